@@ -1,0 +1,115 @@
+/* sewgen C runtime: pivoted LU, closed-form dyads, damped Newton with a predictor, sweep driver.
+ *
+ * Hand-written; the generated kernels (generated/sg_<mechanism>.c) include this header and fill one
+ * sg_mechanism descriptor each. Everything exported is prefixed sg_. C99, no allocation, no globals.
+ */
+#ifndef SG_RUNTIME_H
+#define SG_RUNTIME_H
+
+#include <math.h>
+#include <stddef.h>
+
+/* Per-position status codes (sewgen.errors maps each to a typed Python error). */
+enum sg_status {
+    SG_OK = 0,
+    SG_CANNOT_ASSEMBLE = 1, /* the loop does not close at this input (a dyad's circles do not meet) */
+    SG_SINGULAR = 2,        /* the constraint Jacobian is singular here (toggle / dead-centre position) */
+    SG_BRANCH_JUMP = 3,     /* Newton landed on another assembly branch than the previous position */
+    SG_NAN_INPUT = 4,       /* a shaft angle, speed or acceleration is not finite */
+    SG_NO_CONVERGENCE = 5,  /* Newton ran out of iterations */
+    SG_NONFINITE = 6,       /* a result came out non-finite (never returned as a value) */
+    SG_BAD_ARGUMENT = 7     /* sizes or options out of range: nothing was computed */
+};
+
+/* Largest number of coordinates a mechanism may have (stack work arrays). */
+#define SG_MAX_Q 48
+
+typedef int (*sg_closed_fn)(const double *x, const double *p, const int *branch, double *q);
+typedef void (*sg_residual_fn)(const double *q, const double *x, const double *p, double *r, double *jac);
+typedef int (*sg_motion_fn)(const double *q, const double *x, const double *xd, const double *xdd,
+                            const double *p, double *qd, double *qdd, double *obs);
+
+/* One mechanism as the generated code describes it. */
+typedef struct sg_mechanism {
+    const char *name;
+    int nq;      /* coordinates: link angles (rad) and slider travels (m) */
+    int nx;      /* inputs: x[0] = shaft angle, then held inputs */
+    int np;      /* parameters (SI) */
+    int nobs;    /* observables per position (points, bodies), see the manifest */
+    int nbranch; /* closed-form dyads, each with an assembly sign */
+    const unsigned char *coord_is_angle;
+    sg_closed_fn closed;     /* NULL where the loops do not split into dyads */
+    sg_residual_fn residual; /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
+    sg_motion_fn motion;     /* velocities, accelerations and observables at a solved position */
+} sg_mechanism;
+
+typedef struct sg_options {
+    double tol;     /* loop residual tolerance (m); Newton stops below it */
+    int max_iter;   /* Newton iterations per position */
+    int newton_only; /* 1: Newton even where a closed form exists (tests, benchmarks) */
+} sg_options;
+
+/* LU with partial pivoting, in place, row-major n x n. Returns SG_SINGULAR when a pivot is below
+ * 1e-11 of its column's largest original entry (column-scale invariant: columns may be rad or m). */
+int sg_lu_factor(int n, double *a, int *piv, double *det_sign);
+void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
+
+/* Closed-form dyads (seed 001 §三, Makino's vector triangles; BV4 is the RRR dyad). ------------------ */
+
+/* RRR: J is at distance l1 from P and l2 from Q; sigma = +1 puts J left of the ray P->Q. */
+static inline int sg_dyad_rrr(const double P[2], const double Q[2], double l1, double l2, int sigma,
+                              double J[2])
+{
+    const double dx = Q[0] - P[0], dy = Q[1] - P[1];
+    const double d2 = dx * dx + dy * dy;
+    if (!(d2 > 1e-30)) return SG_SINGULAR;
+    const double a = 0.5 * (l1 * l1 - l2 * l2 + d2) / d2; /* along PQ, in units of d */
+    const double h2 = l1 * l1 / d2 - a * a;                /* across PQ, squared, in units of d^2 */
+    if (!(h2 >= 0.0)) return SG_CANNOT_ASSEMBLE;
+    const double h = sigma * sqrt(h2);
+    J[0] = P[0] + a * dx - h * dy;
+    J[1] = P[1] + a * dy + h * dx;
+    return SG_OK;
+}
+
+/* RRP: J = L0 + s*u (u a unit vector) at distance l1 from P; sigma = +1 takes the larger s. */
+static inline int sg_dyad_rrp(const double P[2], double l1, const double L0[2], const double u[2],
+                              int sigma, double *s, double J[2])
+{
+    const double wx = L0[0] - P[0], wy = L0[1] - P[1];
+    const double b = u[0] * wx + u[1] * wy;
+    const double disc = b * b - (wx * wx + wy * wy - l1 * l1);
+    if (!(disc >= 0.0)) return SG_CANNOT_ASSEMBLE;
+    *s = -b + sigma * sqrt(disc);
+    J[0] = L0[0] + *s * u[0];
+    J[1] = L0[1] + *s * u[1];
+    return SG_OK;
+}
+
+/* RPR (oscillating guide bar): in the bar's frame the pin runs on w0 + s*u (u unit); it must lie at
+ * distance |D| from the pivot, D = pin - pivot in the world. Returns s (sigma = +1: larger s) and the
+ * bar angle theta with R(theta) (w0 + s u) = D. */
+static inline int sg_dyad_rpr(const double D[2], const double w0[2], const double u[2], int sigma,
+                              double *s, double *theta)
+{
+    const double d2 = D[0] * D[0] + D[1] * D[1];
+    if (!(d2 > 1e-30)) return SG_SINGULAR;
+    const double b = u[0] * w0[0] + u[1] * w0[1];
+    const double disc = b * b - (w0[0] * w0[0] + w0[1] * w0[1] - d2);
+    if (!(disc >= 0.0)) return SG_CANNOT_ASSEMBLE;
+    *s = -b + sigma * sqrt(disc);
+    const double wx = w0[0] + *s * u[0], wy = w0[1] + *s * u[1];
+    *theta = atan2(D[1], D[0]) - atan2(wy, wx);
+    return SG_OK;
+}
+
+/* Sweep a mechanism over n shaft angles in one call: positions, velocities, accelerations and every
+ * observable. phi/omega/alpha have n entries; held has nx-1; q_guess (nq) starts Newton where no closed
+ * form exists. Outputs are row-major (n x nq, n x nobs); status has n entries. Returns the number of
+ * positions whose status is not SG_OK (or n with every status SG_BAD_ARGUMENT on bad sizes). */
+size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
+                const double *alpha, const double *held, const double *p, const int *branch,
+                const double *q_guess, const sg_options *opt, double *q, double *qd, double *qdd,
+                double *obs, int *status);
+
+#endif

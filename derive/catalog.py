@@ -1,0 +1,13 @@
+"""The built-in mechanisms, in the order they are generated."""
+from __future__ import annotations
+
+import importlib
+
+CATALOG = ("needle_bar", "take_up", "hook_drive")
+
+
+def declare(name: str):
+    """The declaration of a catalog mechanism by name."""
+    if name not in CATALOG:
+        raise KeyError(f"no catalog mechanism {name!r}; known: {', '.join(CATALOG)}")
+    return importlib.import_module(f"derive.models.{name}").declare()

@@ -1,0 +1,62 @@
+"""SymPy -> C99 expression text: flat-array symbol names, integer powers as products (DESIGN.md §4).
+
+User names never reach C: every symbol prints as an element of a flat array (q[i], p[j], ...) or as a
+numbered temporary. Output depends only on the expressions, never on hash order.
+"""
+from __future__ import annotations
+
+import re
+
+import sympy as sp
+from sympy.printing.c import C99CodePrinter
+
+_ARRAY = re.compile(r"^(q|qd|qdd|x|xd|xdd|p)_(\d+)$")
+_LOCAL = re.compile(r"^([A-Za-z]+\w*?)_(\d+)$")
+
+
+class KernelPrinter(C99CodePrinter):
+    """C99 printer with sewgen's symbol mapping. ``names`` overrides the text of given symbols."""
+
+    def __init__(self, names: dict | None = None):
+        super().__init__({"math_macros": {}})
+        self.names = names or {}
+
+    def _print_Symbol(self, expr):
+        if expr in self.names:
+            return self.names[expr]
+        m = _ARRAY.match(expr.name)
+        if m:
+            return f"{m.group(1)}[{m.group(2)}]"
+        m = _LOCAL.match(expr.name)
+        if m:
+            return f"{m.group(1)}[{m.group(2)}]"
+        return expr.name
+
+    def _print_Pow(self, expr):
+        base, exp = expr.args
+        if exp.is_Integer and 2 <= abs(int(exp)) <= 4:
+            b = self.parenthesize(base, 1000)  # strictly atomic or parenthesised
+            prod = "*".join([b] * abs(int(exp)))
+            return f"({prod})" if exp > 0 else f"(1.0/({prod}))"
+        if exp == -1:
+            return f"(1.0/{self.parenthesize(base, 1000)})"
+        return super()._print_Pow(expr)
+
+    def _print_NumberSymbol(self, expr):  # pi, E, ...: a literal, never a macro or a declaration
+        return repr(float(expr))
+
+    _print_Pi = _print_Exp1 = _print_NumberSymbol
+
+    def _print_Float(self, expr):
+        return repr(float(expr))
+
+    def _print_Rational(self, expr):
+        return repr(float(expr))
+
+    def _print_Integer(self, expr):
+        return f"{int(expr)}.0" if abs(int(expr)) < 2**53 else repr(float(expr))
+
+
+def ops(exprs) -> int:
+    """Operation count of a list of expressions (the 'Total ops' of a kernel)."""
+    return int(sum(sp.count_ops(e) for e in exprs))

@@ -1,0 +1,120 @@
+"""Declaration -> generated files: C kernels, header, cffi cdef and manifest (DESIGN.md §2, §4).
+
+Every C string is computed in :mod:`derive.kernels`; the jinja2 templates (StrictUndefined) only lay it out.
+The manifest (names, units, sizes, defaults, layout of the observables) is written as JSON and also
+compiled into each mechanism as a string, so a loaded module describes itself.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import jinja2
+
+from .dyads import split_into_dyads
+from .kernels import closed_kernel, motion_kernel, residual_kernel
+from .kinematics import Kinematics
+from .model import Mechanism
+from .units import to_si
+
+_TEMPLATES = jinja2.Environment(
+    loader=jinja2.FileSystemLoader(str(Path(__file__).parent / "templates")),
+    undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
+    autoescape=False)
+
+POINT_FIELDS = ["x", "y", "vx", "vy", "ax", "ay"]
+BODY_FIELDS = ["angle", "omega", "alpha"] + [f"com_{f}" for f in POINT_FIELDS]
+
+
+@dataclass
+class Generated:
+    name: str
+    prefix: str
+    c_source: str
+    prototypes: list
+    manifest: dict
+
+
+def manifest_of(mech: Mechanism, kin: Kinematics, dyads, kernels) -> dict:
+    offset = 0
+    points, bodies = [], []
+    for name, _att, doc in mech.points:
+        points.append({"name": name, "offset": offset, "doc": doc})
+        offset += len(POINT_FIELDS)
+    for body in mech.bodies:
+        if body.moving:
+            entry = {"name": body.name, "kind": body.kind, "offset": offset, "doc": body.doc}
+            bodies.append(entry)
+            offset += len(BODY_FIELDS)
+    return {
+        "name": mech.name,
+        "doc": mech.doc.strip(),
+        "closed_form": dyads is not None,
+        "default_speed": to_si(mech.default_speed, "speed", f"{mech.name}.default_speed"),
+        "coords": [{"name": c.name, "unit": "rad" if c.kind == "angle" else "m", "guess": c.guess}
+                   for c in kin.coords],
+        "inputs": [{"name": i.name, "kind": i.kind, "unit": "rad", "default": i.default,
+                    "display_unit": i.display_unit, "doc": i.doc} for i in mech.inputs],
+        "params": [{"name": p.name, "kind": p.kind, "unit": p.unit, "default": p.default,
+                    "display_unit": p.display_unit, "positive": p.positive, "doc": p.doc}
+                   for p in mech.params],
+        "points": points,
+        "point_fields": POINT_FIELDS,
+        "bodies": bodies,
+        "body_fields": BODY_FIELDS,
+        "observables": [{"name": o.name, "unit": o.unit} for o in kin.observables],
+        "closure": kin.closure_names,
+        "branches": [{"joint": d.joint.name, "kind": d.kind, "default": d.joint.branch, "meaning": d.meaning}
+                     for d in (dyads or [])],
+        "kernels": {k.name: {"ops": k.ops} for k in kernels},
+    }
+
+
+def _c_string_chunks(text: str, width: int = 96) -> list[str]:
+    esc = text.replace("\\", "\\\\").replace('"', '\\"')
+    chunks = []
+    while esc:
+        cut = min(width, len(esc))
+        while cut < len(esc) and esc[cut - 1] == "\\":  # never split an escape
+            cut += 1
+        chunks.append(esc[:cut])
+        esc = esc[cut:]
+    return chunks
+
+
+def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
+    """Derive one mechanism and render its C file and manifest."""
+    kin = Kinematics(mech)
+    dyads = split_into_dyads(kin) if closed_form else None
+    prefix = f"sg_{mech.name}"
+    kernels = [residual_kernel(prefix, kin), motion_kernel(prefix, kin)]
+    if dyads is not None:
+        kernels.insert(0, closed_kernel(prefix, kin, dyads))
+    manifest = manifest_of(mech, kin, dyads, kernels)
+    text = json.dumps(manifest, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    c_source = _TEMPLATES.get_template("mechanism.c.j2").render(
+        mech={"name": mech.name, "title": (mech.doc.strip().splitlines() or [mech.name])[0],
+              "coord_names": ", ".join(c.name for c in kin.coords) or "none",
+              "input_names": ", ".join(i.name for i in mech.inputs)},
+        prefix=prefix, kernels=kernels,
+        angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
+        sizes={"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
+               "nbranch": len(dyads or [])},
+        closed_fn=f"{prefix}_closed" if dyads is not None else "0",
+        manifest_chunks=_c_string_chunks(text))
+    prototypes = [k.prototype for k in kernels] + [
+        f"const sg_mechanism *{prefix}(void);", f"const char *{prefix}_manifest(void);"]
+    return Generated(mech.name, prefix, c_source, prototypes, manifest)
+
+
+def render_files(generated: list[Generated], header: str = "sg_kernels.h") -> dict[str, str]:
+    """All files of one compiled module: sg_<name>.c per mechanism, the header, the cdef, manifest.json."""
+    files = {f"{g.prefix}.c": g.c_source for g in generated}
+    mechs = [{"name": g.name, "prototypes": g.prototypes} for g in generated]
+    guard = header.upper().replace(".", "_").replace("-", "_")
+    files[header] = _TEMPLATES.get_template("kernels.h.j2").render(mechanisms=mechs, guard=guard)
+    files["sg_kernels.cdef"] = _TEMPLATES.get_template("kernels.cdef.j2").render(mechanisms=mechs)
+    files["manifest.json"] = json.dumps({g.name: g.manifest for g in generated}, indent=1, sort_keys=True,
+                                        ensure_ascii=False) + "\n"
+    return files

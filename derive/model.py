@@ -1,0 +1,254 @@
+"""The modelling vocabulary: bodies, joints, points and parameters (DESIGN.md §3).
+
+A mechanism is declared the way the seeds draw it, as bodies joined by joints; :mod:`derive.kinematics`
+finds the loops. Nothing here is symbolic algebra beyond creating parameter symbols.
+
+Body frames: a driven body has its origin at its pivot and its x axis along the crank; a slider has its
+origin on its guide line at travel ``s`` and its x axis along the guide; a link's frame is wherever its
+attachment points say (``link.at(u, v)`` in millimetres-or-whatever units the parameters carry).
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from .units import SI_UNITS, to_si, unit_of
+
+_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+class DeclarationError(ValueError):
+    """A mechanism declaration that cannot be derived (names the mechanism and the part)."""
+
+
+@dataclass(frozen=True)
+class Param:
+    """A named parameter: symbol, physical kind, SI default, the unit it was declared in, docstring."""
+
+    name: str
+    symbol: sp.Symbol
+    kind: str
+    default: float
+    display_unit: str
+    doc: str
+    positive: bool
+
+    @property
+    def unit(self) -> str:
+        return SI_UNITS[self.kind]
+
+
+@dataclass(frozen=True)
+class Attachment:
+    """A point fixed in a body, at local coordinates (u, v) of the body frame."""
+
+    body: "Body"
+    u: sp.Expr
+    v: sp.Expr
+
+
+@dataclass(frozen=True)
+class Line:
+    """A line fixed in a body: through local point (u, v), at local angle ``angle``."""
+
+    body: "Body"
+    u: sp.Expr
+    v: sp.Expr
+    angle: sp.Expr
+
+
+@dataclass(eq=False)
+class Body:
+    """A rigid body. ``kind`` is ground, driven (angle = input), link (free angle) or slider (travel)."""
+
+    mech: "Mechanism"
+    name: str
+    kind: str
+    doc: str = ""
+    pivot: Attachment | None = None  # driven: its pivot on ground
+    input_index: int = -1  # driven: which input drives it
+    phase: sp.Expr = sp.S.Zero  # driven: angle = sense * input + phase
+    sense: int = 1
+    guide: Line | None = None  # slider: the line it travels on
+    guess: float = 0.0  # link angle (rad) or slider travel (m) to start Newton from
+    mass: sp.Expr = sp.S.Zero
+    com: tuple = (sp.S.Zero, sp.S.Zero)
+    inertia: sp.Expr = sp.S.Zero
+
+    def at(self, u, v) -> Attachment:
+        return Attachment(self, sp.sympify(u), sp.sympify(v))
+
+    def line(self, at=(0, 0), angle=0) -> Line:
+        return Line(self, sp.sympify(at[0]), sp.sympify(at[1]), sp.sympify(angle))
+
+    @property
+    def moving(self) -> bool:
+        return self.kind != "ground"
+
+    def __repr__(self) -> str:
+        return f"<{self.kind} {self.name}>"
+
+
+@dataclass(eq=False)
+class Joint:
+    """A joint. Revolute: a and b coincide. Prismatic: point b stays on line a, the bodies keep their angle."""
+
+    name: str
+    kind: str
+    a: Attachment | Line
+    b: Attachment
+    branch: int = 1
+
+
+@dataclass(frozen=True)
+class Input:
+    """A driving input: the shaft angle (index 0) or a held input such as a stitch regulator."""
+
+    name: str
+    kind: str  # "shaft" or "held"
+    default: float  # held inputs: SI default value (rad)
+    display_unit: str
+    doc: str
+
+
+@dataclass(eq=False)
+class Mechanism:
+    """A planar mechanism declaration. Create bodies, joints, points and parameters through its methods."""
+
+    name: str
+    doc: str = ""
+    default_speed: str = "1000 rpm"  # shaft speed a run uses unless told otherwise
+    params: list = field(default_factory=list)
+    bodies: list = field(default_factory=list)
+    joints: list = field(default_factory=list)
+    points: list = field(default_factory=list)  # (name, Attachment, doc)
+    inputs: list = field(default_factory=list)
+
+    def __post_init__(self):
+        if not _NAME.match(self.name):
+            raise DeclarationError(f"mechanism name {self.name!r} must be lower_snake_case")
+        self.ground = Body(self, "ground", "ground", doc="the frame")
+        self.bodies.append(self.ground)
+        self.inputs.append(Input("shaft", "shaft", 0.0, "rad", "upper-shaft angle phi"))
+        self._names: set = {"ground", "shaft"}
+
+    # -- parameters ------------------------------------------------------------------------------------
+    def _claim(self, name: str, what: str) -> None:
+        """Parameters have their own namespace; bodies, joints and points share one."""
+        if not re.match(r"^[A-Za-z][A-Za-z0-9_.]*$", name):
+            raise DeclarationError(f"{self.name}: {what} name {name!r} must be letters, digits and _")
+        key = ("param:" if what == "parameter" else "") + name
+        if key in self._names:
+            raise DeclarationError(f"{self.name}: the {what} name {name!r} is declared twice")
+        self._names.add(key)
+
+    def param(self, name: str, kind: str, default: str, doc: str, positive: bool = False) -> sp.Symbol:
+        """Declare a parameter of physical ``kind`` with a default such as "16.7 mm"; returns its symbol."""
+        self._claim(name, "parameter")
+        if not doc:
+            raise DeclarationError(f"{self.name}: parameter {name!r} needs a docstring")
+        value = to_si(default, kind, f"{self.name}.{name}")
+        if positive and not value > 0:
+            raise DeclarationError(f"{self.name}: default of {name!r} must be positive")
+        sym = sp.Symbol(f"p_{len(self.params)}", real=True)
+        unit = unit_of(default) if isinstance(default, str) else SI_UNITS[kind]
+        self.params.append(Param(name, sym, kind, value, unit, doc, positive))
+        return sym
+
+    def length(self, name: str, default: str, doc: str, signed: bool = False) -> sp.Symbol:
+        """A length; positive unless ``signed`` (offsets, coordinates)."""
+        return self.param(name, "length", default, doc, positive=not signed)
+
+    def angle(self, name: str, default: str, doc: str) -> sp.Symbol:
+        return self.param(name, "angle", default, doc)
+
+    # -- bodies ----------------------------------------------------------------------------------------
+    def _body(self, name: str, kind: str, doc: str, mass, com, inertia, **kw) -> Body:
+        self._claim(name, "body")
+        body = Body(self, name, kind, doc=doc, **kw)
+        body.mass = self._mass_prop(name, "mass", "mass", mass, f"mass of {name}")
+        body.com = (
+            self._mass_prop(name, "com_u", "length", com[0], f"centre of mass of {name}, local u"),
+            self._mass_prop(name, "com_v", "length", com[1], f"centre of mass of {name}, local v"),
+        )
+        body.inertia = self._mass_prop(name, "inertia", "inertia", inertia, f"moment of inertia of {name} about its centre of mass")
+        self.bodies.append(body)
+        return body
+
+    def _mass_prop(self, body: str, prop: str, kind: str, value, doc: str) -> sp.Expr:
+        """A mass property: a quantity string becomes parameter ``body.prop``; an expression is used as is."""
+        if isinstance(value, str):
+            return self.param(f"{body}.{prop}", kind, value, doc)
+        return sp.sympify(value)
+
+    def driven(self, name: str, pivot: Attachment, phase="0 deg", sense: int = 1, doc: str = "",
+               mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2") -> Body:
+        """A body turned by the upper shaft: angle = sense * phi + phase, about ``pivot`` on ground."""
+        self._check_on_ground(pivot, name)
+        if sense not in (1, -1):
+            raise DeclarationError(f"{self.name}: sense of {name!r} must be +1 or -1")
+        ph = self.angle(f"{name}.phase", phase, f"phase of {name} relative to the shaft angle") if isinstance(phase, str) else sp.sympify(phase)
+        return self._body(name, "driven", doc, mass, com, inertia, pivot=pivot, input_index=0, phase=ph, sense=sense)
+
+    def held(self, name: str, pivot: Attachment, default: str, doc: str,
+             mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2") -> Body:
+        """A body set by a held input (stitch regulator): its angle is an input that stays put in a run."""
+        self._check_on_ground(pivot, name)
+        self._names.add(f"input:{name}")
+        self.inputs.append(Input(name, "held", to_si(default, "angle", f"{self.name}.{name}"), unit_of(default), doc))
+        return self._body(name, "driven", doc, mass, com, inertia, pivot=pivot, input_index=len(self.inputs) - 1)
+
+    def link(self, name: str, doc: str = "", guess: str = "0 deg",
+             mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2") -> Body:
+        """A free link; its absolute angle is a coordinate. ``guess`` starts Newton when no closed form exists."""
+        return self._body(name, "link", doc, mass, com, inertia, guess=to_si(guess, "angle", f"{self.name}.{name}.guess"))
+
+    def slider(self, name: str, guide: Line, doc: str = "", guess: str = "0 mm",
+               mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2") -> Body:
+        """A body travelling on ``guide`` (a line of ground or of a moving body); its travel is a coordinate."""
+        if not isinstance(guide, Line):
+            raise DeclarationError(f"{self.name}: guide of {name!r} must be body.line(...)")
+        return self._body(name, "slider", doc, mass, com, inertia, guide=guide,
+                          guess=to_si(guess, "length", f"{self.name}.{name}.guess"))
+
+    def _check_on_ground(self, att: Attachment, name: str) -> None:
+        if not isinstance(att, Attachment) or att.body is not self.ground:
+            raise DeclarationError(f"{self.name}: pivot of {name!r} must be a point of ground")
+
+    # -- joints and points -----------------------------------------------------------------------------
+    def revolute(self, a: Attachment, b: Attachment, name: str, branch: int = 1) -> Joint:
+        """A pin joint between two bodies. ``branch`` (+1/-1) picks the assembly when this joint closes a dyad."""
+        self._claim(name, "joint")
+        for att in (a, b):
+            if not isinstance(att, Attachment):
+                raise DeclarationError(f"{self.name}: joint {name!r} needs body.at(u, v) on both sides")
+        if a.body is b.body:
+            raise DeclarationError(f"{self.name}: joint {name!r} joins {a.body.name!r} to itself")
+        if branch not in (1, -1):
+            raise DeclarationError(f"{self.name}: branch of joint {name!r} must be +1 or -1")
+        joint = Joint(name, "revolute", a, b, branch)
+        self.joints.append(joint)
+        return joint
+
+    def prismatic(self, guide: Line, b: Attachment, name: str) -> Joint:
+        """Point ``b`` slides on ``guide`` and body b keeps the guide body's angle (a closing slide)."""
+        self._claim(name, "joint")
+        if not isinstance(guide, Line) or not isinstance(b, Attachment) or guide.body is b.body:
+            raise DeclarationError(f"{self.name}: prismatic {name!r} needs a line of one body and a point of another")
+        joint = Joint(name, "prismatic", guide, b)
+        self.joints.append(joint)
+        return joint
+
+    def point(self, name: str, at: Attachment, doc: str = "") -> None:
+        """A named point whose position, velocity and acceleration are reported."""
+        self._claim(name, "point")
+        self.points.append((name, at, doc))
+
+    # -- queries ---------------------------------------------------------------------------------------
+    def body(self, name: str) -> Body:
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise KeyError(name)

@@ -1,0 +1,1 @@
+"""The catalog's mechanism declarations, one module each, each with ``declare() -> Mechanism``."""

@@ -1,0 +1,76 @@
+"""Quantities with explicit units -> SI floats (DESIGN.md §5).
+
+Model files and declarations state units ("16.7 mm", "105 g", "1000 rpm", "90 deg"); everything inside
+sewgen is SI. This module is the one place that talks to the units library (pint).
+"""
+from __future__ import annotations
+
+import functools
+import math
+
+#: Physical kinds a parameter can have, with the SI unit its value is stored in.
+SI_UNITS = {
+    "length": "m",
+    "angle": "rad",
+    "mass": "kg",
+    "inertia": "kg*m**2",
+    "speed": "rad/s",
+    "angular_acceleration": "rad/s**2",
+    "force": "N",
+    "torque": "N*m",
+    "mass_length": "kg*m",
+    "density": "kg/m**3",
+    "dimensionless": "",
+}
+
+
+class UnitError(ValueError):
+    """A quantity whose text cannot be read, or whose unit is not of the expected kind."""
+
+
+@functools.lru_cache(maxsize=1)
+def registry():
+    import pint
+
+    return pint.UnitRegistry()
+
+
+def to_si(value, kind: str, what: str = "value") -> float:
+    """Convert ``value`` (a number taken as SI, or a string such as ``"16.7 mm"``) to an SI float.
+
+    ``kind`` is a key of :data:`SI_UNITS`; ``what`` names the parameter or option in the error.
+    """
+    if kind not in SI_UNITS:
+        raise UnitError(f"{what}: unknown kind {kind!r}")
+    if isinstance(value, bool):
+        raise UnitError(f"{what}: expected a {kind} ({SI_UNITS[kind] or 'no unit'}), got {value!r}")
+    if isinstance(value, (int, float)):
+        out = float(value)
+    elif isinstance(value, str):
+        ureg = registry()
+        try:
+            q = ureg.Quantity(value.strip())
+        except Exception as exc:  # pint raises several unrelated types for unreadable text
+            raise UnitError(f"{what}: cannot read {value!r} as a quantity ({exc})") from None
+        target = SI_UNITS[kind]
+        try:
+            if kind == "angle" and q.dimensionless and not isinstance(q.magnitude, str):
+                out = float(q.to("radian").magnitude)
+            elif target:
+                out = float(q.to(target).magnitude)
+            else:
+                out = float(q.to("dimensionless").magnitude)
+        except Exception:
+            unit = SI_UNITS[kind] or "no unit"
+            raise UnitError(f"{what}: {value!r} is not a {kind} (expected a unit convertible to {unit})") from None
+    else:
+        raise UnitError(f"{what}: expected a number or a quantity string, got {type(value).__name__}")
+    if not math.isfinite(out):
+        raise UnitError(f"{what}: {value!r} is not finite")
+    return out
+
+
+def unit_of(text: str) -> str:
+    """The unit part of a quantity string ("16.7 mm" -> "mm"); "" for a bare number."""
+    parts = text.strip().split(None, 1)
+    return parts[1] if len(parts) == 2 else ""

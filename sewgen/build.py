@@ -1,0 +1,59 @@
+"""cffi builders: the catalog module at install time, user mechanisms at run time (DESIGN.md §4).
+
+``setup.py`` names ``sewgen/build.py:catalog_ffi`` in ``cffi_modules``; setuptools runs this file on its
+own, so it imports nothing from the sewgen package. Flags: -O2 -std=c99 and warnings as errors, never
+-ffast-math (it would delete the NaN guards); SEWGEN_CFLAGS adds flags (the sanitizer build of CI).
+"""
+from __future__ import annotations
+
+import os
+import shlex
+from pathlib import Path
+
+import cffi
+
+HERE = Path(__file__).resolve().parent
+CFLAGS = ["-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-Wno-unused-parameter"]
+
+
+def runtime_dir() -> Path:
+    """The hand-written runtime sources: installed as sewgen/_csrc, or csrc/ in a checkout."""
+    for cand in (HERE / "_csrc", HERE.parent / "csrc"):
+        if (cand / "sg_runtime.c").is_file():
+            return cand
+    raise FileNotFoundError("sewgen's C runtime sources (csrc/sg_runtime.c) are missing from this install")
+
+
+def make_ffi(module: str, kernel_dir: Path, mechanisms: list[str], extra_cflags: list[str] | None = None,
+             relative_to: Path | None = None) -> cffi.FFI:
+    """An out-of-line API-mode FFI for the runtime plus the generated kernels of ``mechanisms``."""
+    rt = runtime_dir()
+    ffi = cffi.FFI()
+    ffi.cdef((rt / "sg_api.cdef").read_text())
+    ffi.cdef((kernel_dir / "sg_kernels.cdef").read_text())
+    sources = [rt / "sg_runtime.c"] + [kernel_dir / f"sg_{name}.c" for name in mechanisms]
+    incs = [rt, kernel_dir]
+    if relative_to is not None:  # setuptools wants paths relative to setup.py
+        sources = [s.relative_to(relative_to) for s in sources]
+        incs = [i.relative_to(relative_to) for i in incs]
+    flags = CFLAGS + (extra_cflags or []) + shlex.split(os.environ.get("SEWGEN_CFLAGS", ""))
+    ffi.set_source(module, '#include "sg_kernels.h"\n',
+                   sources=[str(s) for s in sources], include_dirs=[str(i) for i in incs],
+                   extra_compile_args=flags, extra_link_args=[f for f in flags if f.startswith("-fsanitize")],
+                   libraries=["m"])
+    return ffi
+
+
+def _catalog_ffi() -> cffi.FFI:
+    import json
+
+    root = HERE.parent
+    generated = root / "generated"
+    names = list(json.loads((generated / "manifest.json").read_text()))
+    return make_ffi("sewgen._kernels", generated, names, relative_to=root)
+
+
+catalog_ffi = _catalog_ffi() if (HERE.parent / "generated" / "manifest.json").is_file() else None
+
+if __name__ == "__main__":  # python sewgen/build.py: compile the catalog module in place
+    catalog_ffi.compile(tmpdir=str(HERE.parent), verbose=True)
