@@ -1,0 +1,45 @@
+"""sewgen: sewing-machine mechanism analysis through derived, compiled kinematics.
+
+    >>> import sewgen
+    >>> nb = sewgen.mechanism("needle_bar")
+    >>> motion = nb.solve(sewgen.shaft_angles(5), speed="1000 rpm")
+    >>> motion.point("needle_eye").y      # m, at 72 shaft angles
+"""
+from .errors import (AssemblyError, BranchJumpError, BuildError, ConvergenceError, InputError, ParameterError,
+                     PositionError, SewgenError, SingularPositionError)
+from .mechanism import Mechanism, shaft_angles
+from .results import Motion
+
+__all__ = ["AssemblyError", "BranchJumpError", "BuildError", "ConvergenceError", "InputError", "Mechanism",
+           "Motion", "ParameterError", "PositionError", "SewgenError", "SingularPositionError", "catalog",
+           "load", "mechanism", "shaft_angles"]
+
+_cache: dict = {}
+
+
+def catalog() -> list[str]:
+    """Names of the built-in mechanisms."""
+    from .loader import catalog_names
+
+    return catalog_names()
+
+
+def mechanism(name: str) -> Mechanism:
+    """A built-in mechanism by name (see :func:`catalog`)."""
+    from .loader import catalog_module, catalog_names
+
+    if name not in _cache:
+        names = catalog_names()
+        if name not in names:
+            raise KeyError(f"no built-in mechanism {name!r}; the catalog has: {', '.join(names)}")
+        mod = catalog_module()
+        _cache[name] = Mechanism(mod.ffi, mod.lib, name)
+    return _cache[name]
+
+
+def load(source, *, closed_form: bool = True, cache_dir=None) -> Mechanism:
+    """A mechanism declared outside the catalog: a derive.Mechanism, a function returning one, or a .py file
+    with ``declare()``. Derived and compiled on first use, then loaded from the cache."""
+    from .loader import load_user
+
+    return load_user(source, closed_form=closed_form, cache_dir=cache_dir)

@@ -1,0 +1,215 @@
+"""A compiled mechanism behind a thin Python API: parameters from the manifest, one C call per sweep.
+
+Names, units, sizes and defaults come from the manifest compiled into the module (derive/emit.py); nothing
+here repeats them by hand. Inputs are checked and converted before C sees them; a failing position raises
+the typed error of its status, naming the mechanism and the first failing shaft angle.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from derive.units import UnitError, to_si
+
+from .errors import STATUS_ERRORS, InputError, ParameterError
+from .results import Motion
+
+_NONNEGATIVE = {"mass", "inertia"}
+
+
+class Mechanism:
+    """One mechanism of a compiled module (the catalog's or a user's)."""
+
+    def __init__(self, ffi, lib, name: str, build_info: dict | None = None):
+        self.ffi, self.lib, self.name = ffi, lib, name
+        self.manifest = json.loads(ffi.string(getattr(lib, f"sg_{name}_manifest")()).decode())
+        self._descriptor = getattr(lib, f"sg_{name}")()
+        self.build_info = build_info or {}
+        man = self.manifest
+        self.param_names = [p["name"] for p in man["params"]]
+        self.coord_names = [c["name"] for c in man["coords"]]
+        self.held_names = [i["name"] for i in man["inputs"][1:]]
+        self.branch_names = [b["joint"] for b in man["branches"]]
+        self.point_names = [p["name"] for p in man["points"]]
+        self.body_names = [b["name"] for b in man["bodies"]]
+        self.closed_form = bool(man["closed_form"])
+        self.default_speed = float(man["default_speed"])
+
+    def __repr__(self) -> str:
+        return f"<sewgen.Mechanism {self.name}: {len(self.coord_names)} coordinates, {len(self.param_names)} parameters>"
+
+    @property
+    def doc(self) -> str:
+        return self.manifest["doc"]
+
+    def defaults(self) -> dict[str, float]:
+        """Every parameter's default, SI."""
+        return {p["name"]: p["default"] for p in self.manifest["params"]}
+
+    def describe_params(self) -> list[dict]:
+        """Name, kind, SI unit, default, declared unit and docstring of every parameter."""
+        return [dict(p) for p in self.manifest["params"]]
+
+    # -- input conversion ----------------------------------------------------------------------------------
+    def param_vector(self, params: dict | None = None) -> np.ndarray:
+        """Defaults overridden by ``params`` (SI numbers or quantity strings), checked, as a C-ready vector."""
+        values = self.defaults()
+        for key, val in (params or {}).items():
+            if key not in values:
+                raise ParameterError(self.name, key, f"unknown; parameters are: {', '.join(values)}")
+            values[key] = val
+        out = np.empty(len(self.param_names))
+        for i, spec in enumerate(self.manifest["params"]):
+            name, kind = spec["name"], spec["kind"]
+            try:
+                v = to_si(values[name], kind, name)
+            except UnitError as exc:
+                raise ParameterError(self.name, name, str(exc).split(": ", 1)[-1]) from None
+            if spec["positive"] and not v > 0:
+                raise ParameterError(self.name, name, f"must be positive, got {v!r} {spec['unit']}")
+            if kind in _NONNEGATIVE and v < 0:
+                raise ParameterError(self.name, name, f"must not be negative, got {v!r} {spec['unit']}")
+            out[i] = v
+        return out
+
+    def _named_vector(self, what: str, names: list[str], defaults: list, given: dict | None, kind: str):
+        vals = dict(zip(names, defaults))
+        for key, v in (given or {}).items():
+            if key not in vals:
+                known = ", ".join(names) or "none"
+                raise ParameterError(self.name, key, f"is not a {what}; {what}s are: {known}")
+            vals[key] = v
+        out = []
+        for key in names:
+            v = vals[key]
+            if kind == "sign":
+                if v not in (1, -1):
+                    raise ParameterError(self.name, key, f"branch must be +1 or -1, got {v!r}")
+                out.append(int(v))
+            else:
+                try:
+                    out.append(to_si(v, kind, key))
+                except UnitError as exc:
+                    raise ParameterError(self.name, key, str(exc).split(": ", 1)[-1]) from None
+        return out
+
+    def _series(self, what: str, value, n: int, kind: str) -> np.ndarray:
+        """A per-position array (scalar broadcast) of float64, finite, 1-D, length n."""
+        if isinstance(value, str):
+            try:
+                value = to_si(value, kind, what)
+            except UnitError as exc:
+                raise InputError(self.name, str(exc)) from None
+        arr = np.asarray(value)
+        if np.iscomplexobj(arr) or arr.dtype.kind not in "biuf":
+            raise InputError(self.name, f"{what} must be real numbers, got dtype {arr.dtype}")
+        arr = np.full(n, float(arr)) if arr.ndim == 0 else np.ascontiguousarray(arr, dtype=np.float64)
+        if arr.ndim != 1 or arr.shape[0] != n:
+            raise InputError(self.name, f"{what} must be a scalar or have shape ({n},), got {arr.shape}")
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            raise InputError(self.name, f"{what} is not finite at position {bad[0]} ({arr[bad[0]]!r})")
+        return arr
+
+    # -- kernels -------------------------------------------------------------------------------------------
+    def _ptr(self, ctype: str, arr: np.ndarray):
+        return self.ffi.cast(ctype, self.ffi.from_buffer(arr)) if arr.size else self.ffi.NULL
+
+    def residual(self, q, phi: float, params: dict | None = None, held: dict | None = None):
+        """Φ(q, x) and Φ_q at one position (for checks): arrays of shape (nq,) and (nq, nq)."""
+        nq = len(self.coord_names)
+        qv = np.ascontiguousarray(q, dtype=np.float64).reshape(nq)
+        x = np.array([float(phi)] + self._held(held), dtype=np.float64)
+        r, jac = np.zeros(nq), np.zeros((nq, nq))
+        getattr(self.lib, f"sg_{self.name}_residual")(
+            self._ptr("double *", qv), self._ptr("double *", x), self._ptr("double *", self.param_vector(params)),
+            self._ptr("double *", r), self._ptr("double *", jac))
+        return r, jac
+
+    def _held(self, held):
+        defaults = [i["default"] for i in self.manifest["inputs"][1:]]
+        return self._named_vector("held input", self.held_names, defaults, held, "angle")
+
+    def _guess(self, guess):
+        out = []
+        for c in self.manifest["coords"]:
+            kind = "angle" if c["unit"] == "rad" else "length"
+            out += self._named_vector("coordinate", [c["name"]], [c["guess"]],
+                                      {c["name"]: (guess or {})[c["name"]]} if c["name"] in (guess or {}) else None,
+                                      kind)
+        unknown = set(guess or {}) - set(self.coord_names)
+        if unknown:
+            key = sorted(unknown)[0]
+            raise ParameterError(self.name, key, f"is not a coordinate; coordinates are: {', '.join(self.coord_names)}")
+        return out
+
+    def length_scale(self, p: np.ndarray) -> float:
+        """The largest length parameter (m): sets the loop-residual tolerance."""
+        lengths = [abs(v) for v, s in zip(p, self.manifest["params"]) if s["kind"] == "length"]
+        return max(lengths + [1e-3])
+
+    def solve(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
+              branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
+              newton: bool = False, max_iter: int = 50) -> Motion:
+        """Positions, velocities and accelerations of every coordinate, point and body at shaft angles ``phi``.
+
+        ``phi`` in rad (or degrees with ``degrees=True``); ``speed`` (rad/s, default the mechanism's
+        default speed) and ``accel`` (rad/s²) are scalars or per-position arrays, numbers in SI or quantity
+        strings ("1000 rpm"). ``params``, ``held`` (held inputs), ``branch`` (joint -> ±1) and ``guess``
+        (coordinate -> Newton start) override the manifest's defaults by name. ``newton=True`` solves by
+        Newton even where a closed form exists. Raises a :class:`~sewgen.errors.PositionError` subclass at
+        the first shaft angle that fails.
+        """
+        phi_arr = np.asarray(phi)
+        if phi_arr.ndim == 0:
+            phi_arr = phi_arr.reshape(1)
+        n = phi_arr.shape[0] if phi_arr.ndim == 1 else -1
+        if n < 0:
+            raise InputError(self.name, f"shaft angles must be a 1-D array, got shape {phi_arr.shape}")
+        phi_v = self._series("shaft angle", phi_arr, n, "angle")
+        if degrees:
+            phi_v = np.radians(phi_v)
+        omega = self._series("speed", self.default_speed if speed is None else speed, n, "speed")
+        alpha = self._series("angular acceleration", accel, n, "angular_acceleration")
+        p = self.param_vector(params)
+        held_v = np.array(self._held(held), dtype=np.float64)
+        br = np.array(self._named_vector("branch joint", self.branch_names,
+                                         [b["default"] for b in self.manifest["branches"]], branch, "sign"),
+                      dtype=np.intc)
+        q0 = np.array(self._guess(guess), dtype=np.float64)
+        if not isinstance(max_iter, int) or max_iter < 1:
+            raise ParameterError(self.name, "max_iter", f"must be a positive integer, got {max_iter!r}")
+        nq, nobs = len(self.coord_names), len(self.manifest["observables"])
+        q, qd, qdd = (np.zeros((n, nq)) for _ in range(3))
+        obs = np.zeros((n, nobs))
+        status = np.zeros(n, dtype=np.intc)
+        opt = self.ffi.new("sg_options *", {"tol": 1e-12 * self.length_scale(p), "max_iter": max_iter,
+                                            "newton_only": 1 if newton else 0})
+        d = self._ptr
+        self.lib.sg_sweep(self._descriptor, n, d("double *", phi_v), d("double *", omega), d("double *", alpha),
+                          d("double *", held_v), d("double *", p), d("int *", br), d("double *", q0), opt,
+                          d("double *", q), d("double *", qd), d("double *", qdd), d("double *", obs),
+                          d("int *", status))
+        self._raise_for(status, phi_v)
+        return Motion(self, phi_v, omega, alpha, q, qd, qdd, obs)
+
+    def _raise_for(self, status: np.ndarray, phi: np.ndarray) -> None:
+        bad = np.flatnonzero(status)
+        if not bad.size:
+            return
+        i = int(bad[0])
+        code = int(status[i])
+        cls = STATUS_ERRORS.get(code)
+        if cls is None:  # SG_NAN_INPUT / SG_BAD_ARGUMENT: Python checks first, so this is a bug
+            raise InputError(self.name, f"runtime refused the sweep (status {code}) at position {i}")
+        same = bad[status[bad] == code]
+        raise cls(self.name, float(phi[i]), i, int(same.size), float(phi[same[-1]]))
+
+
+def shaft_angles(step_deg: float = 5.0, start_deg: float = 0.0, turns: float = 1.0) -> np.ndarray:
+    """Shaft angles (rad) from ``start_deg`` over ``turns`` revolutions every ``step_deg`` (seed 000: 72 at 5°)."""
+    if not step_deg > 0 or not turns > 0:
+        raise ValueError("step_deg and turns must be positive")
+    n = int(round(360.0 * turns / step_deg))
+    return np.radians(start_deg + step_deg * np.arange(n))
