@@ -3,69 +3,16 @@
 
 #include <string.h>
 
-#define SG_PIVOT_RTOL 1e-11
 #define SG_TWO_PI 6.283185307179586476925286766559
 
 int sg_lu_factor(int n, double *a, int *piv, double *det_sign)
 {
-    double colmax[SG_MAX_Q];
-    double sign = 1.0;
-    for (int j = 0; j < n; ++j) {
-        double cm = 0.0;
-        for (int i = 0; i < n; ++i) {
-            const double v = fabs(a[i * n + j]);
-            if (v > cm) cm = v;
-        }
-        colmax[j] = cm;
-    }
-    for (int k = 0; k < n; ++k) {
-        int pr = k;
-        double best = fabs(a[k * n + k]);
-        for (int i = k + 1; i < n; ++i) {
-            const double v = fabs(a[i * n + k]);
-            if (v > best) {
-                best = v;
-                pr = i;
-            }
-        }
-        piv[k] = pr;
-        if (!(best > SG_PIVOT_RTOL * colmax[k])) return SG_SINGULAR;
-        if (pr != k) {
-            sign = -sign;
-            for (int j = 0; j < n; ++j) {
-                const double t = a[k * n + j];
-                a[k * n + j] = a[pr * n + j];
-                a[pr * n + j] = t;
-            }
-        }
-        const double inv = 1.0 / a[k * n + k];
-        if (a[k * n + k] < 0.0) sign = -sign;
-        for (int i = k + 1; i < n; ++i) {
-            const double f = a[i * n + k] * inv;
-            a[i * n + k] = f;
-            if (f != 0.0)
-                for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
-        }
-    }
-    if (det_sign) *det_sign = sign;
-    return SG_OK;
+    return sg_lu_factor_inl(n, a, piv, det_sign);
 }
 
 void sg_lu_solve(int n, const double *lu, const int *piv, double *b)
 {
-    for (int k = 0; k < n; ++k) {
-        if (piv[k] != k) {
-            const double t = b[k];
-            b[k] = b[piv[k]];
-            b[piv[k]] = t;
-        }
-        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
-    }
-    for (int k = n - 1; k >= 0; --k) {
-        double s = b[k];
-        for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
-        b[k] = s / lu[k * n + k];
-    }
+    sg_lu_solve_inl(n, lu, piv, b);
 }
 
 static double inf_norm(int n, const double *v)
@@ -78,66 +25,84 @@ static double inf_norm(int n, const double *v)
     return m;
 }
 
-/* Damped Newton on Phi(q, x) = 0 from q (in place). On success *det_sign is the sign of det(dPhi/dq). */
-static int newton(const sg_mechanism *m, double *q, const double *x, const double *p,
-                  const sg_options *opt, double *det_sign)
+/* cos and sin of every angle coordinate (travels get 1, 0: never read). */
+static void fill_trig(const sg_mechanism *m, const double *q, double *cq)
+{
+    for (int i = 0; i < m->nq; ++i) {
+        if (m->coord_is_angle[i]) {
+            cq[2 * i] = cos(q[i]);
+            cq[2 * i + 1] = sin(q[i]);
+        } else {
+            cq[2 * i] = 1.0;
+            cq[2 * i + 1] = 0.0;
+        }
+    }
+}
+
+/* Damped Newton on Phi(q, x) = 0 from q (in place), with cq kept in step with q.
+ * On success *det_sign is the sign of det(dPhi/dq). */
+static int newton(const sg_mechanism *m, double *q, double *cq, const double *x, const double *cx,
+                  const double *c, const sg_options *opt, double *det_sign)
 {
     const int nq = m->nq;
     double r[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q], lu[SG_MAX_Q * SG_MAX_Q];
-    double qt[SG_MAX_Q], rt[SG_MAX_Q], dq[SG_MAX_Q];
+    double qt[SG_MAX_Q], cqt[2 * SG_MAX_Q], rt[SG_MAX_Q], dq[SG_MAX_Q];
     int piv[SG_MAX_Q];
-    m->residual(q, x, p, r, jac);
+    fill_trig(m, q, cq);
+    m->residual(q, cq, x, cx, c, r, jac);
     double norm = inf_norm(nq, r);
     for (int it = 0;; ++it) {
         if (!isfinite(norm)) return SG_NO_CONVERGENCE;
         memcpy(lu, jac, sizeof(double) * (size_t)(nq * nq));
-        const int st = sg_lu_factor(nq, lu, piv, det_sign);
+        const int st = sg_lu_factor_inl(nq, lu, piv, det_sign);
         if (norm <= opt->tol) return st == SG_OK ? SG_OK : SG_SINGULAR;
         if (st != SG_OK) return SG_CANNOT_ASSEMBLE; /* no descent direction away from a solution */
         if (it >= opt->max_iter) return SG_NO_CONVERGENCE;
         for (int i = 0; i < nq; ++i) dq[i] = -r[i];
-        sg_lu_solve(nq, lu, piv, dq);
+        sg_lu_solve_inl(nq, lu, piv, dq);
         double lambda = 1.0, nt = 0.0;
         int k;
         for (k = 0; k < 30; ++k) {
             for (int i = 0; i < nq; ++i) qt[i] = q[i] + lambda * dq[i];
-            m->residual(qt, x, p, rt, jac);
+            fill_trig(m, qt, cqt);
+            m->residual(qt, cqt, x, cx, c, rt, jac);
             nt = inf_norm(nq, rt);
             if (nt < norm) break;
             lambda *= 0.5;
         }
         if (k == 30) return SG_CANNOT_ASSEMBLE; /* the residual has a positive local minimum */
         memcpy(q, qt, sizeof(double) * (size_t)nq);
+        memcpy(cq, cqt, sizeof(double) * (size_t)(2 * nq));
         memcpy(r, rt, sizeof(double) * (size_t)nq);
         norm = nt;
     }
 }
 
-/* Quadratic (Lagrange) extrapolation in the shaft angle from up to three earlier solutions. */
-static void predict(int nq, int nh, const double *hphi, const double *hq, double phi, double *out)
+/* Quadratic (Lagrange) extrapolation in the shaft angle from up to three earlier solutions, given as
+ * row indices into the output array q (newest first). */
+static void predict(int nq, int nh, const size_t *hist, const double *phi, const double *q, double phi_new,
+                    double *out)
 {
     double w[3] = {1.0, 0.0, 0.0};
     int used = nh;
-    for (;;) {
+    for (; used > 1; --used) { /* repeated angles: fall back to a lower order */
         int ok = 1;
         for (int a = 0; a < used && ok; ++a) {
             double num = 1.0, den = 1.0;
             for (int b = 0; b < used; ++b) {
                 if (b == a) continue;
-                num *= phi - hphi[b];
-                den *= hphi[a] - hphi[b];
+                num *= phi_new - phi[hist[b]];
+                den *= phi[hist[a]] - phi[hist[b]];
             }
             if (!(fabs(den) > 1e-14)) ok = 0;
             else w[a] = num / den;
         }
-        if (ok || used == 1) break;
-        --used; /* repeated angles: fall back to a lower order */
-        w[0] = 1.0;
+        if (ok) break;
     }
-    if (used == 1) w[0] = 1.0;
+    if (used <= 1) w[0] = 1.0, used = 1;
     for (int i = 0; i < nq; ++i) {
         double v = 0.0;
-        for (int a = 0; a < used; ++a) v += w[a] * hq[a * nq + i];
+        for (int a = 0; a < used; ++a) v += w[a] * q[hist[a] * (size_t)nq + i];
         out[i] = v;
     }
 }
@@ -147,11 +112,20 @@ static void zero_row(double *v, int n)
     for (int i = 0; i < n; ++i) v[i] = 0.0;
 }
 
-static int all_finite(const double *v, int n)
+/* A sum that is NaN or infinite when any entry is: one branch per row instead of one per entry, four
+ * independent accumulators so the additions do not wait on each other. */
+static double sum(const double *v, int n)
 {
-    for (int i = 0; i < n; ++i)
-        if (!isfinite(v[i])) return 0;
-    return 1;
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    int i = 0;
+    for (; i + 4 <= n; i += 4) {
+        s0 += v[i];
+        s1 += v[i + 1];
+        s2 += v[i + 2];
+        s3 += v[i + 3];
+    }
+    for (; i < n; ++i) s0 += v[i];
+    return (s0 + s1) + (s2 + s3);
 }
 
 size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
@@ -160,18 +134,23 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
                 double *obs, int *status)
 {
     const int nq = m->nq, nx = m->nx, nobs = m->nobs;
-    if (nq > SG_MAX_Q || nx > SG_MAX_Q || nx < 1 || !(opt->tol > 0.0) || opt->max_iter < 1) {
+    if (nq > SG_MAX_Q || nx > SG_MAX_Q || nx < 1 || m->nc > SG_MAX_C || !(opt->tol > 0.0) ||
+        opt->max_iter < 1) {
         for (size_t i = 0; i < n; ++i) status[i] = SG_BAD_ARGUMENT;
         return n;
     }
     const int use_closed = m->closed != NULL && !opt->newton_only;
-    double x[SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q];
+    double c[SG_MAX_C];
+    m->constants(p, c);
+    double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q], cq[2 * SG_MAX_Q];
     for (int k = 1; k < nx; ++k) {
         x[k] = held[k - 1];
+        cx[2 * k] = cos(x[k]);
+        cx[2 * k + 1] = sin(x[k]);
         xd[k] = 0.0;
         xdd[k] = 0.0;
     }
-    double hphi[3], hq[3 * SG_MAX_Q]; /* newest first */
+    size_t hist[3]; /* rows of the last good solutions, newest first */
     int nh = 0;
     double ref_sign = 0.0;
     size_t failures = 0;
@@ -179,31 +158,38 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
         double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq;
         double *oi = obs + i * (size_t)nobs;
         int st = SG_OK;
-        x[0] = phi[i];
+        const double ph = phi[i];
+        x[0] = ph;
         xd[0] = omega[i];
         xdd[0] = alpha[i];
-        if (!isfinite(phi[i]) || !isfinite(omega[i]) || !isfinite(alpha[i])) st = SG_NAN_INPUT;
+        if (!isfinite(ph + omega[i] + alpha[i])) st = SG_NAN_INPUT;
+        cx[0] = cos(ph);
+        cx[1] = sin(ph);
         if (st == SG_OK && use_closed) {
-            st = m->closed(x, p, branch, qi);
-            if (st == SG_OK && nh > 0) /* keep angles continuous: unwrap against the last solution */
+            st = m->closed(x, cx, c, branch, qi, cq);
+            if (st == SG_OK && nh > 0) { /* keep angles continuous: unwrap against the last solution */
+                const double *prev = q + hist[0] * (size_t)nq;
                 for (int k = 0; k < nq; ++k)
-                    if (m->coord_is_angle[k]) qi[k] += SG_TWO_PI * nearbyint((hq[k] - qi[k]) / SG_TWO_PI);
+                    if (m->coord_is_angle[k]) {
+                        const double turns = (prev[k] - qi[k]) * (1.0 / SG_TWO_PI);
+                        if (fabs(turns) > 0.5) qi[k] += SG_TWO_PI * nearbyint(turns);
+                    }
+            }
         } else if (st == SG_OK) {
             double sign = 0.0;
             if (nh > 0) {
-                predict(nq, nh, hphi, hq, phi[i], qi);
-            } else if (m->closed == NULL || m->closed(x, p, branch, qi) != SG_OK) {
+                predict(nq, nh, hist, phi, q, ph, qi);
+            } else if (m->closed == NULL || m->closed(x, cx, c, branch, qi, cq) != SG_OK) {
                 memcpy(qi, q_guess, sizeof(double) * (size_t)nq);
             }
-            st = newton(m, qi, x, p, opt, &sign);
+            st = newton(m, qi, cq, x, cx, c, opt, &sign);
             if (st == SG_OK) {
                 if (ref_sign == 0.0) ref_sign = sign;
                 else if (sign != ref_sign) st = SG_BRANCH_JUMP;
             }
         }
-        if (st == SG_OK) st = m->motion(qi, x, xd, xdd, p, qdi, qddi, oi);
-        if (st == SG_OK && !(all_finite(qi, nq) && all_finite(qdi, nq) && all_finite(qddi, nq) &&
-                             all_finite(oi, nobs)))
+        if (st == SG_OK) st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi);
+        if (st == SG_OK && !isfinite(sum(qi, nq) + sum(qdi, nq) + sum(qddi, nq) + sum(oi, nobs)))
             st = SG_NONFINITE;
         status[i] = st;
         if (st != SG_OK) {
@@ -214,15 +200,10 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
             zero_row(oi, nobs);
             continue;
         }
-        /* history for the predictor and the unwrap, newest first */
-        const int keep = nh < 3 ? nh + 1 : 3;
-        for (int a = keep - 1; a > 0; --a) {
-            hphi[a] = hphi[a - 1];
-            memcpy(hq + a * nq, hq + (a - 1) * nq, sizeof(double) * (size_t)nq);
-        }
-        hphi[0] = phi[i];
-        memcpy(hq, qi, sizeof(double) * (size_t)nq);
-        nh = keep;
+        hist[2] = hist[1];
+        hist[1] = hist[0];
+        hist[0] = i;
+        if (nh < 3) ++nh;
     }
     return failures;
 }

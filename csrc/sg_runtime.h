@@ -21,13 +21,20 @@ enum sg_status {
     SG_BAD_ARGUMENT = 7     /* sizes or options out of range: nothing was computed */
 };
 
-/* Largest number of coordinates a mechanism may have (stack work arrays). */
+/* Largest number of coordinates and of hoisted constants a mechanism may have (stack work arrays). */
 #define SG_MAX_Q 48
+#define SG_MAX_C 2048
 
-typedef int (*sg_closed_fn)(const double *x, const double *p, const int *branch, double *q);
-typedef void (*sg_residual_fn)(const double *q, const double *x, const double *p, double *r, double *jac);
-typedef int (*sg_motion_fn)(const double *q, const double *x, const double *xd, const double *xdd,
-                            const double *p, double *qd, double *qdd, double *obs);
+/* Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx
+ * their cos, sin likewise; c the constants that sg_<m>_constants hoisted out of the parameters p. */
+typedef void (*sg_constants_fn)(const double *p, double *c);
+typedef int (*sg_closed_fn)(const double *x, const double *cx, const double *c, const int *branch, double *q,
+                            double *cq);
+typedef void (*sg_residual_fn)(const double *q, const double *cq, const double *x, const double *cx,
+                               const double *c, double *r, double *jac);
+typedef int (*sg_motion_fn)(const double *q, const double *cq, const double *x, const double *cx,
+                            const double *xd, const double *xdd, const double *c, double *qd, double *qdd,
+                            double *obs);
 
 /* One mechanism as the generated code describes it. */
 typedef struct sg_mechanism {
@@ -35,9 +42,11 @@ typedef struct sg_mechanism {
     int nq;      /* coordinates: link angles (rad) and slider travels (m) */
     int nx;      /* inputs: x[0] = shaft angle, then held inputs */
     int np;      /* parameters (SI) */
+    int nc;      /* constants hoisted out of the parameters */
     int nobs;    /* observables per position (points, bodies), see the manifest */
     int nbranch; /* closed-form dyads, each with an assembly sign */
     const unsigned char *coord_is_angle;
+    sg_constants_fn constants;
     sg_closed_fn closed;     /* NULL where the loops do not split into dyads */
     sg_residual_fn residual; /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
     sg_motion_fn motion;     /* velocities, accelerations and observables at a solved position */
@@ -50,7 +59,73 @@ typedef struct sg_options {
 } sg_options;
 
 /* LU with partial pivoting, in place, row-major n x n. Returns SG_SINGULAR when a pivot is below
- * 1e-11 of its column's largest original entry (column-scale invariant: columns may be rad or m). */
+ * 1e-11 of its column's largest original entry (column-scale invariant: columns may be rad or m).
+ * Inline so that a kernel's call with a literal n unrolls; sg_lu_factor/sg_lu_solve are the exported
+ * copies. */
+#define SG_PIVOT_RTOL 1e-11
+
+static inline int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
+{
+    double colmax[SG_MAX_Q];
+    double sign = 1.0;
+    for (int j = 0; j < n; ++j) {
+        double cm = 0.0;
+        for (int i = 0; i < n; ++i) {
+            const double v = fabs(a[i * n + j]);
+            if (v > cm) cm = v;
+        }
+        colmax[j] = cm;
+    }
+    for (int k = 0; k < n; ++k) {
+        int pr = k;
+        double best = fabs(a[k * n + k]);
+        for (int i = k + 1; i < n; ++i) {
+            const double v = fabs(a[i * n + k]);
+            if (v > best) {
+                best = v;
+                pr = i;
+            }
+        }
+        piv[k] = pr;
+        if (!(best > SG_PIVOT_RTOL * colmax[k])) return SG_SINGULAR;
+        if (pr != k) {
+            sign = -sign;
+            for (int j = 0; j < n; ++j) {
+                const double t = a[k * n + j];
+                a[k * n + j] = a[pr * n + j];
+                a[pr * n + j] = t;
+            }
+        }
+        const double inv = 1.0 / a[k * n + k];
+        if (a[k * n + k] < 0.0) sign = -sign;
+        for (int i = k + 1; i < n; ++i) {
+            const double f = a[i * n + k] * inv;
+            a[i * n + k] = f;
+            if (f != 0.0)
+                for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
+        }
+    }
+    if (det_sign) *det_sign = sign;
+    return SG_OK;
+}
+
+static inline void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *b)
+{
+    for (int k = 0; k < n; ++k) {
+        if (piv[k] != k) {
+            const double t = b[k];
+            b[k] = b[piv[k]];
+            b[piv[k]] = t;
+        }
+        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
+    }
+    for (int k = n - 1; k >= 0; --k) {
+        double s = b[k];
+        for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
+        b[k] = s / lu[k * n + k];
+    }
+}
+
 int sg_lu_factor(int n, double *a, int *piv, double *det_sign);
 void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
 

@@ -10,7 +10,7 @@ import re
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
-_ARRAY = re.compile(r"^(q|qd|qdd|x|xd|xdd|p)_(\d+)$")
+_ARRAY = re.compile(r"^(q|qd|qdd|x|xd|xdd|p|c|cq|cx)_(\d+)$")
 _LOCAL = re.compile(r"^([A-Za-z]+\w*?)_(\d+)$")
 
 

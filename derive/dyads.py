@@ -28,6 +28,7 @@ class Dyad:
     bodies: tuple
     inputs: dict  # C local name -> list of SymPy expressions (known when the dyad is reached)
     outputs: list  # (coordinate index, SymPy expression in the solver's output symbols)
+    trig: list  # (angle coordinate index, cos, sin) in the solver's outputs: no trig call needed
     meaning: str
 
 
@@ -41,6 +42,12 @@ def _mine(joint: Joint, body: Body) -> Attachment:
 
 def _angle(u, v):
     return sp.atan2(v, u)
+
+
+def _rotation_between(a, b):
+    """cos and sin of the rotation taking vector a onto vector b, for |a| = |b| (no trig call)."""
+    n2 = a[0] ** 2 + a[1] ** 2
+    return ((a[0] * b[0] + a[1] * b[1]) / n2, (a[0] * b[1] - a[1] * b[0]) / n2)
 
 
 class _Split:
@@ -125,6 +132,8 @@ class _Split:
                                                        sp.sqrt(v2[0] ** 2 + v2[1] ** 2)]},
                     [(self.coord_of[b1], _angle(Jx - Px, Jy - Py) - _angle(*v1)),
                      (self.coord_of[b2], _angle(Jx - Qx, Jy - Qy) - _angle(*v2))],
+                    [(self.coord_of[b1], *_rotation_between(v1, (Jx - Px, Jy - Py))),
+                     (self.coord_of[b2], *_rotation_between(v2, (Jx - Qx, Jy - Qy)))],
                     f"+1: joint {j.name} left of the line from {ja.name} to {jb.name}")
 
     def rrp(self, j, b1, s, ja) -> Dyad:
@@ -144,6 +153,7 @@ class _Split:
                     {"P": list(P), "l": [sp.sqrt(v1[0] ** 2 + v1[1] ** 2)],
                      "L0": [gx + du, gy + dv], "u": [sp.cos(th), sp.sin(th)]},
                     [(self.coord_of[b1], _angle(Jx - Px, Jy - Py) - _angle(*v1)), (self.coord_of[s], ssym)],
+                    [(self.coord_of[b1], *_rotation_between(v1, (Jx - Px, Jy - Py)))],
                     f"+1: the larger travel of {s.name} at joint {j.name}")
 
     def rpr(self, s, bar, ja, jb) -> Dyad:
@@ -154,11 +164,14 @@ class _Split:
         pin = _mine(jb, s)
         pu, pv = rot(g.angle, pin.u, pin.v)
         ssym, tsym = sp.symbols("s theta", real=True)
+        D = sp.symbols("D_0 D_1", real=True)
+        w = [sp.Symbol(f"w0_{k}", real=True) + ssym * sp.Symbol(f"u_{k}", real=True) for k in range(2)]
         self.mark(ja, jb)
         return Dyad("rpr", jb, (s, bar),
                     {"D": [Q[0] - P[0], Q[1] - P[1]], "w0": [g.u - a.u + pu, g.v - a.v + pv],
                      "u": [sp.cos(g.angle), sp.sin(g.angle)]},
                     [(self.coord_of[s], ssym), (self.coord_of[bar], tsym)],
+                    [(self.coord_of[bar], *_rotation_between(w, D))],
                     f"+1: the larger travel of {s.name} on {bar.name}")
 
 

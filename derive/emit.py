@@ -13,7 +13,7 @@ from pathlib import Path
 import jinja2
 
 from .dyads import split_into_dyads
-from .kernels import closed_kernel, motion_kernel, residual_kernel
+from .kernels import KernelSet
 from .kinematics import Kinematics
 from .model import Mechanism
 from .units import to_si
@@ -36,7 +36,7 @@ class Generated:
     manifest: dict
 
 
-def manifest_of(mech: Mechanism, kin: Kinematics, dyads, kernels) -> dict:
+def manifest_of(mech: Mechanism, kin: Kinematics, dyads, kernels, sizes: dict) -> dict:
     offset = 0
     points, bodies = [], []
     for name, _att, doc in mech.points:
@@ -68,6 +68,7 @@ def manifest_of(mech: Mechanism, kin: Kinematics, dyads, kernels) -> dict:
         "branches": [{"joint": d.joint.name, "kind": d.kind, "default": d.joint.branch, "meaning": d.meaning}
                      for d in (dyads or [])],
         "kernels": {k.name: {"ops": k.ops} for k in kernels},
+        "sizes": sizes,
     }
 
 
@@ -88,10 +89,12 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     kin = Kinematics(mech)
     dyads = split_into_dyads(kin) if closed_form else None
     prefix = f"sg_{mech.name}"
-    kernels = [residual_kernel(prefix, kin), motion_kernel(prefix, kin)]
-    if dyads is not None:
-        kernels.insert(0, closed_kernel(prefix, kin, dyads))
-    manifest = manifest_of(mech, kin, dyads, kernels)
+    ks = KernelSet(prefix, kin)
+    kernels = ([ks.closed(dyads)] if dyads is not None else []) + [ks.residual(), ks.motion()]
+    kernels.insert(0, ks.constants_kernel())  # last to build: it evaluates what the others hoisted
+    sizes = {"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
+             "nbranch": len(dyads or []), "nc": len(ks.constants)}
+    manifest = manifest_of(mech, kin, dyads, kernels, sizes)
     text = json.dumps(manifest, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
     c_source = _TEMPLATES.get_template("mechanism.c.j2").render(
         mech={"name": mech.name, "title": (mech.doc.strip().splitlines() or [mech.name])[0],
@@ -99,8 +102,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
               "input_names": ", ".join(i.name for i in mech.inputs)},
         prefix=prefix, kernels=kernels,
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
-        sizes={"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
-               "nbranch": len(dyads or [])},
+        sizes=sizes,
         closed_fn=f"{prefix}_closed" if dyads is not None else "0",
         manifest_chunks=_c_string_chunks(text))
     prototypes = [k.prototype for k in kernels] + [

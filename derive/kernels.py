@@ -1,12 +1,18 @@
 """Kernel bodies as C text, computed in Python (DESIGN.md §4): the templates only lay them out.
 
-Three kernels per mechanism, each one joint CSE over everything it returns:
+Four kernels per mechanism, each one joint CSE over everything it returns:
 
-* ``closed``   — the dyad chain (derive.dyads) calling the runtime's sg_dyad_* solvers;
-* ``residual`` — Φ(q, x) and Φ_q for Newton and for residual checks;
-* ``motion``   — Φ_q, −Φ_x x', LU, q'; γ, q''; every observable. The CSE temporaries are emitted in three
-  stages by what they depend on (positions only / q' / q''), so a subexpression such as sin(q[1]) is
-  computed once for the Jacobian, γ and the observables alike.
+* ``constants`` — every subexpression of the parameters alone (link lengths from triangle sides, cos and
+  sin of fixed angles, 1/l² ...), evaluated once per sweep into ``c[]``;
+* ``closed``    — the dyad chain (derive.dyads) calling the runtime's sg_dyad_* solvers; it returns the
+  coordinates and the cos/sin of every angle coordinate straight from the geometry;
+* ``residual``  — Φ and Φ_q for Newton and residual checks;
+* ``motion``    — Φ_q, −Φ_x x', LU, q'; γ, q''; every observable. Its CSE temporaries are emitted in
+  three stages by what they depend on (positions only / q' / q''), so each is computed once.
+
+No kernel calls a trigonometric function of a coordinate or input: sin(a + c) of an angle a and a fixed
+c is expanded by the addition formulas and sin a, cos a are read from ``cq[]`` (coordinates) and ``cx[]``
+(inputs), which the runtime fills once per position (closed form: from the dyads' geometry, no call).
 """
 from __future__ import annotations
 
@@ -46,18 +52,160 @@ def _unused(body, *names):
     return [f"(void){n};" for n in names if not re.search(rf"\b{n}\b", text)]
 
 
-def residual_kernel(prefix: str, kin: Kinematics) -> Kernel:
-    n = len(kin.q)
-    pr = KernelPrinter()
-    exprs = list(kin.closure) + [kin.jac_q[i, j] for i in range(n) for j in range(n)]
-    repl, red = _cse(exprs)
-    body = _temps(pr, repl)
-    body += [f"r[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[:n])]
-    body += [f"jac[{k}] = {pr.doprint(e)};" for k, e in enumerate(red[n:])]
-    body = _unused(body, "q", "x", "p") + body
-    return Kernel(f"{prefix}_residual",
-                  f"void {prefix}_residual(const double *q, const double *x, const double *p, double *r, double *jac)",
-                  body, ops(e for _, e in repl) + ops(red))
+_DYAD_CALL = {
+    "rrr": ("double J[2];", "sg_dyad_rrr(P, Q, l[0], l[1], branch[{k}], J)"),
+    "rrp": ("double s, J[2];", "sg_dyad_rrp(P, l[0], L0, u, branch[{k}], &s, J)"),
+    "rpr": ("double s, theta;", "sg_dyad_rpr(D, w0, u, branch[{k}], &s, &theta)"),
+}
+
+
+class KernelSet:
+    """The kernels of one mechanism, sharing one table of hoisted parameter-only constants."""
+
+    def __init__(self, prefix: str, kin: Kinematics):
+        self.prefix, self.kin = prefix, kin
+        self.printer = KernelPrinter()
+        self.params = set(kin.p)
+        self.constants: dict = {}  # expression -> symbol c_k, in first-seen order
+        self.trig: dict = {}  # angle symbol -> (cos symbol, sin symbol)
+        for i, (c, q) in enumerate(zip(kin.coords, kin.q)):
+            if c.kind == "angle":
+                self.trig[q] = (sp.Symbol(f"cq_{2 * i}", real=True), sp.Symbol(f"cq_{2 * i + 1}", real=True))
+        for k, x in enumerate(kin.x):
+            self.trig[x] = (sp.Symbol(f"cx_{2 * k}", real=True), sp.Symbol(f"cx_{2 * k + 1}", real=True))
+
+    # -- expression preparation ------------------------------------------------------------------------
+    def _expand_trig(self, expr: sp.Expr) -> sp.Expr:
+        """sin/cos(±a + c), a a coordinate or input angle and c fixed -> products of cq/cx and sin/cos c."""
+        repl = {}
+        for f in expr.atoms(sp.sin, sp.cos):
+            arg = f.args[0]
+            angles = [s for s in arg.free_symbols if s in self.trig]
+            if len(angles) != 1:
+                continue
+            a = angles[0]
+            k = arg.coeff(a)
+            rest = sp.expand(arg - k * a)
+            if k not in (1, -1) or a in rest.free_symbols:
+                continue
+            ca, sa = self.trig[a]
+            sa = k * sa
+            cr, sr = sp.cos(rest), sp.sin(rest)
+            repl[f] = ca * cr - sa * sr if isinstance(f, sp.cos) else sa * cr + ca * sr
+        return expr.xreplace(repl) if repl else expr
+
+    def _is_const(self, e: sp.Expr) -> bool:
+        return bool(e.free_symbols) and e.free_symbols <= self.params
+
+    def _const(self, e: sp.Expr) -> sp.Symbol:
+        if e not in self.constants:
+            self.constants[e] = sp.Symbol(f"c_{len(self.constants)}", real=True)
+        return self.constants[e]
+
+    def _hoist(self, e: sp.Expr) -> sp.Expr:
+        """Replace every maximal parameter-only subexpression (a bare parameter too) by a constant c_k."""
+        if e.is_Atom:
+            return self._const(e) if e in self.params else e
+        if self._is_const(e):
+            return self._const(e)
+        if isinstance(e, (sp.Add, sp.Mul)):  # group the fixed part of a sum or product
+            fixed = [o for o in e.args if self._is_const(o)]
+            if len(fixed) >= 2:
+                rest = [self._hoist(o) for o in e.args if not self._is_const(o)]
+                return e.func(self._const(e.func(*fixed)), *rest)
+        return e.func(*[self._hoist(a) for a in e.args])
+
+    def prepare(self, exprs) -> list:
+        return [self._hoist(self._expand_trig(sp.sympify(e))) for e in exprs]
+
+    # -- kernels ---------------------------------------------------------------------------------------
+    def residual(self) -> Kernel:
+        kin, pr, n = self.kin, self.printer, len(self.kin.q)
+        exprs = self.prepare(list(kin.closure) + [kin.jac_q[i, j] for i in range(n) for j in range(n)])
+        repl, red = _cse(exprs)
+        body = _temps(pr, repl)
+        body += [f"r[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[:n])]
+        body += [f"jac[{k}] = {pr.doprint(e)};" for k, e in enumerate(red[n:])]
+        body = _unused(body, "q", "cq", "x", "cx", "c") + body
+        return Kernel(f"{self.prefix}_residual",
+                      f"void {self.prefix}_residual(const double *q, const double *cq, const double *x, "
+                      f"const double *cx, const double *c, double *r, double *jac)",
+                      body, ops(e for _, e in repl) + ops(red))
+
+    def motion(self) -> Kernel:
+        kin, pr, n = self.kin, self.printer, len(self.kin.q)
+        jac = [kin.jac_q[i, j] for i in range(n) for j in range(n)]
+        exprs = self.prepare(jac + list(kin.vel_rhs) + list(kin.gamma) + [o.expr for o in kin.observables])
+        repl, red = _cse(exprs)
+        levels: dict = {}
+        for t, e in repl:
+            levels[t] = max((_stage(s, levels) for s in e.free_symbols), default=0)
+        staged = [[(t, e) for t, e in repl if levels[t] == k] for k in range(3)]
+        r_jac, r_vel = red[: n * n], red[n * n: n * n + n]
+        r_gam, r_obs = red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:]
+        body = _temps(pr, staged[0])
+        if n:
+            body += [f"double J[{n * n}];", f"int piv[{n}];"]
+            body += [f"J[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_jac)]
+            body += [f"qd[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_vel)]
+            body += [f"if (sg_lu_factor_inl({n}, J, piv, 0) != SG_OK) return SG_SINGULAR;",
+                     f"sg_lu_solve_inl({n}, J, piv, qd);"]
+        body += _temps(pr, staged[1])
+        if n:
+            body += [f"qdd[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_gam)]
+            body += [f"sg_lu_solve_inl({n}, J, piv, qdd);"]
+        body += _temps(pr, staged[2])
+        body += [f"obs[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_obs)]
+        names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "obs")
+        body = _unused(body, *names) + body + ["return SG_OK;"]
+        return Kernel(f"{self.prefix}_motion",
+                      f"int {self.prefix}_motion(const double *q, const double *cq, const double *x, "
+                      f"const double *cx, const double *xd, const double *xdd, const double *c, "
+                      f"double *qd, double *qdd, double *obs)",
+                      body, ops(e for _, e in repl) + ops(red))
+
+    def closed(self, dyads: list[Dyad]) -> Kernel:
+        pr = self.printer
+        body = ["int st;"]
+        total = 0
+        for k, dyad in enumerate(dyads):
+            keys = list(dyad.inputs)
+            repl, red = _cse(self.prepare(e for key in keys for e in dyad.inputs[key]))
+            outs = self.prepare(e for _, e in dyad.outputs)
+            trig = self.prepare(e for _, cs, sn in dyad.trig for e in (cs, sn))
+            total += ops(e for _, e in repl) + ops(red) + ops(outs) + ops(trig)
+            names = ", ".join(b.name for b in dyad.bodies)
+            block = [f"/* dyad {k}: {dyad.kind.upper()} closed at joint {dyad.joint.name} ({names}) */"]
+            block += _temps(pr, repl)
+            pos = 0
+            for key in keys:
+                size = len(dyad.inputs[key])
+                vals = ", ".join(pr.doprint(e) for e in red[pos: pos + size])
+                block.append(f"const double {key}[{size}] = {{{vals}}};")
+                pos += size
+            decl, call = _DYAD_CALL[dyad.kind]
+            block += [decl, f"st = {call.format(k=k)};", "if (st != SG_OK) return st;"]
+            block += [f"q[{i}] = {pr.doprint(e)};" for (i, _), e in zip(dyad.outputs, outs)]
+            for j, (i, _, _) in enumerate(dyad.trig):
+                block += [f"cq[{2 * i}] = {pr.doprint(trig[2 * j])};",
+                          f"cq[{2 * i + 1}] = {pr.doprint(trig[2 * j + 1])};"]
+            body += ["{"] + ["    " + line for line in block] + ["}"]
+        body = _unused(body, "x", "cx", "c", "branch", "q", "cq") + body + ["return SG_OK;"]
+        return Kernel(f"{self.prefix}_closed",
+                      f"int {self.prefix}_closed(const double *x, const double *cx, const double *c, "
+                      f"const int *branch, double *q, double *cq)",
+                      body, total)
+
+    def constants_kernel(self) -> Kernel:
+        """Call last: it evaluates every constant the other kernels hoisted."""
+        pr = self.printer
+        exprs = list(self.constants)
+        repl, red = _cse(exprs)
+        body = _temps(pr, repl) + [f"c[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
+        body = _unused(body, "p", "c") + body
+        return Kernel(f"{self.prefix}_constants",
+                      f"void {self.prefix}_constants(const double *p, double *c)",
+                      body, ops(e for _, e in repl) + ops(red))
 
 
 def _stage(sym, levels):
@@ -67,71 +215,3 @@ def _stage(sym, levels):
     if name.startswith("qd_"):
         return 1
     return levels.get(sym, 0)
-
-
-def motion_kernel(prefix: str, kin: Kinematics) -> Kernel:
-    n = len(kin.q)
-    pr = KernelPrinter()
-    jac = [kin.jac_q[i, j] for i in range(n) for j in range(n)]
-    obs = [o.expr for o in kin.observables]
-    exprs = jac + list(kin.vel_rhs) + list(kin.gamma) + obs
-    repl, red = _cse(exprs)
-    levels: dict = {}
-    for t, e in repl:
-        levels[t] = max((_stage(s, levels) for s in e.free_symbols), default=0)
-    staged = [[(t, e) for t, e in repl if levels[t] == k] for k in range(3)]
-    r_jac, r_vel = red[: n * n], red[n * n: n * n + n]
-    r_gam, r_obs = red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:]
-    body = _temps(pr, staged[0])
-    if n:
-        body += [f"double J[{n * n}];", f"int piv[{n}];"]
-        body += [f"J[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_jac)]
-        body += [f"qd[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_vel)]
-        body += [f"if (sg_lu_factor({n}, J, piv, 0) != SG_OK) return SG_SINGULAR;",
-                 f"sg_lu_solve({n}, J, piv, qd);"]
-    body += _temps(pr, staged[1])
-    if n:
-        body += [f"qdd[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_gam)]
-        body += [f"sg_lu_solve({n}, J, piv, qdd);"]
-    body += _temps(pr, staged[2])
-    body += [f"obs[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_obs)]
-    body = _unused(body, "q", "x", "xd", "xdd", "p", "qd", "qdd", "obs") + body + ["return SG_OK;"]
-    return Kernel(f"{prefix}_motion",
-                  f"int {prefix}_motion(const double *q, const double *x, const double *xd, const double *xdd, "
-                  f"const double *p, double *qd, double *qdd, double *obs)",
-                  body, ops(e for _, e in repl) + ops(red))
-
-
-_DYAD_CALL = {
-    "rrr": ("double J[2];", "sg_dyad_rrr(P, Q, l[0], l[1], branch[{k}], J)"),
-    "rrp": ("double s, J[2];", "sg_dyad_rrp(P, l[0], L0, u, branch[{k}], &s, J)"),
-    "rpr": ("double s, theta;", "sg_dyad_rpr(D, w0, u, branch[{k}], &s, &theta)"),
-}
-
-
-def closed_kernel(prefix: str, kin: Kinematics, dyads: list[Dyad]) -> Kernel:
-    pr = KernelPrinter()
-    body = ["int st;"]
-    total = 0
-    for k, dyad in enumerate(dyads):
-        keys = list(dyad.inputs)
-        flat = [e for key in keys for e in dyad.inputs[key]]
-        repl, red = _cse(flat)
-        total += ops(e for _, e in repl) + ops(red) + ops(e for _, e in dyad.outputs)
-        names = ", ".join(b.name for b in dyad.bodies)
-        block = [f"/* dyad {k}: {dyad.kind.upper()} closed at joint {dyad.joint.name} ({names}) */"]
-        block += _temps(pr, repl)
-        pos = 0
-        for key in keys:
-            size = len(dyad.inputs[key])
-            vals = ", ".join(pr.doprint(e) for e in red[pos: pos + size])
-            block.append(f"const double {key}[{size}] = {{{vals}}};")
-            pos += size
-        decl, call = _DYAD_CALL[dyad.kind]
-        block += [decl, f"st = {call.format(k=k)};", "if (st != SG_OK) return st;"]
-        block += [f"q[{i}] = {pr.doprint(e)};" for i, e in dyad.outputs]
-        body += ["{"] + ["    " + line for line in block] + ["}"]
-    body = _unused(body, "x", "p", "branch", "q") + body + ["return SG_OK;"]
-    return Kernel(f"{prefix}_closed",
-                  f"int {prefix}_closed(const double *x, const double *p, const int *branch, double *q)",
-                  body, total)

@@ -152,7 +152,7 @@ class Mechanism:
         value = to_si(default, kind, f"{self.name}.{name}")
         if positive and not value > 0:
             raise DeclarationError(f"{self.name}: default of {name!r} must be positive")
-        sym = sp.Symbol(f"p_{len(self.params)}", real=True)
+        sym = sp.Symbol(f"p_{len(self.params)}", **({"positive": True} if positive else {"real": True}))
         unit = unit_of(default) if isinstance(default, str) else SI_UNITS[kind]
         self.params.append(Param(name, sym, kind, value, unit, doc, positive))
         return sym

@@ -6,29 +6,60 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_hook_drive_closed -- Total ops: 33 */
-int sg_hook_drive_closed(const double *x, const double *p, const int *branch, double *q)
+/* sg_hook_drive_constants -- Total ops: 12 */
+void sg_hook_drive_constants(const double *p, double *c)
 {
+    c[0] = p[0];
+    c[1] = cos(p[9]);
+    c[2] = sin(p[9]);
+    c[3] = p[2];
+    c[4] = p[3];
+    c[5] = p[1];
+    c[6] = p[4];
+    c[7] = (1.0/(p[1]));
+    c[8] = (1.0/(p[4]));
+    c[9] = p[5]*cos(p[6]);
+    c[10] = p[5]*sin(p[6]);
+    c[11] = p[2] - p[7];
+    c[12] = p[3] - p[8];
+    c[13] = -p[2];
+    c[14] = -p[3];
+    c[15] = p[7];
+    c[16] = p[8];
+    c[17] = p[9];
+    c[18] = p[11];
+    c[19] = p[12];
+    c[20] = p[17];
+    c[21] = p[18];
+    c[22] = p[21];
+    c[23] = p[22];
+    c[24] = p[25];
+    c[25] = p[26];
+}
+
+/* sg_hook_drive_closed -- Total ops: 60 */
+int sg_hook_drive_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+{
+    (void)x;
     int st;
     {
         /* dyad 0: RRR closed at joint C (big_rod, rock_shaft) */
-        const double t0 = p[9] + x[0];
-        const double P[2] = {p[0]*cos(t0), p[0]*sin(t0)};
-        const double Q[2] = {p[2], p[3]};
-        const double l[2] = {fabs(p[1]), fabs(p[4])};
+        const double P[2] = {c[0]*(c[1]*cx[0] - c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[2]*cx[0])};
+        const double Q[2] = {c[3], c[4]};
+        const double l[2] = {c[5], c[6]};
         double J[2];
         st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
         if (st != SG_OK) return st;
-        q[2] = -atan2(0.0, p[1]) + atan2(J[1] - P[1], J[0] - P[0]);
-        q[0] = -atan2(0.0, p[4]) + atan2(J[1] - Q[1], J[0] - Q[0]);
+        q[2] = atan2(J[1] - P[1], J[0] - P[0]);
+        q[0] = atan2(J[1] - Q[1], J[0] - Q[0]);
+        cq[4] = c[7]*(J[0] - P[0]);
+        cq[5] = c[7]*(J[1] - P[1]);
+        cq[0] = c[8]*(J[0] - Q[0]);
+        cq[1] = c[8]*(J[1] - Q[1]);
     }
     {
         /* dyad 1: RPR closed at joint E (rock_slider, lower_shaft) */
-        const double t0 = cos(q[0]);
-        const double t1 = p[5]*cos(p[6]);
-        const double t2 = sin(q[0]);
-        const double t3 = p[5]*sin(p[6]);
-        const double D[2] = {p[2] - p[7] + t0*t1 - t2*t3, p[3] - p[8] + t0*t3 + t1*t2};
+        const double D[2] = {-c[10]*cq[1] + c[11] + c[9]*cq[0], c[10]*cq[0] + c[12] + c[9]*cq[1]};
         const double w0[2] = {0.0, 0.0};
         const double u[2] = {1.0, 0.0};
         double s, theta;
@@ -36,211 +67,199 @@ int sg_hook_drive_closed(const double *x, const double *p, const int *branch, do
         if (st != SG_OK) return st;
         q[3] = s;
         q[1] = theta;
+        cq[2] = (D[0]*(s*u[0] + w0[0]) + D[1]*(s*u[1] + w0[1]))/(((s*u[0] + w0[0])*(s*u[0] + w0[0])) + ((s*u[1] + w0[1])*(s*u[1] + w0[1])));
+        cq[3] = (-D[0]*(s*u[1] + w0[1]) + D[1]*(s*u[0] + w0[0]))/(((s*u[0] + w0[0])*(s*u[0] + w0[0])) + ((s*u[1] + w0[1])*(s*u[1] + w0[1])));
     }
     return SG_OK;
 }
 
-/* sg_hook_drive_residual -- Total ops: 49 */
-void sg_hook_drive_residual(const double *q, const double *x, const double *p, double *r, double *jac)
+/* sg_hook_drive_residual -- Total ops: 37 */
+void sg_hook_drive_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac)
 {
-    const double t0 = -p[2];
-    const double t1 = p[1]*cos(q[2]);
-    const double t2 = cos(q[0]);
-    const double t3 = -p[4]*t2;
-    const double t4 = p[9] + x[0];
-    const double t5 = p[1]*sin(q[2]);
-    const double t6 = sin(q[0]);
-    const double t7 = p[4]*t6;
-    const double t8 = cos(q[1]);
-    const double t9 = q[3]*t8;
-    const double t10 = p[5]*sin(p[6]);
-    const double t11 = cos(p[6]);
-    const double t12 = -p[5]*t11*t2 + t10*t6;
-    const double t13 = sin(q[1]);
-    const double t14 = q[3]*t13;
-    const double t15 = p[5]*t11*t6 + t10*t2;
-    r[0] = p[0]*cos(t4) + t0 + t1 + t3;
-    r[1] = p[0]*sin(t4) - p[3] + t5 - t7;
-    r[2] = -p[7] - t0 - t12 - t9;
-    r[3] = p[3] - p[8] - t14 + t15;
-    jac[0] = t7;
+    (void)x;
+    const double t0 = c[5]*cq[4];
+    const double t1 = -c[6]*cq[0];
+    const double t2 = c[5]*cq[5];
+    const double t3 = c[6]*cq[1];
+    const double t4 = cq[2]*q[3];
+    const double t5 = c[10]*cq[1] - c[9]*cq[0];
+    const double t6 = cq[3]*q[3];
+    const double t7 = c[10]*cq[0] + c[9]*cq[1];
+    r[0] = c[0]*(c[1]*cx[0] - c[2]*cx[1]) + c[13] + t0 + t1;
+    r[1] = c[0]*(c[1]*cx[1] + c[2]*cx[0]) + c[14] + t2 - t3;
+    r[2] = c[11] - t4 - t5;
+    r[3] = c[12] - t6 + t7;
+    jac[0] = t3;
     jac[1] = 0.0;
-    jac[2] = -t5;
+    jac[2] = -t2;
     jac[3] = 0.0;
-    jac[4] = t3;
+    jac[4] = t1;
     jac[5] = 0.0;
-    jac[6] = t1;
+    jac[6] = t0;
     jac[7] = 0.0;
-    jac[8] = -t15;
-    jac[9] = t14;
+    jac[8] = -t7;
+    jac[9] = t6;
     jac[10] = 0.0;
-    jac[11] = -t8;
-    jac[12] = -t12;
-    jac[13] = -t9;
+    jac[11] = -cq[2];
+    jac[12] = -t5;
+    jac[13] = -t4;
     jac[14] = 0.0;
-    jac[15] = -t13;
+    jac[15] = -cq[3];
 }
 
-/* sg_hook_drive_motion -- Total ops: 201 */
-int sg_hook_drive_motion(const double *q, const double *x, const double *xd, const double *xdd, const double *p, double *qd, double *qdd, double *obs)
+/* sg_hook_drive_motion -- Total ops: 192 */
+int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
 {
-    const double t0 = sin(q[0]);
-    const double t1 = p[4]*t0;
-    const double t2 = p[1]*sin(q[2]);
-    const double t3 = cos(q[0]);
-    const double t4 = p[4]*t3;
-    const double t5 = cos(q[2]);
-    const double t6 = p[1]*t5;
-    const double t7 = p[5]*sin(p[6]);
-    const double t8 = cos(p[6]);
-    const double t9 = -p[5]*t0*t8 - t3*t7;
-    const double t10 = sin(q[1]);
-    const double t11 = q[3]*t10;
-    const double t12 = cos(q[1]);
-    const double t13 = -p[5]*t3*t8 + t0*t7;
-    const double t14 = q[3]*t12;
-    const double t15 = p[9] + x[0];
-    const double t16 = sin(t15);
-    const double t17 = p[0]*t16;
-    const double t18 = t17*xd[0];
-    const double t19 = cos(t15);
-    const double t20 = p[0]*t19;
-    const double t21 = t20*xd[0];
-    const double t26 = ((xd[0])*(xd[0]));
-    const double t27 = t17*xdd[0] + t20*t26;
-    const double t30 = t17*t26 - t20*xdd[0];
-    const double t36 = p[7] + t14;
-    const double t37 = p[8] + t11;
-    const double t40 = p[11]*t19 - p[12]*t16;
-    const double t41 = p[11]*t16 + p[12]*t19;
+    const double t0 = c[6]*cq[1];
+    const double t1 = c[5]*cq[5];
+    const double t2 = c[6]*cq[0];
+    const double t3 = c[5]*cq[4];
+    const double t4 = -c[10]*cq[0] - c[9]*cq[1];
+    const double t5 = cq[3]*q[3];
+    const double t6 = c[10]*cq[1] - c[9]*cq[0];
+    const double t7 = cq[2]*q[3];
+    const double t8 = c[1]*cx[1] + c[2]*cx[0];
+    const double t9 = c[0]*t8;
+    const double t10 = t9*xd[0];
+    const double t11 = c[1]*cx[0] - c[2]*cx[1];
+    const double t12 = c[0]*t11;
+    const double t13 = t12*xd[0];
+    const double t18 = ((xd[0])*(xd[0]));
+    const double t19 = t12*t18 + t9*xdd[0];
+    const double t22 = -t12*xdd[0] + t18*t9;
+    const double t28 = c[15] + t7;
+    const double t29 = c[16] + t5;
+    const double t32 = c[18]*t11 - c[19]*t8;
+    const double t33 = c[18]*t8 + c[19]*t11;
+    const double t34 = -t33;
+    const double t35 = (0.5)*t3;
+    const double t36 = (0.5)*t1;
+    const double t37 = c[20]*cq[0] - c[21]*cq[1];
+    const double t38 = c[20]*cq[1] + c[21]*cq[0];
+    const double t39 = -t38;
+    const double t40 = c[22]*cq[2] - c[23]*cq[3];
+    const double t41 = c[22]*cq[3] + c[23]*cq[2];
     const double t42 = -t41;
-    const double t43 = (0.5)*t6;
-    const double t44 = (0.5)*t2;
-    const double t45 = p[17]*t3 - p[18]*t0;
-    const double t46 = p[17]*t0 + p[18]*t3;
-    const double t47 = -t46;
-    const double t48 = p[21]*t12 - p[22]*t10;
-    const double t49 = p[21]*t10 + p[22]*t12;
-    const double t50 = -t49;
-    const double t52 = p[25]*t12 - p[26]*t10;
-    const double t53 = p[25]*t10 + p[26]*t12;
-    const double t54 = -t11 - t53;
-    const double t56 = t14 + t52;
+    const double t44 = c[24]*cq[2] - c[25]*cq[3];
+    const double t45 = c[24]*cq[3] + c[25]*cq[2];
+    const double t46 = -t45 - t5;
+    const double t48 = t44 + t7;
     double J[16];
     int piv[4];
-    J[0] = t1;
+    J[0] = t0;
     J[1] = 0.0;
-    J[2] = -t2;
+    J[2] = -t1;
     J[3] = 0.0;
-    J[4] = -t4;
+    J[4] = -t2;
     J[5] = 0.0;
-    J[6] = t6;
+    J[6] = t3;
     J[7] = 0.0;
-    J[8] = t9;
-    J[9] = t11;
+    J[8] = t4;
+    J[9] = t5;
     J[10] = 0.0;
-    J[11] = -t12;
-    J[12] = -t13;
-    J[13] = -t14;
+    J[11] = -cq[2];
+    J[12] = -t6;
+    J[13] = -t7;
     J[14] = 0.0;
-    J[15] = -t10;
-    qd[0] = t18;
-    qd[1] = -t21;
+    J[15] = -cq[3];
+    qd[0] = t10;
+    qd[1] = -t13;
     qd[2] = 0.0;
     qd[3] = 0.0;
-    if (sg_lu_factor(4, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve(4, J, piv, qd);
-    const double t22 = ((qd[2])*(qd[2]));
-    const double t23 = t22*t6;
-    const double t24 = ((qd[0])*(qd[0]));
-    const double t25 = t24*t4;
-    const double t28 = t2*t22;
-    const double t29 = t1*t24;
-    const double t31 = qd[3]*t10;
-    const double t32 = qd[1]*t31;
-    const double t33 = qd[1]*t14 + t31;
-    const double t34 = qd[3]*t12;
-    const double t35 = qd[1]*t11 - t34;
-    const double t38 = -t35;
-    const double t51 = ((qd[1])*(qd[1]));
-    const double t55 = qd[1]*t54 + t34;
-    qdd[0] = t23 - t25 + t27;
-    qdd[1] = t28 - t29 + t30;
-    qdd[2] = -qd[1]*t33 - t13*t24 - t32;
-    qdd[3] = qd[1]*qd[3]*t12 - qd[1]*t35 - t24*t9;
-    sg_lu_solve(4, J, piv, qdd);
-    const double t39 = qd[1]*t34 + qdd[3]*t10;
-    obs[0] = t20;
-    obs[1] = t17;
-    obs[2] = -t18;
-    obs[3] = t21;
-    obs[4] = -t27;
-    obs[5] = -t30;
-    obs[6] = p[2] + t4;
-    obs[7] = p[3] + t1;
-    obs[8] = -qd[0]*t1;
-    obs[9] = qd[0]*t4;
-    obs[10] = -qdd[0]*t1 - t25;
-    obs[11] = p[4]*qdd[0]*t3 - t29;
-    obs[12] = t36;
-    obs[13] = t37;
-    obs[14] = t38;
-    obs[15] = t33;
-    obs[16] = -qd[1]*t33 - qdd[1]*t11 + qdd[3]*t12 - t32;
-    obs[17] = qd[1]*t38 + qdd[1]*t14 + t39;
-    obs[18] = t15;
+    if (sg_lu_factor_inl(4, J, piv, 0) != SG_OK) return SG_SINGULAR;
+    sg_lu_solve_inl(4, J, piv, qd);
+    const double t14 = ((qd[2])*(qd[2]));
+    const double t15 = t14*t3;
+    const double t16 = ((qd[0])*(qd[0]));
+    const double t17 = t16*t2;
+    const double t20 = -t0*t16;
+    const double t21 = t1*t14;
+    const double t23 = cq[3]*qd[3];
+    const double t24 = qd[1]*t23;
+    const double t25 = qd[1]*t7 + t23;
+    const double t26 = cq[2]*qd[3];
+    const double t27 = -cq[3]*q[3]*qd[1] + t26;
+    const double t43 = ((qd[1])*(qd[1]));
+    const double t47 = qd[1]*t46 + t26;
+    qdd[0] = t15 - t17 + t19;
+    qdd[1] = t20 + t21 + t22;
+    qdd[2] = -qd[1]*t25 - t16*t6 - t24;
+    qdd[3] = cq[2]*qd[1]*qd[3] + qd[1]*t27 - t16*t4;
+    sg_lu_solve_inl(4, J, piv, qdd);
+    const double t30 = cq[2]*qdd[3] - t24;
+    const double t31 = cq[3]*qdd[3] + qd[1]*t26;
+    obs[0] = t12;
+    obs[1] = t9;
+    obs[2] = -t10;
+    obs[3] = t13;
+    obs[4] = -t19;
+    obs[5] = -t22;
+    obs[6] = c[3] + t2;
+    obs[7] = c[4] + t0;
+    obs[8] = -qd[0]*t0;
+    obs[9] = qd[0]*t2;
+    obs[10] = -qdd[0]*t0 - t17;
+    obs[11] = qdd[0]*t2 + t20;
+    obs[12] = t28;
+    obs[13] = t29;
+    obs[14] = t27;
+    obs[15] = t25;
+    obs[16] = -qd[1]*t25 - qdd[1]*t5 + t30;
+    obs[17] = qd[1]*t27 + qdd[1]*t7 + t31;
+    obs[18] = c[17] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
-    obs[21] = t40;
-    obs[22] = t41;
-    obs[23] = t42*xd[0];
-    obs[24] = t40*xd[0];
-    obs[25] = -t26*t40 + t42*xdd[0];
-    obs[26] = t26*t42 + t40*xdd[0];
+    obs[21] = t32;
+    obs[22] = t33;
+    obs[23] = t34*xd[0];
+    obs[24] = t32*xd[0];
+    obs[25] = -t18*t32 + t34*xdd[0];
+    obs[26] = t18*t34 + t32*xdd[0];
     obs[27] = q[2];
     obs[28] = qd[2];
     obs[29] = qdd[2];
-    obs[30] = t20 + t43;
-    obs[31] = t17 + t44;
-    obs[32] = -qd[2]*t44 - t18;
-    obs[33] = qd[2]*t43 + t21;
-    obs[34] = -qdd[2]*t44 - 0.5*t23 - t27;
-    obs[35] = (0.5)*p[1]*qdd[2]*t5 - 0.5*t28 - t30;
+    obs[30] = t12 + t35;
+    obs[31] = t36 + t9;
+    obs[32] = -qd[2]*t36 - t10;
+    obs[33] = qd[2]*t35 + t13;
+    obs[34] = -qdd[2]*t36 - 0.5*t15 - t19;
+    obs[35] = (0.5)*c[5]*cq[4]*qdd[2] - 0.5*t21 - t22;
     obs[36] = q[0];
     obs[37] = qd[0];
     obs[38] = qdd[0];
-    obs[39] = p[2] + t45;
-    obs[40] = p[3] + t46;
-    obs[41] = qd[0]*t47;
-    obs[42] = qd[0]*t45;
-    obs[43] = qdd[0]*t47 - t24*t45;
-    obs[44] = qdd[0]*t45 + t24*t47;
+    obs[39] = c[3] + t37;
+    obs[40] = c[4] + t38;
+    obs[41] = qd[0]*t39;
+    obs[42] = qd[0]*t37;
+    obs[43] = qdd[0]*t39 - t16*t37;
+    obs[44] = qdd[0]*t37 + t16*t39;
     obs[45] = q[1];
     obs[46] = qd[1];
     obs[47] = qdd[1];
-    obs[48] = p[7] + t48;
-    obs[49] = p[8] + t49;
-    obs[50] = qd[1]*t50;
-    obs[51] = qd[1]*t48;
-    obs[52] = qdd[1]*t50 - t48*t51;
-    obs[53] = qdd[1]*t48 + t50*t51;
+    obs[48] = c[15] + t40;
+    obs[49] = c[16] + t41;
+    obs[50] = qd[1]*t42;
+    obs[51] = qd[1]*t40;
+    obs[52] = qdd[1]*t42 - t40*t43;
+    obs[53] = qdd[1]*t40 + t42*t43;
     obs[54] = q[1];
     obs[55] = qd[1];
     obs[56] = qdd[1];
-    obs[57] = t36 + t52;
-    obs[58] = t37 + t53;
-    obs[59] = t55;
-    obs[60] = qd[1]*t56 + t31;
-    obs[61] = qd[1]*(-qd[1]*t56 - t31) + qdd[1]*t54 + qdd[3]*t12 - t32;
-    obs[62] = qd[1]*t55 + qdd[1]*t56 + t39;
+    obs[57] = t28 + t44;
+    obs[58] = t29 + t45;
+    obs[59] = t47;
+    obs[60] = qd[1]*t48 + t23;
+    obs[61] = qd[1]*(-qd[1]*t48 - t23) + qdd[1]*t46 + t30;
+    obs[62] = qd[1]*t47 + qdd[1]*t48 + t31;
     return SG_OK;
 }
 
 static const unsigned char sg_hook_drive_coord_is_angle[4] = { 1, 1, 1, 0 };
 
 static const sg_mechanism sg_hook_drive_descriptor = {
-    "hook_drive", 4, 1, 28, 63, 2,
+    "hook_drive", 4, 1, 28, 26, 63, 2,
     sg_hook_drive_coord_is_angle,
+    sg_hook_drive_constants,
     sg_hook_drive_closed,
     sg_hook_drive_residual,
     sg_hook_drive_motion
@@ -281,95 +300,96 @@ const char *sg_hook_drive_manifest(void)
         "uide\\nbar turns into a shuttle swing near 208\\u00b0 (household shuttles swing 206\\u00b0\\u201"
         "3210\\u00b0).\",\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angl"
         "e phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"unit\":\"rad\"}],\"kernels\":{\"sg_hook_drive_cl"
-        "osed\":{\"ops\":33},\"sg_hook_drive_motion\":{\"ops\":201},\"sg_hook_drive_residual\":{\"ops\":4"
-        "9}},\"name\":\"hook_drive\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\""
-        ":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank"
-        "_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_"
-        "pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\""
-        ",\"unit\":\"m\"},{\"name\":\"rock_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"rock_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"slider_pin.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{"
-        "\"name\":\"slider_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"slider_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"}"
-        ",{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"nam"
-        "e\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"cr"
-        "ank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cra"
-        "nk.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_"
-        "rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\""
-        ":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_r"
-        "od.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_r"
-        "od.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"nam"
-        "e\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"}"
-        ",{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\""
-        ",\"unit\":\"rad\"},{\"name\":\"lower_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft"
-        ".angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lo"
-        "wer_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"lower_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"}"
-        ",{\"name\":\"lower_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\""
-        ":\"rad\"},{\"name\":\"rock_slider.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd"
-        "\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider"
-        ".com.y\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_sl"
-        "ider.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"rock_slider.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.012,\"display_unit\":\""
-        "mm\",\"doc\":\"hook crank radius on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\""
-        "crank\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.17,\"display_unit\":\"mm\",\"doc\":\"bi"
-        "g connecting rod, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":"
-        "true,\"unit\":\"m\"},{\"default\":-0.017,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, hori"
-        "zontal (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"unit\":\"m"
-        "\"},{\"default\":-0.17,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, vertical (estimate)\","
-        "\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0"
-        "17,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm driven by the big rod (estimate)\",\"kind\":"
-        "\"length\",\"name\":\"rock_front_arm\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.02,\"dis"
-        "play_unit\":\"mm\",\"doc\":\"rock-shaft arm carrying the slider pin (estimate)\",\"kind\":\"leng"
-        "th\",\"name\":\"rock_rear_arm\",\"positive\":true,\"unit\":\"m\"},{\"default\":-1.57079632679489"
-        "66,\"display_unit\":\"deg\",\"doc\":\"rear arm direction relative to the front arm (estimate)\","
-        "\"kind\":\"angle\",\"name\":\"rock_rear_angle\",\"positive\":false,\"unit\":\"rad\"},{\"default\""
-        ":-0.017,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, horizontal (estimate)\",\"kind\":\"l"
-        "ength\",\"name\":\"lower_axis_x\",\"positive\":false,\"unit\":\"m\"},{\"default\":-0.1875,\"disp"
-        "lay_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\""
-        ":\"lower_axis_y\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\""
-        "doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\""
-        ",\"positive\":false,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of "
-        "crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default"
-        "\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"length\","
-        "\"name\":\"crank.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\""
-        "positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment "
-        "of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\""
-        "positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\"mass "
-        "of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"unit\":\"kg\"},{\""
-        "default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_rod about its ce"
-        "ntre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":false,\"unit\":\"k"
-        "g*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mas"
-        "s\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.002,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\""
-        "rock_shaft.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\""
-        ",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com"
-        "_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":"
-        "\"moment of inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"roc"
-        "k_shaft.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.08,\"display_unit\":\""
-        "g\",\"doc\":\"mass of lower_shaft\",\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\""
-        ":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of low"
-        "er_shaft, local u\",\"kind\":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":false,\"unit"
-        "\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, loca"
-        "l v\",\"kind\":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":false,\"unit\":\"m\"},{\"d"
-        "efault\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lower_shaft about i"
-        "ts centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_shaft.inertia\",\"positive\":false,\"u"
-        "nit\":\"kg*m**2\"},{\"default\":0.003,\"display_unit\":\"g\",\"doc\":\"mass of rock_slider\",\"k"
-        "ind\":\"mass\",\"name\":\"rock_slider.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0."
-        "0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, local u\",\"kind\":\"length\""
-        ",\"name\":\"rock_slider.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_un"
-        "it\":\"mm\",\"doc\":\"centre of mass of rock_slider, local v\",\"kind\":\"length\",\"name\":\"ro"
-        "ck_slider.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m*"
-        "*2\",\"doc\":\"moment of inertia of rock_slider about its centre of mass\",\"kind\":\"inertia\","
-        "\"name\":\"rock_slider.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x"
-        "\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\""
-        ",\"offset\":0},{\"doc\":\"big-rod pin C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\""
-        ":6},{\"doc\":\"slider pin E on the rock-shaft rear arm\",\"name\":\"slider_pin\",\"offset\":12}]"
-        "}"
+        "osed\":{\"ops\":60},\"sg_hook_drive_constants\":{\"ops\":12},\"sg_hook_drive_motion\":{\"ops\":1"
+        "92},\"sg_hook_drive_residual\":{\"ops\":37}},\"name\":\"hook_drive\",\"observables\":[{\"name\":"
+        "\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin."
+        "x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.x\""
+        ",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":\"m\"},{\"name\":\"rock_pin.x_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.x_dd\",\"unit\":\"m/s^2"
+        "\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.x\",\"unit\":\"m\"},{"
+        "\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\":\"slider_pin.x_d\",\"unit\":\"m/s\"},{\"name"
+        "\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
+        "e\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\""
+        ":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"nam"
+        "e\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank."
+        "com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com."
+        "x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod."
+        "angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod."
+        "angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_rod"
+        ".com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com"
+        ".y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod."
+        "com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock"
+        "_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\""
+        "name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"na"
+        "me\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"lower_shaft.angle_d\","
+        "\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_s"
+        "haft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lower_s"
+        "haft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.com.y_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name\":\"rock_slider.angle_d\",\"unit\":\""
+        "rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_slider.com.x\""
+        ",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider"
+        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.com.y_dd\",\"unit\":\"m/s^2\"}],\"params"
+        "\":[{\"default\":0.012,\"display_unit\":\"mm\",\"doc\":\"hook crank radius on the upper shaft (e"
+        "stimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\"default\""
+        ":0.17,\"display_unit\":\"mm\",\"doc\":\"big connecting rod, pin to pin (estimate)\",\"kind\":\"l"
+        "ength\",\"name\":\"big_rod\",\"positive\":true,\"unit\":\"m\"},{\"default\":-0.017,\"display_uni"
+        "t\":\"mm\",\"doc\":\"rock-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"roc"
+        "k_axis_x\",\"positive\":false,\"unit\":\"m\"},{\"default\":-0.17,\"display_unit\":\"mm\",\"doc\""
+        ":\"rock-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positiv"
+        "e\":false,\"unit\":\"m\"},{\"default\":0.017,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm dr"
+        "iven by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\":tr"
+        "ue,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm carrying t"
+        "he slider pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm\",\"positive\":true,\"un"
+        "it\":\"m\"},{\"default\":-1.5707963267948966,\"display_unit\":\"deg\",\"doc\":\"rear arm directi"
+        "on relative to the front arm (estimate)\",\"kind\":\"angle\",\"name\":\"rock_rear_angle\",\"posi"
+        "tive\":false,\"unit\":\"rad\"},{\"default\":-0.017,\"display_unit\":\"mm\",\"doc\":\"lower-shaft"
+        " axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_x\",\"positive\":false,"
+        "\"unit\":\"m\"},{\"default\":-0.1875,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertica"
+        "l (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false,\"unit\":\"m\"},"
+        "{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\""
+        ",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"unit\":\"rad\"},{\"default\":0"
+        ".0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\""
+        "positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of m"
+        "ass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"unit\""
+        ":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\""
+        "kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\"kin"
+        "d\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\""
+        ":0.028,\"display_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.m"
+        "ass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\""
+        ":\"moment of inertia of big_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_r"
+        "od.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\""
+        "doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\""
+        "unit\":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft"
+        ", local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"unit\":\"m\"}"
+        ",{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\""
+        "kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":"
+        "8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre of"
+        " mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"unit\":\"kg*m*"
+        "*2\"},{\"default\":0.08,\"display_unit\":\"g\",\"doc\":\"mass of lower_shaft\",\"kind\":\"mass\""
+        ",\"name\":\"lower_shaft.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_un"
+        "it\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local u\",\"kind\":\"length\",\"name\":\"lo"
+        "wer_shaft.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\""
+        "doc\":\"centre of mass of lower_shaft, local v\",\"kind\":\"length\",\"name\":\"lower_shaft.com_"
+        "v\",\"positive\":false,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\""
+        ":\"moment of inertia of lower_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"l"
+        "ower_shaft.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"display_unit\""
+        ":\"g\",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\"positiv"
+        "e\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of "
+        "rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"positive\":false,\"u"
+        "nit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, l"
+        "ocal v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positive\":false,\"unit\":\"m\"},{"
+        "\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_slider about "
+        "its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_slider.inertia\",\"positive\":false,\""
+        "unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"d"
+        "oc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\"big-rod pin C on the rock-s"
+        "haft arm\",\"name\":\"rock_pin\",\"offset\":6},{\"doc\":\"slider pin E on the rock-shaft rear ar"
+        "m\",\"name\":\"slider_pin\",\"offset\":12}],\"sizes\":{\"nbranch\":2,\"nc\":26,\"nobs\":63,\"np\""
+        ":28,\"nq\":4,\"nx\":1}}"
         ;
 }

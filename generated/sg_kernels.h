@@ -5,23 +5,26 @@
 #include "sg_runtime.h"
 
 /* needle_bar */
-int sg_needle_bar_closed(const double *x, const double *p, const int *branch, double *q);
-void sg_needle_bar_residual(const double *q, const double *x, const double *p, double *r, double *jac);
-int sg_needle_bar_motion(const double *q, const double *x, const double *xd, const double *xdd, const double *p, double *qd, double *qdd, double *obs);
+void sg_needle_bar_constants(const double *p, double *c);
+int sg_needle_bar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+void sg_needle_bar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
+int sg_needle_bar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
 const sg_mechanism *sg_needle_bar(void);
 const char *sg_needle_bar_manifest(void);
 
 /* take_up */
-int sg_take_up_closed(const double *x, const double *p, const int *branch, double *q);
-void sg_take_up_residual(const double *q, const double *x, const double *p, double *r, double *jac);
-int sg_take_up_motion(const double *q, const double *x, const double *xd, const double *xdd, const double *p, double *qd, double *qdd, double *obs);
+void sg_take_up_constants(const double *p, double *c);
+int sg_take_up_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+void sg_take_up_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
+int sg_take_up_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
 const sg_mechanism *sg_take_up(void);
 const char *sg_take_up_manifest(void);
 
 /* hook_drive */
-int sg_hook_drive_closed(const double *x, const double *p, const int *branch, double *q);
-void sg_hook_drive_residual(const double *q, const double *x, const double *p, double *r, double *jac);
-int sg_hook_drive_motion(const double *q, const double *x, const double *xd, const double *xdd, const double *p, double *qd, double *qdd, double *obs);
+void sg_hook_drive_constants(const double *p, double *c);
+int sg_hook_drive_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+void sg_hook_drive_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
+int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
 const sg_mechanism *sg_hook_drive(void);
 const char *sg_hook_drive_manifest(void);
 

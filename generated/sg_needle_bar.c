@@ -6,118 +6,138 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_needle_bar_closed -- Total ops: 11 */
-int sg_needle_bar_closed(const double *x, const double *p, const int *branch, double *q)
+/* sg_needle_bar_constants -- Total ops: 7 */
+void sg_needle_bar_constants(const double *p, double *c)
 {
+    const double t0 = -p[2];
+    c[0] = p[0];
+    c[1] = cos(p[4]);
+    c[2] = sin(p[4]);
+    c[3] = p[1];
+    c[4] = p[2];
+    c[5] = (1.0/(p[1]));
+    c[6] = t0;
+    c[7] = -p[3];
+    c[8] = p[4];
+    c[9] = p[6];
+    c[10] = p[7];
+    c[11] = -p[13] - t0;
+    c[12] = p[12];
+}
+
+/* sg_needle_bar_closed -- Total ops: 15 */
+int sg_needle_bar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+{
+    (void)x;
     int st;
     {
         /* dyad 0: RRP closed at joint C (rod, needle_bar) */
-        const double t0 = p[4] + x[0];
-        const double P[2] = {p[0]*cos(t0), p[0]*sin(t0)};
-        const double l[1] = {fabs(p[1])};
-        const double L0[2] = {p[2], 0.0};
+        const double P[2] = {c[0]*(c[1]*cx[0] - c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[2]*cx[0])};
+        const double l[1] = {c[3]};
+        const double L0[2] = {c[4], 0.0};
         const double u[2] = {0.0, 1.0};
         double s, J[2];
         st = sg_dyad_rrp(P, l[0], L0, u, branch[0], &s, J);
         if (st != SG_OK) return st;
-        q[1] = -atan2(0.0, p[1]) + atan2(J[1] - P[1], J[0] - P[0]);
+        q[1] = atan2(J[1] - P[1], J[0] - P[0]);
         q[0] = s;
+        cq[2] = c[5]*(J[0] - P[0]);
+        cq[3] = c[5]*(J[1] - P[1]);
     }
     return SG_OK;
 }
 
-/* sg_needle_bar_residual -- Total ops: 15 */
-void sg_needle_bar_residual(const double *q, const double *x, const double *p, double *r, double *jac)
+/* sg_needle_bar_residual -- Total ops: 16 */
+void sg_needle_bar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac)
 {
-    const double t0 = p[1]*cos(q[1]);
-    const double t1 = p[4] + x[0];
-    const double t2 = p[1]*sin(q[1]);
-    r[0] = p[0]*cos(t1) - p[2] + t0;
-    r[1] = p[0]*sin(t1) - q[0] + t2;
+    (void)x;
+    const double t0 = c[3]*cq[2];
+    const double t1 = c[3]*cq[3];
+    r[0] = c[0]*(c[1]*cx[0] - c[2]*cx[1]) + c[6] + t0;
+    r[1] = c[0]*(c[1]*cx[1] + c[2]*cx[0]) - q[0] + t1;
     jac[0] = 0.0;
-    jac[1] = -t2;
+    jac[1] = -t1;
     jac[2] = -1.0;
     jac[3] = t0;
 }
 
-/* sg_needle_bar_motion -- Total ops: 68 */
-int sg_needle_bar_motion(const double *q, const double *x, const double *xd, const double *xdd, const double *p, double *qd, double *qdd, double *obs)
+/* sg_needle_bar_motion -- Total ops: 70 */
+int sg_needle_bar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
 {
-    const double t0 = p[1]*sin(q[1]);
-    const double t1 = cos(q[1]);
-    const double t2 = p[1]*t1;
-    const double t3 = p[4] + x[0];
-    const double t4 = sin(t3);
-    const double t5 = p[0]*t4;
-    const double t6 = t5*xd[0];
-    const double t7 = cos(t3);
-    const double t8 = p[0]*t7;
-    const double t9 = t8*xd[0];
-    const double t12 = ((xd[0])*(xd[0]));
-    const double t13 = t12*t8 + t5*xdd[0];
-    const double t15 = t12*t5 - t8*xdd[0];
-    const double t16 = p[6]*t7 - p[7]*t4;
-    const double t17 = p[6]*t4 + p[7]*t7;
-    const double t18 = -t17;
-    const double t19 = (0.5)*t2;
-    const double t20 = (0.5)*t0;
+    const double t0 = c[3]*cq[3];
+    const double t1 = c[3]*cq[2];
+    const double t2 = c[1]*cx[1] + c[2]*cx[0];
+    const double t3 = c[0]*t2;
+    const double t4 = t3*xd[0];
+    const double t5 = c[1]*cx[0] - c[2]*cx[1];
+    const double t6 = c[0]*t5;
+    const double t7 = t6*xd[0];
+    const double t10 = ((xd[0])*(xd[0]));
+    const double t11 = t10*t6 + t3*xdd[0];
+    const double t13 = t10*t3 - t6*xdd[0];
+    const double t14 = c[10]*t2 - c[9]*t5;
+    const double t15 = -t14;
+    const double t16 = c[10]*t5 + c[9]*t2;
+    const double t17 = -t16;
+    const double t18 = (0.5)*t1;
+    const double t19 = (0.5)*t0;
     double J[4];
     int piv[2];
     J[0] = 0.0;
     J[1] = -t0;
     J[2] = -1.0;
-    J[3] = t2;
-    qd[0] = t6;
-    qd[1] = -t9;
-    if (sg_lu_factor(2, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve(2, J, piv, qd);
-    const double t10 = ((qd[1])*(qd[1]));
-    const double t11 = t10*t2;
-    const double t14 = t0*t10;
-    qdd[0] = t11 + t13;
-    qdd[1] = t14 + t15;
-    sg_lu_solve(2, J, piv, qdd);
-    obs[0] = t8;
-    obs[1] = t5;
-    obs[2] = -t6;
-    obs[3] = t9;
-    obs[4] = -t13;
-    obs[5] = -t15;
-    obs[6] = p[2];
+    J[3] = t1;
+    qd[0] = t4;
+    qd[1] = -t7;
+    if (sg_lu_factor_inl(2, J, piv, 0) != SG_OK) return SG_SINGULAR;
+    sg_lu_solve_inl(2, J, piv, qd);
+    const double t8 = ((qd[1])*(qd[1]));
+    const double t9 = t1*t8;
+    const double t12 = t0*t8;
+    qdd[0] = t11 + t9;
+    qdd[1] = t12 + t13;
+    sg_lu_solve_inl(2, J, piv, qdd);
+    obs[0] = t6;
+    obs[1] = t3;
+    obs[2] = -t4;
+    obs[3] = t7;
+    obs[4] = -t11;
+    obs[5] = -t13;
+    obs[6] = c[4];
     obs[7] = q[0];
     obs[8] = 0.0;
     obs[9] = qd[0];
     obs[10] = 0.0;
     obs[11] = qdd[0];
-    obs[12] = p[2];
-    obs[13] = -p[3] + q[0];
+    obs[12] = c[4];
+    obs[13] = c[7] + q[0];
     obs[14] = 0.0;
     obs[15] = qd[0];
     obs[16] = 0.0;
     obs[17] = qdd[0];
-    obs[18] = t3;
+    obs[18] = c[8] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
-    obs[21] = t16;
-    obs[22] = t17;
-    obs[23] = t18*xd[0];
-    obs[24] = t16*xd[0];
-    obs[25] = -t12*t16 + t18*xdd[0];
-    obs[26] = t12*t18 + t16*xdd[0];
+    obs[21] = t15;
+    obs[22] = t16;
+    obs[23] = t17*xd[0];
+    obs[24] = t15*xd[0];
+    obs[25] = t10*t14 + t17*xdd[0];
+    obs[26] = t10*t17 + t15*xdd[0];
     obs[27] = q[1];
     obs[28] = qd[1];
     obs[29] = qdd[1];
-    obs[30] = t19 + t8;
-    obs[31] = t20 + t5;
-    obs[32] = -qd[1]*t20 - t6;
-    obs[33] = qd[1]*t19 + t9;
-    obs[34] = -qdd[1]*t20 - 0.5*t11 - t13;
-    obs[35] = (0.5)*p[1]*qdd[1]*t1 - 0.5*t14 - t15;
+    obs[30] = t18 + t6;
+    obs[31] = t19 + t3;
+    obs[32] = -qd[1]*t19 - t4;
+    obs[33] = qd[1]*t18 + t7;
+    obs[34] = -qdd[1]*t19 - t11 - 0.5*t9;
+    obs[35] = (0.5)*c[3]*cq[2]*qdd[1] - 0.5*t12 - t13;
     obs[36] = (0.5)*3.141592653589793;
     obs[37] = 0.0;
     obs[38] = 0.0;
-    obs[39] = -p[13] + p[2];
-    obs[40] = p[12] + q[0];
+    obs[39] = c[11];
+    obs[40] = c[12] + q[0];
     obs[41] = 0.0;
     obs[42] = qd[0];
     obs[43] = 0.0;
@@ -128,8 +148,9 @@ int sg_needle_bar_motion(const double *q, const double *x, const double *xd, con
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };
 
 static const sg_mechanism sg_needle_bar_descriptor = {
-    "needle_bar", 2, 1, 15, 45, 1,
+    "needle_bar", 2, 1, 15, 13, 45, 1,
     sg_needle_bar_coord_is_angle,
+    sg_needle_bar_constants,
     sg_needle_bar_closed,
     sg_needle_bar_residual,
     sg_needle_bar_motion
@@ -163,59 +184,60 @@ const char *sg_needle_bar_manifest(void)
         ", masses and inertias are estimates (the\\nseeds' tables of them are not in the text we have).\""
         ",\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\""
         ":\"shaft\",\"name\":\"shaft\",\"unit\":\"rad\"}],\"kernels\":{\"sg_needle_bar_closed\":{\"ops\":"
-        "11},\"sg_needle_bar_motion\":{\"ops\":68},\"sg_needle_bar_residual\":{\"ops\":15}},\"name\":\"ne"
-        "edle_bar\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\","
-        "\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit"
-        "\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit"
-        "\":\"m/s^2\"},{\"name\":\"link_pin.x\",\"unit\":\"m\"},{\"name\":\"link_pin.y\",\"unit\":\"m\"},"
-        "{\"name\":\"link_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.y_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"link_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.y_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"need"
-        "le_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle"
-        "_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cr"
-        "ank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank."
-        "angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com"
-        ".y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\""
-        "rad/s\"},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod"
-        ".com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"nee"
-        "dle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\""
-        "name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"na"
-        "me\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\""
-        ":\"m/s^2\"}],\"params\":[{\"default\":0.0167,\"display_unit\":\"mm\",\"doc\":\"crank radius AB ("
-        "seed 002 \\u00a73)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\""
-        "default\":0.05,\"display_unit\":\"mm\",\"doc\":\"needle-bar link BC, pin to pin (estimate)\",\"k"
-        "ind\":\"length\",\"name\":\"rod\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.0,\"display_u"
-        "nit\":\"mm\",\"doc\":\"horizontal offset of the needle-bar axis from the shaft axis\",\"kind\":\""
-        "length\",\"name\":\"offset\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.062,\"display_uni"
-        "t\":\"mm\",\"doc\":\"needle eye below the link pin C along the bar (estimate)\",\"kind\":\"lengt"
-        "h\",\"name\":\"eye_below_pin\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.0,\"display_unit"
-        "\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\""
-        "crank.phase\",\"positive\":false,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc"
-        "\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"unit\":\"kg\""
-        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\""
-        ":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"displ"
-        "ay_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"cra"
-        "nk.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"do"
-        "c\":\"moment of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"cran"
-        "k.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\""
-        "doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\",\"positive\":false,\"unit\":\"kg\""
-        "},{\"default\":2.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rod about its"
-        " centre of mass\",\"kind\":\"inertia\",\"name\":\"rod.inertia\",\"positive\":false,\"unit\":\"kg"
-        "*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mas"
-        "s\",\"name\":\"needle_bar.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":-0.03,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\""
-        "needle_bar.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\""
-        "doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar.com_v\""
-        ",\"positive\":false,\"unit\":\"m\"},{\"default\":1.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\""
-        "moment of inertia of needle_bar about its centre of mass\",\"kind\":\"inertia\",\"name\":\"needl"
-        "e_bar.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\""
-        "vy\",\"ax\",\"ay\"],\"points\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0},{\""
-        "doc\":\"needle-bar link pin C\",\"name\":\"link_pin\",\"offset\":6},{\"doc\":\"needle eye\",\"na"
-        "me\":\"needle_eye\",\"offset\":12}]}"
+        "15},\"sg_needle_bar_constants\":{\"ops\":7},\"sg_needle_bar_motion\":{\"ops\":70},\"sg_needle_ba"
+        "r_residual\":{\"ops\":16}},\"name\":\"needle_bar\",\"observables\":[{\"name\":\"crank_pin.x\",\""
+        "unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^"
+        "2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.x\",\"unit\":\"m\"},{"
+        "\"name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "link_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lin"
+        "k_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_e"
+        "ye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_"
+        "dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\""
+        ",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\""
+        ",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m"
+        "/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\""
+        "},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"}"
+        ",{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod"
+        ".com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_d"
+        "d\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.an"
+        "gle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_"
+        "bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\""
+        "needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{"
+        "\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0167,\"display_"
+        "unit\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u00a73)\",\"kind\":\"length\",\"name\":\"cra"
+        "nk\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.05,\"display_unit\":\"mm\",\"doc\":\"needl"
+        "e-bar link BC, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\""
+        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"horizontal offset of the needle"
+        "-bar axis from the shaft axis\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"uni"
+        "t\":\"m\"},{\"default\":0.062,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link pin C "
+        "along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":true,\"un"
+        "it\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the s"
+        "haft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"unit\":\"rad\"},{\""
+        "default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"cran"
+        "k.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\""
+        "centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":fal"
+        "se,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, l"
+        "ocal v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"unit\":\"m\"},{\"defa"
+        "ult\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of "
+        "mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},"
+        "{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"r"
+        "od.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":2.5e-06,\"display_unit\":\"kg*m**2\","
+        "\"doc\":\"moment of inertia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"ro"
+        "d.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\""
+        "doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\""
+        "unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar"
+        ", local u\",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"unit\":\"m\"}"
+        ",{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"ki"
+        "nd\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":1."
+        "5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of"
+        " mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"unit\":\"kg*m*"
+        "*2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"doc\":\"crank p"
+        "in B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\"needle-bar link pin C\",\"name\":\"link_p"
+        "in\",\"offset\":6},{\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":12}],\"sizes\":{\""
+        "nbranch\":1,\"nc\":13,\"nobs\":45,\"np\":15,\"nq\":2,\"nx\":1}}"
         ;
 }

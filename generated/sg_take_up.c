@@ -6,155 +6,180 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_take_up_closed -- Total ops: 17 */
-int sg_take_up_closed(const double *x, const double *p, const int *branch, double *q)
+/* sg_take_up_constants -- Total ops: 18 */
+void sg_take_up_constants(const double *p, double *c)
 {
+    const double t0 = (1.0/(p[3]));
+    const double t1 = ((p[5])*(p[5]));
+    const double t2 = ((p[3])*(p[3]));
+    const double t3 = -((p[6])*(p[6])) + t1 + t2;
+    c[0] = p[2];
+    c[1] = cos(p[7]);
+    c[2] = sin(p[7]);
+    c[3] = p[0];
+    c[4] = p[1];
+    c[5] = p[3];
+    c[6] = p[4];
+    c[7] = t0;
+    c[8] = (1.0/(p[4]));
+    c[9] = -p[0];
+    c[10] = -p[1];
+    c[11] = sqrt(t1 - 0.25*((t3)*(t3))/t2);
+    c[12] = t0*t3;
+    c[13] = p[7];
+    c[14] = p[9];
+    c[15] = p[10];
+    c[16] = p[13];
+    c[17] = p[14];
+}
+
+/* sg_take_up_closed -- Total ops: 22 */
+int sg_take_up_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+{
+    (void)x;
     int st;
     {
         /* dyad 0: RRR closed at joint C (lever, rocker) */
-        const double t0 = p[7] + x[0];
-        const double P[2] = {p[2]*cos(t0), p[2]*sin(t0)};
-        const double Q[2] = {p[0], p[1]};
-        const double l[2] = {fabs(p[3]), fabs(p[4])};
+        const double P[2] = {c[0]*(c[1]*cx[0] - c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[2]*cx[0])};
+        const double Q[2] = {c[3], c[4]};
+        const double l[2] = {c[5], c[6]};
         double J[2];
         st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
         if (st != SG_OK) return st;
-        q[1] = -atan2(0.0, p[3]) + atan2(J[1] - P[1], J[0] - P[0]);
-        q[0] = -atan2(0.0, p[4]) + atan2(J[1] - Q[1], J[0] - Q[0]);
+        q[1] = atan2(J[1] - P[1], J[0] - P[0]);
+        q[0] = atan2(J[1] - Q[1], J[0] - Q[0]);
+        cq[2] = c[7]*(J[0] - P[0]);
+        cq[3] = c[7]*(J[1] - P[1]);
+        cq[0] = c[8]*(J[0] - Q[0]);
+        cq[1] = c[8]*(J[1] - Q[1]);
     }
     return SG_OK;
 }
 
-/* sg_take_up_residual -- Total ops: 22 */
-void sg_take_up_residual(const double *q, const double *x, const double *p, double *r, double *jac)
+/* sg_take_up_residual -- Total ops: 20 */
+void sg_take_up_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac)
 {
-    const double t0 = p[4]*cos(q[0]);
-    const double t1 = cos(q[1]);
-    const double t2 = p[7] + x[0];
-    const double t3 = p[4]*sin(q[0]);
-    const double t4 = -p[3]*sin(q[1]);
-    r[0] = -p[0] + p[2]*cos(t2) + p[3]*t1 - t0;
-    r[1] = -p[1] + p[2]*sin(t2) - t3 - t4;
+    (void)q;
+    (void)x;
+    const double t0 = c[5]*cq[2];
+    const double t1 = -c[6]*cq[0];
+    const double t2 = c[5]*cq[3];
+    const double t3 = c[6]*cq[1];
+    r[0] = c[0]*(c[1]*cx[0] - c[2]*cx[1]) + c[9] + t0 + t1;
+    r[1] = c[0]*(c[1]*cx[1] + c[2]*cx[0]) + c[10] + t2 - t3;
     jac[0] = t3;
-    jac[1] = t4;
-    jac[2] = -t0;
-    jac[3] = p[3]*t1;
+    jac[1] = -t2;
+    jac[2] = t1;
+    jac[3] = t0;
 }
 
-/* sg_take_up_motion -- Total ops: 143 */
-int sg_take_up_motion(const double *q, const double *x, const double *xd, const double *xdd, const double *p, double *qd, double *qdd, double *obs)
+/* sg_take_up_motion -- Total ops: 126 */
+int sg_take_up_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
 {
-    const double t0 = p[4]*sin(q[0]);
-    const double t1 = sin(q[1]);
-    const double t2 = p[3]*t1;
-    const double t3 = cos(q[0]);
-    const double t4 = p[4]*t3;
-    const double t5 = cos(q[1]);
-    const double t6 = p[3]*t5;
-    const double t7 = p[7] + x[0];
-    const double t8 = sin(t7);
-    const double t9 = p[2]*t8;
-    const double t10 = t9*xd[0];
-    const double t11 = cos(t7);
-    const double t12 = p[2]*t11;
-    const double t13 = t12*xd[0];
-    const double t17 = ((xd[0])*(xd[0]));
-    const double t18 = t12*t17 + t9*xdd[0];
-    const double t20 = t12*xdd[0];
-    const double t21 = t17*t9;
-    const double t22 = -t20 + t21;
-    const double t26 = (1.0/(p[3]));
-    const double t27 = ((p[3])*(p[3]));
-    const double t28 = ((p[5])*(p[5]));
-    const double t29 = -((p[6])*(p[6])) + t27 + t28;
-    const double t30 = (0.5)*t26*t29;
-    const double t31 = sqrt(t28 - 0.25*((t29)*(t29))/t27);
-    const double t32 = t1*t31;
-    const double t33 = t1*t30 + t31*t5;
-    const double t34 = -t33;
-    const double t35 = -0.5*t26*t29*t5 + t32;
+    const double t0 = c[6]*cq[1];
+    const double t1 = c[5]*cq[3];
+    const double t2 = c[6]*cq[0];
+    const double t3 = c[5]*cq[2];
+    const double t4 = c[1]*cx[1] + c[2]*cx[0];
+    const double t5 = c[0]*t4;
+    const double t6 = t5*xd[0];
+    const double t7 = c[1]*cx[0] - c[2]*cx[1];
+    const double t8 = c[0]*t7;
+    const double t9 = t8*xd[0];
+    const double t13 = ((xd[0])*(xd[0]));
+    const double t14 = t13*t8 + t5*xdd[0];
+    const double t17 = t13*t5;
+    const double t18 = t8*xdd[0];
+    const double t19 = t17 - t18;
+    const double t24 = c[11]*cq[3];
+    const double t25 = (0.5)*c[12];
+    const double t26 = c[11]*cq[2] + cq[3]*t25;
+    const double t27 = -t26;
+    const double t28 = -0.5*c[12]*cq[2] + t24;
+    const double t29 = -t28;
+    const double t30 = -t17 + t18;
+    const double t31 = c[14]*t7 - c[15]*t4;
+    const double t32 = c[14]*t4 + c[15]*t7;
+    const double t33 = -t32;
+    const double t34 = c[16]*cq[2] - c[17]*cq[3];
+    const double t35 = c[16]*cq[3] + c[17]*cq[2];
     const double t36 = -t35;
-    const double t37 = t20 - t21;
-    const double t38 = p[10]*t8 - p[9]*t11;
-    const double t39 = -t38;
-    const double t40 = p[10]*t11 + p[9]*t8;
-    const double t41 = -t40;
-    const double t42 = p[13]*t5 - p[14]*t1;
-    const double t43 = p[13]*t1 + p[14]*t5;
-    const double t44 = -t43;
     double J[4];
     int piv[2];
     J[0] = t0;
-    J[1] = -t2;
-    J[2] = -t4;
-    J[3] = t6;
-    qd[0] = t10;
-    qd[1] = -t13;
-    if (sg_lu_factor(2, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve(2, J, piv, qd);
-    const double t14 = ((qd[1])*(qd[1]));
-    const double t15 = ((qd[0])*(qd[0]));
-    const double t16 = t15*t4;
-    const double t19 = t0*t15;
-    const double t23 = qd[0]*t0;
-    const double t24 = qd[0]*t4;
-    qdd[0] = t14*t6 - t16 + t18;
-    qdd[1] = t14*t2 - t19 + t22;
-    sg_lu_solve(2, J, piv, qdd);
-    const double t25 = qdd[0]*t0;
-    obs[0] = t12;
-    obs[1] = t9;
-    obs[2] = -t10;
-    obs[3] = t13;
-    obs[4] = -t18;
-    obs[5] = -t22;
-    obs[6] = p[0] + t4;
-    obs[7] = p[1] + t0;
-    obs[8] = -t23;
-    obs[9] = t24;
-    obs[10] = -t16 - t25;
-    obs[11] = p[4]*qdd[0]*t3 - t19;
-    obs[12] = t12 + t30*t5 - t32;
-    obs[13] = t33 + t9;
-    obs[14] = qd[1]*t34 - t10;
-    obs[15] = qd[1]*t36 + t13;
-    obs[16] = qdd[1]*t34 + t14*t35 - t18;
-    obs[17] = qdd[1]*t36 + t14*t34 + t37;
-    obs[18] = t7;
+    J[1] = -t1;
+    J[2] = -t2;
+    J[3] = t3;
+    qd[0] = t6;
+    qd[1] = -t9;
+    if (sg_lu_factor_inl(2, J, piv, 0) != SG_OK) return SG_SINGULAR;
+    sg_lu_solve_inl(2, J, piv, qd);
+    const double t10 = ((qd[1])*(qd[1]));
+    const double t11 = ((qd[0])*(qd[0]));
+    const double t12 = t11*t2;
+    const double t15 = t0*t11;
+    const double t16 = -t15;
+    const double t20 = qd[0]*t0;
+    const double t21 = qd[0]*t2;
+    qdd[0] = t10*t3 - t12 + t14;
+    qdd[1] = t1*t10 + t16 + t19;
+    sg_lu_solve_inl(2, J, piv, qdd);
+    const double t22 = qdd[0]*t0;
+    const double t23 = qdd[0]*t2;
+    obs[0] = t8;
+    obs[1] = t5;
+    obs[2] = -t6;
+    obs[3] = t9;
+    obs[4] = -t14;
+    obs[5] = -t19;
+    obs[6] = c[3] + t2;
+    obs[7] = c[4] + t0;
+    obs[8] = -t20;
+    obs[9] = t21;
+    obs[10] = -t12 - t22;
+    obs[11] = t16 + t23;
+    obs[12] = cq[2]*t25 - t24 + t8;
+    obs[13] = t26 + t5;
+    obs[14] = qd[1]*t27 - t6;
+    obs[15] = qd[1]*t29 + t9;
+    obs[16] = qdd[1]*t27 + t10*t28 - t14;
+    obs[17] = qdd[1]*t29 + t10*t27 + t30;
+    obs[18] = c[13] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
-    obs[21] = t39;
-    obs[22] = t40;
-    obs[23] = t41*xd[0];
-    obs[24] = t39*xd[0];
-    obs[25] = t17*t38 + t41*xdd[0];
-    obs[26] = t17*t41 + t39*xdd[0];
+    obs[21] = t31;
+    obs[22] = t32;
+    obs[23] = t33*xd[0];
+    obs[24] = t31*xd[0];
+    obs[25] = -t13*t31 + t33*xdd[0];
+    obs[26] = t13*t33 + t31*xdd[0];
     obs[27] = q[1];
     obs[28] = qd[1];
     obs[29] = qdd[1];
-    obs[30] = t12 + t42;
-    obs[31] = t43 + t9;
-    obs[32] = qd[1]*t44 - t10;
-    obs[33] = qd[1]*t42 + t13;
-    obs[34] = qdd[1]*t44 - t14*t42 - t18;
-    obs[35] = qdd[1]*t42 + t14*t44 + t37;
+    obs[30] = t34 + t8;
+    obs[31] = t35 + t5;
+    obs[32] = qd[1]*t36 - t6;
+    obs[33] = qd[1]*t34 + t9;
+    obs[34] = qdd[1]*t36 - t10*t34 - t14;
+    obs[35] = qdd[1]*t34 + t10*t36 + t30;
     obs[36] = q[0];
     obs[37] = qd[0];
     obs[38] = qdd[0];
-    obs[39] = p[0] + (0.5)*t4;
-    obs[40] = p[1] + (0.5)*t0;
-    obs[41] = -0.5*t23;
-    obs[42] = (0.5)*t24;
-    obs[43] = -0.5*t16 - 0.5*t25;
-    obs[44] = (0.5)*p[4]*qdd[0]*t3 - 0.5*t19;
+    obs[39] = c[3] + (0.5)*t2;
+    obs[40] = c[4] + (0.5)*t0;
+    obs[41] = -0.5*t20;
+    obs[42] = (0.5)*t21;
+    obs[43] = -0.5*t12 - 0.5*t22;
+    obs[44] = -0.5*t15 + (0.5)*t23;
     return SG_OK;
 }
 
 static const unsigned char sg_take_up_coord_is_angle[2] = { 1, 1 };
 
 static const sg_mechanism sg_take_up_descriptor = {
-    "take_up", 2, 1, 18, 45, 1,
+    "take_up", 2, 1, 18, 18, 45, 1,
     sg_take_up_coord_is_angle,
+    sg_take_up_constants,
     sg_take_up_closed,
     sg_take_up_residual,
     sg_take_up_motion
@@ -188,64 +213,65 @@ const char *sg_take_up_manifest(void)
         "t make a\\nGrashof crank-rocker (10 + 38 \\u2264 26 + 32.8) with the willow-leaf eye path the pa"
         "per describes.\",\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft ang"
         "le phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"unit\":\"rad\"}],\"kernels\":{\"sg_take_up_clos"
-        "ed\":{\"ops\":17},\"sg_take_up_motion\":{\"ops\":143},\"sg_take_up_residual\":{\"ops\":22}},\"na"
-        "me\":\"take_up\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pi"
-        "n.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\","
-        "\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit"
-        "\":\"m\"},{\"name\":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"}"
-        ",{\"name\":\"thread_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{"
-        "\"name\":\"thread_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"nam"
-        "e\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"cr"
-        "ank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cra"
-        "nk.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever."
-        "angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lev"
-        "er.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\""
-        "unit\":\"rad\"},{\"name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\""
-        "unit\":\"rad/s^2\"},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit"
-        "\":\"m\"},{\"name\":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":"
-        "\"m/s^2\"}],\"params\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, h"
-        "orizontal (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\""
-        ":false,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed 00"
-        "4 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"unit\":\""
-        "m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\":\"length"
-        "\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.038,\"display_unit\":\"mm"
-        "\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name\":\"lever_bc\",\"posit"
-        "ive\":true,\"unit\":\"m\"},{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"r"
-        "ocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\",\"positive\":true,\"unit\":\"m\"},"
-        "{\"default\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to thread eye E (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"lever_be\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.022,"
-        "\"display_unit\":\"mm\",\"doc\":\"take-up lever C to thread eye E (estimate)\",\"kind\":\"length"
-        "\",\"name\":\"lever_ce\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"d"
-        "eg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank."
-        "phase\",\"positive\":false,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"m"
-        "ass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"unit\":\"kg\"},{\""
-        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"le"
-        "ngth\",\"name\":\"crank.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_un"
-        "it\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.co"
-        "m_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\""
-        "moment of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.iner"
-        "tia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.009000000000000001,\"display_unit\""
-        ":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\""
-        "unit\":\"kg\"},{\"default\":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, loc"
-        "al u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"unit\":\"m\"},{\"defaul"
-        "t\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length"
-        "\",\"name\":\"lever.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit"
-        "\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inerti"
-        "a\",\"name\":\"lever.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"dis"
-        "play_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.mass\",\"positi"
-        "ve\":false,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of "
-        "inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rocker.inertia\",\""
-        "positive\":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\""
-        "],\"points\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\"lever-roc"
-        "ker pin C\",\"name\":\"rocker_pin\",\"offset\":6},{\"doc\":\"thread eye E of the take-up lever\""
-        ",\"name\":\"thread_eye\",\"offset\":12}]}"
+        "ed\":{\"ops\":22},\"sg_take_up_constants\":{\"ops\":18},\"sg_take_up_motion\":{\"ops\":126},\"sg"
+        "_take_up_residual\":{\"ops\":20}},\"name\":\"take_up\",\"observables\":[{\"name\":\"crank_pin.x\""
+        ",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m"
+        "/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.x\",\"unit\":\"m"
+        "\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\"name\":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\""
+        "name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.x\",\"unit\":\"m\"},{\"nam"
+        "e\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\"thread_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"cr"
+        "ank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
+        "crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_"
+        "d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\","
+        "\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\""
+        "unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\""
+        ":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s"
+        "^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\"name\":\"rocker.angle_d\",\"unit\":\"rad/s"
+        "\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rocker.com.x\",\"unit\":\"m\""
+        "},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\"name\":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"n"
+        "ame\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\""
+        "name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.026000000000000002,\""
+        "display_unit\":\"mm\",\"doc\":\"D, horizontal (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"na"
+        "me\":\"rocker_pivot_x\",\"positive\":false,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\""
+        "mm\",\"doc\":\"D, vertical (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot"
+        "_y\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"cran"
+        "k AB (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\"de"
+        "fault\":0.038,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"len"
+        "gth\",\"name\":\"lever_bc\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.026000000000000002,"
+        "\"display_unit\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\""
+        ",\"positive\":true,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up "
+        "lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\",\"positive\":true"
+        ",\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"take-up lever C to thread "
+        "eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"positive\":true,\"unit\":\"m\"},{"
+        "\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\","
+        "\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"unit\":\"rad\"},{\"default\":0."
+        "0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"p"
+        "ositive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
+        "ss of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"unit\":"
+        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"k"
+        "ind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\"kin"
+        "d\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\""
+        ":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\""
+        ":\"lever.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.024,\"display_unit\":\"mm\",\""
+        "doc\":\"centre of mass of lever, local u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positi"
+        "ve\":false,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass o"
+        "f lever, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"unit\":\"m\""
+        "},{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its"
+        " centre of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"unit\":\""
+        "kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\""
+        ",\"name\":\"rocker.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\""
+        ":\"kg*m**2\",\"doc\":\"moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia"
+        "\",\"name\":\"rocker.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\""
+        ",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\","
+        "\"offset\":0},{\"doc\":\"lever-rocker pin C\",\"name\":\"rocker_pin\",\"offset\":6},{\"doc\":\"t"
+        "hread eye E of the take-up lever\",\"name\":\"thread_eye\",\"offset\":12}],\"sizes\":{\"nbranch\""
+        ":1,\"nc\":18,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1}}"
         ;
 }

@@ -116,15 +116,25 @@ class Mechanism:
     def _ptr(self, ctype: str, arr: np.ndarray):
         return self.ffi.cast(ctype, self.ffi.from_buffer(arr)) if arr.size else self.ffi.NULL
 
+    def constants(self, params: dict | None = None) -> np.ndarray:
+        """The parameter-only constants the kernels read (sg_<name>_constants)."""
+        c = np.zeros(max(self.manifest["sizes"]["nc"], 1))
+        getattr(self.lib, f"sg_{self.name}_constants")(self._ptr("double *", self.param_vector(params)),
+                                                         self._ptr("double *", c))
+        return c
+
     def residual(self, q, phi: float, params: dict | None = None, held: dict | None = None):
         """Φ(q, x) and Φ_q at one position (for checks): arrays of shape (nq,) and (nq, nq)."""
         nq = len(self.coord_names)
         qv = np.ascontiguousarray(q, dtype=np.float64).reshape(nq)
         x = np.array([float(phi)] + self._held(held), dtype=np.float64)
+        cq = np.column_stack([np.cos(qv), np.sin(qv)]).ravel()
+        cx = np.column_stack([np.cos(x), np.sin(x)]).ravel()
         r, jac = np.zeros(nq), np.zeros((nq, nq))
+        d = self._ptr
         getattr(self.lib, f"sg_{self.name}_residual")(
-            self._ptr("double *", qv), self._ptr("double *", x), self._ptr("double *", self.param_vector(params)),
-            self._ptr("double *", r), self._ptr("double *", jac))
+            d("double *", qv), d("double *", cq), d("double *", x), d("double *", cx),
+            d("double *", self.constants(params)), d("double *", r), d("double *", jac))
         return r, jac
 
     def _held(self, held):
