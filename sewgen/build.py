@@ -55,5 +55,25 @@ def _catalog_ffi() -> cffi.FFI:
 
 catalog_ffi = _catalog_ffi() if (HERE.parent / "generated" / "manifest.json").is_file() else None
 
-if __name__ == "__main__":  # python sewgen/build.py: compile the catalog module in place
-    catalog_ffi.compile(tmpdir=str(HERE.parent), verbose=True)
+SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=undefined", "-fno-omit-frame-pointer", "-g"]
+
+
+def build_catalog(outdir: Path, extra_cflags: list[str] | None = None) -> Path:
+    """Compile the catalog module into ``outdir`` (a checkout only); returns the shared object's path."""
+    import json
+
+    generated = HERE.parent / "generated"
+    names = list(json.loads((generated / "manifest.json").read_text()))
+    outdir.mkdir(parents=True, exist_ok=True)
+    ffi = make_ffi("sewgen._kernels", generated, names, extra_cflags)
+    return Path(ffi.compile(tmpdir=str(outdir)))
+
+
+if __name__ == "__main__":  # python -m sewgen.build [--sanitize] OUTDIR: a separate catalog build (CI)
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m sewgen.build")
+    ap.add_argument("outdir", type=Path)
+    ap.add_argument("--sanitize", action="store_true", help="-fsanitize=address,undefined")
+    a = ap.parse_args()
+    print(build_catalog(a.outdir, SANITIZE if a.sanitize else None))

@@ -1,0 +1,118 @@
+"""The ``sewgen`` command: list the catalog, show parameters, run a kinematic sweep to a table and CSV."""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from derive.units import UnitError, to_si
+
+from . import catalog, load, mechanism
+from .errors import SewgenError
+from .mechanism import Mechanism
+
+
+def _pairs(items: list[str], what: str) -> dict:
+    out = {}
+    for item in items or []:
+        key, sep, val = item.partition("=")
+        if not sep or not key:
+            raise SystemExit(f"sewgen: {what} {item!r} must be NAME=VALUE")
+        out[key.strip()] = val.strip()
+    return out
+
+
+def _mechanism(args) -> Mechanism:
+    if args.file:
+        return load(Path(args.file))
+    return mechanism(args.name)
+
+
+def cmd_list(args) -> int:
+    for name in catalog():
+        m = mechanism(name)
+        title = m.doc.splitlines()[0] if m.doc else ""
+        print(f"{name:12s} {title}")
+        print(f"{'':12s} coordinates: {', '.join(m.coord_names)}; points: {', '.join(m.point_names)}")
+    return 0
+
+
+def cmd_params(args) -> int:
+    m = _mechanism(args)
+    print(f"{m.name}: {len(m.param_names)} parameters (SI default, declared unit)")
+    for p in m.describe_params():
+        print(f"  {p['name']:24s} {p['default']:>12.6g} {p['unit']:8s} [{p['display_unit']}]  {p['doc']}")
+    for b in m.manifest["branches"]:
+        print(f"  branch {b['joint']:17s} default {b['default']:+d}  {b['meaning']}")
+    return 0
+
+
+def _extreme(values: np.ndarray, phi: np.ndarray, fn) -> str:
+    i = int(fn(values))
+    return f"{values[i]:12.6g} @ {math.degrees(phi[i]):6.1f}°"
+
+
+def cmd_kinematics(args) -> int:
+    m = _mechanism(args)
+    try:
+        step = math.degrees(to_si(args.step, "angle", "--step"))
+        start = math.degrees(to_si(args.start, "angle", "--start"))
+    except UnitError as exc:
+        raise SystemExit(f"sewgen: {exc}") from None
+    if not step > 0:
+        raise SystemExit("sewgen: --step must be positive")
+    n = int(round(360.0 / step))
+    phi = np.radians(start + step * np.arange(n))
+    motion = m.solve(phi, speed=args.speed, params=_pairs(args.param, "--param"),
+                     branch={k: int(v) for k, v in _pairs(args.branch, "--branch").items()}, newton=args.newton)
+    print(f"{m.name}: {n} positions every {step:g}°, speed {motion.omega[0]:.6g} rad/s")
+    print(f"{'point':16s} {'x range (m)':>22s} {'y range (m)':>22s} {'peak |v| (m/s)':>26s} {'peak |a| (m/s²)':>26s}")
+    for name in motion.point_names:
+        pt = motion.point(name)
+        speed, acc = np.hypot(pt.vx, pt.vy), np.hypot(pt.ax, pt.ay)
+        print(f"{name:16s} {pt.x.min():10.5f} {pt.x.max():10.5f}  {pt.y.min():10.5f} {pt.y.max():10.5f} "
+              f"{_extreme(speed, phi, np.argmax)} {_extreme(acc, phi, np.argmax)}")
+    for name in motion.coord_names:
+        c = motion.coord(name)
+        print(f"{name:24s} [{c.unit}] min {_extreme(c.value, phi, np.argmin)}  max {_extreme(c.value, phi, np.argmax)}")
+    if args.csv:
+        motion.to_csv(args.csv)
+        print(f"wrote {args.csv}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="sewgen", description="Sewing-machine mechanism analysis.")
+    sub = ap.add_subparsers(dest="command", required=True)
+    sub.add_parser("list", help="the built-in mechanisms").set_defaults(fn=cmd_list)
+    for name, fn, text in (("params", cmd_params, "a mechanism's parameters"),
+                           ("kinematics", cmd_kinematics, "positions, velocities, accelerations over a revolution")):
+        p = sub.add_parser(name, help=text)
+        p.add_argument("name", nargs="?", default="needle_bar", help="catalog mechanism (default needle_bar)")
+        p.add_argument("--file", help="a user mechanism: a .py file with declare()")
+        p.set_defaults(fn=fn)
+        if name == "kinematics":
+            p.add_argument("--speed", default=None, help='shaft speed, e.g. "1000 rpm" (default: the model\'s)')
+            p.add_argument("--step", default="5 deg", help="shaft-angle step (default 5 deg: 72 positions)")
+            p.add_argument("--start", default="0 deg", help="first shaft angle")
+            p.add_argument("--param", action="append", help="NAME=VALUE with unit, e.g. crank='16.7 mm'")
+            p.add_argument("--branch", action="append", help="JOINT=+1|-1 assembly branch")
+            p.add_argument("--newton", action="store_true", help="solve by Newton even where a closed form exists")
+            p.add_argument("--csv", help="write every result column to this CSV file")
+    return ap
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.fn(args)
+    except (SewgenError, KeyError) as exc:
+        print(f"sewgen: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
