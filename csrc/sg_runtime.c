@@ -112,22 +112,6 @@ static void zero_row(double *v, int n)
     for (int i = 0; i < n; ++i) v[i] = 0.0;
 }
 
-/* A sum that is NaN or infinite when any entry is: one branch per row instead of one per entry, four
- * independent accumulators so the additions do not wait on each other. */
-static double sum(const double *v, int n)
-{
-    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-    int i = 0;
-    for (; i + 4 <= n; i += 4) {
-        s0 += v[i];
-        s1 += v[i + 1];
-        s2 += v[i + 2];
-        s3 += v[i + 3];
-    }
-    for (; i < n; ++i) s0 += v[i];
-    return (s0 + s1) + (s2 + s3);
-}
-
 size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
                 const double *alpha, const double *held, const double *p, const int *branch,
                 const double *q_guess, const sg_options *opt, double *q, double *qd, double *qdd,
@@ -189,8 +173,6 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
             }
         }
         if (st == SG_OK) st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi);
-        if (st == SG_OK && !isfinite(sum(qi, nq) + sum(qdi, nq) + sum(qddi, nq) + sum(oi, nobs)))
-            st = SG_NONFINITE;
         status[i] = st;
         if (st != SG_OK) {
             ++failures;

@@ -17,7 +17,7 @@ enum sg_status {
     SG_BRANCH_JUMP = 3,     /* Newton landed on another assembly branch than the previous position */
     SG_NAN_INPUT = 4,       /* a shaft angle, speed or acceleration is not finite */
     SG_NO_CONVERGENCE = 5,  /* Newton ran out of iterations */
-    SG_NONFINITE = 6,       /* a result came out non-finite (never returned as a value) */
+    SG_NONFINITE = 6,       /* a result came out non-finite (the motion kernel tests every output) */
     SG_BAD_ARGUMENT = 7     /* sizes or options out of range: nothing was computed */
 };
 

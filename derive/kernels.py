@@ -156,6 +156,9 @@ class KernelSet:
             body += [f"sg_lu_solve_inl({n}, J, piv, qdd);"]
         body += _temps(pr, staged[2])
         body += [f"obs[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_obs)]
+        outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)] + [f"obs[{k}]" for k in range(len(r_obs))]
+        if outputs:  # one NaN/inf test per position: a balanced sum is non-finite iff an entry is
+            body += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
         names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "obs")
         body = _unused(body, *names) + body + ["return SG_OK;"]
         return Kernel(f"{self.prefix}_motion",
@@ -206,6 +209,14 @@ class KernelSet:
         return Kernel(f"{self.prefix}_constants",
                       f"void {self.prefix}_constants(const double *p, double *c)",
                       body, ops(e for _, e in repl) + ops(red))
+
+
+def _balanced_sum(terms: list[str]) -> str:
+    """a + b + ... as a balanced tree, so the additions do not wait on each other."""
+    if len(terms) == 1:
+        return terms[0]
+    mid = len(terms) // 2
+    return f"({_balanced_sum(terms[:mid])} + {_balanced_sum(terms[mid:])})"
 
 
 def _stage(sym, levels):

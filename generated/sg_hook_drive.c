@@ -251,6 +251,7 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     obs[60] = qd[1]*t48 + t23;
     obs[61] = qd[1]*(-qd[1]*t48 - t23) + qdd[1]*t46 + t30;
     obs[62] = qd[1]*t47 + qdd[1]*t48 + t31;
+    if (!isfinite(((((((q[0] + q[1]) + (q[2] + q[3])) + ((qd[0] + qd[1]) + (qd[2] + (qd[3] + qdd[0])))) + (((qdd[1] + qdd[2]) + (qdd[3] + obs[0])) + ((obs[1] + obs[2]) + (obs[3] + (obs[4] + obs[5]))))) + ((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + (obs[13] + obs[14])))) + (((obs[15] + obs[16]) + (obs[17] + (obs[18] + obs[19]))) + ((obs[20] + obs[21]) + (obs[22] + (obs[23] + obs[24])))))) + (((((obs[25] + obs[26]) + (obs[27] + obs[28])) + ((obs[29] + obs[30]) + (obs[31] + (obs[32] + obs[33])))) + (((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38]))) + ((obs[39] + obs[40]) + (obs[41] + (obs[42] + obs[43]))))) + ((((obs[44] + obs[45]) + (obs[46] + obs[47])) + ((obs[48] + obs[49]) + (obs[50] + (obs[51] + obs[52])))) + (((obs[53] + obs[54]) + (obs[55] + (obs[56] + obs[57]))) + ((obs[58] + obs[59]) + (obs[60] + (obs[61] + obs[62]))))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
