@@ -109,6 +109,8 @@ static inline int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
     return SG_OK;
 }
 
+/* The factor swaps whole rows (L's multipliers too, as LAPACK's dgetrf), so every interchange is applied
+ * to b before the forward substitution. */
 static inline void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *b)
 {
     for (int k = 0; k < n; ++k) {
@@ -117,8 +119,9 @@ static inline void sg_lu_solve_inl(int n, const double *lu, const int *piv, doub
             b[k] = b[piv[k]];
             b[piv[k]] = t;
         }
-        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
     }
+    for (int k = 0; k < n; ++k)
+        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
     for (int k = n - 1; k >= 0; --k) {
         double s = b[k];
         for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];

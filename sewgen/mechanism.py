@@ -194,7 +194,7 @@ class Mechanism:
         q, qd, qdd = (np.zeros((n, nq)) for _ in range(3))
         obs = np.zeros((n, nobs))
         status = np.zeros(n, dtype=np.intc)
-        opt = self.ffi.new("sg_options *", {"tol": 1e-12 * self.length_scale(p), "max_iter": max_iter,
+        opt = self.ffi.new("sg_options *", {"tol": 1e-13 * self.length_scale(p), "max_iter": max_iter,
                                             "newton_only": 1 if newton else 0})
         d = self._ptr
         self.lib.sg_sweep(self._descriptor, n, d("double *", phi_v), d("double *", omega), d("double *", alpha),

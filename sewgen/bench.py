@@ -1,0 +1,409 @@
+"""Benchmarks: compiled sweeps against a SymPy-lambdify + SciPy baseline of the same equations.
+
+    python -m sewgen.bench                      # every catalog mechanism, table on stdout
+    python -m sewgen.bench --json               # the same as a JSON list
+    python -m sewgen.bench --mechanism take_up  # one mechanism (repeatable; "catalog" = the derive line)
+
+Each row is one (mechanism, kernel) entry of the registry below. The "kinematics" kernel times
+``Mechanism.solve`` over one sweep of N shaft angles (positions, velocities, accelerations of every
+coordinate, point and body; the thin Python API included), best of several repeats after a warm-up, and
+the same sweep through ``sg_sweep`` alone (raw C). The baseline evaluates the same Kinematics expressions
+(derive.kinematics) through ``sympy.lambdify(modules="numpy")``, one position at a time: scipy.optimize.root
+on the loop closure from the previous position's solution, numpy.linalg.solve for q' and q'', then every
+observable. Its results are checked against the compiled sweep at the same angles, so the ratio compares
+like with like. The "derive" line times derive.emit.generate for the whole catalog, in-process.
+
+Extension point: add a kernel that runs for every catalog mechanism with :func:`register_kernel` (e.g.
+"kinetostatics"), or a single entry such as a whole machine ("jb1-3") with :func:`register_entry`. Either
+function returns ``(positions_per_s, baseline_positions_per_s or None, extra dict)``; put
+``extra["agree"] = False`` in when a cross-check fails (the run then exits with status 1).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+import sewgen
+
+# -- configuration and registry -----------------------------------------------------------------------------
+
+
+@dataclass
+class Config:
+    positions: int = 3600  # shaft angles in the timed sweep (one revolution)
+    baseline_positions: int = 200  # positions of the lambdify + scipy baseline
+    repeats: int = 7  # timed repeats; the best counts
+    baseline_repeats: int = 5
+    min_time: float = 0.05  # s: one timed repeat loops the call until it lasts at least this long
+    # Agreement of baseline and compiled results, relative to each column's scale. scipy's root ("hybr",
+    # default xtol 1.49e-8) leaves relative errors up to ~1e-8 in the baseline itself (hook_drive: 9e-9).
+    rtol: float = 1e-7
+    baseline_angles: str = "spread"  # "spread": every k-th sweep angle; "contiguous": the first ones
+
+    def sweep_angles(self) -> np.ndarray:
+        """One revolution in ``positions`` equal steps (0.1° for the default 3600), rad."""
+        return 2.0 * np.pi * np.arange(self.positions) / self.positions
+
+    def baseline_rows(self) -> np.ndarray:
+        """Indices into the sweep of the angles the baseline solves (a subset of the timed sweep)."""
+        m = min(self.baseline_positions, self.positions)
+        if self.baseline_angles == "contiguous":
+            return np.arange(m)
+        return np.arange(m) * (self.positions // m)
+
+
+Result = tuple  # (positions_per_s, baseline_positions_per_s | None, extra: dict)
+KernelFn = Callable[[str, Config], Result]  # (catalog mechanism name, config) -> Result
+
+
+@dataclass
+class Entry:
+    mechanism: str
+    kernel: str
+    run: Callable[[Config], Result]
+
+
+class NotApplicable(Exception):
+    """Raise from a kernel function when the kernel does not apply to that mechanism (row skipped)."""
+
+
+#: Kernels timed for every catalog mechanism: name -> function(mechanism name, config).
+KERNELS: dict[str, KernelFn] = {}
+#: Entries that are not "every catalog mechanism" (a whole machine such as "jb1-3", user mechanisms).
+EXTRA_ENTRIES: list[Entry] = []
+
+
+def register_kernel(name: str):
+    """Decorator: time ``fn(mechanism_name, config)`` for every catalog mechanism as kernel ``name``."""
+    def deco(fn: KernelFn) -> KernelFn:
+        KERNELS[name] = fn
+        return fn
+    return deco
+
+
+def register_entry(mechanism: str, kernel: str, fn: Callable[[Config], Result]) -> None:
+    """One extra row: ``fn(config)`` timed as (mechanism, kernel)."""
+    EXTRA_ENTRIES.append(Entry(mechanism, kernel, fn))
+
+
+def entries(selected: list[str] | None = None) -> list[Entry]:
+    """Every registered row (catalog × KERNELS, then EXTRA_ENTRIES), restricted to ``selected`` names."""
+    out = [Entry(name, kernel, (lambda cfg, f=fn, n=name: f(n, cfg)))
+           for name in sewgen.catalog() for kernel, fn in KERNELS.items()]
+    out += EXTRA_ENTRIES
+    return [e for e in out if selected is None or e.mechanism in selected]
+
+
+# -- timing -------------------------------------------------------------------------------------------------
+
+
+def best_time(fn: Callable[[], object], repeats: int, min_time: float) -> float:
+    """Seconds per call of ``fn``: warm up, loop enough calls that a repeat lasts ``min_time``, best repeat."""
+    fn()
+    loops = 1
+    while True:
+        t0 = time.perf_counter()
+        for _ in range(loops):
+            fn()
+        dt = time.perf_counter() - t0
+        if dt >= min_time:
+            break
+        loops = max(loops * 2, int(loops * min_time / max(dt, 1e-9) * 1.2))
+    best = dt / loops
+    for _ in range(repeats - 1):
+        t0 = time.perf_counter()
+        for _ in range(loops):
+            fn()
+        best = min(best, (time.perf_counter() - t0) / loops)
+    return best
+
+
+# -- the compiled sweep -------------------------------------------------------------------------------------
+
+
+def raw_sweep(m: sewgen.Mechanism, phi: np.ndarray):
+    """A closure calling sg_sweep alone on preallocated arrays (defaults as solve() uses them)."""
+    n, nq, nobs = len(phi), len(m.coord_names), len(m.manifest["observables"])
+    phi = np.ascontiguousarray(phi, dtype=np.float64)
+    omega, alpha = np.full(n, m.default_speed), np.zeros(n)
+    p = m.param_vector()
+    held = np.array([i["default"] for i in m.manifest["inputs"][1:]], dtype=np.float64)
+    branch = np.array([b["default"] for b in m.manifest["branches"]], dtype=np.intc)
+    guess = np.array([c["guess"] for c in m.manifest["coords"]], dtype=np.float64)
+    q, qd, qdd = (np.zeros((n, nq)) for _ in range(3))
+    obs, status = np.zeros((n, nobs)), np.zeros(n, dtype=np.intc)
+    opt = m.ffi.new("sg_options *", {"tol": 1e-12 * m.length_scale(p), "max_iter": 50, "newton_only": 0})
+    d = m._ptr
+    args = (m._descriptor, n, d("double *", phi), d("double *", omega), d("double *", alpha),
+            d("double *", held), d("double *", p), d("int *", branch), d("double *", guess), opt,
+            d("double *", q), d("double *", qd), d("double *", qdd), d("double *", obs), d("int *", status))
+    sweep = m.lib.sg_sweep
+
+    def call():
+        return sweep(*args)
+
+    call.keep = (phi, omega, alpha, p, held, branch, guess, q, qd, qdd, opt)  # outlive the pointers
+    call.obs, call.status = obs, status
+    return call
+
+
+# -- the lambdify + scipy baseline --------------------------------------------------------------------------
+
+
+class Baseline:
+    """The Kinematics expressions of one catalog mechanism through sympy.lambdify, solved per position."""
+
+    def __init__(self, name: str):
+        import sympy as sp
+
+        from derive.catalog import declare
+        from derive.kinematics import Kinematics
+
+        t0 = time.perf_counter()
+        kin = Kinematics(declare(name))
+        t1 = time.perf_counter()
+
+        def lam(args, expr):
+            return sp.lambdify(args, expr, modules="numpy")
+
+        q, qd, qdd, x, xd, xdd, p = kin.q, kin.qd, kin.qdd, kin.x, kin.xd, kin.xdd, kin.p
+        self.closure = lam([q, x, p], kin.closure)
+        self.jac_q = lam([q, x, p], kin.jac_q)
+        self.vel_rhs = lam([q, x, xd, p], kin.vel_rhs)
+        self.gamma = lam([q, qd, x, xd, xdd, p], kin.gamma)
+        self.observables = lam([q, qd, qdd, x, xd, xdd, p], [o.expr for o in kin.observables])
+        self.kin = kin
+        self.derive_s, self.lambdify_s = t1 - t0, time.perf_counter() - t1
+
+    def run(self, phi, omega, accel, held, p, q_start):
+        """Positions, velocities, accelerations and observables at each angle of ``phi`` (sequentially)."""
+        from scipy.optimize import root
+
+        n, nq, nobs = len(phi), len(self.kin.q), len(self.kin.observables)
+        Q, QD, QDD, OBS = np.zeros((n, nq)), np.zeros((n, nq)), np.zeros((n, nq)), np.zeros((n, nobs))
+        closure, jac_q, vel_rhs, gamma, observables = (self.closure, self.jac_q, self.vel_rhs, self.gamma,
+                                                        self.observables)
+        held = list(held)
+        xd = [omega] + [0.0] * len(held)
+        xdd = [accel] + [0.0] * len(held)
+        q = np.array(q_start, dtype=np.float64)
+        nfev = 0
+        for i in range(n):
+            x = [phi[i]] + held
+            sol = root(lambda qq: np.asarray(closure(qq, x, p), dtype=np.float64), q,
+                       jac=lambda qq: np.asarray(jac_q(qq, x, p), dtype=np.float64))
+            if not sol.success:
+                raise RuntimeError(f"baseline: scipy.optimize.root failed at position {i}: {sol.message}")
+            nfev += sol.nfev
+            q = sol.x
+            J = np.asarray(jac_q(q, x, p), dtype=np.float64)
+            qd = np.linalg.solve(J, np.asarray(vel_rhs(q, x, xd, p), dtype=np.float64))
+            qdd = np.linalg.solve(J, np.asarray(gamma(q, qd, x, xd, xdd, p), dtype=np.float64))
+            Q[i], QD[i], QDD[i] = q, qd, qdd
+            OBS[i] = np.asarray(observables(q, qd, qdd, x, xd, xdd, p), dtype=np.float64)
+        return Q, QD, QDD, OBS, nfev / max(n, 1)
+
+
+def compare(m: sewgen.Mechanism, base: tuple, ref: tuple, rtol: float) -> dict:
+    """Largest difference of baseline and compiled results, relative to each column's scale.
+
+    A column's scale is its largest magnitude over the compared positions, floored at 1e-6 of the largest
+    magnitude among columns of the same unit (so an identically zero column is judged against its unit).
+    """
+    man = m.manifest
+    coord_units = [c["unit"] for c in man["coords"]]
+    parts = {  # part -> (units, labels) of its columns, in the order of base and ref
+        "q": (coord_units, m.coord_names),
+        "qd": ([u + "/s" for u in coord_units], [c + "_d" for c in m.coord_names]),
+        "qdd": ([u + "/s^2" for u in coord_units], [c + "_dd" for c in m.coord_names]),
+        "obs": ([o["unit"] for o in man["observables"]], [o["name"] for o in man["observables"]]),
+    }
+    units = [u for us, _ in parts.values() for u in us]
+    labels = [lb for _, lbs in parts.values() for lb in lbs]
+    b_all, r_all = np.hstack(base), np.hstack(ref)
+    colmax = np.max(np.abs(r_all), axis=0)
+    scale = colmax.copy()
+    for u in set(units):
+        idx = [k for k, uu in enumerate(units) if uu == u]
+        scale[idx] = np.maximum(colmax[idx], 1e-6 * colmax[idx].max())
+    scale[scale == 0] = 1.0
+    rel = np.max(np.abs(b_all - r_all), axis=0) / scale
+    out = {"max_rel_diff": float(rel.max()), "worst": labels[int(rel.argmax())], "agree": bool(rel.max() <= rtol)}
+    start = 0
+    for part, (us, _) in parts.items():
+        k = len(us)
+        out[f"max_rel_diff_{part}"] = float(rel[start:start + k].max()) if k else 0.0
+        start += k
+    return out
+
+
+# -- kernels ------------------------------------------------------------------------------------------------
+
+
+@register_kernel("kinematics")
+def kinematics(name: str, cfg: Config) -> Result:
+    """solve() over the sweep; raw sg_sweep; the lambdify + scipy baseline on a subset, cross-checked."""
+    m = sewgen.mechanism(name)
+    phi = cfg.sweep_angles()
+    n = len(phi)
+    t_solve = best_time(lambda: m.solve(phi), cfg.repeats, cfg.min_time)
+    t_overhead = best_time(lambda: m.solve(phi[:1]), cfg.repeats, cfg.min_time)
+    raw = raw_sweep(m, phi)
+    t_raw = best_time(raw, cfg.repeats, cfg.min_time)
+    motion = m.solve(phi)
+    if np.any(raw.status) or not np.array_equal(raw.obs, motion.obs):
+        raise RuntimeError(f"{name}: the raw sg_sweep call disagrees with solve()")
+
+    rows = cfg.baseline_rows()
+    bl = Baseline(name)
+    p = m.param_vector()
+    if len(bl.kin.p) != len(p):
+        raise RuntimeError(f"{name}: {len(bl.kin.p)} symbolic parameters but {len(p)} compiled ones")
+    held = [i["default"] for i in m.manifest["inputs"][1:]]
+    args = (phi[rows], float(m.default_speed), 0.0, held, p, motion.q[rows[0]])
+    out = bl.run(*args)  # warm-up, and the results to check
+    t_base = min(_timed(bl.run, args) for _ in range(cfg.baseline_repeats))
+    check = compare(m, out[:4], (motion.q[rows], motion.qd[rows], motion.qdd[rows], motion.obs[rows]), cfg.rtol)
+
+    extra = {
+        "raw_c_positions_per_s": n / t_raw,
+        "solve_seconds": t_solve,
+        "solve_overhead_seconds": t_overhead,
+        "baseline_step_deg": float(np.degrees(phi[rows[1]] - phi[rows[0]])) if len(rows) > 1 else None,
+        "baseline_nfev_per_position": out[4],
+        "baseline_setup_seconds": bl.derive_s + bl.lambdify_s,
+        "nq": len(m.coord_names),
+        "nobs": len(m.manifest["observables"]),
+        **check,
+    }
+    return n / t_solve, len(rows) / t_base, extra
+
+
+def _timed(fn, args) -> float:
+    t0 = time.perf_counter()
+    fn(*args)
+    return time.perf_counter() - t0
+
+
+def derive_catalog() -> dict:
+    """Seconds of derive.emit.generate for every catalog declaration, in-process, SymPy's cache cleared."""
+    from sympy.core.cache import clear_cache
+
+    from derive.catalog import CATALOG, declare
+    from derive.emit import generate
+
+    clear_cache()
+    each = {}
+    t0 = time.perf_counter()
+    for name in CATALOG:
+        t = time.perf_counter()
+        generate(declare(name))
+        each[name] = time.perf_counter() - t
+    return {"derive_seconds": time.perf_counter() - t0, "per_mechanism_seconds": each}
+
+
+# -- driver -------------------------------------------------------------------------------------------------
+
+
+def run(cfg: Config, selected: list[str] | None = None) -> list[dict]:
+    """Every selected row as a dict (the --json objects), the derive line last."""
+    rows: list[dict] = []
+    derive_row = None
+    if selected is None or "catalog" in selected:  # first, before the baselines warm SymPy up
+        d = derive_catalog()
+        derive_row = {"mechanism": "catalog", "kernel": "derive", "derive_seconds": d["derive_seconds"],
+                      "positions_per_s": None, "baseline_positions_per_s": None, "speedup": None,
+                      "positions": None, "baseline_positions": None,
+                      "extra": {"per_mechanism_seconds": d["per_mechanism_seconds"]}}
+    for e in entries(selected):
+        try:
+            pps, bpps, extra = e.run(cfg)
+        except NotApplicable:
+            continue
+        rows.append({"mechanism": e.mechanism, "kernel": e.kernel, "positions_per_s": pps,
+                     "baseline_positions_per_s": bpps, "speedup": pps / bpps if bpps else None,
+                     "positions": cfg.positions,
+                     "baseline_positions": len(cfg.baseline_rows()) if bpps else None, "extra": extra})
+    if derive_row is not None:
+        rows.append(derive_row)
+    return rows
+
+
+def _si(v: float | None) -> str:
+    if v is None:
+        return "-"
+    for div, suffix in ((1e9, " G"), (1e6, " M"), (1e3, " k")):
+        if abs(v) >= div:
+            return f"{v / div:.3g}{suffix}"
+    return f"{v:.3g}"
+
+
+def table(rows: list[dict]) -> str:
+    head = ("mechanism", "kernel", "positions/s", "raw C pos/s", "baseline pos/s", "speed-up", "check")
+    lines = [head]
+    for r in rows:
+        x = r.get("extra", {})
+        if r["kernel"] == "derive":
+            lines.append((r["mechanism"], "derive", f"{r['derive_seconds']:.2f} s", "-", "-", "-", "-"))
+            continue
+        check = "-" if "agree" not in x else (f"ok {x['max_rel_diff']:.0e}" if x["agree"] else
+                                              f"MISMATCH {x['max_rel_diff']:.1e} ({x['worst']})")
+        lines.append((r["mechanism"], r["kernel"], _si(r["positions_per_s"]),
+                       _si(x.get("raw_c_positions_per_s")), _si(r["baseline_positions_per_s"]),
+                       "-" if r["speedup"] is None else f"{r['speedup']:.0f}x", check))
+    widths = [max(len(row[k]) for row in lines) for k in range(len(head))]
+    fmt = lambda row: "  ".join(c.ljust(w) if k < 2 or k == 6 else c.rjust(w)  # noqa: E731
+                                for k, (c, w) in enumerate(zip(row, widths))).rstrip()
+    out = [fmt(lines[0]), fmt(tuple("-" * w for w in widths))] + [fmt(r) for r in lines[1:]]
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m sewgen.bench", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--positions", type=int, default=Config.positions,
+                    help="shaft angles in the timed sweep, one revolution (default %(default)s: 0.1°)")
+    ap.add_argument("--baseline-positions", type=int, default=Config.baseline_positions,
+                    help="positions the lambdify + scipy baseline solves (default %(default)s)")
+    ap.add_argument("--baseline-angles", choices=("spread", "contiguous"), default=Config.baseline_angles,
+                    help="baseline angles: every k-th sweep angle over the revolution (default) or the "
+                         "first ones at the sweep's own step")
+    ap.add_argument("--repeats", type=int, default=Config.repeats, help="timed repeats, best counts")
+    ap.add_argument("--rtol", type=float, default=Config.rtol,
+                    help="baseline/compiled agreement, relative to each column's scale (default %(default)g)")
+    ap.add_argument("--mechanism", action="append", metavar="NAME",
+                    help="restrict to this mechanism (repeatable); 'catalog' selects the derive line")
+    ap.add_argument("--json", action="store_true", help="print a JSON list instead of the table")
+    args = ap.parse_args(argv)
+    if args.positions < 1 or args.baseline_positions < 1 or args.repeats < 1:
+        ap.error("--positions, --baseline-positions and --repeats must be positive")
+    known = set(sewgen.catalog()) | {e.mechanism for e in EXTRA_ENTRIES} | {"catalog"}
+    for name in args.mechanism or []:
+        if name not in known:
+            ap.error(f"unknown mechanism {name!r}; known: {', '.join(sorted(known))}")
+    cfg = Config(positions=args.positions, baseline_positions=args.baseline_positions,
+                 repeats=args.repeats, baseline_angles=args.baseline_angles, rtol=args.rtol)
+    t0 = time.perf_counter()
+    rows = run(cfg, args.mechanism)
+    if args.json:
+        print(json.dumps(rows, indent=1))
+    else:
+        print(table(rows))
+        print(f"\n{cfg.positions} positions per sweep (one revolution), best of {cfg.repeats}; baseline "
+              f"{len(cfg.baseline_rows())} positions, best of {cfg.baseline_repeats}; "
+              f"{time.perf_counter() - t0:.1f} s in all")
+    bad = [r for r in rows if r.get("extra", {}).get("agree") is False]
+    for r in bad:
+        x = r["extra"]
+        print(f"sewgen.bench: {r['mechanism']} {r['kernel']}: baseline and compiled results differ by "
+              f"{x['max_rel_diff']:.3g} (relative, worst {x['worst']}; tolerance {cfg.rtol:g})", file=sys.stderr)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
