@@ -11,6 +11,14 @@ from .catalog import CATALOG, declare
 from .emit import generate, render_files
 
 ROOT = Path(__file__).resolve().parent.parent
+#: What derive writes; anything else in generated/ (object files of an in-place build) is not its business.
+GENERATED_SUFFIXES = (".c", ".h", ".cdef", ".json")
+
+
+def _derived_files(folder: Path) -> set[str]:
+    if not folder.is_dir():
+        return set()
+    return {p.name for p in folder.iterdir() if p.is_file() and p.suffix in GENERATED_SUFFIXES}
 
 
 def catalog_files() -> dict[str, str]:
@@ -27,7 +35,7 @@ def main(argv=None) -> int:
     out: Path = args.out
     if args.check:
         stale = False
-        present = {p.name for p in out.glob("*") if p.is_file()} if out.is_dir() else set()
+        present = _derived_files(out)
         for name in sorted(set(files) | present):
             old = (out / name).read_text() if name in present else ""
             new = files.get(name, "")
@@ -41,9 +49,8 @@ def main(argv=None) -> int:
         print(f"generated/ is current ({len(files)} files, {time.perf_counter() - t0:.1f} s)")
         return 0
     out.mkdir(parents=True, exist_ok=True)
-    for old in out.glob("*"):
-        if old.is_file() and old.name not in files:
-            old.unlink()
+    for name in _derived_files(out) - set(files):
+        (out / name).unlink()
     for name, text in files.items():
         (out / name).write_text(text)
     print(f"wrote {len(files)} files to {out} in {time.perf_counter() - t0:.1f} s")

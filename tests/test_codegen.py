@@ -1,0 +1,350 @@
+"""The code generator and the C it emits: up to date, deterministic, warning-free, self-describing, and
+with no user names in the C namespace.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+GENERATED = ROOT / "generated"
+CSRC = ROOT / "csrc"
+GCC = shutil.which("gcc")
+NM = shutil.which("nm")
+CFLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror"]
+TEXT_SUFFIXES = {".c", ".h", ".cdef", ".json"}
+
+
+def _derive(*args, env_extra=None, cwd=ROOT, timeout=300):
+    env = dict(os.environ)
+    env.update(env_extra or {})
+    return subprocess.run([sys.executable, "-m", "derive", *args], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def _committed_generated() -> list[Path]:
+    """The files of generated/ under version control (build artifacts such as *.o are not)."""
+    git = shutil.which("git")
+    if git and (ROOT / ".git").exists():
+        out = subprocess.run([git, "ls-files", "-z", "--", "generated"], cwd=ROOT, capture_output=True)
+        if out.returncode == 0:
+            files = [ROOT / name for name in out.stdout.decode().split("\0") if name]
+            if files:
+                return sorted(files)
+    return sorted(p for p in GENERATED.iterdir() if p.is_file() and p.suffix in TEXT_SUFFIXES)
+
+
+def _kernel_files() -> list[Path]:
+    return [p for p in _committed_generated() if p.suffix == ".c"]
+
+
+def _manifest() -> dict:
+    return json.loads((GENERATED / "manifest.json").read_text(encoding="utf-8"))
+
+
+def _copy_committed(dest: Path) -> Path:
+    dest.mkdir(parents=True, exist_ok=True)
+    for p in _committed_generated():
+        shutil.copyfile(p, dest / p.name)
+    return dest
+
+
+# -- up to date ------------------------------------------------------------------------------------------------
+
+def test_check_passes_on_the_repository():
+    """`python -m derive --check` in the repository root, as a developer or CI runs it."""
+    res = _derive("--check")
+    assert res.returncode == 0, f"stdout:\n{res.stdout[-3000:]}\nstderr:\n{res.stderr[-3000:]}"
+    assert "current" in res.stdout
+
+
+def test_check_passes_on_the_committed_generated_files(tmp_path):
+    """Only the version-controlled files of generated/ (no build artifacts), checked with --out."""
+    out = _copy_committed(tmp_path / "generated")
+    assert {p.name for p in out.iterdir()} >= {"manifest.json", "sg_kernels.h", "sg_kernels.cdef"}
+    res = _derive("--check", "--out", str(out))
+    assert res.returncode == 0, f"stdout:\n{res.stdout[-3000:]}\nstderr:\n{res.stderr[-3000:]}"
+
+
+def test_check_fails_on_stale_or_missing_files(tmp_path):
+    out = _copy_committed(tmp_path / "generated")
+    target = out / "sg_needle_bar.c"
+    target.write_text(target.read_text(encoding="utf-8").replace("Total ops", "Total opz", 1), encoding="utf-8")
+    (out / "sg_take_up.c").unlink()
+    res = _derive("--check", "--out", str(out))
+    assert res.returncode == 1
+    assert "sg_needle_bar.c" in res.stdout and "Total opz" in res.stdout
+    assert "sg_take_up.c" in res.stdout
+    assert "stale" in res.stderr
+
+
+def test_check_reports_foreign_files_without_crashing(tmp_path):
+    """A build artifact (an object file of an in-place build, an editor backup) in the output folder: --check
+    may call the folder stale, but must say so, not die with a traceback."""
+    out = _copy_committed(tmp_path / "generated")
+    (out / "sg_needle_bar.o").write_bytes(b"\x7fELF\x02\x01\x01\x00" + bytes(range(256)))
+    res = _derive("--check", "--out", str(out))
+    assert "Traceback" not in res.stderr, res.stderr[-3000:]
+    assert res.returncode in (0, 1)
+    if res.returncode == 1:
+        assert "sg_needle_bar.o" in res.stdout + res.stderr
+
+
+# -- deterministic -------------------------------------------------------------------------------------------------
+
+def test_output_is_independent_of_hash_seed(tmp_path):
+    outs = {}
+    for seed in ("0", "12345"):
+        out = tmp_path / f"seed_{seed}"
+        res = _derive("--out", str(out), env_extra={"PYTHONHASHSEED": seed})
+        assert res.returncode == 0, res.stderr[-3000:]
+        outs[seed] = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    a, b = outs["0"], outs["12345"]
+    assert set(a) == set(b)
+    assert {"manifest.json", "sg_kernels.h", "sg_kernels.cdef", "sg_needle_bar.c", "sg_take_up.c",
+            "sg_hook_drive.c"} <= set(a)
+    differing = [name for name in sorted(a) if a[name] != b[name]]
+    assert not differing, f"files differ between PYTHONHASHSEED=0 and 12345: {differing}"
+    # and byte-identical to what is committed
+    committed = {p.name: p.read_bytes() for p in _committed_generated()}
+    assert set(committed) == set(a)
+    assert [n for n in sorted(a) if a[n] != committed[n]] == []
+
+
+# -- compiles cleanly ------------------------------------------------------------------------------------------------
+
+def _compile(src: Path, obj: Path, includes=(CSRC, GENERATED)):
+    cmd = [GCC, *CFLAGS, *(f"-I{d}" for d in includes), "-c", str(src), "-o", str(obj)]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, f"{' '.join(cmd)}\n{res.stderr[-5000:]}"
+    assert res.stderr.strip() == "", res.stderr  # not even a note
+    return obj
+
+
+C_SOURCES = [CSRC / "sg_runtime.c"] + _kernel_files()
+
+
+@pytest.mark.skipif(GCC is None, reason="gcc not installed")
+@pytest.mark.parametrize("src", C_SOURCES, ids=lambda p: p.name)
+def test_compiles_without_warnings(src, tmp_path):
+    _compile(src, tmp_path / (src.stem + ".o"))
+
+
+@pytest.mark.skipif(GCC is None, reason="gcc not installed")
+@pytest.mark.parametrize("closed_form", [True, False], ids=["closed", "newton_only"])
+def test_user_mechanism_compiles_without_warnings(tmp_path, closed_form):
+    """A declaration outside the catalog, with a slider on a moving link, rendered and compiled alone."""
+    from derive import Mechanism, generate, render_files
+
+    m = Mechanism("codegen_probe", "crank pin in a block on an oscillating guide bar, the bar driving a rod")
+    r = m.length("crank", "10 mm", "crank")
+    l = m.length("rod", "40 mm", "rod")
+    oy = m.length("guide_pivot_y", "-50 mm", "guide pivot", signed=True)
+    crank = m.driven("crank", pivot=m.ground.at(0, 0))
+    guide = m.link("guide", guess="-90 deg")
+    block = m.slider("block", guide=guide.line(at=(0, 0), angle=0), guess="50 mm")
+    rod = m.link("rod", guess="0 deg")
+    bar = m.slider("bar", guide=m.ground.line(at=(0, -0.08), angle=0), guess="0 mm")
+    m.revolute(m.ground.at(0, oy), guide.at(0, 0), name="O")
+    m.revolute(crank.at(r, 0), block.at(0, 0), name="B")
+    m.revolute(guide.at(0.07, 0), rod.at(0, 0), name="E")
+    m.revolute(rod.at(l, 0), bar.at(0, 0), name="C")
+    m.point("pin", bar.at(0, 0))
+    files = render_files([generate(m, closed_form=closed_form)])
+    for name, text in files.items():
+        (tmp_path / name).write_text(text, encoding="utf-8")
+    _compile(tmp_path / "sg_codegen_probe.c", tmp_path / "probe.o", includes=(CSRC, tmp_path))
+
+
+# -- self-describing -------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("path", _kernel_files(), ids=lambda p: p.name)
+def test_kernel_preamble_and_op_counts(path):
+    text = path.read_text(encoding="utf-8")
+    name = path.stem[len("sg_"):]
+    first = text.split("*/", 1)[0]
+    assert text.startswith("/*") and "do not edit" in first.lower()
+    assert name in first
+    manifest = _manifest()[name]
+    kernels = manifest["kernels"]
+    expected = {f"sg_{name}_{k}" for k in ("constants", "residual", "motion")}
+    if manifest["closed_form"]:
+        expected.add(f"sg_{name}_closed")
+    assert set(kernels) == expected
+    counted = dict(re.findall(r"/\* (sg_\w+) -- Total ops: (\d+) \*/", text))
+    assert set(counted) == expected
+    for kernel, info in kernels.items():
+        assert int(counted[kernel]) == info["ops"] > 0
+        # the count sits right above the kernel's definition
+        assert re.search(rf"/\* {kernel} -- Total ops: \d+ \*/\n(void|int) {kernel}\(", text), kernel
+
+
+@pytest.mark.parametrize("name", ["sg_kernels.h", "sg_kernels.cdef"])
+def test_header_and_cdef_preamble(name):
+    first = (GENERATED / name).read_text(encoding="utf-8").split("*/", 1)[0]
+    assert "do not edit" in first.lower()
+
+
+# -- the C namespace -------------------------------------------------------------------------------------------------
+
+C_KEYWORDS = {
+    "auto", "break", "case", "char", "const", "continue", "default", "do", "double", "else", "enum", "extern",
+    "float", "for", "goto", "if", "inline", "int", "long", "register", "restrict", "return", "short", "signed",
+    "sizeof", "static", "struct", "switch", "typedef", "union", "unsigned", "void", "volatile", "while",
+    "size_t", "_Bool",
+}
+
+
+def _code_tokens(text: str) -> list[str]:
+    """The C text with comments, string and character literals and preprocessor lines removed, as tokens."""
+    out, i, n = [], 0, len(text)
+    line_start = True
+    while i < n:
+        ch = text[i]
+        if line_start and ch == "#":  # a preprocessor line (with continuations)
+            while i < n and (text[i] != "\n" or text[i - 1] == "\\"):
+                i += 1
+            continue
+        if text.startswith("/*", i):
+            j = text.find("*/", i + 2)
+            assert j >= 0, "unterminated comment"
+            i = j + 2
+            out.append(" ")
+            continue
+        if text.startswith("//", i):
+            while i < n and text[i] != "\n":
+                i += 1
+            continue
+        if ch in "\"'":
+            j = i + 1
+            while j < n and text[j] != ch:
+                j += 2 if text[j] == "\\" else 1
+            assert j < n, "unterminated literal"
+            i = j + 1
+            out.append(" ")
+            continue
+        if ch == "\n":
+            line_start = True
+        elif not ch.isspace():
+            line_start = False
+        out.append(ch)
+        i += 1
+    return re.findall(r"[A-Za-z_]\w*|\d[\w.]*|\S", "".join(out))
+
+
+def _file_scope_names(tokens: list[str]) -> list[tuple[str, bool]]:
+    """(name, static) of what each file-scope declaration or definition declares: the identifier right
+    before the first '(', '[', '=' or ';' of the declaration outside parentheses and braces."""
+    names, brace, paren = [], 0, 0
+    decl: list[str] = []
+    done = False
+    for tok in tokens:
+        if tok == "{":
+            brace += 1
+        elif tok == "}":
+            brace -= 1
+            if brace == 0 and paren == 0:
+                decl, done = [], False  # end of a function body (or of a struct / initializer)
+            continue
+        if brace:
+            continue
+        if tok == "(":
+            if paren == 0 and not done and decl and decl[-1] not in C_KEYWORDS and re.match(r"[A-Za-z_]", decl[-1]):
+                names.append((decl[-1], "static" in decl))
+                done = True
+            paren += 1
+        elif tok == ")":
+            paren -= 1
+        elif paren:
+            continue
+        elif tok in ("[", "=", ";", ","):
+            if not done and decl and decl[-1] not in C_KEYWORDS and re.match(r"[A-Za-z_]", decl[-1]):
+                names.append((decl[-1], "static" in decl))
+            done = tok in ("[", "=")
+            if tok == ";":
+                decl, done = [], False
+            elif tok == ",":
+                done = False
+        else:
+            decl.append(tok)
+    return names
+
+
+def test_file_scope_name_finder_works():
+    toks = _code_tokens('/* c */ int sg_a(int x);\nstatic double helper(void) { return 1.0; }\n'
+                        'static const unsigned char sg_b[2] = { 1, 0 };\nconst char *sg_c(void) { return "x(y"; }\n'
+                        'typedef struct sg_d { int a; } sg_d;\n#define FOO 1\nint bad_name = 3;\n')
+    assert _file_scope_names(toks) == [("sg_a", False), ("helper", True), ("sg_b", True), ("sg_c", False),
+                                       ("sg_d", False), ("bad_name", False)]
+
+
+def _defines(text: str) -> list[str]:
+    return re.findall(r"^\s*#\s*define\s+(\w+)", text, flags=re.M)
+
+
+@pytest.mark.parametrize("path", _kernel_files() + [GENERATED / "sg_kernels.h", CSRC / "sg_runtime.h"],
+                         ids=lambda p: p.name)
+def test_every_file_scope_name_is_prefixed(path):
+    """Generated code and the runtime header put only sg_ names (SG_ macros) into the includer's namespace."""
+    text = path.read_text(encoding="utf-8")
+    names = _file_scope_names(_code_tokens(text))
+    assert names, "found no declarations: the scanner is broken"
+    bad = [n for n, _ in names if not n.startswith("sg_")]
+    assert not bad, f"{path.name}: file-scope names without the sg_ prefix: {bad}"
+    bad_macros = [d for d in _defines(text) if not d.startswith("SG_")]
+    assert not bad_macros, f"{path.name}: macros without the SG_ prefix: {bad_macros}"
+
+
+def test_runtime_exports_only_prefixed_names():
+    text = (CSRC / "sg_runtime.c").read_text(encoding="utf-8")
+    exported = [n for n, static in _file_scope_names(_code_tokens(text)) if not static]
+    assert "sg_sweep" in exported
+    assert [n for n in exported if not n.startswith("sg_")] == []
+
+
+@pytest.mark.skipif(GCC is None or NM is None, reason="gcc or nm not installed")
+def test_object_files_define_only_prefixed_globals(tmp_path):
+    for src in C_SOURCES:
+        obj = _compile(src, tmp_path / (src.stem + ".o"))
+        res = subprocess.run([NM, "-g", "--defined-only", str(obj)], capture_output=True, text=True)
+        assert res.returncode == 0, res.stderr
+        symbols = [line.split()[-1] for line in res.stdout.splitlines() if line.strip()]
+        assert symbols, f"{src.name}: no global symbols?"
+        assert [s for s in symbols if not s.startswith("sg_")] == [], src.name
+
+
+def _user_names(manifest: dict) -> set[str]:
+    """Names a user chose: parameters, points, moving bodies, coordinates (their identifier parts)."""
+    names = set()
+    for key in ("params", "points", "bodies", "coords"):
+        for entry in manifest[key]:
+            names.update(part for part in entry["name"].split(".") if re.fullmatch(r"[A-Za-z_]\w*", part))
+    # generic parts of compound names that the code may legitimately use as C names
+    return names - {"angle", "travel", "mass", "inertia", "com_u", "com_v", "phase"}
+
+
+@pytest.mark.parametrize("path", _kernel_files(), ids=lambda p: p.name)
+def test_no_user_names_in_c_code(path):
+    """User names appear in comments and in the manifest string only, never as C identifiers."""
+    name = path.stem[len("sg_"):]
+    users = _user_names(_manifest()[name])
+    assert {"crank"} <= users or name == "hook_drive"
+    text = path.read_text(encoding="utf-8")
+    tokens = _code_tokens(text)
+    idents = {t for t in tokens if re.fullmatch(r"[A-Za-z_]\w*", t)}
+    assert not (idents & users), f"{path.name}: user names used as C identifiers: {sorted(idents & users)}"
+    assert f"sg_{name}_motion" in idents  # the scan does see the code
+
+
+def test_needle_eye_only_in_comments_and_manifest():
+    text = (GENERATED / "sg_needle_bar.c").read_text(encoding="utf-8")
+    assert "needle_eye" in text  # it is in the manifest string
+    assert "needle_eye" not in _code_tokens(text)
+    assert "crank" not in _code_tokens(text)
