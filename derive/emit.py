@@ -73,7 +73,7 @@ def manifest_of(mech: Mechanism, kin: Kinematics, dyads, kernels, sizes: dict) -
 
 
 def _c_string_chunks(text: str, width: int = 96) -> list[str]:
-    esc = text.replace("\\", "\\\\").replace('"', '\\"')
+    esc = text.replace("\\", "\\\\").replace('"', '\\"').replace("?", "\\?")  # \? : no trigraphs
     chunks = []
     while esc:
         cut = min(width, len(esc))
@@ -97,7 +97,8 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     manifest = manifest_of(mech, kin, dyads, kernels, sizes)
     text = json.dumps(manifest, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
     c_source = _TEMPLATES.get_template("mechanism.c.j2").render(
-        mech={"name": mech.name, "title": (mech.doc.strip().splitlines() or [mech.name])[0],
+        mech={"name": mech.name,
+              "title": (mech.doc.strip().splitlines() or [mech.name])[0].replace("*/", "* /").replace("??", "? ?"),
               "coord_names": ", ".join(c.name for c in kin.coords) or "none",
               "input_names": ", ".join(i.name for i in mech.inputs)},
         prefix=prefix, kernels=kernels,

@@ -8,6 +8,8 @@ from __future__ import annotations
 import functools
 import math
 
+import numpy as np
+
 #: Physical kinds a parameter can have, with the SI unit its value is stored in.
 SI_UNITS = {
     "length": "m",
@@ -42,9 +44,9 @@ def to_si(value, kind: str, what: str = "value") -> float:
     """
     if kind not in SI_UNITS:
         raise UnitError(f"{what}: unknown kind {kind!r}")
-    if isinstance(value, bool):
+    if isinstance(value, (bool, np.bool_)):
         raise UnitError(f"{what}: expected a {kind} ({SI_UNITS[kind] or 'no unit'}), got {value!r}")
-    if isinstance(value, (int, float)):
+    if isinstance(value, (int, float, np.integer, np.floating)):
         out = float(value)
     elif isinstance(value, str):
         ureg = registry()

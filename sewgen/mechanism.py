@@ -84,7 +84,7 @@ class Mechanism:
         for key in names:
             v = vals[key]
             if kind == "sign":
-                if v not in (1, -1):
+                if isinstance(v, (bool, np.bool_)) or v not in (1, -1):
                     raise ParameterError(self.name, key, f"branch must be +1 or -1, got {v!r}")
                 out.append(int(v))
             else:
@@ -188,7 +188,7 @@ class Mechanism:
                                          [b["default"] for b in self.manifest["branches"]], branch, "sign"),
                       dtype=np.intc)
         q0 = np.array(self._guess(guess), dtype=np.float64)
-        if not isinstance(max_iter, int) or max_iter < 1:
+        if not isinstance(max_iter, int) or isinstance(max_iter, bool) or max_iter < 1:
             raise ParameterError(self.name, "max_iter", f"must be a positive integer, got {max_iter!r}")
         nq, nobs = len(self.coord_names), len(self.manifest["observables"])
         q, qd, qdd = (np.zeros((n, nq)) for _ in range(3))

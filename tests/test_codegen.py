@@ -163,6 +163,37 @@ def test_user_mechanism_compiles_without_warnings(tmp_path, closed_form):
     _compile(tmp_path / "sg_codegen_probe.c", tmp_path / "probe.o", includes=(CSRC, tmp_path))
 
 
+USER_TEXTS = {
+    "quotes_backslashes_unicode": ('Crank "A" \\ slider \\n 针杆 — ends in a backslash \\', 'radius "r" \\'),
+    "comment_terminator_in_title": ("A slider-crank */ with a comment terminator in its title", "crank radius"),
+    "trigraph_in_parameter_doc": ("A slider-crank", "crank radius (really??!)"),
+    "trigraph_before_quote": ("A slider-crank", 'crank radius ??/"'),
+}
+
+
+@pytest.mark.skipif(GCC is None, reason="gcc not installed")
+@pytest.mark.parametrize("case", list(USER_TEXTS))
+def test_user_text_cannot_break_the_generated_c(tmp_path, case):
+    """Docstrings are free text; the C they are copied into (comments, the manifest string) must still
+    compile with the project's flags, and the manifest must round-trip."""
+    from derive import Mechanism, generate, render_files
+
+    doc, pdoc = USER_TEXTS[case]
+    m = Mechanism("text_probe", doc)
+    r = m.length("crank", "10 mm", pdoc)
+    crank = m.driven("crank", pivot=m.ground.at(0, 0))
+    rod = m.link("rod", guess="-30 deg")
+    bar = m.slider("bar", guide=m.ground.line(at=(0, 0), angle=0), guess="40 mm")
+    m.revolute(crank.at(r, 0), rod.at(0, 0), name="B")
+    m.revolute(rod.at(0.04, 0), bar.at(0, 0), name="C")
+    gen = generate(m)
+    assert gen.manifest["doc"] == doc.strip()
+    assert gen.manifest["params"][0]["doc"] == pdoc
+    for name, text in render_files([gen]).items():
+        (tmp_path / name).write_text(text, encoding="utf-8")
+    _compile(tmp_path / "sg_text_probe.c", tmp_path / "probe.o", includes=(CSRC, tmp_path))
+
+
 # -- self-describing -------------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("path", _kernel_files(), ids=lambda p: p.name)
