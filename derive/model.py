@@ -196,7 +196,6 @@ class Mechanism:
              mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2") -> Body:
         """A body set by a held input (stitch regulator): its angle is an input that stays put in a run."""
         self._check_on_ground(pivot, name)
-        self._names.add(f"input:{name}")
         self.inputs.append(Input(name, "held", to_si(default, "angle", f"{self.name}.{name}"), unit_of(default), doc))
         return self._body(name, "driven", doc, mass, com, inertia, pivot=pivot, input_index=len(self.inputs) - 1)
 

@@ -44,28 +44,28 @@ def make_ffi(module: str, kernel_dir: Path, mechanisms: list[str], extra_cflags:
     return ffi
 
 
-def _catalog_ffi() -> cffi.FFI:
+GENERATED = HERE.parent / "generated"
+
+
+def _catalog_names() -> list[str]:
     import json
 
-    root = HERE.parent
-    generated = root / "generated"
-    names = list(json.loads((generated / "manifest.json").read_text()))
-    return make_ffi("sewgen._kernels", generated, names, relative_to=root)
+    return list(json.loads((GENERATED / "manifest.json").read_text()))
 
 
-catalog_ffi = _catalog_ffi() if (HERE.parent / "generated" / "manifest.json").is_file() else None
+def _catalog_ffi() -> cffi.FFI:
+    return make_ffi("sewgen._kernels", GENERATED, _catalog_names(), relative_to=HERE.parent)
+
+
+catalog_ffi = _catalog_ffi() if (GENERATED / "manifest.json").is_file() else None
 
 SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=undefined", "-fno-omit-frame-pointer", "-g"]
 
 
 def build_catalog(outdir: Path, extra_cflags: list[str] | None = None) -> Path:
     """Compile the catalog module into ``outdir`` (a checkout only); returns the shared object's path."""
-    import json
-
-    generated = HERE.parent / "generated"
-    names = list(json.loads((generated / "manifest.json").read_text()))
     outdir.mkdir(parents=True, exist_ok=True)
-    ffi = make_ffi("sewgen._kernels", generated, names, extra_cflags)
+    ffi = make_ffi("sewgen._kernels", GENERATED, _catalog_names(), extra_cflags)
     return Path(ffi.compile(tmpdir=str(outdir)))
 
 

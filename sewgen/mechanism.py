@@ -62,10 +62,7 @@ class Mechanism:
         out = np.empty(len(self.param_names))
         for i, spec in enumerate(self.manifest["params"]):
             name, kind = spec["name"], spec["kind"]
-            try:
-                v = to_si(values[name], kind, name)
-            except UnitError as exc:
-                raise ParameterError(self.name, name, str(exc).split(": ", 1)[-1]) from None
+            v = self._si(values[name], kind, name)
             if spec["positive"] and not v > 0:
                 raise ParameterError(self.name, name, f"must be positive, got {v!r} {spec['unit']}")
             if kind in _NONNEGATIVE and v < 0:
@@ -88,10 +85,7 @@ class Mechanism:
                     raise ParameterError(self.name, key, f"branch must be +1 or -1, got {v!r}")
                 out.append(int(v))
             else:
-                try:
-                    out.append(to_si(v, kind, key))
-                except UnitError as exc:
-                    raise ParameterError(self.name, key, str(exc).split(": ", 1)[-1]) from None
+                out.append(self._si(v, kind, key))
         return out
 
     def _series(self, what: str, value, n: int, kind: str) -> np.ndarray:
@@ -142,17 +136,21 @@ class Mechanism:
         return self._named_vector("held input", self.held_names, defaults, held, "angle")
 
     def _guess(self, guess):
-        out = []
-        for c in self.manifest["coords"]:
-            kind = "angle" if c["unit"] == "rad" else "length"
-            out += self._named_vector("coordinate", [c["name"]], [c["guess"]],
-                                      {c["name"]: (guess or {})[c["name"]]} if c["name"] in (guess or {}) else None,
-                                      kind)
-        unknown = set(guess or {}) - set(self.coord_names)
+        """Newton's start per coordinate (rad or m, or quantity strings): the manifest's unless overridden."""
+        given = dict(guess or {})
+        unknown = sorted(set(given) - set(self.coord_names))
         if unknown:
-            key = sorted(unknown)[0]
-            raise ParameterError(self.name, key, f"is not a coordinate; coordinates are: {', '.join(self.coord_names)}")
-        return out
+            raise ParameterError(self.name, unknown[0],
+                                 f"is not a coordinate; coordinates are: {', '.join(self.coord_names)}")
+        return [self._si(given.get(c["name"], c["guess"]), "angle" if c["unit"] == "rad" else "length", c["name"])
+                for c in self.manifest["coords"]]
+
+    def _si(self, value, kind: str, name: str) -> float:
+        """to_si with its error retyped as a ParameterError naming this mechanism and ``name``."""
+        try:
+            return to_si(value, kind, name)
+        except UnitError as exc:
+            raise ParameterError(self.name, name, str(exc).split(": ", 1)[-1]) from None
 
     def length_scale(self, p: np.ndarray) -> float:
         """The largest length parameter (m): sets the loop-residual tolerance."""
