@@ -112,14 +112,16 @@ static void zero_row(double *v, int n)
     for (int i = 0; i < n; ++i) v[i] = 0.0;
 }
 
-size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
-                const double *alpha, const double *held, const double *p, const int *branch,
-                const double *q_guess, const sg_options *opt, double *q, double *qd, double *qdd,
-                double *obs, int *status)
+/* The sweep: kinematics at every position, then (frc != NULL) the forces from the same solution. */
+static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
+                    const double *alpha, const double *held, const double *p, const int *branch,
+                    const double *q_guess, const sg_options *opt, const double *gv, const double *loads,
+                    double *q, double *qd, double *qdd, double *obs, double *frc, int *status)
 {
-    const int nq = m->nq, nx = m->nx, nobs = m->nobs;
-    if (nq > SG_MAX_Q || nx > SG_MAX_Q || nx < 1 || m->nc > SG_MAX_C || !(opt->tol > 0.0) ||
-        opt->max_iter < 1) {
+    const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo;
+    double no_loads[SG_MAX_LOAD] = {0.0};
+    if (nq > SG_MAX_Q || nx > SG_MAX_Q || nx < 1 || m->nc > SG_MAX_C || m->nload > SG_MAX_LOAD ||
+        !(opt->tol > 0.0) || opt->max_iter < 1 || (frc != NULL && gv == NULL)) {
         for (size_t i = 0; i < n; ++i) status[i] = SG_BAD_ARGUMENT;
         return n;
     }
@@ -173,6 +175,9 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
             }
         }
         if (st == SG_OK) st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi);
+        if (st == SG_OK && frc != NULL)
+            st = m->forces(qi, cq, x, cx, xd, c, oi, gv, loads ? loads + i * (size_t)m->nload : no_loads,
+                           frc + i * (size_t)nfo);
         status[i] = st;
         if (st != SG_OK) {
             ++failures;
@@ -180,6 +185,7 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
             zero_row(qdi, nq);
             zero_row(qddi, nq);
             zero_row(oi, nobs);
+            if (frc != NULL) zero_row(frc + i * (size_t)nfo, nfo);
             continue;
         }
         hist[2] = hist[1];
@@ -188,4 +194,22 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
         if (nh < 3) ++nh;
     }
     return failures;
+}
+
+size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
+                const double *alpha, const double *held, const double *p, const int *branch,
+                const double *q_guess, const sg_options *opt, double *q, double *qd, double *qdd,
+                double *obs, int *status)
+{
+    return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, NULL, NULL, q, qd, qdd, obs, NULL,
+                 status);
+}
+
+size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
+                       const double *alpha, const double *held, const double *p, const int *branch,
+                       const double *q_guess, const sg_options *opt, const double *gv, const double *loads,
+                       double *q, double *qd, double *qdd, double *obs, double *frc, int *status)
+{
+    return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, gv, loads, q, qd, qdd, obs, frc,
+                 status);
 }

@@ -21,9 +21,12 @@ enum sg_status {
     SG_BAD_ARGUMENT = 7     /* sizes or options out of range: nothing was computed */
 };
 
-/* Largest number of coordinates and of hoisted constants a mechanism may have (stack work arrays). */
+/* Largest number of coordinates (also the largest LU: force blocks included) and of hoisted constants a
+ * mechanism may have (stack work arrays). */
 #define SG_MAX_Q 48
 #define SG_MAX_C 2048
+/* Largest number of load slots per position. */
+#define SG_MAX_LOAD 512
 
 /* Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx
  * their cos, sin likewise; c the constants that sg_<m>_constants hoisted out of the parameters p. */
@@ -35,6 +38,14 @@ typedef void (*sg_residual_fn)(const double *q, const double *cq, const double *
 typedef int (*sg_motion_fn)(const double *q, const double *cq, const double *x, const double *cx,
                             const double *xd, const double *xdd, const double *c, double *qd, double *qdd,
                             double *obs);
+/* Kinetostatics at a solved position: reads the motion kernel's observables obs, gravity gv[2] (m/s^2)
+ * and the loads ld (nload); writes the reactions f (nf) then the derived outputs (nfo in all). */
+typedef int (*sg_forces_fn)(const double *q, const double *cq, const double *x, const double *cx,
+                            const double *xd, const double *c, const double *obs, const double *gv,
+                            const double *ld, double *out);
+typedef void (*sg_force_matrix_fn)(const double *q, const double *cq, const double *x, const double *cx,
+                                   const double *c, const double *obs, const double *gv, const double *ld,
+                                   double *A, double *b);
 
 /* One mechanism as the generated code describes it. */
 typedef struct sg_mechanism {
@@ -45,11 +56,16 @@ typedef struct sg_mechanism {
     int nc;      /* constants hoisted out of the parameters */
     int nobs;    /* observables per position (points, bodies), see the manifest */
     int nbranch; /* closed-form dyads, each with an assembly sign */
+    int nf;      /* force unknowns: reactions and driving torques */
+    int nfo;     /* force outputs per position: nf, then torques, powers, shaking, energies (manifest) */
+    int nload;   /* load slots per position: fx, fy per point of a moving body, torque per moving body */
     const unsigned char *coord_is_angle;
     sg_constants_fn constants;
     sg_closed_fn closed;     /* NULL where the loops do not split into dyads */
     sg_residual_fn residual; /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
     sg_motion_fn motion;     /* velocities, accelerations and observables at a solved position */
+    sg_forces_fn forces;     /* joint reactions, driving torques, shaking force, energies */
+    sg_force_matrix_fn force_matrix; /* A (nf x nf, row-major) and b of A f = b, for inspection */
 } sg_mechanism;
 
 typedef struct sg_options {
@@ -189,5 +205,12 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
                 const double *alpha, const double *held, const double *p, const int *branch,
                 const double *q_guess, const sg_options *opt, double *q, double *qd, double *qdd,
                 double *obs, int *status);
+
+/* sg_sweep plus kinetostatics in the same pass: gv is gravity (2), loads is n x nload (NULL: no loads),
+ * frc receives n x nfo force outputs. A singular force matrix gives SG_SINGULAR at that position. */
+size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
+                       const double *alpha, const double *held, const double *p, const int *branch,
+                       const double *q_guess, const sg_options *opt, const double *gv, const double *loads,
+                       double *q, double *qd, double *qdd, double *obs, double *frc, int *status);
 
 #endif

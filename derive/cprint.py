@@ -10,7 +10,9 @@ import re
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
-_ARRAY = re.compile(r"^(q|qd|qdd|x|xd|xdd|p|c|cq|cx)_(\d+)$")
+_ARRAY = re.compile(r"^(q|qd|qdd|x|xd|xdd|p|c|cq|cx|o|gv|ld|f)_(\d+)$")
+#: Symbol prefixes printed under another array name: observables o_k -> obs[k], force results f_k -> out[k].
+_ALIAS = {"o": "obs", "f": "out"}
 _LOCAL = re.compile(r"^([A-Za-z]+\w*?)_(\d+)$")
 
 
@@ -26,7 +28,7 @@ class KernelPrinter(C99CodePrinter):
             return self.names[expr]
         m = _ARRAY.match(expr.name)
         if m:
-            return f"{m.group(1)}[{m.group(2)}]"
+            return f"{_ALIAS.get(m.group(1), m.group(1))}[{m.group(2)}]"
         m = _LOCAL.match(expr.name)
         if m:
             return f"{m.group(1)}[{m.group(2)}]"

@@ -15,6 +15,7 @@ import jinja2
 from .dyads import split_into_dyads
 from .kernels import KernelSet
 from .kinematics import Kinematics
+from .kinetostatics import Kinetostatics
 from .model import Mechanism
 from .units import to_si
 
@@ -36,7 +37,22 @@ class Generated:
     manifest: dict
 
 
-def manifest_of(mech: Mechanism, kin: Kinematics, dyads, kernels, sizes: dict) -> dict:
+def _force_manifest(kst: Kinetostatics) -> dict:
+    reactions, offset = [], 0
+    for r in kst.reactions:
+        reactions.append({"name": r.name, "kind": r.kind, "a": r.a.name, "b": r.b.name, "grounded": r.grounded,
+                          "columns": r.columns, "offset": offset})
+        offset += len(r.columns)
+    return {
+        "reactions": reactions,
+        "force_outputs": [{"name": name, "unit": unit} for name, unit, _ in kst.outputs()],
+        "loads": [{"name": name, "component": comp, "body": body.name} for name, comp, body, _ in kst.load_slots],
+        "force_rows": kst.row_names,
+        "force_blocks": [len(cols) for _, cols in kst.blocks],
+    }
+
+
+def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, kernels, sizes: dict) -> dict:
     offset = 0
     points, bodies = [], []
     for name, _att, doc in mech.points:
@@ -69,6 +85,7 @@ def manifest_of(mech: Mechanism, kin: Kinematics, dyads, kernels, sizes: dict) -
                      for d in (dyads or [])],
         "kernels": {k.name: {"ops": k.ops} for k in kernels},
         "sizes": sizes,
+        **_force_manifest(kst),
     }
 
 
@@ -90,11 +107,14 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     dyads = split_into_dyads(kin) if closed_form else None
     prefix = f"sg_{mech.name}"
     ks = KernelSet(prefix, kin)
-    kernels = ([ks.closed(dyads)] if dyads is not None else []) + [ks.residual(), ks.motion()]
+    kst = Kinetostatics(kin)
+    kernels = ([ks.closed(dyads)] if dyads is not None else []) + [ks.residual(), ks.motion(), ks.forces(kst),
+                                                                   ks.force_matrix(kst)]
     kernels.insert(0, ks.constants_kernel())  # last to build: it evaluates what the others hoisted
     sizes = {"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
-             "nbranch": len(dyads or []), "nc": len(ks.constants)}
-    manifest = manifest_of(mech, kin, dyads, kernels, sizes)
+             "nbranch": len(dyads or []), "nc": len(ks.constants), "nf": len(kst.f),
+             "nfo": len(kst.f) + len(kst.outputs()), "nload": len(kst.load_slots)}
+    manifest = manifest_of(mech, kin, kst, dyads, kernels, sizes)
     text = json.dumps(manifest, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
     c_source = _TEMPLATES.get_template("mechanism.c.j2").render(
         mech={"name": mech.name,

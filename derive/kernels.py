@@ -24,6 +24,11 @@ import sympy as sp
 from .cprint import KernelPrinter, ops
 from .dyads import Dyad
 from .kinematics import Kinematics
+from .kinetostatics import Kinetostatics
+from .model import DeclarationError
+
+#: csrc/sg_runtime.h SG_MAX_Q: the largest LU the runtime's stack arrays hold.
+MAX_BLOCK = 48
 
 
 @dataclass
@@ -167,6 +172,87 @@ class KernelSet:
                       f"double *qd, double *qdd, double *obs)",
                       body, ops(e for _, e in repl) + ops(red))
 
+    def forces(self, kst: Kinetostatics) -> Kernel:
+        """A and b, the block-triangular solve of A f = b (pivoted LU per block), then every derived output.
+
+        Temporaries are staged like the motion kernel's: those of A and b first, those that read the solved
+        reactions after the solve."""
+        pr, A, n = self.printer, kst.A, len(kst.f)
+        nz = [(i, j) for i in range(n) for j in range(n) if A[i, j] != 0]
+        outs = kst.outputs()
+        exprs = self.prepare([A[i, j] for i, j in nz] + list(kst.b) + [e for _, _, e in outs])
+        repl, red = _cse(exprs)
+        fsyms = set(kst.f)
+        late: set = set()
+        for t, e in repl:
+            if e.free_symbols & (fsyms | late):
+                late.add(t)
+        a = {ij: red[k] for k, ij in enumerate(nz)}
+        rhs, r_out = red[len(nz): len(nz) + n], red[len(nz) + n:]
+        body = _temps(pr, [(t, e) for t, e in repl if t not in late])
+        for rows, cols in kst.blocks:
+            body += self._block_solve(rows, cols, a, rhs, kst.f)
+        body += _temps(pr, [(t, e) for t, e in repl if t in late])
+        body += [f"out[{n + k}] = {pr.doprint(e)};" for k, e in enumerate(r_out)]
+        outputs = [f"out[{k}]" for k in range(n + len(r_out))]
+        body += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
+        names = ("q", "cq", "x", "cx", "xd", "c", "obs", "gv", "ld", "out")
+        body = _unused(body, *names) + body + ["return SG_OK;"]
+        return Kernel(f"{self.prefix}_forces",
+                      f"int {self.prefix}_forces(const double *q, const double *cq, const double *x, "
+                      f"const double *cx, const double *xd, const double *c, const double *obs, "
+                      f"const double *gv, const double *ld, double *out)",
+                      body, ops(e for _, e in repl) + ops(red))
+
+    def _block_solve(self, rows, cols, a, rhs, f) -> list[str]:
+        """C for one diagonal block: its right-hand side less the columns solved before, then LU or a division."""
+        pr, n = self.printer, len(f)
+        inside = set(cols)
+
+        def known_part(i):
+            """b_i less the products with reactions solved in earlier blocks (f_j prints as out[j])."""
+            e = rhs[i] - sum((a[(i, j)] * f[j] for j in range(n) if (i, j) in a and j not in inside), sp.S.Zero)
+            return e
+
+        label = ", ".join(str(j) for j in cols)
+        if len(cols) == 1:
+            (i,), (j,) = rows, cols
+            piv = a[(i, j)]
+            if piv.is_Number:
+                return [f"out[{j}] = {pr.doprint(known_part(i) / piv)};"]
+            column = [pr.doprint(a[(k, j)]) for k in range(n) if (k, j) in a]  # the LU's column-scaled test
+            return ["{", f"    const double d = {pr.doprint(piv)};",
+                    f"    if (!(fabs(d) > SG_PIVOT_RTOL * {_fmax(column)})) return SG_SINGULAR;",
+                    f"    out[{j}] = ({pr.doprint(known_part(i))})/d;", "}"]
+        k = len(cols)
+        if k > MAX_BLOCK:
+            raise DeclarationError(f"{self.kin.mech.name}: a force block of {k} unknowns ({label}) is larger "
+                                   f"than the runtime's {MAX_BLOCK} (csrc/sg_runtime.h SG_MAX_Q)")
+        lines = [f"/* block of unknowns {label} */", f"double M[{k * k}], r[{k}];", f"int piv[{k}];"]
+        for bi, i in enumerate(rows):
+            for bj, j in enumerate(cols):
+                lines.append(f"M[{bi * k + bj}] = {pr.doprint(a[(i, j)]) if (i, j) in a else '0.0'};")
+            lines.append(f"r[{bi}] = {pr.doprint(known_part(i))};")
+        lines += [f"if (sg_lu_factor_inl({k}, M, piv, 0) != SG_OK) return SG_SINGULAR;",
+                  f"sg_lu_solve_inl({k}, M, piv, r);"]
+        lines += [f"out[{j}] = r[{bj}];" for bj, j in enumerate(cols)]
+        return ["{"] + ["    " + line for line in lines] + ["}"]
+
+    def force_matrix(self, kst: Kinetostatics) -> Kernel:
+        """A (row-major) and b as they are, for inspection, tests and baselines."""
+        pr, A, n = self.printer, kst.A, len(kst.f)
+        nz = [(i, j) for i in range(n) for j in range(n) if A[i, j] != 0]
+        repl, red = _cse(self.prepare([A[i, j] for i, j in nz] + list(kst.b)))
+        body = _temps(pr, repl) + [f"for (int k = 0; k < {n * n}; ++k) A[k] = 0.0;"]
+        body += [f"A[{i * n + j}] = {pr.doprint(e)};" for (i, j), e in zip(nz, red)]
+        body += [f"b[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[len(nz):])]
+        body = _unused(body, "q", "cq", "x", "cx", "c", "obs", "gv", "ld") + body
+        return Kernel(f"{self.prefix}_force_matrix",
+                      f"void {self.prefix}_force_matrix(const double *q, const double *cq, const double *x, "
+                      f"const double *cx, const double *c, const double *obs, const double *gv, "
+                      f"const double *ld, double *A, double *b)",
+                      body, ops(e for _, e in repl) + ops(red))
+
     def closed(self, dyads: list[Dyad]) -> Kernel:
         pr = self.printer
         body = ["int st;"]
@@ -217,6 +303,14 @@ def _balanced_sum(terms: list[str]) -> str:
         return terms[0]
     mid = len(terms) // 2
     return f"({_balanced_sum(terms[:mid])} + {_balanced_sum(terms[mid:])})"
+
+
+def _fmax(terms: list[str]) -> str:
+    """fmax of the absolute values, as a balanced tree."""
+    if len(terms) == 1:
+        return f"fabs({terms[0]})"
+    mid = len(terms) // 2
+    return f"fmax({_fmax(terms[:mid])}, {_fmax(terms[mid:])})"
 
 
 def _stage(sym, levels):

@@ -18,6 +18,7 @@ SI_UNITS = {
     "inertia": "kg*m**2",
     "speed": "rad/s",
     "angular_acceleration": "rad/s**2",
+    "acceleration": "m/s**2",
     "force": "N",
     "torque": "N*m",
     "mass_length": "kg*m",

@@ -9,6 +9,8 @@ void sg_needle_bar_constants(const double *p, double *c);
 int sg_needle_bar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
 void sg_needle_bar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_needle_bar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
+int sg_needle_bar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
+void sg_needle_bar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 const sg_mechanism *sg_needle_bar(void);
 const char *sg_needle_bar_manifest(void);
 
@@ -17,6 +19,8 @@ void sg_take_up_constants(const double *p, double *c);
 int sg_take_up_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
 void sg_take_up_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_take_up_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
+int sg_take_up_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
+void sg_take_up_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 const sg_mechanism *sg_take_up(void);
 const char *sg_take_up_manifest(void);
 
@@ -25,6 +29,8 @@ void sg_hook_drive_constants(const double *p, double *c);
 int sg_hook_drive_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
 void sg_hook_drive_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
+int sg_hook_drive_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
+void sg_hook_drive_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 const sg_mechanism *sg_hook_drive(void);
 const char *sg_hook_drive_manifest(void);
 

@@ -6,13 +6,14 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_take_up_constants -- Total ops: 18 */
+/* sg_take_up_constants -- Total ops: 24 */
 void sg_take_up_constants(const double *p, double *c)
 {
     const double t0 = (1.0/(p[3]));
     const double t1 = ((p[5])*(p[5]));
     const double t2 = ((p[3])*(p[3]));
     const double t3 = -((p[6])*(p[6])) + t1 + t2;
+    const double t4 = sqrt(t1 - 0.25*((t3)*(t3))/t2);
     c[0] = p[2];
     c[1] = cos(p[7]);
     c[2] = sin(p[7]);
@@ -24,13 +25,23 @@ void sg_take_up_constants(const double *p, double *c)
     c[8] = (1.0/(p[4]));
     c[9] = -p[0];
     c[10] = -p[1];
-    c[11] = sqrt(t1 - 0.25*((t3)*(t3))/t2);
+    c[11] = t4;
     c[12] = t0*t3;
     c[13] = p[7];
     c[14] = p[9];
     c[15] = p[10];
     c[16] = p[13];
     c[17] = p[14];
+    c[18] = p[2] - p[9];
+    c[19] = -p[13] + p[3];
+    c[20] = p[8];
+    c[21] = p[11];
+    c[22] = p[12];
+    c[23] = p[15];
+    c[24] = -p[14] + t4;
+    c[25] = -p[13] + (0.5)*t0*t3;
+    c[26] = p[16];
+    c[27] = p[17];
 }
 
 /* sg_take_up_closed -- Total ops: 22 */
@@ -175,15 +186,157 @@ int sg_take_up_motion(const double *q, const double *cq, const double *x, const 
     return SG_OK;
 }
 
+/* sg_take_up_forces -- Total ops: 149 */
+int sg_take_up_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
+{
+    (void)q;
+    (void)x;
+    const double t0 = c[1]*cx[1] + c[2]*cx[0];
+    const double t1 = c[1]*cx[0] - c[2]*cx[1];
+    const double t2 = c[15]*t1;
+    const double t3 = c[15]*t0;
+    const double t4 = -c[18]*t0 + t2;
+    const double t5 = c[18]*t1 + t3;
+    const double t6 = c[17]*cq[2];
+    const double t7 = c[17]*cq[3];
+    const double t8 = (0.5)*c[6];
+    const double t9 = cq[1]*t8;
+    const double t10 = cq[0]*t8;
+    {
+        /* block of unknowns 2, 3, 4, 5, 6, 7 */
+        double M[36], r[6];
+        int piv[6];
+        M[0] = 1.0;
+        M[1] = 0.0;
+        M[2] = 0.0;
+        M[3] = 0.0;
+        M[4] = -1.0;
+        M[5] = 0.0;
+        r[0] = c[22]*(-gv[0] + obs[34]) - ld[4];
+        M[6] = c[16]*cq[3] + t6;
+        M[7] = -c[16]*cq[2] + t7;
+        M[8] = 0.0;
+        M[9] = 0.0;
+        M[10] = c[19]*cq[3] - t6;
+        M[11] = -c[19]*cq[2] - t7;
+        r[1] = c[23]*obs[29] - ld[4]*(-c[24]*cq[2] - c[25]*cq[3]) - ld[5]*(-c[24]*cq[3] + c[25]*cq[2]) - ld[7];
+        M[12] = 0.0;
+        M[13] = 0.0;
+        M[14] = t9;
+        M[15] = -t10;
+        M[16] = -t9;
+        M[17] = t10;
+        r[2] = c[27]*obs[38] + ld[2]*t9 - ld[3]*t10 - ld[8];
+        M[18] = 0.0;
+        M[19] = 0.0;
+        M[20] = 0.0;
+        M[21] = 1.0;
+        M[22] = 0.0;
+        M[23] = 1.0;
+        r[3] = c[26]*(-gv[1] + obs[44]) - ld[3];
+        M[24] = 0.0;
+        M[25] = 0.0;
+        M[26] = 1.0;
+        M[27] = 0.0;
+        M[28] = 1.0;
+        M[29] = 0.0;
+        r[4] = c[26]*(-gv[0] + obs[43]) - ld[2];
+        M[30] = 0.0;
+        M[31] = 1.0;
+        M[32] = 0.0;
+        M[33] = 0.0;
+        M[34] = 0.0;
+        M[35] = -1.0;
+        r[5] = c[22]*(-gv[1] + obs[35]) - ld[5];
+        if (sg_lu_factor_inl(6, M, piv, 0) != SG_OK) return SG_SINGULAR;
+        sg_lu_solve_inl(6, M, piv, r);
+        out[2] = r[0];
+        out[3] = r[1];
+        out[4] = r[2];
+        out[5] = r[3];
+        out[6] = r[4];
+        out[7] = r[5];
+    }
+    out[0] = c[20]*(-gv[0] + obs[25]) + out[2] - ld[0];
+    out[1] = c[20]*(-gv[1] + obs[26]) + out[3] - ld[1];
+    out[8] = c[21]*obs[20] - out[0]*(c[14]*t0 + t2) - out[1]*(-c[14]*t1 + t3) + out[2]*t4 + out[3]*t5 - ld[0]*t4 - ld[1]*t5 - ld[6];
+    out[9] = out[8];
+    out[10] = out[8]*xd[0];
+    out[11] = out[0] + out[4];
+    out[12] = out[1] + out[5];
+    out[13] = c[3]*out[5] - c[4]*out[4] + out[8];
+    out[14] = (0.5)*c[20]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + (0.5)*c[21]*((obs[19])*(obs[19])) + (0.5)*c[22]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + (0.5)*c[23]*((obs[28])*(obs[28])) + (0.5)*c[26]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + (0.5)*c[27]*((obs[37])*(obs[37]));
+    out[15] = -c[20]*(gv[0]*obs[21] + gv[1]*obs[22]) - c[22]*(gv[0]*obs[30] + gv[1]*obs[31]) - c[26]*(gv[0]*obs[39] + gv[1]*obs[40]);
+    out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37];
+    if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + out[7]))) + (((out[8] + out[9]) + (out[10] + out[11])) + ((out[12] + out[13]) + (out[14] + (out[15] + out[16]))))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_take_up_force_matrix -- Total ops: 81 */
+void sg_take_up_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b)
+{
+    (void)q;
+    (void)x;
+    const double t0 = c[1]*cx[1] + c[2]*cx[0];
+    const double t1 = c[1]*cx[0] - c[2]*cx[1];
+    const double t2 = c[15]*t1;
+    const double t3 = c[15]*t0;
+    const double t4 = -c[18]*t0 + t2;
+    const double t5 = c[18]*t1 + t3;
+    const double t6 = c[17]*cq[2];
+    const double t7 = c[17]*cq[3];
+    const double t8 = (0.5)*c[6];
+    const double t9 = cq[1]*t8;
+    const double t10 = cq[0]*t8;
+    for (int k = 0; k < 81; ++k) A[k] = 0.0;
+    A[0] = 1.0;
+    A[2] = -1.0;
+    A[10] = 1.0;
+    A[12] = -1.0;
+    A[18] = c[14]*t0 + t2;
+    A[19] = -c[14]*t1 + t3;
+    A[20] = -t4;
+    A[21] = -t5;
+    A[26] = 1.0;
+    A[29] = 1.0;
+    A[33] = -1.0;
+    A[39] = 1.0;
+    A[43] = -1.0;
+    A[47] = c[16]*cq[3] + t6;
+    A[48] = -c[16]*cq[2] + t7;
+    A[51] = c[19]*cq[3] - t6;
+    A[52] = -c[19]*cq[2] - t7;
+    A[58] = 1.0;
+    A[60] = 1.0;
+    A[68] = 1.0;
+    A[70] = 1.0;
+    A[76] = t9;
+    A[77] = -t10;
+    A[78] = -t9;
+    A[79] = t10;
+    b[0] = c[20]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[20]*(-gv[1] + obs[26]) - ld[1];
+    b[2] = c[21]*obs[20] - ld[0]*t4 - ld[1]*t5 - ld[6];
+    b[3] = c[22]*(-gv[0] + obs[34]) - ld[4];
+    b[4] = c[22]*(-gv[1] + obs[35]) - ld[5];
+    b[5] = c[23]*obs[29] - ld[4]*(-c[24]*cq[2] - c[25]*cq[3]) - ld[5]*(-c[24]*cq[3] + c[25]*cq[2]) - ld[7];
+    b[6] = c[26]*(-gv[0] + obs[43]) - ld[2];
+    b[7] = c[26]*(-gv[1] + obs[44]) - ld[3];
+    b[8] = c[27]*obs[38] + ld[2]*t9 - ld[3]*t10 - ld[8];
+}
+
 static const unsigned char sg_take_up_coord_is_angle[2] = { 1, 1 };
 
 static const sg_mechanism sg_take_up_descriptor = {
-    "take_up", 2, 1, 18, 18, 45, 1,
+    "take_up", 2, 1, 18, 28, 45, 1,
+    9, 17, 9,
     sg_take_up_coord_is_angle,
     sg_take_up_constants,
     sg_take_up_closed,
     sg_take_up_residual,
-    sg_take_up_motion
+    sg_take_up_motion,
+    sg_take_up_forces,
+    sg_take_up_force_matrix
 };
 
 const sg_mechanism *sg_take_up(void)
@@ -212,67 +365,87 @@ const char *sg_take_up_manifest(void)
         " in place of the paper's misprinted \\u03c6CD).\\nSeed 004 runs the crank at n = 5000 r/min.\\n\\n"
         "The link lengths of seed 004's table 1 are not in the text: AB, BC, CD, BE, CE are estimates tha"
         "t make a\\nGrashof crank-rocker (10 + 38 \\u2264 26 + 32.8) with the willow-leaf eye path the pa"
-        "per describes.\",\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft ang"
-        "le phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"unit\":\"rad\"}],\"kernels\":{\"sg_take_up_clos"
-        "ed\":{\"ops\":22},\"sg_take_up_constants\":{\"ops\":18},\"sg_take_up_motion\":{\"ops\":126},\"sg"
-        "_take_up_residual\":{\"ops\":20}},\"name\":\"take_up\",\"observables\":[{\"name\":\"crank_pin.x\""
-        ",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":"
-        "\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m"
-        "/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.x\",\"unit\":\"m"
-        "\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\"name\":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\""
-        "name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.x\",\"unit\":\"m\"},{\"nam"
-        "e\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\"thread_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"cr"
-        "ank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
-        "crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_"
-        "d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\","
-        "\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\""
-        "unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\""
-        ":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\"name\":\"rocker.angle_d\",\"unit\":\"rad/s"
-        "\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rocker.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\"name\":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"n"
-        "ame\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\""
-        "name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.026000000000000002,\""
-        "display_unit\":\"mm\",\"doc\":\"D, horizontal (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"na"
-        "me\":\"rocker_pivot_x\",\"positive\":false,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\""
-        "mm\",\"doc\":\"D, vertical (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot"
-        "_y\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"cran"
-        "k AB (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\"de"
-        "fault\":0.038,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"len"
-        "gth\",\"name\":\"lever_bc\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.026000000000000002,"
-        "\"display_unit\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\""
-        ",\"positive\":true,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up "
-        "lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\",\"positive\":true"
-        ",\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"take-up lever C to thread "
-        "eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"positive\":true,\"unit\":\"m\"},{"
-        "\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\","
-        "\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"unit\":\"rad\"},{\"default\":0."
-        "0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"p"
-        "ositive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
-        "ss of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"unit\":"
-        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"k"
-        "ind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\""
-        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\"kin"
-        "d\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\""
-        ":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\""
-        ":\"lever.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.024,\"display_unit\":\"mm\",\""
-        "doc\":\"centre of mass of lever, local u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positi"
-        "ve\":false,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass o"
-        "f lever, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"unit\":\"m\""
-        "},{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its"
-        " centre of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"unit\":\""
-        "kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\""
-        ",\"name\":\"rocker.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\""
-        ":\"kg*m**2\",\"doc\":\"moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia"
-        "\",\"name\":\"rocker.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\""
-        ",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\","
-        "\"offset\":0},{\"doc\":\"lever-rocker pin C\",\"name\":\"rocker_pin\",\"offset\":6},{\"doc\":\"t"
-        "hread eye E of the take-up lever\",\"name\":\"thread_eye\",\"offset\":12}],\"sizes\":{\"nbranch\""
-        ":1,\"nc\":18,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1}}"
+        "per describes.\",\"force_blocks\":[6,1,1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit"
+        "\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{"
+        "\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\""
+        ":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"l"
+        "oad_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"lever.x\""
+        ",\"lever.y\",\"lever.moment\",\"rocker.x\",\"rocker.y\",\"rocker.moment\"],\"inputs\":[{\"defaul"
+        "t\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\""
+        "shaft\",\"unit\":\"rad\"}],\"kernels\":{\"sg_take_up_closed\":{\"ops\":22},\"sg_take_up_constant"
+        "s\":{\"ops\":24},\"sg_take_up_force_matrix\":{\"ops\":81},\"sg_take_up_forces\":{\"ops\":149},\""
+        "sg_take_up_motion\":{\"ops\":126},\"sg_take_up_residual\":{\"ops\":20}},\"loads\":[{\"body\":\"c"
+        "rank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"n"
+        "ame\":\"crank_pin\"},{\"body\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\""
+        ":\"rocker\",\"component\":\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx"
+        "\",\"name\":\"thread_eye\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\""
+        "body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":"
+        "\"torque\",\"name\":\"lever\"},{\"body\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\""
+        "}],\"name\":\"take_up\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"c"
+        "rank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin"
+        ".y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin."
+        "y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\""
+        ",\"unit\":\"m\"},{\"name\":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"u"
+        "nit\":\"m/s\"},{\"name\":\"rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\""
+        ":\"m\"},{\"name\":\"thread_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"thread_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/"
+        "s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\""
+        "},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"nam"
+        "e\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name"
+        "\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":"
+        "\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name"
+        "\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.c"
+        "om.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x"
+        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.an"
+        "gle\",\"unit\":\"rad\"},{\"name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angl"
+        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y"
+        "\",\"unit\":\"m\"},{\"name\":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\""
+        "unit\":\"m/s\"},{\"name\":\"rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\","
+        "\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc"
+        "\":\"D, horizontal (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"p"
+        "ositive\":false,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical"
+        " (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\""
+        "unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\""
+        ":\"length\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.038,\"display_un"
+        "it\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name\":\"lever_bc\""
+        ",\"positive\":true,\"unit\":\"m\"},{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"d"
+        "oc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\",\"positive\":true,\"unit\""
+        ":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to thread eye E (es"
+        "timate)\",\"kind\":\"length\",\"name\":\"lever_be\",\"positive\":true,\"unit\":\"m\"},{\"default"
+        "\":0.022,\"display_unit\":\"mm\",\"doc\":\"take-up lever C to thread eye E (estimate)\",\"kind\""
+        ":\"length\",\"name\":\"lever_ce\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.0,\"display_u"
+        "nit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\""
+        ":\"crank.phase\",\"positive\":false,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\""
+        "doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"unit\":\""
+        "kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"ki"
+        "nd\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"d"
+        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\""
+        "crank.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\""
+        "doc\":\"moment of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"cr"
+        "ank.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.009000000000000001,\"displ"
+        "ay_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\""
+        ":false,\"unit\":\"kg\"},{\"default\":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of l"
+        "ever, local u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"unit\":\"m\"},"
+        "{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\""
+        ":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":3e-06,\"dis"
+        "play_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\""
+        ":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0."
+        "004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.mass\""
+        ",\"positive\":false,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"m"
+        "oment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rocker.ine"
+        "rtia\",\"positive\":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"a"
+        "x\",\"ay\"],\"points\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\""
+        "lever-rocker pin C\",\"name\":\"rocker_pin\",\"offset\":6},{\"doc\":\"thread eye E of the take-u"
+        "p lever\",\"name\":\"thread_eye\",\"offset\":12}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank"
+        "\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\","
+        "\"offset\":0},{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\""
+        "kind\":\"revolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":"
+        "[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"le"
+        "ver\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"na"
+        "me\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\""
+        ":true,\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\""
+        ":28,\"nf\":9,\"nfo\":17,\"nload\":9,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1}}"
         ;
 }

@@ -13,6 +13,8 @@ import numpy as np
 from derive.units import UnitError, to_si
 
 from .errors import STATUS_ERRORS, InputError, ParameterError
+from .forces import ForceAnalysis
+from .loads import load_matrix
 from .results import Motion
 
 _NONNEGATIVE = {"mass", "inertia"}
@@ -157,18 +159,8 @@ class Mechanism:
         lengths = [abs(v) for v, s in zip(p, self.manifest["params"]) if s["kind"] == "length"]
         return max(lengths + [1e-3])
 
-    def solve(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
-              branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
-              newton: bool = False, max_iter: int = 50) -> Motion:
-        """Positions, velocities and accelerations of every coordinate, point and body at shaft angles ``phi``.
-
-        ``phi`` in rad (or degrees with ``degrees=True``); ``speed`` (rad/s, default the mechanism's
-        default speed) and ``accel`` (rad/s²) are scalars or per-position arrays, numbers in SI or quantity
-        strings ("1000 rpm"). ``params``, ``held`` (held inputs), ``branch`` (joint -> ±1) and ``guess``
-        (coordinate -> Newton start) override the manifest's defaults by name. ``newton=True`` solves by
-        Newton even where a closed form exists. Raises a :class:`~sewgen.errors.PositionError` subclass at
-        the first shaft angle that fails.
-        """
+    def _sweep_inputs(self, phi, speed, accel, params, held, branch, guess, degrees, newton, max_iter) -> dict:
+        """Every sweep argument checked and converted to the C-ready arrays sg_sweep takes."""
         phi_arr = np.asarray(phi)
         if phi_arr.ndim == 0:
             phi_arr = phi_arr.reshape(1)
@@ -181,26 +173,100 @@ class Mechanism:
         omega = self._series("speed", self.default_speed if speed is None else speed, n, "speed")
         alpha = self._series("angular acceleration", accel, n, "angular_acceleration")
         p = self.param_vector(params)
-        held_v = np.array(self._held(held), dtype=np.float64)
         br = np.array(self._named_vector("branch joint", self.branch_names,
                                          [b["default"] for b in self.manifest["branches"]], branch, "sign"),
                       dtype=np.intc)
-        q0 = np.array(self._guess(guess), dtype=np.float64)
         if not isinstance(max_iter, int) or isinstance(max_iter, bool) or max_iter < 1:
             raise ParameterError(self.name, "max_iter", f"must be a positive integer, got {max_iter!r}")
         nq, nobs = len(self.coord_names), len(self.manifest["observables"])
-        q, qd, qdd = (np.zeros((n, nq)) for _ in range(3))
-        obs = np.zeros((n, nobs))
-        status = np.zeros(n, dtype=np.intc)
-        opt = self.ffi.new("sg_options *", {"tol": 1e-13 * self.length_scale(p), "max_iter": max_iter,
-                                            "newton_only": 1 if newton else 0})
+        return {"n": n, "phi": phi_v, "omega": omega, "alpha": alpha, "p": p,
+                "held": np.array(self._held(held), dtype=np.float64), "branch": br,
+                "guess": np.array(self._guess(guess), dtype=np.float64),
+                "opt": self.ffi.new("sg_options *", {"tol": 1e-13 * self.length_scale(p), "max_iter": max_iter,
+                                                    "newton_only": 1 if newton else 0}),
+                "q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)),
+                "obs": np.zeros((n, nobs)), "status": np.zeros(n, dtype=np.intc)}
+
+    def _motion(self, a: dict) -> Motion:
+        return Motion(self, a["phi"], a["omega"], a["alpha"], a["q"], a["qd"], a["qdd"], a["obs"])
+
+    def solve(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
+              branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
+              newton: bool = False, max_iter: int = 50) -> Motion:
+        """Positions, velocities and accelerations of every coordinate, point and body at shaft angles ``phi``.
+
+        ``phi`` in rad (or degrees with ``degrees=True``); ``speed`` (rad/s, default the mechanism's
+        default speed) and ``accel`` (rad/s²) are scalars or per-position arrays, numbers in SI or quantity
+        strings ("1000 rpm"). ``params``, ``held`` (held inputs), ``branch`` (joint -> ±1) and ``guess``
+        (coordinate -> Newton start) override the manifest's defaults by name. ``newton=True`` solves by
+        Newton even where a closed form exists. Raises a :class:`~sewgen.errors.PositionError` subclass at
+        the first shaft angle that fails.
+        """
+        a = self._sweep_inputs(phi, speed, accel, params, held, branch, guess, degrees, newton, max_iter)
         d = self._ptr
-        self.lib.sg_sweep(self._descriptor, n, d("double *", phi_v), d("double *", omega), d("double *", alpha),
-                          d("double *", held_v), d("double *", p), d("int *", br), d("double *", q0), opt,
-                          d("double *", q), d("double *", qd), d("double *", qdd), d("double *", obs),
-                          d("int *", status))
-        self._raise_for(status, phi_v)
-        return Motion(self, phi_v, omega, alpha, q, qd, qdd, obs)
+        self.lib.sg_sweep(self._descriptor, a["n"], d("double *", a["phi"]), d("double *", a["omega"]),
+                          d("double *", a["alpha"]), d("double *", a["held"]), d("double *", a["p"]),
+                          d("int *", a["branch"]), d("double *", a["guess"]), a["opt"], d("double *", a["q"]),
+                          d("double *", a["qd"]), d("double *", a["qdd"]), d("double *", a["obs"]),
+                          d("int *", a["status"]))
+        self._raise_for(a["status"], a["phi"])
+        return self._motion(a)
+
+    def kinetostatics(self, phi, speed=None, accel=0.0, *, loads=(), gravity="9.80665 m/s**2",
+                      gravity_direction="-90 deg", moment_about=(0.0, 0.0), params: dict | None = None,
+                      held: dict | None = None, branch: dict | None = None, guess: dict | None = None,
+                      degrees: bool = False, newton: bool = False, max_iter: int = 50) -> ForceAnalysis:
+        """Kinematics and every force at shaft angles ``phi``, in one C call (seed 000 §二(三)).
+
+        Joint reactions, driving (and holding) torques, the shaking force and moment, kinetic and potential
+        energy and the power of every source. ``loads`` is a sequence of :class:`~sewgen.loads.Load`;
+        ``gravity`` (magnitude, 0 to switch it off) acts along ``gravity_direction`` in the mechanism's plane
+        (default −90°: −y, the catalog's "down"); ``moment_about`` is the point (x, y; m or strings) the
+        shaking moment is taken about. The other arguments are :meth:`solve`'s. A singular force matrix (a
+        toggle position) raises :class:`~sewgen.errors.SingularPositionError` naming the shaft angle.
+        """
+        a = self._sweep_inputs(phi, speed, accel, params, held, branch, guess, degrees, newton, max_iter)
+        g = self._si(gravity, "acceleration", "gravity")
+        g_dir = self._si(gravity_direction, "angle", "gravity_direction")
+        gv = np.array([g * np.cos(g_dir), g * np.sin(g_dir)])
+        if not (isinstance(moment_about, (tuple, list)) and len(moment_about) == 2):
+            raise ParameterError(self.name, "moment_about", f"must be a point (x, y), got {moment_about!r}")
+        about = tuple(self._si(v, "length", "moment_about") for v in moment_about)
+        ld, placed = load_matrix(self, loads, a["phi"])
+        frc = np.zeros((a["n"], self.manifest["sizes"]["nfo"]))
+        d = self._ptr
+        self.lib.sg_sweep_forces(
+            self._descriptor, a["n"], d("double *", a["phi"]), d("double *", a["omega"]),
+            d("double *", a["alpha"]), d("double *", a["held"]), d("double *", a["p"]), d("int *", a["branch"]),
+            d("double *", a["guess"]), a["opt"], d("double *", gv),
+            self.ffi.NULL if ld is None else d("double *", ld), d("double *", a["q"]), d("double *", a["qd"]),
+            d("double *", a["qdd"]), d("double *", a["obs"]), d("double *", frc), d("int *", a["status"]))
+        self._raise_for(a["status"], a["phi"])
+        return ForceAnalysis(self, self._motion(a), frc, placed, gv, about)
+
+    def force_matrix(self, motion: Motion, index: int = 0, *, params: dict | None = None, held: dict | None = None,
+                     gravity=(0.0, -9.80665),
+                     load_row=None):
+        """A and b of A f = b at position ``index`` of a solved ``motion`` (for inspection and checks).
+
+        ``gravity`` is the vector (gx, gy) in m/s²; ``load_row`` the load slots (manifest "loads") or zeros.
+        Rows: the manifest's "force_rows"; columns: the reactions' columns in manifest order.
+        """
+        nf = self.manifest["sizes"]["nf"]
+        q = np.ascontiguousarray(motion.q[index], dtype=np.float64)
+        x = np.array([float(motion.phi[index])] + self._held(held), dtype=np.float64)
+        cq = np.column_stack([np.cos(q), np.sin(q)]).ravel()
+        cx = np.column_stack([np.cos(x), np.sin(x)]).ravel()
+        obs = np.ascontiguousarray(motion.obs[index], dtype=np.float64)
+        ld = np.zeros(max(self.manifest["sizes"]["nload"], 1)) if load_row is None else \
+            np.ascontiguousarray(load_row, dtype=np.float64)
+        A, b = np.zeros((nf, nf)), np.zeros(nf)
+        d = self._ptr
+        getattr(self.lib, f"sg_{self.name}_force_matrix")(
+            d("double *", q), d("double *", cq), d("double *", x), d("double *", cx),
+            d("double *", self.constants(params)), d("double *", obs), d("double *", np.array(gravity, dtype=float)),
+            d("double *", ld), d("double *", A), d("double *", b))
+        return A, b
 
     def _raise_for(self, status: np.ndarray, phi: np.ndarray) -> None:
         bad = np.flatnonzero(status)

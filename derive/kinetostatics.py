@@ -1,0 +1,295 @@
+"""Symbolic kinetostatics: the force-balance matrices A(q) f = b(q, q', q'', loads) (seed 000 §二(三)).
+
+Seed 000 writes, for every moving body i, m_i·g̈_i = Σ F and I_i·θ̈_i = Σ M_G (its eqs. for 构件 13–17 and
+the feed group), stacks them into one matrix per group and solves "by numerical methods in one go". Here the
+same equations are derived from the declaration, for any mechanism:
+
+* unknowns f: two reaction components per revolute (force on its body b from its body a, frame axes), the
+  normal force and the couple per prismatic (on the slider side, normal n = guide direction turned +90°),
+  and one driving torque per driven body (a held input's is its holding torque);
+* rows: per moving body, force x, force y, moment about the centre of mass G;
+* b: m(a_G − g) minus the external loads, and I·α minus the loads' moments about G.
+
+Driven bodies are pinned to ground at their pivot (joint ``<body>.pivot``); a slider's guide is a prismatic
+joint ``<slider>.guide``. Loads: a force (frame components) at every named point of a moving body, a torque
+on every moving body — values per position at run time, so windows and magnitudes are not baked in. Gravity
+is a run-time vector in the mechanism's plane.
+
+The kinematic quantities b needs (a_G, α, ω, v of points) are the motion kernel's observables: they enter as
+placeholder symbols ``o_k`` (= obs[k]) so nothing is computed twice; :meth:`Kinetostatics.explicit` puts
+the kinematic expressions back for checks and baselines.
+
+The system is square for every declaration the kinematics accepts (3 per body = 2 per joint + 1 per drive,
+given as many closure equations as coordinates). It is solved in block-triangular order (Dulmage–Mendelsohn:
+a perfect matching, then strongly connected blocks in dependency order, as KLU does); each block by the
+runtime's pivoted LU, so no pivot is fixed symbolically.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from .kinematics import Kinematics, rot
+from .model import Attachment, Body, DeclarationError
+
+
+@dataclass
+class Reaction:
+    """A joint as the force analysis sees it: body ``a`` acts on body ``b`` at ``b``'s point ``at``."""
+
+    name: str
+    kind: str  # "revolute", "prismatic" or "drive"
+    a: Body
+    b: Body
+    at: Attachment | None  # point of b where the force acts (None: a pure torque)
+    at_a: Attachment | None = None  # revolute: the coinciding point of a (its own moment arm)
+    guide_angle: sp.Expr = sp.S.Zero  # prismatic: world angle of the guide line
+    sense: int = 1  # drive: body angle = sense * input + phase
+    input_index: int = -1  # drive
+
+    @property
+    def columns(self) -> list[str]:
+        return {"revolute": ["fx", "fy"], "prismatic": ["normal", "moment"], "drive": ["torque"]}[self.kind]
+
+    @property
+    def grounded(self) -> bool:
+        return not self.a.moving or not self.b.moving
+
+
+class Kinetostatics:
+    """A, b, the outputs derived from the solution, and the block order to solve A f = b in."""
+
+    def __init__(self, kin: Kinematics):
+        self.kin, self.mech = kin, kin.mech
+        mech = self.mech
+        self.moving = [b for b in mech.bodies if b.moving]
+        self.reactions = self._reactions()
+        self.obs = [sp.Symbol(f"o_{k}", real=True) for k in range(len(kin.observables))]
+        self.gravity = [sp.Symbol("gv_0", real=True), sp.Symbol("gv_1", real=True)]
+        self._obs_index = {o.name: k for k, o in enumerate(kin.observables)}
+        self.load_slots = self._load_slots()
+        self.loads = [sp.Symbol(f"ld_{k}", real=True) for k in range(len(self.load_slots))]
+        self.f = [sp.Symbol(f"f_{k}", real=True) for k in range(sum(len(r.columns) for r in self.reactions))]
+        self.unknown_names = [f"{r.name}.{c}" for r in self.reactions for c in r.columns]
+        self.row_names = [f"{b.name}.{e}" for b in self.moving for e in ("x", "y", "moment")]
+        self.A, self.b = self._balance()
+        self.blocks = self._block_order()
+
+    # -- what acts where ------------------------------------------------------------------------------------
+    def _reactions(self) -> list[Reaction]:
+        kin, mech = self.kin, self.mech
+        out = []
+        for body in mech.bodies:
+            if body.kind == "driven":
+                out.append(Reaction(f"{body.name}.pivot", "revolute", mech.ground, body,
+                                    Attachment(body, sp.S.Zero, sp.S.Zero), body.pivot))
+            elif body.kind == "slider":
+                g = body.guide
+                out.append(Reaction(f"{body.name}.guide", "prismatic", g.body, body,
+                                    Attachment(body, sp.S.Zero, sp.S.Zero),
+                                    guide_angle=kin.pose[g.body][2] + g.angle))
+        for j in mech.joints:
+            if j.kind == "revolute":
+                out.append(Reaction(j.name, "revolute", j.a.body, j.b.body, j.b, j.a))
+            else:
+                out.append(Reaction(j.name, "prismatic", j.a.body, j.b.body, j.b,
+                                    guide_angle=kin.pose[j.a.body][2] + j.a.angle))
+        for body in mech.bodies:
+            if body.kind == "driven":
+                out.append(Reaction(f"{body.name}.drive", "drive", mech.ground, body, None,
+                                    sense=body.sense if body.input_index == 0 else 1,
+                                    input_index=body.input_index))
+        return out
+
+    def _load_slots(self) -> list[tuple]:
+        """(name, kind, body, attachment, component): fx, fy per named point of a moving body, torque per body."""
+        slots = []
+        for name, att, _doc in self.mech.points:
+            if att.body.moving:
+                slots += [(name, "fx", att.body, att), (name, "fy", att.body, att)]
+        for body in self.moving:
+            slots.append((body.name, "torque", body, None))
+        return slots
+
+    def o(self, name: str) -> sp.Symbol:
+        """The placeholder of observable ``name`` (see derive.kinematics: "<body>.com.x_dd", "<point>.x_d")."""
+        return self.obs[self._obs_index[name]]
+
+    def arm(self, body: Body, world_point) -> tuple:
+        """world_point − G of ``body``, world axes."""
+        gx, gy = self.kin.world(Attachment(body, body.com[0], body.com[1]))
+        return (world_point[0] - gx, world_point[1] - gy)
+
+    def own_arm(self, att: Attachment) -> tuple:
+        """A point fixed in its body, relative to the body's G: R(θ)(u − u_G, v − v_G)."""
+        body = att.body
+        return rot(self.kin.pose[body][2], att.u - body.com[0], att.v - body.com[1])
+
+    # -- the matrices ---------------------------------------------------------------------------------------
+    def _balance(self):
+        rows = {b: 3 * i for i, b in enumerate(self.moving)}
+        n = len(self.f)
+        A = sp.zeros(n, n)
+        col = 0
+        for r in self.reactions:
+            for sign, body in ((1, r.b), (-1, r.a)):
+                if not body.moving:
+                    continue
+                k = rows[body]
+                if r.kind == "revolute":
+                    dx, dy = self.own_arm(r.at if body is r.b else r.at_a)
+                    A[k, col] += sign
+                    A[k + 1, col + 1] += sign
+                    A[k + 2, col] += -sign * dy
+                    A[k + 2, col + 1] += sign * dx
+                elif r.kind == "prismatic":
+                    nx, ny = -sp.sin(r.guide_angle), sp.cos(r.guide_angle)
+                    dx, dy = (self.own_arm(r.at) if body is r.b else self.arm(body, self.kin.world(r.at)))
+                    A[k, col] += sign * nx
+                    A[k + 1, col] += sign * ny
+                    A[k + 2, col] += sign * (dx * ny - dy * nx)
+                    A[k + 2, col + 1] += sign
+                else:
+                    A[k + 2, col] += sign
+            col += len(r.columns)
+        b = sp.zeros(n, 1)
+        gx, gy = self.gravity
+        for body in self.moving:
+            k, name = rows[body], body.name
+            b[k] = body.mass * (self.o(f"{name}.com.x_dd") - gx)
+            b[k + 1] = body.mass * (self.o(f"{name}.com.y_dd") - gy)
+            b[k + 2] = body.inertia * self.o(f"{name}.angle_dd")
+        for (name, comp, body, att), load in zip(self.load_slots, self.loads):
+            k = rows[body]
+            if comp == "torque":
+                b[k + 2] -= load
+                continue
+            dx, dy = self.own_arm(att)
+            b[k if comp == "fx" else k + 1] -= load
+            b[k + 2] -= (-dy if comp == "fx" else dx) * load
+        return A, b
+
+    # -- outputs derived from the solution ------------------------------------------------------------------
+    def outputs(self) -> list[tuple[str, str, sp.Expr]]:
+        """(name, unit, expression in f, observables, gravity, loads) of every result after f itself."""
+        kin, mech = self.kin, self.mech
+        out = []
+        col = {}
+        k = 0
+        for r in self.reactions:
+            col[r.name] = k
+            k += len(r.columns)
+        for i, inp in enumerate(mech.inputs):
+            tau = sum((r.sense * self.f[col[r.name]] for r in self.reactions
+                       if r.kind == "drive" and r.input_index == i), sp.S.Zero)
+            out.append((f"{inp.name}.torque", "N*m", tau))
+        for i, inp in enumerate(mech.inputs):
+            out.append((f"{inp.name}.power", "W", out[i][2] * kin.xd[i]))
+        for r in self.reactions:  # a prismatic's normal force in frame components
+            if r.kind == "prismatic":
+                c = col[r.name]
+                out += [(f"{r.name}.fx", "N", -sp.sin(r.guide_angle) * self.f[c]),
+                        (f"{r.name}.fy", "N", sp.cos(r.guide_angle) * self.f[c])]
+        fx = fy = mz = sp.S.Zero  # the frame's reactions on the moving parts
+        for r in self.reactions:
+            if not r.grounded:
+                continue
+            sign = 1 if not r.a.moving else -1  # f acts on b from a
+            c = col[r.name]
+            if r.kind == "revolute":
+                px, py = kin.world(r.at)
+                fx += sign * self.f[c]
+                fy += sign * self.f[c + 1]
+                mz += sign * (px * self.f[c + 1] - py * self.f[c])
+            elif r.kind == "prismatic":
+                px, py = kin.world(r.at)
+                nx, ny = -sp.sin(r.guide_angle), sp.cos(r.guide_angle)
+                fx += sign * nx * self.f[c]
+                fy += sign * ny * self.f[c]
+                mz += sign * ((px * ny - py * nx) * self.f[c] + self.f[c + 1])
+            else:
+                mz += sign * self.f[c]
+        out += [("shaking.fx", "N", fx), ("shaking.fy", "N", fy), ("shaking.moment", "N*m", mz)]
+        ke = pe = sp.S.Zero
+        gx, gy = self.gravity
+        for body in self.moving:
+            n = body.name
+            vx, vy, w = self.o(f"{n}.com.x_d"), self.o(f"{n}.com.y_d"), self.o(f"{n}.angle_d")
+            ke += body.mass * (vx * vx + vy * vy) / 2 + body.inertia * w * w / 2
+            pe -= body.mass * (gx * self.o(f"{n}.com.x") + gy * self.o(f"{n}.com.y"))
+        power = sp.S.Zero
+        for (name, comp, body, _att), load in zip(self.load_slots, self.loads):
+            rate = self.o(f"{body.name}.angle_d") if comp == "torque" else self.o(f"{name}.{comp[1]}_d")
+            power += load * rate
+        out += [("kinetic_energy", "J", ke), ("potential_energy", "J", pe), ("load_power", "W", power)]
+        return out
+
+    # -- solve order ----------------------------------------------------------------------------------------
+    def _block_order(self) -> list[tuple[list[int], list[int]]]:
+        """(rows, columns) of each diagonal block of A's block-triangular form, in the order to solve them."""
+        n = self.A.shape[0]
+        nz = [[j for j in range(n) if self.A[i, j] != 0] for i in range(n)]
+        match_row = _perfect_matching(nz, n)  # column -> row
+        if match_row is None:
+            raise DeclarationError(f"{self.mech.name}: the force balance is structurally singular "
+                                   "(a body or joint is over- or under-constrained)")
+        row_of = match_row
+        deps = {j: sorted({k for k in nz[row_of[j]] if k != j}) for j in range(n)}
+        return [([row_of[j] for j in comp], comp) for comp in _tarjan(deps, n)]
+
+    # -- checks and baselines -------------------------------------------------------------------------------
+    def explicit(self, expr):
+        """``expr`` with the observable placeholders replaced by their kinematic expressions."""
+        subs = {o: ob.expr for o, ob in zip(self.obs, self.kin.observables)}
+        return expr.xreplace(subs) if hasattr(expr, "xreplace") else sp.sympify(expr).xreplace(subs)
+
+
+def _perfect_matching(nz: list[list[int]], n: int):
+    """Kuhn's augmenting paths on rows -> columns; column -> row, or None if A is structurally singular."""
+    owner = [-1] * n
+
+    def augment(i, seen):
+        for j in nz[i]:
+            if j in seen:
+                continue
+            seen.add(j)
+            if owner[j] < 0 or augment(owner[j], seen):
+                owner[j] = i
+                return True
+        return False
+
+    for i in range(n):
+        if not augment(i, set()):
+            return None
+    return owner
+
+
+def _tarjan(deps: dict, n: int) -> list[list[int]]:
+    """Strongly connected components of j -> deps[j], each listed after every component it depends on."""
+    index, low, on, stack, comps = {}, {}, set(), [], []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in deps[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            comps.append(sorted(comp))
+
+    for v in range(n):
+        if v not in index:
+            visit(v)
+    return comps

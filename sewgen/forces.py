@@ -1,0 +1,170 @@
+"""Named results of a kinetostatic sweep: joint reactions, driving torques, shaking force and moment, energy.
+
+Conventions (derive/kinetostatics.py): a revolute's reaction is the force on the joint's second body (b) from
+its first (a), in the frame's x, y axes; a prismatic's is the normal force along the guide's normal (guide
+direction turned +90°) and the couple, both on the slider side. Driven bodies are pinned to the frame at
+``<body>.pivot``; a slider's own guide is ``<slider>.guide``. Shaking force and moment are the resultant of
+the frame's reactions on the moving parts — Σ m·a_G − Σ m·g − Σ loads — with the drives counted as part of
+the frame (seed 000 analyses the machine's shaking through these base reactions); the force the mechanism
+puts on the frame is their negative, per joint in :meth:`ForceAnalysis.frame_force`.
+"""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class JointReaction:
+    """A joint force over the sweep: frame components (N), magnitude (N), direction (rad from +x).
+
+    For a prismatic joint also the normal force (N) and the couple (N·m); for a revolute both are None.
+    """
+
+    fx: np.ndarray
+    fy: np.ndarray
+    normal: np.ndarray | None = None
+    moment: np.ndarray | None = None
+
+    @property
+    def magnitude(self) -> np.ndarray:
+        return np.hypot(self.fx, self.fy)
+
+    @property
+    def direction(self) -> np.ndarray:
+        return np.arctan2(self.fy, self.fx)
+
+
+class ForceAnalysis:
+    """Kinematics and kinetostatics of one mechanism over a sweep (SI units throughout)."""
+
+    def __init__(self, mechanism, motion, frc: np.ndarray, placed_loads, gravity, moment_about):
+        self.mechanism, self.motion, self.frc = mechanism, motion, frc
+        self.phi = motion.phi
+        self.gravity = gravity
+        self.moment_about = moment_about
+        man = mechanism.manifest
+        self._reactions = {r["name"]: r for r in man["reactions"]}
+        nf = man["sizes"]["nf"]
+        self._outputs = {o["name"]: nf + k for k, o in enumerate(man["force_outputs"])}
+        self._placed = placed_loads
+        self._inputs = [i["name"] for i in man["inputs"]]
+
+    def __len__(self) -> int:
+        return len(self.phi)
+
+    @property
+    def reaction_names(self) -> list[str]:
+        """Every joint that carries a force (driving torques are under :meth:`torque`)."""
+        return [n for n, r in self._reactions.items() if r["kind"] != "drive"]
+
+    @property
+    def frame_joint_names(self) -> list[str]:
+        return [n for n, r in self._reactions.items() if r["grounded"] and r["kind"] != "drive"]
+
+    def _out(self, name: str) -> np.ndarray:
+        return self.frc[:, self._outputs[name]]
+
+    def reaction(self, name: str) -> JointReaction:
+        """The force on the joint's second body from its first (see the module docstring)."""
+        r = self._reactions.get(name)
+        if r is None or r["kind"] == "drive":
+            raise KeyError(f"{self.mechanism.name} has no joint {name!r}; joints: {', '.join(self.reaction_names)}")
+        k = r["offset"]
+        if r["kind"] == "revolute":
+            return JointReaction(self.frc[:, k], self.frc[:, k + 1])
+        return JointReaction(self._out(f"{name}.fx"), self._out(f"{name}.fy"), self.frc[:, k], self.frc[:, k + 1])
+
+    def frame_force(self, name: str) -> JointReaction:
+        """The force joint ``name`` puts on the frame (it must join a body to ground)."""
+        r = self._reactions.get(name)
+        if r is None or not r["grounded"] or r["kind"] == "drive":
+            raise KeyError(f"{self.mechanism.name}: {name!r} is not a frame joint; frame joints: "
+                           f"{', '.join(self.frame_joint_names)}")
+        on_b = self.reaction(name)
+        sign = -1.0 if r["a"] == "ground" else 1.0  # the frame is a: it gets −f; the frame is b: it gets f
+        scale = (lambda v: None if v is None else sign * v)
+        return JointReaction(sign * on_b.fx, sign * on_b.fy, scale(on_b.normal), scale(on_b.moment))
+
+    def torque(self, input_name: str = "shaft") -> np.ndarray:
+        """Driving torque of an input (N·m): the shaft's, or a held input's holding torque."""
+        if input_name not in self._inputs:
+            raise KeyError(f"{self.mechanism.name} has no input {input_name!r}; inputs: {', '.join(self._inputs)}")
+        return self._out(f"{input_name}.torque")
+
+    def input_power(self, input_name: str = "shaft") -> np.ndarray:
+        """Power the input delivers (W) = torque × input speed (zero for held inputs)."""
+        self.torque(input_name)
+        return self._out(f"{input_name}.power")
+
+    @property
+    def shaking_force(self) -> np.ndarray:
+        """(n, 2): resultant of the frame's reactions on the moving parts = Σ m a_G − Σ m g − Σ loads (N)."""
+        return np.column_stack([self._out("shaking.fx"), self._out("shaking.fy")])
+
+    @property
+    def shaking_moment(self) -> np.ndarray:
+        """Moment of the frame's reactions (drives included) about ``moment_about`` (N·m)."""
+        ox, oy = self.moment_about
+        return self._out("shaking.moment") - (ox * self._out("shaking.fy") - oy * self._out("shaking.fx"))
+
+    @property
+    def kinetic_energy(self) -> np.ndarray:
+        return self._out("kinetic_energy")
+
+    @property
+    def potential_energy(self) -> np.ndarray:
+        """Gravitational potential energy, zero at the frame's origin (J)."""
+        return self._out("potential_energy")
+
+    @property
+    def load_power(self) -> np.ndarray:
+        """Total power of the external loads (W)."""
+        return self._out("load_power")
+
+    def load_powers(self) -> dict[str, np.ndarray]:
+        """Power of each external load (W), by its label."""
+        out = {}
+        for load, cols, mask in self._placed:
+            slots = self.mechanism.manifest["loads"]
+            p = np.zeros(len(self))
+            for k, value in cols:
+                s = slots[k]
+                rate = (self.motion.body(s["body"]).omega if s["component"] == "torque"
+                        else getattr(self.motion.point(s["name"]), "v" + s["component"][1]))
+                p += np.where(mask, value, 0.0) * rate
+            out[load.label] = out.get(load.label, 0.0) + p
+        return out
+
+    def table(self) -> dict[str, np.ndarray]:
+        """Every force result as a column named ``"<name> [unit]"``, shaft angle first."""
+        cols = {"phi [rad]": self.phi}
+        for name in self.reaction_names:
+            r = self.reaction(name)
+            cols[f"{name}.fx [N]"], cols[f"{name}.fy [N]"] = r.fx, r.fy
+            cols[f"{name}.magnitude [N]"] = r.magnitude
+            cols[f"{name}.direction [rad]"] = r.direction
+            if r.moment is not None:
+                cols[f"{name}.normal [N]"], cols[f"{name}.moment [N*m]"] = r.normal, r.moment
+        for name in self.frame_joint_names:
+            r = self.frame_force(name)
+            cols[f"frame@{name}.fx [N]"], cols[f"frame@{name}.fy [N]"] = r.fx, r.fy
+        for name in self._inputs:
+            cols[f"{name}.torque [N*m]"] = self.torque(name)
+            cols[f"{name}.power [W]"] = self.input_power(name)
+        sf = self.shaking_force
+        cols["shaking.fx [N]"], cols["shaking.fy [N]"] = sf[:, 0], sf[:, 1]
+        cols["shaking.moment [N*m]"] = self.shaking_moment
+        cols["kinetic_energy [J]"] = self.kinetic_energy
+        cols["potential_energy [J]"] = self.potential_energy
+        cols["load_power [W]"] = self.load_power
+        return cols
+
+    def to_csv(self, path) -> None:
+        cols = self.table()
+        with open(path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(cols)
+            w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
