@@ -76,11 +76,16 @@ typedef struct sg_options {
 
 /* LU with partial pivoting, in place, row-major n x n. Returns SG_SINGULAR when a pivot is below
  * 1e-11 of its column's largest original entry (column-scale invariant: columns may be rad or m).
- * Inline so that a kernel's call with a literal n unrolls; sg_lu_factor/sg_lu_solve are the exported
+ * Always inline, so that a kernel's call with a literal n unrolls; sg_lu_factor/sg_lu_solve are the exported
  * copies. */
 #define SG_PIVOT_RTOL 1e-11
+#if defined(__GNUC__)
+#define SG_INLINE static inline __attribute__((always_inline))
+#else
+#define SG_INLINE static inline
+#endif
 
-static inline int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
+SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
 {
     double colmax[SG_MAX_Q];
     double sign = 1.0;
@@ -127,7 +132,7 @@ static inline int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
 
 /* The factor swaps whole rows (L's multipliers too, as LAPACK's dgetrf), so every interchange is applied
  * to b before the forward substitution. */
-static inline void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *b)
+SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *b)
 {
     for (int k = 0; k < n; ++k) {
         if (piv[k] != k) {

@@ -173,26 +173,37 @@ class KernelSet:
                       body, ops(e for _, e in repl) + ops(red))
 
     def forces(self, kst: Kinetostatics) -> Kernel:
-        """A and b, the block-triangular solve of A f = b (pivoted LU per block), then every derived output.
+        """The solve of A f = b as derive.kinetostatics plans it, then every derived output.
 
-        Temporaries are staged like the motion kernel's: those of A and b first, those that read the solved
-        reactions after the solve."""
-        pr, A, n = self.printer, kst.A, len(kst.f)
-        nz = [(i, j) for i in range(n) for j in range(n) if A[i, j] != 0]
+        Schur-complement blocks by the runtime's pivoted LU (a division for 1 × 1), then back substitution
+        through the constant-pivot eliminations, then the outputs. Temporaries are staged like the motion
+        kernel's: those of the matrices first, those that read the solved reactions after."""
+        pr, f = self.printer, kst.f
+        schur = sorted(kst.schur)
+        steps = kst.eliminated
         outs = kst.outputs()
-        exprs = self.prepare([A[i, j] for i, j in nz] + list(kst.b) + [e for _, _, e in outs])
-        repl, red = _cse(exprs)
-        fsyms = set(kst.f)
+        exprs = ([kst.schur[ij] for ij in schur] + [kst.schur_rhs[i] for i in sorted(kst.schur_rhs)]
+                 + [e for *_, b_i, row in steps for e in [b_i] + [v for _, v in row]]
+                 + [e for _, _, e in outs])
+        repl, red = _cse(self.prepare(exprs))
         late: set = set()
         for t, e in repl:
-            if e.free_symbols & (fsyms | late):
+            if e.free_symbols & (set(f) | late):
                 late.add(t)
-        a = {ij: red[k] for k, ij in enumerate(nz)}
-        rhs, r_out = red[len(nz): len(nz) + n], red[len(nz) + n:]
+        it = iter(red)
+        a = {ij: next(it) for ij in schur}
+        rhs = {i: next(it) for i in sorted(kst.schur_rhs)}
+        back = []
+        for j, _i, piv, _b, row in steps:
+            b_i = next(it)
+            back.append((j, (b_i - sum((next(it) * f[l] for l, _ in row), sp.S.Zero)) / piv))
+        r_out = list(it)
         body = _temps(pr, [(t, e) for t, e in repl if t not in late])
         for rows, cols in kst.blocks:
-            body += self._block_solve(rows, cols, a, rhs, kst.f)
+            body += self._block_solve(rows, cols, a, rhs, f)
+        body += [f"out[{j}] = {pr.doprint(e)};" for j, e in reversed(back)]
         body += _temps(pr, [(t, e) for t, e in repl if t in late])
+        n = len(f)
         body += [f"out[{n + k}] = {pr.doprint(e)};" for k, e in enumerate(r_out)]
         outputs = [f"out[{k}]" for k in range(n + len(r_out))]
         body += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]

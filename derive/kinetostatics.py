@@ -20,9 +20,14 @@ placeholder symbols ``o_k`` (= obs[k]) so nothing is computed twice; :meth:`Kine
 the kinematic expressions back for checks and baselines.
 
 The system is square for every declaration the kinematics accepts (3 per body = 2 per joint + 1 per drive,
-given as many closure equations as coordinates). It is solved in block-triangular order (Dulmage–Mendelsohn:
-a perfect matching, then strongly connected blocks in dependency order, as KLU does); each block by the
-runtime's pivoted LU, so no pivot is fixed symbolically.
+given as many closure equations as coordinates). Its solve is planned here, in two steps:
+
+1. elimination on constant pivots: the force rows carry ±1 entries, which can never vanish, so Gaussian
+   elimination on them is fixed at derive time (Markowitz order, least fill first). What remains is the
+   Schur complement on the moment rows — for a dyad the classical 2 × 2 of its two moment equations;
+2. the Schur complement in block-triangular order (Dulmage–Mendelsohn: a perfect matching, then strongly
+   connected blocks in dependency order, as KLU does), each block by the runtime's pivoted LU. No pivot that
+   depends on the position is ever fixed symbolically.
 """
 from __future__ import annotations
 
@@ -74,6 +79,7 @@ class Kinetostatics:
         self.unknown_names = [f"{r.name}.{c}" for r in self.reactions for c in r.columns]
         self.row_names = [f"{b.name}.{e}" for b in self.moving for e in ("x", "y", "moment")]
         self.A, self.b = self._balance()
+        self.eliminated, self.schur, self.schur_rhs = self._eliminate_constant_pivots()
         self.blocks = self._block_order()
 
     # -- what acts where ------------------------------------------------------------------------------------
@@ -225,18 +231,60 @@ class Kinetostatics:
         out += [("kinetic_energy", "J", ke), ("potential_energy", "J", pe), ("load_power", "W", power)]
         return out
 
-    # -- solve order ----------------------------------------------------------------------------------------
+    # -- solve plan -----------------------------------------------------------------------------------------
+    def _eliminate_constant_pivots(self):
+        """Gaussian elimination on every pivot that is a nonzero number, least fill first (Markowitz).
+
+        Returns the steps (column j, row i, pivot, b_i, [(l, A_il)]) in elimination order — back substitution
+        runs them in reverse — and the remaining system as {(i, l): entry} and {i: rhs}."""
+        n = len(self.f)
+        a = {(i, j): self.A[i, j] for i in range(n) for j in range(n) if self.A[i, j] != 0}
+        rhs = {i: self.b[i] for i in range(n)}
+        rows, cols = set(range(n)), set(range(n))
+        steps = []
+        while True:
+            best = None
+            for (i, j), v in a.items():
+                if i in rows and j in cols and v.is_Number:
+                    r = sum(1 for (k, l) in a if k == i and l in cols)
+                    c = sum(1 for (k, l) in a if l == j and k in rows)
+                    key = ((r - 1) * (c - 1), -abs(float(v)), i, j)
+                    if best is None or key < best[0]:
+                        best = (key, i, j)
+            if best is None:
+                break
+            _, i, j = best
+            piv = a[(i, j)]
+            row = [(l, a[(i, l)]) for l in sorted(cols) if l != j and (i, l) in a]
+            steps.append((j, i, piv, rhs[i], row))
+            rows.discard(i)
+            cols.discard(j)
+            for k in sorted(rows):
+                factor = a.pop((k, j), None)
+                if factor is None:
+                    continue
+                m = factor / piv
+                for l, v in row:
+                    e = sp.expand(a.get((k, l), sp.S.Zero) - m * v)
+                    if e == 0:
+                        a.pop((k, l), None)
+                    else:
+                        a[(k, l)] = e
+                rhs[k] = rhs[k] - m * rhs[i]
+        schur = {ij: v for ij, v in a.items() if ij[0] in rows and ij[1] in cols}
+        return steps, schur, {i: rhs[i] for i in sorted(rows)}
+
     def _block_order(self) -> list[tuple[list[int], list[int]]]:
-        """(rows, columns) of each diagonal block of A's block-triangular form, in the order to solve them."""
-        n = self.A.shape[0]
-        nz = [[j for j in range(n) if self.A[i, j] != 0] for i in range(n)]
-        match_row = _perfect_matching(nz, n)  # column -> row
-        if match_row is None:
+        """(rows, columns) of each diagonal block of the Schur complement's block-triangular form, in solve order."""
+        rows = sorted(self.schur_rhs)
+        cols = sorted(set(range(len(self.f))) - {j for j, *_ in self.eliminated})
+        nz = {i: [j for j in cols if (i, j) in self.schur] for i in rows}
+        owner = _perfect_matching(nz, rows)  # column -> row
+        if owner is None:
             raise DeclarationError(f"{self.mech.name}: the force balance is structurally singular "
                                    "(a body or joint is over- or under-constrained)")
-        row_of = match_row
-        deps = {j: sorted({k for k in nz[row_of[j]] if k != j}) for j in range(n)}
-        return [([row_of[j] for j in comp], comp) for comp in _tarjan(deps, n)]
+        deps = {j: sorted({k for k in nz[owner[j]] if k != j}) for j in cols}
+        return [([owner[j] for j in comp], comp) for comp in _tarjan(deps)]
 
     # -- checks and baselines -------------------------------------------------------------------------------
     def explicit(self, expr):
@@ -245,27 +293,27 @@ class Kinetostatics:
         return expr.xreplace(subs) if hasattr(expr, "xreplace") else sp.sympify(expr).xreplace(subs)
 
 
-def _perfect_matching(nz: list[list[int]], n: int):
-    """Kuhn's augmenting paths on rows -> columns; column -> row, or None if A is structurally singular."""
-    owner = [-1] * n
+def _perfect_matching(nz: dict, rows: list) -> dict | None:
+    """Kuhn's augmenting paths, rows -> columns: {column: row}, or None if no perfect matching exists."""
+    owner: dict = {}
 
     def augment(i, seen):
         for j in nz[i]:
             if j in seen:
                 continue
             seen.add(j)
-            if owner[j] < 0 or augment(owner[j], seen):
+            if j not in owner or augment(owner[j], seen):
                 owner[j] = i
                 return True
         return False
 
-    for i in range(n):
+    for i in rows:
         if not augment(i, set()):
             return None
     return owner
 
 
-def _tarjan(deps: dict, n: int) -> list[list[int]]:
+def _tarjan(deps: dict) -> list[list[int]]:
     """Strongly connected components of j -> deps[j], each listed after every component it depends on."""
     index, low, on, stack, comps = {}, {}, set(), [], []
 
@@ -289,7 +337,7 @@ def _tarjan(deps: dict, n: int) -> list[list[int]]:
                     break
             comps.append(sorted(comp))
 
-    for v in range(n):
+    for v in sorted(deps):
         if v not in index:
             visit(v)
     return comps

@@ -50,27 +50,33 @@ def to_si(value, kind: str, what: str = "value") -> float:
     if isinstance(value, (int, float, np.integer, np.floating)):
         out = float(value)
     elif isinstance(value, str):
-        ureg = registry()
-        try:
-            q = ureg.Quantity(value.strip())
-        except Exception as exc:  # pint raises several unrelated types for unreadable text
-            raise UnitError(f"{what}: cannot read {value!r} as a quantity ({exc})") from None
-        target = SI_UNITS[kind]
-        try:
-            if kind == "angle" and q.dimensionless and not isinstance(q.magnitude, str):
-                out = float(q.to("radian").magnitude)
-            elif target:
-                out = float(q.to(target).magnitude)
-            else:
-                out = float(q.to("dimensionless").magnitude)
-        except Exception:
-            unit = SI_UNITS[kind] or "no unit"
-            raise UnitError(f"{what}: {value!r} is not a {kind} (expected a unit convertible to {unit})") from None
+        out, problem = _parse(value.strip(), kind)
+        if problem:
+            raise UnitError(f"{what}: {problem.format(value=repr(value))}")
     else:
         raise UnitError(f"{what}: expected a number or a quantity string, got {type(value).__name__}")
     if not math.isfinite(out):
         raise UnitError(f"{what}: {value!r} is not finite")
     return out
+
+
+@functools.lru_cache(maxsize=4096)
+def _parse(text: str, kind: str) -> tuple[float, str]:
+    """(SI value, "") or (nan, problem text with a {value} slot): pint is slow, so each text is read once."""
+    ureg = registry()
+    try:
+        q = ureg.Quantity(text)
+    except Exception as exc:  # pint raises several unrelated types for unreadable text
+        return math.nan, f"cannot read {{value}} as a quantity ({str(exc).replace('{', '{{').replace('}', '}}')})"
+    target = SI_UNITS[kind]
+    try:
+        if kind == "angle" and q.dimensionless and not isinstance(q.magnitude, str):
+            return float(q.to("radian").magnitude), ""
+        if target:
+            return float(q.to(target).magnitude), ""
+        return float(q.to("dimensionless").magnitude), ""
+    except Exception:
+        return math.nan, f"{{value}} is not a {kind} (expected a unit convertible to {target or 'no unit'})"
 
 
 def unit_of(text: str) -> str:

@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_hook_drive_constants -- Total ops: 18 */
+/* sg_hook_drive_constants -- Total ops: 19 */
 void sg_hook_drive_constants(const double *p, double *c)
 {
     const double t0 = cos(p[6]);
@@ -37,20 +37,21 @@ void sg_hook_drive_constants(const double *p, double *c)
     c[23] = p[22];
     c[24] = p[25];
     c[25] = p[26];
-    c[26] = p[0] - p[11];
-    c[27] = -p[17] + p[4];
-    c[28] = -p[18] + p[5]*t1;
-    c[29] = -p[17] + p[5]*t0;
-    c[30] = p[10];
-    c[31] = p[13];
-    c[32] = p[14];
-    c[33] = p[15];
-    c[34] = p[16];
-    c[35] = p[19];
-    c[36] = p[20];
-    c[37] = p[23];
-    c[38] = p[24];
-    c[39] = p[27];
+    c[26] = p[15];
+    c[27] = p[1]*p[14];
+    c[28] = p[19];
+    c[29] = -p[17] + p[4];
+    c[30] = p[16];
+    c[31] = p[24];
+    c[32] = p[23];
+    c[33] = p[27];
+    c[34] = p[20];
+    c[35] = p[13];
+    c[36] = p[0] - p[11];
+    c[37] = p[10];
+    c[38] = p[14];
+    c[39] = -p[18] + p[5]*t1;
+    c[40] = -p[17] + p[5]*t0;
 }
 
 /* sg_hook_drive_closed -- Total ops: 60 */
@@ -271,139 +272,66 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     return SG_OK;
 }
 
-/* sg_hook_drive_forces -- Total ops: 232 */
+/* sg_hook_drive_forces -- Total ops: 258 */
 int sg_hook_drive_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)x;
-    const double t0 = c[1]*cx[1] + c[2]*cx[0];
-    const double t1 = c[1]*cx[0] - c[2]*cx[1];
-    const double t2 = c[19]*t1;
-    const double t3 = c[19]*t0;
-    const double t4 = -c[26]*t0 + t2;
-    const double t5 = c[26]*t1 + t3;
-    const double t6 = (0.5)*c[5];
-    const double t7 = cq[5]*t6;
-    const double t8 = -cq[4]*t6;
-    const double t9 = c[21]*cq[0];
-    const double t10 = -c[27]*cq[1] + t9;
-    const double t11 = c[21]*cq[1] + c[27]*cq[0];
-    const double t12 = c[22]*cq[2];
-    const double t13 = c[22]*cq[3] + c[23]*cq[2];
+    const double t0 = c[10]*cq[0];
+    const double t1 = c[9]*cq[0];
+    const double t2 = c[9]*cq[1];
+    const double t3 = c[10]*cq[1];
+    const double t4 = -((cq[2])*(cq[2]))*q[3] - ((cq[3])*(cq[3]))*q[3];
+    const double t5 = -gv[1] + obs[35];
+    const double t6 = (0.5)*c[27];
+    const double t7 = -gv[0] + obs[34];
+    const double t8 = c[21]*cq[0];
+    const double t9 = c[31]*(-gv[0] + obs[61]) - ld[4];
+    const double t10 = c[30]*(-gv[0] + obs[43]) - ld[2];
+    const double t11 = c[31]*(-gv[1] + obs[62]) - ld[5];
+    const double t12 = c[30]*(-gv[1] + obs[44]) - ld[3];
+    const double t13 = c[24]*cq[3] + c[25]*cq[2];
     const double t14 = -c[24]*cq[2] + c[25]*cq[3];
-    const double t15 = c[24]*cq[3] + c[25]*cq[2];
+    const double t15 = c[34]*(-gv[0] + obs[52]);
+    const double t16 = c[34]*(-gv[1] + obs[53]);
+    const double t17 = -c[32]*obs[47] + ld[9] + t15*(c[22]*cq[3] + c[23]*cq[2]) + t16*(-c[22]*cq[2] + c[23]*cq[3]);
+    const double t18 = c[1]*cx[1] + c[2]*cx[0];
+    const double t19 = c[19]*t18;
+    const double t20 = c[1]*cx[0] - c[2]*cx[1];
+    const double t21 = c[36]*t20 + t19;
+    const double t22 = c[19]*t20;
+    const double t23 = -c[36]*t18 + t22;
     {
-        /* block of unknowns 2, 3, 8, 9, 12, 13 */
-        double M[36], r[6];
-        int piv[6];
-        M[0] = cq[2]*t14 - cq[3]*t15;
-        M[1] = 1.0;
-        M[2] = 0.0;
-        M[3] = 0.0;
-        M[4] = t15;
-        M[5] = t14;
-        r[0] = c[39]*obs[56] - ld[10] - ld[4]*t15 - ld[5]*t14;
-        M[6] = -cq[2]*(c[23]*cq[3] + cq[2]*q[3] - t12) - cq[3]*(cq[3]*q[3] - t13);
-        M[7] = -1.0;
-        M[8] = t13;
-        M[9] = c[23]*cq[3] - t12;
-        M[10] = 0.0;
-        M[11] = 0.0;
-        r[1] = c[37]*obs[47] - ld[9];
-        M[12] = cq[3];
-        M[13] = 0.0;
-        M[14] = 1.0;
-        M[15] = 0.0;
-        M[16] = 0.0;
-        M[17] = 0.0;
-        r[2] = c[36]*(-gv[0] + obs[52]);
-        M[18] = -cq[2];
-        M[19] = 0.0;
-        M[20] = 0.0;
-        M[21] = 1.0;
-        M[22] = 0.0;
-        M[23] = 0.0;
-        r[3] = c[36]*(-gv[1] + obs[53]);
-        M[24] = -cq[3];
-        M[25] = 0.0;
-        M[26] = 0.0;
-        M[27] = 0.0;
-        M[28] = 1.0;
-        M[29] = 0.0;
-        r[4] = c[38]*(-gv[0] + obs[61]) - ld[4];
-        M[30] = cq[2];
-        M[31] = 0.0;
-        M[32] = 0.0;
-        M[33] = 0.0;
-        M[34] = 0.0;
-        M[35] = 1.0;
-        r[5] = c[38]*(-gv[1] + obs[62]) - ld[5];
-        if (sg_lu_factor_inl(6, M, piv, 0) != SG_OK) return SG_SINGULAR;
-        sg_lu_solve_inl(6, M, piv, r);
-        out[2] = r[0];
-        out[3] = r[1];
-        out[8] = r[2];
-        out[9] = r[3];
-        out[12] = r[4];
-        out[13] = r[5];
+        const double d = t4;
+        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(cq[2]*t1 - cq[2]*t3 + cq[3]*t0 + cq[3]*t2), fabs(t4)))) return SG_SINGULAR;
+        out[2] = (c[33]*obs[56] - ld[10] - ld[4]*t13 - ld[5]*t14 - t11*t14 - t13*t9 - t17)/d;
     }
     {
-        /* block of unknowns 4, 5, 6, 7, 10, 11 */
-        double M[36], r[6];
-        int piv[6];
-        M[0] = 1.0;
-        M[1] = 0.0;
-        M[2] = 0.0;
-        M[3] = 0.0;
-        M[4] = -1.0;
-        M[5] = 0.0;
-        r[0] = c[32]*(-gv[0] + obs[34]);
-        M[6] = t7;
-        M[7] = t8;
-        M[8] = 0.0;
-        M[9] = 0.0;
-        M[10] = t7;
-        M[11] = t8;
-        r[1] = c[33]*obs[29] - ld[7];
-        M[12] = 0.0;
-        M[13] = 0.0;
-        M[14] = c[20]*cq[1] + t9;
-        M[15] = -c[20]*cq[0] + c[21]*cq[1];
-        M[16] = t10;
-        M[17] = t11;
-        r[2] = c[35]*obs[38] - out[12]*(c[28]*cq[0] + c[29]*cq[1]) - out[13]*(c[28]*cq[1] - c[29]*cq[0]) - ld[2]*t10 - ld[3]*t11 - ld[8];
-        M[18] = 0.0;
-        M[19] = 0.0;
-        M[20] = 0.0;
-        M[21] = 1.0;
-        M[22] = 0.0;
-        M[23] = 1.0;
-        r[3] = c[34]*(-gv[1] + obs[44]) + out[13] - ld[3];
-        M[24] = 0.0;
-        M[25] = 0.0;
-        M[26] = 1.0;
-        M[27] = 0.0;
-        M[28] = 1.0;
-        M[29] = 0.0;
-        r[4] = c[34]*(-gv[0] + obs[43]) + out[12] - ld[2];
-        M[30] = 0.0;
-        M[31] = 1.0;
-        M[32] = 0.0;
-        M[33] = 0.0;
-        M[34] = 0.0;
-        M[35] = -1.0;
-        r[5] = c[32]*(-gv[1] + obs[35]);
-        if (sg_lu_factor_inl(6, M, piv, 0) != SG_OK) return SG_SINGULAR;
-        sg_lu_solve_inl(6, M, piv, r);
-        out[4] = r[0];
-        out[5] = r[1];
-        out[6] = r[2];
-        out[7] = r[3];
-        out[10] = r[4];
-        out[11] = r[5];
+        /* block of unknowns 10, 11 */
+        double M[4], r[2];
+        int piv[2];
+        M[0] = -c[6]*cq[1];
+        M[1] = c[6]*cq[0];
+        r[0] = c[28]*obs[38] - out[2]*(cq[2]*t1 - cq[2]*t3 + cq[3]*t0 + cq[3]*t2) - ld[2]*(-c[29]*cq[1] + t8) - ld[3]*(c[21]*cq[1] + c[29]*cq[0]) - ld[8] - t10*(c[20]*cq[1] + t8) - t11*(-t1 + t3) - t12*(-c[20]*cq[0] + c[21]*cq[1]) - t9*(t0 + t2);
+        M[2] = c[5]*cq[5];
+        M[3] = -c[5]*cq[4];
+        r[1] = c[26]*obs[29] + cq[4]*t5*t6 - cq[5]*t6*t7 - ld[7];
+        if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
+        sg_lu_solve_inl(2, M, piv, r);
+        out[10] = r[0];
+        out[11] = r[1];
     }
-    out[0] = c[30]*(-gv[0] + obs[25]) + out[4] - ld[0];
-    out[1] = c[30]*(-gv[1] + obs[26]) + out[5] - ld[1];
-    out[14] = c[31]*obs[20] - out[0]*(c[18]*t0 + t2) - out[1]*(-c[18]*t1 + t3) + out[4]*t4 + out[5]*t5 - ld[0]*t4 - ld[1]*t5 - ld[6];
+    out[13] = -cq[2]*out[2] + t11;
+    out[12] = cq[3]*out[2] + t9;
+    out[7] = -out[11] + out[13] + t12;
+    out[6] = -out[10] + out[12] + t10;
+    out[3] = out[2]*t4 + t17;
+    out[9] = cq[2]*out[2] + t16;
+    out[8] = -cq[3]*out[2] + t15;
+    out[5] = c[38]*t5 + out[11];
+    out[4] = c[38]*t7 + out[10];
+    out[1] = c[37]*(-gv[1] + obs[26]) + out[5] - ld[1];
+    out[0] = c[37]*(-gv[0] + obs[25]) + out[4] - ld[0];
+    out[14] = c[35]*obs[20] - out[0]*(c[18]*t18 + t22) - out[1]*(-c[18]*t20 + t19) + out[4]*t23 + out[5]*t21 - ld[0]*t23 - ld[1]*t21 - ld[6];
     out[15] = out[14];
     out[16] = out[14]*xd[0];
     out[17] = -cq[3]*out[2];
@@ -411,8 +339,8 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
     out[19] = out[0] + out[6] + out[8];
     out[20] = out[1] + out[7] + out[9];
     out[21] = c[15]*out[9] - c[16]*out[8] + c[3]*out[7] - c[4]*out[6] + out[14];
-    out[22] = (0.5)*c[30]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + (0.5)*c[31]*((obs[19])*(obs[19])) + (0.5)*c[32]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + (0.5)*c[33]*((obs[28])*(obs[28])) + (0.5)*c[34]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + (0.5)*c[35]*((obs[37])*(obs[37])) + (0.5)*c[36]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + (0.5)*c[37]*((obs[46])*(obs[46])) + (0.5)*c[38]*(((obs[59])*(obs[59])) + ((obs[60])*(obs[60]))) + (0.5)*c[39]*((obs[55])*(obs[55]));
-    out[23] = -c[30]*(gv[0]*obs[21] + gv[1]*obs[22]) - c[32]*(gv[0]*obs[30] + gv[1]*obs[31]) - c[34]*(gv[0]*obs[39] + gv[1]*obs[40]) - c[36]*(gv[0]*obs[48] + gv[1]*obs[49]) - c[38]*(gv[0]*obs[57] + gv[1]*obs[58]);
+    out[22] = (0.5)*c[26]*((obs[28])*(obs[28])) + (0.5)*c[28]*((obs[37])*(obs[37])) + (0.5)*c[30]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + (0.5)*c[31]*(((obs[59])*(obs[59])) + ((obs[60])*(obs[60]))) + (0.5)*c[32]*((obs[46])*(obs[46])) + (0.5)*c[33]*((obs[55])*(obs[55])) + (0.5)*c[34]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + (0.5)*c[35]*((obs[19])*(obs[19])) + (0.5)*c[37]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + (0.5)*c[38]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33])));
+    out[23] = -c[30]*(gv[0]*obs[39] + gv[1]*obs[40]) - c[31]*(gv[0]*obs[57] + gv[1]*obs[58]) - c[34]*(gv[0]*obs[48] + gv[1]*obs[49]) - c[37]*(gv[0]*obs[21] + gv[1]*obs[22]) - c[38]*(gv[0]*obs[30] + gv[1]*obs[31]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[55] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + ((out[21] + out[22]) + (out[23] + out[24]))))))) return SG_NONFINITE;
     return SG_OK;
@@ -426,14 +354,14 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     const double t1 = c[1]*cx[0] - c[2]*cx[1];
     const double t2 = c[19]*t1;
     const double t3 = c[19]*t0;
-    const double t4 = -c[26]*t0 + t2;
-    const double t5 = c[26]*t1 + t3;
+    const double t4 = -c[36]*t0 + t2;
+    const double t5 = c[36]*t1 + t3;
     const double t6 = (0.5)*c[5];
     const double t7 = cq[5]*t6;
     const double t8 = -cq[4]*t6;
     const double t9 = c[21]*cq[0];
-    const double t10 = -c[27]*cq[1] + t9;
-    const double t11 = c[21]*cq[1] + c[27]*cq[0];
+    const double t10 = -c[29]*cq[1] + t9;
+    const double t11 = c[21]*cq[1] + c[29]*cq[0];
     const double t12 = c[22]*cq[2];
     const double t13 = c[22]*cq[3] + c[23]*cq[2];
     const double t14 = -c[24]*cq[2] + c[25]*cq[3];
@@ -466,8 +394,8 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     A[127] = -c[20]*cq[0] + c[21]*cq[1];
     A[130] = t10;
     A[131] = t11;
-    A[132] = c[28]*cq[0] + c[29]*cq[1];
-    A[133] = c[28]*cq[1] - c[29]*cq[0];
+    A[132] = c[39]*cq[0] + c[40]*cq[1];
+    A[133] = c[39]*cq[1] - c[40]*cq[0];
     A[137] = cq[3];
     A[143] = 1.0;
     A[152] = -cq[2];
@@ -484,27 +412,27 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     A[213] = 1.0;
     A[222] = t15;
     A[223] = t14;
-    b[0] = c[30]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[30]*(-gv[1] + obs[26]) - ld[1];
-    b[2] = c[31]*obs[20] - ld[0]*t4 - ld[1]*t5 - ld[6];
-    b[3] = c[32]*(-gv[0] + obs[34]);
-    b[4] = c[32]*(-gv[1] + obs[35]);
-    b[5] = c[33]*obs[29] - ld[7];
-    b[6] = c[34]*(-gv[0] + obs[43]) - ld[2];
-    b[7] = c[34]*(-gv[1] + obs[44]) - ld[3];
-    b[8] = c[35]*obs[38] - ld[2]*t10 - ld[3]*t11 - ld[8];
-    b[9] = c[36]*(-gv[0] + obs[52]);
-    b[10] = c[36]*(-gv[1] + obs[53]);
-    b[11] = c[37]*obs[47] - ld[9];
-    b[12] = c[38]*(-gv[0] + obs[61]) - ld[4];
-    b[13] = c[38]*(-gv[1] + obs[62]) - ld[5];
-    b[14] = c[39]*obs[56] - ld[10] - ld[4]*t15 - ld[5]*t14;
+    b[0] = c[37]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[37]*(-gv[1] + obs[26]) - ld[1];
+    b[2] = c[35]*obs[20] - ld[0]*t4 - ld[1]*t5 - ld[6];
+    b[3] = c[38]*(-gv[0] + obs[34]);
+    b[4] = c[38]*(-gv[1] + obs[35]);
+    b[5] = c[26]*obs[29] - ld[7];
+    b[6] = c[30]*(-gv[0] + obs[43]) - ld[2];
+    b[7] = c[30]*(-gv[1] + obs[44]) - ld[3];
+    b[8] = c[28]*obs[38] - ld[2]*t10 - ld[3]*t11 - ld[8];
+    b[9] = c[34]*(-gv[0] + obs[52]);
+    b[10] = c[34]*(-gv[1] + obs[53]);
+    b[11] = c[32]*obs[47] - ld[9];
+    b[12] = c[31]*(-gv[0] + obs[61]) - ld[4];
+    b[13] = c[31]*(-gv[1] + obs[62]) - ld[5];
+    b[14] = c[33]*obs[56] - ld[10] - ld[4]*t15 - ld[5]*t14;
 }
 
 static const unsigned char sg_hook_drive_coord_is_angle[4] = { 1, 1, 1, 0 };
 
 static const sg_mechanism sg_hook_drive_descriptor = {
-    "hook_drive", 4, 1, 28, 40, 63, 2,
+    "hook_drive", 4, 1, 28, 41, 63, 2,
     15, 25, 11,
     sg_hook_drive_coord_is_angle,
     sg_hook_drive_constants,
@@ -548,127 +476,127 @@ const char *sg_hook_drive_manifest(void)
         "ntal, y up. The lower-shaft slot passes through its axis (local u axis).\\n\\nDimensions are est"
         "imates sized to the household machine: the rock shaft swings about \\u00b145\\u00b0, which the g"
         "uide\\nbar turns into a shuttle swing near 208\\u00b0 (household shuttles swing 206\\u00b0\\u201"
-        "3210\\u00b0).\",\"force_blocks\":[6,6,1,1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"uni"
-        "t\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guide.fx\",\"unit"
-        "\":\"N\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\""
-        "N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\""
-        "name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name"
-        "\":\"load_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"bi"
-        "g_rod.x\",\"big_rod.y\",\"big_rod.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment"
-        "\",\"lower_shaft.x\",\"lower_shaft.y\",\"lower_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\""
-        ",\"rock_slider.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-s"
-        "haft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"unit\":\"rad\"}],\"kernels\":{\"sg_hook"
-        "_drive_closed\":{\"ops\":60},\"sg_hook_drive_constants\":{\"ops\":18},\"sg_hook_drive_force_matr"
-        "ix\":{\"ops\":121},\"sg_hook_drive_forces\":{\"ops\":232},\"sg_hook_drive_motion\":{\"ops\":192}"
-        ",\"sg_hook_drive_residual\":{\"ops\":37}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\""
-        "name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\""
-        ":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rock_pin\"},{\"body\":\"rock_shaft\",\"component"
-        "\":\"fy\",\"name\":\"rock_pin\"},{\"body\":\"rock_slider\",\"component\":\"fx\",\"name\":\"slide"
-        "r_pin\"},{\"body\":\"rock_slider\",\"component\":\"fy\",\"name\":\"slider_pin\"},{\"body\":\"cra"
-        "nk\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"big_rod\",\"component\":\"torque\""
-        ",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\""
-        "},{\"body\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"lower_shaft\"},{\"body\":\"rock_"
-        "slider\",\"component\":\"torque\",\"name\":\"rock_slider\"}],\"name\":\"hook_drive\",\"observabl"
-        "es\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"nam"
-        "e\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":\"m\"},{\"name\":\"rock_pin.x_"
-        "d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.x_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.x\",\"u"
-        "nit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\":\"slider_pin.x_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.x_dd\",\"unit\":\"m"
-        "/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"r"
-        "ad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"ra"
-        "d/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\""
-        "name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name"
-        "\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"na"
-        "me\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"na"
-        "me\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"n"
-        "ame\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\""
-        "name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"r"
-        "ad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\""
-        ":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"un"
-        "it\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y"
-        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"lower_sh"
-        "aft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"na"
-        "me\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\",\"unit\":\"m\"},{\"na"
-        "me\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.y_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.com.y_dd\",\"un"
-        "it\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name\":\"rock_slider.angle_"
-        "d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"roc"
-        "k_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\":\"m\"},{\"name\":\"roc"
-        "k_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\"unit\":\"m/s\"},{\"name"
-        "\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.com.y_dd\",\"unit\":\"m/"
-        "s^2\"}],\"params\":[{\"default\":0.012,\"display_unit\":\"mm\",\"doc\":\"hook crank radius on th"
-        "e upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m"
-        "\"},{\"default\":0.17,\"display_unit\":\"mm\",\"doc\":\"big connecting rod, pin to pin (estimate"
-        ")\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"unit\":\"m\"},{\"default\":-0.0"
-        "17,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, horizontal (estimate)\",\"kind\":\"length\""
-        ",\"name\":\"rock_axis_x\",\"positive\":false,\"unit\":\"m\"},{\"default\":-0.17,\"display_unit\""
-        ":\"mm\",\"doc\":\"rock-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axi"
-        "s_y\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.017,\"display_unit\":\"mm\",\"doc\":\"ro"
-        "ck-shaft arm driven by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\","
-        "\"positive\":true,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"rock-shaft"
-        " arm carrying the slider pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm\",\"posit"
-        "ive\":true,\"unit\":\"m\"},{\"default\":-1.5707963267948966,\"display_unit\":\"deg\",\"doc\":\"r"
-        "ear arm direction relative to the front arm (estimate)\",\"kind\":\"angle\",\"name\":\"rock_rear"
-        "_angle\",\"positive\":false,\"unit\":\"rad\"},{\"default\":-0.017,\"display_unit\":\"mm\",\"doc\""
-        ":\"lower-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_x\",\"pos"
-        "itive\":false,\"unit\":\"m\"},{\"default\":-0.1875,\"display_unit\":\"mm\",\"doc\":\"lower-shaft"
-        " axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false,\""
-        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the"
-        " shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"unit\":\"rad\"},"
-        "{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"c"
-        "rank.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":"
-        "false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank"
-        ", local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"unit\":\"m\"},{\"d"
-        "efault\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre "
-        "of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"unit\":\"kg*m**2\""
-        "},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\",\"name"
-        "\":\"big_rod.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":7e-05,\"display_unit\":\"kg"
-        "*m**2\",\"doc\":\"moment of inertia of big_rod about its centre of mass\",\"kind\":\"inertia\",\""
-        "name\":\"big_rod.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_"
-        "unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"pos"
-        "itive\":false,\"unit\":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
-        "ss of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false"
-        ",\"unit\":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_sh"
-        "aft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"unit\":\"m"
-        "\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft ab"
-        "out its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false"
-        ",\"unit\":\"kg*m**2\"},{\"default\":0.08,\"display_unit\":\"g\",\"doc\":\"mass of lower_shaft\","
-        "\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\""
-        ":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local u\",\"kind\":\"lengt"
-        "h\",\"name\":\"lower_shaft.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display"
-        "_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local v\",\"kind\":\"length\",\"name\":\""
-        "lower_shaft.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"k"
-        "g*m**2\",\"doc\":\"moment of inertia of lower_shaft about its centre of mass\",\"kind\":\"inerti"
-        "a\",\"name\":\"lower_shaft.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.003"
-        ",\"display_unit\":\"g\",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider"
-        ".mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"c"
-        "entre of mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"pos"
-        "itive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass "
-        "of rock_slider, local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positive\":false,"
-        "\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of r"
-        "ock_slider about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_slider.inertia\",\"po"
-        "sitive\":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"]"
-        ",\"points\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\"big-rod pi"
-        "n C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6},{\"doc\":\"slider pin E on the r"
-        "ock-shaft rear arm\",\"name\":\"slider_pin\",\"offset\":12}],\"reactions\":[{\"a\":\"ground\",\""
-        "b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"cra"
-        "nk.pivot\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\"rock_slider\",\"columns\":[\"normal\",\""
-        "moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"rock_slider.guide\",\"offset\":2}"
-        ",{\"a\":\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"re"
-        "volute\",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"offset\":6},{\"a\":\"ground\""
-        ",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"nam"
-        "e\":\"O11\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\""
-        "grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\""
-        ":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\""
-        "E\",\"offset\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,"
-        "\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":14}],\"sizes\":{\"nbranch\":2,\"nc\":40,\""
-        "nf\":15,\"nfo\":25,\"nload\":11,\"nobs\":63,\"np\":28,\"nq\":4,\"nx\":1}}"
+        "3210\\u00b0).\",\"force_blocks\":[1,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\""
+        "N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guide.fx\",\"unit\":\"N"
+        "\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},"
+        "{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\""
+        ":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"l"
+        "oad_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"big_rod."
+        "x\",\"big_rod.y\",\"big_rod.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"l"
+        "ower_shaft.x\",\"lower_shaft.y\",\"lower_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\",\"ro"
+        "ck_slider.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft "
+        "angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"unit\":\"rad\"}],\"kernels\":{\"sg_hook_driv"
+        "e_closed\":{\"ops\":60},\"sg_hook_drive_constants\":{\"ops\":19},\"sg_hook_drive_force_matrix\":"
+        "{\"ops\":121},\"sg_hook_drive_forces\":{\"ops\":258},\"sg_hook_drive_motion\":{\"ops\":192},\"sg"
+        "_hook_drive_residual\":{\"ops\":37}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\""
+        ":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"roc"
+        "k_shaft\",\"component\":\"fx\",\"name\":\"rock_pin\"},{\"body\":\"rock_shaft\",\"component\":\"f"
+        "y\",\"name\":\"rock_pin\"},{\"body\":\"rock_slider\",\"component\":\"fx\",\"name\":\"slider_pin\""
+        "},{\"body\":\"rock_slider\",\"component\":\"fy\",\"name\":\"slider_pin\"},{\"body\":\"crank\",\""
+        "component\":\"torque\",\"name\":\"crank\"},{\"body\":\"big_rod\",\"component\":\"torque\",\"name"
+        "\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"bo"
+        "dy\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"lower_shaft\"},{\"body\":\"rock_slider\""
+        ",\"component\":\"torque\",\"name\":\"rock_slider\"}],\"name\":\"hook_drive\",\"observables\":[{\""
+        "name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"cra"
+        "nk_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_p"
+        "in.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_"
+        "pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":\"m\"},{\"name\":\"rock_pin.x_d\",\"un"
+        "it\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.x_dd\",\"unit\":"
+        "\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.x\",\"unit\":\""
+        "m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\":\"slider_pin.x_d\",\"unit\":\"m/s\"},{"
+        "\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.x_dd\",\"unit\":\"m/s^2\"},"
+        "{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\""
+        "name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},"
+        "{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\""
+        "crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"cran"
+        "k.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"bi"
+        "g_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"bi"
+        "g_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"b"
+        "ig_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_r"
+        "od.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"bi"
+        "g_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":"
+        "\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\""
+        "},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},"
+        "{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"lower_shaft.angl"
+        "e_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"l"
+        "ower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"l"
+        "ower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.y_d\",\"unit\":\"m/s\"},{\"na"
+        "me\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.com.y_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name\":\"rock_slider.angle_d\",\"u"
+        "nit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_slide"
+        "r.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\":\"m\"},{\"name\":\"rock_slide"
+        "r.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"ro"
+        "ck_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.com.y_dd\",\"unit\":\"m/s^2\"}]"
+        ",\"params\":[{\"default\":0.012,\"display_unit\":\"mm\",\"doc\":\"hook crank radius on the upper"
+        " shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\""
+        "default\":0.17,\"display_unit\":\"mm\",\"doc\":\"big connecting rod, pin to pin (estimate)\",\"k"
+        "ind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"unit\":\"m\"},{\"default\":-0.017,\"di"
+        "splay_unit\":\"mm\",\"doc\":\"rock-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"nam"
+        "e\":\"rock_axis_x\",\"positive\":false,\"unit\":\"m\"},{\"default\":-0.17,\"display_unit\":\"mm\""
+        ",\"doc\":\"rock-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\""
+        "positive\":false,\"unit\":\"m\"},{\"default\":0.017,\"display_unit\":\"mm\",\"doc\":\"rock-shaft"
+        " arm driven by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positi"
+        "ve\":true,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm car"
+        "rying the slider pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm\",\"positive\":tr"
+        "ue,\"unit\":\"m\"},{\"default\":-1.5707963267948966,\"display_unit\":\"deg\",\"doc\":\"rear arm "
+        "direction relative to the front arm (estimate)\",\"kind\":\"angle\",\"name\":\"rock_rear_angle\""
+        ",\"positive\":false,\"unit\":\"rad\"},{\"default\":-0.017,\"display_unit\":\"mm\",\"doc\":\"lowe"
+        "r-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_x\",\"positive\""
+        ":false,\"unit\":\"m\"},{\"default\":-0.1875,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, "
+        "vertical (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false,\"unit\":"
+        "\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft "
+        "angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"unit\":\"rad\"},{\"defa"
+        "ult\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.ma"
+        "ss\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cent"
+        "re of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\""
+        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local "
+        "v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\""
+        ":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\""
+        ",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"def"
+        "ault\":0.028,\"display_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\"big"
+        "_rod.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\","
+        "\"doc\":\"moment of inertia of big_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":"
+        "\"big_rod.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":"
+        "\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\""
+        ":false,\"unit\":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of r"
+        "ock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"unit"
+        "\":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, lo"
+        "cal v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"unit\":\"m\"},{\""
+        "default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its"
+        " centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"unit"
+        "\":\"kg*m**2\"},{\"default\":0.08,\"display_unit\":\"g\",\"doc\":\"mass of lower_shaft\",\"kind\""
+        ":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"d"
+        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local u\",\"kind\":\"length\",\"na"
+        "me\":\"lower_shaft.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
+        "\"mm\",\"doc\":\"centre of mass of lower_shaft, local v\",\"kind\":\"length\",\"name\":\"lower_s"
+        "haft.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\""
+        ",\"doc\":\"moment of inertia of lower_shaft about its centre of mass\",\"kind\":\"inertia\",\"na"
+        "me\":\"lower_shaft.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"displ"
+        "ay_unit\":\"g\",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\","
+        "\"positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of"
+        " mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"positive\":"
+        "false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_"
+        "slider, local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positive\":false,\"unit\""
+        ":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_slid"
+        "er about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_slider.inertia\",\"positive\""
+        ":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"point"
+        "s\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\"big-rod pin C on t"
+        "he rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6},{\"doc\":\"slider pin E on the rock-shaf"
+        "t rear arm\",\"name\":\"slider_pin\",\"offset\":12}],\"reactions\":[{\"a\":\"ground\",\"b\":\"cr"
+        "ank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot"
+        "\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\"rock_slider\",\"columns\":[\"normal\",\"moment\""
+        "],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"rock_slider.guide\",\"offset\":2},{\"a\":"
+        "\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\""
+        ",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"]"
+        ",\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"offset\":6},{\"a\":\"ground\",\"b\":\""
+        "lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O11"
+        "\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
+        ":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\":\"rock_sl"
+        "ider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"off"
+        "set\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"kind\":"
+        "\"drive\",\"name\":\"crank.drive\",\"offset\":14}],\"sizes\":{\"nbranch\":2,\"nc\":41,\"nf\":15,"
+        "\"nfo\":25,\"nload\":11,\"nobs\":63,\"np\":28,\"nq\":4,\"nx\":1}}"
         ;
 }

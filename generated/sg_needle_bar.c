@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_needle_bar_constants -- Total ops: 10 */
+/* sg_needle_bar_constants -- Total ops: 11 */
 void sg_needle_bar_constants(const double *p, double *c)
 {
     const double t0 = -p[2];
@@ -23,16 +23,17 @@ void sg_needle_bar_constants(const double *p, double *c)
     c[10] = p[7];
     c[11] = -p[13] - t0;
     c[12] = p[12];
-    c[13] = p[0] - p[6];
-    c[14] = -p[12];
-    c[15] = p[13];
-    c[16] = p[5];
+    c[13] = p[10];
+    c[14] = p[11];
+    c[15] = p[9];
+    c[16] = p[1]*p[9];
     c[17] = p[8];
-    c[18] = p[9];
-    c[19] = p[10];
-    c[20] = p[11];
-    c[21] = p[14];
+    c[18] = p[0] - p[6];
+    c[19] = p[5];
+    c[20] = p[14];
+    c[21] = p[13];
     c[22] = p[12] + p[3];
+    c[23] = -p[12];
 }
 
 /* sg_needle_bar_closed -- Total ops: 15 */
@@ -156,51 +157,44 @@ int sg_needle_bar_motion(const double *q, const double *cq, const double *x, con
     return SG_OK;
 }
 
-/* sg_needle_bar_forces -- Total ops: 130 */
+/* sg_needle_bar_forces -- Total ops: 141 */
 int sg_needle_bar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)x;
-    const double t0 = c[1]*cx[1] + c[2]*cx[0];
-    const double t1 = c[1]*cx[0] - c[2]*cx[1];
-    const double t2 = c[10]*t1;
-    const double t3 = c[10]*t0;
-    const double t4 = -c[13]*t0 + t2;
-    const double t5 = c[13]*t1 + t3;
-    const double t6 = (0.5)*c[3];
-    const double t7 = cq[3]*t6;
-    const double t8 = -cq[2]*t6;
-    out[7] = c[20]*(-gv[1] + obs[44]) - ld[3] - ld[5];
-    out[5] = c[18]*(-gv[1] + obs[35]) + out[7];
+    const double t0 = -gv[0] + obs[34];
+    const double t1 = -gv[1] + obs[44];
+    const double t2 = c[14]*t1 - ld[3] - ld[5];
+    const double t3 = (0.5)*c[3]*cq[2];
+    const double t4 = c[14]*t1 + c[15]*(-gv[1] + obs[35]) - ld[3] - ld[5];
+    const double t5 = c[1]*cx[1] + c[2]*cx[0];
+    const double t6 = c[10]*t5;
+    const double t7 = c[1]*cx[0] - c[2]*cx[1];
+    const double t8 = c[18]*t7 + t6;
+    const double t9 = c[10]*t7;
+    const double t10 = -c[18]*t5 + t9;
     {
-        /* block of unknowns 4, 6 */
-        double M[4], r[2];
-        int piv[2];
-        M[0] = t7;
-        M[1] = t7;
-        r[0] = c[19]*obs[29] - out[5]*t8 - out[7]*t8 - ld[7];
-        M[2] = 1.0;
-        M[3] = -1.0;
-        r[1] = c[18]*(-gv[0] + obs[34]);
-        if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
-        sg_lu_solve_inl(2, M, piv, r);
-        out[4] = r[0];
-        out[6] = r[1];
+        const double d = c[3]*cq[3];
+        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[3]*cq[3]))) return SG_SINGULAR;
+        out[6] = (c[13]*obs[29] - 0.5*c[16]*cq[3]*t0 - ld[7] + t2*t3 + t3*t4)/d;
     }
-    out[0] = c[16]*(-gv[0] + obs[25]) + out[4] - ld[0];
-    out[1] = c[16]*(-gv[1] + obs[26]) + out[5] - ld[1];
-    out[2] = -c[20]*(-gv[0] + obs[43]) + out[6] + ld[2] + ld[4];
-    out[3] = -c[12]*out[6] - c[12]*ld[2] - c[14]*out[2] - c[15]*out[7] - c[15]*ld[3] - c[15]*ld[5] + c[21]*obs[38] - c[22]*ld[4] - ld[8];
-    out[8] = c[17]*obs[20] - out[0]*(c[9]*t0 + t2) - out[1]*(-c[9]*t1 + t3) + out[4]*t4 + out[5]*t5 - ld[0]*t4 - ld[1]*t5 - ld[6];
-    const double t9 = -out[2];
+    out[4] = c[15]*t0 + out[6];
+    out[2] = -c[14]*(-gv[0] + obs[43]) + out[6] + ld[2] + ld[4];
+    out[3] = -c[12]*out[6] - c[12]*ld[2] + c[20]*obs[38] - c[21]*ld[3] - c[21]*ld[5] - c[21]*t2 - c[22]*ld[4] - c[23]*out[2] - ld[8];
+    out[5] = t4;
+    out[7] = t2;
+    out[1] = c[19]*(-gv[1] + obs[26]) + out[5] - ld[1];
+    out[0] = c[19]*(-gv[0] + obs[25]) + out[4] - ld[0];
+    out[8] = c[17]*obs[20] - out[0]*(c[9]*t5 + t9) - out[1]*(-c[9]*t7 + t6) + out[4]*t10 + out[5]*t8 - ld[0]*t10 - ld[1]*t8 - ld[6];
+    const double t11 = -out[2];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
-    out[11] = t9;
+    out[11] = t11;
     out[12] = 0.0;
-    out[13] = out[0] + t9;
+    out[13] = out[0] + t11;
     out[14] = out[1];
     out[15] = out[2]*q[0] + out[3] + out[8];
-    out[16] = (0.5)*c[16]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + (0.5)*c[17]*((obs[19])*(obs[19])) + (0.5)*c[18]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + (0.5)*c[19]*((obs[28])*(obs[28])) + (0.5)*c[20]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + (0.5)*c[21]*((obs[37])*(obs[37]));
-    out[17] = -c[16]*(gv[0]*obs[21] + gv[1]*obs[22]) - c[18]*(gv[0]*obs[30] + gv[1]*obs[31]) - c[20]*(gv[0]*obs[39] + gv[1]*obs[40]);
+    out[16] = (0.5)*c[13]*((obs[28])*(obs[28])) + (0.5)*c[14]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + (0.5)*c[15]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + (0.5)*c[17]*((obs[19])*(obs[19])) + (0.5)*c[19]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + (0.5)*c[20]*((obs[37])*(obs[37]));
+    out[17] = -c[14]*(gv[0]*obs[39] + gv[1]*obs[40]) - c[15]*(gv[0]*obs[30] + gv[1]*obs[31]) - c[19]*(gv[0]*obs[21] + gv[1]*obs[22]);
     out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37];
     if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + (out[12] + out[13]))) + ((out[14] + out[15]) + (out[16] + (out[17] + out[18]))))))) return SG_NONFINITE;
     return SG_OK;
@@ -215,8 +209,8 @@ void sg_needle_bar_force_matrix(const double *q, const double *cq, const double 
     const double t1 = c[1]*cx[0] - c[2]*cx[1];
     const double t2 = c[10]*t1;
     const double t3 = c[10]*t0;
-    const double t4 = -c[13]*t0 + t2;
-    const double t5 = c[13]*t1 + t3;
+    const double t4 = -c[18]*t0 + t2;
+    const double t5 = c[18]*t1 + t3;
     const double t6 = (0.5)*c[3];
     const double t7 = cq[3]*t6;
     const double t8 = -cq[2]*t6;
@@ -241,25 +235,25 @@ void sg_needle_bar_force_matrix(const double *q, const double *cq, const double 
     A[56] = -1.0;
     A[60] = 1.0;
     A[70] = 1.0;
-    A[74] = c[14];
+    A[74] = c[23];
     A[75] = 1.0;
     A[78] = c[12];
-    A[79] = c[15];
-    b[0] = c[16]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[16]*(-gv[1] + obs[26]) - ld[1];
+    A[79] = c[21];
+    b[0] = c[19]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[19]*(-gv[1] + obs[26]) - ld[1];
     b[2] = c[17]*obs[20] - ld[0]*t4 - ld[1]*t5 - ld[6];
-    b[3] = c[18]*(-gv[0] + obs[34]);
-    b[4] = c[18]*(-gv[1] + obs[35]);
-    b[5] = c[19]*obs[29] - ld[7];
-    b[6] = c[20]*(-gv[0] + obs[43]) - ld[2] - ld[4];
-    b[7] = c[20]*(-gv[1] + obs[44]) - ld[3] - ld[5];
-    b[8] = -c[12]*ld[2] - c[15]*ld[3] - c[15]*ld[5] + c[21]*obs[38] - c[22]*ld[4] - ld[8];
+    b[3] = c[15]*(-gv[0] + obs[34]);
+    b[4] = c[15]*(-gv[1] + obs[35]);
+    b[5] = c[13]*obs[29] - ld[7];
+    b[6] = c[14]*(-gv[0] + obs[43]) - ld[2] - ld[4];
+    b[7] = c[14]*(-gv[1] + obs[44]) - ld[3] - ld[5];
+    b[8] = -c[12]*ld[2] + c[20]*obs[38] - c[21]*ld[3] - c[21]*ld[5] - c[22]*ld[4] - ld[8];
 }
 
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };
 
 static const sg_mechanism sg_needle_bar_descriptor = {
-    "needle_bar", 2, 1, 15, 23, 45, 1,
+    "needle_bar", 2, 1, 15, 24, 45, 1,
     9, 19, 9,
     sg_needle_bar_coord_is_angle,
     sg_needle_bar_constants,
@@ -296,84 +290,84 @@ const char *sg_needle_bar_manifest(void)
         "hi = 90\\u00b0).\\n\\nDimensions: crank 16.7 mm is seed 002's industrial crank (its stroke 33.4 "
         "mm is within the 29\\u201335 mm of\\nindustrial and household machines). The link length, offset"
         ", masses and inertias are estimates (the\\nseeds' tables of them are not in the text we have).\""
-        ",\"force_blocks\":[1,1,2,1,1,1,1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m"
-        "\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},"
-        "{\"name\":\"needle_bar.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"na"
-        "me\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"k"
-        "inetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_"
-        "power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"rod.x\",\"ro"
-        "d.y\",\"rod.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"def"
-        "ault\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\""
-        ":\"shaft\",\"unit\":\"rad\"}],\"kernels\":{\"sg_needle_bar_closed\":{\"ops\":15},\"sg_needle_bar"
-        "_constants\":{\"ops\":10},\"sg_needle_bar_force_matrix\":{\"ops\":63},\"sg_needle_bar_forces\":{"
-        "\"ops\":130},\"sg_needle_bar_motion\":{\"ops\":70},\"sg_needle_bar_residual\":{\"ops\":16}},\"lo"
-        "ads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"co"
-        "mponent\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":"
-        "\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"link_pin\"},{\"body\":\"n"
-        "eedle_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\""
-        ":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\""
-        "},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"rod\"},{\"body\":\"needle_bar\",\"compon"
-        "ent\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"needle_bar\",\"observables\":[{\"name\":\""
-        "crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_"
-        "d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.x\",\""
-        "unit\":\"m\"},{\"name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"link_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/s^2\"}"
-        ",{\"name\":\"link_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"n"
-        "ame\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\""
-        "crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\""
-        ":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com"
-        ".x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_d"
-        "d\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.angle\""
-        ",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle_dd\",\"un"
-        "it\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"unit\":\"m\""
-        "},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m"
-        "\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m"
-        "/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"uni"
-        "t\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0"
-        ".0167,\"display_unit\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u00a73)\",\"kind\":\"length\""
-        ",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.05,\"display_unit\":\"mm\","
-        "\"doc\":\"needle-bar link BC, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"pos"
-        "itive\":true,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"horizontal offse"
-        "t of the needle-bar axis from the shaft axis\",\"kind\":\"length\",\"name\":\"offset\",\"positiv"
-        "e\":false,\"unit\":\"m\"},{\"default\":0.062,\"display_unit\":\"mm\",\"doc\":\"needle eye below "
-        "the link pin C along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"posit"
-        "ive\":true,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank re"
-        "lative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"uni"
-        "t\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\""
-        ",\"name\":\"crank.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\""
-        "positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
-        "ss of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"unit\":"
-        "\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about "
-        "its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"unit\""
-        ":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\""
-        ",\"name\":\"rod.mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":2.5e-06,\"display_unit\""
-        ":\"kg*m**2\",\"doc\":\"moment of inertia of rod about its centre of mass\",\"kind\":\"inertia\","
-        "\"name\":\"rod.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_u"
-        "nit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"posi"
-        "tive\":false,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mas"
-        "s of needle_bar, local u\",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":false,"
-        "\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar,"
-        " local v\",\"kind\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"unit\":\"m\"},"
-        "{\"default\":1.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar abou"
-        "t its centre of mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\""
-        "unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"d"
-        "oc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\"needle-bar link pin C\",\"n"
-        "ame\":\"link_pin\",\"offset\":6},{\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":12}]"
-        ",\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,"
-        "\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_ba"
-        "r\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"need"
-        "le_bar.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"ground"
-        "ed\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar\""
-        ",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":"
-        "6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"kind\":\"drive"
-        "\",\"name\":\"crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\":23,\"nf\":9,\"nfo\":1"
-        "9,\"nload\":9,\"nobs\":45,\"np\":15,\"nq\":2,\"nx\":1}}"
+        ",\"force_blocks\":[1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":"
+        "\"shaft.power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"ne"
+        "edle_bar.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking"
+        ".fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\""
+        ",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\""
+        ":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"rod.x\",\"rod.y\",\"rod.mome"
+        "nt\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"dis"
+        "play_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"un"
+        "it\":\"rad\"}],\"kernels\":{\"sg_needle_bar_closed\":{\"ops\":15},\"sg_needle_bar_constants\":{\""
+        "ops\":11},\"sg_needle_bar_force_matrix\":{\"ops\":63},\"sg_needle_bar_forces\":{\"ops\":141},\"s"
+        "g_needle_bar_motion\":{\"ops\":70},\"sg_needle_bar_residual\":{\"ops\":16}},\"loads\":[{\"body\""
+        ":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\""
+        ",\"name\":\"crank_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"link_pin\"},{\""
+        "body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"com"
+        "ponent\":\"fx\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":"
+        "\"needle_eye\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"rod"
+        "\",\"component\":\"torque\",\"name\":\"rod\"},{\"body\":\"needle_bar\",\"component\":\"torque\","
+        "\"name\":\"needle_bar\"}],\"name\":\"needle_bar\",\"observables\":[{\"name\":\"crank_pin.x\",\"u"
+        "nit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/"
+        "s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2"
+        "\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.x\",\"unit\":\"m\"},{\""
+        "name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"l"
+        "ink_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link"
+        "_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_ey"
+        "e.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\""
+        "unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\""
+        "unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^"
+        "2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},"
+        "{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{"
+        "\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.c"
+        "om.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle"
+        "\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar"
+        ".angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"nee"
+        "dle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"n"
+        "eedle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0167,\"display_uni"
+        "t\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u00a73)\",\"kind\":\"length\",\"name\":\"crank\""
+        ",\"positive\":true,\"unit\":\"m\"},{\"default\":0.05,\"display_unit\":\"mm\",\"doc\":\"needle-ba"
+        "r link BC, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"unit"
+        "\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"horizontal offset of the needle-bar"
+        " axis from the shaft axis\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"unit\":"
+        "\"m\"},{\"default\":0.062,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link pin C alon"
+        "g the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":true,\"unit\""
+        ":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft"
+        " angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"unit\":\"rad\"},{\"def"
+        "ault\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.m"
+        "ass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cen"
+        "tre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,"
+        "\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, loca"
+        "l v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default"
+        "\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mas"
+        "s\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\""
+        "default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod."
+        "mass\",\"positive\":false,\"unit\":\"kg\"},{\"default\":2.5e-06,\"display_unit\":\"kg*m**2\",\"d"
+        "oc\":\"moment of inertia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rod.i"
+        "nertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"do"
+        "c\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\"u"
+        "nit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar,"
+        " local u\",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"unit\":\"m\"},"
+        "{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kin"
+        "d\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":1.5"
+        "e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of "
+        "mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"unit\":\"kg*m**"
+        "2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"doc\":\"crank pi"
+        "n B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\"needle-bar link pin C\",\"name\":\"link_pi"
+        "n\",\"offset\":6},{\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":12}],\"reactions\":"
+        "[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revo"
+        "lute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\""
+        ":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.guide\","
+        "\"offset\":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"ki"
+        "nd\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar\",\"columns\":["
+        "\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"gr"
+        "ound\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"kind\":\"drive\",\"name\":\""
+        "crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\":24,\"nf\":9,\"nfo\":19,\"nload\":9,"
+        "\"nobs\":45,\"np\":15,\"nq\":2,\"nx\":1}}"
         ;
 }

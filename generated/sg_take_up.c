@@ -32,16 +32,16 @@ void sg_take_up_constants(const double *p, double *c)
     c[15] = p[10];
     c[16] = p[13];
     c[17] = p[14];
-    c[18] = p[2] - p[9];
-    c[19] = -p[13] + p[3];
-    c[20] = p[8];
-    c[21] = p[11];
-    c[22] = p[12];
-    c[23] = p[15];
-    c[24] = -p[14] + t4;
-    c[25] = -p[13] + (0.5)*t0*t3;
-    c[26] = p[16];
-    c[27] = p[17];
+    c[18] = p[15];
+    c[19] = -p[14] + t4;
+    c[20] = -p[13] + (0.5)*t0*t3;
+    c[21] = p[12];
+    c[22] = p[17];
+    c[23] = p[16];
+    c[24] = p[11];
+    c[25] = p[2] - p[9];
+    c[26] = p[8];
+    c[27] = -p[13] + p[3];
 }
 
 /* sg_take_up_closed -- Total ops: 22 */
@@ -186,87 +186,54 @@ int sg_take_up_motion(const double *q, const double *cq, const double *x, const 
     return SG_OK;
 }
 
-/* sg_take_up_forces -- Total ops: 149 */
+/* sg_take_up_forces -- Total ops: 155 */
 int sg_take_up_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)q;
     (void)x;
-    const double t0 = c[1]*cx[1] + c[2]*cx[0];
-    const double t1 = c[1]*cx[0] - c[2]*cx[1];
-    const double t2 = c[15]*t1;
-    const double t3 = c[15]*t0;
-    const double t4 = -c[18]*t0 + t2;
-    const double t5 = c[18]*t1 + t3;
-    const double t6 = c[17]*cq[2];
-    const double t7 = c[17]*cq[3];
-    const double t8 = (0.5)*c[6];
-    const double t9 = cq[1]*t8;
-    const double t10 = cq[0]*t8;
+    const double t0 = c[6]*cq[1];
+    const double t1 = c[6]*cq[0];
+    const double t2 = c[21]*(-gv[0] + obs[34]) - ld[4];
+    const double t3 = c[21]*(-gv[1] + obs[35]) - ld[5];
+    const double t4 = (0.5)*t1;
+    const double t5 = (0.5)*t0;
+    const double t6 = c[23]*(-gv[1] + obs[44]) - ld[3];
+    const double t7 = c[23]*(-gv[0] + obs[43]) - ld[2];
+    const double t8 = c[1]*cx[1] + c[2]*cx[0];
+    const double t9 = c[15]*t8;
+    const double t10 = c[1]*cx[0] - c[2]*cx[1];
+    const double t11 = c[25]*t10 + t9;
+    const double t12 = c[15]*t10;
+    const double t13 = -c[25]*t8 + t12;
     {
-        /* block of unknowns 2, 3, 4, 5, 6, 7 */
-        double M[36], r[6];
-        int piv[6];
-        M[0] = 1.0;
-        M[1] = 0.0;
-        M[2] = 0.0;
-        M[3] = 0.0;
-        M[4] = -1.0;
-        M[5] = 0.0;
-        r[0] = c[22]*(-gv[0] + obs[34]) - ld[4];
-        M[6] = c[16]*cq[3] + t6;
-        M[7] = -c[16]*cq[2] + t7;
-        M[8] = 0.0;
-        M[9] = 0.0;
-        M[10] = c[19]*cq[3] - t6;
-        M[11] = -c[19]*cq[2] - t7;
-        r[1] = c[23]*obs[29] - ld[4]*(-c[24]*cq[2] - c[25]*cq[3]) - ld[5]*(-c[24]*cq[3] + c[25]*cq[2]) - ld[7];
-        M[12] = 0.0;
-        M[13] = 0.0;
-        M[14] = t9;
-        M[15] = -t10;
-        M[16] = -t9;
-        M[17] = t10;
-        r[2] = c[27]*obs[38] + ld[2]*t9 - ld[3]*t10 - ld[8];
-        M[18] = 0.0;
-        M[19] = 0.0;
-        M[20] = 0.0;
-        M[21] = 1.0;
-        M[22] = 0.0;
-        M[23] = 1.0;
-        r[3] = c[26]*(-gv[1] + obs[44]) - ld[3];
-        M[24] = 0.0;
-        M[25] = 0.0;
-        M[26] = 1.0;
-        M[27] = 0.0;
-        M[28] = 1.0;
-        M[29] = 0.0;
-        r[4] = c[26]*(-gv[0] + obs[43]) - ld[2];
-        M[30] = 0.0;
-        M[31] = 1.0;
-        M[32] = 0.0;
-        M[33] = 0.0;
-        M[34] = 0.0;
-        M[35] = -1.0;
-        r[5] = c[22]*(-gv[1] + obs[35]) - ld[5];
-        if (sg_lu_factor_inl(6, M, piv, 0) != SG_OK) return SG_SINGULAR;
-        sg_lu_solve_inl(6, M, piv, r);
-        out[2] = r[0];
-        out[3] = r[1];
-        out[4] = r[2];
-        out[5] = r[3];
-        out[6] = r[4];
-        out[7] = r[5];
+        /* block of unknowns 6, 7 */
+        double M[4], r[2];
+        int piv[2];
+        M[0] = -t0;
+        M[1] = t1;
+        r[0] = c[22]*obs[38] + ld[2]*t5 - ld[3]*t4 - ld[8] + t4*t6 - t5*t7;
+        M[2] = c[5]*cq[3];
+        M[3] = -c[5]*cq[2];
+        r[1] = c[18]*obs[29] - ld[4]*(-c[19]*cq[2] - c[20]*cq[3]) - ld[5]*(-c[19]*cq[3] + c[20]*cq[2]) - ld[7] - t2*(c[16]*cq[3] + c[17]*cq[2]) - t3*(-c[16]*cq[2] + c[17]*cq[3]);
+        if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
+        sg_lu_solve_inl(2, M, piv, r);
+        out[6] = r[0];
+        out[7] = r[1];
     }
-    out[0] = c[20]*(-gv[0] + obs[25]) + out[2] - ld[0];
-    out[1] = c[20]*(-gv[1] + obs[26]) + out[3] - ld[1];
-    out[8] = c[21]*obs[20] - out[0]*(c[14]*t0 + t2) - out[1]*(-c[14]*t1 + t3) + out[2]*t4 + out[3]*t5 - ld[0]*t4 - ld[1]*t5 - ld[6];
+    out[5] = -out[7] + t6;
+    out[4] = -out[6] + t7;
+    out[3] = out[7] + t3;
+    out[2] = out[6] + t2;
+    out[1] = c[26]*(-gv[1] + obs[26]) + out[3] - ld[1];
+    out[0] = c[26]*(-gv[0] + obs[25]) + out[2] - ld[0];
+    out[8] = c[24]*obs[20] - out[0]*(c[14]*t8 + t12) - out[1]*(-c[14]*t10 + t9) + out[2]*t13 + out[3]*t11 - ld[0]*t13 - ld[1]*t11 - ld[6];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
     out[11] = out[0] + out[4];
     out[12] = out[1] + out[5];
     out[13] = c[3]*out[5] - c[4]*out[4] + out[8];
-    out[14] = (0.5)*c[20]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + (0.5)*c[21]*((obs[19])*(obs[19])) + (0.5)*c[22]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + (0.5)*c[23]*((obs[28])*(obs[28])) + (0.5)*c[26]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + (0.5)*c[27]*((obs[37])*(obs[37]));
-    out[15] = -c[20]*(gv[0]*obs[21] + gv[1]*obs[22]) - c[22]*(gv[0]*obs[30] + gv[1]*obs[31]) - c[26]*(gv[0]*obs[39] + gv[1]*obs[40]);
+    out[14] = (0.5)*c[18]*((obs[28])*(obs[28])) + (0.5)*c[21]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + (0.5)*c[22]*((obs[37])*(obs[37])) + (0.5)*c[23]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + (0.5)*c[24]*((obs[19])*(obs[19])) + (0.5)*c[26]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
+    out[15] = -c[21]*(gv[0]*obs[30] + gv[1]*obs[31]) - c[23]*(gv[0]*obs[39] + gv[1]*obs[40]) - c[26]*(gv[0]*obs[21] + gv[1]*obs[22]);
     out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37];
     if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + out[7]))) + (((out[8] + out[9]) + (out[10] + out[11])) + ((out[12] + out[13]) + (out[14] + (out[15] + out[16]))))))) return SG_NONFINITE;
     return SG_OK;
@@ -281,8 +248,8 @@ void sg_take_up_force_matrix(const double *q, const double *cq, const double *x,
     const double t1 = c[1]*cx[0] - c[2]*cx[1];
     const double t2 = c[15]*t1;
     const double t3 = c[15]*t0;
-    const double t4 = -c[18]*t0 + t2;
-    const double t5 = c[18]*t1 + t3;
+    const double t4 = -c[25]*t0 + t2;
+    const double t5 = c[25]*t1 + t3;
     const double t6 = c[17]*cq[2];
     const double t7 = c[17]*cq[3];
     const double t8 = (0.5)*c[6];
@@ -304,8 +271,8 @@ void sg_take_up_force_matrix(const double *q, const double *cq, const double *x,
     A[43] = -1.0;
     A[47] = c[16]*cq[3] + t6;
     A[48] = -c[16]*cq[2] + t7;
-    A[51] = c[19]*cq[3] - t6;
-    A[52] = -c[19]*cq[2] - t7;
+    A[51] = c[27]*cq[3] - t6;
+    A[52] = -c[27]*cq[2] - t7;
     A[58] = 1.0;
     A[60] = 1.0;
     A[68] = 1.0;
@@ -314,15 +281,15 @@ void sg_take_up_force_matrix(const double *q, const double *cq, const double *x,
     A[77] = -t10;
     A[78] = -t9;
     A[79] = t10;
-    b[0] = c[20]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[20]*(-gv[1] + obs[26]) - ld[1];
-    b[2] = c[21]*obs[20] - ld[0]*t4 - ld[1]*t5 - ld[6];
-    b[3] = c[22]*(-gv[0] + obs[34]) - ld[4];
-    b[4] = c[22]*(-gv[1] + obs[35]) - ld[5];
-    b[5] = c[23]*obs[29] - ld[4]*(-c[24]*cq[2] - c[25]*cq[3]) - ld[5]*(-c[24]*cq[3] + c[25]*cq[2]) - ld[7];
-    b[6] = c[26]*(-gv[0] + obs[43]) - ld[2];
-    b[7] = c[26]*(-gv[1] + obs[44]) - ld[3];
-    b[8] = c[27]*obs[38] + ld[2]*t9 - ld[3]*t10 - ld[8];
+    b[0] = c[26]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[26]*(-gv[1] + obs[26]) - ld[1];
+    b[2] = c[24]*obs[20] - ld[0]*t4 - ld[1]*t5 - ld[6];
+    b[3] = c[21]*(-gv[0] + obs[34]) - ld[4];
+    b[4] = c[21]*(-gv[1] + obs[35]) - ld[5];
+    b[5] = c[18]*obs[29] - ld[4]*(-c[19]*cq[2] - c[20]*cq[3]) - ld[5]*(-c[19]*cq[3] + c[20]*cq[2]) - ld[7];
+    b[6] = c[23]*(-gv[0] + obs[43]) - ld[2];
+    b[7] = c[23]*(-gv[1] + obs[44]) - ld[3];
+    b[8] = c[22]*obs[38] + ld[2]*t9 - ld[3]*t10 - ld[8];
 }
 
 static const unsigned char sg_take_up_coord_is_angle[2] = { 1, 1 };
@@ -365,87 +332,87 @@ const char *sg_take_up_manifest(void)
         " in place of the paper's misprinted \\u03c6CD).\\nSeed 004 runs the crank at n = 5000 r/min.\\n\\n"
         "The link lengths of seed 004's table 1 are not in the text: AB, BC, CD, BE, CE are estimates tha"
         "t make a\\nGrashof crank-rocker (10 + 38 \\u2264 26 + 32.8) with the willow-leaf eye path the pa"
-        "per describes.\",\"force_blocks\":[6,1,1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit"
-        "\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{"
-        "\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\""
-        ":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"l"
-        "oad_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"lever.x\""
-        ",\"lever.y\",\"lever.moment\",\"rocker.x\",\"rocker.y\",\"rocker.moment\"],\"inputs\":[{\"defaul"
-        "t\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\""
-        "shaft\",\"unit\":\"rad\"}],\"kernels\":{\"sg_take_up_closed\":{\"ops\":22},\"sg_take_up_constant"
-        "s\":{\"ops\":24},\"sg_take_up_force_matrix\":{\"ops\":81},\"sg_take_up_forces\":{\"ops\":149},\""
-        "sg_take_up_motion\":{\"ops\":126},\"sg_take_up_residual\":{\"ops\":20}},\"loads\":[{\"body\":\"c"
-        "rank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"n"
-        "ame\":\"crank_pin\"},{\"body\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\""
-        ":\"rocker\",\"component\":\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx"
-        "\",\"name\":\"thread_eye\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\""
-        "body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":"
-        "\"torque\",\"name\":\"lever\"},{\"body\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\""
-        "}],\"name\":\"take_up\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"c"
-        "rank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin"
-        ".y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin."
-        "y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\""
-        ",\"unit\":\"m\"},{\"name\":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"u"
-        "nit\":\"m/s\"},{\"name\":\"rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\""
-        ":\"m\"},{\"name\":\"thread_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m"
-        "/s\"},{\"name\":\"thread_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/"
-        "s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name"
-        "\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":"
-        "\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name"
-        "\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.c"
-        "om.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x"
-        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.an"
-        "gle\",\"unit\":\"rad\"},{\"name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angl"
-        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y"
-        "\",\"unit\":\"m\"},{\"name\":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\","
-        "\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc"
-        "\":\"D, horizontal (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"p"
-        "ositive\":false,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical"
-        " (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\""
-        "unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.038,\"display_un"
-        "it\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name\":\"lever_bc\""
-        ",\"positive\":true,\"unit\":\"m\"},{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"d"
-        "oc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\",\"positive\":true,\"unit\""
-        ":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to thread eye E (es"
-        "timate)\",\"kind\":\"length\",\"name\":\"lever_be\",\"positive\":true,\"unit\":\"m\"},{\"default"
-        "\":0.022,\"display_unit\":\"mm\",\"doc\":\"take-up lever C to thread eye E (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"lever_ce\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.0,\"display_u"
-        "nit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\""
-        ":\"crank.phase\",\"positive\":false,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\""
-        "doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"unit\":\""
-        "kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"ki"
-        "nd\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"d"
-        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\""
-        "crank.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\""
-        "doc\":\"moment of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"cr"
-        "ank.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.009000000000000001,\"displ"
-        "ay_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\""
-        ":false,\"unit\":\"kg\"},{\"default\":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of l"
-        "ever, local u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"unit\":\"m\"},"
-        "{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\""
-        ":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":3e-06,\"dis"
-        "play_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\""
-        ":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0."
-        "004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.mass\""
-        ",\"positive\":false,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"m"
-        "oment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rocker.ine"
-        "rtia\",\"positive\":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"a"
-        "x\",\"ay\"],\"points\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\""
-        "lever-rocker pin C\",\"name\":\"rocker_pin\",\"offset\":6},{\"doc\":\"thread eye E of the take-u"
-        "p lever\",\"name\":\"thread_eye\",\"offset\":12}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank"
-        "\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\","
-        "\"offset\":0},{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\""
-        "kind\":\"revolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":"
-        "[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"le"
-        "ver\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"na"
-        "me\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\""
-        ":true,\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\""
-        ":28,\"nf\":9,\"nfo\":17,\"nload\":9,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1}}"
+        "per describes.\",\"force_blocks\":[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N"
+        "*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name"
+        "\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kin"
+        "etic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_po"
+        "wer\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"lever.x\",\"le"
+        "ver.y\",\"lever.moment\",\"rocker.x\",\"rocker.y\",\"rocker.moment\"],\"inputs\":[{\"default\":0"
+        ".0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaf"
+        "t\",\"unit\":\"rad\"}],\"kernels\":{\"sg_take_up_closed\":{\"ops\":22},\"sg_take_up_constants\":"
+        "{\"ops\":24},\"sg_take_up_force_matrix\":{\"ops\":81},\"sg_take_up_forces\":{\"ops\":155},\"sg_t"
+        "ake_up_motion\":{\"ops\":126},\"sg_take_up_residual\":{\"ops\":20}},\"loads\":[{\"body\":\"crank"
+        "\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\""
+        ":\"crank_pin\"},{\"body\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"r"
+        "ocker\",\"component\":\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\""
+        "name\":\"thread_eye\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body"
+        "\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":\"to"
+        "rque\",\"name\":\"lever\"},{\"body\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\""
+        "name\":\"take_up\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_"
+        "pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"uni"
+        "t\":\"m\"},{\"name\":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\""
+        "},{\"name\":\"thread_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},"
+        "{\"name\":\"thread_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2"
+        "\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},"
+        "{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\""
+        "name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"c"
+        "rank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"leve"
+        "r.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"l"
+        "ever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\","
+        "\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\","
+        "\"unit\":\"rad\"},{\"name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\""
+        ",\"unit\":\"rad/s^2\"},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"u"
+        "nit\":\"m\"},{\"name\":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\""
+        ":\"m/s\"},{\"name\":\"rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit"
+        "\":\"m/s^2\"}],\"params\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D"
+        ", horizontal (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positiv"
+        "e\":false,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed"
+        " 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"unit\""
+        ":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\":\"len"
+        "gth\",\"name\":\"crank\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.038,\"display_unit\":\""
+        "mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name\":\"lever_bc\",\"pos"
+        "itive\":true,\"unit\":\"m\"},{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\""
+        "rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\",\"positive\":true,\"unit\":\"m\"}"
+        ",{\"default\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to thread eye E (estimate)"
+        "\",\"kind\":\"length\",\"name\":\"lever_be\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.02"
+        "2,\"display_unit\":\"mm\",\"doc\":\"take-up lever C to thread eye E (estimate)\",\"kind\":\"leng"
+        "th\",\"name\":\"lever_ce\",\"positive\":true,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\""
+        "deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank"
+        ".phase\",\"positive\":false,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\""
+        "mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"unit\":\"kg\"},{\""
+        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"le"
+        "ngth\",\"name\":\"crank.com_u\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_un"
+        "it\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.co"
+        "m_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\""
+        "moment of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.iner"
+        "tia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.009000000000000001,\"display_unit\""
+        ":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\""
+        "unit\":\"kg\"},{\"default\":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, loc"
+        "al u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"unit\":\"m\"},{\"defaul"
+        "t\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length"
+        "\",\"name\":\"lever.com_v\",\"positive\":false,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit"
+        "\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inerti"
+        "a\",\"name\":\"lever.inertia\",\"positive\":false,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"dis"
+        "play_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.mass\",\"positi"
+        "ve\":false,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of "
+        "inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rocker.inertia\",\""
+        "positive\":false,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\""
+        "],\"points\":[{\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0},{\"doc\":\"lever-roc"
+        "ker pin C\",\"name\":\"rocker_pin\",\"offset\":6},{\"doc\":\"thread eye E of the take-up lever\""
+        ",\"name\":\"thread_eye\",\"offset\":12}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"colu"
+        "mns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\""
+        ":0},{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"r"
+        "evolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":[\"fx\",\""
+        "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\""
+        ":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\","
+        "\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"kin"
+        "d\":\"drive\",\"name\":\"crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\":28,\"nf\":"
+        "9,\"nfo\":17,\"nload\":9,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1}}"
         ;
 }

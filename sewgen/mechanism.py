@@ -37,6 +37,7 @@ class Mechanism:
         self.body_names = [b["name"] for b in man["bodies"]]
         self.closed_form = bool(man["closed_form"])
         self.default_speed = float(man["default_speed"])
+        self._defaults = None
 
     def __repr__(self) -> str:
         return f"<sewgen.Mechanism {self.name}: {len(self.coord_names)} coordinates, {len(self.param_names)} parameters>"
@@ -137,6 +138,10 @@ class Mechanism:
         defaults = [i["default"] for i in self.manifest["inputs"][1:]]
         return self._named_vector("held input", self.held_names, defaults, held, "angle")
 
+    def _branches(self, branch):
+        return self._named_vector("branch joint", self.branch_names,
+                                  [b["default"] for b in self.manifest["branches"]], branch, "sign")
+
     def _guess(self, guess):
         """Newton's start per coordinate (rad or m, or quantity strings): the manifest's unless overridden."""
         given = dict(guess or {})
@@ -172,20 +177,25 @@ class Mechanism:
             phi_v = np.radians(phi_v)
         omega = self._series("speed", self.default_speed if speed is None else speed, n, "speed")
         alpha = self._series("angular acceleration", accel, n, "angular_acceleration")
-        p = self.param_vector(params)
-        br = np.array(self._named_vector("branch joint", self.branch_names,
-                                         [b["default"] for b in self.manifest["branches"]], branch, "sign"),
-                      dtype=np.intc)
         if not isinstance(max_iter, int) or isinstance(max_iter, bool) or max_iter < 1:
             raise ParameterError(self.name, "max_iter", f"must be a positive integer, got {max_iter!r}")
+        if self._defaults is None:  # the conversions of the defaults, once (read-only: C only reads them)
+            self._defaults = {"p": self.param_vector(None), "held": np.array(self._held(None), dtype=np.float64),
+                              "branch": np.array(self._branches(None), dtype=np.intc),
+                              "guess": np.array(self._guess(None), dtype=np.float64)}
+            for arr in self._defaults.values():
+                arr.flags.writeable = False
+        dflt = self._defaults
+        p = dflt["p"] if params is None else self.param_vector(params)
         nq, nobs = len(self.coord_names), len(self.manifest["observables"])
         return {"n": n, "phi": phi_v, "omega": omega, "alpha": alpha, "p": p,
-                "held": np.array(self._held(held), dtype=np.float64), "branch": br,
-                "guess": np.array(self._guess(guess), dtype=np.float64),
+                "held": dflt["held"] if held is None else np.array(self._held(held), dtype=np.float64),
+                "branch": dflt["branch"] if branch is None else np.array(self._branches(branch), dtype=np.intc),
+                "guess": dflt["guess"] if guess is None else np.array(self._guess(guess), dtype=np.float64),
                 "opt": self.ffi.new("sg_options *", {"tol": 1e-13 * self.length_scale(p), "max_iter": max_iter,
                                                     "newton_only": 1 if newton else 0}),
-                "q": np.zeros((n, nq)), "qd": np.zeros((n, nq)), "qdd": np.zeros((n, nq)),
-                "obs": np.zeros((n, nobs)), "status": np.zeros(n, dtype=np.intc)}
+                "q": np.empty((n, nq)), "qd": np.empty((n, nq)), "qdd": np.empty((n, nq)),  # C writes every row
+                "obs": np.empty((n, nobs)), "status": np.zeros(n, dtype=np.intc)}
 
     def _motion(self, a: dict) -> Motion:
         return Motion(self, a["phi"], a["omega"], a["alpha"], a["q"], a["qd"], a["qdd"], a["obs"])
@@ -233,7 +243,7 @@ class Mechanism:
             raise ParameterError(self.name, "moment_about", f"must be a point (x, y), got {moment_about!r}")
         about = tuple(self._si(v, "length", "moment_about") for v in moment_about)
         ld, placed = load_matrix(self, loads, a["phi"])
-        frc = np.zeros((a["n"], self.manifest["sizes"]["nfo"]))
+        frc = np.empty((a["n"], self.manifest["sizes"]["nfo"]))
         d = self._ptr
         self.lib.sg_sweep_forces(
             self._descriptor, a["n"], d("double *", a["phi"]), d("double *", a["omega"]),
