@@ -27,6 +27,11 @@ SI_UNITS = {
 }
 
 
+#: Kinds whose text must name an angle unit: pint takes rad as dimensionless, so "100 Hz" would pass as
+#: 100 rad/s where its writer most likely meant 100 revolutions per second.
+_ANGULAR = ("speed", "angular_acceleration")
+
+
 class UnitError(ValueError):
     """A quantity whose text cannot be read, or whose unit is not of the expected kind."""
 
@@ -69,6 +74,9 @@ def _parse(text: str, kind: str) -> tuple[float, str]:
     except Exception as exc:  # pint raises several unrelated types for unreadable text
         return math.nan, f"cannot read {{value}} as a quantity ({str(exc).replace('{', '{{').replace('}', '}}')})"
     target = SI_UNITS[kind]
+    if kind in _ANGULAR and "radian" not in q.to_root_units().units._units:
+        hint = "rad/s, rpm, deg/s or revolution/s" if kind == "speed" else "rad/s**2 or deg/s**2"
+        return math.nan, f"{{value}} names no angle unit (Hz or 1/min would be read as rad/s): write {hint}"
     try:
         if kind == "angle" and q.dimensionless and not isinstance(q.magnitude, str):
             return float(q.to("radian").magnitude), ""

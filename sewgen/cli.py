@@ -10,7 +10,7 @@ import numpy as np
 
 from derive.units import UnitError, to_si
 
-from . import catalog, load, mechanism
+from . import balance_cli, catalog, load, mechanism
 from .errors import SewgenError
 from .mechanism import Mechanism
 
@@ -102,6 +102,7 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("--branch", action="append", help="JOINT=+1|-1 assembly branch")
             p.add_argument("--newton", action="store_true", help="solve by Newton even where a closed form exists")
             p.add_argument("--csv", help="write every result column to this CSV file")
+    balance_cli.add_parser(sub)
     return ap
 
 
