@@ -84,7 +84,8 @@ def _parse(text: str, kind: str) -> tuple[float, str]:
             return float(q.to(target).magnitude), ""
         return float(q.to("dimensionless").magnitude), ""
     except Exception:
-        return math.nan, f"{{value}} is not a {kind} (expected a unit convertible to {target or 'no unit'})"
+        article = "an" if kind[0] in "aeiou" else "a"
+        return math.nan, f"{{value}} is not {article} {kind} (expected a unit convertible to {target or 'no unit'})"
 
 
 def unit_of(text: str) -> str:

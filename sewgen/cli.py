@@ -12,6 +12,7 @@ from derive.units import UnitError, to_si
 
 from . import balance_cli, catalog, load, mechanism
 from .errors import SewgenError
+from .loads import Load
 from .mechanism import Mechanism
 
 
@@ -57,15 +58,8 @@ def _extreme(values: np.ndarray, phi: np.ndarray, fn) -> str:
 
 def cmd_kinematics(args) -> int:
     m = _mechanism(args)
-    try:
-        step = math.degrees(to_si(args.step, "angle", "--step"))
-        start = math.degrees(to_si(args.start, "angle", "--start"))
-    except UnitError as exc:
-        raise SystemExit(f"sewgen: {exc}") from None
-    if not step > 0:
-        raise SystemExit("sewgen: --step must be positive")
-    n = int(round(360.0 / step))
-    phi = np.radians(start + step * np.arange(n))
+    phi = _sweep_angles(args)
+    n, step = len(phi), 360.0 / len(phi)
     motion = m.solve(phi, speed=args.speed, params=_pairs(args.param, "--param"),
                      branch={k: int(v) for k, v in _pairs(args.branch, "--branch").items()}, newton=args.newton)
     print(f"{m.name}: {n} positions every {step:g}°, speed {motion.omega[0]:.6g} rad/s")
@@ -84,17 +78,80 @@ def cmd_kinematics(args) -> int:
     return 0
 
 
+def _load(text: str) -> Load:
+    """ "AT fx=.. fy=.. torque=.. from=.. to=.." -> Load (quantities with units)."""
+    at, *pairs = text.split()
+    kw, window = {}, {}
+    for item in pairs:
+        key, sep, val = item.partition("=")
+        if not sep or key not in ("fx", "fy", "torque", "from", "to"):
+            raise SystemExit(f"sewgen: --load {text!r}: expected AT fx=.. fy=.. torque=.. from=.. to=.., got {item!r}")
+        (window if key in ("from", "to") else kw)[key] = val
+    if len(window) == 1:
+        raise SystemExit(f"sewgen: --load {text!r}: give both from= and to= for a window")
+    return Load(at, window=(window["from"], window["to"]) if window else None, **kw)
+
+
+def _sweep_angles(args) -> np.ndarray:
+    try:
+        step = math.degrees(to_si(args.step, "angle", "--step"))
+        start = math.degrees(to_si(args.start, "angle", "--start"))
+    except UnitError as exc:
+        raise SystemExit(f"sewgen: {exc}") from None
+    if not step > 0:
+        raise SystemExit("sewgen: --step must be positive")
+    return np.radians(start + step * np.arange(int(round(360.0 / step))))
+
+
+def _number_or_quantity(text: str):
+    """A bare number on the command line is SI (like a number in the API); anything else keeps its unit."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def _rms(v: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(v))))
+
+
+def cmd_forces(args) -> int:
+    m = _mechanism(args)
+    phi = _sweep_angles(args)
+    fa = m.kinetostatics(phi, speed=args.speed, params=_pairs(args.param, "--param"),
+                         branch={k: int(v) for k, v in _pairs(args.branch, "--branch").items()}, newton=args.newton,
+                         loads=[_load(t) for t in args.load or []], gravity=_number_or_quantity(args.gravity))
+    print(f"{m.name}: {len(phi)} positions, speed {fa.motion.omega[0]:.6g} rad/s, gravity {args.gravity}")
+    print(f"{'joint':22s} {'peak |F| (N)':>26s} {'RMS |F| (N)':>12s}")
+    for name in fa.reaction_names:
+        mag = fa.reaction(name).magnitude
+        print(f"{name:22s} {_extreme(mag, phi, np.argmax)} {_rms(mag):12.6g}")
+    for name in [i["name"] for i in m.manifest["inputs"]]:
+        tau = fa.torque(name)
+        print(f"torque {name:15s} min {_extreme(tau, phi, np.argmin)}  max {_extreme(tau, phi, np.argmax)}"
+              f"  RMS {_rms(tau):.6g} N*m")
+    shake = np.hypot(*fa.shaking_force.T)
+    print(f"{'shaking force':22s} {_extreme(shake, phi, np.argmax)} {_rms(shake):12.6g}")
+    moment = np.abs(fa.shaking_moment)
+    print(f"{'shaking moment (N*m)':22s} {_extreme(moment, phi, np.argmax)} {_rms(moment):12.6g}")
+    if args.csv:
+        fa.to_csv(args.csv)
+        print(f"wrote {args.csv}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="sewgen", description="Sewing-machine mechanism analysis.")
     sub = ap.add_subparsers(dest="command", required=True)
     sub.add_parser("list", help="the built-in mechanisms").set_defaults(fn=cmd_list)
     for name, fn, text in (("params", cmd_params, "a mechanism's parameters"),
-                           ("kinematics", cmd_kinematics, "positions, velocities, accelerations over a revolution")):
+                           ("kinematics", cmd_kinematics, "positions, velocities, accelerations over a revolution"),
+                           ("forces", cmd_forces, "joint reactions, driving torque, shaking force over a revolution")):
         p = sub.add_parser(name, help=text)
         p.add_argument("name", nargs="?", default="needle_bar", help="catalog mechanism (default needle_bar)")
         p.add_argument("--file", help="a user mechanism: a .py file with declare()")
         p.set_defaults(fn=fn)
-        if name == "kinematics":
+        if name in ("kinematics", "forces"):
             p.add_argument("--speed", default=None, help='shaft speed, e.g. "1000 rpm" (default: the model\'s)')
             p.add_argument("--step", default="5 deg", help="shaft-angle step (default 5 deg: 72 positions)")
             p.add_argument("--start", default="0 deg", help="first shaft angle")
@@ -102,6 +159,11 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("--branch", action="append", help="JOINT=+1|-1 assembly branch")
             p.add_argument("--newton", action="store_true", help="solve by Newton even where a closed form exists")
             p.add_argument("--csv", help="write every result column to this CSV file")
+        if name == "forces":
+            p.add_argument("--gravity", default="9.80665 m/s**2", help="gravity along -y (0 to switch it off)")
+            p.add_argument("--load", action="append",
+                           help='external load "AT fx=.. fy=.. torque=.. from=.. to=..", e.g. '
+                                '"thread_eye fy=-2.94N from=135deg to=155deg"')
     balance_cli.add_parser(sub)
     return ap
 
