@@ -7,11 +7,13 @@
 """
 from .errors import (AssemblyError, BranchJumpError, BuildError, ConvergenceError, InputError, ParameterError,
                      PositionError, SewgenError, SingularPositionError)
+from .forces import ForceAnalysis, JointReaction
+from .loads import Load
 from .mechanism import Mechanism, shaft_angles
 from .results import Motion
 
-__all__ = ["AssemblyError", "BranchJumpError", "BuildError", "ConvergenceError", "InputError", "Mechanism",
-           "Motion", "ParameterError", "PositionError", "SewgenError", "SingularPositionError", "catalog",
+__all__ = ["AssemblyError", "BranchJumpError", "BuildError", "ConvergenceError", "ForceAnalysis", "InputError",
+           "JointReaction", "Load", "Mechanism", "Motion", "ParameterError", "PositionError", "SewgenError", "SingularPositionError", "catalog",
            "load", "mechanism", "shaft_angles"]
 
 _cache: dict = {}

@@ -49,7 +49,7 @@ class ConvergenceError(AssemblyError):
 
 
 class SingularPositionError(PositionError):
-    what = "singular position (toggle or dead centre: the constraint Jacobian is singular)"
+    what = "singular position (toggle or dead centre: the constraint Jacobian or the force matrix is singular)"
 
 
 class BranchJumpError(PositionError):
