@@ -10,7 +10,7 @@ import re
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
-_ARRAY = re.compile(r"^(q|qd|qdd|x|xd|xdd|p|c|cq|cx|o|gv|ld|f)_(\d+)$")
+_ARRAY = re.compile(r"^(q|qd|qdd|x|xd|xdd|p|c|cq|cx|o|gv|ld|f|ka)_(\d+)$")
 #: Symbol prefixes printed under another array name: observables o_k -> obs[k], force results f_k -> out[k].
 _ALIAS = {"o": "obs", "f": "out"}
 _LOCAL = re.compile(r"^([A-Za-z]+\w*?)_(\d+)$")
@@ -43,6 +43,9 @@ class KernelPrinter(C99CodePrinter):
         if exp == -1:
             return f"(1.0/{self.parenthesize(base, 1000)})"
         return super()._print_Pow(expr)
+
+    def _print_Relational(self, expr):
+        return f"{self._print(expr.lhs)} {expr.rel_op} {self._print(expr.rhs)}"
 
     def _print_NumberSymbol(self, expr):  # pi, E, ...: a literal, never a macro or a declaration
         return repr(float(expr))

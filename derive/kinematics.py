@@ -39,6 +39,19 @@ class Observable:
     expr: sp.Expr
 
 
+@dataclass
+class CamContact:
+    """A cam joint as the kernels see it: the active arc's centre (u, v) and radius are the symbols
+    ``ka[3j..3j+2]``, chosen at run time from the direction ``normal`` (cos, sin) of the follower face's
+    normal in the cam frame; ``ka[3·ncam + j]`` is the active arc's index."""
+
+    joint: Joint
+    center: tuple
+    radius: sp.Symbol
+    index: sp.Symbol
+    normal: tuple
+
+
 class Kinematics:
     """Φ, its Jacobians, γ and every observable of one mechanism, as SymPy expressions."""
 
@@ -115,8 +128,22 @@ class Kinematics:
         return None
 
     # -- loops ---------------------------------------------------------------------------------------------
+    def _line_frame(self, line: Line):
+        """World point of a line, its world direction angle and unit normal (direction turned +90°)."""
+        gx, gy = self.world(Attachment(line.body, line.u, line.v))
+        th = self.pose[line.body][2] + line.angle
+        return (gx, gy), th, (-sp.sin(th), sp.cos(th))
+
     def _close_loops(self) -> None:
         tree = set(self.tree_joint.values())
+        cams = [j for j in self.mech.joints if j.kind == "cam"]
+        self.cams: list[CamContact] = []
+        for k, joint in enumerate(cams):
+            ka = [sp.Symbol(f"ka_{3 * k + i}", real=True) for i in range(3)]
+            _f, th, _n = self._line_frame(joint.b)
+            rel = th + sp.pi / 2 - self.pose[joint.a.body][2]
+            self.cams.append(CamContact(joint, (ka[0], ka[1]), ka[2], sp.Symbol(f"ka_{3 * len(cams) + k}", real=True),
+                                        (sp.cos(rel), sp.sin(rel))))
         self.closure: list[sp.Expr] = []
         self.closure_names: list[str] = []
         for joint in self.mech.joints:
@@ -126,6 +153,17 @@ class Kinematics:
                 (ax, ay), (bx, by) = self.world(joint.a), self.world(joint.b)
                 self.closure += [ax - bx, ay - by]
                 self.closure_names += [f"{joint.name}.x", f"{joint.name}.y"]
+            elif joint.kind == "slot":
+                (fx, fy), _th, (nx, ny) = self._line_frame(joint.a)
+                px, py = self.world(joint.b)
+                self.closure.append(nx * (px - fx) + ny * (py - fy))
+                self.closure_names.append(f"{joint.name}.normal")
+            elif joint.kind == "cam":
+                cam = next(c for c in self.cams if c.joint is joint)
+                (fx, fy), _th, (nx, ny) = self._line_frame(joint.b)
+                cx, cy = self.world(Attachment(joint.a.body, *cam.center))
+                self.closure.append(nx * (cx - fx) + ny * (cy - fy) + cam.radius)
+                self.closure_names.append(f"{joint.name}.normal")
             else:
                 self.closure += self._prismatic_equations(joint)
                 self.closure_names += [f"{joint.name}.normal", f"{joint.name}.angle"]
@@ -184,6 +222,7 @@ class Kinematics:
             obs += self._motion_of(f"{body.name}.angle", th, "rad")
             gx, gy = self.world(Attachment(body, body.com[0], body.com[1]))
             obs += self._point_block(f"{body.name}.com", gx, gy)
+        obs += [Observable(f"{c.joint.name}.arc", "", c.index) for c in self.cams]
         self.observables = obs
 
     def _point_block(self, name, px, py):

@@ -44,7 +44,7 @@ class Reaction:
     """A joint as the force analysis sees it: body ``a`` acts on body ``b`` at ``b``'s point ``at``."""
 
     name: str
-    kind: str  # "revolute", "prismatic" or "drive"
+    kind: str  # "revolute", "prismatic", "slot", "cam" or "drive"
     a: Body
     b: Body
     at: Attachment | None  # point of b where the force acts (None: a pure torque)
@@ -55,7 +55,8 @@ class Reaction:
 
     @property
     def columns(self) -> list[str]:
-        return {"revolute": ["fx", "fy"], "prismatic": ["normal", "moment"], "drive": ["torque"]}[self.kind]
+        return {"revolute": ["fx", "fy"], "prismatic": ["normal", "moment"], "slot": ["normal"], "cam": ["normal"],
+                "drive": ["torque"]}[self.kind]
 
     @property
     def grounded(self) -> bool:
@@ -98,9 +99,13 @@ class Kinetostatics:
         for j in mech.joints:
             if j.kind == "revolute":
                 out.append(Reaction(j.name, "revolute", j.a.body, j.b.body, j.b, j.a))
-            else:
-                out.append(Reaction(j.name, "prismatic", j.a.body, j.b.body, j.b,
+            elif j.kind in ("prismatic", "slot"):
+                out.append(Reaction(j.name, j.kind, j.a.body, j.b.body, j.b,
                                     guide_angle=kin.pose[j.a.body][2] + j.a.angle))
+            else:  # cam: on the follower (b) from the cam (a), along the face normal through the arc's centre
+                cam = next(c for c in kin.cams if c.joint is j)
+                out.append(Reaction(j.name, "cam", j.a.body, j.b.body, Attachment(j.a.body, *cam.center),
+                                    guide_angle=kin.pose[j.b.body][2] + j.b.angle))
         for body in mech.bodies:
             if body.kind == "driven":
                 out.append(Reaction(f"{body.name}.drive", "drive", mech.ground, body, None,
@@ -149,13 +154,14 @@ class Kinetostatics:
                     A[k + 1, col + 1] += sign
                     A[k + 2, col] += -sign * dy
                     A[k + 2, col + 1] += sign * dx
-                elif r.kind == "prismatic":
+                elif r.kind in ("prismatic", "slot", "cam"):  # a normal force N·n at point `at` (+ a couple)
                     nx, ny = -sp.sin(r.guide_angle), sp.cos(r.guide_angle)
-                    dx, dy = (self.own_arm(r.at) if body is r.b else self.arm(body, self.kin.world(r.at)))
+                    dx, dy = (self.own_arm(r.at) if r.at.body is body else self.arm(body, self.kin.world(r.at)))
                     A[k, col] += sign * nx
                     A[k + 1, col] += sign * ny
                     A[k + 2, col] += sign * (dx * ny - dy * nx)
-                    A[k + 2, col + 1] += sign
+                    if r.kind == "prismatic":
+                        A[k + 2, col + 1] += sign
                 else:
                     A[k + 2, col] += sign
             col += len(r.columns)
@@ -192,8 +198,8 @@ class Kinetostatics:
             out.append((f"{inp.name}.torque", "N*m", tau))
         for i, inp in enumerate(mech.inputs):
             out.append((f"{inp.name}.power", "W", out[i][2] * kin.xd[i]))
-        for r in self.reactions:  # a prismatic's normal force in frame components
-            if r.kind == "prismatic":
+        for r in self.reactions:  # a normal force in frame components
+            if r.kind in ("prismatic", "slot", "cam"):
                 c = col[r.name]
                 out += [(f"{r.name}.fx", "N", -sp.sin(r.guide_angle) * self.f[c]),
                         (f"{r.name}.fy", "N", sp.cos(r.guide_angle) * self.f[c])]
@@ -208,12 +214,12 @@ class Kinetostatics:
                 fx += sign * self.f[c]
                 fy += sign * self.f[c + 1]
                 mz += sign * (px * self.f[c + 1] - py * self.f[c])
-            elif r.kind == "prismatic":
+            elif r.kind in ("prismatic", "slot", "cam"):
                 px, py = kin.world(r.at)
                 nx, ny = -sp.sin(r.guide_angle), sp.cos(r.guide_angle)
                 fx += sign * nx * self.f[c]
                 fy += sign * ny * self.f[c]
-                mz += sign * ((px * ny - py * nx) * self.f[c] + self.f[c + 1])
+                mz += sign * ((px * ny - py * nx) * self.f[c] + (self.f[c + 1] if r.kind == "prismatic" else 0))
             else:
                 mz += sign * self.f[c]
         out += [("shaking.fx", "N", fx), ("shaking.fy", "N", fy), ("shaking.moment", "N*m", mz)]

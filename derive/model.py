@@ -91,15 +91,31 @@ class Body:
         return f"<{self.kind} {self.name}>"
 
 
+@dataclass(frozen=True)
+class Arc:
+    """One circular arc of a cam profile, in the cam's frame: centre (u, v), radius, and the sector of outward
+    normal directions [normal_from, normal_to] (rad, counter-clockwise, width < 180°) over which it is the
+    profile's extreme point — i.e. where a flat face touching the cam touches this arc."""
+
+    center_u: sp.Expr
+    center_v: sp.Expr
+    radius: sp.Expr
+    normal_from: sp.Expr
+    normal_to: sp.Expr
+
+
 @dataclass(eq=False)
 class Joint:
-    """A joint. Revolute: a and b coincide. Prismatic: point b stays on line a, the bodies keep their angle."""
+    """A joint. Revolute: a and b coincide. Prismatic: point b stays on line a, the bodies keep their angle.
+    Slot (pin in slot): point b stays on line a, rotation free. Cam: the cam (body of point a) touches the
+    flat face b (a line of the follower) with the arc of ``arcs`` that the face's normal selects."""
 
     name: str
     kind: str
     a: Attachment | Line
-    b: Attachment
+    b: Attachment | Line
     branch: int = 1
+    arcs: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -240,6 +256,37 @@ class Mechanism:
         self.joints.append(joint)
         return joint
 
+    def slot(self, guide: Line, b: Attachment, name: str) -> Joint:
+        """Pin ``b`` runs in the slot ``guide`` of another body; both turn freely (a roller in a slot: one
+        equation, one normal force)."""
+        self._claim(name, "joint")
+        if not isinstance(guide, Line) or not isinstance(b, Attachment) or guide.body is b.body:
+            raise DeclarationError(f"{self.name}: slot {name!r} needs a line of one body and a point of another")
+        joint = Joint(name, "slot", guide, b)
+        self.joints.append(joint)
+        return joint
+
+    def cam(self, cam: Body, face: Line, arcs, name: str) -> Joint:
+        """A cam of circular ``arcs`` (cam frame) touching the flat ``face`` of a follower (seed 000 §一(四)5).
+
+        The cam lies on the right of the face's direction; the face's normal n (its direction turned +90°)
+        points away from the cam. While arc k is in contact, the contact is its equivalent lower pair: the
+        arc's centre runs on the line parallel to the face at the arc's radius (a pin in a slot). The active
+        arc is chosen at every evaluation by the direction of n in the cam's frame (the arcs' normal
+        sectors), so position and velocity stay continuous across a switch of G1-joined arcs; acceleration
+        jumps by what the change of curvature implies. A fork with two parallel faces on a cam of constant
+        breadth needs one face: the opposite arcs are concentric, so both contacts share one line of action.
+        """
+        self._claim(name, "joint")
+        if not isinstance(cam, Body) or not cam.moving or not isinstance(face, Line) or face.body is cam:
+            raise DeclarationError(f"{self.name}: cam {name!r} needs a moving cam body and a face of another body")
+        arcs = tuple(arcs)
+        if not arcs or not all(isinstance(a, Arc) for a in arcs):
+            raise DeclarationError(f"{self.name}: cam {name!r} needs a list of Arc")
+        joint = Joint(name, "cam", Attachment(cam, sp.S.Zero, sp.S.Zero), face, arcs=arcs)
+        self.joints.append(joint)
+        return joint
+
     def point(self, name: str, at: Attachment, doc: str = "") -> None:
         """A named point whose position, velocity and acceleration are reported."""
         self._claim(name, "point")
@@ -251,3 +298,23 @@ class Mechanism:
             if b.name == name:
                 return b
         raise KeyError(name)
+
+
+def constant_breadth_arcs(side, small_radius, centroid=(0, 0), orientation=sp.pi / 2) -> list[Arc]:
+    """The six arcs of a constant-breadth cam built on an equilateral triangle (a rounded Reuleaux triangle).
+
+    Vertices V_i at ``centroid`` + side/√3·(cos, sin)(orientation + 120°·i) in the cam frame. Around each
+    vertex a small arc of ``small_radius`` (normals within ±30° of the vertex's direction) and, opposite, a
+    large arc of side + small_radius centred on the same vertex. Breadth = side + 2·small_radius in every
+    direction. A cam turning about a vertex (``centroid`` = −V_0) dwells 60°, rises 120°, dwells 60°, returns
+    120° (the feed cam 送布凸轮 of seed 000 / seed 001).
+    """
+    side, r0 = sp.sympify(side), sp.sympify(small_radius)
+    cu, cv = (sp.sympify(c) for c in centroid)
+    arcs = []
+    for i in range(3):
+        a = sp.sympify(orientation) + 2 * sp.pi * i / 3
+        vu, vv = cu + side / sp.sqrt(3) * sp.cos(a), cv + side / sp.sqrt(3) * sp.sin(a)
+        arcs.append(Arc(vu, vv, r0, a - sp.pi / 6, a + sp.pi / 6))
+        arcs.append(Arc(vu, vv, side + r0, a + sp.pi - sp.pi / 6, a + sp.pi + sp.pi / 6))
+    return arcs

@@ -20,7 +20,8 @@ import numpy as np
 class JointReaction:
     """A joint force over the sweep: frame components (N), magnitude (N), direction (rad from +x).
 
-    For a prismatic joint also the normal force (N) and the couple (N·m); for a revolute both are None.
+    For a prismatic joint also the normal force (N) and the couple (N·m); for a slot or a cam the normal force
+    (couple None); for a revolute both are None.
     """
 
     fx: np.ndarray
@@ -75,7 +76,8 @@ class ForceAnalysis:
         k = r["offset"]
         if r["kind"] == "revolute":
             return JointReaction(self.frc[:, k], self.frc[:, k + 1])
-        return JointReaction(self._out(f"{name}.fx"), self._out(f"{name}.fy"), self.frc[:, k], self.frc[:, k + 1])
+        couple = self.frc[:, k + 1] if r["kind"] == "prismatic" else None  # slot and cam: a normal force only
+        return JointReaction(self._out(f"{name}.fx"), self._out(f"{name}.fy"), self.frc[:, k], couple)
 
     def frame_force(self, name: str) -> JointReaction:
         """The force joint ``name`` puts on the frame (it must join a body to ground)."""
@@ -146,8 +148,10 @@ class ForceAnalysis:
             cols[f"{name}.fx [N]"], cols[f"{name}.fy [N]"] = r.fx, r.fy
             cols[f"{name}.magnitude [N]"] = r.magnitude
             cols[f"{name}.direction [rad]"] = r.direction
+            if r.normal is not None:
+                cols[f"{name}.normal [N]"] = r.normal
             if r.moment is not None:
-                cols[f"{name}.normal [N]"], cols[f"{name}.moment [N*m]"] = r.normal, r.moment
+                cols[f"{name}.moment [N*m]"] = r.moment
         for name in self.frame_joint_names:
             r = self.frame_force(name)
             cols[f"frame@{name}.fx [N]"], cols[f"frame@{name}.fy [N]"] = r.fx, r.fy
