@@ -113,10 +113,10 @@ class KernelSet:
             return self._const(e) if e in self.params else e
         if self._is_const(e):
             return self._const(e)
-        if isinstance(e, (sp.Add, sp.Mul)):  # group the fixed part of a sum or product
-            fixed = [o for o in e.args if self._is_const(o)]
-            if len(fixed) >= 2:
-                rest = [self._hoist(o) for o in e.args if not self._is_const(o)]
+        if isinstance(e, (sp.Add, sp.Mul)):  # group the fixed part of a sum or product (numbers with it)
+            fixed = [o for o in e.args if self._is_const(o) or o.is_Number]
+            if len(fixed) >= 2 and any(self._is_const(o) for o in fixed):
+                rest = [self._hoist(o) for o in e.args if not (self._is_const(o) or o.is_Number)]
                 return e.func(self._const(e.func(*fixed)), *rest)
         return e.func(*[self._hoist(a) for a in e.args])
 

@@ -6,34 +6,56 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_needle_bar_constants -- Total ops: 11 */
+/* sg_needle_bar_constants -- Total ops: 31 */
 void sg_needle_bar_constants(const double *p, double *c)
 {
-    const double t0 = -p[2];
+    const double t0 = sin(p[4]);
+    const double t1 = -p[2];
+    const double t2 = -p[6];
+    const double t3 = (0.5)*p[1];
+    const double t4 = p[0] + t2;
     c[0] = p[0];
     c[1] = cos(p[4]);
-    c[2] = sin(p[4]);
-    c[3] = p[1];
-    c[4] = p[2];
-    c[5] = (1.0/(p[1]));
-    c[6] = t0;
-    c[7] = -p[3];
-    c[8] = p[4];
-    c[9] = p[6];
-    c[10] = p[7];
-    c[11] = -p[13] - t0;
-    c[12] = p[12];
-    c[13] = p[10];
-    c[14] = p[11];
-    c[15] = p[9];
-    c[16] = p[1]*p[9];
-    c[17] = p[8];
-    c[18] = p[0] - p[6];
-    c[19] = p[5];
-    c[20] = p[14];
-    c[21] = p[13];
-    c[22] = p[12] + p[3];
-    c[23] = -p[12];
+    c[2] = -t0;
+    c[3] = t0;
+    c[4] = p[1];
+    c[5] = p[2];
+    c[6] = (1.0/(p[1]));
+    c[7] = t1;
+    c[8] = -p[1];
+    c[9] = -p[0];
+    c[10] = -p[3];
+    c[11] = p[4];
+    c[12] = p[6];
+    c[13] = -p[7];
+    c[14] = p[7];
+    c[15] = t2;
+    c[16] = t3;
+    c[17] = -t3;
+    c[18] = -p[13] - t1;
+    c[19] = p[12];
+    c[20] = p[10];
+    c[21] = p[11];
+    c[22] = p[9];
+    c[23] = -p[9]*t3;
+    c[24] = p[8];
+    c[25] = -t4;
+    c[26] = t4;
+    c[27] = p[5];
+    c[28] = p[14];
+    c[29] = -p[12];
+    c[30] = -p[13];
+    c[31] = -p[12] - p[3];
+    c[32] = (0.5)*p[10];
+    c[33] = (0.5)*p[11];
+    c[34] = (0.5)*p[14];
+    c[35] = (0.5)*p[5];
+    c[36] = (0.5)*p[8];
+    c[37] = (0.5)*p[9];
+    c[38] = -p[11];
+    c[39] = -p[5];
+    c[40] = -p[9];
+    c[41] = p[13];
 }
 
 /* sg_needle_bar_closed -- Total ops: 15 */
@@ -43,17 +65,17 @@ int sg_needle_bar_closed(const double *x, const double *cx, const double *c, con
     int st;
     {
         /* dyad 0: RRP closed at joint C (rod, needle_bar) */
-        const double P[2] = {c[0]*(c[1]*cx[0] - c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[2]*cx[0])};
-        const double l[1] = {c[3]};
-        const double L0[2] = {c[4], 0.0};
+        const double P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
+        const double l[1] = {c[4]};
+        const double L0[2] = {c[5], 0.0};
         const double u[2] = {0.0, 1.0};
         double s, J[2];
         st = sg_dyad_rrp(P, l[0], L0, u, branch[0], &s, J);
         if (st != SG_OK) return st;
         q[1] = atan2(J[1] - P[1], J[0] - P[0]);
         q[0] = s;
-        cq[2] = c[5]*(J[0] - P[0]);
-        cq[3] = c[5]*(J[1] - P[1]);
+        cq[2] = c[6]*(J[0] - P[0]);
+        cq[3] = c[6]*(J[1] - P[1]);
     }
     return SG_OK;
 }
@@ -62,93 +84,90 @@ int sg_needle_bar_closed(const double *x, const double *cx, const double *c, con
 void sg_needle_bar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac)
 {
     (void)x;
-    const double t0 = c[3]*cq[2];
-    const double t1 = c[3]*cq[3];
-    r[0] = c[0]*(c[1]*cx[0] - c[2]*cx[1]) + c[6] + t0;
-    r[1] = c[0]*(c[1]*cx[1] + c[2]*cx[0]) - q[0] + t1;
+    const double t0 = c[4]*cq[2];
+    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[7] + t0;
+    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[4]*cq[3] - q[0];
     jac[0] = 0.0;
-    jac[1] = -t1;
+    jac[1] = c[8]*cq[3];
     jac[2] = -1.0;
     jac[3] = t0;
 }
 
-/* sg_needle_bar_motion -- Total ops: 70 */
+/* sg_needle_bar_motion -- Total ops: 78 */
 int sg_needle_bar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
 {
-    const double t0 = c[3]*cq[3];
-    const double t1 = c[3]*cq[2];
-    const double t2 = c[1]*cx[1] + c[2]*cx[0];
-    const double t3 = c[0]*t2;
-    const double t4 = t3*xd[0];
-    const double t5 = c[1]*cx[0] - c[2]*cx[1];
-    const double t6 = c[0]*t5;
-    const double t7 = t6*xd[0];
-    const double t10 = ((xd[0])*(xd[0]));
-    const double t11 = t10*t6 + t3*xdd[0];
-    const double t13 = t10*t3 - t6*xdd[0];
-    const double t14 = c[10]*t2 - c[9]*t5;
-    const double t15 = -t14;
-    const double t16 = c[10]*t5 + c[9]*t2;
-    const double t17 = -t16;
-    const double t18 = (0.5)*t1;
-    const double t19 = (0.5)*t0;
+    const double t0 = c[4]*cq[2];
+    const double t1 = c[1]*cx[1] + c[3]*cx[0];
+    const double t2 = c[0]*t1;
+    const double t3 = c[1]*cx[0] + c[2]*cx[1];
+    const double t4 = c[9]*t3;
+    const double t6 = ((xd[0])*(xd[0]));
+    const double t7 = c[0]*t3;
+    const double t9 = c[9]*t1;
+    const double t10 = t9*xd[0];
+    const double t11 = t7*xd[0];
+    const double t12 = t4*t6 + t9*xdd[0];
+    const double t13 = t6*t9 + t7*xdd[0];
+    const double t14 = c[12]*t3 + c[13]*t1;
+    const double t15 = c[13]*t3 + c[15]*t1;
+    const double t16 = c[16]*cq[2];
+    const double t17 = c[17]*cq[3];
     double J[4];
     int piv[2];
     J[0] = 0.0;
-    J[1] = -t0;
+    J[1] = c[8]*cq[3];
     J[2] = -1.0;
-    J[3] = t1;
-    qd[0] = t4;
-    qd[1] = -t7;
+    J[3] = t0;
+    qd[0] = t2*xd[0];
+    qd[1] = t4*xd[0];
     if (sg_lu_factor_inl(2, J, piv, 0) != SG_OK) return SG_SINGULAR;
     sg_lu_solve_inl(2, J, piv, qd);
-    const double t8 = ((qd[1])*(qd[1]));
-    const double t9 = t1*t8;
-    const double t12 = t0*t8;
-    qdd[0] = t11 + t9;
-    qdd[1] = t12 + t13;
+    const double t5 = ((qd[1])*(qd[1]));
+    const double t8 = cq[3]*t5;
+    qdd[0] = t0*t5 + t2*xdd[0] + t6*t7;
+    qdd[1] = c[4]*t8 + t2*t6 + t4*xdd[0];
     sg_lu_solve_inl(2, J, piv, qdd);
-    obs[0] = t6;
-    obs[1] = t3;
-    obs[2] = -t4;
-    obs[3] = t7;
-    obs[4] = -t11;
-    obs[5] = -t13;
-    obs[6] = c[4];
+    obs[0] = t7;
+    obs[1] = t2;
+    obs[2] = t10;
+    obs[3] = t11;
+    obs[4] = t12;
+    obs[5] = t13;
+    obs[6] = c[5];
     obs[7] = q[0];
     obs[8] = 0.0;
     obs[9] = qd[0];
     obs[10] = 0.0;
     obs[11] = qdd[0];
-    obs[12] = c[4];
-    obs[13] = c[7] + q[0];
+    obs[12] = c[5];
+    obs[13] = c[10] + q[0];
     obs[14] = 0.0;
     obs[15] = qd[0];
     obs[16] = 0.0;
     obs[17] = qdd[0];
-    obs[18] = c[8] + x[0];
+    obs[18] = c[11] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
-    obs[21] = t15;
-    obs[22] = t16;
-    obs[23] = t17*xd[0];
-    obs[24] = t15*xd[0];
-    obs[25] = t10*t14 + t17*xdd[0];
-    obs[26] = t10*t17 + t15*xdd[0];
+    obs[21] = t14;
+    obs[22] = c[12]*t1 + c[14]*t3;
+    obs[23] = t15*xd[0];
+    obs[24] = t14*xd[0];
+    obs[25] = t15*xdd[0] + t6*(c[14]*t1 + c[15]*t3);
+    obs[26] = t14*xdd[0] + t15*t6;
     obs[27] = q[1];
     obs[28] = qd[1];
     obs[29] = qdd[1];
-    obs[30] = t18 + t6;
-    obs[31] = t19 + t3;
-    obs[32] = -qd[1]*t19 - t4;
-    obs[33] = qd[1]*t18 + t7;
-    obs[34] = -qdd[1]*t19 - t11 - 0.5*t9;
-    obs[35] = (0.5)*c[3]*cq[2]*qdd[1] - 0.5*t12 - t13;
+    obs[30] = t16 + t7;
+    obs[31] = c[16]*cq[3] + t2;
+    obs[32] = qd[1]*t17 + t10;
+    obs[33] = qd[1]*t16 + t11;
+    obs[34] = c[17]*cq[2]*t5 + qdd[1]*t17 + t12;
+    obs[35] = c[17]*t8 + qdd[1]*t16 + t13;
     obs[36] = (0.5)*3.141592653589793;
     obs[37] = 0.0;
     obs[38] = 0.0;
-    obs[39] = c[11];
-    obs[40] = c[12] + q[0];
+    obs[39] = c[18];
+    obs[40] = c[19] + q[0];
     obs[41] = 0.0;
     obs[42] = qd[0];
     obs[43] = 0.0;
@@ -157,103 +176,98 @@ int sg_needle_bar_motion(const double *q, const double *cq, const double *x, con
     return SG_OK;
 }
 
-/* sg_needle_bar_forces -- Total ops: 141 */
+/* sg_needle_bar_forces -- Total ops: 136 */
 int sg_needle_bar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)x;
     const double t0 = -gv[0] + obs[34];
     const double t1 = -gv[1] + obs[44];
-    const double t2 = c[14]*t1 - ld[3] - ld[5];
-    const double t3 = (0.5)*c[3]*cq[2];
-    const double t4 = c[14]*t1 + c[15]*(-gv[1] + obs[35]) - ld[3] - ld[5];
-    const double t5 = c[1]*cx[1] + c[2]*cx[0];
-    const double t6 = c[10]*t5;
-    const double t7 = c[1]*cx[0] - c[2]*cx[1];
-    const double t8 = c[18]*t7 + t6;
-    const double t9 = c[10]*t7;
-    const double t10 = -c[18]*t5 + t9;
+    const double t2 = c[21]*t1 - ld[3] - ld[5];
+    const double t3 = c[16]*cq[2];
+    const double t4 = c[21]*t1 + c[22]*(-gv[1] + obs[35]) - ld[3] - ld[5];
+    const double t5 = c[1]*cx[0] + c[2]*cx[1];
+    const double t6 = c[14]*t5;
+    const double t7 = c[1]*cx[1] + c[3]*cx[0];
+    const double t8 = c[14]*t7;
     {
-        const double d = c[3]*cq[3];
-        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[3]*cq[3]))) return SG_SINGULAR;
-        out[6] = (c[13]*obs[29] - 0.5*c[16]*cq[3]*t0 - ld[7] + t2*t3 + t3*t4)/d;
+        const double d = c[4]*cq[3];
+        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[4]*cq[3]))) return SG_SINGULAR;
+        out[6] = (c[20]*obs[29] + c[23]*cq[3]*t0 - ld[7] + t2*t3 + t3*t4)/d;
     }
-    out[4] = c[15]*t0 + out[6];
-    out[2] = -c[14]*(-gv[0] + obs[43]) + out[6] + ld[2] + ld[4];
-    out[3] = -c[12]*out[6] - c[12]*ld[2] + c[20]*obs[38] - c[21]*ld[3] - c[21]*ld[5] - c[21]*t2 - c[22]*ld[4] - c[23]*out[2] - ld[8];
+    out[4] = c[22]*t0 + out[6];
+    out[2] = -c[21]*(-gv[0] + obs[43]) + out[6] + ld[2] + ld[4];
+    out[3] = -c[19]*out[6] + c[28]*obs[38] - c[29]*out[2] + c[29]*ld[2] + c[30]*ld[3] + c[30]*ld[5] + c[30]*t2 + c[31]*ld[4] - ld[8];
     out[5] = t4;
     out[7] = t2;
-    out[1] = c[19]*(-gv[1] + obs[26]) + out[5] - ld[1];
-    out[0] = c[19]*(-gv[0] + obs[25]) + out[4] - ld[0];
-    out[8] = c[17]*obs[20] - out[0]*(c[9]*t5 + t9) - out[1]*(-c[9]*t7 + t6) + out[4]*t10 + out[5]*t8 - ld[0]*t10 - ld[1]*t8 - ld[6];
-    const double t11 = -out[2];
+    out[1] = c[27]*(-gv[1] + obs[26]) + out[5] - ld[1];
+    out[0] = c[27]*(-gv[0] + obs[25]) + out[4] - ld[0];
+    out[8] = c[24]*obs[20] - out[0]*(c[12]*t7 + t6) - out[1]*(c[15]*t5 + t8) - out[4]*(c[13]*t5 + c[26]*t7) - out[5]*(c[13]*t7 + c[25]*t5) - ld[0]*(c[25]*t7 + t6) - ld[1]*(c[26]*t5 + t8) - ld[6];
+    const double t9 = -out[2];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
-    out[11] = t11;
+    out[11] = t9;
     out[12] = 0.0;
-    out[13] = out[0] + t11;
+    out[13] = out[0] + t9;
     out[14] = out[1];
     out[15] = out[2]*q[0] + out[3] + out[8];
-    out[16] = (0.5)*c[13]*((obs[28])*(obs[28])) + (0.5)*c[14]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + (0.5)*c[15]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + (0.5)*c[17]*((obs[19])*(obs[19])) + (0.5)*c[19]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + (0.5)*c[20]*((obs[37])*(obs[37]));
-    out[17] = -c[14]*(gv[0]*obs[39] + gv[1]*obs[40]) - c[15]*(gv[0]*obs[30] + gv[1]*obs[31]) - c[19]*(gv[0]*obs[21] + gv[1]*obs[22]);
+    out[16] = c[32]*((obs[28])*(obs[28])) + c[33]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[34]*((obs[37])*(obs[37])) + c[35]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[36]*((obs[19])*(obs[19])) + c[37]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33])));
+    out[17] = c[38]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[39]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[40]*(gv[0]*obs[30] + gv[1]*obs[31]);
     out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37];
     if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + (out[12] + out[13]))) + ((out[14] + out[15]) + (out[16] + (out[17] + out[18]))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
-/* sg_needle_bar_force_matrix -- Total ops: 63 */
+/* sg_needle_bar_force_matrix -- Total ops: 65 */
 void sg_needle_bar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b)
 {
     (void)q;
     (void)x;
-    const double t0 = c[1]*cx[1] + c[2]*cx[0];
-    const double t1 = c[1]*cx[0] - c[2]*cx[1];
-    const double t2 = c[10]*t1;
-    const double t3 = c[10]*t0;
-    const double t4 = -c[18]*t0 + t2;
-    const double t5 = c[18]*t1 + t3;
-    const double t6 = (0.5)*c[3];
-    const double t7 = cq[3]*t6;
-    const double t8 = -cq[2]*t6;
+    const double t0 = c[1]*cx[1] + c[3]*cx[0];
+    const double t1 = c[1]*cx[0] + c[2]*cx[1];
+    const double t2 = c[14]*t1;
+    const double t3 = c[14]*t0;
+    const double t4 = c[16]*cq[3];
+    const double t5 = c[17]*cq[2];
     for (int k = 0; k < 81; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = -1.0;
     A[10] = 1.0;
     A[14] = -1.0;
-    A[18] = c[9]*t0 + t2;
-    A[19] = -c[9]*t1 + t3;
-    A[22] = -t4;
-    A[23] = -t5;
+    A[18] = c[12]*t0 + t2;
+    A[19] = c[15]*t1 + t3;
+    A[22] = c[13]*t1 + c[26]*t0;
+    A[23] = c[13]*t0 + c[25]*t1;
     A[26] = 1.0;
     A[31] = 1.0;
     A[33] = -1.0;
     A[41] = 1.0;
     A[43] = -1.0;
-    A[49] = t7;
-    A[50] = t8;
-    A[51] = t7;
-    A[52] = t8;
+    A[49] = t4;
+    A[50] = t5;
+    A[51] = t4;
+    A[52] = t5;
     A[56] = -1.0;
     A[60] = 1.0;
     A[70] = 1.0;
-    A[74] = c[23];
+    A[74] = c[29];
     A[75] = 1.0;
-    A[78] = c[12];
-    A[79] = c[21];
-    b[0] = c[19]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[19]*(-gv[1] + obs[26]) - ld[1];
-    b[2] = c[17]*obs[20] - ld[0]*t4 - ld[1]*t5 - ld[6];
-    b[3] = c[15]*(-gv[0] + obs[34]);
-    b[4] = c[15]*(-gv[1] + obs[35]);
-    b[5] = c[13]*obs[29] - ld[7];
-    b[6] = c[14]*(-gv[0] + obs[43]) - ld[2] - ld[4];
-    b[7] = c[14]*(-gv[1] + obs[44]) - ld[3] - ld[5];
-    b[8] = -c[12]*ld[2] + c[20]*obs[38] - c[21]*ld[3] - c[21]*ld[5] - c[22]*ld[4] - ld[8];
+    A[78] = c[19];
+    A[79] = c[41];
+    b[0] = c[27]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[27]*(-gv[1] + obs[26]) - ld[1];
+    b[2] = c[24]*obs[20] - ld[0]*(c[25]*t0 + t2) - ld[1]*(c[26]*t1 + t3) - ld[6];
+    b[3] = c[22]*(-gv[0] + obs[34]);
+    b[4] = c[22]*(-gv[1] + obs[35]);
+    b[5] = c[20]*obs[29] - ld[7];
+    b[6] = c[21]*(-gv[0] + obs[43]) - ld[2] - ld[4];
+    b[7] = c[21]*(-gv[1] + obs[44]) - ld[3] - ld[5];
+    b[8] = c[28]*obs[38] + c[29]*ld[2] + c[30]*ld[3] + c[30]*ld[5] + c[31]*ld[4] - ld[8];
 }
 
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };
 
 static const sg_mechanism sg_needle_bar_descriptor = {
-    "needle_bar", 2, 1, 15, 24, 45, 1,
+    "needle_bar", 2, 1, 15, 42, 45, 1,
     9, 19, 9,
     sg_needle_bar_coord_is_angle,
     sg_needle_bar_constants,
@@ -299,8 +313,8 @@ const char *sg_needle_bar_manifest(void)
         "nt\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"dis"
         "play_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"un"
         "it\":\"rad\"}],\"kernels\":{\"sg_needle_bar_closed\":{\"ops\":15},\"sg_needle_bar_constants\":{\""
-        "ops\":11},\"sg_needle_bar_force_matrix\":{\"ops\":63},\"sg_needle_bar_forces\":{\"ops\":141},\"s"
-        "g_needle_bar_motion\":{\"ops\":70},\"sg_needle_bar_residual\":{\"ops\":16}},\"loads\":[{\"body\""
+        "ops\":31},\"sg_needle_bar_force_matrix\":{\"ops\":65},\"sg_needle_bar_forces\":{\"ops\":136},\"s"
+        "g_needle_bar_motion\":{\"ops\":78},\"sg_needle_bar_residual\":{\"ops\":16}},\"loads\":[{\"body\""
         ":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\""
         ",\"name\":\"crank_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"link_pin\"},{\""
         "body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"com"
@@ -367,7 +381,7 @@ const char *sg_needle_bar_manifest(void)
         "nd\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar\",\"columns\":["
         "\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"gr"
         "ound\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"kind\":\"drive\",\"name\":\""
-        "crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\":24,\"nf\":9,\"nfo\":19,\"nload\":9,"
+        "crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\":42,\"nf\":9,\"nfo\":19,\"nload\":9,"
         "\"nobs\":45,\"np\":15,\"nq\":2,\"nx\":1}}"
         ;
 }

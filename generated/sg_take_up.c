@@ -6,42 +6,76 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_take_up_constants -- Total ops: 24 */
+/* sg_take_up_constants -- Total ops: 47 */
 void sg_take_up_constants(const double *p, double *c)
 {
-    const double t0 = (1.0/(p[3]));
-    const double t1 = ((p[5])*(p[5]));
-    const double t2 = ((p[3])*(p[3]));
-    const double t3 = -((p[6])*(p[6])) + t1 + t2;
-    const double t4 = sqrt(t1 - 0.25*((t3)*(t3))/t2);
+    const double t0 = sin(p[7]);
+    const double t1 = (1.0/(p[3]));
+    const double t2 = -p[3];
+    const double t3 = ((p[5])*(p[5]));
+    const double t4 = ((p[3])*(p[3]));
+    const double t5 = -((p[6])*(p[6])) + t3 + t4;
+    const double t6 = sqrt(t3 - 0.25*((t5)*(t5))/t4);
+    const double t7 = -t6;
+    const double t8 = (0.5)*t1*t5;
+    const double t9 = -t8;
+    const double t10 = -p[9];
+    const double t11 = (0.5)*p[4];
+    const double t12 = p[13] + t9;
+    const double t13 = p[2] + t10;
+    const double t14 = p[13] + t2;
     c[0] = p[2];
     c[1] = cos(p[7]);
-    c[2] = sin(p[7]);
-    c[3] = p[0];
-    c[4] = p[1];
-    c[5] = p[3];
-    c[6] = p[4];
-    c[7] = t0;
-    c[8] = (1.0/(p[4]));
-    c[9] = -p[0];
-    c[10] = -p[1];
-    c[11] = t4;
-    c[12] = t0*t3;
-    c[13] = p[7];
-    c[14] = p[9];
-    c[15] = p[10];
-    c[16] = p[13];
-    c[17] = p[14];
-    c[18] = p[15];
-    c[19] = -p[14] + t4;
-    c[20] = -p[13] + (0.5)*t0*t3;
-    c[21] = p[12];
-    c[22] = p[17];
-    c[23] = p[16];
-    c[24] = p[11];
-    c[25] = p[2] - p[9];
-    c[26] = p[8];
-    c[27] = -p[13] + p[3];
+    c[2] = -t0;
+    c[3] = t0;
+    c[4] = p[0];
+    c[5] = p[1];
+    c[6] = p[3];
+    c[7] = p[4];
+    c[8] = t1;
+    c[9] = (1.0/(p[4]));
+    c[10] = -p[0];
+    c[11] = -p[4];
+    c[12] = -p[1];
+    c[13] = t2;
+    c[14] = -p[2];
+    c[15] = t7;
+    c[16] = t8;
+    c[17] = t6;
+    c[18] = t9;
+    c[19] = p[7];
+    c[20] = p[9];
+    c[21] = -p[10];
+    c[22] = p[10];
+    c[23] = t10;
+    c[24] = p[13];
+    c[25] = -p[14];
+    c[26] = p[14];
+    c[27] = -p[13];
+    c[28] = t11;
+    c[29] = -t11;
+    c[30] = p[15];
+    c[31] = p[14] + t7;
+    c[32] = t12;
+    c[33] = -t12;
+    c[34] = p[12];
+    c[35] = p[17];
+    c[36] = p[16];
+    c[37] = p[11];
+    c[38] = -t13;
+    c[39] = t13;
+    c[40] = p[8];
+    c[41] = (0.5)*p[11];
+    c[42] = (0.5)*p[12];
+    c[43] = (0.5)*p[15];
+    c[44] = (0.5)*p[16];
+    c[45] = (0.5)*p[17];
+    c[46] = (0.5)*p[8];
+    c[47] = -p[12];
+    c[48] = -p[16];
+    c[49] = -p[8];
+    c[50] = -t14;
+    c[51] = t14;
 }
 
 /* sg_take_up_closed -- Total ops: 22 */
@@ -51,18 +85,18 @@ int sg_take_up_closed(const double *x, const double *cx, const double *c, const 
     int st;
     {
         /* dyad 0: RRR closed at joint C (lever, rocker) */
-        const double P[2] = {c[0]*(c[1]*cx[0] - c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[2]*cx[0])};
-        const double Q[2] = {c[3], c[4]};
-        const double l[2] = {c[5], c[6]};
+        const double P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
+        const double Q[2] = {c[4], c[5]};
+        const double l[2] = {c[6], c[7]};
         double J[2];
         st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
         if (st != SG_OK) return st;
         q[1] = atan2(J[1] - P[1], J[0] - P[0]);
         q[0] = atan2(J[1] - Q[1], J[0] - Q[0]);
-        cq[2] = c[7]*(J[0] - P[0]);
-        cq[3] = c[7]*(J[1] - P[1]);
-        cq[0] = c[8]*(J[0] - Q[0]);
-        cq[1] = c[8]*(J[1] - Q[1]);
+        cq[2] = c[8]*(J[0] - P[0]);
+        cq[3] = c[8]*(J[1] - P[1]);
+        cq[0] = c[9]*(J[0] - Q[0]);
+        cq[1] = c[9]*(J[1] - Q[1]);
     }
     return SG_OK;
 }
@@ -72,230 +106,208 @@ void sg_take_up_residual(const double *q, const double *cq, const double *x, con
 {
     (void)q;
     (void)x;
-    const double t0 = c[5]*cq[2];
-    const double t1 = -c[6]*cq[0];
-    const double t2 = c[5]*cq[3];
-    const double t3 = c[6]*cq[1];
-    r[0] = c[0]*(c[1]*cx[0] - c[2]*cx[1]) + c[9] + t0 + t1;
-    r[1] = c[0]*(c[1]*cx[1] + c[2]*cx[0]) + c[10] + t2 - t3;
-    jac[0] = t3;
-    jac[1] = -t2;
-    jac[2] = t1;
-    jac[3] = t0;
+    const double t0 = c[11]*cq[0];
+    const double t1 = c[6]*cq[2];
+    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[10] + t0 + t1;
+    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[11]*cq[1] + c[12] + c[6]*cq[3];
+    jac[0] = c[7]*cq[1];
+    jac[1] = c[13]*cq[3];
+    jac[2] = t0;
+    jac[3] = t1;
 }
 
-/* sg_take_up_motion -- Total ops: 126 */
+/* sg_take_up_motion -- Total ops: 139 */
 int sg_take_up_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
 {
-    const double t0 = c[6]*cq[1];
-    const double t1 = c[5]*cq[3];
-    const double t2 = c[6]*cq[0];
-    const double t3 = c[5]*cq[2];
-    const double t4 = c[1]*cx[1] + c[2]*cx[0];
-    const double t5 = c[0]*t4;
-    const double t6 = t5*xd[0];
-    const double t7 = c[1]*cx[0] - c[2]*cx[1];
-    const double t8 = c[0]*t7;
-    const double t9 = t8*xd[0];
-    const double t13 = ((xd[0])*(xd[0]));
-    const double t14 = t13*t8 + t5*xdd[0];
-    const double t17 = t13*t5;
-    const double t18 = t8*xdd[0];
-    const double t19 = t17 - t18;
-    const double t24 = c[11]*cq[3];
-    const double t25 = (0.5)*c[12];
-    const double t26 = c[11]*cq[2] + cq[3]*t25;
-    const double t27 = -t26;
-    const double t28 = -0.5*c[12]*cq[2] + t24;
-    const double t29 = -t28;
-    const double t30 = -t17 + t18;
-    const double t31 = c[14]*t7 - c[15]*t4;
-    const double t32 = c[14]*t4 + c[15]*t7;
-    const double t33 = -t32;
-    const double t34 = c[16]*cq[2] - c[17]*cq[3];
-    const double t35 = c[16]*cq[3] + c[17]*cq[2];
-    const double t36 = -t35;
+    const double t0 = c[7]*cq[1];
+    const double t1 = c[11]*cq[0];
+    const double t2 = c[6]*cq[2];
+    const double t3 = c[1]*cx[1] + c[3]*cx[0];
+    const double t4 = c[0]*t3;
+    const double t5 = c[1]*cx[0] + c[2]*cx[1];
+    const double t6 = c[14]*t5;
+    const double t10 = ((xd[0])*(xd[0]));
+    const double t11 = c[0]*t5;
+    const double t12 = c[11]*cq[1];
+    const double t14 = c[14]*t3;
+    const double t15 = t14*xd[0];
+    const double t16 = t11*xd[0];
+    const double t17 = t10*t6 + t14*xdd[0];
+    const double t18 = t10*t14 + t11*xdd[0];
+    const double t19 = c[7]*cq[0];
+    const double t20 = c[15]*cq[3] + c[16]*cq[2];
+    const double t21 = c[15]*cq[2] + c[18]*cq[3];
+    const double t22 = c[20]*t5 + c[21]*t3;
+    const double t23 = c[21]*t5 + c[23]*t3;
+    const double t24 = c[24]*cq[2] + c[25]*cq[3];
+    const double t25 = c[25]*cq[2] + c[27]*cq[3];
+    const double t26 = c[28]*cq[0];
+    const double t27 = c[29]*cq[1];
     double J[4];
     int piv[2];
     J[0] = t0;
-    J[1] = -t1;
-    J[2] = -t2;
-    J[3] = t3;
-    qd[0] = t6;
-    qd[1] = -t9;
+    J[1] = c[13]*cq[3];
+    J[2] = t1;
+    J[3] = t2;
+    qd[0] = t4*xd[0];
+    qd[1] = t6*xd[0];
     if (sg_lu_factor_inl(2, J, piv, 0) != SG_OK) return SG_SINGULAR;
     sg_lu_solve_inl(2, J, piv, qd);
-    const double t10 = ((qd[1])*(qd[1]));
-    const double t11 = ((qd[0])*(qd[0]));
-    const double t12 = t11*t2;
-    const double t15 = t0*t11;
-    const double t16 = -t15;
-    const double t20 = qd[0]*t0;
-    const double t21 = qd[0]*t2;
-    qdd[0] = t10*t3 - t12 + t14;
-    qdd[1] = t1*t10 + t16 + t19;
+    const double t7 = ((qd[0])*(qd[0]));
+    const double t8 = t1*t7;
+    const double t9 = ((qd[1])*(qd[1]));
+    const double t13 = t12*t7;
+    qdd[0] = t10*t11 + t2*t9 + t4*xdd[0] + t8;
+    qdd[1] = c[6]*cq[3]*t9 + t10*t4 + t13 + t6*xdd[0];
     sg_lu_solve_inl(2, J, piv, qdd);
-    const double t22 = qdd[0]*t0;
-    const double t23 = qdd[0]*t2;
-    obs[0] = t8;
-    obs[1] = t5;
-    obs[2] = -t6;
-    obs[3] = t9;
-    obs[4] = -t14;
-    obs[5] = -t19;
-    obs[6] = c[3] + t2;
-    obs[7] = c[4] + t0;
-    obs[8] = -t20;
-    obs[9] = t21;
-    obs[10] = -t12 - t22;
-    obs[11] = t16 + t23;
-    obs[12] = cq[2]*t25 - t24 + t8;
-    obs[13] = t26 + t5;
-    obs[14] = qd[1]*t27 - t6;
-    obs[15] = qd[1]*t29 + t9;
-    obs[16] = qdd[1]*t27 + t10*t28 - t14;
-    obs[17] = qdd[1]*t29 + t10*t27 + t30;
-    obs[18] = c[13] + x[0];
+    obs[0] = t11;
+    obs[1] = t4;
+    obs[2] = t15;
+    obs[3] = t16;
+    obs[4] = t17;
+    obs[5] = t18;
+    obs[6] = c[4] + t19;
+    obs[7] = c[5] + t0;
+    obs[8] = qd[0]*t12;
+    obs[9] = qd[0]*t19;
+    obs[10] = qdd[0]*t12 + t8;
+    obs[11] = qdd[0]*t19 + t13;
+    obs[12] = t11 + t20;
+    obs[13] = c[16]*cq[3] + c[17]*cq[2] + t4;
+    obs[14] = qd[1]*t21 + t15;
+    obs[15] = qd[1]*t20 + t16;
+    obs[16] = qdd[1]*t21 + t17 + t9*(c[17]*cq[3] + c[18]*cq[2]);
+    obs[17] = qdd[1]*t20 + t18 + t21*t9;
+    obs[18] = c[19] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
-    obs[21] = t31;
-    obs[22] = t32;
-    obs[23] = t33*xd[0];
-    obs[24] = t31*xd[0];
-    obs[25] = -t13*t31 + t33*xdd[0];
-    obs[26] = t13*t33 + t31*xdd[0];
+    obs[21] = t22;
+    obs[22] = c[20]*t3 + c[22]*t5;
+    obs[23] = t23*xd[0];
+    obs[24] = t22*xd[0];
+    obs[25] = t10*(c[22]*t3 + c[23]*t5) + t23*xdd[0];
+    obs[26] = t10*t23 + t22*xdd[0];
     obs[27] = q[1];
     obs[28] = qd[1];
     obs[29] = qdd[1];
-    obs[30] = t34 + t8;
-    obs[31] = t35 + t5;
-    obs[32] = qd[1]*t36 - t6;
-    obs[33] = qd[1]*t34 + t9;
-    obs[34] = qdd[1]*t36 - t10*t34 - t14;
-    obs[35] = qdd[1]*t34 + t10*t36 + t30;
+    obs[30] = t11 + t24;
+    obs[31] = c[24]*cq[3] + c[26]*cq[2] + t4;
+    obs[32] = qd[1]*t25 + t15;
+    obs[33] = qd[1]*t24 + t16;
+    obs[34] = qdd[1]*t25 + t17 + t9*(c[26]*cq[3] + c[27]*cq[2]);
+    obs[35] = qdd[1]*t24 + t18 + t25*t9;
     obs[36] = q[0];
     obs[37] = qd[0];
     obs[38] = qdd[0];
-    obs[39] = c[3] + (0.5)*t2;
-    obs[40] = c[4] + (0.5)*t0;
-    obs[41] = -0.5*t20;
-    obs[42] = (0.5)*t21;
-    obs[43] = -0.5*t12 - 0.5*t22;
-    obs[44] = -0.5*t15 + (0.5)*t23;
+    obs[39] = c[4] + t26;
+    obs[40] = c[28]*cq[1] + c[5];
+    obs[41] = qd[0]*t27;
+    obs[42] = qd[0]*t26;
+    obs[43] = c[29]*cq[0]*t7 + qdd[0]*t27;
+    obs[44] = qdd[0]*t26 + t27*t7;
     if (!isfinite((((((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))) + ((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))) + ((obs[12] + (obs[13] + obs[14])) + ((obs[15] + obs[16]) + (obs[17] + obs[18]))))) + ((((obs[19] + (obs[20] + obs[21])) + (obs[22] + (obs[23] + obs[24]))) + ((obs[25] + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31])))) + (((obs[32] + (obs[33] + obs[34])) + (obs[35] + (obs[36] + obs[37]))) + ((obs[38] + (obs[39] + obs[40])) + ((obs[41] + obs[42]) + (obs[43] + obs[44])))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
-/* sg_take_up_forces -- Total ops: 155 */
+/* sg_take_up_forces -- Total ops: 151 */
 int sg_take_up_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)q;
     (void)x;
-    const double t0 = c[6]*cq[1];
-    const double t1 = c[6]*cq[0];
-    const double t2 = c[21]*(-gv[0] + obs[34]) - ld[4];
-    const double t3 = c[21]*(-gv[1] + obs[35]) - ld[5];
-    const double t4 = (0.5)*t1;
-    const double t5 = (0.5)*t0;
-    const double t6 = c[23]*(-gv[1] + obs[44]) - ld[3];
-    const double t7 = c[23]*(-gv[0] + obs[43]) - ld[2];
-    const double t8 = c[1]*cx[1] + c[2]*cx[0];
-    const double t9 = c[15]*t8;
-    const double t10 = c[1]*cx[0] - c[2]*cx[1];
-    const double t11 = c[25]*t10 + t9;
-    const double t12 = c[15]*t10;
-    const double t13 = -c[25]*t8 + t12;
+    const double t0 = c[34]*(-gv[0] + obs[34]) - ld[4];
+    const double t1 = c[34]*(-gv[1] + obs[35]) - ld[5];
+    const double t2 = c[36]*(-gv[1] + obs[44]) - ld[3];
+    const double t3 = c[36]*(-gv[0] + obs[43]) - ld[2];
+    const double t4 = c[1]*cx[0] + c[2]*cx[1];
+    const double t5 = c[22]*t4;
+    const double t6 = c[1]*cx[1] + c[3]*cx[0];
+    const double t7 = c[22]*t6;
     {
         /* block of unknowns 6, 7 */
         double M[4], r[2];
         int piv[2];
-        M[0] = -t0;
-        M[1] = t1;
-        r[0] = c[22]*obs[38] + ld[2]*t5 - ld[3]*t4 - ld[8] + t4*t6 - t5*t7;
-        M[2] = c[5]*cq[3];
-        M[3] = -c[5]*cq[2];
-        r[1] = c[18]*obs[29] - ld[4]*(-c[19]*cq[2] - c[20]*cq[3]) - ld[5]*(-c[19]*cq[3] + c[20]*cq[2]) - ld[7] - t2*(c[16]*cq[3] + c[17]*cq[2]) - t3*(-c[16]*cq[2] + c[17]*cq[3]);
+        M[0] = c[11]*cq[1];
+        M[1] = c[7]*cq[0];
+        r[0] = c[28]*cq[0]*t2 + c[28]*cq[1]*ld[2] + c[29]*cq[0]*ld[3] + c[29]*cq[1]*t3 + c[35]*obs[38] - ld[8];
+        M[2] = c[6]*cq[3];
+        M[3] = c[13]*cq[2];
+        r[1] = c[30]*obs[29] - ld[4]*(c[31]*cq[2] + c[32]*cq[3]) - ld[5]*(c[31]*cq[3] + c[33]*cq[2]) - ld[7] - t0*(c[24]*cq[3] + c[26]*cq[2]) - t1*(c[26]*cq[3] + c[27]*cq[2]);
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[6] = r[0];
         out[7] = r[1];
     }
-    out[5] = -out[7] + t6;
-    out[4] = -out[6] + t7;
-    out[3] = out[7] + t3;
-    out[2] = out[6] + t2;
-    out[1] = c[26]*(-gv[1] + obs[26]) + out[3] - ld[1];
-    out[0] = c[26]*(-gv[0] + obs[25]) + out[2] - ld[0];
-    out[8] = c[24]*obs[20] - out[0]*(c[14]*t8 + t12) - out[1]*(-c[14]*t10 + t9) + out[2]*t13 + out[3]*t11 - ld[0]*t13 - ld[1]*t11 - ld[6];
+    out[5] = -out[7] + t2;
+    out[4] = -out[6] + t3;
+    out[3] = out[7] + t1;
+    out[2] = out[6] + t0;
+    out[1] = c[40]*(-gv[1] + obs[26]) + out[3] - ld[1];
+    out[0] = c[40]*(-gv[0] + obs[25]) + out[2] - ld[0];
+    out[8] = c[37]*obs[20] - out[0]*(c[20]*t6 + t5) - out[1]*(c[23]*t4 + t7) - out[2]*(c[21]*t4 + c[39]*t6) - out[3]*(c[21]*t6 + c[38]*t4) - ld[0]*(c[38]*t6 + t5) - ld[1]*(c[39]*t4 + t7) - ld[6];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
     out[11] = out[0] + out[4];
     out[12] = out[1] + out[5];
-    out[13] = c[3]*out[5] - c[4]*out[4] + out[8];
-    out[14] = (0.5)*c[18]*((obs[28])*(obs[28])) + (0.5)*c[21]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + (0.5)*c[22]*((obs[37])*(obs[37])) + (0.5)*c[23]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + (0.5)*c[24]*((obs[19])*(obs[19])) + (0.5)*c[26]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
-    out[15] = -c[21]*(gv[0]*obs[30] + gv[1]*obs[31]) - c[23]*(gv[0]*obs[39] + gv[1]*obs[40]) - c[26]*(gv[0]*obs[21] + gv[1]*obs[22]);
+    out[13] = c[12]*out[4] + c[4]*out[5] + out[8];
+    out[14] = c[41]*((obs[19])*(obs[19])) + c[42]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[43]*((obs[28])*(obs[28])) + c[44]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[45]*((obs[37])*(obs[37])) + c[46]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
+    out[15] = c[47]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[48]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[49]*(gv[0]*obs[21] + gv[1]*obs[22]);
     out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37];
     if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + out[7]))) + (((out[8] + out[9]) + (out[10] + out[11])) + ((out[12] + out[13]) + (out[14] + (out[15] + out[16]))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
-/* sg_take_up_force_matrix -- Total ops: 81 */
+/* sg_take_up_force_matrix -- Total ops: 84 */
 void sg_take_up_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b)
 {
     (void)q;
     (void)x;
-    const double t0 = c[1]*cx[1] + c[2]*cx[0];
-    const double t1 = c[1]*cx[0] - c[2]*cx[1];
-    const double t2 = c[15]*t1;
-    const double t3 = c[15]*t0;
-    const double t4 = -c[25]*t0 + t2;
-    const double t5 = c[25]*t1 + t3;
-    const double t6 = c[17]*cq[2];
-    const double t7 = c[17]*cq[3];
-    const double t8 = (0.5)*c[6];
-    const double t9 = cq[1]*t8;
-    const double t10 = cq[0]*t8;
+    const double t0 = c[1]*cx[1] + c[3]*cx[0];
+    const double t1 = c[1]*cx[0] + c[2]*cx[1];
+    const double t2 = c[22]*t1;
+    const double t3 = c[22]*t0;
+    const double t4 = c[28]*cq[1];
+    const double t5 = c[29]*cq[0];
     for (int k = 0; k < 81; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[2] = -1.0;
     A[10] = 1.0;
     A[12] = -1.0;
-    A[18] = c[14]*t0 + t2;
-    A[19] = -c[14]*t1 + t3;
-    A[20] = -t4;
-    A[21] = -t5;
+    A[18] = c[20]*t0 + t2;
+    A[19] = c[23]*t1 + t3;
+    A[20] = c[21]*t1 + c[39]*t0;
+    A[21] = c[21]*t0 + c[38]*t1;
     A[26] = 1.0;
     A[29] = 1.0;
     A[33] = -1.0;
     A[39] = 1.0;
     A[43] = -1.0;
-    A[47] = c[16]*cq[3] + t6;
-    A[48] = -c[16]*cq[2] + t7;
-    A[51] = c[27]*cq[3] - t6;
-    A[52] = -c[27]*cq[2] - t7;
+    A[47] = c[24]*cq[3] + c[26]*cq[2];
+    A[48] = c[26]*cq[3] + c[27]*cq[2];
+    A[51] = c[25]*cq[2] + c[50]*cq[3];
+    A[52] = c[25]*cq[3] + c[51]*cq[2];
     A[58] = 1.0;
     A[60] = 1.0;
     A[68] = 1.0;
     A[70] = 1.0;
-    A[76] = t9;
-    A[77] = -t10;
-    A[78] = -t9;
-    A[79] = t10;
-    b[0] = c[26]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[26]*(-gv[1] + obs[26]) - ld[1];
-    b[2] = c[24]*obs[20] - ld[0]*t4 - ld[1]*t5 - ld[6];
-    b[3] = c[21]*(-gv[0] + obs[34]) - ld[4];
-    b[4] = c[21]*(-gv[1] + obs[35]) - ld[5];
-    b[5] = c[18]*obs[29] - ld[4]*(-c[19]*cq[2] - c[20]*cq[3]) - ld[5]*(-c[19]*cq[3] + c[20]*cq[2]) - ld[7];
-    b[6] = c[23]*(-gv[0] + obs[43]) - ld[2];
-    b[7] = c[23]*(-gv[1] + obs[44]) - ld[3];
-    b[8] = c[22]*obs[38] + ld[2]*t9 - ld[3]*t10 - ld[8];
+    A[76] = t4;
+    A[77] = t5;
+    A[78] = c[29]*cq[1];
+    A[79] = c[28]*cq[0];
+    b[0] = c[40]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[40]*(-gv[1] + obs[26]) - ld[1];
+    b[2] = c[37]*obs[20] - ld[0]*(c[38]*t0 + t2) - ld[1]*(c[39]*t1 + t3) - ld[6];
+    b[3] = c[34]*(-gv[0] + obs[34]) - ld[4];
+    b[4] = c[34]*(-gv[1] + obs[35]) - ld[5];
+    b[5] = c[30]*obs[29] - ld[4]*(c[31]*cq[2] + c[32]*cq[3]) - ld[5]*(c[31]*cq[3] + c[33]*cq[2]) - ld[7];
+    b[6] = c[36]*(-gv[0] + obs[43]) - ld[2];
+    b[7] = c[36]*(-gv[1] + obs[44]) - ld[3];
+    b[8] = c[35]*obs[38] + ld[2]*t4 + ld[3]*t5 - ld[8];
 }
 
 static const unsigned char sg_take_up_coord_is_angle[2] = { 1, 1 };
 
 static const sg_mechanism sg_take_up_descriptor = {
-    "take_up", 2, 1, 18, 28, 45, 1,
+    "take_up", 2, 1, 18, 52, 45, 1,
     9, 17, 9,
     sg_take_up_coord_is_angle,
     sg_take_up_constants,
@@ -340,8 +352,8 @@ const char *sg_take_up_manifest(void)
         "ver.y\",\"lever.moment\",\"rocker.x\",\"rocker.y\",\"rocker.moment\"],\"inputs\":[{\"default\":0"
         ".0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaf"
         "t\",\"unit\":\"rad\"}],\"kernels\":{\"sg_take_up_closed\":{\"ops\":22},\"sg_take_up_constants\":"
-        "{\"ops\":24},\"sg_take_up_force_matrix\":{\"ops\":81},\"sg_take_up_forces\":{\"ops\":155},\"sg_t"
-        "ake_up_motion\":{\"ops\":126},\"sg_take_up_residual\":{\"ops\":20}},\"loads\":[{\"body\":\"crank"
+        "{\"ops\":47},\"sg_take_up_force_matrix\":{\"ops\":84},\"sg_take_up_forces\":{\"ops\":151},\"sg_t"
+        "ake_up_motion\":{\"ops\":139},\"sg_take_up_residual\":{\"ops\":20}},\"loads\":[{\"body\":\"crank"
         "\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\""
         ":\"crank_pin\"},{\"body\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"r"
         "ocker\",\"component\":\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\""
@@ -412,7 +424,7 @@ const char *sg_take_up_manifest(void)
         "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\""
         ":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\","
         "\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"kin"
-        "d\":\"drive\",\"name\":\"crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\":28,\"nf\":"
+        "d\":\"drive\",\"name\":\"crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\":52,\"nf\":"
         "9,\"nfo\":17,\"nload\":9,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1}}"
         ;
 }

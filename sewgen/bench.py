@@ -13,10 +13,22 @@ on the loop closure from the previous position's solution, numpy.linalg.solve fo
 observable. Its results are checked against the compiled sweep at the same angles, so the ratio compares
 like with like. The "derive" line times derive.emit.generate for the whole catalog, in-process.
 
-Extension point: add a kernel that runs for every catalog mechanism with :func:`register_kernel` (e.g.
-"kinetostatics"), or a single entry such as a whole machine ("jb1-3") with :func:`register_entry`. Either
-function returns ``(positions_per_s, baseline_positions_per_s or None, extra dict)``; put
-``extra["agree"] = False`` in when a cross-check fails (the run then exits with status 1).
+The "kinetostatics" kernel times ``Mechanism.kinetostatics`` (kinematics plus every force: joint reactions,
+driving torques, shaking force and moment, energies and powers; default gravity, no loads) over the same
+sweep, and the same call through ``sg_sweep_forces`` alone (raw C). Its baseline is the kinematics baseline
+above plus, per position, the force balance A f = b of derive.kinetostatics solved by numpy.linalg.solve.
+A and b are lambdified as derive writes them, with the placeholder symbols of the kinematic observables,
+and are fed the observables the kinematics baseline has just evaluated at that position: that is how the
+compiled kernel builds them too (from the motion kernel's observables), so these are the same matrices,
+not a re-expansion of the kinematics inside A and b (``Kinetostatics.explicit``). Gravity (0, -9.80665)
+m/s², loads zero. The baseline solves the unknowns f only (joint reactions and drive torques, nf per
+position); the compiled sweep also derives the other force outputs from f. q, q', q'', the observables and
+f are checked against the compiled sweep at the same angles.
+
+Extension point: add a kernel that runs for every catalog mechanism with :func:`register_kernel`, or a
+single entry such as a whole machine ("jb1-3") with :func:`register_entry`. Either function returns
+``(positions_per_s, baseline_positions_per_s or None, extra dict)``; put ``extra["agree"] = False`` in when
+a cross-check fails (the run then exits with status 1).
 """
 from __future__ import annotations
 
@@ -129,27 +141,45 @@ def best_time(fn: Callable[[], object], repeats: int, min_time: float) -> float:
 
 def raw_sweep(m: sewgen.Mechanism, phi: np.ndarray):
     """A closure calling sg_sweep alone on preallocated arrays (defaults as solve() uses them)."""
-    n, nq, nobs = len(phi), len(m.coord_names), len(m.manifest["observables"])
-    phi = np.ascontiguousarray(phi, dtype=np.float64)
-    omega, alpha = np.full(n, m.default_speed), np.zeros(n)
-    p = m.param_vector()
-    held = np.array([i["default"] for i in m.manifest["inputs"][1:]], dtype=np.float64)
-    branch = np.array([b["default"] for b in m.manifest["branches"]], dtype=np.intc)
-    guess = np.array([c["guess"] for c in m.manifest["coords"]], dtype=np.float64)
-    q, qd, qdd = (np.zeros((n, nq)) for _ in range(3))
-    obs, status = np.zeros((n, nobs)), np.zeros(n, dtype=np.intc)
-    opt = m.ffi.new("sg_options *", {"tol": 1e-12 * m.length_scale(p), "max_iter": 50, "newton_only": 0})
+    a = m._sweep_inputs(phi, None, 0.0, None, None, None, None, False, False, 50)  # exactly solve()'s inputs
+    q, qd, qdd, obs = a["q"], a["qd"], a["qdd"], a["obs"]
     d = m._ptr
-    args = (m._descriptor, n, d("double *", phi), d("double *", omega), d("double *", alpha),
-            d("double *", held), d("double *", p), d("int *", branch), d("double *", guess), opt,
-            d("double *", q), d("double *", qd), d("double *", qdd), d("double *", obs), d("int *", status))
+    args = (m._descriptor, a["n"], d("double *", a["phi"]), d("double *", a["omega"]), d("double *", a["alpha"]),
+            d("double *", a["held"]), d("double *", a["p"]), d("int *", a["branch"]), d("double *", a["guess"]),
+            a["opt"], d("double *", q), d("double *", qd), d("double *", qdd), d("double *", obs),
+            d("int *", a["status"]))
     sweep = m.lib.sg_sweep
 
     def call():
         return sweep(*args)
 
-    call.keep = (phi, omega, alpha, p, held, branch, guess, q, qd, qdd, opt)  # outlive the pointers
-    call.obs, call.status = obs, status
+    call.keep = a  # the arrays outlive the pointers
+    call.obs, call.status = obs, a["status"]
+    return call
+
+
+def raw_sweep_forces(m: sewgen.Mechanism, phi: np.ndarray, gravity: np.ndarray):
+    """A closure calling sg_sweep_forces alone on preallocated arrays, exactly as kinetostatics() calls it.
+
+    The inputs are ``Mechanism._sweep_inputs`` with every default (so tolerance, branch and guess are
+    kinetostatics()'s own); ``gravity`` is the vector (gx, gy) to pass, no loads (NULL).
+    """
+    a = m._sweep_inputs(phi, None, 0.0, None, None, None, None, False, False, 50)
+    gv = np.ascontiguousarray(gravity, dtype=np.float64)
+    frc = np.empty((a["n"], m.manifest["sizes"]["nfo"]))
+    d = m._ptr
+    args = (m._descriptor, a["n"], d("double *", a["phi"]), d("double *", a["omega"]), d("double *", a["alpha"]),
+            d("double *", a["held"]), d("double *", a["p"]), d("int *", a["branch"]), d("double *", a["guess"]),
+            a["opt"], d("double *", gv), m.ffi.NULL, d("double *", a["q"]), d("double *", a["qd"]),
+            d("double *", a["qdd"]), d("double *", a["obs"]), d("double *", frc), d("int *", a["status"]))
+    sweep = m.lib.sg_sweep_forces
+
+    def call():
+        return sweep(*args)
+
+    call.keep = (a, gv)  # outlive the pointers
+    call.q, call.qd, call.qdd, call.obs = a["q"], a["qd"], a["qdd"], a["obs"]
+    call.frc, call.status = frc, a["status"]
     return call
 
 
@@ -157,9 +187,13 @@ def raw_sweep(m: sewgen.Mechanism, phi: np.ndarray):
 
 
 class Baseline:
-    """The Kinematics expressions of one catalog mechanism through sympy.lambdify, solved per position."""
+    """The Kinematics expressions of one catalog mechanism through sympy.lambdify, solved per position.
 
-    def __init__(self, name: str):
+    With ``forces=True`` also the force balance A f = b of derive.kinetostatics, lambdified in the observable
+    placeholders (see the module docstring); :meth:`run` then solves it at every position when given gravity.
+    """
+
+    def __init__(self, name: str, forces: bool = False):
         import sympy as sp
 
         from derive.catalog import declare
@@ -179,13 +213,32 @@ class Baseline:
         self.gamma = lam([q, qd, x, xd, xdd, p], kin.gamma)
         self.observables = lam([q, qd, qdd, x, xd, xdd, p], [o.expr for o in kin.observables])
         self.kin = kin
+        self.kst = None
+        if forces:
+            from derive.kinetostatics import Kinetostatics
+
+            kst = Kinetostatics(kin)
+            fargs = [q, x, p, kst.obs, kst.gravity, kst.loads]
+            self.force_A, self.force_b = lam(fargs, kst.A), lam(fargs, kst.b)
+            self.kst = kst
         self.derive_s, self.lambdify_s = t1 - t0, time.perf_counter() - t1
 
-    def run(self, phi, omega, accel, held, p, q_start):
-        """Positions, velocities, accelerations and observables at each angle of ``phi`` (sequentially)."""
+    def run(self, phi, omega, accel, held, p, q_start, gravity=None):
+        """Positions, velocities, accelerations and observables at each angle of ``phi`` (sequentially).
+
+        Returns (Q, QD, QDD, OBS, root evaluations per position), and, when ``gravity`` (gx, gy) is given
+        (needs ``forces=True``), the force unknowns F (n × nf; loads zero) as a sixth element.
+        """
         from scipy.optimize import root
 
         n, nq, nobs = len(phi), len(self.kin.q), len(self.kin.observables)
+        forces = gravity is not None
+        if forces:
+            if self.kst is None:
+                raise RuntimeError("baseline: built without forces=True")
+            F = np.zeros((n, len(self.kst.f)))
+            force_A, force_b, loads = self.force_A, self.force_b, [0.0] * len(self.kst.loads)
+            gravity = list(gravity)
         Q, QD, QDD, OBS = np.zeros((n, nq)), np.zeros((n, nq)), np.zeros((n, nq)), np.zeros((n, nobs))
         closure, jac_q, vel_rhs, gamma, observables = (self.closure, self.jac_q, self.vel_rhs, self.gamma,
                                                         self.observables)
@@ -207,14 +260,23 @@ class Baseline:
             qdd = np.linalg.solve(J, np.asarray(gamma(q, qd, x, xd, xdd, p), dtype=np.float64))
             Q[i], QD[i], QDD[i] = q, qd, qdd
             OBS[i] = np.asarray(observables(q, qd, qdd, x, xd, xdd, p), dtype=np.float64)
+            if forces:
+                o = OBS[i]
+                A = np.asarray(force_A(q, x, p, o, gravity, loads), dtype=np.float64)
+                b = np.asarray(force_b(q, x, p, o, gravity, loads), dtype=np.float64)
+                F[i] = np.linalg.solve(A, b).ravel()
+        if forces:
+            return Q, QD, QDD, OBS, nfev / max(n, 1), F
         return Q, QD, QDD, OBS, nfev / max(n, 1)
 
 
 def compare(m: sewgen.Mechanism, base: tuple, ref: tuple, rtol: float) -> dict:
     """Largest difference of baseline and compiled results, relative to each column's scale.
 
-    A column's scale is its largest magnitude over the compared positions, floored at 1e-6 of the largest
-    magnitude among columns of the same unit (so an identically zero column is judged against its unit).
+    ``base`` and ``ref`` are (q, q', q'', observables) and optionally the force unknowns f as a fifth part
+    (columns of the manifest's "reactions"; N, or N·m for couples and torques). A column's scale is its
+    largest magnitude over the compared positions, floored at 1e-6 of the largest magnitude among columns
+    of the same unit (so an identically zero column is judged against its unit).
     """
     man = m.manifest
     coord_units = [c["unit"] for c in man["coords"]]
@@ -224,6 +286,10 @@ def compare(m: sewgen.Mechanism, base: tuple, ref: tuple, rtol: float) -> dict:
         "qdd": ([u + "/s^2" for u in coord_units], [c + "_dd" for c in m.coord_names]),
         "obs": ([o["unit"] for o in man["observables"]], [o["name"] for o in man["observables"]]),
     }
+    if len(base) > 4:
+        cols = [(r["name"], c) for r in man["reactions"] for c in r["columns"]]
+        parts["f"] = (["N*m" if c in ("moment", "torque") else "N" for _, c in cols],
+                      [f"{r}.{c}" for r, c in cols])
     units = [u for us, _ in parts.values() for u in us]
     labels = [lb for _, lbs in parts.values() for lb in lbs]
     b_all, r_all = np.hstack(base), np.hstack(ref)
@@ -283,6 +349,61 @@ def kinematics(name: str, cfg: Config) -> Result:
         **check,
     }
     return n / t_solve, len(rows) / t_base, extra
+
+
+#: Gravity of the kinetostatics baseline, m/s² (the compiled side uses kinetostatics()'s default, "-y").
+GRAVITY = (0.0, -9.80665)
+
+
+@register_kernel("kinetostatics")
+def kinetostatics(name: str, cfg: Config) -> Result:
+    """kinetostatics() over the sweep; raw sg_sweep_forces; kinematics + A f = b baseline on a subset, checked."""
+    m = sewgen.mechanism(name)
+    phi = cfg.sweep_angles()
+    n = len(phi)
+    nf = m.manifest["sizes"]["nf"]
+    t_kst = best_time(lambda: m.kinetostatics(phi), cfg.repeats, cfg.min_time)
+    t_overhead = best_time(lambda: m.kinetostatics(phi[:1]), cfg.repeats, cfg.min_time)
+    fa = m.kinetostatics(phi)
+    raw = raw_sweep_forces(m, phi, fa.gravity)  # kinetostatics()'s own gravity vector, so results are equal
+    t_raw = best_time(raw, cfg.repeats, cfg.min_time)
+    mo = fa.motion
+    if np.any(raw.status) or not all(np.array_equal(a, b) for a, b in (
+            (raw.q, mo.q), (raw.qd, mo.qd), (raw.qdd, mo.qdd), (raw.obs, mo.obs), (raw.frc, fa.frc))):
+        raise RuntimeError(f"{name}: the raw sg_sweep_forces call disagrees with kinetostatics()")
+
+    rows = cfg.baseline_rows()
+    bl = Baseline(name, forces=True)
+    p = m.param_vector()
+    if len(bl.kin.p) != len(p):
+        raise RuntimeError(f"{name}: {len(bl.kin.p)} symbolic parameters but {len(p)} compiled ones")
+    unknowns = [f"{r['name']}.{c}" for r in m.manifest["reactions"] for c in r["columns"]]
+    if bl.kst.unknown_names != unknowns or len(unknowns) != nf:
+        raise RuntimeError(f"{name}: symbolic force unknowns {bl.kst.unknown_names} are not the compiled "
+                           f"reactions' columns {unknowns}")
+    held = [i["default"] for i in m.manifest["inputs"][1:]]
+    args = (phi[rows], float(m.default_speed), 0.0, held, p, mo.q[rows[0]], GRAVITY)
+    out = bl.run(*args)  # warm-up, and the results to check
+    t_base = min(_timed(bl.run, args) for _ in range(cfg.baseline_repeats))
+    ref = (mo.q[rows], mo.qd[rows], mo.qdd[rows], mo.obs[rows], fa.frc[rows, :nf])
+    check = compare(m, out[:4] + (out[5],), ref, cfg.rtol)
+
+    extra = {
+        "raw_c_positions_per_s": n / t_raw,
+        "kinetostatics_seconds": t_kst,
+        "kinetostatics_overhead_seconds": t_overhead,
+        "baseline_step_deg": float(np.degrees(phi[rows[1]] - phi[rows[0]])) if len(rows) > 1 else None,
+        "baseline_nfev_per_position": out[4],
+        "baseline_setup_seconds": bl.derive_s + bl.lambdify_s,
+        "baseline_gravity": list(GRAVITY),
+        "compiled_gravity": [float(g) for g in fa.gravity],
+        "nq": len(m.coord_names),
+        "nobs": len(m.manifest["observables"]),
+        "nf": nf,
+        "nfo": m.manifest["sizes"]["nfo"],
+        **check,
+    }
+    return n / t_kst, len(rows) / t_base, extra
 
 
 def _timed(fn, args) -> float:

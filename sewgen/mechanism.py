@@ -7,6 +7,7 @@ the typed error of its status, naming the mechanism and the first failing shaft 
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 
@@ -98,14 +99,16 @@ class Mechanism:
                 value = to_si(value, kind, what)
             except UnitError as exc:
                 raise InputError(self.name, str(exc)) from None
+        if type(value) in (float, int) and math.isfinite(value):  # the common scalar, fast
+            return np.full(n, float(value))
         arr = np.asarray(value)
         if np.iscomplexobj(arr) or arr.dtype.kind not in "biuf":
             raise InputError(self.name, f"{what} must be real numbers, got dtype {arr.dtype}")
         arr = np.full(n, float(arr)) if arr.ndim == 0 else np.ascontiguousarray(arr, dtype=np.float64)
         if arr.ndim != 1 or arr.shape[0] != n:
             raise InputError(self.name, f"{what} must be a scalar or have shape ({n},), got {arr.shape}")
-        bad = np.flatnonzero(~np.isfinite(arr))
-        if bad.size:
+        if not np.isfinite(arr).all():
+            bad = np.flatnonzero(~np.isfinite(arr))
             raise InputError(self.name, f"{what} is not finite at position {bad[0]} ({arr[bad[0]]!r})")
         return arr
 
@@ -239,6 +242,7 @@ class Mechanism:
         g = self._si(gravity, "acceleration", "gravity")
         g_dir = self._si(gravity_direction, "angle", "gravity_direction")
         gv = np.array([g * np.cos(g_dir), g * np.sin(g_dir)])
+        gv[np.abs(gv) < 1e-15 * abs(g)] = 0.0  # -90 deg is exactly -y, not (6e-16, -g)
         if not (isinstance(moment_about, (tuple, list)) and len(moment_about) == 2):
             raise ParameterError(self.name, "moment_about", f"must be a point (x, y), got {moment_about!r}")
         about = tuple(self._si(v, "length", "moment_about") for v in moment_about)
