@@ -51,6 +51,8 @@ def window_mask(phi: np.ndarray, window) -> np.ndarray:
     if window is None:
         return np.ones(phi.shape, dtype=bool)
     start, end = window
+    if abs(end - start) >= 2 * math.pi - _WINDOW_TOL:  # a whole turn (or more): always on
+        return np.ones(phi.shape, dtype=bool)
     span = (end - start) % (2 * math.pi)
     return (phi - start) % (2 * math.pi) <= span + _WINDOW_TOL
 
