@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import importlib
 
-CATALOG = ("needle_bar", "take_up", "hook_drive")
+CATALOG = ("needle_bar", "take_up", "hook_drive", "feed")
 
 
 def declare(name: str):

@@ -40,8 +40,11 @@ class Generated:
 def _force_manifest(kst: Kinetostatics) -> dict:
     reactions, offset = [], 0
     for r in kst.reactions:
-        reactions.append({"name": r.name, "kind": r.kind, "a": r.a.name, "b": r.b.name, "grounded": r.grounded,
-                          "columns": r.columns, "offset": offset})
+        entry = {"name": r.name, "kind": r.kind, "a": r.a.name, "b": r.b.name, "grounded": r.grounded,
+                 "columns": r.columns, "offset": offset}
+        if r.kind == "drive":  # input torque = Σ sense · drive torque of the bodies that input turns
+            entry.update(input=kst.mech.inputs[r.input_index].name, sense=r.sense)
+        reactions.append(entry)
         offset += len(r.columns)
     return {
         "reactions": reactions,

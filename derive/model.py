@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .units import SI_UNITS, to_si, unit_of
+from .units import SI_UNITS, UnitError, to_si, unit_of
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
@@ -78,10 +78,24 @@ class Body:
     inertia: sp.Expr = sp.S.Zero
 
     def at(self, u, v) -> Attachment:
-        return Attachment(self, sp.sympify(u), sp.sympify(v))
+        """The point (u, v) of this body's frame: symbols, numbers (m) or quantity strings ("25 mm")."""
+        return Attachment(self, self._expr(u, "length"), self._expr(v, "length"))
 
     def line(self, at=(0, 0), angle=0) -> Line:
-        return Line(self, sp.sympify(at[0]), sp.sympify(at[1]), sp.sympify(angle))
+        """The line through (u, v) of this body's frame at ``angle`` (rad, a symbol or "30 deg")."""
+        return Line(self, self._expr(at[0], "length"), self._expr(at[1], "length"), self._expr(angle, "angle"))
+
+    def _expr(self, value, kind: str) -> sp.Expr:
+        if isinstance(value, str):
+            try:
+                return sp.Float(to_si(value, kind, f"{self.mech.name}.{self.name}"))
+            except UnitError as exc:
+                raise DeclarationError(str(exc)) from None
+        try:
+            return sp.sympify(value, strict=True)
+        except (sp.SympifyError, TypeError):
+            raise DeclarationError(f"{self.mech.name}: a coordinate of {self.name!r} must be a number, a "
+                                   f"parameter symbol or a quantity string, got {value!r}") from None
 
     @property
     def moving(self) -> bool:

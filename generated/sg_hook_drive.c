@@ -631,8 +631,9 @@ const char *sg_hook_drive_manifest(void)
         "\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
         ":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\":\"rock_sl"
         "ider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"off"
-        "set\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"kind\":"
-        "\"drive\",\"name\":\"crank.drive\",\"offset\":14}],\"sizes\":{\"nbranch\":2,\"nc\":77,\"nf\":15,"
-        "\"nfo\":25,\"nload\":11,\"nobs\":63,\"np\":28,\"nq\":4,\"nx\":1}}"
+        "set\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\""
+        ":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":14,\"sense\":1}],\"sizes\":{\""
+        "nbranch\":2,\"nc\":77,\"nf\":15,\"nfo\":25,\"nload\":11,\"nobs\":63,\"np\":28,\"nq\":4,\"nx\":1}"
+        "}"
         ;
 }

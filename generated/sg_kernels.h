@@ -34,4 +34,13 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
 const sg_mechanism *sg_hook_drive(void);
 const char *sg_hook_drive_manifest(void);
 
+/* feed */
+void sg_feed_constants(const double *p, double *c);
+void sg_feed_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
+int sg_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
+int sg_feed_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
+void sg_feed_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+const sg_mechanism *sg_feed(void);
+const char *sg_feed_manifest(void);
+
 #endif

@@ -380,8 +380,8 @@ const char *sg_needle_bar_manifest(void)
         "\"offset\":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"ki"
         "nd\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar\",\"columns\":["
         "\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"gr"
-        "ound\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"kind\":\"drive\",\"name\":\""
-        "crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\":42,\"nf\":9,\"nfo\":19,\"nload\":9,"
-        "\"nobs\":45,\"np\":15,\"nq\":2,\"nx\":1}}"
+        "ound\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\""
+        "drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"sizes\":{\"nbranch\":1,\"nc\":42,\""
+        "nf\":9,\"nfo\":19,\"nload\":9,\"nobs\":45,\"np\":15,\"nq\":2,\"nx\":1}}"
         ;
 }

@@ -423,8 +423,9 @@ const char *sg_take_up_manifest(void)
         "evolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":[\"fx\",\""
         "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\""
         ":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\","
-        "\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"kin"
-        "d\":\"drive\",\"name\":\"crank.drive\",\"offset\":8}],\"sizes\":{\"nbranch\":1,\"nc\":52,\"nf\":"
-        "9,\"nfo\":17,\"nload\":9,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1}}"
+        "\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"inp"
+        "ut\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"sizes\":"
+        "{\"nbranch\":1,\"nc\":52,\"nf\":9,\"nfo\":17,\"nload\":9,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1"
+        "}}"
         ;
 }

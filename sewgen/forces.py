@@ -41,8 +41,9 @@ class JointReaction:
 class ForceAnalysis:
     """Kinematics and kinetostatics of one mechanism over a sweep (SI units throughout)."""
 
-    def __init__(self, mechanism, motion, frc: np.ndarray, placed_loads, gravity, moment_about):
+    def __init__(self, mechanism, motion, frc: np.ndarray, placed_loads, gravity, moment_about, run: dict):
         self.mechanism, self.motion, self.frc = mechanism, motion, frc
+        self._run = run  # the C-ready parameters, held inputs, gravity vector and load array of the sweep
         self.phi = motion.phi
         self.gravity = gravity
         self.moment_about = moment_about
@@ -139,6 +140,12 @@ class ForceAnalysis:
                 p += np.where(mask, value, 0.0) * rate
             out[load.label] = out.get(load.label, 0.0) + p
         return out
+
+    def force_matrix(self, index: int = 0):
+        """A and b of A f = b at position ``index``, with this run's parameters, held inputs, gravity and loads."""
+        run = self._run
+        row = None if run["loads"] is None else run["loads"][index]
+        return self.mechanism._force_matrix(self.motion, index, run["p"], run["held"], run["gravity"], row)
 
     def table(self) -> dict[str, np.ndarray]:
         """Every force result as a column named ``"<name> [unit]"``, shaft angle first."""

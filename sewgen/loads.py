@@ -57,10 +57,11 @@ def window_mask(phi: np.ndarray, window) -> np.ndarray:
     return (phi - start) % (2 * math.pi) <= span + _WINDOW_TOL
 
 
-def load_matrix(mech, loads, phi: np.ndarray) -> tuple[np.ndarray | None, list[tuple]]:
+def load_matrix(mech, loads, phi: np.ndarray, degrees: bool = False) -> tuple[np.ndarray | None, list[tuple]]:
     """The (n, nload) load array the C sweep reads, and (load, slot indices, mask) per load.
 
-    Slots (the manifest's "loads"): fx, fy per named point of a moving body, torque per moving body.
+    Slots (the manifest's "loads"): fx, fy per named point of a moving body, torque per moving body. Window
+    ends given as bare numbers are radians, or degrees when ``degrees`` (as the sweep's shaft angles).
     """
     slots = mech.manifest["loads"]
     index = {(s["name"], s["component"]): k for k, s in enumerate(slots)}
@@ -75,8 +76,11 @@ def load_matrix(mech, loads, phi: np.ndarray) -> tuple[np.ndarray | None, list[t
         try:
             fx, fy = to_si(load.fx, "force", f"{what}: fx"), to_si(load.fy, "force", f"{what}: fy")
             tz = to_si(load.torque, "torque", f"{what}: torque")
-            window = None if load.window is None else tuple(to_si(w, "angle", f"{what}: window")
-                                                            for w in load.window)
+            if load.window is not None and len(load.window) != 2:
+                raise ValueError(f"{what}: window must be (start, end), got {load.window!r}")
+            window = None if load.window is None else tuple(
+                math.radians(w) if degrees and not isinstance(w, str) else to_si(w, "angle", f"{what}: window")
+                for w in load.window)
         except (UnitError, TypeError, ValueError) as exc:
             raise ParameterError(mech.name, what, str(exc)) from None
         is_point = (load.at, "fx") in index

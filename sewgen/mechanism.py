@@ -246,7 +246,7 @@ class Mechanism:
         if not (isinstance(moment_about, (tuple, list)) and len(moment_about) == 2):
             raise ParameterError(self.name, "moment_about", f"must be a point (x, y), got {moment_about!r}")
         about = tuple(self._si(v, "length", "moment_about") for v in moment_about)
-        ld, placed = load_matrix(self, loads, a["phi"])
+        ld, placed = load_matrix(self, loads, a["phi"], degrees)
         frc = np.empty((a["n"], self.manifest["sizes"]["nfo"]))
         d = self._ptr
         self.lib.sg_sweep_forces(
@@ -256,30 +256,38 @@ class Mechanism:
             self.ffi.NULL if ld is None else d("double *", ld), d("double *", a["q"]), d("double *", a["qd"]),
             d("double *", a["qdd"]), d("double *", a["obs"]), d("double *", frc), d("int *", a["status"]))
         self._raise_for(a["status"], a["phi"])
-        return ForceAnalysis(self, self._motion(a), frc, placed, gv, about)
+        run = {"p": a["p"], "held": a["held"], "gravity": gv, "loads": ld}
+        return ForceAnalysis(self, self._motion(a), frc, placed, gv, about, run)
 
-    def force_matrix(self, motion: Motion, index: int = 0, *, params: dict | None = None, held: dict | None = None,
-                     gravity=(0.0, -9.80665),
-                     load_row=None):
+    def force_matrix(self, motion: Motion, index: int = 0, *, params: dict | None = None,
+                     held: dict | None = None, gravity=(0.0, -9.80665), load_row=None):
         """A and b of A f = b at position ``index`` of a solved ``motion`` (for inspection and checks).
 
-        ``gravity`` is the vector (gx, gy) in m/s²; ``load_row`` the load slots (manifest "loads") or zeros.
-        Rows: the manifest's "force_rows"; columns: the reactions' columns in manifest order.
+        ``params`` and ``held`` must be those of the run; ``gravity`` is the vector (gx, gy) in m/s²;
+        ``load_row`` the load slots (manifest "loads") or zeros. :meth:`ForceAnalysis.force_matrix` reuses a
+        run's own settings. Rows: the manifest's "force_rows"; columns: the reactions' columns in order.
         """
+        return self._force_matrix(motion, index, self.param_vector(params), np.array(self._held(held)),
+                                  np.asarray(gravity, dtype=float), load_row)
+
+    def _force_matrix(self, motion: Motion, index: int, p: np.ndarray, held: np.ndarray, gv: np.ndarray, load_row):
         nf = self.manifest["sizes"]["nf"]
         q = np.ascontiguousarray(motion.q[index], dtype=np.float64)
-        x = np.array([float(motion.phi[index])] + self._held(held), dtype=np.float64)
+        x = np.concatenate([[float(motion.phi[index])], held]).astype(np.float64)
         cq = np.column_stack([np.cos(q), np.sin(q)]).ravel()
         cx = np.column_stack([np.cos(x), np.sin(x)]).ravel()
         obs = np.ascontiguousarray(motion.obs[index], dtype=np.float64)
         ld = np.zeros(max(self.manifest["sizes"]["nload"], 1)) if load_row is None else \
             np.ascontiguousarray(load_row, dtype=np.float64)
+        c = np.zeros(max(self.manifest["sizes"]["nc"], 1))
         A, b = np.zeros((nf, nf)), np.zeros(nf)
         d = self._ptr
+        getattr(self.lib, f"sg_{self.name}_constants")(d("double *", np.ascontiguousarray(p, dtype=np.float64)),
+                                                         d("double *", c))
         getattr(self.lib, f"sg_{self.name}_force_matrix")(
-            d("double *", q), d("double *", cq), d("double *", x), d("double *", cx),
-            d("double *", self.constants(params)), d("double *", obs), d("double *", np.array(gravity, dtype=float)),
-            d("double *", ld), d("double *", A), d("double *", b))
+            d("double *", q), d("double *", cq), d("double *", x), d("double *", cx), d("double *", c),
+            d("double *", obs), d("double *", np.ascontiguousarray(gv, dtype=np.float64)), d("double *", ld),
+            d("double *", A), d("double *", b))
         return A, b
 
     def _raise_for(self, status: np.ndarray, phi: np.ndarray) -> None:
