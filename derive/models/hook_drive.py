@@ -6,8 +6,10 @@ shaft, then the guide bar whose slotted arm turns the lower shaft through a larg
 and lower shaft run parallel to the upper shaft, so both loops project onto one plane: origin on the upper
 shaft axis, x horizontal, y up. The lower-shaft slot passes through its axis (local u axis).
 
-Dimensions are estimates sized to the household machine: the rock shaft swings about ±45°, which the guide
-bar turns into a shuttle swing near 208° (household shuttles swing 206°–210°).
+Dimensions are estimates sized to the household machine: the crank-rocker swings the rock shaft ±62° (its
+pin under the upper shaft at mid-swing), and the guide bar, its axis 13.5 mm from the rock shaft's inside the
+20 mm arm's circle, turns that into a shuttle swing of about 206° (household shuttles swing 206°–210°) with
+the lower shaft's speed at most about 2.8 times the upper shaft's.
 """
 import sympy as sp
 
@@ -18,13 +20,13 @@ def declare() -> Mechanism:
     m = Mechanism("hook_drive", __doc__, default_speed="1000 rpm")
     r = m.length("crank", "12 mm", "hook crank radius on the upper shaft (estimate)")
     rod = m.length("big_rod", "170 mm", "big connecting rod, pin to pin (estimate)")
-    ox = m.length("rock_axis_x", "-17 mm", "rock-shaft axis, horizontal (estimate)", signed=True)
+    ox = m.length("rock_axis_x", "-13.6 mm", "rock-shaft axis, horizontal (estimate)", signed=True)
     oy = m.length("rock_axis_y", "-170 mm", "rock-shaft axis, vertical (estimate)", signed=True)
-    front = m.length("rock_front_arm", "17 mm", "rock-shaft arm driven by the big rod (estimate)")
+    front = m.length("rock_front_arm", "13.6 mm", "rock-shaft arm driven by the big rod (estimate)")
     rear = m.length("rock_rear_arm", "20 mm", "rock-shaft arm carrying the slider pin (estimate)")
     rear_angle = m.angle("rock_rear_angle", "-90 deg", "rear arm direction relative to the front arm (estimate)")
-    lx = m.length("lower_axis_x", "-17 mm", "lower-shaft axis, horizontal (estimate)", signed=True)
-    ly = m.length("lower_axis_y", "-187.5 mm", "lower-shaft axis, vertical (estimate)", signed=True)
+    lx = m.length("lower_axis_x", "-13.6 mm", "lower-shaft axis, horizontal (estimate)", signed=True)
+    ly = m.length("lower_axis_y", "-183.5 mm", "lower-shaft axis, vertical (estimate)", signed=True)
     crank = m.driven("crank", pivot=m.ground.at(0, 0), doc="hook crank 钩线曲柄 (part 12)")
     big_rod = m.link("big_rod", doc="big connecting rod 大连杆 (part 9)", guess="-90 deg",
                      mass="28 g", com=(rod / 2, 0), inertia="7.0e-5 kg*m**2")

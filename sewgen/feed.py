@@ -1,0 +1,78 @@
+"""Stitch length of the feed mechanism: feed-dog travel above the throat plate, and the regulator angle for it.
+
+The stitch length is the feed dog's horizontal travel while it is above the throat plate (seed 001 §五 3, the
+feed-dog trajectory indices): the cloth moves only while the dog's teeth stand above the plate. The plate
+crossings are found on a sweep by cubic Hermite interpolation in the shaft angle (positions and their exact
+shaft-angle derivatives v/ω from the kinematics), so the travel is accurate far below the sweep's step.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .errors import ParameterError
+
+
+@dataclass(frozen=True)
+class DogTravel:
+    """Feed-dog travel above the plate (m; + forward) between the shaft angles where it rises and sinks (rad)."""
+
+    travel: float
+    rise: float
+    sink: float
+    height: float  # highest point above the plate (m)
+
+
+def _hermite(t, p0, p1, d0, d1, h):
+    """Cubic Hermite on [0, h] at t: values p0, p1 and slopes d0, d1."""
+    s = t / h
+    return ((2 * s**3 - 3 * s**2 + 1) * p0 + (s**3 - 2 * s**2 + s) * h * d0
+            + (-2 * s**3 + 3 * s**2) * p1 + (s**3 - s**2) * h * d1)
+
+
+def dog_travel(motion, plate_y: float, point: str = "feed_dog") -> DogTravel:
+    """The travel of ``point`` above ``plate_y`` over one revolution of ``motion`` (equal steps, one turn)."""
+    pt = motion.point(point)
+    phi, w = motion.phi, motion.omega
+    h = float(phi[1] - phi[0]) if len(phi) > 1 else 0.0
+    if not h > 0 or not np.allclose(np.diff(phi), h) or abs(len(phi) * h - 2 * math.pi) > 1e-9:
+        raise ParameterError(motion.mechanism.name, "shaft angles", "need one revolution in equal steps")
+    z = pt.y - plate_y
+    dz, dx = pt.vy / w, pt.vx / w
+    up = np.flatnonzero((z < 0) & (np.roll(z, -1) >= 0))
+    down = np.flatnonzero((z >= 0) & (np.roll(z, -1) < 0))
+    if len(up) != 1 or len(down) != 1:
+        raise ParameterError(motion.mechanism.name, point,
+                             f"must rise above the plate once a revolution (rises {len(up)}, sinks {len(down)})")
+
+    def crossing(i):
+        j = (i + 1) % len(phi)
+        t = brentq(lambda t: _hermite(t, z[i], z[j], dz[i], dz[j], h), 0.0, h, xtol=1e-15)
+        return phi[i] + t, _hermite(t, pt.x[i], pt.x[j], dx[i], dx[j], h)
+
+    (rise, x0), (sink, x1) = crossing(int(up[0])), crossing(int(down[0]))
+    return DogTravel(float(x1 - x0), float(rise % (2 * math.pi)), float(sink % (2 * math.pi)), float(z.max()))
+
+
+def stitch_length(mech, regulator, *, params: dict | None = None, step_deg: float = 1.0,
+                  point: str = "feed_dog", plate: str = "plate_y") -> DogTravel:
+    """Dog travel above the plate at regulator angle ``regulator`` (rad or "30 deg")."""
+    phi = np.radians(np.arange(0.0, 360.0, step_deg))
+    motion = mech.solve(phi, speed=1.0, params=params, held={"regulator": regulator})
+    return dog_travel(motion, mech.param_vector(params)[mech.param_names.index(plate)], point)
+
+
+def regulator_angle(mech, length: float, *, params: dict | None = None, limit_deg: float = 60.0,
+                    step_deg: float = 1.0) -> float:
+    """The regulator angle (rad) whose stitch is ``length`` (m; negative: reverse feed), by Brent's method."""
+    f = (lambda a: stitch_length(mech, a, params=params, step_deg=step_deg).travel - length)
+    lo, hi = -math.radians(limit_deg), math.radians(limit_deg)
+    f_lo, f_hi = f(lo), f(hi)
+    if not min(f_lo, f_hi) <= 0.0 <= max(f_lo, f_hi):
+        longest = max(abs(f_lo + length), abs(f_hi + length))
+        raise ParameterError(mech.name, "stitch", f"{length * 1e3:.3g} mm is beyond the regulator's range "
+                             f"(±{longest * 1e3:.3g} mm at ±{limit_deg:g}°)")
+    return brentq(f, lo, hi, xtol=1e-12)
