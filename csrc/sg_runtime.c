@@ -25,13 +25,49 @@ static double inf_norm(int n, const double *v)
     return m;
 }
 
+/* cos and sin of one angle in one libm call where the compiler offers it (glibc's sincos). */
+static inline void sg_cos_sin(double a, double *c, double *s)
+{
+#if defined(__GNUC__)
+    __builtin_sincos(a, s, c);
+#else
+    *c = cos(a);
+    *s = sin(a);
+#endif
+}
+
+/* cos and sin of q + d from those of q, for the small steps of Newton and of the predictor: the addition
+ * formulas with cos d, sin d from their Taylor series (|d| < 1e-2: the first omitted terms, d^10/10! and
+ * d^9/9!, are below 1e-26 relative), so a step costs no libm call. Larger steps: sincos. */
+#define SG_SMALL_STEP 1e-2
+
+static void shift_trig(const sg_mechanism *m, const double *q, const double *cq, const double *d, double *q_out,
+                       double *cq_out)
+{
+    for (int i = 0; i < m->nq; ++i) {
+        q_out[i] = q[i] + d[i];
+        if (!m->coord_is_angle[i]) {
+            cq_out[2 * i] = 1.0;
+            cq_out[2 * i + 1] = 0.0;
+        } else if (fabs(d[i]) < SG_SMALL_STEP) {
+            const double h = d[i], h2 = h * h;
+            const double sd = h * (1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0)));
+            const double cd = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)));
+            const double c = cq[2 * i], s = cq[2 * i + 1];
+            cq_out[2 * i] = c * cd - s * sd;
+            cq_out[2 * i + 1] = s * cd + c * sd;
+        } else {
+            sg_cos_sin(q_out[i], &cq_out[2 * i], &cq_out[2 * i + 1]);
+        }
+    }
+}
+
 /* cos and sin of every angle coordinate (travels get 1, 0: never read). */
 static void fill_trig(const sg_mechanism *m, const double *q, double *cq)
 {
     for (int i = 0; i < m->nq; ++i) {
         if (m->coord_is_angle[i]) {
-            cq[2 * i] = cos(q[i]);
-            cq[2 * i + 1] = sin(q[i]);
+            sg_cos_sin(q[i], &cq[2 * i], &cq[2 * i + 1]);
         } else {
             cq[2 * i] = 1.0;
             cq[2 * i + 1] = 0.0;
@@ -40,16 +76,15 @@ static void fill_trig(const sg_mechanism *m, const double *q, double *cq)
 }
 
 /* Damped Newton on Phi(q, x) = 0 from q (in place), with cq kept in step with q.
- * On success *det_sign is the sign of det(dPhi/dq). */
+ * On success *det_sign is the sign of det(dPhi/dq) (at the last iterate but one after a full final step). */
 static int newton(const sg_mechanism *m, double *q, double *cq, const double *x, const double *cx,
                   const double *c, const sg_options *opt, double *det_sign)
 {
     const int nq = m->nq;
     double r[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q], lu[SG_MAX_Q * SG_MAX_Q];
-    double qt[SG_MAX_Q], cqt[2 * SG_MAX_Q], rt[SG_MAX_Q], dq[SG_MAX_Q];
+    double qt[SG_MAX_Q], cqt[2 * SG_MAX_Q], rt[SG_MAX_Q], dq[SG_MAX_Q], step[SG_MAX_Q];
     int piv[SG_MAX_Q];
-    fill_trig(m, q, cq);
-    m->residual(q, cq, x, cx, c, r, jac);
+    m->residual(q, cq, x, cx, c, r, jac); /* cq: cos, sin of q, from the caller */
     double norm = inf_norm(nq, r);
     for (int it = 0;; ++it) {
         if (!isfinite(norm)) return SG_NO_CONVERGENCE;
@@ -63,8 +98,8 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
         double lambda = 1.0, nt = 0.0;
         int k;
         for (k = 0; k < 30; ++k) {
-            for (int i = 0; i < nq; ++i) qt[i] = q[i] + lambda * dq[i];
-            fill_trig(m, qt, cqt);
+            for (int i = 0; i < nq; ++i) step[i] = lambda * dq[i];
+            shift_trig(m, q, cq, step, qt, cqt);
             m->residual(qt, cqt, x, cx, c, rt, jac);
             nt = inf_norm(nq, rt);
             if (nt < norm) break;
@@ -75,6 +110,9 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
         memcpy(cq, cqt, sizeof(double) * (size_t)(2 * nq));
         memcpy(r, rt, sizeof(double) * (size_t)nq);
         norm = nt;
+        /* Converged by a full step: det Phi_q keeps the sign of the factor just used (the step is below the
+         * tolerance's scale); a singular Phi_q at the solution is caught by the motion kernel's own LU. */
+        if (norm <= opt->tol && lambda == 1.0) return SG_OK;
     }
 }
 
@@ -128,7 +166,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     const int use_closed = m->closed != NULL && !opt->newton_only;
     double c[SG_MAX_C];
     m->constants(p, c);
-    double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q], cq[2 * SG_MAX_Q];
+    double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q], cq[2 * SG_MAX_Q], cq_last[2 * SG_MAX_Q];
     for (int k = 1; k < nx; ++k) {
         x[k] = held[k - 1];
         cx[2 * k] = cos(x[k]);
@@ -163,10 +201,17 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
             }
         } else if (st == SG_OK) {
             double sign = 0.0;
-            if (nh > 0) {
+            if (nh > 0) { /* predictor; cos, sin shifted from the last solution's */
+                const double *prev = q + hist[0] * (size_t)nq;
+                double d[SG_MAX_Q];
                 predict(nq, nh, hist, phi, q, ph, qi);
+                for (int k = 0; k < nq; ++k) d[k] = qi[k] - prev[k];
+                shift_trig(m, prev, cq_last, d, qi, cq);
             } else if (m->closed == NULL || m->closed(x, cx, c, branch, qi, cq) != SG_OK) {
                 memcpy(qi, q_guess, sizeof(double) * (size_t)nq);
+                fill_trig(m, qi, cq);
+            } else {
+                fill_trig(m, qi, cq);
             }
             st = newton(m, qi, cq, x, cx, c, opt, &sign);
             if (st == SG_OK) {
@@ -188,6 +233,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
             if (frc != NULL) zero_row(frc + i * (size_t)nfo, nfo);
             continue;
         }
+        memcpy(cq_last, cq, sizeof(double) * (size_t)(2 * nq));
         hist[2] = hist[1];
         hist[1] = hist[0];
         hist[0] = i;

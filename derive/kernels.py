@@ -81,23 +81,29 @@ class KernelSet:
 
     # -- expression preparation ------------------------------------------------------------------------
     def _expand_trig(self, expr: sp.Expr) -> sp.Expr:
-        """sin/cos(±a + c), a a coordinate or input angle and c fixed -> products of cq/cx and sin/cos c."""
+        """sin/cos(±a ± b ... + c), a, b coordinate or input angles and c fixed -> products of cq/cx entries and
+        sin/cos c, by the addition formulas applied one angle at a time."""
         repl = {}
         for f in expr.atoms(sp.sin, sp.cos):
-            arg = f.args[0]
-            angles = [s for s in arg.free_symbols if s in self.trig]
-            if len(angles) != 1:
-                continue
-            a = angles[0]
+            cs = self._cos_sin(f.args[0])
+            if cs is not None:
+                repl[f] = cs[0] if isinstance(f, sp.cos) else cs[1]
+        return expr.xreplace(repl) if repl else expr
+
+    def _cos_sin(self, arg):
+        """(cos arg, sin arg) with every angle symbol of coefficient ±1 taken out; None if arg has none."""
+        angles = sorted((s for s in arg.free_symbols if s in self.trig), key=lambda s: s.name)
+        for a in angles:
             k = arg.coeff(a)
             rest = sp.expand(arg - k * a)
             if k not in (1, -1) or a in rest.free_symbols:
                 continue
             ca, sa = self.trig[a]
             sa = k * sa
-            cr, sr = sp.cos(rest), sp.sin(rest)
-            repl[f] = ca * cr - sa * sr if isinstance(f, sp.cos) else sa * cr + ca * sr
-        return expr.xreplace(repl) if repl else expr
+            inner = self._cos_sin(rest)
+            cr, sr = inner if inner is not None else (sp.cos(rest), sp.sin(rest))
+            return ca * cr - sa * sr, sa * cr + ca * sr
+        return None
 
     def _is_const(self, e: sp.Expr) -> bool:
         return isinstance(e, sp.Expr) and bool(e.free_symbols) and e.free_symbols <= self.params

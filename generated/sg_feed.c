@@ -64,20 +64,20 @@ void sg_feed_constants(const double *p, double *c)
     c[29] = t8;
     c[30] = -p[13];
     c[31] = -p[15];
-    c[32] = p[19];
-    c[33] = p[1];
-    c[34] = p[0] + p[1];
-    c[35] = -t1;
-    c[36] = -sqrt(3.0)*t1;
-    c[37] = t1;
-    c[38] = -p[14];
-    c[39] = -p[12];
-    c[40] = p[6];
-    c[41] = p[16];
-    c[42] = p[7];
-    c[43] = -p[16];
-    c[44] = p[10];
-    c[45] = p[11];
+    c[32] = p[1];
+    c[33] = p[0] + p[1];
+    c[34] = -t1;
+    c[35] = -sqrt(3.0)*t1;
+    c[36] = t1;
+    c[37] = -p[14];
+    c[38] = -p[12];
+    c[39] = p[6];
+    c[40] = p[16];
+    c[41] = p[7];
+    c[42] = -p[16];
+    c[43] = p[10];
+    c[44] = p[11];
+    c[45] = p[19];
     c[46] = p[21];
     c[47] = -p[22];
     c[48] = p[22];
@@ -181,39 +181,40 @@ void sg_feed_constants(const double *p, double *c)
 /* sg_feed_residual -- Total ops: 107 */
 void sg_feed_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac)
 {
+    (void)x;
     double ka[4];
     {
         /* cam cam: the arc whose normal sector holds e */
-        const double e0 = -sin(c[32] - q[2] + x[0]), e1 = -cos(c[32] - q[2] + x[0]);
+        const double e0 = -cq[4]*(c[3]*cx[1] + c[6]*cx[0]) + cq[5]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[4]*(c[3]*cx[0] + c[4]*cx[1]) - cq[5]*(c[3]*cx[1] + c[6]*cx[0]);
         if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
-            ka[2] = c[33];
+            ka[2] = c[32];
             ka[3] = 0.0;
         } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
-            ka[2] = c[34];
+            ka[2] = c[33];
             ka[3] = 1.0;
         } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
-            ka[0] = c[35];
-            ka[1] = c[36];
-            ka[2] = c[33];
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[32];
             ka[3] = 2.0;
         } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
-            ka[0] = c[35];
-            ka[1] = c[36];
-            ka[2] = c[34];
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[33];
             ka[3] = 3.0;
         } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
-            ka[0] = c[37];
-            ka[1] = c[36];
-            ka[2] = c[33];
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[32];
             ka[3] = 4.0;
         } else {
-            ka[0] = c[37];
-            ka[1] = c[36];
-            ka[2] = c[34];
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[33];
             ka[3] = 5.0;
         }
     }
@@ -286,36 +287,36 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     double ka[4];
     {
         /* cam cam: the arc whose normal sector holds e */
-        const double e0 = -sin(c[32] - q[2] + x[0]), e1 = -cos(c[32] - q[2] + x[0]);
+        const double e0 = -cq[4]*(c[3]*cx[1] + c[6]*cx[0]) + cq[5]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[4]*(c[3]*cx[0] + c[4]*cx[1]) - cq[5]*(c[3]*cx[1] + c[6]*cx[0]);
         if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
-            ka[2] = c[33];
+            ka[2] = c[32];
             ka[3] = 0.0;
         } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
-            ka[2] = c[34];
+            ka[2] = c[33];
             ka[3] = 1.0;
         } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
-            ka[0] = c[35];
-            ka[1] = c[36];
-            ka[2] = c[33];
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[32];
             ka[3] = 2.0;
         } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
-            ka[0] = c[35];
-            ka[1] = c[36];
-            ka[2] = c[34];
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[33];
             ka[3] = 3.0;
         } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
-            ka[0] = c[37];
-            ka[1] = c[36];
-            ka[2] = c[33];
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[32];
             ka[3] = 4.0;
         } else {
-            ka[0] = c[37];
-            ka[1] = c[36];
-            ka[2] = c[34];
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[33];
             ka[3] = 5.0;
         }
     }
@@ -354,7 +355,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t32 = c[18]*cx[1] + c[21]*cx[0];
     const double t33 = c[17]*t32;
     const double t34 = c[18]*cx[0] + c[19]*cx[1];
-    const double t35 = c[38]*t34;
+    const double t35 = c[37]*t34;
     const double t36 = cq[4]*t1 + cq[5]*t12;
     const double t37 = cq[4]*t26;
     const double t38 = cq[5]*t13 + t37;
@@ -363,15 +364,15 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t53 = c[26]*cq[0];
     const double t54 = c[24]*cq[1];
     const double t55 = cq[8]*t20 + cq[9]*t54;
-    const double t56 = c[39]*cq[3];
-    const double t57 = c[39]*cq[2];
+    const double t56 = c[38]*cq[3];
+    const double t57 = c[38]*cq[2];
     const double t58 = cq[8]*t23 + cq[9]*t57;
-    const double t59 = c[41]*cq[8];
-    const double t60 = c[40] + t54;
-    const double t61 = c[42] + t53;
-    const double t63 = c[43]*cq[9];
-    const double t68 = c[40] + t0;
-    const double t69 = c[42] + t1;
+    const double t59 = c[40]*cq[8];
+    const double t60 = c[39] + t54;
+    const double t61 = c[41] + t53;
+    const double t63 = c[42]*cq[9];
+    const double t68 = c[39] + t0;
+    const double t69 = c[41] + t1;
     const double t70 = t2 + t69;
     const double t75 = c[46]*t9 + c[47]*t8;
     const double t76 = c[47]*t9 + c[49]*t8;
@@ -392,7 +393,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t92 = c[76]*cq[2] + c[78]*cq[3];
     const double t93 = c[79]*cq[10];
     const double t94 = c[80]*cq[11];
-    const double t95 = c[38]*t32;
+    const double t95 = c[37]*t32;
     double J[36];
     int piv[6];
     J[0] = cq[4]*t0 + cq[5]*t1;
@@ -469,10 +470,10 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t73 = qdd[0]*t7 + t12*t41;
     const double t74 = qdd[0]*t0 + t41*t7;
     obs[0] = t59 + t60;
-    obs[1] = c[41]*cq[9] + t61;
+    obs[1] = c[40]*cq[9] + t61;
     obs[2] = qd[4]*t63 + t62;
     obs[3] = qd[4]*t59 + t64;
-    obs[4] = c[43]*cq[8]*t65 + qdd[4]*t63 + t66;
+    obs[4] = c[42]*cq[8]*t65 + qdd[4]*t63 + t66;
     obs[5] = qdd[4]*t59 + t63*t65 + t67;
     obs[6] = t16 + t68;
     obs[7] = t70;
@@ -486,13 +487,13 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     obs[15] = qd[2]*t17 + t72;
     obs[16] = qdd[2]*t15 + t43 + t73;
     obs[17] = qdd[2]*t17 + t46 + t74;
-    obs[18] = c[44] + t22;
-    obs[19] = c[45] + t23;
+    obs[18] = c[43] + t22;
+    obs[19] = c[44] + t23;
     obs[20] = qd[1]*t56;
     obs[21] = qd[1]*t22;
     obs[22] = qdd[1]*t56 + t48*t57;
-    obs[23] = c[39]*t52 + qdd[1]*t22;
-    obs[24] = c[32] + x[0];
+    obs[23] = c[38]*t52 + qdd[1]*t22;
+    obs[24] = c[45] + x[0];
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t75;
@@ -540,8 +541,8 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     obs[69] = q[0];
     obs[70] = qd[0];
     obs[71] = qdd[0];
-    obs[72] = c[40] + t87;
-    obs[73] = c[42] + c[67]*cq[1] + c[69]*cq[0];
+    obs[72] = c[39] + t87;
+    obs[73] = c[41] + c[67]*cq[1] + c[69]*cq[0];
     obs[74] = qd[0]*t88;
     obs[75] = qd[0]*t87;
     obs[76] = qdd[0]*t88 + t41*(c[69]*cq[1] + c[70]*cq[0]);
@@ -558,8 +559,8 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     obs[87] = q[1];
     obs[88] = qd[1];
     obs[89] = qdd[1];
-    obs[90] = c[44] + t91;
-    obs[91] = c[45] + c[75]*cq[3] + c[77]*cq[2];
+    obs[90] = c[43] + t91;
+    obs[91] = c[44] + c[75]*cq[3] + c[77]*cq[2];
     obs[92] = qd[1]*t92;
     obs[93] = qd[1]*t91;
     obs[94] = qdd[1]*t92 + t48*(c[77]*cq[3] + c[78]*cq[2]);
@@ -581,39 +582,40 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
 /* sg_feed_forces -- Total ops: 485 */
 int sg_feed_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
+    (void)x;
     double ka[4];
     {
         /* cam cam: the arc whose normal sector holds e */
-        const double e0 = -sin(c[32] - q[2] + x[0]), e1 = -cos(c[32] - q[2] + x[0]);
+        const double e0 = -cq[4]*(c[3]*cx[1] + c[6]*cx[0]) + cq[5]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[4]*(c[3]*cx[0] + c[4]*cx[1]) - cq[5]*(c[3]*cx[1] + c[6]*cx[0]);
         if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
-            ka[2] = c[33];
+            ka[2] = c[32];
             ka[3] = 0.0;
         } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
-            ka[2] = c[34];
+            ka[2] = c[33];
             ka[3] = 1.0;
         } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
-            ka[0] = c[35];
-            ka[1] = c[36];
-            ka[2] = c[33];
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[32];
             ka[3] = 2.0;
         } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
-            ka[0] = c[35];
-            ka[1] = c[36];
-            ka[2] = c[34];
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[33];
             ka[3] = 3.0;
         } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
-            ka[0] = c[37];
-            ka[1] = c[36];
-            ka[2] = c[33];
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[32];
             ka[3] = 4.0;
         } else {
-            ka[0] = c[37];
-            ka[1] = c[36];
-            ka[2] = c[34];
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[33];
             ka[3] = 5.0;
         }
     }
@@ -654,8 +656,8 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
     const double t34 = c[65]*cx[3] + c[66]*cx[2];
     const double t35 = -cx[3];
     {
-        const double d = c[14]*cq[8] + c[20]*cq[9] + c[24]*t8 + c[26]*t7 + c[39]*t10 + c[39]*t9 + c[40]*cq[8] + c[42]*cq[9];
-        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[24]*t7 + c[26]*t8), fmax(fabs(c[14]*cq[8] + c[20]*cq[9] + c[24]*t8 + c[26]*t7 + c[39]*t10 + c[39]*t9 + c[40]*cq[8] + c[42]*cq[9]), fabs(c[22]*t10 + c[22]*t9))))) return SG_SINGULAR;
+        const double d = c[14]*cq[8] + c[20]*cq[9] + c[24]*t8 + c[26]*t7 + c[38]*t10 + c[38]*t9 + c[39]*cq[8] + c[41]*cq[9];
+        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[24]*t7 + c[26]*t8), fmax(fabs(c[14]*cq[8] + c[20]*cq[9] + c[24]*t8 + c[26]*t7 + c[38]*t10 + c[38]*t9 + c[39]*cq[8] + c[41]*cq[9]), fabs(c[22]*t10 + c[22]*t9))))) return SG_SINGULAR;
         out[23] = (c[91]*obs[80] - ld[0]*(c[92]*cq[9] + t21) - ld[1]*(c[93]*cq[8] + t22) - ld[14] - t17*(c[71]*cq[9] + t21) - t18*(c[74]*cq[8] + t22))/d;
     }
     {
@@ -666,7 +668,7 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
         M[1] = c[5]*cq[0]*cq[4] + cq[5]*t6;
         r[0] = c[24]*cq[0]*t17 + c[24]*cq[1]*t18 + c[88]*obs[71] + c[90]*t19*(c[67]*cq[1] + c[69]*cq[0]) + c[90]*t20*(c[69]*cq[1] + c[70]*cq[0]) - out[23]*(c[24]*t7 + c[26]*t8) - ld[13] + t14*t2 + t16*t6;
         M[2] = c[10]*t0 + c[10]*t1 + c[11]*t0 + c[11]*t1;
-        M[3] = c[40]*cq[4] + c[42]*cq[5] - cq[4]*ka[0]*t5 + cq[4]*ka[1]*t4 + cq[4]*t2 - cq[5]*ka[0]*t4 - cq[5]*ka[1]*t5 + cq[5]*t3;
+        M[3] = c[39]*cq[4] + c[41]*cq[5] - cq[4]*ka[0]*t5 + cq[4]*ka[1]*t4 + cq[4]*t2 - cq[5]*ka[0]*t4 - cq[5]*ka[1]*t5 + cq[5]*t3;
         r[1] = c[61]*cq[4]*t14 + c[61]*cq[5]*ld[2] + c[62]*cq[4]*ld[3] + c[62]*cq[5]*t16 + c[81]*obs[53] + c[82]*cq[5]*ld[4] + c[85]*cq[4]*ld[5] + c[86]*cq[4]*t11 + c[87]*cq[5]*t12 - ld[11];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
@@ -723,7 +725,7 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
     out[36] = cq[8]*out[23];
     out[37] = out[0] + out[17] + out[2] + out[4] + out[9];
     out[38] = out[1] + out[10] + out[18] + out[3] + out[5];
-    out[39] = c[112]*out[4] + c[20]*out[17] + c[40]*out[10] + c[44]*out[18] + c[55]*out[5] + c[7]*out[9] + out[26] + t36;
+    out[39] = c[112]*out[4] + c[20]*out[17] + c[39]*out[10] + c[43]*out[18] + c[55]*out[5] + c[7]*out[9] + out[26] + t36;
     out[40] = c[113]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[114]*((obs[25])*(obs[25])) + c[115]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[116]*((obs[34])*(obs[34])) + c[117]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[118]*((obs[43])*(obs[43])) + c[119]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[120]*((obs[52])*(obs[52])) + c[121]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[122]*((obs[61])*(obs[61])) + c[123]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[124]*((obs[70])*(obs[70])) + c[125]*(((obs[83])*(obs[83])) + ((obs[84])*(obs[84]))) + c[126]*((obs[79])*(obs[79])) + c[127]*(((obs[92])*(obs[92])) + ((obs[93])*(obs[93]))) + c[128]*((obs[88])*(obs[88])) + c[129]*(((obs[101])*(obs[101])) + ((obs[102])*(obs[102]))) + c[130]*((obs[97])*(obs[97]));
     out[41] = c[131]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[132]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[133]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[134]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[135]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[136]*(gv[0]*obs[81] + gv[1]*obs[82]) + c[137]*(gv[0]*obs[90] + gv[1]*obs[91]) + c[138]*(gv[0]*obs[99] + gv[1]*obs[100]) + c[90]*(gv[0]*obs[72] + gv[1]*obs[73]);
     out[42] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[13]*obs[70] + ld[14]*obs[79] + ld[15]*obs[88] + ld[16]*obs[97] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
@@ -734,39 +736,40 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
 /* sg_feed_force_matrix -- Total ops: 255 */
 void sg_feed_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b)
 {
+    (void)x;
     double ka[4];
     {
         /* cam cam: the arc whose normal sector holds e */
-        const double e0 = -sin(c[32] - q[2] + x[0]), e1 = -cos(c[32] - q[2] + x[0]);
+        const double e0 = -cq[4]*(c[3]*cx[1] + c[6]*cx[0]) + cq[5]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[4]*(c[3]*cx[0] + c[4]*cx[1]) - cq[5]*(c[3]*cx[1] + c[6]*cx[0]);
         if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
-            ka[2] = c[33];
+            ka[2] = c[32];
             ka[3] = 0.0;
         } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
-            ka[2] = c[34];
+            ka[2] = c[33];
             ka[3] = 1.0;
         } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
-            ka[0] = c[35];
-            ka[1] = c[36];
-            ka[2] = c[33];
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[32];
             ka[3] = 2.0;
         } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
-            ka[0] = c[35];
-            ka[1] = c[36];
-            ka[2] = c[34];
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[33];
             ka[3] = 3.0;
         } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
-            ka[0] = c[37];
-            ka[1] = c[36];
-            ka[2] = c[33];
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[32];
             ka[3] = 4.0;
         } else {
-            ka[0] = c[37];
-            ka[1] = c[36];
-            ka[2] = c[34];
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[33];
             ka[3] = 5.0;
         }
     }

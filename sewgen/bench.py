@@ -207,21 +207,39 @@ class Baseline:
             return sp.lambdify(args, expr, modules="numpy")
 
         q, qd, qdd, x, xd, xdd, p = kin.q, kin.qd, kin.qdd, kin.x, kin.xd, kin.xdd, kin.p
-        self.closure = lam([q, x, p], kin.closure)
-        self.jac_q = lam([q, x, p], kin.jac_q)
-        self.vel_rhs = lam([q, x, xd, p], kin.vel_rhs)
-        self.gamma = lam([q, qd, x, xd, xdd, p], kin.gamma)
-        self.observables = lam([q, qd, qdd, x, xd, xdd, p], [o.expr for o in kin.observables])
+        ka = [sp.Symbol(f"ka_{k}", real=True) for k in range(4 * len(kin.cams))]  # active cam arcs
+        self.closure = lam([q, x, p, ka], kin.closure)
+        self.jac_q = lam([q, x, p, ka], kin.jac_q)
+        self.vel_rhs = lam([q, x, xd, p, ka], kin.vel_rhs)
+        self.gamma = lam([q, qd, x, xd, xdd, p, ka], kin.gamma)
+        self.observables = lam([q, qd, qdd, x, xd, xdd, p, ka], [o.expr for o in kin.observables])
+        self.cam_normals = [lam([q, x, p], list(c.normal)) for c in kin.cams]
+        self.cam_arcs = [[lam([p], [sp.cos(a.normal_from), sp.sin(a.normal_from), sp.cos(a.normal_to),
+                                    sp.sin(a.normal_to), a.center_u, a.center_v, a.radius])
+                          for a in c.joint.arcs] for c in kin.cams]
         self.kin = kin
         self.kst = None
         if forces:
             from derive.kinetostatics import Kinetostatics
 
             kst = Kinetostatics(kin)
-            fargs = [q, x, p, kst.obs, kst.gravity, kst.loads]
+            fargs = [q, x, p, kst.obs, kst.gravity, kst.loads, ka]
             self.force_A, self.force_b = lam(fargs, kst.A), lam(fargs, kst.b)
             self.kst = kst
         self.derive_s, self.lambdify_s = t1 - t0, time.perf_counter() - t1
+
+    def arcs(self, q, x, p) -> list:
+        """ka: centre, radius of each cam's active arc (the sector holding the face normal), then the indices."""
+        n = len(self.cam_normals)
+        ka = [0.0] * (4 * n)
+        for j, (normal, arcs) in enumerate(zip(self.cam_normals, self.cam_arcs)):
+            e0, e1 = normal(q, x, p)
+            for k, arc in enumerate(arcs):
+                ca, sa, cb, sb, u, v, r = arc(p)
+                if (ca * e1 - sa * e0 >= 0.0 and e0 * sb - e1 * cb > 0.0) or k == len(arcs) - 1:
+                    ka[3 * j: 3 * j + 3], ka[3 * n + j] = [u, v, r], float(k)
+                    break
+        return ka
 
     def run(self, phi, omega, accel, held, p, q_start, gravity=None):
         """Positions, velocities, accelerations and observables at each angle of ``phi`` (sequentially).
@@ -249,21 +267,23 @@ class Baseline:
         nfev = 0
         for i in range(n):
             x = [phi[i]] + held
-            sol = root(lambda qq: np.asarray(closure(qq, x, p), dtype=np.float64), q,
-                       jac=lambda qq: np.asarray(jac_q(qq, x, p), dtype=np.float64))
+            arcs = self.arcs
+            sol = root(lambda qq: np.asarray(closure(qq, x, p, arcs(qq, x, p)), dtype=np.float64), q,
+                       jac=lambda qq: np.asarray(jac_q(qq, x, p, arcs(qq, x, p)), dtype=np.float64))
             if not sol.success:
                 raise RuntimeError(f"baseline: scipy.optimize.root failed at position {i}: {sol.message}")
             nfev += sol.nfev
             q = sol.x
-            J = np.asarray(jac_q(q, x, p), dtype=np.float64)
-            qd = np.linalg.solve(J, np.asarray(vel_rhs(q, x, xd, p), dtype=np.float64))
-            qdd = np.linalg.solve(J, np.asarray(gamma(q, qd, x, xd, xdd, p), dtype=np.float64))
+            ka = arcs(q, x, p)
+            J = np.asarray(jac_q(q, x, p, ka), dtype=np.float64)
+            qd = np.linalg.solve(J, np.asarray(vel_rhs(q, x, xd, p, ka), dtype=np.float64))
+            qdd = np.linalg.solve(J, np.asarray(gamma(q, qd, x, xd, xdd, p, ka), dtype=np.float64))
             Q[i], QD[i], QDD[i] = q, qd, qdd
-            OBS[i] = np.asarray(observables(q, qd, qdd, x, xd, xdd, p), dtype=np.float64)
+            OBS[i] = np.asarray(observables(q, qd, qdd, x, xd, xdd, p, ka), dtype=np.float64)
             if forces:
                 o = OBS[i]
-                A = np.asarray(force_A(q, x, p, o, gravity, loads), dtype=np.float64)
-                b = np.asarray(force_b(q, x, p, o, gravity, loads), dtype=np.float64)
+                A = np.asarray(force_A(q, x, p, o, gravity, loads, ka), dtype=np.float64)
+                b = np.asarray(force_b(q, x, p, o, gravity, loads, ka), dtype=np.float64)
                 F[i] = np.linalg.solve(A, b).ravel()
         if forces:
             return Q, QD, QDD, OBS, nfev / max(n, 1), F
@@ -483,6 +503,26 @@ def table(rows: list[dict]) -> str:
                                 for k, (c, w) in enumerate(zip(row, widths))).rstrip()
     out = [fmt(lines[0]), fmt(tuple("-" * w for w in widths))] + [fmt(r) for r in lines[1:]]
     return "\n".join(out)
+
+
+def _machine_entry(positions: int, target_ms: float):
+    """The whole JB1-3 machine through the Python API: four group sweeps (kinematics + forces) and the shaft."""
+
+    def run(cfg: Config) -> Result:
+        from .machine import load_machine
+
+        machine = load_machine("jb1-3")
+        phi = machine.shaft_angles(2 * np.pi / positions)
+        machine.analyze(phi)  # warm-up
+        t = best_time(lambda: machine.analyze(phi), cfg.repeats, cfg.min_time)
+        return positions / t, None, {"ms_per_analysis": t * 1e3, "target_ms": target_ms,
+                                     "meets_target": t * 1e3 < target_ms, "positions": positions}
+
+    return run
+
+
+register_entry("jb1-3", "machine@72", _machine_entry(72, 1.0))
+register_entry("jb1-3", "machine@3600", _machine_entry(3600, 10.0))
 
 
 def main(argv=None) -> int:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 from pathlib import Path
@@ -140,6 +141,47 @@ def cmd_forces(args) -> int:
     return 0
 
 
+def _progress(message: str, done: int, total: int) -> None:
+    print(f"  [{done + 1}/{total}] {message}", file=sys.stderr, flush=True)
+
+
+def cmd_analyze(args) -> int:
+    from .machine import load_machine
+    from .report import write_report
+
+    machine = load_machine(args.model)
+    step = None
+    if args.step:
+        try:
+            step = to_si(args.step, "angle", "--step")
+        except UnitError as exc:
+            raise SystemExit(f"sewgen: {exc}") from None
+    phi = machine.shaft_angles(step)
+    speed = None
+    if args.speed:
+        try:
+            speed = to_si(args.speed, "speed", "--speed")
+        except UnitError as exc:
+            raise SystemExit(f"sewgen: {exc}") from None
+    out = Path(args.out or machine.name.lower())
+    print(f"{machine.name}: {len(phi)} positions at {(speed or machine.speed) * 30 / math.pi:.6g} rpm "
+          f"-> {out}/", file=sys.stderr)
+    analysis = machine.analyze(phi, speed=speed, progress=_progress)
+    files = write_report(analysis, out, progress=_progress)
+    if not args.no_plots:
+        from .plots import write_all
+
+        files += write_all(analysis, out, progress=_progress, gif=not args.no_gif)
+    summary = json.loads((out / "summary.json").read_text())
+    print(f"power balance residual {summary['power_balance_residual']:.3g}; "
+          f"drive torque {summary['drive_torque']['min']:.4g} .. {summary['drive_torque']['max']:.4g} N*m "
+          f"(RMS {summary['drive_torque']['rms']:.4g}); bearings front {summary['bearings']['front']['max']:.4g} N, "
+          f"rear {summary['bearings']['rear']['max']:.4g} N peak; shaking force {summary['shaking_force']['max']:.4g} N peak")
+    for f in files:
+        print(f"wrote {f}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="sewgen", description="Sewing-machine mechanism analysis.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -165,6 +207,14 @@ def build_parser() -> argparse.ArgumentParser:
                            help='external load "AT fx=.. fy=.. torque=.. from=.. to=..", e.g. '
                                 '"thread_eye fy=-2.94N from=135deg to=155deg"')
     balance_cli.add_parser(sub)
+    p = sub.add_parser("analyze", help="a whole machine: kinematics, forces, shaft bearings; tables, plots, GIF")
+    p.add_argument("model", help='a built-in machine ("jb1-3") or a model file (.toml)')
+    p.add_argument("--out", help="output folder (default: the machine's name)")
+    p.add_argument("--step", help='shaft-angle step, e.g. "1 deg" (default: the model\'s)')
+    p.add_argument("--speed", help='upper-shaft speed, e.g. "1500 rpm" (default: the model\'s)')
+    p.add_argument("--no-plots", action="store_true", help="tables and summary.json only")
+    p.add_argument("--no-gif", action="store_true", help="no animation")
+    p.set_defaults(fn=cmd_analyze)
     return ap
 
 

@@ -23,7 +23,7 @@ frame, as for a group) are the groups' plus the core's.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -45,8 +45,14 @@ class Group:
     params: dict  # SI overrides
     held: dict  # SI held inputs (after converting a stitch length)
     branch: dict
-    loads: list
+    loads: list  # windows in the machine's shaft angle (seed 000: "relative to the upper-shaft angle")
     stitch: float | None = None  # m, feed groups: the stitch the regulator was set for
+
+    @property
+    def sweep_loads(self) -> list:
+        """The loads with their windows moved into the group's own shaft angle (machine angle + phase)."""
+        return [replace(ld, window=None if ld.window is None else tuple(w + self.phase for w in ld.window))
+                for ld in self.loads]
 
 
 @dataclass(frozen=True)
@@ -99,7 +105,7 @@ class Machine:
             if progress:
                 progress(f"{g.name}: {len(phi)} positions", k, len(self.groups))
             out[g.name] = g.mechanism.kinetostatics(
-                phi + g.phase, speed=w, accel=accel, loads=g.loads, gravity=g_mag, gravity_direction=g_dir,
+                phi + g.phase, speed=w, accel=accel, loads=g.sweep_loads, gravity=g_mag, gravity_direction=g_dir,
                 params=g.params or None, held=g.held or None, branch=g.branch or None)
         return MachineAnalysis(self, phi, out)
 
@@ -298,7 +304,10 @@ def load_machine(name_or_path) -> Machine:
     gv = np.array([g_mag * math.cos(g_dir), g_mag * math.sin(g_dir)])
     gv[np.abs(gv) < 1e-15 * max(g_mag, 1e-300)] = 0.0
     m = Machine(mach["name"], mach.get("description", ""), mach["speed"], mach["step"], gv, groups, shaft, str(path))
-    m.shaft_angles()  # checks the step
+    try:
+        m.shaft_angles()
+    except ParameterError as exc:
+        rd.fail("machine.step", str(exc).split(": ", 2)[-1] + " (an angle in deg or rad)")
     return m
 
 
@@ -340,7 +349,8 @@ def _group(rd: Reader, name: str, data: dict) -> Group:
         axial[bname] = rd.quantity(value, "length", f"{key}.axial.{bname}")
     for bname in driven:
         if bname not in axial:
-            rd.fail(f"{key}.axial.{bname}", "missing (z of this driven body on the upper shaft, a length)")
+            rd.fail(f"{key}.axial.{bname}", "missing (z of this driven body on the upper shaft: a length in m, "
+                                            "e.g. \"20 mm\")")
     loads = []
     for i, item in enumerate(g.get("loads", [])):
         lk = f"{key}.loads[{i}]"

@@ -60,7 +60,7 @@ class Reader:
         for k, f in schema.items():
             if f.required and k not in data:
                 what = f"a quantity in {_unit(f.kind)}" if f.kind in SI_UNITS else f"a {f.kind}"
-                self.fail(f"{key}.{k}" if key else k, f"missing ({f.doc or what})")
+                self.fail(f"{key}.{k}" if key else k, f"missing ({f.doc}: {what})" if f.doc else f"missing ({what})")
 
     def quantity(self, value, kind: str, key: str) -> float:
         if kind == "dimensionless" and isinstance(value, (int, float)) and not isinstance(value, bool):

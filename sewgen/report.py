@@ -1,0 +1,128 @@
+"""The analysis report of a machine: CSV tables per group and for the machine, and summary.json.
+
+summary.json holds, for every quantity a designer checks (bearing loads, driving torque, shaking force and
+moment, every joint reaction), the peak and the RMS over the revolution with the shaft angles where they
+occur; the whole machine's power-balance residual (``power_balance_residual``); the feed setting (stitch,
+regulator angle, dog travel and height above the plate) and the cam arc switches with the acceleration
+jump each implies.
+"""
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .cams import arc_switches
+from .feed import dog_travel
+
+
+def _write_csv(path: Path, cols: dict) -> Path:
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(cols)
+        w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
+    return path
+
+
+def _deg(phi) -> np.ndarray:
+    return np.degrees(phi) % 360.0
+
+
+def machine_table(a) -> dict:
+    """Machine-level columns: bearings, torques, shaking force and moment, powers."""
+    cols = {"phi [deg]": _deg(a.phi)}
+    for which in ("front", "rear"):
+        b = a.bearing(which)
+        cols[f"bearing_{which}.fx [N]"], cols[f"bearing_{which}.fy [N]"] = b[:, 0], b[:, 1]
+        cols[f"bearing_{which}.magnitude [N]"] = np.hypot(b[:, 0], b[:, 1])
+    cols["drive_torque [N*m]"] = a.torque
+    for name, fa in a.groups.items():
+        cols[f"{name}.torque [N*m]"] = fa.torque("shaft")
+    sf = a.shaking_force
+    cols["shaking.fx [N]"], cols["shaking.fy [N]"] = sf[:, 0], sf[:, 1]
+    cols["shaking.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
+    cols["shaking.moment [N*m]"] = a.shaking_moment()
+    cols["drive_power [W]"] = a.drive_power
+    cols["load_power [W]"] = a.load_power
+    cols["energy_rate [W]"] = a.energy_rate()
+    return cols
+
+
+def group_table(fa, phi) -> dict:
+    """Kinematics and forces of one group, one row per machine shaft angle ``phi``."""
+    cols = {"phi [deg]": _deg(phi), "group_phi [deg]": _deg(fa.phi)}
+    cols.update({k: v for k, v in fa.motion.table().items() if not k.startswith("phi ")})
+    cols.update({k: v for k, v in fa.table().items() if not k.startswith("phi ")})
+    return cols
+
+
+def _stat(values: np.ndarray, phi: np.ndarray, unit: str) -> dict:
+    i, j = int(np.argmax(values)), int(np.argmin(values))
+    return {"unit": unit, "max": float(values[i]), "max_at_deg": float(_deg(phi[i])), "min": float(values[j]),
+            "min_at_deg": float(_deg(phi[j])), "rms": float(np.sqrt(np.mean(np.square(values))))}
+
+
+def summary(a, switches: dict | None = None) -> dict:
+    """Peaks, RMS and where they occur; the power-balance residual; feed setting; cam arc switches."""
+    phi, m = a.phi, a.machine
+    out = {
+        "machine": m.name,
+        "model_file": m.source,
+        "speed_rpm": float(a.omega[0] * 60 / (2 * math.pi)),
+        "positions": int(len(phi)),
+        "power_balance_residual": a.power_balance_residual,
+        "bearings": {w: _stat(np.hypot(*a.bearing(w).T), phi, "N") for w in ("front", "rear")},
+        "drive_torque": _stat(a.torque, phi, "N*m"),
+        "drive_power": _stat(a.drive_power, phi, "W"),
+        "shaking_force": _stat(np.hypot(*a.shaking_force.T), phi, "N"),
+        "shaking_moment": _stat(a.shaking_moment(), phi, "N*m"),
+        "groups": {},
+    }
+    for g in m.groups:
+        fa = a.groups[g.name]
+        entry = {"mechanism": g.mechanism.name, "phase_deg": math.degrees(g.phase),
+                 "torque": _stat(fa.torque("shaft"), phi, "N*m"),
+                 "joints": {n: _stat(fa.reaction(n).magnitude, phi, "N") for n in fa.reaction_names}}
+        if "regulator" in g.held:
+            entry["regulator_deg"] = math.degrees(g.held["regulator"])
+            entry["holding_torque"] = _stat(fa.torque("regulator"), phi, "N*m")
+        if g.stitch is not None:
+            entry["stitch_mm"] = g.stitch * 1e3
+        if "feed_dog" in fa.motion.point_names and "plate_y" in g.mechanism.param_names:
+            plate = fa._run["p"][g.mechanism.param_names.index("plate_y")]
+            t = dog_travel(fa.motion, plate)
+            entry["feed_dog"] = {"travel_above_plate_mm": t.travel * 1e3, "height_above_plate_mm": t.height * 1e3,
+                                 "rises_at_deg": float(_deg(t.rise - g.phase)),
+                                 "sinks_at_deg": float(_deg(t.sink - g.phase))}
+        if switches and switches.get(g.name):
+            entry["cam_arc_switches"] = [dict(s.as_dict(), angle_deg=float(_deg(s.angle - g.phase)))
+                                         for s in switches[g.name]]
+        out["groups"][g.name] = entry
+    return out
+
+
+def cam_switches(a) -> dict:
+    """Arc switches of every group with a cam, at the analysis' speed."""
+    out = {}
+    for g in a.machine.groups:
+        fa = a.groups[g.name]
+        if any(o["name"].endswith(".arc") for o in g.mechanism.manifest["observables"]):
+            out[g.name] = arc_switches(g.mechanism, fa.motion, params=g.params or None, held=g.held or None)
+    return out
+
+
+def write_report(a, folder, progress=None) -> list[Path]:
+    """machine.csv, <group>.csv for every group and summary.json into ``folder``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    if progress:
+        progress("tables", 0, 1)
+    paths = [_write_csv(folder / "machine.csv", machine_table(a))]
+    for name, fa in a.groups.items():
+        paths.append(_write_csv(folder / f"{name}.csv", group_table(fa, a.phi)))
+    text = json.dumps(summary(a, cam_switches(a)), indent=2, ensure_ascii=False)
+    (folder / "summary.json").write_text(text + "\n", encoding="utf-8")
+    return paths + [folder / "summary.json"]
