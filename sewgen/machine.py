@@ -17,8 +17,9 @@ z_B, per frame axis c ∈ {x, y} (d'Alembert; the plane forces have no axial com
     R_A,c = −R_B,c − Σ_i F_i,c − Σ_k m_k (g_c − a_k,c)
 
 R = frame on shaft; the bearing loads on the frame are −R. Driving torque at the pulley = Σ group shaft
-torques + I_core·α + Σ_k (r_k × m_k (a_k − g))_z. The machine's shaking force and moment (frame on all moving parts, drives counted as
-frame, as for a group) are the groups' plus the core's.
+torques + I_core·α + Σ_k (r_k × m_k (a_k − g))_z. The frame's reactions on the moving parts (drives counted as
+frame, as for a group) are the groups' plus the core's; the machine's shaking force and moment on its base
+leave out the process loads (thread, presser foot, cloth), whose reactions stay inside the machine.
 """
 from __future__ import annotations
 
@@ -172,15 +173,17 @@ class MachineAnalysis:
         return self.torque * self.omega
 
     @property
-    def shaking_force(self) -> np.ndarray:
-        """(n, 2) frame on all moving parts = Σ m a_G − Σ m g − Σ loads, the shaft core included (N)."""
+    def frame_reaction(self) -> np.ndarray:
+        """(n, 2) frame on all moving parts = Σ m a_G − Σ m g − Σ loads, the shaft core included (N): the sum of
+        every group's frame-joint reactions (the shaft's pivots excepted) and of the bearings' (seed 000's
+        base-support reactions 机座支承反力)."""
         gv = self.machine.gravity
         out = sum(fa.shaking_force for fa in self.groups.values())
         for sm, _pos, _vel, acc in self.core:
             out = out + sm.mass * (acc - gv[None, :])
         return out
 
-    def shaking_moment(self, about=(0.0, 0.0)) -> np.ndarray:
+    def frame_moment(self, about=(0.0, 0.0)) -> np.ndarray:
         """In-plane moment of the frame's reactions (the drive included) about ``about`` (m) (N m)."""
         ox, oy = about
         gv = self.machine.gravity
@@ -191,8 +194,43 @@ class MachineAnalysis:
         for sm, pos, _vel, acc in self.core:
             f = sm.mass * (acc - gv[None, :])
             out = out + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
-        sf = self.shaking_force
+        sf = self.frame_reaction
         return out - (ox * sf[:, 1] - oy * sf[:, 0])
+
+    def _process_loads(self):
+        """(n, 2) resultant of the external loads and their moment about the origin (n,)."""
+        force, moment = np.zeros((len(self.phi), 2)), np.zeros(len(self.phi))
+        for g in self.machine.groups:
+            fa = self.groups[g.name]
+            ld = fa._run["loads"]
+            if ld is None:
+                continue
+            for k, slot in enumerate(g.mechanism.manifest["loads"]):
+                if slot["component"] == "torque":
+                    moment += ld[:, k]
+                    continue
+                pt = fa.motion.point(slot["name"])
+                if slot["component"] == "fx":
+                    force[:, 0] += ld[:, k]
+                    moment -= pt.y * ld[:, k]
+                else:
+                    force[:, 1] += ld[:, k]
+                    moment += pt.x * ld[:, k]
+        return force, moment
+
+    @property
+    def shaking_force(self) -> np.ndarray:
+        """(n, 2) the machine's shaking force on its base: Σ m a_G − Σ m g over every moving part (N). The process
+        loads (thread pull, presser foot, feed resistance) react on the machine's own frame, so they cancel
+        here; :attr:`frame_reaction` keeps them."""
+        return self.frame_reaction + self._process_loads()[0]
+
+    def shaking_moment(self, about=(0.0, 0.0)) -> np.ndarray:
+        """The machine's in-plane shaking moment on its base about ``about`` (m): Σ [(r_G − O) × m(a_G − g) + Iα]
+        with the drive counted as frame and the process loads internal (N m)."""
+        force, moment = self._process_loads()
+        ox, oy = about
+        return self.frame_moment(about) + moment - (ox * force[:, 1] - oy * force[:, 0])
 
     def energy_rate(self) -> np.ndarray:
         """d/dt(kinetic + potential energy) of every moving part, from the kinematics alone (W)."""

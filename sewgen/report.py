@@ -45,6 +45,8 @@ def machine_table(a) -> dict:
     cols["shaking.fx [N]"], cols["shaking.fy [N]"] = sf[:, 0], sf[:, 1]
     cols["shaking.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
     cols["shaking.moment [N*m]"] = a.shaking_moment()
+    fr = a.frame_reaction
+    cols["frame_reaction.fx [N]"], cols["frame_reaction.fy [N]"] = fr[:, 0], fr[:, 1]
     cols["drive_power [W]"] = a.drive_power
     cols["load_power [W]"] = a.load_power
     cols["energy_rate [W]"] = a.energy_rate()

@@ -322,12 +322,13 @@ def test_shaking_force_is_newtons_law_over_every_moving_part(run):
     for sm in run.machine.shaft.masses:
         _, _, acc = core_kinematics(run.phi, run.omega, run.alpha, sm)
         total += sm.mass * (acc - g[None, :])
+    assert_close(run.shaking_force, total, 1e-12, "shaking force on the base (process loads internal)")
     for _pt, _bd, fx, fy, _tz in applied_loads(run):
         total -= np.column_stack([fx, fy])
-    assert_close(run.shaking_force, total, 1e-12, "shaking force")
+    assert_close(run.frame_reaction, total, 1e-12, "frame on the moving parts")
 
 
-def test_shaking_force_is_what_the_frame_supplies(run):
+def test_frame_reaction_is_what_the_frame_supplies(run):
     """Frame on the moving parts = −(what every non-shaft frame joint puts on the frame) − (bearing loads)."""
     total = -run.bearing("front") - run.bearing("rear")
     joints = 0
@@ -340,11 +341,12 @@ def test_shaking_force_is_what_the_frame_supplies(run):
             total = total - np.column_stack([f.fx, f.fy])
             joints += 1
     assert joints == 7  # needle-bar guide; take-up D; hook O4, O11; feed regulator, O_feed, O_lift
-    assert_close(run.shaking_force, total, 1e-11, "shaking force vs frame reactions")
+    assert_close(run.frame_reaction, total, 1e-11, "frame reaction vs frame joints")
 
 
 def test_shaking_moment_about_a_point(run):
-    """In-plane moment of the frame's reactions = Σ [r_G × m(a_G − g) + I α] − Σ moments of the loads."""
+    """Shaking moment on the base = Σ [r_G × m(a_G − g) + I α]; the frame's reactions' moment also takes away
+    the moments of the loads."""
     o = np.array([0.013, -0.041])
     g = run.machine.gravity
     total = run.machine.shaft.inertia * run.alpha
@@ -358,11 +360,12 @@ def test_shaking_moment_about_a_point(run):
     for sm in run.machine.shaft.masses:
         pos, _, acc = core_kinematics(run.phi, run.omega, run.alpha, sm)
         total = total + cross(pos, sm.mass * (acc - g[None, :]))
+    assert_close(run.shaking_moment(about=tuple(o)), total, 1e-11, "shaking moment on the base")
     for pt, bd, fx, fy, tz in applied_loads(run):
         if pt is not None:
             total = total - cross(np.column_stack([pt.x, pt.y]), np.column_stack([fx, fy]))
         total = total - tz
-    assert_close(run.shaking_moment(about=tuple(o)), total, 1e-11, "shaking moment")
+    assert_close(run.frame_moment(about=tuple(o)), total, 1e-11, "moment of the frame's reactions")
 
 
 # -- load windows: the seed's angles are the machine's ------------------------------------------------------------
@@ -374,7 +377,7 @@ def test_load_windows_are_machine_shaft_angles(jb):
     phi = np.radians(np.arange(0.0, 360.0, 1.0))
     quiet = dataclasses.replace(jb, groups=[dataclasses.replace(g, loads=[]) if g.name == "take_up" else g
                                             for g in jb.groups])
-    diff = jb.analyze(phi).shaking_force - quiet.analyze(phi).shaking_force  # = −(thread pull) where on
+    diff = jb.analyze(phi).frame_reaction - quiet.analyze(phi).frame_reaction  # = −(thread pull) where on
     on_deg = np.flatnonzero(np.abs(diff[:, 1]) > 1.0)
     assert_close(diff[on_deg, 1], np.full(len(on_deg), 2.94), 1e-12, "thread pull")
     assert on_deg.tolist() == list(range(135, 156)), (
