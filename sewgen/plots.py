@@ -25,6 +25,7 @@ SIZES = {  # inches; a PNG is SIZES[name] * DPI pixels
     "joint_reactions_polar.png": (12.0, 15.0),
     "torque.png": (11.0, 5.5),
     "shaking.png": (13.0, 5.5),
+    "feed_dog_stitches.png": (11.0, 6.0),
 }
 GIF_SIZE, GIF_DPI, GIF_FPS, GIF_COLORS = (8.0, 5.6), 80, 10, 64
 COLORS = {"needle_bar": "tab:blue", "take_up": "tab:orange", "hook_drive": "tab:green", "feed": "tab:red"}
@@ -217,6 +218,48 @@ def _feed_note(ax, fa, plate):
 
 def trajectories(analysis, path):
     return _render(draw_trajectories, analysis, path, "trajectories.png")
+
+
+#: Stitch lengths (mm) of the feed-dog family: zero to the household maximum, and reverse feed.
+STITCHES_MM = (0.0, 1.0, 2.0, 3.0, 4.0, -2.0, -4.0)
+
+
+def draw_feed_dog_stitches(fig, a):
+    """Feed-dog paths (mm) for stitch lengths 0 to 4 mm and reverse, the regulator set for each (seed 001 §五);
+    returns {stitch mm: (x, y)}. Empty without a feed group."""
+    from .feed import regulator_angle
+
+    g, fa = _find(a, "feed")
+    ax = fig.subplots()
+    data = {}
+    if g is None:
+        ax.set_axis_off()
+        return data
+    plate = _plate_y(a)
+    mech, params = g.mechanism, g.params or None
+    from matplotlib import colormaps
+
+    cmap = colormaps["coolwarm"]
+    for k, mm in enumerate(STITCHES_MM):
+        reg = regulator_angle(mech, mm * 1e-3, params=params)
+        mo = mech.solve(fa.phi, speed=fa.motion.omega, params=params, held={"regulator": reg})
+        x, y = mo.point("feed_dog").x * MM, mo.point("feed_dog").y * MM
+        data[mm] = (x, y)
+        ax.plot(_closed(a, x), _closed(a, y), lw=1.4, color=cmap(0.5 + mm / 9.0),
+                label=f"{mm:+.0f} mm (regulator {math.degrees(reg):+.1f}°)")
+    if plate is not None:
+        ax.axhline(plate * MM, color="k", lw=1, ls="--", label=f"throat plate, y = {plate * MM:g} mm")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.margins(0.1)
+    ax.grid(alpha=0.3)
+    ax.set(xlabel="x (mm, + = forward feed)", ylabel="y (mm)")
+    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    fig.suptitle(_title(a, "feed-dog paths for stitch lengths 0 to 4 mm and reverse"))
+    return data
+
+
+def feed_dog_stitches(analysis, path):
+    return _render(draw_feed_dog_stitches, analysis, path, "feed_dog_stitches.png")
 
 
 # -- 2. motion against shaft angle -----------------------------------------------------------------------------
@@ -663,8 +706,9 @@ def machine_gif(analysis, path, progress=None):
 
 # -- everything ------------------------------------------------------------------------------------------------
 
-FIGURES = (("trajectories.png", trajectories), ("motion.png", motion), ("bearings_polar.png", bearings_polar),
-           ("joint_reactions_polar.png", joint_reactions_polar), ("torque.png", torque), ("shaking.png", shaking))
+FIGURES = (("trajectories.png", trajectories), ("feed_dog_stitches.png", feed_dog_stitches), ("motion.png", motion),
+           ("bearings_polar.png", bearings_polar), ("joint_reactions_polar.png", joint_reactions_polar),
+           ("torque.png", torque), ("shaking.png", shaking))
 GIF = "machine.gif"
 
 
@@ -686,6 +730,7 @@ def write_all(analysis, folder, progress=None, gif: bool = True) -> list[Path]:
 
 
 __all__ = ["DPI", "FIGURES", "GIF", "SIZES", "Linkage", "bearings_polar", "draw_bearings_polar",
+           "draw_feed_dog_stitches", "feed_dog_stitches",
            "draw_joint_reactions_polar", "draw_motion", "draw_shaking", "draw_torque", "draw_trajectories",
            "joint_reactions_polar", "linkage", "machine_gif", "motion", "new_figure", "shaking", "torque",
            "trajectories", "write_all"]

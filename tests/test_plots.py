@@ -102,3 +102,26 @@ def test_linkages_drawn_with_rigid_links(analysis):
     reach = np.einsum("nkc,nc->nk", cam - fork["fork_top"][:, None, :], normal)
     np.testing.assert_allclose(reach.max(axis=1), 11.0, atol=0.03)  # arcs drawn with 10 points
     np.testing.assert_allclose(reach.min(axis=1), -11.0, atol=0.03)
+
+
+def test_stitch_family_travels_the_stitch_above_the_plate(analysis):
+    """The feed-dog family: each plotted path moves the dog by its stitch while above the throat plate (plate
+    crossings by linear interpolation on the 5° sweep, so to ~0.05 mm), zero stitch hardly moves it, and the
+    reverse paths span the same width as the forward ones."""
+    fig = plots.new_figure(plots.SIZES["feed_dog_stitches.png"])
+    data = plots.draw_feed_dog_stitches(fig, analysis)
+    plate = plots._plate_y(analysis) * 1e3
+    assert set(data) == set(plots.STITCHES_MM)
+    for mm, (x, y) in data.items():
+        z = y - plate
+        up = int(np.flatnonzero((z < 0) & (np.roll(z, -1) >= 0))[0])
+        down = int(np.flatnonzero((z >= 0) & (np.roll(z, -1) < 0))[0])
+
+        def cross(i):
+            j = (i + 1) % len(z)
+            t = z[i] / (z[i] - z[j])
+            return x[i] + t * (x[j] - x[i])
+
+        assert abs(cross(down) - cross(up) - mm) < 0.05, (mm, cross(down) - cross(up))
+    assert np.ptp(data[0.0][0]) < 0.05
+    assert abs(np.ptp(data[4.0][0]) - np.ptp(data[-4.0][0])) < 0.1
