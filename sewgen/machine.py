@@ -13,8 +13,10 @@ its group, so what the shaft core takes from crank i is the force its pivot puts
 own masses (its unbalance, counterweights) are point masses (m, r, angle, z). With bearing A at z_A and B at
 z_B, per frame axis c ∈ {x, y} (d'Alembert; the plane forces have no axial component):
 
-    R_B,c = −[Σ_i (z_i − z_A) F_i,c + Σ_k (z_k − z_A) m_k (g_c − a_k,c)] / (z_B − z_A)
-    R_A,c = −R_B,c − Σ_i F_i,c − Σ_k m_k (g_c − a_k,c)
+    R_B,c = −[Σ_i (z_i − z_A) F_i,c + Σ_k (z_k − z_A) m_k (g_c − a_k,c) + (z_P − z_A) P_c] / (z_B − z_A)
+    R_A,c = −R_B,c − Σ_i F_i,c − Σ_k m_k (g_c − a_k,c) − P_c
+
+with P the belt's pull on the pulley at z_P (T1 + T2 along the belt: constant, it does no work).
 
 R = frame on shaft; the bearing loads on the frame are −R. Driving torque at the pulley = Σ group shaft
 torques + I_core·α + Σ_k (r_k × m_k (a_k − g))_z. The frame's reactions on the moving parts (drives counted as
@@ -74,6 +76,7 @@ class Shaft:
     inertia: float  # of the core about its axis (kg m²)
     masses: list = field(default_factory=list)  # ShaftMass: the core's mass, unbalance, counterweights
     pulley: float = 0.0  # z of the pulley (m), where the drive torque enters
+    belt: tuple = (0.0, 0.0)  # the belt's pull on the pulley (N, frame x, y): T1 + T2 along the belt
 
 
 @dataclass
@@ -147,8 +150,9 @@ class MachineAnalysis:
         zA, zB = sh.front, sh.rear
         self.core = self._core_masses()
         loads = self.crank_loads()
-        total = sum(F for _, _, F in loads)
-        arm = sum((z - zA) * F for _, z, F in loads)
+        belt = np.asarray(sh.belt, dtype=float)[None, :]
+        total = sum(F for _, _, F in loads) + belt
+        arm = sum((z - zA) * F for _, z, F in loads) + (sh.pulley - zA) * belt
         for sm, _pos, _vel, acc in self.core:
             d = sm.mass * (gv[None, :] - acc)  # d'Alembert force of a core mass
             total = total + d
@@ -174,14 +178,14 @@ class MachineAnalysis:
 
     @property
     def frame_reaction(self) -> np.ndarray:
-        """(n, 2) frame on all moving parts = Σ m a_G − Σ m g − Σ loads, the shaft core included (N): the sum of
-        every group's frame-joint reactions (the shaft's pivots excepted) and of the bearings' (seed 000's
-        base-support reactions 机座支承反力)."""
+        """(n, 2) frame on all moving parts = Σ m a_G − Σ m g − Σ loads − belt pull, the shaft core included (N):
+        the sum of every group's frame-joint reactions (the shaft's pivots excepted) and of the bearings'
+        (seed 000's base-support reactions 机座支承反力)."""
         gv = self.machine.gravity
         out = sum(fa.shaking_force for fa in self.groups.values())
         for sm, _pos, _vel, acc in self.core:
             out = out + sm.mass * (acc - gv[None, :])
-        return out
+        return out - np.asarray(self.machine.shaft.belt, dtype=float)[None, :]
 
     def frame_moment(self, about=(0.0, 0.0)) -> np.ndarray:
         """In-plane moment of the frame's reactions (the drive included) about ``about`` (m) (N m)."""
@@ -222,13 +226,15 @@ class MachineAnalysis:
     def shaking_force(self) -> np.ndarray:
         """(n, 2) the machine's shaking force on its base: Σ m a_G − Σ m g over every moving part (N). The process
         loads (thread pull, presser foot, feed resistance) react on the machine's own frame, so they cancel
-        here; :attr:`frame_reaction` keeps them."""
-        return self.frame_reaction + self._process_loads()[0]
+        here; :attr:`frame_reaction` keeps them. The constant belt pull is left out too (the base carries it
+        besides, as it carries the frame's own weight)."""
+        return self.frame_reaction + self._process_loads()[0] + np.asarray(self.machine.shaft.belt)[None, :]
 
     def shaking_moment(self, about=(0.0, 0.0)) -> np.ndarray:
         """The machine's in-plane shaking moment on its base about ``about`` (m): Σ [(r_G − O) × m(a_G − g) + Iα]
         with the drive counted as frame and the process loads internal (N m)."""
         force, moment = self._process_loads()
+        force = force + np.asarray(self.machine.shaft.belt)[None, :]  # the belt pulls on the shaft axis
         ox, oy = about
         return self.frame_moment(about) + moment - (ox * force[:, 1] - oy * force[:, 0])
 
@@ -287,6 +293,8 @@ SHAFT = {
     "mass": Field("mass", doc="mass of the shaft core"),
     "mass_z": Field("length", doc="z of the core's centre of mass"),
     "masses": Field("list", False),
+    "belt_pull": Field("force", False, "the belt's radial pull on the pulley, T1 + T2"),
+    "belt_direction": Field("angle", False, "direction of the belt pull in the frame (from +x)"),
 }
 SHAFT_MASS = {
     "name": Field("text"),
@@ -330,8 +338,10 @@ def load_machine(name_or_path) -> Machine:
         key = f"shaft.masses[{i}]"
         sm = rd.read(rd.table(item, key), key, SHAFT_MASS)
         masses.append(ShaftMass(sm["name"], sm["mass"], sm["radius"], sm["angle"], sm["z"]))
+    pull, pull_dir = shaft_doc.get("belt_pull", 0.0), shaft_doc.get("belt_direction", -math.pi / 2)
     shaft = Shaft(shaft_doc["front_bearing"], shaft_doc["rear_bearing"], shaft_doc["inertia"], masses,
-                  shaft_doc.get("pulley", shaft_doc["rear_bearing"]))
+                  shaft_doc.get("pulley", shaft_doc["rear_bearing"]),
+                  (pull * math.cos(pull_dir), pull * math.sin(pull_dir)))
     if not shaft.rear > shaft.front:
         rd.fail("shaft.rear_bearing", "must lie behind the front bearing (larger z)")
     groups = [_group(rd, name, rd.table(g, f"groups.{name}")) for name, g in rd.table(doc["groups"], "groups").items()]

@@ -143,6 +143,7 @@ def shaft_bearings(a, z0):
     for sm in sh.masses:
         _, _, acc = core_kinematics(a.phi, a.omega, a.alpha, sm)
         forces.append((sm.z, sm.mass * (np.array([gx, gy])[None, :] - acc)))
+    forces.append((sh.pulley, np.tile(np.asarray(sh.belt, dtype=float), (n, 1))))  # the belt's pull
     rhs = np.zeros((4, n))
     for z, f in forces:
         d = z - z0
@@ -325,6 +326,7 @@ def test_shaking_force_is_newtons_law_over_every_moving_part(run):
     assert_close(run.shaking_force, total, 1e-12, "shaking force on the base (process loads internal)")
     for _pt, _bd, fx, fy, _tz in applied_loads(run):
         total -= np.column_stack([fx, fy])
+    total -= np.asarray(run.machine.shaft.belt)[None, :]
     assert_close(run.frame_reaction, total, 1e-12, "frame on the moving parts")
 
 
@@ -365,6 +367,8 @@ def test_shaking_moment_about_a_point(run):
         if pt is not None:
             total = total - cross(np.column_stack([pt.x, pt.y]), np.column_stack([fx, fy]))
         total = total - tz
+    belt = np.tile(np.asarray(run.machine.shaft.belt, dtype=float), (len(run.phi), 1))
+    total = total - cross(np.zeros_like(belt), belt)  # the belt pulls on the shaft axis
     assert_close(run.frame_moment(about=tuple(o)), total, 1e-11, "moment of the frame's reactions")
 
 
