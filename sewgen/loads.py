@@ -63,10 +63,10 @@ def load_matrix(mech, loads, phi: np.ndarray, degrees: bool = False) -> tuple[np
     Slots (the manifest's "loads"): fx, fy per named point of a moving body, torque per moving body. Window
     ends given as bare numbers are radians, or degrees when ``degrees`` (as the sweep's shaft angles).
     """
-    slots = mech.manifest["loads"]
-    index = {(s["name"], s["component"]): k for k, s in enumerate(slots)}
     if not loads:
         return None, []
+    slots = mech.manifest["loads"]
+    index = {(s["name"], s["component"]): k for k, s in enumerate(slots)}
     out = np.zeros((phi.shape[0], len(slots)))
     placed = []
     for load in loads:

@@ -124,15 +124,23 @@ class MachineAnalysis:
         self._shaft()
 
     def _core_masses(self):
-        """Acceleration (n, 2) and position (n, 2) of every core point mass."""
+        """Position, velocity and acceleration (n, 2 each) of every core point mass (r at φ + angle)."""
         out = []
+        cphi, sphi = np.cos(self.phi), np.sin(self.phi)
+        w, al = self.omega, self.alpha
         for sm in self.machine.shaft.masses:
-            th = self.phi + sm.angle
-            c, s = np.cos(th), np.sin(th)
-            pos = sm.radius * np.column_stack([c, s])
-            vel = sm.radius * self.omega[:, None] * np.column_stack([-s, c])
-            acc = (-sm.radius * self.omega[:, None] ** 2 * np.column_stack([c, s])
-                   + sm.radius * self.alpha[:, None] * np.column_stack([-s, c]))
+            if sm.radius == 0.0:  # on the axis: at rest in the plane
+                zero = np.zeros((len(self.phi), 2))
+                out.append((sm, zero, zero, zero))
+                continue
+            cb, sb = math.cos(sm.angle), math.sin(sm.angle)
+            u = np.empty((len(self.phi), 2))  # radial unit vector
+            u[:, 0] = cphi * cb - sphi * sb
+            u[:, 1] = sphi * cb + cphi * sb
+            t = u[:, ::-1] * np.array([-1.0, 1.0])  # tangential: u turned +90°
+            pos = sm.radius * u
+            vel = (sm.radius * w)[:, None] * t
+            acc = (sm.radius * al)[:, None] * t - (sm.radius * w * w)[:, None] * u
             out.append((sm, pos, vel, acc))
         return out
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 
 import numpy as np
 
@@ -39,6 +40,8 @@ class Mechanism:
         self.closed_form = bool(man["closed_form"])
         self.default_speed = float(man["default_speed"])
         self._defaults = None
+        self._options: dict = {}
+        self._outputs: dict = {}
 
     def __repr__(self) -> str:
         return f"<sewgen.Mechanism {self.name}: {len(self.coord_names)} coordinates, {len(self.param_names)} parameters>"
@@ -191,14 +194,32 @@ class Mechanism:
         dflt = self._defaults
         p = dflt["p"] if params is None else self.param_vector(params)
         nq, nobs = len(self.coord_names), len(self.manifest["observables"])
+        key = (params is None, max_iter, bool(newton))
+        opt = self._options.get(key) if params is None else None
+        if opt is None:  # Newton's options; those of the default parameters are made once
+            opt = self.ffi.new("sg_options *", {"tol": 1e-13 * self.length_scale(p), "max_iter": max_iter,
+                                               "newton_only": 1 if newton else 0})
+            if params is None:
+                self._options[key] = opt
         return {"n": n, "phi": phi_v, "omega": omega, "alpha": alpha, "p": p,
                 "held": dflt["held"] if held is None else np.array(self._held(held), dtype=np.float64),
                 "branch": dflt["branch"] if branch is None else np.array(self._branches(branch), dtype=np.intc),
                 "guess": dflt["guess"] if guess is None else np.array(self._guess(guess), dtype=np.float64),
-                "opt": self.ffi.new("sg_options *", {"tol": 1e-13 * self.length_scale(p), "max_iter": max_iter,
-                                                    "newton_only": 1 if newton else 0}),
-                "q": np.empty((n, nq)), "qd": np.empty((n, nq)), "qdd": np.empty((n, nq)),  # C writes every row
-                "obs": np.empty((n, nobs)), "status": np.zeros(n, dtype=np.intc)}
+                "opt": opt,
+                "q": self._output("q", (n, nq)), "qd": self._output("qd", (n, nq)),  # C writes every row
+                "qdd": self._output("qdd", (n, nq)), "obs": self._output("obs", (n, nobs)),
+                "status": np.zeros(n, dtype=np.intc)}
+
+    def _output(self, name: str, shape: tuple) -> np.ndarray:
+        """An output array for C to fill: the previous call's, if nothing outside this cache still holds it
+        (no result, view or copy of it is alive), else a new one. Reusing the memory spares the page faults
+        of fresh pages, which cost as much as the sweep itself on large sweeps."""
+        arr = self._outputs.get(name)
+        if arr is not None and arr.shape == shape and sys.getrefcount(arr) == 2:  # the dict's and the argument's
+            return arr
+        arr = np.empty(shape)
+        self._outputs[name] = arr
+        return arr
 
     def _motion(self, a: dict) -> Motion:
         return Motion(self, a["phi"], a["omega"], a["alpha"], a["q"], a["qd"], a["qdd"], a["obs"])
@@ -241,13 +262,14 @@ class Mechanism:
         a = self._sweep_inputs(phi, speed, accel, params, held, branch, guess, degrees, newton, max_iter)
         g = self._si(gravity, "acceleration", "gravity")
         g_dir = self._si(gravity_direction, "angle", "gravity_direction")
-        gv = np.array([g * np.cos(g_dir), g * np.sin(g_dir)])
-        gv[np.abs(gv) < 1e-15 * abs(g)] = 0.0  # -90 deg is exactly -y, not (6e-16, -g)
+        gx, gy = g * math.cos(g_dir), g * math.sin(g_dir)
+        tiny = 1e-15 * abs(g)  # -90 deg is exactly -y, not (6e-16, -g)
+        gv = np.array([0.0 if abs(gx) < tiny else gx, 0.0 if abs(gy) < tiny else gy])
         if not (isinstance(moment_about, (tuple, list)) and len(moment_about) == 2):
             raise ParameterError(self.name, "moment_about", f"must be a point (x, y), got {moment_about!r}")
         about = tuple(self._si(v, "length", "moment_about") for v in moment_about)
         ld, placed = load_matrix(self, loads, a["phi"], degrees)
-        frc = np.empty((a["n"], self.manifest["sizes"]["nfo"]))
+        frc = self._output("frc", (a["n"], self.manifest["sizes"]["nfo"]))
         d = self._ptr
         self.lib.sg_sweep_forces(
             self._descriptor, a["n"], d("double *", a["phi"]), d("double *", a["omega"]),
