@@ -215,7 +215,7 @@ class Mechanism:
         (no result, view or copy of it is alive), else a new one. Reusing the memory spares the page faults
         of fresh pages, which cost as much as the sweep itself on large sweeps."""
         arr = self._outputs.get(name)
-        if arr is not None and arr.shape == shape and sys.getrefcount(arr) == 2:  # the dict's and the argument's
+        if arr is not None and arr.shape == shape and sys.getrefcount(arr) == 3:  # the dict, `arr`, the argument
             return arr
         arr = np.empty(shape)
         self._outputs[name] = arr
