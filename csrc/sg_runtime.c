@@ -207,10 +207,9 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                 predict(nq, nh, hist, phi, q, ph, qi);
                 for (int k = 0; k < nq; ++k) d[k] = qi[k] - prev[k];
                 shift_trig(m, prev, cq_last, d, qi, cq);
-            } else if (m->closed == NULL || m->closed(x, cx, c, branch, qi, cq) != SG_OK) {
-                memcpy(qi, q_guess, sizeof(double) * (size_t)nq);
-                fill_trig(m, qi, cq);
-            } else {
+            } else { /* first position: the closed form where it assembles, else the guess */
+                if (m->closed == NULL || m->closed(x, cx, c, branch, qi, cq) != SG_OK)
+                    memcpy(qi, q_guess, sizeof(double) * (size_t)nq);
                 fill_trig(m, qi, cq);
             }
             st = newton(m, qi, cq, x, cx, c, opt, &sign);

@@ -117,12 +117,17 @@ class Mechanism:
 
     # -- kernels -------------------------------------------------------------------------------------------
     def _ptr(self, ctype: str, arr: np.ndarray):
-        return self.ffi.cast(ctype, self.ffi.from_buffer(arr)) if arr.size else self.ffi.NULL
+        """``arr`` as a C array argument ("double *" -> double[]). The typed from_buffer keeps ``arr`` alive for
+        as long as the cdata lives (a cast pointer would not: a temporary array could be freed before the call)."""
+        return self.ffi.from_buffer(ctype.replace(" *", "[]"), arr) if arr.size else self.ffi.NULL
 
     def constants(self, params: dict | None = None) -> np.ndarray:
         """The parameter-only constants the kernels read (sg_<name>_constants)."""
+        return self._constants(self.param_vector(params))
+
+    def _constants(self, p: np.ndarray) -> np.ndarray:
         c = np.zeros(max(self.manifest["sizes"]["nc"], 1))
-        getattr(self.lib, f"sg_{self.name}_constants")(self._ptr("double *", self.param_vector(params)),
+        getattr(self.lib, f"sg_{self.name}_constants")(self._ptr("double *", np.ascontiguousarray(p, dtype=float)),
                                                          self._ptr("double *", c))
         return c
 
@@ -131,8 +136,7 @@ class Mechanism:
         nq = len(self.coord_names)
         qv = np.ascontiguousarray(q, dtype=np.float64).reshape(nq)
         x = np.array([float(phi)] + self._held(held), dtype=np.float64)
-        cq = np.column_stack([np.cos(qv), np.sin(qv)]).ravel()
-        cx = np.column_stack([np.cos(x), np.sin(x)]).ravel()
+        cq, cx = _cos_sin_pairs(qv), _cos_sin_pairs(x)
         r, jac = np.zeros(nq), np.zeros((nq, nq))
         d = self._ptr
         getattr(self.lib, f"sg_{self.name}_residual")(
@@ -194,7 +198,7 @@ class Mechanism:
         dflt = self._defaults
         p = dflt["p"] if params is None else self.param_vector(params)
         nq, nobs = len(self.coord_names), len(self.manifest["observables"])
-        key = (params is None, max_iter, bool(newton))
+        key = (max_iter, bool(newton))
         opt = self._options.get(key) if params is None else None
         if opt is None:  # Newton's options; those of the default parameters are made once
             opt = self.ffi.new("sg_options *", {"tol": 1e-13 * self.length_scale(p), "max_iter": max_iter,
@@ -296,18 +300,14 @@ class Mechanism:
         nf = self.manifest["sizes"]["nf"]
         q = np.ascontiguousarray(motion.q[index], dtype=np.float64)
         x = np.concatenate([[float(motion.phi[index])], held]).astype(np.float64)
-        cq = np.column_stack([np.cos(q), np.sin(q)]).ravel()
-        cx = np.column_stack([np.cos(x), np.sin(x)]).ravel()
         obs = np.ascontiguousarray(motion.obs[index], dtype=np.float64)
         ld = np.zeros(max(self.manifest["sizes"]["nload"], 1)) if load_row is None else \
             np.ascontiguousarray(load_row, dtype=np.float64)
-        c = np.zeros(max(self.manifest["sizes"]["nc"], 1))
         A, b = np.zeros((nf, nf)), np.zeros(nf)
         d = self._ptr
-        getattr(self.lib, f"sg_{self.name}_constants")(d("double *", np.ascontiguousarray(p, dtype=np.float64)),
-                                                         d("double *", c))
         getattr(self.lib, f"sg_{self.name}_force_matrix")(
-            d("double *", q), d("double *", cq), d("double *", x), d("double *", cx), d("double *", c),
+            d("double *", q), d("double *", _cos_sin_pairs(q)), d("double *", x), d("double *", _cos_sin_pairs(x)),
+            d("double *", self._constants(p)),
             d("double *", obs), d("double *", np.ascontiguousarray(gv, dtype=np.float64)), d("double *", ld),
             d("double *", A), d("double *", b))
         return A, b
@@ -323,6 +323,11 @@ class Mechanism:
             raise InputError(self.name, f"runtime refused the sweep (status {code}) at position {i}")
         same = bad[status[bad] == code]
         raise cls(self.name, float(phi[i]), i, int(same.size), float(phi[same[-1]]))
+
+
+def _cos_sin_pairs(v: np.ndarray) -> np.ndarray:
+    """cos v0, sin v0, cos v1, ...: the cq/cx layout the kernels read."""
+    return np.column_stack([np.cos(v), np.sin(v)]).ravel()
 
 
 def shaft_angles(step_deg: float = 5.0, start_deg: float = 0.0, turns: float = 1.0) -> np.ndarray:
