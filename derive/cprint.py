@@ -44,9 +44,6 @@ class KernelPrinter(C99CodePrinter):
             return f"(1.0/{self.parenthesize(base, 1000)})"
         return super()._print_Pow(expr)
 
-    def _print_Relational(self, expr):
-        return f"{self._print(expr.lhs)} {expr.rel_op} {self._print(expr.rhs)}"
-
     def _print_NumberSymbol(self, expr):  # pi, E, ...: a literal, never a macro or a declaration
         return repr(float(expr))
 

@@ -48,7 +48,7 @@ def _force_manifest(kst: Kinetostatics) -> dict:
         offset += len(r.columns)
     return {
         "reactions": reactions,
-        "force_outputs": [{"name": name, "unit": unit} for name, unit, _ in kst.outputs()],
+        "force_outputs": [{"name": name, "unit": unit} for name, unit, _ in kst.outputs],
         "loads": [{"name": name, "component": comp, "body": body.name} for name, comp, body, _ in kst.load_slots],
         "force_rows": kst.row_names,
         "force_blocks": [len(cols) for _, cols in kst.blocks],
@@ -116,7 +116,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     kernels.insert(0, ks.constants_kernel())  # last to build: it evaluates what the others hoisted
     sizes = {"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
              "nbranch": len(dyads or []), "nc": len(ks.constants), "nf": len(kst.f),
-             "nfo": len(kst.f) + len(kst.outputs()), "nload": len(kst.load_slots)}
+             "nfo": len(kst.f) + len(kst.outputs), "nload": len(kst.load_slots)}
     manifest = manifest_of(mech, kin, kst, dyads, kernels, sizes)
     text = json.dumps(manifest, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
     c_source = _TEMPLATES.get_template("mechanism.c.j2").render(

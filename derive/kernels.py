@@ -73,6 +73,7 @@ class KernelSet:
         self.params = set(kin.p)
         self.constants: dict = {}  # expression -> symbol c_k, in first-seen order
         self.trig: dict = {}  # angle symbol -> (cos symbol, sin symbol)
+        self._cam_lines = None
         for i, (c, q) in enumerate(zip(kin.coords, kin.q)):
             if c.kind == "angle":
                 self.trig[q] = (sp.Symbol(f"cq_{2 * i}", real=True), sp.Symbol(f"cq_{2 * i + 1}", real=True))
@@ -131,7 +132,13 @@ class KernelSet:
 
     def cam_block(self) -> list[str]:
         """The active arc of every cam (derive.kinematics.CamContact): ka[3j..3j+2] = its centre and radius,
-        ka[3·ncam + j] = its index, chosen by the sector that holds the face normal's direction e (cam frame)."""
+        ka[3·ncam + j] = its index, chosen by the sector that holds the face normal's direction e (cam frame).
+        The same lines open every kernel that reads ka; they are built once."""
+        if self._cam_lines is None:
+            self._cam_lines = self._cam_selection()
+        return self._cam_lines
+
+    def _cam_selection(self) -> list[str]:
         cams, pr = self.kin.cams, self.printer
         if not cams:
             return []
@@ -212,7 +219,7 @@ class KernelSet:
         pr, f = self.printer, kst.f
         schur = sorted(kst.schur)
         steps = kst.eliminated
-        outs = kst.outputs()
+        outs = kst.outputs
         exprs = ([kst.schur[ij] for ij in schur] + [kst.schur_rhs[i] for i in sorted(kst.schur_rhs)]
                  + [e for *_, b_i, row in steps for e in [b_i] + [v for _, v in row]]
                  + [e for _, _, e in outs])
@@ -253,8 +260,7 @@ class KernelSet:
 
         def known_part(i):
             """b_i less the products with reactions solved in earlier blocks (f_j prints as out[j])."""
-            e = rhs[i] - sum((a[(i, j)] * f[j] for j in range(n) if (i, j) in a and j not in inside), sp.S.Zero)
-            return e
+            return rhs[i] - sum((a[(i, j)] * f[j] for j in range(n) if (i, j) in a and j not in inside), sp.S.Zero)
 
         label = ", ".join(str(j) for j in cols)
         if len(cols) == 1:

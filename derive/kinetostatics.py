@@ -16,8 +16,7 @@ on every moving body — values per position at run time, so windows and magnitu
 is a run-time vector in the mechanism's plane.
 
 The kinematic quantities b needs (a_G, α, ω, v of points) are the motion kernel's observables: they enter as
-placeholder symbols ``o_k`` (= obs[k]) so nothing is computed twice; :meth:`Kinetostatics.explicit` puts
-the kinematic expressions back for checks and baselines.
+placeholder symbols ``o_k`` (= obs[k]) so nothing is computed twice.
 
 The system is square for every declaration the kinematics accepts (3 per body = 2 per joint + 1 per drive,
 given as many closure equations as coordinates). Its solve is planned here, in two steps:
@@ -62,6 +61,11 @@ class Reaction:
     def grounded(self) -> bool:
         return not self.a.moving or not self.b.moving
 
+    @property
+    def normal(self) -> tuple:
+        """Unit normal of a prismatic, slot or cam force: the guide (or face) direction turned +90°."""
+        return (-sp.sin(self.guide_angle), sp.cos(self.guide_angle))
+
 
 class Kinetostatics:
     """A, b, the outputs derived from the solution, and the block order to solve A f = b in."""
@@ -78,10 +82,15 @@ class Kinetostatics:
         self.loads = [sp.Symbol(f"ld_{k}", real=True) for k in range(len(self.load_slots))]
         self.f = [sp.Symbol(f"f_{k}", real=True) for k in range(sum(len(r.columns) for r in self.reactions))]
         self.unknown_names = [f"{r.name}.{c}" for r in self.reactions for c in r.columns]
+        self.column, k = {}, 0  # reaction name -> index of its first unknown in f
+        for r in self.reactions:
+            self.column[r.name] = k
+            k += len(r.columns)
         self.row_names = [f"{b.name}.{e}" for b in self.moving for e in ("x", "y", "moment")]
         self.A, self.b = self._balance()
         self.eliminated, self.schur, self.schur_rhs = self._eliminate_constant_pivots()
         self.blocks = self._block_order()
+        self.outputs = self._outputs()
 
     # -- what acts where ------------------------------------------------------------------------------------
     def _reactions(self) -> list[Reaction]:
@@ -155,7 +164,7 @@ class Kinetostatics:
                     A[k + 2, col] += -sign * dy
                     A[k + 2, col + 1] += sign * dx
                 elif r.kind in ("prismatic", "slot", "cam"):  # a normal force N·n at point `at` (+ a couple)
-                    nx, ny = -sp.sin(r.guide_angle), sp.cos(r.guide_angle)
+                    nx, ny = r.normal
                     dx, dy = (self.own_arm(r.at) if r.at.body is body else self.arm(body, self.kin.world(r.at)))
                     A[k, col] += sign * nx
                     A[k + 1, col] += sign * ny
@@ -183,15 +192,10 @@ class Kinetostatics:
         return A, b
 
     # -- outputs derived from the solution ------------------------------------------------------------------
-    def outputs(self) -> list[tuple[str, str, sp.Expr]]:
+    def _outputs(self) -> list[tuple[str, str, sp.Expr]]:
         """(name, unit, expression in f, observables, gravity, loads) of every result after f itself."""
-        kin, mech = self.kin, self.mech
+        kin, mech, col = self.kin, self.mech, self.column
         out = []
-        col = {}
-        k = 0
-        for r in self.reactions:
-            col[r.name] = k
-            k += len(r.columns)
         for i, inp in enumerate(mech.inputs):
             tau = sum((r.sense * self.f[col[r.name]] for r in self.reactions
                        if r.kind == "drive" and r.input_index == i), sp.S.Zero)
@@ -201,8 +205,7 @@ class Kinetostatics:
         for r in self.reactions:  # a normal force in frame components
             if r.kind in ("prismatic", "slot", "cam"):
                 c = col[r.name]
-                out += [(f"{r.name}.fx", "N", -sp.sin(r.guide_angle) * self.f[c]),
-                        (f"{r.name}.fy", "N", sp.cos(r.guide_angle) * self.f[c])]
+                out += [(f"{r.name}.fx", "N", r.normal[0] * self.f[c]), (f"{r.name}.fy", "N", r.normal[1] * self.f[c])]
         fx = fy = mz = sp.S.Zero  # the frame's reactions on the moving parts
         for r in self.reactions:
             if not r.grounded:
@@ -216,7 +219,7 @@ class Kinetostatics:
                 mz += sign * (px * self.f[c + 1] - py * self.f[c])
             elif r.kind in ("prismatic", "slot", "cam"):
                 px, py = kin.world(r.at)
-                nx, ny = -sp.sin(r.guide_angle), sp.cos(r.guide_angle)
+                nx, ny = r.normal
                 fx += sign * nx * self.f[c]
                 fy += sign * ny * self.f[c]
                 mz += sign * ((px * ny - py * nx) * self.f[c] + (self.f[c + 1] if r.kind == "prismatic" else 0))
@@ -291,12 +294,6 @@ class Kinetostatics:
                                    "(a body or joint is over- or under-constrained)")
         deps = {j: sorted({k for k in nz[owner[j]] if k != j}) for j in cols}
         return [([owner[j] for j in comp], comp) for comp in _tarjan(deps)]
-
-    # -- checks and baselines -------------------------------------------------------------------------------
-    def explicit(self, expr):
-        """``expr`` with the observable placeholders replaced by their kinematic expressions."""
-        subs = {o: ob.expr for o, ob in zip(self.obs, self.kin.observables)}
-        return expr.xreplace(subs) if hasattr(expr, "xreplace") else sp.sympify(expr).xreplace(subs)
 
 
 def _perfect_matching(nz: dict, rows: list) -> dict | None:
