@@ -74,18 +74,18 @@ def _parse(text: str, kind: str) -> tuple[float, str]:
     except Exception as exc:  # pint raises several unrelated types for unreadable text
         return math.nan, f"cannot read {{value}} as a quantity ({str(exc).replace('{', '{{').replace('}', '}}')})"
     target = SI_UNITS[kind]
-    if kind in _ANGULAR and "radian" not in q.to_root_units().units._units:
-        hint = "rad/s, rpm, deg/s or revolution/s" if kind == "speed" else "rad/s**2 or deg/s**2"
-        return math.nan, f"{{value}} names no angle unit (Hz or 1/min would be read as rad/s): write {hint}"
     try:
         if kind == "angle" and q.dimensionless and not isinstance(q.magnitude, str):
-            return float(q.to("radian").magnitude), ""
-        if target:
-            return float(q.to(target).magnitude), ""
-        return float(q.to("dimensionless").magnitude), ""
+            value = float(q.to("radian").magnitude)
+        else:
+            value = float(q.to(target or "dimensionless").magnitude)
     except Exception:
         article = "an" if kind[0] in "aeiou" else "a"
         return math.nan, f"{{value}} is not {article} {kind} (expected a unit convertible to {target or 'no unit'})"
+    if kind in _ANGULAR and "radian" not in q.to_root_units().units._units:
+        hint = "rad/s, rpm, deg/s or revolution/s" if kind == "speed" else "rad/s**2 or deg/s**2"
+        return math.nan, f"{{value}} names no angle unit (Hz or 1/min would be read as rad/s): write {hint}"
+    return value, ""
 
 
 def unit_of(text: str) -> str:

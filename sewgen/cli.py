@@ -93,12 +93,19 @@ def _load(text: str) -> Load:
     return Load(at, window=(window["from"], window["to"]) if window else None, **kw)
 
 
-def _sweep_angles(args) -> np.ndarray:
+def _option(text: str | None, kind: str, option: str) -> float | None:
+    """A command-line quantity in SI (None when not given); a bad unit ends the command naming the option."""
+    if text is None:
+        return None
     try:
-        step = math.degrees(to_si(args.step, "angle", "--step"))
-        start = math.degrees(to_si(args.start, "angle", "--start"))
+        return to_si(text, kind, option)
     except UnitError as exc:
         raise SystemExit(f"sewgen: {exc}") from None
+
+
+def _sweep_angles(args) -> np.ndarray:
+    step = math.degrees(_option(args.step, "angle", "--step"))
+    start = math.degrees(_option(args.start, "angle", "--start"))
     if not step > 0:
         raise SystemExit("sewgen: --step must be positive")
     return np.radians(start + step * np.arange(int(round(360.0 / step))))
@@ -150,19 +157,8 @@ def cmd_analyze(args) -> int:
     from .report import write_report
 
     machine = load_machine(args.model)
-    step = None
-    if args.step:
-        try:
-            step = to_si(args.step, "angle", "--step")
-        except UnitError as exc:
-            raise SystemExit(f"sewgen: {exc}") from None
-    phi = machine.shaft_angles(step)
-    speed = None
-    if args.speed:
-        try:
-            speed = to_si(args.speed, "speed", "--speed")
-        except UnitError as exc:
-            raise SystemExit(f"sewgen: {exc}") from None
+    phi = machine.shaft_angles(_option(args.step, "angle", "--step"))
+    speed = _option(args.speed, "speed", "--speed")
     out = Path(args.out or machine.name.lower())
     print(f"{machine.name}: {len(phi)} positions at {(speed or machine.speed) * 30 / math.pi:.6g} rpm "
           f"-> {out}/", file=sys.stderr)
@@ -225,6 +221,9 @@ def main(argv=None) -> int:
     except (SewgenError, KeyError) as exc:
         print(f"sewgen: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # `sewgen ... | head`: the reader has gone, nothing more to say
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":

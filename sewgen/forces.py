@@ -10,10 +10,11 @@ puts on the frame is their negative, per joint in :meth:`ForceAnalysis.frame_for
 """
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 
 import numpy as np
+
+from .results import write_csv
 
 
 @dataclass(frozen=True)
@@ -43,16 +44,13 @@ class ForceAnalysis:
 
     def __init__(self, mechanism, motion, frc: np.ndarray, placed_loads, gravity, moment_about, run: dict):
         self.mechanism, self.motion, self.frc = mechanism, motion, frc
-        self._run = run  # the C-ready parameters, held inputs, gravity vector and load array of the sweep
+        self._run = run  # the C-ready parameters, held inputs and load array of the sweep
         self.phi = motion.phi
         self.gravity = gravity
         self.moment_about = moment_about
-        man = mechanism.manifest
-        self._reactions = {r["name"]: r for r in man["reactions"]}
-        nf = man["sizes"]["nf"]
-        self._outputs = {o["name"]: nf + k for k, o in enumerate(man["force_outputs"])}
+        lay = mechanism.layout
+        self._reactions, self._outputs, self._inputs = lay["reactions"], lay["force_outputs"], lay["inputs"]
         self._placed = placed_loads
-        self._inputs = [i["name"] for i in man["inputs"]]
 
     def __len__(self) -> int:
         return len(self.phi)
@@ -145,7 +143,7 @@ class ForceAnalysis:
         """A and b of A f = b at position ``index``, with this run's parameters, held inputs, gravity and loads."""
         run = self._run
         row = None if run["loads"] is None else run["loads"][index]
-        return self.mechanism._force_matrix(self.motion, index, run["p"], run["held"], run["gravity"], row)
+        return self.mechanism._force_matrix(self.motion, index, run["p"], run["held"], self.gravity, row)
 
     def table(self) -> dict[str, np.ndarray]:
         """Every force result as a column named ``"<name> [unit]"``, shaft angle first."""
@@ -174,8 +172,4 @@ class ForceAnalysis:
         return cols
 
     def to_csv(self, path) -> None:
-        cols = self.table()
-        with open(path, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(cols)
-            w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
+        write_csv(path, self.table())

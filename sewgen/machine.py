@@ -27,13 +27,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
 from . import mechanism as catalog_mechanism
 from .errors import ParameterError
 from .feed import regulator_angle
-from .loads import Load
+from .loads import Load, load_matrix
 from .modelfile import Field, ModelFileError, Reader, load_toml, resolve  # noqa: F401 (ModelFileError re-exported)
 
 
@@ -51,7 +52,7 @@ class Group:
     loads: list  # windows in the machine's shaft angle (seed 000: "relative to the upper-shaft angle")
     stitch: float | None = None  # m, feed groups: the stitch the regulator was set for
 
-    @property
+    @cached_property
     def sweep_loads(self) -> list:
         """The loads with their windows moved into the group's own shaft angle (machine angle + phase)."""
         return [replace(ld, window=None if ld.window is None else tuple(w + self.phase for w in ld.window))
@@ -426,8 +427,6 @@ def _group(rd: Reader, name: str, data: dict) -> Group:
         except ParameterError as exc:
             rd.fail(f"{key}.stitch", str(exc).split(": ", 2)[-1])
     try:  # every load names a point or body of the mechanism
-        from .loads import load_matrix
-
         load_matrix(mech, loads, np.zeros(1))
     except ParameterError as exc:
         rd.fail(f"{key}.loads", str(exc).split(": ", 1)[-1])

@@ -39,6 +39,15 @@ class Mechanism:
         self.body_names = [b["name"] for b in man["bodies"]]
         self.closed_form = bool(man["closed_form"])
         self.default_speed = float(man["default_speed"])
+        nf = man["sizes"]["nf"]
+        self.layout = {  # name -> place in the result arrays, shared by every Motion and ForceAnalysis
+            "points": {p["name"]: p["offset"] for p in man["points"]},
+            "bodies": {b["name"]: b["offset"] for b in man["bodies"]},
+            "coords": {c["name"]: (i, c["unit"]) for i, c in enumerate(man["coords"])},
+            "reactions": {r["name"]: r for r in man["reactions"]},
+            "force_outputs": {o["name"]: nf + k for k, o in enumerate(man["force_outputs"])},
+            "inputs": [i["name"] for i in man["inputs"]],
+        }
         self._defaults = None
         self._options: dict = {}
         self._outputs: dict = {}
@@ -282,7 +291,7 @@ class Mechanism:
             self.ffi.NULL if ld is None else d("double *", ld), d("double *", a["q"]), d("double *", a["qd"]),
             d("double *", a["qdd"]), d("double *", a["obs"]), d("double *", frc), d("int *", a["status"]))
         self._raise_for(a["status"], a["phi"])
-        run = {"p": a["p"], "held": a["held"], "gravity": gv, "loads": ld}
+        run = {"p": a["p"], "held": a["held"], "loads": ld}
         return ForceAnalysis(self, self._motion(a), frc, placed, gv, about, run)
 
     def force_matrix(self, motion: Motion, index: int = 0, *, params: dict | None = None,

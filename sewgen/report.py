@@ -8,7 +8,6 @@ jump each implies.
 """
 from __future__ import annotations
 
-import csv
 import json
 import math
 from pathlib import Path
@@ -17,14 +16,7 @@ import numpy as np
 
 from .cams import arc_switches
 from .feed import dog_travel
-
-
-def _write_csv(path: Path, cols: dict) -> Path:
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(cols)
-        w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
-    return path
+from .results import write_csv
 
 
 def _deg(phi) -> np.ndarray:
@@ -122,9 +114,9 @@ def write_report(a, folder, progress=None) -> list[Path]:
     folder.mkdir(parents=True, exist_ok=True)
     if progress:
         progress("tables", 0, 1)
-    paths = [_write_csv(folder / "machine.csv", machine_table(a))]
+    paths = [write_csv(folder / "machine.csv", machine_table(a))]
     for name, fa in a.groups.items():
-        paths.append(_write_csv(folder / f"{name}.csv", group_table(fa, a.phi)))
+        paths.append(write_csv(folder / f"{name}.csv", group_table(fa, a.phi)))
     text = json.dumps(summary(a, cam_switches(a)), indent=2, ensure_ascii=False)
     (folder / "summary.json").write_text(text + "\n", encoding="utf-8")
     return paths + [folder / "summary.json"]

@@ -46,10 +46,8 @@ class Motion:
         self.mechanism = mechanism
         self.phi, self.omega, self.alpha = phi, omega, alpha
         self.q, self.qd, self.qdd, self.obs = q, qd, qdd, obs
-        man = mechanism.manifest
-        self._points = {p["name"]: p["offset"] for p in man["points"]}
-        self._bodies = {b["name"]: b["offset"] for b in man["bodies"]}
-        self._coords = {c["name"]: (i, c["unit"]) for i, c in enumerate(man["coords"])}
+        lay = mechanism.layout
+        self._points, self._bodies, self._coords = lay["points"], lay["bodies"], lay["coords"]
 
     def __len__(self) -> int:
         return len(self.phi)
@@ -99,8 +97,13 @@ class Motion:
         return cols
 
     def to_csv(self, path) -> None:
-        cols = self.table()
-        with open(path, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(cols)
-            w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
+        write_csv(path, self.table())
+
+
+def write_csv(path, cols: dict):
+    """Columns (name -> array, equal lengths) as a CSV file with a header row; returns ``path``."""
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(cols)
+        w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
+    return path
