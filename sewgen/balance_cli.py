@@ -5,13 +5,13 @@ import argparse
 import json
 import math
 import sys
-import tomllib
 
 import numpy as np
 
 from derive.units import UnitError, to_si
 
 from . import balance as bal
+from .modelfile import ModelFileError, load_toml
 
 #: Model fields that carry a unit: name -> (kind, help).
 QUANTITIES = {
@@ -81,10 +81,9 @@ def _inputs(args) -> tuple[dict, dict]:
     raw, label = {}, {}
     if args.model:
         try:
-            with open(args.model, "rb") as fh:
-                data = tomllib.load(fh)
-        except (OSError, tomllib.TOMLDecodeError) as exc:
-            _fail(f"--model {args.model}: {exc}")
+            data = load_toml(args.model)
+        except ModelFileError as exc:
+            _fail(f"--model {exc}")
         for key, value in data.items():
             name = key.replace("-", "_")
             if name not in QUANTITIES and name not in SECTOR and name not in SETTINGS:

@@ -141,14 +141,9 @@ def _xy(fa, point):
     return p.x * MM, p.y * MM
 
 
-def _inertia_force(a, g=None):
-    """Σ m (a_G − g) over a group's moving bodies, or without ``g`` the machine's with the shaft core (n, 2) N:
-    the shaking force without the external loads. None when a body's mass is not a plain parameter."""
-    if g is None:
-        parts = [_inertia_force(a, grp) for grp in a.machine.groups]
-        if any(f is None for f in parts):
-            return None
-        return sum(parts) + sum(sm.mass * (acc - a.machine.gravity) for sm, _p, _v, acc in a.core)
+def _inertia_force(a, g):
+    """Σ m (a_G − g) over a group's moving bodies (n, 2) N: its shaking force without the external loads.
+    None when a body's mass is not a plain parameter."""
     fa, p = a.groups[g.name], _params(g)
     out = np.zeros((len(a.phi), 2))
     for body in fa.motion.body_names:
@@ -434,10 +429,6 @@ def draw_shaking(fig, a):
     f = a.shaking_force
     ax1.plot(_closed(a, f[:, 0]), _closed(a, f[:, 1]), color="tab:purple", lw=1.5, label="shaking force hodograph")
     _angle_labels(ax1, a, f[:, 0], f[:, 1])
-    inertia = _inertia_force(a)
-    if inertia is not None and not np.allclose(inertia, f):
-        ax1.plot(_closed(a, inertia[:, 0]), _closed(a, inertia[:, 1]), color="tab:purple", lw=1, ls="--",
-                 label="without the external loads (inertia and weight)")
     ax1.plot([0], [0], "k+", ms=10, label="origin (no force)")
     m = f.mean(axis=0)
     ax1.plot(*m, "kx", ms=7, label=f"mean ({m[0]:.2f}, {m[1]:.2f}) N: the parts' weight")
@@ -525,16 +516,15 @@ def _hook_drive(fa, p):
 def _cam_outline(p, angle, k=10):
     """The feed cam in the frame, (n, 6k, 2) m: the six arcs of derive.model.constant_breadth_arcs as
     derive/models/feed.py places them (centroid (0, -side/√3), a vertex on the shaft), by normal direction."""
+    from derive.model import constant_breadth_arcs
+
     s, r0 = p["cam_side"], p["cam_small_radius"]
     t, u, v = [], [], []
-    for i in range(3):
-        al = math.pi / 2 + 2 * math.pi * i / 3
-        vu, vv = s / math.sqrt(3) * math.cos(al), s / math.sqrt(3) * (math.sin(al) - 1)
-        for radius, mid in ((r0, al), (s + r0, al + math.pi)):
-            th = np.linspace(mid - math.pi / 6, mid + math.pi / 6, k)
-            t.append(th % (2 * math.pi))
-            u.append(vu + radius * np.cos(th))
-            v.append(vv + radius * np.sin(th))
+    for arc in constant_breadth_arcs(s, r0, centroid=(0, -s / math.sqrt(3)), orientation=math.pi / 2):
+        th = np.linspace(float(arc.normal_from), float(arc.normal_to), k)
+        t.append(th % (2 * math.pi))
+        u.append(float(arc.center_u) + float(arc.radius) * np.cos(th))
+        v.append(float(arc.center_v) + float(arc.radius) * np.sin(th))
     order = np.argsort(np.concatenate(t), kind="stable")
     u, v = np.concatenate(u)[order], np.concatenate(v)[order]
     c, sn = np.cos(angle)[:, None], np.sin(angle)[:, None]
