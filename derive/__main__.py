@@ -1,61 +1,10 @@
-"""``python -m derive`` regenerates generated/; ``--check`` fails with a unified diff when it is stale."""
-from __future__ import annotations
+"""``python -m derive`` in a checkout: the same as ``python -m sewgen.derive`` (regenerate or --check generated/).
 
-import argparse
-import difflib
+The derivation lives in the installed package as :mod:`sewgen.derive`; this folder is not installed and only
+keeps the short command working from the repository root.
+"""
 import sys
-import time
-from pathlib import Path
 
-from .catalog import CATALOG, declare
-from .emit import generate, render_files
+from sewgen.derive.__main__ import main
 
-ROOT = Path(__file__).resolve().parent.parent
-#: What derive writes; anything else in generated/ (object files of an in-place build) is not its business.
-GENERATED_SUFFIXES = (".c", ".h", ".cdef", ".json")
-
-
-def _derived_files(folder: Path) -> set[str]:
-    if not folder.is_dir():
-        return set()
-    return {p.name for p in folder.iterdir() if p.is_file() and p.suffix in GENERATED_SUFFIXES}
-
-
-def catalog_files() -> dict[str, str]:
-    return render_files([generate(declare(name)) for name in CATALOG])
-
-
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m derive", description=__doc__)
-    ap.add_argument("--check", action="store_true", help="compare with generated/ instead of writing")
-    ap.add_argument("--out", type=Path, default=ROOT / "generated", help="output folder (default: generated/)")
-    args = ap.parse_args(argv)
-    t0 = time.perf_counter()
-    files = catalog_files()
-    out: Path = args.out
-    if args.check:
-        stale = False
-        present = _derived_files(out)
-        for name in sorted(set(files) | present):
-            old = (out / name).read_text() if name in present else ""
-            new = files.get(name, "")
-            if old != new:
-                stale = True
-                sys.stdout.writelines(difflib.unified_diff(
-                    old.splitlines(True), new.splitlines(True), f"generated/{name}", f"derived/{name}"))
-        if stale:
-            print("generated/ is stale: run `python -m derive`", file=sys.stderr)
-            return 1
-        print(f"generated/ is current ({len(files)} files, {time.perf_counter() - t0:.1f} s)")
-        return 0
-    out.mkdir(parents=True, exist_ok=True)
-    for name in _derived_files(out) - set(files):
-        (out / name).unlink()
-    for name, text in files.items():
-        (out / name).write_text(text)
-    print(f"wrote {len(files)} files to {out} in {time.perf_counter() - t0:.1f} s")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+sys.exit(main())

@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 
-from derive.units import UnitError, to_si
+from .units import UnitError, to_si
 
 from . import balance as bal
 from .modelfile import ModelFileError, load_toml

@@ -196,8 +196,8 @@ class Baseline:
     def __init__(self, name: str, forces: bool = False):
         import sympy as sp
 
-        from derive.catalog import declare
-        from derive.kinematics import Kinematics
+        from .derive.catalog import declare
+        from .derive.kinematics import Kinematics
 
         t0 = time.perf_counter()
         kin = Kinematics(declare(name))
@@ -220,7 +220,7 @@ class Baseline:
         self.kin = kin
         self.kst = None
         if forces:
-            from derive.kinetostatics import Kinetostatics
+            from .derive.kinetostatics import Kinetostatics
 
             kst = Kinetostatics(kin)
             fargs = [q, x, p, kst.obs, kst.gravity, kst.loads, ka]
@@ -436,8 +436,8 @@ def derive_catalog() -> dict:
     """Seconds of derive.emit.generate for every catalog declaration, in-process, SymPy's cache cleared."""
     from sympy.core.cache import clear_cache
 
-    from derive.catalog import CATALOG, declare
-    from derive.emit import generate
+    from .derive.catalog import CATALOG, declare
+    from .derive.emit import generate
 
     clear_cache()
     each = {}

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from derive.units import UnitError, to_si
+from .units import UnitError, to_si
 
 from . import balance_cli, catalog, load, mechanism
 from .errors import SewgenError

@@ -53,7 +53,7 @@ def cache_root() -> Path:
 
 
 def _declaration(source):
-    from derive.model import Mechanism as Declaration
+    from .derive.model import Mechanism as Declaration
 
     if isinstance(source, Declaration):
         return source
@@ -74,7 +74,7 @@ def _declaration(source):
 
 def load_user(source, *, closed_form: bool = True, cache_dir: Path | None = None) -> Mechanism:
     """Derive, compile (once) and load a mechanism declared outside the catalog."""
-    from derive import DeclarationError, generate, render_files
+    from .derive import DeclarationError, generate, render_files
 
     from .build import CFLAGS, make_ffi, runtime_dir
 

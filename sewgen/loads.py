@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from derive.units import UnitError, to_si
+from .units import UnitError, to_si
 
 from .errors import ParameterError
 

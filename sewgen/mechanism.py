@@ -12,7 +12,7 @@ import sys
 
 import numpy as np
 
-from derive.units import UnitError, to_si
+from .units import UnitError, to_si
 
 from .errors import STATUS_ERRORS, InputError, ParameterError
 from .forces import ForceAnalysis

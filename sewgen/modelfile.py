@@ -12,7 +12,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from derive.units import SI_UNITS, UnitError, to_si
+from .units import SI_UNITS, UnitError, to_si
 
 from .errors import SewgenError
 

@@ -516,7 +516,7 @@ def _hook_drive(fa, p):
 def _cam_outline(p, angle, k=10):
     """The feed cam in the frame, (n, 6k, 2) m: the six arcs of derive.model.constant_breadth_arcs as
     derive/models/feed.py places them (centroid (0, -side/√3), a vertex on the shaft), by normal direction."""
-    from derive.model import constant_breadth_arcs
+    from .derive.model import constant_breadth_arcs
 
     s, r0 = p["cam_side"], p["cam_small_radius"]
     t, u, v = [], [], []

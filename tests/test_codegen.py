@@ -141,7 +141,7 @@ def test_compiles_without_warnings(src, tmp_path):
 @pytest.mark.parametrize("closed_form", [True, False], ids=["closed", "newton_only"])
 def test_user_mechanism_compiles_without_warnings(tmp_path, closed_form):
     """A declaration outside the catalog, with a slider on a moving link, rendered and compiled alone."""
-    from derive import Mechanism, generate, render_files
+    from sewgen.derive import Mechanism, generate, render_files
 
     m = Mechanism("codegen_probe", "crank pin in a block on an oscillating guide bar, the bar driving a rod")
     r = m.length("crank", "10 mm", "crank")
@@ -176,7 +176,7 @@ USER_TEXTS = {
 def test_user_text_cannot_break_the_generated_c(tmp_path, case):
     """Docstrings are free text; the C they are copied into (comments, the manifest string) must still
     compile with the project's flags, and the manifest must round-trip."""
-    from derive import Mechanism, generate, render_files
+    from sewgen.derive import Mechanism, generate, render_files
 
     doc, pdoc = USER_TEXTS[case]
     m = Mechanism("text_probe", doc)

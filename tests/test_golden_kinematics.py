@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import sewgen
-from derive.model import Mechanism as Declaration
+from sewgen.derive.model import Mechanism as Declaration
 
 MM = 1e-3
 RPM = 2.0 * math.pi / 60.0

@@ -17,8 +17,8 @@ import pytest
 import sympy as sp
 
 import sewgen
-from derive.catalog import declare
-from derive.kinematics import Kinematics
+from sewgen.derive.catalog import declare
+from sewgen.derive.kinematics import Kinematics
 
 CATALOG = ("needle_bar", "take_up", "hook_drive")
 

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import sewgen
-from derive.model import Mechanism as Declaration
+from sewgen.derive.model import Mechanism as Declaration
 from sewgen.loads import Load
 from sewgen.results import Motion
 

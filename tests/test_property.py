@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, example, given, note, settings
 from hypothesis import strategies as st
 
 import sewgen
-from derive.model import Mechanism as Declaration
+from sewgen.derive.model import Mechanism as Declaration
 
 PHI = sewgen.shaft_angles(5)
 MM = 1e-3

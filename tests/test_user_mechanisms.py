@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 
 import sewgen
-from derive import DeclarationError
-from derive.model import Mechanism as Declaration
+from sewgen.derive import DeclarationError
+from sewgen.derive.model import Mechanism as Declaration
 
 # Declared once as source text so the very same declaration can be loaded as a function and from a file.
 SIX_BAR_SOURCE = textwrap.dedent('''
-    from derive.model import Mechanism
+    from sewgen.derive.model import Mechanism
 
 
     def declare():

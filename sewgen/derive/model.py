@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .units import SI_UNITS, UnitError, to_si, unit_of
+from ..units import SI_UNITS, UnitError, to_si, unit_of
 
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 

@@ -11,7 +11,7 @@ seeds' tables of them are not in the text we have).
 """
 import sympy as sp
 
-from derive.model import Mechanism
+from sewgen.derive.model import Mechanism
 
 
 def declare() -> Mechanism:

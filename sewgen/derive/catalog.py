@@ -10,4 +10,4 @@ def declare(name: str):
     """The declaration of a catalog mechanism by name."""
     if name not in CATALOG:
         raise KeyError(f"no catalog mechanism {name!r}; known: {', '.join(CATALOG)}")
-    return importlib.import_module(f"derive.models.{name}").declare()
+    return importlib.import_module(f"sewgen.derive.models.{name}").declare()

@@ -24,7 +24,7 @@ the fork stroke is 6 mm, the maximum stitch 4 mm at a regulator angle near 40°,
 """
 import sympy as sp
 
-from derive.model import Mechanism, constant_breadth_arcs
+from sewgen.derive.model import Mechanism, constant_breadth_arcs
 
 
 def declare() -> Mechanism:

@@ -11,7 +11,7 @@ Grashof crank-rocker (10 + 38 ≤ 26 + 32.8) with the willow-leaf eye path the p
 """
 import sympy as sp
 
-from derive.model import Mechanism
+from sewgen.derive.model import Mechanism
 
 
 def declare() -> Mechanism:

@@ -17,7 +17,7 @@ from .kernels import KernelSet
 from .kinematics import Kinematics
 from .kinetostatics import Kinetostatics
 from .model import Mechanism
-from .units import to_si
+from ..units import to_si
 
 _TEMPLATES = jinja2.Environment(
     loader=jinja2.FileSystemLoader(str(Path(__file__).parent / "templates")),

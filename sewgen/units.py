@@ -1,12 +1,18 @@
 """Quantities with explicit units -> SI floats (DESIGN.md §5).
 
 Model files and declarations state units ("16.7 mm", "105 g", "1000 rpm", "90 deg"); everything inside
-sewgen is SI. This module is the one place that talks to the units library (pint).
+sewgen is SI. This module is the one place that talks to the units library (pint). It is a leaf: the run-time
+package and the derivation (:mod:`sewgen.derive`) both read it, and it imports nothing of either.
+
+pint is imported and its registry built on the first quantity string, never at import: a sweep given SI
+numbers never pays for it. The registry's parsed definitions are cached on disk (pint's own cache, under the
+sewgen cache folder), which makes a later process's build several times faster.
 """
 from __future__ import annotations
 
 import functools
 import math
+import threading
 
 import numpy as np
 
@@ -36,11 +42,39 @@ class UnitError(ValueError):
     """A quantity whose text cannot be read, or whose unit is not of the expected kind."""
 
 
-@functools.lru_cache(maxsize=1)
-def registry():
-    import pint
+def _cache_folder():
+    """pint's definition cache: ``$SEWGEN_CACHE/pint`` (default ``~/.cache/sewgen/pint``), or None if unusable."""
+    import os
+    from pathlib import Path
 
-    return pint.UnitRegistry()
+    folder = Path(os.environ.get("SEWGEN_CACHE", Path.home() / ".cache" / "sewgen")) / "pint"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    return folder if os.access(folder, os.W_OK) else None
+
+
+_REGISTRY = None
+_REGISTRY_LOCK = threading.Lock()
+
+
+def registry():
+    """The one pint registry, built on first use, once even when several threads ask at the same time."""
+    global _REGISTRY
+    with _REGISTRY_LOCK:
+        if _REGISTRY is None:
+            import pint
+
+            folder = _cache_folder()
+            reg = None
+            if folder is not None:
+                try:
+                    reg = pint.UnitRegistry(cache_folder=folder)
+                except Exception:  # a damaged or foreign cache must not stop unit parsing: build without it
+                    reg = None
+            _REGISTRY = reg if reg is not None else pint.UnitRegistry()
+        return _REGISTRY
 
 
 def to_si(value, kind: str, what: str = "value") -> float:

@@ -13,7 +13,7 @@ the lower shaft's speed at most about 2.8 times the upper shaft's.
 """
 import sympy as sp
 
-from derive.model import Mechanism
+from sewgen.derive.model import Mechanism
 
 
 def declare() -> Mechanism:
