@@ -29,16 +29,18 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from .errors import SewgenError
+
 SERIES = ("two-term", "exact")
 DEFAULT_WEIGHTS = (0.1, 0.9)  # §3: w1 ≤ 0.2, w2 ≥ 0.8; the paper computes with 0.1, 0.9
 
 
-class BalanceError(ValueError):
+class BalanceError(SewgenError, ValueError):
     """A balancing input that cannot be used; ``name`` is the model field (CLI option --name-with-dashes)."""
 
     def __init__(self, name: str, message: str):
         self.name = name
-        super().__init__(f"{name}: {message}")
+        super().__init__(f"{name}: {message}", problem=message, parameter=name)
 
 
 @dataclass(frozen=True)

@@ -114,7 +114,7 @@ def _settings(raw, label):
     try:
         weights = bal.check_weights(weights)
     except bal.BalanceError as exc:
-        _fail(f"{label.get('weights', '--weights')}: {str(exc).split(': ', 1)[1]}")
+        _fail(f"{label.get('weights', '--weights')}: {exc.problem}")
     series = raw.get("series", "two-term")
     if series not in bal.SERIES:
         _fail(f"{label['series']}: must be one of {', '.join(bal.SERIES)}, got {series!r}")
@@ -137,7 +137,7 @@ def build(args):
     try:
         model = bal.NeedleBarModel(**values)
     except bal.BalanceError as exc:
-        _fail(f"{label.get(exc.name, _opt(exc.name))}: {str(exc).split(': ', 1)[1]}")
+        _fail(f"{label.get(exc.name, _opt(exc.name))}: {exc.problem}")
     sector = None
     if "sector_thickness" in raw:
         for name, (_, default, _) in SECTOR.items():
@@ -155,7 +155,7 @@ def _size_sector(mr, s):
                                         s["density"])
     except bal.BalanceError as exc:
         name = exc.name if exc.name == "density" else "sector_" + exc.name
-        _fail(f"{_opt(name)}: {str(exc).split(': ', 1)[1]}")
+        _fail(f"{_opt(name)}: {exc.problem}")
     mass, centroid = bal.sector(outer, s["sector_inner"], s["sector_thickness"], s["sector_angle"], s["density"])
     return {"sector_outer_radius": outer, "sector_mass": mass, "sector_centroid": centroid}
 

@@ -1,4 +1,10 @@
-"""Typed errors: every one names the mechanism and the parameter, option or shaft angle at fault."""
+"""Typed errors: every one names the mechanism and the parameter, option, file, key or shaft angle at fault.
+
+Each error keeps its parts as attributes — ``mechanism``, ``parameter``, ``file``, ``key``, ``angle`` (rad),
+``index`` (position in the sweep) and ``problem`` (what is wrong, without the naming prefix) — so code that
+re-raises an error in another context (a model file's key, a CLI option) reads ``problem`` and never splits
+the message text. Attributes an error does not concern are None.
+"""
 from __future__ import annotations
 
 import math
@@ -7,37 +13,83 @@ import math
 class SewgenError(Exception):
     """Base of every error sewgen raises on purpose."""
 
+    mechanism: str | None = None
+    parameter: str | None = None
+    file: str | None = None
+    key: str | None = None
+    angle: float | None = None
+    index: int | None = None
+
+    def __init__(self, message: str, *, problem: str | None = None, **fields):
+        for name, value in fields.items():
+            setattr(self, name, value)
+        self.problem = message if problem is None else problem
+        super().__init__(message)
+
+    def __reduce__(self):  # pickles (across processes, Dask) with its fields, whatever the subclass's signature
+        return _rebuild, (type(self), self.args, self.__dict__)
+
+
+def _rebuild(cls, args, state):
+    err = cls.__new__(cls)
+    Exception.__init__(err, *args)
+    err.__dict__.update(state)
+    return err
+
+
+class UnitError(SewgenError, ValueError):
+    """A quantity whose text cannot be read, or whose unit is not of the expected kind. ``parameter`` names
+    the parameter or option it was given for."""
+
+    def __init__(self, what: str, problem: str):
+        super().__init__(f"{what}: {problem}", problem=problem, parameter=what)
+
 
 class ParameterError(SewgenError, ValueError):
     """A parameter, input or option value that a mechanism cannot take."""
 
     def __init__(self, mechanism: str, parameter: str, message: str):
-        self.mechanism, self.parameter = mechanism, parameter
-        super().__init__(f"{mechanism}: parameter {parameter!r}: {message}")
+        super().__init__(f"{mechanism}: parameter {parameter!r}: {message}", problem=message, mechanism=mechanism,
+                         parameter=parameter)
+
+
+class RoleError(SewgenError, KeyError):
+    """A machine-level analysis asked a mechanism for a part by a role that no part of it plays."""
+
+    def __init__(self, mechanism: str, role: str, known: list):
+        self.role = role
+        problem = f"no part plays the role {role!r}; roles: {', '.join(known) or 'none'}"
+        super().__init__(f"{mechanism}: {problem}", problem=problem, mechanism=mechanism)
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return self.args[0]
 
 
 class InputError(SewgenError, ValueError):
     """Shaft angles, speeds or accelerations of the wrong shape, type or value."""
 
-    def __init__(self, mechanism: str, message: str):
-        self.mechanism = mechanism
-        super().__init__(f"{mechanism}: {message}")
+    def __init__(self, mechanism: str, message: str, parameter: str | None = None):
+        super().__init__(f"{mechanism}: {message}", problem=message, mechanism=mechanism, parameter=parameter)
 
 
 class BuildError(SewgenError):
-    """A user mechanism that failed to derive or compile."""
+    """A user mechanism that failed to derive or compile (``file``: its declaration file, if any)."""
+
+    def __init__(self, message: str, *, mechanism: str | None = None, file: str | None = None):
+        super().__init__(message, mechanism=mechanism, file=file)
 
 
 class PositionError(SewgenError):
-    """A shaft angle at which the mechanism cannot be solved. ``angle`` is the first such angle (rad)."""
+    """A shaft angle at which the mechanism cannot be solved. ``angle`` is the first such angle (rad),
+    ``index`` its position in the sweep, ``count`` how many positions failed so."""
 
     what = "cannot be solved"
 
     def __init__(self, mechanism: str, angle: float, index: int, count: int, last_angle: float):
-        self.mechanism, self.angle, self.index, self.count = mechanism, angle, index, count
         span = "" if count == 1 else f" (first of {count} failing positions, up to {math.degrees(last_angle):.6g}°)"
-        super().__init__(f"{mechanism}: {self.what} at shaft angle {math.degrees(angle):.6g}°"
-                         f" (position {index}){span}")
+        problem = f"{self.what} at shaft angle {math.degrees(angle):.6g}° (position {index}){span}"
+        super().__init__(f"{mechanism}: {problem}", problem=problem, mechanism=mechanism, angle=angle, index=index,
+                         count=count, last_angle=last_angle)
 
 
 class AssemblyError(PositionError):
@@ -58,13 +110,3 @@ class BranchJumpError(PositionError):
 
 class NonFiniteResultError(PositionError):
     what = "a result came out non-finite"
-
-
-#: Runtime status code (csrc/sg_runtime.h enum sg_status) -> error class.
-STATUS_ERRORS = {
-    1: AssemblyError,
-    2: SingularPositionError,
-    3: BranchJumpError,
-    5: ConvergenceError,
-    6: NonFiniteResultError,
-}

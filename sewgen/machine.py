@@ -364,7 +364,7 @@ def load_machine(name_or_path) -> Machine:
     try:
         m.shaft_angles()
     except ParameterError as exc:
-        rd.fail("machine.step", str(exc).split(": ", 2)[-1] + " (an angle in deg or rad)")
+        rd.fail("machine.step", exc.problem + " (an angle in deg or rad)")
     return m
 
 
@@ -385,7 +385,7 @@ def _group(rd: Reader, name: str, data: dict) -> Group:
     try:
         mech.param_vector(params)
     except ParameterError as exc:
-        rd.fail(f"{key}.params.{exc.parameter}", str(exc).split(": ", 2)[-1])
+        rd.fail(f"{key}.params.{exc.parameter}", exc.problem)
     held = {}
     for hname, value in g.get("held", {}).items():
         if hname not in mech.held_names:
@@ -425,11 +425,11 @@ def _group(rd: Reader, name: str, data: dict) -> Group:
         try:
             group.held["regulator"] = regulator_angle(mech, group.stitch, params=params or None)
         except ParameterError as exc:
-            rd.fail(f"{key}.stitch", str(exc).split(": ", 2)[-1])
+            rd.fail(f"{key}.stitch", exc.problem)
     try:  # every load names a point or body of the mechanism
         load_matrix(mech, loads, np.zeros(1))
     except ParameterError as exc:
-        rd.fail(f"{key}.loads", str(exc).split(": ", 1)[-1])
+        rd.fail(f"{key}.loads", f"{exc.parameter}: {exc.problem}")
     return group
 
 

@@ -14,7 +14,9 @@ import numpy as np
 
 from .units import UnitError, to_si
 
-from .errors import STATUS_ERRORS, InputError, ParameterError
+from . import abi
+from .description import describe
+from .errors import InputError, ParameterError
 from .forces import ForceAnalysis
 from .loads import load_matrix
 from .results import Motion
@@ -28,6 +30,7 @@ class Mechanism:
     def __init__(self, ffi, lib, name: str, build_info: dict | None = None):
         self.ffi, self.lib, self.name = ffi, lib, name
         self.manifest = json.loads(ffi.string(getattr(lib, f"sg_{name}_manifest")()).decode())
+        self.description = describe(self.manifest)
         self._descriptor = getattr(lib, f"sg_{name}")()
         self.build_info = build_info or {}
         man = self.manifest
@@ -176,7 +179,7 @@ class Mechanism:
         try:
             return to_si(value, kind, name)
         except UnitError as exc:
-            raise ParameterError(self.name, name, str(exc).split(": ", 1)[-1]) from None
+            raise ParameterError(self.name, name, exc.problem) from None
 
     def length_scale(self, p: np.ndarray) -> float:
         """The largest length parameter (m): sets the loop-residual tolerance."""
@@ -327,9 +330,9 @@ class Mechanism:
             return
         i = int(bad[0])
         code = int(status[i])
-        cls = STATUS_ERRORS.get(code)
+        cls = abi.error_for(code)
         if cls is None:  # SG_NAN_INPUT / SG_BAD_ARGUMENT: Python checks first, so this is a bug
-            raise InputError(self.name, f"runtime refused the sweep (status {code}) at position {i}")
+            raise InputError(self.name, f"runtime refused the sweep ({abi.status_name(code)}) at position {i}")
         same = bad[status[bad] == code]
         raise cls(self.name, float(phi[i]), i, int(same.size), float(phi[same[-1]]))
 

@@ -21,11 +21,13 @@ MODELS_DIR = Path(__file__).parent / "models"
 
 
 class ModelFileError(SewgenError, ValueError):
-    """A model file that cannot be read: names the file, the key and what was expected."""
+    """A model file that cannot be read: names the file (``file``, also ``path``), the dotted key and what was
+    expected (``problem``)."""
 
     def __init__(self, path, key: str, message: str):
-        self.path, self.key = str(path), key
-        super().__init__(f"{path}: {key}: {message}" if key else f"{path}: {message}")
+        self.path = str(path)
+        super().__init__(f"{path}: {key}: {message}" if key else f"{path}: {message}", problem=message,
+                         file=str(path), key=key)
 
 
 @dataclass(frozen=True)
@@ -71,7 +73,7 @@ class Reader:
         try:
             return to_si(value, kind, key)
         except UnitError as exc:
-            self.fail(key, f"{str(exc).split(': ', 1)[-1]}")
+            self.fail(key, exc.problem)
 
     def read(self, data: dict, key: str, schema: dict) -> dict:
         """Check ``data`` against ``schema`` and convert: quantities to SI floats, the rest as they are."""

@@ -16,6 +16,8 @@ import threading
 
 import numpy as np
 
+from .errors import UnitError  # errors is a leaf too; re-exported here, where quantities are read
+
 #: Physical kinds a parameter can have, with the SI unit its value is stored in.
 SI_UNITS = {
     "length": "m",
@@ -37,9 +39,6 @@ SI_UNITS = {
 #: 100 rad/s where its writer most likely meant 100 revolutions per second.
 _ANGULAR = ("speed", "angular_acceleration")
 
-
-class UnitError(ValueError):
-    """A quantity whose text cannot be read, or whose unit is not of the expected kind."""
 
 
 def _cache_folder():
@@ -83,19 +82,19 @@ def to_si(value, kind: str, what: str = "value") -> float:
     ``kind`` is a key of :data:`SI_UNITS`; ``what`` names the parameter or option in the error.
     """
     if kind not in SI_UNITS:
-        raise UnitError(f"{what}: unknown kind {kind!r}")
+        raise UnitError(what, f"unknown kind {kind!r}")
     if isinstance(value, (bool, np.bool_)):
-        raise UnitError(f"{what}: expected a {kind} ({SI_UNITS[kind] or 'no unit'}), got {value!r}")
+        raise UnitError(what, f"expected a {kind} ({SI_UNITS[kind] or 'no unit'}), got {value!r}")
     if isinstance(value, (int, float, np.integer, np.floating)):
         out = float(value)
     elif isinstance(value, str):
         out, problem = _parse(value.strip(), kind)
         if problem:
-            raise UnitError(f"{what}: {problem.format(value=repr(value))}")
+            raise UnitError(what, f"{problem.format(value=repr(value))}")
     else:
-        raise UnitError(f"{what}: expected a number or a quantity string, got {type(value).__name__}")
+        raise UnitError(what, f"expected a number or a quantity string, got {type(value).__name__}")
     if not math.isfinite(out):
-        raise UnitError(f"{what}: {value!r} is not finite")
+        raise UnitError(what, f"{value!r} is not finite")
     return out
 
 
