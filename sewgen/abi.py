@@ -1,9 +1,11 @@
 """What the C runtime and Python must agree on, stated once (DESIGN.md §4, §7).
 
-The per-position status codes of the sweeps are listed here with the typed error each becomes;
-:mod:`sewgen.derive.emit` writes them into ``generated/sg_abi.h`` for the C runtime, and
-:mod:`sewgen.mechanism` maps a failing position's code to its error through :func:`error_for`. Neither side
-keeps a copy by hand.
+Plain data, no SymPy: the per-position status codes with the typed error each becomes, the options struct,
+the kernel signatures (one per kernel kind), the mechanism descriptor's fields and the runtime's exported
+functions. :mod:`sewgen.derive.abi_header` writes them into ``sg_abi.h`` (read by csrc/sg_runtime.h and every
+generated kernel file) and ``sg_abi.cdef`` (read by cffi); the generated kernels take their prototypes from
+:data:`KERNELS`, and :mod:`sewgen.mechanism` maps a failing position's code to its error through
+:func:`error_for`. Nothing here is repeated by hand anywhere else.
 """
 from __future__ import annotations
 
@@ -37,3 +39,87 @@ def error_for(code: int):
 
 def status_name(code: int) -> str:
     return _NAMES.get(code, f"unknown status {code}")
+
+
+#: Fields of ``sg_options`` (C type, name, meaning).
+OPTIONS = (
+    ("double", "tol", "loop residual tolerance (m); Newton stops below it"),
+    ("int", "max_iter", "Newton iterations per position"),
+    ("int", "newton_only", "1: Newton even where a closed form exists (tests, benchmarks)"),
+)
+
+# Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx their
+# cos, sin likewise; c the constants that sg_<m>_constants hoisted out of the parameters p.
+_Q = (("const double *", "q"), ("const double *", "cq"), ("const double *", "x"), ("const double *", "cx"))
+
+#: Kernel kinds: kind -> (return type, arguments (C type, name), meaning). The generated function of kind k of
+#: mechanism m is ``sg_<m>_<k>``; the descriptor holds a pointer of type ``sg_<k>_fn`` to it.
+KERNELS = {
+    "constants": ("void", (("const double *", "p"), ("double *", "c")),
+                  "every parameter-only subexpression, once per sweep"),
+    "closed": ("int", (("const double *", "x"), ("const double *", "cx"), ("const double *", "c"),
+                       ("const int *", "branch"), ("double *", "q"), ("double *", "cq")),
+               "the dyad chain in closed form; NULL in the descriptor where the loops do not split"),
+    "residual": ("void", _Q + (("const double *", "c"), ("double *", "r"), ("double *", "jac")),
+                 "loop-closure residual and its Jacobian dPhi/dq (row-major)"),
+    "motion": ("int", _Q + (("const double *", "xd"), ("const double *", "xdd"), ("const double *", "c"),
+                            ("double *", "qd"), ("double *", "qdd"), ("double *", "obs")),
+               "velocities, accelerations and observables at a solved position"),
+    "forces": ("int", _Q + (("const double *", "xd"), ("const double *", "c"), ("const double *", "obs"),
+                            ("const double *", "gv"), ("const double *", "ld"), ("double *", "out")),
+               "joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld"),
+    "force_matrix": ("void", _Q + (("const double *", "c"), ("const double *", "obs"), ("const double *", "gv"),
+                                   ("const double *", "ld"), ("double *", "A"), ("double *", "b")),
+                     "A (nf x nf, row-major) and b of A f = b, for inspection"),
+}
+
+#: Fields of ``sg_mechanism``, the descriptor every generated file fills (C type, name, meaning); the sizes'
+#: names are the manifest's "sizes" keys, the kernels' are :data:`KERNELS` kinds.
+DESCRIPTOR = (
+    ("const char *", "name", "the mechanism's name"),
+    ("int", "nq", "coordinates: link angles (rad) and slider travels (m)"),
+    ("int", "nx", "inputs: x[0] = shaft angle, then held inputs"),
+    ("int", "np", "parameters (SI)"),
+    ("int", "nc", "constants hoisted out of the parameters"),
+    ("int", "nobs", "observables per position (points, bodies), see the manifest"),
+    ("int", "nbranch", "closed-form dyads, each with an assembly sign"),
+    ("int", "nf", "force unknowns: reactions and driving torques"),
+    ("int", "nfo", "force outputs per position: nf, then torques, powers, shaking, energies (manifest)"),
+    ("int", "nload", "load slots per position: fx, fy per point of a moving body, torque per moving body"),
+    ("const unsigned char *", "coord_is_angle", "1 for an angle coordinate, 0 for a travel"),
+) + tuple((f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in KERNELS.items())
+
+#: The runtime's exported functions (csrc/sg_runtime.c): name -> (return type, arguments, meaning).
+EXPORTS = {
+    "sg_lu_factor": ("int", (("int", "n"), ("double *", "a"), ("int *", "piv"), ("double *", "det_sign")),
+                     "LU with partial pivoting in place (row-major n x n); SG_SINGULAR below the pivot tolerance"),
+    "sg_lu_solve": ("void", (("int", "n"), ("const double *", "lu"), ("const int *", "piv"), ("double *", "b")),
+                    "solve with a factor of sg_lu_factor, b overwritten"),
+    "sg_sweep": ("size_t", (("const sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
+                            ("const double *", "omega"), ("const double *", "alpha"), ("const double *", "held"),
+                            ("const double *", "p"), ("const int *", "branch"), ("const double *", "q_guess"),
+                            ("const sg_options *", "opt"), ("double *", "q"), ("double *", "qd"),
+                            ("double *", "qdd"), ("double *", "obs"), ("int *", "status")),
+                 "a mechanism over n shaft angles in one call: positions, velocities, accelerations, observables; "
+                 "returns the number of positions whose status is not SG_OK"),
+    "sg_sweep_forces": ("size_t", (("const sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
+                                   ("const double *", "omega"), ("const double *", "alpha"),
+                                   ("const double *", "held"), ("const double *", "p"), ("const int *", "branch"),
+                                   ("const double *", "q_guess"), ("const sg_options *", "opt"),
+                                   ("const double *", "gv"), ("const double *", "loads"), ("double *", "q"),
+                                   ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"),
+                                   ("double *", "frc"), ("int *", "status")),
+                        "sg_sweep plus kinetostatics in the same pass (gv gravity, loads n x nload or NULL, "
+                        "frc n x nfo)"),
+}
+
+
+def c_args(args) -> str:
+    """``(const double *p, double *c)``-style C parameter list of an argument tuple."""
+    return ", ".join(f"{t}{'' if t.endswith('*') else ' '}{n}" for t, n in args) or "void"
+
+
+def kernel_signature(kind: str, function: str) -> str:
+    """The C signature of kernel ``kind`` named ``function`` (no semicolon)."""
+    ret, args, _ = KERNELS[kind]
+    return f"{ret} {function}({c_args(args)})"

@@ -29,6 +29,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from . import roles
 from .errors import SewgenError
 
 SERIES = ("two-term", "exact")
@@ -122,7 +123,7 @@ def slider_accel(model: NeedleBarModel, theta, series: str = "two-term") -> np.n
 
     ``"two-term"``: eq. (5)'s series r·ω²(cos φ + λ·cos 2φ), plus the first-order offset term
     r·ω²·(e/l)·sin φ (zero without offset; from x = r cos φ + √(l² − (r sin φ − e)²) to first order in 1/l).
-    ``"exact"``: the compiled catalog mechanism ``needle_bar``.
+    ``"exact"``: the compiled catalog needle drive (:func:`needle_drive`).
     """
     theta = np.atleast_1d(np.asarray(theta, dtype=float))
     if series == "two-term":
@@ -130,12 +131,11 @@ def slider_accel(model: NeedleBarModel, theta, series: str = "two-term") -> np.n
         r, w2 = model.crank, model.speed ** 2
         return r * w2 * (np.cos(phi) + model.lam * np.cos(2 * phi) + model.offset / model.rod * np.sin(phi))
     if series == "exact":
-        from . import mechanism
-
-        motion = mechanism("needle_bar").solve(theta, speed=model.speed, branch={"C": -1},
-                                               params={"crank": model.crank, "rod": model.rod,
-                                                       "offset": model.offset})
-        return motion.coord("needle_bar.travel").accel
+        drive = needle_drive()
+        motion = drive.mechanism.solve(theta, speed=model.speed,
+                                       params={drive.crank: model.crank, drive.rod: model.rod,
+                                               drive.offset: model.offset})
+        return motion.coord(drive.travel).accel
     raise BalanceError("series", f"must be one of {', '.join(SERIES)}, got {series!r}")
 
 
@@ -272,7 +272,41 @@ def sector_outer_radius(mr: float, inner: float, thickness: float, angle: float,
     return (inner ** 3 + 3 * mr / (2 * density * thickness * math.sin(angle / 2))) ** (1 / 3)
 
 
-# -- the lumped model as needle_bar mechanism parameters ------------------------------------------------------
+# -- the lumped model as the parameters of a compiled needle drive --------------------------------------------
+
+@dataclass(frozen=True)
+class NeedleDrive:
+    """A compiled crank-slider needle drive, its parts found by role (sewgen.roles): the parameter names of
+    the crank radius, the rod length and the guide's offset, the three bodies, and the bar's travel
+    coordinate. The assembly branch is the declaration's (the bar below the crank)."""
+
+    mechanism: object
+    crank: str
+    rod: str
+    offset: str
+    crank_body: object
+    rod_body: object
+    bar_body: object
+    travel: str
+
+
+def needle_drive(mech=None) -> NeedleDrive:
+    """``mech`` (default: the catalog mechanism that plays the needle-drive roles) as a :class:`NeedleDrive`."""
+    from . import catalog, mechanism
+    from .errors import RoleError
+
+    if mech is None:
+        found = [mechanism(n) for n in catalog()
+                 if all(mechanism(n).description.has_role(r) for r in roles.NEEDLE_DRIVE)]
+        if not found:
+            raise RoleError("catalog", roles.NEEDLE_CRANK_RADIUS, [])
+        mech = found[0]
+    d = mech.description
+    crank, rod, bar = (d.role(r) for r in (roles.NEEDLE_CRANK, roles.NEEDLE_ROD, roles.NEEDLE_BAR))
+    return NeedleDrive(mech, d.role(roles.NEEDLE_CRANK_RADIUS).name, d.role(roles.NEEDLE_ROD_LENGTH).name,
+                       d.role(roles.NEEDLE_BAR_OFFSET).name, crank, rod, bar,
+                       next(c.name for c in d.coords if c.name.startswith(bar.name + ".")))
+
 
 def _body(points) -> tuple[float, float, float]:
     """(mass, centre u, inertia about the centre) of point masses [(m, u), ...] on a line."""
@@ -284,8 +318,9 @@ def _body(points) -> tuple[float, float, float]:
 
 
 def mechanism_overrides(model: NeedleBarModel, K: float, cw_radius: float | None = None,
-                        param_names=None) -> dict[str, float]:
-    """Parameters of the catalog ``needle_bar`` (SI) that realise ``model`` with the counterweight of ``K``.
+                        drive: NeedleDrive | None = None) -> dict[str, float]:
+    """Parameters of the needle drive (SI; default :func:`needle_drive`) that realise ``model`` with the
+    counterweight of ``K``.
 
     Crank: its mass at its centre c1, the lumped ``mass_b`` at B and the counterweight m = m·r / cw_radius
     (default l_AB) at u = −cw_radius. Link: m2 at c2 with inertia m2B·m2C·l²/m2 (two point masses at B, C).
@@ -294,10 +329,9 @@ def mechanism_overrides(model: NeedleBarModel, K: float, cw_radius: float | None
     If the mechanism has no ``rod.com_u`` (its link centre is fixed mid-link) and c2 is not mid-link, the
     link's m2B moves onto the crank at B and m2C onto the needle bar: the same Σ m·a, link massless.
     """
-    if param_names is None:
-        from . import mechanism
-
-        param_names = mechanism("needle_bar").param_names
+    drive = drive or needle_drive()
+    param_names = drive.mechanism.param_names
+    cb, rb, bb = drive.crank_body, drive.rod_body, drive.bar_body
     rho = model.crank if cw_radius is None else cw_radius
     if not rho > 0:
         raise BalanceError("cw_radius", f"must be positive, got {rho!r}")
@@ -307,13 +341,13 @@ def mechanism_overrides(model: NeedleBarModel, K: float, cw_radius: float | None
     l = model.rod
     c2 = l / 2 if model.rod_com is None else model.rod_com
     m2b, m2c = model.rod_split()
-    fold = "rod.com_u" not in param_names and abs(c2 - l / 2) > 1e-12 * l and model.rod_mass > 0
+    fold = rb.com_u is None and abs(c2 - l / 2) > 1e-12 * l and model.rod_mass > 0
     crank = _body([(model.crank_mass, model.crank_com or 0.0), (model.mass_b + (m2b if fold else 0), model.crank),
                    (mr / rho, -rho)])
     bar_mass = model.bar_mass + model.mass_c + (m2c if fold else 0)
-    out = {"crank": model.crank, "rod": l, "offset": model.offset,
-           "crank.mass": crank[0], "crank.com_u": crank[1], "crank.com_v": 0.0, "crank.inertia": crank[2],
-           "rod.mass": 0.0 if fold else model.rod_mass, "rod.com_u": c2, "rod.com_v": 0.0,
-           "rod.inertia": 0.0 if fold else model.rod_mass * c2 * (l - c2),
-           "needle_bar.mass": bar_mass, "needle_bar.com_u": 0.0, "needle_bar.com_v": 0.0, "needle_bar.inertia": 0.0}
-    return {k: v for k, v in out.items() if k in param_names}
+    out = {drive.crank: model.crank, drive.rod: l, drive.offset: model.offset,
+           cb.mass: crank[0], cb.com_u: crank[1], cb.com_v: 0.0, cb.inertia: crank[2],
+           rb.mass: 0.0 if fold else model.rod_mass, rb.com_u: c2, rb.com_v: 0.0,
+           rb.inertia: 0.0 if fold else model.rod_mass * c2 * (l - c2),
+           bb.mass: bar_mass, bb.com_u: 0.0, bb.com_v: 0.0, bb.inertia: 0.0}
+    return {k: v for k, v in out.items() if k is not None and k in param_names}

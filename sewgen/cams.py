@@ -33,8 +33,8 @@ class ArcSwitch:
 
 
 def _arc_columns(mech) -> dict:
-    return {o["name"][:-len(".arc")]: k for k, o in enumerate(mech.manifest["observables"])
-            if o["name"].endswith(".arc")}
+    return {name[:-len(".arc")]: k for k, (name, _) in enumerate(mech.description.observables)
+            if name.endswith(".arc")}
 
 
 def arc_switches(mech, motion, *, params=None, held=None, tol: float = 1e-10, side: float = 1e-7) -> list[ArcSwitch]:

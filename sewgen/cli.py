@@ -9,12 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .units import UnitError, to_si
-
 from . import balance_cli, catalog, load, mechanism
 from .errors import SewgenError
 from .loads import Load
 from .mechanism import Mechanism
+from .units import UnitError, to_si
 
 
 def _pairs(items: list[str], what: str) -> dict:
@@ -28,8 +27,12 @@ def _pairs(items: list[str], what: str) -> dict:
 
 
 def _mechanism(args) -> Mechanism:
+    if args.file and args.name:
+        raise SewgenError(f"give a catalog mechanism ({args.name!r}) or --file, not both")
     if args.file:
         return load(Path(args.file))
+    if not args.name:
+        raise SewgenError(f"name a catalog mechanism ({', '.join(catalog())}) or give --file my_mechanism.py")
     return mechanism(args.name)
 
 
@@ -45,10 +48,17 @@ def cmd_list(args) -> int:
 def cmd_params(args) -> int:
     m = _mechanism(args)
     print(f"{m.name}: {len(m.param_names)} parameters (SI default, declared unit)")
-    for p in m.describe_params():
-        print(f"  {p['name']:24s} {p['default']:>12.6g} {p['unit']:8s} [{p['display_unit']}]  {p['doc']}")
-    for b in m.manifest["branches"]:
-        print(f"  branch {b['joint']:17s} default {b['default']:+d}  {b['meaning']}")
+    d = m.description
+    for p in d.params:
+        role = f"  (role {p.role})" if p.role else ""
+        print(f"  {p.name:24s} {p.default:>12.6g} {p.unit:8s} [{p.display_unit}]  {p.doc}{role}")
+    for i in d.held_inputs:
+        role = f"  (role {i.role})" if i.role else ""
+        print(f"  held {i.name:19s} {i.default:>12.6g} {i.unit:8s} [{i.display_unit}]  {i.doc}{role}")
+    for b in d.branches:
+        print(f"  branch {b.joint:17s} default {b.default:+d}  {b.meaning}")
+    if d.roles:
+        print("  roles: " + ", ".join(f"{role} = {kind} {name}" for role, (kind, name) in sorted(d.roles.items())))
     return 0
 
 
@@ -186,7 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
                            ("kinematics", cmd_kinematics, "positions, velocities, accelerations over a revolution"),
                            ("forces", cmd_forces, "joint reactions, driving torque, shaking force over a revolution")):
         p = sub.add_parser(name, help=text)
-        p.add_argument("name", nargs="?", default="needle_bar", help="catalog mechanism (default needle_bar)")
+        p.add_argument("name", nargs="?", help="a catalog mechanism (sewgen list), or give --file")
         p.add_argument("--file", help="a user mechanism: a .py file with declare()")
         p.set_defaults(fn=fn)
         if name in ("kinematics", "forces"):

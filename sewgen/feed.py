@@ -4,6 +4,9 @@ The stitch length is the feed dog's horizontal travel while it is above the thro
 feed-dog trajectory indices): the cloth moves only while the dog's teeth stand above the plate. The plate
 crossings are found on a sweep by cubic Hermite interpolation in the shaft angle (positions and their exact
 shaft-angle derivatives v/ω from the kinematics), so the travel is accurate far below the sweep's step.
+
+Parts are found by role, so any feed mechanism works: the point with role ``feed_dog``, the parameter with role
+``throat_plate`` (its height) and the held input with role ``stitch_regulator``.
 """
 from __future__ import annotations
 
@@ -11,9 +14,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .errors import ParameterError
+from .units import UnitError, to_si
+
+from .roles import FEED_DOG, STITCH_REGULATOR, THROAT_PLATE
 
 
 @dataclass(frozen=True)
@@ -33,14 +38,29 @@ def _hermite(t, p0, p1, d0, d1, h):
             + (-2 * s**3 + 3 * s**2) * p1 + (s**3 - s**2) * h * d1)
 
 
-def dog_travel(motion, plate_y: float, point: str = "feed_dog") -> DogTravel:
-    """The travel of ``point`` above ``plate_y`` over one revolution of ``motion`` (equal steps, one turn)."""
+def has_feed(mech) -> bool:
+    """Whether ``mech`` declares a feed dog, a throat plate and a stitch regulator (by role)."""
+    d = mech.description
+    return all(d.has_role(r) for r in (FEED_DOG, THROAT_PLATE, STITCH_REGULATOR))
+
+
+def plate_height(mech, params: dict | None = None) -> float:
+    """The throat plate's height (m) in ``mech``'s frame: its ``throat_plate`` parameter with ``params``."""
+    return float(mech.param_vector(params)[mech.description.role(THROAT_PLATE).index])
+
+
+def dog_travel(motion, plate: float, point: str | None = None) -> DogTravel:
+    """The travel of ``point`` (default: the mechanism's ``feed_dog``) above the plate height ``plate`` (m) over
+    one revolution of ``motion`` (equal steps, one turn)."""
+    from scipy.optimize import brentq
+
+    point = point or motion.mechanism.description.role(FEED_DOG).name
     pt = motion.point(point)
     phi, w = motion.phi, motion.omega
     h = float(phi[1] - phi[0]) if len(phi) > 1 else 0.0
     if not h > 0 or not np.allclose(np.diff(phi), h) or abs(len(phi) * h - 2 * math.pi) > 1e-9:
         raise ParameterError(motion.mechanism.name, "shaft angles", "need one revolution in equal steps")
-    z = pt.y - plate_y
+    z = pt.y - plate
     dz, dx = pt.vy / w, pt.vx / w
     up = np.flatnonzero((z < 0) & (np.roll(z, -1) >= 0))
     down = np.flatnonzero((z >= 0) & (np.roll(z, -1) < 0))
@@ -57,17 +77,24 @@ def dog_travel(motion, plate_y: float, point: str = "feed_dog") -> DogTravel:
     return DogTravel(float(x1 - x0), float(rise % (2 * math.pi)), float(sink % (2 * math.pi)), float(z.max()))
 
 
-def stitch_length(mech, regulator, *, params: dict | None = None, step_deg: float = 1.0,
-                  point: str = "feed_dog", plate: str = "plate_y") -> DogTravel:
-    """Dog travel above the plate at regulator angle ``regulator`` (rad or "30 deg")."""
+def stitch_length(mech, regulator, *, params: dict | None = None, step_deg: float = 1.0) -> DogTravel:
+    """Dog travel above the plate at stitch-regulator setting ``regulator`` (rad or "30 deg")."""
     phi = np.radians(np.arange(0.0, 360.0, step_deg))
-    motion = mech.solve(phi, speed=1.0, params=params, held={"regulator": regulator})
-    return dog_travel(motion, mech.param_vector(params)[mech.param_names.index(plate)], point)
+    held = {mech.description.role(STITCH_REGULATOR).name: regulator}
+    motion = mech.solve(phi, speed=1.0, params=params, held=held)
+    return dog_travel(motion, plate_height(mech, params))
 
 
-def regulator_angle(mech, length: float, *, params: dict | None = None, limit_deg: float = 60.0,
+def regulator_angle(mech, length, *, params: dict | None = None, limit_deg: float = 60.0,
                     step_deg: float = 1.0) -> float:
-    """The regulator angle (rad) whose stitch is ``length`` (m; negative: reverse feed), by Brent's method."""
+    """The stitch-regulator angle (rad) whose stitch is ``length`` (m or "4 mm"; negative: reverse feed), by
+    Brent's method within ±``limit_deg``."""
+    from scipy.optimize import brentq
+
+    try:
+        length = to_si(length, "length", "stitch")
+    except UnitError as exc:
+        raise ParameterError(mech.name, "stitch", exc.problem) from None
     f = (lambda a: stitch_length(mech, a, params=params, step_deg=step_deg).travel - length)
     lo, hi = -math.radians(limit_deg), math.radians(limit_deg)
     f_lo, f_hi = f(lo), f(hi)

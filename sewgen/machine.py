@@ -31,9 +31,12 @@ from functools import cached_property
 
 import numpy as np
 
+from pathlib import Path
+
 from . import mechanism as catalog_mechanism
-from .errors import ParameterError
+from .errors import BuildError, ParameterError
 from .feed import regulator_angle
+from .roles import STITCH_REGULATOR
 from .loads import Load, load_matrix
 from .modelfile import Field, ModelFileError, Reader, load_toml, resolve  # noqa: F401 (ModelFileError re-exported)
 
@@ -51,6 +54,13 @@ class Group:
     branch: dict
     loads: list  # windows in the machine's shaft angle (seed 000: "relative to the upper-shaft angle")
     stitch: float | None = None  # m, feed groups: the stitch the regulator was set for
+    plane: float | None = None  # z of the group's plane (m); None: the mean z of its driven bodies
+
+    @property
+    def z(self) -> float:
+        """z of the plane the group's forces act in (m): ``plane`` if the model gives it, else the mean axial
+        position of its driven bodies (seed 000 analyses each group as a plane mechanism, §二(三))."""
+        return self.plane if self.plane is not None else float(np.mean(list(self.axial.values())))
 
     @cached_property
     def sweep_loads(self) -> list:
@@ -210,25 +220,33 @@ class MachineAnalysis:
         sf = self.frame_reaction
         return out - (ox * sf[:, 1] - oy * sf[:, 0])
 
+    def _group_loads(self, g: Group):
+        """(n, 2) resultant of one group's external loads and their moment about the origin (n,)."""
+        force, moment = np.zeros((len(self.phi), 2)), np.zeros(len(self.phi))
+        fa = self.groups[g.name]
+        ld = fa._run["loads"]
+        if ld is None:
+            return force, moment
+        for slot in g.mechanism.description.loads:
+            k = slot.index
+            if slot.component == "torque":
+                moment += ld[:, k]
+                continue
+            pt = fa.motion.point(slot.name)
+            if slot.component == "fx":
+                force[:, 0] += ld[:, k]
+                moment -= pt.y * ld[:, k]
+            else:
+                force[:, 1] += ld[:, k]
+                moment += pt.x * ld[:, k]
+        return force, moment
+
     def _process_loads(self):
-        """(n, 2) resultant of the external loads and their moment about the origin (n,)."""
+        """(n, 2) resultant of the external loads of every group and their moment about the origin (n,)."""
         force, moment = np.zeros((len(self.phi), 2)), np.zeros(len(self.phi))
         for g in self.machine.groups:
-            fa = self.groups[g.name]
-            ld = fa._run["loads"]
-            if ld is None:
-                continue
-            for k, slot in enumerate(g.mechanism.manifest["loads"]):
-                if slot["component"] == "torque":
-                    moment += ld[:, k]
-                    continue
-                pt = fa.motion.point(slot["name"])
-                if slot["component"] == "fx":
-                    force[:, 0] += ld[:, k]
-                    moment -= pt.y * ld[:, k]
-                else:
-                    force[:, 1] += ld[:, k]
-                    moment += pt.x * ld[:, k]
+            f, m = self._group_loads(g)
+            force, moment = force + f, moment + m
         return force, moment
 
     @property
@@ -247,6 +265,26 @@ class MachineAnalysis:
         ox, oy = about
         return self.frame_moment(about) + moment - (ox * force[:, 1] - oy * force[:, 0])
 
+    def shaking_moments(self, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """(n, 3) the machine's shaking moment on its base about the point ``about`` (x, y, z; m), about the x,
+        y and z axes (N m). Each group's shaking force (process loads internal) acts in its plane z = ``Group.z``
+        and each core mass at its own z, so the groups' axial offsets rock the base about x and y (seed 000
+        §二(二)1(6) treats the upper shaft in space for this reason): M = Σ (r − O) × F with F = (Fx, Fy, 0),
+        i.e. Mx = −Σ (z − z_O) Fy, My = Σ (z − z_O) Fx; Mz is :meth:`shaking_moment`."""
+        ox, oy, oz = about
+        gv = self.machine.gravity
+        out = np.zeros((len(self.phi), 3))
+        out[:, 2] = self.shaking_moment((ox, oy))
+        for g in self.machine.groups:
+            force = self.groups[g.name].shaking_force + self._group_loads(g)[0]
+            out[:, 0] -= (g.z - oz) * force[:, 1]
+            out[:, 1] += (g.z - oz) * force[:, 0]
+        for sm, _pos, _vel, acc in self.core:
+            force = sm.mass * (acc - gv[None, :])
+            out[:, 0] -= (sm.z - oz) * force[:, 1]
+            out[:, 1] += (sm.z - oz) * force[:, 0]
+        return out
+
     def energy_rate(self) -> np.ndarray:
         """d/dt(kinetic + potential energy) of every moving part, from the kinematics alone (W)."""
         gv = self.machine.gravity
@@ -254,12 +292,12 @@ class MachineAnalysis:
         for g in self.machine.groups:
             fa = self.groups[g.name]
             values = dict(zip(g.mechanism.param_names, fa._run["p"]))
-            for body in fa.motion.body_names:
-                bm = fa.motion.body(body)
-                if f"{body}.mass" not in values or f"{body}.inertia" not in values:
-                    raise ParameterError(g.mechanism.name, f"{body}.mass", "the machine's energy check needs "
+            for body in g.mechanism.description.bodies:
+                bm = fa.motion.body(body.name)
+                if body.mass is None or body.inertia is None:
+                    raise ParameterError(g.mechanism.name, f"{body.name}.mass", "the machine's energy check needs "
                                          "mass and inertia as parameters, not expressions")
-                m, inertia = values[f"{body}.mass"], values[f"{body}.inertia"]
+                m, inertia = values[body.mass], values[body.inertia]
                 com = bm.com
                 rate = rate + m * (com.vx * com.ax + com.vy * com.ay - gv[0] * com.vx - gv[1] * com.vy)
                 rate = rate + inertia * bm.omega * bm.alpha
@@ -313,13 +351,15 @@ SHAFT_MASS = {
     "z": Field("length"),
 }
 GROUP = {
-    "mechanism": Field("text", doc="a catalog mechanism: needle_bar, take_up, hook_drive, feed"),
+    "mechanism": Field("text", doc="a catalog mechanism's name, or the path of a declaration file (.py with a "
+                               "declare()), relative to the model file"),
     "description": Field("text", False),
     "phase": Field("angle", doc="group shaft angle minus machine shaft angle"),
     "axial": Field("table", doc="z on the upper shaft of every driven body, e.g. { crank = \"-20 mm\" }"),
     "params": Field("table", False),
     "held": Field("table", False),
-    "stitch": Field("length", False, "stitch length the regulator is set for (feed groups)"),
+    "stitch": Field("length", False, "stitch length the stitch regulator is set for (feed groups)"),
+    "plane": Field("length", False, "z of the group's plane on the machine (default: mean z of its driven bodies)"),
     "branch": Field("table", False),
     "loads": Field("list", False),
 }
@@ -371,12 +411,9 @@ def load_machine(name_or_path) -> Machine:
 def _group(rd: Reader, name: str, data: dict) -> Group:
     key = f"groups.{name}"
     g = rd.read(data, key, GROUP)
-    try:
-        mech = catalog_mechanism(g["mechanism"])
-    except KeyError as exc:
-        rd.fail(f"{key}.mechanism", str(exc).strip("'\""))
-    man = mech.manifest
-    kinds = {p["name"]: p["kind"] for p in man["params"]}
+    mech = _group_mechanism(rd, f"{key}.mechanism", g["mechanism"])
+    desc = mech.description
+    kinds = {p.name: p.kind for p in desc.params}
     params = {}
     for pname, value in g.get("params", {}).items():
         if pname not in kinds:
@@ -398,7 +435,7 @@ def _group(rd: Reader, name: str, data: dict) -> Group:
             rd.fail(f"{key}.branch.{bname}", f"must be a branch joint of {mech.name} "
                     f"({', '.join(mech.branch_names) or 'none'}) set to 1 or -1")
         branch[bname] = value
-    driven = [b["name"] for b in man["bodies"] if b["kind"] == "driven" and b["name"] not in mech.held_names]
+    driven = [b.name for b in desc.driven_bodies]
     axial = {}
     for bname, value in g["axial"].items():
         if bname not in driven:
@@ -416,14 +453,15 @@ def _group(rd: Reader, name: str, data: dict) -> Group:
             rd.fail(lk, "give both 'from' and 'to' for a window, or neither")
         loads.append(Load(ld["at"], ld.get("fx", 0.0), ld.get("fy", 0.0), ld.get("torque", 0.0),
                           (ld["from"], ld["to"]) if "from" in ld else None, ld.get("name", "")))
-    group = Group(name, mech, g["phase"], axial, params, held, branch, loads, g.get("stitch"))
+    group = Group(name, mech, g["phase"], axial, params, held, branch, loads, g.get("stitch"), g.get("plane"))
     if group.stitch is not None:
-        if "regulator" not in mech.held_names:
-            rd.fail(f"{key}.stitch", f"{mech.name} has no stitch regulator")
-        if "regulator" in held:
-            rd.fail(f"{key}.stitch", "give the stitch length or held.regulator, not both")
+        regulator = desc.role_name(STITCH_REGULATOR)
+        if regulator is None:
+            rd.fail(f"{key}.stitch", f"{mech.name} has no held input with the role {STITCH_REGULATOR!r}")
+        if regulator in held:
+            rd.fail(f"{key}.stitch", f"give the stitch length or held.{regulator}, not both")
         try:
-            group.held["regulator"] = regulator_angle(mech, group.stitch, params=params or None)
+            group.held[regulator] = regulator_angle(mech, group.stitch, params=params or None)
         except ParameterError as exc:
             rd.fail(f"{key}.stitch", exc.problem)
     try:  # every load names a point or body of the mechanism
@@ -431,6 +469,27 @@ def _group(rd: Reader, name: str, data: dict) -> Group:
     except ParameterError as exc:
         rd.fail(f"{key}.loads", f"{exc.parameter}: {exc.problem}")
     return group
+
+
+def _group_mechanism(rd: Reader, key: str, text: str):
+    """A group's mechanism: a catalog name, or a declaration file (.py with ``declare()``) relative to the model
+    file, derived and compiled on first use and then loaded from the cache (:func:`sewgen.load`)."""
+    from . import catalog, load
+
+    if text in catalog():
+        return catalog_mechanism(text)
+    path = Path(text).expanduser()
+    if not path.is_absolute():
+        path = rd.path.parent / path
+    if path.suffix != ".py":
+        rd.fail(key, f"{text!r} is neither a catalog mechanism ({', '.join(catalog())}) nor a declaration file "
+                     "(.py with a declare() function)")
+    if not path.is_file():
+        rd.fail(key, f"no declaration file {path}")
+    try:
+        return load(path)
+    except BuildError as exc:
+        rd.fail(key, exc.problem)
 
 
 __all__ = ["Group", "Machine", "MachineAnalysis", "ModelFileError", "Shaft", "ShaftMass", "load_machine"]

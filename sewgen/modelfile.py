@@ -119,9 +119,10 @@ def load_toml(path) -> dict:
 
 
 def resolve(name_or_path) -> Path:
-    """A built-in model by name ("jb1-3") or a path to a .toml file."""
+    """A built-in model by name ("jb1-3") or a path to a .toml file. A folder is never a model: ``sewgen analyze
+    jb1-3`` writes its results into ./jb1-3, and the next run must still find the built-in model."""
     p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
+    if p.suffix == ".toml" or p.is_file():
         return p
     builtin = MODELS_DIR / f"{name_or_path}.toml"
     if builtin.is_file():

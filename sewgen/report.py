@@ -1,7 +1,7 @@
 """The analysis report of a machine: CSV tables per group and for the machine, and summary.json.
 
-summary.json holds, for every quantity a designer checks (bearing loads, driving torque, shaking force and
-moment, every joint reaction), the peak and the RMS over the revolution with the shaft angles where they
+summary.json holds, for every quantity a designer checks (bearing loads, driving torque, shaking force, the
+shaking moment about the x, y and z axes, every joint reaction), the peak and the RMS over the revolution with the shaft angles where they
 occur; the whole machine's power-balance residual (``power_balance_residual``); the feed setting (stitch,
 regulator angle, dog travel and height above the plate) and the cam arc switches with the acceleration
 jump each implies.
@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from .cams import arc_switches
-from .feed import dog_travel
+from .feed import dog_travel, has_feed, plate_height
+from .roles import FEED_DOG, STITCH_REGULATOR
 from .results import write_csv
 
 
@@ -37,6 +38,9 @@ def machine_table(a) -> dict:
     cols["shaking.fx [N]"], cols["shaking.fy [N]"] = sf[:, 0], sf[:, 1]
     cols["shaking.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
     cols["shaking.moment [N*m]"] = a.shaking_moment()
+    moments = a.shaking_moments()
+    for k, axis in enumerate("xyz"):
+        cols[f"shaking.moment_{axis} [N*m]"] = moments[:, k]
     fr = a.frame_reaction
     cols["frame_reaction.fx [N]"], cols["frame_reaction.fy [N]"] = fr[:, 0], fr[:, 1]
     cols["drive_power [W]"] = a.drive_power
@@ -73,6 +77,7 @@ def summary(a, switches: dict | None = None) -> dict:
         "drive_power": _stat(a.drive_power, phi, "W"),
         "shaking_force": _stat(np.hypot(*a.shaking_force.T), phi, "N"),
         "shaking_moment": _stat(a.shaking_moment(), phi, "N*m"),
+        "shaking_moments_about_origin": {axis: _stat(v, phi, "N*m") for axis, v in zip("xyz", a.shaking_moments().T)},
         "groups": {},
     }
     for g in m.groups:
@@ -80,15 +85,15 @@ def summary(a, switches: dict | None = None) -> dict:
         entry = {"mechanism": g.mechanism.name, "phase_deg": math.degrees(g.phase),
                  "torque": _stat(fa.torque("shaft"), phi, "N*m"),
                  "joints": {n: _stat(fa.reaction(n).magnitude, phi, "N") for n in fa.reaction_names}}
-        if "regulator" in g.held:
-            entry["regulator_deg"] = math.degrees(g.held["regulator"])
-            entry["holding_torque"] = _stat(fa.torque("regulator"), phi, "N*m")
+        regulator = g.mechanism.description.role_name(STITCH_REGULATOR)
+        if regulator is not None:
+            entry["regulator_deg"] = math.degrees(g.held.get(regulator, g.mechanism.description.input(regulator).default))
+            entry["holding_torque"] = _stat(fa.torque(regulator), phi, "N*m")
         if g.stitch is not None:
             entry["stitch_mm"] = g.stitch * 1e3
-        if "feed_dog" in fa.motion.point_names and "plate_y" in g.mechanism.param_names:
-            plate = fa._run["p"][g.mechanism.param_names.index("plate_y")]
-            t = dog_travel(fa.motion, plate)
-            entry["feed_dog"] = {"travel_above_plate_mm": t.travel * 1e3, "height_above_plate_mm": t.height * 1e3,
+        if has_feed(g.mechanism):
+            t = dog_travel(fa.motion, plate_height(g.mechanism, g.params or None))
+            entry[FEED_DOG] = {"travel_above_plate_mm": t.travel * 1e3, "height_above_plate_mm": t.height * 1e3,
                                  "rises_at_deg": float(_deg(t.rise - g.phase)),
                                  "sinks_at_deg": float(_deg(t.sink - g.phase))}
         if switches and switches.get(g.name):
@@ -103,7 +108,7 @@ def cam_switches(a) -> dict:
     out = {}
     for g in a.machine.groups:
         fa = a.groups[g.name]
-        if any(o["name"].endswith(".arc") for o in g.mechanism.manifest["observables"]):
+        if any(name.endswith(".arc") for name, _ in g.mechanism.description.observables):
             out[g.name] = arc_switches(g.mechanism, fa.motion, params=g.params or None, held=g.held or None)
     return out
 

@@ -362,3 +362,12 @@ def test_unknown_builtin():
 
 def test_a_table_where_a_quantity_belongs(tmp_path):
     check(tmp_path, edit('rod = "50 mm"', 'rod = { length = "50 mm" }'), "groups.needle_bar.params.rod", (), "length")
+
+
+def test_a_results_folder_named_like_a_builtin_model_does_not_shadow_it(tmp_path, monkeypatch):
+    """`sewgen analyze jb1-3` writes ./jb1-3/; run again in the same folder, it must still find the model."""
+    from sewgen.modelfile import MODELS_DIR, resolve
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "jb1-3").mkdir()
+    assert resolve("jb1-3") == MODELS_DIR / "jb1-3.toml"

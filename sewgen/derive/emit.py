@@ -58,12 +58,14 @@ def _force_manifest(kst: Kinetostatics) -> dict:
 def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, kernels, sizes: dict) -> dict:
     offset = 0
     points, bodies = [], []
-    for name, _att, doc in mech.points:
-        points.append({"name": name, "offset": offset, "doc": doc})
+    role = mech.role_of
+    for name, att, doc in mech.points:
+        points.append({"name": name, "offset": offset, "doc": doc, "body": att.body.name, "role": role("point", name)})
         offset += len(POINT_FIELDS)
     for body in mech.bodies:
         if body.moving:
-            entry = {"name": body.name, "kind": body.kind, "offset": offset, "doc": body.doc}
+            entry = {"name": body.name, "kind": body.kind, "offset": offset, "doc": body.doc,
+                     "role": role("body", body.name)}
             bodies.append(entry)
             offset += len(BODY_FIELDS)
     return {
@@ -74,10 +76,12 @@ def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, ker
         "coords": [{"name": c.name, "unit": "rad" if c.kind == "angle" else "m", "guess": c.guess}
                    for c in kin.coords],
         "inputs": [{"name": i.name, "kind": i.kind, "unit": "rad", "default": i.default,
-                    "display_unit": i.display_unit, "doc": i.doc} for i in mech.inputs],
+                    "display_unit": i.display_unit, "doc": i.doc, "role": role("input", i.name)}
+                   for i in mech.inputs],
         "params": [{"name": p.name, "kind": p.kind, "unit": p.unit, "default": p.default,
-                    "display_unit": p.display_unit, "positive": p.positive, "doc": p.doc}
-                   for p in mech.params],
+                    "display_unit": p.display_unit, "positive": p.positive, "doc": p.doc,
+                    "role": role("param", p.name)} for p in mech.params],
+        "roles": {r: {"kind": kind, "name": name} for r, (kind, name) in sorted(mech.roles.items())},
         "points": points,
         "point_fields": POINT_FIELDS,
         "bodies": bodies,

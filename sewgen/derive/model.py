@@ -155,6 +155,7 @@ class Mechanism:
     joints: list = field(default_factory=list)
     points: list = field(default_factory=list)  # (name, Attachment, doc)
     inputs: list = field(default_factory=list)
+    roles: dict = field(default_factory=dict)  # role -> (kind, name): what a part is for the machine analyses
 
     def __post_init__(self):
         if not _NAME.match(self.name):
@@ -163,6 +164,23 @@ class Mechanism:
         self.bodies.append(self.ground)
         self.inputs.append(Input("shaft", "shaft", 0.0, "rad", "upper-shaft angle phi"))
         self._names: set = {"ground", "shaft"}
+
+    # -- roles ---------------------------------------------------------------------------------------------
+    def _role(self, role, kind: str, name: str) -> None:
+        """Tag part ``name`` (a "point", "param", "input" or "body") with ``role`` (sewgen.roles); once per role."""
+        if role is None:
+            return
+        if not isinstance(role, str) or not _NAME.match(role):
+            raise DeclarationError(f"{self.name}: role {role!r} of {kind} {name!r} must be lower_snake_case")
+        if role in self.roles:
+            other_kind, other = self.roles[role]
+            raise DeclarationError(f"{self.name}: role {role!r} is given to both {other_kind} {other!r} and "
+                                   f"{kind} {name!r}; a role names one part")
+        self.roles[role] = (kind, name)
+
+    def role_of(self, kind: str, name: str):
+        """The role of part ``name`` of ``kind``, or None."""
+        return next((r for r, (k, n) in self.roles.items() if k == kind and n == name), None)
 
     # -- parameters ------------------------------------------------------------------------------------
     def _claim(self, name: str, what: str) -> None:
@@ -174,9 +192,10 @@ class Mechanism:
             raise DeclarationError(f"{self.name}: the {what} name {name!r} is declared twice")
         self._names.add(key)
 
-    def param(self, name: str, kind: str, default: str, doc: str, positive: bool = False) -> sp.Symbol:
+    def param(self, name: str, kind: str, default: str, doc: str, positive: bool = False, role=None) -> sp.Symbol:
         """Declare a parameter of physical ``kind`` with a default such as "16.7 mm"; returns its symbol."""
         self._claim(name, "parameter")
+        self._role(role, "param", name)
         if not doc:
             raise DeclarationError(f"{self.name}: parameter {name!r} needs a docstring")
         value = to_si(default, kind, f"{self.name}.{name}")
@@ -187,16 +206,17 @@ class Mechanism:
         self.params.append(Param(name, sym, kind, value, unit, doc, positive))
         return sym
 
-    def length(self, name: str, default: str, doc: str, signed: bool = False) -> sp.Symbol:
+    def length(self, name: str, default: str, doc: str, signed: bool = False, role=None) -> sp.Symbol:
         """A length; positive unless ``signed`` (offsets, coordinates)."""
-        return self.param(name, "length", default, doc, positive=not signed)
+        return self.param(name, "length", default, doc, positive=not signed, role=role)
 
-    def angle(self, name: str, default: str, doc: str) -> sp.Symbol:
-        return self.param(name, "angle", default, doc)
+    def angle(self, name: str, default: str, doc: str, role=None) -> sp.Symbol:
+        return self.param(name, "angle", default, doc, role=role)
 
     # -- bodies ----------------------------------------------------------------------------------------
-    def _body(self, name: str, kind: str, doc: str, mass, com, inertia, **kw) -> Body:
+    def _body(self, name: str, kind: str, doc: str, mass, com, inertia, role=None, **kw) -> Body:
         self._claim(name, "body")
+        self._role(role, "body", name)
         body = Body(self, name, kind, doc=doc, **kw)
         body.mass = self._mass_prop(name, "mass", "mass", mass, f"mass of {name}")
         body.com = (
@@ -214,32 +234,36 @@ class Mechanism:
         return sp.sympify(value)
 
     def driven(self, name: str, pivot: Attachment, phase="0 deg", sense: int = 1, doc: str = "",
-               mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2") -> Body:
+               mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None) -> Body:
         """A body turned by the upper shaft: angle = sense * phi + phase, about ``pivot`` on ground."""
         self._check_on_ground(pivot, name)
         if sense not in (1, -1):
             raise DeclarationError(f"{self.name}: sense of {name!r} must be +1 or -1")
         ph = self.angle(f"{name}.phase", phase, f"phase of {name} relative to the shaft angle") if isinstance(phase, str) else sp.sympify(phase)
-        return self._body(name, "driven", doc, mass, com, inertia, pivot=pivot, input_index=0, phase=ph, sense=sense)
+        return self._body(name, "driven", doc, mass, com, inertia, role=role, pivot=pivot, input_index=0, phase=ph,
+                          sense=sense)
 
     def held(self, name: str, pivot: Attachment, default: str, doc: str,
-             mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2") -> Body:
-        """A body set by a held input (stitch regulator): its angle is an input that stays put in a run."""
+             mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None) -> Body:
+        """A body set by a held input (stitch regulator): its angle is an input that stays put in a run.
+        ``role`` tags the held input (e.g. "stitch_regulator")."""
         self._check_on_ground(pivot, name)
+        self._role(role, "input", name)
         self.inputs.append(Input(name, "held", to_si(default, "angle", f"{self.name}.{name}"), unit_of(default), doc))
         return self._body(name, "driven", doc, mass, com, inertia, pivot=pivot, input_index=len(self.inputs) - 1)
 
     def link(self, name: str, doc: str = "", guess: str = "0 deg",
-             mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2") -> Body:
+             mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None) -> Body:
         """A free link; its absolute angle is a coordinate. ``guess`` starts Newton when no closed form exists."""
-        return self._body(name, "link", doc, mass, com, inertia, guess=to_si(guess, "angle", f"{self.name}.{name}.guess"))
+        return self._body(name, "link", doc, mass, com, inertia, role=role,
+                          guess=to_si(guess, "angle", f"{self.name}.{name}.guess"))
 
     def slider(self, name: str, guide: Line, doc: str = "", guess: str = "0 mm",
-               mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2") -> Body:
+               mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None) -> Body:
         """A body travelling on ``guide`` (a line of ground or of a moving body); its travel is a coordinate."""
         if not isinstance(guide, Line):
             raise DeclarationError(f"{self.name}: guide of {name!r} must be body.line(...)")
-        return self._body(name, "slider", doc, mass, com, inertia, guide=guide,
+        return self._body(name, "slider", doc, mass, com, inertia, role=role, guide=guide,
                           guess=to_si(guess, "length", f"{self.name}.{name}.guess"))
 
     def _check_on_ground(self, att: Attachment, name: str) -> None:
@@ -301,9 +325,10 @@ class Mechanism:
         self.joints.append(joint)
         return joint
 
-    def point(self, name: str, at: Attachment, doc: str = "") -> None:
+    def point(self, name: str, at: Attachment, doc: str = "", role=None) -> None:
         """A named point whose position, velocity and acceleration are reported."""
         self._claim(name, "point")
+        self._role(role, "point", name)
         self.points.append((name, at, doc))
 
     # -- queries ---------------------------------------------------------------------------------------

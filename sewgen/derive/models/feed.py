@@ -47,14 +47,15 @@ def declare() -> Mechanism:
     strap = m.length("lift_strap", "180.2 mm", "lift strap, eccentric centre to the drive-arm pin (estimate)")
     dog_u = m.length("dog_u", "20 mm", "feed dog tip along the feed bar from R (estimate)")
     slot_v = m.length("bar_slot_v", "7 mm", "feed bar: its roller slot below the line R–feed dog (estimate)")
-    m.length("plate_y", "-170.5 mm", "throat plate surface, y (estimate: the dog rises ~1 mm above it)", signed=True)
+    m.length("plate_y", "-170.5 mm", "throat plate surface, y (estimate: the dog rises ~1 mm above it)", signed=True,
+             role="throat_plate")
 
-    cam = m.driven("feed_cam", pivot=m.ground.at(0, 0), phase="60 deg",
+    cam = m.driven("feed_cam", pivot=m.ground.at(0, 0), phase="60 deg", role="feed_cam",
                    doc="feed cam 送布凸轮 on the upper shaft (constant breadth, six arcs)",
                    mass="30 g", com=("1.5 mm", "0 mm"), inertia="4.0e-6 kg*m**2")
     lift_ecc = m.driven("lift_eccentric", pivot=m.ground.at(0, 0), phase="160 deg",
                         doc="lift eccentric 抬牙凸轮 on the upper shaft", mass="0 g")
-    regulator = m.held("regulator", pivot=m.ground.at(rx, ry), default="40 deg",
+    regulator = m.held("regulator", pivot=m.ground.at(rx, ry), default="40 deg", role="stitch_regulator",
                        doc="stitch regulator 针距座: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)")
     fork = m.link("feed_fork", doc="feed fork 送布牙叉 (part 3), u down the fork from the cam centre line",
                   guess="-90 deg", mass="35 g", com=(tp / 2, 0), inertia="1.2e-4 kg*m**2")
@@ -62,7 +63,7 @@ def declare() -> Mechanism:
                      doc="stitch block 针距滑块 (part 8)", guess="0 mm", mass="4 g", inertia="1e-8 kg*m**2")
     feed_shaft = m.link("feed_rock_shaft", doc="feed rock shaft with its two arms 送布轴组件 (part 2)",
                         guess="0 deg", mass="40 g", com=("5 mm", "5 mm"), inertia="6.0e-6 kg*m**2")
-    bar = m.link("feed_bar", doc="feed bar 牙架 (part 6) with the feed dog 送布牙", guess="0 deg",
+    bar = m.link("feed_bar", doc="feed bar 牙架 (part 6) with the feed dog 送布牙", guess="0 deg", role="feed_bar",
                  mass="25 g", com=("15 mm", "-3 mm"), inertia="4.0e-6 kg*m**2")
     lift = m.link("lift_rock_shaft", doc="lift rock shaft with its arms and roller 抬牙轴组件 (parts 5, 7)",
                   guess="180 deg", mass="30 g", com=("0 mm", "0 mm"), inertia="3.0e-6 kg*m**2")
@@ -80,7 +81,8 @@ def declare() -> Mechanism:
     m.revolute(lift_ecc.at(ecc, 0), strap_body.at(0, 0), name="S")
     m.revolute(strap_body.at(strap, 0), lift.at(-arm_d, 0), name="T")
     m.slot(bar.line(at=(0, -slot_v), angle=0), lift.at(arm_l, 0), name="L")
-    m.point("feed_dog", bar.at(dog_u, 0), "feed dog tip (on the line through R: lifting it does not move it sideways)")
+    m.point("feed_dog", bar.at(dog_u, 0), "feed dog tip (on the line through R: lifting it does not move it sideways)",
+            role="feed_dog")
     m.point("fork_top", fork.at(0, 0), "feed fork on the cam centre line")
     m.point("stitch_pin", fork.at(tq, 0), "fork pin Q in the stitch block")
     m.point("lift_roller", lift.at(arm_l, 0), "lift roller L in the feed bar")

@@ -33,6 +33,7 @@ def declare() -> Mechanism:
     rock = m.link("rock_shaft", doc="rock shaft with its two arms 摆轴组件 (part 4)", guess="0 deg",
                   mass="60 g", com=("2 mm", "-2 mm"), inertia="8.0e-6 kg*m**2")
     lower = m.link("lower_shaft", doc="lower shaft with slotted arm and shuttle driver 下轴组件 (part 11)",
+                   role="hook_shaft",
                    guess="-90 deg", mass="60 g", com=("0 mm", "0 mm"), inertia="6.0e-6 kg*m**2")
     slider = m.slider("rock_slider", guide=lower.line(at=(0, 0), angle=0),
                       doc="rock-shaft slider 摆轴滑块 (part 10)", guess="5 mm",

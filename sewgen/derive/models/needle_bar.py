@@ -16,20 +16,21 @@ from sewgen.derive.model import Mechanism
 
 def declare() -> Mechanism:
     m = Mechanism("needle_bar", __doc__, default_speed="1000 rpm")
-    r = m.length("crank", "16.7 mm", "crank radius AB (seed 002 §3)")
-    l = m.length("rod", "50 mm", "needle-bar link BC, pin to pin (estimate)")
-    e = m.length("offset", "0 mm", "horizontal offset of the needle-bar axis from the shaft axis", signed=True)
+    r = m.length("crank", "16.7 mm", "crank radius AB (seed 002 §3)", role="needle_crank_radius")
+    l = m.length("rod", "50 mm", "needle-bar link BC, pin to pin (estimate)", role="needle_rod_length")
+    e = m.length("offset", "0 mm", "horizontal offset of the needle-bar axis from the shaft axis", signed=True,
+                 role="needle_bar_offset")
     h = m.length("eye_below_pin", "62 mm", "needle eye below the link pin C along the bar (estimate)")
-    crank = m.driven("crank", pivot=m.ground.at(0, 0), doc="needle-bar crank on the upper shaft",
+    crank = m.driven("crank", pivot=m.ground.at(0, 0), doc="needle-bar crank on the upper shaft", role="needle_crank",
                      mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2")
-    rod = m.link("rod", doc="needle-bar link 小连杆 (part 13)", guess="-90 deg",
+    rod = m.link("rod", doc="needle-bar link 小连杆 (part 13)", guess="-90 deg", role="needle_rod",
                  mass="12 g", com=(l / 2, 0), inertia="2.5e-6 kg*m**2")
     bar = m.slider("needle_bar", guide=m.ground.line(at=(e, 0), angle=sp.pi / 2),
-                   doc="needle bar with clamp and needle 针杆组件 (part 14)", guess="-40 mm",
+                   doc="needle bar with clamp and needle 针杆组件 (part 14)", guess="-40 mm", role="needle_bar",
                    mass="45 g", com=("-30 mm", "0 mm"), inertia="1.5e-5 kg*m**2")
     m.revolute(crank.at(r, 0), rod.at(0, 0), name="B")
     m.revolute(rod.at(l, 0), bar.at(0, 0), name="C", branch=-1)
     m.point("crank_pin", crank.at(r, 0), "crank pin B")
     m.point("link_pin", bar.at(0, 0), "needle-bar link pin C")
-    m.point("needle_eye", bar.at(-h, 0), "needle eye")
+    m.point("needle_eye", bar.at(-h, 0), "needle eye", role="needle_eye")
     return m

@@ -26,7 +26,7 @@ def declare() -> Mechanism:
     eu = (bc**2 + be**2 - ce**2) / (2 * bc)  # E in the lever frame (B origin, C on +u)
     ev = sp.sqrt(be**2 - eu**2)
     crank = m.driven("crank", pivot=m.ground.at(0, 0), doc="take-up crank on the upper shaft")
-    lever = m.link("lever", doc="take-up lever 挑线杆 (part 16)", guess="60 deg",
+    lever = m.link("lever", doc="take-up lever 挑线杆 (part 16)", guess="60 deg", role="take_up_lever",
                    mass="9 g", com=("24 mm", "2 mm"), inertia="3.0e-6 kg*m**2")
     rocker = m.link("rocker", doc="take-up rocker 挑线摇杆 (part 15)", guess="100 deg",
                     mass="4 g", com=(cd / 2, 0), inertia="3.0e-7 kg*m**2")
@@ -35,5 +35,5 @@ def declare() -> Mechanism:
     m.revolute(lever.at(bc, 0), rocker.at(cd, 0), name="C", branch=1)
     m.point("crank_pin", crank.at(ab, 0), "crank pin B")
     m.point("rocker_pin", rocker.at(cd, 0), "lever-rocker pin C")
-    m.point("thread_eye", lever.at(eu, ev), "thread eye E of the take-up lever")
+    m.point("thread_eye", lever.at(eu, ev), "thread eye E of the take-up lever", role="thread_eye")
     return m
