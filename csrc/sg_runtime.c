@@ -241,6 +241,10 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     return failures;
 }
 
+/* Sweep a mechanism over n shaft angles in one call: positions, velocities, accelerations and every
+ * observable. phi/omega/alpha have n entries; held has nx-1; q_guess (nq) starts Newton where no closed
+ * form exists. Outputs are row-major (n x nq, n x nobs); status has n entries. Returns the number of
+ * positions whose status is not SG_OK (or n with every status SG_BAD_ARGUMENT on bad sizes). */
 size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
                 const double *alpha, const double *held, const double *p, const int *branch,
                 const double *q_guess, const sg_options *opt, double *q, double *qd, double *qdd,
@@ -250,6 +254,8 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
                  status);
 }
 
+/* sg_sweep plus kinetostatics in the same pass: gv is gravity (2), loads is n x nload (NULL: no loads),
+ * frc receives n x nfo force outputs. A singular force matrix gives SG_SINGULAR at that position. */
 size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
                        const double *alpha, const double *held, const double *p, const int *branch,
                        const double *q_guess, const sg_options *opt, const double *gv, const double *loads,

@@ -1,7 +1,8 @@
 /* sewgen C runtime: pivoted LU, closed-form dyads, damped Newton with a predictor, sweep driver.
  *
  * Hand-written; the generated kernels (generated/sg_<mechanism>.c) include this header and fill one
- * sg_mechanism descriptor each. Everything exported is prefixed sg_. C99, no allocation, no globals.
+ * sg_mechanism descriptor each (its fields: sg_abi.h). Everything exported is prefixed sg_. C99, no
+ * allocation, no globals.
  */
 #ifndef SG_RUNTIME_H
 #define SG_RUNTIME_H
@@ -9,17 +10,9 @@
 #include <math.h>
 #include <stddef.h>
 
-/* Per-position status codes (sewgen.errors maps each to a typed Python error). */
-enum sg_status {
-    SG_OK = 0,
-    SG_CANNOT_ASSEMBLE = 1, /* the loop does not close at this input (a dyad's circles do not meet) */
-    SG_SINGULAR = 2,        /* the constraint Jacobian is singular here (toggle / dead-centre position) */
-    SG_BRANCH_JUMP = 3,     /* Newton landed on another assembly branch than the previous position */
-    SG_NAN_INPUT = 4,       /* a shaft angle, speed or acceleration is not finite */
-    SG_NO_CONVERGENCE = 5,  /* Newton ran out of iterations */
-    SG_NONFINITE = 6,       /* a result came out non-finite (the motion kernel tests every output) */
-    SG_BAD_ARGUMENT = 7     /* sizes or options out of range: nothing was computed */
-};
+/* Status codes, the options struct, the kernel function types, the mechanism descriptor and the exported
+ * functions are generated from sewgen/abi.py (one source for C and Python). */
+#include "sg_abi.h"
 
 /* Largest number of coordinates (also the largest LU: force blocks included) and of hoisted constants a
  * mechanism may have (stack work arrays). */
@@ -27,52 +20,6 @@ enum sg_status {
 #define SG_MAX_C 2048
 /* Largest number of load slots per position. */
 #define SG_MAX_LOAD 512
-
-/* Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx
- * their cos, sin likewise; c the constants that sg_<m>_constants hoisted out of the parameters p. */
-typedef void (*sg_constants_fn)(const double *p, double *c);
-typedef int (*sg_closed_fn)(const double *x, const double *cx, const double *c, const int *branch, double *q,
-                            double *cq);
-typedef void (*sg_residual_fn)(const double *q, const double *cq, const double *x, const double *cx,
-                               const double *c, double *r, double *jac);
-typedef int (*sg_motion_fn)(const double *q, const double *cq, const double *x, const double *cx,
-                            const double *xd, const double *xdd, const double *c, double *qd, double *qdd,
-                            double *obs);
-/* Kinetostatics at a solved position: reads the motion kernel's observables obs, gravity gv[2] (m/s^2)
- * and the loads ld (nload); writes the reactions f (nf) then the derived outputs (nfo in all). */
-typedef int (*sg_forces_fn)(const double *q, const double *cq, const double *x, const double *cx,
-                            const double *xd, const double *c, const double *obs, const double *gv,
-                            const double *ld, double *out);
-typedef void (*sg_force_matrix_fn)(const double *q, const double *cq, const double *x, const double *cx,
-                                   const double *c, const double *obs, const double *gv, const double *ld,
-                                   double *A, double *b);
-
-/* One mechanism as the generated code describes it. */
-typedef struct sg_mechanism {
-    const char *name;
-    int nq;      /* coordinates: link angles (rad) and slider travels (m) */
-    int nx;      /* inputs: x[0] = shaft angle, then held inputs */
-    int np;      /* parameters (SI) */
-    int nc;      /* constants hoisted out of the parameters */
-    int nobs;    /* observables per position (points, bodies), see the manifest */
-    int nbranch; /* closed-form dyads, each with an assembly sign */
-    int nf;      /* force unknowns: reactions and driving torques */
-    int nfo;     /* force outputs per position: nf, then torques, powers, shaking, energies (manifest) */
-    int nload;   /* load slots per position: fx, fy per point of a moving body, torque per moving body */
-    const unsigned char *coord_is_angle;
-    sg_constants_fn constants;
-    sg_closed_fn closed;     /* NULL where the loops do not split into dyads */
-    sg_residual_fn residual; /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
-    sg_motion_fn motion;     /* velocities, accelerations and observables at a solved position */
-    sg_forces_fn forces;     /* joint reactions, driving torques, shaking force, energies */
-    sg_force_matrix_fn force_matrix; /* A (nf x nf, row-major) and b of A f = b, for inspection */
-} sg_mechanism;
-
-typedef struct sg_options {
-    double tol;     /* loop residual tolerance (m); Newton stops below it */
-    int max_iter;   /* Newton iterations per position */
-    int newton_only; /* 1: Newton even where a closed form exists (tests, benchmarks) */
-} sg_options;
 
 /* LU with partial pivoting, in place, row-major n x n. Returns SG_SINGULAR when a pivot is below
  * 1e-11 of its column's largest original entry (column-scale invariant: columns may be rad or m).
@@ -150,9 +97,6 @@ SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *
     }
 }
 
-int sg_lu_factor(int n, double *a, int *piv, double *det_sign);
-void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
-
 /* Closed-form dyads (seed 001 §三, Makino's vector triangles; BV4 is the RRR dyad). ------------------ */
 
 /* RRR: J is at distance l1 from P and l2 from Q; sigma = +1 puts J left of the ray P->Q. */
@@ -201,21 +145,5 @@ static inline int sg_dyad_rpr(const double D[2], const double w0[2], const doubl
     *theta = atan2(D[1], D[0]) - atan2(wy, wx);
     return SG_OK;
 }
-
-/* Sweep a mechanism over n shaft angles in one call: positions, velocities, accelerations and every
- * observable. phi/omega/alpha have n entries; held has nx-1; q_guess (nq) starts Newton where no closed
- * form exists. Outputs are row-major (n x nq, n x nobs); status has n entries. Returns the number of
- * positions whose status is not SG_OK (or n with every status SG_BAD_ARGUMENT on bad sizes). */
-size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
-                const double *alpha, const double *held, const double *p, const int *branch,
-                const double *q_guess, const sg_options *opt, double *q, double *qd, double *qdd,
-                double *obs, int *status);
-
-/* sg_sweep plus kinetostatics in the same pass: gv is gravity (2), loads is n x nload (NULL: no loads),
- * frc receives n x nfo force outputs. A singular force matrix gives SG_SINGULAR at that position. */
-size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
-                       const double *alpha, const double *held, const double *p, const int *branch,
-                       const double *q_guess, const sg_options *opt, const double *gv, const double *loads,
-                       double *q, double *qd, double *qdd, double *obs, double *frc, int *status);
 
 #endif

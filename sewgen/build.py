@@ -29,7 +29,7 @@ def make_ffi(module: str, kernel_dir: Path, mechanisms: list[str], extra_cflags:
     """An out-of-line API-mode FFI for the runtime plus the generated kernels of ``mechanisms``."""
     rt = runtime_dir()
     ffi = cffi.FFI()
-    ffi.cdef((rt / "sg_api.cdef").read_text())
+    ffi.cdef((kernel_dir / "sg_abi.cdef").read_text())  # the runtime's API, generated from sewgen/abi.py
     ffi.cdef((kernel_dir / "sg_kernels.cdef").read_text())
     sources = [rt / "sg_runtime.c"] + [kernel_dir / f"sg_{name}.c" for name in mechanisms]
     incs = [rt, kernel_dir]

@@ -87,7 +87,7 @@ def load_user(source, *, closed_form: bool = True, cache_dir: Path | None = None
     rt = runtime_dir()
     for name in sorted(files):
         h.update(name.encode() + b"\0" + files[name].encode() + b"\0")
-    for name in ("sg_runtime.c", "sg_runtime.h", "sg_api.cdef"):
+    for name in ("sg_runtime.c", "sg_runtime.h"):  # the ABI (sg_abi.*) is among the generated files
         h.update((rt / name).read_bytes())
     h.update(" ".join(CFLAGS + [os.environ.get("SEWGEN_CFLAGS", "")]).encode())
     key = h.hexdigest()[:20]

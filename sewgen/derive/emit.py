@@ -12,6 +12,7 @@ from pathlib import Path
 
 import jinja2
 
+from . import abi_header
 from .dyads import split_into_dyads
 from .kernels import KernelSet
 from .kinematics import Kinematics
@@ -130,8 +131,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
               "input_names": ", ".join(i.name for i in mech.inputs)},
         prefix=prefix, kernels=kernels,
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
-        sizes=sizes,
-        closed_fn=f"{prefix}_closed" if dyads is not None else "0",
+        descriptor=abi_header.descriptor_initializer(prefix, sizes, {k.name[len(prefix) + 1:]: True for k in kernels}),
         manifest_chunks=_c_string_chunks(text))
     prototypes = [k.prototype for k in kernels] + [
         f"const sg_mechanism *{prefix}(void);", f"const char *{prefix}_manifest(void);"]
@@ -139,12 +139,14 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
 
 
 def render_files(generated: list[Generated], header: str = "sg_kernels.h") -> dict[str, str]:
-    """All files of one compiled module: sg_<name>.c per mechanism, the header, the cdef, manifest.json."""
+    """All files of one compiled module: sg_<name>.c per mechanism, the kernels' header and cdef, the runtime's
+    ABI header and cdef (sewgen/abi.py), manifest.json."""
     files = {f"{g.prefix}.c": g.c_source for g in generated}
     mechs = [{"name": g.name, "prototypes": g.prototypes} for g in generated]
     guard = header.upper().replace(".", "_").replace("-", "_")
     files[header] = _TEMPLATES.get_template("kernels.h.j2").render(mechanisms=mechs, guard=guard)
     files["sg_kernels.cdef"] = _TEMPLATES.get_template("kernels.cdef.j2").render(mechanisms=mechs)
+    files["sg_abi.h"], files["sg_abi.cdef"] = abi_header.header(), abi_header.cdef()
     files["manifest.json"] = json.dumps({g.name: g.manifest for g in generated}, indent=1, sort_keys=True,
                                         ensure_ascii=False) + "\n"
     return files

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from .. import abi
 from .cprint import KernelPrinter, ops
 from .dyads import Dyad
 from .kinematics import Kinematics
@@ -81,6 +82,10 @@ class KernelSet:
             self.trig[x] = (sp.Symbol(f"cx_{2 * k}", real=True), sp.Symbol(f"cx_{2 * k + 1}", real=True))
 
     # -- expression preparation ------------------------------------------------------------------------
+    def _signature(self, kind: str) -> str:
+        """The C signature of this mechanism's kernel of ``kind``, from the one table in :mod:`sewgen.abi`."""
+        return abi.kernel_signature(kind, f"{self.prefix}_{kind}")
+
     def _expand_trig(self, expr: sp.Expr) -> sp.Expr:
         """sin/cos(±a ± b ... + c), a, b coordinate or input angles and c fixed -> products of cq/cx entries and
         sin/cos c, by the addition formulas applied one angle at a time."""
@@ -171,8 +176,7 @@ class KernelSet:
         body += [f"jac[{k}] = {pr.doprint(e)};" for k, e in enumerate(red[n:])]
         body = _unused(body, "q", "cq", "x", "cx", "c") + body
         return Kernel(f"{self.prefix}_residual",
-                      f"void {self.prefix}_residual(const double *q, const double *cq, const double *x, "
-                      f"const double *cx, const double *c, double *r, double *jac)",
+                      self._signature("residual"),
                       body, ops(e for _, e in repl) + ops(red))
 
     def motion(self) -> Kernel:
@@ -205,9 +209,7 @@ class KernelSet:
         names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "obs")
         body = _unused(body, *names) + body + ["return SG_OK;"]
         return Kernel(f"{self.prefix}_motion",
-                      f"int {self.prefix}_motion(const double *q, const double *cq, const double *x, "
-                      f"const double *cx, const double *xd, const double *xdd, const double *c, "
-                      f"double *qd, double *qdd, double *obs)",
+                      self._signature("motion"),
                       body, ops(e for _, e in repl) + ops(red))
 
     def forces(self, kst: Kinetostatics) -> Kernel:
@@ -248,9 +250,7 @@ class KernelSet:
         names = ("q", "cq", "x", "cx", "xd", "c", "obs", "gv", "ld", "out")
         body = _unused(body, *names) + body + ["return SG_OK;"]
         return Kernel(f"{self.prefix}_forces",
-                      f"int {self.prefix}_forces(const double *q, const double *cq, const double *x, "
-                      f"const double *cx, const double *xd, const double *c, const double *obs, "
-                      f"const double *gv, const double *ld, double *out)",
+                      self._signature("forces"),
                       body, ops(e for _, e in repl) + ops(red))
 
     def _block_solve(self, rows, cols, a, rhs, f) -> list[str]:
@@ -296,9 +296,7 @@ class KernelSet:
         body += [f"b[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[len(nz):])]
         body = _unused(body, "q", "cq", "x", "cx", "c", "obs", "gv", "ld") + body
         return Kernel(f"{self.prefix}_force_matrix",
-                      f"void {self.prefix}_force_matrix(const double *q, const double *cq, const double *x, "
-                      f"const double *cx, const double *c, const double *obs, const double *gv, "
-                      f"const double *ld, double *A, double *b)",
+                      self._signature("force_matrix"),
                       body, ops(e for _, e in repl) + ops(red))
 
     def closed(self, dyads: list[Dyad]) -> Kernel:
@@ -329,8 +327,7 @@ class KernelSet:
             body += ["{"] + ["    " + line for line in block] + ["}"]
         body = _unused(body, "x", "cx", "c", "branch", "q", "cq") + body + ["return SG_OK;"]
         return Kernel(f"{self.prefix}_closed",
-                      f"int {self.prefix}_closed(const double *x, const double *cx, const double *c, "
-                      f"const int *branch, double *q, double *cq)",
+                      self._signature("closed"),
                       body, total)
 
     def constants_kernel(self) -> Kernel:
@@ -341,7 +338,7 @@ class KernelSet:
         body = _temps(pr, repl) + [f"c[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
         body = _unused(body, "p", "c") + body
         return Kernel(f"{self.prefix}_constants",
-                      f"void {self.prefix}_constants(const double *p, double *c)",
+                      self._signature("constants"),
                       body, ops(e for _, e in repl) + ops(red))
 
 
