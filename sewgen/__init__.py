@@ -5,18 +5,22 @@
     >>> motion = nb.solve(sewgen.shaft_angles(5), speed="1000 rpm")
     >>> motion.point("needle_eye").y      # m, at 72 shaft angles
 """
+import threading
+
 from .errors import (AssemblyError, BranchJumpError, BuildError, ConvergenceError, InputError, ParameterError,
                      PositionError, SewgenError, SingularPositionError)
-from .forces import ForceAnalysis, JointReaction
+from .forces import ForceAnalysis, JointReaction, RunSettings
 from .loads import Load
-from .mechanism import Mechanism, shaft_angles
+from .mechanism import Mechanism, Reference, Sweep, shaft_angles
 from .results import Motion
 
 __all__ = ["AssemblyError", "BranchJumpError", "BuildError", "ConvergenceError", "ForceAnalysis", "InputError",
-           "JointReaction", "Load", "Mechanism", "Motion", "ParameterError", "PositionError", "SewgenError", "SingularPositionError", "catalog",
-           "load", "mechanism", "shaft_angles"]
+           "JointReaction", "Load", "Mechanism", "Motion", "ParameterError", "PositionError", "Reference",
+           "RunSettings", "SewgenError", "SingularPositionError", "Sweep", "catalog", "load", "mechanism",
+           "shaft_angles"]
 
 _cache: dict = {}
+_cache_lock = threading.Lock()  # one Mechanism per catalog name, even when threads ask at once
 
 
 def catalog() -> list[str]:
@@ -30,13 +34,17 @@ def mechanism(name: str) -> Mechanism:
     """A built-in mechanism by name (see :func:`catalog`)."""
     from .loader import catalog_module, catalog_names
 
-    if name not in _cache:
-        names = catalog_names()
-        if name not in names:
-            raise KeyError(f"no built-in mechanism {name!r}; the catalog has: {', '.join(names)}")
-        mod = catalog_module()
-        _cache[name] = Mechanism(mod.ffi, mod.lib, name)
-    return _cache[name]
+    mech = _cache.get(name)
+    if mech is None:
+        with _cache_lock:
+            if name not in _cache:
+                names = catalog_names()
+                if name not in names:
+                    raise KeyError(f"no built-in mechanism {name!r}; the catalog has: {', '.join(names)}")
+                mod = catalog_module()
+                _cache[name] = Mechanism(mod.ffi, mod.lib, name)
+            mech = _cache[name]
+    return mech
 
 
 def load(source, *, closed_form: bool = True, cache_dir=None) -> Mechanism:

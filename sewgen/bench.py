@@ -139,48 +139,13 @@ def best_time(fn: Callable[[], object], repeats: int, min_time: float) -> float:
 # -- the compiled sweep -------------------------------------------------------------------------------------
 
 
-def raw_sweep(m: sewgen.Mechanism, phi: np.ndarray):
-    """A closure calling sg_sweep alone on preallocated arrays (defaults as solve() uses them)."""
-    a = m._sweep_inputs(phi, None, 0.0, None, None, None, None, False, False, 50)  # exactly solve()'s inputs
-    q, qd, qdd, obs = a["q"], a["qd"], a["qdd"], a["obs"]
-    d = m._ptr
-    args = (m._descriptor, a["n"], d("double *", a["phi"]), d("double *", a["omega"]), d("double *", a["alpha"]),
-            d("double *", a["held"]), d("double *", a["p"]), d("int *", a["branch"]), d("double *", a["guess"]),
-            a["opt"], d("double *", q), d("double *", qd), d("double *", qdd), d("double *", obs),
-            d("int *", a["status"]))
-    sweep = m.lib.sg_sweep
-
-    def call():
-        return sweep(*args)
-
-    call.keep = a  # the arrays outlive the pointers
-    call.obs, call.status = obs, a["status"]
-    return call
-
-
-def raw_sweep_forces(m: sewgen.Mechanism, phi: np.ndarray, gravity: np.ndarray):
-    """A closure calling sg_sweep_forces alone on preallocated arrays, exactly as kinetostatics() calls it.
-
-    The inputs are ``Mechanism._sweep_inputs`` with every default (so tolerance, branch and guess are
-    kinetostatics()'s own); ``gravity`` is the vector (gx, gy) to pass, no loads (NULL).
-    """
-    a = m._sweep_inputs(phi, None, 0.0, None, None, None, None, False, False, 50)
-    gv = np.ascontiguousarray(gravity, dtype=np.float64)
-    frc = np.empty((a["n"], m.manifest["sizes"]["nfo"]))
-    d = m._ptr
-    args = (m._descriptor, a["n"], d("double *", a["phi"]), d("double *", a["omega"]), d("double *", a["alpha"]),
-            d("double *", a["held"]), d("double *", a["p"]), d("int *", a["branch"]), d("double *", a["guess"]),
-            a["opt"], d("double *", gv), m.ffi.NULL, d("double *", a["q"]), d("double *", a["qd"]),
-            d("double *", a["qdd"]), d("double *", a["obs"]), d("double *", frc), d("int *", a["status"]))
-    sweep = m.lib.sg_sweep_forces
-
-    def call():
-        return sweep(*args)
-
-    call.keep = (a, gv)  # outlive the pointers
-    call.q, call.qd, call.qdd, call.obs = a["q"], a["qd"], a["qdd"], a["obs"]
-    call.frc, call.status = frc, a["status"]
-    return call
+def raw_sweep(m: sewgen.Mechanism, phi: np.ndarray, **forces):
+    """The bare C call of ``m.solve(phi)`` (or, with ``forces=True`` and kinetostatics()'s force arguments, of
+    ``m.kinetostatics(phi, ...)``) on its own arrays: :meth:`Mechanism.prepare` converts every argument exactly
+    as solve() does, :meth:`Sweep.bind` makes the pointers once. Returns (call, sweep): time ``call``, read the
+    results (``sweep.q``, ``.obs``, ``.frc``, ``.status``) from ``sweep``."""
+    sweep = m.prepare(phi, **forces)
+    return sweep.bind(), sweep
 
 
 # -- the lambdify + scipy baseline --------------------------------------------------------------------------
@@ -298,16 +263,16 @@ def compare(m: sewgen.Mechanism, base: tuple, ref: tuple, rtol: float) -> dict:
     largest magnitude over the compared positions, floored at 1e-6 of the largest magnitude among columns
     of the same unit (so an identically zero column is judged against its unit).
     """
-    man = m.manifest
-    coord_units = [c["unit"] for c in man["coords"]]
+    desc = m.description
+    coord_units = [c.unit for c in desc.coords]
     parts = {  # part -> (units, labels) of its columns, in the order of base and ref
         "q": (coord_units, m.coord_names),
         "qd": ([u + "/s" for u in coord_units], [c + "_d" for c in m.coord_names]),
         "qdd": ([u + "/s^2" for u in coord_units], [c + "_dd" for c in m.coord_names]),
-        "obs": ([o["unit"] for o in man["observables"]], [o["name"] for o in man["observables"]]),
+        "obs": ([u for _, u in desc.observables], [n for n, _ in desc.observables]),
     }
     if len(base) > 4:
-        cols = [(r["name"], c) for r in man["reactions"] for c in r["columns"]]
+        cols = [(r.name, c) for r in desc.reactions for c in r.columns]
         parts["f"] = (["N*m" if c in ("moment", "torque") else "N" for _, c in cols],
                       [f"{r}.{c}" for r, c in cols])
     units = [u for us, _ in parts.values() for u in us]
@@ -340,10 +305,10 @@ def kinematics(name: str, cfg: Config) -> Result:
     n = len(phi)
     t_solve = best_time(lambda: m.solve(phi), cfg.repeats, cfg.min_time)
     t_overhead = best_time(lambda: m.solve(phi[:1]), cfg.repeats, cfg.min_time)
-    raw = raw_sweep(m, phi)
+    raw, sw = raw_sweep(m, phi)
     t_raw = best_time(raw, cfg.repeats, cfg.min_time)
     motion = m.solve(phi)
-    if np.any(raw.status) or not np.array_equal(raw.obs, motion.obs):
+    if np.any(sw.status) or not np.array_equal(sw.obs, motion.obs):
         raise RuntimeError(f"{name}: the raw sg_sweep call disagrees with solve()")
 
     rows = cfg.baseline_rows()
@@ -351,7 +316,7 @@ def kinematics(name: str, cfg: Config) -> Result:
     p = m.param_vector()
     if len(bl.kin.p) != len(p):
         raise RuntimeError(f"{name}: {len(bl.kin.p)} symbolic parameters but {len(p)} compiled ones")
-    held = [i["default"] for i in m.manifest["inputs"][1:]]
+    held = [i.default for i in m.description.held_inputs]
     args = (phi[rows], float(m.default_speed), 0.0, held, p, motion.q[rows[0]])
     out = bl.run(*args)  # warm-up, and the results to check
     t_base = min(_timed(bl.run, args) for _ in range(cfg.baseline_repeats))
@@ -365,7 +330,7 @@ def kinematics(name: str, cfg: Config) -> Result:
         "baseline_nfev_per_position": out[4],
         "baseline_setup_seconds": bl.derive_s + bl.lambdify_s,
         "nq": len(m.coord_names),
-        "nobs": len(m.manifest["observables"]),
+        "nobs": m.description.sizes["nobs"],
         **check,
     }
     return n / t_solve, len(rows) / t_base, extra
@@ -381,15 +346,15 @@ def kinetostatics(name: str, cfg: Config) -> Result:
     m = sewgen.mechanism(name)
     phi = cfg.sweep_angles()
     n = len(phi)
-    nf = m.manifest["sizes"]["nf"]
+    nf = m.description.sizes["nf"]
     t_kst = best_time(lambda: m.kinetostatics(phi), cfg.repeats, cfg.min_time)
     t_overhead = best_time(lambda: m.kinetostatics(phi[:1]), cfg.repeats, cfg.min_time)
     fa = m.kinetostatics(phi)
-    raw = raw_sweep_forces(m, phi, fa.gravity)  # kinetostatics()'s own gravity vector, so results are equal
+    raw, sw = raw_sweep(m, phi, forces=True)  # kinetostatics()'s own defaults, so results are equal
     t_raw = best_time(raw, cfg.repeats, cfg.min_time)
     mo = fa.motion
-    if np.any(raw.status) or not all(np.array_equal(a, b) for a, b in (
-            (raw.q, mo.q), (raw.qd, mo.qd), (raw.qdd, mo.qdd), (raw.obs, mo.obs), (raw.frc, fa.frc))):
+    if np.any(sw.status) or not all(np.array_equal(a, b) for a, b in (
+            (sw.q, mo.q), (sw.qd, mo.qd), (sw.qdd, mo.qdd), (sw.obs, mo.obs), (sw.frc, fa.frc))):
         raise RuntimeError(f"{name}: the raw sg_sweep_forces call disagrees with kinetostatics()")
 
     rows = cfg.baseline_rows()
@@ -397,11 +362,11 @@ def kinetostatics(name: str, cfg: Config) -> Result:
     p = m.param_vector()
     if len(bl.kin.p) != len(p):
         raise RuntimeError(f"{name}: {len(bl.kin.p)} symbolic parameters but {len(p)} compiled ones")
-    unknowns = [f"{r['name']}.{c}" for r in m.manifest["reactions"] for c in r["columns"]]
+    unknowns = [f"{r.name}.{c}" for r in m.description.reactions for c in r.columns]
     if bl.kst.unknown_names != unknowns or len(unknowns) != nf:
         raise RuntimeError(f"{name}: symbolic force unknowns {bl.kst.unknown_names} are not the compiled "
                            f"reactions' columns {unknowns}")
-    held = [i["default"] for i in m.manifest["inputs"][1:]]
+    held = [i.default for i in m.description.held_inputs]
     args = (phi[rows], float(m.default_speed), 0.0, held, p, mo.q[rows[0]], GRAVITY)
     out = bl.run(*args)  # warm-up, and the results to check
     t_base = min(_timed(bl.run, args) for _ in range(cfg.baseline_repeats))
@@ -418,9 +383,9 @@ def kinetostatics(name: str, cfg: Config) -> Result:
         "baseline_gravity": list(GRAVITY),
         "compiled_gravity": [float(g) for g in fa.gravity],
         "nq": len(m.coord_names),
-        "nobs": len(m.manifest["observables"]),
+        "nobs": m.description.sizes["nobs"],
         "nf": nf,
-        "nfo": m.manifest["sizes"]["nfo"],
+        "nfo": m.description.sizes["nfo"],
         **check,
     }
     return n / t_kst, len(rows) / t_base, extra

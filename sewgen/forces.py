@@ -18,6 +18,26 @@ from .results import write_csv
 
 
 @dataclass(frozen=True)
+class RunSettings:
+    """What a kinetostatic sweep ran with, as the C runtime read it (the arrays are read-only).
+
+    ``params`` (np,) SI parameter vector; ``held`` held inputs (rad); ``branch`` assembly signs; ``gravity`` the
+    vector (gx, gy) in m/s²; ``loads`` the (n, nload) load-slot array of :func:`sewgen.loads.load_matrix` or None
+    without loads; ``moment_about`` the point (x, y; m) of the shaking moment; ``placed`` the loads with their
+    slots and windows, (load, [(slot, value)], mask) each. Analyses that need a run's parameters or loads (the
+    machine's energy check, its process loads) read them here.
+    """
+
+    params: np.ndarray
+    held: np.ndarray
+    branch: np.ndarray
+    gravity: np.ndarray
+    loads: np.ndarray | None
+    moment_about: tuple
+    placed: tuple = ()
+
+
+@dataclass(frozen=True)
 class JointReaction:
     """A joint force over the sweep: frame components (N), magnitude (N), direction (rad from +x).
 
@@ -42,57 +62,78 @@ class JointReaction:
 class ForceAnalysis:
     """Kinematics and kinetostatics of one mechanism over a sweep (SI units throughout)."""
 
-    def __init__(self, mechanism, motion, frc: np.ndarray, placed_loads, gravity, moment_about, run: dict):
+    def __init__(self, mechanism, motion, frc: np.ndarray, settings: RunSettings):
         self.mechanism, self.motion, self.frc = mechanism, motion, frc
-        self._run = run  # the C-ready parameters, held inputs and load array of the sweep
-        self.phi = motion.phi
-        self.gravity = gravity
-        self.moment_about = moment_about
-        lay = mechanism.layout
-        self._reactions, self._outputs, self._inputs = lay["reactions"], lay["force_outputs"], lay["inputs"]
-        self._placed = placed_loads
+        self.run_settings = settings
 
     def __len__(self) -> int:
         return len(self.phi)
 
     @property
+    def phi(self) -> np.ndarray:
+        return self.motion.phi
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """The gravity vector (gx, gy) of the run, m/s²."""
+        return self.run_settings.gravity
+
+    @property
+    def moment_about(self) -> tuple:
+        """The point (x, y; m) :attr:`shaking_moment` is taken about."""
+        return self.run_settings.moment_about
+
+    @property
+    def _run(self) -> dict:
+        """Deprecated dict view of :attr:`run_settings` (``p``, ``held``, ``loads``), kept for callers not yet
+        moved to the public name."""
+        s = self.run_settings
+        return {"p": s.params, "held": s.held, "loads": s.loads}
+
+    @property
     def reaction_names(self) -> list[str]:
         """Every joint that carries a force (driving torques are under :meth:`torque`)."""
-        return [n for n, r in self._reactions.items() if r["kind"] != "drive"]
+        return [r.name for r in self.mechanism.description.force_joints]
 
     @property
     def frame_joint_names(self) -> list[str]:
-        return [n for n, r in self._reactions.items() if r["grounded"] and r["kind"] != "drive"]
+        return [r.name for r in self.mechanism.description.force_joints if r.grounded]
 
     def _out(self, name: str) -> np.ndarray:
-        return self.frc[:, self._outputs[name]]
+        return self.frc[:, self.mechanism.description.output_column(name)]
+
+    def _joint(self, name: str):
+        desc = self.mechanism.description
+        return desc.reaction(name) if desc.has("reaction", name) else None
 
     def reaction(self, name: str) -> JointReaction:
         """The force on the joint's second body from its first (see the module docstring)."""
-        r = self._reactions.get(name)
-        if r is None or r["kind"] == "drive":
+        r = self._joint(name)
+        if r is None or r.is_drive:
             raise KeyError(f"{self.mechanism.name} has no joint {name!r}; joints: {', '.join(self.reaction_names)}")
-        k = r["offset"]
-        if r["kind"] == "revolute":
+        k = r.offset
+        if r.kind == "revolute":
             return JointReaction(self.frc[:, k], self.frc[:, k + 1])
-        couple = self.frc[:, k + 1] if r["kind"] == "prismatic" else None  # slot and cam: a normal force only
+        couple = self.frc[:, k + 1] if r.kind == "prismatic" else None  # slot and cam: a normal force only
         return JointReaction(self._out(f"{name}.fx"), self._out(f"{name}.fy"), self.frc[:, k], couple)
 
     def frame_force(self, name: str) -> JointReaction:
         """The force joint ``name`` puts on the frame (it must join a body to ground)."""
-        r = self._reactions.get(name)
-        if r is None or not r["grounded"] or r["kind"] == "drive":
+        r = self._joint(name)
+        if r is None or not r.grounded or r.is_drive:
             raise KeyError(f"{self.mechanism.name}: {name!r} is not a frame joint; frame joints: "
                            f"{', '.join(self.frame_joint_names)}")
         on_b = self.reaction(name)
-        sign = -1.0 if r["a"] == "ground" else 1.0  # the frame is a: it gets −f; the frame is b: it gets f
+        sign = -1.0 if r.a == "ground" else 1.0  # the frame is a: it gets −f; the frame is b: it gets f
         scale = (lambda v: None if v is None else sign * v)
         return JointReaction(sign * on_b.fx, sign * on_b.fy, scale(on_b.normal), scale(on_b.moment))
 
     def torque(self, input_name: str = "shaft") -> np.ndarray:
         """Driving torque of an input (N·m): the shaft's, or a held input's holding torque."""
-        if input_name not in self._inputs:
-            raise KeyError(f"{self.mechanism.name} has no input {input_name!r}; inputs: {', '.join(self._inputs)}")
+        desc = self.mechanism.description
+        if not desc.has("input", input_name):
+            raise KeyError(f"{self.mechanism.name} has no input {input_name!r}; inputs: "
+                           f"{', '.join(i.name for i in desc.inputs)}")
         return self._out(f"{input_name}.torque")
 
     def input_power(self, input_name: str = "shaft") -> np.ndarray:
@@ -128,22 +169,22 @@ class ForceAnalysis:
     def load_powers(self) -> dict[str, np.ndarray]:
         """Power of each external load (W), by its label."""
         out = {}
-        for load, cols, mask in self._placed:
-            slots = self.mechanism.manifest["loads"]
+        slots = self.mechanism.description.loads
+        for load, cols, mask in self.run_settings.placed:
             p = np.zeros(len(self))
             for k, value in cols:
                 s = slots[k]
-                rate = (self.motion.body(s["body"]).omega if s["component"] == "torque"
-                        else getattr(self.motion.point(s["name"]), "v" + s["component"][1]))
+                rate = (self.motion.body(s.body).omega if s.component == "torque"
+                        else getattr(self.motion.point(s.name), "v" + s.component[1]))
                 p += np.where(mask, value, 0.0) * rate
             out[load.label] = out.get(load.label, 0.0) + p
         return out
 
     def force_matrix(self, index: int = 0):
         """A and b of A f = b at position ``index``, with this run's parameters, held inputs, gravity and loads."""
-        run = self._run
-        row = None if run["loads"] is None else run["loads"][index]
-        return self.mechanism._force_matrix(self.motion, index, run["p"], run["held"], self.gravity, row)
+        s = self.run_settings
+        return self.mechanism.force_matrix(self.motion, index, params=s.params, held=s.held, gravity=s.gravity,
+                                           load_row=None if s.loads is None else s.loads[index])
 
     def table(self) -> dict[str, np.ndarray]:
         """Every force result as a column named ``"<name> [unit]"``, shaft angle first."""
@@ -160,7 +201,7 @@ class ForceAnalysis:
         for name in self.frame_joint_names:
             r = self.frame_force(name)
             cols[f"frame@{name}.fx [N]"], cols[f"frame@{name}.fy [N]"] = r.fx, r.fy
-        for name in self._inputs:
+        for name in (i.name for i in self.mechanism.description.inputs):
             cols[f"{name}.torque [N*m]"] = self.torque(name)
             cols[f"{name}.power [W]"] = self.input_power(name)
         sf = self.shaking_force

@@ -1,19 +1,43 @@
 """Loading compiled modules: the catalog built at install time, and user mechanisms built on demand.
 
 A user mechanism (a declaration object, a function returning one, or a .py file with ``declare()``) is
-derived, rendered and compiled into a cache folder keyed by a hash of everything that goes into the build,
-so a second load of the same declaration imports the cached module without recompiling.
+derived, rendered and compiled into a cache folder keyed by a hash of everything that goes into the build, so a
+second load of the same declaration imports the cached module without recompiling.
+
+The cache is safe to share between processes: a build holds a lock on ``<root>/<module>.lock`` (so two processes
+asking for the same new mechanism compile it once and load the same module), compiles in a temporary folder
+inside the cache root and renames it into place, and only then writes ``BUILT.json`` (the key and the shared
+object's sha256). An entry without a valid marker, or whose shared object does not match it (a partial copy, a
+truncated file), is never imported: it is rebuilt. A cached module that still fails to import is rebuilt once,
+then reported as a :class:`~sewgen.errors.BuildError` naming the mechanism and the path.
+
+:func:`resolve` turns a :class:`~sewgen.mechanism.Reference` (what a pickled Mechanism holds) back into a
+Mechanism, in any process: the catalog by name, a user build from its cache entry, or rebuilt from the generated
+sources the reference carries when the entry is gone.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.util
+import json
 import os
 import runpy
+import shutil
+import tempfile
+import zlib
 from pathlib import Path
 
 from .errors import BuildError
-from .mechanism import Mechanism
+from .mechanism import Mechanism, Reference
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: the atomic rename alone keeps the cache consistent
+    fcntl = None
+
+MARKER = "BUILT.json"
+_RESOLVED: dict = {}  # (key, digest) -> the user Mechanism last loaded: unpickling results imports no module again
 
 
 def _import_path(module: str, path: Path):
@@ -62,10 +86,10 @@ def _declaration(source):
     else:
         path = Path(source)
         if not path.is_file():
-            raise BuildError(f"no mechanism file {path}")
+            raise BuildError(f"no mechanism file {path}", file=str(path))
         ns = runpy.run_path(str(path))
         if "declare" not in ns:
-            raise BuildError(f"{path}: defines no declare() function")
+            raise BuildError(f"{path}: defines no declare() function", file=str(path))
         decl = ns["declare"]()
     if not isinstance(decl, Declaration):
         raise BuildError(f"{source!r} did not give a derive.Mechanism declaration")
@@ -76,13 +100,21 @@ def load_user(source, *, closed_form: bool = True, cache_dir: Path | None = None
     """Derive, compile (once) and load a mechanism declared outside the catalog."""
     from .derive import DeclarationError, generate, render_files
 
-    from .build import CFLAGS, make_ffi, runtime_dir
-
     decl = _declaration(source)
+    declaration = "" if callable(source) or not isinstance(source, (str, os.PathLike)) else str(Path(source))
     try:
         files = render_files([generate(decl, closed_form=closed_form)])
     except DeclarationError as exc:
-        raise BuildError(str(exc)) from None
+        raise BuildError(str(exc), mechanism=decl.name, file=declaration or None) from None
+    return _load_built(Path(cache_dir or cache_root()), decl.name, files, declaration)
+
+
+# -- the cache ------------------------------------------------------------------------------------------------
+
+def _build_key(files: dict) -> str:
+    """Hash of everything a build depends on: the generated files, the runtime sources, the compiler flags."""
+    from .build import CFLAGS, runtime_dir
+
     h = hashlib.sha256()
     rt = runtime_dir()
     for name in sorted(files):
@@ -90,19 +122,127 @@ def load_user(source, *, closed_form: bool = True, cache_dir: Path | None = None
     for name in ("sg_runtime.c", "sg_runtime.h"):  # the ABI (sg_abi.*) is among the generated files
         h.update((rt / name).read_bytes())
     h.update(" ".join(CFLAGS + [os.environ.get("SEWGEN_CFLAGS", "")]).encode())
-    key = h.hexdigest()[:20]
-    module = f"_sg_user_{decl.name}_{key}"
-    folder = Path(cache_dir or cache_root()) / module
-    built = sorted(folder.glob(f"{module}*.so")) if folder.is_dir() else []
-    cached = bool(built)
-    if not cached:
-        folder.mkdir(parents=True, exist_ok=True)
-        for name, text in files.items():
-            (folder / name).write_text(text)
+    return h.hexdigest()[:20]
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+@contextlib.contextmanager
+def _locked(path: Path):
+    """An exclusive lock on ``path`` (created if missing) for the ``with`` block: one builder per cache entry."""
+    with open(path, "a+") as fh:
+        if fcntl is not None:
+            fcntl.flock(fh, fcntl.LOCK_EX)
         try:
-            make_ffi(module, folder, [decl.name]).compile(tmpdir=str(folder))
+            yield
+        finally:
+            if fcntl is not None:
+                fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+def _built(folder: Path, key: str) -> Path | None:
+    """The shared object of a complete entry: the marker names it, for this key, and its hash matches."""
+    try:
+        marker = json.loads((folder / MARKER).read_text())
+        so = folder / marker["so"]
+        if marker["key"] == key and so.is_file() and _sha256(so) == marker["sha256"]:
+            return so
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    return None
+
+
+def _build(root: Path, folder: Path, module: str, name: str, files: dict, key: str, declaration: str) -> Path:
+    """Compile into a temporary folder of ``root``, rename it to ``folder`` and write the marker last.
+    The caller holds the entry's lock."""
+    from .build import make_ffi
+
+    tmp = Path(tempfile.mkdtemp(prefix=f".{module}.", dir=root))
+    try:
+        for fname, text in files.items():
+            (tmp / fname).write_text(text)
+        try:
+            so = Path(make_ffi(module, tmp, [name]).compile(tmpdir=str(tmp)))
         except Exception as exc:
-            raise BuildError(f"{decl.name}: compiling the generated C failed: {exc}") from None
-        built = sorted(folder.glob(f"{module}*.so"))
-    mod = _import_path(module, built[0])
-    return Mechanism(mod.ffi, mod.lib, decl.name, {"cached": cached, "path": str(built[0])})
+            raise BuildError(f"{name}: compiling the generated C failed: {exc}", mechanism=name,
+                             file=declaration or str(folder)) from None
+        if folder.exists():  # an incomplete or broken entry (no valid marker): nobody may use it
+            shutil.rmtree(folder)
+        os.rename(tmp, folder)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    so = folder / so.name
+    marker = {"key": key, "module": module, "mechanism": name, "so": so.name, "sha256": _sha256(so)}
+    part = folder / f".{MARKER}.part"
+    part.write_text(json.dumps(marker, indent=1))
+    os.replace(part, folder / MARKER)
+    return so
+
+
+def _load_built(root: Path, name: str, files: dict, declaration: str = "") -> Mechanism:
+    """The mechanism ``name`` of the generated ``files``: imported from the cache under ``root``, built first
+    if the cache has no complete entry for them."""
+    key = _build_key(files)
+    module = f"_sg_user_{name}_{key}"
+    folder = root / module
+    root.mkdir(parents=True, exist_ok=True)
+    cached, failure = True, None
+    with _locked(root / f"{module}.lock"):
+        so = _built(folder, key)
+        if so is not None:
+            try:
+                mod = _import_path(module, so)
+            except ImportError as exc:  # a complete-looking entry that does not load: rebuild it once
+                so, failure = None, exc
+        if so is None:
+            cached = False
+            so = _build(root, folder, module, name, files, key, declaration)
+            try:
+                mod = _import_path(module, so)
+            except ImportError as exc:
+                before = f" (the cached module failed first: {failure})" if failure else ""
+                raise BuildError(f"{name}: cannot import the compiled module {so}: {exc}{before}", mechanism=name,
+                                 file=str(so)) from None
+    sources = zlib.compress(json.dumps(files, sort_keys=True).encode(), 6)
+    ref = Reference("user", name, module=module, folder=str(folder), key=key, declaration=declaration,
+                    sources=sources)
+    mech = Mechanism(mod.ffi, mod.lib, name, {"cached": cached, "path": str(so), "key": key, "folder": str(folder)},
+                     ref)
+    _RESOLVED[(key, mech.reference.digest)] = mech  # unpickling in this process finds it
+    return mech
+
+
+# -- references (unpickling) ------------------------------------------------------------------------------------
+
+
+def resolve(ref: Reference) -> Mechanism:
+    """The Mechanism a :class:`~sewgen.mechanism.Reference` names (what unpickling a Mechanism calls).
+
+    The catalog's by name; a user build from its cache entry, or — where that entry is gone — rebuilt from the
+    generated sources the reference carries, in this process's cache (:func:`cache_root`). Either way the
+    manifest must be the one the reference was made from: :class:`~sewgen.errors.BuildError` if not.
+    """
+    if ref.kind == "catalog":
+        from . import mechanism
+
+        mech = mechanism(ref.name)
+    else:
+        mech = _RESOLVED.get((ref.key, ref.digest))
+        if mech is None:
+            try:
+                files = json.loads(zlib.decompress(ref.sources))
+            except (zlib.error, ValueError) as exc:
+                raise BuildError(f"{ref.name}: the pickled reference's generated sources are unreadable ({exc})",
+                                 mechanism=ref.name) from None
+            folder = Path(ref.folder)
+            root = folder.parent if _built(folder, ref.key) is not None else cache_root()
+            mech = _load_built(root, ref.name, files, ref.declaration)
+    if mech.reference.digest != ref.digest:
+        where = "the compiled catalog" if ref.kind == "catalog" else mech.build_info.get("path", "the build")
+        raise BuildError(f"{ref.name}: {where} is not the mechanism this was pickled with (its manifest changed)",
+                         mechanism=ref.name, file=ref.declaration or None)
+    if ref.kind != "catalog":
+        _RESOLVED[(ref.key, ref.digest)] = mech
+    return mech

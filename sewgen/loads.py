@@ -60,13 +60,13 @@ def window_mask(phi: np.ndarray, window) -> np.ndarray:
 def load_matrix(mech, loads, phi: np.ndarray, degrees: bool = False) -> tuple[np.ndarray | None, list[tuple]]:
     """The (n, nload) load array the C sweep reads, and (load, slot indices, mask) per load.
 
-    Slots (the manifest's "loads"): fx, fy per named point of a moving body, torque per moving body. Window
+    Slots (the description's ``loads``): fx, fy per named point of a moving body, torque per moving body. Window
     ends given as bare numbers are radians, or degrees when ``degrees`` (as the sweep's shaft angles).
     """
     if not loads:
         return None, []
-    slots = mech.manifest["loads"]
-    index = {(s["name"], s["component"]): k for k, s in enumerate(slots)}
+    slots = mech.description.loads
+    index = {(s.name, s.component): s.index for s in slots}
     out = np.zeros((phi.shape[0], len(slots)))
     placed = []
     for load in loads:
@@ -86,8 +86,8 @@ def load_matrix(mech, loads, phi: np.ndarray, degrees: bool = False) -> tuple[np
         is_point = (load.at, "fx") in index
         is_body = (load.at, "torque") in index
         if not (is_point or is_body):
-            points = sorted({s["name"] for s in slots if s["component"] != "torque"})
-            bodies = sorted({s["name"] for s in slots if s["component"] == "torque"})
+            points = sorted({s.name for s in slots if s.component != "torque"})
+            bodies = sorted({s.name for s in slots if s.component == "torque"})
             raise ParameterError(mech.name, what, f"{load.at!r} is neither a point of a moving body "
                                  f"({', '.join(points) or 'none'}) nor a moving body ({', '.join(bodies)})")
         if is_point and not is_body and tz != 0.0:

@@ -40,60 +40,67 @@ class CoordinateMotion:
 
 
 class Motion:
-    """The kinematics of one mechanism over a sweep of shaft angles (SI units throughout)."""
+    """The kinematics of one mechanism over a sweep of shaft angles (SI units throughout).
+
+    Plain arrays plus the mechanism (which pickles by reference), so a Motion pickles, crosses processes and
+    compares bit for bit; every named view reads the mechanism's description for its column.
+    """
 
     def __init__(self, mechanism, phi, omega, alpha, q, qd, qdd, obs):
         self.mechanism = mechanism
         self.phi, self.omega, self.alpha = phi, omega, alpha
         self.q, self.qd, self.qdd, self.obs = q, qd, qdd, obs
-        lay = mechanism.layout
-        self._points, self._bodies, self._coords = lay["points"], lay["bodies"], lay["coords"]
 
     def __len__(self) -> int:
         return len(self.phi)
 
     @property
     def point_names(self) -> list[str]:
-        return list(self._points)
+        return [p.name for p in self.mechanism.description.points]
 
     @property
     def body_names(self) -> list[str]:
-        return list(self._bodies)
+        return [b.name for b in self.mechanism.description.bodies]
 
     @property
     def coord_names(self) -> list[str]:
-        return list(self._coords)
+        return [c.name for c in self.mechanism.description.coords]
 
     def _block(self, off: int) -> PointMotion:
         return PointMotion(*(self.obs[:, off + k] for k in range(6)))
 
     def point(self, name: str) -> PointMotion:
-        if name not in self._points:
-            raise KeyError(f"{self.mechanism.name} has no point {name!r}; points: {', '.join(self._points)}")
-        return self._block(self._points[name])
+        desc = self.mechanism.description
+        if not desc.has("point", name):
+            raise KeyError(f"{self.mechanism.name} has no point {name!r}; points: {', '.join(self.point_names)}")
+        return self._block(desc.point(name).offset)
 
     def body(self, name: str) -> BodyMotion:
-        if name not in self._bodies:
-            raise KeyError(f"{self.mechanism.name} has no moving body {name!r}; bodies: {', '.join(self._bodies)}")
-        off = self._bodies[name]
+        desc = self.mechanism.description
+        if not desc.has("body", name):
+            raise KeyError(f"{self.mechanism.name} has no moving body {name!r}; bodies: {', '.join(self.body_names)}")
+        off = desc.body(name).offset
         return BodyMotion(self.obs[:, off], self.obs[:, off + 1], self.obs[:, off + 2], self._block(off + 3))
 
     def coord(self, name: str) -> CoordinateMotion:
-        if name not in self._coords:
-            raise KeyError(f"{self.mechanism.name} has no coordinate {name!r}; coordinates: {', '.join(self._coords)}")
-        i, unit = self._coords[name]
-        return CoordinateMotion(self.q[:, i], self.qd[:, i], self.qdd[:, i], unit)
+        desc = self.mechanism.description
+        if not desc.has("coord", name):
+            raise KeyError(f"{self.mechanism.name} has no coordinate {name!r}; coordinates: "
+                           f"{', '.join(self.coord_names)}")
+        c = desc.coord(name)
+        return CoordinateMotion(self.q[:, c.index], self.qd[:, c.index], self.qdd[:, c.index], c.unit)
 
     def table(self) -> dict[str, np.ndarray]:
         """Every result as a column named ``"<name> [unit]"``, shaft angle first."""
         cols = {"phi [rad]": self.phi, "omega [rad/s]": self.omega, "alpha [rad/s^2]": self.alpha}
-        for name, (i, unit) in self._coords.items():
-            rate = "m/s" if unit == "m" else "rad/s"
-            cols[f"{name} [{unit}]"] = self.q[:, i]
-            cols[f"{name}_d [{rate}]"] = self.qd[:, i]
-            cols[f"{name}_dd [{rate}^2]"] = self.qdd[:, i]
-        for k, o in enumerate(self.mechanism.manifest["observables"]):
-            cols[f"{o['name']} [{o['unit']}]"] = self.obs[:, k]
+        desc = self.mechanism.description
+        for c in desc.coords:
+            rate = "m/s" if c.unit == "m" else "rad/s"
+            cols[f"{c.name} [{c.unit}]"] = self.q[:, c.index]
+            cols[f"{c.name}_d [{rate}]"] = self.qd[:, c.index]
+            cols[f"{c.name}_dd [{rate}^2]"] = self.qdd[:, c.index]
+        for k, (name, unit) in enumerate(desc.observables):
+            cols[f"{name} [{unit}]"] = self.obs[:, k]
         return cols
 
     def to_csv(self, path) -> None:
