@@ -101,7 +101,7 @@ def load_user(source, *, closed_form: bool = True, cache_dir: Path | None = None
     from .derive import DeclarationError, generate, render_files
 
     decl = _declaration(source)
-    declaration = "" if callable(source) or not isinstance(source, (str, os.PathLike)) else str(Path(source))
+    declaration = str(Path(source).resolve()) if isinstance(source, (str, os.PathLike)) else ""
     try:
         files = render_files([generate(decl, closed_form=closed_form)])
     except DeclarationError as exc:
@@ -187,9 +187,14 @@ def _load_built(root: Path, name: str, files: dict, declaration: str = "") -> Me
     key = _build_key(files)
     module = f"_sg_user_{name}_{key}"
     folder = root / module
-    root.mkdir(parents=True, exist_ok=True)
+    lock = root / f"{module}.lock"
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        lock.touch()
+    except OSError as exc:
+        raise BuildError(f"{name}: cannot use the build cache {root}: {exc}", mechanism=name, file=str(root)) from None
     cached, failure = True, None
-    with _locked(root / f"{module}.lock"):
+    with _locked(lock):
         so = _built(folder, key)
         if so is not None:
             try:
@@ -227,7 +232,10 @@ def resolve(ref: Reference) -> Mechanism:
     if ref.kind == "catalog":
         from . import mechanism
 
-        mech = mechanism(ref.name)
+        try:
+            mech = mechanism(ref.name)
+        except KeyError:
+            raise BuildError(f"{ref.name}: no longer in the compiled catalog", mechanism=ref.name) from None
     else:
         mech = _RESOLVED.get((ref.key, ref.digest))
         if mech is None:

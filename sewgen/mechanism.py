@@ -64,6 +64,7 @@ class Mechanism:
         text = ffi.string(getattr(lib, f"sg_{name}_manifest")()).decode()
         manifest = json.loads(text)
         desc = describe(manifest)
+        desc.has("point", "")  # build its name tables now, before threads share it
         digest = hashlib.sha256(text.encode()).hexdigest()
         ref = Reference("catalog", name) if reference is None else reference
         p = self._check_params(desc, {q.name: q.default for q in desc.params})
