@@ -144,7 +144,7 @@ def cmd_forces(args) -> int:
     for name in fa.reaction_names:
         mag = fa.reaction(name).magnitude
         print(f"{name:22s} {_extreme(mag, phi, np.argmax)} {_rms(mag):12.6g}")
-    for name in [i["name"] for i in m.manifest["inputs"]]:
+    for name in [i.name for i in m.description.inputs]:
         tau = fa.torque(name)
         print(f"torque {name:15s} min {_extreme(tau, phi, np.argmin)}  max {_extreme(tau, phi, np.argmax)}"
               f"  RMS {_rms(tau):.6g} N*m")

@@ -97,16 +97,84 @@ def _declaration(source):
 
 
 def load_user(source, *, closed_form: bool = True, cache_dir: Path | None = None) -> Mechanism:
-    """Derive, compile (once) and load a mechanism declared outside the catalog."""
+    """Derive, compile (once) and load a mechanism declared outside the catalog.
+
+    A declaration *file* already built is loaded without deriving anything (no SymPy): the cache keeps an index
+    from the file's text (with the derivation's and the runtime's sources, the flags and ``closed_form``) to
+    its build. A declaration that imports other modules of yours is keyed by its own text only: after changing
+    those, touch the declaration file (or clear the cache) to rebuild.
+    """
+    root = Path(cache_dir or cache_root())
+    path = Path(source) if isinstance(source, (str, os.PathLike)) else None
+    index = _declaration_index(root, path, closed_form) if path is not None and path.is_file() else None
+    if index is not None:
+        mech = _load_indexed(root, index, str(path.resolve()))
+        if mech is not None:
+            return mech
     from .derive import DeclarationError, generate, render_files
 
     decl = _declaration(source)
-    declaration = str(Path(source).resolve()) if isinstance(source, (str, os.PathLike)) else ""
+    declaration = str(Path(source).resolve()) if path is not None else ""
     try:
         files = render_files([generate(decl, closed_form=closed_form)])
     except DeclarationError as exc:
         raise BuildError(str(exc), mechanism=decl.name, file=declaration or None) from None
-    return _load_built(Path(cache_dir or cache_root()), decl.name, files, declaration)
+    mech = _load_built(root, decl.name, files, declaration)
+    if index is not None:
+        _write_json(index, {"mechanism": decl.name, "module": mech.build_info.get("folder", ""),
+                            "key": mech.build_info["key"]})
+    return mech
+
+
+# -- declaration files already built: no derivation -------------------------------------------------------------
+
+def _derivation_fingerprint() -> bytes:
+    """What a build of the same declaration depends on besides its text: the derivation's sources and
+    templates, the ABI and units tables, the runtime and the compiler flags."""
+    from .build import CFLAGS, runtime_dir
+
+    here = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    sources = sorted((here / "derive").rglob("*.py")) + sorted((here / "derive").rglob("*.j2"))
+    sources += [here / "abi.py", here / "units.py", runtime_dir() / "sg_runtime.c", runtime_dir() / "sg_runtime.h"]
+    for f in sources:
+        h.update(f.name.encode() + b"\0" + f.read_bytes() + b"\0")
+    h.update(" ".join(CFLAGS + [os.environ.get("SEWGEN_CFLAGS", "")]).encode())
+    return h.digest()
+
+
+def _declaration_index(root: Path, path: Path, closed_form: bool) -> Path:
+    h = hashlib.sha256(path.read_bytes())
+    h.update(b"closed" if closed_form else b"newton")
+    h.update(_derivation_fingerprint())
+    return root / "declarations" / f"{h.hexdigest()[:24]}.json"
+
+
+def _load_indexed(root: Path, index: Path, declaration: str) -> Mechanism | None:
+    """The build an index entry names, loaded from its folder's generated files; None when incomplete."""
+    try:
+        entry = json.loads(index.read_text())
+        folder = Path(entry["module"])
+        if folder.parent != root or _built(folder, entry["key"]) is None:
+            return None
+        files = {f.name: f.read_text() for f in sorted(folder.iterdir())
+                 if f.is_file() and f.name.startswith(("sg_", "manifest")) and f.suffix in (".c", ".h", ".cdef", ".json")}
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if _build_key(files) != entry["key"]:
+        return None
+    return _load_built(root, entry["mechanism"], files, declaration)
+
+
+def _write_json(path: Path, data: dict) -> None:
+    """``data`` as JSON at ``path``, atomically (a reader sees the old file or the whole new one)."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        part = path.with_name(f".{path.name}.{os.getpid()}.part")
+        part.write_text(json.dumps(data, indent=1))
+        os.replace(part, path)
+    except OSError:  # an index is an optimisation: without it the next load derives again
+        pass
 
 
 # -- the cache ------------------------------------------------------------------------------------------------

@@ -224,7 +224,7 @@ class MachineAnalysis:
         """(n, 2) resultant of one group's external loads and their moment about the origin (n,)."""
         force, moment = np.zeros((len(self.phi), 2)), np.zeros(len(self.phi))
         fa = self.groups[g.name]
-        ld = fa._run["loads"]
+        ld = fa.run_settings.loads
         if ld is None:
             return force, moment
         for slot in g.mechanism.description.loads:
@@ -291,7 +291,7 @@ class MachineAnalysis:
         rate = self.machine.shaft.inertia * self.omega * self.alpha
         for g in self.machine.groups:
             fa = self.groups[g.name]
-            values = dict(zip(g.mechanism.param_names, fa._run["p"]))
+            values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
             for body in g.mechanism.description.bodies:
                 bm = fa.motion.body(body.name)
                 if body.mass is None or body.inertia is None:

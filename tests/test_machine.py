@@ -62,7 +62,7 @@ def core_kinematics(phi, omega, alpha, sm):
 def group_values(a, g):
     """The group's parameters by name, from the vector its sweep ran with."""
     fa = a.groups[g.name]
-    return fa, dict(zip(g.mechanism.param_names, fa._run["p"]))
+    return fa, dict(zip(g.mechanism.param_names, fa.run_settings.params))
 
 
 def moving_bodies(a, only=None):
