@@ -35,6 +35,8 @@ typedef int (*sg_motion_fn)(const double *q, const double *cq, const double *x, 
 typedef int (*sg_forces_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 /* A (nf x nf, row-major) and b of A f = b, for inspection */
 typedef void (*sg_force_matrix_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+/* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
+typedef void (*sg_anchors_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 
 /* One mechanism as the generated code describes it. */
 typedef struct sg_mechanism {
@@ -55,6 +57,7 @@ typedef struct sg_mechanism {
     sg_motion_fn motion;                 /* velocities, accelerations and observables at a solved position */
     sg_forces_fn forces;                 /* joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld */
     sg_force_matrix_fn force_matrix;     /* A (nf x nf, row-major) and b of A f = b, for inspection */
+    sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
 } sg_mechanism;
 
 /* LU with partial pivoting in place (row-major n x n); SG_SINGULAR below the pivot tolerance */

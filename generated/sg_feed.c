@@ -906,6 +906,154 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     b[26] = c[98]*obs[98] - ld[16];
 }
 
+/* sg_feed_anchors -- Total ops: 155 */
+void sg_feed_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    const double t0 = c[55] + cx[2]*q[3];
+    const double t1 = c[58] + cx[3]*q[3];
+    const double t2 = c[39] + c[9]*cq[0];
+    const double t3 = c[11]*cq[4] + t2;
+    const double t4 = c[41] + c[9]*cq[1];
+    const double t5 = c[11]*cq[5] + t4;
+    const double t6 = c[3]*cx[0] + c[4]*cx[1];
+    const double t7 = c[34]*t6;
+    const double t8 = sqrt(3.0);
+    const double t9 = c[3]*cx[1] + c[6]*cx[0];
+    const double t10 = c[36]*t9;
+    const double t11 = t10*t8;
+    const double t12 = t11 + t7;
+    const double t13 = t7*t8;
+    const double t14 = c[34]*t9 + t13;
+    const double t15 = c[36]*t6 + t11;
+    const double t16 = t10 + t13;
+    const double t17 = c[10]*cq[4] + t3;
+    const double t18 = c[10]*cq[5] + t5;
+    const double t19 = c[24]*cq[1] + c[39];
+    const double t20 = c[26]*cq[0] + c[41];
+    const double t21 = c[18]*cx[0] + c[19]*cx[1];
+    const double t22 = c[17]*t21;
+    const double t23 = c[18]*cx[1] + c[21]*cx[0];
+    const double t24 = c[17]*t23;
+    const double t25 = c[22]*cq[2] + c[43];
+    const double t26 = c[22]*cq[3] + c[44];
+    const double t27 = c[45] + x[0];
+    const double t28 = t27 + (1.3333333333333333)*3.141592653589793;
+    const double t29 = t27 + (1.6666666666666667)*3.141592653589793;
+    const double t30 = t27 + 2.0*3.141592653589793;
+    out[0] = 0.0;
+    out[1] = 0.0;
+    out[2] = 0.0;
+    out[3] = 0.0;
+    out[4] = 0.0;
+    out[5] = 0.0;
+    out[6] = 0.0;
+    out[7] = 0.0;
+    out[8] = c[55];
+    out[9] = c[58];
+    out[10] = c[55];
+    out[11] = c[58];
+    out[12] = c[55];
+    out[13] = c[58];
+    out[14] = cx[2];
+    out[15] = cx[3];
+    out[16] = t0;
+    out[17] = t1;
+    out[18] = c[8]*cq[5] + t3;
+    out[19] = c[2]*cq[4] + t5;
+    out[20] = -cq[4];
+    out[21] = -cq[5];
+    out[22] = 0.0;
+    out[23] = 0.0;
+    out[24] = 0.0;
+    out[25] = 0.0;
+    out[26] = t12;
+    out[27] = t14;
+    out[28] = t12;
+    out[29] = t14;
+    out[30] = t15;
+    out[31] = t16;
+    out[32] = t15;
+    out[33] = t16;
+    out[34] = c[39];
+    out[35] = c[41];
+    out[36] = c[39];
+    out[37] = c[41];
+    out[38] = t2;
+    out[39] = t4;
+    out[40] = t2;
+    out[41] = t4;
+    out[42] = t17;
+    out[43] = t18;
+    out[44] = t0;
+    out[45] = t1;
+    out[46] = t19;
+    out[47] = t20;
+    out[48] = t19;
+    out[49] = t20;
+    out[50] = c[43];
+    out[51] = c[44];
+    out[52] = c[43];
+    out[53] = c[44];
+    out[54] = t22;
+    out[55] = t24;
+    out[56] = t22;
+    out[57] = t24;
+    out[58] = c[15]*cq[10] + t22;
+    out[59] = c[15]*cq[11] + t24;
+    out[60] = c[30]*cq[2] + c[43];
+    out[61] = c[30]*cq[3] + c[44];
+    out[62] = c[23]*cq[9] + t19;
+    out[63] = c[27]*cq[8] + t20;
+    out[64] = cq[8];
+    out[65] = cq[9];
+    out[66] = t25;
+    out[67] = t26;
+    out[68] = c[40]*cq[8] + t19;
+    out[69] = c[40]*cq[9] + t20;
+    out[70] = t3;
+    out[71] = t5;
+    out[72] = t17;
+    out[73] = t18;
+    out[74] = t25;
+    out[75] = t26;
+    out[76] = c[46]*t6 + c[47]*t9;
+    out[77] = c[46]*t9 + c[48]*t6;
+    out[78] = c[51]*t21 + c[52]*t23;
+    out[79] = c[51]*t23 + c[53]*t21;
+    out[80] = c[55] + c[56]*cx[2] + c[57]*cx[3];
+    out[81] = c[56]*cx[3] + c[58] + c[59]*cx[2];
+    out[82] = c[61]*cq[4] + t2;
+    out[83] = c[61]*cq[5] + t4;
+    out[84] = c[63]*cx[2] + c[64]*cx[3] + t0;
+    out[85] = c[63]*cx[3] + c[65]*cx[2] + t1;
+    out[86] = c[39] + c[67]*cq[0] + c[68]*cq[1];
+    out[87] = c[41] + c[67]*cq[1] + c[69]*cq[0];
+    out[88] = c[71]*cq[8] + c[72]*cq[9] + t19;
+    out[89] = c[71]*cq[9] + c[73]*cq[8] + t20;
+    out[90] = c[43] + c[75]*cq[2] + c[76]*cq[3];
+    out[91] = c[44] + c[75]*cq[3] + c[77]*cq[2];
+    out[92] = c[79]*cq[10] + t22;
+    out[93] = c[79]*cq[11] + t24;
+    out[94] = c[32];
+    out[95] = t27 + (0.3333333333333333)*3.141592653589793;
+    out[96] = t27 + (0.6666666666666666)*3.141592653589793;
+    out[97] = c[33];
+    out[98] = t28;
+    out[99] = t29;
+    out[100] = c[32];
+    out[101] = t27 + 3.141592653589793;
+    out[102] = t28;
+    out[103] = c[33];
+    out[104] = t30;
+    out[105] = t27 + (2.3333333333333335)*3.141592653589793;
+    out[106] = c[32];
+    out[107] = t29;
+    out[108] = t30;
+    out[109] = c[33];
+    out[110] = t27 + (2.6666666666666665)*3.141592653589793;
+    out[111] = t27 + 3.0*3.141592653589793;
+}
+
 static const unsigned char sg_feed_coord_is_angle[6] = { 1, 1, 1, 0, 1, 1 };
 
 static const sg_mechanism sg_feed_descriptor = {
@@ -926,6 +1074,7 @@ static const sg_mechanism sg_feed_descriptor = {
     .motion = sg_feed_motion,
     .forces = sg_feed_forces,
     .force_matrix = sg_feed_force_matrix,
+    .anchors = sg_feed_anchors,
 };
 
 const sg_mechanism *sg_feed(void)
@@ -936,289 +1085,340 @@ const sg_mechanism *sg_feed(void)
 const char *sg_feed_manifest(void)
 {
     return
-        "{\"bodies\":[{\"doc\":\"feed cam \\u9001\\u5e03\\u51f8\\u8f6e on the upper shaft (constant bread"
-        "th, six arcs)\",\"kind\":\"driven\",\"name\":\"feed_cam\",\"offset\":24,\"role\":\"feed_cam\"},{"
-        "\"doc\":\"lift eccentric \\u62ac\\u7259\\u51f8\\u8f6e on the upper shaft\",\"kind\":\"driven\",\""
-        "name\":\"lift_eccentric\",\"offset\":33,\"role\":null},{\"doc\":\"stitch regulator \\u9488\\u8dd"
-        "d\\u5ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"kind\":\"driven\","
-        "\"name\":\"regulator\",\"offset\":42,\"role\":null},{\"doc\":\"feed fork \\u9001\\u5e03\\u7259\\u"
-        "53c9 (part 3), u down the fork from the cam centre line\",\"kind\":\"link\",\"name\":\"feed_fork"
-        "\",\"offset\":51,\"role\":null},{\"doc\":\"stitch block \\u9488\\u8ddd\\u6ed1\\u5757 (part 8)\","
-        "\"kind\":\"slider\",\"name\":\"stitch_block\",\"offset\":60,\"role\":null},{\"doc\":\"feed rock "
-        "shaft with its two arms \\u9001\\u5e03\\u8f74\\u7ec4\\u4ef6 (part 2)\",\"kind\":\"link\",\"name\""
-        ":\"feed_rock_shaft\",\"offset\":69,\"role\":null},{\"doc\":\"feed bar \\u7259\\u67b6 (part 6) wi"
-        "th the feed dog \\u9001\\u5e03\\u7259\",\"kind\":\"link\",\"name\":\"feed_bar\",\"offset\":78,\""
-        "role\":\"feed_bar\"},{\"doc\":\"lift rock shaft with its arms and roller \\u62ac\\u7259\\u8f74\\u"
-        "7ec4\\u4ef6 (parts 5, 7)\",\"kind\":\"link\",\"name\":\"lift_rock_shaft\",\"offset\":87,\"role\""
-        ":null},{\"doc\":\"lift strap around the lift eccentric\",\"kind\":\"link\",\"name\":\"lift_strap"
-        "\",\"offset\":96,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_"
-        "y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[],\"closed_form\":false,\"closure"
-        "\":[\"cam.normal\",\"Q.x\",\"Q.y\",\"T.x\",\"T.y\",\"L.normal\"],\"coords\":[{\"guess\":0.0,\"na"
-        "me\":\"feed_rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":3.141592653589793,\"name\":\"lift_ro"
-        "ck_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"feed_fork.angle\",\""
-        "unit\":\"rad\"},{\"guess\":0.0,\"name\":\"stitch_block.travel\",\"unit\":\"m\"},{\"guess\":0.0,\""
-        "name\":\"feed_bar.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"lift_strap"
-        ".angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Feed mechanism \\u900"
-        "1\\u5e03\\u673a\\u6784 of the JB household machine: feed cam \\u2192 feed fork \\u2192 feed rock"
-        " shaft \\u2192 feed bar, with\\nthe stitch-length regulator \\u9488\\u8ddd\\u673a\\u6784 and the"
-        " feed lift \\u62ac\\u7259 (seed 000 \\u00a7\\u4e00(\\u56db), eqs. 1-1 to 1-5; seed 001 \\u00a7\\u"
-        "4e8c, the\\nsub-mechanisms D (lift), E (stitch length) and F (feed bar with the feed dog)).\\n\\n"
-        "A two-degree-of-freedom cam\\u2013linkage: the upper shaft turns the constant-breadth feed cam \\u"
-        "9001\\u5e03\\u51f8\\u8f6e (six circular\\narcs, a rounded Reuleaux triangle turning about a vert"
-        "ex: 60\\u00b0 dwell, 120\\u00b0 stroke, 60\\u00b0 dwell, 120\\u00b0 return)\\ninside the two fla"
-        "t faces of the feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), which hangs down the standing ar"
-        "m. The fork's\\nlower end P drives the feed rock shaft \\u9001\\u5e03\\u8f74 (part 2) through it"
-        "s rear arm; its middle Q carries the stitch\\nblock \\u9488\\u8ddd\\u6ed1\\u5757 (part 8) in the"
-        " slot of the stitch regulator \\u9488\\u8ddd\\u5ea7, whose angle is the second input (held in a\\n"
-        "run; its holding torque is an output). With the slot horizontal the fork only rocks about P: zer"
-        "o stitch;\\ntilted by \\u00b1\\u03b1 it makes the fork rise and fall, turning the feed rock shaf"
-        "t one way or the other: forward or\\nreverse feed. The feed rock shaft's upper arm carries the f"
-        "eed bar \\u7259\\u67b6 (part 6) at R; the feed bar rests in\\nthe lift rock shaft's \\u62ac\\u72"
-        "59\\u8f74 (part 5) roller \\u62ac\\u7259\\u6eda\\u67f1 (part 7), a pin in a slot along the bar; "
-        "the lift rock\\nshaft is rocked by a lift eccentric on the upper shaft (a circular cam: its equi"
-        "valent lower pair, crank and\\nstrap, is exact). The feed dog \\u9001\\u5e03\\u7259 is a point o"
-        "f the feed bar.\\n\\nThe cam contact is replaced, arc by arc, by its equivalent lower pair (deri"
-        "ve.model.Mechanism.cam), so the\\nloop closes in one set of equations (Newton, as seed 000 solve"
-        "s eqs. 1-5). Frame: origin on the upper-shaft\\naxis, x horizontal (feed direction positive), y "
-        "up; the throat plate is at y = plate_y.\\n\\nEvery dimension here is an estimate (seed 000's tab"
-        "les \\u9644\\u8868 and seed 001's \\u9644\\u8868 1 are not in the text): sized so\\nthe fork str"
-        "oke is 6 mm, the maximum stitch 4 mm at a regulator angle near 40\\u00b0, and the feed dog rises"
-        " about\\n1 mm above the throat plate while the needle is out of the cloth (needle top at \\u03c6"
-        " = 90\\u00b0).\",\"force_blocks\":[1,2,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\""
-        ":\"N*m\"},{\"name\":\"regulator.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\""
-        "W\"},{\"name\":\"regulator.power\",\"unit\":\"W\"},{\"name\":\"stitch_block.guide.fx\",\"unit\":"
-        "\"N\"},{\"name\":\"stitch_block.guide.fy\",\"unit\":\"N\"},{\"name\":\"cam.fx\",\"unit\":\"N\"},"
-        "{\"name\":\"cam.fy\",\"unit\":\"N\"},{\"name\":\"L.fx\",\"unit\":\"N\"},{\"name\":\"L.fy\",\"uni"
-        "t\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\""
-        "name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name"
-        "\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"}],\"force_rows\""
-        ":[\"feed_cam.x\",\"feed_cam.y\",\"feed_cam.moment\",\"lift_eccentric.x\",\"lift_eccentric.y\",\""
-        "lift_eccentric.moment\",\"regulator.x\",\"regulator.y\",\"regulator.moment\",\"feed_fork.x\",\"f"
-        "eed_fork.y\",\"feed_fork.moment\",\"stitch_block.x\",\"stitch_block.y\",\"stitch_block.moment\","
-        "\"feed_rock_shaft.x\",\"feed_rock_shaft.y\",\"feed_rock_shaft.moment\",\"feed_bar.x\",\"feed_bar"
-        ".y\",\"feed_bar.moment\",\"lift_rock_shaft.x\",\"lift_rock_shaft.y\",\"lift_rock_shaft.moment\","
-        "\"lift_strap.x\",\"lift_strap.y\",\"lift_strap.moment\"],\"inputs\":[{\"default\":0.0,\"display_"
-        "unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":"
-        "null,\"unit\":\"rad\"},{\"default\":0.6981317007977318,\"display_unit\":\"deg\",\"doc\":\"stitch"
-        " regulator \\u9488\\u8ddd\\u5ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse"
-        ")\",\"kind\":\"held\",\"name\":\"regulator\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\""
-        "kernels\":{\"sg_feed_constants\":{\"ops\":99},\"sg_feed_force_matrix\":{\"ops\":255},\"sg_feed_f"
-        "orces\":{\"ops\":485},\"sg_feed_motion\":{\"ops\":520},\"sg_feed_residual\":{\"ops\":107}},\"loa"
-        "ds\":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"name\":\"feed_dog\"},{\"body\":\"feed_bar\","
-        "\"component\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\""
-        ":\"fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"fork_top\"},{\"body\":\"f"
-        "eed_fork\",\"component\":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"feed_fork\",\"component\":\""
-        "fy\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fx\",\"name\":\"lift"
-        "_roller\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fy\",\"name\":\"lift_roller\"},{\"body\""
-        ":\"feed_cam\",\"component\":\"torque\",\"name\":\"feed_cam\"},{\"body\":\"lift_eccentric\",\"com"
-        "ponent\":\"torque\",\"name\":\"lift_eccentric\"},{\"body\":\"regulator\",\"component\":\"torque\""
-        ",\"name\":\"regulator\"},{\"body\":\"feed_fork\",\"component\":\"torque\",\"name\":\"feed_fork\""
-        "},{\"body\":\"stitch_block\",\"component\":\"torque\",\"name\":\"stitch_block\"},{\"body\":\"fee"
-        "d_rock_shaft\",\"component\":\"torque\",\"name\":\"feed_rock_shaft\"},{\"body\":\"feed_bar\",\"c"
-        "omponent\":\"torque\",\"name\":\"feed_bar\"},{\"body\":\"lift_rock_shaft\",\"component\":\"torqu"
-        "e\",\"name\":\"lift_rock_shaft\"},{\"body\":\"lift_strap\",\"component\":\"torque\",\"name\":\"l"
-        "ift_strap\"}],\"name\":\"feed\",\"observables\":[{\"name\":\"feed_dog.x\",\"unit\":\"m\"},{\"nam"
-        "e\":\"feed_dog.y\",\"unit\":\"m\"},{\"name\":\"feed_dog.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed"
-        "_dog.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_do"
-        "g.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.x\",\"unit\":\"m\"},{\"name\":\"fork_top.y\",\""
-        "unit\":\"m\"},{\"name\":\"fork_top.x_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"fork_top.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.y_dd\",\"unit\":\"m/"
-        "s^2\"},{\"name\":\"stitch_pin.x\",\"unit\":\"m\"},{\"name\":\"stitch_pin.y\",\"unit\":\"m\"},{\""
-        "name\":\"stitch_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.y_d\",\"unit\":\"m/s\"},{\"na"
-        "me\":\"stitch_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.y_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"lift_roller.x\",\"unit\":\"m\"},{\"name\":\"lift_roller.y\",\"unit\":\"m\"},{\"name\""
-        ":\"lift_roller.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.y_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"lift_roller.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.y_dd\",\"unit\":\"m/s^2\"},{\""
-        "name\":\"feed_cam.angle\",\"unit\":\"rad\"},{\"name\":\"feed_cam.angle_d\",\"unit\":\"rad/s\"},{"
-        "\"name\":\"feed_cam.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_cam.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"feed_cam.com.y\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.x_d\",\"unit\":\"m/s\"},"
-        "{\"name\":\"feed_cam.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.x_dd\",\"unit\":\"m/s^"
-        "2\"},{\"name\":\"feed_cam.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.angle\",\"un"
-        "it\":\"rad\"},{\"name\":\"lift_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_eccentri"
-        "c.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_eccentric.com.x\",\"unit\":\"m\"},{\"name\":"
-        "\"lift_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com.x_d\",\"unit\":\"m/s\"},"
-        "{\"name\":\"lift_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.x_dd\",\"u"
-        "nit\":\"m/s^2\"},{\"name\":\"lift_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"regulator"
-        ".angle\",\"unit\":\"rad\"},{\"name\":\"regulator.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"regul"
-        "ator.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"regulator.com.x\",\"unit\":\"m\"},{\"name\":\""
-        "regulator.com.y\",\"unit\":\"m\"},{\"name\":\"regulator.com.x_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "regulator.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.x_dd\",\"unit\":\"m/s^2\"},{\"na"
-        "me\":\"regulator.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork.angle\",\"unit\":\"rad\"},"
-        "{\"name\":\"feed_fork.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_fork.angle_dd\",\"unit\":\""
-        "rad/s^2\"},{\"name\":\"feed_fork.com.x\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.y\",\"unit\":"
-        "\"m\"},{\"name\":\"feed_fork.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.y_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"feed_fork.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork.com.y_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.angle\",\"unit\":\"rad\"},{\"name\":\"stitch_block."
-        "angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_block.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\""
-        ":\"stitch_block.com.x\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.y\",\"unit\":\"m\"},{\"name"
-        "\":\"stitch_block.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.y_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"stitch_block.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.com.y_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"feed_rock_sh"
-        "aft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{"
-        "\"name\":\"feed_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.y\",\"unit\":"
-        "\"m\"},{\"name\":\"feed_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.y"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fe"
-        "ed_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.angle\",\"unit\":\"rad\"},{\"n"
-        "ame\":\"feed_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_bar.angle_dd\",\"unit\":\"rad/s^"
-        "2\"},{\"name\":\"feed_bar.com.x\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.y\",\"unit\":\"m\"},{"
-        "\"name\":\"feed_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"feed_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.com.y_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"lift_rock_shaft.angle"
-        "_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":"
-        "\"lift_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.y\",\"unit\":\"m\"},{\""
-        "name\":\"lift_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.y_d\",\"uni"
-        "t\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_sh"
-        "aft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_strap.angle\",\"unit\":\"rad\"},{\"name\":\""
-        "lift_strap.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_strap.angle_dd\",\"unit\":\"rad/s^2\"}"
-        ",{\"name\":\"lift_strap.com.x\",\"unit\":\"m\"},{\"name\":\"lift_strap.com.y\",\"unit\":\"m\"},{"
-        "\"name\":\"lift_strap.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_strap.com.y_d\",\"unit\":\"m/"
-        "s\"},{\"name\":\"lift_strap.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_strap.com.y_dd\",\"u"
-        "nit\":\"m/s^2\"},{\"name\":\"cam.arc\",\"unit\":\"\"}],\"params\":[{\"default\":0.006,\"display_"
-        "unit\":\"mm\",\"doc\":\"feed cam: side of its Reuleaux triangle = fork stroke (estimate)\",\"kin"
-        "d\":\"length\",\"name\":\"cam_side\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":0.008,\"display_unit\":\"mm\",\"doc\":\"feed cam: small arc radius; breadth = side + 2 radius ("
-        "estimate)\",\"kind\":\"length\",\"name\":\"cam_small_radius\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.2,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre line to r"
-        "ock-shaft pin P (estimate)\",\"kind\":\"length\",\"name\":\"fork_p\",\"positive\":true,\"role\":"
-        "null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre l"
-        "ine to stitch-block pin Q (estimate)\",\"kind\":\"length\",\"name\":\"fork_q\",\"positive\":true"
-        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"stitch regulat"
-        "or pivot, x (estimate)\",\"kind\":\"length\",\"name\":\"regulator_x\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":-0.06,\"display_unit\":\"mm\",\"doc\":\"stitch regulator pivo"
-        "t, y (estimate)\",\"kind\":\"length\",\"name\":\"regulator_y\",\"positive\":false,\"role\":null,"
-        "\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, x (es"
-        "timate)\",\"kind\":\"length\",\"name\":\"feed_shaft_x\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"m\"},{\"default\":-0.2,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, y (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"feed_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},"
-        "{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: rear arm to the fork pin P "
-        "(estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_p\",\"positive\":true,\"role\":null,\"unit\""
-        ":\"m\"},{\"default\":0.0293,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: upper arm to the "
-        "feed-bar pin R (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_r\",\"positive\":true,\"role"
-        "\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis"
-        ", x (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_x\",\"positive\":false,\"role\":null,"
-        "\"unit\":\"m\"},{\"default\":-0.1777,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis, y ("
-        "estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_y\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft: arm to the roll"
-        "er L (estimate)\",\"kind\":\"length\",\"name\":\"lift_arm\",\"positive\":true,\"role\":null,\"un"
-        "it\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft: arm driven by t"
-        "he lift strap (estimate)\",\"kind\":\"length\",\"name\":\"lift_drive_arm\",\"positive\":true,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":0.0012,\"display_unit\":\"mm\",\"doc\":\"lift eccentric "
-        "on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"lift_eccentricity\",\"positive\":"
-        "true,\"role\":null,\"unit\":\"m\"},{\"default\":0.1802,\"display_unit\":\"mm\",\"doc\":\"lift st"
-        "rap, eccentric centre to the drive-arm pin (estimate)\",\"kind\":\"length\",\"name\":\"lift_stra"
-        "p\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\""
-        "doc\":\"feed dog tip along the feed bar from R (estimate)\",\"kind\":\"length\",\"name\":\"dog_u"
-        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.007,\"display_unit\":\"mm\",\""
-        "doc\":\"feed bar: its roller slot below the line R\\u2013feed dog (estimate)\",\"kind\":\"length"
-        "\",\"name\":\"bar_slot_v\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1705,"
-        "\"display_unit\":\"mm\",\"doc\":\"throat plate surface, y (estimate: the dog rises ~1 mm above i"
-        "t)\",\"kind\":\"length\",\"name\":\"plate_y\",\"positive\":false,\"role\":\"throat_plate\",\"uni"
-        "t\":\"m\"},{\"default\":1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"phase of feed_cam "
-        "relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_cam.phase\",\"positive\":false,"
-        "\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of feed_"
-        "cam\",\"kind\":\"mass\",\"name\":\"feed_cam.mass\",\"positive\":false,\"role\":null,\"unit\":\"k"
-        "g\"},{\"default\":0.0015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local u\""
-        ",\"kind\":\"length\",\"name\":\"feed_cam.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local v\",\"kin"
-        "d\":\"length\",\"name\":\"feed_cam.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
-        "efault\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_cam about its ce"
-        "ntre of mass\",\"kind\":\"inertia\",\"name\":\"feed_cam.inertia\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"kg*m**2\"},{\"default\":2.792526803190927,\"display_unit\":\"deg\",\"doc\":\"phase"
-        " of lift_eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"lift_eccentric.ph"
-        "ase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\""
-        ",\"doc\":\"mass of lift_eccentric\",\"kind\":\"mass\",\"name\":\"lift_eccentric.mass\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cent"
-        "re of mass of lift_eccentric, local u\",\"kind\":\"length\",\"name\":\"lift_eccentric.com_u\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":"
-        "\"centre of mass of lift_eccentric, local v\",\"kind\":\"length\",\"name\":\"lift_eccentric.com_"
-        "v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2"
-        "\",\"doc\":\"moment of inertia of lift_eccentric about its centre of mass\",\"kind\":\"inertia\""
-        ",\"name\":\"lift_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"d"
-        "efault\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of regulator\",\"kind\":\"mass\",\"name\":\"r"
-        "egulator.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_uni"
-        "t\":\"mm\",\"doc\":\"centre of mass of regulator, local u\",\"kind\":\"length\",\"name\":\"regul"
-        "ator.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
-        "\"mm\",\"doc\":\"centre of mass of regulator, local v\",\"kind\":\"length\",\"name\":\"regulator"
-        ".com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg"
-        "*m**2\",\"doc\":\"moment of inertia of regulator about its centre of mass\",\"kind\":\"inertia\""
-        ",\"name\":\"regulator.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"defaul"
-        "t\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of feed_fork\",\"kind\":\"mass\",\"name\":\"feed"
-        "_fork.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.00012,\"display_un"
-        "it\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_fork about its centre of mass\",\"kind\":\""
-        "inertia\",\"name\":\"feed_fork.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},"
-        "{\"default\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of stitch_block\",\"kind\":\"mass\",\"n"
-        "ame\":\"stitch_block.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\""
-        "display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local u\",\"kind\":\"length\",\""
-        "name\":\"stitch_block.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,"
-        "\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local v\",\"kind\":\"length\","
-        "\"name\":\"stitch_block.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1e"
-        "-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of stitch_block about its centre of"
-        " mass\",\"kind\":\"inertia\",\"name\":\"stitch_block.inertia\",\"positive\":false,\"role\":null,"
-        "\"unit\":\"kg*m**2\"},{\"default\":0.04,\"display_unit\":\"g\",\"doc\":\"mass of feed_rock_shaft"
-        "\",\"kind\":\"mass\",\"name\":\"feed_rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"kg\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_rock_shaft,"
-        " local u\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_u\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"m\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_r"
-        "ock_shaft, local v\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_v\",\"positive\":false,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of "
-        "inertia of feed_rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_rock_"
-        "shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.025,\"disp"
-        "lay_unit\":\"g\",\"doc\":\"mass of feed_bar\",\"kind\":\"mass\",\"name\":\"feed_bar.mass\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":"
-        "\"centre of mass of feed_bar, local u\",\"kind\":\"length\",\"name\":\"feed_bar.com_u\",\"positi"
-        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.003,\"display_unit\":\"mm\",\"doc\":\"c"
-        "entre of mass of feed_bar, local v\",\"kind\":\"length\",\"name\":\"feed_bar.com_v\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"m"
-        "oment of inertia of feed_bar about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_bar"
-        ".inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_un"
-        "it\":\"g\",\"doc\":\"mass of lift_rock_shaft\",\"kind\":\"mass\",\"name\":\"lift_rock_shaft.mass"
-        "\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\""
-        "doc\":\"centre of mass of lift_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"lift_rock_sh"
-        "aft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of lift_rock_shaft, local v\",\"kind\":\"length\",\"name\":\"lift_"
-        "rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display"
-        "_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_rock_shaft about its centre of mass\",\""
-        "kind\":\"inertia\",\"name\":\"lift_rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of lift_strap\",\"kind\":"
-        "\"mass\",\"name\":\"lift_strap.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"defau"
-        "lt\":3e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_strap about its cent"
-        "re of mass\",\"kind\":\"inertia\",\"name\":\"lift_strap.inertia\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":"
-        "[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (on the line through R: lifting it does not move "
-        "it sideways)\",\"name\":\"feed_dog\",\"offset\":0,\"role\":\"feed_dog\"},{\"body\":\"feed_fork\""
-        ",\"doc\":\"feed fork on the cam centre line\",\"name\":\"fork_top\",\"offset\":6,\"role\":null},"
-        "{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in the stitch block\",\"name\":\"stitch_pin\",\"off"
-        "set\":12,\"role\":null},{\"body\":\"lift_rock_shaft\",\"doc\":\"lift roller L in the feed bar\","
-        "\"name\":\"lift_roller\",\"offset\":18,\"role\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\""
-        "feed_cam\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"feed_c"
-        "am.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\":[\"fx\",\"fy\"],"
-        "\"grounded\":true,\"kind\":\"revolute\",\"name\":\"lift_eccentric.pivot\",\"offset\":2},{\"a\":\""
-        "ground\",\"b\":\"regulator\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\""
-        ",\"name\":\"regulator.pivot\",\"offset\":4},{\"a\":\"regulator\",\"b\":\"stitch_block\",\"column"
-        "s\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"stitch_block.gu"
-        "ide\",\"offset\":6},{\"a\":\"feed_cam\",\"b\":\"feed_fork\",\"columns\":[\"normal\"],\"grounded\""
-        ":false,\"kind\":\"cam\",\"name\":\"cam\",\"offset\":8},{\"a\":\"ground\",\"b\":\"feed_rock_shaft"
-        "\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O_feed\",\"off"
-        "set\":9},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_fork\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
-        ":false,\"kind\":\"revolute\",\"name\":\"P\",\"offset\":11},{\"a\":\"feed_fork\",\"b\":\"stitch_b"
-        "lock\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"Q\",\"off"
-        "set\":13},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
-        ":false,\"kind\":\"revolute\",\"name\":\"R\",\"offset\":15},{\"a\":\"ground\",\"b\":\"lift_rock_s"
-        "haft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O_lift\",\""
-        "offset\":17},{\"a\":\"lift_eccentric\",\"b\":\"lift_strap\",\"columns\":[\"fx\",\"fy\"],\"ground"
-        "ed\":false,\"kind\":\"revolute\",\"name\":\"S\",\"offset\":19},{\"a\":\"lift_strap\",\"b\":\"lif"
-        "t_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"T"
-        "\",\"offset\":21},{\"a\":\"feed_bar\",\"b\":\"lift_rock_shaft\",\"columns\":[\"normal\"],\"groun"
-        "ded\":false,\"kind\":\"slot\",\"name\":\"L\",\"offset\":23},{\"a\":\"ground\",\"b\":\"feed_cam\""
-        ",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"fe"
-        "ed_cam.drive\",\"offset\":24,\"sense\":1},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\""
-        ":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"lift_eccentric"
-        ".drive\",\"offset\":25,\"sense\":1},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"torque\""
-        "],\"grounded\":true,\"input\":\"regulator\",\"kind\":\"drive\",\"name\":\"regulator.drive\",\"of"
-        "fset\":26,\"sense\":1}],\"roles\":{\"feed_bar\":{\"kind\":\"body\",\"name\":\"feed_bar\"},\"feed"
-        "_cam\":{\"kind\":\"body\",\"name\":\"feed_cam\"},\"feed_dog\":{\"kind\":\"point\",\"name\":\"fee"
-        "d_dog\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"regulator\"},\"throat_plate\":{\"ki"
-        "nd\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nbranch\":0,\"nc\":144,\"nf\":27,\"nfo\":43,\""
-        "nload\":17,\"nobs\":106,\"np\":53,\"nq\":6,\"nx\":2}}"
+        "{\"anchors\":[{\"body\":\"ground\",\"joint\":\"feed_cam.pivot\",\"kind\":\"joint\",\"name\":\"fe"
+        "ed_cam.pivot@ground\"},{\"body\":\"feed_cam\",\"joint\":\"feed_cam.pivot\",\"kind\":\"joint\",\""
+        "name\":\"feed_cam.pivot@feed_cam\"},{\"body\":\"ground\",\"joint\":\"lift_eccentric.pivot\",\"ki"
+        "nd\":\"joint\",\"name\":\"lift_eccentric.pivot@ground\"},{\"body\":\"lift_eccentric\",\"joint\":"
+        "\"lift_eccentric.pivot\",\"kind\":\"joint\",\"name\":\"lift_eccentric.pivot@lift_eccentric\"},{\""
+        "body\":\"ground\",\"joint\":\"regulator.pivot\",\"kind\":\"joint\",\"name\":\"regulator.pivot@gr"
+        "ound\"},{\"body\":\"regulator\",\"joint\":\"regulator.pivot\",\"kind\":\"joint\",\"name\":\"regu"
+        "lator.pivot@regulator\"},{\"body\":\"regulator\",\"joint\":\"stitch_block.guide\",\"kind\":\"gui"
+        "de\",\"name\":\"stitch_block.guide@regulator\"},{\"body\":\"regulator\",\"joint\":\"stitch_block"
+        ".guide\",\"kind\":\"guide_direction\",\"name\":\"stitch_block.guide.direction\"},{\"body\":\"sti"
+        "tch_block\",\"joint\":\"stitch_block.guide\",\"kind\":\"joint\",\"name\":\"stitch_block.guide@st"
+        "itch_block\"},{\"body\":\"feed_fork\",\"joint\":\"cam\",\"kind\":\"guide\",\"name\":\"cam@feed_f"
+        "ork\"},{\"body\":\"feed_fork\",\"joint\":\"cam\",\"kind\":\"guide_direction\",\"name\":\"cam.dir"
+        "ection\"},{\"body\":\"feed_cam\",\"joint\":\"cam\",\"kind\":\"arc_center\",\"name\":\"cam.arc0\""
+        "},{\"body\":\"feed_cam\",\"joint\":\"cam\",\"kind\":\"arc_center\",\"name\":\"cam.arc1\"},{\"bod"
+        "y\":\"feed_cam\",\"joint\":\"cam\",\"kind\":\"arc_center\",\"name\":\"cam.arc2\"},{\"body\":\"fe"
+        "ed_cam\",\"joint\":\"cam\",\"kind\":\"arc_center\",\"name\":\"cam.arc3\"},{\"body\":\"feed_cam\""
+        ",\"joint\":\"cam\",\"kind\":\"arc_center\",\"name\":\"cam.arc4\"},{\"body\":\"feed_cam\",\"joint"
+        "\":\"cam\",\"kind\":\"arc_center\",\"name\":\"cam.arc5\"},{\"body\":\"ground\",\"joint\":\"O_fee"
+        "d\",\"kind\":\"joint\",\"name\":\"O_feed@ground\"},{\"body\":\"feed_rock_shaft\",\"joint\":\"O_f"
+        "eed\",\"kind\":\"joint\",\"name\":\"O_feed@feed_rock_shaft\"},{\"body\":\"feed_rock_shaft\",\"jo"
+        "int\":\"P\",\"kind\":\"joint\",\"name\":\"P@feed_rock_shaft\"},{\"body\":\"feed_fork\",\"joint\""
+        ":\"P\",\"kind\":\"joint\",\"name\":\"P@feed_fork\"},{\"body\":\"feed_fork\",\"joint\":\"Q\",\"ki"
+        "nd\":\"joint\",\"name\":\"Q@feed_fork\"},{\"body\":\"stitch_block\",\"joint\":\"Q\",\"kind\":\"j"
+        "oint\",\"name\":\"Q@stitch_block\"},{\"body\":\"feed_rock_shaft\",\"joint\":\"R\",\"kind\":\"joi"
+        "nt\",\"name\":\"R@feed_rock_shaft\"},{\"body\":\"feed_bar\",\"joint\":\"R\",\"kind\":\"joint\",\""
+        "name\":\"R@feed_bar\"},{\"body\":\"ground\",\"joint\":\"O_lift\",\"kind\":\"joint\",\"name\":\"O"
+        "_lift@ground\"},{\"body\":\"lift_rock_shaft\",\"joint\":\"O_lift\",\"kind\":\"joint\",\"name\":\""
+        "O_lift@lift_rock_shaft\"},{\"body\":\"lift_eccentric\",\"joint\":\"S\",\"kind\":\"joint\",\"name"
+        "\":\"S@lift_eccentric\"},{\"body\":\"lift_strap\",\"joint\":\"S\",\"kind\":\"joint\",\"name\":\""
+        "S@lift_strap\"},{\"body\":\"lift_strap\",\"joint\":\"T\",\"kind\":\"joint\",\"name\":\"T@lift_st"
+        "rap\"},{\"body\":\"lift_rock_shaft\",\"joint\":\"T\",\"kind\":\"joint\",\"name\":\"T@lift_rock_s"
+        "haft\"},{\"body\":\"feed_bar\",\"joint\":\"L\",\"kind\":\"guide\",\"name\":\"L@feed_bar\"},{\"bo"
+        "dy\":\"feed_bar\",\"joint\":\"L\",\"kind\":\"guide_direction\",\"name\":\"L.direction\"},{\"body"
+        "\":\"lift_rock_shaft\",\"joint\":\"L\",\"kind\":\"joint\",\"name\":\"L@lift_rock_shaft\"},{\"bod"
+        "y\":\"feed_bar\",\"joint\":null,\"kind\":\"point\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\""
+        ",\"joint\":null,\"kind\":\"point\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"joint\":null"
+        ",\"kind\":\"point\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_shaft\",\"joint\":null,\"kind"
+        "\":\"point\",\"name\":\"lift_roller\"},{\"body\":\"feed_cam\",\"joint\":null,\"kind\":\"com\",\""
+        "name\":\"feed_cam.com\"},{\"body\":\"lift_eccentric\",\"joint\":null,\"kind\":\"com\",\"name\":\""
+        "lift_eccentric.com\"},{\"body\":\"regulator\",\"joint\":null,\"kind\":\"com\",\"name\":\"regulat"
+        "or.com\"},{\"body\":\"feed_fork\",\"joint\":null,\"kind\":\"com\",\"name\":\"feed_fork.com\"},{\""
+        "body\":\"stitch_block\",\"joint\":null,\"kind\":\"com\",\"name\":\"stitch_block.com\"},{\"body\""
+        ":\"feed_rock_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"feed_rock_shaft.com\"},{\"body\""
+        ":\"feed_bar\",\"joint\":null,\"kind\":\"com\",\"name\":\"feed_bar.com\"},{\"body\":\"lift_rock_s"
+        "haft\",\"joint\":null,\"kind\":\"com\",\"name\":\"lift_rock_shaft.com\"},{\"body\":\"lift_strap\""
+        ",\"joint\":null,\"kind\":\"com\",\"name\":\"lift_strap.com\"}],\"arcs\":[{\"body\":\"feed_cam\","
+        "\"center\":11,\"joint\":\"cam\",\"out\":0},{\"body\":\"feed_cam\",\"center\":12,\"joint\":\"cam\""
+        ",\"out\":1},{\"body\":\"feed_cam\",\"center\":13,\"joint\":\"cam\",\"out\":2},{\"body\":\"feed_c"
+        "am\",\"center\":14,\"joint\":\"cam\",\"out\":3},{\"body\":\"feed_cam\",\"center\":15,\"joint\":\""
+        "cam\",\"out\":4},{\"body\":\"feed_cam\",\"center\":16,\"joint\":\"cam\",\"out\":5}],\"bodies\":["
+        "{\"doc\":\"feed cam \\u9001\\u5e03\\u51f8\\u8f6e on the upper shaft (constant breadth, six arcs)"
+        "\",\"kind\":\"driven\",\"name\":\"feed_cam\",\"offset\":24,\"role\":\"feed_cam\"},{\"doc\":\"lif"
+        "t eccentric \\u62ac\\u7259\\u51f8\\u8f6e on the upper shaft\",\"kind\":\"driven\",\"name\":\"lif"
+        "t_eccentric\",\"offset\":33,\"role\":null},{\"doc\":\"stitch regulator \\u9488\\u8ddd\\u5ea7: sl"
+        "ot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"kind\":\"driven\",\"name\":\"r"
+        "egulator\",\"offset\":42,\"role\":null},{\"doc\":\"feed fork \\u9001\\u5e03\\u7259\\u53c9 (part "
+        "3), u down the fork from the cam centre line\",\"kind\":\"link\",\"name\":\"feed_fork\",\"offset"
+        "\":51,\"role\":null},{\"doc\":\"stitch block \\u9488\\u8ddd\\u6ed1\\u5757 (part 8)\",\"kind\":\""
+        "slider\",\"name\":\"stitch_block\",\"offset\":60,\"role\":null},{\"doc\":\"feed rock shaft with "
+        "its two arms \\u9001\\u5e03\\u8f74\\u7ec4\\u4ef6 (part 2)\",\"kind\":\"link\",\"name\":\"feed_ro"
+        "ck_shaft\",\"offset\":69,\"role\":null},{\"doc\":\"feed bar \\u7259\\u67b6 (part 6) with the fee"
+        "d dog \\u9001\\u5e03\\u7259\",\"kind\":\"link\",\"name\":\"feed_bar\",\"offset\":78,\"role\":\"f"
+        "eed_bar\"},{\"doc\":\"lift rock shaft with its arms and roller \\u62ac\\u7259\\u8f74\\u7ec4\\u4e"
+        "f6 (parts 5, 7)\",\"kind\":\"link\",\"name\":\"lift_rock_shaft\",\"offset\":87,\"role\":null},{\""
+        "doc\":\"lift strap around the lift eccentric\",\"kind\":\"link\",\"name\":\"lift_strap\",\"offse"
+        "t\":96,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_"
+        "vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[],\"closed_form\":false,\"closure\":[\"cam."
+        "normal\",\"Q.x\",\"Q.y\",\"T.x\",\"T.y\",\"L.normal\"],\"coords\":[{\"guess\":0.0,\"name\":\"fee"
+        "d_rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":3.141592653589793,\"name\":\"lift_rock_shaft.a"
+        "ngle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"feed_fork.angle\",\"unit\":\""
+        "rad\"},{\"guess\":0.0,\"name\":\"stitch_block.travel\",\"unit\":\"m\"},{\"guess\":0.0,\"name\":\""
+        "feed_bar.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"lift_strap.angle\","
+        "\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Feed mechanism \\u9001\\u5e03\\u"
+        "673a\\u6784 of the JB household machine: feed cam \\u2192 feed fork \\u2192 feed rock shaft \\u2"
+        "192 feed bar, with\\nthe stitch-length regulator \\u9488\\u8ddd\\u673a\\u6784 and the feed lift "
+        "\\u62ac\\u7259 (seed 000 \\u00a7\\u4e00(\\u56db), eqs. 1-1 to 1-5; seed 001 \\u00a7\\u4e8c, the\\n"
+        "sub-mechanisms D (lift), E (stitch length) and F (feed bar with the feed dog)).\\n\\nA two-degre"
+        "e-of-freedom cam\\u2013linkage: the upper shaft turns the constant-breadth feed cam \\u9001\\u5e"
+        "03\\u51f8\\u8f6e (six circular\\narcs, a rounded Reuleaux triangle turning about a vertex: 60\\u"
+        "00b0 dwell, 120\\u00b0 stroke, 60\\u00b0 dwell, 120\\u00b0 return)\\ninside the two flat faces o"
+        "f the feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), which hangs down the standing arm. The fo"
+        "rk's\\nlower end P drives the feed rock shaft \\u9001\\u5e03\\u8f74 (part 2) through its rear ar"
+        "m; its middle Q carries the stitch\\nblock \\u9488\\u8ddd\\u6ed1\\u5757 (part 8) in the slot of "
+        "the stitch regulator \\u9488\\u8ddd\\u5ea7, whose angle is the second input (held in a\\nrun; it"
+        "s holding torque is an output). With the slot horizontal the fork only rocks about P: zero stitc"
+        "h;\\ntilted by \\u00b1\\u03b1 it makes the fork rise and fall, turning the feed rock shaft one w"
+        "ay or the other: forward or\\nreverse feed. The feed rock shaft's upper arm carries the feed bar"
+        " \\u7259\\u67b6 (part 6) at R; the feed bar rests in\\nthe lift rock shaft's \\u62ac\\u7259\\u8f"
+        "74 (part 5) roller \\u62ac\\u7259\\u6eda\\u67f1 (part 7), a pin in a slot along the bar; the lif"
+        "t rock\\nshaft is rocked by a lift eccentric on the upper shaft (a circular cam: its equivalent "
+        "lower pair, crank and\\nstrap, is exact). The feed dog \\u9001\\u5e03\\u7259 is a point of the f"
+        "eed bar.\\n\\nThe cam contact is replaced, arc by arc, by its equivalent lower pair (derive.mode"
+        "l.Mechanism.cam), so the\\nloop closes in one set of equations (Newton, as seed 000 solves eqs. "
+        "1-5). Frame: origin on the upper-shaft\\naxis, x horizontal (feed direction positive), y up; the"
+        " throat plate is at y = plate_y.\\n\\nEvery dimension here is an estimate (seed 000's tables \\u"
+        "9644\\u8868 and seed 001's \\u9644\\u8868 1 are not in the text): sized so\\nthe fork stroke is "
+        "6 mm, the maximum stitch 4 mm at a regulator angle near 40\\u00b0, and the feed dog rises about\\n"
+        "1 mm above the throat plate while the needle is out of the cloth (needle top at \\u03c6 = 90\\u0"
+        "0b0).\",\"force_blocks\":[1,2,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"}"
+        ",{\"name\":\"regulator.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"n"
+        "ame\":\"regulator.power\",\"unit\":\"W\"},{\"name\":\"stitch_block.guide.fx\",\"unit\":\"N\"},{\""
+        "name\":\"stitch_block.guide.fy\",\"unit\":\"N\"},{\"name\":\"cam.fx\",\"unit\":\"N\"},{\"name\":"
+        "\"cam.fy\",\"unit\":\"N\"},{\"name\":\"L.fx\",\"unit\":\"N\"},{\"name\":\"L.fy\",\"unit\":\"N\"}"
+        ",{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"s"
+        "haking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"poten"
+        "tial_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"}],\"force_rows\":[\"feed_c"
+        "am.x\",\"feed_cam.y\",\"feed_cam.moment\",\"lift_eccentric.x\",\"lift_eccentric.y\",\"lift_eccen"
+        "tric.moment\",\"regulator.x\",\"regulator.y\",\"regulator.moment\",\"feed_fork.x\",\"feed_fork.y"
+        "\",\"feed_fork.moment\",\"stitch_block.x\",\"stitch_block.y\",\"stitch_block.moment\",\"feed_roc"
+        "k_shaft.x\",\"feed_rock_shaft.y\",\"feed_rock_shaft.moment\",\"feed_bar.x\",\"feed_bar.y\",\"fee"
+        "d_bar.moment\",\"lift_rock_shaft.x\",\"lift_rock_shaft.y\",\"lift_rock_shaft.moment\",\"lift_str"
+        "ap.x\",\"lift_strap.y\",\"lift_strap.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"r"
+        "ad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"uni"
+        "t\":\"rad\"},{\"default\":0.6981317007977318,\"display_unit\":\"deg\",\"doc\":\"stitch regulator"
+        " \\u9488\\u8ddd\\u5ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"kind"
+        "\":\"held\",\"name\":\"regulator\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels\":"
+        "{\"sg_feed_anchors\":{\"ops\":155},\"sg_feed_constants\":{\"ops\":99},\"sg_feed_force_matrix\":{"
+        "\"ops\":255},\"sg_feed_forces\":{\"ops\":485},\"sg_feed_motion\":{\"ops\":520},\"sg_feed_residua"
+        "l\":{\"ops\":107}},\"loads\":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"name\":\"feed_dog\"}"
+        ",{\"body\":\"feed_bar\",\"component\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\",\"co"
+        "mponent\":\"fx\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\""
+        "fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"fe"
+        "ed_fork\",\"component\":\"fy\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_shaft\",\"componen"
+        "t\":\"fx\",\"name\":\"lift_roller\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fy\",\"name\""
+        ":\"lift_roller\"},{\"body\":\"feed_cam\",\"component\":\"torque\",\"name\":\"feed_cam\"},{\"body"
+        "\":\"lift_eccentric\",\"component\":\"torque\",\"name\":\"lift_eccentric\"},{\"body\":\"regulato"
+        "r\",\"component\":\"torque\",\"name\":\"regulator\"},{\"body\":\"feed_fork\",\"component\":\"tor"
+        "que\",\"name\":\"feed_fork\"},{\"body\":\"stitch_block\",\"component\":\"torque\",\"name\":\"sti"
+        "tch_block\"},{\"body\":\"feed_rock_shaft\",\"component\":\"torque\",\"name\":\"feed_rock_shaft\""
+        "},{\"body\":\"feed_bar\",\"component\":\"torque\",\"name\":\"feed_bar\"},{\"body\":\"lift_rock_s"
+        "haft\",\"component\":\"torque\",\"name\":\"lift_rock_shaft\"},{\"body\":\"lift_strap\",\"compone"
+        "nt\":\"torque\",\"name\":\"lift_strap\"}],\"name\":\"feed\",\"observables\":[{\"name\":\"feed_do"
+        "g.x\",\"unit\":\"m\"},{\"name\":\"feed_dog.y\",\"unit\":\"m\"},{\"name\":\"feed_dog.x_d\",\"unit"
+        "\":\"m/s\"},{\"name\":\"feed_dog.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.x_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"feed_dog.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.x\",\"unit\":\"m\""
+        "},{\"name\":\"fork_top.y\",\"unit\":\"m\"},{\"name\":\"fork_top.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"fork_top.y_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "fork_top.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.x\",\"unit\":\"m\"},{\"name\":\"stitc"
+        "h_pin.y\",\"unit\":\"m\"},{\"name\":\"stitch_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin."
+        "y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin"
+        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.x\",\"unit\":\"m\"},{\"name\":\"lift_roller."
+        "y\",\"unit\":\"m\"},{\"name\":\"lift_roller.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"lift_roller.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.y_"
+        "dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.angle\",\"unit\":\"rad\"},{\"name\":\"feed_cam.ang"
+        "le_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_cam.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"fee"
+        "d_cam.com.x\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.y\",\"unit\":\"m\"},{\"name\":\"feed_cam."
+        "com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_ca"
+        "m.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "lift_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"lift_eccentric.angle_d\",\"unit\":\"rad/s\""
+        "},{\"name\":\"lift_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_eccentric.com.x\""
+        ",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.c"
+        "om.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"li"
+        "ft_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.com.y_dd\",\"unit\":\"m/s"
+        "^2\"},{\"name\":\"regulator.angle\",\"unit\":\"rad\"},{\"name\":\"regulator.angle_d\",\"unit\":\""
+        "rad/s\"},{\"name\":\"regulator.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"regulator.com.x\",\""
+        "unit\":\"m\"},{\"name\":\"regulator.com.y\",\"unit\":\"m\"},{\"name\":\"regulator.com.x_d\",\"un"
+        "it\":\"m/s\"},{\"name\":\"regulator.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.x_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"regulator.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork."
+        "angle\",\"unit\":\"rad\"},{\"name\":\"feed_fork.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_f"
+        "ork.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_fork.com.x\",\"unit\":\"m\"},{\"name\":\"f"
+        "eed_fork.com.y\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"f"
+        "eed_fork.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
+        "e\":\"feed_fork.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.angle\",\"unit\":\"rad\""
+        "},{\"name\":\"stitch_block.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_block.angle_dd\",\"u"
+        "nit\":\"rad/s^2\"},{\"name\":\"stitch_block.com.x\",\"unit\":\"m\"},{\"name\":\"stitch_block.com"
+        ".y\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_blo"
+        "ck.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"stitch_block.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.angle\",\"unit\":\"ra"
+        "d\"},{\"name\":\"feed_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_rock_shaft.angle"
+        "_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"feed"
+        "_rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"n"
+        "ame\":\"feed_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.x_dd\",\"uni"
+        "t\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.a"
+        "ngle\",\"unit\":\"rad\"},{\"name\":\"feed_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_bar"
+        ".angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_bar.com.x\",\"unit\":\"m\"},{\"name\":\"feed_"
+        "bar.com.y\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_ba"
+        "r.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fe"
+        "ed_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"n"
+        "ame\":\"lift_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_rock_shaft.angle_dd\",\"u"
+        "nit\":\"rad/s^2\"},{\"name\":\"lift_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lift_rock_sha"
+        "ft.com.y\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"l"
+        "ift_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.x_dd\",\"unit\":\"m/s"
+        "^2\"},{\"name\":\"lift_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_strap.angle\","
+        "\"unit\":\"rad\"},{\"name\":\"lift_strap.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_strap.an"
+        "gle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_strap.com.x\",\"unit\":\"m\"},{\"name\":\"lift_s"
+        "trap.com.y\",\"unit\":\"m\"},{\"name\":\"lift_strap.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift"
+        "_strap.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_strap.com.x_dd\",\"unit\":\"m/s^2\"},{\"name"
+        "\":\"lift_strap.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cam.arc\",\"unit\":\"\"}],\"params\":"
+        "[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"feed cam: side of its Reuleaux triangle = "
+        "fork stroke (estimate)\",\"kind\":\"length\",\"name\":\"cam_side\",\"positive\":true,\"role\":nu"
+        "ll,\"unit\":\"m\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"feed cam: small arc radi"
+        "us; breadth = side + 2 radius (estimate)\",\"kind\":\"length\",\"name\":\"cam_small_radius\",\"p"
+        "ositive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.2,\"display_unit\":\"mm\",\"doc\":\""
+        "feed fork: cam centre line to rock-shaft pin P (estimate)\",\"kind\":\"length\",\"name\":\"fork_"
+        "p\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\""
+        "doc\":\"feed fork: cam centre line to stitch-block pin Q (estimate)\",\"kind\":\"length\",\"name"
+        "\":\"fork_q\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
+        "\"mm\",\"doc\":\"stitch regulator pivot, x (estimate)\",\"kind\":\"length\",\"name\":\"regulator"
+        "_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.06,\"display_unit\":\"mm\""
+        ",\"doc\":\"stitch regulator pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"regulator_y\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\""
+        ":\"feed rock shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_x\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.2,\"display_unit\":\"mm\",\"doc\":\"feed "
+        "rock shaft axis, y (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_y\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock sha"
+        "ft: rear arm to the fork pin P (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_p\",\"positi"
+        "ve\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0293,\"display_unit\":\"mm\",\"doc\":\"fe"
+        "ed rock shaft: upper arm to the feed-bar pin R (estimate)\",\"kind\":\"length\",\"name\":\"feed_"
+        "arm_r\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\""
+        ",\"doc\":\"lift rock shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_x\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1777,\"display_unit\":\"mm\",\"do"
+        "c\":\"lift rock shaft axis, y (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_y\",\"posit"
+        "ive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"l"
+        "ift rock shaft: arm to the roller L (estimate)\",\"kind\":\"length\",\"name\":\"lift_arm\",\"pos"
+        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"l"
+        "ift rock shaft: arm driven by the lift strap (estimate)\",\"kind\":\"length\",\"name\":\"lift_dr"
+        "ive_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0012,\"display_unit\":\""
+        "mm\",\"doc\":\"lift eccentric on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"lif"
+        "t_eccentricity\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.1802,\"display_u"
+        "nit\":\"mm\",\"doc\":\"lift strap, eccentric centre to the drive-arm pin (estimate)\",\"kind\":\""
+        "length\",\"name\":\"lift_strap\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
+        "02,\"display_unit\":\"mm\",\"doc\":\"feed dog tip along the feed bar from R (estimate)\",\"kind\""
+        ":\"length\",\"name\":\"dog_u\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.00"
+        "7,\"display_unit\":\"mm\",\"doc\":\"feed bar: its roller slot below the line R\\u2013feed dog (e"
+        "stimate)\",\"kind\":\"length\",\"name\":\"bar_slot_v\",\"positive\":true,\"role\":null,\"unit\":"
+        "\"m\"},{\"default\":-0.1705,\"display_unit\":\"mm\",\"doc\":\"throat plate surface, y (estimate:"
+        " the dog rises ~1 mm above it)\",\"kind\":\"length\",\"name\":\"plate_y\",\"positive\":false,\"r"
+        "ole\":\"throat_plate\",\"unit\":\"m\"},{\"default\":1.0471975511965976,\"display_unit\":\"deg\","
+        "\"doc\":\"phase of feed_cam relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_cam"
+        ".phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\""
+        "g\",\"doc\":\"mass of feed_cam\",\"kind\":\"mass\",\"name\":\"feed_cam.mass\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"kg\"},{\"default\":0.0015,\"display_unit\":\"mm\",\"doc\":\"centre of "
+        "mass of feed_cam, local u\",\"kind\":\"length\",\"name\":\"feed_cam.com_u\",\"positive\":false,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
+        " feed_cam, local v\",\"kind\":\"length\",\"name\":\"feed_cam.com_v\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inerti"
+        "a of feed_cam about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_cam.inertia\",\"po"
+        "sitive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":2.792526803190927,\"display_unit"
+        "\":\"deg\",\"doc\":\"phase of lift_eccentric relative to the shaft angle\",\"kind\":\"angle\",\""
+        "name\":\"lift_eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":"
+        "0.0,\"display_unit\":\"g\",\"doc\":\"mass of lift_eccentric\",\"kind\":\"mass\",\"name\":\"lift_"
+        "eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_un"
+        "it\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local u\",\"kind\":\"length\",\"name\":\""
+        "lift_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"displ"
+        "ay_unit\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local v\",\"kind\":\"length\",\"nam"
+        "e\":\"lift_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_eccentric about its centre of mas"
+        "s\",\"kind\":\"inertia\",\"name\":\"lift_eccentric.inertia\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of regulator\",\"kind"
+        "\":\"mass\",\"name\":\"regulator.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"def"
+        "ault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local u\",\"kind\":\"l"
+        "ength\",\"name\":\"regulator.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
+        "\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local v\",\"kind\":\"lengt"
+        "h\",\"name\":\"regulator.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0"
+        ".0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of regulator about its centre of mas"
+        "s\",\"kind\":\"inertia\",\"name\":\"regulator.inertia\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of feed_fork\",\"kind\":\""
+        "mass\",\"name\":\"feed_fork.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
+        ":0.00012,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_fork about its centre "
+        "of mass\",\"kind\":\"inertia\",\"name\":\"feed_fork.inertia\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of stitch_block\",\""
+        "kind\":\"mass\",\"name\":\"stitch_block.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"}"
+        ",{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local u\",\""
+        "kind\":\"length\",\"name\":\"stitch_block.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local v\",\""
+        "kind\":\"length\",\"name\":\"stitch_block.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of stitch_block ab"
+        "out its centre of mass\",\"kind\":\"inertia\",\"name\":\"stitch_block.inertia\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.04,\"display_unit\":\"g\",\"doc\":\"mass o"
+        "f feed_rock_shaft\",\"kind\":\"mass\",\"name\":\"feed_rock_shaft.mass\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"kg\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
+        " feed_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_u\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre "
+        "of mass of feed_rock_shaft, local v\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_v\",\"p"
+        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\""
+        "doc\":\"moment of inertia of feed_rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"n"
+        "ame\":\"feed_rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"defa"
+        "ult\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of feed_bar\",\"kind\":\"mass\",\"name\":\"fee"
+        "d_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit"
+        "\":\"mm\",\"doc\":\"centre of mass of feed_bar, local u\",\"kind\":\"length\",\"name\":\"feed_ba"
+        "r.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.003,\"display_unit\":"
+        "\"mm\",\"doc\":\"centre of mass of feed_bar, local v\",\"kind\":\"length\",\"name\":\"feed_bar.c"
+        "om_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg"
+        "*m**2\",\"doc\":\"moment of inertia of feed_bar about its centre of mass\",\"kind\":\"inertia\","
+        "\"name\":\"feed_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\""
+        ":0.03,\"display_unit\":\"g\",\"doc\":\"mass of lift_rock_shaft\",\"kind\":\"mass\",\"name\":\"li"
+        "ft_rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"displa"
+        "y_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local u\",\"kind\":\"length\",\"nam"
+        "e\":\"lift_rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,"
+        "\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local v\",\"kind\":\"length"
+        "\",\"name\":\"lift_rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defaul"
+        "t\":3e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_rock_shaft about its "
+        "centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_rock_shaft.inertia\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of li"
+        "ft_strap\",\"kind\":\"mass\",\"name\":\"lift_strap.mass\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"kg\"},{\"default\":3e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_"
+        "strap about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_strap.inertia\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\""
+        ",\"ay\"],\"points\":[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (on the line through R: lifti"
+        "ng it does not move it sideways)\",\"name\":\"feed_dog\",\"offset\":0,\"role\":\"feed_dog\"},{\""
+        "body\":\"feed_fork\",\"doc\":\"feed fork on the cam centre line\",\"name\":\"fork_top\",\"offset"
+        "\":6,\"role\":null},{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in the stitch block\",\"name\":"
+        "\"stitch_pin\",\"offset\":12,\"role\":null},{\"body\":\"lift_rock_shaft\",\"doc\":\"lift roller "
+        "L in the feed bar\",\"name\":\"lift_roller\",\"offset\":18,\"role\":null}],\"reactions\":[{\"a\""
+        ":\"ground\",\"b\":\"feed_cam\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute"
+        "\",\"name\":\"feed_cam.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"column"
+        "s\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"lift_eccentric.pivot\",\""
+        "offset\":2},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,"
+        "\"kind\":\"revolute\",\"name\":\"regulator.pivot\",\"offset\":4},{\"a\":\"regulator\",\"b\":\"st"
+        "itch_block\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"nam"
+        "e\":\"stitch_block.guide\",\"offset\":6},{\"a\":\"feed_cam\",\"b\":\"feed_fork\",\"columns\":[\""
+        "normal\"],\"grounded\":false,\"kind\":\"cam\",\"name\":\"cam\",\"offset\":8},{\"a\":\"ground\",\""
+        "b\":\"feed_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"na"
+        "me\":\"O_feed\",\"offset\":9},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_fork\",\"columns\":[\"fx\""
+        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"P\",\"offset\":11},{\"a\":\"feed_fo"
+        "rk\",\"b\":\"stitch_block\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\""
+        ",\"name\":\"Q\",\"offset\":13},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_bar\",\"columns\":[\"fx\""
+        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"R\",\"offset\":15},{\"a\":\"ground\""
+        ",\"b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\""
+        "name\":\"O_lift\",\"offset\":17},{\"a\":\"lift_eccentric\",\"b\":\"lift_strap\",\"columns\":[\"f"
+        "x\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"S\",\"offset\":19},{\"a\":\"lift"
+        "_strap\",\"b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"rev"
+        "olute\",\"name\":\"T\",\"offset\":21},{\"a\":\"feed_bar\",\"b\":\"lift_rock_shaft\",\"columns\":"
+        "[\"normal\"],\"grounded\":false,\"kind\":\"slot\",\"name\":\"L\",\"offset\":23},{\"a\":\"ground\""
+        ",\"b\":\"feed_cam\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"dr"
+        "ive\",\"name\":\"feed_cam.drive\",\"offset\":24,\"sense\":1},{\"a\":\"ground\",\"b\":\"lift_ecce"
+        "ntric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name"
+        "\":\"lift_eccentric.drive\",\"offset\":25,\"sense\":1},{\"a\":\"ground\",\"b\":\"regulator\",\"c"
+        "olumns\":[\"torque\"],\"grounded\":true,\"input\":\"regulator\",\"kind\":\"drive\",\"name\":\"re"
+        "gulator.drive\",\"offset\":26,\"sense\":1}],\"roles\":{\"feed_bar\":{\"kind\":\"body\",\"name\":"
+        "\"feed_bar\"},\"feed_cam\":{\"kind\":\"body\",\"name\":\"feed_cam\"},\"feed_dog\":{\"kind\":\"po"
+        "int\",\"name\":\"feed_dog\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"regulator\"},\""
+        "throat_plate\":{\"kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":112,\"nbran"
+        "ch\":0,\"nc\":144,\"nf\":27,\"nfo\":43,\"nload\":17,\"nobs\":106,\"np\":53,\"nq\":6,\"nx\":2}}"
         ;
 }

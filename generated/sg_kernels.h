@@ -11,6 +11,7 @@ void sg_needle_bar_residual(const double *q, const double *cq, const double *x, 
 int sg_needle_bar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
 int sg_needle_bar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_needle_bar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 const sg_mechanism *sg_needle_bar(void);
 const char *sg_needle_bar_manifest(void);
 
@@ -21,6 +22,7 @@ void sg_take_up_residual(const double *q, const double *cq, const double *x, con
 int sg_take_up_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
 int sg_take_up_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_take_up_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+void sg_take_up_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 const sg_mechanism *sg_take_up(void);
 const char *sg_take_up_manifest(void);
 
@@ -31,6 +33,7 @@ void sg_hook_drive_residual(const double *q, const double *cq, const double *x, 
 int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
 int sg_hook_drive_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_hook_drive_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 const sg_mechanism *sg_hook_drive(void);
 const char *sg_hook_drive_manifest(void);
 
@@ -40,6 +43,7 @@ void sg_feed_residual(const double *q, const double *cq, const double *x, const 
 int sg_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
 int sg_feed_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_feed_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+void sg_feed_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 const sg_mechanism *sg_feed(void);
 const char *sg_feed_manifest(void);
 

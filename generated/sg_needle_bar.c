@@ -264,6 +264,46 @@ void sg_needle_bar_force_matrix(const double *q, const double *cq, const double 
     b[8] = c[28]*obs[38] + c[29]*ld[2] + c[30]*ld[3] + c[30]*ld[5] + c[31]*ld[4] - ld[8];
 }
 
+/* sg_needle_bar_anchors -- Total ops: 24 */
+void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)x;
+    const double t0 = c[1]*cx[0] + c[2]*cx[1];
+    const double t1 = c[0]*t0;
+    const double t2 = c[1]*cx[1] + c[3]*cx[0];
+    const double t3 = c[0]*t2;
+    out[0] = 0.0;
+    out[1] = 0.0;
+    out[2] = 0.0;
+    out[3] = 0.0;
+    out[4] = c[5];
+    out[5] = 0.0;
+    out[6] = 0.0;
+    out[7] = 1.0;
+    out[8] = c[5];
+    out[9] = q[0];
+    out[10] = t1;
+    out[11] = t3;
+    out[12] = t1;
+    out[13] = t3;
+    out[14] = c[4]*cq[2] + t1;
+    out[15] = c[4]*cq[3] + t3;
+    out[16] = c[5];
+    out[17] = q[0];
+    out[18] = t1;
+    out[19] = t3;
+    out[20] = c[5];
+    out[21] = q[0];
+    out[22] = c[5];
+    out[23] = c[10] + q[0];
+    out[24] = c[12]*t0 + c[13]*t2;
+    out[25] = c[12]*t2 + c[14]*t0;
+    out[26] = c[16]*cq[2] + t1;
+    out[27] = c[16]*cq[3] + t3;
+    out[28] = c[18];
+    out[29] = c[19] + q[0];
+}
+
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };
 
 static const sg_mechanism sg_needle_bar_descriptor = {
@@ -284,6 +324,7 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .motion = sg_needle_bar_motion,
     .forces = sg_needle_bar_forces,
     .force_matrix = sg_needle_bar_force_matrix,
+    .anchors = sg_needle_bar_anchors,
 };
 
 const sg_mechanism *sg_needle_bar(void)
@@ -294,112 +335,126 @@ const sg_mechanism *sg_needle_bar(void)
 const char *sg_needle_bar_manifest(void)
 {
     return
-        "{\"bodies\":[{\"doc\":\"needle-bar crank on the upper shaft\",\"kind\":\"driven\",\"name\":\"cra"
-        "nk\",\"offset\":18,\"role\":\"needle_crank\"},{\"doc\":\"needle-bar link \\u5c0f\\u8fde\\u6746 ("
-        "part 13)\",\"kind\":\"link\",\"name\":\"rod\",\"offset\":27,\"role\":\"needle_rod\"},{\"doc\":\""
-        "needle bar with clamp and needle \\u9488\\u6746\\u7ec4\\u4ef6 (part 14)\",\"kind\":\"slider\",\""
-        "name\":\"needle_bar\",\"offset\":36,\"role\":\"needle_bar\"}],\"body_fields\":[\"angle\",\"omega"
-        "\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"d"
-        "efault\":-1,\"joint\":\"C\",\"kind\":\"rrp\",\"meaning\":\"+1: the larger travel of needle_bar a"
-        "t joint C\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\"],\"coords\":[{\"guess\":-0.04,\""
-        "name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":-1.5707963267948966,\"name\":\"rod.angle"
-        "\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Needle-bar mechanism \\u523"
-        "a\\u5e03\\u673a\\u6784: upper-shaft crank \\u2192 needle-bar link \\u5c0f\\u8fde\\u6746 13 \\u21"
-        "92 needle bar \\u9488\\u6746 14.\\n\\nA crank-slider with offset (seed 000 \\u00a7\\u4e00(\\u4e0"
-        "0)1 and fig. 1-6; seed 002 fig. 1: A crank centre, B crank pin,\\nC needle-bar pin). Frame: orig"
-        "in on the upper-shaft axis A, x horizontal, y up; the needle bar slides on\\nthe vertical line x"
-        " = offset, its travel s measured upward from the shaft's horizontal (s = y of C).\\nCrank angle "
-        "= shaft angle + phase, counter-clockwise from +x (the needle is highest near phi = 90\\u00b0).\\n"
-        "\\nDimensions: crank 16.7 mm is seed 002's industrial crank (its stroke 33.4 mm is within the 29"
-        "\\u201335 mm of\\nindustrial and household machines). The link length, offset, masses and inerti"
-        "as are estimates (the\\nseeds' tables of them are not in the text we have).\",\"force_blocks\":["
-        "1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"u"
-        "nit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar.guide.fy\""
-        ",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\""
-        "},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\""
-        "name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"}],\"force_ro"
-        "ws\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\"needle_bar.x"
-        "\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\""
-        ",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":"
-        "\"rad\"}],\"kernels\":{\"sg_needle_bar_closed\":{\"ops\":15},\"sg_needle_bar_constants\":{\"ops\""
-        ":31},\"sg_needle_bar_force_matrix\":{\"ops\":65},\"sg_needle_bar_forces\":{\"ops\":136},\"sg_nee"
-        "dle_bar_motion\":{\"ops\":78},\"sg_needle_bar_residual\":{\"ops\":16}},\"loads\":[{\"body\":\"cr"
-        "ank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"na"
-        "me\":\"crank_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"link_pin\"},{\"body"
-        "\":\"needle_bar\",\"component\":\"fy\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"compone"
-        "nt\":\"fx\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"ne"
-        "edle_eye\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"rod\",\""
-        "component\":\"torque\",\"name\":\"rod\"},{\"body\":\"needle_bar\",\"component\":\"torque\",\"nam"
-        "e\":\"needle_bar\"}],\"name\":\"needle_bar\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\""
-        ":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},"
-        "{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.x\",\"unit\":\"m\"},{\"name"
-        "\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"link_"
-        "pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin"
-        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\""
-        ",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"u"
-        "nit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit"
-        "\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"uni"
-        "t\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"}"
-        ",{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},{\"n"
-        "ame\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"na"
-        "me\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.com.x"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\","
-        "\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.an"
-        "gle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle"
-        "_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"need"
-        "le_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name"
-        "\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0167,\"display_unit\""
-        ":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u00a73)\",\"kind\":\"length\",\"name\":\"crank\",\""
-        "positive\":true,\"role\":\"needle_crank_radius\",\"unit\":\"m\"},{\"default\":0.05,\"display_uni"
-        "t\":\"mm\",\"doc\":\"needle-bar link BC, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\""
-        "rod\",\"positive\":true,\"role\":\"needle_rod_length\",\"unit\":\"m\"},{\"default\":0.0,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"horizontal offset of the needle-bar axis from the shaft axis\",\"kind\""
-        ":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":\"needle_bar_offset\",\"unit\":\"m\""
-        "},{\"default\":0.062,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link pin C along the"
-        " bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":true,\"role\":null"
-        ",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to "
-        "the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\""
-        "unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mas"
-        "s\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\""
-        "display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":"
-        "\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit"
-        "\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_"
-        "v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2"
-        "\",\"doc\":\"moment of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\""
-        ":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"d"
-        "isplay_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":2.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":"
-        "\"moment of inertia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rod.inerti"
-        "a\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\""
-        "g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":f"
-        "alse,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre "
-        "of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of"
-        " mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":fa"
-        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"mo"
-        "ment of inertia of needle_bar about its centre of mass\",\"kind\":\"inertia\",\"name\":\"needle_"
-        "bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\""
-        "y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\""
-        ":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle-bar link pi"
-        "n C\",\"name\":\"link_pin\",\"offset\":6,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needl"
-        "e eye\",\"name\":\"needle_eye\",\"offset\":12,\"role\":\"needle_eye\"}],\"reactions\":[{\"a\":\""
-        "ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"n"
-        "ame\":\"crank.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal"
-        "\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\""
-        ":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"rev"
-        "olute\",\"name\":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"f"
-        "y\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b"
-        "\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\""
-        "name\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\""
-        "name\":\"needle_bar\"},\"needle_bar_offset\":{\"kind\":\"param\",\"name\":\"offset\"},\"needle_c"
-        "rank\":{\"kind\":\"body\",\"name\":\"crank\"},\"needle_crank_radius\":{\"kind\":\"param\",\"name"
-        "\":\"crank\"},\"needle_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"needle_rod\":{\"kind"
-        "\":\"body\",\"name\":\"rod\"},\"needle_rod_length\":{\"kind\":\"param\",\"name\":\"rod\"}},\"siz"
-        "es\":{\"nbranch\":1,\"nc\":42,\"nf\":9,\"nfo\":19,\"nload\":9,\"nobs\":45,\"np\":15,\"nq\":2,\"n"
-        "x\":1}}"
+        "{\"anchors\":[{\"body\":\"ground\",\"joint\":\"crank.pivot\",\"kind\":\"joint\",\"name\":\"crank"
+        ".pivot@ground\"},{\"body\":\"crank\",\"joint\":\"crank.pivot\",\"kind\":\"joint\",\"name\":\"cra"
+        "nk.pivot@crank\"},{\"body\":\"ground\",\"joint\":\"needle_bar.guide\",\"kind\":\"guide\",\"name\""
+        ":\"needle_bar.guide@ground\"},{\"body\":\"ground\",\"joint\":\"needle_bar.guide\",\"kind\":\"gui"
+        "de_direction\",\"name\":\"needle_bar.guide.direction\"},{\"body\":\"needle_bar\",\"joint\":\"nee"
+        "dle_bar.guide\",\"kind\":\"joint\",\"name\":\"needle_bar.guide@needle_bar\"},{\"body\":\"crank\""
+        ",\"joint\":\"B\",\"kind\":\"joint\",\"name\":\"B@crank\"},{\"body\":\"rod\",\"joint\":\"B\",\"ki"
+        "nd\":\"joint\",\"name\":\"B@rod\"},{\"body\":\"rod\",\"joint\":\"C\",\"kind\":\"joint\",\"name\""
+        ":\"C@rod\"},{\"body\":\"needle_bar\",\"joint\":\"C\",\"kind\":\"joint\",\"name\":\"C@needle_bar\""
+        "},{\"body\":\"crank\",\"joint\":null,\"kind\":\"point\",\"name\":\"crank_pin\"},{\"body\":\"need"
+        "le_bar\",\"joint\":null,\"kind\":\"point\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"joi"
+        "nt\":null,\"kind\":\"point\",\"name\":\"needle_eye\"},{\"body\":\"crank\",\"joint\":null,\"kind\""
+        ":\"com\",\"name\":\"crank.com\"},{\"body\":\"rod\",\"joint\":null,\"kind\":\"com\",\"name\":\"ro"
+        "d.com\"},{\"body\":\"needle_bar\",\"joint\":null,\"kind\":\"com\",\"name\":\"needle_bar.com\"}],"
+        "\"arcs\":[],\"bodies\":[{\"doc\":\"needle-bar crank on the upper shaft\",\"kind\":\"driven\",\"n"
+        "ame\":\"crank\",\"offset\":18,\"role\":\"needle_crank\"},{\"doc\":\"needle-bar link \\u5c0f\\u8f"
+        "de\\u6746 (part 13)\",\"kind\":\"link\",\"name\":\"rod\",\"offset\":27,\"role\":\"needle_rod\"},"
+        "{\"doc\":\"needle bar with clamp and needle \\u9488\\u6746\\u7ec4\\u4ef6 (part 14)\",\"kind\":\""
+        "slider\",\"name\":\"needle_bar\",\"offset\":36,\"role\":\"needle_bar\"}],\"body_fields\":[\"angl"
+        "e\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branc"
+        "hes\":[{\"default\":-1,\"joint\":\"C\",\"kind\":\"rrp\",\"meaning\":\"+1: the larger travel of n"
+        "eedle_bar at joint C\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\"],\"coords\":[{\"guess"
+        "\":-0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":-1.5707963267948966,\"name\":"
+        "\"rod.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Needle-bar mecha"
+        "nism \\u523a\\u5e03\\u673a\\u6784: upper-shaft crank \\u2192 needle-bar link \\u5c0f\\u8fde\\u67"
+        "46 13 \\u2192 needle bar \\u9488\\u6746 14.\\n\\nA crank-slider with offset (seed 000 \\u00a7\\u"
+        "4e00(\\u4e00)1 and fig. 1-6; seed 002 fig. 1: A crank centre, B crank pin,\\nC needle-bar pin). "
+        "Frame: origin on the upper-shaft axis A, x horizontal, y up; the needle bar slides on\\nthe vert"
+        "ical line x = offset, its travel s measured upward from the shaft's horizontal (s = y of C).\\nC"
+        "rank angle = shaft angle + phase, counter-clockwise from +x (the needle is highest near phi = 90"
+        "\\u00b0).\\n\\nDimensions: crank 16.7 mm is seed 002's industrial crank (its stroke 33.4 mm is w"
+        "ithin the 29\\u201335 mm of\\nindustrial and household machines). The link length, offset, masse"
+        "s and inertias are estimates (the\\nseeds' tables of them are not in the text we have).\",\"forc"
+        "e_blocks\":[1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft"
+        ".power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_ba"
+        "r.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\""
+        "unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit"
+        "\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\""
+        "}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\""
+        "needle_bar.x\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_un"
+        "it\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":nu"
+        "ll,\"unit\":\"rad\"}],\"kernels\":{\"sg_needle_bar_anchors\":{\"ops\":24},\"sg_needle_bar_closed"
+        "\":{\"ops\":15},\"sg_needle_bar_constants\":{\"ops\":31},\"sg_needle_bar_force_matrix\":{\"ops\""
+        ":65},\"sg_needle_bar_forces\":{\"ops\":136},\"sg_needle_bar_motion\":{\"ops\":78},\"sg_needle_ba"
+        "r_residual\":{\"ops\":16}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_"
+        "pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"needle_bar\""
+        ",\"component\":\"fx\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"nam"
+        "e\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\"body"
+        "\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"crank\",\"component\""
+        ":\"torque\",\"name\":\"crank\"},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"rod\"},{\""
+        "body\":\"needle_bar\",\"component\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"needle_bar\""
+        ",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\""
+        "m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"link_pin.x\",\"unit\":\"m\"},{\"name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\""
+        "link_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_p"
+        "in.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle"
+        "_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\","
+        "\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\","
+        "\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\""
+        "unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\""
+        ":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s"
+        "^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\""
+        "name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":"
+        "\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_"
+        "d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\","
+        "\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angl"
+        "e_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"ne"
+        "edle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"need"
+        "le_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\""
+        "}],\"params\":[{\"default\":0.0167,\"display_unit\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u"
+        "00a73)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":\"needle_crank_radius"
+        "\",\"unit\":\"m\"},{\"default\":0.05,\"display_unit\":\"mm\",\"doc\":\"needle-bar link BC, pin t"
+        "o pin (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":\"needle_rod_"
+        "length\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"horizontal offset of"
+        " the needle-bar axis from the shaft axis\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":"
+        "false,\"role\":\"needle_bar_offset\",\"unit\":\"m\"},{\"default\":0.062,\"display_unit\":\"mm\","
+        "\"doc\":\"needle eye below the link pin C along the bar (estimate)\",\"kind\":\"length\",\"name\""
+        ":\"eye_below_pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_un"
+        "it\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":"
+        "\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_un"
+        "it\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":fals"
+        "e,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
+        "ss of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank,"
+        " local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about"
+        " its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\""
+        "kind\":\"mass\",\"name\":\"rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"defau"
+        "lt\":2.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rod about its centre of"
+        " mass\",\"kind\":\"inertia\",\"name\":\"rod.inertia\",\"positive\":false,\"role\":null,\"unit\":"
+        "\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\""
+        "mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default"
+        "\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"le"
+        "ngth\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
+        "\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"leng"
+        "th\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":1.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre"
+        " of mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{"
+        "\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\""
+        "body\":\"needle_bar\",\"doc\":\"needle-bar link pin C\",\"name\":\"link_pin\",\"offset\":6,\"rol"
+        "e\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":12,"
+        "\"role\":\"needle_eye\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\""
+        "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"gr"
+        "ound\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"pri"
+        "smatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":"
+        "[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"r"
+        "od\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\""
+        "name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded"
+        "\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1"
+        "}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_bar_offset\":{"
+        "\"kind\":\"param\",\"name\":\"offset\"},\"needle_crank\":{\"kind\":\"body\",\"name\":\"crank\"},"
+        "\"needle_crank_radius\":{\"kind\":\"param\",\"name\":\"crank\"},\"needle_eye\":{\"kind\":\"point"
+        "\",\"name\":\"needle_eye\"},\"needle_rod\":{\"kind\":\"body\",\"name\":\"rod\"},\"needle_rod_len"
+        "gth\":{\"kind\":\"param\",\"name\":\"rod\"}},\"sizes\":{\"nanchor_out\":30,\"nbranch\":1,\"nc\":"
+        "42,\"nf\":9,\"nfo\":19,\"nload\":9,\"nobs\":45,\"np\":15,\"nq\":2,\"nx\":1}}"
         ;
 }

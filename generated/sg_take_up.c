@@ -304,6 +304,47 @@ void sg_take_up_force_matrix(const double *q, const double *cq, const double *x,
     b[8] = c[35]*obs[38] + ld[2]*t4 + ld[3]*t5 - ld[8];
 }
 
+/* sg_take_up_anchors -- Total ops: 42 */
+void sg_take_up_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)q;
+    (void)x;
+    const double t0 = c[1]*cx[0] + c[2]*cx[1];
+    const double t1 = c[0]*t0;
+    const double t2 = c[1]*cx[1] + c[3]*cx[0];
+    const double t3 = c[0]*t2;
+    const double t4 = c[4] + c[7]*cq[0];
+    const double t5 = c[5] + c[7]*cq[1];
+    out[0] = 0.0;
+    out[1] = 0.0;
+    out[2] = 0.0;
+    out[3] = 0.0;
+    out[4] = t1;
+    out[5] = t3;
+    out[6] = t1;
+    out[7] = t3;
+    out[8] = c[4];
+    out[9] = c[5];
+    out[10] = c[4];
+    out[11] = c[5];
+    out[12] = c[6]*cq[2] + t1;
+    out[13] = c[6]*cq[3] + t3;
+    out[14] = t4;
+    out[15] = t5;
+    out[16] = t1;
+    out[17] = t3;
+    out[18] = t4;
+    out[19] = t5;
+    out[20] = c[15]*cq[3] + c[16]*cq[2] + t1;
+    out[21] = c[16]*cq[3] + c[17]*cq[2] + t3;
+    out[22] = c[20]*t0 + c[21]*t2;
+    out[23] = c[20]*t2 + c[22]*t0;
+    out[24] = c[24]*cq[2] + c[25]*cq[3] + t1;
+    out[25] = c[24]*cq[3] + c[26]*cq[2] + t3;
+    out[26] = c[28]*cq[0] + c[4];
+    out[27] = c[28]*cq[1] + c[5];
+}
+
 static const unsigned char sg_take_up_coord_is_angle[2] = { 1, 1 };
 
 static const sg_mechanism sg_take_up_descriptor = {
@@ -324,6 +365,7 @@ static const sg_mechanism sg_take_up_descriptor = {
     .motion = sg_take_up_motion,
     .forces = sg_take_up_forces,
     .force_matrix = sg_take_up_force_matrix,
+    .anchors = sg_take_up_anchors,
 };
 
 const sg_mechanism *sg_take_up(void)
@@ -334,111 +376,124 @@ const sg_mechanism *sg_take_up(void)
 const char *sg_take_up_manifest(void)
 {
     return
-        "{\"bodies\":[{\"doc\":\"take-up crank on the upper shaft\",\"kind\":\"driven\",\"name\":\"crank\""
-        ",\"offset\":18,\"role\":null},{\"doc\":\"take-up lever \\u6311\\u7ebf\\u6746 (part 16)\",\"kind\""
-        ":\"link\",\"name\":\"lever\",\"offset\":27,\"role\":\"take_up_lever\"},{\"doc\":\"take-up rocker"
-        " \\u6311\\u7ebf\\u6447\\u6746 (part 15)\",\"kind\":\"link\",\"name\":\"rocker\",\"offset\":36,\""
-        "role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"co"
-        "m_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"me"
-        "aning\":\"+1: joint C left of the line from B to D\"}],\"closed_form\":true,\"closure\":[\"C.x\""
-        ",\"C.y\"],\"coords\":[{\"guess\":1.7453292519943295,\"name\":\"rocker.angle\",\"unit\":\"rad\"},"
-        "{\"guess\":1.0471975511965976,\"name\":\"lever.angle\",\"unit\":\"rad\"}],\"default_speed\":523."
-        "5987755982989,\"doc\":\"Thread take-up mechanism \\u6311\\u7ebf\\u673a\\u6784: upper-shaft crank"
-        " AB \\u2192 take-up lever \\u6311\\u7ebf\\u6746 BCE (16) \\u2192 rocker CD \\u6311\\u7ebf\\u6447"
-        "\\u6746 (15).\\n\\nA crank-rocker four-bar with the thread eye E on the coupler triangle BCE (se"
-        "ed 000 group \\u6311\\u7ebf; seed 004\\n\\u00a71.1, figs. 1-2). Frame as seed 004 with its (Z, X"
-        ") taken as our (x, y): A at the origin, D = (26, \\u221220) mm;\\nthe crank angle runs from +x t"
-        "owards +y. E is placed from the triangle's sides by the law of cosines,\\nB\\u2192E at \\u2220CB"
-        "E from B\\u2192C (seed 004 eq. for \\u03c6BE, with \\u03c6BC in place of the paper's misprinted "
-        "\\u03c6CD).\\nSeed 004 runs the crank at n = 5000 r/min.\\n\\nThe link lengths of seed 004's tab"
-        "le 1 are not in the text: AB, BC, CD, BE, CE are estimates that make a\\nGrashof crank-rocker (1"
-        "0 + 38 \\u2264 26 + 32.8) with the willow-leaf eye path the paper describes.\",\"force_blocks\":"
-        "[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\""
-        "unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},"
-        "{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"n"
-        "ame\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"}],\"force_row"
-        "s\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"lever.x\",\"lever.y\",\"lever.moment\",\"rocker."
-        "x\",\"rocker.y\",\"rocker.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\""
-        ":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}"
-        "],\"kernels\":{\"sg_take_up_closed\":{\"ops\":22},\"sg_take_up_constants\":{\"ops\":47},\"sg_tak"
-        "e_up_force_matrix\":{\"ops\":84},\"sg_take_up_forces\":{\"ops\":151},\"sg_take_up_motion\":{\"op"
-        "s\":139},\"sg_take_up_residual\":{\"ops\":20}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx"
-        "\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"b"
-        "ody\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"rocker\",\"component\""
-        ":\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"thread_eye\""
-        "},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\"compon"
-        "ent\":\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lev"
-        "er\"},{\"body\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\"name\":\"take_up\",\""
-        "observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\""
-        "},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\"name\":\""
-        "rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"ro"
-        "cker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":"
-        "\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\"thread_e"
-        "ye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye"
-        ".x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank."
-        "angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angl"
-        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\""
-        ",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"uni"
-        "t\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"uni"
-        "t\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":"
-        "\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\""
-        ":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},"
-        "{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\""
-        "name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/s^2\""
-        "},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\"name\""
-        ":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],\"param"
-        "s\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, horizontal (seed 004"
-        " \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\":false,\"role\":nul"
-        "l,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed 004 \\u"
-        "00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.03"
-        "8,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name"
-        "\":\"lever_bc\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.02600000000000000"
-        "2,\"display_unit\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker"
-        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\""
-        "doc\":\"take-up lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\",\""
-        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\""
-        ":\"take-up lever C to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"posi"
-        "tive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"ph"
-        "ase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass"
-        " of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":"
-        "\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\""
-        "kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
-        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"len"
-        "gth\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
-        ",\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\""
-        "kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**"
-        "2\"},{\"default\":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\""
-        ":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
-        ":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\","
-        "\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"d"
-        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\""
-        "lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit"
-        "\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inerti"
-        "a\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
-        "\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.m"
-        "ass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg"
-        "*m**2\",\"doc\":\"moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\""
-        "name\":\"rocker.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields"
-        "\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin"
-        " B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rocker\",\"doc\":\"lever-roc"
-        "ker pin C\",\"name\":\"rocker_pin\",\"offset\":6,\"role\":null},{\"body\":\"lever\",\"doc\":\"th"
-        "read eye E of the take-up lever\",\"name\":\"thread_eye\",\"offset\":12,\"role\":\"thread_eye\"}"
-        "],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true"
-        ",\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"crank\",\"b\":\"lever\",\""
-        "columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":2},"
-        "{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revo"
-        "lute\",\"name\":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\""
-        "],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":"
-        "\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"na"
-        "me\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"take_up_lever\":{\"kind\":\"body\","
-        "\"name\":\"lever\"},\"thread_eye\":{\"kind\":\"point\",\"name\":\"thread_eye\"}},\"sizes\":{\"nb"
-        "ranch\":1,\"nc\":52,\"nf\":9,\"nfo\":17,\"nload\":9,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1}}"
+        "{\"anchors\":[{\"body\":\"ground\",\"joint\":\"crank.pivot\",\"kind\":\"joint\",\"name\":\"crank"
+        ".pivot@ground\"},{\"body\":\"crank\",\"joint\":\"crank.pivot\",\"kind\":\"joint\",\"name\":\"cra"
+        "nk.pivot@crank\"},{\"body\":\"crank\",\"joint\":\"B\",\"kind\":\"joint\",\"name\":\"B@crank\"},{"
+        "\"body\":\"lever\",\"joint\":\"B\",\"kind\":\"joint\",\"name\":\"B@lever\"},{\"body\":\"ground\""
+        ",\"joint\":\"D\",\"kind\":\"joint\",\"name\":\"D@ground\"},{\"body\":\"rocker\",\"joint\":\"D\","
+        "\"kind\":\"joint\",\"name\":\"D@rocker\"},{\"body\":\"lever\",\"joint\":\"C\",\"kind\":\"joint\""
+        ",\"name\":\"C@lever\"},{\"body\":\"rocker\",\"joint\":\"C\",\"kind\":\"joint\",\"name\":\"C@rock"
+        "er\"},{\"body\":\"crank\",\"joint\":null,\"kind\":\"point\",\"name\":\"crank_pin\"},{\"body\":\""
+        "rocker\",\"joint\":null,\"kind\":\"point\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"joint\""
+        ":null,\"kind\":\"point\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\"joint\":null,\"kind\":\""
+        "com\",\"name\":\"crank.com\"},{\"body\":\"lever\",\"joint\":null,\"kind\":\"com\",\"name\":\"lev"
+        "er.com\"},{\"body\":\"rocker\",\"joint\":null,\"kind\":\"com\",\"name\":\"rocker.com\"}],\"arcs\""
+        ":[],\"bodies\":[{\"doc\":\"take-up crank on the upper shaft\",\"kind\":\"driven\",\"name\":\"cra"
+        "nk\",\"offset\":18,\"role\":null},{\"doc\":\"take-up lever \\u6311\\u7ebf\\u6746 (part 16)\",\"k"
+        "ind\":\"link\",\"name\":\"lever\",\"offset\":27,\"role\":\"take_up_lever\"},{\"doc\":\"take-up r"
+        "ocker \\u6311\\u7ebf\\u6447\\u6746 (part 15)\",\"kind\":\"link\",\"name\":\"rocker\",\"offset\":"
+        "36,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\""
+        ",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\""
+        ",\"meaning\":\"+1: joint C left of the line from B to D\"}],\"closed_form\":true,\"closure\":[\""
+        "C.x\",\"C.y\"],\"coords\":[{\"guess\":1.7453292519943295,\"name\":\"rocker.angle\",\"unit\":\"ra"
+        "d\"},{\"guess\":1.0471975511965976,\"name\":\"lever.angle\",\"unit\":\"rad\"}],\"default_speed\""
+        ":523.5987755982989,\"doc\":\"Thread take-up mechanism \\u6311\\u7ebf\\u673a\\u6784: upper-shaft "
+        "crank AB \\u2192 take-up lever \\u6311\\u7ebf\\u6746 BCE (16) \\u2192 rocker CD \\u6311\\u7ebf\\u"
+        "6447\\u6746 (15).\\n\\nA crank-rocker four-bar with the thread eye E on the coupler triangle BCE"
+        " (seed 000 group \\u6311\\u7ebf; seed 004\\n\\u00a71.1, figs. 1-2). Frame as seed 004 with its ("
+        "Z, X) taken as our (x, y): A at the origin, D = (26, \\u221220) mm;\\nthe crank angle runs from "
+        "+x towards +y. E is placed from the triangle's sides by the law of cosines,\\nB\\u2192E at \\u22"
+        "20CBE from B\\u2192C (seed 004 eq. for \\u03c6BE, with \\u03c6BC in place of the paper's misprin"
+        "ted \\u03c6CD).\\nSeed 004 runs the crank at n = 5000 r/min.\\n\\nThe link lengths of seed 004's"
+        " table 1 are not in the text: AB, BC, CD, BE, CE are estimates that make a\\nGrashof crank-rocke"
+        "r (10 + 38 \\u2264 26 + 32.8) with the willow-leaf eye path the paper describes.\",\"force_block"
+        "s\":[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\""
+        ",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\""
+        "},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\""
+        "name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"}],\"force_ro"
+        "ws\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"lever.x\",\"lever.y\",\"lever.moment\",\"rocker"
+        ".x\",\"rocker.y\",\"rocker.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc"
+        "\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\""
+        "}],\"kernels\":{\"sg_take_up_anchors\":{\"ops\":42},\"sg_take_up_closed\":{\"ops\":22},\"sg_take"
+        "_up_constants\":{\"ops\":47},\"sg_take_up_force_matrix\":{\"ops\":84},\"sg_take_up_forces\":{\"o"
+        "ps\":151},\"sg_take_up_motion\":{\"ops\":139},\"sg_take_up_residual\":{\"ops\":20}},\"loads\":[{"
+        "\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\""
+        ":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\""
+        "},{\"body\":\"rocker\",\"component\":\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"compo"
+        "nent\":\"fx\",\"name\":\"thread_eye\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"threa"
+        "d_eye\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\""
+        "component\":\"torque\",\"name\":\"lever\"},{\"body\":\"rocker\",\"component\":\"torque\",\"name\""
+        ":\"rocker\"}],\"name\":\"take_up\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\""
+        "name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"c"
+        "rank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocke"
+        "r_pin.y\",\"unit\":\"m\"},{\"name\":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin."
+        "y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin"
+        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\""
+        ",\"unit\":\"m\"},{\"name\":\"thread_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"u"
+        "nit\":\"m/s\"},{\"name\":\"thread_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit"
+        "\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"uni"
+        "t\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"}"
+        ",{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\""
+        "name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},"
+        "{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\""
+        "lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"leve"
+        "r.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"ro"
+        "cker.angle\",\"unit\":\"rad\"},{\"name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock"
+        "er.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocke"
+        "r.com.y\",\"unit\":\"m\"},{\"name\":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com."
+        "y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com"
+        ".y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm"
+        "\",\"doc\":\"D, horizontal (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot"
+        "_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\""
+        ",\"doc\":\"D, vertical (seed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"do"
+        "c\":\"crank AB (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":nu"
+        "ll,\"unit\":\"m\"},{\"default\":0.038,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to C (es"
+        "timate)\",\"kind\":\"length\",\"name\":\"lever_bc\",\"positive\":true,\"role\":null,\"unit\":\"m"
+        "\"},{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"rocker CD (estimate)\",\""
+        "kind\":\"length\",\"name\":\"rocker\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default"
+        "\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to thread eye E (estimate)\",\"kind\""
+        ":\"length\",\"name\":\"lever_be\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0"
+        ".022,\"display_unit\":\"mm\",\"doc\":\"take-up lever C to thread eye E (estimate)\",\"kind\":\"l"
+        "ength\",\"name\":\"lever_ce\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\""
+        ",\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\""
+        "display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"posit"
+        "ive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"ce"
+        "ntre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass"
+        " of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of "
+        "crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.009000000000000001,\"display_unit\":\"g\""
+        ",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg\"},{\"default\":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of le"
+        "ver, local u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"u"
+        "nit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local"
+        " v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its"
+        " centre of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\""
+        "kind\":\"mass\",\"name\":\"rocker.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"de"
+        "fault\":3e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rocker about its centr"
+        "e of mass\",\"kind\":\"inertia\",\"name\":\"rocker.inertia\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"b"
+        "ody\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"bo"
+        "dy\":\"rocker\",\"doc\":\"lever-rocker pin C\",\"name\":\"rocker_pin\",\"offset\":6,\"role\":nul"
+        "l},{\"body\":\"lever\",\"doc\":\"thread eye E of the take-up lever\",\"name\":\"thread_eye\",\"o"
+        "ffset\":12,\"role\":\"thread_eye\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\""
+        ":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},"
+        "{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revol"
+        "ute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\""
+        "],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\":\""
+        "rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"o"
+        "ffset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\""
+        ":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"t"
+        "ake_up_lever\":{\"kind\":\"body\",\"name\":\"lever\"},\"thread_eye\":{\"kind\":\"point\",\"name\""
+        ":\"thread_eye\"}},\"sizes\":{\"nanchor_out\":28,\"nbranch\":1,\"nc\":52,\"nf\":9,\"nfo\":17,\"nl"
+        "oad\":9,\"nobs\":45,\"np\":18,\"nq\":2,\"nx\":1}}"
         ;
 }

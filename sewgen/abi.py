@@ -71,6 +71,9 @@ KERNELS = {
     "force_matrix": ("void", _Q + (("const double *", "c"), ("const double *", "obs"), ("const double *", "gv"),
                                    ("const double *", "ld"), ("double *", "A"), ("double *", "b")),
                      "A (nf x nf, row-major) and b of A f = b, for inspection"),
+    "anchors": ("void", _Q + (("const double *", "c"), ("double *", "out")),
+                "world x, y of every drawing anchor (manifest \"anchors\"), then the cam arcs' radius and world "
+                "normal sector (manifest \"arcs\"): nanchor_out values, for pictures of any mechanism"),
 }
 
 #: Fields of ``sg_mechanism``, the descriptor every generated file fills (C type, name, meaning); the sizes'

@@ -377,6 +377,29 @@ class Mechanism:
             d("double *", self.constants(params)), d("double *", r), d("double *", jac))
         return r, jac
 
+    def anchors(self, q, x, params=None, constants: np.ndarray | None = None) -> np.ndarray:
+        """The drawing anchors at one position (sg_<name>_anchors): world x, y of every anchor of the description
+        (``description.anchors``; a "guide_direction" pair is a unit vector), then radius, world normal_from and
+        normal_to of every cam arc (``description.arcs``). ``q`` the coordinates of a solved position, ``x`` its
+        inputs (shaft angle, then held inputs); ``params`` by name or as the run's vector, or ``constants``
+        already computed (drawing many frames of one run)."""
+        d = self.description
+        nq, nx = len(d.coords), len(d.inputs)
+        qv = np.ascontiguousarray(q, dtype=np.float64)
+        xv = np.ascontiguousarray(x, dtype=np.float64)
+        if qv.shape != (nq,) or xv.shape != (nx,):
+            raise InputError(self.name, f"anchors need q of shape ({nq},) and x of shape ({nx},), got {qv.shape} "
+                                        f"and {xv.shape}")
+        if constants is None:
+            p = params if isinstance(params, np.ndarray) else self.param_vector(params)
+            constants = self._constants(p)
+        out = np.zeros(max(d.sizes["nanchor_out"], 1))
+        dp = self._ptr
+        getattr(self.lib, f"sg_{self.name}_anchors")(
+            dp("double *", qv), dp("double *", _cos_sin_pairs(qv)), dp("double *", xv), dp("double *", _cos_sin_pairs(xv)),
+            dp("double *", np.ascontiguousarray(constants, dtype=np.float64)), dp("double *", out))
+        return out[:d.sizes["nanchor_out"]]
+
     def force_matrix(self, motion: Motion, index: int = 0, *, params=None, held=None,
                      gravity=(0.0, -9.80665), load_row=None):
         """A and b of A f = b at position ``index`` of a solved ``motion`` (for inspection and checks).

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import jinja2
 
-from . import abi_header
+from . import abi_header, drawing
 from .dyads import split_into_dyads
 from .kernels import KernelSet
 from .kinematics import Kinematics
@@ -116,13 +116,16 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     prefix = f"sg_{mech.name}"
     ks = KernelSet(prefix, kin)
     kst = Kinetostatics(kin)
+    anchor_list, arc_list = drawing.anchors(kin)
+    anchor_out = drawing.outputs(anchor_list, arc_list)
     kernels = ([ks.closed(dyads)] if dyads is not None else []) + [ks.residual(), ks.motion(), ks.forces(kst),
-                                                                   ks.force_matrix(kst)]
+                                                                   ks.force_matrix(kst), ks.anchors(anchor_out)]
     kernels.insert(0, ks.constants_kernel())  # last to build: it evaluates what the others hoisted
     sizes = {"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
              "nbranch": len(dyads or []), "nc": len(ks.constants), "nf": len(kst.f),
-             "nfo": len(kst.f) + len(kst.outputs), "nload": len(kst.load_slots)}
+             "nfo": len(kst.f) + len(kst.outputs), "nload": len(kst.load_slots), "nanchor_out": len(anchor_out)}
     manifest = manifest_of(mech, kin, kst, dyads, kernels, sizes)
+    manifest.update(drawing.manifest(anchor_list, arc_list))
     text = json.dumps(manifest, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
     c_source = _TEMPLATES.get_template("mechanism.c.j2").render(
         mech={"name": mech.name,

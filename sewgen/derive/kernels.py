@@ -179,6 +179,14 @@ class KernelSet:
                       self._signature("residual"),
                       body, ops(e for _, e in repl) + ops(red))
 
+    def anchors(self, exprs: list) -> Kernel:
+        """World x, y of every drawing anchor, then the cam arcs' radii and normal sectors (derive.drawing)."""
+        pr = self.printer
+        repl, red = _cse(self.prepare(exprs))
+        body = _temps(pr, repl) + [f"out[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
+        body = _unused(body, "q", "cq", "x", "cx", "c") + body
+        return Kernel(f"{self.prefix}_anchors", self._signature("anchors"), body, ops(e for _, e in repl) + ops(red))
+
     def motion(self) -> Kernel:
         kin, pr, n = self.kin, self.printer, len(self.kin.q)
         jac = [kin.jac_q[i, j] for i in range(n) for j in range(n)]
