@@ -16,9 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ParameterError
-from .units import UnitError, to_si
-
 from .roles import FEED_DOG, STITCH_REGULATOR, THROAT_PLATE
+from .units import UnitError, to_si
 
 
 @dataclass(frozen=True)

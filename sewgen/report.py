@@ -1,8 +1,8 @@
 """The analysis report of a machine: CSV tables per group and for the machine, and summary.json.
 
 summary.json holds, for every quantity a designer checks (bearing loads, driving torque, shaking force, the
-shaking moment about the x, y and z axes, every joint reaction), the peak and the RMS over the revolution with the shaft angles where they
-occur; the whole machine's power-balance residual (``power_balance_residual``); the feed setting (stitch,
+shaking moment about the x, y and z axes, every joint reaction), the peak and the RMS over the revolution with
+the shaft angles where they occur; the whole machine's power-balance residual (``power_balance_residual``); the feed setting (stitch,
 regulator angle, dog travel and height above the plate) and the cam arc switches with the acceleration
 jump each implies.
 """
@@ -77,7 +77,8 @@ def summary(a, switches: dict | None = None) -> dict:
         "drive_power": _stat(a.drive_power, phi, "W"),
         "shaking_force": _stat(np.hypot(*a.shaking_force.T), phi, "N"),
         "shaking_moment": _stat(a.shaking_moment(), phi, "N*m"),
-        "shaking_moments_about_origin": {axis: _stat(v, phi, "N*m") for axis, v in zip("xyz", a.shaking_moments().T)},
+        "shaking_moments_about_origin": {axis: _stat(v, phi, "N*m")
+                                         for axis, v in zip("xyz", a.shaking_moments().T)},
         "groups": {},
     }
     for g in m.groups:
@@ -87,7 +88,8 @@ def summary(a, switches: dict | None = None) -> dict:
                  "joints": {n: _stat(fa.reaction(n).magnitude, phi, "N") for n in fa.reaction_names}}
         regulator = g.mechanism.description.role_name(STITCH_REGULATOR)
         if regulator is not None:
-            entry["regulator_deg"] = math.degrees(g.held.get(regulator, g.mechanism.description.input(regulator).default))
+            setting = g.held.get(regulator, g.mechanism.description.input(regulator).default)
+            entry["regulator_deg"] = math.degrees(setting)
             entry["holding_torque"] = _stat(fa.torque(regulator), phi, "N*m")
         if g.stitch is not None:
             entry["stitch_mm"] = g.stitch * 1e3
