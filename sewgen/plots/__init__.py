@@ -1,0 +1,100 @@
+"""Pictures of a whole-machine analysis for ``sewgen analyze MACHINE --out DIR``, drawn from the mechanisms'
+descriptions and roles — never from a catalog name — so a machine of the user's own gets the same pictures.
+
+One function per figure, ``name(analysis, path) -> Path``, taking a :class:`sewgen.machine.MachineAnalysis`
+and writing one PNG; beside each a ``draw_<name>(fig, analysis)`` that draws onto a given figure (for tests
+and notebooks; :func:`figure_size` gives the size the PNG uses). :func:`machine_gif` animates the machine over
+the sweep and :func:`draw_machine` draws one position of it; :func:`write_all` writes everything. Figures are
+``matplotlib.figure.Figure`` objects on the Agg canvas: nothing here touches pyplot or a caller's backend.
+Lengths are drawn in mm; abscissae are the machine's shaft angle φ.
+
+Modules, one job each: :mod:`.common` (figures, shaft-angle axes, group colours, role look-ups),
+:mod:`.geometry` (a mechanism's drawing from its description and the anchors kernel), :mod:`.drawing` (linkages
+on axes), :mod:`.animation` (the machine's panels and the GIF), :mod:`.background` (the GIF written by a forked
+process while the PNGs are drawn), :mod:`.paths` (trajectories, feed-dog stitch
+family), :mod:`.curves` (motion against the shaft angle), :mod:`.reactions` (bearing and joint polars, torque,
+shaking force and moments).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .animation import GIF_DPI, GIF_FPS, GIF_WIDTH, MachineView, draw_machine, machine_gif, machine_linkages
+from .background import BackgroundGif, can_fork
+from .common import DPI, PALETTE, new_figure, throat_plate_height, render
+from .curves import draw_motion, motion_rows, motion_size
+from .geometry import Linkage, linkage, linkage_of
+from .paths import (STITCHES_MM, draw_feed_dog_stitches, draw_trajectories, path_panels, stitches_size,
+                    trajectories_size)
+from .reactions import (draw_bearings_polar, draw_joint_reactions_polar, draw_shaking, draw_torque, joints_size,
+                        main_joints)
+
+#: Sizes (inches) of the figures whose size does not depend on the machine; :func:`figure_size` gives all.
+SIZES = {"bearings_polar.png": (12.0, 6.6), "torque.png": (11.0, 6.2), "shaking.png": (13.0, 7.0)}
+_SIZED = {"trajectories.png": trajectories_size, "feed_dog_stitches.png": stitches_size, "motion.png": motion_size,
+          "joint_reactions_polar.png": joints_size}
+
+
+def figure_size(name: str, analysis) -> tuple:
+    """The size (inches) of figure ``name`` for ``analysis``: a PNG is this times :data:`DPI` pixels."""
+    return _SIZED[name](analysis) if name in _SIZED else SIZES[name]
+
+
+def _png(name, draw):
+    def make(analysis, path):
+        return render(draw, analysis, path, figure_size(name, analysis))
+
+    make.__name__ = Path(name).stem
+    make.__doc__ = f"Write {name}: {draw.__doc__.splitlines()[0] if draw.__doc__ else ''}"
+    return make
+
+
+trajectories = _png("trajectories.png", draw_trajectories)
+feed_dog_stitches = _png("feed_dog_stitches.png", draw_feed_dog_stitches)
+motion = _png("motion.png", draw_motion)
+bearings_polar = _png("bearings_polar.png", draw_bearings_polar)
+joint_reactions_polar = _png("joint_reactions_polar.png", draw_joint_reactions_polar)
+torque = _png("torque.png", draw_torque)
+shaking = _png("shaking.png", draw_shaking)
+
+FIGURES = (("trajectories.png", trajectories), ("feed_dog_stitches.png", feed_dog_stitches), ("motion.png", motion),
+           ("bearings_polar.png", bearings_polar), ("joint_reactions_polar.png", joint_reactions_polar),
+           ("torque.png", torque), ("shaking.png", shaking))
+GIF = "machine.gif"
+
+
+def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool | None = None) -> list[Path]:
+    """Every figure (and the GIF unless ``gif=False``) into ``folder``; returns the paths written.
+    ``progress(message, done, total)`` is called before each file (done = files finished, total = files) and
+    every 8 frames of the GIF (done stays at the GIF's index). The GIF is written by a forked process while the
+    PNGs are drawn where that is safe (:func:`~sewgen.plots.background.can_fork`; ``parallel=False``: never)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    total = len(FIGURES) + bool(gif)
+    report = progress or (lambda message, done, total: None)
+    gif_progress = (lambda message, i, n: report(message, len(FIGURES), total))  # noqa: E731
+    out, background = [], None
+    links = machine_linkages(analysis) if gif else None  # built here: the geometry's errors raise here
+    if gif and (can_fork() if parallel is None else parallel):
+        background = BackgroundGif(analysis, folder / GIF, links)
+    try:
+        for k, (name, make) in enumerate(FIGURES):
+            report(name, k, total)
+            out.append(make(analysis, folder / name))
+        if background is not None:
+            out.append(background.wait(gif_progress))
+            background = None
+        elif gif:
+            out.append(machine_gif(analysis, folder / GIF, gif_progress, links=links))
+    finally:
+        if background is not None:  # a figure failed: stop the GIF
+            background.cancel()
+    return out
+
+
+__all__ = ["DPI", "FIGURES", "GIF", "GIF_DPI", "GIF_FPS", "GIF_WIDTH", "PALETTE", "SIZES", "STITCHES_MM",
+           "BackgroundGif", "Linkage", "MachineView", "bearings_polar", "can_fork", "draw_bearings_polar",
+           "draw_feed_dog_stitches", "draw_joint_reactions_polar", "draw_machine", "draw_motion", "draw_shaking",
+           "draw_torque", "draw_trajectories", "feed_dog_stitches", "figure_size", "joint_reactions_polar", "linkage",
+           "linkage_of", "machine_gif", "machine_linkages", "main_joints", "motion", "motion_rows", "new_figure",
+           "path_panels", "shaking", "throat_plate_height", "torque", "trajectories", "write_all"]

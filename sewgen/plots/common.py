@@ -1,0 +1,194 @@
+"""What every figure shares: the Agg figure and its fixed layout, shaft-angle axes, group colours, and the parts
+a machine's pictures look up by role (never by a catalog name)."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..feed import has_feed, plate_height
+from ..roles import FEED_DOG, NEEDLE_EYE, THROAT_PLATE
+
+MM = 1e3  # m -> mm
+DPI = 100
+#: Group colours, by the group's place in the machine (the first group blue, the second orange, ...).
+PALETTE = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive",
+           "tab:cyan", "tab:gray")
+#: Point roles that work at the throat plate: the plate is drawn beside them.
+AT_THE_PLATE = (NEEDLE_EYE, FEED_DOG)
+
+
+# -- figures ---------------------------------------------------------------------------------------------------
+
+def new_figure(size, dpi=DPI):
+    """A figure on its own Agg canvas (no pyplot, no global backend change). No layout engine: the figures place
+    their axes once (:func:`place`), so drawing never re-runs a layout."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size, dpi=dpi)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def place(fig, nrows, ncols, *, left=0.8, right=0.25, top=0.6, bottom=0.6, wspace=0.7, hspace=0.7, **kw):
+    """A grid of axes with margins and gaps in inches (fast: no constrained layout); ``kw`` go to
+    ``fig.subplots`` (``subplot_kw``, ``width_ratios``, ``sharex``, ...). Returns the (nrows, ncols) array."""
+    w, h = fig.get_size_inches()
+    aw = (w - left - right - wspace * (ncols - 1)) / ncols
+    ah = (h - top - bottom - hspace * (nrows - 1)) / nrows
+    gs = dict(left=left / w, right=1 - right / w, top=1 - top / h, bottom=bottom / h,
+              wspace=wspace / max(aw, 1e-3), hspace=hspace / max(ah, 1e-3))
+    return fig.subplots(nrows, ncols, squeeze=False, gridspec_kw=gs, **kw)
+
+
+def render(draw, analysis, path, size):
+    """Draw ``draw(fig, analysis)`` on a new figure of ``size`` (inches) and write it as a PNG."""
+    fig = new_figure(size)
+    draw(fig, analysis)
+    fig.savefig(path, dpi=DPI)
+    return Path(path)
+
+
+def title(a, what: str) -> str:
+    return f"{a.machine.name}: {what} at {a.omega[0] * 30 / math.pi:.0f} rpm"
+
+
+def suptitle(fig, text, size=12):
+    fig.text(0.5, 1 - 0.12 / fig.get_size_inches()[1], text, ha="center", va="top", fontsize=size)
+
+
+# -- shaft angles ----------------------------------------------------------------------------------------------
+
+def full_turn(phi) -> bool:
+    h = np.diff(phi)
+    return len(phi) > 2 and np.allclose(h, h[0]) and abs(len(phi) * h[0] - 2 * math.pi) < 1e-6
+
+
+def closed(a, y):
+    """``y`` with its first value repeated at the end when the sweep is one whole turn (closed curves)."""
+    y = np.asarray(y)
+    return np.concatenate([y, y[:1]]) if full_turn(a.phi) else y
+
+
+def deg(a):
+    """Shaft angles in degrees, closed to 360° like :func:`closed`."""
+    d = np.degrees(a.phi)
+    return np.append(d, d[0] + 360.0) if full_turn(a.phi) else d
+
+
+def angle_axis(ax, label=True, step=45):
+    ax.set_xlim(0, 360)
+    ax.set_xticks(np.arange(0, 361, step))
+    ax.grid(alpha=0.3)
+    if label:
+        ax.set_xlabel("shaft angle φ (deg)")
+
+
+def shade(ax, a, mask, color, label=None):
+    """Shade the shaft angles where ``mask`` holds (full height of the axes)."""
+    ax.fill_between(deg(a), 0, 1, where=closed(a, mask), color=color, alpha=0.12, lw=0,
+                    transform=ax.get_xaxis_transform(), label=label)
+
+
+def angle_labels(ax, a, x, y, *, at=None, step=45.0, color="0.2", size=7):
+    """Dots and "φ°" labels at every ``step`` degrees of shaft angle on a path x, y (equal-aspect data units);
+    each label is pushed off the path along its normal, away from the path's centre. ``at`` gives other
+    data coordinates to annotate (a polar axes' θ, r) with x, y used for the directions. One Line2D holds the
+    dots; the labels are plain texts (no arrows)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    d = np.degrees(a.phi)
+    idx = np.flatnonzero(np.abs(d - step * np.round(d / step)) < 1e-6)
+    if not len(idx):
+        return
+    tx, ty = np.roll(x, -1) - np.roll(x, 1), np.roll(y, -1) - np.roll(y, 1)
+    cx, cy = x.mean(), y.mean()
+    size_ = max(np.ptp(x), np.ptp(y), 1e-300)
+    px, py = (x, y) if at is None else (np.asarray(at[0]), np.asarray(at[1]))
+    ax.plot(px[idx], py[idx], "o", ms=2.5, color=color)
+    for i in idx:
+        nx, ny = ty[i], -tx[i]  # right-hand normal of the direction of travel
+        ox, oy = x[i] - cx, y[i] - cy
+        if math.hypot(nx, ny) < 1e-3 * size_:  # at rest: straight out from the centre
+            nx, ny = ox, oy
+        elif nx * ox + ny * oy < -1e-9 * size_**2:
+            nx, ny = -nx, -ny
+        r = math.hypot(nx, ny) or 1.0
+        nx, ny = nx / r, ny / r
+        ha = "center" if abs(nx) < 0.4 else ("left" if nx > 0 else "right")  # the text starts next to the dot
+        va = "center" if abs(ny) < 0.4 else ("bottom" if ny > 0 else "top")
+        ax.annotate(f"{d[i] % 360:.0f}°", (px[i], py[i]), xytext=(5 * nx, 5 * ny), textcoords="offset points",
+                    ha=ha, va=va, fontsize=size, color=color)
+
+
+# -- groups, roles ---------------------------------------------------------------------------------------------
+
+def color(a, g) -> str:
+    """The colour of group ``g`` (a Group or its name): by its place in the machine."""
+    name = getattr(g, "name", g)
+    k = next(i for i, gr in enumerate(a.machine.groups) if gr.name == name)
+    return PALETTE[k % len(PALETTE)]
+
+
+def plate(a):
+    """(group, height in m) of the first group with a ``throat_plate`` role, or None. The groups share the
+    machine's frame (x, y), so one plate serves every group."""
+    for g in a.machine.groups:
+        if g.mechanism.description.has_role(THROAT_PLATE):
+            return g, plate_height(g.mechanism, g.params or None)
+    return None
+
+
+def throat_plate_height(a):
+    """The throat plate's height (m), or None."""
+    p = plate(a)
+    return None if p is None else float(p[1])
+
+
+def role_points(g) -> list:
+    """(point name, role) of every role-tagged point of group ``g``, in declaration order."""
+    return [(p.name, p.role) for p in g.mechanism.description.points if p.role]
+
+
+def role_point(a, role):
+    """(group, point name) of the first group with a point of ``role``, or (None, None)."""
+    for g in a.machine.groups:
+        name = g.mechanism.description.role_name(role)
+        if name is not None and g.mechanism.description.has("point", name):
+            return g, name
+    return None, None
+
+
+def feed_groups(a) -> list:
+    """The groups that declare a feed dog, a throat plate and a stitch regulator (sewgen.feed.has_feed)."""
+    return [g for g in a.machine.groups if has_feed(g.mechanism)]
+
+
+def pretty(name: str) -> str:
+    """A role or part name as words: "needle_eye" -> "needle eye"."""
+    return name.replace("_", " ")
+
+
+def run_of(fa) -> tuple:
+    """(parameter vector, held inputs, load array or None) that a group's sweep ``fa`` ran with; Nones for what
+    it does not know (a plain Motion)."""
+    s = getattr(fa, "run_settings", None)
+    return (None, None, None) if s is None else (s.params, s.held, s.loads)
+
+
+def load_mask(fa):
+    """(n,) where the group's external loads act (any load slot non-zero), or None without loads."""
+    ld = run_of(fa)[2]
+    if ld is None:
+        return None
+    mask = np.any(np.asarray(ld) != 0.0, axis=1)
+    return mask if mask.any() else None
+
+
+def shade_loads(ax, a, labels=True):
+    """Shade the shaft angles where each group's external forces act, read from the load array its sweep used."""
+    for g in a.machine.groups:
+        mask = load_mask(a.groups[g.name])
+        if mask is not None:
+            shade(ax, a, mask, color(a, g), f"external loads on {g.name} act" if labels else None)
