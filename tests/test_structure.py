@@ -120,8 +120,7 @@ CATALOG_WORDS = ("needle_bar", "take_up", "hook_drive", "feed", "plate_y", "lowe
 #: Modules that may name catalog parts: the catalog declarations (sewgen/derive/models), the derivation's
 #: catalog list, the benchmark's catalog table (it times every catalog mechanism by name), and the role
 #: vocabulary (whose roles share words with the catalog's part names).
-ALLOWED = {"derive/catalog.py", "bench.py", "roles.py",
-           "plots.py"}  # until the pictures are drawn from descriptions (in progress)
+ALLOWED = {"derive/catalog.py", "bench.py", "roles.py"}
 
 
 def test_no_runtime_module_names_a_catalog_part():

@@ -123,9 +123,7 @@ def analysed(tmp_path_factory):
     (root / "stephenson_needle.py").write_text(DECLARATION)
     (root / "my_machine.toml").write_text(MODEL)
     env = dict(os.environ, SEWGEN_CACHE=str(root / "cache"))
-    # --no-plots until the pictures are drawn from mechanism descriptions (issue 9, item 4)
-    res = subprocess.run([sys.executable, "-m", "sewgen", "analyze", "my_machine.toml", "--out", "results",
-                          "--no-plots"],
+    res = subprocess.run([sys.executable, "-m", "sewgen", "analyze", "my_machine.toml", "--out", "results"],
                          cwd=root, env=env, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr
     return root / "results", res
@@ -137,6 +135,21 @@ def test_the_user_machine_writes_its_tables_and_summary(analysed):
         assert (out / name).stat().st_size > 100, name
     header = (out / "needle.csv").read_text().splitlines()[0].split(",")
     assert {"needle_eye.y [m]", "pin_e.x [m]", "F.fx [N]", "bar.travel [m]", "shaft.torque [N*m]"} <= set(header)
+
+
+def test_the_user_machine_gets_every_picture(analysed):
+    """Pictures are drawn from the description: the user's six-bar gets the catalog's figures (no feed figure:
+    it has no feed dog), each a real image with the PNG or GIF signature and many frames in the GIF."""
+    out, _ = analysed
+    pngs = {p.name for p in out.glob("*.png")}
+    assert pngs == {"trajectories.png", "motion.png", "torque.png", "shaking.png", "bearings_polar.png",
+                    "joint_reactions_polar.png"}
+    for name in pngs:
+        data = (out / name).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000, name
+    gif = (out / "machine.gif").read_bytes()
+    assert gif[:6] in (b"GIF87a", b"GIF89a")
+    assert gif.count(b"\x21\xf9\x04") >= 36  # one graphic-control extension per frame
 
 
 def test_the_power_balance_closes(analysed):

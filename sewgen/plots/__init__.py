@@ -21,7 +21,7 @@ from pathlib import Path
 
 from .animation import GIF_DPI, GIF_FPS, GIF_WIDTH, MachineView, draw_machine, machine_gif, machine_linkages
 from .background import BackgroundGif, can_fork
-from .common import DPI, PALETTE, new_figure, throat_plate_height, render
+from .common import DPI, PALETTE, feed_groups, new_figure, render, throat_plate_height
 from .curves import draw_motion, motion_rows, motion_size
 from .geometry import Linkage, linkage, linkage_of
 from .paths import (STITCHES_MM, draw_feed_dog_stitches, draw_trajectories, path_panels, stitches_size,
@@ -61,6 +61,13 @@ FIGURES = (("trajectories.png", trajectories), ("feed_dog_stitches.png", feed_do
            ("bearings_polar.png", bearings_polar), ("joint_reactions_polar.png", joint_reactions_polar),
            ("torque.png", torque), ("shaking.png", shaking))
 GIF = "machine.gif"
+#: Figures drawn only for some machines: figure -> whether ``analysis`` has what it shows.
+APPLIES = {"feed_dog_stitches.png": lambda analysis: bool(feed_groups(analysis))}
+
+
+def figures_for(analysis) -> list[tuple]:
+    """The (name, writer) pairs of :data:`FIGURES` that apply to ``analysis`` (no feed-dog figure without a feed)."""
+    return [(name, make) for name, make in FIGURES if APPLIES.get(name, lambda a: True)(analysis)]
 
 
 def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool | None = None) -> list[Path]:
@@ -70,15 +77,16 @@ def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool 
     PNGs are drawn where that is safe (:func:`~sewgen.plots.background.can_fork`; ``parallel=False``: never)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    total = len(FIGURES) + bool(gif)
+    figures = figures_for(analysis)
+    total = len(figures) + bool(gif)
     report = progress or (lambda message, done, total: None)
-    gif_progress = (lambda message, i, n: report(message, len(FIGURES), total))  # noqa: E731
+    gif_progress = (lambda message, i, n: report(message, len(figures), total))  # noqa: E731
     out, background = [], None
     links = machine_linkages(analysis) if gif else None  # built here: the geometry's errors raise here
     if gif and (can_fork() if parallel is None else parallel):
         background = BackgroundGif(analysis, folder / GIF, links)
     try:
-        for k, (name, make) in enumerate(FIGURES):
+        for k, (name, make) in enumerate(figures):
             report(name, k, total)
             out.append(make(analysis, folder / name))
         if background is not None:
@@ -93,8 +101,8 @@ def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool 
 
 
 __all__ = ["DPI", "FIGURES", "GIF", "GIF_DPI", "GIF_FPS", "GIF_WIDTH", "PALETTE", "SIZES", "STITCHES_MM",
-           "BackgroundGif", "Linkage", "MachineView", "bearings_polar", "can_fork", "draw_bearings_polar",
+           "APPLIES", "BackgroundGif", "Linkage", "MachineView", "bearings_polar", "can_fork", "draw_bearings_polar",
            "draw_feed_dog_stitches", "draw_joint_reactions_polar", "draw_machine", "draw_motion", "draw_shaking",
-           "draw_torque", "draw_trajectories", "feed_dog_stitches", "figure_size", "joint_reactions_polar", "linkage",
+           "draw_torque", "draw_trajectories", "feed_dog_stitches", "figure_size", "figures_for", "joint_reactions_polar", "linkage",
            "linkage_of", "machine_gif", "machine_linkages", "main_joints", "motion", "motion_rows", "new_figure",
            "path_panels", "shaking", "throat_plate_height", "torque", "trajectories", "write_all"]

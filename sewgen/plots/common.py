@@ -56,7 +56,10 @@ def title(a, what: str) -> str:
 
 
 def suptitle(fig, text, size=12):
-    fig.text(0.5, 1 - 0.12 / fig.get_size_inches()[1], text, ha="center", va="top", fontsize=size)
+    """A figure title in one line: its font shrinks (to 8 pt at least) to fit a narrow figure's width."""
+    width_in, height_in = fig.get_size_inches()
+    fit = 0.96 * width_in * 72 / (0.55 * max(len(text), 1))  # DejaVu Sans: a character is about 0.55 em wide
+    fig.text(0.5, 1 - 0.12 / height_in, text, ha="center", va="top", fontsize=max(min(size, fit), 8))
 
 
 # -- shaft angles ----------------------------------------------------------------------------------------------
