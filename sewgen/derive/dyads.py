@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from .joints import kind_of
 from .kinematics import Kinematics, rot
 from .model import Attachment, Body, Joint
 
@@ -59,7 +60,7 @@ class _Split:
         self.known_bodies = {b for b in mech.bodies if b.kind in ("ground", "driven")}
         self.used: set = set()
         self.dyads: list[Dyad] = []
-        self.revolutes = [j for j in mech.joints if j.kind == "revolute"]
+        self.revolutes = [j for j in mech.joints if kind_of(j).dyad_letter == "R"]  # the pins dyads are made of
 
     def is_known_point(self, att: Attachment) -> bool:
         if att.body not in self.known_bodies:

@@ -43,8 +43,7 @@ def _force_manifest(kst: Kinetostatics) -> dict:
     for r in kst.reactions:
         entry = {"name": r.name, "kind": r.kind, "a": r.a.name, "b": r.b.name, "grounded": r.grounded,
                  "columns": r.columns, "offset": offset}
-        if r.kind == "drive":  # input torque = Σ sense · drive torque of the bodies that input turns
-            entry.update(input=kst.mech.inputs[r.input_index].name, sense=r.sense)
+        entry.update(r.joint_kind.manifest(kst.mech, r))  # a drive: the input it turns, its sense
         reactions.append(entry)
         offset += len(r.columns)
     return {

@@ -24,6 +24,7 @@ import sympy as sp
 from .. import abi
 from .cprint import KernelPrinter, ops
 from .dyads import Dyad
+from .joints import KINDS
 from .kinematics import Kinematics
 from .kinetostatics import Kinetostatics
 from .model import DeclarationError
@@ -74,7 +75,7 @@ class KernelSet:
         self.params = set(kin.p)
         self.constants: dict = {}  # expression -> symbol c_k, in first-seen order
         self.trig: dict = {}  # angle symbol -> (cos symbol, sin symbol)
-        self._cam_lines = None
+        self._selection_lines = None
         for i, (c, q) in enumerate(zip(kin.coords, kin.q)):
             if c.kind == "angle":
                 self.trig[q] = (sp.Symbol(f"cq_{2 * i}", real=True), sp.Symbol(f"cq_{2 * i + 1}", real=True))
@@ -135,43 +136,21 @@ class KernelSet:
     def prepare(self, exprs) -> list:
         return [self._hoist(self._expand_trig(sp.sympify(e))) for e in exprs]
 
-    def cam_block(self) -> list[str]:
-        """The active arc of every cam (derive.kinematics.CamContact): ka[3j..3j+2] = its centre and radius,
-        ka[3·ncam + j] = its index, chosen by the sector that holds the face normal's direction e (cam frame).
-        The same lines open every kernel that reads ka; they are built once."""
-        if self._cam_lines is None:
-            self._cam_lines = self._cam_selection()
-        return self._cam_lines
-
-    def _cam_selection(self) -> list[str]:
-        cams, pr = self.kin.cams, self.printer
-        if not cams:
-            return []
-        lines = [f"double ka[{4 * len(cams)}];"]
-        for j, cam in enumerate(cams):
-            e0, e1 = (pr.doprint(e) for e in self.prepare(cam.normal))
-            block = [f"/* cam {cam.joint.name}: the arc whose normal sector holds e */",
-                     f"const double e0 = {e0}, e1 = {e1};"]
-            arcs = cam.joint.arcs
-            for k, arc in enumerate(arcs):
-                ca, sa, cb, sb, u, v, r = (pr.doprint(e) for e in self.prepare(
-                    [sp.cos(arc.normal_from), sp.sin(arc.normal_from), sp.cos(arc.normal_to), sp.sin(arc.normal_to),
-                     arc.center_u, arc.center_v, arc.radius]))
-                test = f"({ca})*e1 - ({sa})*e0 >= 0.0 && e0*({sb}) - e1*({cb}) > 0.0"
-                block.append("if (" + test + ") {" if k == 0 else
-                             ("} else if (" + test + ") {" if k < len(arcs) - 1 else "} else {"))
-                block += [f"    ka[{3 * j}] = {u};", f"    ka[{3 * j + 1}] = {v};", f"    ka[{3 * j + 2}] = {r};",
-                          f"    ka[{3 * len(cams) + j}] = {k}.0;"]
-            block.append("}")
-            lines += ["{"] + ["    " + line for line in block] + ["}"]
-        return lines
+    def selection_block(self) -> list[str]:
+        """What the joints choose at run time before any kernel reads them (a cam's active arc, ka[]: see
+        derive.joints.Cam.selection_c), in kind order. The same lines open every kernel that reads ka; they are
+        built once."""
+        if self._selection_lines is None:
+            self._selection_lines = [line for kind in KINDS.values()
+                               for line in kind.selection_c(self.kin, self.printer, self.prepare)]
+        return self._selection_lines
 
     # -- kernels ---------------------------------------------------------------------------------------
     def residual(self) -> Kernel:
         kin, pr, n = self.kin, self.printer, len(self.kin.q)
         exprs = self.prepare(list(kin.closure) + [kin.jac_q[i, j] for i in range(n) for j in range(n)])
         repl, red = _cse(exprs)
-        body = self.cam_block() + _temps(pr, repl)
+        body = self.selection_block() + _temps(pr, repl)
         body += [f"r[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[:n])]
         body += [f"jac[{k}] = {pr.doprint(e)};" for k, e in enumerate(red[n:])]
         body = _unused(body, "q", "cq", "x", "cx", "c") + body
@@ -198,7 +177,7 @@ class KernelSet:
         staged = [[(t, e) for t, e in repl if levels[t] == k] for k in range(3)]
         r_jac, r_vel = red[: n * n], red[n * n: n * n + n]
         r_gam, r_obs = red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:]
-        body = self.cam_block() + _temps(pr, staged[0])
+        body = self.selection_block() + _temps(pr, staged[0])
         if n:
             body += [f"double J[{n * n}];", f"int piv[{n}];"]
             body += [f"J[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_jac)]
@@ -246,7 +225,7 @@ class KernelSet:
             b_i = next(it)
             back.append((j, (b_i - sum((next(it) * f[l] for l, _ in row), sp.S.Zero)) / piv))
         r_out = list(it)
-        body = self.cam_block() + _temps(pr, [(t, e) for t, e in repl if t not in late])
+        body = self.selection_block() + _temps(pr, [(t, e) for t, e in repl if t not in late])
         for rows, cols in kst.blocks:
             body += self._block_solve(rows, cols, a, rhs, f)
         body += [f"out[{j}] = {pr.doprint(e)};" for j, e in reversed(back)]
@@ -299,7 +278,7 @@ class KernelSet:
         pr, A, n = self.printer, kst.A, len(kst.f)
         nz = [(i, j) for i in range(n) for j in range(n) if A[i, j] != 0]
         repl, red = _cse(self.prepare([A[i, j] for i, j in nz] + list(kst.b)))
-        body = self.cam_block() + _temps(pr, repl) + [f"for (int k = 0; k < {n * n}; ++k) A[k] = 0.0;"]
+        body = self.selection_block() + _temps(pr, repl) + [f"for (int k = 0; k < {n * n}; ++k) A[k] = 0.0;"]
         body += [f"A[{i * n + j}] = {pr.doprint(e)};" for (i, j), e in zip(nz, red)]
         body += [f"b[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[len(nz):])]
         body = _unused(body, "q", "cq", "x", "cx", "c", "obs", "gv", "ld") + body

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .model import Attachment, Body, DeclarationError, Joint, Line, Mechanism
+from .joints import KINDS, CamContact, kind_of
+from .model import Attachment, Body, DeclarationError, Mechanism
 
 
 def rot(theta, u, v):
@@ -37,19 +38,6 @@ class Observable:
     name: str
     unit: str
     expr: sp.Expr
-
-
-@dataclass
-class CamContact:
-    """A cam joint as the kernels see it: the active arc's centre (u, v) and radius are the symbols
-    ``ka[3j..3j+2]``, chosen at run time from the direction ``normal`` (cos, sin) of the follower face's
-    normal in the cam frame; ``ka[3·ncam + j]`` is the active arc's index."""
-
-    joint: Joint
-    center: tuple
-    radius: sp.Symbol
-    index: sp.Symbol
-    normal: tuple
 
 
 class Kinematics:
@@ -115,8 +103,8 @@ class Kinematics:
             bx, by = self.world(Attachment(g.body, g.u, g.v))
             th = self.pose[g.body][2] + g.angle
             return (bx + s * sp.cos(th), by + s * sp.sin(th), th)
-        for joint in self.mech.joints:  # link: first pin to a placed body
-            if joint.kind != "revolute":
+        for joint in self.mech.joints:  # link: first joint of a kind links hang from (a pin) to a placed body
+            if not kind_of(joint).places_links:
                 continue
             for mine, other in ((joint.a, joint.b), (joint.b, joint.a)):
                 if mine.body is body and other.body in known:
@@ -128,58 +116,25 @@ class Kinematics:
         return None
 
     # -- loops ---------------------------------------------------------------------------------------------
-    def _line_frame(self, line: Line):
-        """World point of a line, its world direction angle and unit normal (direction turned +90°)."""
-        gx, gy = self.world(Attachment(line.body, line.u, line.v))
-        th = self.pose[line.body][2] + line.angle
-        return (gx, gy), th, (-sp.sin(th), sp.cos(th))
-
     def _close_loops(self) -> None:
+        """Every joint off the spanning tree closes a loop with its kind's equations (derive.joints)."""
+        self.cams: list[CamContact] = []  # filled by the cam kind's prepare
+        for name, kind in KINDS.items():
+            kind.prepare(self, [j for j in self.mech.joints if j.kind == name])
         tree = set(self.tree_joint.values())
-        cams = [j for j in self.mech.joints if j.kind == "cam"]
-        self.cams: list[CamContact] = []
-        for k, joint in enumerate(cams):
-            ka = [sp.Symbol(f"ka_{3 * k + i}", real=True) for i in range(3)]
-            _f, th, _n = self._line_frame(joint.b)
-            rel = th + sp.pi / 2 - self.pose[joint.a.body][2]
-            self.cams.append(CamContact(joint, (ka[0], ka[1]), ka[2], sp.Symbol(f"ka_{3 * len(cams) + k}", real=True),
-                                        (sp.cos(rel), sp.sin(rel))))
         self.closure: list[sp.Expr] = []
         self.closure_names: list[str] = []
         for joint in self.mech.joints:
             if joint in tree:
                 continue
-            if joint.kind == "revolute":
-                (ax, ay), (bx, by) = self.world(joint.a), self.world(joint.b)
-                self.closure += [ax - bx, ay - by]
-                self.closure_names += [f"{joint.name}.x", f"{joint.name}.y"]
-            elif joint.kind == "slot":
-                (fx, fy), _th, (nx, ny) = self._line_frame(joint.a)
-                px, py = self.world(joint.b)
-                self.closure.append(nx * (px - fx) + ny * (py - fy))
-                self.closure_names.append(f"{joint.name}.normal")
-            elif joint.kind == "cam":
-                cam = next(c for c in self.cams if c.joint is joint)
-                (fx, fy), _th, (nx, ny) = self._line_frame(joint.b)
-                cx, cy = self.world(Attachment(joint.a.body, *cam.center))
-                self.closure.append(nx * (cx - fx) + ny * (cy - fy) + cam.radius)
-                self.closure_names.append(f"{joint.name}.normal")
-            else:
-                self.closure += self._prismatic_equations(joint)
-                self.closure_names += [f"{joint.name}.normal", f"{joint.name}.angle"]
+            for name, expr in kind_of(joint).closure(self, joint):
+                self.closure_names.append(name)
+                self.closure.append(expr)
         n, m = len(self.coords), len(self.closure)
         if n != m:
             raise DeclarationError(
                 f"{self.mech.name}: {n} unknown coordinates but {m} loop-closure equations "
                 f"({'under' if n > m else 'over'}-constrained; check the joints)")
-
-    def _prismatic_equations(self, joint: Joint):
-        line: Line = joint.a
-        gx, gy = self.world(Attachment(line.body, line.u, line.v))
-        th = self.pose[line.body][2] + line.angle
-        px, py = self.world(joint.b)
-        normal = -sp.sin(th) * (px - gx) + sp.cos(th) * (py - gy)
-        return [normal, self.pose[joint.b.body][2] - self.pose[line.body][2]]
 
     # -- derivatives ------------------------------------------------------------------------------------
     def dt(self, expr: sp.Expr) -> sp.Expr:

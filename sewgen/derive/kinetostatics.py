@@ -30,41 +30,11 @@ given as many closure equations as coordinates). Its solve is planned here, in t
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import sympy as sp
 
+from .joints import Reaction, kind_of
 from .kinematics import Kinematics, rot
 from .model import Attachment, Body, DeclarationError
-
-
-@dataclass
-class Reaction:
-    """A joint as the force analysis sees it: body ``a`` acts on body ``b`` at ``b``'s point ``at``."""
-
-    name: str
-    kind: str  # "revolute", "prismatic", "slot", "cam" or "drive"
-    a: Body
-    b: Body
-    at: Attachment | None  # point of b where the force acts (None: a pure torque)
-    at_a: Attachment | None = None  # revolute: the coinciding point of a (its own moment arm)
-    guide_angle: sp.Expr = sp.S.Zero  # prismatic: world angle of the guide line
-    sense: int = 1  # drive: body angle = sense * input + phase
-    input_index: int = -1  # drive
-
-    @property
-    def columns(self) -> list[str]:
-        return {"revolute": ["fx", "fy"], "prismatic": ["normal", "moment"], "slot": ["normal"], "cam": ["normal"],
-                "drive": ["torque"]}[self.kind]
-
-    @property
-    def grounded(self) -> bool:
-        return not self.a.moving or not self.b.moving
-
-    @property
-    def normal(self) -> tuple:
-        """Unit normal of a prismatic, slot or cam force: the guide (or face) direction turned +90°."""
-        return (-sp.sin(self.guide_angle), sp.cos(self.guide_angle))
 
 
 class Kinetostatics:
@@ -94,27 +64,10 @@ class Kinetostatics:
 
     # -- what acts where ------------------------------------------------------------------------------------
     def _reactions(self) -> list[Reaction]:
+        """The joints the bodies imply, every declared joint (each as its kind makes it, derive.joints), then
+        the drive of every driven body."""
         kin, mech = self.kin, self.mech
-        out = []
-        for body in mech.bodies:
-            if body.kind == "driven":
-                out.append(Reaction(f"{body.name}.pivot", "revolute", mech.ground, body,
-                                    Attachment(body, sp.S.Zero, sp.S.Zero), body.pivot))
-            elif body.kind == "slider":
-                g = body.guide
-                out.append(Reaction(f"{body.name}.guide", "prismatic", g.body, body,
-                                    Attachment(body, sp.S.Zero, sp.S.Zero),
-                                    guide_angle=kin.pose[g.body][2] + g.angle))
-        for j in mech.joints:
-            if j.kind == "revolute":
-                out.append(Reaction(j.name, "revolute", j.a.body, j.b.body, j.b, j.a))
-            elif j.kind in ("prismatic", "slot"):
-                out.append(Reaction(j.name, j.kind, j.a.body, j.b.body, j.b,
-                                    guide_angle=kin.pose[j.a.body][2] + j.a.angle))
-            else:  # cam: on the follower (b) from the cam (a), along the face normal through the arc's centre
-                cam = next(c for c in kin.cams if c.joint is j)
-                out.append(Reaction(j.name, "cam", j.a.body, j.b.body, Attachment(j.a.body, *cam.center),
-                                    guide_angle=kin.pose[j.b.body][2] + j.b.angle))
+        out = [kind_of(j).reaction(kin, j) for j in mech.implied_joints() + mech.joints]
         for body in mech.bodies:
             if body.kind == "driven":
                 out.append(Reaction(f"{body.name}.drive", "drive", mech.ground, body, None,
@@ -154,25 +107,9 @@ class Kinetostatics:
         col = 0
         for r in self.reactions:
             for sign, body in ((1, r.b), (-1, r.a)):
-                if not body.moving:
-                    continue
-                k = rows[body]
-                if r.kind == "revolute":
-                    dx, dy = self.own_arm(r.at if body is r.b else r.at_a)
-                    A[k, col] += sign
-                    A[k + 1, col + 1] += sign
-                    A[k + 2, col] += -sign * dy
-                    A[k + 2, col + 1] += sign * dx
-                elif r.kind in ("prismatic", "slot", "cam"):  # a normal force N·n at point `at` (+ a couple)
-                    nx, ny = r.normal
-                    dx, dy = (self.own_arm(r.at) if r.at.body is body else self.arm(body, self.kin.world(r.at)))
-                    A[k, col] += sign * nx
-                    A[k + 1, col] += sign * ny
-                    A[k + 2, col] += sign * (dx * ny - dy * nx)
-                    if r.kind == "prismatic":
-                        A[k + 2, col + 1] += sign
-                else:
-                    A[k + 2, col] += sign
+                if body.moving:
+                    for row, column, entry in r.joint_kind.rows(self, r, body, sign):
+                        A[rows[body] + row, col + column] += entry
             col += len(r.columns)
         b = sp.zeros(n, 1)
         gx, gy = self.gravity
@@ -197,34 +134,24 @@ class Kinetostatics:
         kin, mech, col = self.kin, self.mech, self.column
         out = []
         for i, inp in enumerate(mech.inputs):
-            tau = sum((r.sense * self.f[col[r.name]] for r in self.reactions
-                       if r.kind == "drive" and r.input_index == i), sp.S.Zero)
+            tau = sum((r.sense * self.f[col[r.name]] for r in self.reactions  # the drives: the reactions
+                       if r.input_index == i), sp.S.Zero)                   # with an input
             out.append((f"{inp.name}.torque", "N*m", tau))
         for i, inp in enumerate(mech.inputs):
             out.append((f"{inp.name}.power", "W", out[i][2] * kin.xd[i]))
-        for r in self.reactions:  # a normal force in frame components
-            if r.kind in ("prismatic", "slot", "cam"):
-                c = col[r.name]
-                out += [(f"{r.name}.fx", "N", r.normal[0] * self.f[c]), (f"{r.name}.fy", "N", r.normal[1] * self.f[c])]
+        for r in self.reactions:  # what each kind adds (a normal force in frame components)
+            c = col[r.name]
+            out += r.joint_kind.outputs(r, self.f[c:c + len(r.columns)])
         fx = fy = mz = sp.S.Zero  # the frame's reactions on the moving parts
         for r in self.reactions:
             if not r.grounded:
                 continue
             sign = 1 if not r.a.moving else -1  # f acts on b from a
             c = col[r.name]
-            if r.kind == "revolute":
-                px, py = kin.world(r.at)
-                fx += sign * self.f[c]
-                fy += sign * self.f[c + 1]
-                mz += sign * (px * self.f[c + 1] - py * self.f[c])
-            elif r.kind in ("prismatic", "slot", "cam"):
-                px, py = kin.world(r.at)
-                nx, ny = r.normal
-                fx += sign * nx * self.f[c]
-                fy += sign * ny * self.f[c]
-                mz += sign * ((px * ny - py * nx) * self.f[c] + (self.f[c + 1] if r.kind == "prismatic" else 0))
-            else:
-                mz += sign * self.f[c]
+            on_x, on_y, on_z = r.joint_kind.on_body(self, r, self.f[c:c + len(r.columns)])
+            fx += sign * on_x
+            fy += sign * on_y
+            mz += sign * on_z
         out += [("shaking.fx", "N", fx), ("shaking.fy", "N", fy), ("shaking.moment", "N*m", mz)]
         ke = pe = sp.S.Zero
         gx, gy = self.gravity

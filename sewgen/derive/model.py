@@ -120,9 +120,8 @@ class Arc:
 
 @dataclass(eq=False)
 class Joint:
-    """A joint. Revolute: a and b coincide. Prismatic: point b stays on line a, the bodies keep their angle.
-    Slot (pin in slot): point b stays on line a, rotation free. Cam: the cam (body of point a) touches the
-    flat face b (a line of the follower) with the arc of ``arcs`` that the face's normal selects."""
+    """A joint of ``kind`` (a key of :data:`derive.joints.KINDS`, whose class says what it constrains and
+    carries) between side ``a`` and side ``b``, each a point (:class:`Attachment`) or a line of a body."""
 
     name: str
     kind: str
@@ -271,38 +270,28 @@ class Mechanism:
             raise DeclarationError(f"{self.name}: pivot of {name!r} must be a point of ground")
 
     # -- joints and points -----------------------------------------------------------------------------
-    def revolute(self, a: Attachment, b: Attachment, name: str, branch: int = 1) -> Joint:
-        """A pin joint between two bodies. ``branch`` (+1/-1) picks the assembly when this joint closes a dyad."""
+    def _joint(self, kind: str, name: str, a, b, **options) -> Joint:
+        """Declare a joint of ``kind`` (a key of :data:`derive.joints.KINDS`, which checks its sides)."""
+        from .joints import KINDS  # joints builds on this module's vocabulary
+
         self._claim(name, "joint")
-        for att in (a, b):
-            if not isinstance(att, Attachment):
-                raise DeclarationError(f"{self.name}: joint {name!r} needs body.at(u, v) on both sides")
-        if a.body is b.body:
-            raise DeclarationError(f"{self.name}: joint {name!r} joins {a.body.name!r} to itself")
-        if branch not in (1, -1):
-            raise DeclarationError(f"{self.name}: branch of joint {name!r} must be +1 or -1")
-        joint = Joint(name, "revolute", a, b, branch)
+        KINDS[kind].check(self, name, a, b, **options)
+        joint = Joint(name, kind, a, b, **options)
         self.joints.append(joint)
         return joint
 
+    def revolute(self, a: Attachment, b: Attachment, name: str, branch: int = 1) -> Joint:
+        """A pin joint between two bodies. ``branch`` (+1/-1) picks the assembly when this joint closes a dyad."""
+        return self._joint("revolute", name, a, b, branch=branch)
+
     def prismatic(self, guide: Line, b: Attachment, name: str) -> Joint:
         """Point ``b`` slides on ``guide`` and body b keeps the guide body's angle (a closing slide)."""
-        self._claim(name, "joint")
-        if not isinstance(guide, Line) or not isinstance(b, Attachment) or guide.body is b.body:
-            raise DeclarationError(f"{self.name}: prismatic {name!r} needs a line of one body and a point of another")
-        joint = Joint(name, "prismatic", guide, b)
-        self.joints.append(joint)
-        return joint
+        return self._joint("prismatic", name, guide, b)
 
     def slot(self, guide: Line, b: Attachment, name: str) -> Joint:
         """Pin ``b`` runs in the slot ``guide`` of another body; both turn freely (a roller in a slot: one
         equation, one normal force)."""
-        self._claim(name, "joint")
-        if not isinstance(guide, Line) or not isinstance(b, Attachment) or guide.body is b.body:
-            raise DeclarationError(f"{self.name}: slot {name!r} needs a line of one body and a point of another")
-        joint = Joint(name, "slot", guide, b)
-        self.joints.append(joint)
-        return joint
+        return self._joint("slot", name, guide, b)
 
     def cam(self, cam: Body, face: Line, arcs, name: str) -> Joint:
         """A cam of circular ``arcs`` (cam frame) touching the flat ``face`` of a follower (seed 000 §一(四)5).
@@ -315,15 +304,8 @@ class Mechanism:
         jumps by what the change of curvature implies. A fork with two parallel faces on a cam of constant
         breadth needs one face: the opposite arcs are concentric, so both contacts share one line of action.
         """
-        self._claim(name, "joint")
-        if not isinstance(cam, Body) or not cam.moving or not isinstance(face, Line) or face.body is cam:
-            raise DeclarationError(f"{self.name}: cam {name!r} needs a moving cam body and a face of another body")
-        arcs = tuple(arcs)
-        if not arcs or not all(isinstance(a, Arc) for a in arcs):
-            raise DeclarationError(f"{self.name}: cam {name!r} needs a list of Arc")
-        joint = Joint(name, "cam", Attachment(cam, sp.S.Zero, sp.S.Zero), face, arcs=arcs)
-        self.joints.append(joint)
-        return joint
+        origin = Attachment(cam, sp.S.Zero, sp.S.Zero) if isinstance(cam, Body) else cam
+        return self._joint("cam", name, origin, face, arcs=tuple(arcs))
 
     def point(self, name: str, at: Attachment, doc: str = "", role=None) -> None:
         """A named point whose position, velocity and acceleration are reported."""
@@ -332,6 +314,19 @@ class Mechanism:
         self.points.append((name, at, doc))
 
     # -- queries ---------------------------------------------------------------------------------------
+    def implied_joints(self) -> list[Joint]:
+        """The joints the bodies imply, in body order: a driven body's pin ``<body>.pivot`` to ground (its pivot,
+        its origin) and a slider's slide ``<body>.guide`` (its guide, its origin). The spanning tree satisfies
+        them, so they close no loop; they carry reactions and are drawn like declared joints."""
+        out = []
+        for body in self.bodies:
+            origin = Attachment(body, sp.S.Zero, sp.S.Zero)
+            if body.kind == "driven":
+                out.append(Joint(f"{body.name}.pivot", "revolute", body.pivot, origin))
+            elif body.kind == "slider":
+                out.append(Joint(f"{body.name}.guide", "prismatic", body.guide, origin))
+        return out
+
     def body(self, name: str) -> Body:
         for b in self.bodies:
             if b.name == name:
