@@ -174,6 +174,18 @@ class Load:
 
 
 @dataclass(frozen=True)
+class Element:
+    """A force element (spring, damper, torsion spring: sewgen.derive.elements) between two bodies, and the
+    names of its force outputs (``<name>.force``, ``.length``, ``.energy`` …)."""
+
+    name: str
+    kind: str
+    bodies: tuple
+    outputs: tuple
+    doc: str = ""
+
+
+@dataclass(frozen=True)
 class Output:
     """A derived force output (torque, power, shaking force, energies), its column in the force results."""
 
@@ -207,6 +219,7 @@ class Description:
     arcs: tuple = ()
     roles: dict = field(default_factory=dict)  # role -> (kind, name)
     kernels: tuple = ()
+    elements: tuple = ()  # force elements: springs, dampers, torsion springs
 
     # -- lookup by name --------------------------------------------------------------------------------------
     @cached_property
@@ -214,7 +227,7 @@ class Description:
         return {"param": {p.name: p for p in self.params}, "point": {p.name: p for p in self.points},
                 "body": {b.name: b for b in self.bodies}, "input": {i.name: i for i in self.inputs},
                 "coord": {c.name: c for c in self.coords}, "reaction": {r.name: r for r in self.reactions},
-                "joint": {j.name: j for j in self.joints}}
+                "joint": {j.name: j for j in self.joints}, "element": {e.name: e for e in self.elements}}
 
     def _get(self, what: str, name: str):
         table = self._by_name[what]
@@ -224,6 +237,9 @@ class Description:
 
     def param(self, name: str) -> Parameter:
         return self._get("param", name)
+
+    def element(self, name: str) -> Element:
+        return self._get("element", name)
 
     def point(self, name: str) -> Point:
         return self._get("point", name)
@@ -326,4 +342,6 @@ def describe(manifest: dict | str) -> Description:
         inputs=inputs, branches=branches, points=points, bodies=bodies, reactions=reactions, joints=joints,
         loads=loads, force_outputs=outputs, force_rows=tuple(man["force_rows"]),
         observables=tuple((o["name"], o["unit"]) for o in man["observables"]), anchors=anchors, arcs=arcs,
-        roles=roles, kernels=tuple(sorted(man.get("kernels", {}))))
+        roles=roles, kernels=tuple(sorted(man.get("kernels", {}))),
+        elements=tuple(Element(e["name"], e["kind"], tuple(e["bodies"]), tuple(e["outputs"]), e.get("doc", ""))
+                       for e in man.get("elements", ())))

@@ -158,12 +158,17 @@ class ForceAnalysis:
 
     @property
     def potential_energy(self) -> np.ndarray:
-        """Gravitational potential energy, zero at the frame's origin (J)."""
+        """Gravitational potential energy, zero at the frame's origin, plus the energy the springs store (J)."""
         return self._out("potential_energy")
 
     @property
+    def elastic_power(self) -> np.ndarray:
+        """d/dt of the energy the springs store (W); zero without springs."""
+        return self._out("elastic_power")
+
+    @property
     def load_power(self) -> np.ndarray:
-        """Total power of the external loads (W)."""
+        """Total power of the external loads and of the dampers (a damper's is ≤ 0) (W)."""
         return self._out("load_power")
 
     def load_powers(self) -> dict[str, np.ndarray]:
@@ -179,6 +184,14 @@ class ForceAnalysis:
                 p += np.where(mask, value, 0.0) * rate
             out[load.label] = out.get(load.label, 0.0) + p
         return out
+
+    def element(self, name: str) -> dict[str, np.ndarray]:
+        """The results of force element ``name`` over the sweep, by quantity: a spring's ``force`` (tension, N),
+        ``length`` (m) and ``energy`` (J); a damper's ``force``, ``length``, ``rate`` (m/s) and ``power``
+        (dissipated, W); a torsion spring's ``torque`` (N·m, on the joint's body a), ``deflection`` (rad) and
+        ``energy`` (sewgen.derive.elements)."""
+        el = self.mechanism.description.element(name)
+        return {out[len(name) + 1:]: self._out(out) for out in el.outputs}
 
     def force_matrix(self, index: int = 0):
         """A and b of A f = b at position ``index``, with this run's parameters, held inputs, gravity and loads."""
@@ -210,6 +223,10 @@ class ForceAnalysis:
         cols["kinetic_energy [J]"] = self.kinetic_energy
         cols["potential_energy [J]"] = self.potential_energy
         cols["load_power [W]"] = self.load_power
+        units = {o.name: o.unit for o in self.mechanism.description.force_outputs}
+        for el in self.mechanism.description.elements:
+            for out in el.outputs:
+                cols[f"{out} [{units[out]}]"] = self._out(out)
         return cols
 
     def to_csv(self, path) -> None:

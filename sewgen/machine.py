@@ -286,7 +286,8 @@ class MachineAnalysis:
         return out
 
     def energy_rate(self) -> np.ndarray:
-        """d/dt(kinetic + potential energy) of every moving part, from the kinematics alone (W)."""
+        """d/dt(kinetic + potential energy) of every moving part, from the kinematics alone, plus the rate at which
+        the springs store energy (W)."""
         gv = self.machine.gravity
         rate = self.machine.shaft.inertia * self.omega * self.alpha
         for g in self.machine.groups:
@@ -301,6 +302,7 @@ class MachineAnalysis:
                 com = bm.com
                 rate = rate + m * (com.vx * com.ax + com.vy * com.ay - gv[0] * com.vx - gv[1] * com.vy)
                 rate = rate + inertia * bm.omega * bm.alpha
+            rate = rate + fa.elastic_power  # the springs' stored energy
         for sm, _pos, vel, acc in self.core:
             rate = rate + sm.mass * np.sum(vel * (acc - gv[None, :]), axis=1)
         return rate

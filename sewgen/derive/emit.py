@@ -13,6 +13,7 @@ from pathlib import Path
 import jinja2
 
 from . import abi_header, drawing
+from .elements import ELEMENTS
 from .dyads import split_into_dyads
 from .kernels import KernelSet
 from .kinematics import Kinematics
@@ -50,6 +51,9 @@ def _force_manifest(kst: Kinetostatics) -> dict:
         "reactions": reactions,
         "force_outputs": [{"name": name, "unit": unit} for name, unit, _ in kst.outputs],
         "loads": [{"name": name, "component": comp, "body": body.name} for name, comp, body, _ in kst.load_slots],
+        "elements": [{"name": el.name, "kind": el.kind, "bodies": [b.name for b in el.bodies], "doc": el.doc,
+                      "outputs": [name for name, _, _ in ELEMENTS[el.kind].outputs(kst, el)]}
+                     for el in kst.mech.elements],
         "force_rows": kst.row_names,
         "force_blocks": [len(cols) for _, cols in kst.blocks],
     }

@@ -288,7 +288,7 @@ class KernelSet:
 
     def closed(self, dyads: list[Dyad]) -> Kernel:
         pr = self.printer
-        body = ["int st;"]
+        body = ["int st;"] if dyads else []  # no loop: nothing to solve
         total = 0
         for k, dyad in enumerate(dyads):
             keys = list(dyad.inputs)

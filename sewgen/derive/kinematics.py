@@ -149,7 +149,7 @@ class Kinematics:
     def _derive_motion(self) -> None:
         phi = sp.Matrix(self.closure)
         self.jac_q = phi.jacobian(self.q) if self.q else sp.zeros(0, 0)
-        self.jac_x = phi.jacobian(self.x)
+        self.jac_x = phi.jacobian(self.x) if self.closure else sp.zeros(0, len(self.x))  # a body with no loop
         self.vel_rhs = list(-(self.jac_x * sp.Matrix(self.xd))) if self.q else []
         vel = [sum((self.jac_q[i, j] * self.qd[j] for j in range(len(self.q))), sp.S.Zero)
                + sum((self.jac_x[i, k] * self.xd[k] for k in range(len(self.x))), sp.S.Zero)

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from .elements import ELEMENTS
 from .joints import Reaction, kind_of
 from .kinematics import Kinematics, rot
 from .model import Attachment, Body, DeclarationError
@@ -94,6 +95,15 @@ class Kinetostatics:
         gx, gy = self.kin.world(Attachment(body, body.com[0], body.com[1]))
         return (world_point[0] - gx, world_point[1] - gy)
 
+    def point_velocity(self, att: Attachment) -> tuple:
+        """World velocity of a point fixed in its body: v_G + ω × (point − G); zero on the frame."""
+        body = att.body
+        if not body.moving:
+            return (sp.S.Zero, sp.S.Zero)
+        rx, ry = self.own_arm(att)
+        w = self.o(f"{body.name}.angle_d")
+        return (self.o(f"{body.name}.com.x_d") - w * ry, self.o(f"{body.name}.com.y_d") + w * rx)
+
     def own_arm(self, att: Attachment) -> tuple:
         """A point fixed in its body, relative to the body's G: R(θ)(u − u_G, v − v_G)."""
         body = att.body
@@ -126,7 +136,18 @@ class Kinetostatics:
             dx, dy = self.own_arm(att)
             b[k if comp == "fx" else k + 1] -= load
             b[k + 2] -= (-dy if comp == "fx" else dx) * load
+        for ap in self._applied():  # force elements: known forces from positions and velocities
+            if ap.body.moving:
+                k = rows[ap.body]
+                dx, dy = self.own_arm(ap.at) if ap.at is not None else (0, 0)
+                b[k] -= ap.fx
+                b[k + 1] -= ap.fy
+                b[k + 2] -= dx * ap.fy - dy * ap.fx + ap.torque
         return A, b
+
+    def _applied(self) -> list:
+        """What every force element puts on each of its bodies (derive.elements), in declaration order."""
+        return [ap for el in self.mech.elements for ap in ELEMENTS[el.kind].applied(self, el)]
 
     # -- outputs derived from the solution ------------------------------------------------------------------
     def _outputs(self) -> list[tuple[str, str, sp.Expr]]:
@@ -152,6 +173,15 @@ class Kinetostatics:
             fx += sign * on_x
             fy += sign * on_y
             mz += sign * on_z
+        for el in self.mech.elements:  # an element anchored to the frame acts on the parts from the frame
+            if all(body.moving for body in el.bodies):
+                continue
+            for ap in ELEMENTS[el.kind].applied(self, el):
+                if ap.body.moving:
+                    px, py = kin.world(ap.at) if ap.at is not None else (0, 0)
+                    fx += ap.fx
+                    fy += ap.fy
+                    mz += px * ap.fy - py * ap.fx + ap.torque
         out += [("shaking.fx", "N", fx), ("shaking.fy", "N", fy), ("shaking.moment", "N*m", mz)]
         ke = pe = sp.S.Zero
         gx, gy = self.gravity
@@ -164,7 +194,14 @@ class Kinetostatics:
         for (name, comp, body, _att), load in zip(self.load_slots, self.loads):
             rate = self.o(f"{body.name}.angle_d") if comp == "torque" else self.o(f"{name}.{comp[1]}_d")
             power += load * rate
+        for el in self.mech.elements:  # springs store energy; dampers take power
+            pe += ELEMENTS[el.kind].energy(self, el)
+            power += ELEMENTS[el.kind].power(self, el)
         out += [("kinetic_energy", "J", ke), ("potential_energy", "J", pe), ("load_power", "W", power)]
+        elastic = sum((ELEMENTS[el.kind].energy_rate(self, el) for el in self.mech.elements), sp.S.Zero)
+        out.append(("elastic_power", "W", elastic))  # d/dt of the energy the springs store
+        for el in self.mech.elements:
+            out += ELEMENTS[el.kind].outputs(self, el)
         return out
 
     # -- solve plan -----------------------------------------------------------------------------------------

@@ -154,6 +154,7 @@ class Mechanism:
     joints: list = field(default_factory=list)
     points: list = field(default_factory=list)  # (name, Attachment, doc)
     inputs: list = field(default_factory=list)
+    elements: list = field(default_factory=list)  # force elements (derive.elements): springs, dampers
     roles: dict = field(default_factory=dict)  # role -> (kind, name): what a part is for the machine analyses
 
     def __post_init__(self):
@@ -227,7 +228,8 @@ class Mechanism:
         return body
 
     def _mass_prop(self, body: str, prop: str, kind: str, value, doc: str) -> sp.Expr:
-        """A mass property: a quantity string becomes parameter ``body.prop``; an expression is used as is."""
+        """A property of a part (mass, an element's stiffness …): a quantity string becomes parameter
+        ``part.prop``; an expression is used as is."""
         if isinstance(value, str):
             return self.param(f"{body}.{prop}", kind, value, doc)
         return sp.sympify(value)
@@ -306,6 +308,39 @@ class Mechanism:
         """
         origin = Attachment(cam, sp.S.Zero, sp.S.Zero) if isinstance(cam, Body) else cam
         return self._joint("cam", name, origin, face, arcs=tuple(arcs))
+
+    # -- force elements (derive.elements) ------------------------------------------------------------------
+    def _element(self, kind: str, name: str, a=None, b=None, joint=None, values=None, doc: str = ""):
+        from .elements import ELEMENTS, ForceElement  # elements build on this module's vocabulary
+
+        self._claim(name, "force element")
+        el = ForceElement(name, kind, a, b, joint, {}, doc)
+        ELEMENTS[kind].check(self, el)
+        for prop, (quantity, value) in (values or {}).items():
+            el.values[prop] = self._mass_prop(name, prop, quantity, value, f"{prop.replace('_', ' ')} of {name}")
+        self.elements.append(el)
+        return el
+
+    def spring(self, a: Attachment, b: Attachment, stiffness, free_length, preload="0 N", *, name: str,
+               doc: str = ""):
+        """A linear spring from point ``a`` to point ``b`` (any two bodies, ground included): tension
+        preload + stiffness·(length − free_length), positive when it pulls the points together. Values are
+        quantity strings ("1.2 N/mm", "30 mm", "2 N": parameters ``<name>.stiffness`` …) or expressions."""
+        return self._element("spring", name, a, b, values={
+            "stiffness": ("stiffness", stiffness), "free_length": ("length", free_length),
+            "preload": ("force", preload)}, doc=doc)
+
+    def damper(self, a: Attachment, b: Attachment, coefficient, *, name: str, doc: str = ""):
+        """A linear viscous damper from ``a`` to ``b``: tension coefficient·(d length/dt)."""
+        return self._element("damper", name, a, b, values={"coefficient": ("damping", coefficient)}, doc=doc)
+
+    def torsion_spring(self, joint: Joint, stiffness, free_angle="0 deg", preload="0 N*m", *, name: str,
+                       doc: str = ""):
+        """A torsion spring at revolute ``joint``: torque preload + stiffness·((θ_b − θ_a) − free_angle) acts on
+        the joint's body b as −T and on its body a as +T (the deflection is taken in (−180°, 180°])."""
+        return self._element("torsion_spring", name, joint=joint, values={
+            "stiffness": ("torsional_stiffness", stiffness), "free_angle": ("angle", free_angle),
+            "preload": ("torque", preload)}, doc=doc)
 
     def point(self, name: str, at: Attachment, doc: str = "", role=None) -> None:
         """A named point whose position, velocity and acceleration are reported."""
