@@ -122,7 +122,7 @@ class Reaction:
     offset: int
     grounded: bool
     input: str | None = None
-    sense: int = 1
+    sense: float = 1  # d(relative angle)/d(input): ±1, or a speed ratio
 
     @property
     def is_drive(self) -> bool:
@@ -322,7 +322,7 @@ def describe(manifest: dict | str) -> Description:
     bodies = tuple(Body(b["name"], b["kind"], b.get("doc", ""), int(b["offset"]), role=b.get("role"),
                         **_mass_params(b["name"], pnames)) for b in man["bodies"])
     reactions = tuple(Reaction(r["name"], r["kind"], r["a"], r["b"], tuple(r["columns"]), int(r["offset"]),
-                               bool(r["grounded"]), r.get("input"), int(r.get("sense", 1))) for r in man["reactions"])
+                               bool(r["grounded"]), r.get("input"), r.get("sense", 1)) for r in man["reactions"])
     if "joints" in man:
         joints = tuple(Joint(j["name"], j["kind"], j["a"], j["b"], j.get("reaction"), j.get("branch"))
                        for j in man["joints"])

@@ -136,6 +136,14 @@ class ForceAnalysis:
                            f"{', '.join(i.name for i in desc.inputs)}")
         return self._out(f"{input_name}.torque")
 
+    def drive_torque(self, body: str) -> np.ndarray:
+        """The torque that turns (or holds) driven body ``body`` at its pivot, on it from its pivot's body (N·m):
+        one actuator's share; an input's torque is Σ ratio · these over the bodies it drives."""
+        r = self._joint(f"{body}.drive")
+        if r is None:
+            raise KeyError(f"{self.mechanism.name} has no driven body {body!r}")
+        return self.frc[:, r.offset]
+
     def input_power(self, input_name: str = "shaft") -> np.ndarray:
         """Power the input delivers (W) = torque × input speed (zero for held inputs)."""
         self.torque(input_name)

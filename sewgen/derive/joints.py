@@ -43,7 +43,7 @@ class Reaction:
     at: Attachment | None  # point of b where the force acts (None: a pure torque)
     at_a: Attachment | None = None  # revolute: the coinciding point of a (its own moment arm)
     guide_angle: sp.Expr = sp.S.Zero  # slides and contacts: world angle of the guide line (or face)
-    sense: int = 1  # drive: body angle = sense * input + phase
+    sense: sp.Expr = sp.S.One  # drive: d(body's angle relative to its pivot's body)/d(input) = sense · ratio
     input_index: int = -1  # drive
 
     @property
@@ -310,7 +310,8 @@ class Drive(JointKind):
 
     def manifest(self, mech, r):
         """Input torque = Σ sense · drive torque of the bodies that input turns."""
-        return {"input": mech.inputs[r.input_index].name, "sense": r.sense}
+        rate = sp.sympify(r.sense)
+        return {"input": mech.inputs[r.input_index].name, "sense": int(rate) if rate.is_Integer else float(rate)}
 
 
 #: Every joint kind by name: the only registry the derivation consults.

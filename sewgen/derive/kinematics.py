@@ -91,10 +91,14 @@ class Kinematics:
                 pending.remove(body)
 
     def _try_place(self, body: Body, known: set):
-        if body.kind == "driven":
+        if body.kind == "driven":  # turns about its pivot relative to the pivot's body (ground: absolutely)
+            parent = body.pivot.body
+            if parent not in known:
+                return None
             x = self.x[body.input_index]
-            ox, oy = body.pivot.u, body.pivot.v
-            return (ox, oy, body.sense * x + body.phase if body.input_index == 0 else x)
+            ox, oy = self.world(body.pivot)
+            turn = body.sense * body.ratio * x + body.phase if body.input_index == 0 else x
+            return (ox, oy, self.pose[parent][2] + turn)
         if body.kind == "slider":
             g = body.guide
             if g.body not in known:

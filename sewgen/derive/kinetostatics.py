@@ -71,8 +71,8 @@ class Kinetostatics:
         out = [kind_of(j).reaction(kin, j) for j in mech.implied_joints() + mech.joints]
         for body in mech.bodies:
             if body.kind == "driven":
-                out.append(Reaction(f"{body.name}.drive", "drive", mech.ground, body, None,
-                                    sense=body.sense if body.input_index == 0 else 1,
+                rate = body.sense * body.ratio if body.input_index == 0 else sp.S.One  # d(relative angle)/d(input)
+                out.append(Reaction(f"{body.name}.drive", "drive", body.pivot.body, body, None, sense=rate,
                                     input_index=body.input_index))
         return out
 

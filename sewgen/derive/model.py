@@ -69,8 +69,9 @@ class Body:
     doc: str = ""
     pivot: Attachment | None = None  # driven: its pivot on ground
     input_index: int = -1  # driven: which input drives it
-    phase: sp.Expr = sp.S.Zero  # driven: angle = sense * input + phase
+    phase: sp.Expr = sp.S.Zero  # driven: angle = pivot body's angle + sense * ratio * input + phase
     sense: int = 1
+    ratio: sp.Expr = sp.S.One
     guide: Line | None = None  # slider: the line it travels on
     guess: float = 0.0  # link angle (rad) or slider travel (m) to start Newton from
     mass: sp.Expr = sp.S.Zero
@@ -235,23 +236,40 @@ class Mechanism:
         return sp.sympify(value)
 
     def driven(self, name: str, pivot: Attachment, phase="0 deg", sense: int = 1, doc: str = "",
-               mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None) -> Body:
-        """A body turned by the upper shaft: angle = sense * phi + phase, about ``pivot`` on ground."""
-        self._check_on_ground(pivot, name)
+               mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None, ratio=1) -> Body:
+        """A body turned by the upper shaft about ``pivot``: its angle relative to the pivot's body is
+        sense · ratio · phi + phase. ``pivot`` is a point of ground (an absolute drive: a crank on the shaft) or of
+        a moving body declared before (a relative drive: a motor or gear train at that joint). ``ratio`` is the
+        speed ratio (a rotary hook turns twice per stitch: 2), an exact number."""
+        self._check_pivot(pivot, name)
         if sense not in (1, -1):
             raise DeclarationError(f"{self.name}: sense of {name!r} must be +1 or -1")
+        ratio = self._ratio(ratio, name)
         ph = self.angle(f"{name}.phase", phase, f"phase of {name} relative to the shaft angle") if isinstance(phase, str) else sp.sympify(phase)
         return self._body(name, "driven", doc, mass, com, inertia, role=role, pivot=pivot, input_index=0, phase=ph,
-                          sense=sense)
+                          sense=sense, ratio=ratio)
 
     def held(self, name: str, pivot: Attachment, default: str, doc: str,
              mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None) -> Body:
-        """A body set by a held input (stitch regulator): its angle is an input that stays put in a run.
-        ``role`` tags the held input (e.g. "stitch_regulator")."""
-        self._check_on_ground(pivot, name)
+        """A body set by a held input (stitch regulator): its angle relative to the pivot's body is an input that
+        stays put in a run. ``pivot`` as for :meth:`driven`. ``role`` tags the held input (e.g.
+        "stitch_regulator")."""
+        self._check_pivot(pivot, name)
         self._role(role, "input", name)
         self.inputs.append(Input(name, "held", to_si(default, "angle", f"{self.name}.{name}"), unit_of(default), doc))
         return self._body(name, "driven", doc, mass, com, inertia, pivot=pivot, input_index=len(self.inputs) - 1)
+
+    def _ratio(self, ratio, name: str) -> sp.Expr:
+        """A speed ratio as an exact SymPy number (2, -1/2, 0.5 → 1/2); zero refused."""
+        if isinstance(ratio, bool) or not isinstance(ratio, (int, float, str, sp.Rational)):
+            raise DeclarationError(f"{self.name}: ratio of {name!r} must be a number, got {ratio!r}")
+        try:
+            value = sp.Rational(str(ratio)) if not isinstance(ratio, sp.Rational) else ratio
+        except (TypeError, ValueError, sp.SympifyError):
+            raise DeclarationError(f"{self.name}: ratio of {name!r} must be a number, got {ratio!r}") from None
+        if value == 0:
+            raise DeclarationError(f"{self.name}: ratio of {name!r} must not be zero")
+        return value
 
     def link(self, name: str, doc: str = "", guess: str = "0 deg",
              mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None) -> Body:
@@ -267,9 +285,10 @@ class Mechanism:
         return self._body(name, "slider", doc, mass, com, inertia, role=role, guide=guide,
                           guess=to_si(guess, "length", f"{self.name}.{name}.guess"))
 
-    def _check_on_ground(self, att: Attachment, name: str) -> None:
-        if not isinstance(att, Attachment) or att.body is not self.ground:
-            raise DeclarationError(f"{self.name}: pivot of {name!r} must be a point of ground")
+    def _check_pivot(self, att: Attachment, name: str) -> None:
+        if not isinstance(att, Attachment) or att.body not in self.bodies:
+            raise DeclarationError(f"{self.name}: pivot of {name!r} must be a point of ground or of a body "
+                                   "declared before it (body.at(u, v))")
 
     # -- joints and points -----------------------------------------------------------------------------
     def _joint(self, kind: str, name: str, a, b, **options) -> Joint:
