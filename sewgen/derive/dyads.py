@@ -1,12 +1,14 @@
 """Split a mechanism's loops into closed-form dyads (seed 001 §三, Makino's standard vector triangles).
 
 A loop that splits into two-unknown triangles solves in closed form, with no first guess and with the
-assembly branch an explicit sign (DESIGN.md §3). Three dyads cover the sewing-machine mechanisms:
+assembly branch an explicit sign (DESIGN.md §3). Four dyads cover the sewing-machine mechanisms:
 
 * RRR (BV4): two links pinned together, each pinned to a known body — four-bars, the take-up lever;
 * RRP: a link pinned to a slider on a known guide — the needle-bar crank-slider;
 * RPR: a slider on a link pinned to a known body, the slider pinned to a known body — the oscillating
   guide bar of the hook drive (seed 000 fig. 1-2(c)).
+* RRS: a link pinned to a known body whose other pin is held by a ball-jointed rod to a spatial crank's pin —
+  seed 003 eq. 1's spatial four-bar, an RRR triangle whose second side is the rod's in-plane reach.
 
 Each dyad lists the SymPy expressions of its known inputs (in earlier coordinates, inputs, parameters)
 and of its coordinates in terms of the runtime solver's outputs (csrc/sg_runtime.h sg_dyad_*).
@@ -24,7 +26,7 @@ from .model import Attachment, Body, Joint
 
 @dataclass
 class Dyad:
-    kind: str  # "rrr", "rrp", "rpr"
+    kind: str  # "rrr", "rrp", "rpr", "rrs"
     joint: Joint  # the joint whose branch sign picks the assembly
     bodies: tuple
     inputs: dict  # C local name -> list of SymPy expressions (known when the dyad is reached)
@@ -61,6 +63,7 @@ class _Split:
         self.used: set = set()
         self.dyads: list[Dyad] = []
         self.revolutes = [j for j in mech.joints if kind_of(j).dyad_letter == "R"]  # the pins dyads are made of
+        self.rods = [j for j in mech.joints if kind_of(j).dyad_letter == "S"]  # ball-jointed rods to spatial cranks
 
     def is_known_point(self, att: Attachment) -> bool:
         if att.body not in self.known_bodies:
@@ -106,6 +109,13 @@ class _Split:
                     ja = self.pins_to_known(b1, j)
                     if ja:
                         return self.rrp(j, b1, b2, ja)
+        for j in self.rods:  # RRS: a link pinned to a known point, its rod's crank pin known (a spatial four-bar)
+            b1 = j.b.body
+            if j in self.used or b1 not in unknown or b1.kind != "link" or j.a.body not in self.known_bodies:
+                continue
+            ja = self.pins_to_known(b1, None)
+            if ja:
+                return self.rrs(j, b1, ja)
         for s in unknown:  # RPR: a slider whose guide is an unknown link
             if s.kind != "slider" or s.guide.body not in unknown or s.guide.body.kind != "link":
                 continue
@@ -156,6 +166,26 @@ class _Split:
                     [(self.coord_of[b1], _angle(Jx - Px, Jy - Py) - _angle(*v1)), (self.coord_of[s], ssym)],
                     [(self.coord_of[b1], *_rotation_between(v1, (Jx - Px, Jy - Py)))],
                     f"+1: the larger travel of {s.name} at joint {j.name}")
+
+    def rrs(self, j, b1, ja) -> Dyad:
+        """Seed 003 eq. 1: the rocker's pin C lies on the circle of radius √(L² − (z_C − z_B)²) about B's
+        projection and on the circle about its pivot: an RRR triangle with the rod's in-plane reach as one side
+        (δ₁ = the branch: +1 puts C left of the line from the pivot to B's projection)."""
+        kin = self.kin
+        P = kin.world(_other(ja, b1))
+        a1, i1 = _mine(ja, b1), j.b
+        v1 = (i1.u - a1.u, i1.v - a1.v)
+        B = kin.world3(j.a)
+        reach = sp.sqrt(j.values["length"] ** 2 - (j.values["z"] - B[2]) ** 2)
+        Jx, Jy = sp.symbols("J_0 J_1", real=True)
+        Px, Py = sp.symbols("P_0 P_1", real=True)
+        self.mark(j, ja)
+        return Dyad("rrs", j, (b1,),
+                    {"P": list(P), "Q": [B[0], B[1]], "l": [sp.sqrt(v1[0] ** 2 + v1[1] ** 2), reach]},
+                    [(self.coord_of[b1], _angle(Jx - Px, Jy - Py) - _angle(*v1))],
+                    [(self.coord_of[b1], *_rotation_between(v1, (Jx - Px, Jy - Py)))],
+                    f"+1: pin {j.b.body.name} of rod {j.name} left of the line from {ja.name} to the crank pin's "
+                    "projection (seed 003 eq. 1: δ₁)")
 
     def rpr(self, s, bar, ja, jb) -> Dyad:
         kin = self.kin

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .drawing import Anchor, at_anchor, guide_anchors
-from .model import Arc, Attachment, Body, DeclarationError, Joint, Line
+from .model import Arc, Attachment, Body, DeclarationError, Joint, Line, SpatialPoint
 
 
 @dataclass
@@ -45,6 +45,7 @@ class Reaction:
     guide_angle: sp.Expr = sp.S.Zero  # slides and contacts: world angle of the guide line (or face)
     sense: sp.Expr = sp.S.One  # drive: d(body's angle relative to its pivot's body)/d(input) = sense · ratio
     input_index: int = -1  # drive
+    joint: Joint | None = None  # the declared joint, for kinds that need more than the fields above (a rod)
 
     @property
     def joint_kind(self) -> "JointKind":
@@ -111,7 +112,7 @@ class JointKind:
         """(fx, fy, mz about the world origin) of the force on b from a, in the unknowns ``f`` of ``r``."""
         return (sp.S.Zero, sp.S.Zero, sp.S.Zero)
 
-    def outputs(self, r: Reaction, f: list) -> list[tuple[str, str, sp.Expr]]:
+    def outputs(self, kst, r: Reaction, f: list) -> list[tuple[str, str, sp.Expr]]:
         """Results this reaction adds after the unknowns (name, unit, expression)."""
         return []
 
@@ -189,7 +190,7 @@ class _NormalForce(JointKind):
         nx, ny = r.normal
         return (nx * f[0], ny * f[0], (px * ny - py * nx) * f[0] + (f[1] if self.couple else 0))
 
-    def outputs(self, r, f):
+    def outputs(self, kst, r, f):
         """The normal force in frame components."""
         return [(f"{r.name}.fx", "N", r.normal[0] * f[0]), (f"{r.name}.fy", "N", r.normal[1] * f[0])]
 
@@ -297,6 +298,69 @@ class Cam(_NormalForce):
         return lines
 
 
+class Rod(JointKind):
+    """A rod with ball joints at both ends from a spatial crank's pin B (side a) to point C of a planar body
+    (side b, lifted ``z`` out of the plane): |C − B| = length (seed 003 eq. 1's spatial four-bar). A two-force
+    member: its reaction is the tension N, acting on C as −N·e and on B as +N·e, e = (C − B)/length.
+
+    On the planar body the in-plane components enter its rows (its bearing takes the out-of-plane part, given as
+    the output ``<name>.fz``); on the crank its x, y rows take the in-plane components and its moment row the
+    moment about its own axis, ((B − A) × N·e)·axis. The dyad letter "S": a link pinned to a known point whose
+    other point is at the rod's in-plane reach √(length² − Δz²) of B's projection closes in closed form as an
+    RRR triangle (:mod:`derive.dyads`)."""
+
+    name, columns, dyad_letter = "rod", ("tension",), "S"
+
+    def check(self, mech, name, a, b, values=None, **options):
+        if not isinstance(a, SpatialPoint) or not isinstance(b, Attachment) or b.body.axis is not None:
+            raise DeclarationError(f"{mech.name}: rod {name!r} needs a spatial crank's pin (crank.pin(...)) and a "
+                                   "point of a planar body")
+        if options.get("branch", 1) not in (1, -1):
+            raise DeclarationError(f"{mech.name}: branch of rod {name!r} must be +1 or -1")
+
+    @staticmethod
+    def ends(kin, joint):
+        """B and C in the machine frame (x, y, z)."""
+        return kin.world3(joint.a), kin.world3((joint.b, joint.values["z"]))
+
+    def direction(self, kin, joint):
+        """e = (C − B)/length."""
+        b, c = self.ends(kin, joint)
+        length = joint.values["length"]
+        return tuple((c[k] - b[k]) / length for k in range(3))
+
+    def closure(self, kin, joint):
+        b, c = self.ends(kin, joint)
+        length = joint.values["length"]
+        return [(f"{joint.name}.length", sum((c[k] - b[k]) ** 2 for k in range(3)) - length ** 2)]
+
+    def reaction(self, kin, joint):
+        return Reaction(joint.name, self.name, joint.a.body, joint.b.body, joint.b, joint=joint)
+
+    def rows(self, kst, r, body, sign):
+        e = self.direction(kst.kin, r.joint)
+        if body is r.b:  # −N·e at C
+            dx, dy = kst.own_arm(r.at)
+            return [(0, 0, -e[0]), (1, 0, -e[1]), (2, 0, -(dx * e[1] - dy * e[0]))]
+        b, _c = self.ends(kst.kin, r.joint)  # +N·e at B on the crank: in-plane force, moment about its axis
+        axis = body.axis
+        arm = [b[k] - axis.point[k] for k in range(3)]
+        moment = sum(axis.direction[k] * (arm[(k + 1) % 3] * e[(k + 2) % 3] - arm[(k + 2) % 3] * e[(k + 1) % 3])
+                     for k in range(3))
+        return [(0, 0, e[0]), (1, 0, e[1]), (2, 0, moment)]
+
+    def outputs(self, kst, r, f):
+        """The force on the planar body's pin C in machine axes (its z part goes to that body's bearing)."""
+        return [(f"{r.name}.{axis}", "N", -f[0] * component)
+                for axis, component in zip(("fx", "fy", "fz"), self.direction(kst.kin, r.joint))]
+
+    def anchors(self, kin, joint):
+        """B projected on the plane (on the crank) and C (on the planar body)."""
+        b, _c = self.ends(kin, joint)
+        return [Anchor(f"{joint.name}@{joint.a.body.name}", joint.a.body.name, "joint", joint.name, (b[0], b[1])),
+                at_anchor(kin, joint.b, f"{joint.name}@{joint.b.body.name}", "joint", joint.name)]
+
+
 class Drive(JointKind):
     """The torque that turns (or holds) a driven body, from the frame: a reaction, never declared."""
 
@@ -315,10 +379,10 @@ class Drive(JointKind):
 
 
 #: Every joint kind by name: the only registry the derivation consults.
-KINDS: dict[str, JointKind] = {k.name: k for k in (Revolute(), Prismatic(), Slot(), Cam(), Drive())}
+KINDS: dict[str, JointKind] = {k.name: k for k in (Revolute(), Prismatic(), Slot(), Cam(), Rod(), Drive())}
 
 #: The kinds a declaration may use (``Drive`` is implied by driven bodies).
-DECLARABLE = ("revolute", "prismatic", "slot", "cam")
+DECLARABLE = ("revolute", "prismatic", "slot", "cam", "rod")
 
 
 def kind_of(joint: Joint) -> JointKind:

@@ -63,6 +63,7 @@ _DYAD_CALL = {
     "rrr": ("double J[2];", "sg_dyad_rrr(P, Q, l[0], l[1], branch[{k}], J)"),
     "rrp": ("double s, J[2];", "sg_dyad_rrp(P, l[0], L0, u, branch[{k}], &s, J)"),
     "rpr": ("double s, theta;", "sg_dyad_rpr(D, w0, u, branch[{k}], &s, &theta)"),
+    "rrs": ("double J[2];", "sg_dyad_rrr(P, Q, l[0], l[1], branch[{k}], J)"),  # the rod's in-plane reach as l[1]
 }
 
 

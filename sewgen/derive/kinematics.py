@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .joints import KINDS, CamContact, kind_of
-from .model import Attachment, Body, DeclarationError, Mechanism
+from .model import Attachment, Body, DeclarationError, Mechanism, SpatialPoint
 
 
 def rot(theta, u, v):
@@ -66,6 +66,18 @@ class Kinematics:
         ox, oy, th = self.pose[att.body]
         du, dv = rot(th, att.u, att.v)
         return (ox + du, oy + dv)
+
+    def world3(self, point) -> tuple:
+        """(x, y, z) of a point in the machine frame: a spatial crank's pin (axis point + along·axis + radius·(cos θ
+        e1 + sin θ e2)), or a planar body's point lifted ``z`` out of the plane (given as (Attachment, z))."""
+        if isinstance(point, SpatialPoint):
+            axis, th = point.body.axis, self.pose[point.body][2]
+            c, s = sp.cos(th), sp.sin(th)
+            return tuple(axis.point[k] + point.along * axis.direction[k] + point.radius * (c * axis.e1[k] + s * axis.e2[k])
+                         for k in range(3))
+        att, z = point
+        x, y = self.world(att)
+        return (x, y, z)
 
     def _new_coord(self, body: Body, kind: str) -> sp.Symbol:
         suffix = "angle" if kind == "angle" else "travel"

@@ -162,7 +162,7 @@ class Kinetostatics:
             out.append((f"{inp.name}.power", "W", out[i][2] * kin.xd[i]))
         for r in self.reactions:  # what each kind adds (a normal force in frame components)
             c = col[r.name]
-            out += r.joint_kind.outputs(r, self.f[c:c + len(r.columns)])
+            out += r.joint_kind.outputs(self, r, self.f[c:c + len(r.columns)])
         fx = fy = mz = sp.S.Zero  # the frame's reactions on the moving parts
         for r in self.reactions:
             if not r.grounded:

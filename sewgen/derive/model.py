@@ -59,6 +59,27 @@ class Line:
     angle: sp.Expr
 
 
+@dataclass(frozen=True)
+class Axis:
+    """A fixed axis in the machine frame (x, y in the mechanism's plane, z out of it): a point on it, its unit
+    direction, and the unit vectors e1 (angle zero) and e2 = direction × e1 of the plane it turns in."""
+
+    point: tuple
+    direction: tuple
+    e1: tuple
+    e2: tuple
+
+
+@dataclass(frozen=True)
+class SpatialPoint:
+    """A point of a spatial crank: at ``radius`` from its axis in the plane it turns in, ``along`` the axis from
+    the axis point (seed 003's crank pin B of the spatial four-bar)."""
+
+    body: "Body"
+    radius: sp.Expr
+    along: sp.Expr
+
+
 @dataclass(eq=False)
 class Body:
     """A rigid body. ``kind`` is ground, driven (angle = input), link (free angle) or slider (travel)."""
@@ -74,13 +95,23 @@ class Body:
     ratio: sp.Expr = sp.S.One
     guide: Line | None = None  # slider: the line it travels on
     guess: float = 0.0  # link angle (rad) or slider travel (m) to start Newton from
+    axis: Axis | None = None  # spatial crank: the axis it turns about (its angle is measured from e1 to e2)
     mass: sp.Expr = sp.S.Zero
     com: tuple = (sp.S.Zero, sp.S.Zero)
     inertia: sp.Expr = sp.S.Zero
 
     def at(self, u, v) -> Attachment:
         """The point (u, v) of this body's frame: symbols, numbers (m) or quantity strings ("25 mm")."""
+        if self.axis is not None:
+            raise DeclarationError(f"{self.mech.name}: {self.name!r} turns about an axis in space: its points are "
+                                   f"{self.name}.pin(radius, along), not .at(u, v)")
         return Attachment(self, self._expr(u, "length"), self._expr(v, "length"))
+
+    def pin(self, radius, along="0 mm") -> SpatialPoint:
+        """A spatial crank's point at ``radius`` from its axis, ``along`` the axis from its axis point."""
+        if self.axis is None:
+            raise DeclarationError(f"{self.mech.name}: {self.name!r} is a planar body: its points are .at(u, v)")
+        return SpatialPoint(self, self._expr(radius, "length"), self._expr(along, "length"))
 
     def line(self, at=(0, 0), angle=0) -> Line:
         """The line through (u, v) of this body's frame at ``angle`` (rad, a symbol or "30 deg")."""
@@ -130,6 +161,7 @@ class Joint:
     b: Attachment | Line
     branch: int = 1
     arcs: tuple = ()
+    values: dict = field(default_factory=dict)  # a kind's own values (a rod's length, its planar end's z)
 
 
 @dataclass(frozen=True)
@@ -259,6 +291,45 @@ class Mechanism:
         self.inputs.append(Input(name, "held", to_si(default, "angle", f"{self.name}.{name}"), unit_of(default), doc))
         return self._body(name, "driven", doc, mass, com, inertia, pivot=pivot, input_index=len(self.inputs) - 1)
 
+    def spatial_crank(self, name: str, axis_point, axis, phase="0 deg", sense: int = 1, ratio=1, reference=None,
+                      doc: str = "", mass="0 g", inertia="0 kg*m**2", role=None) -> Body:
+        """A crank turned by the upper shaft about a fixed axis in space (seed 003's spatial four-bar: the crank
+        of the needle or looper drive, whose shaft is not parallel to the rocker's).
+
+        ``axis_point`` (x, y, z; the mechanism's plane is z = 0) is a point of the axis, ``axis`` its direction
+        (three numbers, normalised here); the crank angle sense · ratio · phi + phase is measured about the axis
+        from ``reference`` (three numbers; default: the machine's z axis, or x when the axis is along z) projected
+        into the plane the crank turns in. Its points are ``crank.pin(radius, along)``; its centre of mass is on
+        the axis and ``inertia`` is about the axis. In the force balance its rows are the in-plane components
+        of its bearings' resultant (reaction ``<name>.pivot`` at the axis point's projection) and the moment
+        about its own axis (the driving torque)."""
+        def coordinate(value, what):
+            if isinstance(value, str):
+                return sp.Float(to_si(value, "length", f"{self.name}.{name}.{what}"))
+            return sp.sympify(value)
+
+        try:
+            point = tuple(coordinate(value, what) for value, what in zip(axis_point, "xyz"))
+            direction = sp.Matrix([sp.Rational(str(c)) if not isinstance(c, sp.Expr) else c for c in axis])
+            ref = sp.Matrix([sp.Rational(str(c)) for c in reference]) if reference is not None else None
+        except (TypeError, ValueError, sp.SympifyError):
+            raise DeclarationError(f"{self.name}: axis of {name!r}: a point (x, y, z) and a direction of three "
+                                   "numbers") from None
+        if len(point) != 3 or direction.shape != (3, 1) or direction.norm() == 0:
+            raise DeclarationError(f"{self.name}: axis of {name!r}: a point (x, y, z) and a nonzero direction")
+        a = direction / direction.norm()
+        if ref is None:
+            ref = sp.Matrix([0, 0, 1]) if abs(float(a[2])) < 0.9 else sp.Matrix([1, 0, 0])
+        e1 = ref - ref.dot(a) * a
+        if float(e1.norm()) < 1e-9:
+            raise DeclarationError(f"{self.name}: reference of {name!r} is along its axis")
+        e1 = sp.simplify(e1 / e1.norm())
+        e2 = sp.simplify(a.cross(e1))
+        body = self.driven(name, self.ground.at(point[0], point[1]), phase=phase, sense=sense, doc=doc, mass=mass,
+                           inertia=inertia, role=role, ratio=ratio)
+        body.axis = Axis(point, tuple(a), tuple(e1), tuple(e2))
+        return body
+
     def _ratio(self, ratio, name: str) -> sp.Expr:
         """A speed ratio as an exact SymPy number (2, -1/2, 0.5 → 1/2); zero refused."""
         if isinstance(ratio, bool) or not isinstance(ratio, (int, float, str, sp.Rational)):
@@ -360,6 +431,15 @@ class Mechanism:
         return self._element("torsion_spring", name, joint=joint, values={
             "stiffness": ("torsional_stiffness", stiffness), "free_angle": ("angle", free_angle),
             "preload": ("torque", preload)}, doc=doc)
+
+    def rod(self, crank_pin: SpatialPoint, b: Attachment, length, name: str, z="0 mm", branch: int = 1) -> Joint:
+        """A rod with a ball joint at each end (seed 003's spatial four-bar ABCD): from a spatial crank's pin to
+        point ``b`` of a planar body, lifted ``z`` out of the mechanism's plane; it keeps their distance at
+        ``length``. A two-force member (massless: lump its mass on the crank and the rocker). Its reaction is
+        its tension. ``branch`` picks the rocker's assembly (seed 003 eq. 1's δ₁) when the rod closes a dyad."""
+        values = {"length": self._mass_prop(name, "length", "length", length, f"length of rod {name}"),
+                  "z": b.body._expr(z, "length") if isinstance(b, Attachment) else sp.S.Zero}
+        return self._joint("rod", name, crank_pin, b, branch=branch, values=values)
 
     def point(self, name: str, at: Attachment, doc: str = "", role=None) -> None:
         """A named point whose position, velocity and acceleration are reported."""

@@ -88,6 +88,12 @@ class PanelArtists:
                     line_c.append(color)
                     line_w.append(lw * 1.6)
                     line_s.append("solid")
+            for ba, bb, ends in lk.rods:
+                if keep(ba) or keep(bb):
+                    lines.append(ends)
+                    line_c.append(color)
+                    line_w.append(lw)
+                    line_s.append("solid")
             for gd in lk.guides:
                 if not gd.fixed and keep(gd.body):
                     lines.append(gd.ends)

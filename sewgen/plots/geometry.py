@@ -68,6 +68,7 @@ class Linkage:
     (n, 2)}, each joint's attachment on each of its bodies (ground included). ``pins``: (n, m, 2) the moving
     pins. ``pivots``: (k, 2) ground pivots. ``circles``: (centre (2,), radius) of the cranks the shaft turns.
     ``guides``, ``sliders``: see :class:`Guide`, :class:`Slider`. ``cams``: cam body -> profile (n, m, 2).
+    ``rods``: (crank, body, (n, 2, 2)) each ball-jointed rod from its crank pin's projection to its planar pin.
     ``points``: every named point (n, 2); ``marks``: the points whose paths are drawn (role-tagged first).
     ``roles``: point role -> point name. ``body_roles``: body -> role."""
 
@@ -81,6 +82,7 @@ class Linkage:
     guides: list = field(default_factory=list)
     sliders: list = field(default_factory=list)
     cams: dict = field(default_factory=dict)
+    rods: list = field(default_factory=list)  # (body, body, (n, 2, 2) mm): ball-jointed rods, end to end
     points: dict = field(default_factory=dict)
     marks: list = field(default_factory=list)
     roles: dict = field(default_factory=dict)
@@ -155,10 +157,11 @@ def _outline(places: list) -> np.ndarray | None:
         return None
     pts = np.stack(places, axis=1)  # (n, k, 2)
     first = pts[0]
-    scale = max(float(np.ptp(first, axis=0).max()), 1e-9)
+    scale = max(float(np.ptp(pts.reshape(-1, 2), axis=0).max()), 1e-9)
+    apart = lambda i, j: float(np.hypot(*(pts[:, i] - pts[:, j]).T).max())  # noqa: E731 (a projected body is not rigid)
     keep = []
     for i in range(len(first)):
-        if all(_dist(first[i], first[j]) > 1e-6 * scale for j in keep):
+        if all(apart(i, j) > 1e-6 * scale for j in keep):
             keep.append(i)
     if len(keep) < 2:
         return None
@@ -200,6 +203,11 @@ def linkage_of(mech, motion, *, p=None, held=None, group: str = "") -> Linkage:
         ol = _outline(places[b.name])
         if ol is not None:
             lk.bodies[b.name] = ol
+    for jname, sides in lk.joints.items():  # a rod to a spatial crank: a line between its ball ends
+        if kinds.get(jname) == "rod" and len(sides) == 2:
+            (ba, ea), (bb, eb) = sides.items()
+            lk.rods.append((ba, bb, np.stack([ea, eb], axis=1)))
+            pins += [ea, eb]
     _pivots(desc, kinds, lk, pins, len(motion.phi))
     return lk
 
