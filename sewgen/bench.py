@@ -465,7 +465,7 @@ def table(rows: list[dict]) -> str:
             continue
         if "ratio" in x:  # a row timed against a peer in the same run
             check = (f"{'ok' if x['ratio'] >= x['target_ratio'] else 'MISSES'} {x['ratio']:.2f}x of "
-                     f"{_si(x['peer_positions_per_s'])} without (>= {x['target_ratio']:.2f}x)")
+                     f"{_si(x['peer_positions_per_s'])} {x.get('peer', 'without')} (>= {x['target_ratio']:.2f}x)")
         else:
             check = "-" if "agree" not in x else (f"ok {x['max_rel_diff']:.0e}" if x["agree"] else
                                                   f"MISMATCH {x['max_rel_diff']:.1e} ({x['worst']})")
@@ -551,6 +551,35 @@ def _spring_entry(cfg: Config) -> Result:
 
 
 register_entry("four_bar", "kinetostatics+spring", _spring_entry)
+
+
+def _rssr():
+    """A spatial crank-rocker (seed 003's needle-drive four-bar, axes perpendicular) with the four-bar's rocker."""
+    from .derive.model import Mechanism
+
+    def declare():
+        m = Mechanism("bench_rssr", "a spatial crank-rocker")
+        crank = m.spatial_crank("crank", ("50 mm", "20 mm", "-30 mm"), (1, 0, 0), inertia="2e-6 kg*m**2")
+        rocker = m.link("rocker", guess="90 deg", mass="25 g", com=("15 mm", "0 mm"), inertia="3e-6 kg*m**2")
+        m.revolute(m.ground.at(0, 0), rocker.at(0, 0), "D")
+        m.rod(crank.pin("8 mm"), rocker.at("30 mm", 0), "60 mm", "rod")
+        return m
+
+    return sewgen.load(declare)
+
+
+def _rssr_entry(cfg: Config) -> Result:
+    """Kinematics of the spatial crank-rocker against the planar four-bar's, in the same run."""
+    phi = cfg.sweep_angles()
+    rates = []
+    for mech in (_rssr(), _four_bar(False)):
+        call, _ = raw_sweep(mech, phi)
+        rates.append(cfg.positions / best_time(call, cfg.repeats, cfg.min_time))
+    return rates[0], None, {"raw_c_positions_per_s": rates[0], "peer_positions_per_s": rates[1],
+                            "ratio": rates[0] / rates[1], "target_ratio": 1.0, "peer": "the planar four-bar"}
+
+
+register_entry("rssr", "kinematics", _rssr_entry)
 register_entry("cli", "import sewgen", _wall_entry(["-c", "import sewgen"], 300.0))
 register_entry("cli", "analyze --no-plots", _wall_entry(["-m", "sewgen", "analyze", "jb1-3", "--out", "out",
                                                          "--no-plots"], 1000.0))

@@ -229,6 +229,12 @@ class Description:
                 "coord": {c.name: c for c in self.coords}, "reaction": {r.name: r for r in self.reactions},
                 "joint": {j.name: j for j in self.joints}, "element": {e.name: e for e in self.elements}}
 
+    @cached_property
+    def angle_columns(self) -> tuple[list, list]:
+        """Columns of the angle results: angle coordinates in q, angles (unit rad) among the observables."""
+        return ([c.index for c in self.coords if c.unit == "rad"],
+                [k for k, (_name, unit) in enumerate(self.observables) if unit == "rad"])
+
     def _get(self, what: str, name: str):
         table = self._by_name[what]
         if name not in table:

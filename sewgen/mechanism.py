@@ -475,8 +475,11 @@ class Sweep:
         return call
 
     def run(self) -> int:
-        """Run the sweep in C (the GIL released); returns the number of positions whose status is not SG_OK."""
-        return self.bind()()
+        """Run the sweep in C (the GIL released), then make every angle continuous over the sweep; returns the
+        number of positions whose status is not SG_OK."""
+        failed = self.bind()()
+        continuous_angles(self.mechanism.description, self.q, self.obs)
+        return failed
 
     def check(self) -> None:
         """Raise the typed error of the first failing position (naming its shaft angle), if any failed."""
@@ -500,6 +503,18 @@ class Sweep:
         if not self.forces:
             raise ValueError("this sweep was prepared without forces (prepare(..., forces=True))")
         return ForceAnalysis(self.mechanism, self.motion(), self.frc, self.settings)
+
+
+def continuous_angles(desc, q: np.ndarray, obs: np.ndarray) -> None:
+    """Every angle result (angle coordinates, body angles) continuous along the sweep, in place: no 2π jumps
+    (a closed-form dyad's atan2 wraps at ±180°), the first position in (−π, π] (issue 12, item 5). Only angles
+    change, by whole turns, so every sine and cosine — and every result computed from them — stays the same."""
+    qa, oa = desc.angle_columns
+    for arr, cols in ((q, qa), (obs, oa)):
+        if cols and arr.ndim == 2 and len(arr):
+            block = np.unwrap(arr[:, cols], axis=0)
+            block -= 2 * np.pi * np.ceil((block[:1] - np.pi) / (2 * np.pi))
+            arr[:, cols] = block
 
 
 def _si(mechanism: str, value, kind: str, name: str) -> float:
