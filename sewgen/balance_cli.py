@@ -55,7 +55,9 @@ def add_parser(subparsers) -> None:
                               description="Partial balancing of the needle-bar crank-slider by a counterweight on "
                               "the crank: optimum K, residual inertia force before (K = 0) and after.",
                               epilog=EXAMPLE, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("target", choices=["needle-bar"], help="the mechanism to balance")
+    p.add_argument("target", choices=["needle-bar", "machine"],
+                   help="needle-bar: seed 002's counterweight; machine: a whole machine (seed 000's three methods)")
+    p.add_argument("machine_model", nargs="?", metavar="MODEL", help="machine: its model file or built-in name")
     p.add_argument("--model", metavar="FILE", help="a TOML model file (keys as the options, with underscores)")
     for name, (_, text) in QUANTITIES.items():
         p.add_argument(_opt(name), dest=name, metavar="Q", help=text)
@@ -68,6 +70,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--plot", default="needle_bar_balance.png", metavar="FILE",
                    help="PNG of F(φ) before/after and of F1, F2, objective over K (default needle_bar_balance.png)")
     p.add_argument("--no-plot", action="store_true", help="write no plot")
+    from .balance_machine_cli import add_arguments
+
+    add_arguments(p)
     p.set_defaults(fn=cmd_balance)
 
 
@@ -214,6 +219,13 @@ def _table(model, res, series, sector, plot_path) -> str:
 
 
 def cmd_balance(args) -> int:
+    if args.target == "machine":
+        from .balance_machine_cli import run
+
+        args.model = args.machine_model
+        return run(args)
+    if args.machine_model:
+        _fail(f"needle-bar takes no positional model ({args.machine_model!r}): use --model FILE")
     model, weights, series, points, sector_in = build(args)
     res = bal.optimise(model, weights, series, points)
     sector = _size_sector(res.counterweight_mr, sector_in) if sector_in else None

@@ -342,6 +342,7 @@ SHAFT = {
     "mass": Field("mass", doc="mass of the shaft core"),
     "mass_z": Field("length", doc="z of the core's centre of mass"),
     "masses": Field("list", False),
+    "counterweights": Field("list", False, "planes where `sewgen balance machine` may put counterweights"),
     "belt_pull": Field("force", False, "the belt's radial pull on the pulley, T1 + T2"),
     "belt_direction": Field("angle", False, "direction of the belt pull in the frame (from +x)"),
 }

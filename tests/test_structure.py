@@ -29,7 +29,7 @@ def test_import_and_a_catalog_sweep_load_no_derivation_and_no_scipy():
     code = ("import sys, sewgen\n"
             "m = sewgen.mechanism('feed')\n"
             "m.solve(sewgen.shaft_angles(5), speed=104.7)\n"
-            "print(sorted(k for k in ('sympy', 'jinja2', 'scipy', 'pint', 'sewgen.derive') if k in sys.modules))\n"
+            "print(sorted(k for k in ('sympy', 'jinja2', 'scipy', 'pint', 'cvxpy', 'sewgen.derive') if k in sys.modules))\n"
             "m.kinetostatics(sewgen.shaft_angles(5), speed='1000 rpm')\n"
             "print(sorted(k for k in ('sympy', 'jinja2', 'sewgen.derive') if k in sys.modules))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
