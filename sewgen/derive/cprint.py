@@ -44,6 +44,10 @@ class KernelPrinter(C99CodePrinter):
             return f"(1.0/{self.parenthesize(base, 1000)})"
         return super()._print_Pow(expr)
 
+    def _print_sign(self, expr):  # sign(x): +1, -1, or 0 at exactly 0 (Coulomb friction at rest: none)
+        a = self._print(expr.args[0])
+        return f"(({a}) > 0.0 ? 1.0 : (({a}) < 0.0 ? -1.0 : 0.0))"
+
     def _print_NumberSymbol(self, expr):  # pi, E, ...: a literal, never a macro or a declaration
         return repr(float(expr))
 

@@ -123,6 +123,22 @@ class JointKind:
     def anchors(self, kin, joint: Joint) -> list[Anchor]:
         return []
 
+    # -- Coulomb friction (issue 12, item 4) ----------------------------------------------------------------
+    has_friction = False
+    friction_unit = ""
+
+    def relative_rate(self, kst, r: Reaction) -> sp.Expr:
+        """The relative motion friction opposes: b's rotation against a's (rad/s), or its sliding (m/s)."""
+        raise NotImplementedError(self.name)
+
+    def friction_magnitude(self, kst, r: Reaction, f: list, mu, radius) -> sp.Expr:
+        """The friction moment or force on b from a (signed: against the relative motion) given the reaction."""
+        raise NotImplementedError(self.name)
+
+    def friction_loads(self, kst, r: Reaction, fr) -> list[tuple]:
+        """(body, fx, fy, moment about its G) the friction ``fr`` puts on each of the joint's bodies."""
+        raise NotImplementedError(self.name)
+
     def prepare(self, kin, joints: list) -> None:
         """Called once per mechanism with every joint of this kind, before the loops close."""
 
@@ -164,6 +180,19 @@ class Revolute(JointKind):
         return [at_anchor(kin, joint.a, f"{joint.name}@{joint.a.body.name}", "joint", joint.name),
                 at_anchor(kin, joint.b, f"{joint.name}@{joint.b.body.name}", "joint", joint.name)]
 
+    has_friction, friction_unit = True, "N*m"
+
+    def relative_rate(self, kst, r):
+        """ω_b − ω_a."""
+        return sum((s * kst.o(f"{body.name}.angle_d") for s, body in ((1, r.b), (-1, r.a)) if body.moving), sp.S.Zero)
+
+    def friction_magnitude(self, kst, r, f, mu, radius):
+        """−μ·r·|F|·sign(ω_b − ω_a): the pin's friction moment on b (the friction circle, radius μ·r)."""
+        return -mu * radius * sp.sqrt(f[0] * f[0] + f[1] * f[1]) * sp.sign(self.relative_rate(kst, r))
+
+    def friction_loads(self, kst, r, fr):
+        return [(r.b, sp.S.Zero, sp.S.Zero, fr), (r.a, sp.S.Zero, sp.S.Zero, -fr)]
+
 
 class _NormalForce(JointKind):
     """Slides and contacts: one normal force N along n at the point ``at`` (a prismatic adds a couple)."""
@@ -193,6 +222,32 @@ class _NormalForce(JointKind):
     def outputs(self, kst, r, f):
         """The normal force in frame components."""
         return [(f"{r.name}.fx", "N", r.normal[0] * f[0]), (f"{r.name}.fy", "N", r.normal[1] * f[0])]
+
+    has_friction, friction_unit = True, "N"
+
+    def _tangent(self, r):
+        return (sp.cos(r.guide_angle), sp.sin(r.guide_angle))
+
+    def relative_rate(self, kst, r):
+        """The sliding speed along the guide: t · (v_b − v_a) at the contact point."""
+        point = kst.kin.world(r.at)
+        (vbx, vby), (vax, vay) = kst.velocity_at(r.b, point), kst.velocity_at(r.a, point)
+        tx, ty = self._tangent(r)
+        return tx * (vbx - vax) + ty * (vby - vay)
+
+    def friction_magnitude(self, kst, r, f, mu, radius):
+        """−μ·|N|·sign(sliding speed): the friction force on b along the guide."""
+        return -mu * sp.Abs(f[0]) * sp.sign(self.relative_rate(kst, r))
+
+    def friction_loads(self, kst, r, fr):
+        tx, ty = self._tangent(r)
+        point = kst.kin.world(r.at)
+        out = []
+        for body, s in ((r.b, 1), (r.a, -1)):
+            if body.moving:
+                dx, dy = kst.arm(body, point)
+                out.append((body, s * fr * tx, s * fr * ty, s * fr * (dx * ty - dy * tx)))
+        return out
 
     def anchors(self, kin, joint):
         """The guide line of body a, the pin or slider point of body b."""
@@ -231,6 +286,7 @@ class Cam(_NormalForce):
     Side a is the cam's origin, side b the face. Reaction: the normal force through the arc's centre."""
 
     name, columns = "cam", ("normal",)
+    has_friction = False  # a cam's contact rolls and slides at once: no Coulomb model here
 
     def check(self, mech, name, a, b, arcs=(), **options):
         cam = a.body if isinstance(a, Attachment) else None

@@ -59,6 +59,10 @@ def _unused(body, *names):
     return [f"(void){n};" for n in names if not re.search(rf"\b{n}\b", text)]
 
 
+#: Coulomb friction's fixed point: relative change of the friction loads that ends it, and the most iterations.
+FRICTION_RTOL = 1e-13
+FRICTION_ITER = 100
+
 _DYAD_CALL = {
     "rrr": ("double J[2];", "sg_dyad_rrr(P, Q, l[0], l[1], branch[{k}], J)"),
     "rrp": ("double s, J[2];", "sg_dyad_rrp(P, l[0], L0, u, branch[{k}], &s, J)"),
@@ -212,7 +216,7 @@ class KernelSet:
         outs = kst.outputs
         exprs = ([kst.schur[ij] for ij in schur] + [kst.schur_rhs[i] for i in sorted(kst.schur_rhs)]
                  + [e for *_, b_i, row in steps for e in [b_i] + [v for _, v in row]]
-                 + [e for _, _, e in outs])
+                 + [e for _, _, e in outs] + [update for *_, update in kst.frictions])
         repl, red = _cse(self.prepare(exprs))
         late: set = set()
         for t, e in repl:
@@ -225,18 +229,31 @@ class KernelSet:
         for j, _i, piv, _b, row in steps:
             b_i = next(it)
             back.append((j, (b_i - sum((next(it) * f[l] for l, _ in row), sp.S.Zero)) / piv))
-        r_out = list(it)
-        body = self.selection_block() + _temps(pr, [(t, e) for t, e in repl if t not in late])
+        rest = list(it)
+        nfr = len(kst.frictions)
+        r_out, r_fr = rest[:len(rest) - nfr], rest[len(rest) - nfr:]
+        solve = _temps(pr, [(t, e) for t, e in repl if t not in late])
         for rows, cols in kst.blocks:
-            body += self._block_solve(rows, cols, a, rhs, f)
-        body += [f"out[{j}] = {pr.doprint(e)};" for j, e in reversed(back)]
-        body += _temps(pr, [(t, e) for t, e in repl if t in late])
+            solve += self._block_solve(rows, cols, a, rhs, f)
+        solve += [f"out[{j}] = {pr.doprint(e)};" for j, e in reversed(back)]
+        solve += _temps(pr, [(t, e) for t, e in repl if t in late])
         n = len(f)
-        body += [f"out[{n + k}] = {pr.doprint(e)};" for k, e in enumerate(r_out)]
+        finish = [f"out[{n + k}] = {pr.doprint(e)};" for k, e in enumerate(r_out)]
         outputs = [f"out[{k}]" for k in range(n + len(r_out))]
-        body += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
+        finish += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;", "return SG_OK;"]
+        if nfr:  # Coulomb friction: fr <- its value from the reactions, until it settles (A never changes)
+            loop = solve + [f"double frn[{nfr}];"] + [f"frn[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_fr)]
+            loop += ["double d = 0.0, s = 0.0;",
+                     f"for (int k = 0; k < {nfr}; ++k) {{ d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }}",
+                     f"if (d <= {FRICTION_RTOL!r} * s) {{"] + ["    " + line for line in finish] + ["}",
+                     f"if (it >= {FRICTION_ITER}) return SG_NO_CONVERGENCE;",
+                     f"for (int k = 0; k < {nfr}; ++k) fr[k] = frn[k];"]
+            body = [f"double fr[{nfr}] = {{0.0}};", "for (int it = 0; ; ++it) {"] + ["    " + x for x in loop] + ["}"]
+        else:
+            body = solve + finish
+        body = self.selection_block() + body
         names = ("q", "cq", "x", "cx", "xd", "c", "obs", "gv", "ld", "out")
-        body = _unused(body, *names) + body + ["return SG_OK;"]
+        body = _unused(body, *names) + body
         return Kernel(f"{self.prefix}_forces",
                       self._signature("forces"),
                       body, ops(e for _, e in repl) + ops(red))
@@ -275,10 +292,12 @@ class KernelSet:
         return ["{"] + ["    " + line for line in lines] + ["}"]
 
     def force_matrix(self, kst: Kinetostatics) -> Kernel:
-        """A (row-major) and b as they are, for inspection, tests and baselines."""
+        """A (row-major) and b as they are, for inspection, tests and baselines (b without the friction loads,
+        which depend on the reactions)."""
         pr, A, n = self.printer, kst.A, len(kst.f)
         nz = [(i, j) for i in range(n) for j in range(n) if A[i, j] != 0]
-        repl, red = _cse(self.prepare([A[i, j] for i, j in nz] + list(kst.b)))
+        no_friction = {fr: 0 for _r, fr, _u in kst.frictions}  # b as without friction (it needs the reactions)
+        repl, red = _cse(self.prepare([A[i, j] for i, j in nz] + [e.xreplace(no_friction) for e in kst.b]))
         body = self.selection_block() + _temps(pr, repl) + [f"for (int k = 0; k < {n * n}; ++k) A[k] = 0.0;"]
         body += [f"A[{i * n + j}] = {pr.doprint(e)};" for (i, j), e in zip(nz, red)]
         body += [f"b[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[len(nz):])]

@@ -58,6 +58,7 @@ class Kinetostatics:
             self.column[r.name] = k
             k += len(r.columns)
         self.row_names = [f"{b.name}.{e}" for b in self.moving for e in ("x", "y", "moment")]
+        self.frictions = self._frictions()
         self.A, self.b = self._balance()
         self.eliminated, self.schur, self.schur_rhs = self._eliminate_constant_pivots()
         self.blocks = self._block_order()
@@ -74,6 +75,19 @@ class Kinetostatics:
                 rate = body.sense * body.ratio if body.input_index == 0 else sp.S.One  # d(relative angle)/d(input)
                 out.append(Reaction(f"{body.name}.drive", "drive", body.pivot.body, body, None, sense=rate,
                                     input_index=body.input_index))
+        return out
+
+    def _frictions(self) -> list[tuple]:
+        """(reaction, symbol fr_k, its update from the reactions) of every joint with Coulomb friction: the
+        friction moment or force is a known load in b, iterated to a fixed point with the reactions (the
+        forces kernel: fr ← update(f) until it settles; A never changes)."""
+        by_name = {r.name: r for r in self.reactions}
+        out = []
+        for k, (name, mu, radius) in enumerate(self.mech.frictions):
+            r = by_name[name]
+            c = self.column[r.name]
+            update = r.joint_kind.friction_magnitude(self, r, self.f[c:c + len(r.columns)], mu, radius)
+            out.append((r, sp.Symbol(f"fr_{k}", real=True), update))
         return out
 
     def _load_slots(self) -> list[tuple]:
@@ -101,6 +115,14 @@ class Kinetostatics:
         if not body.moving:
             return (sp.S.Zero, sp.S.Zero)
         rx, ry = self.own_arm(att)
+        w = self.o(f"{body.name}.angle_d")
+        return (self.o(f"{body.name}.com.x_d") - w * ry, self.o(f"{body.name}.com.y_d") + w * rx)
+
+    def velocity_at(self, body: Body, world_point) -> tuple:
+        """World velocity of the point of ``body`` that is at ``world_point`` now: v_G + ω × (point − G)."""
+        if not body.moving:
+            return (sp.S.Zero, sp.S.Zero)
+        rx, ry = self.arm(body, world_point)
         w = self.o(f"{body.name}.angle_d")
         return (self.o(f"{body.name}.com.x_d") - w * ry, self.o(f"{body.name}.com.y_d") + w * rx)
 
@@ -136,6 +158,13 @@ class Kinetostatics:
             dx, dy = self.own_arm(att)
             b[k if comp == "fx" else k + 1] -= load
             b[k + 2] -= (-dy if comp == "fx" else dx) * load
+        for r, fr, _update in self.frictions:  # friction: loads in b that the kernel iterates with f
+            for body, fx, fy, moment in r.joint_kind.friction_loads(self, r, fr):
+                if body.moving:
+                    k = rows[body]
+                    b[k] -= fx
+                    b[k + 1] -= fy
+                    b[k + 2] -= moment
         for ap in self._applied():  # force elements: known forces from positions and velocities
             if ap.body.moving:
                 k = rows[ap.body]
@@ -173,6 +202,15 @@ class Kinetostatics:
             fx += sign * on_x
             fy += sign * on_y
             mz += sign * on_z
+        for r, fr, _update in self.frictions:  # friction in a frame joint: from the frame too
+            if not r.grounded:
+                continue
+            for body, bx, by, moment in r.joint_kind.friction_loads(self, r, fr):
+                if body.moving:
+                    gx_, gy_ = kin.world(Attachment(body, body.com[0], body.com[1]))
+                    fx += bx
+                    fy += by
+                    mz += moment + gx_ * by - gy_ * bx
         for el in self.mech.elements:  # an element anchored to the frame acts on the parts from the frame
             if all(body.moving for body in el.bodies):
                 continue
@@ -197,11 +235,16 @@ class Kinetostatics:
         for el in self.mech.elements:  # springs store energy; dampers take power
             pe += ELEMENTS[el.kind].energy(self, el)
             power += ELEMENTS[el.kind].power(self, el)
+        for r, fr, _update in self.frictions:  # friction's power on the parts (≤ 0)
+            power += fr * r.joint_kind.relative_rate(self, r)
         out += [("kinetic_energy", "J", ke), ("potential_energy", "J", pe), ("load_power", "W", power)]
         elastic = sum((ELEMENTS[el.kind].energy_rate(self, el) for el in self.mech.elements), sp.S.Zero)
         out.append(("elastic_power", "W", elastic))  # d/dt of the energy the springs store
         for el in self.mech.elements:
             out += ELEMENTS[el.kind].outputs(self, el)
+        for r, fr, _update in self.frictions:
+            out += [(f"{r.name}.friction", r.joint_kind.friction_unit, fr),
+                    (f"{r.name}.friction_power", "W", -fr * r.joint_kind.relative_rate(self, r))]
         return out
 
     # -- solve plan -----------------------------------------------------------------------------------------

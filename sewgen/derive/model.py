@@ -188,6 +188,7 @@ class Mechanism:
     points: list = field(default_factory=list)  # (name, Attachment, doc)
     inputs: list = field(default_factory=list)
     elements: list = field(default_factory=list)  # force elements (derive.elements): springs, dampers
+    frictions: list = field(default_factory=list)  # Coulomb friction: (joint name, coefficient, pin radius)
     roles: dict = field(default_factory=dict)  # role -> (kind, name): what a part is for the machine analyses
 
     def __post_init__(self):
@@ -440,6 +441,29 @@ class Mechanism:
         values = {"length": self._mass_prop(name, "length", "length", length, f"length of rod {name}"),
                   "z": b.body._expr(z, "length") if isinstance(b, Attachment) else sp.S.Zero}
         return self._joint("rod", name, crank_pin, b, branch=branch, values=values)
+
+    def friction(self, joint, coefficient="0", pin_radius="0 mm") -> None:
+        """Coulomb friction in ``joint`` (a Joint, or the name of one — also a body's implied ``<body>.pivot`` or
+        ``<slider>.guide``): a pin's friction moment μ·r·|F| against the relative rotation, a slide's or slot's
+        friction force μ·|N| against the sliding (derive.kinetostatics solves for it with the reactions).
+        ``coefficient`` and ``pin_radius`` become parameters ``<joint>.friction`` and ``<joint>.pin_radius``; a
+        coefficient of 0 (the seeds' assumption, the default) switches it off."""
+        names = {j.name: j for j in self.joints + self.implied_joints()}
+        name = joint.name if isinstance(joint, Joint) else joint
+        if name not in names:
+            raise DeclarationError(f"{self.name}: friction: no joint {name!r}; joints: {', '.join(sorted(names))}")
+        from .joints import KINDS  # joints builds on this module's vocabulary
+
+        kind = KINDS[names[name].kind]
+        if not kind.has_friction:
+            raise DeclarationError(f"{self.name}: friction in {name!r}: a {kind.name} joint has no friction model "
+                                   f"(joints that have: {', '.join(k for k, v in KINDS.items() if v.has_friction)})")
+        if any(f[0] == name for f in self.frictions):
+            raise DeclarationError(f"{self.name}: friction in {name!r} is declared twice")
+        mu = self._mass_prop(name, "friction", "dimensionless", coefficient, f"Coulomb friction coefficient of {name}")
+        radius = (self._mass_prop(name, "pin_radius", "length", pin_radius, f"pin radius of {name} (friction arm)")
+                  if kind.friction_unit == "N*m" else sp.S.Zero)
+        self.frictions.append((name, mu, radius))
 
     def point(self, name: str, at: Attachment, doc: str = "", role=None) -> None:
         """A named point whose position, velocity and acceleration are reported."""
