@@ -47,4 +47,26 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
 const sg_mechanism *sg_feed(void);
 const char *sg_feed_manifest(void);
 
+/* overlock_needle */
+void sg_overlock_needle_constants(const double *p, double *c);
+int sg_overlock_needle_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+void sg_overlock_needle_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
+int sg_overlock_needle_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
+int sg_overlock_needle_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
+void sg_overlock_needle_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+void sg_overlock_needle_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+const sg_mechanism *sg_overlock_needle(void);
+const char *sg_overlock_needle_manifest(void);
+
+/* overlock_loopers */
+void sg_overlock_loopers_constants(const double *p, double *c);
+int sg_overlock_loopers_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+void sg_overlock_loopers_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
+int sg_overlock_loopers_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
+int sg_overlock_loopers_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
+void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+void sg_overlock_loopers_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+const sg_mechanism *sg_overlock_loopers(void);
+const char *sg_overlock_loopers_manifest(void);
+
 #endif

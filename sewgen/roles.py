@@ -13,7 +13,9 @@ NEEDLE_POINT = "needle_point"    #: the needle's point
 THREAD_EYE = "thread_eye"        #: the take-up lever's thread eye (thread supply and demand)
 FEED_DOG = "feed_dog"            #: the feed dog's tooth tip (stitch length, trajectory indices; seed 001 §五)
 HOOK_POINT = "hook_point"        #: the hook's or shuttle's point (loop pick-up timing)
-LOOPER_TIP = "looper_tip"        #: a looper's tip (overlock, seed 003)
+LOOPER_TIP = "looper_tip"        #: a looper's tip (a machine with one looper)
+LOWER_LOOPER_TIP = "lower_looper_tip"  #: the overlock's lower looper tip N₁ (seed 003 eqs. 5–6)
+UPPER_LOOPER_TIP = "upper_looper_tip"  #: the overlock's upper looper tip N₂ (seed 003 eq. 4)
 KNIFE_EDGE = "knife_edge"        #: the upper knife's edge (overlock, seed 003)
 
 # -- parameters ----------------------------------------------------------------------------------------------
