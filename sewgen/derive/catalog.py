@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import importlib
 
-CATALOG = ("needle_bar", "take_up", "hook_drive", "feed", "overlock_needle", "overlock_loopers")
+CATALOG = ("needle_bar", "take_up", "hook_drive", "feed", "overlock_needle", "overlock_loopers", "overlock_feed")
 
 
 def declare(name: str):

@@ -1,0 +1,59 @@
+"""51-A class overlock: the material feed механизм продвижения материала (seed 003 fig. 5, eqs. 3–14).
+
+Two eccentrics on the main shaft A, fixed to each other at the constructive angle θ: the feed eccentric AB
+drives the rock shaft 3 through the planar four-bar ABCD (φ₃ by eq. 1 with α = 0), whose arm DE carries the rack's
+rear pin E; the lift eccentric AK (radius l₅) lifts the rack's front through the link KF (l₆). The rack 4 — the
+link EF (l₄) with its teeth at F and G — is the two-input group DEFKA's dyad (links 4 and 6 meeting at F): the
+seed solves its velocities by Cramer's rule on the velocity plan (eqs. 8–13; eq. 12 needs ω₃·l₃) and G's by the
+same plan (eq. 14).
+
+Frame: the plane across the main shaft, origin on its axis A, x the feed direction, y up. The rock-shaft arm DE is
+vertical in mid stroke, so E moves about horizontally (the stitch), K about vertically (the lift).
+
+Every dimension is an estimate (seed 003 prints none): a rack travel of about 4.3 mm at the largest stitch, a
+lift of about 2.4 mm, the rack's teeth about 40 mm above the shaft. θ = 0 puts the teeth at their highest when
+they move forward fastest, at φ ≈ 90°, when the needle (overlock_needle) is at its highest: the rack feeds while
+the needle is out of the material. The stitch regulator (the 51-A's adjustment) is not
+modelled yet: the stitch is set by the dimensions.
+"""
+from sewgen.derive.model import Mechanism
+
+
+def declare() -> Mechanism:
+    m = Mechanism("overlock_feed", __doc__, default_speed="3500 rpm")
+    r1 = m.length("feed_eccentric", "1.6 mm", "feed eccentricity AB (estimate)")
+    l2 = m.length("strap", "45 mm", "feed eccentric strap BC (estimate)")
+    dx = m.length("rock_shaft_x", "45 mm", "rock shaft D, x (estimate)", signed=True)
+    dy = m.length("rock_shaft_y", "16 mm", "rock shaft D, y (estimate)", signed=True)
+    cd = m.length("rock_arm", "18 mm", "rock-shaft arm DC, below D (estimate)")
+    l3 = m.length("rack_arm", "24 mm", "rock-shaft arm DE, above D, l₃ (estimate)")
+    l4 = m.length("rack", "45 mm", "rack EF between its rear pin E and front pin F, l₄ (estimate)")
+    g_from_f = m.length("tooth_spacing", "10 mm", "tooth G behind tooth F along the rack (estimate)")
+    l5 = m.length("lift_eccentric", "1.2 mm", "lift eccentricity AK, l₅ (estimate)")
+    theta = m.angle("lift_angle", "0 deg", "constructive angle θ of the lift eccentric ahead of the feed one "
+                    "(estimate)")
+    l6 = m.length("lift_link", "40 mm", "lift link KF, l₆ (estimate)")
+
+    feed = m.driven("feed_eccentric", m.ground.at(0, 0), doc="feed eccentric AB on the main shaft",
+                    mass="15 g", com=("0.5 mm", "0 mm"), inertia="2e-6 kg*m**2")
+    lift = m.driven("lift_eccentric", m.ground.at(0, 0), phase=theta, doc="lift eccentric AK, θ ahead of AB",
+                    mass="12 g", com=("0.4 mm", "0 mm"), inertia="1.5e-6 kg*m**2")
+    strap = m.link("strap", doc="feed eccentric strap BC", guess="0 deg", mass="20 g", com=(l2 / 2, 0),
+                   inertia="5e-6 kg*m**2")
+    rock = m.link("rock_shaft", doc="feed rock shaft 3 with its arms DC (down) and DE (up)", guess="90 deg",
+                  mass="30 g", com=("4 mm", "0 mm"), inertia="6e-6 kg*m**2")
+    rack = m.link("rack", doc="feed rack 4 (the link EF with its teeth F and G)", guess="180 deg", mass="18 g",
+                  com=(l4 / 2, "3 mm"), inertia="4e-6 kg*m**2")
+    link = m.link("lift_link", doc="lift link 6 (KF)", guess="90 deg", mass="8 g", com=(l6 / 2, 0),
+                  inertia="1.2e-6 kg*m**2")
+    m.revolute(feed.at(r1, 0), strap.at(0, 0), "B")
+    m.revolute(m.ground.at(dx, dy), rock.at(0, 0), "D")
+    m.revolute(strap.at(l2, 0), rock.at(-cd, 0), "C", branch=-1)
+    m.revolute(rock.at(l3, 0), rack.at(0, 0), "E")
+    m.revolute(lift.at(l5, 0), link.at(0, 0), "K")
+    m.revolute(rack.at(l4, 0), link.at(l6, 0), "F", branch=-1)
+    m.point("rear_pin", rock.at(l3, 0), "rack's rear pin E")
+    m.point("tooth_f", rack.at(l4, 0), "front tooth F", role="feed_dog")
+    m.point("tooth_g", rack.at(l4 - g_from_f, 0), "tooth G behind F")
+    m.point("lift_pin", lift.at(l5, 0), "lift eccentric's centre K")
+    return m
