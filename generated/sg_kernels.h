@@ -80,4 +80,15 @@ void sg_overlock_feed_anchors(const double *q, const double *cq, const double *x
 const sg_mechanism *sg_overlock_feed(void);
 const char *sg_overlock_feed_manifest(void);
 
+/* overlock_knife */
+void sg_overlock_knife_constants(const double *p, double *c);
+int sg_overlock_knife_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+void sg_overlock_knife_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
+int sg_overlock_knife_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
+int sg_overlock_knife_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
+void sg_overlock_knife_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+void sg_overlock_knife_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+const sg_mechanism *sg_overlock_knife(void);
+const char *sg_overlock_knife_manifest(void);
+
 #endif

@@ -20,6 +20,7 @@ KNIFE_EDGE = "knife_edge"        #: the upper knife's edge (overlock, seed 003)
 
 # -- parameters ----------------------------------------------------------------------------------------------
 THROAT_PLATE = "throat_plate"    #: the throat plate's height in the mechanism's frame (m)
+LOWER_KNIFE_EDGE = "lower_knife_edge"  #: the fixed lower knife's edge height (overlock; the cutting overlap)
 
 NEEDLE_CRANK_RADIUS = "needle_crank_radius"  #: the needle drive's crank radius (seed 002 l_AB)
 NEEDLE_ROD_LENGTH = "needle_rod_length"      #: the needle-bar link's length, pin to pin (seed 002 l_BC)

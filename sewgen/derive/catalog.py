@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import importlib
 
-CATALOG = ("needle_bar", "take_up", "hook_drive", "feed", "overlock_needle", "overlock_loopers", "overlock_feed")
+CATALOG = ("needle_bar", "take_up", "hook_drive", "feed", "overlock_needle", "overlock_loopers", "overlock_feed",
+           "overlock_knife")
 
 
 def declare(name: str):
