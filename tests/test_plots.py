@@ -260,7 +260,8 @@ def test_user_machine_gets_every_picture(user_mech, tmp_path):
     assert isinstance(a, MachineAnalysis) and len(a.phi) == 36
     assert not has_feed(user_mech) and plots.throat_plate_height(a) is None
     files = plots.write_all(a, tmp_path)
-    assert [f.name for f in files] == [name for name, _ in plots.FIGURES] + [plots.GIF]
+    assert [f.name for f in files] == [name for name, _ in plots.figures_for(a)] + [plots.GIF]
+    assert "feed_dog_stitches.png" not in [f.name for f in files]  # no feed: no feed-dog figure
     for f in files[:-1]:
         with Image.open(f) as im:
             assert im.format == "PNG" and im.size == tuple(round(s * plots.DPI) for s in
