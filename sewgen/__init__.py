@@ -19,6 +19,34 @@ __all__ = ["AssemblyError", "BranchJumpError", "BuildError", "ConvergenceError",
            "RunSettings", "SewgenError", "SingularPositionError", "Sweep", "catalog", "load", "mechanism",
            "shaft_angles"]
 
+
+def __getattr__(name: str):
+    """``sewgen.__version__``, looked up on first use (package metadata costs start-up time)."""
+    if name == "__version__":
+        value = _version()
+        globals()["__version__"] = value
+        return value
+    raise AttributeError(f"module 'sewgen' has no attribute {name!r}")
+
+
+def _version() -> str:
+    """The installed distribution's version (package metadata); else, in a checkout, pyproject.toml's."""
+    from importlib import metadata
+
+    try:
+        return metadata.version("sewgen")
+    except metadata.PackageNotFoundError:
+        pass
+    try:
+        import tomllib
+        from pathlib import Path
+
+        text = (Path(__file__).resolve().parent.parent / "pyproject.toml").read_text(encoding="utf-8")
+        return str(tomllib.loads(text)["project"]["version"])
+    except (OSError, KeyError, ValueError):
+        return "0+unknown"
+
+
 _cache: dict = {}
 _cache_lock = threading.Lock()  # one Mechanism per catalog name, even when threads ask at once
 

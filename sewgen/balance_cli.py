@@ -1,17 +1,34 @@
-"""``sewgen balance needle-bar``: the optimum partial-balancing counterweight of seed 002 (see balance.py)."""
+"""``sewgen balance needle_bar``: the optimum partial-balancing counterweight of seed 002 (see balance.py).
+
+The target is the needle drive, named as the catalog names it (``needle-bar`` is accepted too). A mistake is one
+line naming the option or the model file's key (exit status 2, nothing on stdout); the plot is written before
+the table is printed.
+"""
 from __future__ import annotations
 
 import argparse
 import json
 import math
-import sys
+from pathlib import Path
 
 import numpy as np
 
-from .units import UnitError, to_si
-
-from . import balance as bal
+from .errors import SewgenError
 from .modelfile import ModelFileError, load_toml
+from .units import MAX_POSITIONS, UnitError, to_si
+
+class _Balance:
+    """sewgen.balance, imported on first use: it brings SciPy, which no other command should wait for."""
+
+    def __getattr__(self, name):
+        from . import balance
+
+        return getattr(balance, name)
+
+
+bal = _Balance()
+#: Formats --plot may write (by extension); a name without an extension gets .png.
+PLOT_FORMATS = (".png", ".pdf", ".svg")
 
 #: Model fields that carry a unit: name -> (kind, help).
 QUANTITIES = {
@@ -34,7 +51,10 @@ SECTOR = {
     "density": ("density", "7850 kg/m**3", "its density (default steel)"),
 }
 SETTINGS = ("weights", "series", "points")
-EXAMPLE = """model file (TOML; quantities are strings with units, options override it):
+EXAMPLE = """example:
+  sewgen balance needle_bar --crank 16.7mm --rod 53mm --mass-b 39.3g --mass-c 105.29g --speed 6000rpm
+
+model file (TOML; quantities are strings with units, options override it):
   crank = "16.7 mm"
   rod = "53 mm"
   speed = "6000 rpm"
@@ -49,14 +69,14 @@ def _opt(name: str) -> str:
     return "--" + name.replace("_", "-")
 
 
-def add_parser(subparsers) -> None:
-    """Register ``balance`` with the ``sewgen`` command's subparsers."""
+def add_parser(subparsers, common=None) -> None:
+    """Register ``balance`` with the ``sewgen`` command's subparsers (``common(p)`` adds the shared options)."""
     p = subparsers.add_parser("balance", help="optimum partial-balancing counterweight (seed 002)",
                               description="Partial balancing of the needle-bar crank-slider by a counterweight on "
                               "the crank: optimum K, residual inertia force before (K = 0) and after.",
                               epilog=EXAMPLE, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("target", choices=["needle-bar", "machine"],
-                   help="needle-bar: seed 002's counterweight; machine: a whole machine (seed 000's three methods)")
+    p.add_argument("target", metavar="TARGET", help="needle-bar (or needle_bar): the needle drive's counterweight "
+                   "(seed 002); machine: a whole machine by seed 000's three methods (give its MODEL)")
     p.add_argument("machine_model", nargs="?", metavar="MODEL", help="machine: its model file or built-in name")
     p.add_argument("--model", metavar="FILE", help="a TOML model file (keys as the options, with underscores)")
     for name, (_, text) in QUANTITIES.items():
@@ -65,20 +85,50 @@ def add_parser(subparsers) -> None:
         p.add_argument(_opt(name), dest=name, metavar="Q", help=text + (f" (default {default})" if default else ""))
     p.add_argument("--weights", help="w1,w2 of the objective w1·F1 + w2·F2, summing to 1 (default 0.1,0.9)")
     p.add_argument("--series", help="slider acceleration: two-term (the paper's, default) or exact (compiled)")
-    p.add_argument("--points", help="shaft positions per revolution (default 3600)")
+    p.add_argument("--points", help=f"shaft positions per revolution (default 3600, at most {MAX_POSITIONS:,})")
     p.add_argument("--json", action="store_true", help="print the result as JSON (SI: N, kg·m, kg, m)")
-    p.add_argument("--plot", default="needle_bar_balance.png", metavar="FILE",
-                   help="PNG of F(φ) before/after and of F1, F2, objective over K (default needle_bar_balance.png)")
+    p.add_argument("--plot", default=None, metavar="FILE",
+                   help="picture of F(φ) before/after and of F1, F2, objective over K: .png (default "
+                        "<mechanism>_balance.png), .pdf or .svg")
     p.add_argument("--no-plot", action="store_true", help="write no plot")
     from .balance_machine_cli import add_arguments
 
     add_arguments(p)
+    if common is not None:
+        common(p)
     p.set_defaults(fn=cmd_balance)
 
 
+class BalanceInputError(SewgenError, ValueError):
+    """A bad option or model-file value of ``sewgen balance`` (the message names it)."""
+
+
 def _fail(message: str):
-    print(f"sewgen balance: {message}", file=sys.stderr)
-    raise SystemExit(2)
+    raise BalanceInputError(message)
+
+
+def target_name(text: str) -> str:
+    """The catalog's name of the needle drive, if ``text`` names it (either spelling); else a one-line error."""
+    drive = bal.needle_drive().mechanism.name
+    if text.replace("-", "_") != drive:
+        _fail(f"balance: no such mechanism {text}: the one mechanism to balance is {drive} (the needle drive)")
+    return drive
+
+
+def _plot_path(text: str | None, drive: str) -> Path:
+    """--plot's file, checked before any work: a picture format, in an existing folder, not a folder."""
+    path = Path(text if text is not None else f"{drive}_balance.png")
+    if text is not None and not text.strip():
+        _fail("--plot: an empty file name")
+    if path.is_dir():
+        _fail(f"--plot: {path} is a folder: give a file name, e.g. {path / (drive + '_balance.png')}")
+    if path.suffix == "":
+        path = path.with_name(path.name + ".png")
+    if path.suffix.lower() not in PLOT_FORMATS:
+        _fail(f"--plot: {path}: cannot write a {path.suffix} picture; use {', '.join(PLOT_FORMATS)}")
+    if not path.absolute().parent.is_dir():
+        _fail(f"--plot: cannot write {path}: no folder {path.absolute().parent}")
+    return path
 
 
 def _inputs(args) -> tuple[dict, dict]:
@@ -123,12 +173,15 @@ def _settings(raw, label):
     series = raw.get("series", "two-term")
     if series not in bal.SERIES:
         _fail(f"{label['series']}: must be one of {', '.join(bal.SERIES)}, got {series!r}")
+    value = raw.get("points", 3600)
     try:
-        points = int(raw.get("points", 3600))
+        points = int(value) if isinstance(value, int) or str(value).strip().isdigit() else 0
     except (TypeError, ValueError):
         points = 0
-    if points < 8:
-        _fail(f"{label['points']}: need an integer of at least 8, got {raw['points']!r}")
+    if isinstance(value, bool) or points < 8:
+        _fail(f"{label['points']}: need a whole number of at least 8, got {value}")
+    if points > MAX_POSITIONS:
+        _fail(f"{label['points']}: {points:,} positions a revolution; at most {MAX_POSITIONS:,} are allowed")
     return weights, series, points
 
 
@@ -218,31 +271,32 @@ def _table(model, res, series, sector, plot_path) -> str:
     return "\n".join(lines)
 
 
-def cmd_balance(args) -> int:
+def cmd_balance(args, con=None) -> int:
     if args.target == "machine":
         from .balance_machine_cli import run
 
         args.model = args.machine_model
         return run(args)
+    drive = target_name(args.target)
     if args.machine_model:
-        _fail(f"needle-bar takes no positional model ({args.machine_model!r}): use --model FILE")
+        _fail(f"balance {args.target}: takes no model file argument ({args.machine_model!r}); use --model FILE")
+    plot_path = None if (args.no_plot or args.json) else _plot_path(args.plot, drive)
     model, weights, series, points, sector_in = build(args)
     res = bal.optimise(model, weights, series, points)
     sector = _size_sector(res.counterweight_mr, sector_in) if sector_in else None
+    say = con.say if con is not None else print
     if args.json:
         out = {**res.as_dict(), "weights": list(res.weights), "lambda": model.lam, "omega": model.speed,
                "points": points, **(sector or {})}
-        print(json.dumps(out, indent=2))
+        say(json.dumps(out, indent=2))
         return 0
-    plot_path = None
-    if not args.no_plot:
+    if plot_path is not None:
         curve = bal.objective_curve(model, np.linspace(0, 1, 101), weights, series, min(points, 1440))
         try:
-            plot(args.plot, model, res, curve, series)
+            plot(plot_path, model, res, curve, series)
         except ImportError:
             _fail("--plot needs matplotlib (pip install matplotlib), or give --no-plot")
-        except OSError as exc:
-            _fail(f"--plot {args.plot}: {exc}")
-        plot_path = args.plot
-    print(_table(model, res, series, sector, plot_path))
+        except (OSError, ValueError) as exc:
+            _fail(f"--plot: cannot write {plot_path}: {getattr(exc, 'strerror', None) or exc}")
+    say(_table(model, res, series, sector, plot_path))
     return 0

@@ -16,7 +16,7 @@ import numpy as np
 from .errors import SewgenError
 from .units import UnitError, to_si
 
-SPEEDS_HELP = "speeds to evaluate at, e.g. \"600 rpm,900 rpm,1200 rpm,1500 rpm\" (default: 60 %, 100 %, 150 % of rated)"
+SPEEDS_HELP = "speeds to evaluate at, e.g. \"600 rpm,900 rpm,1200 rpm,1500 rpm\" (default: 60 %%, 100 %%, 150 %% of rated)"
 
 
 def add_arguments(p) -> None:

@@ -50,7 +50,8 @@ def plate_height(mech, params: dict | None = None) -> float:
 
 def dog_travel(motion, plate: float, point: str | None = None) -> DogTravel:
     """The travel of ``point`` (default: the mechanism's ``feed_dog``) above the plate height ``plate`` (m) over
-    one revolution of ``motion`` (equal steps, one turn)."""
+    one revolution of ``motion`` (equal steps, one turn). The crossings are interpolated with the exact slopes
+    v/ω; a sweep at rest (ω = 0) falls back on central differences."""
     from scipy.optimize import brentq
 
     point = point or motion.mechanism.description.role(FEED_DOG).name
@@ -60,7 +61,11 @@ def dog_travel(motion, plate: float, point: str | None = None) -> DogTravel:
     if not h > 0 or not np.allclose(np.diff(phi), h) or abs(len(phi) * h - 2 * math.pi) > 1e-9:
         raise ParameterError(motion.mechanism.name, "shaft angles", "need one revolution in equal steps")
     z = pt.y - plate
-    dz, dx = pt.vy / w, pt.vx / w
+    if np.all(w != 0):  # exact slopes d/dφ = v / ω
+        dz, dx = pt.vy / w, pt.vx / w
+    else:  # at rest (a static analysis) the velocities say nothing: periodic central differences
+        dz = (np.roll(z, -1) - np.roll(z, 1)) / (2 * h)
+        dx = (np.roll(pt.x, -1) - np.roll(pt.x, 1)) / (2 * h)
     up = np.flatnonzero((z < 0) & (np.roll(z, -1) >= 0))
     down = np.flatnonzero((z >= 0) & (np.roll(z, -1) < 0))
     if len(up) != 1 or len(down) != 1:
@@ -84,21 +89,30 @@ def stitch_length(mech, regulator, *, params: dict | None = None, step_deg: floa
     return dog_travel(motion, plate_height(mech, params))
 
 
-def regulator_angle(mech, length, *, params: dict | None = None, limit_deg: float = 60.0,
+#: The stitch regulator's working range (deg either side of zero) unless a caller states another: the catalog
+#: feed's largest stitch, 4 mm (seed 000 §一(二)5), needs about 33°; beyond ±45° the regulator slot runs out.
+REGULATOR_LIMIT_DEG = 45.0
+
+
+def regulator_angle(mech, length, *, params: dict | None = None, limit_deg: float = REGULATOR_LIMIT_DEG,
                     step_deg: float = 1.0) -> float:
     """The stitch-regulator angle (rad) whose stitch is ``length`` (m or "4 mm"; negative: reverse feed), by
-    Brent's method within ±``limit_deg``."""
+    Brent's method within the regulator's range ±``limit_deg``. A stitch the regulator cannot reach within
+    that range is a :class:`~sewgen.errors.ParameterError` naming the longest stitch it can."""
     from scipy.optimize import brentq
 
     try:
         length = to_si(length, "length", "stitch")
     except UnitError as exc:
         raise ParameterError(mech.name, "stitch", exc.problem) from None
+    if not (isinstance(limit_deg, (int, float)) and 0 < limit_deg < 90):
+        raise ParameterError(mech.name, "limit_deg", f"must be between 0 and 90 degrees, got {limit_deg!r}")
     f = (lambda a: stitch_length(mech, a, params=params, step_deg=step_deg).travel - length)
     lo, hi = -math.radians(limit_deg), math.radians(limit_deg)
     f_lo, f_hi = f(lo), f(hi)
     if not min(f_lo, f_hi) <= 0.0 <= max(f_lo, f_hi):
-        longest = max(abs(f_lo + length), abs(f_hi + length))
+        reach = f_hi + length if length > 0 else f_lo + length
         raise ParameterError(mech.name, "stitch", f"{length * 1e3:.3g} mm is beyond the regulator's range "
-                             f"(±{longest * 1e3:.3g} mm at ±{limit_deg:g}°)")
+                             f"(±{limit_deg:g}°: at most {abs(reach) * 1e3:.3g} mm "
+                             f"{'forward' if length > 0 else 'reverse'})")
     return brentq(f, lo, hi, xtol=1e-12)

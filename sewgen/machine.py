@@ -25,20 +25,27 @@ leave out the process loads (thread, presser foot, cloth), whose reactions stay 
 """
 from __future__ import annotations
 
+import copy
 import math
+import re
 from dataclasses import dataclass, field, replace
 from functools import cached_property
+from pathlib import Path
 
 import numpy as np
 
-from pathlib import Path
-
 from . import mechanism as catalog_mechanism
-from .errors import BuildError, ParameterError
+from .errors import BuildError, ParameterError, SewgenError
 from .feed import regulator_angle
-from .roles import STITCH_REGULATOR
 from .loads import Load, load_matrix
-from .modelfile import Field, ModelFileError, Reader, load_toml, resolve  # noqa: F401 (ModelFileError re-exported)
+from .modelfile import (Field, ModelFileError, Reader, declaration_problem, load_toml,  # noqa: F401 (re-exported)
+                        resolve)
+from .roles import STITCH_REGULATOR
+from .units import UnitError, steps_per_turn, to_si
+
+#: Names a group may not take: its table would overwrite the machine's (machine.csv, summary.json).
+RESERVED_GROUP_NAMES = ("machine", "summary")
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 @dataclass
@@ -102,27 +109,42 @@ class Machine:
     source: str = ""
 
     def shaft_angles(self, step: float | None = None) -> np.ndarray:
+        """One revolution every ``step`` (rad; default the model's): a step must divide 360° into 4 to
+        :data:`sewgen.units.MAX_POSITIONS` equal steps (it is never rounded to one that does)."""
         h = self.step if step is None else step
-        n = int(round(2 * math.pi / h))
-        if n < 4 or abs(n * h - 2 * math.pi) > 1e-9 * 2 * math.pi:
-            raise ParameterError(self.name, "step", f"must divide a revolution into at least 4 equal steps, "
-                                 f"got {math.degrees(h):g}°")
-        return h * np.arange(n)
+        n, problem = steps_per_turn(h)
+        if n is None:
+            raise ParameterError(self.name, "step", problem)
+        return (2 * math.pi / n) * np.arange(n)
 
     def analyze(self, phi=None, speed=None, accel=0.0, progress=None) -> "MachineAnalysis":
-        """Kinematics, kinetostatics and the upper-shaft bearings at machine shaft angles ``phi`` (rad)."""
+        """Kinematics, kinetostatics and the upper-shaft bearings at machine shaft angles ``phi`` (rad).
+
+        A group that cannot be solved raises its typed error (AssemblyError, SingularPositionError, ...) with
+        the model file (``file``) and the group's key (``key``, e.g. ``groups.take_up``) added to its fields and
+        its message."""
         phi = self.shaft_angles() if phi is None else np.asarray(phi, dtype=float)
         w = self.speed if speed is None else speed
+        if isinstance(w, str):
+            try:
+                w = to_si(w, "speed", "speed")
+            except UnitError as exc:
+                raise ParameterError(self.name, "speed", exc.problem) from None
         g_mag = float(np.hypot(*self.gravity))
         g_dir = math.atan2(self.gravity[1], self.gravity[0]) if g_mag else -math.pi / 2
         out = {}
         for k, g in enumerate(self.groups):
             if progress:
                 progress(f"{g.name}: {len(phi)} positions", k, len(self.groups))
-            out[g.name] = g.mechanism.kinetostatics(
-                phi + g.phase, speed=w, accel=accel, loads=g.sweep_loads, gravity=g_mag, gravity_direction=g_dir,
-                params=g.params or None, held=g.held or None, branch=g.branch or None)
-        return MachineAnalysis(self, phi, out)
+            try:
+                out[g.name] = g.mechanism.kinetostatics(
+                    phi + g.phase, speed=w, accel=accel, loads=g.sweep_loads, gravity=g_mag, gravity_direction=g_dir,
+                    params=g.params or None, held=g.held or None, branch=g.branch or None)
+            except SewgenError as exc:
+                raise located(exc, self.source, f"groups.{g.name}") from None
+        analysis = MachineAnalysis(self, phi, out)
+        analysis.run = {"speed": w, "accel": accel}
+        return analysis
 
 
 class MachineAnalysis:
@@ -132,7 +154,31 @@ class MachineAnalysis:
         self.machine, self.phi, self.groups = machine, phi, groups
         first = next(iter(groups.values()))
         self.omega, self.alpha = first.motion.omega, first.motion.alpha
-        self._shaft()
+        self.run = {"speed": self.omega, "accel": self.alpha}  # what analyze() was given
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, as a typed error
+            self._shaft()
+        for what, values in (("shaft.front_bearing", self.front), ("shaft.rear_bearing", self.rear),
+                             ("shaft", self.torque)):
+            if not np.isfinite(values).all():
+                from .report import NonFiniteOutputError
+
+                raise NonFiniteOutputError(f"{what}: the {'driving torque' if what == 'shaft' else 'bearing load'}",
+                                           values[~np.isfinite(values)].flat[0], machine.source or None)
+
+    def refined(self, step: float = math.radians(1.0)) -> "MachineAnalysis":
+        """The same analysis (speed, acceleration) every ``step`` (rad) over one revolution, when this one is a
+        whole revolution in coarser steps; else this one. Curves are drawn from it (a 5° polyline looks
+        jagged), while tables keep the step that was asked for."""
+        phi = self.phi
+        n = len(phi)
+        whole = n > 2 and np.allclose(np.diff(phi), 2 * math.pi / n) and abs(phi[0]) < 1e-12
+        if not whole or 2 * math.pi / n <= step * (1 + 1e-9):
+            return self
+        run = self.run
+        speed, accel = run["speed"], run["accel"]
+        if np.ndim(speed) or np.ndim(accel):  # per-position speeds cannot be resampled
+            return self
+        return self.machine.analyze(self.machine.shaft_angles(step), speed=speed, accel=accel)
 
     def _core_masses(self):
         """Position, velocity and acceleration (n, 2 each) of every core point mass (r at φ + angle)."""
@@ -329,8 +375,8 @@ def _xy(r) -> tuple:
 MACHINE = {
     "name": Field("text", doc="the machine's name"),
     "description": Field("text", False),
-    "speed": Field("speed", doc="upper-shaft speed, e.g. \"1000 rpm\""),
-    "step": Field("angle", doc="shaft-angle step, e.g. \"5 deg\" (72 positions)"),
+    "speed": Field("speed", doc="upper-shaft speed, e.g. \"1000 rpm\"", sign="positive"),
+    "step": Field("angle", doc="shaft-angle step, e.g. \"5 deg\" (72 positions)", sign="positive"),
     "gravity": Field("acceleration", False),
     "gravity_direction": Field("angle", False),
 }
@@ -338,18 +384,18 @@ SHAFT = {
     "front_bearing": Field("length", doc="z of the front bearing"),
     "rear_bearing": Field("length", doc="z of the rear bearing"),
     "pulley": Field("length", False),
-    "inertia": Field("inertia", doc="moment of inertia of the shaft core about its axis"),
-    "mass": Field("mass", doc="mass of the shaft core"),
+    "inertia": Field("inertia", doc="moment of inertia of the shaft core about its axis", sign="nonnegative"),
+    "mass": Field("mass", doc="mass of the shaft core", sign="nonnegative"),
     "mass_z": Field("length", doc="z of the core's centre of mass"),
     "masses": Field("list", False),
     "counterweights": Field("list", False, "planes where `sewgen balance machine` may put counterweights"),
-    "belt_pull": Field("force", False, "the belt's radial pull on the pulley, T1 + T2"),
+    "belt_pull": Field("force", False, "the belt's radial pull on the pulley, T1 + T2", sign="nonnegative"),
     "belt_direction": Field("angle", False, "direction of the belt pull in the frame (from +x)"),
 }
 SHAFT_MASS = {
     "name": Field("text"),
-    "mass": Field("mass"),
-    "radius": Field("length"),
+    "mass": Field("mass", sign="nonnegative"),
+    "radius": Field("length", sign="nonnegative"),
     "angle": Field("angle"),
     "z": Field("length"),
 }
@@ -384,6 +430,7 @@ def load_machine(name_or_path) -> Machine:
     doc = rd.table(load_toml(path), "")
     rd.check_keys(doc, "", {"machine": Field("table"), "shaft": Field("table"), "groups": Field("table")})
     mach = rd.read(rd.table(doc["machine"], "machine"), "machine", MACHINE)
+    _check_name(rd, mach["name"])
     shaft_doc = rd.read(rd.table(doc["shaft"], "shaft"), "shaft", SHAFT)
     masses = [ShaftMass("core", shaft_doc["mass"], 0.0, 0.0, shaft_doc["mass_z"])]
     for i, item in enumerate(shaft_doc.get("masses", [])):
@@ -396,7 +443,15 @@ def load_machine(name_or_path) -> Machine:
                   (pull * math.cos(pull_dir), pull * math.sin(pull_dir)))
     if not shaft.rear > shaft.front:
         rd.fail("shaft.rear_bearing", "must lie behind the front bearing (larger z)")
-    groups = [_group(rd, name, rd.table(g, f"groups.{name}")) for name, g in rd.table(doc["groups"], "groups").items()]
+    groups = []
+    for name, g in rd.table(doc["groups"], "groups").items():
+        _check_group_name(rd, name)
+        try:
+            groups.append(_group(rd, name, rd.table(g, f"groups.{name}")))
+        except ModelFileError:
+            raise
+        except SewgenError as exc:  # the group's geometry: cannot assemble at the stitch's setting, ...
+            raise located(exc, path, f"groups.{name}") from None
     if not groups:
         rd.fail("groups", "a machine needs at least one group")
     g_mag = mach.get("gravity", 9.80665)
@@ -409,6 +464,35 @@ def load_machine(name_or_path) -> Machine:
     except ParameterError as exc:
         rd.fail("machine.step", exc.problem + " (an angle in deg or rad)")
     return m
+
+
+def _check_name(rd: Reader, name: str) -> None:
+    """The machine's name is the default output folder: a plain name, never a path."""
+    bad = ("/" in name or "\\" in name or ".." in name or not name.strip() or name != name.strip()
+           or name.startswith(".") or any(ord(c) < 32 or ord(c) == 127 for c in name))
+    if bad:
+        rd.fail("machine.name", f"must be a plain name (it names the default output folder): no /, \\, .., "
+                                f"leading dot, control characters or surrounding spaces; got {name!r}")
+
+
+def _check_group_name(rd: Reader, name: str) -> None:
+    """A group's name names its table (``<group>.csv``) and its entries in summary.json."""
+    if not _IDENTIFIER.fullmatch(name):
+        rd.fail(f"groups.{name}", "a group name must be an identifier (letters, digits and _, not starting with a "
+                                  "digit)")
+    if name in RESERVED_GROUP_NAMES:
+        rd.fail(f"groups.{name}", f"{name!r} is reserved (the machine's own outputs: "
+                                  f"{', '.join(RESERVED_GROUP_NAMES)}); rename the group")
+
+
+def located(exc: SewgenError, path, key: str) -> SewgenError:
+    """``exc`` (same type, same fields) with the model file and key added: its message starts "file: key: "."""
+    if not path:
+        return exc
+    out = copy.copy(exc)
+    out.args = (f"{path}: {key}: {exc}",) + tuple(exc.args[1:])
+    out.file, out.key = str(path), key
+    return out
 
 
 def _group(rd: Reader, name: str, data: dict) -> Group:
@@ -493,6 +577,11 @@ def _group_mechanism(rd: Reader, key: str, text: str):
         return load(path)
     except BuildError as exc:
         rd.fail(key, exc.problem)
+    except Exception as exc:  # a syntax error in the declaration, or its declare() raised
+        problem = declaration_problem(exc, path)
+        if problem is None:
+            raise
+        rd.fail(key, problem)
 
 
 __all__ = ["Group", "Machine", "MachineAnalysis", "ModelFileError", "Shaft", "ShaftMass", "load_machine"]

@@ -4,7 +4,8 @@ Every quantity is a string with its unit ("16.7 mm", "105 g", "1000 rpm"); a bar
 anything that has a unit. An unknown key, a missing key or a unit of the wrong kind raises
 :class:`ModelFileError` naming the file, the key (dotted, e.g. ``groups.feed.params.cam_side``) and the unit
 expected. Group parameters, held inputs, branches and load points are checked against the mechanism's own
-manifest, so a model file can set anything a mechanism declares and nothing else.
+manifest, so a model file can set anything a mechanism declares and nothing else. A file that is not UTF-8 text
+or not TOML is a ModelFileError too, naming the file (and the line).
 """
 from __future__ import annotations
 
@@ -12,9 +13,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from .units import SI_UNITS, UnitError, to_si
-
 from .errors import SewgenError
+from .units import EXAMPLES, SI_UNITS, UnitError, to_si
 
 #: Built-in machine models, shipped beside this module.
 MODELS_DIR = Path(__file__).parent / "models"
@@ -35,6 +35,7 @@ class Field:
     kind: str  # a units kind, "text", "int", "table" or "list"
     required: bool = True
     doc: str = ""
+    sign: str = ""  # quantities: "positive" (> 0), "nonnegative" (>= 0) or "" (any finite value)
 
 
 def _unit(kind: str) -> str:
@@ -68,12 +69,20 @@ class Reader:
         if kind == "dimensionless" and isinstance(value, (int, float)) and not isinstance(value, bool):
             return float(value)
         if not isinstance(value, str):
-            self.fail(key, f"must be a quantity string with its unit, e.g. \"12 {_hint(kind)}\" "
+            self.fail(key, f"must be a quantity string with its unit, e.g. \"{EXAMPLES.get(kind, '1')}\" "
                            f"(expected {_unit(kind)}), got {value!r}")
         try:
             return to_si(value, kind, key)
         except UnitError as exc:
             self.fail(key, exc.problem)
+
+    def signed(self, value: float, sign: str, key: str, text) -> float:
+        """``value`` checked against ``sign`` ("positive", "nonnegative" or "")."""
+        if sign == "positive" and not value > 0:
+            self.fail(key, f"must be positive, got {text!r}")
+        if sign == "nonnegative" and value < 0:
+            self.fail(key, f"must not be negative, got {text!r}")
+        return value
 
     def read(self, data: dict, key: str, schema: dict) -> dict:
         """Check ``data`` against ``schema`` and convert: quantities to SI floats, the rest as they are."""
@@ -84,7 +93,7 @@ class Reader:
                 continue
             v, full = data[k], f"{key}.{k}" if key else k
             if f.kind in SI_UNITS:
-                out[k] = self.quantity(v, f.kind, full)
+                out[k] = self.signed(self.quantity(v, f.kind, full), f.sign, full, v)
             elif f.kind == "text":
                 if not isinstance(v, str):
                     self.fail(full, f"must be text, got {v!r}")
@@ -102,30 +111,77 @@ class Reader:
         return out
 
 
-def _hint(kind: str) -> str:
-    return {"length": "mm", "angle": "deg", "mass": "g", "inertia": "kg*m**2", "speed": "rpm", "force": "N",
-            "torque": "N*m", "acceleration": "m/s**2", "mass_length": "g*mm"}.get(kind, _unit(kind))
-
-
 def load_toml(path) -> dict:
-    """Parse a TOML file; a syntax error names the file and the line."""
+    """Parse a TOML file; a missing file, a folder, unreadable bytes (not UTF-8) or a syntax error names the file
+    (and, for a syntax error, the line)."""
     p = Path(path)
+    if p.is_dir():
+        raise ModelFileError(p, "", "is a folder, not a model file")
     if not p.is_file():
         raise ModelFileError(p, "", "no such model file")
     try:
-        return tomllib.loads(p.read_text(encoding="utf-8"))
+        data = p.read_bytes()
+    except OSError as exc:
+        raise ModelFileError(p, "", f"cannot be read ({exc.strerror or exc})") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        raise ModelFileError(p, "", f"not UTF-8 text (byte 0x{data[exc.start]:02x} on line {line}): save the file "
+                                    "as UTF-8") from None
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ModelFileError(p, "", f"not valid TOML: {exc}") from None
 
 
+def builtin_models() -> list[str]:
+    """Names of the built-in machine models ("jb1-3", ...)."""
+    return sorted(q.stem for q in MODELS_DIR.glob("*.toml"))
+
+
 def resolve(name_or_path) -> Path:
-    """A built-in model by name ("jb1-3") or a path to a .toml file. A folder is never a model: ``sewgen analyze
-    jb1-3`` writes its results into ./jb1-3, and the next run must still find the built-in model."""
-    p = Path(name_or_path)
-    if p.suffix == ".toml" or p.is_file():
+    """The model file a name or path stands for: a ``.toml`` path as given; otherwise a built-in model's name
+    ("jb1-3"); otherwise an existing file. A folder is never a model: ``sewgen analyze jb1-3`` writes its results
+    into ./jb1-3, and the next run must still find the built-in model."""
+    text = str(name_or_path)
+    p = Path(text)
+    if p.suffix.lower() == ".toml":
         return p
-    builtin = MODELS_DIR / f"{name_or_path}.toml"
-    if builtin.is_file():
-        return builtin
-    known = ", ".join(sorted(q.stem for q in MODELS_DIR.glob("*.toml")))
-    raise ModelFileError(p, "", f"neither a model file nor a built-in model (built in: {known})")
+    if text in builtin_models():
+        return MODELS_DIR / f"{text}.toml"
+    if p.is_file():
+        return p
+    known = ", ".join(builtin_models())
+    raise ModelFileError(p, "", f"neither a model file (.toml) nor a built-in model (built in: {known})")
+
+
+def is_builtin(path) -> bool:
+    """Whether ``path`` is one of the built-in model files."""
+    try:
+        return Path(path).resolve().parent == MODELS_DIR.resolve()
+    except OSError:
+        return False
+
+
+def declaration_problem(exc: BaseException, path) -> str | None:
+    """What a user's declaration file did wrong, as ``file:line: problem`` — a syntax error (or bytes that are
+    not UTF-8), or an exception raised from the file's own code — or None when ``exc`` did not come from that
+    file (then it is sewgen's, and keeps its traceback)."""
+    import traceback
+
+    path = Path(path)
+    if isinstance(exc, SyntaxError):
+        where = f"{exc.filename or path}:{exc.lineno}" if exc.lineno else str(exc.filename or path)
+        return f"{where}: syntax error: {exc.msg}"
+
+    def same(name):
+        try:
+            return Path(name).resolve() == path.resolve()
+        except OSError:
+            return False
+
+    frames = [f for f in traceback.extract_tb(exc.__traceback__) if same(f.filename)]
+    if not frames:
+        return None
+    return f"{path}:{frames[-1].lineno}: {type(exc).__name__}: {exc}"

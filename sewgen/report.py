@@ -2,30 +2,108 @@
 
 summary.json holds, for every quantity a designer checks (bearing loads, driving torque, shaking force, the
 shaking moment about the x, y and z axes, every joint reaction), the peak and the RMS over the revolution with
-the shaft angles where they occur; the whole machine's power-balance residual (``power_balance_residual``); the feed setting (stitch,
-regulator angle, dog travel and height above the plate) and the cam arc switches with the acceleration
-jump each implies.
+the shaft angles where they occur; the whole machine's relative power-balance residual
+(``power_balance_residual_relative``); the feed setting (stitch, regulator angle, dog travel and height above
+the plate) and the cam arc switches with the acceleration jump each implies; the units of every entry and the
+sign conventions (``units``, ``conventions``). Numbers are rounded to 12 significant digits (float noise such
+as 999.9999999999999 rpm or 255.00000000000003° is not a result), and a non-finite number is never written:
+it raises :class:`NonFiniteOutputError` naming the entry.
+
+A report is written into a temporary folder beside the target and moved into place only when complete
+(:func:`staged_folder`): a run that fails leaves no half-written tables behind.
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from .cams import arc_switches
+from .errors import SewgenError
 from .feed import dog_travel, has_feed, plate_height
 from .roles import FEED_DOG, STITCH_REGULATOR
-from .results import write_csv
+from .units import DisplayUnits
+
+#: What the numbers of summary.json mean: frame, angles, signs (the same words as the README's "Units and
+#: conventions").
+CONVENTIONS = {
+    "frame": "x horizontal across the upper shaft (+ = the feed direction), y up, origin on the upper-shaft axis; "
+             "z along the upper shaft from the front bearing towards the hand wheel",
+    "shaft_angle": "φ, the machine's upper-shaft angle in degrees, 0 ≤ φ < 360, increasing counter-clockwise in the "
+                   "x-y plane (from +x towards +y); the model's zero has the needle at its top at φ = 90°; a "
+                   "group's own angle is φ + phase_deg; *_at_deg and *_deg entries are shaft angles",
+    "bearings": "magnitude of the load the upper shaft puts on the frame at each bearing",
+    "drive_torque": "torque the pulley puts on the upper shaft about +z, positive in the sense of rotation; "
+                    "friction is left out (ideal joints)",
+    "joints": "magnitude of a joint's reaction: the force on the joint's second body from its first",
+    "shaking_force": "magnitude of Σ m·a_G − Σ m·g over every moving part: the resultant of the frame's reactions "
+                     "on the moving parts (the base feels its negative); process loads (thread, presser foot, "
+                     "cloth) react inside the machine and are left out",
+    "shaking_moment": "about the z axis through the origin; shaking_moments_about_origin: about the x, y and z axes",
+    "power_balance_residual_relative": "max over the revolution of |P_drive + P_loads − dE/dt| divided by the "
+                                       "largest |P_drive| or |dE/dt| (E: kinetic + potential energy): 0 for an "
+                                       "exact analysis",
+}
+#: Units of summary.json's entries (every statistic also carries its own "unit").
+UNITS = {"angles": "deg", "speed_rpm": "rpm (revolutions per minute)", "forces": "N", "torques": "N*m",
+         "moments": "N*m", "powers": "W", "lengths": "mm (keys ending in _mm)",
+         "power_balance_residual_relative": "1 (a ratio)"}
+#: Significant digits kept in summary.json.
+DIGITS = 12
+
+
+class NonFiniteOutputError(SewgenError, ValueError):
+    """A result that came out infinite or NaN (an absurd mass or speed in a model file overflows): never written.
+    ``key`` names the entry or column, ``file`` the model file."""
+
+    def __init__(self, key: str, value, file: str | None = None):
+        problem = f"{key} came out {value} (not finite): check the model's masses, inertias and speed"
+        super().__init__(f"{file}: {problem}" if file else problem, problem=problem, key=key, file=file)
 
 
 def _deg(phi) -> np.ndarray:
     return np.degrees(phi) % 360.0
 
 
+def _clean(value, key: str = "summary", file: str | None = None):
+    """``value`` (nested dicts, lists, numbers) with every float rounded to :data:`DIGITS` significant digits and
+    -0.0 made 0.0; a non-finite number raises :class:`NonFiniteOutputError` naming its key."""
+    if isinstance(value, dict):
+        return {k: _clean(v, f"{key}.{k}", file) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v, f"{key}[{i}]", file) for i, v in enumerate(value)]
+    if isinstance(value, (bool, np.bool_)) or value is None or isinstance(value, str):
+        return value
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    v = float(value)
+    if not math.isfinite(v):
+        raise NonFiniteOutputError(key, v, file)
+    v = float(f"{v:.{DIGITS}g}")
+    if v == 0.0:
+        return 0.0
+    if "deg" in key.rsplit(".", 1)[-1] and abs(v - 360.0) < 1e-9:  # an angle in [0, 360)
+        return 0.0
+    return v
+
+
+def _check_columns(cols: dict, table: str, file: str | None) -> dict:
+    for name, values in cols.items():
+        arr = np.asarray(values)
+        if arr.dtype.kind == "f" and not np.isfinite(arr).all():
+            bad = arr[~np.isfinite(arr)][0]
+            raise NonFiniteOutputError(f"{table}: {name}", bad, file)
+    return cols
+
+
 def machine_table(a) -> dict:
-    """Machine-level columns: bearings, torques, shaking force and moment, powers."""
+    """Machine-level columns: bearings, torques, shaking force and moment, powers (SI; ``phi`` in deg)."""
     cols = {"phi [deg]": _deg(a.phi)}
     for which in ("front", "rear"):
         b = a.bearing(which)
@@ -50,28 +128,54 @@ def machine_table(a) -> dict:
 
 
 def group_table(fa, phi) -> dict:
-    """Kinematics and forces of one group, one row per machine shaft angle ``phi``."""
+    """Kinematics and forces of one group, one row per machine shaft angle ``phi`` (SI; angles of φ in deg)."""
     cols = {"phi [deg]": _deg(phi), "group_phi [deg]": _deg(fa.phi)}
     cols.update({k: v for k, v in fa.motion.table().items() if not k.startswith("phi ")})
     cols.update({k: v for k, v in fa.table().items() if not k.startswith("phi ")})
     return cols
 
 
+def _rms(values: np.ndarray) -> float:
+    """RMS without overflow: large values are scaled before squaring."""
+    scale = float(np.max(np.abs(values))) if len(values) else 0.0
+    if not math.isfinite(scale) or scale == 0.0:
+        return scale
+    return scale * float(np.sqrt(np.mean(np.square(values / scale))))
+
+
 def _stat(values: np.ndarray, phi: np.ndarray, unit: str) -> dict:
     i, j = int(np.argmax(values)), int(np.argmin(values))
     return {"unit": unit, "max": float(values[i]), "max_at_deg": float(_deg(phi[i])), "min": float(values[j]),
-            "min_at_deg": float(_deg(phi[j])), "rms": float(np.sqrt(np.mean(np.square(values))))}
+            "min_at_deg": float(_deg(phi[j])), "rms": _rms(values)}
+
+
+def model_path(source: str, start=None) -> str:
+    """The model file as summary.json names it: ``<sewgen>/models/NAME.toml`` for a built-in model, else the
+    path relative to ``start`` (default: the working directory)."""
+    from .modelfile import is_builtin
+
+    if not source:
+        return ""
+    if is_builtin(source):
+        return f"<sewgen>/models/{Path(source).name}"
+    try:
+        return Path(os.path.relpath(Path(source).resolve(), Path(start or os.getcwd()).resolve())).as_posix()
+    except ValueError:  # another drive (Windows)
+        return Path(source).as_posix()
 
 
 def summary(a, switches: dict | None = None) -> dict:
-    """Peaks, RMS and where they occur; the power-balance residual; feed setting; cam arc switches."""
+    """Peaks, RMS and where they occur; the power-balance residual; feed setting; cam arc switches; units and
+    conventions. Numbers rounded to :data:`DIGITS` significant digits; a non-finite one raises
+    :class:`NonFiniteOutputError`."""
     phi, m = a.phi, a.machine
     out = {
         "machine": m.name,
-        "model_file": m.source,
+        "model_file": model_path(m.source),
         "speed_rpm": float(a.omega[0] * 60 / (2 * math.pi)),
         "positions": int(len(phi)),
-        "power_balance_residual": a.power_balance_residual,
+        "step_deg": 360.0 / len(phi),
+        "power_balance_residual_relative": a.power_balance_residual,
         "bearings": {w: _stat(np.hypot(*a.bearing(w).T), phi, "N") for w in ("front", "rear")},
         "drive_torque": _stat(a.torque, phi, "N*m"),
         "drive_power": _stat(a.drive_power, phi, "W"),
@@ -96,13 +200,15 @@ def summary(a, switches: dict | None = None) -> dict:
         if has_feed(g.mechanism):
             t = dog_travel(fa.motion, plate_height(g.mechanism, g.params or None))
             entry[FEED_DOG] = {"travel_above_plate_mm": t.travel * 1e3, "height_above_plate_mm": t.height * 1e3,
-                                 "rises_at_deg": float(_deg(t.rise - g.phase)),
-                                 "sinks_at_deg": float(_deg(t.sink - g.phase))}
+                               "rises_at_deg": float(_deg(t.rise - g.phase)),
+                               "sinks_at_deg": float(_deg(t.sink - g.phase))}
         if switches and switches.get(g.name):
             entry["cam_arc_switches"] = [dict(s.as_dict(), angle_deg=float(_deg(s.angle - g.phase)))
                                          for s in switches[g.name]]
         out["groups"][g.name] = entry
-    return out
+    out["units"] = UNITS
+    out["conventions"] = CONVENTIONS
+    return _clean(out, "summary", m.source or None)
 
 
 def cam_switches(a) -> dict:
@@ -115,15 +221,109 @@ def cam_switches(a) -> dict:
     return out
 
 
-def write_report(a, folder, progress=None) -> list[Path]:
-    """machine.csv, <group>.csv for every group and summary.json into ``folder``."""
+def write_csv(path, cols: dict) -> Path:
+    """Columns (name -> array, equal lengths) as a CSV file with a header row, written to a temporary file beside
+    ``path`` and renamed into place; returns ``path``."""
+    from .results import write_csv as _write
+
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    os.close(fd)
+    try:
+        _write(tmp, cols)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_tables(a, folder, progress=None, units: DisplayUnits | None = None) -> list[Path]:
+    """machine.csv, <group>.csv for every group and summary.json into ``folder`` (which must exist), the tables
+    in ``units`` (default SI; headers name the unit of every column). Everything is computed and checked
+    before the first file is written."""
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    units = units or DisplayUnits()
     if progress:
         progress("tables", 0, 1)
-    paths = [write_csv(folder / "machine.csv", machine_table(a))]
+    source = a.machine.source or None
+    tables = {"machine.csv": _check_columns(units.table(machine_table(a)), "machine.csv", source)}
     for name, fa in a.groups.items():
-        paths.append(write_csv(folder / f"{name}.csv", group_table(fa, a.phi)))
-    text = json.dumps(summary(a, cam_switches(a)), indent=2, ensure_ascii=False)
+        tables[f"{name}.csv"] = _check_columns(units.table(group_table(fa, a.phi)), f"{name}.csv", source)
+    text = json.dumps(summary(a, cam_switches(a)), indent=2, ensure_ascii=False, allow_nan=False)
+    paths = [write_csv(folder / name, cols) for name, cols in tables.items()]
     (folder / "summary.json").write_text(text + "\n", encoding="utf-8")
     return paths + [folder / "summary.json"]
+
+
+def check_output_folder(folder, option: str = "--out") -> Path:
+    """``folder`` usable as an output folder: an existing folder, or a new one whose parent exists. Raises
+    :class:`OutputPathError` naming ``option`` otherwise (before any work is done)."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise OutputPathError(option, f"{folder} exists and is not a folder")
+    parent = folder.absolute().parent
+    if not folder.exists() and not parent.is_dir():
+        raise OutputPathError(option, f"cannot make {folder}: no folder {parent}")
+    if not os.access(folder if folder.exists() else parent, os.W_OK):
+        raise OutputPathError(option, f"cannot write into {folder if folder.exists() else parent}: permission denied")
+    return folder
+
+
+class OutputPathError(SewgenError, ValueError):
+    """An output file or folder that cannot be written (``parameter``: the option or argument naming it)."""
+
+    def __init__(self, option: str, problem: str):
+        super().__init__(f"{option}: {problem}" if option else problem, problem=problem, parameter=option)
+
+
+@contextlib.contextmanager
+def staged_folder(folder, option: str = "--out"):
+    """Write a folder's files into a temporary folder; move them into place only when the block ends without an
+    error. A new folder is staged beside it and renamed in one step; an existing folder (``--out .``, a mount
+    point) is staged in a hidden folder inside it, and each file is renamed over the old one, summary.json last.
+    On an error the temporary folder is removed and ``folder`` is left as it was. Yields the temporary folder."""
+    folder = check_output_folder(folder, option)
+    existed = folder.is_dir()
+    home = folder if existed else folder.absolute().parent
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=f".{folder.absolute().name or 'out'}.", suffix=".part", dir=home))
+    except OSError as exc:
+        raise OutputPathError(option, f"cannot write into {home}: {exc.strerror or exc}") from None
+    try:
+        yield tmp
+        os.chmod(tmp, 0o777 & ~_umask())
+        if not existed:
+            try:
+                os.rename(tmp, folder)
+                return
+            except OSError:  # made meanwhile: move the files one by one
+                folder.mkdir(exist_ok=True)
+        names = sorted(p.name for p in tmp.iterdir())
+        names.sort(key=lambda n: n == "summary.json")  # summary.json last: its presence marks a complete run
+        for name in names:
+            target = folder / name
+            if target.is_dir():
+                raise OutputPathError(option, f"cannot replace {target}: it is a folder")
+            os.replace(tmp / name, target)
+    except OSError as exc:
+        raise OutputPathError(option, f"cannot write {folder}: {exc.strerror or exc}") from None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_report(a, folder, progress=None, units: DisplayUnits | None = None) -> list[Path]:
+    """machine.csv, <group>.csv for every group and summary.json into ``folder``, moved into place only when all
+    are written (:func:`staged_folder`). Returns the paths in ``folder``."""
+    folder = Path(folder)
+    with staged_folder(folder, "folder") as tmp:
+        written = write_tables(a, tmp, progress, units)
+    return [folder / p.name for p in written]

@@ -172,5 +172,5 @@ def test_element_declarations_are_checked():
         m.spring(crank.at(0, 0), crank.at(1, 0), "1 N/m", "1 mm", name="s")
     with pytest.raises(DeclarationError, match="torsion spring 't' needs a revolute joint"):
         m.torsion_spring(m.ground.line(), "1 N*m/rad", name="t")
-    with pytest.raises(UnitError, match="wrong_unit.stiffness: '1 N' is not a stiffness"):
+    with pytest.raises(UnitError, match=r"wrong_unit\.stiffness: .1 N. is not a stiffness"):
         m.spring(crank.at(0, 0), m.ground.at(0, 0), "1 N", "1 mm", name="wrong_unit")

@@ -371,3 +371,139 @@ def test_a_results_folder_named_like_a_builtin_model_does_not_shadow_it(tmp_path
     monkeypatch.chdir(tmp_path)
     (tmp_path / "jb1-3").mkdir()
     assert resolve("jb1-3") == MODELS_DIR / "jb1-3.toml"
+
+
+# -- names, signs, encodings, geometry (issue 11, item 7) ----------------------------------------------------------
+
+@pytest.mark.parametrize("old, new, key, must", [
+    ("[groups.needle_bar]", "[groups.machine]", "groups.machine", ["reserved"]),
+    ("[groups.take_up]", "[groups.summary]", "groups.summary", ["reserved"]),
+    ("[groups.hook_drive]", '[groups."hook drive"]', "groups.hook drive", ["identifier"]),
+    ("[groups.hook_drive]", '[groups."2nd"]', "groups.2nd", ["identifier"]),
+    ("[groups.hook_drive]", '[groups."../x"]', "groups.../x", ["identifier"]),
+])
+def test_group_names_are_identifiers_and_not_reserved(tmp_path, old, new, key, must):
+    stem = old[1:-1] + "."
+    text = edit(old, new).replace(stem, new[1:-1] + ".")
+    check(tmp_path, text, key, must)
+
+
+@pytest.mark.parametrize("name", ["../ESCAPED", "a/b", "a\\\\b", "..", ".hidden", " JB", ""])
+def test_the_machine_name_is_never_a_path(tmp_path, name):
+    check(tmp_path, edit('name = "JB1-3"', f'name = "{name}"'), "machine.name", ["plain name"])
+
+
+@pytest.mark.parametrize("old, new, key", [
+    ('mass = "250 g"', 'mass = "-250 g"', "shaft.mass"),
+    ('inertia = "2.0e-5 kg*m**2"', 'inertia = "-2.0e-5 kg*m**2"', "shaft.inertia"),
+    ('mass = "20 g"', 'mass = "-20 g"', "shaft.masses[0].mass"),
+    ('radius = "10 mm"', 'radius = "-10 mm"', "shaft.masses[0].radius"),
+    ('belt_pull = "30 N"', 'belt_pull = "-30 N"', "shaft.belt_pull"),
+    ('"crank.mass" = "35 g"', '"crank.mass" = "-35 g"', "groups.needle_bar.params.crank.mass"),
+    ('"crank.inertia" = "3.0e-6 kg*m**2"', '"crank.inertia" = "-3.0e-6 kg*m**2"',
+     "groups.needle_bar.params.crank.inertia"),
+])
+def test_masses_and_inertias_are_not_negative(tmp_path, old, new, key):
+    check(tmp_path, edit(old, new), key, ["negative"])
+
+
+@pytest.mark.parametrize("old, new", [('speed = "1000 rpm"', 'speed = "0 rpm"'),
+                                      ('speed = "1000 rpm"', 'speed = "-1000 rpm"'),
+                                      ('step = "5 deg"', 'step = "0 deg"')])
+def test_speed_and_step_are_positive(tmp_path, old, new):
+    check(tmp_path, edit(old, new), f"machine.{old.split()[0]}", ["positive"])
+
+
+@pytest.mark.parametrize("value", ["1,5 mm", "16,7 mm", "mm", "🧵 mm", "", "50"])
+def test_strict_quantities_in_a_model_file(tmp_path, value):
+    msg = check(tmp_path, edit('rod = "50 mm"', f'rod = "{value}"'), "groups.needle_bar.params.rod")
+    assert f'"{value}"' in msg or "empty" in msg
+
+
+def test_a_file_that_is_not_utf8(tmp_path):
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(TEXT.replace("household", "m\u00e9nage").encode("latin-1", "replace"))
+    with pytest.raises(ModelFileError) as exc:
+        load_machine(path)
+    assert exc.value.file == str(path) and "UTF-8" in str(exc.value) and "line" in str(exc.value)
+
+
+def test_a_folder_is_not_a_model(tmp_path, monkeypatch):
+    from sewgen.modelfile import resolve
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mine.toml").mkdir()
+    with pytest.raises(ModelFileError) as exc:
+        load_machine("mine.toml")
+    assert "folder" in str(exc.value)
+    (tmp_path / "jb1-3.toml").write_text(TEXT.replace('name = "JB1-3"', 'name = "Local"'), encoding="utf-8")
+    assert load_machine("jb1-3.toml").name == "Local"  # a .toml path is that file
+    assert resolve("jb1-3") == MODELS_DIR / "jb1-3.toml"  # the built-in name is the built-in
+    (tmp_path / "plain").write_text(TEXT, encoding="utf-8")
+    assert resolve("plain").name == "plain"  # any other existing file: that file
+
+
+def test_a_group_that_cannot_assemble_names_file_and_group(tmp_path):
+    from sewgen.errors import AssemblyError
+
+    path = write(tmp_path, edit('rod = "50 mm"', 'rod = "10 mm"'))
+    m = load_machine(path)
+    with pytest.raises(AssemblyError) as exc:
+        m.analyze()
+    err = exc.value
+    assert err.file == str(path) and err.key == "groups.needle_bar" and err.mechanism == "needle_bar"
+    assert str(err).startswith(f"{path}: groups.needle_bar: needle_bar: cannot assemble")
+    assert err.angle is not None
+
+
+def test_a_stitch_the_regulator_cannot_reach_names_the_key(tmp_path):
+    check(tmp_path, edit('stitch = "4 mm"', 'stitch = "10 mm"'), "groups.feed.stitch", ["10 mm", "range"])
+
+
+def test_non_finite_results_are_a_typed_error_and_never_written(tmp_path):
+    from sewgen.report import NonFiniteOutputError, write_report
+
+    path = write(tmp_path, edit('mass = "20 g"', 'mass = "1e307 kg"'))
+    with np.errstate(all="ignore"), pytest.raises(NonFiniteOutputError) as exc:
+        write_report(load_machine(path).analyze(), tmp_path / "out")
+    assert exc.value.file == str(path) and "shaft" in str(exc.value)
+    assert not (tmp_path / "out").exists() and sorted(p.name for p in tmp_path.iterdir()) == ["machine.toml"]
+
+
+def test_a_report_is_written_whole_or_not_at_all(tmp_path, jb, monkeypatch):
+    from sewgen import report
+
+    a = jb.analyze()
+    files = report.write_report(a, tmp_path / "r")
+    assert [f.name for f in files][-1] == "summary.json" and all(f.is_file() for f in files)
+    before = {f.name: f.read_bytes() for f in files}
+
+    def broken(a_, folder, progress=None, units=None):
+        (folder / "machine.csv").write_text("half")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(report, "write_tables", broken)
+    with pytest.raises(report.OutputPathError):
+        report.write_report(a, tmp_path / "r")
+    assert {f.name: f.read_bytes() for f in (tmp_path / "r").iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r"]
+
+
+def test_summary_is_clean_json(jb):
+    from sewgen.report import summary
+
+    s = summary(jb.analyze())
+    text = json.dumps(s, allow_nan=False)
+    assert "Infinity" not in text and "NaN" not in text
+    assert s["speed_rpm"] == 1000.0 and s["model_file"] == "<sewgen>/models/jb1-3.toml"
+    assert s["drive_torque"]["max_at_deg"] % 5 == 0
+    assert set(s["conventions"]) >= {"frame", "shaft_angle", "drive_torque", "power_balance_residual_relative"}
+
+
+def test_a_summary_at_rest(jb):
+    """A static analysis (speed 0) is an analysis: the feed's travel from central differences, no NaN."""
+    from sewgen.report import summary
+
+    s = summary(jb.analyze(speed=0.0))
+    assert s["speed_rpm"] == 0.0
+    assert s["groups"]["feed"]["feed_dog"]["travel_above_plate_mm"] == pytest.approx(4.0, abs=1e-4)

@@ -70,13 +70,21 @@ def figures_for(analysis) -> list[tuple]:
     return [(name, make) for name, make in FIGURES if APPLIES.get(name, lambda a: True)(analysis)]
 
 
-def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool | None = None) -> list[Path]:
+def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool | None = None,
+              curves=None) -> list[Path]:
     """Every figure (and the GIF unless ``gif=False``) into ``folder``; returns the paths written.
     ``progress(message, done, total)`` is called before each file (done = files finished, total = files) and
     every 8 frames of the GIF (done stays at the GIF's index). The GIF is written by a forked process while the
-    PNGs are drawn where that is safe (:func:`~sewgen.plots.background.can_fork`; ``parallel=False``: never)."""
+    PNGs are drawn where that is safe (:func:`~sewgen.plots.background.can_fork`; ``parallel=False``: never).
+
+    The figures are drawn from ``curves`` (default: ``analysis.refined()``, the same analysis every 1° when it
+    was run in coarser steps, so no curve is a jagged polyline); the GIF has one frame per position of
+    ``analysis``."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    if curves is None:
+        refine = getattr(analysis, "refined", None)
+        curves = refine() if refine is not None else analysis
     figures = figures_for(analysis)
     total = len(figures) + bool(gif)
     report = progress or (lambda message, done, total: None)
@@ -88,7 +96,7 @@ def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool 
     try:
         for k, (name, make) in enumerate(figures):
             report(name, k, total)
-            out.append(make(analysis, folder / name))
+            out.append(make(curves, folder / name))
         if background is not None:
             out.append(background.wait(gif_progress))
             background = None

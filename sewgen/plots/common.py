@@ -98,19 +98,27 @@ def shade(ax, a, mask, color, label=None):
 def angle_labels(ax, a, x, y, *, at=None, step=45.0, color="0.2", size=7):
     """Dots and "φ°" labels at every ``step`` degrees of shaft angle on a path x, y (equal-aspect data units);
     each label is pushed off the path along its normal, away from the path's centre. ``at`` gives other
-    data coordinates to annotate (a polar axes' θ, r) with x, y used for the directions. One Line2D holds the
-    dots; the labels are plain texts (no arrows)."""
+    data coordinates to annotate (a polar axes' θ, r) with x, y used for the directions. A label that would
+    overlap one already placed is left out with its dot (labels at multiples of 90° are placed first), so
+    labels never pile up where a path passes one spot at several angles. Call it after the axes' limits are
+    final (set, or autoscaled with the path plotted). One Line2D holds the dots; the labels are plain texts.
+    Returns the shaft angles (deg) labelled."""
     x, y = np.asarray(x, float), np.asarray(y, float)
     d = np.degrees(a.phi)
     idx = np.flatnonzero(np.abs(d - step * np.round(d / step)) < 1e-6)
     if not len(idx):
-        return
+        return []
     tx, ty = np.roll(x, -1) - np.roll(x, 1), np.roll(y, -1) - np.roll(y, 1)
     cx, cy = x.mean(), y.mean()
     size_ = max(np.ptp(x), np.ptp(y), 1e-300)
     px, py = (x, y) if at is None else (np.asarray(at[0]), np.asarray(at[1]))
-    ax.plot(px[idx], py[idx], "o", ms=2.5, color=color)
-    for i in idx:
+    ax.autoscale_view()
+    ax.apply_aspect()
+    to_px = ax.transData.transform
+    scale = ax.figure.dpi / 72.0  # points -> pixels
+    order = sorted(idx, key=lambda i: (round(d[i] % 90.0, 6) != 0.0, d[i] % 360.0))
+    boxes, kept = [], []
+    for i in order:
         nx, ny = ty[i], -tx[i]  # right-hand normal of the direction of travel
         ox, oy = x[i] - cx, y[i] - cy
         if math.hypot(nx, ny) < 1e-3 * size_:  # at rest: straight out from the centre
@@ -121,8 +129,21 @@ def angle_labels(ax, a, x, y, *, at=None, step=45.0, color="0.2", size=7):
         nx, ny = nx / r, ny / r
         ha = "center" if abs(nx) < 0.4 else ("left" if nx > 0 else "right")  # the text starts next to the dot
         va = "center" if abs(ny) < 0.4 else ("bottom" if ny > 0 else "top")
-        ax.annotate(f"{d[i] % 360:.0f}°", (px[i], py[i]), xytext=(5 * nx, 5 * ny), textcoords="offset points",
+        text = f"{d[i] % 360:.0f}°"
+        w, h = 0.62 * size * len(text) * scale, 1.15 * size * scale
+        bx, by = to_px((px[i], py[i])) + 5 * scale * np.array([nx, ny])
+        left = bx - {"left": 0.0, "center": w / 2, "right": w}[ha]
+        bottom = by - {"bottom": 0.0, "center": h / 2, "top": h}[va]
+        box = (left - 1, bottom - 1, left + w + 1, bottom + h + 1)
+        if any(box[0] < o[2] and o[0] < box[2] and box[1] < o[3] and o[1] < box[3] for o in boxes):
+            continue
+        boxes.append(box)
+        kept.append(i)
+        ax.annotate(text, (px[i], py[i]), xytext=(5 * nx, 5 * ny), textcoords="offset points",
                     ha=ha, va=va, fontsize=size, color=color)
+    kept.sort()
+    ax.plot(px[kept], py[kept], "o", ms=2.5, color=color)
+    return [float(d[i] % 360) for i in kept]
 
 
 # -- groups, roles ---------------------------------------------------------------------------------------------

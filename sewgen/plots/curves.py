@@ -87,6 +87,19 @@ def motion_size(a):
     return (13.0, 0.55 + _bottom(a) + 2.45 * max(len(motion_rows(a)), 1))
 
 
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def scale_of(values) -> tuple[float, str]:
+    """(factor, prefix) that keeps an axis's tick labels short without an offset text ("1e4" in a corner): values
+    of 10⁴ and more are shown in 10³, 10⁶, ... of their unit, the power in the axis label."""
+    top = float(np.max(np.abs(values))) if len(values) else 0.0
+    if not np.isfinite(top) or top < 1e4:
+        return 1.0, ""
+    e = 3 * int(np.floor(np.log10(top) / 3))
+    return 10.0 ** -e, f"10{str(e).translate(_SUPERSCRIPT)} "
+
+
 def draw_motion(fig, a):
     from matplotlib.ticker import MaxNLocator
 
@@ -101,8 +114,11 @@ def draw_motion(fig, a):
         c = color(a, row.group)
         for k, kind in enumerate(("displacement", "velocity", "acceleration")):
             ax = axes[r, k]
+            factor, prefix = scale_of(np.concatenate([values[k] for _, *values in row.series]))
+            if k == 0:
+                factor, prefix = 1.0, ""  # positions keep their unit (mm, deg)
             for s, (label, *values) in enumerate(row.series):
-                ax.plot(d, closed(a, values[k]), color=c, lw=1.4, ls=("-", "--")[s % 2],
+                ax.plot(d, closed(a, factor * values[k]), color=c, lw=1.4, ls=("-", "--")[s % 2],
                         label=label if len(row.series) > 1 else None)
             for mask, mc, text in masks:
                 shade(ax, a, mask, mc, text if r == 0 and k == 0 else None)
@@ -112,11 +128,10 @@ def draw_motion(fig, a):
                 ax.axhline(0, color="0.5", lw=0.6)
             if len(row.series) > 1 and k == 0:
                 ax.legend(fontsize=7, loc="best")
-            ax.set_ylabel(f"{kind} ({row.units[k]})", fontsize=9)
+            ax.set_ylabel(f"{kind} ({prefix}{row.units[k]})", fontsize=9)
             ax.set_title(row.title, fontsize=9, color=c, y=1.0)
             ax.yaxis.set_major_locator(MaxNLocator(5, steps=[1, 2, 2.5, 5, 10]))
-            ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4))
-            ax.yaxis.get_offset_text().set(x=-0.11, ha="right", fontsize=7)  # "1e4" beside the axis, not on the title
+            ax.ticklabel_format(axis="y", style="plain", useOffset=False)  # no "1e4" offsets: the power is in the label
             ax.tick_params(labelsize=8)
             angle_axis(ax, label=r == n - 1, step=90)
     handles, labels = [], []

@@ -32,19 +32,44 @@ def path_panels(a) -> list:
     return out
 
 
+#: Width (in) of a trajectory panel's axes for a path as wide as it is high; a narrower path (the needle eye's
+#: straight stroke) gets a narrower panel, down to :data:`_MIN_RATIO` of it, so no panel is mostly empty.
+_PANEL_W, _GAP, _MIN_RATIO = 3.1, 0.85, 0.42
+
+
+def _column_ratios(a) -> list:
+    """Width of each column of trajectory panels, relative to :data:`_PANEL_W`: the widest path's width over
+    its height (at least :data:`_MIN_RATIO`, at most 1)."""
+    panels = path_panels(a)
+    n = max(len(panels), 1)
+    cols = min(n, _NCOL)
+    ratios = [_MIN_RATIO] * cols
+    for k, (g, pts) in enumerate(panels):
+        fa = a.groups[g.name]
+        xs = np.concatenate([fa.motion.point(name).x for name, _ in pts])
+        ys = np.concatenate([fa.motion.point(name).y for name, _ in pts])
+        aspect = (np.ptp(xs) + 0.2 * np.ptp(ys)) / max(np.ptp(ys), 1e-12)
+        ratios[k % cols] = max(ratios[k % cols], min(1.0, 1.4 * aspect))
+    return ratios if panels else [1.0]
+
+
 def trajectories_size(a):
     n = max(len(path_panels(a)), 1)
-    rows, cols = math.ceil(n / _NCOL), min(n, _NCOL)
-    return (max(1.1 + 3.95 * cols, 6.0), 0.75 + 4.75 * rows)
+    rows = math.ceil(n / _NCOL)
+    ratios = _column_ratios(a)
+    return (max(1.1 + _PANEL_W * sum(ratios) + _GAP * (len(ratios) - 1), 6.0), 0.9 + 5.35 * rows)
 
 
 def draw_trajectories(fig, a):
     """Paths (mm) of the role-tagged points (a group without roles: all its points), the throat plate beside the
-    points that work at it; returns {"group.point": (x, y)}."""
+    points that work at it; returns {"group.point": (x, y)}. A panel is as wide as its paths need (the needle
+    eye's straight stroke gets a narrow one)."""
     panels = path_panels(a)
     n = max(len(panels), 1)
     rows, cols = math.ceil(n / _NCOL), min(n, _NCOL)
-    axes = place(fig, rows, cols, left=0.8, right=0.3, top=0.55, bottom=0.65, wspace=0.85, hspace=1.0).ravel()
+    ratios = _column_ratios(a)
+    axes = place(fig, rows, cols, left=0.8, right=0.3, top=0.55, bottom=1.2, wspace=_GAP, hspace=1.6,
+                 width_ratios=ratios).ravel()
     plate = throat_plate_height(a)
     data = {}
     for ax in axes[len(panels):]:
@@ -56,9 +81,8 @@ def draw_trajectories(fig, a):
             p = fa.motion.point(name)
             x, y = p.x * MM, p.y * MM
             data[f"{g.name}.{name}"] = (x, y)
-            ax.plot(closed(a, x), closed(a, y), color=c, lw=1.5, ls=styles[k % 4], label=f"{pretty(name)} path",
-                    gid=f"{g.name}.{name}")
-            angle_labels(ax, a, x, y, size=6.5)
+            ax.plot(closed(a, x), closed(a, y), color=c, lw=1.5, ls=styles[k % 4],
+                    label=f"{pretty(name)} path" if len(pts) > 1 else None, gid=f"{g.name}.{name}")
         roles = {role for _, role in pts}
         if plate is not None and roles & set(AT_THE_PLATE):
             ax.axhline(plate * MM, color="k", lw=1, ls="--", label=f"throat plate, y = {plate * MM:g} mm")
@@ -72,11 +96,15 @@ def draw_trajectories(fig, a):
                 _feed_note(ax, g, fa, plate)
         ax.set_aspect("equal", adjustable="datalim")
         ax.margins(0.2)
+        for name, _ in pts:  # after the limits: labels that would overlap are left out
+            angle_labels(ax, a, *data[f"{g.name}.{name}"], size=6.5)
+        ax.set_autoscale_on(False)
         head = pretty(pts[0][1]) if len(pts) == 1 and pts[0][1] else "named points"
         ax.set_title(f"{g.name}: {head}", fontsize=10, color=c, y=1.0)
         ax.set(xlabel="x (mm)", ylabel="y (mm)")
         ax.grid(alpha=0.3)
-        ax.legend(loc="best", fontsize=7, framealpha=0.8)
+        if ax.get_legend_handles_labels()[1]:  # below the axes: never over a path or its labels
+            ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=7, framealpha=0.8)
     suptitle(fig, title(a, "paths in the machine's plane (labels: shaft angle φ)"))
     return data
 
@@ -93,24 +121,46 @@ def _feed_note(ax, g, fa, plate):
 
 
 def stitches_size(a):
-    return (11.0, 0.6 + 5.6 * max(len(feed_groups(a)), 1))
+    return (13.0, 0.6 + 6.0 * max(len(feed_groups(a)), 1))
+
+
+def _arrows(ax, x, y, color, count=2):
+    """Arrowheads along a closed path in its direction of travel: at its highest and lowest points (more with
+    ``count`` > 2, evenly between)."""
+    n = len(x)
+    if n < 4:
+        return
+    picks = [int(np.argmax(y)), int(np.argmin(y))]
+    picks += [int(k * n / count) for k in range(2, count)]
+    step = max(1, n // 90)  # a few degrees of travel
+    for i in picks:
+        j = (i + step) % n
+        if math.hypot(x[j] - x[i], y[j] - y[i]) < 1e-9:
+            continue
+        ax.annotate("", xy=(x[j], y[j]), xytext=(x[i], y[i]),
+                    arrowprops=dict(arrowstyle="-|>", color=color, lw=1.2, mutation_scale=13, shrinkA=0, shrinkB=0))
 
 
 def draw_feed_dog_stitches(fig, a):
     """Feed-dog paths (mm) for stitch lengths 0 to 4 mm and reverse, the stitch regulator set for each (seed 001
-    §五), one panel per group with a feed; returns {stitch mm: (x, y)} of the first such group (empty without)."""
+    §五): for each group with a feed, forward feed in one panel and reverse feed beside it, the same scale, with
+    arrows in the dog's direction of travel; returns {stitch mm: (x, y)} of the first such group (empty without)."""
     from matplotlib import colormaps
 
     groups = feed_groups(a)
-    axes = place(fig, max(len(groups), 1), 1, left=0.9, right=3.4, top=0.85, bottom=0.6, hspace=0.9).ravel()
+    axes = place(fig, max(len(groups), 1), 2, left=0.9, right=0.3, top=0.85, bottom=1.9, wspace=0.9,
+                 hspace=2.2)
     out = {}
     if not groups:
-        axes[0].set_axis_off()
-        axes[0].text(0.5, 0.5, "no group with a feed dog, a throat plate and a stitch regulator", ha="center",
-                     transform=axes[0].transAxes)
+        for ax in axes.ravel():
+            ax.set_axis_off()
+        axes[0, 0].text(0.5, 0.5, "no group with a feed dog, a throat plate and a stitch regulator", ha="center",
+                        transform=axes[0, 0].transAxes)
         return out
     cmap = colormaps["coolwarm"]
-    for ax, g in zip(axes, groups):
+    forward = [mm for mm in STITCHES_MM if mm >= 0]
+    reverse = [0.0] + [mm for mm in STITCHES_MM if mm < 0]
+    for row, g in zip(axes, groups):
         mech, params, fa = g.mechanism, g.params or None, a.groups[g.name]
         d = mech.description
         dog, reg = d.role_name(FEED_DOG), d.role_name(STITCH_REGULATOR)
@@ -119,17 +169,26 @@ def draw_feed_dog_stitches(fig, a):
         for mm in STITCHES_MM:
             angle = regulator_angle(mech, mm * 1e-3, params=params)
             mo = mech.solve(fa.motion.phi, speed=fa.motion.omega, params=params, held={reg: angle})
-            x, y = mo.point(dog).x * MM, mo.point(dog).y * MM
-            data[mm] = (x, y)
-            ax.plot(closed(a, x), closed(a, y), lw=1.4, color=cmap(0.5 + mm / 9.0),
-                    label=f"{mm:+.0f} mm ({pretty(reg)} {math.degrees(angle):+.1f}°)")
-        ax.axhline(plate * MM, color="k", lw=1, ls="--", label=f"throat plate, y = {plate * MM:g} mm")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.margins(0.1)
-        ax.grid(alpha=0.3)
-        ax.set(xlabel="x (mm, + = forward feed)", ylabel="y (mm)")
-        ax.set_title(f"{g.name}: {pretty(dog)}", y=1.0)
-        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5), title="stitch length")
-        out = out or data
+            data[mm] = (mo.point(dog).x * MM, mo.point(dog).y * MM, angle)
+        for ax, family, text in ((row[0], forward, "forward stitches"), (row[1], reverse, "reverse stitches")):
+            for mm in family:
+                x, y, angle = data[mm]
+                c = cmap(0.5 + mm / 9.0) if mm else "0.55"
+                ax.plot(closed(a, x), closed(a, y), lw=1.5, color=c,
+                        label=f"{mm:+.0f} mm ({pretty(reg)} {round(math.degrees(angle), 1) + 0.0:+.1f}°)")
+                if mm:
+                    _arrows(ax, x, y, c)
+            ax.axhline(plate * MM, color="k", lw=1, ls="--", label=f"throat plate, y = {plate * MM:g} mm")
+            xs = np.concatenate([v[0] for v in data.values()])  # both panels on one scale
+            ys = np.concatenate([v[1] for v in data.values()] + [[plate * MM]])
+            pad = 0.08 * max(np.ptp(xs), np.ptp(ys))
+            ax.set(xlim=(xs.min() - pad, xs.max() + pad), ylim=(ys.min() - pad, ys.max() + pad))
+            ax.set_aspect("equal", adjustable="box")
+            ax.grid(alpha=0.3)
+            ax.set(xlabel="x (mm, + = forward feed)", ylabel="y (mm)")
+            ax.set_title(f"{g.name}: {pretty(dog)}, {text} (arrows: direction of travel)", y=1.0, fontsize=10)
+            ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2,
+                      title="stitch length", title_fontsize=8)
+        out = out or {mm: (x, y) for mm, (x, y, _) in data.items()}
     suptitle(fig, title(a, "feed-dog paths for stitch lengths 0 to 4 mm and reverse"))
     return out

@@ -56,13 +56,14 @@ def _polar(ax, a, fx, fy, c, text, step=90.0):
                 bbox=dict(fc="w", ec="none", pad=0.5, alpha=0.8))
     ax.plot(closed(a, fx), closed(a, fy), color=c, lw=1.5)
     ax.plot([0], [0], "k+", ms=6)
-    angle_labels(ax, a, fx, fy, size=6, step=step)
     ax.plot([fx[k]], [fy[k]], "o", ms=6, mfc="none", mec="k")
     ax.set_title(f"{text}\npeak {mag[k]:.3g} N at φ = {math.degrees(a.phi[k]) % 360:.0f}°, "
                  f"mean {mag.mean():.3g} N", fontsize=8.5, y=1.0, pad=4)
     ax.set(xlim=(-1.2 * R, 1.2 * R), ylim=(-1.2 * R, 1.2 * R))
     ax.set_aspect("equal", adjustable="box")
+    ax.set_autoscale_on(False)
     ax.set_axis_off()
+    angle_labels(ax, a, fx, fy, size=6, step=step)  # after the limits: overlapping labels are left out
 
 
 def draw_bearings_polar(fig, a):
@@ -131,7 +132,9 @@ def draw_torque(fig, a):
                  f"{np.degrees(a.phi[kmin]) % 360:.0f}°", fontsize=9, y=1.0)
     fig.legend(*ax.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8,
                bbox_to_anchor=(0.5, 0.04 / fig.get_size_inches()[1]))
-    suptitle(fig, title(a, "driving torque of the upper shaft"))
+    ax.text(0.995, 0.015, "ideal joints: friction is left out", transform=ax.transAxes, ha="right", va="bottom",
+            fontsize=8, color="0.25", bbox=dict(fc="w", ec="0.7", alpha=0.85))
+    suptitle(fig, title(a, "driving torque of the upper shaft (friction left out)"))
 
 
 # -- shaking force and moments ---------------------------------------------------------------------------------
@@ -146,7 +149,6 @@ def draw_shaking(fig, a):
     ax2, ax3 = fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[1, 1])
     f = a.shaking_force
     ax1.plot(closed(a, f[:, 0]), closed(a, f[:, 1]), color="tab:purple", lw=1.5, label="shaking force hodograph")
-    angle_labels(ax1, a, f[:, 0], f[:, 1])
     ax1.plot([0], [0], "k+", ms=10, label="origin (no force)")
     m = f.mean(axis=0)
     ax1.plot(*m, "kx", ms=7, label=f"mean ({m[0]:.2f}, {m[1]:.2f}) N: the parts' weight")
@@ -155,6 +157,8 @@ def draw_shaking(fig, a):
              label=f"peak {np.hypot(*f[k]):.3g} N at φ = {np.degrees(a.phi[k]) % 360:.0f}°")
     ax1.set_aspect("equal", adjustable="datalim")
     ax1.margins(0.12)
+    angle_labels(ax1, a, f[:, 0], f[:, 1])
+    ax1.set_autoscale_on(False)
     ax1.grid(alpha=0.3)
     ax1.set(xlabel="Fx (N)", ylabel="Fy (N)")
     ax1.set_title("shaking force on the base (process loads internal)", y=1.0)
