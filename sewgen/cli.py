@@ -188,6 +188,22 @@ def cmd_analyze(args) -> int:
     return 0
 
 
+def cmd_timing(args) -> int:
+    """Stitch-formation timing of a machine: the event table and every rule's margin (exit 1 if one fails)."""
+    from .machine import load_machine
+    from .timing import timing
+
+    machine = load_machine(args.model)
+    tm = timing(machine, speed=_option(args.speed, "speed", "--speed"))
+    print(json.dumps(tm.as_dict(), indent=2, ensure_ascii=False) if args.json else tm.table())
+    if args.plots:
+        from .plots.cycle import write_timing_plots
+
+        for path in write_timing_plots(tm, Path(args.plots)):
+            print(f"wrote {path}", file=sys.stderr)
+    return 0 if tm.ok else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="sewgen", description="Sewing-machine mechanism analysis.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -221,6 +237,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-plots", action="store_true", help="tables and summary.json only")
     p.add_argument("--no-gif", action="store_true", help="no animation")
     p.set_defaults(fn=cmd_analyze)
+    p = sub.add_parser("timing", help="stitch-formation timing: events, rule margins (exit 1 if a rule fails)")
+    p.add_argument("model", help='a built-in machine ("jb1-3") or a model file (.toml)')
+    p.add_argument("--speed", help='upper-shaft speed for the take-up eye\'s speed, e.g. "1500 rpm"')
+    p.add_argument("--json", action="store_true", help="the events and checks as JSON (summary.json's timing)")
+    p.add_argument("--plots", metavar="DIR", help="also write the cycle diagram and the thread curves into DIR")
+    p.set_defaults(fn=cmd_timing)
     return ap
 
 

@@ -100,6 +100,8 @@ class Machine:
     groups: list
     shaft: Shaft
     source: str = ""
+    stitch: object = None  # sewgen.timing.Stitch: cloth, loop lift and release, timing rules ([stitch])
+    thread: object = None  # sewgen.thread.ThreadPath: the needle thread's guides ([thread])
 
     def shaft_angles(self, step: float | None = None) -> np.ndarray:
         h = self.step if step is None else step
@@ -123,6 +125,12 @@ class Machine:
                 phi + g.phase, speed=w, accel=accel, loads=g.sweep_loads, gravity=g_mag, gravity_direction=g_dir,
                 params=g.params or None, held=g.held or None, branch=g.branch or None)
         return MachineAnalysis(self, phi, out)
+
+    def kinematics(self, phi, speed=None) -> dict:
+        """Group name -> Motion at machine shaft angles ``phi`` (rad), constant ``speed`` (sewgen.timing)."""
+        w = self.speed if speed is None else speed
+        return {g.name: g.mechanism.solve(np.asarray(phi, dtype=float) + g.phase, speed=w, params=g.params or None,
+                                          held=g.held or None, branch=g.branch or None) for g in self.groups}
 
 
 class MachineAnalysis:
@@ -379,7 +387,8 @@ def load_machine(name_or_path) -> Machine:
     path = resolve(name_or_path)
     rd = Reader(path)
     doc = rd.table(load_toml(path), "")
-    rd.check_keys(doc, "", {"machine": Field("table"), "shaft": Field("table"), "groups": Field("table")})
+    rd.check_keys(doc, "", {"machine": Field("table"), "shaft": Field("table"), "groups": Field("table"),
+                            "stitch": Field("table", False), "thread": Field("table", False)})
     mach = rd.read(rd.table(doc["machine"], "machine"), "machine", MACHINE)
     shaft_doc = rd.read(rd.table(doc["shaft"], "shaft"), "shaft", SHAFT)
     masses = [ShaftMass("core", shaft_doc["mass"], 0.0, 0.0, shaft_doc["mass_z"])]
@@ -401,6 +410,14 @@ def load_machine(name_or_path) -> Machine:
     gv = np.array([g_mag * math.cos(g_dir), g_mag * math.sin(g_dir)])
     gv[np.abs(gv) < 1e-15 * max(g_mag, 1e-300)] = 0.0
     m = Machine(mach["name"], mach.get("description", ""), mach["speed"], mach["step"], gv, groups, shaft, str(path))
+    if "stitch" in doc:  # stitch formation and thread control (sewgen.timing, sewgen.thread)
+        from .timing import read_stitch
+
+        m.stitch = read_stitch(rd, doc["stitch"])
+    if "thread" in doc:
+        from .thread import read_thread
+
+        m.thread = read_thread(rd, doc["thread"])
     try:
         m.shaft_angles()
     except ParameterError as exc:
