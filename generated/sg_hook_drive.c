@@ -6,24 +6,29 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_hook_drive_constants -- Total ops: 54 */
+/* sg_hook_drive_constants -- Total ops: 63 */
 void sg_hook_drive_constants(const double *p, double *c)
 {
-    const double t0 = sin(p[9]);
+    const double t0 = sin(p[11]);
     const double t1 = p[5]*cos(p[6]);
     const double t2 = p[5]*sin(p[6]);
     const double t3 = -t2;
     const double t4 = -p[8];
     const double t5 = -p[4];
     const double t6 = -t1;
-    const double t7 = -p[11];
-    const double t8 = (0.5)*p[1];
-    const double t9 = p[14]*t8;
-    const double t10 = p[17] + t5;
-    const double t11 = p[0] + t7;
-    const double t12 = p[17] + t6;
+    const double t7 = p[9]*cos(p[10]);
+    const double t8 = p[9]*sin(p[10]);
+    const double t9 = -t8;
+    const double t10 = -t7;
+    const double t11 = -p[13];
+    const double t12 = (0.5)*p[1];
+    const double t13 = p[16]*t12;
+    const double t14 = p[19] + t5;
+    const double t15 = p[23] + t10;
+    const double t16 = p[0] + t11;
+    const double t17 = p[19] + t6;
     c[0] = p[0];
-    c[1] = cos(p[9]);
+    c[1] = cos(p[11]);
     c[2] = -t0;
     c[3] = t0;
     c[4] = p[2];
@@ -45,60 +50,67 @@ void sg_hook_drive_constants(const double *p, double *c)
     c[20] = -p[0];
     c[21] = p[7];
     c[22] = p[8];
-    c[23] = p[9];
-    c[24] = p[11];
-    c[25] = -p[12];
-    c[26] = p[12];
-    c[27] = t7;
-    c[28] = t8;
-    c[29] = -t8;
-    c[30] = p[17];
-    c[31] = -p[18];
-    c[32] = p[18];
-    c[33] = -p[17];
-    c[34] = p[21];
-    c[35] = -p[22];
-    c[36] = p[22];
-    c[37] = -p[21];
-    c[38] = p[25];
-    c[39] = -p[26];
-    c[40] = p[26];
-    c[41] = -p[25];
-    c[42] = p[15];
-    c[43] = t9;
-    c[44] = -t9;
-    c[45] = p[19];
-    c[46] = t10;
-    c[47] = -t10;
-    c[48] = p[16];
-    c[49] = p[24];
-    c[50] = p[23];
-    c[51] = p[27];
-    c[52] = -p[20];
-    c[53] = p[13];
-    c[54] = -t11;
-    c[55] = t11;
-    c[56] = p[10];
-    c[57] = p[14];
-    c[58] = p[20];
-    c[59] = t4;
-    c[60] = (0.5)*p[10];
-    c[61] = (0.5)*p[13];
-    c[62] = (0.5)*p[14];
-    c[63] = (0.5)*p[15];
-    c[64] = (0.5)*p[16];
-    c[65] = (0.5)*p[19];
-    c[66] = (0.5)*p[20];
-    c[67] = (0.5)*p[23];
-    c[68] = (0.5)*p[24];
-    c[69] = (0.5)*p[27];
-    c[70] = -p[10];
-    c[71] = -p[14];
-    c[72] = -p[16];
-    c[73] = -p[24];
-    c[74] = -p[18] - t3;
-    c[75] = -t12;
-    c[76] = t12;
+    c[23] = t7;
+    c[24] = t9;
+    c[25] = t8;
+    c[26] = t10;
+    c[27] = p[11];
+    c[28] = p[13];
+    c[29] = -p[14];
+    c[30] = p[14];
+    c[31] = t11;
+    c[32] = t12;
+    c[33] = -t12;
+    c[34] = p[19];
+    c[35] = -p[20];
+    c[36] = p[20];
+    c[37] = -p[19];
+    c[38] = p[23];
+    c[39] = -p[24];
+    c[40] = p[24];
+    c[41] = -p[23];
+    c[42] = p[27];
+    c[43] = -p[28];
+    c[44] = p[28];
+    c[45] = -p[27];
+    c[46] = p[17];
+    c[47] = t13;
+    c[48] = -t13;
+    c[49] = p[21];
+    c[50] = t14;
+    c[51] = -t14;
+    c[52] = p[18];
+    c[53] = p[26];
+    c[54] = p[25];
+    c[55] = p[29];
+    c[56] = p[24] + t9;
+    c[57] = t15;
+    c[58] = -t15;
+    c[59] = p[22];
+    c[60] = p[15];
+    c[61] = -t16;
+    c[62] = t16;
+    c[63] = p[12];
+    c[64] = p[16];
+    c[65] = t4;
+    c[66] = (0.5)*p[12];
+    c[67] = (0.5)*p[15];
+    c[68] = (0.5)*p[16];
+    c[69] = (0.5)*p[17];
+    c[70] = (0.5)*p[18];
+    c[71] = (0.5)*p[21];
+    c[72] = (0.5)*p[22];
+    c[73] = (0.5)*p[25];
+    c[74] = (0.5)*p[26];
+    c[75] = (0.5)*p[29];
+    c[76] = -p[12];
+    c[77] = -p[16];
+    c[78] = -p[18];
+    c[79] = -p[22];
+    c[80] = -p[26];
+    c[81] = -p[20] - t3;
+    c[82] = -t17;
+    c[83] = t17;
 }
 
 /* sg_hook_drive_closed -- Total ops: 60 */
@@ -168,7 +180,7 @@ void sg_hook_drive_residual(const double *q, const double *cq, const double *x, 
     jac[15] = -cq[3];
 }
 
-/* sg_hook_drive_motion -- Total ops: 215 */
+/* sg_hook_drive_motion -- Total ops: 237 */
 int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
 {
     const double t0 = c[7]*cq[1];
@@ -193,17 +205,19 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     const double t29 = c[7]*cq[0];
     const double t30 = c[21] + t5;
     const double t31 = c[22] + t4;
-    const double t34 = c[24]*t9 + c[25]*t7;
-    const double t35 = c[25]*t9 + c[27]*t7;
-    const double t36 = c[28]*cq[4];
-    const double t37 = c[29]*cq[5];
-    const double t38 = c[30]*cq[0] + c[31]*cq[1];
-    const double t39 = c[31]*cq[0] + c[33]*cq[1];
-    const double t40 = c[34]*cq[2] + c[35]*cq[3];
-    const double t41 = c[35]*cq[2] + c[37]*cq[3];
+    const double t34 = c[23]*cq[2] + c[24]*cq[3];
+    const double t35 = c[24]*cq[2] + c[26]*cq[3];
+    const double t37 = c[28]*t9 + c[29]*t7;
+    const double t38 = c[29]*t9 + c[31]*t7;
+    const double t39 = c[32]*cq[4];
+    const double t40 = c[33]*cq[5];
+    const double t41 = c[34]*cq[0] + c[35]*cq[1];
+    const double t42 = c[35]*cq[0] + c[37]*cq[1];
     const double t43 = c[38]*cq[2] + c[39]*cq[3];
-    const double t44 = c[39]*cq[2] + c[41]*cq[3] - t4;
-    const double t46 = t43 + t5;
+    const double t44 = c[39]*cq[2] + c[41]*cq[3];
+    const double t45 = c[42]*cq[2] + c[43]*cq[3];
+    const double t46 = c[43]*cq[2] + c[45]*cq[3] - t4;
+    const double t48 = t45 + t5;
     double J[16];
     int piv[4];
     J[0] = t0;
@@ -238,8 +252,8 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     const double t21 = qd[1]*t5 + t19;
     const double t22 = cq[2]*qd[3];
     const double t23 = -cq[3]*q[3]*qd[1] + t22;
-    const double t42 = ((qd[1])*(qd[1]));
-    const double t45 = qd[1]*t44 + t22;
+    const double t36 = ((qd[1])*(qd[1]));
+    const double t47 = qd[1]*t46 + t22;
     qdd[0] = t12 + t13*t2 + t14*t15 + t8*xdd[0];
     qdd[1] = c[6]*t18 + t10*xdd[0] + t14*t8 + t17;
     qdd[2] = -qd[1]*t21 - t11*(c[13]*cq[1] + c[19]*cq[0]) - t20;
@@ -265,84 +279,89 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     obs[15] = t21;
     obs[16] = -qd[1]*t21 - qdd[1]*t4 + t32;
     obs[17] = qd[1]*t23 + qdd[1]*t5 + t33;
-    obs[18] = c[23] + x[0];
-    obs[19] = xd[0];
-    obs[20] = xdd[0];
-    obs[21] = t34;
-    obs[22] = c[24]*t7 + c[26]*t9;
-    obs[23] = t35*xd[0];
-    obs[24] = t34*xd[0];
-    obs[25] = t14*(c[26]*t7 + c[27]*t9) + t35*xdd[0];
-    obs[26] = t14*t35 + t34*xdd[0];
-    obs[27] = q[2];
-    obs[28] = qd[2];
-    obs[29] = qdd[2];
-    obs[30] = t15 + t36;
-    obs[31] = c[28]*cq[5] + t8;
-    obs[32] = qd[2]*t37 + t25;
-    obs[33] = qd[2]*t36 + t26;
-    obs[34] = c[29]*cq[4]*t13 + qdd[2]*t37 + t27;
-    obs[35] = c[29]*t18 + qdd[2]*t36 + t28;
-    obs[36] = q[0];
-    obs[37] = qd[0];
-    obs[38] = qdd[0];
-    obs[39] = c[4] + t38;
-    obs[40] = c[30]*cq[1] + c[32]*cq[0] + c[5];
-    obs[41] = qd[0]*t39;
-    obs[42] = qd[0]*t38;
-    obs[43] = qdd[0]*t39 + t11*(c[32]*cq[1] + c[33]*cq[0]);
-    obs[44] = qdd[0]*t38 + t11*t39;
-    obs[45] = q[1];
-    obs[46] = qd[1];
-    obs[47] = qdd[1];
-    obs[48] = c[21] + t40;
-    obs[49] = c[22] + c[34]*cq[3] + c[36]*cq[2];
-    obs[50] = qd[1]*t41;
-    obs[51] = qd[1]*t40;
-    obs[52] = qdd[1]*t41 + t42*(c[36]*cq[3] + c[37]*cq[2]);
-    obs[53] = qdd[1]*t40 + t41*t42;
-    obs[54] = q[1];
-    obs[55] = qd[1];
-    obs[56] = qdd[1];
-    obs[57] = t30 + t43;
-    obs[58] = c[38]*cq[3] + c[40]*cq[2] + t31;
-    obs[59] = t45;
-    obs[60] = qd[1]*t46 + t19;
-    obs[61] = qd[1]*(qd[1]*(c[40]*cq[3] + c[41]*cq[2] + t6) - t19) + qdd[1]*t44 + t32;
-    obs[62] = qd[1]*t45 + qdd[1]*t46 + t33;
-    if (!isfinite(((((((q[0] + q[1]) + (q[2] + q[3])) + ((qd[0] + qd[1]) + (qd[2] + (qd[3] + qdd[0])))) + (((qdd[1] + qdd[2]) + (qdd[3] + obs[0])) + ((obs[1] + obs[2]) + (obs[3] + (obs[4] + obs[5]))))) + ((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + (obs[13] + obs[14])))) + (((obs[15] + obs[16]) + (obs[17] + (obs[18] + obs[19]))) + ((obs[20] + obs[21]) + (obs[22] + (obs[23] + obs[24])))))) + (((((obs[25] + obs[26]) + (obs[27] + obs[28])) + ((obs[29] + obs[30]) + (obs[31] + (obs[32] + obs[33])))) + (((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38]))) + ((obs[39] + obs[40]) + (obs[41] + (obs[42] + obs[43]))))) + ((((obs[44] + obs[45]) + (obs[46] + obs[47])) + ((obs[48] + obs[49]) + (obs[50] + (obs[51] + obs[52])))) + (((obs[53] + obs[54]) + (obs[55] + (obs[56] + obs[57]))) + ((obs[58] + obs[59]) + (obs[60] + (obs[61] + obs[62]))))))))) return SG_NONFINITE;
+    obs[18] = c[21] + t34;
+    obs[19] = c[22] + c[23]*cq[3] + c[25]*cq[2];
+    obs[20] = qd[1]*t35;
+    obs[21] = qd[1]*t34;
+    obs[22] = qdd[1]*t35 + t36*(c[25]*cq[3] + c[26]*cq[2]);
+    obs[23] = qdd[1]*t34 + t35*t36;
+    obs[24] = c[27] + x[0];
+    obs[25] = xd[0];
+    obs[26] = xdd[0];
+    obs[27] = t37;
+    obs[28] = c[28]*t7 + c[30]*t9;
+    obs[29] = t38*xd[0];
+    obs[30] = t37*xd[0];
+    obs[31] = t14*(c[30]*t7 + c[31]*t9) + t38*xdd[0];
+    obs[32] = t14*t38 + t37*xdd[0];
+    obs[33] = q[2];
+    obs[34] = qd[2];
+    obs[35] = qdd[2];
+    obs[36] = t15 + t39;
+    obs[37] = c[32]*cq[5] + t8;
+    obs[38] = qd[2]*t40 + t25;
+    obs[39] = qd[2]*t39 + t26;
+    obs[40] = c[33]*cq[4]*t13 + qdd[2]*t40 + t27;
+    obs[41] = c[33]*t18 + qdd[2]*t39 + t28;
+    obs[42] = q[0];
+    obs[43] = qd[0];
+    obs[44] = qdd[0];
+    obs[45] = c[4] + t41;
+    obs[46] = c[34]*cq[1] + c[36]*cq[0] + c[5];
+    obs[47] = qd[0]*t42;
+    obs[48] = qd[0]*t41;
+    obs[49] = qdd[0]*t42 + t11*(c[36]*cq[1] + c[37]*cq[0]);
+    obs[50] = qdd[0]*t41 + t11*t42;
+    obs[51] = q[1];
+    obs[52] = qd[1];
+    obs[53] = qdd[1];
+    obs[54] = c[21] + t43;
+    obs[55] = c[22] + c[38]*cq[3] + c[40]*cq[2];
+    obs[56] = qd[1]*t44;
+    obs[57] = qd[1]*t43;
+    obs[58] = qdd[1]*t44 + t36*(c[40]*cq[3] + c[41]*cq[2]);
+    obs[59] = qdd[1]*t43 + t36*t44;
+    obs[60] = q[1];
+    obs[61] = qd[1];
+    obs[62] = qdd[1];
+    obs[63] = t30 + t45;
+    obs[64] = c[42]*cq[3] + c[44]*cq[2] + t31;
+    obs[65] = t47;
+    obs[66] = qd[1]*t48 + t19;
+    obs[67] = qd[1]*(qd[1]*(c[44]*cq[3] + c[45]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
+    obs[68] = qd[1]*t47 + qdd[1]*t48 + t33;
+    if (!isfinite(((((((q[0] + q[1]) + (q[2] + (q[3] + qd[0]))) + ((qd[1] + qd[2]) + (qd[3] + (qdd[0] + qdd[1])))) + (((qdd[2] + qdd[3]) + (obs[0] + (obs[1] + obs[2]))) + ((obs[3] + obs[4]) + (obs[5] + (obs[6] + obs[7]))))) + ((((obs[8] + obs[9]) + (obs[10] + (obs[11] + obs[12]))) + ((obs[13] + obs[14]) + (obs[15] + (obs[16] + obs[17])))) + (((obs[18] + obs[19]) + (obs[20] + (obs[21] + obs[22]))) + ((obs[23] + obs[24]) + (obs[25] + (obs[26] + obs[27])))))) + (((((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))) + ((obs[33] + obs[34]) + (obs[35] + (obs[36] + obs[37])))) + (((obs[38] + obs[39]) + (obs[40] + (obs[41] + obs[42]))) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) + ((((obs[48] + obs[49]) + (obs[50] + (obs[51] + obs[52]))) + ((obs[53] + obs[54]) + (obs[55] + (obs[56] + obs[57])))) + (((obs[58] + obs[59]) + (obs[60] + (obs[61] + obs[62]))) + ((obs[63] + (obs[64] + obs[65])) + (obs[66] + (obs[67] + obs[68]))))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
-/* sg_hook_drive_forces -- Total ops: 258 */
+/* sg_hook_drive_forces -- Total ops: 265 */
 int sg_hook_drive_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)x;
     const double t0 = c[10]*cq[1];
     const double t1 = c[13]*cq[0];
     const double t2 = -((cq[2])*(cq[2]))*q[3] - ((cq[3])*(cq[3]))*q[3];
-    const double t3 = -gv[1] + obs[35];
-    const double t4 = -gv[0] + obs[34];
-    const double t5 = c[32]*cq[0];
-    const double t6 = c[32]*cq[1];
-    const double t7 = c[49]*(-gv[0] + obs[61]) - ld[4];
-    const double t8 = c[49]*(-gv[1] + obs[62]) - ld[5];
-    const double t9 = c[48]*(-gv[0] + obs[43]) - ld[2];
-    const double t10 = c[48]*(-gv[1] + obs[44]) - ld[3];
-    const double t11 = c[38]*cq[3] + c[40]*cq[2];
-    const double t12 = c[40]*cq[3] + c[41]*cq[2];
-    const double t13 = -gv[0] + obs[52];
-    const double t14 = c[34]*cq[3] + c[36]*cq[2];
-    const double t15 = -gv[1] + obs[53];
-    const double t16 = c[36]*cq[3] + c[37]*cq[2];
-    const double t17 = c[1]*cx[0] + c[2]*cx[1];
-    const double t18 = c[26]*t17;
-    const double t19 = c[1]*cx[1] + c[3]*cx[0];
-    const double t20 = c[26]*t19;
+    const double t3 = -gv[1] + obs[41];
+    const double t4 = -gv[0] + obs[40];
+    const double t5 = c[36]*cq[0];
+    const double t6 = c[36]*cq[1];
+    const double t7 = c[53]*(-gv[0] + obs[67]) - ld[4];
+    const double t8 = c[53]*(-gv[1] + obs[68]) - ld[5];
+    const double t9 = c[52]*(-gv[0] + obs[49]) - ld[2];
+    const double t10 = c[52]*(-gv[1] + obs[50]) - ld[3];
+    const double t11 = c[42]*cq[3] + c[44]*cq[2];
+    const double t12 = c[44]*cq[3] + c[45]*cq[2];
+    const double t13 = c[59]*(-gv[0] + obs[58]) - ld[6];
+    const double t14 = c[59]*(-gv[1] + obs[59]) - ld[7];
+    const double t15 = -c[54]*obs[53] + ld[11] + ld[6]*(c[56]*cq[2] + c[57]*cq[3]) + ld[7]*(c[56]*cq[3] + c[58]*cq[2]) + t13*(c[38]*cq[3] + c[40]*cq[2]) + t14*(c[40]*cq[3] + c[41]*cq[2]);
+    const double t16 = c[1]*cx[0] + c[2]*cx[1];
+    const double t17 = c[30]*t16;
+    const double t18 = c[1]*cx[1] + c[3]*cx[0];
+    const double t19 = c[30]*t18;
     {
         const double d = t2;
         if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), fabs(t2)))) return SG_SINGULAR;
-        out[2] = (c[50]*obs[47] + c[51]*obs[56] + c[52]*t13*t14 + c[52]*t15*t16 - ld[10] - ld[4]*t11 - ld[5]*t12 - ld[9] - t11*t7 - t12*t8)/d;
+        out[2] = (c[55]*obs[62] - ld[12] - ld[4]*t11 - ld[5]*t12 - t11*t7 - t12*t8 - t15)/d;
     }
     {
         /* block of unknowns 10, 11 */
@@ -350,10 +369,10 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
         int piv[2];
         M[0] = c[16]*cq[1];
         M[1] = c[7]*cq[0];
-        r[0] = c[45]*obs[38] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - ld[2]*(c[46]*cq[1] + t5) - ld[3]*(c[47]*cq[0] + t6) - ld[8] - t10*(c[33]*cq[0] + t6) - t7*(t0 + t1) - t8*(c[13]*cq[1] + c[19]*cq[0]) - t9*(c[30]*cq[1] + t5);
+        r[0] = c[49]*obs[44] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - ld[10] - ld[2]*(c[50]*cq[1] + t5) - ld[3]*(c[51]*cq[0] + t6) - t10*(c[37]*cq[0] + t6) - t7*(t0 + t1) - t8*(c[13]*cq[1] + c[19]*cq[0]) - t9*(c[34]*cq[1] + t5);
         M[2] = c[6]*cq[5];
         M[3] = c[18]*cq[4];
-        r[1] = c[42]*obs[29] + c[43]*cq[4]*t3 + c[44]*cq[5]*t4 - ld[7];
+        r[1] = c[46]*obs[35] + c[47]*cq[4]*t3 + c[48]*cq[5]*t4 - ld[9];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[10] = r[0];
@@ -363,55 +382,55 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
     out[12] = cq[3]*out[2] + t7;
     out[7] = -out[11] + out[13] + t10;
     out[6] = -out[10] + out[12] + t9;
-    out[3] = -c[50]*obs[47] - c[52]*t13*t14 - c[52]*t15*t16 + out[2]*t2 + ld[9];
-    out[9] = c[58]*t15 + cq[2]*out[2];
-    out[8] = c[58]*t13 - cq[3]*out[2];
-    out[5] = c[57]*t3 + out[11];
-    out[4] = c[57]*t4 + out[10];
-    out[1] = c[56]*(-gv[1] + obs[26]) + out[5] - ld[1];
-    out[0] = c[56]*(-gv[0] + obs[25]) + out[4] - ld[0];
-    out[14] = c[53]*obs[20] - out[0]*(c[24]*t19 + t18) - out[1]*(c[27]*t17 + t20) - out[4]*(c[25]*t17 + c[55]*t19) - out[5]*(c[25]*t19 + c[54]*t17) - ld[0]*(c[54]*t19 + t18) - ld[1]*(c[55]*t17 + t20) - ld[6];
+    out[3] = out[2]*t2 + t15;
+    out[9] = cq[2]*out[2] + t14;
+    out[8] = -cq[3]*out[2] + t13;
+    out[5] = c[64]*t3 + out[11];
+    out[4] = c[64]*t4 + out[10];
+    out[1] = c[63]*(-gv[1] + obs[32]) + out[5] - ld[1];
+    out[0] = c[63]*(-gv[0] + obs[31]) + out[4] - ld[0];
+    out[14] = c[60]*obs[26] - out[0]*(c[28]*t18 + t17) - out[1]*(c[31]*t16 + t19) - out[4]*(c[29]*t16 + c[62]*t18) - out[5]*(c[29]*t18 + c[61]*t16) - ld[0]*(c[61]*t18 + t17) - ld[1]*(c[62]*t16 + t19) - ld[8];
     out[15] = out[14];
     out[16] = out[14]*xd[0];
     out[17] = -cq[3]*out[2];
     out[18] = cq[2]*out[2];
     out[19] = out[0] + out[6] + out[8];
     out[20] = out[1] + out[7] + out[9];
-    out[21] = c[17]*out[6] + c[21]*out[9] + c[4]*out[7] + c[59]*out[8] + out[14];
-    out[22] = c[60]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[61]*((obs[19])*(obs[19])) + c[62]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[63]*((obs[28])*(obs[28])) + c[64]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[65]*((obs[37])*(obs[37])) + c[66]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[67]*((obs[46])*(obs[46])) + c[68]*(((obs[59])*(obs[59])) + ((obs[60])*(obs[60]))) + c[69]*((obs[55])*(obs[55]));
-    out[23] = c[52]*(gv[0]*obs[48] + gv[1]*obs[49]) + c[70]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[71]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[72]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[73]*(gv[0]*obs[57] + gv[1]*obs[58]);
-    out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[55] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
+    out[21] = c[17]*out[6] + c[21]*out[9] + c[4]*out[7] + c[65]*out[8] + out[14];
+    out[22] = c[66]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[67]*((obs[25])*(obs[25])) + c[68]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[69]*((obs[34])*(obs[34])) + c[70]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[71]*((obs[43])*(obs[43])) + c[72]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[73]*((obs[52])*(obs[52])) + c[74]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[75]*((obs[61])*(obs[61]));
+    out[23] = c[76]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[77]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[78]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[79]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[80]*(gv[0]*obs[63] + gv[1]*obs[64]);
+    out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
     out[25] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
-/* sg_hook_drive_force_matrix -- Total ops: 126 */
+/* sg_hook_drive_force_matrix -- Total ops: 138 */
 void sg_hook_drive_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b)
 {
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[26]*t1;
-    const double t3 = c[26]*t0;
-    const double t4 = c[28]*cq[5];
-    const double t5 = c[29]*cq[4];
-    const double t6 = c[32]*cq[0];
-    const double t7 = c[32]*cq[1];
-    const double t8 = c[46]*cq[1] + t6;
-    const double t9 = c[47]*cq[0] + t7;
-    const double t10 = c[36]*cq[3] + c[37]*cq[2];
-    const double t11 = c[40]*cq[3] + c[41]*cq[2];
-    const double t12 = c[38]*cq[3] + c[40]*cq[2];
+    const double t2 = c[30]*t1;
+    const double t3 = c[30]*t0;
+    const double t4 = c[32]*cq[5];
+    const double t5 = c[33]*cq[4];
+    const double t6 = c[36]*cq[0];
+    const double t7 = c[36]*cq[1];
+    const double t8 = c[50]*cq[1] + t6;
+    const double t9 = c[51]*cq[0] + t7;
+    const double t10 = c[40]*cq[3] + c[41]*cq[2];
+    const double t11 = c[44]*cq[3] + c[45]*cq[2];
+    const double t12 = c[42]*cq[3] + c[44]*cq[2];
     for (int k = 0; k < 225; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = -1.0;
     A[16] = 1.0;
     A[20] = -1.0;
-    A[30] = c[24]*t0 + t2;
-    A[31] = c[27]*t1 + t3;
-    A[34] = c[25]*t1 + c[55]*t0;
-    A[35] = c[25]*t0 + c[54]*t1;
+    A[30] = c[28]*t0 + t2;
+    A[31] = c[31]*t1 + t3;
+    A[34] = c[29]*t1 + c[62]*t0;
+    A[35] = c[29]*t0 + c[61]*t1;
     A[44] = 1.0;
     A[49] = 1.0;
     A[55] = -1.0;
@@ -427,46 +446,46 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     A[112] = 1.0;
     A[116] = 1.0;
     A[118] = -1.0;
-    A[126] = c[30]*cq[1] + t6;
-    A[127] = c[33]*cq[0] + t7;
+    A[126] = c[34]*cq[1] + t6;
+    A[127] = c[37]*cq[0] + t7;
     A[130] = t8;
     A[131] = t9;
-    A[132] = c[74]*cq[0] + c[75]*cq[1];
-    A[133] = c[74]*cq[1] + c[76]*cq[0];
+    A[132] = c[81]*cq[0] + c[82]*cq[1];
+    A[133] = c[81]*cq[1] + c[83]*cq[0];
     A[137] = cq[3];
     A[143] = 1.0;
     A[152] = -cq[2];
     A[159] = 1.0;
-    A[167] = -cq[2]*(cq[2]*q[3] + t10) - cq[3]*(c[35]*cq[2] + c[37]*cq[3] + cq[3]*q[3]);
+    A[167] = -cq[2]*(cq[2]*q[3] + t10) - cq[3]*(c[39]*cq[2] + c[41]*cq[3] + cq[3]*q[3]);
     A[168] = -1.0;
-    A[173] = c[34]*cq[3] + c[36]*cq[2];
+    A[173] = c[38]*cq[3] + c[40]*cq[2];
     A[174] = t10;
     A[182] = -cq[3];
     A[192] = 1.0;
     A[197] = cq[2];
     A[208] = 1.0;
-    A[212] = cq[2]*t11 + cq[3]*(c[39]*cq[2] + c[41]*cq[3]);
+    A[212] = cq[2]*t11 + cq[3]*(c[43]*cq[2] + c[45]*cq[3]);
     A[213] = 1.0;
     A[222] = t12;
     A[223] = t11;
-    b[0] = c[56]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[56]*(-gv[1] + obs[26]) - ld[1];
-    b[2] = c[53]*obs[20] - ld[0]*(c[54]*t0 + t2) - ld[1]*(c[55]*t1 + t3) - ld[6];
-    b[3] = c[57]*(-gv[0] + obs[34]);
-    b[4] = c[57]*(-gv[1] + obs[35]);
-    b[5] = c[42]*obs[29] - ld[7];
-    b[6] = c[48]*(-gv[0] + obs[43]) - ld[2];
-    b[7] = c[48]*(-gv[1] + obs[44]) - ld[3];
-    b[8] = c[45]*obs[38] - ld[2]*t8 - ld[3]*t9 - ld[8];
-    b[9] = c[58]*(-gv[0] + obs[52]);
-    b[10] = c[58]*(-gv[1] + obs[53]);
-    b[11] = c[50]*obs[47] - ld[9];
-    b[12] = c[49]*(-gv[0] + obs[61]) - ld[4];
-    b[13] = c[49]*(-gv[1] + obs[62]) - ld[5];
-    b[14] = c[51]*obs[56] - ld[10] - ld[4]*t12 - ld[5]*t11;
+    b[0] = c[63]*(-gv[0] + obs[31]) - ld[0];
+    b[1] = c[63]*(-gv[1] + obs[32]) - ld[1];
+    b[2] = c[60]*obs[26] - ld[0]*(c[61]*t0 + t2) - ld[1]*(c[62]*t1 + t3) - ld[8];
+    b[3] = c[64]*(-gv[0] + obs[40]);
+    b[4] = c[64]*(-gv[1] + obs[41]);
+    b[5] = c[46]*obs[35] - ld[9];
+    b[6] = c[52]*(-gv[0] + obs[49]) - ld[2];
+    b[7] = c[52]*(-gv[1] + obs[50]) - ld[3];
+    b[8] = c[49]*obs[44] - ld[10] - ld[2]*t8 - ld[3]*t9;
+    b[9] = c[59]*(-gv[0] + obs[58]) - ld[6];
+    b[10] = c[59]*(-gv[1] + obs[59]) - ld[7];
+    b[11] = c[54]*obs[53] - ld[11] - ld[6]*(c[56]*cq[2] + c[57]*cq[3]) - ld[7]*(c[56]*cq[3] + c[58]*cq[2]);
+    b[12] = c[53]*(-gv[0] + obs[67]) - ld[4];
+    b[13] = c[53]*(-gv[1] + obs[68]) - ld[5];
+    b[14] = c[55]*obs[62] - ld[12] - ld[4]*t12 - ld[5]*t11;
 }
 
-/* sg_hook_drive_anchors -- Total ops: 62 */
+/* sg_hook_drive_anchors -- Total ops: 70 */
 void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
 {
     (void)x;
@@ -514,16 +533,18 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[33] = t7;
     out[34] = t0;
     out[35] = t1;
-    out[36] = c[24]*t2 + c[25]*t4;
-    out[37] = c[24]*t4 + c[26]*t2;
-    out[38] = c[28]*cq[4] + t3;
-    out[39] = c[28]*cq[5] + t5;
-    out[40] = c[30]*cq[0] + c[31]*cq[1] + c[4];
-    out[41] = c[30]*cq[1] + c[32]*cq[0] + c[5];
-    out[42] = c[21] + c[34]*cq[2] + c[35]*cq[3];
-    out[43] = c[22] + c[34]*cq[3] + c[36]*cq[2];
-    out[44] = c[38]*cq[2] + c[39]*cq[3] + t0;
-    out[45] = c[38]*cq[3] + c[40]*cq[2] + t1;
+    out[36] = c[21] + c[23]*cq[2] + c[24]*cq[3];
+    out[37] = c[22] + c[23]*cq[3] + c[25]*cq[2];
+    out[38] = c[28]*t2 + c[29]*t4;
+    out[39] = c[28]*t4 + c[30]*t2;
+    out[40] = c[32]*cq[4] + t3;
+    out[41] = c[32]*cq[5] + t5;
+    out[42] = c[34]*cq[0] + c[35]*cq[1] + c[4];
+    out[43] = c[34]*cq[1] + c[36]*cq[0] + c[5];
+    out[44] = c[21] + c[38]*cq[2] + c[39]*cq[3];
+    out[45] = c[22] + c[38]*cq[3] + c[40]*cq[2];
+    out[46] = c[42]*cq[2] + c[43]*cq[3] + t0;
+    out[47] = c[42]*cq[3] + c[44]*cq[2] + t1;
 }
 
 static const unsigned char sg_hook_drive_coord_is_angle[4] = { 1, 1, 1, 0 };
@@ -532,13 +553,13 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .name = "hook_drive",
     .nq = 4,
     .nx = 1,
-    .np = 28,
-    .nc = 77,
-    .nobs = 63,
+    .np = 30,
+    .nc = 84,
+    .nobs = 69,
     .nbranch = 2,
     .nf = 15,
     .nfo = 26,
-    .nload = 11,
+    .nload = 13,
     .coord_is_angle = sg_hook_drive_coord_is_angle,
     .constants = sg_hook_drive_constants,
     .closed = sg_hook_drive_closed,
@@ -574,168 +595,208 @@ const char *sg_hook_drive_manifest(void)
         "dy\":\"rock_slider\",\"joint\":\"E\",\"kind\":\"joint\",\"name\":\"E@rock_slider\"},{\"body\":\""
         "crank\",\"joint\":null,\"kind\":\"point\",\"name\":\"crank_pin\"},{\"body\":\"rock_shaft\",\"joi"
         "nt\":null,\"kind\":\"point\",\"name\":\"rock_pin\"},{\"body\":\"rock_slider\",\"joint\":null,\"k"
-        "ind\":\"point\",\"name\":\"slider_pin\"},{\"body\":\"crank\",\"joint\":null,\"kind\":\"com\",\"n"
-        "ame\":\"crank.com\"},{\"body\":\"big_rod\",\"joint\":null,\"kind\":\"com\",\"name\":\"big_rod.co"
-        "m\"},{\"body\":\"rock_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_shaft.com\"},{\"bo"
-        "dy\":\"lower_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"lower_shaft.com\"},{\"body\":\"r"
-        "ock_slider\",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_slider.com\"}],\"arcs\":[],\"bodies"
-        "\":[{\"doc\":\"hook crank \\u94a9\\u7ebf\\u66f2\\u67c4 (part 12)\",\"kind\":\"driven\",\"name\":"
-        "\"crank\",\"offset\":18,\"role\":null},{\"doc\":\"big connecting rod \\u5927\\u8fde\\u6746 (part"
-        " 9)\",\"kind\":\"link\",\"name\":\"big_rod\",\"offset\":27,\"role\":null},{\"doc\":\"rock shaft "
-        "with its two arms \\u6446\\u8f74\\u7ec4\\u4ef6 (part 4)\",\"kind\":\"link\",\"name\":\"rock_shaf"
-        "t\",\"offset\":36,\"role\":null},{\"doc\":\"lower shaft with slotted arm and shuttle driver \\u4"
-        "e0b\\u8f74\\u7ec4\\u4ef6 (part 11)\",\"kind\":\"link\",\"name\":\"lower_shaft\",\"offset\":45,\""
-        "role\":\"hook_shaft\"},{\"doc\":\"rock-shaft slider \\u6446\\u8f74\\u6ed1\\u5757 (part 10)\",\"k"
-        "ind\":\"slider\",\"name\":\"rock_slider\",\"offset\":54,\"role\":null}],\"body_fields\":[\"angle"
-        "\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branch"
-        "es\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C left of the line"
-        " from B to O4\"},{\"default\":1,\"joint\":\"E\",\"kind\":\"rpr\",\"meaning\":\"+1: the larger tr"
-        "avel of rock_slider on lower_shaft\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\",\"E.x\""
-        ",\"E.y\"],\"coords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":"
-        "-1.5707963267948966,\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948"
-        "966,\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"guess\":0.005,\"name\":\"rock_slider.travel\""
-        ",\"unit\":\"m\"}],\"default_speed\":104.71975511965977,\"doc\":\"Hook drive \\u94a9\\u7ebf\\u673"
-        "a\\u6784: hook crank 12 \\u2192 big connecting rod \\u5927\\u8fde\\u6746 9 \\u2192 rock shaft \\u"
-        "6446\\u8f74 4 \\u2192 rock-shaft slider\\n\\u6446\\u8f74\\u6ed1\\u5757 10 in the slot of the low"
-        "er-shaft arm \\u4e0b\\u8f74 11 (an oscillating guide bar) \\u2192 oscillating shuttle.\\n\\nTwo "
-        "loops (seed 000 \\u00a7\\u4e00(\\u4e00)3, fig. 1-1; fig. 1-2(c) is the guide-bar unit): the four"
-        "-bar crank\\u2013rod\\u2013rock\\nshaft, then the guide bar whose slotted arm turns the lower sh"
-        "aft through a large swing. The rock shaft\\nand lower shaft run parallel to the upper shaft, so "
-        "both loops project onto one plane: origin on the upper\\nshaft axis, x horizontal, y up. The low"
-        "er-shaft slot passes through its axis (local u axis).\\n\\nDimensions are estimates sized to the"
-        " household machine: the crank-rocker swings the rock shaft \\u00b162\\u00b0 (its\\npin under the"
-        " upper shaft at mid-swing), and the guide bar, its axis 13.5 mm from the rock shaft's inside the"
-        "\\n20 mm arm's circle, turns that into a shuttle swing of about 206\\u00b0 (household shuttles s"
-        "wing 206\\u00b0\\u2013210\\u00b0) with\\nthe lower shaft's speed at most about 2.8 times the upp"
-        "er shaft's.\",\"elements\":[],\"force_blocks\":[1,2],\"force_outputs\":[{\"name\":\"shaft.torque"
-        "\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guide.fx\""
-        ",\"unit\":\"N\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"u"
-        "nit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*"
-        "m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"}"
-        ",{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_r"
-        "ows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"big_rod.x\",\"big_rod.y\",\"big_rod.moment\",\""
-        "rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"lower_shaft.x\",\"lower_shaft.y\",\"lowe"
-        "r_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\",\"rock_slider.moment\"],\"inputs\":[{\"defa"
-        "ult\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\""
-        ":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_hook_drive_anchors\":{\"ops\":62},"
-        "\"sg_hook_drive_closed\":{\"ops\":60},\"sg_hook_drive_constants\":{\"ops\":54},\"sg_hook_drive_f"
-        "orce_matrix\":{\"ops\":126},\"sg_hook_drive_forces\":{\"ops\":258},\"sg_hook_drive_motion\":{\"o"
-        "ps\":215},\"sg_hook_drive_residual\":{\"ops\":38}},\"loads\":[{\"body\":\"crank\",\"component\":"
-        "\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},"
-        "{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rock_pin\"},{\"body\":\"rock_shaft\",\""
-        "component\":\"fy\",\"name\":\"rock_pin\"},{\"body\":\"rock_slider\",\"component\":\"fx\",\"name\""
-        ":\"slider_pin\"},{\"body\":\"rock_slider\",\"component\":\"fy\",\"name\":\"slider_pin\"},{\"body"
-        "\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"big_rod\",\"component\":\""
-        "torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock"
-        "_shaft\"},{\"body\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"lower_shaft\"},{\"body\""
-        ":\"rock_slider\",\"component\":\"torque\",\"name\":\"rock_slider\"}],\"name\":\"hook_drive\",\"o"
-        "bservables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\""
-        "},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":\"m\"},{\"name\":\"roc"
-        "k_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin."
-        "x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pi"
-        "n.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\":\"slider_pin.x_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.x_dd\",\"u"
-        "nit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"u"
-        "nit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"un"
-        "it\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\""
-        "m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\""
-        "},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},"
-        "{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad"
-        "\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"uni"
-        "t\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\""
-        "unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft."
-        "com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"low"
-        "er_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"unit\":\"rad/s^2\"},"
-        "{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\",\"unit\":\"m\"},"
-        "{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.com.y_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name\":\"rock_slider.a"
-        "ngle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":"
-        "\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\":\"m\"},{\"name\":"
-        "\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.com.y_dd\",\"unit\":"
-        "\"m/s^2\"}],\"params\":[{\"default\":0.012,\"display_unit\":\"mm\",\"doc\":\"hook crank radius o"
-        "n the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":0.17,\"display_unit\":\"mm\",\"doc\":\"big connecting rod, pi"
-        "n to pin (estimate)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":-0.0136,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, horizontal"
-        " (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"m\"},{\"default\":-0.17,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, vertical (esti"
-        "mate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.0136,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm driven by the big rod "
-        "(estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\":true,\"role\":null,\"u"
-        "nit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm carrying the sli"
-        "der pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm\",\"positive\":true,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":-1.5707963267948966,\"display_unit\":\"deg\",\"doc\":\"rear arm"
-        " direction relative to the front arm (estimate)\",\"kind\":\"angle\",\"name\":\"rock_rear_angle\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":-0.0136,\"display_unit\":\"mm\""
-        ",\"doc\":\"lower-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_x"
-        "\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1835,\"display_unit\":\"mm\""
-        ",\"doc\":\"lower-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_y\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"do"
-        "c\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\""
-        "positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\""
-        ":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local"
-        " u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\""
-        ":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
-        "\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mas"
-        "s\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
-        "kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass"
-        "\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":7e-0"
-        "5,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_rod about its centre of mass\""
-        ",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"k"
-        "g*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mas"
-        "s\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":"
-        "0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\"lengt"
-        "h\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
-        "-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"leng"
-        "th\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre o"
-        "f mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of lower_shaft\",\"k"
-        "ind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{"
-        "\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local u\",\"kin"
-        "d\":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
-        "\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local v\",\"kin"
-        "d\":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
-        "\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lower_shaft about "
-        "its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_shaft.inertia\",\"positive\":false,\""
-        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"display_unit\":\"g\",\"doc\":\"mass of ro"
-        "ck_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\"positive\":false,\"role\":null,\"u"
-        "nit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, "
-        "local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, "
-        "local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of roc"
-        "k_slider about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_slider.inertia\",\"posi"
-        "tive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\""
-        "ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"of"
-        "fset\":0,\"role\":null},{\"body\":\"rock_shaft\",\"doc\":\"big-rod pin C on the rock-shaft arm\""
-        ",\"name\":\"rock_pin\",\"offset\":6,\"role\":null},{\"body\":\"rock_slider\",\"doc\":\"slider pi"
-        "n E on the rock-shaft rear arm\",\"name\":\"slider_pin\",\"offset\":12,\"role\":null}],\"reactio"
-        "ns\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\""
-        "revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\"rock_slider\",\""
-        "columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"rock_slid"
-        "er.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"ground"
-        "ed\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_sha"
-        "ft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"offse"
-        "t\":6},{\"a\":\"ground\",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"k"
-        "ind\":\"revolute\",\"name\":\"O11\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"colu"
-        "mns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\""
-        "a\":\"rock_shaft\",\"b\":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\""
-        ":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"tor"
-        "que\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offse"
-        "t\":14,\"sense\":1}],\"roles\":{\"hook_shaft\":{\"kind\":\"body\",\"name\":\"lower_shaft\"}},\"s"
-        "izes\":{\"nanchor_out\":46,\"nbranch\":2,\"nc\":77,\"nf\":15,\"nfo\":26,\"nload\":11,\"nobs\":63"
-        ",\"np\":28,\"nq\":4,\"nx\":1}}"
+        "ind\":\"point\",\"name\":\"slider_pin\"},{\"body\":\"lower_shaft\",\"joint\":null,\"kind\":\"poi"
+        "nt\",\"name\":\"hook_point\"},{\"body\":\"crank\",\"joint\":null,\"kind\":\"com\",\"name\":\"cra"
+        "nk.com\"},{\"body\":\"big_rod\",\"joint\":null,\"kind\":\"com\",\"name\":\"big_rod.com\"},{\"bod"
+        "y\":\"rock_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_shaft.com\"},{\"body\":\"lowe"
+        "r_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"lower_shaft.com\"},{\"body\":\"rock_slider\""
+        ",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_slider.com\"}],\"arcs\":[],\"bodies\":[{\"doc\""
+        ":\"hook crank \\u94a9\\u7ebf\\u66f2\\u67c4 (part 12)\",\"kind\":\"driven\",\"name\":\"crank\",\""
+        "offset\":24,\"role\":null},{\"doc\":\"big connecting rod \\u5927\\u8fde\\u6746 (part 9)\",\"kind"
+        "\":\"link\",\"name\":\"big_rod\",\"offset\":33,\"role\":null},{\"doc\":\"rock shaft with its two"
+        " arms \\u6446\\u8f74\\u7ec4\\u4ef6 (part 4)\",\"kind\":\"link\",\"name\":\"rock_shaft\",\"offset"
+        "\":42,\"role\":null},{\"doc\":\"lower shaft with slotted arm and shuttle driver \\u4e0b\\u8f74\\u"
+        "7ec4\\u4ef6 (part 11)\",\"kind\":\"link\",\"name\":\"lower_shaft\",\"offset\":51,\"role\":\"hook"
+        "_shaft\"},{\"doc\":\"rock-shaft slider \\u6446\\u8f74\\u6ed1\\u5757 (part 10)\",\"kind\":\"slide"
+        "r\",\"name\":\"rock_slider\",\"offset\":60,\"role\":null}],\"body_fields\":[\"angle\",\"omega\","
+        "\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"defa"
+        "ult\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C left of the line from B to O4"
+        "\"},{\"default\":1,\"joint\":\"E\",\"kind\":\"rpr\",\"meaning\":\"+1: the larger travel of rock_"
+        "slider on lower_shaft\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\",\"E.x\",\"E.y\"],\"c"
+        "oords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267"
+        "948966,\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":"
+        "\"big_rod.angle\",\"unit\":\"rad\"},{\"guess\":0.005,\"name\":\"rock_slider.travel\",\"unit\":\""
+        "m\"}],\"default_speed\":104.71975511965977,\"doc\":\"Hook drive \\u94a9\\u7ebf\\u673a\\u6784: ho"
+        "ok crank 12 \\u2192 big connecting rod \\u5927\\u8fde\\u6746 9 \\u2192 rock shaft \\u6446\\u8f74"
+        " 4 \\u2192 rock-shaft slider\\n\\u6446\\u8f74\\u6ed1\\u5757 10 in the slot of the lower-shaft ar"
+        "m \\u4e0b\\u8f74 11 (an oscillating guide bar) \\u2192 oscillating shuttle.\\n\\nTwo loops (seed"
+        " 000 \\u00a7\\u4e00(\\u4e00)3, fig. 1-1; fig. 1-2(c) is the guide-bar unit): the four-bar crank\\u"
+        "2013rod\\u2013rock\\nshaft, then the guide bar whose slotted arm turns the lower shaft through a"
+        " large swing. The rock shaft\\nand lower shaft run parallel to the upper shaft, so both loops pr"
+        "oject onto one plane: origin on the upper\\nshaft axis, x horizontal, y up. The lower-shaft slot"
+        " passes through its axis (local u axis).\\n\\nThe shuttle's point \\u6446\\u68ad\\u5c16 (point `"
+        "`hook_point``) is a point of the lower-shaft body at ``hook_radius`` from its\\naxis and ``hook_"
+        "angle`` from the slot: the lower shaft's axis is under the needle (x = 0), so the hook point\\nc"
+        "rosses the needle's centre line at the top of its circle, moving across it (sewgen.timing measur"
+        "es the\\nneedle's rise from its bottom dead centre and the hook point's height above the needle "
+        "eye there).\\n\\nDimensions are estimates sized to the household machine (seed 000's tables are "
+        "not in the text); the\\nearlier estimate (crank 12, rod 170, rock arms 13.6 and 20 mm) swung the"
+        " rock shaft \\u00b162\\u00b0 with a minimum\\ntransmission angle of 23.6\\u00b0, at \\u03c6 = 12"
+        "5\\u00b0 where the hook crank pin's load peaked:\\n\\n* the crank-rocker (crank 16 mm, big rod 2"
+        "17.76 mm, front arm 21.02 mm, rock axis 217.45 mm below the upper\\n  shaft) swings the rock sha"
+        "ft 99.1\\u00b0 with a minimum transmission angle of 40.3\\u00b0 (big rod against the front\\n  a"
+        "rm). A crank-rocker's transmission angle falls below 40\\u00b0 once its rocker swings much more "
+        "than 100\\u00b0, so\\n  the rock swing cannot stay near the old 124\\u00b0. Its ends \\u2014 the"
+        " shuttle's reversals \\u2014 fall at crank angles of\\n  about 89\\u00b0 and 269\\u00b0, so a gr"
+        "oup phase of \\u22122\\u00b0 puts them at the needle's top and bottom dead centres (an\\n  oscil"
+        "lating shuttle starts from its end position with the needle at its lowest point);\\n* the guide "
+        "bar (the lower-shaft axis under the needle, 32.4 mm from the rock shaft's, inside the 39.01 mm\\n"
+        "  rear arm's circle; rear arm 57.63\\u00b0 from the front arm) turns the 99.1\\u00b0 into a shut"
+        "tle swing of 206.7\\u00b0\\n  (household shuttles swing 206\\u00b0\\u2013210\\u00b0). Its own tr"
+        "ansmission angle is 90\\u00b0 (the slot's force is normal to the\\n  slotted arm). The price of "
+        "the smaller rock swing is a less uniform shuttle: the guide bar must multiply\\n  the swing 2.1 "
+        "times, most of it at mid-stroke, so the lower shaft peaks at 4.5 times the upper shaft's speed\\n"
+        "  (2.7 before) and its inertia, not the transmission, now sets the hook crank pin's peak load. T"
+        "hese\\n  dimensions are the ones of least peak crank-pin load (167 N at 1000 r/min with the lowe"
+        "r shaft's 6e-6\\n  kg\\u00b7m\\u00b2) among those with a transmission angle of at least 40.3\\u0"
+        "0b0, a 206.5\\u00b0\\u2013210\\u00b0 swing and reversals at 89\\u00b0 and\\n  269\\u00b0 (a loca"
+        "l search over rod, rock axis, arms and rear-arm angle); a 35\\u00b0 design of the same kind woul"
+        "d\\n  carry about 80 N, and without the lower shaft's inertia this one would carry 16 N (the old"
+        " one 44 N);\\n* the shuttle (hook point) radius is 12 mm, its axis 20 mm below the throat plate:"
+        " its point passes over the\\n  needle's centre line at the top of its circle. ``hook_angle`` (13"
+        "2.45\\u00b0) puts it there when the needle has\\n  risen 2.0 mm from its bottom dead centre (JUK"
+        "I service manuals: 2.0 \\u00b1 0.2 mm) at the JB1-3's phase, 1.6 mm\\n  above the top of the nee"
+        "dle eye (service manuals: 1\\u20132.5 mm).\",\"elements\":[],\"force_blocks\":[1,2],\"force_outp"
+        "uts\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\""
+        "name\":\"rock_slider.guide.fx\",\"unit\":\"N\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\""
+        "},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\""
+        "shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"pote"
+        "ntial_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_powe"
+        "r\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"big_rod.x\",\"bi"
+        "g_rod.y\",\"big_rod.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"lower_sha"
+        "ft.x\",\"lower_shaft.y\",\"lower_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\",\"rock_slide"
+        "r.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle ph"
+        "i\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_hoo"
+        "k_drive_anchors\":{\"ops\":70},\"sg_hook_drive_closed\":{\"ops\":60},\"sg_hook_drive_constants\""
+        ":{\"ops\":63},\"sg_hook_drive_force_matrix\":{\"ops\":138},\"sg_hook_drive_forces\":{\"ops\":265"
+        "},\"sg_hook_drive_motion\":{\"ops\":237},\"sg_hook_drive_residual\":{\"ops\":38}},\"loads\":[{\""
+        "body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":"
+        "\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rock_pin"
+        "\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"rock_pin\"},{\"body\":\"rock_slider"
+        "\",\"component\":\"fx\",\"name\":\"slider_pin\"},{\"body\":\"rock_slider\",\"component\":\"fy\","
+        "\"name\":\"slider_pin\"},{\"body\":\"lower_shaft\",\"component\":\"fx\",\"name\":\"hook_point\"}"
+        ",{\"body\":\"lower_shaft\",\"component\":\"fy\",\"name\":\"hook_point\"},{\"body\":\"crank\",\"c"
+        "omponent\":\"torque\",\"name\":\"crank\"},{\"body\":\"big_rod\",\"component\":\"torque\",\"name\""
+        ":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body"
+        "\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"lower_shaft\"},{\"body\":\"rock_slider\","
+        "\"component\":\"torque\",\"name\":\"rock_slider\"}],\"name\":\"hook_drive\",\"observables\":[{\""
+        "name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"cra"
+        "nk_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_p"
+        "in.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_"
+        "pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":\"m\"},{\"name\":\"rock_pin.x_d\",\"un"
+        "it\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.x_dd\",\"unit\":"
+        "\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.x\",\"unit\":\""
+        "m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\":\"slider_pin.x_d\",\"unit\":\"m/s\"},{"
+        "\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.x_dd\",\"unit\":\"m/s^2\"},"
+        "{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_point.x\",\"unit\":\"m\"},{\""
+        "name\":\"hook_point.y\",\"unit\":\"m\"},{\"name\":\"hook_point.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"hook_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"hook_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"hook_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\""
+        "crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\""
+        ":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com"
+        ".x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_d"
+        "d\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.ang"
+        "le\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.ang"
+        "le_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.co"
+        "m.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_"
+        "d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com"
+        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_sh"
+        "aft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"nam"
+        "e\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\""
+        ":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"lower_shaft.angle_d\",\"u"
+        "nit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_shaf"
+        "t.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lower_shaf"
+        "t.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lo"
+        "wer_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.com.y_dd\",\"unit\":\"m/s^2\"},"
+        "{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name\":\"rock_slider.angle_d\",\"unit\":\"r"
+        "ad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_slider.com.x\""
+        ",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider"
+        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.com.y_dd\",\"unit\":\"m/s^2\"}],\"params"
+        "\":[{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"hook crank radius on the upper shaft (e"
+        "stimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":\"big connecting rod, pin to pin (estimat"
+        "e)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, horizontal (estimate)\",\"k"
+        "ind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
+        "fault\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, vertical (estimate)\",\"kind"
+        "\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
+        "lt\":0.02102,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm driven by the big rod (estimate)\""
+        ",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"}"
+        ",{\"default\":0.039009999999999996,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm carrying the"
+        " slider pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm\",\"positive\":true,\"role"
+        "\":null,\"unit\":\"m\"},{\"default\":1.0058332479243322,\"display_unit\":\"deg\",\"doc\":\"rear "
+        "arm direction relative to the front arm (estimate)\",\"kind\":\"angle\",\"name\":\"rock_rear_ang"
+        "le\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"mm\""
+        ",\"doc\":\"lower-shaft axis, horizontal: under the needle (estimate)\",\"kind\":\"length\",\"nam"
+        "e\":\"lower_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1905,\"dis"
+        "play_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\""
+        ":\"lower_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.012,\"display_"
+        "unit\":\"mm\",\"doc\":\"shuttle point's radius about the lower-shaft axis (estimate)\",\"kind\":"
+        "\"length\",\"name\":\"hook_radius\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":2.311688594266489,\"display_unit\":\"deg\",\"doc\":\"shuttle point's direction on the lower sha"
+        "ft from its slot (set for a 2.0 mm loop lift)\",\"kind\":\"angle\",\"name\":\"hook_angle\",\"pos"
+        "itive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":"
+        "\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"pos"
+        "itive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\""
+        "mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\""
+        ",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
+        "\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\""
+        "length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
+        "0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\""
+        ",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*"
+        "m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\","
+        "\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":7e-05,\""
+        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_rod about its centre of mass\",\"k"
+        "ind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m*"
+        "*2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\","
+        "\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.00"
+        "2,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\","
+        "\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0"
+        "02,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"length\""
+        ",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-"
+        "06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre of ma"
+        "ss\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of lower_shaft\",\"kind"
+        "\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
+        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local u\",\"kind\""
+        ":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local v\",\"kind\""
+        ":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lower_shaft about its"
+        " centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_shaft.inertia\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"display_unit\":\"g\",\"doc\":\"mass of rock_"
+        "slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, loc"
+        "al u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, loc"
+        "al v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_s"
+        "lider about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_slider.inertia\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\""
+        ",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset"
+        "\":0,\"role\":null},{\"body\":\"rock_shaft\",\"doc\":\"big-rod pin C on the rock-shaft arm\",\"n"
+        "ame\":\"rock_pin\",\"offset\":6,\"role\":null},{\"body\":\"rock_slider\",\"doc\":\"slider pin E "
+        "on the rock-shaft rear arm\",\"name\":\"slider_pin\",\"offset\":12,\"role\":null},{\"body\":\"lo"
+        "wer_shaft\",\"doc\":\"shuttle point \\u6446\\u68ad\\u5c16\",\"name\":\"hook_point\",\"offset\":1"
+        "8,\"role\":\"hook_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\""
+        ",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\""
+        "lower_shaft\",\"b\":\"rock_slider\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kin"
+        "d\":\"prismatic\",\"name\":\"rock_slider.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"big_rod\""
+        ",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":"
+        "4},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\""
+        ":\"revolute\",\"name\":\"O4\",\"offset\":6},{\"a\":\"ground\",\"b\":\"lower_shaft\",\"columns\":"
+        "[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O11\",\"offset\":8},{\"a\":\""
+        "big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolut"
+        "e\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\":\"rock_slider\",\"columns\":[\"fx\""
+        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"ground\""
+        ",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive"
+        "\",\"name\":\"crank.drive\",\"offset\":14,\"sense\":1}],\"roles\":{\"hook_point\":{\"kind\":\"po"
+        "int\",\"name\":\"hook_point\"},\"hook_shaft\":{\"kind\":\"body\",\"name\":\"lower_shaft\"}},\"si"
+        "zes\":{\"nanchor_out\":48,\"nbranch\":2,\"nc\":84,\"nf\":15,\"nfo\":26,\"nload\":13,\"nobs\":69,"
+        "\"np\":30,\"nq\":4,\"nx\":1}}"
         ;
 }

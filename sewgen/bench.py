@@ -624,6 +624,7 @@ register_entry("cli", "import sewgen", _wall_entry(["-c", "import sewgen"], 300.
 register_entry("cli", "analyze --no-plots", _wall_entry(["-m", "sewgen", "analyze", "jb1-3", "--out", "out",
                                                          "--no-plots"], 1000.0))
 register_entry("cli", "analyze", _wall_entry(["-m", "sewgen", "analyze", "jb1-3", "--out", "out"], 4000.0, 3))
+register_entry("cli", "timing", _wall_entry(["-m", "sewgen", "timing", "jb1-3"], 1000.0))
 
 
 def main(argv=None) -> int:

@@ -419,6 +419,25 @@ def cmd_analyze(args, con: Console) -> int:
     return 0
 
 
+def cmd_timing(args, con: Console) -> int:
+    """Stitch-formation timing of a machine: the event table and every rule's margin (exit 1 if one fails)."""
+    from .machine import load_machine
+    from .report import check_output_folder
+    from .timing import timing
+
+    speed = _quantity(args.speed, "speed", "--speed", "positive")
+    plots = check_output_folder(Path(args.plots), "--plots") if args.plots else None
+    machine = load_machine(args.model)
+    tm = timing(machine, speed=speed)
+    con.say(json.dumps(tm.as_dict(), indent=2, ensure_ascii=False) if args.json else tm.table())
+    if plots is not None:
+        from .plots.cycle import write_timing_plots
+
+        for path in write_timing_plots(tm, plots):
+            con.note(f"wrote {path}")
+    return 0 if tm.ok else 1
+
+
 # -- the parser ------------------------------------------------------------------------------------------------
 
 QUIET_HELP = "print nothing but errors and warnings (files are still written)"
@@ -479,6 +498,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-gif", action="store_true", help="no animation")
     _common(p)
     p.set_defaults(fn=cmd_analyze)
+    p = sub.add_parser("timing", help="stitch-formation timing: events, rule margins (exit 1 if a rule fails)")
+    p.add_argument("model", help='a built-in machine ("jb1-3") or a model file (.toml)')
+    p.add_argument("--speed", help='upper-shaft speed for the take-up eye\'s speed, e.g. "1500 rpm"')
+    p.add_argument("--json", action="store_true", help="the events and checks as JSON (summary.json's timing)")
+    p.add_argument("--plots", metavar="DIR", help="also write the cycle diagram and the thread curves into DIR")
+    _common(p)
+    p.set_defaults(fn=cmd_timing)
     return ap
 
 

@@ -107,6 +107,8 @@ class Machine:
     groups: list
     shaft: Shaft
     source: str = ""
+    stitch: object = None  # sewgen.timing.Stitch: cloth, loop lift and release, timing rules ([stitch])
+    thread: object = None  # sewgen.thread.ThreadPath: the needle thread's guides ([thread])
 
     def shaft_angles(self, step: float | None = None) -> np.ndarray:
         """One revolution every ``step`` (rad; default the model's): a step must divide 360° into 4 to
@@ -145,6 +147,12 @@ class Machine:
         analysis = MachineAnalysis(self, phi, out)
         analysis.run = {"speed": w, "accel": accel}
         return analysis
+
+    def kinematics(self, phi, speed=None) -> dict:
+        """Group name -> Motion at machine shaft angles ``phi`` (rad), constant ``speed`` (sewgen.timing)."""
+        w = self.speed if speed is None else speed
+        return {g.name: g.mechanism.solve(np.asarray(phi, dtype=float) + g.phase, speed=w, params=g.params or None,
+                                          held=g.held or None, branch=g.branch or None) for g in self.groups}
 
 
 class MachineAnalysis:
@@ -428,7 +436,8 @@ def load_machine(name_or_path) -> Machine:
     path = resolve(name_or_path)
     rd = Reader(path)
     doc = rd.table(load_toml(path), "")
-    rd.check_keys(doc, "", {"machine": Field("table"), "shaft": Field("table"), "groups": Field("table")})
+    rd.check_keys(doc, "", {"machine": Field("table"), "shaft": Field("table"), "groups": Field("table"),
+                            "stitch": Field("table", False), "thread": Field("table", False)})
     mach = rd.read(rd.table(doc["machine"], "machine"), "machine", MACHINE)
     _check_name(rd, mach["name"])
     shaft_doc = rd.read(rd.table(doc["shaft"], "shaft"), "shaft", SHAFT)
@@ -459,6 +468,14 @@ def load_machine(name_or_path) -> Machine:
     gv = np.array([g_mag * math.cos(g_dir), g_mag * math.sin(g_dir)])
     gv[np.abs(gv) < 1e-15 * max(g_mag, 1e-300)] = 0.0
     m = Machine(mach["name"], mach.get("description", ""), mach["speed"], mach["step"], gv, groups, shaft, str(path))
+    if "stitch" in doc:  # stitch formation and thread control (sewgen.timing, sewgen.thread)
+        from .timing import read_stitch
+
+        m.stitch = read_stitch(rd, doc["stitch"])
+    if "thread" in doc:
+        from .thread import read_thread
+
+        m.thread = read_thread(rd, doc["thread"])
     try:
         m.shaft_angles()
     except ParameterError as exc:

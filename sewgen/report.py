@@ -4,10 +4,16 @@ summary.json holds, for every quantity a designer checks (bearing loads, driving
 shaking moment about the x, y and z axes, every joint reaction), the peak and the RMS over the revolution with
 the shaft angles where they occur; the whole machine's relative power-balance residual
 (``power_balance_residual_relative``); the feed setting (stitch, regulator angle, dog travel and height above
-the plate) and the cam arc switches with the acceleration jump each implies; the units of every entry and the
-sign conventions (``units``, ``conventions``). Numbers are rounded to 12 significant digits (float noise such
-as 999.9999999999999 rpm or 255.00000000000003° is not a result), and a non-finite number is never written:
-it raises :class:`NonFiniteOutputError` naming the entry.
+the plate) and the cam arc switches with the acceleration jump each implies; for a machine with a ``[stitch]``
+table, its stitch-formation timing (events, rule checks, thread control: sewgen.timing, written out as
+timing.txt too); the units of every entry and the sign conventions (``units``, ``conventions``). Numbers are
+rounded to 12 significant digits (float noise such as 999.9999999999999 rpm or 255.00000000000003° is not a
+result), and a non-finite number is never written: it raises :class:`NonFiniteOutputError` naming the entry.
+
+Every force says on which body it acts: the bearing loads and the shaking force and moments act on the frame
+(``acts_on``; the shaking ones are dynamic, −Σ m a_G, with the moving parts' weight reported apart, sewgen.shaking);
+``frame_on_parts`` is the frame's reaction on the moving parts; a joint's reaction is on its second body from
+its first (group tables).
 
 A report is written into a temporary folder beside the target and moved into place only when complete
 (:func:`staged_folder`): a run that fails leaves no half-written tables behind.
@@ -27,6 +33,7 @@ import numpy as np
 from .cams import arc_switches
 from .errors import SewgenError
 from .feed import dog_travel, has_feed, plate_height
+from . import shaking
 from .roles import FEED_DOG, STITCH_REGULATOR
 from .units import DisplayUnits
 
@@ -42,10 +49,11 @@ CONVENTIONS = {
     "drive_torque": "torque the pulley puts on the upper shaft about +z, positive in the sense of rotation; "
                     "friction is left out (ideal joints)",
     "joints": "magnitude of a joint's reaction: the force on the joint's second body from its first",
-    "shaking_force": "magnitude of Σ m·a_G − Σ m·g over every moving part: the resultant of the frame's reactions "
-                     "on the moving parts (the base feels its negative); process loads (thread, presser foot, "
-                     "cloth) react inside the machine and are left out",
-    "shaking_moment": "about the z axis through the origin; shaking_moments_about_origin: about the x, y and z axes",
+    "shaking_force": "magnitude of the force the moving parts put on the frame by their inertia, −Σ m·a_G: "
+                     "dynamic, the parts' static weight apart (weight_of_moving_parts); process loads (thread, "
+                     "presser foot, cloth) react inside the machine and are left out",
+    "shaking_moment": "of the same inertia forces on the frame, about the z axis through the origin; "
+                      "shaking_moments_about_origin: about the x, y and z axes",
     "power_balance_residual_relative": "max over the revolution of |P_drive + P_loads − dE/dt| divided by the "
                                        "largest |P_drive| or |dE/dt| (E: kinetic + potential energy): 0 for an "
                                        "exact analysis",
@@ -107,20 +115,19 @@ def machine_table(a) -> dict:
     cols = {"phi [deg]": _deg(a.phi)}
     for which in ("front", "rear"):
         b = a.bearing(which)
-        cols[f"bearing_{which}.fx [N]"], cols[f"bearing_{which}.fy [N]"] = b[:, 0], b[:, 1]
-        cols[f"bearing_{which}.magnitude [N]"] = np.hypot(b[:, 0], b[:, 1])
+        cols[f"bearing_{which}_on_frame.fx [N]"], cols[f"bearing_{which}_on_frame.fy [N]"] = b[:, 0], b[:, 1]
+        cols[f"bearing_{which}_on_frame.magnitude [N]"] = np.hypot(b[:, 0], b[:, 1])
     cols["drive_torque [N*m]"] = a.torque
     for name, fa in a.groups.items():
         cols[f"{name}.torque [N*m]"] = fa.torque("shaft")
-    sf = a.shaking_force
-    cols["shaking.fx [N]"], cols["shaking.fy [N]"] = sf[:, 0], sf[:, 1]
-    cols["shaking.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
-    cols["shaking.moment [N*m]"] = a.shaking_moment()
-    moments = a.shaking_moments()
+    sf = shaking.shaking_force(a)  # dynamic, on the frame; the weight apart (summary.json)
+    cols["shaking_on_frame.fx [N]"], cols["shaking_on_frame.fy [N]"] = sf[:, 0], sf[:, 1]
+    cols["shaking_on_frame.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
+    moments = shaking.shaking_moments(a)
     for k, axis in enumerate("xyz"):
-        cols[f"shaking.moment_{axis} [N*m]"] = moments[:, k]
+        cols[f"shaking_on_frame.moment_{axis} [N*m]"] = moments[:, k]
     fr = a.frame_reaction
-    cols["frame_reaction.fx [N]"], cols["frame_reaction.fy [N]"] = fr[:, 0], fr[:, 1]
+    cols["frame_on_parts.fx [N]"], cols["frame_on_parts.fy [N]"] = fr[:, 0], fr[:, 1]
     cols["drive_power [W]"] = a.drive_power
     cols["load_power [W]"] = a.load_power
     cols["energy_rate [W]"] = a.energy_rate()
@@ -164,11 +171,12 @@ def model_path(source: str, start=None) -> str:
         return Path(source).as_posix()
 
 
-def summary(a, switches: dict | None = None) -> dict:
-    """Peaks, RMS and where they occur; the power-balance residual; feed setting; cam arc switches; units and
-    conventions. Numbers rounded to :data:`DIGITS` significant digits; a non-finite one raises
-    :class:`NonFiniteOutputError`."""
+def summary(a, switches: dict | None = None, timing=None) -> dict:
+    """Peaks, RMS and where they occur; the power-balance residual; feed setting; cam arc switches; the
+    stitch-formation timing; units and conventions. Numbers rounded to :data:`DIGITS` significant digits; a
+    non-finite one raises :class:`NonFiniteOutputError`."""
     phi, m = a.phi, a.machine
+    weight, moments = shaking.weight(a), shaking.shaking_moments(a)
     out = {
         "machine": m.name,
         "model_file": model_path(m.source),
@@ -176,13 +184,16 @@ def summary(a, switches: dict | None = None) -> dict:
         "positions": int(len(phi)),
         "step_deg": 360.0 / len(phi),
         "power_balance_residual_relative": a.power_balance_residual,
-        "bearings": {w: _stat(np.hypot(*a.bearing(w).T), phi, "N") for w in ("front", "rear")},
+        "bearings": {w: dict(_stat(np.hypot(*a.bearing(w).T), phi, "N"), acts_on="frame") for w in ("front", "rear")},
         "drive_torque": _stat(a.torque, phi, "N*m"),
         "drive_power": _stat(a.drive_power, phi, "W"),
-        "shaking_force": _stat(np.hypot(*a.shaking_force.T), phi, "N"),
-        "shaking_moment": _stat(a.shaking_moment(), phi, "N*m"),
-        "shaking_moments_about_origin": {axis: _stat(v, phi, "N*m")
-                                         for axis, v in zip("xyz", a.shaking_moments().T)},
+        "shaking_force": dict(_stat(np.hypot(*shaking.shaking_force(a).T), phi, "N"), acts_on="frame",
+                              what="-sum(m a_G): dynamic, the weight apart"),
+        "weight_of_moving_parts": {"unit": "N", "acts_on": "frame", "fx": float(weight[0]), "fy": float(weight[1]),
+                                   "magnitude": float(np.hypot(*weight))},
+        "shaking_moment": dict(_stat(moments[:, 2], phi, "N*m"), acts_on="frame"),
+        "shaking_moments_about_origin": {axis: dict(_stat(v, phi, "N*m"), acts_on="frame")
+                                         for axis, v in zip("xyz", moments.T)},
         "groups": {},
     }
     for g in m.groups:
@@ -206,9 +217,19 @@ def summary(a, switches: dict | None = None) -> dict:
             entry["cam_arc_switches"] = [dict(s.as_dict(), angle_deg=float(_deg(s.angle - g.phase)))
                                          for s in switches[g.name]]
         out["groups"][g.name] = entry
+    if m.stitch is not None:  # stitch-formation timing and thread control (sewgen.timing)
+        out["timing"] = (timing or timing_of(a)).as_dict()
     out["units"] = UNITS
     out["conventions"] = CONVENTIONS
     return _clean(out, "summary", m.source or None)
+
+
+def timing_of(a):
+    """The stitch-formation timing (sewgen.timing.Timing) of analysis ``a``'s machine at the analysis' speed."""
+    from .timing import timing
+
+    return timing(a.machine, speed=float(a.omega[0]) or None)  # at rest: the events are positions; eye speeds
+    # at the model's speed
 
 
 def cam_switches(a) -> dict:
@@ -258,10 +279,15 @@ def write_tables(a, folder, progress=None, units: DisplayUnits | None = None) ->
     tables = {"machine.csv": _check_columns(units.table(machine_table(a)), "machine.csv", source)}
     for name, fa in a.groups.items():
         tables[f"{name}.csv"] = _check_columns(units.table(group_table(fa, a.phi)), f"{name}.csv", source)
-    text = json.dumps(summary(a, cam_switches(a)), indent=2, ensure_ascii=False, allow_nan=False)
+    tm = timing_of(a) if a.machine.stitch is not None else None
+    text = json.dumps(summary(a, cam_switches(a), tm), indent=2, ensure_ascii=False, allow_nan=False)
     paths = [write_csv(folder / name, cols) for name, cols in tables.items()]
-    (folder / "summary.json").write_text(text + "\n", encoding="utf-8")
-    return paths + [folder / "summary.json"]
+    if tm is not None:
+        (folder / "timing.txt").write_text(tm.table() + "\n", encoding="utf-8")
+        paths.append(folder / "timing.txt")
+    (folder / "summary.json").write_text(text + "\n", encoding="utf-8")  # last: the report is complete
+    paths.append(folder / "summary.json")
+    return paths
 
 
 def check_output_folder(folder, option: str = "--out") -> Path:

@@ -21,6 +21,8 @@ KNIFE_EDGE = "knife_edge"        #: the upper knife's edge (overlock, seed 003)
 # -- parameters ----------------------------------------------------------------------------------------------
 THROAT_PLATE = "throat_plate"    #: the throat plate's height in the mechanism's frame (m)
 LOWER_KNIFE_EDGE = "lower_knife_edge"  #: the fixed lower knife's edge height (overlock; the cutting overlap)
+NEEDLE_EYE_LENGTH = "needle_eye_length"  #: the needle eye's length along the needle (its top = eye + length/2)
+NEEDLE_SCARF = "needle_scarf"    #: the needle scarf's length above the eye's top (where the hook point passes)
 
 NEEDLE_CRANK_RADIUS = "needle_crank_radius"  #: the needle drive's crank radius (seed 002 l_AB)
 NEEDLE_ROD_LENGTH = "needle_rod_length"      #: the needle-bar link's length, pin to pin (seed 002 l_BC)

@@ -462,6 +462,6 @@ def test_hook_drive_shuttle_swing_household_range():
     assert 206.0 <= swing <= 210.0, swing
     ref = np.unwrap(hook_drive_reference(phi, prm)["lower"])
     assert abs(swing - math.degrees(np.ptp(ref))) < 1e-9
-    # the rock shaft swings about +-62 deg (model doc): a centred crank-rocker, 2 asin(crank / front arm)
+    # the rock shaft swings about 99 deg (model doc): a centred crank-rocker, 2 asin(crank / front arm)
     rock = math.degrees(np.ptp(hd.solve(phi).coord("rock_shaft.angle").value))
     assert abs(rock - 2 * math.degrees(math.asin(prm["crank"] / prm["rock_front_arm"]))) < 3.0, rock

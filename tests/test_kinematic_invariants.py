@@ -26,7 +26,7 @@ CATALOG = ("needle_bar", "take_up", "hook_drive")
 OVERRIDES = {
     "needle_bar": {"offset": "4 mm", "crank.phase": "10 deg", "rod": "47 mm"},
     "take_up": {"crank.phase": "-15 deg", "lever_ce": "24 mm", "rocker_pivot_x": "27 mm"},
-    "hook_drive": {"crank.phase": "25 deg", "rock_rear_arm": "21 mm", "big_rod": "171 mm"},
+    "hook_drive": {"crank.phase": "25 deg", "rock_rear_arm": "39.5 mm", "big_rod": "218.5 mm"},
 }
 
 

@@ -342,7 +342,7 @@ def test_frame_reaction_is_what_the_frame_supplies(run):
             f = fa.frame_force(name)
             total = total - np.column_stack([f.fx, f.fy])
             joints += 1
-    assert joints == 7  # needle-bar guide; take-up D; hook O4, O11; feed regulator, O_feed, O_lift
+    assert joints == 8  # needle-bar guide; take-up D; hook O4, O11; feed regulator, O_feed, O_lift, O4 (B's copy)
     assert_close(run.frame_reaction, total, 1e-11, "frame reaction vs frame joints")
 
 
@@ -474,7 +474,9 @@ def test_dog_travel_above_the_plate_is_the_stitch(settings, plate_y, stitch):
 
 def test_regulator_direction_and_range(settings, feed, plate_y):
     angs = {s: a for s, (a, _m) in settings.items()}
-    assert abs(angs[0.0]) < math.radians(1e-3)  # zero stitch: the slot horizontal
+    # zero stitch: the slot horizontal, up to second-order motions of the dog that do not cancel over its time
+    # above the plate (φ ≈ 10°–179° since the lift comes from the rock shaft, seed 001's chain B → D)
+    assert abs(angs[0.0]) < math.radians(1e-2)
     order = sorted(STITCHES)
     assert all(angs[p] < angs[q] for p, q in zip(order, order[1:])), "stitch grows with the regulator angle"
     assert 0 < angs[4.0] < math.radians(60.0)  # 4 mm is inside the regulator's ±60°

@@ -74,10 +74,15 @@ def dump_toml(doc: dict) -> str:
             return repr(v)
         if isinstance(v, str):
             return json.dumps(v)
+        if isinstance(v, list) and not any(isinstance(x, dict) for x in v):
+            return "[" + ", ".join(value(x) for x in v) + "]"
         raise TypeError(type(v))
 
+    def tables(v):
+        return isinstance(v, list) and v and all(isinstance(x, dict) for x in v)
+
     def table(path, t):
-        scalars = {k: v for k, v in t.items() if not isinstance(v, (dict, list))}
+        scalars = {k: v for k, v in t.items() if not isinstance(v, dict) and not tables(v)}
         if path:
             lines.append("[" + ".".join(key(p) for p in path) + "]")
         lines.extend(f"{key(k)} = {value(v)}" for k, v in scalars.items())
@@ -85,7 +90,7 @@ def dump_toml(doc: dict) -> str:
         for k, v in t.items():
             if isinstance(v, dict):
                 table(path + [k], v)
-            elif isinstance(v, list):
+            elif tables(v):
                 for item in v:
                     lines.append("[[" + ".".join(key(p) for p in path + [k]) + "]]")
                     lines.extend(f"{key(a)} = {value(b)}" for a, b in item.items())
@@ -118,11 +123,11 @@ def test_builtin_jb1_3_numbers(jb):
     assert list(groups) == ["needle_bar", "take_up", "hook_drive", "feed"]
     assert {n: g.mechanism.name for n, g in groups.items()} == {n: n for n in groups}
     assert {n: math.degrees(g.phase) for n, g in groups.items()} == pytest.approx(
-        {"needle_bar": 0.0, "take_up": 82.0, "hook_drive": -40.0, "feed": 0.0}, abs=1e-12)
+        {"needle_bar": 0.0, "take_up": -58.0, "hook_drive": -2.0, "feed": 0.0}, abs=1e-12)
     assert {n: g.axial for n, g in groups.items()} == {
         "needle_bar": {"crank": pytest.approx(-0.018)}, "take_up": {"crank": pytest.approx(-0.008)},
         "hook_drive": {"crank": pytest.approx(0.200)},
-        "feed": {"feed_cam": pytest.approx(0.175), "lift_eccentric": pytest.approx(0.185)}}
+        "feed": {"feed_cam": pytest.approx(0.175), "hook_crank": pytest.approx(0.200)}}
     nb = groups["needle_bar"].params
     assert nb["crank"] == pytest.approx(0.0167) and nb["crank.mass"] == pytest.approx(0.035)
     assert nb["crank.inertia"] == pytest.approx(3.0e-6) and nb["needle_bar.com_u"] == pytest.approx(-0.040)
@@ -148,7 +153,7 @@ def test_a_copy_round_trips(tmp_path, jb):
     copy = load_machine(write(tmp_path, TEXT, "copy.toml"))
     assert copy.source == str(tmp_path / "copy.toml")
     assert close(numbers(copy), numbers(jb), rel=0.0)
-    phi = np.radians([0.0, 47.0, 135.0, 222.0])
+    phi = np.radians([0.0, 47.0, 90.0, 135.0, 180.0, 222.0])  # the feed tracks its Newton loop in steps ≤ 60°
     a, b = copy.analyze(phi), jb.analyze(phi)
     assert np.array_equal(a.torque, b.torque) and np.array_equal(a.bearing("rear"), b.bearing("rear"))
 
@@ -170,7 +175,7 @@ def test_other_units_same_machine(tmp_path, jb):
                      ('mass = "250 g"', 'mass = "0.25 kg"'),
                      ('inertia = "2.0e-5 kg*m**2"', 'inertia = "200 g*cm**2"'),
                      ('gravity = "9.80665 m/s**2"', 'gravity = "980.665 cm/s**2"'),
-                     ('phase = "82 deg"', f'phase = "{math.radians(82)!r} rad"'),
+                     ('phase = "-58 deg"', f'phase = "{math.radians(-58)!r} rad"'),
                      ('crank = "16.7 mm"', 'crank = "1.67 cm"'),
                      ('fy = "-2.94 N"', 'fy = "-294000 dyn"'),
                      ('stitch = "4 mm"', 'stitch = "0.4 cm"')]:
@@ -208,11 +213,12 @@ def check(tmp_path, text, key, must=(), unit=None, name="bad.toml"):
 
 
 UNKNOWN = [
-    ("top level", edit("[machine]\n", 'colour = "red"\n\n[machine]\n'), "colour", ["unknown key", "machine, shaft, groups"]),
+    ("top level", edit("[machine]\n", 'colour = "red"\n\n[machine]\n'), "colour",
+     ["unknown key", "machine, shaft, groups, stitch, thread"]),
     ("machine", edit('step = "5 deg"', 'step = "5 deg"\nspeeed = "1000 rpm"'), "machine.speeed",
      ["unknown key", "speed"]),
     ("shaft", edit('pulley = "245 mm"', 'pulley = "245 mm"\npully = "245 mm"'), "shaft.pully", ["unknown key"]),
-    ("group", edit('phase = "82 deg"', 'phase = "82 deg"\nphaze = "1 deg"'), "groups.take_up.phaze",
+    ("group", edit('phase = "-58 deg"', 'phase = "-58 deg"\nphaze = "1 deg"'), "groups.take_up.phaze",
      ["unknown key", "phase"]),
     ("param", edit('"crank.mass" = "10 g"', '"crank.mass" = "10 g"\ncranck = "16 mm"'), "groups.take_up.params.cranck",
      ["take_up has no such parameter", "lever_bc"]),
@@ -220,7 +226,7 @@ UNKNOWN = [
     ("load", edit('at = "thread_eye"', 'at = "thread_eye"\nfz = "1 N"'), "groups.take_up.loads[0].fz", ["unknown key"]),
     ("axial body", edit('axial = { crank = "-8 mm" }', 'axial = { crank = "-8 mm", rocker = "1 mm" }'),
      "groups.take_up.axial.rocker", ["not a body the shaft drives", "crank"]),
-    ("held input", edit('phase = "82 deg"', 'phase = "82 deg"\nheld = { regulator = "1 deg" }'),
+    ("held input", edit('phase = "-58 deg"', 'phase = "-58 deg"\nheld = { regulator = "1 deg" }'),
      "groups.take_up.held.regulator", ["no such held input"]),
 ]
 
@@ -234,9 +240,9 @@ MISSING = [
     ("machine.speed", edit('speed = "1000 rpm"              # seed', "# seed"), "machine.speed", "speed"),
     ("machine.step", edit('step = "5 deg"  ', "# "), "machine.step", "angle"),
     ("shaft.front_bearing", edit('front_bearing = "0 mm"\n', ""), "shaft.front_bearing", "length"),
-    ("group phase", edit('phase = "82 deg"  ', "# "), "groups.take_up.phase", "angle"),
-    ("axial position", edit('axial = { feed_cam = "175 mm", lift_eccentric = "185 mm" }',
-                            'axial = { feed_cam = "175 mm" }'), "groups.feed.axial.lift_eccentric", "length"),
+    ("group phase", edit('phase = "-58 deg"\n', "\n"), "groups.take_up.phase", "angle"),
+    ("axial position", edit('axial = { feed_cam = "175 mm", hook_crank = "200 mm" }',
+                            'axial = { feed_cam = "175 mm" }'), "groups.feed.axial.hook_crank", "length"),
 ]
 
 
@@ -254,7 +260,7 @@ WRONG_UNIT = [
     ("counterweight radius in g", edit('radius = "10 mm"', 'radius = "10 g"'), "shaft.masses[0].radius", "length"),
     ("load in N*m", edit('fy = "-2.94 N"', 'fy = "-2.94 N*m"'), "groups.take_up.loads[0].fy", "force"),
     ("stitch in deg", edit('stitch = "4 mm"', 'stitch = "4 deg"'), "groups.feed.stitch", "length"),
-    ("phase in mm", edit('phase = "-40 deg"', 'phase = "-40 mm"'), "groups.hook_drive.phase", "angle"),
+    ("phase in mm", edit('phase = "-2 deg"', 'phase = "-2 mm"'), "groups.hook_drive.phase", "angle"),
     ("bare length", edit('rear_bearing = "215 mm"', "rear_bearing = 215"), "shaft.rear_bearing", "length"),
     ("bare speed", edit('speed = "1000 rpm"', "speed = 1000"), "machine.speed", "speed"),
     ("bare param", edit('rod = "50 mm"', "rod = 0.05"), "groups.needle_bar.params.rod", "length"),
@@ -280,12 +286,12 @@ def test_unknown_mechanism(tmp_path):
 @pytest.mark.parametrize("branch", ["{ C = 2 }", "{ C = 0 }", "{ C = true }", '{ C = "1" }', "{ X = 1 }"])
 def test_bad_branch(tmp_path, branch):
     joint = branch.split()[1]
-    check(tmp_path, edit('phase = "82 deg"', f'phase = "82 deg"\nbranch = {branch}'),
+    check(tmp_path, edit('phase = "-58 deg"', f'phase = "-58 deg"\nbranch = {branch}'),
           f"groups.take_up.branch.{joint}", ["1 or -1", "(C)"])
 
 
 def test_good_branch_is_taken(tmp_path):
-    m = load_machine(write(tmp_path, edit('phase = "82 deg"', 'phase = "82 deg"\nbranch = { C = -1 }')))
+    m = load_machine(write(tmp_path, edit('phase = "-58 deg"', 'phase = "-58 deg"\nbranch = { C = -1 }')))
     assert next(g for g in m.groups if g.name == "take_up").branch == {"C": -1}
 
 
@@ -305,7 +311,8 @@ def check_prefix(tmp_path, text, prefix):
 
 
 def test_window_with_only_from(tmp_path):
-    check(tmp_path, edit('to = "155 deg"\n', ""), "groups.take_up.loads[0]", ["'from'", "'to'"])
+    check(tmp_path, edit('to = "155 deg"\n\n[groups.hook_drive]', "\n[groups.hook_drive]"), "groups.take_up.loads[0]",
+          ["'from'", "'to'"])
 
 
 def test_window_with_only_to(tmp_path):
@@ -506,4 +513,4 @@ def test_a_summary_at_rest(jb):
 
     s = summary(jb.analyze(speed=0.0))
     assert s["speed_rpm"] == 0.0
-    assert s["groups"]["feed"]["feed_dog"]["travel_above_plate_mm"] == pytest.approx(4.0, abs=1e-4)
+    assert s["groups"]["feed"]["feed_dog"]["travel_above_plate_mm"] == pytest.approx(4.0, abs=1e-3)  # differences

@@ -22,7 +22,7 @@ from sewgen import plots
 from sewgen.feed import has_feed
 from sewgen.machine import Group, Machine, MachineAnalysis, Shaft, ShaftMass, load_machine
 from sewgen.plots import animation
-from sewgen.roles import FEED_DOG, NEEDLE_EYE
+from sewgen.roles import FEED_DOG, HOOK_POINT, NEEDLE_EYE
 
 ROOT = Path(__file__).resolve().parent.parent
 TOL = 1e-9  # mm: anchors that a solved loop makes coincide
@@ -82,8 +82,8 @@ def test_gif_has_one_frame_per_shaft_angle(written, analysis):
 
 def test_machine_view_has_a_panel_per_group_and_the_stitch_zone(analysis):
     """Groups never share a panel (no knot of linkages at different axial positions); with a throat plate the
-    stitch-forming zone is one more panel holding the needle's and the feed dog's bodies; the readout says by
-    role what they do."""
+    stitch-forming zone is one more panel holding the needle's, the hook point's and the feed dog's bodies; the
+    readout says by role what they do."""
     view = plots.draw_machine(analysis, index=0)
     groups = analysis.machine.groups
     assert len(view.axes) == len(groups) + 1
@@ -95,7 +95,7 @@ def test_machine_view_has_a_panel_per_group_and_the_stitch_zone(analysis):
         (x0, y0), (x1, y1) = ax.transData.transform([(0, 0), (10, 10)])
         assert abs((x1 - x0) - (y1 - y0)) < 0.02 * abs(x1 - x0)
     zone = view.panels[-1].parts
-    assert {p.lk.group for p in zone} == {_role_group(analysis, r)[0].name for r in (NEEDLE_EYE, FEED_DOG)}
+    assert {p.lk.group for p in zone} == {_role_group(analysis, r)[0].name for r in (NEEDLE_EYE, HOOK_POINT, FEED_DOG)}
     g, eye = _role_group(analysis, NEEDLE_EYE)
     plate = plots.throat_plate_height(analysis)
     y = analysis.groups[g.name].motion.point(eye).y
@@ -261,7 +261,9 @@ def test_user_machine_gets_every_picture(user_mech, tmp_path):
     assert not has_feed(user_mech) and plots.throat_plate_height(a) is None
     files = plots.write_all(a, tmp_path)
     assert [f.name for f in files] == [name for name, _ in plots.figures_for(a)] + [plots.GIF]
-    assert "feed_dog_stitches.png" not in [f.name for f in files]  # no feed: no feed-dog figure
+    # no feed and no [stitch] table: every figure but the feed-dog family, the cycle diagram and the thread curves
+    assert {name for name, _ in plots.FIGURES} - {f.name for f in files} == {
+        "feed_dog_stitches.png", "cycle_diagram.png", "thread_control.png"}
     for f in files[:-1]:
         with Image.open(f) as im:
             assert im.format == "PNG" and im.size == tuple(round(s * plots.DPI) for s in

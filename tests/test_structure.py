@@ -116,7 +116,7 @@ def test_description_is_the_manifest():
 #: The catalog's mechanisms and its distinctive part names (bodies, points, parameters, held inputs).
 CATALOG_WORDS = ("needle_bar", "take_up", "hook_drive", "feed", "plate_y", "lower_shaft", "regulator", "feed_cam",
                  "feed_fork", "feed_bar", "feed_dog", "needle_eye", "thread_eye", "link_pin", "crank_pin",
-                 "rock_slider", "lift_rock_shaft", "feed_rock_shaft", "stitch_block", "lift_eccentric")
+                 "rock_slider", "lift_rock_shaft", "feed_rock_shaft", "stitch_block", "hook_point", "needle_point")
 #: Modules that may name catalog parts: the catalog declarations (sewgen/derive/models), the derivation's
 #: catalog list, the benchmark's catalog table (it times every catalog mechanism by name), and the role
 #: vocabulary (whose roles share words with the catalog's part names).

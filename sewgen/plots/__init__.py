@@ -13,7 +13,8 @@ Modules, one job each: :mod:`.common` (figures, shaft-angle axes, group colours,
 on axes), :mod:`.animation` (the machine's panels and the GIF), :mod:`.background` (the GIF written by a forked
 process while the PNGs are drawn), :mod:`.paths` (trajectories, feed-dog stitch
 family), :mod:`.curves` (motion against the shaft angle), :mod:`.reactions` (bearing and joint polars, torque,
-shaking force and moments).
+shaking force and moments), :mod:`.cycle` (the stitch-formation cycle diagram) and :mod:`.thread` (the thread's
+supply, demand and slack) for a machine with a ``[stitch]`` table.
 """
 from __future__ import annotations
 
@@ -23,16 +24,20 @@ from .animation import GIF_DPI, GIF_FPS, GIF_WIDTH, MachineView, draw_machine, m
 from .background import BackgroundGif, can_fork
 from .common import DPI, PALETTE, feed_groups, new_figure, render, throat_plate_height
 from .curves import draw_motion, motion_rows, motion_size
+from .cycle import cycle_size, draw_cycle, draw_cycle_timing, write_timing_plots
 from .geometry import Linkage, linkage, linkage_of
 from .paths import (STITCHES_MM, draw_feed_dog_stitches, draw_trajectories, path_panels, stitches_size,
                     trajectories_size)
 from .reactions import (draw_bearings_polar, draw_joint_reactions_polar, draw_shaking, draw_torque, joints_size,
                         main_joints)
+from .thread import draw_thread, draw_thread_timing, thread_size
 
 #: Sizes (inches) of the figures whose size does not depend on the machine; :func:`figure_size` gives all.
 SIZES = {"bearings_polar.png": (12.0, 6.6), "torque.png": (11.0, 6.2), "shaking.png": (13.0, 7.0)}
 _SIZED = {"trajectories.png": trajectories_size, "feed_dog_stitches.png": stitches_size, "motion.png": motion_size,
-          "joint_reactions_polar.png": joints_size}
+          "joint_reactions_polar.png": joints_size,
+          "cycle_diagram.png": lambda a: cycle_size(a.machine),
+          "thread_control.png": lambda a: thread_size(a.machine)}
 
 
 def figure_size(name: str, analysis) -> tuple:
@@ -56,13 +61,19 @@ bearings_polar = _png("bearings_polar.png", draw_bearings_polar)
 joint_reactions_polar = _png("joint_reactions_polar.png", draw_joint_reactions_polar)
 torque = _png("torque.png", draw_torque)
 shaking = _png("shaking.png", draw_shaking)
+cycle_diagram = _png("cycle_diagram.png", draw_cycle)
+thread_control = _png("thread_control.png", draw_thread)
 
 FIGURES = (("trajectories.png", trajectories), ("feed_dog_stitches.png", feed_dog_stitches), ("motion.png", motion),
            ("bearings_polar.png", bearings_polar), ("joint_reactions_polar.png", joint_reactions_polar),
-           ("torque.png", torque), ("shaking.png", shaking))
+           ("torque.png", torque), ("shaking.png", shaking), ("cycle_diagram.png", cycle_diagram),
+           ("thread_control.png", thread_control))
 GIF = "machine.gif"
 #: Figures drawn only for some machines: figure -> whether ``analysis`` has what it shows.
-APPLIES = {"feed_dog_stitches.png": lambda analysis: bool(feed_groups(analysis))}
+APPLIES = {"feed_dog_stitches.png": lambda analysis: bool(feed_groups(analysis)),
+           "cycle_diagram.png": lambda analysis: getattr(analysis.machine, "stitch", None) is not None,
+           "thread_control.png": lambda analysis: getattr(analysis.machine, "stitch", None) is not None
+           and getattr(analysis.machine, "thread", None) is not None}
 
 
 def figures_for(analysis) -> list[tuple]:
@@ -113,4 +124,6 @@ __all__ = ["DPI", "FIGURES", "GIF", "GIF_DPI", "GIF_FPS", "GIF_WIDTH", "PALETTE"
            "draw_feed_dog_stitches", "draw_joint_reactions_polar", "draw_machine", "draw_motion", "draw_shaking",
            "draw_torque", "draw_trajectories", "feed_dog_stitches", "figure_size", "figures_for", "joint_reactions_polar", "linkage",
            "linkage_of", "machine_gif", "machine_linkages", "main_joints", "motion", "motion_rows", "new_figure",
-           "path_panels", "shaking", "throat_plate_height", "torque", "trajectories", "write_all"]
+           "path_panels", "shaking", "throat_plate_height", "torque", "trajectories", "write_all",
+           "cycle_diagram", "thread_control", "cycle_size", "thread_size", "draw_cycle", "draw_cycle_timing",
+           "draw_thread", "draw_thread_timing", "write_timing_plots"]

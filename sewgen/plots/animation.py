@@ -1,6 +1,7 @@
 """The machine drawn over a revolution: one panel per group, each in its own equal-aspect view (groups at
 different axial positions never pile up into one knot), and, when the machine has a throat plate, a close-up
-of the stitch-forming zone: the bodies that carry the needle eye and the feed dog, their paths and the plate.
+of the stitch-forming zone: the bodies that carry the needle, the hook point and the feed dog (the roles of
+common.AT_THE_PLATE), their paths and the plate.
 A readout says, by role, whether the needle is below the plate and the feed dog up.
 
 The GIF is blitted: the fixed parts are drawn once, every frame redraws only the moving collections onto a

@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..feed import dog_travel, has_feed, plate_height, regulator_angle
 from ..roles import FEED_DOG, STITCH_REGULATOR
-from .common import (AT_THE_PLATE, MM, angle_labels, closed, color, feed_groups, place, pretty, role_points, suptitle,
+from .common import (AT_THE_PLATE, DPI, MM, angle_labels, closed, color, feed_groups, place, pretty, role_points, suptitle,
                      throat_plate_height, title)
 
 #: Stitch lengths (mm) of the feed-dog family: zero to the household maximum, and reverse feed.
@@ -57,7 +57,8 @@ def trajectories_size(a):
     n = max(len(path_panels(a)), 1)
     rows = math.ceil(n / _NCOL)
     ratios = _column_ratios(a)
-    return (max(1.1 + _PANEL_W * sum(ratios) + _GAP * (len(ratios) - 1), 6.0), 0.9 + 5.35 * rows)
+    width = max(1.1 + _PANEL_W * sum(ratios) + _GAP * (len(ratios) - 1), 6.0)
+    return (round(width * DPI) / DPI, 0.9 + 5.35 * rows)  # whole pixels: the PNG is exactly this size
 
 
 def draw_trajectories(fig, a):

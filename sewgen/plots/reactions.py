@@ -96,9 +96,9 @@ def draw_joint_reactions_polar(fig, a):
                 axes[r, cc].set_visible(False)
                 continue
             f, j = fa.reaction(names[cc]), d.reaction(names[cc])
-            _polar(axes[r, cc], a, f.fx, f.fy, color(a, g), f"{g.name} {names[cc]}: on {j.b} from {j.a}")
-    suptitle(fig, title(a, "the three most loaded joints of each group (polar: direction, magnitude in N; "
-                           "labels: shaft angle φ)"), size=11)
+            _polar(axes[r, cc], a, f.fx, f.fy, color(a, g), f"{g.name} {names[cc]}: on {j.b} (from {j.a})")
+    suptitle(fig, title(a, "the three most loaded joints of each group, the force on the part named (polar: "
+                           "direction, magnitude in N; labels: shaft angle φ)"), size=11)
 
 
 # -- driving torque --------------------------------------------------------------------------------------------
@@ -125,7 +125,7 @@ def draw_torque(fig, a):
         ax.axhline(s, color="k", lw=0.6, ls="-.", alpha=0.6)
     ax.axhline(0, color="0.5", lw=0.6)
     angle_axis(ax)
-    ax.set_ylabel("driving torque (N·m)")
+    ax.set_ylabel("driving torque on the shaft (N·m)")
     kmin, kmax = int(np.argmin(t)), int(np.argmax(t))
     ax.set_title(f"total: mean {t.mean():.4f} N·m, RMS {rms:.4f} N·m, max {t[kmax]:.3f} N·m at φ = "
                  f"{np.degrees(a.phi[kmax]) % 360:.0f}°, min {t[kmin]:.3f} N·m at φ = "
@@ -134,37 +134,47 @@ def draw_torque(fig, a):
                bbox_to_anchor=(0.5, 0.04 / fig.get_size_inches()[1]))
     ax.text(0.995, 0.015, "ideal joints: friction is left out", transform=ax.transAxes, ha="right", va="bottom",
             fontsize=8, color="0.25", bbox=dict(fc="w", ec="0.7", alpha=0.85))
-    suptitle(fig, title(a, "driving torque of the upper shaft (friction left out)"))
+    suptitle(fig, title(a, "driving torque on the upper shaft (the pulley's, and each group's share; friction left out)"))
 
 
 # -- shaking force and moments ---------------------------------------------------------------------------------
 
 def draw_shaking(fig, a):
+    """The shaking force and moments the moving parts put on the frame: dynamic (−Σ m a_G, process loads
+    internal), the moving parts' weight apart (sewgen.shaking)."""
     from matplotlib.gridspec import GridSpec
+
+    from .. import shaking
 
     W, H = fig.get_size_inches()
     gs = GridSpec(2, 2, figure=fig, left=0.8 / W, right=1 - 0.3 / W, top=1 - 0.75 / H, bottom=1.25 / H,
                   wspace=0.28, hspace=0.55, width_ratios=(1, 1.25))
     ax1 = fig.add_subplot(gs[:, 0])
     ax2, ax3 = fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[1, 1])
-    f = a.shaking_force
-    ax1.plot(closed(a, f[:, 0]), closed(a, f[:, 1]), color="tab:purple", lw=1.5, label="shaking force hodograph")
+    f = shaking.shaking_force(a)
+    wgt = shaking.weight(a)
+    ax1.plot(closed(a, f[:, 0]), closed(a, f[:, 1]), color="tab:purple", lw=1.5,
+             label="shaking force on the frame, −Σ m a_G")
+    angle_labels(ax1, a, f[:, 0], f[:, 1])
     ax1.plot([0], [0], "k+", ms=10, label="origin (no force)")
     m = f.mean(axis=0)
-    ax1.plot(*m, "kx", ms=7, label=f"mean ({m[0]:.2f}, {m[1]:.2f}) N: the parts' weight")
+    ax1.plot(*m, "kx", ms=7, label=f"mean ({m[0]:.2f}, {m[1]:.2f}) N")
     k = int(np.argmax(np.hypot(*f.T)))
     ax1.plot(*f[k], "o", ms=7, mfc="none", mec="k",
              label=f"peak {np.hypot(*f[k]):.3g} N at φ = {np.degrees(a.phi[k]) % 360:.0f}°")
+    ax1.annotate("", xy=tuple(wgt), xytext=(0, 0), arrowprops=dict(arrowstyle="-|>", color="0.35", lw=1.6))
+    ax1.plot([], [], color="0.35", lw=1.6,
+             label=f"weight of the moving parts on the frame: {np.hypot(*wgt):.2f} N, static, acts besides")
     ax1.set_aspect("equal", adjustable="datalim")
     ax1.margins(0.12)
     angle_labels(ax1, a, f[:, 0], f[:, 1])
     ax1.set_autoscale_on(False)
     ax1.grid(alpha=0.3)
     ax1.set(xlabel="Fx (N)", ylabel="Fy (N)")
-    ax1.set_title("shaking force on the base (process loads internal)", y=1.0)
+    ax1.set_title("shaking force on the frame (dynamic; process loads internal)", y=1.0)
     ax1.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2)
 
-    moments = a.shaking_moments()
+    moments = shaking.shaking_moments(a)
     d = deg(a)
     for ax, cols, text in ((ax2, (2,), "about the upper-shaft axis z"),
                            (ax3, (0, 1), "about x and y: the base rocks (groups at their axial positions)")):
@@ -180,6 +190,7 @@ def draw_shaking(fig, a):
         ax.axhline(0, color="0.5", lw=0.6)
         angle_axis(ax, label=ax is ax3)
         ax.set_ylabel("moment (N·m)")
-        ax.set_title(f"shaking moment {text}", fontsize=9.5, y=1.0)
+        ax.set_title(f"shaking moment on the frame {text}", fontsize=9.5, y=1.0)
         ax.legend(fontsize=7, loc="best", framealpha=0.85)
-    suptitle(fig, title(a, "shaking force and moments on the base (about the frame origin; labels: shaft angle φ)"))
+    suptitle(fig, title(a, "shaking force and moments on the frame, dynamic (−Σ m a_G; the weight apart), about "
+                           "the frame origin; labels: shaft angle φ"))

@@ -8,6 +8,12 @@ Crank angle = shaft angle + phase, counter-clockwise from +x (the needle is high
 Dimensions: crank 16.7 mm is seed 002's industrial crank (its stroke 33.4 mm is within the 29–35 mm of
 industrial and household machines). The link length, offset, masses and inertias are estimates (the
 seeds' tables of them are not in the text we have).
+
+The needle itself (stitch formation, sewgen.timing): the eye (point ``needle_eye``, the eye's centre), the
+point below it (point ``needle_point``: it enters and leaves the cloth), the eye's length (its top is where
+the hook point's height is measured from) and the scarf above the eye (the hollow the hook point passes
+through). A household 130/705 H (15x1) needle of size 80–90 is assumed: eye about 1.2 mm long, its centre
+about 2.5 mm above the point, scarf about 4 mm long (estimates; no dimensioned drawing was reachable).
 """
 import sympy as sp
 
@@ -21,6 +27,10 @@ def declare() -> Mechanism:
     e = m.length("offset", "0 mm", "horizontal offset of the needle-bar axis from the shaft axis", signed=True,
                  role="needle_bar_offset")
     h = m.length("eye_below_pin", "62 mm", "needle eye below the link pin C along the bar (estimate)")
+    tip = m.length("point_below_eye", "2.5 mm", "needle point below the eye's centre (estimate, 130/705 H size 80-90)")
+    m.length("eye_length", "1.2 mm", "length of the needle eye along the needle (estimate)", role="needle_eye_length")
+    m.length("scarf_length", "4 mm", "needle scarf above the eye's top, where the hook point passes (estimate)",
+             role="needle_scarf")
     crank = m.driven("crank", pivot=m.ground.at(0, 0), doc="needle-bar crank on the upper shaft", role="needle_crank",
                      mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2")
     rod = m.link("rod", doc="needle-bar link 小连杆 (part 13)", guess="-90 deg", role="needle_rod",
@@ -32,5 +42,6 @@ def declare() -> Mechanism:
     m.revolute(rod.at(l, 0), bar.at(0, 0), name="C", branch=-1)
     m.point("crank_pin", crank.at(r, 0), "crank pin B")
     m.point("link_pin", bar.at(0, 0), "needle-bar link pin C")
-    m.point("needle_eye", bar.at(-h, 0), "needle eye", role="needle_eye")
+    m.point("needle_eye", bar.at(-h, 0), "needle eye (its centre)", role="needle_eye")
+    m.point("needle_point", bar.at(-h - tip, 0), "needle point", role="needle_point")
     return m

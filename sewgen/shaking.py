@@ -1,0 +1,72 @@
+"""The machine's shaking force and moments as the moving parts put them on the frame, without their weight.
+
+:class:`sewgen.machine.MachineAnalysis` keeps the frame's reactions *on the parts*: ``shaking_force`` is
+Σ m a_G − Σ m g (process loads internal), so it holds the parts' static weight — the frame holding them up —
+besides the inertia forces. What shakes the base is the inertia alone, acting *on the frame*:
+
+    F = −Σ m a_G,        M = −Σ [(r_G − O) × m a_G + I_G α]   (the drive torque counted as frame),
+
+summed over every moving part of every group (each group's parts in its plane z, for the moments about x and
+y) and the upper shaft's core masses. The weight of the moving parts, W = Σ m g, is constant and acts on the
+frame besides (its moment about O moves with the centres of mass); :func:`weight` gives it apart. Then
+F + W = −(the frame's force on the parts with the process loads put back), which the tests check.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def _bodies(a):
+    """(group, mass, inertia, BodyMotion) of every moving body of every group of analysis ``a``."""
+    for g in a.machine.groups:
+        fa = a.groups[g.name]
+        values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
+        for body in g.mechanism.description.bodies:
+            m = values[body.mass] if body.mass else 0.0
+            inertia = values[body.inertia] if body.inertia else 0.0
+            yield g, m, inertia, fa.motion.body(body.name)
+
+
+def moving_mass(a) -> float:
+    """Σ m of every moving part (kg): the groups' bodies and the shaft core's masses."""
+    return sum(m for _, m, _, _ in _bodies(a)) + sum(sm.mass for sm in a.machine.shaft.masses)
+
+
+def weight(a) -> np.ndarray:
+    """(2,) the moving parts' weight, the force it puts on the frame (N): Σ m g, constant."""
+    return moving_mass(a) * np.asarray(a.machine.gravity, dtype=float)
+
+
+def shaking_force(a) -> np.ndarray:
+    """(n, 2) the dynamic shaking force on the frame, −Σ m a_G over every moving part (N); no weight."""
+    out = np.zeros((len(a.phi), 2))
+    for _, m, _, bm in _bodies(a):
+        out[:, 0] -= m * bm.com.ax
+        out[:, 1] -= m * bm.com.ay
+    for sm, _pos, _vel, acc in a.core:
+        out -= sm.mass * acc
+    return out
+
+
+def shaking_moments(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """(n, 3) the dynamic shaking moment on the frame about the point ``about`` (x, y, z; m), about the x, y and
+    z axes (N m): −Σ (r − O) × m a_G, and −Σ I α about z (the shaft core's included); each group's parts in
+    the group's plane z = ``Group.z``, each core mass at its own z; no weight."""
+    ox, oy, oz = about
+    out = np.zeros((len(a.phi), 3))
+    out[:, 2] -= a.machine.shaft.inertia * a.alpha
+    for g, m, inertia, bm in _bodies(a):
+        c = bm.com
+        fx, fy = -m * c.ax, -m * c.ay
+        out[:, 0] -= (g.z - oz) * fy
+        out[:, 1] += (g.z - oz) * fx
+        out[:, 2] += (c.x - ox) * fy - (c.y - oy) * fx - inertia * bm.alpha
+    for sm, pos, _vel, acc in a.core:
+        fx, fy = -sm.mass * acc[:, 0], -sm.mass * acc[:, 1]
+        out[:, 0] -= (sm.z - oz) * fy
+        out[:, 1] += (sm.z - oz) * fx
+        out[:, 2] += (pos[:, 0] - ox) * fy - (pos[:, 1] - oy) * fx
+    return out
+
+
+__all__ = ["moving_mass", "shaking_force", "shaking_moments", "weight"]
