@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_feed_constants -- Total ops: 99 */
+/* sg_feed_constants -- Total ops: 132 */
 void sg_feed_constants(const double *p, double *c)
 {
     const double t0 = -p[6];
@@ -18,20 +18,30 @@ void sg_feed_constants(const double *p, double *c)
     const double t6 = sin(p[24]);
     const double t7 = -p[9];
     const double t8 = -p[3];
-    const double t9 = -p[26];
-    const double t10 = (0.5)*p[2];
-    const double t11 = -p[44];
-    const double t12 = -p[48];
-    const double t13 = (0.5)*p[15];
-    const double t14 = t10 + t8;
-    const double t15 = -t14;
-    const double t16 = p[35]*t15;
-    const double t17 = p[16] + t11;
-    const double t18 = p[12] + t12;
-    const double t19 = p[51]*t13;
-    const double t20 = p[14] + t9;
-    const double t21 = p[40] + t4;
-    const double t22 = p[13] + p[48];
+    const double t9 = fabs(p[6]);
+    const double t10 = fabs(p[7]);
+    const double t11 = t10 + t9;
+    const double t12 = p[2] + p[3] + p[8];
+    const double t13 = fabs(p[10]);
+    const double t14 = p[13] + p[14] + p[15];
+    const double t15 = t13 + t14;
+    const double t16 = fabs(p[11]);
+    const double t17 = t14 + t16;
+    const double t18 = 2.0*p[12] + 2.0*p[17] + 2.0*p[9] + t11 + t13 + t16;
+    const double t19 = -p[26];
+    const double t20 = (0.5)*p[2];
+    const double t21 = -p[44];
+    const double t22 = -p[48];
+    const double t23 = (0.5)*p[15];
+    const double t24 = t20 + t8;
+    const double t25 = -t24;
+    const double t26 = p[35]*t25;
+    const double t27 = p[16] + t21;
+    const double t28 = p[12] + t22;
+    const double t29 = p[51]*t23;
+    const double t30 = p[14] + t19;
+    const double t31 = p[40] + t4;
+    const double t32 = p[13] + p[48];
     c[0] = t0;
     c[1] = p[2];
     c[2] = -t2;
@@ -69,113 +79,122 @@ void sg_feed_constants(const double *p, double *c)
     c[34] = -t1;
     c[35] = -sqrt(3.0)*t1;
     c[36] = t1;
-    c[37] = -p[14];
-    c[38] = -p[12];
-    c[39] = p[6];
-    c[40] = p[16];
-    c[41] = p[7];
-    c[42] = -p[16];
-    c[43] = p[10];
-    c[44] = p[11];
-    c[45] = p[19];
-    c[46] = p[21];
-    c[47] = -p[22];
-    c[48] = p[22];
-    c[49] = -p[21];
-    c[50] = p[24];
-    c[51] = p[26];
-    c[52] = -p[27];
-    c[53] = p[27];
-    c[54] = t9;
-    c[55] = p[4];
-    c[56] = p[30];
-    c[57] = -p[31];
-    c[58] = p[5];
-    c[59] = p[31];
-    c[60] = -p[30];
-    c[61] = -t10;
-    c[62] = t10;
-    c[63] = p[36];
-    c[64] = -p[37];
-    c[65] = p[37];
-    c[66] = -p[36];
-    c[67] = p[40];
-    c[68] = -p[41];
-    c[69] = p[41];
-    c[70] = -p[40];
-    c[71] = p[44];
-    c[72] = -p[45];
-    c[73] = p[45];
-    c[74] = t11;
-    c[75] = p[48];
-    c[76] = -p[49];
-    c[77] = p[49];
-    c[78] = t12;
-    c[79] = t13;
-    c[80] = -t13;
-    c[81] = p[34];
-    c[82] = t15;
-    c[83] = p[33];
-    c[84] = p[35];
-    c[85] = t14;
-    c[86] = t16;
-    c[87] = -t16;
-    c[88] = p[42];
-    c[89] = p[43];
-    c[90] = -p[39];
-    c[91] = p[46];
-    c[92] = -t17;
-    c[93] = t17;
-    c[94] = p[50];
-    c[95] = -t18;
-    c[96] = t18;
-    c[97] = p[47];
-    c[98] = p[52];
-    c[99] = t19;
-    c[100] = -t19;
-    c[101] = p[23];
-    c[102] = p[20];
-    c[103] = p[28];
-    c[104] = t20;
-    c[105] = -t20;
-    c[106] = p[25];
-    c[107] = p[32];
-    c[108] = p[29];
-    c[109] = p[38];
-    c[110] = p[51];
-    c[111] = p[39];
-    c[112] = -p[5];
-    c[113] = (0.5)*p[20];
-    c[114] = (0.5)*p[23];
-    c[115] = (0.5)*p[25];
-    c[116] = (0.5)*p[28];
-    c[117] = (0.5)*p[29];
-    c[118] = (0.5)*p[32];
-    c[119] = (0.5)*p[33];
-    c[120] = (0.5)*p[34];
-    c[121] = (0.5)*p[35];
-    c[122] = (0.5)*p[38];
-    c[123] = (0.5)*p[39];
-    c[124] = (0.5)*p[42];
-    c[125] = (0.5)*p[43];
-    c[126] = (0.5)*p[46];
-    c[127] = (0.5)*p[47];
-    c[128] = (0.5)*p[50];
-    c[129] = (0.5)*p[51];
-    c[130] = (0.5)*p[52];
-    c[131] = -p[20];
-    c[132] = -p[25];
-    c[133] = -p[29];
-    c[134] = -p[33];
-    c[135] = -p[35];
-    c[136] = -p[43];
-    c[137] = -p[47];
-    c[138] = -p[51];
-    c[139] = -t21;
-    c[140] = t21;
-    c[141] = -p[41] - t7;
-    c[142] = t22;
-    c[143] = -t22;
+    c[37] = p[0] + 2.0*p[1] + 2.0*p[8] + t11;
+    c[38] = t12 + t9 + fabs(p[4]);
+    c[39] = t10 + t12 + fabs(p[5]);
+    c[40] = t15;
+    c[41] = t17;
+    c[42] = t18;
+    c[43] = -p[14];
+    c[44] = -p[12];
+    c[45] = p[6];
+    c[46] = p[16];
+    c[47] = p[7];
+    c[48] = -p[16];
+    c[49] = p[10];
+    c[50] = p[11];
+    c[51] = p[19];
+    c[52] = p[21];
+    c[53] = -p[22];
+    c[54] = p[22];
+    c[55] = -p[21];
+    c[56] = p[24];
+    c[57] = p[26];
+    c[58] = -p[27];
+    c[59] = p[27];
+    c[60] = t19;
+    c[61] = p[4];
+    c[62] = p[30];
+    c[63] = -p[31];
+    c[64] = p[5];
+    c[65] = p[31];
+    c[66] = -p[30];
+    c[67] = -t20;
+    c[68] = t20;
+    c[69] = p[36];
+    c[70] = -p[37];
+    c[71] = p[37];
+    c[72] = -p[36];
+    c[73] = p[40];
+    c[74] = -p[41];
+    c[75] = p[41];
+    c[76] = -p[40];
+    c[77] = p[44];
+    c[78] = -p[45];
+    c[79] = p[45];
+    c[80] = t21;
+    c[81] = p[48];
+    c[82] = -p[49];
+    c[83] = p[49];
+    c[84] = t22;
+    c[85] = t23;
+    c[86] = -t23;
+    c[87] = (1.0/(t15));
+    c[88] = (1.0/(t17));
+    c[89] = (1.0/(t18));
+    c[90] = p[34];
+    c[91] = t25;
+    c[92] = p[33];
+    c[93] = p[35];
+    c[94] = t24;
+    c[95] = t26;
+    c[96] = -t26;
+    c[97] = p[42];
+    c[98] = p[43];
+    c[99] = -p[39];
+    c[100] = p[46];
+    c[101] = -t27;
+    c[102] = t27;
+    c[103] = p[50];
+    c[104] = -t28;
+    c[105] = t28;
+    c[106] = p[47];
+    c[107] = p[52];
+    c[108] = t29;
+    c[109] = -t29;
+    c[110] = p[23];
+    c[111] = p[20];
+    c[112] = p[28];
+    c[113] = t30;
+    c[114] = -t30;
+    c[115] = p[25];
+    c[116] = p[32];
+    c[117] = p[29];
+    c[118] = p[38];
+    c[119] = p[51];
+    c[120] = p[39];
+    c[121] = -p[5];
+    c[122] = (0.5)*p[20];
+    c[123] = (0.5)*p[23];
+    c[124] = (0.5)*p[25];
+    c[125] = (0.5)*p[28];
+    c[126] = (0.5)*p[29];
+    c[127] = (0.5)*p[32];
+    c[128] = (0.5)*p[33];
+    c[129] = (0.5)*p[34];
+    c[130] = (0.5)*p[35];
+    c[131] = (0.5)*p[38];
+    c[132] = (0.5)*p[39];
+    c[133] = (0.5)*p[42];
+    c[134] = (0.5)*p[43];
+    c[135] = (0.5)*p[46];
+    c[136] = (0.5)*p[47];
+    c[137] = (0.5)*p[50];
+    c[138] = (0.5)*p[51];
+    c[139] = (0.5)*p[52];
+    c[140] = -p[20];
+    c[141] = -p[25];
+    c[142] = -p[29];
+    c[143] = -p[33];
+    c[144] = -p[35];
+    c[145] = -p[43];
+    c[146] = -p[47];
+    c[147] = -p[51];
+    c[148] = -t31;
+    c[149] = t31;
+    c[150] = -p[41] - t7;
+    c[151] = t32;
+    c[152] = -t32;
 }
 
 /* sg_feed_residual -- Total ops: 107 */
@@ -281,8 +300,77 @@ void sg_feed_residual(const double *q, const double *cq, const double *x, const 
     jac[35] = 0.0;
 }
 
-/* sg_feed_motion -- Total ops: 520 */
-int sg_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+/* sg_feed_scales -- Total ops: 17 */
+void sg_feed_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)x;
+    double ka[4];
+    {
+        /* cam cam: the arc whose normal sector holds e */
+        const double e0 = -cq[4]*(c[3]*cx[1] + c[6]*cx[0]) + cq[5]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[4]*(c[3]*cx[0] + c[4]*cx[1]) - cq[5]*(c[3]*cx[1] + c[6]*cx[0]);
+        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+            ka[0] = 0.0;
+            ka[1] = 0.0;
+            ka[2] = c[32];
+            ka[3] = 0.0;
+        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+            ka[0] = 0.0;
+            ka[1] = 0.0;
+            ka[2] = c[33];
+            ka[3] = 1.0;
+        } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[32];
+            ka[3] = 2.0;
+        } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+            ka[0] = c[34];
+            ka[1] = c[35];
+            ka[2] = c[33];
+            ka[3] = 3.0;
+        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[32];
+            ka[3] = 4.0;
+        } else {
+            ka[0] = c[36];
+            ka[1] = c[35];
+            ka[2] = c[33];
+            ka[3] = 5.0;
+        }
+    }
+    const double t0 = fabs(q[3]);
+    out[0] = c[37] + 2.0*fabs(ka[0]) + 2.0*fabs(ka[1]) + fabs(ka[2]);
+    out[1] = c[38] + t0;
+    out[2] = c[39] + t0;
+    out[3] = c[40];
+    out[4] = c[41];
+    out[5] = c[42];
+}
+
+/* sg_feed_blocks -- Total ops: 101 */
+void sg_feed_blocks(const double *jac, double *out)
+{
+    /* block 0: joints cam, Q */
+    {
+        const double nr = sqrt(sg_row_norm2(6, jac + 0) * sg_row_norm2(6, jac + 6) * sg_row_norm2(6, jac + 12));
+        out[0] = nr > 0.0 ? (jac[2] * (jac[9] * jac[12] - jac[6] * jac[15]) - jac[3] * (jac[8] * jac[12] - jac[6] * jac[14]) + jac[0] * (jac[8] * jac[15] - jac[9] * jac[14])) / nr : 0.0;
+    }
+    /* block 1: joints T */
+    {
+        const double nr = sqrt(sg_row_norm2(6, jac + 18) * sg_row_norm2(6, jac + 24));
+        out[1] = nr > 0.0 ? (jac[23] * jac[25] - jac[19] * jac[29]) / nr : 0.0;
+    }
+    /* block 2: joints L */
+    {
+        const double nr = sqrt(sg_row_norm2(6, jac + 30));
+        out[2] = nr > 0.0 ? (jac[34]) / nr : 0.0;
+    }
+}
+
+/* sg_feed_motion -- Total ops: 521 */
+int sg_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     double ka[4];
     {
@@ -355,7 +443,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t32 = c[18]*cx[1] + c[21]*cx[0];
     const double t33 = c[17]*t32;
     const double t34 = c[18]*cx[0] + c[19]*cx[1];
-    const double t35 = c[37]*t34;
+    const double t35 = c[43]*t34;
     const double t36 = cq[4]*t1 + cq[5]*t12;
     const double t37 = cq[4]*t26;
     const double t38 = cq[5]*t13 + t37;
@@ -364,37 +452,38 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t53 = c[26]*cq[0];
     const double t54 = c[24]*cq[1];
     const double t55 = cq[8]*t20 + cq[9]*t54;
-    const double t56 = c[38]*cq[3];
-    const double t57 = c[38]*cq[2];
+    const double t56 = c[44]*cq[3];
+    const double t57 = c[44]*cq[2];
     const double t58 = cq[8]*t23 + cq[9]*t57;
-    const double t59 = c[40]*cq[8];
-    const double t60 = c[39] + t54;
-    const double t61 = c[41] + t53;
-    const double t63 = c[42]*cq[9];
-    const double t68 = c[39] + t0;
-    const double t69 = c[41] + t1;
+    const double t59 = c[46]*cq[8];
+    const double t60 = c[45] + t54;
+    const double t61 = c[47] + t53;
+    const double t63 = c[48]*cq[9];
+    const double t68 = c[45] + t0;
+    const double t69 = c[47] + t1;
     const double t70 = t2 + t69;
-    const double t75 = c[46]*t9 + c[47]*t8;
-    const double t76 = c[47]*t9 + c[49]*t8;
-    const double t77 = c[51]*t34 + c[52]*t32;
-    const double t78 = c[52]*t34 + c[54]*t32;
-    const double t79 = c[56]*cx[2] + c[57]*cx[3];
-    const double t80 = c[57]*cx[2] + c[60]*cx[3];
+    const double t75 = c[52]*t9 + c[53]*t8;
+    const double t76 = c[53]*t9 + c[55]*t8;
+    const double t77 = c[57]*t34 + c[58]*t32;
+    const double t78 = c[58]*t34 + c[60]*t32;
+    const double t79 = c[62]*cx[2] + c[63]*cx[3];
+    const double t80 = c[63]*cx[2] + c[66]*cx[3];
     const double t81 = ((xd[1])*(xd[1]));
-    const double t82 = c[61]*cq[4];
-    const double t83 = c[62]*cq[5];
-    const double t84 = c[63]*cx[2] + c[64]*cx[3] + t30;
-    const double t85 = c[64]*cx[2] + c[66]*cx[3] - t28;
-    const double t87 = c[67]*cq[0] + c[68]*cq[1];
-    const double t88 = c[68]*cq[0] + c[70]*cq[1];
-    const double t89 = c[71]*cq[8] + c[72]*cq[9];
-    const double t90 = c[72]*cq[8] + c[74]*cq[9];
-    const double t91 = c[75]*cq[2] + c[76]*cq[3];
-    const double t92 = c[76]*cq[2] + c[78]*cq[3];
-    const double t93 = c[79]*cq[10];
-    const double t94 = c[80]*cq[11];
-    const double t95 = c[37]*t32;
-    double J[36];
+    const double t82 = c[67]*cq[4];
+    const double t83 = c[68]*cq[5];
+    const double t84 = c[69]*cx[2] + c[70]*cx[3] + t30;
+    const double t85 = c[70]*cx[2] + c[72]*cx[3] - t28;
+    const double t87 = c[73]*cq[0] + c[74]*cq[1];
+    const double t88 = c[74]*cq[0] + c[76]*cq[1];
+    const double t89 = c[77]*cq[8] + c[78]*cq[9];
+    const double t90 = c[78]*cq[8] + c[80]*cq[9];
+    const double t91 = c[81]*cq[2] + c[82]*cq[3];
+    const double t92 = c[82]*cq[2] + c[84]*cq[3];
+    const double t93 = c[85]*cq[10];
+    const double t94 = c[86]*cq[11];
+    const double t95 = c[43]*t32;
+    const double t96 = fabs(q[3]);
+    double J[36], rs[6], cs[6];
     int piv[6];
     J[0] = cq[4]*t0 + cq[5]*t1;
     J[1] = 0.0;
@@ -438,8 +527,14 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     qd[3] = t33*xd[0];
     qd[4] = t35*xd[0];
     qd[5] = 0.0;
-    if (sg_lu_factor_inl(6, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(6, J, piv, qd);
+    rs[0] = (1.0/(c[37] + 2.0*fabs(ka[0]) + 2.0*fabs(ka[1]) + fabs(ka[2])));
+    rs[1] = (1.0/(c[38] + t96));
+    rs[2] = (1.0/(c[39] + t96));
+    rs[3] = c[87];
+    rs[4] = c[88];
+    rs[5] = c[89];
+    if (sg_factor_eq_inl(6, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(6, J, piv, rs, cs, qd);
     const double t39 = cx[3]*qd[3];
     const double t40 = t39*xd[1];
     const double t41 = ((qd[0])*(qd[0]));
@@ -464,16 +559,16 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     qdd[3] = t18*t48 + t19*t47 + t33*xdd[0] + t49*t50;
     qdd[4] = c[15]*t51 + c[16]*t52 + t33*t49 + t35*xdd[0];
     qdd[5] = -qd[0]*(qd[0]*(cq[8]*t53 + cq[9]*t21) + qd[4]*t55) - qd[1]*(qd[1]*(cq[8]*t56 + cq[9]*t22) + qd[4]*t58) - qd[4]*(qd[0]*t55 + qd[1]*t58 + qd[4]*(c[23]*((cq[8])*(cq[8])) + c[23]*((cq[9])*(cq[9])) - cq[8]*t25 + cq[9]*t24));
-    sg_lu_solve_inl(6, J, piv, qdd);
+    sg_solve_eq_inl(6, J, piv, rs, cs, qdd);
     const double t66 = qdd[0]*t20 + t21*t41;
     const double t67 = qdd[0]*t54 + t20*t41;
     const double t73 = qdd[0]*t7 + t12*t41;
     const double t74 = qdd[0]*t0 + t41*t7;
     obs[0] = t59 + t60;
-    obs[1] = c[40]*cq[9] + t61;
+    obs[1] = c[46]*cq[9] + t61;
     obs[2] = qd[4]*t63 + t62;
     obs[3] = qd[4]*t59 + t64;
-    obs[4] = c[42]*cq[8]*t65 + qdd[4]*t63 + t66;
+    obs[4] = c[48]*cq[8]*t65 + qdd[4]*t63 + t66;
     obs[5] = qdd[4]*t59 + t63*t65 + t67;
     obs[6] = t16 + t68;
     obs[7] = t70;
@@ -487,93 +582,93 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     obs[15] = qd[2]*t17 + t72;
     obs[16] = qdd[2]*t15 + t43 + t73;
     obs[17] = qdd[2]*t17 + t46 + t74;
-    obs[18] = c[43] + t22;
-    obs[19] = c[44] + t23;
+    obs[18] = c[49] + t22;
+    obs[19] = c[50] + t23;
     obs[20] = qd[1]*t56;
     obs[21] = qd[1]*t22;
     obs[22] = qdd[1]*t56 + t48*t57;
-    obs[23] = c[38]*t52 + qdd[1]*t22;
-    obs[24] = c[45] + x[0];
+    obs[23] = c[44]*t52 + qdd[1]*t22;
+    obs[24] = c[51] + x[0];
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t75;
-    obs[28] = c[46]*t8 + c[48]*t9;
+    obs[28] = c[52]*t8 + c[54]*t9;
     obs[29] = t76*xd[0];
     obs[30] = t75*xd[0];
-    obs[31] = t49*(c[48]*t8 + c[49]*t9) + t76*xdd[0];
+    obs[31] = t49*(c[54]*t8 + c[55]*t9) + t76*xdd[0];
     obs[32] = t49*t76 + t75*xdd[0];
-    obs[33] = c[50] + x[0];
+    obs[33] = c[56] + x[0];
     obs[34] = xd[0];
     obs[35] = xdd[0];
     obs[36] = t77;
-    obs[37] = c[51]*t32 + c[53]*t34;
+    obs[37] = c[57]*t32 + c[59]*t34;
     obs[38] = t78*xd[0];
     obs[39] = t77*xd[0];
-    obs[40] = t49*(c[53]*t32 + c[54]*t34) + t78*xdd[0];
+    obs[40] = t49*(c[59]*t32 + c[60]*t34) + t78*xdd[0];
     obs[41] = t49*t78 + t77*xdd[0];
     obs[42] = x[1];
     obs[43] = xd[1];
     obs[44] = xdd[1];
-    obs[45] = c[55] + t79;
-    obs[46] = c[56]*cx[3] + c[58] + c[59]*cx[2];
+    obs[45] = c[61] + t79;
+    obs[46] = c[62]*cx[3] + c[64] + c[65]*cx[2];
     obs[47] = t80*xd[1];
     obs[48] = t79*xd[1];
-    obs[49] = t80*xdd[1] + t81*(c[59]*cx[3] + c[60]*cx[2]);
+    obs[49] = t80*xdd[1] + t81*(c[65]*cx[3] + c[66]*cx[2]);
     obs[50] = t79*xdd[1] + t80*t81;
     obs[51] = q[2];
     obs[52] = qd[2];
     obs[53] = qdd[2];
     obs[54] = t68 + t82;
-    obs[55] = c[61]*cq[5] + t69;
+    obs[55] = c[67]*cq[5] + t69;
     obs[56] = qd[2]*t83 + t71;
     obs[57] = qd[2]*t82 + t72;
-    obs[58] = c[62]*cq[4]*t42 + qdd[2]*t83 + t73;
+    obs[58] = c[68]*cq[4]*t42 + qdd[2]*t83 + t73;
     obs[59] = qdd[2]*t82 + t42*t83 + t74;
     obs[60] = x[1];
     obs[61] = xd[1];
     obs[62] = xdd[1];
-    obs[63] = c[55] + t84;
-    obs[64] = c[58] + c[63]*cx[3] + c[65]*cx[2] + t28;
+    obs[63] = c[61] + t84;
+    obs[64] = c[64] + c[69]*cx[3] + c[71]*cx[2] + t28;
     obs[65] = t86;
     obs[66] = t39 + t84*xd[1];
-    obs[67] = cx[2]*qdd[3] - t40 + t85*xdd[1] + xd[1]*(-t39 + xd[1]*(c[65]*cx[3] + c[66]*cx[2] - t30));
+    obs[67] = cx[2]*qdd[3] - t40 + t85*xdd[1] + xd[1]*(-t39 + xd[1]*(c[71]*cx[3] + c[72]*cx[2] - t30));
     obs[68] = cx[3]*qdd[3] + t45 + t84*xdd[1] + t86*xd[1];
     obs[69] = q[0];
     obs[70] = qd[0];
     obs[71] = qdd[0];
-    obs[72] = c[39] + t87;
-    obs[73] = c[41] + c[67]*cq[1] + c[69]*cq[0];
+    obs[72] = c[45] + t87;
+    obs[73] = c[47] + c[73]*cq[1] + c[75]*cq[0];
     obs[74] = qd[0]*t88;
     obs[75] = qd[0]*t87;
-    obs[76] = qdd[0]*t88 + t41*(c[69]*cq[1] + c[70]*cq[0]);
+    obs[76] = qdd[0]*t88 + t41*(c[75]*cq[1] + c[76]*cq[0]);
     obs[77] = qdd[0]*t87 + t41*t88;
     obs[78] = q[4];
     obs[79] = qd[4];
     obs[80] = qdd[4];
     obs[81] = t60 + t89;
-    obs[82] = c[71]*cq[9] + c[73]*cq[8] + t61;
+    obs[82] = c[77]*cq[9] + c[79]*cq[8] + t61;
     obs[83] = qd[4]*t90 + t62;
     obs[84] = qd[4]*t89 + t64;
-    obs[85] = qdd[4]*t90 + t65*(c[73]*cq[9] + c[74]*cq[8]) + t66;
+    obs[85] = qdd[4]*t90 + t65*(c[79]*cq[9] + c[80]*cq[8]) + t66;
     obs[86] = qdd[4]*t89 + t65*t90 + t67;
     obs[87] = q[1];
     obs[88] = qd[1];
     obs[89] = qdd[1];
-    obs[90] = c[43] + t91;
-    obs[91] = c[44] + c[75]*cq[3] + c[77]*cq[2];
+    obs[90] = c[49] + t91;
+    obs[91] = c[50] + c[81]*cq[3] + c[83]*cq[2];
     obs[92] = qd[1]*t92;
     obs[93] = qd[1]*t91;
-    obs[94] = qdd[1]*t92 + t48*(c[77]*cq[3] + c[78]*cq[2]);
+    obs[94] = qdd[1]*t92 + t48*(c[83]*cq[3] + c[84]*cq[2]);
     obs[95] = qdd[1]*t91 + t48*t92;
     obs[96] = q[5];
     obs[97] = qd[5];
     obs[98] = qdd[5];
     obs[99] = t50 + t93;
-    obs[100] = c[79]*cq[11] + t33;
+    obs[100] = c[85]*cq[11] + t33;
     obs[101] = qd[5]*t94 + t95*xd[0];
     obs[102] = qd[5]*t93 + t50*xd[0];
-    obs[103] = c[80]*cq[10]*t47 + qdd[5]*t94 + t35*t49 + t95*xdd[0];
-    obs[104] = c[80]*t51 + qdd[5]*t93 + t49*t95 + t50*xdd[0];
+    obs[103] = c[86]*cq[10]*t47 + qdd[5]*t94 + t35*t49 + t95*xdd[0];
+    obs[104] = c[86]*t51 + qdd[5]*t93 + t49*t95 + t50*xdd[0];
     obs[105] = ka[3];
     if (!isfinite(((((((q[0] + (q[1] + q[2])) + ((q[3] + q[4]) + (q[5] + qd[0]))) + (((qd[1] + qd[2]) + (qd[3] + qd[4])) + ((qd[5] + qdd[0]) + (qdd[1] + qdd[2])))) + ((((qdd[3] + qdd[4]) + (qdd[5] + obs[0])) + ((obs[1] + obs[2]) + (obs[3] + obs[4]))) + (((obs[5] + obs[6]) + (obs[7] + obs[8])) + ((obs[9] + obs[10]) + (obs[11] + obs[12]))))) + ((((obs[13] + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + obs[19]))) + (((obs[20] + obs[21]) + (obs[22] + obs[23])) + ((obs[24] + obs[25]) + (obs[26] + obs[27])))) + ((((obs[28] + obs[29]) + (obs[30] + obs[31])) + ((obs[32] + obs[33]) + (obs[34] + obs[35]))) + (((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + obs[43])))))) + (((((obs[44] + (obs[45] + obs[46])) + ((obs[47] + obs[48]) + (obs[49] + obs[50]))) + (((obs[51] + obs[52]) + (obs[53] + obs[54])) + ((obs[55] + obs[56]) + (obs[57] + obs[58])))) + ((((obs[59] + obs[60]) + (obs[61] + obs[62])) + ((obs[63] + obs[64]) + (obs[65] + obs[66]))) + (((obs[67] + obs[68]) + (obs[69] + obs[70])) + ((obs[71] + obs[72]) + (obs[73] + obs[74]))))) + ((((obs[75] + (obs[76] + obs[77])) + ((obs[78] + obs[79]) + (obs[80] + obs[81]))) + (((obs[82] + obs[83]) + (obs[84] + obs[85])) + ((obs[86] + obs[87]) + (obs[88] + obs[89])))) + ((((obs[90] + obs[91]) + (obs[92] + obs[93])) + ((obs[94] + obs[95]) + (obs[96] + obs[97]))) + (((obs[98] + obs[99]) + (obs[100] + obs[101])) + ((obs[102] + obs[103]) + (obs[104] + obs[105]))))))))) return SG_NONFINITE;
     return SG_OK;
@@ -632,33 +727,33 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
     const double t10 = cq[3]*cq[9];
     const double t11 = -gv[1] + obs[68];
     const double t12 = -gv[0] + obs[67];
-    const double t13 = c[84]*t11;
-    const double t14 = c[83]*(-gv[1] + obs[59]) - ld[3] - ld[5] + t13;
-    const double t15 = c[84]*t12;
-    const double t16 = c[83]*(-gv[0] + obs[58]) - ld[2] - ld[4] + t15;
-    const double t17 = c[89]*(-gv[0] + obs[85]) - ld[0];
-    const double t18 = c[89]*(-gv[1] + obs[86]) - ld[1];
+    const double t13 = c[93]*t11;
+    const double t14 = c[92]*(-gv[1] + obs[59]) - ld[3] - ld[5] + t13;
+    const double t15 = c[93]*t12;
+    const double t16 = c[92]*(-gv[0] + obs[58]) - ld[2] - ld[4] + t15;
+    const double t17 = c[98]*(-gv[0] + obs[85]) - ld[0];
+    const double t18 = c[98]*(-gv[1] + obs[86]) - ld[1];
     const double t19 = -gv[0] + obs[76];
     const double t20 = -gv[1] + obs[77];
-    const double t21 = c[73]*cq[8];
-    const double t22 = c[73]*cq[9];
-    const double t23 = c[77]*cq[2];
-    const double t24 = c[77]*cq[3];
-    const double t25 = c[97]*(-gv[0] + obs[94]) - ld[6];
-    const double t26 = c[97]*(-gv[1] + obs[95]) - ld[7];
-    const double t27 = -gv[0] + obs[103];
-    const double t28 = -gv[1] + obs[104];
-    const double t29 = c[47] + ka[1];
-    const double t30 = c[49] + ka[0];
+    const double t21 = c[79]*cq[8];
+    const double t22 = c[79]*cq[9];
+    const double t23 = c[83]*cq[2];
+    const double t24 = c[83]*cq[3];
+    const double t25 = c[106]*(-gv[0] + obs[94]) - ld[6];
+    const double t26 = c[106]*(-gv[1] + obs[95]) - ld[7];
+    const double t27 = -gv[1] + obs[104];
+    const double t28 = -gv[0] + obs[103];
+    const double t29 = c[53] + ka[1];
+    const double t30 = c[55] + ka[0];
     const double t31 = c[18]*cx[1] + c[21]*cx[0];
     const double t32 = c[18]*cx[0] + c[19]*cx[1];
-    const double t33 = c[59]*cx[3] + c[60]*cx[2];
-    const double t34 = c[65]*cx[3] + c[66]*cx[2];
+    const double t33 = c[65]*cx[3] + c[66]*cx[2];
+    const double t34 = c[71]*cx[3] + c[72]*cx[2];
     const double t35 = -cx[3];
     {
-        const double d = c[14]*cq[8] + c[20]*cq[9] + c[24]*t8 + c[26]*t7 + c[38]*t10 + c[38]*t9 + c[39]*cq[8] + c[41]*cq[9];
-        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[24]*t7 + c[26]*t8), fmax(fabs(c[14]*cq[8] + c[20]*cq[9] + c[24]*t8 + c[26]*t7 + c[38]*t10 + c[38]*t9 + c[39]*cq[8] + c[41]*cq[9]), fabs(c[22]*t10 + c[22]*t9))))) return SG_SINGULAR;
-        out[23] = (c[91]*obs[80] - ld[0]*(c[92]*cq[9] + t21) - ld[1]*(c[93]*cq[8] + t22) - ld[14] - t17*(c[71]*cq[9] + t21) - t18*(c[74]*cq[8] + t22))/d;
+        const double d = c[14]*cq[8] + c[20]*cq[9] + c[24]*t8 + c[26]*t7 + c[44]*t10 + c[44]*t9 + c[45]*cq[8] + c[47]*cq[9];
+        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[24]*t7 + c[26]*t8), fmax(fabs(c[14]*cq[8] + c[20]*cq[9] + c[24]*t8 + c[26]*t7 + c[44]*t10 + c[44]*t9 + c[45]*cq[8] + c[47]*cq[9]), fabs(c[22]*t10 + c[22]*t9))))) return SG_SINGULAR;
+        out[23] = (c[100]*obs[80] - ld[0]*(c[101]*cq[9] + t21) - ld[1]*(c[102]*cq[8] + t22) - ld[14] - t17*(c[77]*cq[9] + t21) - t18*(c[80]*cq[8] + t22))/d;
     }
     {
         /* block of unknowns 6, 8 */
@@ -666,10 +761,10 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
         int piv[2];
         M[0] = cx[2]*t2 + cx[3]*t3;
         M[1] = c[5]*cq[0]*cq[4] + cq[5]*t6;
-        r[0] = c[24]*cq[0]*t17 + c[24]*cq[1]*t18 + c[88]*obs[71] + c[90]*t19*(c[67]*cq[1] + c[69]*cq[0]) + c[90]*t20*(c[69]*cq[1] + c[70]*cq[0]) - out[23]*(c[24]*t7 + c[26]*t8) - ld[13] + t14*t2 + t16*t6;
+        r[0] = c[24]*cq[0]*t17 + c[24]*cq[1]*t18 + c[97]*obs[71] + c[99]*t19*(c[73]*cq[1] + c[75]*cq[0]) + c[99]*t20*(c[75]*cq[1] + c[76]*cq[0]) - out[23]*(c[24]*t7 + c[26]*t8) - ld[13] + t14*t2 + t16*t6;
         M[2] = c[10]*t0 + c[10]*t1 + c[11]*t0 + c[11]*t1;
-        M[3] = c[39]*cq[4] + c[41]*cq[5] - cq[4]*ka[0]*t5 + cq[4]*ka[1]*t4 + cq[4]*t2 - cq[5]*ka[0]*t4 - cq[5]*ka[1]*t5 + cq[5]*t3;
-        r[1] = c[61]*cq[4]*t14 + c[61]*cq[5]*ld[2] + c[62]*cq[4]*ld[3] + c[62]*cq[5]*t16 + c[81]*obs[53] + c[82]*cq[5]*ld[4] + c[85]*cq[4]*ld[5] + c[86]*cq[4]*t11 + c[87]*cq[5]*t12 - ld[11];
+        M[3] = c[45]*cq[4] + c[47]*cq[5] - cq[4]*ka[0]*t5 + cq[4]*ka[1]*t4 + cq[4]*t2 - cq[5]*ka[0]*t4 - cq[5]*ka[1]*t5 + cq[5]*t3;
+        r[1] = c[67]*cq[4]*t14 + c[67]*cq[5]*ld[2] + c[68]*cq[4]*ld[3] + c[68]*cq[5]*t16 + c[90]*obs[53] + c[91]*cq[5]*ld[4] + c[94]*cq[4]*ld[5] + c[95]*cq[4]*t11 + c[96]*cq[5]*t12 - ld[11];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[6] = r[0];
@@ -681,10 +776,10 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
         int piv[2];
         M[0] = c[15]*cq[11];
         M[1] = c[31]*cq[10];
-        r[0] = c[100]*cq[11]*t27 + c[98]*obs[98] + c[99]*cq[10]*t28 - ld[16];
+        r[0] = c[107]*obs[98] + c[108]*cq[10]*t27 + c[109]*cq[11]*t28 - ld[16];
         M[2] = c[16]*cq[3];
         M[3] = c[30]*cq[2];
-        r[1] = c[94]*obs[89] - out[23]*(c[22]*t10 + c[22]*t9) - ld[15] - ld[6]*(c[95]*cq[3] + t23) - ld[7]*(c[96]*cq[2] + t24) - t25*(c[75]*cq[3] + t23) - t26*(c[78]*cq[2] + t24);
+        r[1] = c[103]*obs[89] - out[23]*(c[22]*t10 + c[22]*t9) - ld[15] - ld[6]*(c[104]*cq[3] + t23) - ld[7]*(c[105]*cq[2] + t24) - t25*(c[81]*cq[3] + t23) - t26*(c[84]*cq[2] + t24);
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[21] = r[0];
@@ -696,22 +791,22 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
     out[17] = cq[9]*out[23] - out[21] + t25;
     out[16] = cq[8]*out[23] + t18;
     out[15] = -cq[9]*out[23] + t17;
-    out[10] = c[111]*t20 + out[12] + out[16];
-    out[9] = c[111]*t19 + out[11] + out[15];
+    out[10] = c[120]*t20 + out[12] + out[16];
+    out[9] = c[120]*t19 + out[11] + out[15];
     out[14] = -cx[2]*out[6] + t13;
     out[13] = -out[6]*t35 + t15;
-    out[20] = c[110]*t28 + out[22];
-    out[19] = c[110]*t27 + out[21];
-    out[7] = c[109]*obs[62] - out[13]*(c[63]*cx[3] + c[65]*cx[2]) - out[14]*t34 - out[6]*(cx[2]*t34 + cx[3]*(c[64]*cx[2] + c[66]*cx[3])) - ld[12];
-    out[5] = c[108]*(-gv[1] + obs[50]) + cx[2]*out[6];
-    out[4] = c[108]*(-gv[0] + obs[49]) - cx[3]*out[6];
-    out[26] = c[107]*obs[44] - out[4]*(c[56]*cx[3] + c[59]*cx[2]) - out[5]*t33 - out[6]*(-cx[2]*(cx[2]*q[3] + t33) - cx[3]*(c[57]*cx[2] + c[60]*cx[3] + cx[3]*q[3])) + out[7] - ld[10];
-    out[3] = c[106]*(-gv[1] + obs[41]) + out[20];
-    out[2] = c[106]*(-gv[0] + obs[40]) + out[19];
-    out[25] = c[103]*obs[35] - out[19]*(c[104]*t31 + c[52]*t32) - out[2]*(c[51]*t31 + c[53]*t32) - out[20]*(c[105]*t32 + c[52]*t31) - out[3]*(c[53]*t31 + c[54]*t32) - ld[9];
-    out[1] = c[102]*(-gv[1] + obs[32]) - cq[4]*out[8];
-    out[0] = c[102]*(-gv[0] + obs[31]) + cq[5]*out[8];
-    out[24] = c[101]*obs[26] - out[0]*(c[46]*t4 + c[48]*t5) - out[1]*(c[48]*t4 + c[49]*t5) - out[8]*(cq[4]*(-t29*t4 + t30*t5) + cq[5]*(t29*t5 + t30*t4)) - ld[8];
+    out[20] = c[119]*t27 + out[22];
+    out[19] = c[119]*t28 + out[21];
+    out[7] = c[118]*obs[62] - out[13]*(c[69]*cx[3] + c[71]*cx[2]) - out[14]*t34 - out[6]*(cx[2]*t34 + cx[3]*(c[70]*cx[2] + c[72]*cx[3])) - ld[12];
+    out[5] = c[117]*(-gv[1] + obs[50]) + cx[2]*out[6];
+    out[4] = c[117]*(-gv[0] + obs[49]) - cx[3]*out[6];
+    out[26] = c[116]*obs[44] - out[4]*(c[62]*cx[3] + c[65]*cx[2]) - out[5]*t33 - out[6]*(-cx[2]*(cx[2]*q[3] + t33) - cx[3]*(c[63]*cx[2] + c[66]*cx[3] + cx[3]*q[3])) + out[7] - ld[10];
+    out[3] = c[115]*(-gv[1] + obs[41]) + out[20];
+    out[2] = c[115]*(-gv[0] + obs[40]) + out[19];
+    out[25] = c[112]*obs[35] - out[19]*(c[113]*t31 + c[58]*t32) - out[2]*(c[57]*t31 + c[59]*t32) - out[20]*(c[114]*t32 + c[58]*t31) - out[3]*(c[59]*t31 + c[60]*t32) - ld[9];
+    out[1] = c[111]*(-gv[1] + obs[32]) - cq[4]*out[8];
+    out[0] = c[111]*(-gv[0] + obs[31]) + cq[5]*out[8];
+    out[24] = c[110]*obs[26] - out[0]*(c[52]*t4 + c[54]*t5) - out[1]*(c[54]*t4 + c[55]*t5) - out[8]*(cq[4]*(-t29*t4 + t30*t5) + cq[5]*(t29*t5 + t30*t4)) - ld[8];
     const double t36 = out[24] + out[25];
     out[27] = t36;
     out[28] = out[26];
@@ -725,9 +820,9 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
     out[36] = cq[8]*out[23];
     out[37] = out[0] + out[17] + out[2] + out[4] + out[9];
     out[38] = out[1] + out[10] + out[18] + out[3] + out[5];
-    out[39] = c[112]*out[4] + c[20]*out[17] + c[39]*out[10] + c[43]*out[18] + c[55]*out[5] + c[7]*out[9] + out[26] + t36;
-    out[40] = c[113]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[114]*((obs[25])*(obs[25])) + c[115]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[116]*((obs[34])*(obs[34])) + c[117]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[118]*((obs[43])*(obs[43])) + c[119]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[120]*((obs[52])*(obs[52])) + c[121]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[122]*((obs[61])*(obs[61])) + c[123]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[124]*((obs[70])*(obs[70])) + c[125]*(((obs[83])*(obs[83])) + ((obs[84])*(obs[84]))) + c[126]*((obs[79])*(obs[79])) + c[127]*(((obs[92])*(obs[92])) + ((obs[93])*(obs[93]))) + c[128]*((obs[88])*(obs[88])) + c[129]*(((obs[101])*(obs[101])) + ((obs[102])*(obs[102]))) + c[130]*((obs[97])*(obs[97]));
-    out[41] = c[131]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[132]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[133]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[134]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[135]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[136]*(gv[0]*obs[81] + gv[1]*obs[82]) + c[137]*(gv[0]*obs[90] + gv[1]*obs[91]) + c[138]*(gv[0]*obs[99] + gv[1]*obs[100]) + c[90]*(gv[0]*obs[72] + gv[1]*obs[73]);
+    out[39] = c[121]*out[4] + c[20]*out[17] + c[45]*out[10] + c[49]*out[18] + c[61]*out[5] + c[7]*out[9] + out[26] + t36;
+    out[40] = c[122]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[123]*((obs[25])*(obs[25])) + c[124]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[125]*((obs[34])*(obs[34])) + c[126]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[127]*((obs[43])*(obs[43])) + c[128]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[129]*((obs[52])*(obs[52])) + c[130]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[131]*((obs[61])*(obs[61])) + c[132]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[133]*((obs[70])*(obs[70])) + c[134]*(((obs[83])*(obs[83])) + ((obs[84])*(obs[84]))) + c[135]*((obs[79])*(obs[79])) + c[136]*(((obs[92])*(obs[92])) + ((obs[93])*(obs[93]))) + c[137]*((obs[88])*(obs[88])) + c[138]*(((obs[101])*(obs[101])) + ((obs[102])*(obs[102]))) + c[139]*((obs[97])*(obs[97]));
+    out[41] = c[140]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[141]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[142]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[143]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[144]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[145]*(gv[0]*obs[81] + gv[1]*obs[82]) + c[146]*(gv[0]*obs[90] + gv[1]*obs[91]) + c[147]*(gv[0]*obs[99] + gv[1]*obs[100]) + c[99]*(gv[0]*obs[72] + gv[1]*obs[73]);
     out[42] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[13]*obs[70] + ld[14]*obs[79] + ld[15]*obs[88] + ld[16]*obs[97] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
     if (!isfinite((((((out[0] + out[1]) + (out[2] + (out[3] + out[4]))) + ((out[5] + out[6]) + (out[7] + (out[8] + out[9])))) + (((out[10] + out[11]) + (out[12] + (out[13] + out[14]))) + ((out[15] + (out[16] + out[17])) + (out[18] + (out[19] + out[20]))))) + ((((out[21] + out[22]) + (out[23] + (out[24] + out[25]))) + ((out[26] + (out[27] + out[28])) + (out[29] + (out[30] + out[31])))) + (((out[32] + out[33]) + (out[34] + (out[35] + out[36]))) + ((out[37] + (out[38] + out[39])) + (out[40] + (out[41] + out[42])))))))) return SG_NONFINITE;
     return SG_OK;
@@ -775,49 +870,49 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     }
     const double t0 = c[3]*cx[1] + c[6]*cx[0];
     const double t1 = c[3]*cx[0] + c[4]*cx[1];
-    const double t2 = c[47] + ka[1];
-    const double t3 = c[49] + ka[0];
+    const double t2 = c[53] + ka[1];
+    const double t3 = c[55] + ka[0];
     const double t4 = c[18]*cx[1] + c[21]*cx[0];
     const double t5 = c[18]*cx[0] + c[19]*cx[1];
-    const double t6 = c[59]*cx[3] + c[60]*cx[2];
-    const double t7 = c[62]*cq[4];
-    const double t8 = c[61]*cq[5];
-    const double t9 = c[82]*cq[5];
-    const double t10 = c[85]*cq[4];
-    const double t11 = c[65]*cx[3] + c[66]*cx[2];
-    const double t12 = c[73]*cq[8];
-    const double t13 = c[73]*cq[9];
-    const double t14 = c[74]*cq[8] + t13;
-    const double t15 = c[77]*cq[2];
-    const double t16 = c[77]*cq[3];
-    const double t17 = c[96]*cq[2] + t16;
-    const double t18 = c[79]*cq[11];
-    const double t19 = c[80]*cq[10];
+    const double t6 = c[65]*cx[3] + c[66]*cx[2];
+    const double t7 = c[68]*cq[4];
+    const double t8 = c[67]*cq[5];
+    const double t9 = c[91]*cq[5];
+    const double t10 = c[94]*cq[4];
+    const double t11 = c[71]*cx[3] + c[72]*cx[2];
+    const double t12 = c[79]*cq[8];
+    const double t13 = c[79]*cq[9];
+    const double t14 = c[80]*cq[8] + t13;
+    const double t15 = c[83]*cq[2];
+    const double t16 = c[83]*cq[3];
+    const double t17 = c[105]*cq[2] + t16;
+    const double t18 = c[85]*cq[11];
+    const double t19 = c[86]*cq[10];
     for (int k = 0; k < 729; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[8] = -cq[5];
     A[28] = 1.0;
     A[35] = cq[4];
-    A[54] = c[46]*t0 + c[48]*t1;
-    A[55] = c[48]*t0 + c[49]*t1;
+    A[54] = c[52]*t0 + c[54]*t1;
+    A[55] = c[54]*t0 + c[55]*t1;
     A[62] = cq[4]*(-t0*t2 + t1*t3) + cq[5]*(t0*t3 + t1*t2);
     A[78] = 1.0;
     A[83] = 1.0;
     A[100] = -1.0;
     A[111] = 1.0;
     A[128] = -1.0;
-    A[137] = c[51]*t4 + c[53]*t5;
-    A[138] = c[53]*t4 + c[54]*t5;
-    A[154] = c[104]*t4 + c[52]*t5;
-    A[155] = c[105]*t5 + c[52]*t4;
+    A[137] = c[57]*t4 + c[59]*t5;
+    A[138] = c[59]*t4 + c[60]*t5;
+    A[154] = c[113]*t4 + c[58]*t5;
+    A[155] = c[114]*t5 + c[58]*t4;
     A[160] = 1.0;
     A[166] = 1.0;
     A[168] = cx[3];
     A[194] = 1.0;
     A[195] = -cx[2];
-    A[220] = c[56]*cx[3] + c[59]*cx[2];
+    A[220] = c[62]*cx[3] + c[65]*cx[2];
     A[221] = t6;
-    A[222] = -cx[2]*(cx[2]*q[3] + t6) - cx[3]*(c[57]*cx[2] + c[60]*cx[3] + cx[3]*q[3]);
+    A[222] = -cx[2]*(cx[2]*q[3] + t6) - cx[3]*(c[63]*cx[2] + c[66]*cx[3] + cx[3]*q[3]);
     A[223] = -1.0;
     A[242] = 1.0;
     A[251] = cq[5];
@@ -826,7 +921,7 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[278] = -cq[4];
     A[282] = 1.0;
     A[284] = -1.0;
-    A[305] = -cq[4]*(c[0] + c[5]*cq[0] + ka[0]*t1 - ka[1]*t0 + t7) - cq[5]*(c[5]*cq[1] + c[62]*cq[5] + c[7] + ka[0]*t0 + ka[1]*t1);
+    A[305] = -cq[4]*(c[0] + c[5]*cq[0] + ka[0]*t1 - ka[1]*t0 + t7) - cq[5]*(c[5]*cq[1] + c[68]*cq[5] + c[7] + ka[0]*t0 + ka[1]*t1);
     A[308] = t8;
     A[309] = t7;
     A[310] = t9;
@@ -835,9 +930,9 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[337] = 1.0;
     A[357] = cx[2];
     A[365] = 1.0;
-    A[384] = cx[2]*t11 + cx[3]*(c[64]*cx[2] + c[66]*cx[3]);
+    A[384] = cx[2]*t11 + cx[3]*(c[70]*cx[2] + c[72]*cx[3]);
     A[385] = 1.0;
-    A[391] = c[63]*cx[3] + c[65]*cx[2];
+    A[391] = c[69]*cx[3] + c[71]*cx[2];
     A[392] = t11;
     A[414] = 1.0;
     A[416] = -1.0;
@@ -845,30 +940,30 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[442] = 1.0;
     A[444] = -1.0;
     A[448] = -1.0;
-    A[468] = c[67]*cq[1] + c[69]*cq[0];
-    A[469] = c[69]*cq[1] + c[70]*cq[0];
-    A[470] = c[139]*cq[1] + c[68]*cq[0];
-    A[471] = c[140]*cq[0] + c[68]*cq[1];
-    A[474] = c[141]*cq[0] + c[70]*cq[1];
-    A[475] = c[141]*cq[1] + c[67]*cq[0];
+    A[468] = c[73]*cq[1] + c[75]*cq[0];
+    A[469] = c[75]*cq[1] + c[76]*cq[0];
+    A[470] = c[148]*cq[1] + c[74]*cq[0];
+    A[471] = c[149]*cq[0] + c[74]*cq[1];
+    A[474] = c[150]*cq[0] + c[76]*cq[1];
+    A[475] = c[150]*cq[1] + c[73]*cq[0];
     A[501] = 1.0;
     A[509] = cq[9];
     A[529] = 1.0;
     A[536] = -cq[8];
-    A[555] = c[71]*cq[9] + t12;
+    A[555] = c[77]*cq[9] + t12;
     A[556] = t14;
-    A[563] = -cq[8]*(c[22]*cq[2] + c[26]*cq[1] + c[28] + t14) - cq[9]*(c[22]*cq[3] + c[24]*cq[0] + c[25] + c[72]*cq[8] + c[74]*cq[9]);
+    A[563] = -cq[8]*(c[22]*cq[2] + c[26]*cq[1] + c[28] + t14) - cq[9]*(c[22]*cq[3] + c[24]*cq[0] + c[25] + c[78]*cq[8] + c[80]*cq[9]);
     A[584] = 1.0;
     A[588] = 1.0;
     A[590] = -cq[9];
     A[612] = 1.0;
     A[616] = 1.0;
     A[617] = cq[8];
-    A[638] = c[75]*cq[3] + t15;
-    A[639] = c[78]*cq[2] + t16;
-    A[642] = c[142]*cq[3] + t15;
-    A[643] = c[143]*cq[2] + t16;
-    A[644] = cq[8]*t17 + cq[9]*(c[76]*cq[2] + c[96]*cq[3]);
+    A[638] = c[81]*cq[3] + t15;
+    A[639] = c[84]*cq[2] + t16;
+    A[642] = c[151]*cq[3] + t15;
+    A[643] = c[152]*cq[2] + t16;
+    A[644] = cq[8]*t17 + cq[9]*(c[105]*cq[3] + c[82]*cq[2]);
     A[667] = 1.0;
     A[669] = -1.0;
     A[695] = 1.0;
@@ -877,43 +972,43 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[722] = t19;
     A[723] = t18;
     A[724] = t19;
-    b[0] = c[102]*(-gv[0] + obs[31]);
-    b[1] = c[102]*(-gv[1] + obs[32]);
-    b[2] = c[101]*obs[26] - ld[8];
-    b[3] = c[106]*(-gv[0] + obs[40]);
-    b[4] = c[106]*(-gv[1] + obs[41]);
-    b[5] = c[103]*obs[35] - ld[9];
-    b[6] = c[108]*(-gv[0] + obs[49]);
-    b[7] = c[108]*(-gv[1] + obs[50]);
-    b[8] = c[107]*obs[44] - ld[10];
-    b[9] = c[83]*(-gv[0] + obs[58]) - ld[2] - ld[4];
-    b[10] = c[83]*(-gv[1] + obs[59]) - ld[3] - ld[5];
-    b[11] = c[81]*obs[53] - ld[11] + ld[2]*t8 + ld[3]*t7 + ld[4]*t9 + ld[5]*t10;
-    b[12] = c[84]*(-gv[0] + obs[67]);
-    b[13] = c[84]*(-gv[1] + obs[68]);
-    b[14] = c[109]*obs[62] - ld[12];
-    b[15] = c[111]*(-gv[0] + obs[76]);
-    b[16] = c[111]*(-gv[1] + obs[77]);
-    b[17] = c[88]*obs[71] - ld[13];
-    b[18] = c[89]*(-gv[0] + obs[85]) - ld[0];
-    b[19] = c[89]*(-gv[1] + obs[86]) - ld[1];
-    b[20] = c[91]*obs[80] - ld[0]*(c[92]*cq[9] + t12) - ld[1]*(c[93]*cq[8] + t13) - ld[14];
-    b[21] = c[97]*(-gv[0] + obs[94]) - ld[6];
-    b[22] = c[97]*(-gv[1] + obs[95]) - ld[7];
-    b[23] = c[94]*obs[89] - ld[15] - ld[6]*(c[95]*cq[3] + t15) - ld[7]*t17;
-    b[24] = c[110]*(-gv[0] + obs[103]);
-    b[25] = c[110]*(-gv[1] + obs[104]);
-    b[26] = c[98]*obs[98] - ld[16];
+    b[0] = c[111]*(-gv[0] + obs[31]);
+    b[1] = c[111]*(-gv[1] + obs[32]);
+    b[2] = c[110]*obs[26] - ld[8];
+    b[3] = c[115]*(-gv[0] + obs[40]);
+    b[4] = c[115]*(-gv[1] + obs[41]);
+    b[5] = c[112]*obs[35] - ld[9];
+    b[6] = c[117]*(-gv[0] + obs[49]);
+    b[7] = c[117]*(-gv[1] + obs[50]);
+    b[8] = c[116]*obs[44] - ld[10];
+    b[9] = c[92]*(-gv[0] + obs[58]) - ld[2] - ld[4];
+    b[10] = c[92]*(-gv[1] + obs[59]) - ld[3] - ld[5];
+    b[11] = c[90]*obs[53] - ld[11] + ld[2]*t8 + ld[3]*t7 + ld[4]*t9 + ld[5]*t10;
+    b[12] = c[93]*(-gv[0] + obs[67]);
+    b[13] = c[93]*(-gv[1] + obs[68]);
+    b[14] = c[118]*obs[62] - ld[12];
+    b[15] = c[120]*(-gv[0] + obs[76]);
+    b[16] = c[120]*(-gv[1] + obs[77]);
+    b[17] = c[97]*obs[71] - ld[13];
+    b[18] = c[98]*(-gv[0] + obs[85]) - ld[0];
+    b[19] = c[98]*(-gv[1] + obs[86]) - ld[1];
+    b[20] = c[100]*obs[80] - ld[0]*(c[101]*cq[9] + t12) - ld[1]*(c[102]*cq[8] + t13) - ld[14];
+    b[21] = c[106]*(-gv[0] + obs[94]) - ld[6];
+    b[22] = c[106]*(-gv[1] + obs[95]) - ld[7];
+    b[23] = c[103]*obs[89] - ld[15] - ld[6]*(c[104]*cq[3] + t15) - ld[7]*t17;
+    b[24] = c[119]*(-gv[0] + obs[103]);
+    b[25] = c[119]*(-gv[1] + obs[104]);
+    b[26] = c[107]*obs[98] - ld[16];
 }
 
 /* sg_feed_anchors -- Total ops: 155 */
 void sg_feed_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
 {
-    const double t0 = c[55] + cx[2]*q[3];
-    const double t1 = c[58] + cx[3]*q[3];
-    const double t2 = c[39] + c[9]*cq[0];
+    const double t0 = c[61] + cx[2]*q[3];
+    const double t1 = c[64] + cx[3]*q[3];
+    const double t2 = c[45] + c[9]*cq[0];
     const double t3 = c[11]*cq[4] + t2;
-    const double t4 = c[41] + c[9]*cq[1];
+    const double t4 = c[47] + c[9]*cq[1];
     const double t5 = c[11]*cq[5] + t4;
     const double t6 = c[3]*cx[0] + c[4]*cx[1];
     const double t7 = c[34]*t6;
@@ -928,15 +1023,15 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     const double t16 = t10 + t13;
     const double t17 = c[10]*cq[4] + t3;
     const double t18 = c[10]*cq[5] + t5;
-    const double t19 = c[24]*cq[1] + c[39];
-    const double t20 = c[26]*cq[0] + c[41];
+    const double t19 = c[24]*cq[1] + c[45];
+    const double t20 = c[26]*cq[0] + c[47];
     const double t21 = c[18]*cx[0] + c[19]*cx[1];
     const double t22 = c[17]*t21;
     const double t23 = c[18]*cx[1] + c[21]*cx[0];
     const double t24 = c[17]*t23;
-    const double t25 = c[22]*cq[2] + c[43];
-    const double t26 = c[22]*cq[3] + c[44];
-    const double t27 = c[45] + x[0];
+    const double t25 = c[22]*cq[2] + c[49];
+    const double t26 = c[22]*cq[3] + c[50];
+    const double t27 = c[51] + x[0];
     const double t28 = t27 + (1.3333333333333333)*3.141592653589793;
     const double t29 = t27 + (1.6666666666666667)*3.141592653589793;
     const double t30 = t27 + 2.0*3.141592653589793;
@@ -948,12 +1043,12 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[5] = 0.0;
     out[6] = 0.0;
     out[7] = 0.0;
-    out[8] = c[55];
-    out[9] = c[58];
-    out[10] = c[55];
-    out[11] = c[58];
-    out[12] = c[55];
-    out[13] = c[58];
+    out[8] = c[61];
+    out[9] = c[64];
+    out[10] = c[61];
+    out[11] = c[64];
+    out[12] = c[61];
+    out[13] = c[64];
     out[14] = cx[2];
     out[15] = cx[3];
     out[16] = t0;
@@ -974,10 +1069,10 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[31] = t16;
     out[32] = t15;
     out[33] = t16;
-    out[34] = c[39];
-    out[35] = c[41];
-    out[36] = c[39];
-    out[37] = c[41];
+    out[34] = c[45];
+    out[35] = c[47];
+    out[36] = c[45];
+    out[37] = c[47];
     out[38] = t2;
     out[39] = t4;
     out[40] = t2;
@@ -990,50 +1085,50 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[47] = t20;
     out[48] = t19;
     out[49] = t20;
-    out[50] = c[43];
-    out[51] = c[44];
-    out[52] = c[43];
-    out[53] = c[44];
+    out[50] = c[49];
+    out[51] = c[50];
+    out[52] = c[49];
+    out[53] = c[50];
     out[54] = t22;
     out[55] = t24;
     out[56] = t22;
     out[57] = t24;
     out[58] = c[15]*cq[10] + t22;
     out[59] = c[15]*cq[11] + t24;
-    out[60] = c[30]*cq[2] + c[43];
-    out[61] = c[30]*cq[3] + c[44];
+    out[60] = c[30]*cq[2] + c[49];
+    out[61] = c[30]*cq[3] + c[50];
     out[62] = c[23]*cq[9] + t19;
     out[63] = c[27]*cq[8] + t20;
     out[64] = cq[8];
     out[65] = cq[9];
     out[66] = t25;
     out[67] = t26;
-    out[68] = c[40]*cq[8] + t19;
-    out[69] = c[40]*cq[9] + t20;
+    out[68] = c[46]*cq[8] + t19;
+    out[69] = c[46]*cq[9] + t20;
     out[70] = t3;
     out[71] = t5;
     out[72] = t17;
     out[73] = t18;
     out[74] = t25;
     out[75] = t26;
-    out[76] = c[46]*t6 + c[47]*t9;
-    out[77] = c[46]*t9 + c[48]*t6;
-    out[78] = c[51]*t21 + c[52]*t23;
-    out[79] = c[51]*t23 + c[53]*t21;
-    out[80] = c[55] + c[56]*cx[2] + c[57]*cx[3];
-    out[81] = c[56]*cx[3] + c[58] + c[59]*cx[2];
-    out[82] = c[61]*cq[4] + t2;
-    out[83] = c[61]*cq[5] + t4;
-    out[84] = c[63]*cx[2] + c[64]*cx[3] + t0;
-    out[85] = c[63]*cx[3] + c[65]*cx[2] + t1;
-    out[86] = c[39] + c[67]*cq[0] + c[68]*cq[1];
-    out[87] = c[41] + c[67]*cq[1] + c[69]*cq[0];
-    out[88] = c[71]*cq[8] + c[72]*cq[9] + t19;
-    out[89] = c[71]*cq[9] + c[73]*cq[8] + t20;
-    out[90] = c[43] + c[75]*cq[2] + c[76]*cq[3];
-    out[91] = c[44] + c[75]*cq[3] + c[77]*cq[2];
-    out[92] = c[79]*cq[10] + t22;
-    out[93] = c[79]*cq[11] + t24;
+    out[76] = c[52]*t6 + c[53]*t9;
+    out[77] = c[52]*t9 + c[54]*t6;
+    out[78] = c[57]*t21 + c[58]*t23;
+    out[79] = c[57]*t23 + c[59]*t21;
+    out[80] = c[61] + c[62]*cx[2] + c[63]*cx[3];
+    out[81] = c[62]*cx[3] + c[64] + c[65]*cx[2];
+    out[82] = c[67]*cq[4] + t2;
+    out[83] = c[67]*cq[5] + t4;
+    out[84] = c[69]*cx[2] + c[70]*cx[3] + t0;
+    out[85] = c[69]*cx[3] + c[71]*cx[2] + t1;
+    out[86] = c[45] + c[73]*cq[0] + c[74]*cq[1];
+    out[87] = c[47] + c[73]*cq[1] + c[75]*cq[0];
+    out[88] = c[77]*cq[8] + c[78]*cq[9] + t19;
+    out[89] = c[77]*cq[9] + c[79]*cq[8] + t20;
+    out[90] = c[49] + c[81]*cq[2] + c[82]*cq[3];
+    out[91] = c[50] + c[81]*cq[3] + c[83]*cq[2];
+    out[92] = c[85]*cq[10] + t22;
+    out[93] = c[85]*cq[11] + t24;
     out[94] = c[32];
     out[95] = t27 + (0.3333333333333333)*3.141592653589793;
     out[96] = t27 + (0.6666666666666666)*3.141592653589793;
@@ -1061,12 +1156,13 @@ static const sg_mechanism sg_feed_descriptor = {
     .nq = 6,
     .nx = 2,
     .np = 53,
-    .nc = 144,
+    .nc = 153,
     .nobs = 106,
     .nbranch = 0,
     .nf = 27,
     .nfo = 43,
     .nload = 17,
+    .nblock = 3,
     .coord_is_angle = sg_feed_coord_is_angle,
     .constants = sg_feed_constants,
     .closed = 0,
@@ -1074,6 +1170,8 @@ static const sg_mechanism sg_feed_descriptor = {
     .motion = sg_feed_motion,
     .forces = sg_feed_forces,
     .force_matrix = sg_feed_force_matrix,
+    .scales = sg_feed_scales,
+    .blocks = sg_feed_blocks,
     .anchors = sg_feed_anchors,
 };
 
@@ -1135,290 +1233,303 @@ const char *sg_feed_manifest(void)
         "\"center\":11,\"joint\":\"cam\",\"out\":0},{\"body\":\"feed_cam\",\"center\":12,\"joint\":\"cam\""
         ",\"out\":1},{\"body\":\"feed_cam\",\"center\":13,\"joint\":\"cam\",\"out\":2},{\"body\":\"feed_c"
         "am\",\"center\":14,\"joint\":\"cam\",\"out\":3},{\"body\":\"feed_cam\",\"center\":15,\"joint\":\""
-        "cam\",\"out\":4},{\"body\":\"feed_cam\",\"center\":16,\"joint\":\"cam\",\"out\":5}],\"bodies\":["
-        "{\"doc\":\"feed cam \\u9001\\u5e03\\u51f8\\u8f6e on the upper shaft (constant breadth, six arcs)"
-        "\",\"kind\":\"driven\",\"name\":\"feed_cam\",\"offset\":24,\"role\":\"feed_cam\"},{\"doc\":\"lif"
-        "t eccentric \\u62ac\\u7259\\u51f8\\u8f6e on the upper shaft\",\"kind\":\"driven\",\"name\":\"lif"
-        "t_eccentric\",\"offset\":33,\"role\":null},{\"doc\":\"stitch regulator \\u9488\\u8ddd\\u5ea7: sl"
-        "ot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"kind\":\"driven\",\"name\":\"r"
-        "egulator\",\"offset\":42,\"role\":null},{\"doc\":\"feed fork \\u9001\\u5e03\\u7259\\u53c9 (part "
-        "3), u down the fork from the cam centre line\",\"kind\":\"link\",\"name\":\"feed_fork\",\"offset"
-        "\":51,\"role\":null},{\"doc\":\"stitch block \\u9488\\u8ddd\\u6ed1\\u5757 (part 8)\",\"kind\":\""
-        "slider\",\"name\":\"stitch_block\",\"offset\":60,\"role\":null},{\"doc\":\"feed rock shaft with "
-        "its two arms \\u9001\\u5e03\\u8f74\\u7ec4\\u4ef6 (part 2)\",\"kind\":\"link\",\"name\":\"feed_ro"
-        "ck_shaft\",\"offset\":69,\"role\":null},{\"doc\":\"feed bar \\u7259\\u67b6 (part 6) with the fee"
-        "d dog \\u9001\\u5e03\\u7259\",\"kind\":\"link\",\"name\":\"feed_bar\",\"offset\":78,\"role\":\"f"
-        "eed_bar\"},{\"doc\":\"lift rock shaft with its arms and roller \\u62ac\\u7259\\u8f74\\u7ec4\\u4e"
-        "f6 (parts 5, 7)\",\"kind\":\"link\",\"name\":\"lift_rock_shaft\",\"offset\":87,\"role\":null},{\""
-        "doc\":\"lift strap around the lift eccentric\",\"kind\":\"link\",\"name\":\"lift_strap\",\"offse"
-        "t\":96,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_"
-        "vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[],\"closed_form\":false,\"closure\":[\"cam."
-        "normal\",\"Q.x\",\"Q.y\",\"T.x\",\"T.y\",\"L.normal\"],\"coords\":[{\"guess\":0.0,\"name\":\"fee"
-        "d_rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":3.141592653589793,\"name\":\"lift_rock_shaft.a"
-        "ngle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"feed_fork.angle\",\"unit\":\""
-        "rad\"},{\"guess\":0.0,\"name\":\"stitch_block.travel\",\"unit\":\"m\"},{\"guess\":0.0,\"name\":\""
-        "feed_bar.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"lift_strap.angle\","
-        "\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Feed mechanism \\u9001\\u5e03\\u"
-        "673a\\u6784 of the JB household machine: feed cam \\u2192 feed fork \\u2192 feed rock shaft \\u2"
-        "192 feed bar, with\\nthe stitch-length regulator \\u9488\\u8ddd\\u673a\\u6784 and the feed lift "
-        "\\u62ac\\u7259 (seed 000 \\u00a7\\u4e00(\\u56db), eqs. 1-1 to 1-5; seed 001 \\u00a7\\u4e8c, the\\n"
-        "sub-mechanisms D (lift), E (stitch length) and F (feed bar with the feed dog)).\\n\\nA two-degre"
-        "e-of-freedom cam\\u2013linkage: the upper shaft turns the constant-breadth feed cam \\u9001\\u5e"
-        "03\\u51f8\\u8f6e (six circular\\narcs, a rounded Reuleaux triangle turning about a vertex: 60\\u"
-        "00b0 dwell, 120\\u00b0 stroke, 60\\u00b0 dwell, 120\\u00b0 return)\\ninside the two flat faces o"
-        "f the feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), which hangs down the standing arm. The fo"
-        "rk's\\nlower end P drives the feed rock shaft \\u9001\\u5e03\\u8f74 (part 2) through its rear ar"
-        "m; its middle Q carries the stitch\\nblock \\u9488\\u8ddd\\u6ed1\\u5757 (part 8) in the slot of "
-        "the stitch regulator \\u9488\\u8ddd\\u5ea7, whose angle is the second input (held in a\\nrun; it"
-        "s holding torque is an output). With the slot horizontal the fork only rocks about P: zero stitc"
-        "h;\\ntilted by \\u00b1\\u03b1 it makes the fork rise and fall, turning the feed rock shaft one w"
-        "ay or the other: forward or\\nreverse feed. The feed rock shaft's upper arm carries the feed bar"
-        " \\u7259\\u67b6 (part 6) at R; the feed bar rests in\\nthe lift rock shaft's \\u62ac\\u7259\\u8f"
-        "74 (part 5) roller \\u62ac\\u7259\\u6eda\\u67f1 (part 7), a pin in a slot along the bar; the lif"
-        "t rock\\nshaft is rocked by a lift eccentric on the upper shaft (a circular cam: its equivalent "
-        "lower pair, crank and\\nstrap, is exact). The feed dog \\u9001\\u5e03\\u7259 is a point of the f"
-        "eed bar.\\n\\nThe cam contact is replaced, arc by arc, by its equivalent lower pair (derive.mode"
-        "l.Mechanism.cam), so the\\nloop closes in one set of equations (Newton, as seed 000 solves eqs. "
-        "1-5). Frame: origin on the upper-shaft\\naxis, x horizontal (feed direction positive), y up; the"
-        " throat plate is at y = plate_y.\\n\\nEvery dimension here is an estimate (seed 000's tables \\u"
-        "9644\\u8868 and seed 001's \\u9644\\u8868 1 are not in the text): sized so\\nthe fork stroke is "
-        "6 mm, the maximum stitch 4 mm at a regulator angle near 40\\u00b0, and the feed dog rises about\\n"
-        "1 mm above the throat plate while the needle is out of the cloth (needle top at \\u03c6 = 90\\u0"
-        "0b0).\",\"force_blocks\":[1,2,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"}"
-        ",{\"name\":\"regulator.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"n"
-        "ame\":\"regulator.power\",\"unit\":\"W\"},{\"name\":\"stitch_block.guide.fx\",\"unit\":\"N\"},{\""
-        "name\":\"stitch_block.guide.fy\",\"unit\":\"N\"},{\"name\":\"cam.fx\",\"unit\":\"N\"},{\"name\":"
-        "\"cam.fy\",\"unit\":\"N\"},{\"name\":\"L.fx\",\"unit\":\"N\"},{\"name\":\"L.fy\",\"unit\":\"N\"}"
-        ",{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"s"
-        "haking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"poten"
-        "tial_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"}],\"force_rows\":[\"feed_c"
-        "am.x\",\"feed_cam.y\",\"feed_cam.moment\",\"lift_eccentric.x\",\"lift_eccentric.y\",\"lift_eccen"
-        "tric.moment\",\"regulator.x\",\"regulator.y\",\"regulator.moment\",\"feed_fork.x\",\"feed_fork.y"
-        "\",\"feed_fork.moment\",\"stitch_block.x\",\"stitch_block.y\",\"stitch_block.moment\",\"feed_roc"
-        "k_shaft.x\",\"feed_rock_shaft.y\",\"feed_rock_shaft.moment\",\"feed_bar.x\",\"feed_bar.y\",\"fee"
-        "d_bar.moment\",\"lift_rock_shaft.x\",\"lift_rock_shaft.y\",\"lift_rock_shaft.moment\",\"lift_str"
-        "ap.x\",\"lift_strap.y\",\"lift_strap.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"r"
-        "ad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"uni"
-        "t\":\"rad\"},{\"default\":0.6981317007977318,\"display_unit\":\"deg\",\"doc\":\"stitch regulator"
-        " \\u9488\\u8ddd\\u5ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"kind"
-        "\":\"held\",\"name\":\"regulator\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels\":"
-        "{\"sg_feed_anchors\":{\"ops\":155},\"sg_feed_constants\":{\"ops\":99},\"sg_feed_force_matrix\":{"
-        "\"ops\":255},\"sg_feed_forces\":{\"ops\":485},\"sg_feed_motion\":{\"ops\":520},\"sg_feed_residua"
-        "l\":{\"ops\":107}},\"loads\":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"name\":\"feed_dog\"}"
-        ",{\"body\":\"feed_bar\",\"component\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\",\"co"
-        "mponent\":\"fx\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\""
-        "fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"fe"
-        "ed_fork\",\"component\":\"fy\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_shaft\",\"componen"
-        "t\":\"fx\",\"name\":\"lift_roller\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fy\",\"name\""
-        ":\"lift_roller\"},{\"body\":\"feed_cam\",\"component\":\"torque\",\"name\":\"feed_cam\"},{\"body"
-        "\":\"lift_eccentric\",\"component\":\"torque\",\"name\":\"lift_eccentric\"},{\"body\":\"regulato"
-        "r\",\"component\":\"torque\",\"name\":\"regulator\"},{\"body\":\"feed_fork\",\"component\":\"tor"
-        "que\",\"name\":\"feed_fork\"},{\"body\":\"stitch_block\",\"component\":\"torque\",\"name\":\"sti"
-        "tch_block\"},{\"body\":\"feed_rock_shaft\",\"component\":\"torque\",\"name\":\"feed_rock_shaft\""
-        "},{\"body\":\"feed_bar\",\"component\":\"torque\",\"name\":\"feed_bar\"},{\"body\":\"lift_rock_s"
-        "haft\",\"component\":\"torque\",\"name\":\"lift_rock_shaft\"},{\"body\":\"lift_strap\",\"compone"
-        "nt\":\"torque\",\"name\":\"lift_strap\"}],\"name\":\"feed\",\"observables\":[{\"name\":\"feed_do"
-        "g.x\",\"unit\":\"m\"},{\"name\":\"feed_dog.y\",\"unit\":\"m\"},{\"name\":\"feed_dog.x_d\",\"unit"
-        "\":\"m/s\"},{\"name\":\"feed_dog.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.x_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"feed_dog.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.x\",\"unit\":\"m\""
-        "},{\"name\":\"fork_top.y\",\"unit\":\"m\"},{\"name\":\"fork_top.x_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"fork_top.y_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "fork_top.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.x\",\"unit\":\"m\"},{\"name\":\"stitc"
-        "h_pin.y\",\"unit\":\"m\"},{\"name\":\"stitch_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin."
-        "y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin"
-        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.x\",\"unit\":\"m\"},{\"name\":\"lift_roller."
-        "y\",\"unit\":\"m\"},{\"name\":\"lift_roller.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.y_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"lift_roller.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.y_"
-        "dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.angle\",\"unit\":\"rad\"},{\"name\":\"feed_cam.ang"
-        "le_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_cam.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"fee"
-        "d_cam.com.x\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.y\",\"unit\":\"m\"},{\"name\":\"feed_cam."
-        "com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_ca"
-        "m.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "lift_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"lift_eccentric.angle_d\",\"unit\":\"rad/s\""
-        "},{\"name\":\"lift_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_eccentric.com.x\""
-        ",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.c"
-        "om.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"li"
-        "ft_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.com.y_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"regulator.angle\",\"unit\":\"rad\"},{\"name\":\"regulator.angle_d\",\"unit\":\""
-        "rad/s\"},{\"name\":\"regulator.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"regulator.com.x\",\""
-        "unit\":\"m\"},{\"name\":\"regulator.com.y\",\"unit\":\"m\"},{\"name\":\"regulator.com.x_d\",\"un"
-        "it\":\"m/s\"},{\"name\":\"regulator.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.x_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"regulator.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork."
-        "angle\",\"unit\":\"rad\"},{\"name\":\"feed_fork.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_f"
-        "ork.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_fork.com.x\",\"unit\":\"m\"},{\"name\":\"f"
-        "eed_fork.com.y\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"f"
-        "eed_fork.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"feed_fork.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.angle\",\"unit\":\"rad\""
-        "},{\"name\":\"stitch_block.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_block.angle_dd\",\"u"
-        "nit\":\"rad/s^2\"},{\"name\":\"stitch_block.com.x\",\"unit\":\"m\"},{\"name\":\"stitch_block.com"
-        ".y\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_blo"
-        "ck.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"stitch_block.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.angle\",\"unit\":\"ra"
-        "d\"},{\"name\":\"feed_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_rock_shaft.angle"
-        "_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"feed"
-        "_rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"n"
-        "ame\":\"feed_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.x_dd\",\"uni"
-        "t\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.a"
-        "ngle\",\"unit\":\"rad\"},{\"name\":\"feed_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_bar"
-        ".angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_bar.com.x\",\"unit\":\"m\"},{\"name\":\"feed_"
-        "bar.com.y\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_ba"
-        "r.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fe"
-        "ed_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"n"
-        "ame\":\"lift_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_rock_shaft.angle_dd\",\"u"
-        "nit\":\"rad/s^2\"},{\"name\":\"lift_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lift_rock_sha"
-        "ft.com.y\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"l"
-        "ift_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.x_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"lift_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_strap.angle\","
-        "\"unit\":\"rad\"},{\"name\":\"lift_strap.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_strap.an"
-        "gle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_strap.com.x\",\"unit\":\"m\"},{\"name\":\"lift_s"
-        "trap.com.y\",\"unit\":\"m\"},{\"name\":\"lift_strap.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift"
-        "_strap.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_strap.com.x_dd\",\"unit\":\"m/s^2\"},{\"name"
-        "\":\"lift_strap.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cam.arc\",\"unit\":\"\"}],\"params\":"
-        "[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"feed cam: side of its Reuleaux triangle = "
-        "fork stroke (estimate)\",\"kind\":\"length\",\"name\":\"cam_side\",\"positive\":true,\"role\":nu"
-        "ll,\"unit\":\"m\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"feed cam: small arc radi"
-        "us; breadth = side + 2 radius (estimate)\",\"kind\":\"length\",\"name\":\"cam_small_radius\",\"p"
-        "ositive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.2,\"display_unit\":\"mm\",\"doc\":\""
-        "feed fork: cam centre line to rock-shaft pin P (estimate)\",\"kind\":\"length\",\"name\":\"fork_"
-        "p\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\""
-        "doc\":\"feed fork: cam centre line to stitch-block pin Q (estimate)\",\"kind\":\"length\",\"name"
-        "\":\"fork_q\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
-        "\"mm\",\"doc\":\"stitch regulator pivot, x (estimate)\",\"kind\":\"length\",\"name\":\"regulator"
-        "_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.06,\"display_unit\":\"mm\""
-        ",\"doc\":\"stitch regulator pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"regulator_y\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\""
-        ":\"feed rock shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_x\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.2,\"display_unit\":\"mm\",\"doc\":\"feed "
-        "rock shaft axis, y (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_y\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock sha"
-        "ft: rear arm to the fork pin P (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_p\",\"positi"
-        "ve\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0293,\"display_unit\":\"mm\",\"doc\":\"fe"
-        "ed rock shaft: upper arm to the feed-bar pin R (estimate)\",\"kind\":\"length\",\"name\":\"feed_"
-        "arm_r\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\""
-        ",\"doc\":\"lift rock shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_x\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1777,\"display_unit\":\"mm\",\"do"
-        "c\":\"lift rock shaft axis, y (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_y\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"l"
-        "ift rock shaft: arm to the roller L (estimate)\",\"kind\":\"length\",\"name\":\"lift_arm\",\"pos"
-        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"l"
-        "ift rock shaft: arm driven by the lift strap (estimate)\",\"kind\":\"length\",\"name\":\"lift_dr"
-        "ive_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0012,\"display_unit\":\""
-        "mm\",\"doc\":\"lift eccentric on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"lif"
-        "t_eccentricity\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.1802,\"display_u"
-        "nit\":\"mm\",\"doc\":\"lift strap, eccentric centre to the drive-arm pin (estimate)\",\"kind\":\""
-        "length\",\"name\":\"lift_strap\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
-        "02,\"display_unit\":\"mm\",\"doc\":\"feed dog tip along the feed bar from R (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"dog_u\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.00"
-        "7,\"display_unit\":\"mm\",\"doc\":\"feed bar: its roller slot below the line R\\u2013feed dog (e"
-        "stimate)\",\"kind\":\"length\",\"name\":\"bar_slot_v\",\"positive\":true,\"role\":null,\"unit\":"
-        "\"m\"},{\"default\":-0.1705,\"display_unit\":\"mm\",\"doc\":\"throat plate surface, y (estimate:"
-        " the dog rises ~1 mm above it)\",\"kind\":\"length\",\"name\":\"plate_y\",\"positive\":false,\"r"
-        "ole\":\"throat_plate\",\"unit\":\"m\"},{\"default\":1.0471975511965976,\"display_unit\":\"deg\","
-        "\"doc\":\"phase of feed_cam relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_cam"
-        ".phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\""
-        "g\",\"doc\":\"mass of feed_cam\",\"kind\":\"mass\",\"name\":\"feed_cam.mass\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"kg\"},{\"default\":0.0015,\"display_unit\":\"mm\",\"doc\":\"centre of "
-        "mass of feed_cam, local u\",\"kind\":\"length\",\"name\":\"feed_cam.com_u\",\"positive\":false,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
-        " feed_cam, local v\",\"kind\":\"length\",\"name\":\"feed_cam.com_v\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inerti"
-        "a of feed_cam about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_cam.inertia\",\"po"
-        "sitive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":2.792526803190927,\"display_unit"
-        "\":\"deg\",\"doc\":\"phase of lift_eccentric relative to the shaft angle\",\"kind\":\"angle\",\""
-        "name\":\"lift_eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":"
-        "0.0,\"display_unit\":\"g\",\"doc\":\"mass of lift_eccentric\",\"kind\":\"mass\",\"name\":\"lift_"
-        "eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_un"
-        "it\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local u\",\"kind\":\"length\",\"name\":\""
-        "lift_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"displ"
-        "ay_unit\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local v\",\"kind\":\"length\",\"nam"
-        "e\":\"lift_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
-        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_eccentric about its centre of mas"
-        "s\",\"kind\":\"inertia\",\"name\":\"lift_eccentric.inertia\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of regulator\",\"kind"
-        "\":\"mass\",\"name\":\"regulator.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"def"
-        "ault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local u\",\"kind\":\"l"
-        "ength\",\"name\":\"regulator.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
-        "\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local v\",\"kind\":\"lengt"
-        "h\",\"name\":\"regulator.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0"
-        ".0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of regulator about its centre of mas"
-        "s\",\"kind\":\"inertia\",\"name\":\"regulator.inertia\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of feed_fork\",\"kind\":\""
-        "mass\",\"name\":\"feed_fork.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
-        ":0.00012,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_fork about its centre "
-        "of mass\",\"kind\":\"inertia\",\"name\":\"feed_fork.inertia\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of stitch_block\",\""
-        "kind\":\"mass\",\"name\":\"stitch_block.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"}"
-        ",{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local u\",\""
-        "kind\":\"length\",\"name\":\"stitch_block.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local v\",\""
-        "kind\":\"length\",\"name\":\"stitch_block.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of stitch_block ab"
-        "out its centre of mass\",\"kind\":\"inertia\",\"name\":\"stitch_block.inertia\",\"positive\":fal"
-        "se,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.04,\"display_unit\":\"g\",\"doc\":\"mass o"
-        "f feed_rock_shaft\",\"kind\":\"mass\",\"name\":\"feed_rock_shaft.mass\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"kg\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
-        " feed_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_u\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre "
-        "of mass of feed_rock_shaft, local v\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_v\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\""
-        "doc\":\"moment of inertia of feed_rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"n"
-        "ame\":\"feed_rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"defa"
-        "ult\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of feed_bar\",\"kind\":\"mass\",\"name\":\"fee"
-        "d_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit"
-        "\":\"mm\",\"doc\":\"centre of mass of feed_bar, local u\",\"kind\":\"length\",\"name\":\"feed_ba"
-        "r.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.003,\"display_unit\":"
-        "\"mm\",\"doc\":\"centre of mass of feed_bar, local v\",\"kind\":\"length\",\"name\":\"feed_bar.c"
-        "om_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg"
-        "*m**2\",\"doc\":\"moment of inertia of feed_bar about its centre of mass\",\"kind\":\"inertia\","
-        "\"name\":\"feed_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\""
-        ":0.03,\"display_unit\":\"g\",\"doc\":\"mass of lift_rock_shaft\",\"kind\":\"mass\",\"name\":\"li"
-        "ft_rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local u\",\"kind\":\"length\",\"nam"
-        "e\":\"lift_rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,"
-        "\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local v\",\"kind\":\"length"
-        "\",\"name\":\"lift_rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defaul"
-        "t\":3e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_rock_shaft about its "
-        "centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_rock_shaft.inertia\",\"positive\":false,\""
-        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of li"
-        "ft_strap\",\"kind\":\"mass\",\"name\":\"lift_strap.mass\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"kg\"},{\"default\":3e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_"
-        "strap about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_strap.inertia\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\""
-        ",\"ay\"],\"points\":[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (on the line through R: lifti"
-        "ng it does not move it sideways)\",\"name\":\"feed_dog\",\"offset\":0,\"role\":\"feed_dog\"},{\""
-        "body\":\"feed_fork\",\"doc\":\"feed fork on the cam centre line\",\"name\":\"fork_top\",\"offset"
-        "\":6,\"role\":null},{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in the stitch block\",\"name\":"
-        "\"stitch_pin\",\"offset\":12,\"role\":null},{\"body\":\"lift_rock_shaft\",\"doc\":\"lift roller "
-        "L in the feed bar\",\"name\":\"lift_roller\",\"offset\":18,\"role\":null}],\"reactions\":[{\"a\""
-        ":\"ground\",\"b\":\"feed_cam\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute"
-        "\",\"name\":\"feed_cam.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"column"
-        "s\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"lift_eccentric.pivot\",\""
-        "offset\":2},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,"
-        "\"kind\":\"revolute\",\"name\":\"regulator.pivot\",\"offset\":4},{\"a\":\"regulator\",\"b\":\"st"
-        "itch_block\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"nam"
-        "e\":\"stitch_block.guide\",\"offset\":6},{\"a\":\"feed_cam\",\"b\":\"feed_fork\",\"columns\":[\""
-        "normal\"],\"grounded\":false,\"kind\":\"cam\",\"name\":\"cam\",\"offset\":8},{\"a\":\"ground\",\""
-        "b\":\"feed_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"na"
-        "me\":\"O_feed\",\"offset\":9},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_fork\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"P\",\"offset\":11},{\"a\":\"feed_fo"
-        "rk\",\"b\":\"stitch_block\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\""
-        ",\"name\":\"Q\",\"offset\":13},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_bar\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"R\",\"offset\":15},{\"a\":\"ground\""
-        ",\"b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\""
-        "name\":\"O_lift\",\"offset\":17},{\"a\":\"lift_eccentric\",\"b\":\"lift_strap\",\"columns\":[\"f"
-        "x\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"S\",\"offset\":19},{\"a\":\"lift"
-        "_strap\",\"b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"rev"
-        "olute\",\"name\":\"T\",\"offset\":21},{\"a\":\"feed_bar\",\"b\":\"lift_rock_shaft\",\"columns\":"
-        "[\"normal\"],\"grounded\":false,\"kind\":\"slot\",\"name\":\"L\",\"offset\":23},{\"a\":\"ground\""
-        ",\"b\":\"feed_cam\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"dr"
-        "ive\",\"name\":\"feed_cam.drive\",\"offset\":24,\"sense\":1},{\"a\":\"ground\",\"b\":\"lift_ecce"
-        "ntric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name"
-        "\":\"lift_eccentric.drive\",\"offset\":25,\"sense\":1},{\"a\":\"ground\",\"b\":\"regulator\",\"c"
-        "olumns\":[\"torque\"],\"grounded\":true,\"input\":\"regulator\",\"kind\":\"drive\",\"name\":\"re"
-        "gulator.drive\",\"offset\":26,\"sense\":1}],\"roles\":{\"feed_bar\":{\"kind\":\"body\",\"name\":"
-        "\"feed_bar\"},\"feed_cam\":{\"kind\":\"body\",\"name\":\"feed_cam\"},\"feed_dog\":{\"kind\":\"po"
-        "int\",\"name\":\"feed_dog\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"regulator\"},\""
-        "throat_plate\":{\"kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":112,\"nbran"
-        "ch\":0,\"nc\":144,\"nf\":27,\"nfo\":43,\"nload\":17,\"nobs\":106,\"np\":53,\"nq\":6,\"nx\":2}}"
+        "cam\",\"out\":4},{\"body\":\"feed_cam\",\"center\":16,\"joint\":\"cam\",\"out\":5}],\"blocks\":["
+        "{\"coords\":[2,3,0],\"joints\":[\"cam\",\"Q\"],\"rows\":[0,1,2]},{\"coords\":[5,1],\"joints\":[\""
+        "T\"],\"rows\":[3,4]},{\"coords\":[4],\"joints\":[\"L\"],\"rows\":[5]}],\"bodies\":[{\"doc\":\"fe"
+        "ed cam \\u9001\\u5e03\\u51f8\\u8f6e on the upper shaft (constant breadth, six arcs)\",\"kind\":\""
+        "driven\",\"name\":\"feed_cam\",\"offset\":24,\"role\":\"feed_cam\"},{\"doc\":\"lift eccentric \\u"
+        "62ac\\u7259\\u51f8\\u8f6e on the upper shaft\",\"kind\":\"driven\",\"name\":\"lift_eccentric\",\""
+        "offset\":33,\"role\":null},{\"doc\":\"stitch regulator \\u9488\\u8ddd\\u5ea7: slot angle from ho"
+        "rizontal (0: no feed; >0 forward; <0 reverse)\",\"kind\":\"driven\",\"name\":\"regulator\",\"off"
+        "set\":42,\"role\":null},{\"doc\":\"feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), u down the f"
+        "ork from the cam centre line\",\"kind\":\"link\",\"name\":\"feed_fork\",\"offset\":51,\"role\":n"
+        "ull},{\"doc\":\"stitch block \\u9488\\u8ddd\\u6ed1\\u5757 (part 8)\",\"kind\":\"slider\",\"name\""
+        ":\"stitch_block\",\"offset\":60,\"role\":null},{\"doc\":\"feed rock shaft with its two arms \\u9"
+        "001\\u5e03\\u8f74\\u7ec4\\u4ef6 (part 2)\",\"kind\":\"link\",\"name\":\"feed_rock_shaft\",\"offs"
+        "et\":69,\"role\":null},{\"doc\":\"feed bar \\u7259\\u67b6 (part 6) with the feed dog \\u9001\\u5"
+        "e03\\u7259\",\"kind\":\"link\",\"name\":\"feed_bar\",\"offset\":78,\"role\":\"feed_bar\"},{\"doc"
+        "\":\"lift rock shaft with its arms and roller \\u62ac\\u7259\\u8f74\\u7ec4\\u4ef6 (parts 5, 7)\""
+        ",\"kind\":\"link\",\"name\":\"lift_rock_shaft\",\"offset\":87,\"role\":null},{\"doc\":\"lift str"
+        "ap around the lift eccentric\",\"kind\":\"link\",\"name\":\"lift_strap\",\"offset\":96,\"role\":"
+        "null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\","
+        "\"com_ax\",\"com_ay\"],\"branches\":[],\"closed_form\":false,\"closure\":[\"cam.normal\",\"Q.x\""
+        ",\"Q.y\",\"T.x\",\"T.y\",\"L.normal\"],\"constants\":[[6],[2],[0,1],[19],[19],[8],[19],[7],[0,1]"
+        ",[8],[3],[2],[4,6],[5,7],[10],[15],[13],[14],[24],[24],[11],[24],[12],[17],[9],[7,11],[9],[17],["
+        "6,10],[3],[13],[15],[1],[0,1],[0],[0],[0],[0,1,6,7,8],[2,3,4,6,8],[2,3,5,7,8],[10,13,14,15],[11,"
+        "13,14,15],[6,7,9,10,11,12,17],[14],[12],[6],[16],[7],[16],[10],[11],[19],[21],[22],[22],[21],[24"
+        "],[26],[27],[27],[26],[4],[30],[31],[5],[31],[30],[2],[2],[36],[37],[37],[36],[40],[41],[41],[40"
+        "],[44],[45],[45],[44],[48],[49],[49],[48],[15],[15],[10,13,14,15],[11,13,14,15],[6,7,9,10,11,12,"
+        "17],[34],[2,3],[33],[35],[2,3],[2,3,35],[2,3,35],[42],[43],[39],[46],[16,44],[16,44],[50],[12,48"
+        "],[12,48],[47],[52],[15,51],[15,51],[23],[20],[28],[14,26],[14,26],[25],[32],[29],[38],[51],[39]"
+        ",[5],[20],[23],[25],[28],[29],[32],[33],[34],[35],[38],[39],[42],[43],[46],[47],[50],[51],[52],["
+        "20],[25],[29],[33],[35],[43],[47],[51],[8,40],[8,40],[9,41],[13,48],[13,48]],\"coords\":[{\"gues"
+        "s\":0.0,\"name\":\"feed_rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":3.141592653589793,\"name"
+        "\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"feed_fo"
+        "rk.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"stitch_block.travel\",\"unit\":\"m\"},{\""
+        "guess\":0.0,\"name\":\"feed_bar.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\""
+        ":\"lift_strap.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Feed mec"
+        "hanism \\u9001\\u5e03\\u673a\\u6784 of the JB household machine: feed cam \\u2192 feed fork \\u2"
+        "192 feed rock shaft \\u2192 feed bar, with\\nthe stitch-length regulator \\u9488\\u8ddd\\u673a\\u"
+        "6784 and the feed lift \\u62ac\\u7259 (seed 000 \\u00a7\\u4e00(\\u56db), eqs. 1-1 to 1-5; seed 0"
+        "01 \\u00a7\\u4e8c, the\\nsub-mechanisms D (lift), E (stitch length) and F (feed bar with the fee"
+        "d dog)).\\n\\nA two-degree-of-freedom cam\\u2013linkage: the upper shaft turns the constant-brea"
+        "dth feed cam \\u9001\\u5e03\\u51f8\\u8f6e (six circular\\narcs, a rounded Reuleaux triangle turn"
+        "ing about a vertex: 60\\u00b0 dwell, 120\\u00b0 stroke, 60\\u00b0 dwell, 120\\u00b0 return)\\nin"
+        "side the two flat faces of the feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), which hangs down"
+        " the standing arm. The fork's\\nlower end P drives the feed rock shaft \\u9001\\u5e03\\u8f74 (pa"
+        "rt 2) through its rear arm; its middle Q carries the stitch\\nblock \\u9488\\u8ddd\\u6ed1\\u5757"
+        " (part 8) in the slot of the stitch regulator \\u9488\\u8ddd\\u5ea7, whose angle is the second i"
+        "nput (held in a\\nrun; its holding torque is an output). With the slot horizontal the fork only "
+        "rocks about P: zero stitch;\\ntilted by \\u00b1\\u03b1 it makes the fork rise and fall, turning "
+        "the feed rock shaft one way or the other: forward or\\nreverse feed. The feed rock shaft's upper"
+        " arm carries the feed bar \\u7259\\u67b6 (part 6) at R; the feed bar rests in\\nthe lift rock sh"
+        "aft's \\u62ac\\u7259\\u8f74 (part 5) roller \\u62ac\\u7259\\u6eda\\u67f1 (part 7), a pin in a sl"
+        "ot along the bar; the lift rock\\nshaft is rocked by a lift eccentric on the upper shaft (a circ"
+        "ular cam: its equivalent lower pair, crank and\\nstrap, is exact). The feed dog \\u9001\\u5e03\\u"
+        "7259 is a point of the feed bar.\\n\\nThe cam contact is replaced, arc by arc, by its equivalent"
+        " lower pair (derive.model.Mechanism.cam), so the\\nloop closes in one set of equations (Newton, "
+        "as seed 000 solves eqs. 1-5). Frame: origin on the upper-shaft\\naxis, x horizontal (feed direct"
+        "ion positive), y up; the throat plate is at y = plate_y.\\n\\nEvery dimension here is an estimat"
+        "e (seed 000's tables \\u9644\\u8868 and seed 001's \\u9644\\u8868 1 are not in the text): sized "
+        "so\\nthe fork stroke is 6 mm, the maximum stitch 4 mm at a regulator angle near 40\\u00b0, and t"
+        "he feed dog rises about\\n1 mm above the throat plate while the needle is out of the cloth (need"
+        "le top at \\u03c6 = 90\\u00b0).\",\"force_blocks\":[1,2,2],\"force_outputs\":[{\"name\":\"shaft."
+        "torque\",\"unit\":\"N*m\"},{\"name\":\"regulator.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.po"
+        "wer\",\"unit\":\"W\"},{\"name\":\"regulator.power\",\"unit\":\"W\"},{\"name\":\"stitch_block.gui"
+        "de.fx\",\"unit\":\"N\"},{\"name\":\"stitch_block.guide.fy\",\"unit\":\"N\"},{\"name\":\"cam.fx\""
+        ",\"unit\":\"N\"},{\"name\":\"cam.fy\",\"unit\":\"N\"},{\"name\":\"L.fx\",\"unit\":\"N\"},{\"name"
+        "\":\"L.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\""
+        "unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit"
+        "\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\""
+        "}],\"force_rows\":[\"feed_cam.x\",\"feed_cam.y\",\"feed_cam.moment\",\"lift_eccentric.x\",\"lift"
+        "_eccentric.y\",\"lift_eccentric.moment\",\"regulator.x\",\"regulator.y\",\"regulator.moment\",\""
+        "feed_fork.x\",\"feed_fork.y\",\"feed_fork.moment\",\"stitch_block.x\",\"stitch_block.y\",\"stitc"
+        "h_block.moment\",\"feed_rock_shaft.x\",\"feed_rock_shaft.y\",\"feed_rock_shaft.moment\",\"feed_b"
+        "ar.x\",\"feed_bar.y\",\"feed_bar.moment\",\"lift_rock_shaft.x\",\"lift_rock_shaft.y\",\"lift_roc"
+        "k_shaft.moment\",\"lift_strap.x\",\"lift_strap.y\",\"lift_strap.moment\"],\"inputs\":[{\"default"
+        "\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\""
+        "shaft\",\"role\":null,\"unit\":\"rad\"},{\"default\":0.6981317007977318,\"display_unit\":\"deg\""
+        ",\"doc\":\"stitch regulator \\u9488\\u8ddd\\u5ea7: slot angle from horizontal (0: no feed; >0 fo"
+        "rward; <0 reverse)\",\"kind\":\"held\",\"name\":\"regulator\",\"role\":\"stitch_regulator\",\"un"
+        "it\":\"rad\"}],\"kernels\":{\"sg_feed_anchors\":{\"ops\":155},\"sg_feed_blocks\":{\"ops\":101},\""
+        "sg_feed_constants\":{\"ops\":132},\"sg_feed_force_matrix\":{\"ops\":255},\"sg_feed_forces\":{\"o"
+        "ps\":485},\"sg_feed_motion\":{\"ops\":521},\"sg_feed_residual\":{\"ops\":107},\"sg_feed_scales\""
+        ":{\"ops\":17}},\"loads\":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"name\":\"feed_dog\"},{\""
+        "body\":\"feed_bar\",\"component\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\",\"compon"
+        "ent\":\"fx\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"fork"
+        "_top\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"feed_f"
+        "ork\",\"component\":\"fy\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_shaft\",\"component\":"
+        "\"fx\",\"name\":\"lift_roller\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fy\",\"name\":\"l"
+        "ift_roller\"},{\"body\":\"feed_cam\",\"component\":\"torque\",\"name\":\"feed_cam\"},{\"body\":\""
+        "lift_eccentric\",\"component\":\"torque\",\"name\":\"lift_eccentric\"},{\"body\":\"regulator\",\""
+        "component\":\"torque\",\"name\":\"regulator\"},{\"body\":\"feed_fork\",\"component\":\"torque\","
+        "\"name\":\"feed_fork\"},{\"body\":\"stitch_block\",\"component\":\"torque\",\"name\":\"stitch_bl"
+        "ock\"},{\"body\":\"feed_rock_shaft\",\"component\":\"torque\",\"name\":\"feed_rock_shaft\"},{\"b"
+        "ody\":\"feed_bar\",\"component\":\"torque\",\"name\":\"feed_bar\"},{\"body\":\"lift_rock_shaft\""
+        ",\"component\":\"torque\",\"name\":\"lift_rock_shaft\"},{\"body\":\"lift_strap\",\"component\":\""
+        "torque\",\"name\":\"lift_strap\"}],\"name\":\"feed\",\"observables\":[{\"name\":\"feed_dog.x\",\""
+        "unit\":\"m\"},{\"name\":\"feed_dog.y\",\"unit\":\"m\"},{\"name\":\"feed_dog.x_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"feed_dog.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.x_dd\",\"unit\":\"m/s^2\"}"
+        ",{\"name\":\"feed_dog.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.x\",\"unit\":\"m\"},{\"nam"
+        "e\":\"fork_top.y\",\"unit\":\"m\"},{\"name\":\"fork_top.x_d\",\"unit\":\"m/s\"},{\"name\":\"fork"
+        "_top.y_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_to"
+        "p.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.x\",\"unit\":\"m\"},{\"name\":\"stitch_pin.y"
+        "\",\"unit\":\"m\"},{\"name\":\"stitch_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.y_d\",\""
+        "unit\":\"m/s\"},{\"name\":\"stitch_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.y_dd\","
+        "\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.x\",\"unit\":\"m\"},{\"name\":\"lift_roller.y\",\"un"
+        "it\":\"m\"},{\"name\":\"lift_roller.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.y_d\",\"unit"
+        "\":\"m/s\"},{\"name\":\"lift_roller.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.y_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"feed_cam.angle\",\"unit\":\"rad\"},{\"name\":\"feed_cam.angle_d\","
+        "\"unit\":\"rad/s\"},{\"name\":\"feed_cam.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_cam.c"
+        "om.x\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.y\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.x"
+        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_e"
+        "ccentric.angle\",\"unit\":\"rad\"},{\"name\":\"lift_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"n"
+        "ame\":\"lift_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_eccentric.com.x\",\"uni"
+        "t\":\"m\"},{\"name\":\"lift_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_ecc"
+        "entric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},"
+        "{\"name\":\"regulator.angle\",\"unit\":\"rad\"},{\"name\":\"regulator.angle_d\",\"unit\":\"rad/s"
+        "\"},{\"name\":\"regulator.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"regulator.com.x\",\"unit\""
+        ":\"m\"},{\"name\":\"regulator.com.y\",\"unit\":\"m\"},{\"name\":\"regulator.com.x_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"regulator.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.x_dd\",\"unit"
+        "\":\"m/s^2\"},{\"name\":\"regulator.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork.angle\""
+        ",\"unit\":\"rad\"},{\"name\":\"feed_fork.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_fork.ang"
+        "le_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_fork.com.x\",\"unit\":\"m\"},{\"name\":\"feed_for"
+        "k.com.y\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_for"
+        "k.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"f"
+        "eed_fork.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.angle\",\"unit\":\"rad\"},{\"na"
+        "me\":\"stitch_block.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_block.angle_dd\",\"unit\":\""
+        "rad/s^2\"},{\"name\":\"stitch_block.com.x\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.y\",\"u"
+        "nit\":\"m\"},{\"name\":\"stitch_block.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.y"
+        "_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitc"
+        "h_block.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.angle\",\"unit\":\"rad\"},{\""
+        "name\":\"feed_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_rock_shaft.angle_dd\",\""
+        "unit\":\"rad/s^2\"},{\"name\":\"feed_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"feed_rock_sh"
+        "aft.com.y\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "feed_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.x_dd\",\"unit\":\"m/"
+        "s^2\"},{\"name\":\"feed_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.angle\",\""
+        "unit\":\"rad\"},{\"name\":\"feed_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_bar.angle_dd"
+        "\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_bar.com.x\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.y"
+        "\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.y_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.co"
+        "m.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"l"
+        "ift_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_rock_shaft.angle_dd\",\"unit\":\"r"
+        "ad/s^2\"},{\"name\":\"lift_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.y\""
+        ",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_s"
+        "haft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"lift_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_strap.angle\",\"unit\":\""
+        "rad\"},{\"name\":\"lift_strap.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_strap.angle_dd\",\""
+        "unit\":\"rad/s^2\"},{\"name\":\"lift_strap.com.x\",\"unit\":\"m\"},{\"name\":\"lift_strap.com.y\""
+        ",\"unit\":\"m\"},{\"name\":\"lift_strap.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_strap.com.y"
+        "_d\",\"unit\":\"m/s\"},{\"name\":\"lift_strap.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_st"
+        "rap.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cam.arc\",\"unit\":\"\"}],\"params\":[{\"default\""
+        ":0.006,\"display_unit\":\"mm\",\"doc\":\"feed cam: side of its Reuleaux triangle = fork stroke ("
+        "estimate)\",\"kind\":\"length\",\"name\":\"cam_side\",\"positive\":true,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"feed cam: small arc radius; breadth = "
+        "side + 2 radius (estimate)\",\"kind\":\"length\",\"name\":\"cam_small_radius\",\"positive\":true"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.2,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam"
+        " centre line to rock-shaft pin P (estimate)\",\"kind\":\"length\",\"name\":\"fork_p\",\"positive"
+        "\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"feed f"
+        "ork: cam centre line to stitch-block pin Q (estimate)\",\"kind\":\"length\",\"name\":\"fork_q\","
+        "\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
+        ":\"stitch regulator pivot, x (estimate)\",\"kind\":\"length\",\"name\":\"regulator_x\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.06,\"display_unit\":\"mm\",\"doc\":\"sti"
+        "tch regulator pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"regulator_y\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock"
+        " shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_x\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":-0.2,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft a"
+        "xis, y (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_y\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: rear arm"
+        " to the fork pin P (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_p\",\"positive\":true,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":0.0293,\"display_unit\":\"mm\",\"doc\":\"feed rock shaf"
+        "t: upper arm to the feed-bar pin R (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_r\",\"po"
+        "sitive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\""
+        "lift rock shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_x\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1777,\"display_unit\":\"mm\",\"doc\":\"lift "
+        "rock shaft axis, y (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_y\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"lift rock sh"
+        "aft: arm to the roller L (estimate)\",\"kind\":\"length\",\"name\":\"lift_arm\",\"positive\":tru"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"lift rock sh"
+        "aft: arm driven by the lift strap (estimate)\",\"kind\":\"length\",\"name\":\"lift_drive_arm\",\""
+        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0012,\"display_unit\":\"mm\",\"doc\""
+        ":\"lift eccentric on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"lift_eccentrici"
+        "ty\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.1802,\"display_unit\":\"mm\""
+        ",\"doc\":\"lift strap, eccentric centre to the drive-arm pin (estimate)\",\"kind\":\"length\",\""
+        "name\":\"lift_strap\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"displa"
+        "y_unit\":\"mm\",\"doc\":\"feed dog tip along the feed bar from R (estimate)\",\"kind\":\"length\""
+        ",\"name\":\"dog_u\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.007,\"display"
+        "_unit\":\"mm\",\"doc\":\"feed bar: its roller slot below the line R\\u2013feed dog (estimate)\","
+        "\"kind\":\"length\",\"name\":\"bar_slot_v\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":-0.1705,\"display_unit\":\"mm\",\"doc\":\"throat plate surface, y (estimate: the dog ri"
+        "ses ~1 mm above it)\",\"kind\":\"length\",\"name\":\"plate_y\",\"positive\":false,\"role\":\"thr"
+        "oat_plate\",\"unit\":\"m\"},{\"default\":1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"p"
+        "hase of feed_cam relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_cam.phase\",\""
+        "positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\""
+        ":\"mass of feed_cam\",\"kind\":\"mass\",\"name\":\"feed_cam.mass\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"kg\"},{\"default\":0.0015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of fee"
+        "d_cam, local u\",\"kind\":\"length\",\"name\":\"feed_cam.com_u\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam,"
+        " local v\",\"kind\":\"length\",\"name\":\"feed_cam.com_v\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_"
+        "cam about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_cam.inertia\",\"positive\":f"
+        "alse,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":2.792526803190927,\"display_unit\":\"deg\""
+        ",\"doc\":\"phase of lift_eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"l"
+        "ift_eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"disp"
+        "lay_unit\":\"g\",\"doc\":\"mass of lift_eccentric\",\"kind\":\"mass\",\"name\":\"lift_eccentric."
+        "mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\""
+        ",\"doc\":\"centre of mass of lift_eccentric, local u\",\"kind\":\"length\",\"name\":\"lift_eccen"
+        "tric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
+        "\"mm\",\"doc\":\"centre of mass of lift_eccentric, local v\",\"kind\":\"length\",\"name\":\"lift"
+        "_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_u"
+        "nit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_eccentric about its centre of mass\",\"kin"
+        "d\":\"inertia\",\"name\":\"lift_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of regulator\",\"kind\":\"mass"
+        "\",\"name\":\"regulator.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0."
+        "0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local u\",\"kind\":\"length\",\""
+        "name\":\"regulator.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"d"
+        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local v\",\"kind\":\"length\",\"name"
+        "\":\"regulator.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"displ"
+        "ay_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of regulator about its centre of mass\",\"kind"
+        "\":\"inertia\",\"name\":\"regulator.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**"
+        "2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of feed_fork\",\"kind\":\"mass\",\""
+        "name\":\"feed_fork.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.00012"
+        ",\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_fork about its centre of mass\""
+        ",\"kind\":\"inertia\",\"name\":\"feed_fork.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of stitch_block\",\"kind\":\""
+        "mass\",\"name\":\"stitch_block.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"defau"
+        "lt\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local u\",\"kind\":\""
+        "length\",\"name\":\"stitch_block.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"def"
+        "ault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local v\",\"kind\":"
+        "\"length\",\"name\":\"stitch_block.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of stitch_block about it"
+        "s centre of mass\",\"kind\":\"inertia\",\"name\":\"stitch_block.inertia\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"kg*m**2\"},{\"default\":0.04,\"display_unit\":\"g\",\"doc\":\"mass of feed"
+        "_rock_shaft\",\"kind\":\"mass\",\"name\":\"feed_rock_shaft.mass\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"kg\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_"
+        "rock_shaft, local u\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_u\",\"positive\":false,"
+        "\"role\":null,\"unit\":\"m\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mas"
+        "s of feed_rock_shaft, local v\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_v\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":"
+        "\"moment of inertia of feed_rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":"
+        "\"feed_rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":"
+        "0.025,\"display_unit\":\"g\",\"doc\":\"mass of feed_bar\",\"kind\":\"mass\",\"name\":\"feed_bar."
+        "mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"m"
+        "m\",\"doc\":\"centre of mass of feed_bar, local u\",\"kind\":\"length\",\"name\":\"feed_bar.com_"
+        "u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.003,\"display_unit\":\"mm\""
+        ",\"doc\":\"centre of mass of feed_bar, local v\",\"kind\":\"length\",\"name\":\"feed_bar.com_v\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\""
+        ",\"doc\":\"moment of inertia of feed_bar about its centre of mass\",\"kind\":\"inertia\",\"name\""
+        ":\"feed_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\""
+        "display_unit\":\"g\",\"doc\":\"mass of lift_rock_shaft\",\"kind\":\"mass\",\"name\":\"lift_rock_"
+        "shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\""
+        ":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"li"
+        "ft_rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"displa"
+        "y_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local v\",\"kind\":\"length\",\"nam"
+        "e\":\"lift_rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-0"
+        "6,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_rock_shaft about its centre o"
+        "f mass\",\"kind\":\"inertia\",\"name\":\"lift_rock_shaft.inertia\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of lift_strap"
+        "\",\"kind\":\"mass\",\"name\":\"lift_strap.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
+        "\"},{\"default\":3e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_strap ab"
+        "out its centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_strap.inertia\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"]"
+        ",\"points\":[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (on the line through R: lifting it do"
+        "es not move it sideways)\",\"name\":\"feed_dog\",\"offset\":0,\"role\":\"feed_dog\"},{\"body\":\""
+        "feed_fork\",\"doc\":\"feed fork on the cam centre line\",\"name\":\"fork_top\",\"offset\":6,\"ro"
+        "le\":null},{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in the stitch block\",\"name\":\"stitch_"
+        "pin\",\"offset\":12,\"role\":null},{\"body\":\"lift_rock_shaft\",\"doc\":\"lift roller L in the "
+        "feed bar\",\"name\":\"lift_roller\",\"offset\":18,\"role\":null}],\"reactions\":[{\"a\":\"ground"
+        "\",\"b\":\"feed_cam\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name"
+        "\":\"feed_cam.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\":[\"fx"
+        "\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"lift_eccentric.pivot\",\"offset\":"
+        "2},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":"
+        "\"revolute\",\"name\":\"regulator.pivot\",\"offset\":4},{\"a\":\"regulator\",\"b\":\"stitch_bloc"
+        "k\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"sti"
+        "tch_block.guide\",\"offset\":6},{\"a\":\"feed_cam\",\"b\":\"feed_fork\",\"columns\":[\"normal\"]"
+        ",\"grounded\":false,\"kind\":\"cam\",\"name\":\"cam\",\"offset\":8},{\"a\":\"ground\",\"b\":\"fe"
+        "ed_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O"
+        "_feed\",\"offset\":9},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_fork\",\"columns\":[\"fx\",\"fy\"]"
+        ",\"grounded\":false,\"kind\":\"revolute\",\"name\":\"P\",\"offset\":11},{\"a\":\"feed_fork\",\"b"
+        "\":\"stitch_block\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\""
+        ":\"Q\",\"offset\":13},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_bar\",\"columns\":[\"fx\",\"fy\"],"
+        "\"grounded\":false,\"kind\":\"revolute\",\"name\":\"R\",\"offset\":15},{\"a\":\"ground\",\"b\":\""
+        "lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\""
+        "O_lift\",\"offset\":17},{\"a\":\"lift_eccentric\",\"b\":\"lift_strap\",\"columns\":[\"fx\",\"fy\""
+        "],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"S\",\"offset\":19},{\"a\":\"lift_strap\",\""
+        "b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"n"
+        "ame\":\"T\",\"offset\":21},{\"a\":\"feed_bar\",\"b\":\"lift_rock_shaft\",\"columns\":[\"normal\""
+        "],\"grounded\":false,\"kind\":\"slot\",\"name\":\"L\",\"offset\":23},{\"a\":\"ground\",\"b\":\"f"
+        "eed_cam\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"na"
+        "me\":\"feed_cam.drive\",\"offset\":24,\"sense\":1},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\""
+        "columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"lift_"
+        "eccentric.drive\",\"offset\":25,\"sense\":1},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":["
+        "\"torque\"],\"grounded\":true,\"input\":\"regulator\",\"kind\":\"drive\",\"name\":\"regulator.dr"
+        "ive\",\"offset\":26,\"sense\":1}],\"roles\":{\"feed_bar\":{\"kind\":\"body\",\"name\":\"feed_bar"
+        "\"},\"feed_cam\":{\"kind\":\"body\",\"name\":\"feed_cam\"},\"feed_dog\":{\"kind\":\"point\",\"na"
+        "me\":\"feed_dog\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"regulator\"},\"throat_pla"
+        "te\":{\"kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":112,\"nblock\":3,\"nb"
+        "ranch\":0,\"nc\":153,\"nf\":27,\"nfo\":43,\"nload\":17,\"nobs\":106,\"np\":53,\"nq\":6,\"nx\":2}"
+        "}"
         ;
 }

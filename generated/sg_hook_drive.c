@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_hook_drive_constants -- Total ops: 54 */
+/* sg_hook_drive_constants -- Total ops: 69 */
 void sg_hook_drive_constants(const double *p, double *c)
 {
     const double t0 = sin(p[9]);
@@ -16,12 +16,18 @@ void sg_hook_drive_constants(const double *p, double *c)
     const double t4 = -p[8];
     const double t5 = -p[4];
     const double t6 = -t1;
-    const double t7 = -p[11];
-    const double t8 = (0.5)*p[1];
-    const double t9 = p[14]*t8;
-    const double t10 = p[17] + t5;
-    const double t11 = p[0] + t7;
-    const double t12 = p[17] + t6;
+    const double t7 = fabs(p[2]);
+    const double t8 = p[0] + p[1] + p[4];
+    const double t9 = t7 + t8;
+    const double t10 = fabs(p[3]);
+    const double t11 = t10 + t8;
+    const double t12 = 2.0*p[5];
+    const double t13 = -p[11];
+    const double t14 = (0.5)*p[1];
+    const double t15 = p[14]*t14;
+    const double t16 = p[17] + t5;
+    const double t17 = p[0] + t13;
+    const double t18 = p[17] + t6;
     c[0] = p[0];
     c[1] = cos(p[9]);
     c[2] = -t0;
@@ -42,63 +48,69 @@ void sg_hook_drive_constants(const double *p, double *c)
     c[17] = -p[3];
     c[18] = -p[1];
     c[19] = t6;
-    c[20] = -p[0];
-    c[21] = p[7];
-    c[22] = p[8];
-    c[23] = p[9];
-    c[24] = p[11];
-    c[25] = -p[12];
-    c[26] = p[12];
-    c[27] = t7;
-    c[28] = t8;
-    c[29] = -t8;
-    c[30] = p[17];
-    c[31] = -p[18];
-    c[32] = p[18];
-    c[33] = -p[17];
-    c[34] = p[21];
-    c[35] = -p[22];
-    c[36] = p[22];
-    c[37] = -p[21];
-    c[38] = p[25];
-    c[39] = -p[26];
-    c[40] = p[26];
-    c[41] = -p[25];
-    c[42] = p[15];
-    c[43] = t9;
-    c[44] = -t9;
-    c[45] = p[19];
-    c[46] = t10;
-    c[47] = -t10;
-    c[48] = p[16];
-    c[49] = p[24];
-    c[50] = p[23];
-    c[51] = p[27];
-    c[52] = -p[20];
-    c[53] = p[13];
-    c[54] = -t11;
-    c[55] = t11;
-    c[56] = p[10];
-    c[57] = p[14];
-    c[58] = p[20];
-    c[59] = t4;
-    c[60] = (0.5)*p[10];
-    c[61] = (0.5)*p[13];
-    c[62] = (0.5)*p[14];
-    c[63] = (0.5)*p[15];
-    c[64] = (0.5)*p[16];
-    c[65] = (0.5)*p[19];
-    c[66] = (0.5)*p[20];
-    c[67] = (0.5)*p[23];
-    c[68] = (0.5)*p[24];
-    c[69] = (0.5)*p[27];
-    c[70] = -p[10];
-    c[71] = -p[14];
-    c[72] = -p[16];
-    c[73] = -p[24];
-    c[74] = -p[18] - t3;
-    c[75] = -t12;
-    c[76] = t12;
+    c[20] = t9;
+    c[21] = t11;
+    c[22] = t12 + t7 + fabs(p[7]);
+    c[23] = t10 + t12 + fabs(p[8]);
+    c[24] = -p[0];
+    c[25] = p[7];
+    c[26] = p[8];
+    c[27] = p[9];
+    c[28] = p[11];
+    c[29] = -p[12];
+    c[30] = p[12];
+    c[31] = t13;
+    c[32] = t14;
+    c[33] = -t14;
+    c[34] = p[17];
+    c[35] = -p[18];
+    c[36] = p[18];
+    c[37] = -p[17];
+    c[38] = p[21];
+    c[39] = -p[22];
+    c[40] = p[22];
+    c[41] = -p[21];
+    c[42] = p[25];
+    c[43] = -p[26];
+    c[44] = p[26];
+    c[45] = -p[25];
+    c[46] = (1.0/(t9));
+    c[47] = (1.0/(t11));
+    c[48] = p[15];
+    c[49] = t15;
+    c[50] = -t15;
+    c[51] = p[19];
+    c[52] = t16;
+    c[53] = -t16;
+    c[54] = p[16];
+    c[55] = p[24];
+    c[56] = p[23];
+    c[57] = p[27];
+    c[58] = -p[20];
+    c[59] = p[13];
+    c[60] = -t17;
+    c[61] = t17;
+    c[62] = p[10];
+    c[63] = p[14];
+    c[64] = p[20];
+    c[65] = t4;
+    c[66] = (0.5)*p[10];
+    c[67] = (0.5)*p[13];
+    c[68] = (0.5)*p[14];
+    c[69] = (0.5)*p[15];
+    c[70] = (0.5)*p[16];
+    c[71] = (0.5)*p[19];
+    c[72] = (0.5)*p[20];
+    c[73] = (0.5)*p[23];
+    c[74] = (0.5)*p[24];
+    c[75] = (0.5)*p[27];
+    c[76] = -p[10];
+    c[77] = -p[14];
+    c[78] = -p[16];
+    c[79] = -p[24];
+    c[80] = -p[18] - t3;
+    c[81] = -t18;
+    c[82] = t18;
 }
 
 /* sg_hook_drive_closed -- Total ops: 60 */
@@ -168,8 +180,36 @@ void sg_hook_drive_residual(const double *q, const double *cq, const double *x, 
     jac[15] = -cq[3];
 }
 
-/* sg_hook_drive_motion -- Total ops: 215 */
-int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+/* sg_hook_drive_scales -- Total ops: 7 */
+void sg_hook_drive_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)cq;
+    (void)x;
+    (void)cx;
+    const double t0 = fabs(q[3]);
+    out[0] = c[20];
+    out[1] = c[21];
+    out[2] = c[22] + t0;
+    out[3] = c[23] + t0;
+}
+
+/* sg_hook_drive_blocks -- Total ops: 46 */
+void sg_hook_drive_blocks(const double *jac, double *out)
+{
+    /* block 0: joints C */
+    {
+        const double nr = sqrt(sg_row_norm2(4, jac + 0) * sg_row_norm2(4, jac + 4));
+        out[0] = nr > 0.0 ? (jac[2] * jac[4] - jac[0] * jac[6]) / nr : 0.0;
+    }
+    /* block 1: joints E */
+    {
+        const double nr = sqrt(sg_row_norm2(4, jac + 8) * sg_row_norm2(4, jac + 12));
+        out[1] = nr > 0.0 ? (jac[11] * jac[13] - jac[9] * jac[15]) / nr : 0.0;
+    }
+}
+
+/* sg_hook_drive_motion -- Total ops: 216 */
+int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[7]*cq[1];
     const double t1 = c[16]*cq[0];
@@ -181,30 +221,31 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     const double t7 = c[1]*cx[1] + c[3]*cx[0];
     const double t8 = c[0]*t7;
     const double t9 = c[1]*cx[0] + c[2]*cx[1];
-    const double t10 = c[20]*t9;
+    const double t10 = c[24]*t9;
     const double t14 = ((xd[0])*(xd[0]));
     const double t15 = c[0]*t9;
     const double t16 = c[16]*cq[1];
-    const double t24 = c[20]*t7;
+    const double t24 = c[24]*t7;
     const double t25 = t24*xd[0];
     const double t26 = t15*xd[0];
     const double t27 = t10*t14 + t24*xdd[0];
     const double t28 = t14*t24 + t15*xdd[0];
     const double t29 = c[7]*cq[0];
-    const double t30 = c[21] + t5;
-    const double t31 = c[22] + t4;
-    const double t34 = c[24]*t9 + c[25]*t7;
-    const double t35 = c[25]*t9 + c[27]*t7;
-    const double t36 = c[28]*cq[4];
-    const double t37 = c[29]*cq[5];
-    const double t38 = c[30]*cq[0] + c[31]*cq[1];
-    const double t39 = c[31]*cq[0] + c[33]*cq[1];
-    const double t40 = c[34]*cq[2] + c[35]*cq[3];
-    const double t41 = c[35]*cq[2] + c[37]*cq[3];
-    const double t43 = c[38]*cq[2] + c[39]*cq[3];
-    const double t44 = c[39]*cq[2] + c[41]*cq[3] - t4;
+    const double t30 = c[25] + t5;
+    const double t31 = c[26] + t4;
+    const double t34 = c[28]*t9 + c[29]*t7;
+    const double t35 = c[29]*t9 + c[31]*t7;
+    const double t36 = c[32]*cq[4];
+    const double t37 = c[33]*cq[5];
+    const double t38 = c[34]*cq[0] + c[35]*cq[1];
+    const double t39 = c[35]*cq[0] + c[37]*cq[1];
+    const double t40 = c[38]*cq[2] + c[39]*cq[3];
+    const double t41 = c[39]*cq[2] + c[41]*cq[3];
+    const double t43 = c[42]*cq[2] + c[43]*cq[3];
+    const double t44 = c[43]*cq[2] + c[45]*cq[3] - t4;
     const double t46 = t43 + t5;
-    double J[16];
+    const double t47 = fabs(q[3]);
+    double J[16], rs[4], cs[4];
     int piv[4];
     J[0] = t0;
     J[1] = 0.0;
@@ -226,8 +267,12 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     qd[1] = t10*xd[0];
     qd[2] = 0.0;
     qd[3] = 0.0;
-    if (sg_lu_factor_inl(4, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(4, J, piv, qd);
+    rs[0] = c[46];
+    rs[1] = c[47];
+    rs[2] = (1.0/(c[22] + t47));
+    rs[3] = (1.0/(c[23] + t47));
+    if (sg_factor_eq_inl(4, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(4, J, piv, rs, cs, qd);
     const double t11 = ((qd[0])*(qd[0]));
     const double t12 = t1*t11;
     const double t13 = ((qd[2])*(qd[2]));
@@ -244,7 +289,7 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     qdd[1] = c[6]*t18 + t10*xdd[0] + t14*t8 + t17;
     qdd[2] = -qd[1]*t21 - t11*(c[13]*cq[1] + c[19]*cq[0]) - t20;
     qdd[3] = cq[2]*qd[1]*qd[3] + qd[1]*t23 - t11*t3;
-    sg_lu_solve_inl(4, J, piv, qdd);
+    sg_solve_eq_inl(4, J, piv, rs, cs, qdd);
     const double t32 = cq[2]*qdd[3] - t20;
     const double t33 = cq[3]*qdd[3] + qd[1]*t22;
     obs[0] = t15;
@@ -265,50 +310,50 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     obs[15] = t21;
     obs[16] = -qd[1]*t21 - qdd[1]*t4 + t32;
     obs[17] = qd[1]*t23 + qdd[1]*t5 + t33;
-    obs[18] = c[23] + x[0];
+    obs[18] = c[27] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = t34;
-    obs[22] = c[24]*t7 + c[26]*t9;
+    obs[22] = c[28]*t7 + c[30]*t9;
     obs[23] = t35*xd[0];
     obs[24] = t34*xd[0];
-    obs[25] = t14*(c[26]*t7 + c[27]*t9) + t35*xdd[0];
+    obs[25] = t14*(c[30]*t7 + c[31]*t9) + t35*xdd[0];
     obs[26] = t14*t35 + t34*xdd[0];
     obs[27] = q[2];
     obs[28] = qd[2];
     obs[29] = qdd[2];
     obs[30] = t15 + t36;
-    obs[31] = c[28]*cq[5] + t8;
+    obs[31] = c[32]*cq[5] + t8;
     obs[32] = qd[2]*t37 + t25;
     obs[33] = qd[2]*t36 + t26;
-    obs[34] = c[29]*cq[4]*t13 + qdd[2]*t37 + t27;
-    obs[35] = c[29]*t18 + qdd[2]*t36 + t28;
+    obs[34] = c[33]*cq[4]*t13 + qdd[2]*t37 + t27;
+    obs[35] = c[33]*t18 + qdd[2]*t36 + t28;
     obs[36] = q[0];
     obs[37] = qd[0];
     obs[38] = qdd[0];
     obs[39] = c[4] + t38;
-    obs[40] = c[30]*cq[1] + c[32]*cq[0] + c[5];
+    obs[40] = c[34]*cq[1] + c[36]*cq[0] + c[5];
     obs[41] = qd[0]*t39;
     obs[42] = qd[0]*t38;
-    obs[43] = qdd[0]*t39 + t11*(c[32]*cq[1] + c[33]*cq[0]);
+    obs[43] = qdd[0]*t39 + t11*(c[36]*cq[1] + c[37]*cq[0]);
     obs[44] = qdd[0]*t38 + t11*t39;
     obs[45] = q[1];
     obs[46] = qd[1];
     obs[47] = qdd[1];
-    obs[48] = c[21] + t40;
-    obs[49] = c[22] + c[34]*cq[3] + c[36]*cq[2];
+    obs[48] = c[25] + t40;
+    obs[49] = c[26] + c[38]*cq[3] + c[40]*cq[2];
     obs[50] = qd[1]*t41;
     obs[51] = qd[1]*t40;
-    obs[52] = qdd[1]*t41 + t42*(c[36]*cq[3] + c[37]*cq[2]);
+    obs[52] = qdd[1]*t41 + t42*(c[40]*cq[3] + c[41]*cq[2]);
     obs[53] = qdd[1]*t40 + t41*t42;
     obs[54] = q[1];
     obs[55] = qd[1];
     obs[56] = qdd[1];
     obs[57] = t30 + t43;
-    obs[58] = c[38]*cq[3] + c[40]*cq[2] + t31;
+    obs[58] = c[42]*cq[3] + c[44]*cq[2] + t31;
     obs[59] = t45;
     obs[60] = qd[1]*t46 + t19;
-    obs[61] = qd[1]*(qd[1]*(c[40]*cq[3] + c[41]*cq[2] + t6) - t19) + qdd[1]*t44 + t32;
+    obs[61] = qd[1]*(qd[1]*(c[44]*cq[3] + c[45]*cq[2] + t6) - t19) + qdd[1]*t44 + t32;
     obs[62] = qd[1]*t45 + qdd[1]*t46 + t33;
     if (!isfinite(((((((q[0] + q[1]) + (q[2] + q[3])) + ((qd[0] + qd[1]) + (qd[2] + (qd[3] + qdd[0])))) + (((qdd[1] + qdd[2]) + (qdd[3] + obs[0])) + ((obs[1] + obs[2]) + (obs[3] + (obs[4] + obs[5]))))) + ((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + (obs[13] + obs[14])))) + (((obs[15] + obs[16]) + (obs[17] + (obs[18] + obs[19]))) + ((obs[20] + obs[21]) + (obs[22] + (obs[23] + obs[24])))))) + (((((obs[25] + obs[26]) + (obs[27] + obs[28])) + ((obs[29] + obs[30]) + (obs[31] + (obs[32] + obs[33])))) + (((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38]))) + ((obs[39] + obs[40]) + (obs[41] + (obs[42] + obs[43]))))) + ((((obs[44] + obs[45]) + (obs[46] + obs[47])) + ((obs[48] + obs[49]) + (obs[50] + (obs[51] + obs[52])))) + (((obs[53] + obs[54]) + (obs[55] + (obs[56] + obs[57]))) + ((obs[58] + obs[59]) + (obs[60] + (obs[61] + obs[62]))))))))) return SG_NONFINITE;
     return SG_OK;
@@ -323,26 +368,26 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
     const double t2 = -((cq[2])*(cq[2]))*q[3] - ((cq[3])*(cq[3]))*q[3];
     const double t3 = -gv[1] + obs[35];
     const double t4 = -gv[0] + obs[34];
-    const double t5 = c[32]*cq[0];
-    const double t6 = c[32]*cq[1];
-    const double t7 = c[49]*(-gv[0] + obs[61]) - ld[4];
-    const double t8 = c[49]*(-gv[1] + obs[62]) - ld[5];
-    const double t9 = c[48]*(-gv[0] + obs[43]) - ld[2];
-    const double t10 = c[48]*(-gv[1] + obs[44]) - ld[3];
-    const double t11 = c[38]*cq[3] + c[40]*cq[2];
-    const double t12 = c[40]*cq[3] + c[41]*cq[2];
+    const double t5 = c[36]*cq[0];
+    const double t6 = c[36]*cq[1];
+    const double t7 = c[55]*(-gv[0] + obs[61]) - ld[4];
+    const double t8 = c[55]*(-gv[1] + obs[62]) - ld[5];
+    const double t9 = c[54]*(-gv[0] + obs[43]) - ld[2];
+    const double t10 = c[54]*(-gv[1] + obs[44]) - ld[3];
+    const double t11 = c[42]*cq[3] + c[44]*cq[2];
+    const double t12 = c[44]*cq[3] + c[45]*cq[2];
     const double t13 = -gv[0] + obs[52];
-    const double t14 = c[34]*cq[3] + c[36]*cq[2];
+    const double t14 = c[38]*cq[3] + c[40]*cq[2];
     const double t15 = -gv[1] + obs[53];
-    const double t16 = c[36]*cq[3] + c[37]*cq[2];
+    const double t16 = c[40]*cq[3] + c[41]*cq[2];
     const double t17 = c[1]*cx[0] + c[2]*cx[1];
-    const double t18 = c[26]*t17;
+    const double t18 = c[30]*t17;
     const double t19 = c[1]*cx[1] + c[3]*cx[0];
-    const double t20 = c[26]*t19;
+    const double t20 = c[30]*t19;
     {
         const double d = t2;
         if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), fabs(t2)))) return SG_SINGULAR;
-        out[2] = (c[50]*obs[47] + c[51]*obs[56] + c[52]*t13*t14 + c[52]*t15*t16 - ld[10] - ld[4]*t11 - ld[5]*t12 - ld[9] - t11*t7 - t12*t8)/d;
+        out[2] = (c[56]*obs[47] + c[57]*obs[56] + c[58]*t13*t14 + c[58]*t15*t16 - ld[10] - ld[4]*t11 - ld[5]*t12 - ld[9] - t11*t7 - t12*t8)/d;
     }
     {
         /* block of unknowns 10, 11 */
@@ -350,10 +395,10 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
         int piv[2];
         M[0] = c[16]*cq[1];
         M[1] = c[7]*cq[0];
-        r[0] = c[45]*obs[38] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - ld[2]*(c[46]*cq[1] + t5) - ld[3]*(c[47]*cq[0] + t6) - ld[8] - t10*(c[33]*cq[0] + t6) - t7*(t0 + t1) - t8*(c[13]*cq[1] + c[19]*cq[0]) - t9*(c[30]*cq[1] + t5);
+        r[0] = c[51]*obs[38] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - ld[2]*(c[52]*cq[1] + t5) - ld[3]*(c[53]*cq[0] + t6) - ld[8] - t10*(c[37]*cq[0] + t6) - t7*(t0 + t1) - t8*(c[13]*cq[1] + c[19]*cq[0]) - t9*(c[34]*cq[1] + t5);
         M[2] = c[6]*cq[5];
         M[3] = c[18]*cq[4];
-        r[1] = c[42]*obs[29] + c[43]*cq[4]*t3 + c[44]*cq[5]*t4 - ld[7];
+        r[1] = c[48]*obs[29] + c[49]*cq[4]*t3 + c[50]*cq[5]*t4 - ld[7];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[10] = r[0];
@@ -363,23 +408,23 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
     out[12] = cq[3]*out[2] + t7;
     out[7] = -out[11] + out[13] + t10;
     out[6] = -out[10] + out[12] + t9;
-    out[3] = -c[50]*obs[47] - c[52]*t13*t14 - c[52]*t15*t16 + out[2]*t2 + ld[9];
-    out[9] = c[58]*t15 + cq[2]*out[2];
-    out[8] = c[58]*t13 - cq[3]*out[2];
-    out[5] = c[57]*t3 + out[11];
-    out[4] = c[57]*t4 + out[10];
-    out[1] = c[56]*(-gv[1] + obs[26]) + out[5] - ld[1];
-    out[0] = c[56]*(-gv[0] + obs[25]) + out[4] - ld[0];
-    out[14] = c[53]*obs[20] - out[0]*(c[24]*t19 + t18) - out[1]*(c[27]*t17 + t20) - out[4]*(c[25]*t17 + c[55]*t19) - out[5]*(c[25]*t19 + c[54]*t17) - ld[0]*(c[54]*t19 + t18) - ld[1]*(c[55]*t17 + t20) - ld[6];
+    out[3] = -c[56]*obs[47] - c[58]*t13*t14 - c[58]*t15*t16 + out[2]*t2 + ld[9];
+    out[9] = c[64]*t15 + cq[2]*out[2];
+    out[8] = c[64]*t13 - cq[3]*out[2];
+    out[5] = c[63]*t3 + out[11];
+    out[4] = c[63]*t4 + out[10];
+    out[1] = c[62]*(-gv[1] + obs[26]) + out[5] - ld[1];
+    out[0] = c[62]*(-gv[0] + obs[25]) + out[4] - ld[0];
+    out[14] = c[59]*obs[20] - out[0]*(c[28]*t19 + t18) - out[1]*(c[31]*t17 + t20) - out[4]*(c[29]*t17 + c[61]*t19) - out[5]*(c[29]*t19 + c[60]*t17) - ld[0]*(c[60]*t19 + t18) - ld[1]*(c[61]*t17 + t20) - ld[6];
     out[15] = out[14];
     out[16] = out[14]*xd[0];
     out[17] = -cq[3]*out[2];
     out[18] = cq[2]*out[2];
     out[19] = out[0] + out[6] + out[8];
     out[20] = out[1] + out[7] + out[9];
-    out[21] = c[17]*out[6] + c[21]*out[9] + c[4]*out[7] + c[59]*out[8] + out[14];
-    out[22] = c[60]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[61]*((obs[19])*(obs[19])) + c[62]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[63]*((obs[28])*(obs[28])) + c[64]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[65]*((obs[37])*(obs[37])) + c[66]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[67]*((obs[46])*(obs[46])) + c[68]*(((obs[59])*(obs[59])) + ((obs[60])*(obs[60]))) + c[69]*((obs[55])*(obs[55]));
-    out[23] = c[52]*(gv[0]*obs[48] + gv[1]*obs[49]) + c[70]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[71]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[72]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[73]*(gv[0]*obs[57] + gv[1]*obs[58]);
+    out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[65]*out[8] + out[14];
+    out[22] = c[66]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[67]*((obs[19])*(obs[19])) + c[68]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[69]*((obs[28])*(obs[28])) + c[70]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[71]*((obs[37])*(obs[37])) + c[72]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[73]*((obs[46])*(obs[46])) + c[74]*(((obs[59])*(obs[59])) + ((obs[60])*(obs[60]))) + c[75]*((obs[55])*(obs[55]));
+    out[23] = c[58]*(gv[0]*obs[48] + gv[1]*obs[49]) + c[76]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[77]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[78]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[79]*(gv[0]*obs[57] + gv[1]*obs[58]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[55] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + ((out[21] + out[22]) + (out[23] + out[24]))))))) return SG_NONFINITE;
     return SG_OK;
@@ -391,26 +436,26 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[26]*t1;
-    const double t3 = c[26]*t0;
-    const double t4 = c[28]*cq[5];
-    const double t5 = c[29]*cq[4];
-    const double t6 = c[32]*cq[0];
-    const double t7 = c[32]*cq[1];
-    const double t8 = c[46]*cq[1] + t6;
-    const double t9 = c[47]*cq[0] + t7;
-    const double t10 = c[36]*cq[3] + c[37]*cq[2];
-    const double t11 = c[40]*cq[3] + c[41]*cq[2];
-    const double t12 = c[38]*cq[3] + c[40]*cq[2];
+    const double t2 = c[30]*t1;
+    const double t3 = c[30]*t0;
+    const double t4 = c[32]*cq[5];
+    const double t5 = c[33]*cq[4];
+    const double t6 = c[36]*cq[0];
+    const double t7 = c[36]*cq[1];
+    const double t8 = c[52]*cq[1] + t6;
+    const double t9 = c[53]*cq[0] + t7;
+    const double t10 = c[40]*cq[3] + c[41]*cq[2];
+    const double t11 = c[44]*cq[3] + c[45]*cq[2];
+    const double t12 = c[42]*cq[3] + c[44]*cq[2];
     for (int k = 0; k < 225; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = -1.0;
     A[16] = 1.0;
     A[20] = -1.0;
-    A[30] = c[24]*t0 + t2;
-    A[31] = c[27]*t1 + t3;
-    A[34] = c[25]*t1 + c[55]*t0;
-    A[35] = c[25]*t0 + c[54]*t1;
+    A[30] = c[28]*t0 + t2;
+    A[31] = c[31]*t1 + t3;
+    A[34] = c[29]*t1 + c[61]*t0;
+    A[35] = c[29]*t0 + c[60]*t1;
     A[44] = 1.0;
     A[49] = 1.0;
     A[55] = -1.0;
@@ -426,51 +471,51 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     A[112] = 1.0;
     A[116] = 1.0;
     A[118] = -1.0;
-    A[126] = c[30]*cq[1] + t6;
-    A[127] = c[33]*cq[0] + t7;
+    A[126] = c[34]*cq[1] + t6;
+    A[127] = c[37]*cq[0] + t7;
     A[130] = t8;
     A[131] = t9;
-    A[132] = c[74]*cq[0] + c[75]*cq[1];
-    A[133] = c[74]*cq[1] + c[76]*cq[0];
+    A[132] = c[80]*cq[0] + c[81]*cq[1];
+    A[133] = c[80]*cq[1] + c[82]*cq[0];
     A[137] = cq[3];
     A[143] = 1.0;
     A[152] = -cq[2];
     A[159] = 1.0;
-    A[167] = -cq[2]*(cq[2]*q[3] + t10) - cq[3]*(c[35]*cq[2] + c[37]*cq[3] + cq[3]*q[3]);
+    A[167] = -cq[2]*(cq[2]*q[3] + t10) - cq[3]*(c[39]*cq[2] + c[41]*cq[3] + cq[3]*q[3]);
     A[168] = -1.0;
-    A[173] = c[34]*cq[3] + c[36]*cq[2];
+    A[173] = c[38]*cq[3] + c[40]*cq[2];
     A[174] = t10;
     A[182] = -cq[3];
     A[192] = 1.0;
     A[197] = cq[2];
     A[208] = 1.0;
-    A[212] = cq[2]*t11 + cq[3]*(c[39]*cq[2] + c[41]*cq[3]);
+    A[212] = cq[2]*t11 + cq[3]*(c[43]*cq[2] + c[45]*cq[3]);
     A[213] = 1.0;
     A[222] = t12;
     A[223] = t11;
-    b[0] = c[56]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[56]*(-gv[1] + obs[26]) - ld[1];
-    b[2] = c[53]*obs[20] - ld[0]*(c[54]*t0 + t2) - ld[1]*(c[55]*t1 + t3) - ld[6];
-    b[3] = c[57]*(-gv[0] + obs[34]);
-    b[4] = c[57]*(-gv[1] + obs[35]);
-    b[5] = c[42]*obs[29] - ld[7];
-    b[6] = c[48]*(-gv[0] + obs[43]) - ld[2];
-    b[7] = c[48]*(-gv[1] + obs[44]) - ld[3];
-    b[8] = c[45]*obs[38] - ld[2]*t8 - ld[3]*t9 - ld[8];
-    b[9] = c[58]*(-gv[0] + obs[52]);
-    b[10] = c[58]*(-gv[1] + obs[53]);
-    b[11] = c[50]*obs[47] - ld[9];
-    b[12] = c[49]*(-gv[0] + obs[61]) - ld[4];
-    b[13] = c[49]*(-gv[1] + obs[62]) - ld[5];
-    b[14] = c[51]*obs[56] - ld[10] - ld[4]*t12 - ld[5]*t11;
+    b[0] = c[62]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[62]*(-gv[1] + obs[26]) - ld[1];
+    b[2] = c[59]*obs[20] - ld[0]*(c[60]*t0 + t2) - ld[1]*(c[61]*t1 + t3) - ld[6];
+    b[3] = c[63]*(-gv[0] + obs[34]);
+    b[4] = c[63]*(-gv[1] + obs[35]);
+    b[5] = c[48]*obs[29] - ld[7];
+    b[6] = c[54]*(-gv[0] + obs[43]) - ld[2];
+    b[7] = c[54]*(-gv[1] + obs[44]) - ld[3];
+    b[8] = c[51]*obs[38] - ld[2]*t8 - ld[3]*t9 - ld[8];
+    b[9] = c[64]*(-gv[0] + obs[52]);
+    b[10] = c[64]*(-gv[1] + obs[53]);
+    b[11] = c[56]*obs[47] - ld[9];
+    b[12] = c[55]*(-gv[0] + obs[61]) - ld[4];
+    b[13] = c[55]*(-gv[1] + obs[62]) - ld[5];
+    b[14] = c[57]*obs[56] - ld[10] - ld[4]*t12 - ld[5]*t11;
 }
 
 /* sg_hook_drive_anchors -- Total ops: 62 */
 void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
 {
     (void)x;
-    const double t0 = c[21] + cq[2]*q[3];
-    const double t1 = c[22] + cq[3]*q[3];
+    const double t0 = c[25] + cq[2]*q[3];
+    const double t1 = c[26] + cq[3]*q[3];
     const double t2 = c[1]*cx[0] + c[2]*cx[1];
     const double t3 = c[0]*t2;
     const double t4 = c[1]*cx[1] + c[3]*cx[0];
@@ -481,8 +526,8 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[1] = 0.0;
     out[2] = 0.0;
     out[3] = 0.0;
-    out[4] = c[21];
-    out[5] = c[22];
+    out[4] = c[25];
+    out[5] = c[26];
     out[6] = cq[2];
     out[7] = cq[3];
     out[8] = t0;
@@ -495,10 +540,10 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[15] = c[5];
     out[16] = c[4];
     out[17] = c[5];
-    out[18] = c[21];
-    out[19] = c[22];
-    out[20] = c[21];
-    out[21] = c[22];
+    out[18] = c[25];
+    out[19] = c[26];
+    out[20] = c[25];
+    out[21] = c[26];
     out[22] = c[6]*cq[4] + t3;
     out[23] = c[6]*cq[5] + t5;
     out[24] = t6;
@@ -513,16 +558,16 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[33] = t7;
     out[34] = t0;
     out[35] = t1;
-    out[36] = c[24]*t2 + c[25]*t4;
-    out[37] = c[24]*t4 + c[26]*t2;
-    out[38] = c[28]*cq[4] + t3;
-    out[39] = c[28]*cq[5] + t5;
-    out[40] = c[30]*cq[0] + c[31]*cq[1] + c[4];
-    out[41] = c[30]*cq[1] + c[32]*cq[0] + c[5];
-    out[42] = c[21] + c[34]*cq[2] + c[35]*cq[3];
-    out[43] = c[22] + c[34]*cq[3] + c[36]*cq[2];
-    out[44] = c[38]*cq[2] + c[39]*cq[3] + t0;
-    out[45] = c[38]*cq[3] + c[40]*cq[2] + t1;
+    out[36] = c[28]*t2 + c[29]*t4;
+    out[37] = c[28]*t4 + c[30]*t2;
+    out[38] = c[32]*cq[4] + t3;
+    out[39] = c[32]*cq[5] + t5;
+    out[40] = c[34]*cq[0] + c[35]*cq[1] + c[4];
+    out[41] = c[34]*cq[1] + c[36]*cq[0] + c[5];
+    out[42] = c[25] + c[38]*cq[2] + c[39]*cq[3];
+    out[43] = c[26] + c[38]*cq[3] + c[40]*cq[2];
+    out[44] = c[42]*cq[2] + c[43]*cq[3] + t0;
+    out[45] = c[42]*cq[3] + c[44]*cq[2] + t1;
 }
 
 static const unsigned char sg_hook_drive_coord_is_angle[4] = { 1, 1, 1, 0 };
@@ -532,12 +577,13 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .nq = 4,
     .nx = 1,
     .np = 28,
-    .nc = 77,
+    .nc = 83,
     .nobs = 63,
     .nbranch = 2,
     .nf = 15,
     .nfo = 25,
     .nload = 11,
+    .nblock = 2,
     .coord_is_angle = sg_hook_drive_coord_is_angle,
     .constants = sg_hook_drive_constants,
     .closed = sg_hook_drive_closed,
@@ -545,6 +591,8 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .motion = sg_hook_drive_motion,
     .forces = sg_hook_drive_forces,
     .force_matrix = sg_hook_drive_force_matrix,
+    .scales = sg_hook_drive_scales,
+    .blocks = sg_hook_drive_blocks,
     .anchors = sg_hook_drive_anchors,
 };
 
@@ -577,163 +625,170 @@ const char *sg_hook_drive_manifest(void)
         "ame\":\"crank.com\"},{\"body\":\"big_rod\",\"joint\":null,\"kind\":\"com\",\"name\":\"big_rod.co"
         "m\"},{\"body\":\"rock_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_shaft.com\"},{\"bo"
         "dy\":\"lower_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"lower_shaft.com\"},{\"body\":\"r"
-        "ock_slider\",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_slider.com\"}],\"arcs\":[],\"bodies"
-        "\":[{\"doc\":\"hook crank \\u94a9\\u7ebf\\u66f2\\u67c4 (part 12)\",\"kind\":\"driven\",\"name\":"
-        "\"crank\",\"offset\":18,\"role\":null},{\"doc\":\"big connecting rod \\u5927\\u8fde\\u6746 (part"
-        " 9)\",\"kind\":\"link\",\"name\":\"big_rod\",\"offset\":27,\"role\":null},{\"doc\":\"rock shaft "
-        "with its two arms \\u6446\\u8f74\\u7ec4\\u4ef6 (part 4)\",\"kind\":\"link\",\"name\":\"rock_shaf"
-        "t\",\"offset\":36,\"role\":null},{\"doc\":\"lower shaft with slotted arm and shuttle driver \\u4"
-        "e0b\\u8f74\\u7ec4\\u4ef6 (part 11)\",\"kind\":\"link\",\"name\":\"lower_shaft\",\"offset\":45,\""
-        "role\":\"hook_shaft\"},{\"doc\":\"rock-shaft slider \\u6446\\u8f74\\u6ed1\\u5757 (part 10)\",\"k"
-        "ind\":\"slider\",\"name\":\"rock_slider\",\"offset\":54,\"role\":null}],\"body_fields\":[\"angle"
-        "\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branch"
-        "es\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C left of the line"
-        " from B to O4\"},{\"default\":1,\"joint\":\"E\",\"kind\":\"rpr\",\"meaning\":\"+1: the larger tr"
-        "avel of rock_slider on lower_shaft\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\",\"E.x\""
-        ",\"E.y\"],\"coords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":"
-        "-1.5707963267948966,\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948"
-        "966,\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"guess\":0.005,\"name\":\"rock_slider.travel\""
-        ",\"unit\":\"m\"}],\"default_speed\":104.71975511965977,\"doc\":\"Hook drive \\u94a9\\u7ebf\\u673"
-        "a\\u6784: hook crank 12 \\u2192 big connecting rod \\u5927\\u8fde\\u6746 9 \\u2192 rock shaft \\u"
-        "6446\\u8f74 4 \\u2192 rock-shaft slider\\n\\u6446\\u8f74\\u6ed1\\u5757 10 in the slot of the low"
-        "er-shaft arm \\u4e0b\\u8f74 11 (an oscillating guide bar) \\u2192 oscillating shuttle.\\n\\nTwo "
-        "loops (seed 000 \\u00a7\\u4e00(\\u4e00)3, fig. 1-1; fig. 1-2(c) is the guide-bar unit): the four"
-        "-bar crank\\u2013rod\\u2013rock\\nshaft, then the guide bar whose slotted arm turns the lower sh"
-        "aft through a large swing. The rock shaft\\nand lower shaft run parallel to the upper shaft, so "
-        "both loops project onto one plane: origin on the upper\\nshaft axis, x horizontal, y up. The low"
-        "er-shaft slot passes through its axis (local u axis).\\n\\nDimensions are estimates sized to the"
-        " household machine: the crank-rocker swings the rock shaft \\u00b162\\u00b0 (its\\npin under the"
-        " upper shaft at mid-swing), and the guide bar, its axis 13.5 mm from the rock shaft's inside the"
-        "\\n20 mm arm's circle, turns that into a shuttle swing of about 206\\u00b0 (household shuttles s"
-        "wing 206\\u00b0\\u2013210\\u00b0) with\\nthe lower shaft's speed at most about 2.8 times the upp"
-        "er shaft's.\",\"force_blocks\":[1,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*"
-        "m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guide.fx\",\"unit\":\"N\""
-        "},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\""
-        "name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\""
-        "kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load"
-        "_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"big_rod.x\""
-        ",\"big_rod.y\",\"big_rod.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"lowe"
-        "r_shaft.x\",\"lower_shaft.y\",\"lower_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\",\"rock_"
-        "slider.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft ang"
-        "le phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"s"
-        "g_hook_drive_anchors\":{\"ops\":62},\"sg_hook_drive_closed\":{\"ops\":60},\"sg_hook_drive_consta"
-        "nts\":{\"ops\":54},\"sg_hook_drive_force_matrix\":{\"ops\":126},\"sg_hook_drive_forces\":{\"ops\""
-        ":258},\"sg_hook_drive_motion\":{\"ops\":215},\"sg_hook_drive_residual\":{\"ops\":38}},\"loads\":"
-        "[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"componen"
-        "t\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rock"
-        "_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"rock_pin\"},{\"body\":\"rock_sl"
-        "ider\",\"component\":\"fx\",\"name\":\"slider_pin\"},{\"body\":\"rock_slider\",\"component\":\"f"
-        "y\",\"name\":\"slider_pin\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\""
-        "body\":\"big_rod\",\"component\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"com"
-        "ponent\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"lower_shaft\",\"component\":\"torque\","
-        "\"name\":\"lower_shaft\"},{\"body\":\"rock_slider\",\"component\":\"torque\",\"name\":\"rock_sli"
-        "der\"}],\"name\":\"hook_drive\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"na"
-        "me\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"c"
-        "rank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cr"
-        "ank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin"
-        ".y\",\"unit\":\"m\"},{\"name\":\"rock_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"u"
-        "nit\":\"m/s\"},{\"name\":\"rock_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"uni"
-        "t\":\"m/s^2\"},{\"name\":\"slider_pin.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\""
-        "m\"},{\"name\":\"slider_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"slider_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\""
-        "},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{"
-        "\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":"
-        "\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\""
-        "big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"na"
-        "me\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"b"
-        "ig_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"b"
-        "ig_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name"
-        "\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{"
-        "\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\""
-        "m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"un"
-        "it\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.an"
-        "gle\",\"unit\":\"rad\"},{\"name\":\"lower_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_"
-        "shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\""
-        ":\"lower_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"na"
-        "me\":\"lower_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"lower_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"u"
-        "nit\":\"rad\"},{\"name\":\"rock_slider.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.ang"
-        "le_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_s"
-        "lider.com.y\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"ro"
-        "ck_slider.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\""
-        "name\":\"rock_slider.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.012,\"display_un"
-        "it\":\"mm\",\"doc\":\"hook crank radius on the upper shaft (estimate)\",\"kind\":\"length\",\"na"
-        "me\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.17,\"display_unit\""
-        ":\"mm\",\"doc\":\"big connecting rod, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"big"
-        "_rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0136,\"display_unit\":\"m"
-        "m\",\"doc\":\"rock-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_"
-        "x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.17,\"display_unit\":\"mm\","
-        "\"doc\":\"rock-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0136,\"display_unit\":\"mm\",\"doc"
-        "\":\"rock-shaft arm driven by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front"
-        "_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\""
-        ",\"doc\":\"rock-shaft arm carrying the slider pin (estimate)\",\"kind\":\"length\",\"name\":\"ro"
-        "ck_rear_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-1.5707963267948966,\""
-        "display_unit\":\"deg\",\"doc\":\"rear arm direction relative to the front arm (estimate)\",\"kin"
-        "d\":\"angle\",\"name\":\"rock_rear_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\""
-        "default\":-0.0136,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, horizontal (estimate)\",\""
-        "kind\":\"length\",\"name\":\"lower_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":-0.1835,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical (estimate)\",\"ki"
-        "nd\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
-        "fault\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"ki"
-        "nd\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"de"
-        "fault\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank."
-        "mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\""
-        ",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"c"
-        "entre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment o"
-        "f inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\""
-        "doc\":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inert"
-        "ia of big_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc"
-        "\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass o"
-        "f rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass "
-        "of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of "
-        "inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.iner"
-        "tia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":"
-        "\"g\",\"doc\":\"mass of lower_shaft\",\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centr"
-        "e of mass of lower_shaft, local u\",\"kind\":\"length\",\"name\":\"lower_shaft.com_u\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centr"
-        "e of mass of lower_shaft, local v\",\"kind\":\"length\",\"name\":\"lower_shaft.com_v\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":"
-        "\"moment of inertia of lower_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lo"
-        "wer_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\""
-        "display_unit\":\"g\",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.ma"
-        "ss\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\","
-        "\"doc\":\"centre of mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.co"
-        "m_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\","
-        "\"doc\":\"centre of mass of rock_slider, local v\",\"kind\":\"length\",\"name\":\"rock_slider.co"
-        "m_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*"
-        "m**2\",\"doc\":\"moment of inertia of rock_slider about its centre of mass\",\"kind\":\"inertia\""
-        ",\"name\":\"rock_slider.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"poin"
-        "t_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"c"
-        "rank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rock_shaft\",\"doc\""
-        ":\"big-rod pin C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6,\"role\":null},{\"bo"
-        "dy\":\"rock_slider\",\"doc\":\"slider pin E on the rock-shaft rear arm\",\"name\":\"slider_pin\""
-        ",\"offset\":12,\"role\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"f"
-        "x\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\""
-        ":\"lower_shaft\",\"b\":\"rock_slider\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\""
-        "kind\":\"prismatic\",\"name\":\"rock_slider.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"big_r"
-        "od\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offse"
-        "t\":4},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"ki"
-        "nd\":\"revolute\",\"name\":\"O4\",\"offset\":6},{\"a\":\"ground\",\"b\":\"lower_shaft\",\"column"
-        "s\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O11\",\"offset\":8},{\"a\""
-        ":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revo"
-        "lute\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\":\"rock_slider\",\"columns\":[\""
-        "fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"gro"
-        "und\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\""
-        "drive\",\"name\":\"crank.drive\",\"offset\":14,\"sense\":1}],\"roles\":{\"hook_shaft\":{\"kind\""
-        ":\"body\",\"name\":\"lower_shaft\"}},\"sizes\":{\"nanchor_out\":46,\"nbranch\":2,\"nc\":77,\"nf\""
+        "ock_slider\",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_slider.com\"}],\"arcs\":[],\"blocks"
+        "\":[{\"coords\":[2,0],\"joints\":[\"C\"],\"rows\":[0,1]},{\"coords\":[3,1],\"joints\":[\"E\"],\""
+        "rows\":[2,3]}],\"bodies\":[{\"doc\":\"hook crank \\u94a9\\u7ebf\\u66f2\\u67c4 (part 12)\",\"kind"
+        "\":\"driven\",\"name\":\"crank\",\"offset\":18,\"role\":null},{\"doc\":\"big connecting rod \\u5"
+        "927\\u8fde\\u6746 (part 9)\",\"kind\":\"link\",\"name\":\"big_rod\",\"offset\":27,\"role\":null}"
+        ",{\"doc\":\"rock shaft with its two arms \\u6446\\u8f74\\u7ec4\\u4ef6 (part 4)\",\"kind\":\"link"
+        "\",\"name\":\"rock_shaft\",\"offset\":36,\"role\":null},{\"doc\":\"lower shaft with slotted arm "
+        "and shuttle driver \\u4e0b\\u8f74\\u7ec4\\u4ef6 (part 11)\",\"kind\":\"link\",\"name\":\"lower_s"
+        "haft\",\"offset\":45,\"role\":\"hook_shaft\"},{\"doc\":\"rock-shaft slider \\u6446\\u8f74\\u6ed1"
+        "\\u5757 (part 10)\",\"kind\":\"slider\",\"name\":\"rock_slider\",\"offset\":54,\"role\":null}],\""
+        "body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\""
+        ",\"com_ay\"],\"branches\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joi"
+        "nt C left of the line from B to O4\"},{\"default\":1,\"joint\":\"E\",\"kind\":\"rpr\",\"meaning\""
+        ":\"+1: the larger travel of rock_slider on lower_shaft\"}],\"closed_form\":true,\"closure\":[\"C"
+        ".x\",\"C.y\",\"E.x\",\"E.y\"],\"constants\":[[0],[9],[9],[9],[2],[3],[1],[4],[1],[4],[5,6],[5,6]"
+        ",[2,7],[5,6],[3,8],[2],[4],[3],[1],[5,6],[0,1,2,4],[0,1,3,4],[2,5,7],[3,5,8],[0],[7],[8],[9],[11"
+        "],[12],[12],[11],[1],[1],[17],[18],[18],[17],[21],[22],[22],[21],[25],[26],[26],[25],[0,1,2,4],["
+        "0,1,3,4],[15],[1,14],[1,14],[19],[4,17],[4,17],[16],[24],[23],[27],[20],[13],[0,11],[0,11],[10],"
+        "[14],[20],[8],[10],[13],[14],[15],[16],[19],[20],[23],[24],[27],[10],[14],[16],[24],[5,6,18],[5,"
+        "6,17],[5,6,17]],\"coords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"gu"
+        "ess\":-1.5707963267948966,\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963"
+        "267948966,\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"guess\":0.005,\"name\":\"rock_slider.t"
+        "ravel\",\"unit\":\"m\"}],\"default_speed\":104.71975511965977,\"doc\":\"Hook drive \\u94a9\\u7eb"
+        "f\\u673a\\u6784: hook crank 12 \\u2192 big connecting rod \\u5927\\u8fde\\u6746 9 \\u2192 rock s"
+        "haft \\u6446\\u8f74 4 \\u2192 rock-shaft slider\\n\\u6446\\u8f74\\u6ed1\\u5757 10 in the slot of"
+        " the lower-shaft arm \\u4e0b\\u8f74 11 (an oscillating guide bar) \\u2192 oscillating shuttle.\\n"
+        "\\nTwo loops (seed 000 \\u00a7\\u4e00(\\u4e00)3, fig. 1-1; fig. 1-2(c) is the guide-bar unit): t"
+        "he four-bar crank\\u2013rod\\u2013rock\\nshaft, then the guide bar whose slotted arm turns the l"
+        "ower shaft through a large swing. The rock shaft\\nand lower shaft run parallel to the upper sha"
+        "ft, so both loops project onto one plane: origin on the upper\\nshaft axis, x horizontal, y up. "
+        "The lower-shaft slot passes through its axis (local u axis).\\n\\nDimensions are estimates sized"
+        " to the household machine: the crank-rocker swings the rock shaft \\u00b162\\u00b0 (its\\npin un"
+        "der the upper shaft at mid-swing), and the guide bar, its axis 13.5 mm from the rock shaft's ins"
+        "ide the\\n20 mm arm's circle, turns that into a shuttle swing of about 206\\u00b0 (household shu"
+        "ttles swing 206\\u00b0\\u2013210\\u00b0) with\\nthe lower shaft's speed at most about 2.8 times "
+        "the upper shaft's.\",\"force_blocks\":[1,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit"
+        "\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guide.fx\",\"unit\""
+        ":\"N\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N"
+        "\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"n"
+        "ame\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\""
+        ":\"load_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"big_"
+        "rod.x\",\"big_rod.y\",\"big_rod.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\""
+        ",\"lower_shaft.x\",\"lower_shaft.y\",\"lower_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\","
+        "\"rock_slider.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-sh"
+        "aft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels"
+        "\":{\"sg_hook_drive_anchors\":{\"ops\":62},\"sg_hook_drive_blocks\":{\"ops\":46},\"sg_hook_drive"
+        "_closed\":{\"ops\":60},\"sg_hook_drive_constants\":{\"ops\":69},\"sg_hook_drive_force_matrix\":{"
+        "\"ops\":126},\"sg_hook_drive_forces\":{\"ops\":258},\"sg_hook_drive_motion\":{\"ops\":216},\"sg_"
+        "hook_drive_residual\":{\"ops\":38},\"sg_hook_drive_scales\":{\"ops\":7}},\"loads\":[{\"body\":\""
+        "crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\""
+        "name\":\"crank_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rock_pin\"},{\"bo"
+        "dy\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"rock_pin\"},{\"body\":\"rock_slider\",\"comp"
+        "onent\":\"fx\",\"name\":\"slider_pin\"},{\"body\":\"rock_slider\",\"component\":\"fy\",\"name\":"
+        "\"slider_pin\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"big"
+        "_rod\",\"component\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"t"
+        "orque\",\"name\":\"rock_shaft\"},{\"body\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"l"
+        "ower_shaft\"},{\"body\":\"rock_slider\",\"component\":\"torque\",\"name\":\"rock_slider\"}],\"na"
+        "me\":\"hook_drive\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank"
+        "_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\""
+        ":\"m\"},{\"name\":\"rock_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"rock_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"slider_pin.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\""
+        ":\"slider_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "slider_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"c"
+        "rank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"cran"
+        "k.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_"
+        "d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_d"
+        "d\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_"
+        "d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod"
+        ".com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_d"
+        "d\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaf"
+        "t.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"roc"
+        "k_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\""
+        ":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name"
+        "\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\""
+        ":\"rad\"},{\"name\":\"lower_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd"
+        "\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft"
+        ".com.y\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_s"
+        "haft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"lower_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},"
+        "{\"name\":\"rock_slider.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\""
+        ":\"rad/s^2\"},{\"name\":\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\""
+        "unit\":\"m\"},{\"name\":\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_"
+        "d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_sl"
+        "ider.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.012,\"display_unit\":\"mm\",\"do"
+        "c\":\"hook crank radius on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\""
+        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.17,\"display_unit\":\"mm\",\"doc\":"
+        "\"big connecting rod, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positiv"
+        "e\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0136,\"display_unit\":\"mm\",\"doc\":\"ro"
+        "ck-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.17,\"display_unit\":\"mm\",\"doc\":\"rock-s"
+        "haft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.0136,\"display_unit\":\"mm\",\"doc\":\"rock-shaft "
+        "arm driven by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positiv"
+        "e\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"rock-"
+        "shaft arm carrying the slider pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm\",\""
+        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-1.5707963267948966,\"display_unit\":"
+        "\"deg\",\"doc\":\"rear arm direction relative to the front arm (estimate)\",\"kind\":\"angle\",\""
+        "name\":\"rock_rear_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":-0.01"
+        "36,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, horizontal (estimate)\",\"kind\":\"length"
+        "\",\"name\":\"lower_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.18"
+        "35,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical (estimate)\",\"kind\":\"length\""
+        ",\"name\":\"lower_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"d"
+        "isplay_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\","
+        "\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"d"
+        "isplay_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positi"
+        "ve\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cen"
+        "tre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,"
+        "\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass "
+        "of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of c"
+        "rank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\"mass "
+        "of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_ro"
+        "d about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":fals"
+        "e,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of"
+        " rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft"
+        ", local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft"
+        ", local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of roc"
+        "k_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positi"
+        "ve\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":"
+        "\"mass of lower_shaft\",\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of l"
+        "ower_shaft, local u\",\"kind\":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of l"
+        "ower_shaft, local v\",\"kind\":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of in"
+        "ertia of lower_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_shaft.iner"
+        "tia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"display_unit\""
+        ":\"g\",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cent"
+        "re of mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"positi"
+        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cent"
+        "re of mass of rock_slider, local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positi"
+        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\""
+        ":\"moment of inertia of rock_slider about its centre of mass\",\"kind\":\"inertia\",\"name\":\"r"
+        "ock_slider.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\""
+        "x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\""
+        "name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rock_shaft\",\"doc\":\"big-rod pin "
+        "C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6,\"role\":null},{\"body\":\"rock_sli"
+        "der\",\"doc\":\"slider pin E on the rock-shaft rear arm\",\"name\":\"slider_pin\",\"offset\":12,"
+        "\"role\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"g"
+        "rounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"lower_shaft"
+        "\",\"b\":\"rock_slider\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prism"
+        "atic\",\"name\":\"rock_slider.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"big_rod\",\"columns"
+        "\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":"
+        "\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolut"
+        "e\",\"name\":\"O4\",\"offset\":6},{\"a\":\"ground\",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\""
+        "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O11\",\"offset\":8},{\"a\":\"big_rod\","
+        "\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name"
+        "\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],"
+        "\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"ground\",\"b\":\""
+        "crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name"
+        "\":\"crank.drive\",\"offset\":14,\"sense\":1}],\"roles\":{\"hook_shaft\":{\"kind\":\"body\",\"na"
+        "me\":\"lower_shaft\"}},\"sizes\":{\"nanchor_out\":46,\"nblock\":2,\"nbranch\":2,\"nc\":83,\"nf\""
         ":15,\"nfo\":25,\"nload\":11,\"nobs\":63,\"np\":28,\"nq\":4,\"nx\":1}}"
         ;
 }

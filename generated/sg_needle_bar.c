@@ -6,14 +6,16 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_needle_bar_constants -- Total ops: 31 */
+/* sg_needle_bar_constants -- Total ops: 35 */
 void sg_needle_bar_constants(const double *p, double *c)
 {
     const double t0 = sin(p[4]);
     const double t1 = -p[2];
-    const double t2 = -p[6];
-    const double t3 = (0.5)*p[1];
-    const double t4 = p[0] + t2;
+    const double t2 = p[0] + p[1];
+    const double t3 = t2 + fabs(p[2]);
+    const double t4 = -p[6];
+    const double t5 = (0.5)*p[1];
+    const double t6 = p[0] + t4;
     c[0] = p[0];
     c[1] = cos(p[4]);
     c[2] = -t0;
@@ -23,39 +25,42 @@ void sg_needle_bar_constants(const double *p, double *c)
     c[6] = (1.0/(p[1]));
     c[7] = t1;
     c[8] = -p[1];
-    c[9] = -p[0];
-    c[10] = -p[3];
-    c[11] = p[4];
-    c[12] = p[6];
-    c[13] = -p[7];
-    c[14] = p[7];
-    c[15] = t2;
-    c[16] = t3;
-    c[17] = -t3;
-    c[18] = -p[13] - t1;
-    c[19] = p[12];
-    c[20] = p[10];
-    c[21] = p[11];
-    c[22] = p[9];
-    c[23] = -p[9]*t3;
-    c[24] = p[8];
-    c[25] = -t4;
-    c[26] = t4;
-    c[27] = p[5];
-    c[28] = p[14];
-    c[29] = -p[12];
-    c[30] = -p[13];
-    c[31] = -p[12] - p[3];
-    c[32] = (0.5)*p[10];
-    c[33] = (0.5)*p[11];
-    c[34] = (0.5)*p[14];
-    c[35] = (0.5)*p[5];
-    c[36] = (0.5)*p[8];
-    c[37] = (0.5)*p[9];
-    c[38] = -p[11];
-    c[39] = -p[5];
-    c[40] = -p[9];
-    c[41] = p[13];
+    c[9] = t3;
+    c[10] = t2;
+    c[11] = -p[0];
+    c[12] = -p[3];
+    c[13] = p[4];
+    c[14] = p[6];
+    c[15] = -p[7];
+    c[16] = p[7];
+    c[17] = t4;
+    c[18] = t5;
+    c[19] = -t5;
+    c[20] = -p[13] - t1;
+    c[21] = p[12];
+    c[22] = (1.0/(t3));
+    c[23] = p[10];
+    c[24] = p[11];
+    c[25] = p[9];
+    c[26] = -p[9]*t5;
+    c[27] = p[8];
+    c[28] = -t6;
+    c[29] = t6;
+    c[30] = p[5];
+    c[31] = p[14];
+    c[32] = -p[12];
+    c[33] = -p[13];
+    c[34] = -p[12] - p[3];
+    c[35] = (0.5)*p[10];
+    c[36] = (0.5)*p[11];
+    c[37] = (0.5)*p[14];
+    c[38] = (0.5)*p[5];
+    c[39] = (0.5)*p[8];
+    c[40] = (0.5)*p[9];
+    c[41] = -p[11];
+    c[42] = -p[5];
+    c[43] = -p[9];
+    c[44] = p[13];
 }
 
 /* sg_needle_bar_closed -- Total ops: 15 */
@@ -93,26 +98,51 @@ void sg_needle_bar_residual(const double *q, const double *cq, const double *x, 
     jac[3] = t0;
 }
 
+/* sg_needle_bar_scales -- Total ops: 4 */
+void sg_needle_bar_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)cq;
+    (void)x;
+    (void)cx;
+    out[0] = c[9];
+    out[1] = c[10] + fabs(q[0]);
+}
+
+/* sg_needle_bar_blocks -- Total ops: 14 */
+void sg_needle_bar_blocks(const double *jac, double *out)
+{
+    /* block 0: joints C */
+    {
+        const double nr = sqrt(sg_row_norm2(2, jac + 0));
+        out[0] = nr > 0.0 ? (jac[1]) / nr : 0.0;
+    }
+    /* block 1: joints C */
+    {
+        const double nr = sqrt(sg_row_norm2(2, jac + 2));
+        out[1] = nr > 0.0 ? (jac[2]) / nr : 0.0;
+    }
+}
+
 /* sg_needle_bar_motion -- Total ops: 78 */
-int sg_needle_bar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+int sg_needle_bar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[4]*cq[2];
     const double t1 = c[1]*cx[1] + c[3]*cx[0];
     const double t2 = c[0]*t1;
     const double t3 = c[1]*cx[0] + c[2]*cx[1];
-    const double t4 = c[9]*t3;
+    const double t4 = c[11]*t3;
     const double t6 = ((xd[0])*(xd[0]));
     const double t7 = c[0]*t3;
-    const double t9 = c[9]*t1;
+    const double t9 = c[11]*t1;
     const double t10 = t9*xd[0];
     const double t11 = t7*xd[0];
     const double t12 = t4*t6 + t9*xdd[0];
     const double t13 = t6*t9 + t7*xdd[0];
-    const double t14 = c[12]*t3 + c[13]*t1;
-    const double t15 = c[13]*t3 + c[15]*t1;
-    const double t16 = c[16]*cq[2];
-    const double t17 = c[17]*cq[3];
-    double J[4];
+    const double t14 = c[14]*t3 + c[15]*t1;
+    const double t15 = c[15]*t3 + c[17]*t1;
+    const double t16 = c[18]*cq[2];
+    const double t17 = c[19]*cq[3];
+    double J[4], rs[2], cs[2];
     int piv[2];
     J[0] = 0.0;
     J[1] = c[8]*cq[3];
@@ -120,13 +150,15 @@ int sg_needle_bar_motion(const double *q, const double *cq, const double *x, con
     J[3] = t0;
     qd[0] = t2*xd[0];
     qd[1] = t4*xd[0];
-    if (sg_lu_factor_inl(2, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(2, J, piv, qd);
+    rs[0] = c[22];
+    rs[1] = (1.0/(c[10] + fabs(q[0])));
+    if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(2, J, piv, rs, cs, qd);
     const double t5 = ((qd[1])*(qd[1]));
     const double t8 = cq[3]*t5;
     qdd[0] = t0*t5 + t2*xdd[0] + t6*t7;
     qdd[1] = c[4]*t8 + t2*t6 + t4*xdd[0];
-    sg_lu_solve_inl(2, J, piv, qdd);
+    sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
     obs[0] = t7;
     obs[1] = t2;
     obs[2] = t10;
@@ -140,34 +172,34 @@ int sg_needle_bar_motion(const double *q, const double *cq, const double *x, con
     obs[10] = 0.0;
     obs[11] = qdd[0];
     obs[12] = c[5];
-    obs[13] = c[10] + q[0];
+    obs[13] = c[12] + q[0];
     obs[14] = 0.0;
     obs[15] = qd[0];
     obs[16] = 0.0;
     obs[17] = qdd[0];
-    obs[18] = c[11] + x[0];
+    obs[18] = c[13] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = t14;
-    obs[22] = c[12]*t1 + c[14]*t3;
+    obs[22] = c[14]*t1 + c[16]*t3;
     obs[23] = t15*xd[0];
     obs[24] = t14*xd[0];
-    obs[25] = t15*xdd[0] + t6*(c[14]*t1 + c[15]*t3);
+    obs[25] = t15*xdd[0] + t6*(c[16]*t1 + c[17]*t3);
     obs[26] = t14*xdd[0] + t15*t6;
     obs[27] = q[1];
     obs[28] = qd[1];
     obs[29] = qdd[1];
     obs[30] = t16 + t7;
-    obs[31] = c[16]*cq[3] + t2;
+    obs[31] = c[18]*cq[3] + t2;
     obs[32] = qd[1]*t17 + t10;
     obs[33] = qd[1]*t16 + t11;
-    obs[34] = c[17]*cq[2]*t5 + qdd[1]*t17 + t12;
-    obs[35] = c[17]*t8 + qdd[1]*t16 + t13;
+    obs[34] = c[19]*cq[2]*t5 + qdd[1]*t17 + t12;
+    obs[35] = c[19]*t8 + qdd[1]*t16 + t13;
     obs[36] = (0.5)*3.141592653589793;
     obs[37] = 0.0;
     obs[38] = 0.0;
-    obs[39] = c[18];
-    obs[40] = c[19] + q[0];
+    obs[39] = c[20];
+    obs[40] = c[21] + q[0];
     obs[41] = 0.0;
     obs[42] = qd[0];
     obs[43] = 0.0;
@@ -182,26 +214,26 @@ int sg_needle_bar_forces(const double *q, const double *cq, const double *x, con
     (void)x;
     const double t0 = -gv[0] + obs[34];
     const double t1 = -gv[1] + obs[44];
-    const double t2 = c[21]*t1 - ld[3] - ld[5];
-    const double t3 = c[16]*cq[2];
-    const double t4 = c[21]*t1 + c[22]*(-gv[1] + obs[35]) - ld[3] - ld[5];
+    const double t2 = c[24]*t1 - ld[3] - ld[5];
+    const double t3 = c[18]*cq[2];
+    const double t4 = c[24]*t1 + c[25]*(-gv[1] + obs[35]) - ld[3] - ld[5];
     const double t5 = c[1]*cx[0] + c[2]*cx[1];
-    const double t6 = c[14]*t5;
+    const double t6 = c[16]*t5;
     const double t7 = c[1]*cx[1] + c[3]*cx[0];
-    const double t8 = c[14]*t7;
+    const double t8 = c[16]*t7;
     {
         const double d = c[4]*cq[3];
         if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[4]*cq[3]))) return SG_SINGULAR;
-        out[6] = (c[20]*obs[29] + c[23]*cq[3]*t0 - ld[7] + t2*t3 + t3*t4)/d;
+        out[6] = (c[23]*obs[29] + c[26]*cq[3]*t0 - ld[7] + t2*t3 + t3*t4)/d;
     }
-    out[4] = c[22]*t0 + out[6];
-    out[2] = -c[21]*(-gv[0] + obs[43]) + out[6] + ld[2] + ld[4];
-    out[3] = -c[19]*out[6] + c[28]*obs[38] - c[29]*out[2] + c[29]*ld[2] + c[30]*ld[3] + c[30]*ld[5] + c[30]*t2 + c[31]*ld[4] - ld[8];
+    out[4] = c[25]*t0 + out[6];
+    out[2] = -c[24]*(-gv[0] + obs[43]) + out[6] + ld[2] + ld[4];
+    out[3] = -c[21]*out[6] + c[31]*obs[38] - c[32]*out[2] + c[32]*ld[2] + c[33]*ld[3] + c[33]*ld[5] + c[33]*t2 + c[34]*ld[4] - ld[8];
     out[5] = t4;
     out[7] = t2;
-    out[1] = c[27]*(-gv[1] + obs[26]) + out[5] - ld[1];
-    out[0] = c[27]*(-gv[0] + obs[25]) + out[4] - ld[0];
-    out[8] = c[24]*obs[20] - out[0]*(c[12]*t7 + t6) - out[1]*(c[15]*t5 + t8) - out[4]*(c[13]*t5 + c[26]*t7) - out[5]*(c[13]*t7 + c[25]*t5) - ld[0]*(c[25]*t7 + t6) - ld[1]*(c[26]*t5 + t8) - ld[6];
+    out[1] = c[30]*(-gv[1] + obs[26]) + out[5] - ld[1];
+    out[0] = c[30]*(-gv[0] + obs[25]) + out[4] - ld[0];
+    out[8] = c[27]*obs[20] - out[0]*(c[14]*t7 + t6) - out[1]*(c[17]*t5 + t8) - out[4]*(c[15]*t5 + c[29]*t7) - out[5]*(c[15]*t7 + c[28]*t5) - ld[0]*(c[28]*t7 + t6) - ld[1]*(c[29]*t5 + t8) - ld[6];
     const double t9 = -out[2];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
@@ -210,8 +242,8 @@ int sg_needle_bar_forces(const double *q, const double *cq, const double *x, con
     out[13] = out[0] + t9;
     out[14] = out[1];
     out[15] = out[2]*q[0] + out[3] + out[8];
-    out[16] = c[32]*((obs[28])*(obs[28])) + c[33]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[34]*((obs[37])*(obs[37])) + c[35]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[36]*((obs[19])*(obs[19])) + c[37]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33])));
-    out[17] = c[38]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[39]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[40]*(gv[0]*obs[30] + gv[1]*obs[31]);
+    out[16] = c[35]*((obs[28])*(obs[28])) + c[36]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[37]*((obs[37])*(obs[37])) + c[38]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[39]*((obs[19])*(obs[19])) + c[40]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33])));
+    out[17] = c[41]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[42]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[43]*(gv[0]*obs[30] + gv[1]*obs[31]);
     out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37];
     if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + (out[12] + out[13]))) + ((out[14] + out[15]) + (out[16] + (out[17] + out[18]))))))) return SG_NONFINITE;
     return SG_OK;
@@ -224,19 +256,19 @@ void sg_needle_bar_force_matrix(const double *q, const double *cq, const double 
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[14]*t1;
-    const double t3 = c[14]*t0;
-    const double t4 = c[16]*cq[3];
-    const double t5 = c[17]*cq[2];
+    const double t2 = c[16]*t1;
+    const double t3 = c[16]*t0;
+    const double t4 = c[18]*cq[3];
+    const double t5 = c[19]*cq[2];
     for (int k = 0; k < 81; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = -1.0;
     A[10] = 1.0;
     A[14] = -1.0;
-    A[18] = c[12]*t0 + t2;
-    A[19] = c[15]*t1 + t3;
-    A[22] = c[13]*t1 + c[26]*t0;
-    A[23] = c[13]*t0 + c[25]*t1;
+    A[18] = c[14]*t0 + t2;
+    A[19] = c[17]*t1 + t3;
+    A[22] = c[15]*t1 + c[29]*t0;
+    A[23] = c[15]*t0 + c[28]*t1;
     A[26] = 1.0;
     A[31] = 1.0;
     A[33] = -1.0;
@@ -249,19 +281,19 @@ void sg_needle_bar_force_matrix(const double *q, const double *cq, const double 
     A[56] = -1.0;
     A[60] = 1.0;
     A[70] = 1.0;
-    A[74] = c[29];
+    A[74] = c[32];
     A[75] = 1.0;
-    A[78] = c[19];
-    A[79] = c[41];
-    b[0] = c[27]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[27]*(-gv[1] + obs[26]) - ld[1];
-    b[2] = c[24]*obs[20] - ld[0]*(c[25]*t0 + t2) - ld[1]*(c[26]*t1 + t3) - ld[6];
-    b[3] = c[22]*(-gv[0] + obs[34]);
-    b[4] = c[22]*(-gv[1] + obs[35]);
-    b[5] = c[20]*obs[29] - ld[7];
-    b[6] = c[21]*(-gv[0] + obs[43]) - ld[2] - ld[4];
-    b[7] = c[21]*(-gv[1] + obs[44]) - ld[3] - ld[5];
-    b[8] = c[28]*obs[38] + c[29]*ld[2] + c[30]*ld[3] + c[30]*ld[5] + c[31]*ld[4] - ld[8];
+    A[78] = c[21];
+    A[79] = c[44];
+    b[0] = c[30]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[30]*(-gv[1] + obs[26]) - ld[1];
+    b[2] = c[27]*obs[20] - ld[0]*(c[28]*t0 + t2) - ld[1]*(c[29]*t1 + t3) - ld[6];
+    b[3] = c[25]*(-gv[0] + obs[34]);
+    b[4] = c[25]*(-gv[1] + obs[35]);
+    b[5] = c[23]*obs[29] - ld[7];
+    b[6] = c[24]*(-gv[0] + obs[43]) - ld[2] - ld[4];
+    b[7] = c[24]*(-gv[1] + obs[44]) - ld[3] - ld[5];
+    b[8] = c[31]*obs[38] + c[32]*ld[2] + c[33]*ld[3] + c[33]*ld[5] + c[34]*ld[4] - ld[8];
 }
 
 /* sg_needle_bar_anchors -- Total ops: 24 */
@@ -295,13 +327,13 @@ void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, c
     out[20] = c[5];
     out[21] = q[0];
     out[22] = c[5];
-    out[23] = c[10] + q[0];
-    out[24] = c[12]*t0 + c[13]*t2;
-    out[25] = c[12]*t2 + c[14]*t0;
-    out[26] = c[16]*cq[2] + t1;
-    out[27] = c[16]*cq[3] + t3;
-    out[28] = c[18];
-    out[29] = c[19] + q[0];
+    out[23] = c[12] + q[0];
+    out[24] = c[14]*t0 + c[15]*t2;
+    out[25] = c[14]*t2 + c[16]*t0;
+    out[26] = c[18]*cq[2] + t1;
+    out[27] = c[18]*cq[3] + t3;
+    out[28] = c[20];
+    out[29] = c[21] + q[0];
 }
 
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };
@@ -311,12 +343,13 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .nq = 2,
     .nx = 1,
     .np = 15,
-    .nc = 42,
+    .nc = 45,
     .nobs = 45,
     .nbranch = 1,
     .nf = 9,
     .nfo = 19,
     .nload = 9,
+    .nblock = 2,
     .coord_is_angle = sg_needle_bar_coord_is_angle,
     .constants = sg_needle_bar_constants,
     .closed = sg_needle_bar_closed,
@@ -324,6 +357,8 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .motion = sg_needle_bar_motion,
     .forces = sg_needle_bar_forces,
     .force_matrix = sg_needle_bar_force_matrix,
+    .scales = sg_needle_bar_scales,
+    .blocks = sg_needle_bar_blocks,
     .anchors = sg_needle_bar_anchors,
 };
 
@@ -349,112 +384,117 @@ const char *sg_needle_bar_manifest(void)
         "nt\":null,\"kind\":\"point\",\"name\":\"needle_eye\"},{\"body\":\"crank\",\"joint\":null,\"kind\""
         ":\"com\",\"name\":\"crank.com\"},{\"body\":\"rod\",\"joint\":null,\"kind\":\"com\",\"name\":\"ro"
         "d.com\"},{\"body\":\"needle_bar\",\"joint\":null,\"kind\":\"com\",\"name\":\"needle_bar.com\"}],"
-        "\"arcs\":[],\"bodies\":[{\"doc\":\"needle-bar crank on the upper shaft\",\"kind\":\"driven\",\"n"
-        "ame\":\"crank\",\"offset\":18,\"role\":\"needle_crank\"},{\"doc\":\"needle-bar link \\u5c0f\\u8f"
-        "de\\u6746 (part 13)\",\"kind\":\"link\",\"name\":\"rod\",\"offset\":27,\"role\":\"needle_rod\"},"
-        "{\"doc\":\"needle bar with clamp and needle \\u9488\\u6746\\u7ec4\\u4ef6 (part 14)\",\"kind\":\""
-        "slider\",\"name\":\"needle_bar\",\"offset\":36,\"role\":\"needle_bar\"}],\"body_fields\":[\"angl"
-        "e\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branc"
-        "hes\":[{\"default\":-1,\"joint\":\"C\",\"kind\":\"rrp\",\"meaning\":\"+1: the larger travel of n"
-        "eedle_bar at joint C\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\"],\"coords\":[{\"guess"
-        "\":-0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":-1.5707963267948966,\"name\":"
-        "\"rod.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Needle-bar mecha"
-        "nism \\u523a\\u5e03\\u673a\\u6784: upper-shaft crank \\u2192 needle-bar link \\u5c0f\\u8fde\\u67"
-        "46 13 \\u2192 needle bar \\u9488\\u6746 14.\\n\\nA crank-slider with offset (seed 000 \\u00a7\\u"
-        "4e00(\\u4e00)1 and fig. 1-6; seed 002 fig. 1: A crank centre, B crank pin,\\nC needle-bar pin). "
-        "Frame: origin on the upper-shaft axis A, x horizontal, y up; the needle bar slides on\\nthe vert"
-        "ical line x = offset, its travel s measured upward from the shaft's horizontal (s = y of C).\\nC"
-        "rank angle = shaft angle + phase, counter-clockwise from +x (the needle is highest near phi = 90"
-        "\\u00b0).\\n\\nDimensions: crank 16.7 mm is seed 002's industrial crank (its stroke 33.4 mm is w"
-        "ithin the 29\\u201335 mm of\\nindustrial and household machines). The link length, offset, masse"
-        "s and inertias are estimates (the\\nseeds' tables of them are not in the text we have).\",\"forc"
-        "e_blocks\":[1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft"
-        ".power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_ba"
-        "r.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\""
-        "unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit"
-        "\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\""
-        "}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\""
-        "needle_bar.x\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_un"
-        "it\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":nu"
-        "ll,\"unit\":\"rad\"}],\"kernels\":{\"sg_needle_bar_anchors\":{\"ops\":24},\"sg_needle_bar_closed"
-        "\":{\"ops\":15},\"sg_needle_bar_constants\":{\"ops\":31},\"sg_needle_bar_force_matrix\":{\"ops\""
-        ":65},\"sg_needle_bar_forces\":{\"ops\":136},\"sg_needle_bar_motion\":{\"ops\":78},\"sg_needle_ba"
-        "r_residual\":{\"ops\":16}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_"
-        "pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"needle_bar\""
-        ",\"component\":\"fx\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"nam"
-        "e\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\"body"
-        "\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"crank\",\"component\""
-        ":\"torque\",\"name\":\"crank\"},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"rod\"},{\""
-        "body\":\"needle_bar\",\"component\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"needle_bar\""
-        ",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\""
-        "m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"link_pin.x\",\"unit\":\"m\"},{\"name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\""
-        "link_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_p"
-        "in.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle"
-        "_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\","
-        "\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\""
-        "unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\""
-        ":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":"
-        "\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_"
-        "d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angl"
-        "e_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"ne"
-        "edle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"need"
-        "le_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\""
-        "}],\"params\":[{\"default\":0.0167,\"display_unit\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u"
-        "00a73)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":\"needle_crank_radius"
-        "\",\"unit\":\"m\"},{\"default\":0.05,\"display_unit\":\"mm\",\"doc\":\"needle-bar link BC, pin t"
-        "o pin (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":\"needle_rod_"
-        "length\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"horizontal offset of"
-        " the needle-bar axis from the shaft axis\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":"
-        "false,\"role\":\"needle_bar_offset\",\"unit\":\"m\"},{\"default\":0.062,\"display_unit\":\"mm\","
-        "\"doc\":\"needle eye below the link pin C along the bar (estimate)\",\"kind\":\"length\",\"name\""
-        ":\"eye_below_pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_un"
-        "it\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":"
-        "\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_un"
-        "it\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
-        "ss of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":"
-        "null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank,"
-        " local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about"
-        " its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\""
-        "kind\":\"mass\",\"name\":\"rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"defau"
-        "lt\":2.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rod about its centre of"
-        " mass\",\"kind\":\"inertia\",\"name\":\"rod.inertia\",\"positive\":false,\"role\":null,\"unit\":"
-        "\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\""
-        "mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default"
-        "\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"le"
-        "ngth\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
-        "\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"leng"
-        "th\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":1.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre"
-        " of mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{"
-        "\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\""
-        "body\":\"needle_bar\",\"doc\":\"needle-bar link pin C\",\"name\":\"link_pin\",\"offset\":6,\"rol"
-        "e\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":12,"
-        "\"role\":\"needle_eye\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\""
-        "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"gr"
-        "ound\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"pri"
-        "smatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":"
-        "[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"r"
-        "od\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\""
-        "name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded"
-        "\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1"
-        "}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_bar_offset\":{"
-        "\"kind\":\"param\",\"name\":\"offset\"},\"needle_crank\":{\"kind\":\"body\",\"name\":\"crank\"},"
-        "\"needle_crank_radius\":{\"kind\":\"param\",\"name\":\"crank\"},\"needle_eye\":{\"kind\":\"point"
-        "\",\"name\":\"needle_eye\"},\"needle_rod\":{\"kind\":\"body\",\"name\":\"rod\"},\"needle_rod_len"
-        "gth\":{\"kind\":\"param\",\"name\":\"rod\"}},\"sizes\":{\"nanchor_out\":30,\"nbranch\":1,\"nc\":"
-        "42,\"nf\":9,\"nfo\":19,\"nload\":9,\"nobs\":45,\"np\":15,\"nq\":2,\"nx\":1}}"
+        "\"arcs\":[],\"blocks\":[{\"coords\":[1],\"joints\":[\"C\"],\"rows\":[0]},{\"coords\":[0],\"joint"
+        "s\":[\"C\"],\"rows\":[1]}],\"bodies\":[{\"doc\":\"needle-bar crank on the upper shaft\",\"kind\""
+        ":\"driven\",\"name\":\"crank\",\"offset\":18,\"role\":\"needle_crank\"},{\"doc\":\"needle-bar li"
+        "nk \\u5c0f\\u8fde\\u6746 (part 13)\",\"kind\":\"link\",\"name\":\"rod\",\"offset\":27,\"role\":\""
+        "needle_rod\"},{\"doc\":\"needle bar with clamp and needle \\u9488\\u6746\\u7ec4\\u4ef6 (part 14)"
+        "\",\"kind\":\"slider\",\"name\":\"needle_bar\",\"offset\":36,\"role\":\"needle_bar\"}],\"body_fi"
+        "elds\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com"
+        "_ay\"],\"branches\":[{\"default\":-1,\"joint\":\"C\",\"kind\":\"rrp\",\"meaning\":\"+1: the larg"
+        "er travel of needle_bar at joint C\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\"],\"cons"
+        "tants\":[[0],[4],[4],[4],[1],[2],[1],[2],[1],[0,1,2],[0,1],[0],[3],[4],[6],[7],[7],[6],[1],[1],["
+        "2,13],[12],[0,1,2],[10],[11],[9],[1,9],[8],[0,6],[0,6],[5],[14],[12],[13],[3,12],[10],[11],[14],"
+        "[5],[8],[9],[11],[5],[9],[13]],\"coords\":[{\"guess\":-0.04,\"name\":\"needle_bar.travel\",\"uni"
+        "t\":\"m\"},{\"guess\":-1.5707963267948966,\"name\":\"rod.angle\",\"unit\":\"rad\"}],\"default_sp"
+        "eed\":104.71975511965977,\"doc\":\"Needle-bar mechanism \\u523a\\u5e03\\u673a\\u6784: upper-shaf"
+        "t crank \\u2192 needle-bar link \\u5c0f\\u8fde\\u6746 13 \\u2192 needle bar \\u9488\\u6746 14.\\n"
+        "\\nA crank-slider with offset (seed 000 \\u00a7\\u4e00(\\u4e00)1 and fig. 1-6; seed 002 fig. 1: "
+        "A crank centre, B crank pin,\\nC needle-bar pin). Frame: origin on the upper-shaft axis A, x hor"
+        "izontal, y up; the needle bar slides on\\nthe vertical line x = offset, its travel s measured up"
+        "ward from the shaft's horizontal (s = y of C).\\nCrank angle = shaft angle + phase, counter-cloc"
+        "kwise from +x (the needle is highest near phi = 90\\u00b0).\\n\\nDimensions: crank 16.7 mm is se"
+        "ed 002's industrial crank (its stroke 33.4 mm is within the 29\\u201335 mm of\\nindustrial and h"
+        "ousehold machines). The link length, offset, masses and inertias are estimates (the\\nseeds' tab"
+        "les of them are not in the text we have).\",\"force_blocks\":[1],\"force_outputs\":[{\"name\":\""
+        "shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"needle_ba"
+        "r.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaki"
+        "ng.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\""
+        "unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"un"
+        "it\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\""
+        "crank.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar"
+        ".moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi"
+        "\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_need"
+        "le_bar_anchors\":{\"ops\":24},\"sg_needle_bar_blocks\":{\"ops\":14},\"sg_needle_bar_closed\":{\""
+        "ops\":15},\"sg_needle_bar_constants\":{\"ops\":35},\"sg_needle_bar_force_matrix\":{\"ops\":65},\""
+        "sg_needle_bar_forces\":{\"ops\":136},\"sg_needle_bar_motion\":{\"ops\":78},\"sg_needle_bar_resid"
+        "ual\":{\"ops\":16},\"sg_needle_bar_scales\":{\"ops\":4}},\"loads\":[{\"body\":\"crank\",\"compon"
+        "ent\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_p"
+        "in\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"link_pin\"},{\"body\":\"needle_ba"
+        "r\",\"component\":\"fy\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\""
+        "name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\""
+        "body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"rod\",\"component\":\""
+        "torque\",\"name\":\"rod\"},{\"body\":\"needle_bar\",\"component\":\"torque\",\"name\":\"needle_b"
+        "ar\"}],\"name\":\"needle_bar\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"nam"
+        "e\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"cr"
+        "ank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cra"
+        "nk_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.x\",\"unit\":\"m\"},{\"name\":\"link_pin."
+        "y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.y_d\",\"un"
+        "it\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.y_dd\",\"unit"
+        "\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m"
+        "\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s"
+        "^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\""
+        "},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{"
+        "\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":"
+        "\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod"
+        ".angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod."
+        "com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit"
+        "\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/"
+        "s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\""
+        "rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\""
+        "unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\""
+        ",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y"
+        "_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_"
+        "bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0167,\"display_unit\":\"mm\",\"do"
+        "c\":\"crank radius AB (seed 002 \\u00a73)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":"
+        "true,\"role\":\"needle_crank_radius\",\"unit\":\"m\"},{\"default\":0.05,\"display_unit\":\"mm\","
+        "\"doc\":\"needle-bar link BC, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"pos"
+        "itive\":true,\"role\":\"needle_rod_length\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\""
+        "mm\",\"doc\":\"horizontal offset of the needle-bar axis from the shaft axis\",\"kind\":\"length\""
+        ",\"name\":\"offset\",\"positive\":false,\"role\":\"needle_bar_offset\",\"unit\":\"m\"},{\"defaul"
+        "t\":0.062,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link pin C along the bar (estim"
+        "ate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":true,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft an"
+        "gle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"ra"
+        "d\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\""
+        ":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_uni"
+        "t\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com"
+        "_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\""
+        "doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positi"
+        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\""
+        "moment of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.iner"
+        "tia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\""
+        ":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\",\"positive\":false,\"role"
+        "\":null,\"unit\":\"kg\"},{\"default\":2.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of i"
+        "nertia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rod.inertia\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":"
+        "\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of ne"
+        "edle_bar, local u\",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needl"
+        "e_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"m\"},{\"default\":1.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inerti"
+        "a of needle_bar about its centre of mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\","
+        "\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"v"
+        "y\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\""
+        ",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle-bar link pin C\",\"name\""
+        ":\"link_pin\",\"offset\":6,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye\",\"name"
+        "\":\"needle_eye\",\"offset\":12,\"role\":\"needle_eye\"}],\"reactions\":[{\"a\":\"ground\",\"b\""
+        ":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank."
+        "pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"]"
+        ",\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"c"
+        "rank\",\"b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name"
+        "\":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounde"
+        "d\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\""
+        "columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank"
+        ".drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"need"
+        "le_bar\"},\"needle_bar_offset\":{\"kind\":\"param\",\"name\":\"offset\"},\"needle_crank\":{\"kin"
+        "d\":\"body\",\"name\":\"crank\"},\"needle_crank_radius\":{\"kind\":\"param\",\"name\":\"crank\"}"
+        ",\"needle_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"needle_rod\":{\"kind\":\"body\",\""
+        "name\":\"rod\"},\"needle_rod_length\":{\"kind\":\"param\",\"name\":\"rod\"}},\"sizes\":{\"nancho"
+        "r_out\":30,\"nblock\":2,\"nbranch\":1,\"nc\":45,\"nf\":9,\"nfo\":19,\"nload\":9,\"nobs\":45,\"np"
+        "\":15,\"nq\":2,\"nx\":1}}"
         ;
 }
