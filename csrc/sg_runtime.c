@@ -3,7 +3,20 @@
 
 #include <string.h>
 
+/* SG_DEBUG (the sanitizer build of CI): the sweep asserts its pointers and the order permutation's range. */
+#ifdef SG_DEBUG
+#include <assert.h>
+#define SG_ASSERT(cond) assert(cond)
+#else
+#define SG_ASSERT(cond) ((void)0)
+#endif
+
 #define SG_TWO_PI 6.283185307179586476925286766559
+/* Unit roundoff. */
+#define SG_EPS 1.1102230246251565e-16
+/* A relative loop residual below this is rounding of the residual's own terms (sizes taken with every cos and
+ * sin as 1): the position is then as exact as a closed form's. */
+#define SG_RESID_FLOOR (64.0 * SG_EPS)
 
 int sg_lu_factor(int n, double *a, int *piv, double *det_sign)
 {
@@ -15,12 +28,13 @@ void sg_lu_solve(int n, const double *lu, const int *piv, double *b)
     sg_lu_solve_inl(n, lu, piv, b);
 }
 
-static double inf_norm(int n, const double *v)
+/* max |v_i| w_i; NaN propagates: a NaN entry makes the norm NaN */
+static double weighted_norm(int n, const double *v, const double *w)
 {
     double m = 0.0;
     for (int i = 0; i < n; ++i) {
-        const double a = fabs(v[i]);
-        if (!(a <= m)) m = a; /* NaN propagates: a NaN entry makes the norm NaN */
+        const double a = fabs(v[i]) * w[i];
+        if (!(a <= m)) m = a;
     }
     return m;
 }
@@ -75,23 +89,28 @@ static void fill_trig(const sg_mechanism *m, const double *q, double *cq)
     }
 }
 
-/* Damped Newton on Phi(q, x) = 0 from q (in place), with cq kept in step with q.
- * On success *det_sign is the sign of det(dPhi/dq) (at the last iterate but one after a full final step). */
+/* Damped Newton on Phi(q, x) = 0 from q (in place), with cq kept in step with q. Converged when every closure
+ * equation's residual is below opt->tol times that equation's own loop size (inv_scale: the reciprocals of the
+ * 'scales' kernel's sizes, refreshed by the caller). On success jac holds dPhi/dq at the solution and *resid
+ * the largest relative residual. */
 static int newton(const sg_mechanism *m, double *q, double *cq, const double *x, const double *cx,
-                  const double *c, const sg_options *opt, double *det_sign)
+                  const double *c, const sg_options *opt, const double *inv_scale, double *jac, double *resid)
 {
     const int nq = m->nq;
-    double r[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q], lu[SG_MAX_Q * SG_MAX_Q];
+    double r[SG_MAX_Q], w[SG_MAX_Q], lu[SG_MAX_Q * SG_MAX_Q];
     double qt[SG_MAX_Q], cqt[2 * SG_MAX_Q], rt[SG_MAX_Q], dq[SG_MAX_Q], step[SG_MAX_Q];
     int piv[SG_MAX_Q];
+    for (int i = 0; i < nq; ++i) w[i] = inv_scale[i] / opt->tol; /* scaled residual: converged at <= 1 */
     m->residual(q, cq, x, cx, c, r, jac); /* cq: cos, sin of q, from the caller */
-    double norm = inf_norm(nq, r);
+    double norm = weighted_norm(nq, r, w);
     for (int it = 0;; ++it) {
         if (!isfinite(norm)) return SG_NO_CONVERGENCE;
+        if (norm <= 1.0) {
+            *resid = norm * opt->tol;
+            return SG_OK;
+        }
         memcpy(lu, jac, sizeof(double) * (size_t)(nq * nq));
-        const int st = sg_lu_factor_inl(nq, lu, piv, det_sign);
-        if (norm <= opt->tol) return st == SG_OK ? SG_OK : SG_SINGULAR;
-        if (st != SG_OK) return SG_CANNOT_ASSEMBLE; /* no descent direction away from a solution */
+        if (sg_lu_factor_inl(nq, lu, piv, 0) != SG_OK) return SG_CANNOT_ASSEMBLE; /* no descent direction */
         if (it >= opt->max_iter) return SG_NO_CONVERGENCE;
         for (int i = 0; i < nq; ++i) dq[i] = -r[i];
         sg_lu_solve_inl(nq, lu, piv, dq);
@@ -100,8 +119,8 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
         for (k = 0; k < 30; ++k) {
             for (int i = 0; i < nq; ++i) step[i] = lambda * dq[i];
             shift_trig(m, q, cq, step, qt, cqt);
-            m->residual(qt, cqt, x, cx, c, rt, jac);
-            nt = inf_norm(nq, rt);
+            m->residual(qt, cqt, x, cx, c, rt, jac); /* the accepted trial leaves its dPhi/dq in jac */
+            nt = weighted_norm(nq, rt, w);
             if (nt < norm) break;
             lambda *= 0.5;
         }
@@ -110,16 +129,40 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
         memcpy(cq, cqt, sizeof(double) * (size_t)(2 * nq));
         memcpy(r, rt, sizeof(double) * (size_t)nq);
         norm = nt;
-        /* Converged by a full step: det Phi_q keeps the sign of the factor just used (the step is below the
-         * tolerance's scale); a singular Phi_q at the solution is caught by the motion kernel's own LU. */
-        if (norm <= opt->tol && lambda == 1.0) return SG_OK;
     }
 }
 
-/* Quadratic (Lagrange) extrapolation in the shaft angle from up to three earlier solutions, given as
- * row indices into the output array q (newest first). */
-static void predict(int nq, int nh, const size_t *hist, const double *phi, const double *q, double phi_new,
-                    double *out)
+/* One more full Newton step at a converged position (q, cq in place), kept if it lowers the residual: the
+ * position then is exact to rounding, as a closed form's, and its error no longer weighs in the rates' error
+ * estimate. Taken only where that estimate would otherwise be above the singular tolerance. */
+static void polish(const sg_mechanism *m, double *q, double *cq, const double *x, const double *cx, const double *c,
+                   const sg_options *opt, double *resid)
+{
+    const int nq = m->nq;
+    double r[SG_MAX_Q], w[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q], qt[SG_MAX_Q], cqt[2 * SG_MAX_Q], dq[SG_MAX_Q];
+    int piv[SG_MAX_Q];
+    m->scales(q, cq, x, cx, c, w);
+    for (int i = 0; i < nq; ++i) w[i] = 1.0 / w[i];
+    m->residual(q, cq, x, cx, c, r, jac);
+    const double before = weighted_norm(nq, r, w);
+    if (sg_lu_factor_inl(nq, jac, piv, 0) != SG_OK) return;
+    for (int i = 0; i < nq; ++i) dq[i] = -r[i];
+    sg_lu_solve_inl(nq, jac, piv, dq);
+    shift_trig(m, q, cq, dq, qt, cqt);
+    m->residual(qt, cqt, x, cx, c, r, jac);
+    const double after = weighted_norm(nq, r, w);
+    if (after < before) {
+        memcpy(q, qt, sizeof(double) * (size_t)nq);
+        memcpy(cq, cqt, sizeof(double) * (size_t)(2 * nq));
+        *resid = after;
+    } else {
+        *resid = before;
+    }
+    (void)opt;
+}
+
+/* Quadratic (Lagrange) extrapolation in the shaft angle from up to three earlier states (newest first). */
+static void predict(int nq, int nh, const double *hphi, double *const *hq, double phi_new, double *out)
 {
     double w[3] = {1.0, 0.0, 0.0};
     int used = nh;
@@ -129,8 +172,8 @@ static void predict(int nq, int nh, const size_t *hist, const double *phi, const
             double num = 1.0, den = 1.0;
             for (int b = 0; b < used; ++b) {
                 if (b == a) continue;
-                num *= phi_new - phi[hist[b]];
-                den *= phi[hist[a]] - phi[hist[b]];
+                num *= phi_new - hphi[b];
+                den *= hphi[a] - hphi[b];
             }
             if (!(fabs(den) > 1e-14)) ok = 0;
             else w[a] = num / den;
@@ -140,7 +183,7 @@ static void predict(int nq, int nh, const size_t *hist, const double *phi, const
     if (used <= 1) w[0] = 1.0, used = 1;
     for (int i = 0; i < nq; ++i) {
         double v = 0.0;
-        for (int a = 0; a < used; ++a) v += w[a] * q[hist[a] * (size_t)nq + i];
+        for (int a = 0; a < used; ++a) v += w[a] * hq[a][i];
         out[i] = v;
     }
 }
@@ -150,23 +193,154 @@ static void zero_row(double *v, int n)
     for (int i = 0; i < n; ++i) v[i] = 0.0;
 }
 
+/* Continuation along the shaft angle: the last solved states (the predictor's history, newest first), the
+ * orientation signs of the closing loops at the sweep's first position (kernel 'blocks'), the inputs. */
+typedef struct {
+    const sg_mechanism *m;
+    const sg_options *opt;
+    const double *c;
+    double *x, *cx;
+    int nh;
+    double hphi[3];
+    double *hq[3];            /* newest first: pointers into store, rotated (no copies) */
+    double store[3][SG_MAX_Q];
+    double hcq[2 * SG_MAX_Q]; /* cos, sin of the newest state */
+    int has_ref;
+    double ref[SG_MAX_Q];
+    double lscale;             /* the largest loop size (m): what a travel's step is measured against */
+    double inv_scale[SG_MAX_Q]; /* 1 / each closure equation's loop size, for Newton's tolerance */
+    int scale_age;              /* solves since inv_scale was taken (loop sizes move with the travels only) */
+} sg_walker;
+
+/* Largest shaft-angle step of the continuation (rad): longer steps between the requested angles are cut. */
+#define SG_H_MAX 0.2
+/* Smallest: a branch that cannot be followed in steps this short has ended (or met another). */
+#define SG_H_MIN 1e-6
+/* Largest change of an angle coordinate (rad; a travel: times the largest loop size) that a step may predict
+ * or that Newton may add to the prediction: a larger one halves the step. */
+#define SG_DQ_MAX 0.5
+/* Below this |normalised block determinant| a loop is at its singular position: its sign says nothing. */
+#define SG_BLOCK_ZERO 1e-12
+
+static void set_input(sg_walker *w, double ph)
+{
+    if (w->x[0] == ph) return; /* cos, sin already those of ph */
+    w->x[0] = ph;
+    sg_cos_sin(ph, &w->cx[0], &w->cx[1]);
+}
+
+static void push(sg_walker *w, double ph, const double *q, const double *cq)
+{
+    const int nq = w->m->nq;
+    double *oldest = w->hq[2];
+    w->hq[2] = w->hq[1], w->hq[1] = w->hq[0], w->hq[0] = oldest;
+    w->hphi[2] = w->hphi[1], w->hphi[1] = w->hphi[0], w->hphi[0] = ph;
+    memcpy(w->hq[0], q, sizeof(double) * (size_t)nq);
+    memcpy(w->hcq, cq, sizeof(double) * (size_t)(2 * nq));
+    if (w->nh < 3) ++w->nh;
+}
+
+/* |d| within SG_DQ_MAX for every coordinate (travels against the loop size). */
+static int small_change(const sg_walker *w, const double *d)
+{
+    const sg_mechanism *m = w->m;
+    for (int k = 0; k < m->nq; ++k) {
+        const double lim = m->coord_is_angle[k] ? SG_DQ_MAX : SG_DQ_MAX * w->lscale;
+        if (!(fabs(d[k]) <= lim)) return 0;
+    }
+    return 1;
+}
+
+/* Newton at shaft angle ph from q (cq its cos, sin), then the loops' orientation signs against the reference. */
+static int solve_at(sg_walker *w, double ph, double *q, double *cq, double *resid)
+{
+    const sg_mechanism *m = w->m;
+    double jac[SG_MAX_Q * SG_MAX_Q], bv[SG_MAX_Q];
+    set_input(w, ph);
+    if (w->scale_age <= 0) {
+        m->scales(q, cq, w->x, w->cx, w->c, w->inv_scale);
+        for (int i = 0; i < m->nq; ++i) w->inv_scale[i] = 1.0 / w->inv_scale[i];
+        w->scale_age = 16;
+    }
+    --w->scale_age;
+    const int st = newton(m, q, cq, w->x, w->cx, w->c, w->opt, w->inv_scale, jac, resid);
+    if (st != SG_OK || m->nblock == 0) return st;
+    m->blocks(jac, bv);
+    if (!w->has_ref) {
+        for (int k = 0; k < m->nblock; ++k)
+            if (!(fabs(bv[k]) > SG_BLOCK_ZERO)) return SG_OK; /* a singular first position sets no reference */
+        for (int k = 0; k < m->nblock; ++k) w->ref[k] = bv[k] > 0.0 ? 1.0 : -1.0;
+        w->has_ref = 1;
+        return SG_OK;
+    }
+    for (int k = 0; k < m->nblock; ++k)
+        if (bv[k] * w->ref[k] < 0.0 && fabs(bv[k]) > SG_BLOCK_ZERO) return SG_BRANCH_JUMP;
+    return SG_OK;
+}
+
+/* From the newest state to shaft angle phi_t in steps of at most SG_H_MAX, each predicted from the history and
+ * corrected by Newton, halved while a step predicts or corrects too much, fails, or lands on another branch;
+ * every accepted step joins the history. On success q, cq hold the solution at phi_t. */
+static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *resid)
+{
+    const int nq = w->m->nq;
+    double cur = w->hphi[0];
+    const double total = phi_t - cur;
+    if (total == 0.0) { /* a repeated angle: the same solution (Newton only confirms it) */
+        memcpy(q, w->hq[0], sizeof(double) * (size_t)nq);
+        memcpy(cq, w->hcq, sizeof(double) * (size_t)(2 * nq));
+        return solve_at(w, phi_t, q, cq, resid);
+    }
+    const double dir = total > 0.0 ? 1.0 : -1.0;
+    double h = fmin(fabs(total), SG_H_MAX);
+    int last = SG_NO_CONVERGENCE;
+    for (;;) {
+        const double next = h >= fabs(phi_t - cur) ? phi_t : cur + dir * h;
+        double d[SG_MAX_Q], qp[SG_MAX_Q];
+        predict(nq, w->nh, w->hphi, w->hq, next, qp);
+        for (int k = 0; k < nq; ++k) d[k] = qp[k] - w->hq[0][k];
+        if (small_change(w, d)) {
+            shift_trig(w->m, w->hq[0], w->hcq, d, q, cq);
+            int st = solve_at(w, next, q, cq, resid);
+            if (st == SG_OK) {
+                for (int k = 0; k < nq; ++k) d[k] = q[k] - qp[k];
+                if (!small_change(w, d)) st = SG_BRANCH_JUMP; /* somewhere else than where the step leads */
+            }
+            if (st == SG_OK) {
+                push(w, next, q, cq);
+                if (next == phi_t) return SG_OK;
+                cur = next;
+                h = fmin(2.0 * h, SG_H_MAX);
+                continue;
+            }
+            last = st;
+        }
+        h *= 0.5;
+        if (h < SG_H_MIN) return last;
+    }
+}
+
 /* The sweep: kinematics at every position, then (frc != NULL) the forces from the same solution. */
 static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
                     const double *alpha, const double *held, const double *p, const int *branch,
-                    const double *q_guess, const sg_options *opt, const double *gv, const double *loads,
-                    double *q, double *qd, double *qdd, double *obs, double *frc, int *status)
+                    const double *q_guess, const sg_options *opt, const size_t *order, const double *gv,
+                    const double *loads, double *q, double *qd, double *qdd, double *obs, double *err,
+                    double *frc, int *status)
 {
     const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo;
     double no_loads[SG_MAX_LOAD] = {0.0};
+    SG_ASSERT(phi && omega && alpha && p && branch && q_guess && opt && q && qd && qdd && obs && status);
+    SG_ASSERT(nx == 1 || held);
     if (nq > SG_MAX_Q || nx > SG_MAX_Q || nx < 1 || m->nc > SG_MAX_C || m->nload > SG_MAX_LOAD ||
-        !(opt->tol > 0.0) || opt->max_iter < 1 || (frc != NULL && gv == NULL)) {
+        m->nblock > SG_MAX_Q || !(opt->tol > 0.0) || opt->max_iter < 1 || !(opt->singular_tol > 0.0) ||
+        (frc != NULL && gv == NULL)) {
         for (size_t i = 0; i < n; ++i) status[i] = SG_BAD_ARGUMENT;
         return n;
     }
     const int use_closed = m->closed != NULL && !opt->newton_only;
     double c[SG_MAX_C];
     m->constants(p, c);
-    double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q], cq[2 * SG_MAX_Q], cq_last[2 * SG_MAX_Q];
+    double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q];
     for (int k = 1; k < nx; ++k) {
         x[k] = held[k - 1];
         cx[2 * k] = cos(x[k]);
@@ -174,55 +348,117 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         xd[k] = 0.0;
         xdd[k] = 0.0;
     }
-    size_t hist[3]; /* rows of the last good solutions, newest first */
-    int nh = 0;
-    double ref_sign = 0.0;
+    sg_walker w;
+    w.m = m, w.opt = opt, w.c = c, w.x = x, w.cx = cx, w.nh = 0, w.has_ref = 0, w.lscale = 0.0, w.scale_age = 0;
+    w.hq[0] = w.store[0], w.hq[1] = w.store[1], w.hq[2] = w.store[2];
+    x[0] = NAN; /* no angle's cos, sin yet */
+    if (!use_closed && m->closed != NULL && m->nblock > 0) {
+        /* Newton on a mechanism with a closed form: the loops' orientation signs are those of the declared
+         * branch, taken from the closed form at the first position (in solving order) where it assembles */
+        for (size_t k = 0; k < n && !w.has_ref; ++k) {
+            const size_t i = order ? order[k] : k;
+            double qr[SG_MAX_Q], cqr[2 * SG_MAX_Q], r[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q], bv[SG_MAX_Q];
+            if (!isfinite(phi[i])) continue;
+            set_input(&w, phi[i]);
+            if (m->closed(x, cx, c, branch, qr, cqr) != SG_OK) continue;
+            m->residual(qr, cqr, x, cx, c, r, jac);
+            m->blocks(jac, bv);
+            int ok = 1;
+            for (int b = 0; b < m->nblock; ++b) ok &= fabs(bv[b]) > SG_BLOCK_ZERO;
+            if (!ok) continue;
+            for (int b = 0; b < m->nblock; ++b) w.ref[b] = bv[b] > 0.0 ? 1.0 : -1.0;
+            w.has_ref = 1;
+        }
+    }
     size_t failures = 0;
-    for (size_t i = 0; i < n; ++i) {
+    int prev_failed = 0;
+    for (size_t k = 0; k < n; ++k) {
+        const size_t i = order ? order[k] : k;
+        SG_ASSERT(i < n);
         double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq;
         double *oi = obs + i * (size_t)nobs;
+        double cq[2 * SG_MAX_Q];
+        double resid = SG_EPS; /* the position's relative accuracy: rounding for the closed form */
         int st = SG_OK;
         const double ph = phi[i];
-        x[0] = ph;
         xd[0] = omega[i];
         xdd[0] = alpha[i];
         if (!isfinite(ph + omega[i] + alpha[i])) st = SG_NAN_INPUT;
-        cx[0] = cos(ph);
-        cx[1] = sin(ph);
+        set_input(&w, ph);
         if (st == SG_OK && use_closed) {
             st = m->closed(x, cx, c, branch, qi, cq);
-            if (st == SG_OK && nh > 0) { /* keep angles continuous: unwrap against the last solution */
-                const double *prev = q + hist[0] * (size_t)nq;
-                for (int k = 0; k < nq; ++k)
-                    if (m->coord_is_angle[k]) {
-                        const double turns = (prev[k] - qi[k]) * (1.0 / SG_TWO_PI);
-                        if (fabs(turns) > 0.5) qi[k] += SG_TWO_PI * nearbyint(turns);
+            if (st == SG_OK && w.nh > 0) { /* keep angles continuous: unwrap against the last solution */
+                for (int j = 0; j < nq; ++j)
+                    if (m->coord_is_angle[j]) {
+                        const double turns = (w.hq[0][j] - qi[j]) * (1.0 / SG_TWO_PI);
+                        if (fabs(turns) > 0.5) qi[j] += SG_TWO_PI * nearbyint(turns);
                     }
             }
+            if (st == SG_OK) push(&w, ph, qi, cq);
         } else if (st == SG_OK) {
-            double sign = 0.0;
-            if (nh > 0) { /* predictor; cos, sin shifted from the last solution's */
-                const double *prev = q + hist[0] * (size_t)nq;
-                double d[SG_MAX_Q];
-                predict(nq, nh, hist, phi, q, ph, qi);
-                for (int k = 0; k < nq; ++k) d[k] = qi[k] - prev[k];
-                shift_trig(m, prev, cq_last, d, qi, cq);
-            } else { /* first position: the closed form where it assembles, else the guess */
-                if (m->closed == NULL || m->closed(x, cx, c, branch, qi, cq) != SG_OK)
+            if (w.nh > 0 && !prev_failed) {
+                st = advance(&w, ph, qi, cq, &resid);
+            } else { /* first position, or after a failure: the closed form where it assembles, else the last
+                      * solution or the guess; the orientation signs are checked against the first position's */
+                int have = 0, closed_st = SG_OK;
+                if (m->closed != NULL) {
+                    closed_st = m->closed(x, cx, c, branch, qi, cq);
+                    have = closed_st == SG_OK;
+                }
+                if (!have && w.nh > 0) {
+                    memcpy(qi, w.hq[0], sizeof(double) * (size_t)nq);
+                    memcpy(cq, w.hcq, sizeof(double) * (size_t)(2 * nq));
+                } else if (!have) {
                     memcpy(qi, q_guess, sizeof(double) * (size_t)nq);
-                fill_trig(m, qi, cq);
+                    fill_trig(m, qi, cq);
+                }
+                w.scale_age = 0; /* a fresh start takes the loop sizes anew */
+                if (w.nh == 0) { /* the loop sizes at the start: the scale of a travel's step */
+                    double sc[SG_MAX_Q];
+                    m->scales(qi, cq, x, cx, c, sc);
+                    for (int j = 0; j < nq; ++j)
+                        if (isfinite(sc[j]) && sc[j] > w.lscale) w.lscale = sc[j];
+                    if (!(w.lscale > 0.0)) w.lscale = 1.0;
+                }
+                if (!have && m->closed != NULL && !w.has_ref)
+                    st = closed_st; /* the declared branch assembles nowhere in the sweep: nothing to follow */
+                else
+                    st = solve_at(&w, ph, qi, cq, &resid);
+                if (st == SG_BRANCH_JUMP && !have && m->closed != NULL)
+                    st = closed_st; /* the declared branch does not assemble here: Newton found another */
+                if (st == SG_OK) {
+                    w.nh = 0; /* the history restarts here */
+                    push(&w, ph, qi, cq);
+                }
             }
-            st = newton(m, qi, cq, x, cx, c, opt, &sign);
-            if (st == SG_OK) {
-                if (ref_sign == 0.0) ref_sign = sign;
-                else if (sign != ref_sign) st = SG_BRANCH_JUMP;
+            prev_failed = st != SG_OK;
+        }
+        double cond = 1.0, est = 0.0;
+        if (st == SG_OK) {
+            st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
+            if (st == SG_SINGULAR) {
+                est = INFINITY; /* the velocity solve itself is singular */
+            } else if (st == SG_OK) { /* the rates' relative error: the solve's own (eps cond) plus what the
+                                       * position's error (resid cond) does to the Jacobian, amplified again */
+                est = cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
+                if (!(est <= opt->singular_tol) && resid > SG_RESID_FLOOR) { /* Newton's last residual */
+                    polish(m, qi, cq, x, cx, c, opt, &resid);
+                    st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
+                    if (st == SG_SINGULAR) est = INFINITY;
+                    else est = cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
+                    if (st == SG_OK && w.nh > 0 && !use_closed) { /* the history holds the polished state */
+                        memcpy(w.hq[0], qi, sizeof(double) * (size_t)nq);
+                        memcpy(w.hcq, cq, sizeof(double) * (size_t)(2 * nq));
+                    }
+                }
+                if (st == SG_OK && !(est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;
             }
         }
-        if (st == SG_OK) st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi);
         if (st == SG_OK && frc != NULL)
             st = m->forces(qi, cq, x, cx, xd, c, oi, gv, loads ? loads + i * (size_t)m->nload : no_loads,
                            frc + i * (size_t)nfo);
         status[i] = st;
+        if (err) err[i] = st == SG_OK || st == SG_SINGULAR ? est : 0.0; /* a force-matrix singularity: est ok */
         if (st != SG_OK) {
             ++failures;
             zero_row(qi, nq);
@@ -230,37 +466,34 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
             zero_row(qddi, nq);
             zero_row(oi, nobs);
             if (frc != NULL) zero_row(frc + i * (size_t)nfo, nfo);
-            continue;
         }
-        memcpy(cq_last, cq, sizeof(double) * (size_t)(2 * nq));
-        hist[2] = hist[1];
-        hist[1] = hist[0];
-        hist[0] = i;
-        if (nh < 3) ++nh;
     }
     return failures;
 }
 
 /* Sweep a mechanism over n shaft angles in one call: positions, velocities, accelerations and every
  * observable. phi/omega/alpha have n entries; held has nx-1; q_guess (nq) starts Newton where no closed
- * form exists. Outputs are row-major (n x nq, n x nobs); status has n entries. Returns the number of
- * positions whose status is not SG_OK (or n with every status SG_BAD_ARGUMENT on bad sizes). */
+ * form exists. The positions are solved in the order 'order' (NULL: as given) and written to their own rows.
+ * Outputs are row-major (n x nq, n x nobs); err (NULL or n) gets each position's estimated relative error of
+ * the rates; status has n entries. Returns the number of positions whose status is not SG_OK (or n with
+ * every status SG_BAD_ARGUMENT on bad sizes). */
 size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
                 const double *alpha, const double *held, const double *p, const int *branch,
-                const double *q_guess, const sg_options *opt, double *q, double *qd, double *qdd,
-                double *obs, int *status)
+                const double *q_guess, const sg_options *opt, const size_t *order, double *q, double *qd,
+                double *qdd, double *obs, double *err, int *status)
 {
-    return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, NULL, NULL, q, qd, qdd, obs, NULL,
-                 status);
+    return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, NULL, NULL, q, qd, qdd, obs, err,
+                 NULL, status);
 }
 
 /* sg_sweep plus kinetostatics in the same pass: gv is gravity (2), loads is n x nload (NULL: no loads),
  * frc receives n x nfo force outputs. A singular force matrix gives SG_SINGULAR at that position. */
 size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
                        const double *alpha, const double *held, const double *p, const int *branch,
-                       const double *q_guess, const sg_options *opt, const double *gv, const double *loads,
-                       double *q, double *qd, double *qdd, double *obs, double *frc, int *status)
+                       const double *q_guess, const sg_options *opt, const size_t *order, const double *gv,
+                       const double *loads, double *q, double *qd, double *qdd, double *obs, double *err,
+                       double *frc, int *status)
 {
-    return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, gv, loads, q, qd, qdd, obs, frc,
-                 status);
+    return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, gv, loads, q, qd, qdd, obs, err,
+                 frc, status);
 }

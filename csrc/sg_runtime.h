@@ -97,7 +97,130 @@ SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *
     }
 }
 
-/* Closed-form dyads (seed 001 §三, Makino's vector triangles; BV4 is the RRR dyad). ------------------ */
+/* LU of A scaled, R A C: R = diag(rs) given in natural units (sewgen's motion kernels: each row over its loop's
+ * size, so that a loop near its toggle, whose rows all but vanish, stays near-singular), C = diag(cs) found here
+ * (each column of R A to its largest entry 1: rad and m columns alike, the solution's components each to its
+ * own scale); and a bound of the condition number of R A C in the inf norm (from the factor, below). The
+ * runtime turns it into the estimated relative error of the rates (csrc/sg_runtime.c). Solve with
+ * sg_solve_eq_inl. */
+SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, double *cs, double *cond)
+{
+    *cond = INFINITY;
+    for (int j = 0; j < n; ++j) {
+        double m = 0.0;
+        for (int i = 0; i < n; ++i) {
+            a[i * n + j] *= rs[i];
+            const double v = fabs(a[i * n + j]);
+            if (!(v <= m)) m = v; /* NaN propagates */
+        }
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR; /* a coordinate no loop reads */
+        cs[j] = 1.0 / m;
+        for (int i = 0; i < n; ++i) a[i * n + j] *= cs[j];
+    }
+    double anorm = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double s = 0.0;
+        for (int j = 0; j < n; ++j) s += fabs(a[i * n + j]);
+        if (!(s <= anorm)) anorm = s; /* NaN propagates */
+    }
+    for (int k = 0; k < n; ++k) { /* LU with partial pivoting: every column's largest entry is 1 already */
+        int pr = k;
+        double best = fabs(a[k * n + k]);
+        for (int i = k + 1; i < n; ++i) {
+            const double v = fabs(a[i * n + k]);
+            if (v > best) best = v, pr = i;
+        }
+        piv[k] = pr;
+        if (!(best > SG_PIVOT_RTOL)) return SG_SINGULAR;
+        if (pr != k)
+            for (int j = 0; j < n; ++j) {
+                const double t = a[k * n + j];
+                a[k * n + j] = a[pr * n + j];
+                a[pr * n + j] = t;
+            }
+        const double inv = 1.0 / a[k * n + k];
+        a[k * n + k] = inv; /* U's diagonal kept as its reciprocal: the solves multiply */
+        for (int i = k + 1; i < n; ++i) {
+            const double f = a[i * n + k] * inv;
+            a[i * n + k] = f;
+            if (f != 0.0)
+                for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
+        }
+    }
+    /* ||A^-1||_inf <= ||U^-1|| ||L^-1|| <= ||M(U)^-1 1|| ||M(L)^-1 1||, M the comparison matrix (|diagonal|,
+     * -|off-diagonal|: its inverse is non-negative, so its norm is its row sums, one triangular solve with a
+     * vector of ones each). An upper bound, tight for the small well-scaled factors here; two passes of n^2/2
+     * instead of n solves. */
+    double y[SG_MAX_Q];
+    double lnorm = 0.0, inorm = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double s = 1.0;
+        for (int j = 0; j < i; ++j) s += fabs(a[i * n + j]) * y[j];
+        y[i] = s;
+        if (!(s <= lnorm)) lnorm = s;
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        double s = 1.0;
+        for (int j = i + 1; j < n; ++j) s += fabs(a[i * n + j]) * y[j];
+        y[i] = s * fabs(a[i * n + i]);
+        if (!(y[i] <= inorm)) inorm = y[i];
+    }
+    inorm *= lnorm;
+    *cond = anorm * inorm;
+    return isfinite(*cond) ? SG_OK : SG_SINGULAR;
+}
+
+/* Solve A x = b with a factor of sg_factor_eq_inl (b overwritten by x; U's diagonal holds reciprocals). */
+SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const double *rs, const double *cs,
+                               double *b)
+{
+    for (int i = 0; i < n; ++i) b[i] *= rs[i];
+    for (int k = 0; k < n; ++k)
+        if (piv[k] != k) {
+            const double t = b[k];
+            b[k] = b[piv[k]];
+            b[piv[k]] = t;
+        }
+    for (int k = 0; k < n; ++k)
+        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
+    for (int k = n - 1; k >= 0; --k) {
+        double s = b[k];
+        for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
+        b[k] = s * lu[k * n + k];
+    }
+    for (int j = 0; j < n; ++j) b[j] *= cs[j];
+}
+
+/* A parameter sum under a square root (a triangle's height from its sides): a negative within 1e-12 of the sum
+ * of its terms' magnitudes is rounding of a zero (a collinear triangle) and becomes 0; a real negative stays. */
+static inline double sg_rounding_clamp(double value, double scale)
+{
+    return value < 0.0 && value >= -1e-12 * scale ? 0.0 : value;
+}
+
+/* Squared Euclidean norm of a row of n entries. */
+static inline double sg_row_norm2(int n, const double *row)
+{
+    double s = 0.0;
+    for (int j = 0; j < n; ++j) s += row[j] * row[j];
+    return s;
+}
+
+/* Determinant of an n x n matrix (destroyed), 0 where the LU finds it singular. */
+SG_INLINE double sg_det_inl(int n, double *a, int *piv)
+{
+    double sign = 1.0;
+    if (sg_lu_factor_inl(n, a, piv, &sign) != SG_OK) return 0.0;
+    double d = 1.0;
+    for (int k = 0; k < n; ++k) d *= fabs(a[k * n + k]);
+    return sign * d;
+}
+
+/* Closed-form dyads (seed 001 §三, Makino's vector triangles; BV4 is the RRR dyad). ------------------
+ * A triangle that closes only within the rounding of its sides (a toggle or change point hit exactly) is taken
+ * as closed, flat: SG_TOUCH is that rounding, relative to the squares summed. The position is then singular
+ * and the motion kernel's condition estimate reports it as such. */
+#define SG_TOUCH 1e-14
 
 /* RRR: J is at distance l1 from P and l2 from Q; sigma = +1 puts J left of the ray P->Q. */
 static inline int sg_dyad_rrr(const double P[2], const double Q[2], double l1, double l2, int sigma,
@@ -107,7 +230,8 @@ static inline int sg_dyad_rrr(const double P[2], const double Q[2], double l1, d
     const double d2 = dx * dx + dy * dy;
     if (!(d2 > 1e-30)) return SG_SINGULAR;
     const double a = 0.5 * (l1 * l1 - l2 * l2 + d2) / d2; /* along PQ, in units of d */
-    const double h2 = l1 * l1 / d2 - a * a;                /* across PQ, squared, in units of d^2 */
+    double h2 = l1 * l1 / d2 - a * a;                      /* across PQ, squared, in units of d^2 */
+    if (h2 < 0.0 && h2 >= -SG_TOUCH * (l1 * l1 + l2 * l2 + d2) / d2) h2 = 0.0; /* touching within rounding */
     if (!(h2 >= 0.0)) return SG_CANNOT_ASSEMBLE;
     const double h = sigma * sqrt(h2);
     J[0] = P[0] + a * dx - h * dy;
@@ -121,7 +245,8 @@ static inline int sg_dyad_rrp(const double P[2], double l1, const double L0[2], 
 {
     const double wx = L0[0] - P[0], wy = L0[1] - P[1];
     const double b = u[0] * wx + u[1] * wy;
-    const double disc = b * b - (wx * wx + wy * wy - l1 * l1);
+    double disc = b * b - (wx * wx + wy * wy - l1 * l1);
+    if (disc < 0.0 && disc >= -SG_TOUCH * (b * b + wx * wx + wy * wy + l1 * l1)) disc = 0.0;
     if (!(disc >= 0.0)) return SG_CANNOT_ASSEMBLE;
     *s = -b + sigma * sqrt(disc);
     J[0] = L0[0] + *s * u[0];
@@ -138,7 +263,8 @@ static inline int sg_dyad_rpr(const double D[2], const double w0[2], const doubl
     const double d2 = D[0] * D[0] + D[1] * D[1];
     if (!(d2 > 1e-30)) return SG_SINGULAR;
     const double b = u[0] * w0[0] + u[1] * w0[1];
-    const double disc = b * b - (w0[0] * w0[0] + w0[1] * w0[1] - d2);
+    double disc = b * b - (w0[0] * w0[0] + w0[1] * w0[1] - d2);
+    if (disc < 0.0 && disc >= -SG_TOUCH * (b * b + w0[0] * w0[0] + w0[1] * w0[1] + d2)) disc = 0.0;
     if (!(disc >= 0.0)) return SG_CANNOT_ASSEMBLE;
     *s = -b + sigma * sqrt(disc);
     const double wx = w0[0] + *s * u[0], wy = w0[1] + *s * u[1];

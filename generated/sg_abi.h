@@ -9,7 +9,7 @@ enum sg_status {
     SG_OK = 0, /* solved */
     SG_CANNOT_ASSEMBLE = 1, /* the loop does not close at this input (a dyad's circles do not meet) */
     SG_SINGULAR = 2, /* the constraint Jacobian or a force block is singular here (toggle / dead-centre position) */
-    SG_BRANCH_JUMP = 3, /* Newton landed on another assembly branch than the previous position */
+    SG_BRANCH_JUMP = 3, /* the declared assembly branch cannot be continued here: Newton, in steps down to 1e-6 rad, finds only positions where a closing loop's orientation sign differs from the sweep's first position */
     SG_NAN_INPUT = 4, /* a shaft angle, speed or acceleration is not finite (Python checks first) */
     SG_NO_CONVERGENCE = 5, /* Newton ran out of iterations */
     SG_NONFINITE = 6, /* a result came out non-finite (the motion kernel tests every output) */
@@ -17,9 +17,11 @@ enum sg_status {
 };
 
 typedef struct sg_options {
-    double tol;      /* loop residual tolerance (m); Newton stops below it */
-    int max_iter;    /* Newton iterations per position */
-    int newton_only; /* 1: Newton even where a closed form exists (tests, benchmarks) */
+    double tol;          /* relative loop residual tolerance: Newton stops when every closure equation's residual is below tol times that equation's own loop size (kernel 'scales') */
+    int max_iter;        /* Newton iterations per position */
+    int newton_only;     /* 1: Newton even where a closed form exists (tests, benchmarks) */
+    double singular_tol; /* largest estimated relative error of the velocities and accelerations; a position above it is SG_SINGULAR unless keep_singular */
+    int keep_singular;   /* 1: positions above singular_tol keep their results (status SG_OK, err says why) */
 } sg_options;
 
 /* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */
@@ -29,12 +31,16 @@ typedef void (*sg_constants_fn)(const double *p, double *c);
 typedef int (*sg_closed_fn)(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
 /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
 typedef void (*sg_residual_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
-/* velocities, accelerations and observables at a solved position */
-typedef int (*sg_motion_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs);
+/* velocities, accelerations and observables at a solved position; cond: the condition number (inf norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated */
+typedef int (*sg_motion_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
 /* joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld */
 typedef int (*sg_forces_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 /* A (nf x nf, row-major) and b of A f = b, for inspection */
 typedef void (*sg_force_matrix_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+/* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
+typedef void (*sg_scales_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+/* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
+typedef void (*sg_blocks_fn)(const double *jac, double *out);
 /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
 typedef void (*sg_anchors_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 
@@ -50,13 +56,16 @@ typedef struct sg_mechanism {
     int nf;                              /* force unknowns: reactions and driving torques */
     int nfo;                             /* force outputs per position: nf, then torques, powers, shaking, energies (manifest) */
     int nload;                           /* load slots per position: fx, fy per point of a moving body, torque per moving body */
+    int nblock;                          /* diagonal blocks of dPhi/dq (closing loops), each with an orientation sign */
     const unsigned char *coord_is_angle; /* 1 for an angle coordinate, 0 for a travel */
     sg_constants_fn constants;           /* every parameter-only subexpression, once per sweep */
     sg_closed_fn closed;                 /* the dyad chain in closed form; NULL in the descriptor where the loops do not split */
     sg_residual_fn residual;             /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
-    sg_motion_fn motion;                 /* velocities, accelerations and observables at a solved position */
+    sg_motion_fn motion;                 /* velocities, accelerations and observables at a solved position; cond: the condition number (inf norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated */
     sg_forces_fn forces;                 /* joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld */
     sg_force_matrix_fn force_matrix;     /* A (nf x nf, row-major) and b of A f = b, for inspection */
+    sg_scales_fn scales;                 /* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
+    sg_blocks_fn blocks;                 /* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
     sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
 } sg_mechanism;
 
@@ -64,9 +73,9 @@ typedef struct sg_mechanism {
 int sg_lu_factor(int n, double *a, int *piv, double *det_sign);
 /* solve with a factor of sg_lu_factor, b overwritten */
 void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
-/* a mechanism over n shaft angles in one call: positions, velocities, accelerations, observables; returns the number of positions whose status is not SG_OK */
-size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, double *q, double *qd, double *qdd, double *obs, int *status);
+/* a mechanism over n shaft angles in one call: positions, velocities, accelerations, observables; solved in the order 'order' (a permutation of 0..n-1 that sorts phi; NULL: as given), written in the caller's order; err (n, or NULL) the estimated relative error of the rates; returns the number of positions whose status is not SG_OK */
+size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
 /* sg_sweep plus kinetostatics in the same pass (gv gravity, loads n x nload or NULL, frc n x nfo) */
-size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *frc, int *status);
+size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status);
 
 #endif

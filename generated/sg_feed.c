@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_feed_constants -- Total ops: 124 */
+/* sg_feed_constants -- Total ops: 164 */
 void sg_feed_constants(const double *p, double *c)
 {
     const double t0 = -p[6];
@@ -24,24 +24,36 @@ void sg_feed_constants(const double *p, double *c)
     const double t12 = p[18]*cos(p[19]);
     const double t13 = -p[9];
     const double t14 = -p[3];
-    const double t15 = -p[31];
-    const double t16 = (0.5)*p[2];
-    const double t17 = -p[49];
-    const double t18 = -p[53];
-    const double t19 = -p[57];
-    const double t20 = -p[62];
-    const double t21 = -p[61];
-    const double t22 = t14 + t16;
-    const double t23 = -t22;
-    const double t24 = p[40]*t23;
-    const double t25 = p[21] + t17;
-    const double t26 = p[12] + t18;
-    const double t27 = t11 + t20;
-    const double t28 = t12 + t21;
-    const double t29 = p[13] + t15;
-    const double t30 = p[45] + t4;
-    const double t31 = p[14] + t19;
-    const double t32 = p[17] + t21;
+    const double t15 = fabs(p[6]);
+    const double t16 = fabs(p[7]);
+    const double t17 = t15 + t16;
+    const double t18 = p[2] + p[3] + p[8];
+    const double t19 = fabs(p[15]);
+    const double t20 = p[13] + p[14] + p[17];
+    const double t21 = t19 + t20;
+    const double t22 = fabs(p[16]);
+    const double t23 = t20 + t22;
+    const double t24 = fabs(p[10]) + fabs(p[11]);
+    const double t25 = 4.0*p[18] + t19 + t22 + t24;
+    const double t26 = 2.0*p[12] + 2.0*p[22] + 2.0*p[9] + t17 + t24;
+    const double t27 = -p[31];
+    const double t28 = (0.5)*p[2];
+    const double t29 = -p[49];
+    const double t30 = -p[53];
+    const double t31 = -p[57];
+    const double t32 = -p[62];
+    const double t33 = -p[61];
+    const double t34 = t14 + t28;
+    const double t35 = -t34;
+    const double t36 = p[40]*t35;
+    const double t37 = p[21] + t29;
+    const double t38 = p[12] + t30;
+    const double t39 = t11 + t32;
+    const double t40 = t12 + t33;
+    const double t41 = p[13] + t27;
+    const double t42 = p[45] + t4;
+    const double t43 = p[14] + t31;
+    const double t44 = p[17] + t33;
     c[0] = t0;
     c[1] = p[2];
     c[2] = -t2;
@@ -88,133 +100,144 @@ void sg_feed_constants(const double *p, double *c)
     c[43] = -t1;
     c[44] = -sqrt(3.0)*t1;
     c[45] = t1;
-    c[46] = -p[13];
-    c[47] = -p[12];
-    c[48] = p[6];
-    c[49] = p[21];
-    c[50] = p[7];
-    c[51] = -p[21];
-    c[52] = p[10];
-    c[53] = p[11];
-    c[54] = p[15];
-    c[55] = p[16];
-    c[56] = p[24];
-    c[57] = p[26];
-    c[58] = -p[27];
-    c[59] = p[27];
-    c[60] = -p[26];
-    c[61] = p[29];
-    c[62] = p[31];
-    c[63] = -p[32];
-    c[64] = p[32];
-    c[65] = t15;
-    c[66] = p[4];
-    c[67] = p[35];
-    c[68] = -p[36];
-    c[69] = p[5];
-    c[70] = p[36];
-    c[71] = -p[35];
-    c[72] = -t16;
-    c[73] = t16;
-    c[74] = p[41];
-    c[75] = -p[42];
-    c[76] = p[42];
-    c[77] = -p[41];
-    c[78] = p[45];
-    c[79] = -p[46];
-    c[80] = p[46];
-    c[81] = -p[45];
-    c[82] = p[49];
-    c[83] = -p[50];
-    c[84] = p[50];
-    c[85] = t17;
-    c[86] = p[53];
-    c[87] = -p[54];
-    c[88] = p[54];
-    c[89] = t18;
-    c[90] = p[57];
-    c[91] = -p[58];
-    c[92] = p[58];
-    c[93] = t19;
-    c[94] = p[61];
-    c[95] = t20;
-    c[96] = p[62];
-    c[97] = t21;
-    c[98] = -p[10];
-    c[99] = -p[11];
-    c[100] = p[39];
-    c[101] = t23;
-    c[102] = p[38];
-    c[103] = p[40];
-    c[104] = t22;
-    c[105] = t24;
-    c[106] = -t24;
-    c[107] = p[47];
-    c[108] = p[48];
-    c[109] = -p[44];
-    c[110] = p[51];
-    c[111] = -t25;
-    c[112] = t25;
-    c[113] = p[55];
-    c[114] = -t26;
-    c[115] = t26;
-    c[116] = p[52];
-    c[117] = p[59];
-    c[118] = -p[56];
-    c[119] = p[63];
-    c[120] = -t27;
-    c[121] = -t28;
-    c[122] = t28;
-    c[123] = p[60];
-    c[124] = p[28];
-    c[125] = p[25];
-    c[126] = p[33];
-    c[127] = t29;
-    c[128] = -t29;
-    c[129] = p[30];
-    c[130] = p[37];
-    c[131] = p[34];
-    c[132] = p[43];
-    c[133] = p[56];
-    c[134] = p[44];
-    c[135] = -t9;
-    c[136] = -p[5];
-    c[137] = (0.5)*p[25];
-    c[138] = (0.5)*p[28];
-    c[139] = (0.5)*p[30];
-    c[140] = (0.5)*p[33];
-    c[141] = (0.5)*p[34];
-    c[142] = (0.5)*p[37];
-    c[143] = (0.5)*p[38];
-    c[144] = (0.5)*p[39];
-    c[145] = (0.5)*p[40];
-    c[146] = (0.5)*p[43];
-    c[147] = (0.5)*p[44];
-    c[148] = (0.5)*p[47];
-    c[149] = (0.5)*p[48];
-    c[150] = (0.5)*p[51];
-    c[151] = (0.5)*p[52];
-    c[152] = (0.5)*p[55];
-    c[153] = (0.5)*p[56];
-    c[154] = (0.5)*p[59];
-    c[155] = (0.5)*p[60];
-    c[156] = (0.5)*p[63];
-    c[157] = -p[25];
-    c[158] = -p[30];
-    c[159] = -p[34];
-    c[160] = -p[38];
-    c[161] = -p[40];
-    c[162] = -p[48];
-    c[163] = -p[52];
-    c[164] = -p[60];
-    c[165] = -t30;
-    c[166] = t30;
-    c[167] = -p[46] - t13;
-    c[168] = t31;
-    c[169] = -t31;
-    c[170] = -t32;
-    c[171] = t32;
-    c[172] = t27;
+    c[46] = p[0] + 2.0*p[1] + 2.0*p[8] + t17;
+    c[47] = t15 + t18 + fabs(p[4]);
+    c[48] = t16 + t18 + fabs(p[5]);
+    c[49] = t21;
+    c[50] = t23;
+    c[51] = t25;
+    c[52] = t26;
+    c[53] = -p[13];
+    c[54] = -p[12];
+    c[55] = p[6];
+    c[56] = p[21];
+    c[57] = p[7];
+    c[58] = -p[21];
+    c[59] = p[10];
+    c[60] = p[11];
+    c[61] = p[15];
+    c[62] = p[16];
+    c[63] = p[24];
+    c[64] = p[26];
+    c[65] = -p[27];
+    c[66] = p[27];
+    c[67] = -p[26];
+    c[68] = p[29];
+    c[69] = p[31];
+    c[70] = -p[32];
+    c[71] = p[32];
+    c[72] = t27;
+    c[73] = p[4];
+    c[74] = p[35];
+    c[75] = -p[36];
+    c[76] = p[5];
+    c[77] = p[36];
+    c[78] = -p[35];
+    c[79] = -t28;
+    c[80] = t28;
+    c[81] = p[41];
+    c[82] = -p[42];
+    c[83] = p[42];
+    c[84] = -p[41];
+    c[85] = p[45];
+    c[86] = -p[46];
+    c[87] = p[46];
+    c[88] = -p[45];
+    c[89] = p[49];
+    c[90] = -p[50];
+    c[91] = p[50];
+    c[92] = t29;
+    c[93] = p[53];
+    c[94] = -p[54];
+    c[95] = p[54];
+    c[96] = t30;
+    c[97] = p[57];
+    c[98] = -p[58];
+    c[99] = p[58];
+    c[100] = t31;
+    c[101] = p[61];
+    c[102] = t32;
+    c[103] = p[62];
+    c[104] = t33;
+    c[105] = (1.0/(t21));
+    c[106] = (1.0/(t23));
+    c[107] = (1.0/(t25));
+    c[108] = (1.0/(t26));
+    c[109] = -p[10];
+    c[110] = -p[11];
+    c[111] = p[39];
+    c[112] = t35;
+    c[113] = p[38];
+    c[114] = p[40];
+    c[115] = t34;
+    c[116] = t36;
+    c[117] = -t36;
+    c[118] = p[47];
+    c[119] = p[48];
+    c[120] = -p[44];
+    c[121] = p[51];
+    c[122] = -t37;
+    c[123] = t37;
+    c[124] = p[55];
+    c[125] = -t38;
+    c[126] = t38;
+    c[127] = p[52];
+    c[128] = p[59];
+    c[129] = -p[56];
+    c[130] = p[63];
+    c[131] = -t39;
+    c[132] = -t40;
+    c[133] = t40;
+    c[134] = p[60];
+    c[135] = p[28];
+    c[136] = p[25];
+    c[137] = p[33];
+    c[138] = t41;
+    c[139] = -t41;
+    c[140] = p[30];
+    c[141] = p[37];
+    c[142] = p[34];
+    c[143] = p[43];
+    c[144] = p[56];
+    c[145] = p[44];
+    c[146] = -t9;
+    c[147] = -p[5];
+    c[148] = (0.5)*p[25];
+    c[149] = (0.5)*p[28];
+    c[150] = (0.5)*p[30];
+    c[151] = (0.5)*p[33];
+    c[152] = (0.5)*p[34];
+    c[153] = (0.5)*p[37];
+    c[154] = (0.5)*p[38];
+    c[155] = (0.5)*p[39];
+    c[156] = (0.5)*p[40];
+    c[157] = (0.5)*p[43];
+    c[158] = (0.5)*p[44];
+    c[159] = (0.5)*p[47];
+    c[160] = (0.5)*p[48];
+    c[161] = (0.5)*p[51];
+    c[162] = (0.5)*p[52];
+    c[163] = (0.5)*p[55];
+    c[164] = (0.5)*p[56];
+    c[165] = (0.5)*p[59];
+    c[166] = (0.5)*p[60];
+    c[167] = (0.5)*p[63];
+    c[168] = -p[25];
+    c[169] = -p[30];
+    c[170] = -p[34];
+    c[171] = -p[38];
+    c[172] = -p[40];
+    c[173] = -p[48];
+    c[174] = -p[52];
+    c[175] = -p[60];
+    c[176] = -t42;
+    c[177] = t42;
+    c[178] = -p[46] - t13;
+    c[179] = t43;
+    c[180] = -t43;
+    c[181] = -t44;
+    c[182] = t44;
+    c[183] = t39;
 }
 
 /* sg_feed_residual -- Total ops: 134 */
@@ -339,8 +362,83 @@ void sg_feed_residual(const double *q, const double *cq, const double *x, const 
     jac[48] = 0.0;
 }
 
-/* sg_feed_motion -- Total ops: 607 */
-int sg_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+/* sg_feed_scales -- Total ops: 18 */
+void sg_feed_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)x;
+    double ka[4];
+    {
+        /* cam cam: the arc whose normal sector holds e */
+        const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
+        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+            ka[0] = 0.0;
+            ka[1] = 0.0;
+            ka[2] = c[41];
+            ka[3] = 0.0;
+        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+            ka[0] = 0.0;
+            ka[1] = 0.0;
+            ka[2] = c[42];
+            ka[3] = 1.0;
+        } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+            ka[0] = c[43];
+            ka[1] = c[44];
+            ka[2] = c[41];
+            ka[3] = 2.0;
+        } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+            ka[0] = c[43];
+            ka[1] = c[44];
+            ka[2] = c[42];
+            ka[3] = 3.0;
+        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+            ka[0] = c[45];
+            ka[1] = c[44];
+            ka[2] = c[41];
+            ka[3] = 4.0;
+        } else {
+            ka[0] = c[45];
+            ka[1] = c[44];
+            ka[2] = c[42];
+            ka[3] = 5.0;
+        }
+    }
+    const double t0 = fabs(q[4]);
+    out[0] = c[46] + 2.0*fabs(ka[0]) + 2.0*fabs(ka[1]) + fabs(ka[2]);
+    out[1] = c[47] + t0;
+    out[2] = c[48] + t0;
+    out[3] = c[49];
+    out[4] = c[50];
+    out[5] = c[51];
+    out[6] = c[52];
+}
+
+/* sg_feed_blocks -- Total ops: 130 */
+void sg_feed_blocks(const double *jac, double *out)
+{
+    /* block 0: joints cam, Q */
+    {
+        const double nr = sqrt(sg_row_norm2(7, jac + 0) * sg_row_norm2(7, jac + 7) * sg_row_norm2(7, jac + 14));
+        out[0] = nr > 0.0 ? (jac[3] * (jac[11] * jac[14] - jac[7] * jac[18]) - jac[4] * (jac[10] * jac[14] - jac[7] * jac[17]) + jac[0] * (jac[10] * jac[18] - jac[11] * jac[17])) / nr : 0.0;
+    }
+    /* block 1: joints C */
+    {
+        const double nr = sqrt(sg_row_norm2(7, jac + 21) * sg_row_norm2(7, jac + 28));
+        out[1] = nr > 0.0 ? (jac[27] * jac[30] - jac[23] * jac[34]) / nr : 0.0;
+    }
+    /* block 2: joints D */
+    {
+        const double nr = sqrt(sg_row_norm2(7, jac + 35));
+        out[2] = nr > 0.0 ? (jac[36]) / nr : 0.0;
+    }
+    /* block 3: joints L */
+    {
+        const double nr = sqrt(sg_row_norm2(7, jac + 42));
+        out[3] = nr > 0.0 ? (jac[47]) / nr : 0.0;
+    }
+}
+
+/* sg_feed_motion -- Total ops: 608 */
+int sg_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     double ka[4];
     {
@@ -420,7 +518,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t39 = c[17]*cx[1] + c[21]*cx[0];
     const double t40 = c[16]*t39;
     const double t41 = c[17]*cx[0] + c[18]*cx[1];
-    const double t42 = c[46]*t41;
+    const double t42 = c[53]*t41;
     const double t43 = cq[6]*t1 + cq[7]*t12;
     const double t44 = cq[6]*t33;
     const double t45 = cq[7]*t13 + t44;
@@ -432,39 +530,40 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t61 = c[34]*cq[0];
     const double t62 = c[32]*cq[1];
     const double t63 = cq[10]*t27 + cq[11]*t62;
-    const double t64 = c[47]*cq[3];
-    const double t65 = c[47]*cq[2];
+    const double t64 = c[54]*cq[3];
+    const double t65 = c[54]*cq[2];
     const double t66 = cq[10]*t30 + cq[11]*t65;
-    const double t67 = c[49]*cq[10];
-    const double t68 = c[48] + t62;
-    const double t69 = c[50] + t61;
-    const double t71 = c[51]*cq[11];
-    const double t76 = c[48] + t0;
-    const double t77 = c[50] + t1;
+    const double t67 = c[56]*cq[10];
+    const double t68 = c[55] + t62;
+    const double t69 = c[57] + t61;
+    const double t71 = c[58]*cq[11];
+    const double t76 = c[55] + t0;
+    const double t77 = c[57] + t1;
     const double t78 = t2 + t77;
-    const double t84 = c[57]*t9 + c[58]*t8;
-    const double t85 = c[58]*t9 + c[60]*t8;
-    const double t86 = c[62]*t41 + c[63]*t39;
-    const double t87 = c[63]*t41 + c[65]*t39;
-    const double t88 = c[67]*cx[2] + c[68]*cx[3];
-    const double t89 = c[68]*cx[2] + c[71]*cx[3];
+    const double t84 = c[64]*t9 + c[65]*t8;
+    const double t85 = c[65]*t9 + c[67]*t8;
+    const double t86 = c[69]*t41 + c[70]*t39;
+    const double t87 = c[70]*t41 + c[72]*t39;
+    const double t88 = c[74]*cx[2] + c[75]*cx[3];
+    const double t89 = c[75]*cx[2] + c[78]*cx[3];
     const double t90 = ((xd[1])*(xd[1]));
-    const double t91 = c[72]*cq[6];
-    const double t92 = c[73]*cq[7];
-    const double t93 = c[74]*cx[2] + c[75]*cx[3] + t37;
-    const double t94 = c[75]*cx[2] + c[77]*cx[3] - t35;
-    const double t96 = c[78]*cq[0] + c[79]*cq[1];
-    const double t97 = c[79]*cq[0] + c[81]*cq[1];
-    const double t98 = c[82]*cq[10] + c[83]*cq[11];
-    const double t99 = c[83]*cq[10] + c[85]*cq[11];
-    const double t100 = c[86]*cq[2] + c[87]*cq[3];
-    const double t101 = c[87]*cq[2] + c[89]*cq[3];
-    const double t102 = c[90]*cq[12] + c[91]*cq[13];
-    const double t103 = c[91]*cq[12] + c[93]*cq[13];
-    const double t104 = c[46]*t39;
-    const double t105 = c[94]*cq[4] + c[95]*cq[5];
-    const double t106 = c[95]*cq[4] + c[97]*cq[5];
-    double J[49];
+    const double t91 = c[79]*cq[6];
+    const double t92 = c[80]*cq[7];
+    const double t93 = c[81]*cx[2] + c[82]*cx[3] + t37;
+    const double t94 = c[82]*cx[2] + c[84]*cx[3] - t35;
+    const double t96 = c[85]*cq[0] + c[86]*cq[1];
+    const double t97 = c[86]*cq[0] + c[88]*cq[1];
+    const double t98 = c[89]*cq[10] + c[90]*cq[11];
+    const double t99 = c[90]*cq[10] + c[92]*cq[11];
+    const double t100 = c[93]*cq[2] + c[94]*cq[3];
+    const double t101 = c[94]*cq[2] + c[96]*cq[3];
+    const double t102 = c[97]*cq[12] + c[98]*cq[13];
+    const double t103 = c[100]*cq[13] + c[98]*cq[12];
+    const double t104 = c[53]*t39;
+    const double t105 = c[101]*cq[4] + c[102]*cq[5];
+    const double t106 = c[102]*cq[4] + c[104]*cq[5];
+    const double t107 = fabs(q[4]);
+    double J[49], rs[7], cs[7];
     int piv[7];
     J[0] = cq[6]*t0 + cq[7]*t1;
     J[1] = 0.0;
@@ -522,8 +621,15 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     qd[4] = t42*xd[0];
     qd[5] = 0.0;
     qd[6] = 0.0;
-    if (sg_lu_factor_inl(7, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(7, J, piv, qd);
+    rs[0] = (1.0/(c[46] + 2.0*fabs(ka[0]) + 2.0*fabs(ka[1]) + fabs(ka[2])));
+    rs[1] = (1.0/(c[47] + t107));
+    rs[2] = (1.0/(c[48] + t107));
+    rs[3] = c[105];
+    rs[4] = c[106];
+    rs[5] = c[107];
+    rs[6] = c[108];
+    if (sg_factor_eq_inl(7, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(7, J, piv, rs, cs, qd);
     const double t46 = cx[3]*qd[4];
     const double t47 = t46*xd[1];
     const double t48 = ((qd[0])*(qd[0]));
@@ -548,16 +654,16 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     qdd[4] = c[15]*cq[13]*t54 + c[19]*cq[5]*t55 + t40*t56 + t42*xdd[0];
     qdd[5] = -qd[1]*(qd[1]*(-t20*t25 + t22*t23) + qd[2]*t60) - qd[2]*(qd[1]*t60 + qd[2]*(-t23*t59 + t58));
     qdd[6] = -qd[0]*(qd[0]*(cq[10]*t61 + cq[11]*t28) + qd[5]*t63) - qd[1]*(qd[1]*(cq[10]*t64 + cq[11]*t29) + qd[5]*t66) - qd[5]*(qd[0]*t63 + qd[1]*t66 + qd[5]*(c[30]*((cq[10])*(cq[10])) + c[30]*((cq[11])*(cq[11])) - cq[10]*t32 + cq[11]*t31));
-    sg_lu_solve_inl(7, J, piv, qdd);
+    sg_solve_eq_inl(7, J, piv, rs, cs, qdd);
     const double t74 = qdd[0]*t27 + t28*t48;
     const double t75 = qdd[0]*t62 + t27*t48;
     const double t81 = qdd[0]*t7 + t12*t48;
     const double t82 = qdd[0]*t0 + t48*t7;
     obs[0] = t67 + t68;
-    obs[1] = c[49]*cq[11] + t69;
+    obs[1] = c[56]*cq[11] + t69;
     obs[2] = qd[5]*t71 + t70;
     obs[3] = qd[5]*t67 + t72;
-    obs[4] = c[51]*cq[10]*t73 + qdd[5]*t71 + t74;
+    obs[4] = c[58]*cq[10]*t73 + qdd[5]*t71 + t74;
     obs[5] = qdd[5]*t67 + t71*t73 + t75;
     obs[6] = t16 + t76;
     obs[7] = t78;
@@ -571,107 +677,107 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     obs[15] = qd[3]*t17 + t80;
     obs[16] = qdd[3]*t15 + t50 + t81;
     obs[17] = qdd[3]*t17 + t53 + t82;
-    obs[18] = c[52] + t29;
-    obs[19] = c[53] + t30;
+    obs[18] = c[59] + t29;
+    obs[19] = c[60] + t30;
     obs[20] = qd[1]*t64;
     obs[21] = qd[1]*t29;
     obs[22] = qdd[1]*t64 + t65*t83;
     obs[23] = qdd[1]*t29 + t64*t83;
-    obs[24] = c[54] + t21;
-    obs[25] = c[55] + t24;
+    obs[24] = c[61] + t21;
+    obs[25] = c[62] + t24;
     obs[26] = qd[2]*t26;
     obs[27] = qd[2]*t21;
     obs[28] = qdd[2]*t26 + t55*t59;
     obs[29] = qdd[2]*t21 + t26*t55;
-    obs[30] = c[56] + x[0];
+    obs[30] = c[63] + x[0];
     obs[31] = xd[0];
     obs[32] = xdd[0];
     obs[33] = t84;
-    obs[34] = c[57]*t8 + c[59]*t9;
+    obs[34] = c[64]*t8 + c[66]*t9;
     obs[35] = t85*xd[0];
     obs[36] = t84*xd[0];
-    obs[37] = t56*(c[59]*t8 + c[60]*t9) + t85*xdd[0];
+    obs[37] = t56*(c[66]*t8 + c[67]*t9) + t85*xdd[0];
     obs[38] = t56*t85 + t84*xdd[0];
-    obs[39] = c[61] + x[0];
+    obs[39] = c[68] + x[0];
     obs[40] = xd[0];
     obs[41] = xdd[0];
     obs[42] = t86;
-    obs[43] = c[62]*t39 + c[64]*t41;
+    obs[43] = c[69]*t39 + c[71]*t41;
     obs[44] = t87*xd[0];
     obs[45] = t86*xd[0];
-    obs[46] = t56*(c[64]*t39 + c[65]*t41) + t87*xdd[0];
+    obs[46] = t56*(c[71]*t39 + c[72]*t41) + t87*xdd[0];
     obs[47] = t56*t87 + t86*xdd[0];
     obs[48] = x[1];
     obs[49] = xd[1];
     obs[50] = xdd[1];
-    obs[51] = c[66] + t88;
-    obs[52] = c[67]*cx[3] + c[69] + c[70]*cx[2];
+    obs[51] = c[73] + t88;
+    obs[52] = c[74]*cx[3] + c[76] + c[77]*cx[2];
     obs[53] = t89*xd[1];
     obs[54] = t88*xd[1];
-    obs[55] = t89*xdd[1] + t90*(c[70]*cx[3] + c[71]*cx[2]);
+    obs[55] = t89*xdd[1] + t90*(c[77]*cx[3] + c[78]*cx[2]);
     obs[56] = t88*xdd[1] + t89*t90;
     obs[57] = q[3];
     obs[58] = qd[3];
     obs[59] = qdd[3];
     obs[60] = t76 + t91;
-    obs[61] = c[72]*cq[7] + t77;
+    obs[61] = c[79]*cq[7] + t77;
     obs[62] = qd[3]*t92 + t79;
     obs[63] = qd[3]*t91 + t80;
-    obs[64] = c[73]*cq[6]*t49 + qdd[3]*t92 + t81;
+    obs[64] = c[80]*cq[6]*t49 + qdd[3]*t92 + t81;
     obs[65] = qdd[3]*t91 + t49*t92 + t82;
     obs[66] = x[1];
     obs[67] = xd[1];
     obs[68] = xdd[1];
-    obs[69] = c[66] + t93;
-    obs[70] = c[69] + c[74]*cx[3] + c[76]*cx[2] + t35;
+    obs[69] = c[73] + t93;
+    obs[70] = c[76] + c[81]*cx[3] + c[83]*cx[2] + t35;
     obs[71] = t95;
     obs[72] = t46 + t93*xd[1];
-    obs[73] = cx[2]*qdd[4] - t47 + t94*xdd[1] + xd[1]*(-t46 + xd[1]*(c[76]*cx[3] + c[77]*cx[2] - t37));
+    obs[73] = cx[2]*qdd[4] - t47 + t94*xdd[1] + xd[1]*(-t46 + xd[1]*(c[83]*cx[3] + c[84]*cx[2] - t37));
     obs[74] = cx[3]*qdd[4] + t52 + t93*xdd[1] + t95*xd[1];
     obs[75] = q[0];
     obs[76] = qd[0];
     obs[77] = qdd[0];
-    obs[78] = c[48] + t96;
-    obs[79] = c[50] + c[78]*cq[1] + c[80]*cq[0];
+    obs[78] = c[55] + t96;
+    obs[79] = c[57] + c[85]*cq[1] + c[87]*cq[0];
     obs[80] = qd[0]*t97;
     obs[81] = qd[0]*t96;
-    obs[82] = qdd[0]*t97 + t48*(c[80]*cq[1] + c[81]*cq[0]);
+    obs[82] = qdd[0]*t97 + t48*(c[87]*cq[1] + c[88]*cq[0]);
     obs[83] = qdd[0]*t96 + t48*t97;
     obs[84] = q[5];
     obs[85] = qd[5];
     obs[86] = qdd[5];
     obs[87] = t68 + t98;
-    obs[88] = c[82]*cq[11] + c[84]*cq[10] + t69;
+    obs[88] = c[89]*cq[11] + c[91]*cq[10] + t69;
     obs[89] = qd[5]*t99 + t70;
     obs[90] = qd[5]*t98 + t72;
-    obs[91] = qdd[5]*t99 + t73*(c[84]*cq[11] + c[85]*cq[10]) + t74;
+    obs[91] = qdd[5]*t99 + t73*(c[91]*cq[11] + c[92]*cq[10]) + t74;
     obs[92] = qdd[5]*t98 + t73*t99 + t75;
     obs[93] = q[1];
     obs[94] = qd[1];
     obs[95] = qdd[1];
-    obs[96] = c[52] + t100;
-    obs[97] = c[53] + c[86]*cq[3] + c[88]*cq[2];
+    obs[96] = c[59] + t100;
+    obs[97] = c[60] + c[93]*cq[3] + c[95]*cq[2];
     obs[98] = qd[1]*t101;
     obs[99] = qd[1]*t100;
-    obs[100] = qdd[1]*t101 + t83*(c[88]*cq[3] + c[89]*cq[2]);
+    obs[100] = qdd[1]*t101 + t83*(c[95]*cq[3] + c[96]*cq[2]);
     obs[101] = qdd[1]*t100 + t101*t83;
     obs[102] = q[6];
     obs[103] = qd[6];
     obs[104] = qdd[6];
     obs[105] = t102 + t57;
-    obs[106] = c[90]*cq[13] + c[92]*cq[12] + t40;
+    obs[106] = c[97]*cq[13] + c[99]*cq[12] + t40;
     obs[107] = qd[6]*t103 + t104*xd[0];
     obs[108] = qd[6]*t102 + t57*xd[0];
-    obs[109] = qdd[6]*t103 + t104*xdd[0] + t42*t56 + t54*(c[92]*cq[13] + c[93]*cq[12]);
+    obs[109] = qdd[6]*t103 + t104*xdd[0] + t42*t56 + t54*(c[100]*cq[12] + c[99]*cq[13]);
     obs[110] = qdd[6]*t102 + t103*t54 + t104*t56 + t57*xdd[0];
     obs[111] = q[2];
     obs[112] = qd[2];
     obs[113] = qdd[2];
-    obs[114] = c[54] + t105;
-    obs[115] = c[55] + c[94]*cq[5] + c[96]*cq[4];
+    obs[114] = c[61] + t105;
+    obs[115] = c[101]*cq[5] + c[103]*cq[4] + c[62];
     obs[116] = qd[2]*t106;
     obs[117] = qd[2]*t105;
-    obs[118] = qdd[2]*t106 + t55*(c[96]*cq[5] + c[97]*cq[4]);
+    obs[118] = qdd[2]*t106 + t55*(c[103]*cq[5] + c[104]*cq[4]);
     obs[119] = qdd[2]*t105 + t106*t55;
     obs[120] = ka[3];
     if (!isfinite((((((((q[0] + q[1]) + (q[2] + q[3])) + ((q[4] + q[5]) + (q[6] + qd[0]))) + (((qd[1] + qd[2]) + (qd[3] + qd[4])) + ((qd[5] + qd[6]) + (qdd[0] + (qdd[1] + qdd[2]))))) + ((((qdd[3] + qdd[4]) + (qdd[5] + qdd[6])) + ((obs[0] + obs[1]) + (obs[2] + (obs[3] + obs[4])))) + (((obs[5] + obs[6]) + (obs[7] + obs[8])) + ((obs[9] + obs[10]) + (obs[11] + (obs[12] + obs[13])))))) + (((((obs[14] + obs[15]) + (obs[16] + obs[17])) + ((obs[18] + obs[19]) + (obs[20] + (obs[21] + obs[22])))) + (((obs[23] + obs[24]) + (obs[25] + obs[26])) + ((obs[27] + obs[28]) + (obs[29] + (obs[30] + obs[31]))))) + ((((obs[32] + obs[33]) + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + (obs[39] + obs[40])))) + (((obs[41] + obs[42]) + (obs[43] + obs[44])) + ((obs[45] + obs[46]) + (obs[47] + (obs[48] + obs[49]))))))) + ((((((obs[50] + obs[51]) + (obs[52] + obs[53])) + ((obs[54] + obs[55]) + (obs[56] + obs[57]))) + (((obs[58] + obs[59]) + (obs[60] + obs[61])) + ((obs[62] + obs[63]) + (obs[64] + (obs[65] + obs[66]))))) + ((((obs[67] + obs[68]) + (obs[69] + obs[70])) + ((obs[71] + obs[72]) + (obs[73] + (obs[74] + obs[75])))) + (((obs[76] + obs[77]) + (obs[78] + obs[79])) + ((obs[80] + obs[81]) + (obs[82] + (obs[83] + obs[84])))))) + (((((obs[85] + obs[86]) + (obs[87] + obs[88])) + ((obs[89] + obs[90]) + (obs[91] + (obs[92] + obs[93])))) + (((obs[94] + obs[95]) + (obs[96] + obs[97])) + ((obs[98] + obs[99]) + (obs[100] + (obs[101] + obs[102]))))) + ((((obs[103] + obs[104]) + (obs[105] + obs[106])) + ((obs[107] + obs[108]) + (obs[109] + (obs[110] + obs[111])))) + (((obs[112] + obs[113]) + (obs[114] + obs[115])) + ((obs[116] + obs[117]) + (obs[118] + (obs[119] + obs[120])))))))))) return SG_NONFINITE;
@@ -737,35 +843,35 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
     const double t16 = cq[5]*t12;
     const double t17 = -gv[1] + obs[74];
     const double t18 = -gv[0] + obs[73];
-    const double t19 = c[103]*t17;
-    const double t20 = c[102]*(-gv[1] + obs[65]) - ld[3] - ld[5] + t19;
-    const double t21 = c[103]*t18;
-    const double t22 = c[102]*(-gv[0] + obs[64]) - ld[2] - ld[4] + t21;
+    const double t19 = c[114]*t17;
+    const double t20 = c[113]*(-gv[1] + obs[65]) - ld[3] - ld[5] + t19;
+    const double t21 = c[114]*t18;
+    const double t22 = c[113]*(-gv[0] + obs[64]) - ld[2] - ld[4] + t21;
     const double t23 = -gv[0] + obs[82];
     const double t24 = -gv[1] + obs[83];
-    const double t25 = c[108]*(-gv[0] + obs[91]) - ld[0];
-    const double t26 = c[108]*(-gv[1] + obs[92]) - ld[1];
-    const double t27 = c[84]*cq[10];
-    const double t28 = c[84]*cq[11];
-    const double t29 = c[88]*cq[2];
-    const double t30 = c[88]*cq[3];
-    const double t31 = c[116]*(-gv[0] + obs[100]) - ld[6];
-    const double t32 = c[116]*(-gv[1] + obs[101]) - ld[7];
+    const double t25 = c[119]*(-gv[0] + obs[91]) - ld[0];
+    const double t26 = c[119]*(-gv[1] + obs[92]) - ld[1];
+    const double t27 = c[91]*cq[10];
+    const double t28 = c[91]*cq[11];
+    const double t29 = c[95]*cq[2];
+    const double t30 = c[95]*cq[3];
+    const double t31 = c[127]*(-gv[0] + obs[100]) - ld[6];
+    const double t32 = c[127]*(-gv[1] + obs[101]) - ld[7];
     const double t33 = -gv[0] + obs[109];
     const double t34 = -gv[1] + obs[110];
-    const double t35 = c[123]*(-gv[0] + obs[118]) - ld[8];
-    const double t36 = c[123]*(-gv[1] + obs[119]) - ld[9];
-    const double t37 = c[58] + ka[1];
-    const double t38 = c[60] + ka[0];
+    const double t35 = c[134]*(-gv[0] + obs[118]) - ld[8];
+    const double t36 = c[134]*(-gv[1] + obs[119]) - ld[9];
+    const double t37 = c[65] + ka[1];
+    const double t38 = c[67] + ka[0];
     const double t39 = c[17]*cx[1] + c[21]*cx[0];
     const double t40 = c[17]*cx[0] + c[18]*cx[1];
-    const double t41 = c[70]*cx[3] + c[71]*cx[2];
-    const double t42 = c[76]*cx[3] + c[77]*cx[2];
+    const double t41 = c[77]*cx[3] + c[78]*cx[2];
+    const double t42 = c[83]*cx[3] + c[84]*cx[2];
     const double t43 = -cx[3];
     {
-        const double d = c[32]*t8 + c[34]*t7 + c[47]*t10 + c[47]*t9 + c[48]*cq[10] + c[50]*cq[11] + c[98]*cq[10] + c[99]*cq[11];
-        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[32]*t7 + c[34]*t8), fmax(fabs(c[32]*t8 + c[34]*t7 + c[47]*t10 + c[47]*t9 + c[48]*cq[10] + c[50]*cq[11] + c[98]*cq[10] + c[99]*cq[11]), fabs(c[31]*t10 + c[31]*t9))))) return SG_SINGULAR;
-        out[26] = (c[110]*obs[86] - ld[0]*(c[111]*cq[11] + t27) - ld[1]*(c[112]*cq[10] + t28) - ld[16] - t25*(c[82]*cq[11] + t27) - t26*(c[85]*cq[10] + t28))/d;
+        const double d = c[109]*cq[10] + c[110]*cq[11] + c[32]*t8 + c[34]*t7 + c[54]*t10 + c[54]*t9 + c[55]*cq[10] + c[57]*cq[11];
+        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[32]*t7 + c[34]*t8), fmax(fabs(c[109]*cq[10] + c[110]*cq[11] + c[32]*t8 + c[34]*t7 + c[54]*t10 + c[54]*t9 + c[55]*cq[10] + c[57]*cq[11]), fabs(c[31]*t10 + c[31]*t9))))) return SG_SINGULAR;
+        out[26] = (c[121]*obs[86] - ld[0]*(c[122]*cq[11] + t27) - ld[1]*(c[123]*cq[10] + t28) - ld[16] - t25*(c[89]*cq[11] + t27) - t26*(c[92]*cq[10] + t28))/d;
     }
     {
         /* block of unknowns 6, 8 */
@@ -773,19 +879,19 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
         int piv[2];
         M[0] = cx[2]*t2 + cx[3]*t3;
         M[1] = c[5]*cq[0]*cq[6] + cq[7]*t6;
-        r[0] = c[107]*obs[77] + c[109]*t23*(c[78]*cq[1] + c[80]*cq[0]) + c[109]*t24*(c[80]*cq[1] + c[81]*cq[0]) + c[32]*cq[0]*t25 + c[32]*cq[1]*t26 - out[26]*(c[32]*t7 + c[34]*t8) - ld[15] + t2*t20 + t22*t6;
+        r[0] = c[118]*obs[77] + c[120]*t23*(c[85]*cq[1] + c[87]*cq[0]) + c[120]*t24*(c[87]*cq[1] + c[88]*cq[0]) + c[32]*cq[0]*t25 + c[32]*cq[1]*t26 - out[26]*(c[32]*t7 + c[34]*t8) - ld[15] + t2*t20 + t22*t6;
         M[2] = c[10]*t0 + c[10]*t1 + c[11]*t0 + c[11]*t1;
-        M[3] = c[48]*cq[6] + c[50]*cq[7] - cq[6]*ka[0]*t5 + cq[6]*ka[1]*t4 + cq[6]*t2 - cq[7]*ka[0]*t4 - cq[7]*ka[1]*t5 + cq[7]*t3;
-        r[1] = c[100]*obs[59] + c[101]*cq[7]*ld[4] + c[104]*cq[6]*ld[5] + c[105]*cq[6]*t17 + c[106]*cq[7]*t18 + c[72]*cq[6]*t20 + c[72]*cq[7]*ld[2] + c[73]*cq[6]*ld[3] + c[73]*cq[7]*t22 - ld[13];
+        M[3] = c[55]*cq[6] + c[57]*cq[7] - cq[6]*ka[0]*t5 + cq[6]*ka[1]*t4 + cq[6]*t2 - cq[7]*ka[0]*t4 - cq[7]*ka[1]*t5 + cq[7]*t3;
+        r[1] = c[111]*obs[59] + c[112]*cq[7]*ld[4] + c[115]*cq[6]*ld[5] + c[116]*cq[6]*t17 + c[117]*cq[7]*t18 + c[79]*cq[6]*t20 + c[79]*cq[7]*ld[2] + c[80]*cq[6]*ld[3] + c[80]*cq[7]*t22 - ld[13];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[6] = r[0];
         out[8] = r[1];
     }
     {
-        const double d = c[14]*t11 + c[20]*t12 + c[24]*t13 + c[28]*t14 + c[40]*t15 + c[40]*t16 + c[52]*t11 + c[53]*t12;
-        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[14]*t11 + c[20]*t12 + c[24]*t13 + c[28]*t14 + c[40]*t15 + c[40]*t16 + c[52]*t11 + c[53]*t12), fabs(c[24]*t14 + c[25]*t15 + c[25]*t16 + c[28]*t13)))) return SG_SINGULAR;
-        out[25] = (c[113]*obs[95] - out[26]*(c[31]*t10 + c[31]*t9) - ld[17] - ld[6]*(c[114]*cq[3] + t29) - ld[7]*(c[115]*cq[2] + t30) - t31*(c[86]*cq[3] + t29) - t32*(c[89]*cq[2] + t30))/d;
+        const double d = c[14]*t11 + c[20]*t12 + c[24]*t13 + c[28]*t14 + c[40]*t15 + c[40]*t16 + c[59]*t11 + c[60]*t12;
+        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[14]*t11 + c[20]*t12 + c[24]*t13 + c[28]*t14 + c[40]*t15 + c[40]*t16 + c[59]*t11 + c[60]*t12), fabs(c[24]*t14 + c[25]*t15 + c[25]*t16 + c[28]*t13)))) return SG_SINGULAR;
+        out[25] = (c[124]*obs[95] - out[26]*(c[31]*t10 + c[31]*t9) - ld[17] - ld[6]*(c[125]*cq[3] + t29) - ld[7]*(c[126]*cq[2] + t30) - t31*(c[93]*cq[3] + t29) - t32*(c[96]*cq[2] + t30))/d;
     }
     {
         /* block of unknowns 23, 24 */
@@ -793,10 +899,10 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
         int piv[2];
         M[0] = c[19]*cq[5];
         M[1] = c[38]*cq[4];
-        r[0] = c[119]*obs[113] - out[25]*(c[24]*t14 + c[25]*t15 + c[25]*t16 + c[28]*t13) - ld[19] - ld[8]*(c[120]*cq[4] + c[121]*cq[5]) - ld[9]*(c[120]*cq[5] + c[122]*cq[4]) - t35*(c[94]*cq[5] + c[96]*cq[4]) - t36*(c[96]*cq[5] + c[97]*cq[4]);
+        r[0] = c[130]*obs[113] - out[25]*(c[24]*t14 + c[25]*t15 + c[25]*t16 + c[28]*t13) - ld[19] - ld[8]*(c[131]*cq[4] + c[132]*cq[5]) - ld[9]*(c[131]*cq[5] + c[133]*cq[4]) - t35*(c[101]*cq[5] + c[103]*cq[4]) - t36*(c[103]*cq[5] + c[104]*cq[4]);
         M[2] = c[15]*cq[13];
         M[3] = c[39]*cq[12];
-        r[1] = c[117]*obs[104] + c[118]*t33*(c[90]*cq[13] + c[92]*cq[12]) + c[118]*t34*(c[92]*cq[13] + c[93]*cq[12]) - ld[18];
+        r[1] = c[128]*obs[104] + c[129]*t33*(c[97]*cq[13] + c[99]*cq[12]) + c[129]*t34*(c[100]*cq[12] + c[99]*cq[13]) - ld[18];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[23] = r[0];
@@ -805,27 +911,27 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
     out[12] = cq[6]*out[8] - cx[2]*out[6] + t20;
     out[11] = -cq[7]*out[8] - out[6]*t43 + t22;
     out[22] = -out[24] - out[25]*t11 + t36;
-    out[21] = -out[23] - out[25]*(c[135]*cq[3] + c[23]*cq[2]) + t35;
-    out[18] = -cq[10]*out[26] - out[25]*(c[135]*cq[2] + c[27]*cq[3]) + t32;
+    out[21] = -out[23] - out[25]*(c[146]*cq[3] + c[23]*cq[2]) + t35;
+    out[18] = -cq[10]*out[26] - out[25]*(c[146]*cq[2] + c[27]*cq[3]) + t32;
     out[17] = cq[11]*out[26] - out[25]*t12 + t31;
     out[16] = cq[10]*out[26] + t26;
     out[15] = -cq[11]*out[26] + t25;
-    out[10] = c[134]*t24 + out[12] + out[16];
-    out[9] = c[134]*t23 + out[11] + out[15];
+    out[10] = c[145]*t24 + out[12] + out[16];
+    out[9] = c[145]*t23 + out[11] + out[15];
     out[14] = -cx[2]*out[6] + t19;
     out[13] = -out[6]*t43 + t21;
-    out[20] = c[133]*t34 + out[24];
-    out[19] = c[133]*t33 + out[23];
-    out[7] = c[132]*obs[68] - out[13]*(c[74]*cx[3] + c[76]*cx[2]) - out[14]*t42 - out[6]*(cx[2]*t42 + cx[3]*(c[75]*cx[2] + c[77]*cx[3])) - ld[14];
-    out[5] = c[131]*(-gv[1] + obs[56]) + cx[2]*out[6];
-    out[4] = c[131]*(-gv[0] + obs[55]) - cx[3]*out[6];
-    out[29] = c[130]*obs[50] - out[4]*(c[67]*cx[3] + c[70]*cx[2]) - out[5]*t41 - out[6]*(-cx[2]*(cx[2]*q[4] + t41) - cx[3]*(c[68]*cx[2] + c[71]*cx[3] + cx[3]*q[4])) + out[7] - ld[12];
-    out[3] = c[129]*(-gv[1] + obs[47]) + out[20];
-    out[2] = c[129]*(-gv[0] + obs[46]) + out[19];
-    out[28] = c[126]*obs[41] - out[19]*(c[127]*t39 + c[63]*t40) - out[2]*(c[62]*t39 + c[64]*t40) - out[20]*(c[128]*t40 + c[63]*t39) - out[3]*(c[64]*t39 + c[65]*t40) - ld[11];
-    out[1] = c[125]*(-gv[1] + obs[38]) - cq[6]*out[8];
-    out[0] = c[125]*(-gv[0] + obs[37]) + cq[7]*out[8];
-    out[27] = c[124]*obs[32] - out[0]*(c[57]*t4 + c[59]*t5) - out[1]*(c[59]*t4 + c[60]*t5) - out[8]*(cq[6]*(-t37*t4 + t38*t5) + cq[7]*(t37*t5 + t38*t4)) - ld[10];
+    out[20] = c[144]*t34 + out[24];
+    out[19] = c[144]*t33 + out[23];
+    out[7] = c[143]*obs[68] - out[13]*(c[81]*cx[3] + c[83]*cx[2]) - out[14]*t42 - out[6]*(cx[2]*t42 + cx[3]*(c[82]*cx[2] + c[84]*cx[3])) - ld[14];
+    out[5] = c[142]*(-gv[1] + obs[56]) + cx[2]*out[6];
+    out[4] = c[142]*(-gv[0] + obs[55]) - cx[3]*out[6];
+    out[29] = c[141]*obs[50] - out[4]*(c[74]*cx[3] + c[77]*cx[2]) - out[5]*t41 - out[6]*(-cx[2]*(cx[2]*q[4] + t41) - cx[3]*(c[75]*cx[2] + c[78]*cx[3] + cx[3]*q[4])) + out[7] - ld[12];
+    out[3] = c[140]*(-gv[1] + obs[47]) + out[20];
+    out[2] = c[140]*(-gv[0] + obs[46]) + out[19];
+    out[28] = c[137]*obs[41] - out[19]*(c[138]*t39 + c[70]*t40) - out[2]*(c[69]*t39 + c[71]*t40) - out[20]*(c[139]*t40 + c[70]*t39) - out[3]*(c[71]*t39 + c[72]*t40) - ld[11];
+    out[1] = c[136]*(-gv[1] + obs[38]) - cq[6]*out[8];
+    out[0] = c[136]*(-gv[0] + obs[37]) + cq[7]*out[8];
+    out[27] = c[135]*obs[32] - out[0]*(c[64]*t4 + c[66]*t5) - out[1]*(c[66]*t4 + c[67]*t5) - out[8]*(cq[6]*(-t37*t4 + t38*t5) + cq[7]*(t37*t5 + t38*t4)) - ld[10];
     const double t44 = out[27] + out[28];
     out[30] = t44;
     out[31] = out[29];
@@ -841,9 +947,9 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
     out[41] = cq[10]*out[26];
     out[42] = out[0] + out[17] + out[2] + out[21] + out[4] + out[9];
     out[43] = out[1] + out[10] + out[18] + out[22] + out[3] + out[5];
-    out[44] = c[136]*out[4] + c[20]*out[21] + c[48]*out[10] + c[52]*out[18] + c[54]*out[22] + c[66]*out[5] + c[7]*out[9] + c[99]*out[17] + out[29] + t44;
-    out[45] = c[137]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[138]*((obs[31])*(obs[31])) + c[139]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[140]*((obs[40])*(obs[40])) + c[141]*(((obs[53])*(obs[53])) + ((obs[54])*(obs[54]))) + c[142]*((obs[49])*(obs[49])) + c[143]*(((obs[62])*(obs[62])) + ((obs[63])*(obs[63]))) + c[144]*((obs[58])*(obs[58])) + c[145]*(((obs[71])*(obs[71])) + ((obs[72])*(obs[72]))) + c[146]*((obs[67])*(obs[67])) + c[147]*(((obs[80])*(obs[80])) + ((obs[81])*(obs[81]))) + c[148]*((obs[76])*(obs[76])) + c[149]*(((obs[89])*(obs[89])) + ((obs[90])*(obs[90]))) + c[150]*((obs[85])*(obs[85])) + c[151]*(((obs[98])*(obs[98])) + ((obs[99])*(obs[99]))) + c[152]*((obs[94])*(obs[94])) + c[153]*(((obs[107])*(obs[107])) + ((obs[108])*(obs[108]))) + c[154]*((obs[103])*(obs[103])) + c[155]*(((obs[116])*(obs[116])) + ((obs[117])*(obs[117]))) + c[156]*((obs[112])*(obs[112]));
-    out[46] = c[109]*(gv[0]*obs[78] + gv[1]*obs[79]) + c[118]*(gv[0]*obs[105] + gv[1]*obs[106]) + c[157]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[158]*(gv[0]*obs[42] + gv[1]*obs[43]) + c[159]*(gv[0]*obs[51] + gv[1]*obs[52]) + c[160]*(gv[0]*obs[60] + gv[1]*obs[61]) + c[161]*(gv[0]*obs[69] + gv[1]*obs[70]) + c[162]*(gv[0]*obs[87] + gv[1]*obs[88]) + c[163]*(gv[0]*obs[96] + gv[1]*obs[97]) + c[164]*(gv[0]*obs[114] + gv[1]*obs[115]);
+    out[44] = c[110]*out[17] + c[147]*out[4] + c[20]*out[21] + c[55]*out[10] + c[59]*out[18] + c[61]*out[22] + c[7]*out[9] + c[73]*out[5] + out[29] + t44;
+    out[45] = c[148]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[149]*((obs[31])*(obs[31])) + c[150]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[151]*((obs[40])*(obs[40])) + c[152]*(((obs[53])*(obs[53])) + ((obs[54])*(obs[54]))) + c[153]*((obs[49])*(obs[49])) + c[154]*(((obs[62])*(obs[62])) + ((obs[63])*(obs[63]))) + c[155]*((obs[58])*(obs[58])) + c[156]*(((obs[71])*(obs[71])) + ((obs[72])*(obs[72]))) + c[157]*((obs[67])*(obs[67])) + c[158]*(((obs[80])*(obs[80])) + ((obs[81])*(obs[81]))) + c[159]*((obs[76])*(obs[76])) + c[160]*(((obs[89])*(obs[89])) + ((obs[90])*(obs[90]))) + c[161]*((obs[85])*(obs[85])) + c[162]*(((obs[98])*(obs[98])) + ((obs[99])*(obs[99]))) + c[163]*((obs[94])*(obs[94])) + c[164]*(((obs[107])*(obs[107])) + ((obs[108])*(obs[108]))) + c[165]*((obs[103])*(obs[103])) + c[166]*(((obs[116])*(obs[116])) + ((obs[117])*(obs[117]))) + c[167]*((obs[112])*(obs[112]));
+    out[46] = c[120]*(gv[0]*obs[78] + gv[1]*obs[79]) + c[129]*(gv[0]*obs[105] + gv[1]*obs[106]) + c[168]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[169]*(gv[0]*obs[42] + gv[1]*obs[43]) + c[170]*(gv[0]*obs[51] + gv[1]*obs[52]) + c[171]*(gv[0]*obs[60] + gv[1]*obs[61]) + c[172]*(gv[0]*obs[69] + gv[1]*obs[70]) + c[173]*(gv[0]*obs[87] + gv[1]*obs[88]) + c[174]*(gv[0]*obs[96] + gv[1]*obs[97]) + c[175]*(gv[0]*obs[114] + gv[1]*obs[115]);
     out[47] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[31] + ld[11]*obs[40] + ld[12]*obs[49] + ld[13]*obs[58] + ld[14]*obs[67] + ld[15]*obs[76] + ld[16]*obs[85] + ld[17]*obs[94] + ld[18]*obs[103] + ld[19]*obs[112] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[26] + ld[9]*obs[27];
     out[48] = 0.0;
     if (!isfinite((((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))) + ((((out[24] + (out[25] + out[26])) + (out[27] + (out[28] + out[29]))) + ((out[30] + (out[31] + out[32])) + (out[33] + (out[34] + out[35])))) + (((out[36] + (out[37] + out[38])) + (out[39] + (out[40] + out[41]))) + ((out[42] + (out[43] + out[44])) + ((out[45] + out[46]) + (out[47] + out[48])))))))) return SG_NONFINITE;
@@ -892,54 +998,54 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     }
     const double t0 = c[3]*cx[1] + c[6]*cx[0];
     const double t1 = c[3]*cx[0] + c[4]*cx[1];
-    const double t2 = c[58] + ka[1];
-    const double t3 = c[60] + ka[0];
+    const double t2 = c[65] + ka[1];
+    const double t3 = c[67] + ka[0];
     const double t4 = c[17]*cx[1] + c[21]*cx[0];
     const double t5 = c[17]*cx[0] + c[18]*cx[1];
-    const double t6 = c[70]*cx[3] + c[71]*cx[2];
-    const double t7 = c[73]*cq[6];
-    const double t8 = c[72]*cq[7];
-    const double t9 = c[101]*cq[7];
-    const double t10 = c[104]*cq[6];
-    const double t11 = c[76]*cx[3] + c[77]*cx[2];
-    const double t12 = c[84]*cq[10];
-    const double t13 = c[84]*cq[11];
-    const double t14 = c[85]*cq[10] + t13;
+    const double t6 = c[77]*cx[3] + c[78]*cx[2];
+    const double t7 = c[80]*cq[6];
+    const double t8 = c[79]*cq[7];
+    const double t9 = c[112]*cq[7];
+    const double t10 = c[115]*cq[6];
+    const double t11 = c[83]*cx[3] + c[84]*cx[2];
+    const double t12 = c[91]*cq[10];
+    const double t13 = c[91]*cq[11];
+    const double t14 = c[92]*cq[10] + t13;
     const double t15 = c[22]*cq[3] + c[27]*cq[2];
-    const double t16 = c[88]*cq[2];
-    const double t17 = c[88]*cq[3];
-    const double t18 = c[89]*cq[2] + t17;
+    const double t16 = c[95]*cq[2];
+    const double t17 = c[95]*cq[3];
+    const double t18 = c[96]*cq[2] + t17;
     const double t19 = c[22]*cq[2] + c[23]*cq[3];
-    const double t20 = c[87]*cq[2];
-    const double t21 = c[115]*cq[2] + t17;
-    const double t22 = c[96]*cq[4];
-    const double t23 = c[96]*cq[5];
-    const double t24 = c[120]*cq[5] + c[122]*cq[4];
+    const double t20 = c[94]*cq[2];
+    const double t21 = c[126]*cq[2] + t17;
+    const double t22 = c[103]*cq[4];
+    const double t23 = c[103]*cq[5];
+    const double t24 = c[131]*cq[5] + c[133]*cq[4];
     for (int k = 0; k < 900; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[8] = -cq[7];
     A[31] = 1.0;
     A[38] = cq[6];
-    A[60] = c[57]*t0 + c[59]*t1;
-    A[61] = c[59]*t0 + c[60]*t1;
+    A[60] = c[64]*t0 + c[66]*t1;
+    A[61] = c[66]*t0 + c[67]*t1;
     A[68] = cq[6]*(-t0*t2 + t1*t3) + cq[7]*(t0*t3 + t1*t2);
     A[87] = 1.0;
     A[92] = 1.0;
     A[109] = -1.0;
     A[123] = 1.0;
     A[140] = -1.0;
-    A[152] = c[62]*t4 + c[64]*t5;
-    A[153] = c[64]*t4 + c[65]*t5;
-    A[169] = c[127]*t4 + c[63]*t5;
-    A[170] = c[128]*t5 + c[63]*t4;
+    A[152] = c[69]*t4 + c[71]*t5;
+    A[153] = c[71]*t4 + c[72]*t5;
+    A[169] = c[138]*t4 + c[70]*t5;
+    A[170] = c[139]*t5 + c[70]*t4;
     A[178] = 1.0;
     A[184] = 1.0;
     A[186] = cx[3];
     A[215] = 1.0;
     A[216] = -cx[2];
-    A[244] = c[67]*cx[3] + c[70]*cx[2];
+    A[244] = c[74]*cx[3] + c[77]*cx[2];
     A[245] = t6;
-    A[246] = -cx[2]*(cx[2]*q[4] + t6) - cx[3]*(c[68]*cx[2] + c[71]*cx[3] + cx[3]*q[4]);
+    A[246] = -cx[2]*(cx[2]*q[4] + t6) - cx[3]*(c[75]*cx[2] + c[78]*cx[3] + cx[3]*q[4]);
     A[247] = -1.0;
     A[269] = 1.0;
     A[278] = cq[7];
@@ -948,7 +1054,7 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[308] = -cq[6];
     A[312] = 1.0;
     A[314] = -1.0;
-    A[338] = -cq[6]*(c[0] + c[5]*cq[0] + ka[0]*t1 - ka[1]*t0 + t7) - cq[7]*(c[5]*cq[1] + c[7] + c[73]*cq[7] + ka[0]*t0 + ka[1]*t1);
+    A[338] = -cq[6]*(c[0] + c[5]*cq[0] + ka[0]*t1 - ka[1]*t0 + t7) - cq[7]*(c[5]*cq[1] + c[7] + c[80]*cq[7] + ka[0]*t0 + ka[1]*t1);
     A[341] = t8;
     A[342] = t7;
     A[343] = t9;
@@ -957,9 +1063,9 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[373] = 1.0;
     A[396] = cx[2];
     A[404] = 1.0;
-    A[426] = cx[2]*t11 + cx[3]*(c[75]*cx[2] + c[77]*cx[3]);
+    A[426] = cx[2]*t11 + cx[3]*(c[82]*cx[2] + c[84]*cx[3]);
     A[427] = 1.0;
-    A[433] = c[74]*cx[3] + c[76]*cx[2];
+    A[433] = c[81]*cx[3] + c[83]*cx[2];
     A[434] = t11;
     A[459] = 1.0;
     A[461] = -1.0;
@@ -967,88 +1073,88 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[490] = 1.0;
     A[492] = -1.0;
     A[496] = -1.0;
-    A[519] = c[78]*cq[1] + c[80]*cq[0];
-    A[520] = c[80]*cq[1] + c[81]*cq[0];
-    A[521] = c[165]*cq[1] + c[79]*cq[0];
-    A[522] = c[166]*cq[0] + c[79]*cq[1];
-    A[525] = c[167]*cq[0] + c[81]*cq[1];
-    A[526] = c[167]*cq[1] + c[78]*cq[0];
+    A[519] = c[85]*cq[1] + c[87]*cq[0];
+    A[520] = c[87]*cq[1] + c[88]*cq[0];
+    A[521] = c[176]*cq[1] + c[86]*cq[0];
+    A[522] = c[177]*cq[0] + c[86]*cq[1];
+    A[525] = c[178]*cq[0] + c[88]*cq[1];
+    A[526] = c[178]*cq[1] + c[85]*cq[0];
     A[555] = 1.0;
     A[566] = cq[11];
     A[586] = 1.0;
     A[596] = -cq[10];
-    A[615] = c[82]*cq[11] + t12;
+    A[615] = c[89]*cq[11] + t12;
     A[616] = t14;
-    A[626] = -cq[10]*(c[31]*cq[2] + c[34]*cq[1] + c[36] + t14) - cq[11]*(c[31]*cq[3] + c[32]*cq[0] + c[33] + c[83]*cq[10] + c[85]*cq[11]);
+    A[626] = -cq[10]*(c[31]*cq[2] + c[34]*cq[1] + c[36] + t14) - cq[11]*(c[31]*cq[3] + c[32]*cq[0] + c[33] + c[90]*cq[10] + c[92]*cq[11]);
     A[647] = 1.0;
     A[655] = t15;
     A[656] = -cq[11];
     A[678] = 1.0;
-    A[685] = c[135]*cq[2] + c[27]*cq[3];
+    A[685] = c[146]*cq[2] + c[27]*cq[3];
     A[686] = cq[10];
-    A[707] = c[86]*cq[3] + t16;
+    A[707] = c[93]*cq[3] + t16;
     A[708] = t18;
-    A[715] = -t15*(c[24]*cq[4] + c[25]*cq[5] + c[26] + c[89]*cq[3] + t20) - t19*(c[25]*cq[4] + c[28]*cq[5] + c[29] + t18);
-    A[716] = cq[10]*t21 + cq[11]*(c[115]*cq[3] + t20);
+    A[715] = -t15*(c[24]*cq[4] + c[25]*cq[5] + c[26] + c[96]*cq[3] + t20) - t19*(c[25]*cq[4] + c[28]*cq[5] + c[29] + t18);
+    A[716] = cq[10]*t21 + cq[11]*(c[126]*cq[3] + t20);
     A[739] = 1.0;
     A[743] = -1.0;
     A[770] = 1.0;
     A[774] = -1.0;
-    A[799] = c[90]*cq[13] + c[92]*cq[12];
-    A[800] = c[92]*cq[13] + c[93]*cq[12];
-    A[803] = c[168]*cq[13] + c[91]*cq[12];
-    A[804] = c[169]*cq[12] + c[91]*cq[13];
+    A[799] = c[97]*cq[13] + c[99]*cq[12];
+    A[800] = c[100]*cq[12] + c[99]*cq[13];
+    A[803] = c[179]*cq[13] + c[98]*cq[12];
+    A[804] = c[180]*cq[12] + c[98]*cq[13];
     A[831] = 1.0;
     A[833] = 1.0;
-    A[835] = c[135]*cq[3] + c[23]*cq[2];
+    A[835] = c[146]*cq[3] + c[23]*cq[2];
     A[862] = 1.0;
     A[864] = 1.0;
     A[865] = t19;
-    A[891] = c[94]*cq[5] + t22;
-    A[892] = c[97]*cq[4] + t23;
-    A[893] = c[170]*cq[5] + t22;
-    A[894] = c[171]*cq[4] + t23;
-    A[895] = t15*(c[122]*cq[5] + c[172]*cq[4]) + t19*t24;
-    b[0] = c[125]*(-gv[0] + obs[37]);
-    b[1] = c[125]*(-gv[1] + obs[38]);
-    b[2] = c[124]*obs[32] - ld[10];
-    b[3] = c[129]*(-gv[0] + obs[46]);
-    b[4] = c[129]*(-gv[1] + obs[47]);
-    b[5] = c[126]*obs[41] - ld[11];
-    b[6] = c[131]*(-gv[0] + obs[55]);
-    b[7] = c[131]*(-gv[1] + obs[56]);
-    b[8] = c[130]*obs[50] - ld[12];
-    b[9] = c[102]*(-gv[0] + obs[64]) - ld[2] - ld[4];
-    b[10] = c[102]*(-gv[1] + obs[65]) - ld[3] - ld[5];
-    b[11] = c[100]*obs[59] - ld[13] + ld[2]*t8 + ld[3]*t7 + ld[4]*t9 + ld[5]*t10;
-    b[12] = c[103]*(-gv[0] + obs[73]);
-    b[13] = c[103]*(-gv[1] + obs[74]);
-    b[14] = c[132]*obs[68] - ld[14];
-    b[15] = c[134]*(-gv[0] + obs[82]);
-    b[16] = c[134]*(-gv[1] + obs[83]);
-    b[17] = c[107]*obs[77] - ld[15];
-    b[18] = c[108]*(-gv[0] + obs[91]) - ld[0];
-    b[19] = c[108]*(-gv[1] + obs[92]) - ld[1];
-    b[20] = c[110]*obs[86] - ld[0]*(c[111]*cq[11] + t12) - ld[1]*(c[112]*cq[10] + t13) - ld[16];
-    b[21] = c[116]*(-gv[0] + obs[100]) - ld[6];
-    b[22] = c[116]*(-gv[1] + obs[101]) - ld[7];
-    b[23] = c[113]*obs[95] - ld[17] - ld[6]*(c[114]*cq[3] + t16) - ld[7]*t21;
-    b[24] = c[133]*(-gv[0] + obs[109]);
-    b[25] = c[133]*(-gv[1] + obs[110]);
-    b[26] = c[117]*obs[104] - ld[18];
-    b[27] = c[123]*(-gv[0] + obs[118]) - ld[8];
-    b[28] = c[123]*(-gv[1] + obs[119]) - ld[9];
-    b[29] = c[119]*obs[113] - ld[19] - ld[8]*(c[120]*cq[4] + c[121]*cq[5]) - ld[9]*t24;
+    A[891] = c[101]*cq[5] + t22;
+    A[892] = c[104]*cq[4] + t23;
+    A[893] = c[181]*cq[5] + t22;
+    A[894] = c[182]*cq[4] + t23;
+    A[895] = t15*(c[133]*cq[5] + c[183]*cq[4]) + t19*t24;
+    b[0] = c[136]*(-gv[0] + obs[37]);
+    b[1] = c[136]*(-gv[1] + obs[38]);
+    b[2] = c[135]*obs[32] - ld[10];
+    b[3] = c[140]*(-gv[0] + obs[46]);
+    b[4] = c[140]*(-gv[1] + obs[47]);
+    b[5] = c[137]*obs[41] - ld[11];
+    b[6] = c[142]*(-gv[0] + obs[55]);
+    b[7] = c[142]*(-gv[1] + obs[56]);
+    b[8] = c[141]*obs[50] - ld[12];
+    b[9] = c[113]*(-gv[0] + obs[64]) - ld[2] - ld[4];
+    b[10] = c[113]*(-gv[1] + obs[65]) - ld[3] - ld[5];
+    b[11] = c[111]*obs[59] - ld[13] + ld[2]*t8 + ld[3]*t7 + ld[4]*t9 + ld[5]*t10;
+    b[12] = c[114]*(-gv[0] + obs[73]);
+    b[13] = c[114]*(-gv[1] + obs[74]);
+    b[14] = c[143]*obs[68] - ld[14];
+    b[15] = c[145]*(-gv[0] + obs[82]);
+    b[16] = c[145]*(-gv[1] + obs[83]);
+    b[17] = c[118]*obs[77] - ld[15];
+    b[18] = c[119]*(-gv[0] + obs[91]) - ld[0];
+    b[19] = c[119]*(-gv[1] + obs[92]) - ld[1];
+    b[20] = c[121]*obs[86] - ld[0]*(c[122]*cq[11] + t12) - ld[1]*(c[123]*cq[10] + t13) - ld[16];
+    b[21] = c[127]*(-gv[0] + obs[100]) - ld[6];
+    b[22] = c[127]*(-gv[1] + obs[101]) - ld[7];
+    b[23] = c[124]*obs[95] - ld[17] - ld[6]*(c[125]*cq[3] + t16) - ld[7]*t21;
+    b[24] = c[144]*(-gv[0] + obs[109]);
+    b[25] = c[144]*(-gv[1] + obs[110]);
+    b[26] = c[128]*obs[104] - ld[18];
+    b[27] = c[134]*(-gv[0] + obs[118]) - ld[8];
+    b[28] = c[134]*(-gv[1] + obs[119]) - ld[9];
+    b[29] = c[130]*obs[113] - ld[19] - ld[8]*(c[131]*cq[4] + c[132]*cq[5]) - ld[9]*t24;
 }
 
 /* sg_feed_anchors -- Total ops: 181 */
 void sg_feed_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
 {
-    const double t0 = c[66] + cx[2]*q[4];
-    const double t1 = c[69] + cx[3]*q[4];
-    const double t2 = c[48] + c[9]*cq[0];
+    const double t0 = c[73] + cx[2]*q[4];
+    const double t1 = c[76] + cx[3]*q[4];
+    const double t2 = c[55] + c[9]*cq[0];
     const double t3 = c[11]*cq[6] + t2;
-    const double t4 = c[50] + c[9]*cq[1];
+    const double t4 = c[57] + c[9]*cq[1];
     const double t5 = c[11]*cq[7] + t4;
     const double t6 = c[3]*cx[0] + c[4]*cx[1];
     const double t7 = c[43]*t6;
@@ -1063,17 +1169,17 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     const double t16 = t10 + t13;
     const double t17 = c[10]*cq[6] + t3;
     const double t18 = c[10]*cq[7] + t5;
-    const double t19 = c[32]*cq[1] + c[48];
-    const double t20 = c[34]*cq[0] + c[50];
+    const double t19 = c[32]*cq[1] + c[55];
+    const double t20 = c[34]*cq[0] + c[57];
     const double t21 = c[17]*cx[0] + c[18]*cx[1];
     const double t22 = c[16]*t21;
     const double t23 = c[17]*cx[1] + c[21]*cx[0];
     const double t24 = c[16]*t23;
-    const double t25 = c[25]*cq[4] + c[28]*cq[5] + c[54];
-    const double t26 = c[24]*cq[4] + c[25]*cq[5] + c[55];
-    const double t27 = c[31]*cq[2] + c[52];
-    const double t28 = c[31]*cq[3] + c[53];
-    const double t29 = c[56] + x[0];
+    const double t25 = c[25]*cq[4] + c[28]*cq[5] + c[61];
+    const double t26 = c[24]*cq[4] + c[25]*cq[5] + c[62];
+    const double t27 = c[31]*cq[2] + c[59];
+    const double t28 = c[31]*cq[3] + c[60];
+    const double t29 = c[63] + x[0];
     const double t30 = t29 + (1.3333333333333333)*3.141592653589793;
     const double t31 = t29 + (1.6666666666666667)*3.141592653589793;
     const double t32 = t29 + 2.0*3.141592653589793;
@@ -1085,12 +1191,12 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[5] = 0.0;
     out[6] = 0.0;
     out[7] = 0.0;
-    out[8] = c[66];
-    out[9] = c[69];
-    out[10] = c[66];
-    out[11] = c[69];
-    out[12] = c[66];
-    out[13] = c[69];
+    out[8] = c[73];
+    out[9] = c[76];
+    out[10] = c[73];
+    out[11] = c[76];
+    out[12] = c[73];
+    out[13] = c[76];
     out[14] = cx[2];
     out[15] = cx[3];
     out[16] = t0;
@@ -1111,10 +1217,10 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[31] = t16;
     out[32] = t15;
     out[33] = t16;
-    out[34] = c[48];
-    out[35] = c[50];
-    out[36] = c[48];
-    out[37] = c[50];
+    out[34] = c[55];
+    out[35] = c[57];
+    out[36] = c[55];
+    out[37] = c[57];
     out[38] = t2;
     out[39] = t4;
     out[40] = t2;
@@ -1127,24 +1233,24 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[47] = t20;
     out[48] = t19;
     out[49] = t20;
-    out[50] = c[52];
-    out[51] = c[53];
-    out[52] = c[52];
-    out[53] = c[53];
+    out[50] = c[59];
+    out[51] = c[60];
+    out[52] = c[59];
+    out[53] = c[60];
     out[54] = t22;
     out[55] = t24;
     out[56] = t22;
     out[57] = t24;
-    out[58] = c[54];
-    out[59] = c[55];
-    out[60] = c[54];
-    out[61] = c[55];
+    out[58] = c[61];
+    out[59] = c[62];
+    out[60] = c[61];
+    out[61] = c[62];
     out[62] = c[15]*cq[12] + t22;
     out[63] = c[15]*cq[13] + t24;
-    out[64] = c[38]*cq[4] + c[54];
-    out[65] = c[38]*cq[5] + c[55];
-    out[66] = c[52];
-    out[67] = c[53];
+    out[64] = c[38]*cq[4] + c[61];
+    out[65] = c[38]*cq[5] + c[62];
+    out[66] = c[59];
+    out[67] = c[60];
     out[68] = c[22]*cq[2] + c[23]*cq[3];
     out[69] = c[22]*cq[3] + c[27]*cq[2];
     out[70] = t25;
@@ -1155,8 +1261,8 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[75] = cq[11];
     out[76] = t27;
     out[77] = t28;
-    out[78] = c[49]*cq[10] + t19;
-    out[79] = c[49]*cq[11] + t20;
+    out[78] = c[56]*cq[10] + t19;
+    out[79] = c[56]*cq[11] + t20;
     out[80] = t3;
     out[81] = t5;
     out[82] = t17;
@@ -1165,26 +1271,26 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[85] = t28;
     out[86] = t25;
     out[87] = t26;
-    out[88] = c[57]*t6 + c[58]*t9;
-    out[89] = c[57]*t9 + c[59]*t6;
-    out[90] = c[62]*t21 + c[63]*t23;
-    out[91] = c[62]*t23 + c[64]*t21;
-    out[92] = c[66] + c[67]*cx[2] + c[68]*cx[3];
-    out[93] = c[67]*cx[3] + c[69] + c[70]*cx[2];
-    out[94] = c[72]*cq[6] + t2;
-    out[95] = c[72]*cq[7] + t4;
-    out[96] = c[74]*cx[2] + c[75]*cx[3] + t0;
-    out[97] = c[74]*cx[3] + c[76]*cx[2] + t1;
-    out[98] = c[48] + c[78]*cq[0] + c[79]*cq[1];
-    out[99] = c[50] + c[78]*cq[1] + c[80]*cq[0];
-    out[100] = c[82]*cq[10] + c[83]*cq[11] + t19;
-    out[101] = c[82]*cq[11] + c[84]*cq[10] + t20;
-    out[102] = c[52] + c[86]*cq[2] + c[87]*cq[3];
-    out[103] = c[53] + c[86]*cq[3] + c[88]*cq[2];
-    out[104] = c[90]*cq[12] + c[91]*cq[13] + t22;
-    out[105] = c[90]*cq[13] + c[92]*cq[12] + t24;
-    out[106] = c[54] + c[94]*cq[4] + c[95]*cq[5];
-    out[107] = c[55] + c[94]*cq[5] + c[96]*cq[4];
+    out[88] = c[64]*t6 + c[65]*t9;
+    out[89] = c[64]*t9 + c[66]*t6;
+    out[90] = c[69]*t21 + c[70]*t23;
+    out[91] = c[69]*t23 + c[71]*t21;
+    out[92] = c[73] + c[74]*cx[2] + c[75]*cx[3];
+    out[93] = c[74]*cx[3] + c[76] + c[77]*cx[2];
+    out[94] = c[79]*cq[6] + t2;
+    out[95] = c[79]*cq[7] + t4;
+    out[96] = c[81]*cx[2] + c[82]*cx[3] + t0;
+    out[97] = c[81]*cx[3] + c[83]*cx[2] + t1;
+    out[98] = c[55] + c[85]*cq[0] + c[86]*cq[1];
+    out[99] = c[57] + c[85]*cq[1] + c[87]*cq[0];
+    out[100] = c[89]*cq[10] + c[90]*cq[11] + t19;
+    out[101] = c[89]*cq[11] + c[91]*cq[10] + t20;
+    out[102] = c[59] + c[93]*cq[2] + c[94]*cq[3];
+    out[103] = c[60] + c[93]*cq[3] + c[95]*cq[2];
+    out[104] = c[97]*cq[12] + c[98]*cq[13] + t22;
+    out[105] = c[97]*cq[13] + c[99]*cq[12] + t24;
+    out[106] = c[101]*cq[4] + c[102]*cq[5] + c[61];
+    out[107] = c[101]*cq[5] + c[103]*cq[4] + c[62];
     out[108] = c[41];
     out[109] = t29 + (0.3333333333333333)*3.141592653589793;
     out[110] = t29 + (0.6666666666666666)*3.141592653589793;
@@ -1212,12 +1318,13 @@ static const sg_mechanism sg_feed_descriptor = {
     .nq = 7,
     .nx = 2,
     .np = 64,
-    .nc = 173,
+    .nc = 184,
     .nobs = 121,
     .nbranch = 0,
     .nf = 30,
     .nfo = 49,
     .nload = 20,
+    .nblock = 4,
     .coord_is_angle = sg_feed_coord_is_angle,
     .constants = sg_feed_constants,
     .closed = 0,
@@ -1225,6 +1332,8 @@ static const sg_mechanism sg_feed_descriptor = {
     .motion = sg_feed_motion,
     .forces = sg_feed_forces,
     .force_matrix = sg_feed_force_matrix,
+    .scales = sg_feed_scales,
+    .blocks = sg_feed_blocks,
     .anchors = sg_feed_anchors,
 };
 
@@ -1292,348 +1401,363 @@ const char *sg_feed_manifest(void)
         "\"cam\",\"out\":0},{\"body\":\"feed_cam\",\"center\":12,\"joint\":\"cam\",\"out\":1},{\"body\":\""
         "feed_cam\",\"center\":13,\"joint\":\"cam\",\"out\":2},{\"body\":\"feed_cam\",\"center\":14,\"joi"
         "nt\":\"cam\",\"out\":3},{\"body\":\"feed_cam\",\"center\":15,\"joint\":\"cam\",\"out\":4},{\"bod"
-        "y\":\"feed_cam\",\"center\":16,\"joint\":\"cam\",\"out\":5}],\"bodies\":[{\"doc\":\"feed cam \\u"
-        "9001\\u5e03\\u51f8\\u8f6e on the upper shaft (constant breadth, six arcs)\",\"kind\":\"driven\","
-        "\"name\":\"feed_cam\",\"offset\":30,\"role\":\"feed_cam\"},{\"doc\":\"B: the hook crank \\u94a9\\u"
-        "7ebf\\u66f2\\u67c4 (part 12; its phase = the hook drive's group phase)\",\"kind\":\"driven\",\"n"
-        "ame\":\"hook_crank\",\"offset\":39,\"role\":null},{\"doc\":\"stitch regulator \\u9488\\u8ddd\\u5"
-        "ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"kind\":\"driven\",\"nam"
-        "e\":\"regulator\",\"offset\":48,\"role\":null},{\"doc\":\"feed fork \\u9001\\u5e03\\u7259\\u53c9"
-        " (part 3), u down the fork from the cam centre line\",\"kind\":\"link\",\"name\":\"feed_fork\",\""
-        "offset\":57,\"role\":null},{\"doc\":\"stitch block \\u9488\\u8ddd\\u6ed1\\u5757 (part 8)\",\"kin"
-        "d\":\"slider\",\"name\":\"stitch_block\",\"offset\":66,\"role\":null},{\"doc\":\"feed rock shaft"
-        " with its two arms \\u9001\\u5e03\\u8f74\\u7ec4\\u4ef6 (part 2)\",\"kind\":\"link\",\"name\":\"f"
-        "eed_rock_shaft\",\"offset\":75,\"role\":null},{\"doc\":\"feed bar \\u7259\\u67b6 (part 6) with t"
-        "he feed dog \\u9001\\u5e03\\u7259\",\"kind\":\"link\",\"name\":\"feed_bar\",\"offset\":84,\"role"
-        "\":\"feed_bar\"},{\"doc\":\"lift rock shaft with its arms and roller \\u62ac\\u7259\\u8f74\\u7ec"
-        "4\\u4ef6 (parts 5, 7)\",\"kind\":\"link\",\"name\":\"lift_rock_shaft\",\"offset\":93,\"role\":nu"
-        "ll},{\"doc\":\"B: big rod \\u5927\\u8fde\\u6746 (part 9); massless here, its mass is in the hook"
-        " drive\",\"kind\":\"link\",\"name\":\"big_rod\",\"offset\":102,\"role\":null},{\"doc\":\"B: rock"
-        " shaft \\u6446\\u8f74 (part 4) with the lift cam \\u62ac\\u7259\\u51f8\\u8f6e (D); massless here"
-        "\",\"kind\":\"link\",\"name\":\"rock_shaft\",\"offset\":111,\"role\":null}],\"body_fields\":[\"a"
-        "ngle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"br"
-        "anches\":[],\"closed_form\":false,\"closure\":[\"cam.normal\",\"Q.x\",\"Q.y\",\"C.x\",\"C.y\",\""
-        "D.normal\",\"L.normal\"],\"coords\":[{\"guess\":0.0,\"name\":\"feed_rock_shaft.angle\",\"unit\":"
-        "\"rad\"},{\"guess\":3.141592653589793,\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"gu"
-        "ess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\""
-        ":\"feed_fork.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"stitch_block.travel\",\"unit\":"
-        "\"m\"},{\"guess\":0.0,\"name\":\"feed_bar.angle\",\"unit\":\"rad\"},{\"guess\":-1.57079632679489"
-        "66,\"name\":\"big_rod.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\""
-        "Feed mechanism \\u9001\\u5e03\\u673a\\u6784 of the JB household machine: feed cam \\u2192 feed f"
-        "ork \\u2192 feed rock shaft \\u2192 feed bar, with\\nthe stitch-length regulator \\u9488\\u8ddd\\u"
-        "673a\\u6784 and the feed lift \\u62ac\\u7259 (seed 000 \\u00a7\\u4e00(\\u56db), eqs. 1-1 to 1-5;"
-        " seed 001 \\u00a7\\u4e8c, the\\nsub-mechanisms D (lift), E (stitch length) and F (feed bar with "
-        "the feed dog)).\\n\\nA two-degree-of-freedom cam\\u2013linkage: the upper shaft turns the consta"
-        "nt-breadth feed cam \\u9001\\u5e03\\u51f8\\u8f6e (six circular\\narcs, a rounded Reuleaux triang"
-        "le turning about a vertex: 60\\u00b0 dwell, 120\\u00b0 stroke, 60\\u00b0 dwell, 120\\u00b0 retur"
-        "n)\\ninside the two flat faces of the feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), which han"
-        "gs down the standing arm. The fork's\\nlower end P drives the feed rock shaft \\u9001\\u5e03\\u8"
-        "f74 (part 2) through its rear arm; its middle Q carries the stitch\\nblock \\u9488\\u8ddd\\u6ed1"
-        "\\u5757 (part 8) in the slot of the stitch regulator \\u9488\\u8ddd\\u5ea7, whose angle is the s"
-        "econd input (held in a\\nrun; its holding torque is an output). With the slot horizontal the for"
-        "k only rocks about P: zero stitch;\\ntilted by \\u00b1\\u03b1 it makes the fork rise and fall, t"
-        "urning the feed rock shaft one way or the other: forward or\\nreverse feed. The feed rock shaft'"
-        "s upper arm carries the feed bar \\u7259\\u67b6 (part 6) at R; the feed bar rests in\\nthe lift "
-        "rock shaft's \\u62ac\\u7259\\u8f74 (part 5) roller \\u62ac\\u7259\\u6eda\\u67f1 (part 7), a pin "
-        "in a slot along the bar. The feed dog\\n\\u9001\\u5e03\\u7259 is a point of the feed bar.\\n\\nT"
-        "he lift \\u62ac\\u7259 follows seed 001 \\u00a7\\u4e8c's upper branch: upper shaft \\u2192 B (th"
-        "e big-rod mechanism \\u5927\\u8fde\\u6746\\u673a\\u6784: hook crank,\\nbig rod \\u5927\\u8fde\\u"
-        "6746 9, rock shaft \\u6446\\u8f74 4 \\u2014 the hook drive's own four-bar) \\u2192 D (the lift c"
-        "am mechanism \\u62ac\\u7259\\u51f8\\u8f6e\\u673a\\u6784: a\\nlift cam on the rock shaft in the f"
-        "ork of the lift crank \\u62ac\\u7259\\u66f2\\u67c4) \\u2192 the lift rock shaft. B is declared h"
-        "ere a\\nsecond time, massless, with the hook drive's dimensions (its parameters must equal ``hoo"
-        "k_drive``'s crank,\\nbig_rod, rock_axis_x/_y and rock_front_arm and its phase the hook drive's):"
-        " the two groups then move one rock\\nshaft alike, the hook drive's group carries B's masses, and"
-        " the lift's reaction reaches the hook crank pin and\\nthe rock-shaft bearing through this copy \\u"
-        "2014 kinetostatics is linear in the loads, so the groups' reactions add\\nup to the real ones. T"
-        "he lift cam is a circular cam (an eccentric of ``lift_cam_eccentricity`` on the rock\\nshaft) be"
-        "tween the two parallel faces of the lift crank's fork: its equivalent lower pair, the eccentric'"
-        "s\\ncentre as a pin in the fork's centre-line slot, is exact. The rock shaft swings about 96\\u0"
-        "0b0 once a turn with its\\nends at the shuttle's reversals (needle top and bottom, \\u03c6 \\u22"
-        "48 90\\u00b0 and 270\\u00b0); the eccentric sits across the line\\nfrom the rock shaft to the li"
-        "ft shaft at mid-swing, so the lift crank turns one way over the whole swing and the\\ndog is hig"
-        "hest when the needle is highest \\u2014 above the plate while the needle is out of the cloth, be"
-        "low it\\nwhile the needle is in (seed 001 \\u00a7\\u4e94 2, \\\"coordination of the feed dog wit"
-        "h the other mechanisms\\\").\\n\\nThe cam contact is replaced, arc by arc, by its equivalent low"
-        "er pair (derive.model.Mechanism.cam), so the\\nloop closes in one set of equations (Newton, as s"
-        "eed 000 solves eqs. 1-5). Frame: origin on the upper-shaft\\naxis, x horizontal (feed direction "
-        "positive), y up; the throat plate is at y = plate_y.\\n\\nEvery dimension here is an estimate (s"
-        "eed 000's tables \\u9644\\u8868 and seed 001's \\u9644\\u8868 1 are not in the text): sized so\\n"
-        "the fork stroke is 6 mm, the maximum stitch 4 mm at a regulator angle near 40\\u00b0, and the fe"
-        "ed dog rises about\\n1 mm above the throat plate while the needle is out of the cloth (needle to"
-        "p at \\u03c6 = 90\\u00b0).\",\"elements\":[],\"force_blocks\":[1,2,1,2],\"force_outputs\":[{\"na"
-        "me\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"regulator.torque\",\"unit\":\"N*m\"},{\"name"
-        "\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"regulator.power\",\"unit\":\"W\"},{\"name\":\"sti"
-        "tch_block.guide.fx\",\"unit\":\"N\"},{\"name\":\"stitch_block.guide.fy\",\"unit\":\"N\"},{\"name"
-        "\":\"cam.fx\",\"unit\":\"N\"},{\"name\":\"cam.fy\",\"unit\":\"N\"},{\"name\":\"D.fx\",\"unit\":\""
-        "N\"},{\"name\":\"D.fy\",\"unit\":\"N\"},{\"name\":\"L.fx\",\"unit\":\"N\"},{\"name\":\"L.fy\",\""
-        "unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},"
-        "{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"n"
-        "ame\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\""
-        "elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"feed_cam.x\",\"feed_cam.y\",\"feed_cam.moment"
-        "\",\"hook_crank.x\",\"hook_crank.y\",\"hook_crank.moment\",\"regulator.x\",\"regulator.y\",\"reg"
-        "ulator.moment\",\"feed_fork.x\",\"feed_fork.y\",\"feed_fork.moment\",\"stitch_block.x\",\"stitch"
-        "_block.y\",\"stitch_block.moment\",\"feed_rock_shaft.x\",\"feed_rock_shaft.y\",\"feed_rock_shaft"
-        ".moment\",\"feed_bar.x\",\"feed_bar.y\",\"feed_bar.moment\",\"lift_rock_shaft.x\",\"lift_rock_sh"
-        "aft.y\",\"lift_rock_shaft.moment\",\"big_rod.x\",\"big_rod.y\",\"big_rod.moment\",\"rock_shaft.x"
-        "\",\"rock_shaft.y\",\"rock_shaft.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\""
-        ",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":"
-        "\"rad\"},{\"default\":0.6981317007977318,\"display_unit\":\"deg\",\"doc\":\"stitch regulator \\u"
-        "9488\\u8ddd\\u5ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"kind\":\""
-        "held\",\"name\":\"regulator\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels\":{\"sg"
-        "_feed_anchors\":{\"ops\":181},\"sg_feed_constants\":{\"ops\":124},\"sg_feed_force_matrix\":{\"op"
-        "s\":323},\"sg_feed_forces\":{\"ops\":585},\"sg_feed_motion\":{\"ops\":607},\"sg_feed_residual\":"
-        "{\"ops\":134}},\"loads\":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"name\":\"feed_dog\"},{\""
-        "body\":\"feed_bar\",\"component\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\",\"compon"
-        "ent\":\"fx\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"fork"
-        "_top\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"feed_f"
-        "ork\",\"component\":\"fy\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_shaft\",\"component\":"
-        "\"fx\",\"name\":\"lift_roller\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fy\",\"name\":\"l"
-        "ift_roller\"},{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"lift_cam\"},{\"body\":\"r"
-        "ock_shaft\",\"component\":\"fy\",\"name\":\"lift_cam\"},{\"body\":\"feed_cam\",\"component\":\"t"
-        "orque\",\"name\":\"feed_cam\"},{\"body\":\"hook_crank\",\"component\":\"torque\",\"name\":\"hook"
-        "_crank\"},{\"body\":\"regulator\",\"component\":\"torque\",\"name\":\"regulator\"},{\"body\":\"f"
-        "eed_fork\",\"component\":\"torque\",\"name\":\"feed_fork\"},{\"body\":\"stitch_block\",\"compone"
-        "nt\":\"torque\",\"name\":\"stitch_block\"},{\"body\":\"feed_rock_shaft\",\"component\":\"torque\""
-        ",\"name\":\"feed_rock_shaft\"},{\"body\":\"feed_bar\",\"component\":\"torque\",\"name\":\"feed_b"
-        "ar\"},{\"body\":\"lift_rock_shaft\",\"component\":\"torque\",\"name\":\"lift_rock_shaft\"},{\"bo"
-        "dy\":\"big_rod\",\"component\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"compo"
-        "nent\":\"torque\",\"name\":\"rock_shaft\"}],\"name\":\"feed\",\"observables\":[{\"name\":\"feed_"
-        "dog.x\",\"unit\":\"m\"},{\"name\":\"feed_dog.y\",\"unit\":\"m\"},{\"name\":\"feed_dog.x_d\",\"un"
-        "it\":\"m/s\"},{\"name\":\"feed_dog.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.x_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"feed_dog.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.x\",\"unit\":\"m"
-        "\"},{\"name\":\"fork_top.y\",\"unit\":\"m\"},{\"name\":\"fork_top.x_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"fork_top.y_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"fork_top.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.x\",\"unit\":\"m\"},{\"name\":\"st"
-        "itch_pin.y\",\"unit\":\"m\"},{\"name\":\"stitch_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_p"
-        "in.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_"
-        "pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.x\",\"unit\":\"m\"},{\"name\":\"lift_roll"
-        "er.y\",\"unit\":\"m\"},{\"name\":\"lift_roller.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.y"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rolle"
-        "r.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_cam.x\",\"unit\":\"m\"},{\"name\":\"lift_cam.y\",\""
-        "unit\":\"m\"},{\"name\":\"lift_cam.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_cam.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"lift_cam.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_cam.y_dd\",\"unit\":\"m/"
-        "s^2\"},{\"name\":\"feed_cam.angle\",\"unit\":\"rad\"},{\"name\":\"feed_cam.angle_d\",\"unit\":\""
-        "rad/s\"},{\"name\":\"feed_cam.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_cam.com.x\",\"un"
-        "it\":\"m\"},{\"name\":\"feed_cam.com.y\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.x_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"feed_cam.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.x_dd\",\"uni"
-        "t\":\"m/s^2\"},{\"name\":\"feed_cam.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_crank.angle\""
-        ",\"unit\":\"rad\"},{\"name\":\"hook_crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"hook_crank.a"
-        "ngle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"hook_crank.com.x\",\"unit\":\"m\"},{\"name\":\"hook_"
-        "crank.com.y\",\"unit\":\"m\"},{\"name\":\"hook_crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"hoo"
-        "k_crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"hook_crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"hook_crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"regulator.angle\",\"unit\":\"rad\"},"
-        "{\"name\":\"regulator.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"regulator.angle_dd\",\"unit\":\""
-        "rad/s^2\"},{\"name\":\"regulator.com.x\",\"unit\":\"m\"},{\"name\":\"regulator.com.y\",\"unit\":"
-        "\"m\"},{\"name\":\"regulator.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.y_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"regulator.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"regulator.com.y_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"feed_fork.angle\",\"unit\":\"rad\"},{\"name\":\"feed_fork.angle_"
-        "d\",\"unit\":\"rad/s\"},{\"name\":\"feed_fork.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_"
-        "fork.com.x\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.y\",\"unit\":\"m\"},{\"name\":\"feed_fork"
-        ".com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_"
-        "fork.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork.com.y_dd\",\"unit\":\"m/s^2\"},{\"name"
-        "\":\"stitch_block.angle\",\"unit\":\"rad\"},{\"name\":\"stitch_block.angle_d\",\"unit\":\"rad/s\""
-        "},{\"name\":\"stitch_block.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"stitch_block.com.x\",\"u"
-        "nit\":\"m\"},{\"name\":\"stitch_block.com.y\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.x_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block"
-        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"feed_rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"feed_rock_shaft.angle_d\",\"unit\":\"ra"
-        "d/s\"},{\"name\":\"feed_rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_rock_shaft."
-        "com.x\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"feed_roc"
-        "k_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"n"
-        "ame\":\"feed_rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.com.y_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"feed_bar.angle\",\"unit\":\"rad\"},{\"name\":\"feed_bar.angle_d\","
-        "\"unit\":\"rad/s\"},{\"name\":\"feed_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_bar.c"
-        "om.x\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.y\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.x_d"
-        "\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.x"
-        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_r"
-        "ock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"lift_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"lift_rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_rock_shaft.com.x\",\""
-        "unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.co"
-        "m.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"li"
-        "ft_rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.com.y_dd\",\"unit\":\"m"
-        "/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"r"
-        "ad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\""
-        ":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/"
-        "s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\""
-        ":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\""
-        ",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com"
-        ".y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.c"
-        "om.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"roc"
-        "k_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cam.arc\",\"unit\":\"\"}],\"params\":[{\"defa"
-        "ult\":0.006,\"display_unit\":\"mm\",\"doc\":\"feed cam: side of its Reuleaux triangle = fork str"
-        "oke (estimate)\",\"kind\":\"length\",\"name\":\"cam_side\",\"positive\":true,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"feed cam: small arc radius; brea"
-        "dth = side + 2 radius (estimate)\",\"kind\":\"length\",\"name\":\"cam_small_radius\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.2,\"display_unit\":\"mm\",\"doc\":\"feed fork"
-        ": cam centre line to rock-shaft pin P (estimate)\",\"kind\":\"length\",\"name\":\"fork_p\",\"pos"
-        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"f"
-        "eed fork: cam centre line to stitch-block pin Q (estimate)\",\"kind\":\"length\",\"name\":\"fork"
-        "_q\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\""
-        "doc\":\"stitch regulator pivot, x (estimate)\",\"kind\":\"length\",\"name\":\"regulator_x\",\"po"
-        "sitive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.06,\"display_unit\":\"mm\",\"doc\":"
-        "\"stitch regulator pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"regulator_y\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"feed"
-        " rock shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_x\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"m\"},{\"default\":-0.2,\"display_unit\":\"mm\",\"doc\":\"feed rock sh"
-        "aft axis, y (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_y\",\"positive\":false,\"role"
-        "\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: rea"
-        "r arm to the fork pin P (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_p\",\"positive\":tr"
-        "ue,\"role\":null,\"unit\":\"m\"},{\"default\":0.0293,\"display_unit\":\"mm\",\"doc\":\"feed rock"
-        " shaft: upper arm to the feed-bar pin R (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_r\""
-        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc"
-        "\":\"lift rock shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_x\",\"positi"
-        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1777,\"display_unit\":\"mm\",\"doc\":\""
-        "lift rock shaft axis, y (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_y\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"lift ro"
-        "ck shaft: arm to the roller L (estimate)\",\"kind\":\"length\",\"name\":\"lift_arm\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"B: hook"
-        " crank radius (= hook_drive crank)\",\"kind\":\"length\",\"name\":\"hook_crank\",\"positive\":tr"
-        "ue,\"role\":null,\"unit\":\"m\"},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":\"B: big r"
-        "od, pin to pin (= hook_drive big_rod)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":tr"
-        "ue,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"B: rock-"
-        "shaft axis, x (= hook_drive rock_axis_x)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positi"
-        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.21745,\"display_unit\":\"mm\",\"doc\":\""
-        "B: rock-shaft axis, y (= hook_drive rock_axis_y)\",\"kind\":\"length\",\"name\":\"rock_axis_y\","
-        "\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\":\"mm\",\""
-        "doc\":\"B: rock-shaft arm driven by the big rod (= hook_drive's)\",\"kind\":\"length\",\"name\":"
-        "\"rock_front_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0039,\"display"
-        "_unit\":\"mm\",\"doc\":\"D: lift cam (eccentric) centre from the rock-shaft axis (estimate)\",\""
-        "kind\":\"length\",\"name\":\"lift_cam_eccentricity\",\"positive\":true,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.9791297103688189,\"display_unit\":\"deg\",\"doc\":\"D: lift cam centre's dir"
-        "ection on the rock shaft from its front arm (estimate: across the line to the lift shaft at mid-"
-        "swing)\",\"kind\":\"angle\",\"name\":\"lift_cam_angle\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"rad\"},{\"default\":0.9581857593448869,\"display_unit\":\"deg\",\"doc\":\"D: lift crank's for"
-        "k centre line on the lift rock shaft, from its roller arm (estimate)\",\"kind\":\"angle\",\"name"
-        "\":\"lift_fork_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"di"
-        "splay_unit\":\"mm\",\"doc\":\"feed dog tip along the feed bar from R (estimate)\",\"kind\":\"len"
-        "gth\",\"name\":\"dog_u\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.007,\"di"
-        "splay_unit\":\"mm\",\"doc\":\"feed bar: its roller slot below the line R\\u2013feed dog (estimat"
-        "e)\",\"kind\":\"length\",\"name\":\"bar_slot_v\",\"positive\":true,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":-0.1705,\"display_unit\":\"mm\",\"doc\":\"throat plate surface, y (estimate: the d"
-        "og rises ~1 mm above it)\",\"kind\":\"length\",\"name\":\"plate_y\",\"positive\":false,\"role\":"
-        "\"throat_plate\",\"unit\":\"m\"},{\"default\":1.0471975511965976,\"display_unit\":\"deg\",\"doc\""
-        ":\"phase of feed_cam relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_cam.phase\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"d"
-        "oc\":\"mass of feed_cam\",\"kind\":\"mass\",\"name\":\"feed_cam.mass\",\"positive\":false,\"role"
-        "\":null,\"unit\":\"kg\"},{\"default\":0.0015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
-        " feed_cam, local u\",\"kind\":\"length\",\"name\":\"feed_cam.com_u\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_"
-        "cam, local v\",\"kind\":\"length\",\"name\":\"feed_cam.com_v\",\"positive\":false,\"role\":null,"
-        "\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of f"
-        "eed_cam about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_cam.inertia\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":-0.03490658503988659,\"display_unit\":"
-        "\"deg\",\"doc\":\"phase of hook_crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":"
-        "\"hook_crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"displ"
-        "ay_unit\":\"g\",\"doc\":\"mass of hook_crank\",\"kind\":\"mass\",\"name\":\"hook_crank.mass\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of hook_crank, local u\",\"kind\":\"length\",\"name\":\"hook_crank.com_u\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\""
-        "centre of mass of hook_crank, local v\",\"kind\":\"length\",\"name\":\"hook_crank.com_v\",\"posi"
-        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\""
-        ":\"moment of inertia of hook_crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"ho"
-        "ok_crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"dis"
-        "play_unit\":\"g\",\"doc\":\"mass of regulator\",\"kind\":\"mass\",\"name\":\"regulator.mass\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of regulator, local u\",\"kind\":\"length\",\"name\":\"regulator.com_u\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"c"
-        "entre of mass of regulator, local v\",\"kind\":\"length\",\"name\":\"regulator.com_v\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\""
-        "moment of inertia of regulator about its centre of mass\",\"kind\":\"inertia\",\"name\":\"regula"
-        "tor.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of feed_fork\",\"kind\":\"mass\",\"name\":\"feed_fork.mass\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.00012,\"display_unit\":\"kg*m**2\",\""
-        "doc\":\"moment of inertia of feed_fork about its centre of mass\",\"kind\":\"inertia\",\"name\":"
-        "\"feed_fork.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.004,"
-        "\"display_unit\":\"g\",\"doc\":\"mass of stitch_block\",\"kind\":\"mass\",\"name\":\"stitch_bloc"
-        "k.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"m"
-        "m\",\"doc\":\"centre of mass of stitch_block, local u\",\"kind\":\"length\",\"name\":\"stitch_bl"
-        "ock.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of stitch_block, local v\",\"kind\":\"length\",\"name\":\"stitch_b"
-        "lock.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\""
-        ":\"kg*m**2\",\"doc\":\"moment of inertia of stitch_block about its centre of mass\",\"kind\":\"i"
-        "nertia\",\"name\":\"stitch_block.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\""
-        "},{\"default\":0.04,\"display_unit\":\"g\",\"doc\":\"mass of feed_rock_shaft\",\"kind\":\"mass\""
-        ",\"name\":\"feed_rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
-        ":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_rock_shaft, local u\",\"kind\":\""
-        "length\",\"name\":\"feed_rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_rock_shaft, local v\",\""
-        "kind\":\"length\",\"name\":\"feed_rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_rock_sh"
-        "aft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_rock_shaft.inertia\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\""
-        ":\"mass of feed_bar\",\"kind\":\"mass\",\"name\":\"feed_bar.mass\",\"positive\":false,\"role\":n"
-        "ull,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed"
-        "_bar, local u\",\"kind\":\"length\",\"name\":\"feed_bar.com_u\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"m\"},{\"default\":-0.003,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_ba"
-        "r, local v\",\"kind\":\"length\",\"name\":\"feed_bar.com_v\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of fee"
-        "d_bar about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_bar.inertia\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"ma"
-        "ss of lift_rock_shaft\",\"kind\":\"mass\",\"name\":\"lift_rock_shaft.mass\",\"positive\":false,\""
+        "y\":\"feed_cam\",\"center\":16,\"joint\":\"cam\",\"out\":5}],\"blocks\":[{\"coords\":[3,4,0],\"j"
+        "oints\":[\"cam\",\"Q\"],\"rows\":[0,1,2]},{\"coords\":[6,2],\"joints\":[\"C\"],\"rows\":[3,4]},{"
+        "\"coords\":[1],\"joints\":[\"D\"],\"rows\":[5]},{\"coords\":[5],\"joints\":[\"L\"],\"rows\":[6]}"
+        "],\"bodies\":[{\"doc\":\"feed cam \\u9001\\u5e03\\u51f8\\u8f6e on the upper shaft (constant brea"
+        "dth, six arcs)\",\"kind\":\"driven\",\"name\":\"feed_cam\",\"offset\":30,\"role\":\"feed_cam\"},"
+        "{\"doc\":\"B: the hook crank \\u94a9\\u7ebf\\u66f2\\u67c4 (part 12; its phase = the hook drive's"
+        " group phase)\",\"kind\":\"driven\",\"name\":\"hook_crank\",\"offset\":39,\"role\":null},{\"doc\""
+        ":\"stitch regulator \\u9488\\u8ddd\\u5ea7: slot angle from horizontal (0: no feed; >0 forward; <"
+        "0 reverse)\",\"kind\":\"driven\",\"name\":\"regulator\",\"offset\":48,\"role\":null},{\"doc\":\""
+        "feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), u down the fork from the cam centre line\",\"ki"
+        "nd\":\"link\",\"name\":\"feed_fork\",\"offset\":57,\"role\":null},{\"doc\":\"stitch block \\u948"
+        "8\\u8ddd\\u6ed1\\u5757 (part 8)\",\"kind\":\"slider\",\"name\":\"stitch_block\",\"offset\":66,\""
+        "role\":null},{\"doc\":\"feed rock shaft with its two arms \\u9001\\u5e03\\u8f74\\u7ec4\\u4ef6 (p"
+        "art 2)\",\"kind\":\"link\",\"name\":\"feed_rock_shaft\",\"offset\":75,\"role\":null},{\"doc\":\""
+        "feed bar \\u7259\\u67b6 (part 6) with the feed dog \\u9001\\u5e03\\u7259\",\"kind\":\"link\",\"n"
+        "ame\":\"feed_bar\",\"offset\":84,\"role\":\"feed_bar\"},{\"doc\":\"lift rock shaft with its arms"
+        " and roller \\u62ac\\u7259\\u8f74\\u7ec4\\u4ef6 (parts 5, 7)\",\"kind\":\"link\",\"name\":\"lift"
+        "_rock_shaft\",\"offset\":93,\"role\":null},{\"doc\":\"B: big rod \\u5927\\u8fde\\u6746 (part 9);"
+        " massless here, its mass is in the hook drive\",\"kind\":\"link\",\"name\":\"big_rod\",\"offset\""
+        ":102,\"role\":null},{\"doc\":\"B: rock shaft \\u6446\\u8f74 (part 4) with the lift cam \\u62ac\\u"
+        "7259\\u51f8\\u8f6e (D); massless here\",\"kind\":\"link\",\"name\":\"rock_shaft\",\"offset\":111"
+        ",\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\""
+        "com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[],\"closed_form\":false,\"closure\":[\"cam.normal\""
+        ",\"Q.x\",\"Q.y\",\"C.x\",\"C.y\",\"D.normal\",\"L.normal\"],\"constants\":[[6],[2],[0,1],[24],[2"
+        "4],[8],[24],[7],[0,1],[8],[3],[2],[4,6],[5,7],[15],[14],[13],[29],[29],[17],[16],[29],[20],[20],"
+        "[18,19],[18,19],[11,16],[20],[18,19],[10,15],[22],[12],[9],[7,11],[9],[22],[6,10],[3],[17],[14],"
+        "[18,19],[1],[0,1],[0],[0],[0],[0,1,6,7,8],[2,3,4,6,8],[2,3,5,7,8],[13,14,15,17],[13,14,16,17],[1"
+        "0,11,15,16,18],[6,7,9,10,11,12,22],[13],[12],[6],[21],[7],[21],[10],[11],[15],[16],[24],[26],[27"
+        "],[27],[26],[29],[31],[32],[32],[31],[4],[35],[36],[5],[36],[35],[2],[2],[41],[42],[42],[41],[45"
+        "],[46],[46],[45],[49],[50],[50],[49],[53],[54],[54],[53],[57],[58],[58],[57],[61],[62],[62],[61]"
+        ",[13,14,15,17],[13,14,16,17],[10,11,15,16,18],[6,7,9,10,11,12,22],[10],[11],[39],[2,3],[38],[40]"
+        ",[2,3],[2,3,40],[2,3,40],[47],[48],[44],[51],[21,49],[21,49],[55],[12,53],[12,53],[52],[59],[56]"
+        ",[63],[18,19,62],[18,19,61],[18,19,61],[60],[28],[25],[33],[13,31],[13,31],[30],[37],[34],[43],["
+        "56],[44],[20],[5],[25],[28],[30],[33],[34],[37],[38],[39],[40],[43],[44],[47],[48],[51],[52],[55"
+        "],[56],[59],[60],[63],[25],[30],[34],[38],[40],[48],[52],[60],[8,45],[8,45],[9,46],[14,57],[14,5"
+        "7],[17,61],[17,61],[18,19,62]],\"coords\":[{\"guess\":0.0,\"name\":\"feed_rock_shaft.angle\",\"u"
+        "nit\":\"rad\"},{\"guess\":3.141592653589793,\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"}"
+        ",{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\""
+        "name\":\"feed_fork.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"stitch_block.travel\",\"u"
+        "nit\":\"m\"},{\"guess\":0.0,\"name\":\"feed_bar.angle\",\"unit\":\"rad\"},{\"guess\":-1.57079632"
+        "67948966,\"name\":\"big_rod.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"do"
+        "c\":\"Feed mechanism \\u9001\\u5e03\\u673a\\u6784 of the JB household machine: feed cam \\u2192 "
+        "feed fork \\u2192 feed rock shaft \\u2192 feed bar, with\\nthe stitch-length regulator \\u9488\\u"
+        "8ddd\\u673a\\u6784 and the feed lift \\u62ac\\u7259 (seed 000 \\u00a7\\u4e00(\\u56db), eqs. 1-1 "
+        "to 1-5; seed 001 \\u00a7\\u4e8c, the\\nsub-mechanisms D (lift), E (stitch length) and F (feed ba"
+        "r with the feed dog)).\\n\\nA two-degree-of-freedom cam\\u2013linkage: the upper shaft turns the"
+        " constant-breadth feed cam \\u9001\\u5e03\\u51f8\\u8f6e (six circular\\narcs, a rounded Reuleaux"
+        " triangle turning about a vertex: 60\\u00b0 dwell, 120\\u00b0 stroke, 60\\u00b0 dwell, 120\\u00b"
+        "0 return)\\ninside the two flat faces of the feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), wh"
+        "ich hangs down the standing arm. The fork's\\nlower end P drives the feed rock shaft \\u9001\\u5"
+        "e03\\u8f74 (part 2) through its rear arm; its middle Q carries the stitch\\nblock \\u9488\\u8ddd"
+        "\\u6ed1\\u5757 (part 8) in the slot of the stitch regulator \\u9488\\u8ddd\\u5ea7, whose angle i"
+        "s the second input (held in a\\nrun; its holding torque is an output). With the slot horizontal "
+        "the fork only rocks about P: zero stitch;\\ntilted by \\u00b1\\u03b1 it makes the fork rise and "
+        "fall, turning the feed rock shaft one way or the other: forward or\\nreverse feed. The feed rock"
+        " shaft's upper arm carries the feed bar \\u7259\\u67b6 (part 6) at R; the feed bar rests in\\nth"
+        "e lift rock shaft's \\u62ac\\u7259\\u8f74 (part 5) roller \\u62ac\\u7259\\u6eda\\u67f1 (part 7),"
+        " a pin in a slot along the bar. The feed dog\\n\\u9001\\u5e03\\u7259 is a point of the feed bar."
+        "\\n\\nThe lift \\u62ac\\u7259 follows seed 001 \\u00a7\\u4e8c's upper branch: upper shaft \\u219"
+        "2 B (the big-rod mechanism \\u5927\\u8fde\\u6746\\u673a\\u6784: hook crank,\\nbig rod \\u5927\\u"
+        "8fde\\u6746 9, rock shaft \\u6446\\u8f74 4 \\u2014 the hook drive's own four-bar) \\u2192 D (the"
+        " lift cam mechanism \\u62ac\\u7259\\u51f8\\u8f6e\\u673a\\u6784: a\\nlift cam on the rock shaft i"
+        "n the fork of the lift crank \\u62ac\\u7259\\u66f2\\u67c4) \\u2192 the lift rock shaft. B is dec"
+        "lared here a\\nsecond time, massless, with the hook drive's dimensions (its parameters must equa"
+        "l ``hook_drive``'s crank,\\nbig_rod, rock_axis_x/_y and rock_front_arm and its phase the hook dr"
+        "ive's): the two groups then move one rock\\nshaft alike, the hook drive's group carries B's mass"
+        "es, and the lift's reaction reaches the hook crank pin and\\nthe rock-shaft bearing through this"
+        " copy \\u2014 kinetostatics is linear in the loads, so the groups' reactions add\\nup to the rea"
+        "l ones. The lift cam is a circular cam (an eccentric of ``lift_cam_eccentricity`` on the rock\\n"
+        "shaft) between the two parallel faces of the lift crank's fork: its equivalent lower pair, the e"
+        "ccentric's\\ncentre as a pin in the fork's centre-line slot, is exact. The rock shaft swings abo"
+        "ut 96\\u00b0 once a turn with its\\nends at the shuttle's reversals (needle top and bottom, \\u0"
+        "3c6 \\u2248 90\\u00b0 and 270\\u00b0); the eccentric sits across the line\\nfrom the rock shaft "
+        "to the lift shaft at mid-swing, so the lift crank turns one way over the whole swing and the\\nd"
+        "og is highest when the needle is highest \\u2014 above the plate while the needle is out of the "
+        "cloth, below it\\nwhile the needle is in (seed 001 \\u00a7\\u4e94 2, \\\"coordination of the fee"
+        "d dog with the other mechanisms\\\").\\n\\nThe cam contact is replaced, arc by arc, by its equiv"
+        "alent lower pair (derive.model.Mechanism.cam), so the\\nloop closes in one set of equations (New"
+        "ton, as seed 000 solves eqs. 1-5). Frame: origin on the upper-shaft\\naxis, x horizontal (feed d"
+        "irection positive), y up; the throat plate is at y = plate_y.\\n\\nEvery dimension here is an es"
+        "timate (seed 000's tables \\u9644\\u8868 and seed 001's \\u9644\\u8868 1 are not in the text): s"
+        "ized so\\nthe fork stroke is 6 mm, the maximum stitch 4 mm at a regulator angle near 40\\u00b0, "
+        "and the feed dog rises about\\n1 mm above the throat plate while the needle is out of the cloth "
+        "(needle top at \\u03c6 = 90\\u00b0).\",\"elements\":[],\"force_blocks\":[1,2,1,2],\"force_output"
+        "s\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"regulator.torque\",\"unit\":\"N*m\""
+        "},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"regulator.power\",\"unit\":\"W\"},{\"nam"
+        "e\":\"stitch_block.guide.fx\",\"unit\":\"N\"},{\"name\":\"stitch_block.guide.fy\",\"unit\":\"N\""
+        "},{\"name\":\"cam.fx\",\"unit\":\"N\"},{\"name\":\"cam.fy\",\"unit\":\"N\"},{\"name\":\"D.fx\",\""
+        "unit\":\"N\"},{\"name\":\"D.fy\",\"unit\":\"N\"},{\"name\":\"L.fx\",\"unit\":\"N\"},{\"name\":\""
+        "L.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\""
+        ":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J"
+        "\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"n"
+        "ame\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"feed_cam.x\",\"feed_cam.y\",\"feed_ca"
+        "m.moment\",\"hook_crank.x\",\"hook_crank.y\",\"hook_crank.moment\",\"regulator.x\",\"regulator.y"
+        "\",\"regulator.moment\",\"feed_fork.x\",\"feed_fork.y\",\"feed_fork.moment\",\"stitch_block.x\","
+        "\"stitch_block.y\",\"stitch_block.moment\",\"feed_rock_shaft.x\",\"feed_rock_shaft.y\",\"feed_ro"
+        "ck_shaft.moment\",\"feed_bar.x\",\"feed_bar.y\",\"feed_bar.moment\",\"lift_rock_shaft.x\",\"lift"
+        "_rock_shaft.y\",\"lift_rock_shaft.moment\",\"big_rod.x\",\"big_rod.y\",\"big_rod.moment\",\"rock"
+        "_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\""
+        ":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\""
+        "unit\":\"rad\"},{\"default\":0.6981317007977318,\"display_unit\":\"deg\",\"doc\":\"stitch regula"
+        "tor \\u9488\\u8ddd\\u5ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"k"
+        "ind\":\"held\",\"name\":\"regulator\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels"
+        "\":{\"sg_feed_anchors\":{\"ops\":181},\"sg_feed_blocks\":{\"ops\":130},\"sg_feed_constants\":{\""
+        "ops\":164},\"sg_feed_force_matrix\":{\"ops\":323},\"sg_feed_forces\":{\"ops\":585},\"sg_feed_mot"
+        "ion\":{\"ops\":608},\"sg_feed_residual\":{\"ops\":134},\"sg_feed_scales\":{\"ops\":18}},\"loads\""
+        ":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"name\":\"feed_dog\"},{\"body\":\"feed_bar\",\"co"
+        "mponent\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\""
+        "fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"fork_top\"},{\"body\":\"feed"
+        "_fork\",\"component\":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"feed_fork\",\"component\":\"fy"
+        "\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fx\",\"name\":\"lift_r"
+        "oller\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fy\",\"name\":\"lift_roller\"},{\"body\":"
+        "\"rock_shaft\",\"component\":\"fx\",\"name\":\"lift_cam\"},{\"body\":\"rock_shaft\",\"component\""
+        ":\"fy\",\"name\":\"lift_cam\"},{\"body\":\"feed_cam\",\"component\":\"torque\",\"name\":\"feed_c"
+        "am\"},{\"body\":\"hook_crank\",\"component\":\"torque\",\"name\":\"hook_crank\"},{\"body\":\"reg"
+        "ulator\",\"component\":\"torque\",\"name\":\"regulator\"},{\"body\":\"feed_fork\",\"component\":"
+        "\"torque\",\"name\":\"feed_fork\"},{\"body\":\"stitch_block\",\"component\":\"torque\",\"name\":"
+        "\"stitch_block\"},{\"body\":\"feed_rock_shaft\",\"component\":\"torque\",\"name\":\"feed_rock_sh"
+        "aft\"},{\"body\":\"feed_bar\",\"component\":\"torque\",\"name\":\"feed_bar\"},{\"body\":\"lift_r"
+        "ock_shaft\",\"component\":\"torque\",\"name\":\"lift_rock_shaft\"},{\"body\":\"big_rod\",\"compo"
+        "nent\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name"
+        "\":\"rock_shaft\"}],\"name\":\"feed\",\"observables\":[{\"name\":\"feed_dog.x\",\"unit\":\"m\"},"
+        "{\"name\":\"feed_dog.y\",\"unit\":\"m\"},{\"name\":\"feed_dog.x_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"feed_dog.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"f"
+        "eed_dog.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.x\",\"unit\":\"m\"},{\"name\":\"fork_top"
+        ".y\",\"unit\":\"m\"},{\"name\":\"fork_top.x_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.y_d\",\"u"
+        "nit\":\"m/s\"},{\"name\":\"fork_top.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.y_dd\",\"uni"
+        "t\":\"m/s^2\"},{\"name\":\"stitch_pin.x\",\"unit\":\"m\"},{\"name\":\"stitch_pin.y\",\"unit\":\""
+        "m\"},{\"name\":\"stitch_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.y_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"stitch_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.y_dd\",\"unit\":\"m/s"
+        "^2\"},{\"name\":\"lift_roller.x\",\"unit\":\"m\"},{\"name\":\"lift_roller.y\",\"unit\":\"m\"},{\""
+        "name\":\"lift_roller.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.y_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"lift_roller.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.y_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"lift_cam.x\",\"unit\":\"m\"},{\"name\":\"lift_cam.y\",\"unit\":\"m\"},{\"name\":\""
+        "lift_cam.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_cam.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_c"
+        "am.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_cam.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_c"
+        "am.angle\",\"unit\":\"rad\"},{\"name\":\"feed_cam.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed"
+        "_cam.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_cam.com.x\",\"unit\":\"m\"},{\"name\":\"f"
+        "eed_cam.com.y\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"fee"
+        "d_cam.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":"
+        "\"feed_cam.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_crank.angle\",\"unit\":\"rad\"},{\"na"
+        "me\":\"hook_crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"hook_crank.angle_dd\",\"unit\":\"rad"
+        "/s^2\"},{\"name\":\"hook_crank.com.x\",\"unit\":\"m\"},{\"name\":\"hook_crank.com.y\",\"unit\":\""
+        "m\"},{\"name\":\"hook_crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"hook_crank.com.y_d\",\"unit\""
+        ":\"m/s\"},{\"name\":\"hook_crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_crank.com.y_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"regulator.angle\",\"unit\":\"rad\"},{\"name\":\"regulator.angle"
+        "_d\",\"unit\":\"rad/s\"},{\"name\":\"regulator.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"regu"
+        "lator.com.x\",\"unit\":\"m\"},{\"name\":\"regulator.com.y\",\"unit\":\"m\"},{\"name\":\"regulato"
+        "r.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"regu"
+        "lator.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"regulator.com.y_dd\",\"unit\":\"m/s^2\"},{\"nam"
+        "e\":\"feed_fork.angle\",\"unit\":\"rad\"},{\"name\":\"feed_fork.angle_d\",\"unit\":\"rad/s\"},{\""
+        "name\":\"feed_fork.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_fork.com.x\",\"unit\":\"m\""
+        "},{\"name\":\"feed_fork.com.y\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.x_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"feed_fork.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.x_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"feed_fork.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.angle\",\""
+        "unit\":\"rad\"},{\"name\":\"stitch_block.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_block."
+        "angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"stitch_block.com.x\",\"unit\":\"m\"},{\"name\":\"st"
+        "itch_block.com.y\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"stitch_block.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.x_dd\",\"unit\":\"m/s^2"
+        "\"},{\"name\":\"stitch_block.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.angle\","
+        "\"unit\":\"rad\"},{\"name\":\"feed_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_roc"
+        "k_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_rock_shaft.com.x\",\"unit\":\"m\"},{\""
+        "name\":\"feed_rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.x_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"feed_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com"
+        ".x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"feed_bar.angle\",\"unit\":\"rad\"},{\"name\":\"feed_bar.angle_d\",\"unit\":\"rad/s\"},{\"name"
+        "\":\"feed_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_bar.com.x\",\"unit\":\"m\"},{\"n"
+        "ame\":\"feed_bar.com.y\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.x_d\",\"unit\":\"m/s\"},{\"nam"
+        "e\":\"feed_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.x_dd\",\"unit\":\"m/s^2\"},{"
+        "\"name\":\"feed_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.angle\",\"unit\":"
+        "\"rad\"},{\"name\":\"lift_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_rock_shaft.a"
+        "ngle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\""
+        "lift_rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.x_d\",\"unit\":\"m/s\"},"
+        "{\"name\":\"lift_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.x_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod"
+        ".angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod"
+        ".angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_ro"
+        "d.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.co"
+        "m.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod"
+        ".com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"roc"
+        "k_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\""
+        "name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"na"
+        "me\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"cam.arc\",\"unit\":\"\"}],\"params\":[{\"default\":0.006,\"display_unit\""
+        ":\"mm\",\"doc\":\"feed cam: side of its Reuleaux triangle = fork stroke (estimate)\",\"kind\":\""
+        "length\",\"name\":\"cam_side\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.00"
+        "8,\"display_unit\":\"mm\",\"doc\":\"feed cam: small arc radius; breadth = side + 2 radius (estim"
+        "ate)\",\"kind\":\"length\",\"name\":\"cam_small_radius\",\"positive\":true,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":0.2,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre line to rock-sh"
+        "aft pin P (estimate)\",\"kind\":\"length\",\"name\":\"fork_p\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre line to "
+        "stitch-block pin Q (estimate)\",\"kind\":\"length\",\"name\":\"fork_q\",\"positive\":true,\"role"
+        "\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"stitch regulator pivo"
+        "t, x (estimate)\",\"kind\":\"length\",\"name\":\"regulator_x\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"m\"},{\"default\":-0.06,\"display_unit\":\"mm\",\"doc\":\"stitch regulator pivot, y ("
+        "estimate)\",\"kind\":\"length\",\"name\":\"regulator_y\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, x (estimate"
+        ")\",\"kind\":\"length\",\"name\":\"feed_shaft_x\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":-0.2,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, y (estimate)\",\"kin"
+        "d\":\"length\",\"name\":\"feed_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"def"
+        "ault\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: rear arm to the fork pin P (estim"
+        "ate)\",\"kind\":\"length\",\"name\":\"feed_arm_p\",\"positive\":true,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.0293,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: upper arm to the feed-b"
+        "ar pin R (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_r\",\"positive\":true,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis, x (e"
+        "stimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_x\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"m\"},{\"default\":-0.1777,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis, y (estima"
+        "te)\",\"kind\":\"length\",\"name\":\"lift_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft: arm to the roller L ("
+        "estimate)\",\"kind\":\"length\",\"name\":\"lift_arm\",\"positive\":true,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"B: hook crank radius (= hook_drive cra"
+        "nk)\",\"kind\":\"length\",\"name\":\"hook_crank\",\"positive\":true,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":\"B: big rod, pin to pin (= hook_drive bi"
+        "g_rod)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft axis, x (= hook_drive roc"
+        "k_axis_x)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"m\"},{\"default\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft axis, y (= hook_"
+        "drive rock_axis_y)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft arm driv"
+        "en by the big rod (= hook_drive's)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\""
+        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0039,\"display_unit\":\"mm\",\"doc\":\"D: lif"
+        "t cam (eccentric) centre from the rock-shaft axis (estimate)\",\"kind\":\"length\",\"name\":\"li"
+        "ft_cam_eccentricity\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.97912971036"
+        "88189,\"display_unit\":\"deg\",\"doc\":\"D: lift cam centre's direction on the rock shaft from i"
+        "ts front arm (estimate: across the line to the lift shaft at mid-swing)\",\"kind\":\"angle\",\"n"
+        "ame\":\"lift_cam_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.95818"
+        "57593448869,\"display_unit\":\"deg\",\"doc\":\"D: lift crank's fork centre line on the lift rock"
+        " shaft, from its roller arm (estimate)\",\"kind\":\"angle\",\"name\":\"lift_fork_angle\",\"posit"
+        "ive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\""
+        "feed dog tip along the feed bar from R (estimate)\",\"kind\":\"length\",\"name\":\"dog_u\",\"pos"
+        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.007,\"display_unit\":\"mm\",\"doc\":\""
+        "feed bar: its roller slot below the line R\\u2013feed dog (estimate)\",\"kind\":\"length\",\"nam"
+        "e\":\"bar_slot_v\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1705,\"displa"
+        "y_unit\":\"mm\",\"doc\":\"throat plate surface, y (estimate: the dog rises ~1 mm above it)\",\"k"
+        "ind\":\"length\",\"name\":\"plate_y\",\"positive\":false,\"role\":\"throat_plate\",\"unit\":\"m\""
+        "},{\"default\":1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"phase of feed_cam relative "
+        "to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_cam.phase\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of feed_cam\",\"k"
+        "ind\":\"mass\",\"name\":\"feed_cam.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
+        "efault\":0.0015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local u\",\"kind\""
+        ":\"length\",\"name\":\"feed_cam.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local v\",\"kind\":\"len"
+        "gth\",\"name\":\"feed_cam.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
+        "4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_cam about its centre of m"
+        "ass\",\"kind\":\"inertia\",\"name\":\"feed_cam.inertia\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"kg*m**2\"},{\"default\":-0.03490658503988659,\"display_unit\":\"deg\",\"doc\":\"phase of ho"
+        "ok_crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"hook_crank.phase\",\"positi"
+        "ve\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mas"
+        "s of hook_crank\",\"kind\":\"mass\",\"name\":\"hook_crank.mass\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of hook_cra"
+        "nk, local u\",\"kind\":\"length\",\"name\":\"hook_crank.com_u\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of hook_crank"
+        ", local v\",\"kind\":\"length\",\"name\":\"hook_crank.com_v\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of hook_"
+        "crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"hook_crank.inertia\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"m"
+        "ass of regulator\",\"kind\":\"mass\",\"name\":\"regulator.mass\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulato"
+        "r, local u\",\"kind\":\"length\",\"name\":\"regulator.com_u\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, lo"
+        "cal v\",\"kind\":\"length\",\"name\":\"regulator.com_v\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of regulator"
+        " about its centre of mass\",\"kind\":\"inertia\",\"name\":\"regulator.inertia\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass "
+        "of feed_fork\",\"kind\":\"mass\",\"name\":\"feed_fork.mass\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg\"},{\"default\":0.00012,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of "
+        "feed_fork about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_fork.inertia\",\"posit"
+        "ive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\""
+        ":\"mass of stitch_block\",\"kind\":\"mass\",\"name\":\"stitch_block.mass\",\"positive\":false,\""
         "role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass o"
-        "f lift_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"lift_rock_shaft.com_u\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre o"
-        "f mass of lift_rock_shaft, local v\",\"kind\":\"length\",\"name\":\"lift_rock_shaft.com_v\",\"po"
-        "sitive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\"d"
-        "oc\":\"moment of inertia of lift_rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"na"
-        "me\":\"lift_rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"defau"
-        "lt\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod"
-        ".mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm"
-        "\",\"doc\":\"centre of mass of big_rod, local u\",\"kind\":\"length\",\"name\":\"big_rod.com_u\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc"
-        "\":\"centre of mass of big_rod, local v\",\"kind\":\"length\",\"name\":\"big_rod.com_v\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":"
-        "\"moment of inertia of big_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_ro"
-        "d.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_un"
-        "it\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"ce"
-        "ntre of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positi"
-        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cent"
-        "re of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"m"
-        "oment of inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_s"
-        "haft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\""
-        "y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (on t"
-        "he line through R: lifting it does not move it sideways)\",\"name\":\"feed_dog\",\"offset\":0,\""
-        "role\":\"feed_dog\"},{\"body\":\"feed_fork\",\"doc\":\"feed fork on the cam centre line\",\"name"
-        "\":\"fork_top\",\"offset\":6,\"role\":null},{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in the "
-        "stitch block\",\"name\":\"stitch_pin\",\"offset\":12,\"role\":null},{\"body\":\"lift_rock_shaft\""
-        ",\"doc\":\"lift roller L in the feed bar\",\"name\":\"lift_roller\",\"offset\":18,\"role\":null}"
-        ",{\"body\":\"rock_shaft\",\"doc\":\"D: lift cam centre, in the fork\",\"name\":\"lift_cam\",\"of"
-        "fset\":24,\"role\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"feed_cam\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"feed_cam.pivot\",\"offset\":0},{\"a\""
-        ":\"ground\",\"b\":\"hook_crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolu"
-        "te\",\"name\":\"hook_crank.pivot\",\"offset\":2},{\"a\":\"ground\",\"b\":\"regulator\",\"columns"
-        "\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"regulator.pivot\",\"offset"
-        "\":4},{\"a\":\"regulator\",\"b\":\"stitch_block\",\"columns\":[\"normal\",\"moment\"],\"grounded"
-        "\":false,\"kind\":\"prismatic\",\"name\":\"stitch_block.guide\",\"offset\":6},{\"a\":\"feed_cam\""
-        ",\"b\":\"feed_fork\",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"cam\",\"name\":\"cam"
-        "\",\"offset\":8},{\"a\":\"ground\",\"b\":\"feed_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"groun"
-        "ded\":true,\"kind\":\"revolute\",\"name\":\"O_feed\",\"offset\":9},{\"a\":\"feed_rock_shaft\",\""
-        "b\":\"feed_fork\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":"
-        "\"P\",\"offset\":11},{\"a\":\"feed_fork\",\"b\":\"stitch_block\",\"columns\":[\"fx\",\"fy\"],\"g"
-        "rounded\":false,\"kind\":\"revolute\",\"name\":\"Q\",\"offset\":13},{\"a\":\"feed_rock_shaft\",\""
-        "b\":\"feed_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\""
-        "R\",\"offset\":15},{\"a\":\"ground\",\"b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"gro"
-        "unded\":true,\"kind\":\"revolute\",\"name\":\"O_lift\",\"offset\":17},{\"a\":\"hook_crank\",\"b\""
-        ":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\""
-        ",\"offset\":19},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":"
-        "true,\"kind\":\"revolute\",\"name\":\"O4\",\"offset\":21},{\"a\":\"big_rod\",\"b\":\"rock_shaft\""
-        ",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":"
-        "23},{\"a\":\"lift_rock_shaft\",\"b\":\"rock_shaft\",\"columns\":[\"normal\"],\"grounded\":false,"
-        "\"kind\":\"slot\",\"name\":\"D\",\"offset\":25},{\"a\":\"feed_bar\",\"b\":\"lift_rock_shaft\",\""
-        "columns\":[\"normal\"],\"grounded\":false,\"kind\":\"slot\",\"name\":\"L\",\"offset\":26},{\"a\""
-        ":\"ground\",\"b\":\"feed_cam\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\""
-        "kind\":\"drive\",\"name\":\"feed_cam.drive\",\"offset\":27,\"sense\":1},{\"a\":\"ground\",\"b\":"
-        "\"hook_crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\""
-        ",\"name\":\"hook_crank.drive\",\"offset\":28,\"sense\":1},{\"a\":\"ground\",\"b\":\"regulator\","
-        "\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"regulator\",\"kind\":\"drive\",\"name\":\""
-        "regulator.drive\",\"offset\":29,\"sense\":1}],\"roles\":{\"feed_bar\":{\"kind\":\"body\",\"name\""
-        ":\"feed_bar\"},\"feed_cam\":{\"kind\":\"body\",\"name\":\"feed_cam\"},\"feed_dog\":{\"kind\":\"p"
-        "oint\",\"name\":\"feed_dog\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"regulator\"},\""
-        "throat_plate\":{\"kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":126,\"nbran"
-        "ch\":0,\"nc\":173,\"nf\":30,\"nfo\":49,\"nload\":20,\"nobs\":121,\"np\":64,\"nq\":7,\"nx\":2}}"
+        "f stitch_block, local u\",\"kind\":\"length\",\"name\":\"stitch_block.com_u\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass"
+        " of stitch_block, local v\",\"kind\":\"length\",\"name\":\"stitch_block.com_v\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"momen"
+        "t of inertia of stitch_block about its centre of mass\",\"kind\":\"inertia\",\"name\":\"stitch_b"
+        "lock.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.04,\"displa"
+        "y_unit\":\"g\",\"doc\":\"mass of feed_rock_shaft\",\"kind\":\"mass\",\"name\":\"feed_rock_shaft."
+        "mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.005,\"display_unit\":\"m"
+        "m\",\"doc\":\"centre of mass of feed_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"feed_r"
+        "ock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.005,\"display_"
+        "unit\":\"mm\",\"doc\":\"centre of mass of feed_rock_shaft, local v\",\"kind\":\"length\",\"name\""
+        ":\"feed_rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\""
+        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_rock_shaft about its centre of ma"
+        "ss\",\"kind\":\"inertia\",\"name\":\"feed_rock_shaft.inertia\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"kg*m**2\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of feed_bar\",\"k"
+        "ind\":\"mass\",\"name\":\"feed_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
+        "efault\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_bar, local u\",\"kind\":"
+        "\"length\",\"name\":\"feed_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
+        "lt\":-0.003,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_bar, local v\",\"kind\":\"l"
+        "ength\",\"name\":\"feed_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_bar about its centre of "
+        "mass\",\"kind\":\"inertia\",\"name\":\"feed_bar.inertia\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of lift_rock_shaft\",\""
+        "kind\":\"mass\",\"name\":\"lift_rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
+        "\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local "
+        "u\",\"kind\":\"length\",\"name\":\"lift_rock_shaft.com_u\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft"
+        ", local v\",\"kind\":\"length\",\"name\":\"lift_rock_shaft.com_v\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia "
+        "of lift_rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_rock_shaft.in"
+        "ertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\""
+        ":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":fals"
+        "e,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
+        "ss of big_rod, local u\",\"kind\":\"length\",\"name\":\"big_rod.com_u\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of bi"
+        "g_rod, local v\",\"kind\":\"length\",\"name\":\"big_rod.com_v\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of bi"
+        "g_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass"
+        " of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaf"
+        "t, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft,"
+        " local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_"
+        "shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\""
+        ",\"ay\"],\"points\":[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (on the line through R: lifti"
+        "ng it does not move it sideways)\",\"name\":\"feed_dog\",\"offset\":0,\"role\":\"feed_dog\"},{\""
+        "body\":\"feed_fork\",\"doc\":\"feed fork on the cam centre line\",\"name\":\"fork_top\",\"offset"
+        "\":6,\"role\":null},{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in the stitch block\",\"name\":"
+        "\"stitch_pin\",\"offset\":12,\"role\":null},{\"body\":\"lift_rock_shaft\",\"doc\":\"lift roller "
+        "L in the feed bar\",\"name\":\"lift_roller\",\"offset\":18,\"role\":null},{\"body\":\"rock_shaft"
+        "\",\"doc\":\"D: lift cam centre, in the fork\",\"name\":\"lift_cam\",\"offset\":24,\"role\":null"
+        "}],\"reactions\":[{\"a\":\"ground\",\"b\":\"feed_cam\",\"columns\":[\"fx\",\"fy\"],\"grounded\":"
+        "true,\"kind\":\"revolute\",\"name\":\"feed_cam.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"h"
+        "ook_crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"hook_"
+        "crank.pivot\",\"offset\":2},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"fx\",\"fy\"],\""
+        "grounded\":true,\"kind\":\"revolute\",\"name\":\"regulator.pivot\",\"offset\":4},{\"a\":\"regula"
+        "tor\",\"b\":\"stitch_block\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"p"
+        "rismatic\",\"name\":\"stitch_block.guide\",\"offset\":6},{\"a\":\"feed_cam\",\"b\":\"feed_fork\""
+        ",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"cam\",\"name\":\"cam\",\"offset\":8},{\""
+        "a\":\"ground\",\"b\":\"feed_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":"
+        "\"revolute\",\"name\":\"O_feed\",\"offset\":9},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_fork\",\""
+        "columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"P\",\"offset\":11}"
+        ",{\"a\":\"feed_fork\",\"b\":\"stitch_block\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"ki"
+        "nd\":\"revolute\",\"name\":\"Q\",\"offset\":13},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_bar\",\""
+        "columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"R\",\"offset\":15}"
+        ",{\"a\":\"ground\",\"b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kin"
+        "d\":\"revolute\",\"name\":\"O_lift\",\"offset\":17},{\"a\":\"hook_crank\",\"b\":\"big_rod\",\"co"
+        "lumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":19},{"
+        "\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"r"
+        "evolute\",\"name\":\"O4\",\"offset\":21},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\""
+        "fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":23},{\"a\":\"lif"
+        "t_rock_shaft\",\"b\":\"rock_shaft\",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"slot\""
+        ",\"name\":\"D\",\"offset\":25},{\"a\":\"feed_bar\",\"b\":\"lift_rock_shaft\",\"columns\":[\"norm"
+        "al\"],\"grounded\":false,\"kind\":\"slot\",\"name\":\"L\",\"offset\":26},{\"a\":\"ground\",\"b\""
+        ":\"feed_cam\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\","
+        "\"name\":\"feed_cam.drive\",\"offset\":27,\"sense\":1},{\"a\":\"ground\",\"b\":\"hook_crank\",\""
+        "columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"hook_"
+        "crank.drive\",\"offset\":28,\"sense\":1},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"to"
+        "rque\"],\"grounded\":true,\"input\":\"regulator\",\"kind\":\"drive\",\"name\":\"regulator.drive\""
+        ",\"offset\":29,\"sense\":1}],\"roles\":{\"feed_bar\":{\"kind\":\"body\",\"name\":\"feed_bar\"},\""
+        "feed_cam\":{\"kind\":\"body\",\"name\":\"feed_cam\"},\"feed_dog\":{\"kind\":\"point\",\"name\":\""
+        "feed_dog\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"regulator\"},\"throat_plate\":{\""
+        "kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":126,\"nblock\":4,\"nbranch\":"
+        "0,\"nc\":184,\"nf\":30,\"nfo\":49,\"nload\":20,\"nobs\":121,\"np\":64,\"nq\":7,\"nx\":2}}"
         ;
 }

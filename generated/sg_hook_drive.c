@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_hook_drive_constants -- Total ops: 63 */
+/* sg_hook_drive_constants -- Total ops: 78 */
 void sg_hook_drive_constants(const double *p, double *c)
 {
     const double t0 = sin(p[11]);
@@ -16,17 +16,23 @@ void sg_hook_drive_constants(const double *p, double *c)
     const double t4 = -p[8];
     const double t5 = -p[4];
     const double t6 = -t1;
-    const double t7 = p[9]*cos(p[10]);
-    const double t8 = p[9]*sin(p[10]);
-    const double t9 = -t8;
-    const double t10 = -t7;
-    const double t11 = -p[13];
-    const double t12 = (0.5)*p[1];
-    const double t13 = p[16]*t12;
-    const double t14 = p[19] + t5;
-    const double t15 = p[23] + t10;
-    const double t16 = p[0] + t11;
-    const double t17 = p[19] + t6;
+    const double t7 = fabs(p[2]);
+    const double t8 = p[0] + p[1] + p[4];
+    const double t9 = t7 + t8;
+    const double t10 = fabs(p[3]);
+    const double t11 = t10 + t8;
+    const double t12 = 2.0*p[5];
+    const double t13 = p[9]*cos(p[10]);
+    const double t14 = p[9]*sin(p[10]);
+    const double t15 = -t14;
+    const double t16 = -t13;
+    const double t17 = -p[13];
+    const double t18 = (0.5)*p[1];
+    const double t19 = p[16]*t18;
+    const double t20 = p[19] + t5;
+    const double t21 = p[23] + t16;
+    const double t22 = p[0] + t17;
+    const double t23 = p[19] + t6;
     c[0] = p[0];
     c[1] = cos(p[11]);
     c[2] = -t0;
@@ -47,70 +53,76 @@ void sg_hook_drive_constants(const double *p, double *c)
     c[17] = -p[3];
     c[18] = -p[1];
     c[19] = t6;
-    c[20] = -p[0];
-    c[21] = p[7];
-    c[22] = p[8];
-    c[23] = t7;
-    c[24] = t9;
-    c[25] = t8;
-    c[26] = t10;
-    c[27] = p[11];
-    c[28] = p[13];
-    c[29] = -p[14];
-    c[30] = p[14];
-    c[31] = t11;
-    c[32] = t12;
-    c[33] = -t12;
-    c[34] = p[19];
-    c[35] = -p[20];
-    c[36] = p[20];
-    c[37] = -p[19];
-    c[38] = p[23];
-    c[39] = -p[24];
-    c[40] = p[24];
-    c[41] = -p[23];
-    c[42] = p[27];
-    c[43] = -p[28];
-    c[44] = p[28];
-    c[45] = -p[27];
-    c[46] = p[17];
-    c[47] = t13;
-    c[48] = -t13;
-    c[49] = p[21];
-    c[50] = t14;
-    c[51] = -t14;
-    c[52] = p[18];
-    c[53] = p[26];
-    c[54] = p[25];
-    c[55] = p[29];
-    c[56] = p[24] + t9;
-    c[57] = t15;
-    c[58] = -t15;
-    c[59] = p[22];
-    c[60] = p[15];
-    c[61] = -t16;
-    c[62] = t16;
-    c[63] = p[12];
-    c[64] = p[16];
-    c[65] = t4;
-    c[66] = (0.5)*p[12];
-    c[67] = (0.5)*p[15];
-    c[68] = (0.5)*p[16];
-    c[69] = (0.5)*p[17];
-    c[70] = (0.5)*p[18];
-    c[71] = (0.5)*p[21];
-    c[72] = (0.5)*p[22];
-    c[73] = (0.5)*p[25];
-    c[74] = (0.5)*p[26];
-    c[75] = (0.5)*p[29];
-    c[76] = -p[12];
-    c[77] = -p[16];
-    c[78] = -p[18];
-    c[79] = -p[22];
-    c[80] = -p[26];
-    c[81] = -p[20] - t3;
-    c[82] = -t17;
-    c[83] = t17;
+    c[20] = t9;
+    c[21] = t11;
+    c[22] = t12 + t7 + fabs(p[7]);
+    c[23] = t10 + t12 + fabs(p[8]);
+    c[24] = -p[0];
+    c[25] = p[7];
+    c[26] = p[8];
+    c[27] = t13;
+    c[28] = t15;
+    c[29] = t14;
+    c[30] = t16;
+    c[31] = p[11];
+    c[32] = p[13];
+    c[33] = -p[14];
+    c[34] = p[14];
+    c[35] = t17;
+    c[36] = t18;
+    c[37] = -t18;
+    c[38] = p[19];
+    c[39] = -p[20];
+    c[40] = p[20];
+    c[41] = -p[19];
+    c[42] = p[23];
+    c[43] = -p[24];
+    c[44] = p[24];
+    c[45] = -p[23];
+    c[46] = p[27];
+    c[47] = -p[28];
+    c[48] = p[28];
+    c[49] = -p[27];
+    c[50] = (1.0/(t9));
+    c[51] = (1.0/(t11));
+    c[52] = p[17];
+    c[53] = t19;
+    c[54] = -t19;
+    c[55] = p[21];
+    c[56] = t20;
+    c[57] = -t20;
+    c[58] = p[18];
+    c[59] = p[26];
+    c[60] = p[25];
+    c[61] = p[29];
+    c[62] = p[24] + t15;
+    c[63] = t21;
+    c[64] = -t21;
+    c[65] = p[22];
+    c[66] = p[15];
+    c[67] = -t22;
+    c[68] = t22;
+    c[69] = p[12];
+    c[70] = p[16];
+    c[71] = t4;
+    c[72] = (0.5)*p[12];
+    c[73] = (0.5)*p[15];
+    c[74] = (0.5)*p[16];
+    c[75] = (0.5)*p[17];
+    c[76] = (0.5)*p[18];
+    c[77] = (0.5)*p[21];
+    c[78] = (0.5)*p[22];
+    c[79] = (0.5)*p[25];
+    c[80] = (0.5)*p[26];
+    c[81] = (0.5)*p[29];
+    c[82] = -p[12];
+    c[83] = -p[16];
+    c[84] = -p[18];
+    c[85] = -p[22];
+    c[86] = -p[26];
+    c[87] = -p[20] - t3;
+    c[88] = -t23;
+    c[89] = t23;
 }
 
 /* sg_hook_drive_closed -- Total ops: 60 */
@@ -180,8 +192,36 @@ void sg_hook_drive_residual(const double *q, const double *cq, const double *x, 
     jac[15] = -cq[3];
 }
 
-/* sg_hook_drive_motion -- Total ops: 237 */
-int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+/* sg_hook_drive_scales -- Total ops: 7 */
+void sg_hook_drive_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)cq;
+    (void)x;
+    (void)cx;
+    const double t0 = fabs(q[3]);
+    out[0] = c[20];
+    out[1] = c[21];
+    out[2] = c[22] + t0;
+    out[3] = c[23] + t0;
+}
+
+/* sg_hook_drive_blocks -- Total ops: 46 */
+void sg_hook_drive_blocks(const double *jac, double *out)
+{
+    /* block 0: joints C */
+    {
+        const double nr = sqrt(sg_row_norm2(4, jac + 0) * sg_row_norm2(4, jac + 4));
+        out[0] = nr > 0.0 ? (jac[2] * jac[4] - jac[0] * jac[6]) / nr : 0.0;
+    }
+    /* block 1: joints E */
+    {
+        const double nr = sqrt(sg_row_norm2(4, jac + 8) * sg_row_norm2(4, jac + 12));
+        out[1] = nr > 0.0 ? (jac[11] * jac[13] - jac[9] * jac[15]) / nr : 0.0;
+    }
+}
+
+/* sg_hook_drive_motion -- Total ops: 238 */
+int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[7]*cq[1];
     const double t1 = c[16]*cq[0];
@@ -193,32 +233,33 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     const double t7 = c[1]*cx[1] + c[3]*cx[0];
     const double t8 = c[0]*t7;
     const double t9 = c[1]*cx[0] + c[2]*cx[1];
-    const double t10 = c[20]*t9;
+    const double t10 = c[24]*t9;
     const double t14 = ((xd[0])*(xd[0]));
     const double t15 = c[0]*t9;
     const double t16 = c[16]*cq[1];
-    const double t24 = c[20]*t7;
+    const double t24 = c[24]*t7;
     const double t25 = t24*xd[0];
     const double t26 = t15*xd[0];
     const double t27 = t10*t14 + t24*xdd[0];
     const double t28 = t14*t24 + t15*xdd[0];
     const double t29 = c[7]*cq[0];
-    const double t30 = c[21] + t5;
-    const double t31 = c[22] + t4;
-    const double t34 = c[23]*cq[2] + c[24]*cq[3];
-    const double t35 = c[24]*cq[2] + c[26]*cq[3];
-    const double t37 = c[28]*t9 + c[29]*t7;
-    const double t38 = c[29]*t9 + c[31]*t7;
-    const double t39 = c[32]*cq[4];
-    const double t40 = c[33]*cq[5];
-    const double t41 = c[34]*cq[0] + c[35]*cq[1];
-    const double t42 = c[35]*cq[0] + c[37]*cq[1];
-    const double t43 = c[38]*cq[2] + c[39]*cq[3];
-    const double t44 = c[39]*cq[2] + c[41]*cq[3];
-    const double t45 = c[42]*cq[2] + c[43]*cq[3];
-    const double t46 = c[43]*cq[2] + c[45]*cq[3] - t4;
+    const double t30 = c[25] + t5;
+    const double t31 = c[26] + t4;
+    const double t34 = c[27]*cq[2] + c[28]*cq[3];
+    const double t35 = c[28]*cq[2] + c[30]*cq[3];
+    const double t37 = c[32]*t9 + c[33]*t7;
+    const double t38 = c[33]*t9 + c[35]*t7;
+    const double t39 = c[36]*cq[4];
+    const double t40 = c[37]*cq[5];
+    const double t41 = c[38]*cq[0] + c[39]*cq[1];
+    const double t42 = c[39]*cq[0] + c[41]*cq[1];
+    const double t43 = c[42]*cq[2] + c[43]*cq[3];
+    const double t44 = c[43]*cq[2] + c[45]*cq[3];
+    const double t45 = c[46]*cq[2] + c[47]*cq[3];
+    const double t46 = c[47]*cq[2] + c[49]*cq[3] - t4;
     const double t48 = t45 + t5;
-    double J[16];
+    const double t49 = fabs(q[3]);
+    double J[16], rs[4], cs[4];
     int piv[4];
     J[0] = t0;
     J[1] = 0.0;
@@ -240,8 +281,12 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     qd[1] = t10*xd[0];
     qd[2] = 0.0;
     qd[3] = 0.0;
-    if (sg_lu_factor_inl(4, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(4, J, piv, qd);
+    rs[0] = c[50];
+    rs[1] = c[51];
+    rs[2] = (1.0/(c[22] + t49));
+    rs[3] = (1.0/(c[23] + t49));
+    if (sg_factor_eq_inl(4, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(4, J, piv, rs, cs, qd);
     const double t11 = ((qd[0])*(qd[0]));
     const double t12 = t1*t11;
     const double t13 = ((qd[2])*(qd[2]));
@@ -258,7 +303,7 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     qdd[1] = c[6]*t18 + t10*xdd[0] + t14*t8 + t17;
     qdd[2] = -qd[1]*t21 - t11*(c[13]*cq[1] + c[19]*cq[0]) - t20;
     qdd[3] = cq[2]*qd[1]*qd[3] + qd[1]*t23 - t11*t3;
-    sg_lu_solve_inl(4, J, piv, qdd);
+    sg_solve_eq_inl(4, J, piv, rs, cs, qdd);
     const double t32 = cq[2]*qdd[3] - t20;
     const double t33 = cq[3]*qdd[3] + qd[1]*t22;
     obs[0] = t15;
@@ -279,56 +324,56 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     obs[15] = t21;
     obs[16] = -qd[1]*t21 - qdd[1]*t4 + t32;
     obs[17] = qd[1]*t23 + qdd[1]*t5 + t33;
-    obs[18] = c[21] + t34;
-    obs[19] = c[22] + c[23]*cq[3] + c[25]*cq[2];
+    obs[18] = c[25] + t34;
+    obs[19] = c[26] + c[27]*cq[3] + c[29]*cq[2];
     obs[20] = qd[1]*t35;
     obs[21] = qd[1]*t34;
-    obs[22] = qdd[1]*t35 + t36*(c[25]*cq[3] + c[26]*cq[2]);
+    obs[22] = qdd[1]*t35 + t36*(c[29]*cq[3] + c[30]*cq[2]);
     obs[23] = qdd[1]*t34 + t35*t36;
-    obs[24] = c[27] + x[0];
+    obs[24] = c[31] + x[0];
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t37;
-    obs[28] = c[28]*t7 + c[30]*t9;
+    obs[28] = c[32]*t7 + c[34]*t9;
     obs[29] = t38*xd[0];
     obs[30] = t37*xd[0];
-    obs[31] = t14*(c[30]*t7 + c[31]*t9) + t38*xdd[0];
+    obs[31] = t14*(c[34]*t7 + c[35]*t9) + t38*xdd[0];
     obs[32] = t14*t38 + t37*xdd[0];
     obs[33] = q[2];
     obs[34] = qd[2];
     obs[35] = qdd[2];
     obs[36] = t15 + t39;
-    obs[37] = c[32]*cq[5] + t8;
+    obs[37] = c[36]*cq[5] + t8;
     obs[38] = qd[2]*t40 + t25;
     obs[39] = qd[2]*t39 + t26;
-    obs[40] = c[33]*cq[4]*t13 + qdd[2]*t40 + t27;
-    obs[41] = c[33]*t18 + qdd[2]*t39 + t28;
+    obs[40] = c[37]*cq[4]*t13 + qdd[2]*t40 + t27;
+    obs[41] = c[37]*t18 + qdd[2]*t39 + t28;
     obs[42] = q[0];
     obs[43] = qd[0];
     obs[44] = qdd[0];
     obs[45] = c[4] + t41;
-    obs[46] = c[34]*cq[1] + c[36]*cq[0] + c[5];
+    obs[46] = c[38]*cq[1] + c[40]*cq[0] + c[5];
     obs[47] = qd[0]*t42;
     obs[48] = qd[0]*t41;
-    obs[49] = qdd[0]*t42 + t11*(c[36]*cq[1] + c[37]*cq[0]);
+    obs[49] = qdd[0]*t42 + t11*(c[40]*cq[1] + c[41]*cq[0]);
     obs[50] = qdd[0]*t41 + t11*t42;
     obs[51] = q[1];
     obs[52] = qd[1];
     obs[53] = qdd[1];
-    obs[54] = c[21] + t43;
-    obs[55] = c[22] + c[38]*cq[3] + c[40]*cq[2];
+    obs[54] = c[25] + t43;
+    obs[55] = c[26] + c[42]*cq[3] + c[44]*cq[2];
     obs[56] = qd[1]*t44;
     obs[57] = qd[1]*t43;
-    obs[58] = qdd[1]*t44 + t36*(c[40]*cq[3] + c[41]*cq[2]);
+    obs[58] = qdd[1]*t44 + t36*(c[44]*cq[3] + c[45]*cq[2]);
     obs[59] = qdd[1]*t43 + t36*t44;
     obs[60] = q[1];
     obs[61] = qd[1];
     obs[62] = qdd[1];
     obs[63] = t30 + t45;
-    obs[64] = c[42]*cq[3] + c[44]*cq[2] + t31;
+    obs[64] = c[46]*cq[3] + c[48]*cq[2] + t31;
     obs[65] = t47;
     obs[66] = qd[1]*t48 + t19;
-    obs[67] = qd[1]*(qd[1]*(c[44]*cq[3] + c[45]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
+    obs[67] = qd[1]*(qd[1]*(c[48]*cq[3] + c[49]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
     obs[68] = qd[1]*t47 + qdd[1]*t48 + t33;
     if (!isfinite(((((((q[0] + q[1]) + (q[2] + (q[3] + qd[0]))) + ((qd[1] + qd[2]) + (qd[3] + (qdd[0] + qdd[1])))) + (((qdd[2] + qdd[3]) + (obs[0] + (obs[1] + obs[2]))) + ((obs[3] + obs[4]) + (obs[5] + (obs[6] + obs[7]))))) + ((((obs[8] + obs[9]) + (obs[10] + (obs[11] + obs[12]))) + ((obs[13] + obs[14]) + (obs[15] + (obs[16] + obs[17])))) + (((obs[18] + obs[19]) + (obs[20] + (obs[21] + obs[22]))) + ((obs[23] + obs[24]) + (obs[25] + (obs[26] + obs[27])))))) + (((((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))) + ((obs[33] + obs[34]) + (obs[35] + (obs[36] + obs[37])))) + (((obs[38] + obs[39]) + (obs[40] + (obs[41] + obs[42]))) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) + ((((obs[48] + obs[49]) + (obs[50] + (obs[51] + obs[52]))) + ((obs[53] + obs[54]) + (obs[55] + (obs[56] + obs[57])))) + (((obs[58] + obs[59]) + (obs[60] + (obs[61] + obs[62]))) + ((obs[63] + (obs[64] + obs[65])) + (obs[66] + (obs[67] + obs[68]))))))))) return SG_NONFINITE;
     return SG_OK;
@@ -343,25 +388,25 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
     const double t2 = -((cq[2])*(cq[2]))*q[3] - ((cq[3])*(cq[3]))*q[3];
     const double t3 = -gv[1] + obs[41];
     const double t4 = -gv[0] + obs[40];
-    const double t5 = c[36]*cq[0];
-    const double t6 = c[36]*cq[1];
-    const double t7 = c[53]*(-gv[0] + obs[67]) - ld[4];
-    const double t8 = c[53]*(-gv[1] + obs[68]) - ld[5];
-    const double t9 = c[52]*(-gv[0] + obs[49]) - ld[2];
-    const double t10 = c[52]*(-gv[1] + obs[50]) - ld[3];
-    const double t11 = c[42]*cq[3] + c[44]*cq[2];
-    const double t12 = c[44]*cq[3] + c[45]*cq[2];
-    const double t13 = c[59]*(-gv[0] + obs[58]) - ld[6];
-    const double t14 = c[59]*(-gv[1] + obs[59]) - ld[7];
-    const double t15 = -c[54]*obs[53] + ld[11] + ld[6]*(c[56]*cq[2] + c[57]*cq[3]) + ld[7]*(c[56]*cq[3] + c[58]*cq[2]) + t13*(c[38]*cq[3] + c[40]*cq[2]) + t14*(c[40]*cq[3] + c[41]*cq[2]);
+    const double t5 = c[40]*cq[0];
+    const double t6 = c[40]*cq[1];
+    const double t7 = c[59]*(-gv[0] + obs[67]) - ld[4];
+    const double t8 = c[59]*(-gv[1] + obs[68]) - ld[5];
+    const double t9 = c[58]*(-gv[0] + obs[49]) - ld[2];
+    const double t10 = c[58]*(-gv[1] + obs[50]) - ld[3];
+    const double t11 = c[46]*cq[3] + c[48]*cq[2];
+    const double t12 = c[48]*cq[3] + c[49]*cq[2];
+    const double t13 = c[65]*(-gv[0] + obs[58]) - ld[6];
+    const double t14 = c[65]*(-gv[1] + obs[59]) - ld[7];
+    const double t15 = -c[60]*obs[53] + ld[11] + ld[6]*(c[62]*cq[2] + c[63]*cq[3]) + ld[7]*(c[62]*cq[3] + c[64]*cq[2]) + t13*(c[42]*cq[3] + c[44]*cq[2]) + t14*(c[44]*cq[3] + c[45]*cq[2]);
     const double t16 = c[1]*cx[0] + c[2]*cx[1];
-    const double t17 = c[30]*t16;
+    const double t17 = c[34]*t16;
     const double t18 = c[1]*cx[1] + c[3]*cx[0];
-    const double t19 = c[30]*t18;
+    const double t19 = c[34]*t18;
     {
         const double d = t2;
         if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), fabs(t2)))) return SG_SINGULAR;
-        out[2] = (c[55]*obs[62] - ld[12] - ld[4]*t11 - ld[5]*t12 - t11*t7 - t12*t8 - t15)/d;
+        out[2] = (c[61]*obs[62] - ld[12] - ld[4]*t11 - ld[5]*t12 - t11*t7 - t12*t8 - t15)/d;
     }
     {
         /* block of unknowns 10, 11 */
@@ -369,10 +414,10 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
         int piv[2];
         M[0] = c[16]*cq[1];
         M[1] = c[7]*cq[0];
-        r[0] = c[49]*obs[44] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - ld[10] - ld[2]*(c[50]*cq[1] + t5) - ld[3]*(c[51]*cq[0] + t6) - t10*(c[37]*cq[0] + t6) - t7*(t0 + t1) - t8*(c[13]*cq[1] + c[19]*cq[0]) - t9*(c[34]*cq[1] + t5);
+        r[0] = c[55]*obs[44] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - ld[10] - ld[2]*(c[56]*cq[1] + t5) - ld[3]*(c[57]*cq[0] + t6) - t10*(c[41]*cq[0] + t6) - t7*(t0 + t1) - t8*(c[13]*cq[1] + c[19]*cq[0]) - t9*(c[38]*cq[1] + t5);
         M[2] = c[6]*cq[5];
         M[3] = c[18]*cq[4];
-        r[1] = c[46]*obs[35] + c[47]*cq[4]*t3 + c[48]*cq[5]*t4 - ld[9];
+        r[1] = c[52]*obs[35] + c[53]*cq[4]*t3 + c[54]*cq[5]*t4 - ld[9];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[10] = r[0];
@@ -385,20 +430,20 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
     out[3] = out[2]*t2 + t15;
     out[9] = cq[2]*out[2] + t14;
     out[8] = -cq[3]*out[2] + t13;
-    out[5] = c[64]*t3 + out[11];
-    out[4] = c[64]*t4 + out[10];
-    out[1] = c[63]*(-gv[1] + obs[32]) + out[5] - ld[1];
-    out[0] = c[63]*(-gv[0] + obs[31]) + out[4] - ld[0];
-    out[14] = c[60]*obs[26] - out[0]*(c[28]*t18 + t17) - out[1]*(c[31]*t16 + t19) - out[4]*(c[29]*t16 + c[62]*t18) - out[5]*(c[29]*t18 + c[61]*t16) - ld[0]*(c[61]*t18 + t17) - ld[1]*(c[62]*t16 + t19) - ld[8];
+    out[5] = c[70]*t3 + out[11];
+    out[4] = c[70]*t4 + out[10];
+    out[1] = c[69]*(-gv[1] + obs[32]) + out[5] - ld[1];
+    out[0] = c[69]*(-gv[0] + obs[31]) + out[4] - ld[0];
+    out[14] = c[66]*obs[26] - out[0]*(c[32]*t18 + t17) - out[1]*(c[35]*t16 + t19) - out[4]*(c[33]*t16 + c[68]*t18) - out[5]*(c[33]*t18 + c[67]*t16) - ld[0]*(c[67]*t18 + t17) - ld[1]*(c[68]*t16 + t19) - ld[8];
     out[15] = out[14];
     out[16] = out[14]*xd[0];
     out[17] = -cq[3]*out[2];
     out[18] = cq[2]*out[2];
     out[19] = out[0] + out[6] + out[8];
     out[20] = out[1] + out[7] + out[9];
-    out[21] = c[17]*out[6] + c[21]*out[9] + c[4]*out[7] + c[65]*out[8] + out[14];
-    out[22] = c[66]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[67]*((obs[25])*(obs[25])) + c[68]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[69]*((obs[34])*(obs[34])) + c[70]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[71]*((obs[43])*(obs[43])) + c[72]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[73]*((obs[52])*(obs[52])) + c[74]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[75]*((obs[61])*(obs[61]));
-    out[23] = c[76]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[77]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[78]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[79]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[80]*(gv[0]*obs[63] + gv[1]*obs[64]);
+    out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14];
+    out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
+    out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
     out[25] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
@@ -411,26 +456,26 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[30]*t1;
-    const double t3 = c[30]*t0;
-    const double t4 = c[32]*cq[5];
-    const double t5 = c[33]*cq[4];
-    const double t6 = c[36]*cq[0];
-    const double t7 = c[36]*cq[1];
-    const double t8 = c[50]*cq[1] + t6;
-    const double t9 = c[51]*cq[0] + t7;
-    const double t10 = c[40]*cq[3] + c[41]*cq[2];
-    const double t11 = c[44]*cq[3] + c[45]*cq[2];
-    const double t12 = c[42]*cq[3] + c[44]*cq[2];
+    const double t2 = c[34]*t1;
+    const double t3 = c[34]*t0;
+    const double t4 = c[36]*cq[5];
+    const double t5 = c[37]*cq[4];
+    const double t6 = c[40]*cq[0];
+    const double t7 = c[40]*cq[1];
+    const double t8 = c[56]*cq[1] + t6;
+    const double t9 = c[57]*cq[0] + t7;
+    const double t10 = c[44]*cq[3] + c[45]*cq[2];
+    const double t11 = c[48]*cq[3] + c[49]*cq[2];
+    const double t12 = c[46]*cq[3] + c[48]*cq[2];
     for (int k = 0; k < 225; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = -1.0;
     A[16] = 1.0;
     A[20] = -1.0;
-    A[30] = c[28]*t0 + t2;
-    A[31] = c[31]*t1 + t3;
-    A[34] = c[29]*t1 + c[62]*t0;
-    A[35] = c[29]*t0 + c[61]*t1;
+    A[30] = c[32]*t0 + t2;
+    A[31] = c[35]*t1 + t3;
+    A[34] = c[33]*t1 + c[68]*t0;
+    A[35] = c[33]*t0 + c[67]*t1;
     A[44] = 1.0;
     A[49] = 1.0;
     A[55] = -1.0;
@@ -446,51 +491,51 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     A[112] = 1.0;
     A[116] = 1.0;
     A[118] = -1.0;
-    A[126] = c[34]*cq[1] + t6;
-    A[127] = c[37]*cq[0] + t7;
+    A[126] = c[38]*cq[1] + t6;
+    A[127] = c[41]*cq[0] + t7;
     A[130] = t8;
     A[131] = t9;
-    A[132] = c[81]*cq[0] + c[82]*cq[1];
-    A[133] = c[81]*cq[1] + c[83]*cq[0];
+    A[132] = c[87]*cq[0] + c[88]*cq[1];
+    A[133] = c[87]*cq[1] + c[89]*cq[0];
     A[137] = cq[3];
     A[143] = 1.0;
     A[152] = -cq[2];
     A[159] = 1.0;
-    A[167] = -cq[2]*(cq[2]*q[3] + t10) - cq[3]*(c[39]*cq[2] + c[41]*cq[3] + cq[3]*q[3]);
+    A[167] = -cq[2]*(cq[2]*q[3] + t10) - cq[3]*(c[43]*cq[2] + c[45]*cq[3] + cq[3]*q[3]);
     A[168] = -1.0;
-    A[173] = c[38]*cq[3] + c[40]*cq[2];
+    A[173] = c[42]*cq[3] + c[44]*cq[2];
     A[174] = t10;
     A[182] = -cq[3];
     A[192] = 1.0;
     A[197] = cq[2];
     A[208] = 1.0;
-    A[212] = cq[2]*t11 + cq[3]*(c[43]*cq[2] + c[45]*cq[3]);
+    A[212] = cq[2]*t11 + cq[3]*(c[47]*cq[2] + c[49]*cq[3]);
     A[213] = 1.0;
     A[222] = t12;
     A[223] = t11;
-    b[0] = c[63]*(-gv[0] + obs[31]) - ld[0];
-    b[1] = c[63]*(-gv[1] + obs[32]) - ld[1];
-    b[2] = c[60]*obs[26] - ld[0]*(c[61]*t0 + t2) - ld[1]*(c[62]*t1 + t3) - ld[8];
-    b[3] = c[64]*(-gv[0] + obs[40]);
-    b[4] = c[64]*(-gv[1] + obs[41]);
-    b[5] = c[46]*obs[35] - ld[9];
-    b[6] = c[52]*(-gv[0] + obs[49]) - ld[2];
-    b[7] = c[52]*(-gv[1] + obs[50]) - ld[3];
-    b[8] = c[49]*obs[44] - ld[10] - ld[2]*t8 - ld[3]*t9;
-    b[9] = c[59]*(-gv[0] + obs[58]) - ld[6];
-    b[10] = c[59]*(-gv[1] + obs[59]) - ld[7];
-    b[11] = c[54]*obs[53] - ld[11] - ld[6]*(c[56]*cq[2] + c[57]*cq[3]) - ld[7]*(c[56]*cq[3] + c[58]*cq[2]);
-    b[12] = c[53]*(-gv[0] + obs[67]) - ld[4];
-    b[13] = c[53]*(-gv[1] + obs[68]) - ld[5];
-    b[14] = c[55]*obs[62] - ld[12] - ld[4]*t12 - ld[5]*t11;
+    b[0] = c[69]*(-gv[0] + obs[31]) - ld[0];
+    b[1] = c[69]*(-gv[1] + obs[32]) - ld[1];
+    b[2] = c[66]*obs[26] - ld[0]*(c[67]*t0 + t2) - ld[1]*(c[68]*t1 + t3) - ld[8];
+    b[3] = c[70]*(-gv[0] + obs[40]);
+    b[4] = c[70]*(-gv[1] + obs[41]);
+    b[5] = c[52]*obs[35] - ld[9];
+    b[6] = c[58]*(-gv[0] + obs[49]) - ld[2];
+    b[7] = c[58]*(-gv[1] + obs[50]) - ld[3];
+    b[8] = c[55]*obs[44] - ld[10] - ld[2]*t8 - ld[3]*t9;
+    b[9] = c[65]*(-gv[0] + obs[58]) - ld[6];
+    b[10] = c[65]*(-gv[1] + obs[59]) - ld[7];
+    b[11] = c[60]*obs[53] - ld[11] - ld[6]*(c[62]*cq[2] + c[63]*cq[3]) - ld[7]*(c[62]*cq[3] + c[64]*cq[2]);
+    b[12] = c[59]*(-gv[0] + obs[67]) - ld[4];
+    b[13] = c[59]*(-gv[1] + obs[68]) - ld[5];
+    b[14] = c[61]*obs[62] - ld[12] - ld[4]*t12 - ld[5]*t11;
 }
 
 /* sg_hook_drive_anchors -- Total ops: 70 */
 void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
 {
     (void)x;
-    const double t0 = c[21] + cq[2]*q[3];
-    const double t1 = c[22] + cq[3]*q[3];
+    const double t0 = c[25] + cq[2]*q[3];
+    const double t1 = c[26] + cq[3]*q[3];
     const double t2 = c[1]*cx[0] + c[2]*cx[1];
     const double t3 = c[0]*t2;
     const double t4 = c[1]*cx[1] + c[3]*cx[0];
@@ -501,8 +546,8 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[1] = 0.0;
     out[2] = 0.0;
     out[3] = 0.0;
-    out[4] = c[21];
-    out[5] = c[22];
+    out[4] = c[25];
+    out[5] = c[26];
     out[6] = cq[2];
     out[7] = cq[3];
     out[8] = t0;
@@ -515,10 +560,10 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[15] = c[5];
     out[16] = c[4];
     out[17] = c[5];
-    out[18] = c[21];
-    out[19] = c[22];
-    out[20] = c[21];
-    out[21] = c[22];
+    out[18] = c[25];
+    out[19] = c[26];
+    out[20] = c[25];
+    out[21] = c[26];
     out[22] = c[6]*cq[4] + t3;
     out[23] = c[6]*cq[5] + t5;
     out[24] = t6;
@@ -533,18 +578,18 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[33] = t7;
     out[34] = t0;
     out[35] = t1;
-    out[36] = c[21] + c[23]*cq[2] + c[24]*cq[3];
-    out[37] = c[22] + c[23]*cq[3] + c[25]*cq[2];
-    out[38] = c[28]*t2 + c[29]*t4;
-    out[39] = c[28]*t4 + c[30]*t2;
-    out[40] = c[32]*cq[4] + t3;
-    out[41] = c[32]*cq[5] + t5;
-    out[42] = c[34]*cq[0] + c[35]*cq[1] + c[4];
-    out[43] = c[34]*cq[1] + c[36]*cq[0] + c[5];
-    out[44] = c[21] + c[38]*cq[2] + c[39]*cq[3];
-    out[45] = c[22] + c[38]*cq[3] + c[40]*cq[2];
-    out[46] = c[42]*cq[2] + c[43]*cq[3] + t0;
-    out[47] = c[42]*cq[3] + c[44]*cq[2] + t1;
+    out[36] = c[25] + c[27]*cq[2] + c[28]*cq[3];
+    out[37] = c[26] + c[27]*cq[3] + c[29]*cq[2];
+    out[38] = c[32]*t2 + c[33]*t4;
+    out[39] = c[32]*t4 + c[34]*t2;
+    out[40] = c[36]*cq[4] + t3;
+    out[41] = c[36]*cq[5] + t5;
+    out[42] = c[38]*cq[0] + c[39]*cq[1] + c[4];
+    out[43] = c[38]*cq[1] + c[40]*cq[0] + c[5];
+    out[44] = c[25] + c[42]*cq[2] + c[43]*cq[3];
+    out[45] = c[26] + c[42]*cq[3] + c[44]*cq[2];
+    out[46] = c[46]*cq[2] + c[47]*cq[3] + t0;
+    out[47] = c[46]*cq[3] + c[48]*cq[2] + t1;
 }
 
 static const unsigned char sg_hook_drive_coord_is_angle[4] = { 1, 1, 1, 0 };
@@ -554,12 +599,13 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .nq = 4,
     .nx = 1,
     .np = 30,
-    .nc = 84,
+    .nc = 90,
     .nobs = 69,
     .nbranch = 2,
     .nf = 15,
     .nfo = 26,
     .nload = 13,
+    .nblock = 2,
     .coord_is_angle = sg_hook_drive_coord_is_angle,
     .constants = sg_hook_drive_constants,
     .closed = sg_hook_drive_closed,
@@ -567,6 +613,8 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .motion = sg_hook_drive_motion,
     .forces = sg_hook_drive_forces,
     .force_matrix = sg_hook_drive_force_matrix,
+    .scales = sg_hook_drive_scales,
+    .blocks = sg_hook_drive_blocks,
     .anchors = sg_hook_drive_anchors,
 };
 
@@ -600,203 +648,210 @@ const char *sg_hook_drive_manifest(void)
         "nk.com\"},{\"body\":\"big_rod\",\"joint\":null,\"kind\":\"com\",\"name\":\"big_rod.com\"},{\"bod"
         "y\":\"rock_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_shaft.com\"},{\"body\":\"lowe"
         "r_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"lower_shaft.com\"},{\"body\":\"rock_slider\""
-        ",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_slider.com\"}],\"arcs\":[],\"bodies\":[{\"doc\""
-        ":\"hook crank \\u94a9\\u7ebf\\u66f2\\u67c4 (part 12)\",\"kind\":\"driven\",\"name\":\"crank\",\""
-        "offset\":24,\"role\":null},{\"doc\":\"big connecting rod \\u5927\\u8fde\\u6746 (part 9)\",\"kind"
-        "\":\"link\",\"name\":\"big_rod\",\"offset\":33,\"role\":null},{\"doc\":\"rock shaft with its two"
-        " arms \\u6446\\u8f74\\u7ec4\\u4ef6 (part 4)\",\"kind\":\"link\",\"name\":\"rock_shaft\",\"offset"
-        "\":42,\"role\":null},{\"doc\":\"lower shaft with slotted arm and shuttle driver \\u4e0b\\u8f74\\u"
-        "7ec4\\u4ef6 (part 11)\",\"kind\":\"link\",\"name\":\"lower_shaft\",\"offset\":51,\"role\":\"hook"
-        "_shaft\"},{\"doc\":\"rock-shaft slider \\u6446\\u8f74\\u6ed1\\u5757 (part 10)\",\"kind\":\"slide"
-        "r\",\"name\":\"rock_slider\",\"offset\":60,\"role\":null}],\"body_fields\":[\"angle\",\"omega\","
-        "\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"defa"
-        "ult\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C left of the line from B to O4"
-        "\"},{\"default\":1,\"joint\":\"E\",\"kind\":\"rpr\",\"meaning\":\"+1: the larger travel of rock_"
-        "slider on lower_shaft\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\",\"E.x\",\"E.y\"],\"c"
-        "oords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267"
-        "948966,\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":"
-        "\"big_rod.angle\",\"unit\":\"rad\"},{\"guess\":0.005,\"name\":\"rock_slider.travel\",\"unit\":\""
-        "m\"}],\"default_speed\":104.71975511965977,\"doc\":\"Hook drive \\u94a9\\u7ebf\\u673a\\u6784: ho"
-        "ok crank 12 \\u2192 big connecting rod \\u5927\\u8fde\\u6746 9 \\u2192 rock shaft \\u6446\\u8f74"
-        " 4 \\u2192 rock-shaft slider\\n\\u6446\\u8f74\\u6ed1\\u5757 10 in the slot of the lower-shaft ar"
-        "m \\u4e0b\\u8f74 11 (an oscillating guide bar) \\u2192 oscillating shuttle.\\n\\nTwo loops (seed"
-        " 000 \\u00a7\\u4e00(\\u4e00)3, fig. 1-1; fig. 1-2(c) is the guide-bar unit): the four-bar crank\\u"
-        "2013rod\\u2013rock\\nshaft, then the guide bar whose slotted arm turns the lower shaft through a"
-        " large swing. The rock shaft\\nand lower shaft run parallel to the upper shaft, so both loops pr"
-        "oject onto one plane: origin on the upper\\nshaft axis, x horizontal, y up. The lower-shaft slot"
-        " passes through its axis (local u axis).\\n\\nThe shuttle's point \\u6446\\u68ad\\u5c16 (point `"
-        "`hook_point``) is a point of the lower-shaft body at ``hook_radius`` from its\\naxis and ``hook_"
-        "angle`` from the slot: the lower shaft's axis is under the needle (x = 0), so the hook point\\nc"
-        "rosses the needle's centre line at the top of its circle, moving across it (sewgen.timing measur"
-        "es the\\nneedle's rise from its bottom dead centre and the hook point's height above the needle "
-        "eye there).\\n\\nDimensions are estimates sized to the household machine (seed 000's tables are "
-        "not in the text); the\\nearlier estimate (crank 12, rod 170, rock arms 13.6 and 20 mm) swung the"
-        " rock shaft \\u00b162\\u00b0 with a minimum\\ntransmission angle of 23.6\\u00b0, at \\u03c6 = 12"
-        "5\\u00b0 where the hook crank pin's load peaked:\\n\\n* the crank-rocker (crank 16 mm, big rod 2"
-        "17.76 mm, front arm 21.02 mm, rock axis 217.45 mm below the upper\\n  shaft) swings the rock sha"
-        "ft 99.1\\u00b0 with a minimum transmission angle of 40.3\\u00b0 (big rod against the front\\n  a"
-        "rm). A crank-rocker's transmission angle falls below 40\\u00b0 once its rocker swings much more "
-        "than 100\\u00b0, so\\n  the rock swing cannot stay near the old 124\\u00b0. Its ends \\u2014 the"
-        " shuttle's reversals \\u2014 fall at crank angles of\\n  about 89\\u00b0 and 269\\u00b0, so a gr"
-        "oup phase of \\u22122\\u00b0 puts them at the needle's top and bottom dead centres (an\\n  oscil"
-        "lating shuttle starts from its end position with the needle at its lowest point);\\n* the guide "
-        "bar (the lower-shaft axis under the needle, 32.4 mm from the rock shaft's, inside the 39.01 mm\\n"
-        "  rear arm's circle; rear arm 57.63\\u00b0 from the front arm) turns the 99.1\\u00b0 into a shut"
-        "tle swing of 206.7\\u00b0\\n  (household shuttles swing 206\\u00b0\\u2013210\\u00b0). Its own tr"
-        "ansmission angle is 90\\u00b0 (the slot's force is normal to the\\n  slotted arm). The price of "
-        "the smaller rock swing is a less uniform shuttle: the guide bar must multiply\\n  the swing 2.1 "
-        "times, most of it at mid-stroke, so the lower shaft peaks at 4.5 times the upper shaft's speed\\n"
-        "  (2.7 before) and its inertia, not the transmission, now sets the hook crank pin's peak load. T"
-        "hese\\n  dimensions are the ones of least peak crank-pin load (167 N at 1000 r/min with the lowe"
-        "r shaft's 6e-6\\n  kg\\u00b7m\\u00b2) among those with a transmission angle of at least 40.3\\u0"
-        "0b0, a 206.5\\u00b0\\u2013210\\u00b0 swing and reversals at 89\\u00b0 and\\n  269\\u00b0 (a loca"
-        "l search over rod, rock axis, arms and rear-arm angle); a 35\\u00b0 design of the same kind woul"
-        "d\\n  carry about 80 N, and without the lower shaft's inertia this one would carry 16 N (the old"
-        " one 44 N);\\n* the shuttle (hook point) radius is 12 mm, its axis 20 mm below the throat plate:"
-        " its point passes over the\\n  needle's centre line at the top of its circle. ``hook_angle`` (13"
-        "2.45\\u00b0) puts it there when the needle has\\n  risen 2.0 mm from its bottom dead centre (JUK"
-        "I service manuals: 2.0 \\u00b1 0.2 mm) at the JB1-3's phase, 1.6 mm\\n  above the top of the nee"
-        "dle eye (service manuals: 1\\u20132.5 mm).\",\"elements\":[],\"force_blocks\":[1,2],\"force_outp"
-        "uts\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\""
-        "name\":\"rock_slider.guide.fx\",\"unit\":\"N\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\""
-        "},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\""
-        "shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"pote"
-        "ntial_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_powe"
-        "r\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"big_rod.x\",\"bi"
-        "g_rod.y\",\"big_rod.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"lower_sha"
-        "ft.x\",\"lower_shaft.y\",\"lower_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\",\"rock_slide"
-        "r.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle ph"
-        "i\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_hoo"
-        "k_drive_anchors\":{\"ops\":70},\"sg_hook_drive_closed\":{\"ops\":60},\"sg_hook_drive_constants\""
-        ":{\"ops\":63},\"sg_hook_drive_force_matrix\":{\"ops\":138},\"sg_hook_drive_forces\":{\"ops\":265"
-        "},\"sg_hook_drive_motion\":{\"ops\":237},\"sg_hook_drive_residual\":{\"ops\":38}},\"loads\":[{\""
-        "body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":"
-        "\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rock_pin"
-        "\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"rock_pin\"},{\"body\":\"rock_slider"
-        "\",\"component\":\"fx\",\"name\":\"slider_pin\"},{\"body\":\"rock_slider\",\"component\":\"fy\","
-        "\"name\":\"slider_pin\"},{\"body\":\"lower_shaft\",\"component\":\"fx\",\"name\":\"hook_point\"}"
-        ",{\"body\":\"lower_shaft\",\"component\":\"fy\",\"name\":\"hook_point\"},{\"body\":\"crank\",\"c"
-        "omponent\":\"torque\",\"name\":\"crank\"},{\"body\":\"big_rod\",\"component\":\"torque\",\"name\""
-        ":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body"
-        "\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"lower_shaft\"},{\"body\":\"rock_slider\","
-        "\"component\":\"torque\",\"name\":\"rock_slider\"}],\"name\":\"hook_drive\",\"observables\":[{\""
-        "name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"cra"
-        "nk_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_p"
-        "in.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_"
-        "pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":\"m\"},{\"name\":\"rock_pin.x_d\",\"un"
-        "it\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.x_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.x\",\"unit\":\""
-        "m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\":\"slider_pin.x_d\",\"unit\":\"m/s\"},{"
-        "\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.x_dd\",\"unit\":\"m/s^2\"},"
-        "{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_point.x\",\"unit\":\"m\"},{\""
-        "name\":\"hook_point.y\",\"unit\":\"m\"},{\"name\":\"hook_point.x_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"hook_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"hook_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"hook_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\""
-        "crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\""
-        ":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com"
-        ".x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_d"
-        "d\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.ang"
-        "le\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.ang"
-        "le_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.co"
-        "m.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_"
-        "d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com"
-        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_sh"
-        "aft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"nam"
-        "e\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\""
-        ":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"lower_shaft.angle_d\",\"u"
-        "nit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_shaf"
-        "t.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lower_shaf"
-        "t.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lo"
-        "wer_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.com.y_dd\",\"unit\":\"m/s^2\"},"
-        "{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name\":\"rock_slider.angle_d\",\"unit\":\"r"
-        "ad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_slider.com.x\""
-        ",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.x_d"
-        "\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider"
-        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.com.y_dd\",\"unit\":\"m/s^2\"}],\"params"
-        "\":[{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"hook crank radius on the upper shaft (e"
-        "stimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":\"big connecting rod, pin to pin (estimat"
-        "e)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, horizontal (estimate)\",\"k"
-        "ind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
-        "fault\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, vertical (estimate)\",\"kind"
-        "\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
-        "lt\":0.02102,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm driven by the big rod (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":0.039009999999999996,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm carrying the"
-        " slider pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm\",\"positive\":true,\"role"
-        "\":null,\"unit\":\"m\"},{\"default\":1.0058332479243322,\"display_unit\":\"deg\",\"doc\":\"rear "
-        "arm direction relative to the front arm (estimate)\",\"kind\":\"angle\",\"name\":\"rock_rear_ang"
-        "le\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"mm\""
-        ",\"doc\":\"lower-shaft axis, horizontal: under the needle (estimate)\",\"kind\":\"length\",\"nam"
-        "e\":\"lower_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1905,\"dis"
-        "play_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\""
-        ":\"lower_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.012,\"display_"
-        "unit\":\"mm\",\"doc\":\"shuttle point's radius about the lower-shaft axis (estimate)\",\"kind\":"
-        "\"length\",\"name\":\"hook_radius\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":2.311688594266489,\"display_unit\":\"deg\",\"doc\":\"shuttle point's direction on the lower sha"
-        "ft from its slot (set for a 2.0 mm loop lift)\",\"kind\":\"angle\",\"name\":\"hook_angle\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":"
-        "\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\""
-        "mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\""
-        ",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
-        "\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\""
-        "length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
-        "0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\""
-        ",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*"
-        "m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\","
-        "\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":7e-05,\""
-        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_rod about its centre of mass\",\"k"
-        "ind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m*"
-        "*2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\","
-        "\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.00"
-        "2,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\","
-        "\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0"
-        "02,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"length\""
-        ",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-"
-        "06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre of ma"
-        "ss\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of lower_shaft\",\"kind"
-        "\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
-        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local u\",\"kind\""
-        ":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
-        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local v\",\"kind\""
-        ":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
-        "efault\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lower_shaft about its"
-        " centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_shaft.inertia\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"display_unit\":\"g\",\"doc\":\"mass of rock_"
-        "slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\"positive\":false,\"role\":null,\"unit"
-        "\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, loc"
-        "al u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, loc"
-        "al v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_s"
-        "lider about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_slider.inertia\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\""
-        ",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset"
-        "\":0,\"role\":null},{\"body\":\"rock_shaft\",\"doc\":\"big-rod pin C on the rock-shaft arm\",\"n"
-        "ame\":\"rock_pin\",\"offset\":6,\"role\":null},{\"body\":\"rock_slider\",\"doc\":\"slider pin E "
-        "on the rock-shaft rear arm\",\"name\":\"slider_pin\",\"offset\":12,\"role\":null},{\"body\":\"lo"
-        "wer_shaft\",\"doc\":\"shuttle point \\u6446\\u68ad\\u5c16\",\"name\":\"hook_point\",\"offset\":1"
-        "8,\"role\":\"hook_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\""
-        "lower_shaft\",\"b\":\"rock_slider\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kin"
-        "d\":\"prismatic\",\"name\":\"rock_slider.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"big_rod\""
-        ",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":"
-        "4},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\""
-        ":\"revolute\",\"name\":\"O4\",\"offset\":6},{\"a\":\"ground\",\"b\":\"lower_shaft\",\"columns\":"
-        "[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O11\",\"offset\":8},{\"a\":\""
-        "big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolut"
-        "e\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\":\"rock_slider\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"ground\""
-        ",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive"
-        "\",\"name\":\"crank.drive\",\"offset\":14,\"sense\":1}],\"roles\":{\"hook_point\":{\"kind\":\"po"
-        "int\",\"name\":\"hook_point\"},\"hook_shaft\":{\"kind\":\"body\",\"name\":\"lower_shaft\"}},\"si"
-        "zes\":{\"nanchor_out\":48,\"nbranch\":2,\"nc\":84,\"nf\":15,\"nfo\":26,\"nload\":13,\"nobs\":69,"
-        "\"np\":30,\"nq\":4,\"nx\":1}}"
+        ",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_slider.com\"}],\"arcs\":[],\"blocks\":[{\"coord"
+        "s\":[2,0],\"joints\":[\"C\"],\"rows\":[0,1]},{\"coords\":[3,1],\"joints\":[\"E\"],\"rows\":[2,3]"
+        "}],\"bodies\":[{\"doc\":\"hook crank \\u94a9\\u7ebf\\u66f2\\u67c4 (part 12)\",\"kind\":\"driven\""
+        ",\"name\":\"crank\",\"offset\":24,\"role\":null},{\"doc\":\"big connecting rod \\u5927\\u8fde\\u"
+        "6746 (part 9)\",\"kind\":\"link\",\"name\":\"big_rod\",\"offset\":33,\"role\":null},{\"doc\":\"r"
+        "ock shaft with its two arms \\u6446\\u8f74\\u7ec4\\u4ef6 (part 4)\",\"kind\":\"link\",\"name\":\""
+        "rock_shaft\",\"offset\":42,\"role\":null},{\"doc\":\"lower shaft with slotted arm and shuttle dr"
+        "iver \\u4e0b\\u8f74\\u7ec4\\u4ef6 (part 11)\",\"kind\":\"link\",\"name\":\"lower_shaft\",\"offse"
+        "t\":51,\"role\":\"hook_shaft\"},{\"doc\":\"rock-shaft slider \\u6446\\u8f74\\u6ed1\\u5757 (part "
+        "10)\",\"kind\":\"slider\",\"name\":\"rock_slider\",\"offset\":60,\"role\":null}],\"body_fields\""
+        ":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"]"
+        ",\"branches\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C left of"
+        " the line from B to O4\"},{\"default\":1,\"joint\":\"E\",\"kind\":\"rpr\",\"meaning\":\"+1: the "
+        "larger travel of rock_slider on lower_shaft\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\""
+        ",\"E.x\",\"E.y\"],\"constants\":[[0],[11],[11],[11],[2],[3],[1],[4],[1],[4],[5,6],[5,6],[2,7],[5"
+        ",6],[3,8],[2],[4],[3],[1],[5,6],[0,1,2,4],[0,1,3,4],[2,5,7],[3,5,8],[0],[7],[8],[9,10],[9,10],[9"
+        ",10],[9,10],[11],[13],[14],[14],[13],[1],[1],[19],[20],[20],[19],[23],[24],[24],[23],[27],[28],["
+        "28],[27],[0,1,2,4],[0,1,3,4],[17],[1,16],[1,16],[21],[4,19],[4,19],[18],[26],[25],[29],[9,10,24]"
+        ",[9,10,23],[9,10,23],[22],[15],[0,13],[0,13],[12],[16],[8],[12],[15],[16],[17],[18],[21],[22],[2"
+        "5],[26],[29],[12],[16],[18],[22],[26],[5,6,20],[5,6,19],[5,6,19]],\"coords\":[{\"guess\":0.0,\"n"
+        "ame\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"lower_sha"
+        "ft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"big_rod.angle\",\"unit\":"
+        "\"rad\"},{\"guess\":0.005,\"name\":\"rock_slider.travel\",\"unit\":\"m\"}],\"default_speed\":104"
+        ".71975511965977,\"doc\":\"Hook drive \\u94a9\\u7ebf\\u673a\\u6784: hook crank 12 \\u2192 big con"
+        "necting rod \\u5927\\u8fde\\u6746 9 \\u2192 rock shaft \\u6446\\u8f74 4 \\u2192 rock-shaft slide"
+        "r\\n\\u6446\\u8f74\\u6ed1\\u5757 10 in the slot of the lower-shaft arm \\u4e0b\\u8f74 11 (an osc"
+        "illating guide bar) \\u2192 oscillating shuttle.\\n\\nTwo loops (seed 000 \\u00a7\\u4e00(\\u4e00"
+        ")3, fig. 1-1; fig. 1-2(c) is the guide-bar unit): the four-bar crank\\u2013rod\\u2013rock\\nshaf"
+        "t, then the guide bar whose slotted arm turns the lower shaft through a large swing. The rock sh"
+        "aft\\nand lower shaft run parallel to the upper shaft, so both loops project onto one plane: ori"
+        "gin on the upper\\nshaft axis, x horizontal, y up. The lower-shaft slot passes through its axis "
+        "(local u axis).\\n\\nThe shuttle's point \\u6446\\u68ad\\u5c16 (point ``hook_point``) is a point"
+        " of the lower-shaft body at ``hook_radius`` from its\\naxis and ``hook_angle`` from the slot: th"
+        "e lower shaft's axis is under the needle (x = 0), so the hook point\\ncrosses the needle's centr"
+        "e line at the top of its circle, moving across it (sewgen.timing measures the\\nneedle's rise fr"
+        "om its bottom dead centre and the hook point's height above the needle eye there).\\n\\nDimensio"
+        "ns are estimates sized to the household machine (seed 000's tables are not in the text); the\\ne"
+        "arlier estimate (crank 12, rod 170, rock arms 13.6 and 20 mm) swung the rock shaft \\u00b162\\u0"
+        "0b0 with a minimum\\ntransmission angle of 23.6\\u00b0, at \\u03c6 = 125\\u00b0 where the hook c"
+        "rank pin's load peaked:\\n\\n* the crank-rocker (crank 16 mm, big rod 217.76 mm, front arm 21.02"
+        " mm, rock axis 217.45 mm below the upper\\n  shaft) swings the rock shaft 99.1\\u00b0 with a min"
+        "imum transmission angle of 40.3\\u00b0 (big rod against the front\\n  arm). A crank-rocker's tra"
+        "nsmission angle falls below 40\\u00b0 once its rocker swings much more than 100\\u00b0, so\\n  t"
+        "he rock swing cannot stay near the old 124\\u00b0. Its ends \\u2014 the shuttle's reversals \\u2"
+        "014 fall at crank angles of\\n  about 89\\u00b0 and 269\\u00b0, so a group phase of \\u22122\\u0"
+        "0b0 puts them at the needle's top and bottom dead centres (an\\n  oscillating shuttle starts fro"
+        "m its end position with the needle at its lowest point);\\n* the guide bar (the lower-shaft axis"
+        " under the needle, 32.4 mm from the rock shaft's, inside the 39.01 mm\\n  rear arm's circle; rea"
+        "r arm 57.63\\u00b0 from the front arm) turns the 99.1\\u00b0 into a shuttle swing of 206.7\\u00b"
+        "0\\n  (household shuttles swing 206\\u00b0\\u2013210\\u00b0). Its own transmission angle is 90\\u"
+        "00b0 (the slot's force is normal to the\\n  slotted arm). The price of the smaller rock swing is"
+        " a less uniform shuttle: the guide bar must multiply\\n  the swing 2.1 times, most of it at mid-"
+        "stroke, so the lower shaft peaks at 4.5 times the upper shaft's speed\\n  (2.7 before) and its i"
+        "nertia, not the transmission, now sets the hook crank pin's peak load. These\\n  dimensions are "
+        "the ones of least peak crank-pin load (167 N at 1000 r/min with the lower shaft's 6e-6\\n  kg\\u"
+        "00b7m\\u00b2) among those with a transmission angle of at least 40.3\\u00b0, a 206.5\\u00b0\\u20"
+        "13210\\u00b0 swing and reversals at 89\\u00b0 and\\n  269\\u00b0 (a local search over rod, rock "
+        "axis, arms and rear-arm angle); a 35\\u00b0 design of the same kind would\\n  carry about 80 N, "
+        "and without the lower shaft's inertia this one would carry 16 N (the old one 44 N);\\n* the shut"
+        "tle (hook point) radius is 12 mm, its axis 20 mm below the throat plate: its point passes over t"
+        "he\\n  needle's centre line at the top of its circle. ``hook_angle`` (132.45\\u00b0) puts it the"
+        "re when the needle has\\n  risen 2.0 mm from its bottom dead centre (JUKI service manuals: 2.0 \\u"
+        "00b1 0.2 mm) at the JB1-3's phase, 1.6 mm\\n  above the top of the needle eye (service manuals: "
+        "1\\u20132.5 mm).\",\"elements\":[],\"force_blocks\":[1,2],\"force_outputs\":[{\"name\":\"shaft.t"
+        "orque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guid"
+        "e.fx\",\"unit\":\"N\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx"
+        "\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\""
+        ":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\""
+        "J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"for"
+        "ce_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"big_rod.x\",\"big_rod.y\",\"big_rod.moment"
+        "\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"lower_shaft.x\",\"lower_shaft.y\",\""
+        "lower_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\",\"rock_slider.moment\"],\"inputs\":[{\""
+        "default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"na"
+        "me\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_hook_drive_anchors\":{\"ops\":"
+        "70},\"sg_hook_drive_blocks\":{\"ops\":46},\"sg_hook_drive_closed\":{\"ops\":60},\"sg_hook_drive_"
+        "constants\":{\"ops\":78},\"sg_hook_drive_force_matrix\":{\"ops\":138},\"sg_hook_drive_forces\":{"
+        "\"ops\":265},\"sg_hook_drive_motion\":{\"ops\":238},\"sg_hook_drive_residual\":{\"ops\":38},\"sg"
+        "_hook_drive_scales\":{\"ops\":7}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\""
+        "crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rock_s"
+        "haft\",\"component\":\"fx\",\"name\":\"rock_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\""
+        ",\"name\":\"rock_pin\"},{\"body\":\"rock_slider\",\"component\":\"fx\",\"name\":\"slider_pin\"},"
+        "{\"body\":\"rock_slider\",\"component\":\"fy\",\"name\":\"slider_pin\"},{\"body\":\"lower_shaft\""
+        ",\"component\":\"fx\",\"name\":\"hook_point\"},{\"body\":\"lower_shaft\",\"component\":\"fy\",\""
+        "name\":\"hook_point\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\""
+        ":\"big_rod\",\"component\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component"
+        "\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"lower_shaft\",\"component\":\"torque\",\"name"
+        "\":\"lower_shaft\"},{\"body\":\"rock_slider\",\"component\":\"torque\",\"name\":\"rock_slider\"}"
+        "],\"name\":\"hook_drive\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\""
+        "crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pi"
+        "n.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin"
+        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\""
+        "unit\":\"m\"},{\"name\":\"rock_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"rock_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/"
+        "s^2\"},{\"name\":\"slider_pin.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\""
+        "name\":\"slider_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"na"
+        "me\":\"slider_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{"
+        "\"name\":\"hook_point.x\",\"unit\":\"m\"},{\"name\":\"hook_point.y\",\"unit\":\"m\"},{\"name\":\""
+        "hook_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"hook_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"ho"
+        "ok_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":"
+        "\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"cr"
+        "ank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank"
+        ".com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d"
+        "\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod."
+        "com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.a"
+        "ngle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_s"
+        "haft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\""
+        "rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{"
+        "\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\""
+        "rad\"},{\"name\":\"lower_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\","
+        "\"unit\":\"rad/s^2\"},{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.co"
+        "m.y\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaf"
+        "t.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "lower_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\""
+        "name\":\"rock_slider.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\""
+        "rad/s^2\"},{\"name\":\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"uni"
+        "t\":\"m\"},{\"name\":\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slide"
+        "r.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.016,\"display_unit\":\"mm\",\"doc\""
+        ":\"hook crank radius on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"po"
+        "sitive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\""
+        ":\"big connecting rod, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positi"
+        "ve\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"r"
+        "ock-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"roc"
+        "k-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"rock-sh"
+        "aft arm driven by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"pos"
+        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.039009999999999996,\"display_unit\":\""
+        "mm\",\"doc\":\"rock-shaft arm carrying the slider pin (estimate)\",\"kind\":\"length\",\"name\":"
+        "\"rock_rear_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":1.005833247924332"
+        "2,\"display_unit\":\"deg\",\"doc\":\"rear arm direction relative to the front arm (estimate)\",\""
+        "kind\":\"angle\",\"name\":\"rock_rear_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"}"
+        ",{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, horizontal: under the need"
+        "le (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_x\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":-0.1905,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical "
+        "(estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"m\"},{\"default\":0.012,\"display_unit\":\"mm\",\"doc\":\"shuttle point's radius about th"
+        "e lower-shaft axis (estimate)\",\"kind\":\"length\",\"name\":\"hook_radius\",\"positive\":true,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":2.311688594266489,\"display_unit\":\"deg\",\"doc\":\"sh"
+        "uttle point's direction on the lower shaft from its slot (set for a 2.0 mm loop lift)\",\"kind\""
+        ":\"angle\",\"name\":\"hook_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default"
+        "\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":"
+        "\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default"
+        "\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"do"
+        "c\":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre"
+        " of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of ine"
+        "rtia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"posit"
+        "ive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\""
+        ":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia o"
+        "f big_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\""
+        "mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of roc"
+        "k_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of ro"
+        "ck_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inerti"
+        "a of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\","
+        "\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\","
+        "\"doc\":\"mass of lower_shaft\",\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of m"
+        "ass of lower_shaft, local u\",\"kind\":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of m"
+        "ass of lower_shaft, local v\",\"kind\":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"mome"
+        "nt of inertia of lower_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_sh"
+        "aft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"displa"
+        "y_unit\":\"g\",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\""
+        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
+        ":\"centre of mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":"
+        "\"centre of mass of rock_slider, local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\""
+        "doc\":\"moment of inertia of rock_slider about its centre of mass\",\"kind\":\"inertia\",\"name\""
+        ":\"rock_slider.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\""
+        ":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B"
+        "\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rock_shaft\",\"doc\":\"big-rod"
+        " pin C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6,\"role\":null},{\"body\":\"roc"
+        "k_slider\",\"doc\":\"slider pin E on the rock-shaft rear arm\",\"name\":\"slider_pin\",\"offset\""
+        ":12,\"role\":null},{\"body\":\"lower_shaft\",\"doc\":\"shuttle point \\u6446\\u68ad\\u5c16\",\"n"
+        "ame\":\"hook_point\",\"offset\":18,\"role\":\"hook_point\"}],\"reactions\":[{\"a\":\"ground\",\""
+        "b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"cra"
+        "nk.pivot\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\"rock_slider\",\"columns\":[\"normal\",\""
+        "moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"rock_slider.guide\",\"offset\":2}"
+        ",{\"a\":\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"re"
+        "volute\",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\""
+        ",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"offset\":6},{\"a\":\"ground\""
+        ",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"nam"
+        "e\":\"O11\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\""
+        "grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\""
+        ":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\""
+        "E\",\"offset\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,"
+        "\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":14,\"sense\":1}],\"ro"
+        "les\":{\"hook_point\":{\"kind\":\"point\",\"name\":\"hook_point\"},\"hook_shaft\":{\"kind\":\"bo"
+        "dy\",\"name\":\"lower_shaft\"}},\"sizes\":{\"nanchor_out\":48,\"nblock\":2,\"nbranch\":2,\"nc\":"
+        "90,\"nf\":15,\"nfo\":26,\"nload\":13,\"nobs\":69,\"np\":30,\"nq\":4,\"nx\":1}}"
         ;
 }

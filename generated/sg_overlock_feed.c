@@ -6,26 +6,34 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_feed_constants -- Total ops: 68 */
+/* sg_overlock_feed_constants -- Total ops: 83 */
 void sg_overlock_feed_constants(const double *p, double *c)
 {
     const double t0 = sin(p[11]);
     const double t1 = sin(p[9]);
     const double t2 = -p[8];
     const double t3 = -p[5];
-    const double t4 = -p[7];
-    const double t5 = p[6] + t4;
-    const double t6 = -p[13];
-    const double t7 = (0.5)*p[1];
-    const double t8 = (0.5)*p[6];
-    const double t9 = (0.5)*p[10];
-    const double t10 = p[20]*t7;
-    const double t11 = p[23] + t3;
-    const double t12 = t4 + t8;
-    const double t13 = p[29]*t9;
-    const double t14 = p[0] + t6;
-    const double t15 = p[17] + t2;
-    const double t16 = p[23] + p[4];
+    const double t4 = fabs(p[2]);
+    const double t5 = p[0] + p[1] + p[4];
+    const double t6 = t4 + t5;
+    const double t7 = fabs(p[3]);
+    const double t8 = t5 + t7;
+    const double t9 = p[10] + p[5] + p[6] + p[8];
+    const double t10 = t4 + t9;
+    const double t11 = t7 + t9;
+    const double t12 = -p[7];
+    const double t13 = p[6] + t12;
+    const double t14 = -p[13];
+    const double t15 = (0.5)*p[1];
+    const double t16 = (0.5)*p[6];
+    const double t17 = (0.5)*p[10];
+    const double t18 = p[20]*t15;
+    const double t19 = p[23] + t3;
+    const double t20 = t12 + t16;
+    const double t21 = p[29]*t17;
+    const double t22 = p[0] + t14;
+    const double t23 = p[17] + t2;
+    const double t24 = p[23] + p[4];
     c[0] = p[0];
     c[1] = cos(p[11]);
     c[2] = -t0;
@@ -53,75 +61,83 @@ void sg_overlock_feed_constants(const double *p, double *c)
     c[24] = -p[1];
     c[25] = t3;
     c[26] = -p[6];
-    c[27] = -p[0];
-    c[28] = t5;
-    c[29] = -t5;
-    c[30] = p[11];
-    c[31] = p[13];
-    c[32] = -p[14];
-    c[33] = p[14];
-    c[34] = t6;
-    c[35] = p[9];
-    c[36] = p[17];
-    c[37] = -p[18];
-    c[38] = p[18];
-    c[39] = -p[17];
-    c[40] = t7;
-    c[41] = -t7;
-    c[42] = p[23];
-    c[43] = -p[24];
-    c[44] = p[24];
-    c[45] = -p[23];
-    c[46] = t8;
-    c[47] = -p[27];
-    c[48] = p[27];
-    c[49] = -t8;
-    c[50] = t9;
-    c[51] = -t9;
-    c[52] = p[21];
-    c[53] = t10;
-    c[54] = -t10;
-    c[55] = p[25];
-    c[56] = t11;
-    c[57] = -t11;
-    c[58] = p[22];
-    c[59] = p[26];
-    c[60] = p[28];
-    c[61] = -t12;
-    c[62] = t12;
-    c[63] = p[30];
-    c[64] = t13;
-    c[65] = -t13;
-    c[66] = p[15];
-    c[67] = t14;
-    c[68] = -t14;
-    c[69] = p[12];
-    c[70] = p[19];
-    c[71] = t15;
-    c[72] = -t15;
-    c[73] = p[16];
-    c[74] = p[20];
-    c[75] = p[29];
-    c[76] = (0.5)*p[12];
-    c[77] = (0.5)*p[15];
-    c[78] = (0.5)*p[16];
-    c[79] = (0.5)*p[19];
-    c[80] = (0.5)*p[20];
-    c[81] = (0.5)*p[21];
-    c[82] = (0.5)*p[22];
-    c[83] = (0.5)*p[25];
-    c[84] = (0.5)*p[26];
-    c[85] = (0.5)*p[28];
-    c[86] = (0.5)*p[29];
-    c[87] = (0.5)*p[30];
-    c[88] = -p[12];
-    c[89] = -p[16];
-    c[90] = -p[20];
-    c[91] = -p[22];
-    c[92] = -p[26];
-    c[93] = -p[29];
-    c[94] = t16;
-    c[95] = -t16;
+    c[27] = t6;
+    c[28] = t8;
+    c[29] = t10;
+    c[30] = t11;
+    c[31] = -p[0];
+    c[32] = t13;
+    c[33] = -t13;
+    c[34] = p[11];
+    c[35] = p[13];
+    c[36] = -p[14];
+    c[37] = p[14];
+    c[38] = t14;
+    c[39] = p[9];
+    c[40] = p[17];
+    c[41] = -p[18];
+    c[42] = p[18];
+    c[43] = -p[17];
+    c[44] = t15;
+    c[45] = -t15;
+    c[46] = p[23];
+    c[47] = -p[24];
+    c[48] = p[24];
+    c[49] = -p[23];
+    c[50] = t16;
+    c[51] = -p[27];
+    c[52] = p[27];
+    c[53] = -t16;
+    c[54] = t17;
+    c[55] = -t17;
+    c[56] = (1.0/(t6));
+    c[57] = (1.0/(t8));
+    c[58] = (1.0/(t10));
+    c[59] = (1.0/(t11));
+    c[60] = p[21];
+    c[61] = t18;
+    c[62] = -t18;
+    c[63] = p[25];
+    c[64] = t19;
+    c[65] = -t19;
+    c[66] = p[22];
+    c[67] = p[26];
+    c[68] = p[28];
+    c[69] = -t20;
+    c[70] = t20;
+    c[71] = p[30];
+    c[72] = t21;
+    c[73] = -t21;
+    c[74] = p[15];
+    c[75] = t22;
+    c[76] = -t22;
+    c[77] = p[12];
+    c[78] = p[19];
+    c[79] = t23;
+    c[80] = -t23;
+    c[81] = p[16];
+    c[82] = p[20];
+    c[83] = p[29];
+    c[84] = (0.5)*p[12];
+    c[85] = (0.5)*p[15];
+    c[86] = (0.5)*p[16];
+    c[87] = (0.5)*p[19];
+    c[88] = (0.5)*p[20];
+    c[89] = (0.5)*p[21];
+    c[90] = (0.5)*p[22];
+    c[91] = (0.5)*p[25];
+    c[92] = (0.5)*p[26];
+    c[93] = (0.5)*p[28];
+    c[94] = (0.5)*p[29];
+    c[95] = (0.5)*p[30];
+    c[96] = -p[12];
+    c[97] = -p[16];
+    c[98] = -p[20];
+    c[99] = -p[22];
+    c[100] = -p[26];
+    c[101] = -p[29];
+    c[102] = t24;
+    c[103] = -t24;
 }
 
 /* sg_overlock_feed_closed -- Total ops: 49 */
@@ -194,8 +210,36 @@ void sg_overlock_feed_residual(const double *q, const double *cq, const double *
     jac[15] = t4;
 }
 
+/* sg_overlock_feed_scales -- Total ops: 4 */
+void sg_overlock_feed_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)q;
+    (void)cq;
+    (void)x;
+    (void)cx;
+    out[0] = c[27];
+    out[1] = c[28];
+    out[2] = c[29];
+    out[3] = c[30];
+}
+
+/* sg_overlock_feed_blocks -- Total ops: 46 */
+void sg_overlock_feed_blocks(const double *jac, double *out)
+{
+    /* block 0: joints C */
+    {
+        const double nr = sqrt(sg_row_norm2(4, jac + 0) * sg_row_norm2(4, jac + 4));
+        out[0] = nr > 0.0 ? (jac[1] * jac[4] - jac[0] * jac[5]) / nr : 0.0;
+    }
+    /* block 1: joints F */
+    {
+        const double nr = sqrt(sg_row_norm2(4, jac + 8) * sg_row_norm2(4, jac + 12));
+        out[1] = nr > 0.0 ? (jac[11] * jac[14] - jac[10] * jac[15]) / nr : 0.0;
+    }
+}
+
 /* sg_overlock_feed_motion -- Total ops: 253 */
-int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[7]*cq[0];
     const double t1 = c[6]*cq[2];
@@ -207,7 +251,7 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     const double t7 = c[1]*cx[1] + c[3]*cx[0];
     const double t8 = c[0]*t7;
     const double t9 = c[1]*cx[0] + c[2]*cx[1];
-    const double t10 = c[27]*t9;
+    const double t10 = c[31]*t9;
     const double t11 = c[12]*cx[1] + c[14]*cx[0];
     const double t12 = c[22]*t11;
     const double t13 = t12*xd[0];
@@ -222,23 +266,23 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     const double t28 = t12*t19 + t15*xdd[0];
     const double t29 = c[4] + t4;
     const double t30 = c[5] + t25;
-    const double t36 = c[28]*cq[4];
-    const double t37 = c[29]*cq[5];
+    const double t36 = c[32]*cq[4];
+    const double t37 = c[33]*cq[5];
     const double t38 = c[11]*t11;
-    const double t39 = c[31]*t9 + c[32]*t7;
-    const double t40 = c[32]*t9 + c[34]*t7;
-    const double t41 = c[36]*t14 + c[37]*t11;
-    const double t42 = c[37]*t14 + c[39]*t11;
-    const double t43 = c[40]*cq[2];
-    const double t44 = c[41]*cq[3];
-    const double t45 = c[27]*t7;
-    const double t46 = c[42]*cq[0] + c[43]*cq[1];
-    const double t47 = c[43]*cq[0] + c[45]*cq[1];
-    const double t48 = c[46]*cq[4] + c[47]*cq[5];
-    const double t49 = c[47]*cq[4] + c[49]*cq[5];
-    const double t50 = c[50]*cq[6];
-    const double t51 = c[51]*cq[7];
-    double J[16];
+    const double t39 = c[35]*t9 + c[36]*t7;
+    const double t40 = c[36]*t9 + c[38]*t7;
+    const double t41 = c[40]*t14 + c[41]*t11;
+    const double t42 = c[41]*t14 + c[43]*t11;
+    const double t43 = c[44]*cq[2];
+    const double t44 = c[45]*cq[3];
+    const double t45 = c[31]*t7;
+    const double t46 = c[46]*cq[0] + c[47]*cq[1];
+    const double t47 = c[47]*cq[0] + c[49]*cq[1];
+    const double t48 = c[50]*cq[4] + c[51]*cq[5];
+    const double t49 = c[51]*cq[4] + c[53]*cq[5];
+    const double t50 = c[54]*cq[6];
+    const double t51 = c[55]*cq[7];
+    double J[16], rs[4], cs[4];
     int piv[4];
     J[0] = c[23]*cq[1];
     J[1] = c[24]*cq[3];
@@ -260,8 +304,12 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     qd[1] = t10*xd[0];
     qd[2] = t13;
     qd[3] = t16;
-    if (sg_lu_factor_inl(4, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(4, J, piv, qd);
+    rs[0] = c[56];
+    rs[1] = c[57];
+    rs[2] = c[58];
+    rs[3] = c[59];
+    if (sg_factor_eq_inl(4, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(4, J, piv, rs, cs, qd);
     const double t17 = ((qd[1])*(qd[1]));
     const double t18 = ((qd[0])*(qd[0]));
     const double t21 = cq[3]*t17;
@@ -275,7 +323,7 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     qdd[1] = c[6]*t21 + c[7]*cq[1]*t18 + t10*xdd[0] + t19*t8;
     qdd[2] = t18*t4 + t22*t5 + t23*t6 + t24;
     qdd[3] = c[21]*t27 + t18*t25 + t22*t26 + t28;
-    sg_lu_solve_inl(4, J, piv, qdd);
+    sg_solve_eq_inl(4, J, piv, rs, cs, qdd);
     const double t33 = c[25]*cq[0]*t18 + qdd[0]*t2;
     const double t34 = qdd[0]*t4 + t18*t2;
     obs[0] = t29;
@@ -291,10 +339,10 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     obs[10] = c[26]*t35 + qdd[2]*t3 + t33;
     obs[11] = qdd[2]*t5 + t22*t3 + t34;
     obs[12] = t29 + t36;
-    obs[13] = c[28]*cq[5] + t30;
+    obs[13] = c[32]*cq[5] + t30;
     obs[14] = qd[2]*t37 + t31;
     obs[15] = qd[2]*t36 + t32;
-    obs[16] = c[29]*t35 + qdd[2]*t37 + t33;
+    obs[16] = c[33]*t35 + qdd[2]*t37 + t33;
     obs[17] = qdd[2]*t36 + t22*t37 + t34;
     obs[18] = t15;
     obs[19] = t38;
@@ -302,60 +350,60 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     obs[21] = t16;
     obs[22] = t24;
     obs[23] = t28;
-    obs[24] = c[30] + x[0];
+    obs[24] = c[34] + x[0];
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t39;
-    obs[28] = c[31]*t7 + c[33]*t9;
+    obs[28] = c[35]*t7 + c[37]*t9;
     obs[29] = t40*xd[0];
     obs[30] = t39*xd[0];
-    obs[31] = t19*(c[33]*t7 + c[34]*t9) + t40*xdd[0];
+    obs[31] = t19*(c[37]*t7 + c[38]*t9) + t40*xdd[0];
     obs[32] = t19*t40 + t39*xdd[0];
-    obs[33] = c[35] + x[0];
+    obs[33] = c[39] + x[0];
     obs[34] = xd[0];
     obs[35] = xdd[0];
     obs[36] = t41;
-    obs[37] = c[36]*t11 + c[38]*t14;
+    obs[37] = c[40]*t11 + c[42]*t14;
     obs[38] = t42*xd[0];
     obs[39] = t41*xd[0];
-    obs[40] = t19*(c[38]*t11 + c[39]*t14) + t42*xdd[0];
+    obs[40] = t19*(c[42]*t11 + c[43]*t14) + t42*xdd[0];
     obs[41] = t19*t42 + t41*xdd[0];
     obs[42] = q[1];
     obs[43] = qd[1];
     obs[44] = qdd[1];
     obs[45] = t20 + t43;
-    obs[46] = c[40]*cq[3] + t8;
+    obs[46] = c[44]*cq[3] + t8;
     obs[47] = qd[1]*t44 + t45*xd[0];
     obs[48] = qd[1]*t43 + t20*xd[0];
-    obs[49] = c[41]*cq[2]*t17 + qdd[1]*t44 + t10*t19 + t45*xdd[0];
-    obs[50] = c[41]*t21 + qdd[1]*t43 + t19*t45 + t20*xdd[0];
+    obs[49] = c[45]*cq[2]*t17 + qdd[1]*t44 + t10*t19 + t45*xdd[0];
+    obs[50] = c[45]*t21 + qdd[1]*t43 + t19*t45 + t20*xdd[0];
     obs[51] = q[0];
     obs[52] = qd[0];
     obs[53] = qdd[0];
     obs[54] = c[4] + t46;
-    obs[55] = c[42]*cq[1] + c[44]*cq[0] + c[5];
+    obs[55] = c[46]*cq[1] + c[48]*cq[0] + c[5];
     obs[56] = qd[0]*t47;
     obs[57] = qd[0]*t46;
-    obs[58] = qdd[0]*t47 + t18*(c[44]*cq[1] + c[45]*cq[0]);
+    obs[58] = qdd[0]*t47 + t18*(c[48]*cq[1] + c[49]*cq[0]);
     obs[59] = qdd[0]*t46 + t18*t47;
     obs[60] = q[2];
     obs[61] = qd[2];
     obs[62] = qdd[2];
     obs[63] = t29 + t48;
-    obs[64] = c[46]*cq[5] + c[48]*cq[4] + t30;
+    obs[64] = c[50]*cq[5] + c[52]*cq[4] + t30;
     obs[65] = qd[2]*t49 + t31;
     obs[66] = qd[2]*t48 + t32;
-    obs[67] = qdd[2]*t49 + t22*(c[48]*cq[5] + c[49]*cq[4]) + t33;
+    obs[67] = qdd[2]*t49 + t22*(c[52]*cq[5] + c[53]*cq[4]) + t33;
     obs[68] = qdd[2]*t48 + t22*t49 + t34;
     obs[69] = q[3];
     obs[70] = qd[3];
     obs[71] = qdd[3];
     obs[72] = t15 + t50;
-    obs[73] = c[50]*cq[7] + t38;
+    obs[73] = c[54]*cq[7] + t38;
     obs[74] = qd[3]*t51 + t13;
     obs[75] = qd[3]*t50 + t16;
-    obs[76] = c[51]*cq[6]*t23 + qdd[3]*t51 + t24;
-    obs[77] = c[51]*t27 + qdd[3]*t50 + t28;
+    obs[76] = c[55]*cq[6]*t23 + qdd[3]*t51 + t24;
+    obs[77] = c[55]*t27 + qdd[3]*t50 + t28;
     if (!isfinite(((((((q[0] + q[1]) + (q[2] + (q[3] + qd[0]))) + ((qd[1] + (qd[2] + qd[3])) + (qdd[0] + (qdd[1] + qdd[2])))) + (((qdd[3] + obs[0]) + (obs[1] + (obs[2] + obs[3]))) + ((obs[4] + (obs[5] + obs[6])) + (obs[7] + (obs[8] + obs[9]))))) + ((((obs[10] + obs[11]) + (obs[12] + (obs[13] + obs[14]))) + ((obs[15] + (obs[16] + obs[17])) + (obs[18] + (obs[19] + obs[20])))) + (((obs[21] + (obs[22] + obs[23])) + (obs[24] + (obs[25] + obs[26]))) + ((obs[27] + (obs[28] + obs[29])) + (obs[30] + (obs[31] + obs[32])))))) + (((((obs[33] + obs[34]) + (obs[35] + (obs[36] + obs[37]))) + ((obs[38] + (obs[39] + obs[40])) + (obs[41] + (obs[42] + obs[43])))) + (((obs[44] + obs[45]) + (obs[46] + (obs[47] + obs[48]))) + ((obs[49] + (obs[50] + obs[51])) + (obs[52] + (obs[53] + obs[54]))))) + ((((obs[55] + obs[56]) + (obs[57] + (obs[58] + obs[59]))) + ((obs[60] + (obs[61] + obs[62])) + (obs[63] + (obs[64] + obs[65])))) + (((obs[66] + (obs[67] + obs[68])) + (obs[69] + (obs[70] + obs[71]))) + ((obs[72] + (obs[73] + obs[74])) + (obs[75] + (obs[76] + obs[77]))))))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -367,32 +415,32 @@ int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, 
     (void)x;
     const double t0 = -gv[1] + obs[50];
     const double t1 = -gv[0] + obs[49];
-    const double t2 = c[44]*cq[0];
-    const double t3 = c[44]*cq[1];
-    const double t4 = c[59]*(-gv[1] + obs[68]) - ld[3] - ld[5];
-    const double t5 = c[59]*(-gv[0] + obs[67]) - ld[2] - ld[4];
-    const double t6 = c[58]*(-gv[0] + obs[58]) - ld[0];
-    const double t7 = c[58]*(-gv[1] + obs[59]) - ld[1];
-    const double t8 = c[48]*cq[4];
-    const double t9 = c[48]*cq[5];
+    const double t2 = c[48]*cq[0];
+    const double t3 = c[48]*cq[1];
+    const double t4 = c[67]*(-gv[1] + obs[68]) - ld[3] - ld[5];
+    const double t5 = c[67]*(-gv[0] + obs[67]) - ld[2] - ld[4];
+    const double t6 = c[66]*(-gv[0] + obs[58]) - ld[0];
+    const double t7 = c[66]*(-gv[1] + obs[59]) - ld[1];
+    const double t8 = c[52]*cq[4];
+    const double t9 = c[52]*cq[5];
     const double t10 = -gv[1] + obs[77];
     const double t11 = -gv[0] + obs[76];
     const double t12 = c[1]*cx[1] + c[3]*cx[0];
     const double t13 = c[1]*cx[0] + c[2]*cx[1];
     const double t14 = c[12]*cx[0] + c[13]*cx[1];
-    const double t15 = c[38]*t14;
+    const double t15 = c[42]*t14;
     const double t16 = c[12]*cx[1] + c[14]*cx[0];
-    const double t17 = c[38]*t16;
+    const double t17 = c[42]*t16;
     {
         /* block of unknowns 14, 15 */
         double M[4], r[2];
         int piv[2];
         M[0] = c[21]*cq[7];
         M[1] = c[16]*cq[6];
-        r[0] = c[63]*obs[71] + c[64]*cq[6]*t10 + c[65]*cq[7]*t11 - ld[13];
+        r[0] = c[71]*obs[71] + c[72]*cq[6]*t10 + c[73]*cq[7]*t11 - ld[13];
         M[2] = c[15]*cq[5];
         M[3] = c[26]*cq[4];
-        r[1] = c[60]*obs[62] - ld[12] - ld[2]*(c[49]*cq[5] + t8) - ld[3]*(c[46]*cq[4] + t9) - ld[4]*(c[61]*cq[5] + t8) - ld[5]*(c[62]*cq[4] + t9) - t4*(c[49]*cq[4] + t9) - t5*(c[46]*cq[5] + t8);
+        r[1] = c[68]*obs[62] - ld[12] - ld[2]*(c[53]*cq[5] + t8) - ld[3]*(c[50]*cq[4] + t9) - ld[4]*(c[69]*cq[5] + t8) - ld[5]*(c[70]*cq[4] + t9) - t4*(c[53]*cq[4] + t9) - t5*(c[50]*cq[5] + t8);
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[14] = r[0];
@@ -404,10 +452,10 @@ int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, 
         int piv[2];
         M[0] = c[7]*cq[1];
         M[1] = c[23]*cq[0];
-        r[0] = c[10]*cq[0]*t4 - c[10]*cq[1]*out[14] - c[25]*cq[0]*out[15] + c[25]*cq[1]*t5 + c[55]*obs[53] - ld[0]*(c[56]*cq[1] + t2) - ld[1]*(c[57]*cq[0] + t3) - ld[11] - t6*(c[42]*cq[1] + t2) - t7*(c[45]*cq[0] + t3);
+        r[0] = c[10]*cq[0]*t4 - c[10]*cq[1]*out[14] - c[25]*cq[0]*out[15] + c[25]*cq[1]*t5 + c[63]*obs[53] - ld[0]*(c[64]*cq[1] + t2) - ld[1]*(c[65]*cq[0] + t3) - ld[11] - t6*(c[46]*cq[1] + t2) - t7*(c[49]*cq[0] + t3);
         M[2] = c[6]*cq[3];
         M[3] = c[24]*cq[2];
-        r[1] = c[52]*obs[44] + c[53]*cq[2]*t0 + c[54]*cq[3]*t1 - ld[10];
+        r[1] = c[60]*obs[44] + c[61]*cq[2]*t0 + c[62]*cq[3]*t1 - ld[10];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[8] = r[0];
@@ -417,24 +465,24 @@ int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, 
     out[10] = out[14] + t5;
     out[7] = out[11] - out[9] + t7;
     out[6] = out[10] - out[8] + t6;
-    out[13] = c[75]*t10 - out[15];
-    out[12] = c[75]*t11 - out[14];
-    out[5] = c[74]*t0 + out[9];
-    out[4] = c[74]*t1 + out[8];
-    out[3] = c[73]*(-gv[1] + obs[41]) + out[13] - ld[7];
-    out[2] = c[73]*(-gv[0] + obs[40]) + out[12] - ld[6];
-    out[17] = c[70]*obs[35] - out[12]*(c[37]*t14 + c[72]*t16) - out[13]*(c[37]*t16 + c[71]*t14) - out[2]*(c[36]*t16 + t15) - out[3]*(c[39]*t14 + t17) - ld[6]*(c[71]*t16 + t15) - ld[7]*(c[72]*t14 + t17) - ld[9];
-    out[1] = c[69]*(-gv[1] + obs[32]) + out[5];
-    out[0] = c[69]*(-gv[0] + obs[31]) + out[4];
-    out[16] = c[66]*obs[26] - out[0]*(c[31]*t12 + c[33]*t13) - out[1]*(c[33]*t12 + c[34]*t13) - out[4]*(c[32]*t13 + c[67]*t12) - out[5]*(c[32]*t12 + c[68]*t13) - ld[8];
+    out[13] = c[83]*t10 - out[15];
+    out[12] = c[83]*t11 - out[14];
+    out[5] = c[82]*t0 + out[9];
+    out[4] = c[82]*t1 + out[8];
+    out[3] = c[81]*(-gv[1] + obs[41]) + out[13] - ld[7];
+    out[2] = c[81]*(-gv[0] + obs[40]) + out[12] - ld[6];
+    out[17] = c[78]*obs[35] - out[12]*(c[41]*t14 + c[80]*t16) - out[13]*(c[41]*t16 + c[79]*t14) - out[2]*(c[40]*t16 + t15) - out[3]*(c[43]*t14 + t17) - ld[6]*(c[79]*t16 + t15) - ld[7]*(c[80]*t14 + t17) - ld[9];
+    out[1] = c[77]*(-gv[1] + obs[32]) + out[5];
+    out[0] = c[77]*(-gv[0] + obs[31]) + out[4];
+    out[16] = c[74]*obs[26] - out[0]*(c[35]*t12 + c[37]*t13) - out[1]*(c[37]*t12 + c[38]*t13) - out[4]*(c[36]*t13 + c[75]*t12) - out[5]*(c[36]*t12 + c[76]*t13) - ld[8];
     const double t18 = out[16] + out[17];
     out[18] = t18;
     out[19] = t18*xd[0];
     out[20] = out[0] + out[2] + out[6];
     out[21] = out[1] + out[3] + out[7];
     out[22] = c[20]*out[6] + c[4]*out[7] + t18;
-    out[23] = c[76]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[77]*((obs[25])*(obs[25])) + c[78]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[79]*((obs[34])*(obs[34])) + c[80]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[81]*((obs[43])*(obs[43])) + c[82]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[83]*((obs[52])*(obs[52])) + c[84]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[85]*((obs[61])*(obs[61])) + c[86]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[87]*((obs[70])*(obs[70]));
-    out[24] = c[88]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[89]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[90]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[91]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[92]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[93]*(gv[0]*obs[72] + gv[1]*obs[73]);
+    out[23] = c[84]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[85]*((obs[25])*(obs[25])) + c[86]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[87]*((obs[34])*(obs[34])) + c[88]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[89]*((obs[43])*(obs[43])) + c[90]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[91]*((obs[52])*(obs[52])) + c[92]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[93]*((obs[61])*(obs[61])) + c[94]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[95]*((obs[70])*(obs[70]));
+    out[24] = c[100]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[101]*(gv[0]*obs[72] + gv[1]*obs[73]) + c[96]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[97]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[98]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[99]*(gv[0]*obs[54] + gv[1]*obs[55]);
     out[25] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[13]*obs[70] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
     out[26] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + ((out[16] + out[17]) + (out[18] + out[19]))) + ((out[20] + (out[21] + out[22])) + ((out[23] + out[24]) + (out[25] + out[26]))))))) return SG_NONFINITE;
@@ -450,34 +498,34 @@ void sg_overlock_feed_force_matrix(const double *q, const double *cq, const doub
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
     const double t2 = c[12]*cx[1] + c[14]*cx[0];
     const double t3 = c[12]*cx[0] + c[13]*cx[1];
-    const double t4 = c[38]*t3;
-    const double t5 = c[38]*t2;
-    const double t6 = c[40]*cq[3];
-    const double t7 = c[41]*cq[2];
-    const double t8 = c[44]*cq[0];
-    const double t9 = c[44]*cq[1];
-    const double t10 = c[46]*cq[5];
-    const double t11 = c[48]*cq[4];
-    const double t12 = c[48]*cq[5];
-    const double t13 = c[49]*cq[4];
+    const double t4 = c[42]*t3;
+    const double t5 = c[42]*t2;
+    const double t6 = c[44]*cq[3];
+    const double t7 = c[45]*cq[2];
+    const double t8 = c[48]*cq[0];
+    const double t9 = c[48]*cq[1];
+    const double t10 = c[50]*cq[5];
+    const double t11 = c[52]*cq[4];
+    const double t12 = c[52]*cq[5];
+    const double t13 = c[53]*cq[4];
     for (int k = 0; k < 324; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = -1.0;
     A[19] = 1.0;
     A[23] = -1.0;
-    A[36] = c[31]*t0 + c[33]*t1;
-    A[37] = c[33]*t0 + c[34]*t1;
-    A[40] = c[32]*t1 + c[67]*t0;
-    A[41] = c[32]*t0 + c[68]*t1;
+    A[36] = c[35]*t0 + c[37]*t1;
+    A[37] = c[37]*t0 + c[38]*t1;
+    A[40] = c[36]*t1 + c[75]*t0;
+    A[41] = c[36]*t0 + c[76]*t1;
     A[52] = 1.0;
     A[56] = 1.0;
     A[66] = -1.0;
     A[75] = 1.0;
     A[85] = -1.0;
-    A[92] = c[36]*t2 + t4;
-    A[93] = c[39]*t3 + t5;
-    A[102] = c[37]*t3 + c[72]*t2;
-    A[103] = c[37]*t2 + c[71]*t3;
+    A[92] = c[40]*t2 + t4;
+    A[93] = c[43]*t3 + t5;
+    A[102] = c[41]*t3 + c[80]*t2;
+    A[103] = c[41]*t2 + c[79]*t3;
     A[107] = 1.0;
     A[112] = 1.0;
     A[116] = -1.0;
@@ -493,46 +541,46 @@ void sg_overlock_feed_force_matrix(const double *q, const double *cq, const doub
     A[187] = 1.0;
     A[189] = 1.0;
     A[191] = -1.0;
-    A[204] = c[42]*cq[1] + t8;
-    A[205] = c[45]*cq[0] + t9;
-    A[206] = c[94]*cq[1] + t8;
-    A[207] = c[95]*cq[0] + t9;
-    A[208] = c[43]*cq[0] + c[57]*cq[1];
-    A[209] = c[43]*cq[1] + c[56]*cq[0];
+    A[204] = c[46]*cq[1] + t8;
+    A[205] = c[49]*cq[0] + t9;
+    A[206] = c[102]*cq[1] + t8;
+    A[207] = c[103]*cq[0] + t9;
+    A[208] = c[47]*cq[0] + c[65]*cq[1];
+    A[209] = c[47]*cq[1] + c[64]*cq[0];
     A[226] = 1.0;
     A[230] = -1.0;
     A[245] = 1.0;
     A[249] = -1.0;
     A[262] = t10 + t11;
     A[263] = t12 + t13;
-    A[266] = c[47]*cq[4] + t10;
-    A[267] = c[47]*cq[5] + t13;
+    A[266] = c[51]*cq[4] + t10;
+    A[267] = c[51]*cq[5] + t13;
     A[282] = 1.0;
     A[284] = 1.0;
     A[301] = 1.0;
     A[303] = 1.0;
-    A[318] = c[50]*cq[7];
-    A[319] = c[51]*cq[6];
-    A[320] = c[51]*cq[7];
-    A[321] = c[50]*cq[6];
-    b[0] = c[69]*(-gv[0] + obs[31]);
-    b[1] = c[69]*(-gv[1] + obs[32]);
-    b[2] = c[66]*obs[26] - ld[8];
-    b[3] = c[73]*(-gv[0] + obs[40]) - ld[6];
-    b[4] = c[73]*(-gv[1] + obs[41]) - ld[7];
-    b[5] = c[70]*obs[35] - ld[6]*(c[71]*t2 + t4) - ld[7]*(c[72]*t3 + t5) - ld[9];
-    b[6] = c[74]*(-gv[0] + obs[49]);
-    b[7] = c[74]*(-gv[1] + obs[50]);
-    b[8] = c[52]*obs[44] - ld[10];
-    b[9] = c[58]*(-gv[0] + obs[58]) - ld[0];
-    b[10] = c[58]*(-gv[1] + obs[59]) - ld[1];
-    b[11] = c[55]*obs[53] - ld[0]*(c[56]*cq[1] + t8) - ld[1]*(c[57]*cq[0] + t9) - ld[11];
-    b[12] = c[59]*(-gv[0] + obs[67]) - ld[2] - ld[4];
-    b[13] = c[59]*(-gv[1] + obs[68]) - ld[3] - ld[5];
-    b[14] = c[60]*obs[62] - ld[12] - ld[2]*(c[49]*cq[5] + t11) - ld[3]*(c[46]*cq[4] + t12) - ld[4]*(c[61]*cq[5] + t11) - ld[5]*(c[62]*cq[4] + t12);
-    b[15] = c[75]*(-gv[0] + obs[76]);
-    b[16] = c[75]*(-gv[1] + obs[77]);
-    b[17] = c[63]*obs[71] - ld[13];
+    A[318] = c[54]*cq[7];
+    A[319] = c[55]*cq[6];
+    A[320] = c[55]*cq[7];
+    A[321] = c[54]*cq[6];
+    b[0] = c[77]*(-gv[0] + obs[31]);
+    b[1] = c[77]*(-gv[1] + obs[32]);
+    b[2] = c[74]*obs[26] - ld[8];
+    b[3] = c[81]*(-gv[0] + obs[40]) - ld[6];
+    b[4] = c[81]*(-gv[1] + obs[41]) - ld[7];
+    b[5] = c[78]*obs[35] - ld[6]*(c[79]*t2 + t4) - ld[7]*(c[80]*t3 + t5) - ld[9];
+    b[6] = c[82]*(-gv[0] + obs[49]);
+    b[7] = c[82]*(-gv[1] + obs[50]);
+    b[8] = c[60]*obs[44] - ld[10];
+    b[9] = c[66]*(-gv[0] + obs[58]) - ld[0];
+    b[10] = c[66]*(-gv[1] + obs[59]) - ld[1];
+    b[11] = c[63]*obs[53] - ld[0]*(c[64]*cq[1] + t8) - ld[1]*(c[65]*cq[0] + t9) - ld[11];
+    b[12] = c[67]*(-gv[0] + obs[67]) - ld[2] - ld[4];
+    b[13] = c[67]*(-gv[1] + obs[68]) - ld[3] - ld[5];
+    b[14] = c[68]*obs[62] - ld[12] - ld[2]*(c[53]*cq[5] + t11) - ld[3]*(c[50]*cq[4] + t12) - ld[4]*(c[69]*cq[5] + t11) - ld[5]*(c[70]*cq[4] + t12);
+    b[15] = c[83]*(-gv[0] + obs[76]);
+    b[16] = c[83]*(-gv[1] + obs[77]);
+    b[17] = c[71]*obs[71] - ld[13];
 }
 
 /* sg_overlock_feed_anchors -- Total ops: 76 */
@@ -588,22 +636,22 @@ void sg_overlock_feed_anchors(const double *q, const double *cq, const double *x
     out[33] = t5;
     out[34] = t10;
     out[35] = t11;
-    out[36] = c[28]*cq[4] + t4;
-    out[37] = c[28]*cq[5] + t5;
+    out[36] = c[32]*cq[4] + t4;
+    out[37] = c[32]*cq[5] + t5;
     out[38] = t7;
     out[39] = t9;
-    out[40] = c[31]*t0 + c[32]*t2;
-    out[41] = c[31]*t2 + c[33]*t0;
-    out[42] = c[36]*t6 + c[37]*t8;
-    out[43] = c[36]*t8 + c[38]*t6;
-    out[44] = c[40]*cq[2] + t1;
-    out[45] = c[40]*cq[3] + t3;
-    out[46] = c[4] + c[42]*cq[0] + c[43]*cq[1];
-    out[47] = c[42]*cq[1] + c[44]*cq[0] + c[5];
-    out[48] = c[46]*cq[4] + c[47]*cq[5] + t4;
-    out[49] = c[46]*cq[5] + c[48]*cq[4] + t5;
-    out[50] = c[50]*cq[6] + t7;
-    out[51] = c[50]*cq[7] + t9;
+    out[40] = c[35]*t0 + c[36]*t2;
+    out[41] = c[35]*t2 + c[37]*t0;
+    out[42] = c[40]*t6 + c[41]*t8;
+    out[43] = c[40]*t8 + c[42]*t6;
+    out[44] = c[44]*cq[2] + t1;
+    out[45] = c[44]*cq[3] + t3;
+    out[46] = c[4] + c[46]*cq[0] + c[47]*cq[1];
+    out[47] = c[46]*cq[1] + c[48]*cq[0] + c[5];
+    out[48] = c[50]*cq[4] + c[51]*cq[5] + t4;
+    out[49] = c[50]*cq[5] + c[52]*cq[4] + t5;
+    out[50] = c[54]*cq[6] + t7;
+    out[51] = c[54]*cq[7] + t9;
 }
 
 static const unsigned char sg_overlock_feed_coord_is_angle[4] = { 1, 1, 1, 1 };
@@ -613,12 +661,13 @@ static const sg_mechanism sg_overlock_feed_descriptor = {
     .nq = 4,
     .nx = 1,
     .np = 31,
-    .nc = 96,
+    .nc = 104,
     .nobs = 78,
     .nbranch = 2,
     .nf = 18,
     .nfo = 27,
     .nload = 14,
+    .nblock = 2,
     .coord_is_angle = sg_overlock_feed_coord_is_angle,
     .constants = sg_overlock_feed_constants,
     .closed = sg_overlock_feed_closed,
@@ -626,6 +675,8 @@ static const sg_mechanism sg_overlock_feed_descriptor = {
     .motion = sg_overlock_feed_motion,
     .forces = sg_overlock_feed_forces,
     .force_matrix = sg_overlock_feed_force_matrix,
+    .scales = sg_overlock_feed_scales,
+    .blocks = sg_overlock_feed_blocks,
     .anchors = sg_overlock_feed_anchors,
 };
 
@@ -661,189 +712,197 @@ const char *sg_overlock_feed_manifest(void)
         "},{\"body\":\"strap\",\"joint\":null,\"kind\":\"com\",\"name\":\"strap.com\"},{\"body\":\"rock_s"
         "haft\",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_shaft.com\"},{\"body\":\"rack\",\"joint\""
         ":null,\"kind\":\"com\",\"name\":\"rack.com\"},{\"body\":\"lift_link\",\"joint\":null,\"kind\":\""
-        "com\",\"name\":\"lift_link.com\"}],\"arcs\":[],\"bodies\":[{\"doc\":\"feed eccentric AB on the m"
-        "ain shaft\",\"kind\":\"driven\",\"name\":\"feed_eccentric\",\"offset\":24,\"role\":null},{\"doc\""
-        ":\"lift eccentric AK, \\u03b8 ahead of AB\",\"kind\":\"driven\",\"name\":\"lift_eccentric\",\"of"
-        "fset\":33,\"role\":null},{\"doc\":\"feed eccentric strap BC\",\"kind\":\"link\",\"name\":\"strap"
-        "\",\"offset\":42,\"role\":null},{\"doc\":\"feed rock shaft 3 with its arms DC (down) and DE (up)"
-        "\",\"kind\":\"link\",\"name\":\"rock_shaft\",\"offset\":51,\"role\":null},{\"doc\":\"feed rack 4"
-        " (the link EF with its teeth F and G)\",\"kind\":\"link\",\"name\":\"rack\",\"offset\":60,\"role"
-        "\":null},{\"doc\":\"lift link 6 (KF)\",\"kind\":\"link\",\"name\":\"lift_link\",\"offset\":69,\""
-        "role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"co"
-        "m_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":-1,\"joint\":\"C\",\"kind\":\"rrr\",\"m"
-        "eaning\":\"+1: joint C left of the line from B to D\"},{\"default\":-1,\"joint\":\"F\",\"kind\":"
-        "\"rrr\",\"meaning\":\"+1: joint F left of the line from E to K\"}],\"closed_form\":true,\"closur"
-        "e\":[\"C.x\",\"C.y\",\"F.x\",\"F.y\"],\"coords\":[{\"guess\":1.5707963267948966,\"name\":\"rock_"
-        "shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"strap.angle\",\"unit\":\"rad\"},{\"gue"
-        "ss\":3.141592653589793,\"name\":\"rack.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\""
-        "name\":\"lift_link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-"
-        "A class overlock: the material feed \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u"
-        "043f\\u0440\\u043e\\u0434\\u0432\\u0438\\u0436\\u0435\\u043d\\u0438\\u044f \\u043c\\u0430\\u0442"
-        "\\u0435\\u0440\\u0438\\u0430\\u043b\\u0430 (seed 003 fig. 5, eqs. 3\\u201314).\\n\\nTwo eccentri"
-        "cs on the main shaft A, fixed to each other at the constructive angle \\u03b8: the feed eccentri"
-        "c AB\\ndrives the rock shaft 3 through the planar four-bar ABCD (\\u03c6\\u2083 by eq. 1 with \\u"
-        "03b1 = 0), whose arm DE carries the rack's\\nrear pin E; the lift eccentric AK (radius l\\u2085)"
-        " lifts the rack's front through the link KF (l\\u2086). The rack 4 \\u2014 the\\nlink EF (l\\u20"
-        "84) with its teeth at F and G \\u2014 is the two-input group DEFKA's dyad (links 4 and 6 meeting"
-        " at F): the\\nseed solves its velocities by Cramer's rule on the velocity plan (eqs. 8\\u201313;"
-        " eq. 12 needs \\u03c9\\u2083\\u00b7l\\u2083) and G's by the\\nsame plan (eq. 14).\\n\\nFrame: th"
-        "e plane across the main shaft, origin on its axis A, x the feed direction, y up. The rock-shaft "
-        "arm DE is\\nvertical in mid stroke, so E moves about horizontally (the stitch), K about vertical"
-        "ly (the lift).\\n\\nEvery dimension is an estimate (seed 003 prints none): a rack travel of abou"
-        "t 4.3 mm at the largest stitch, a\\nlift of about 2.4 mm, the rack's teeth about 40 mm above the"
-        " shaft. \\u03b8 = 0 puts the teeth at their highest when\\nthey move forward fastest, at \\u03c6"
-        " \\u2248 90\\u00b0, when the needle (overlock_needle) is at its highest: the rack feeds while\\n"
-        "the needle is out of the material. The stitch regulator (the 51-A's adjustment) is not\\nmodelle"
-        "d yet: the stitch is set by the dimensions.\",\"elements\":[],\"force_blocks\":[2,2],\"force_out"
-        "puts\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{"
-        "\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"sha"
-        "king.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potenti"
-        "al_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\""
-        ",\"unit\":\"W\"}],\"force_rows\":[\"feed_eccentric.x\",\"feed_eccentric.y\",\"feed_eccentric.mom"
-        "ent\",\"lift_eccentric.x\",\"lift_eccentric.y\",\"lift_eccentric.moment\",\"strap.x\",\"strap.y\""
-        ",\"strap.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"rack.x\",\"rack.y\","
-        "\"rack.moment\",\"lift_link.x\",\"lift_link.y\",\"lift_link.moment\"],\"inputs\":[{\"default\":0"
-        ".0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaf"
-        "t\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_feed_anchors\":{\"ops\":76},\"sg"
-        "_overlock_feed_closed\":{\"ops\":49},\"sg_overlock_feed_constants\":{\"ops\":68},\"sg_overlock_f"
-        "eed_force_matrix\":{\"ops\":154},\"sg_overlock_feed_forces\":{\"ops\":283},\"sg_overlock_feed_mo"
-        "tion\":{\"ops\":253},\"sg_overlock_feed_residual\":{\"ops\":45}},\"loads\":[{\"body\":\"rock_sha"
-        "ft\",\"component\":\"fx\",\"name\":\"rear_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\""
-        "name\":\"rear_pin\"},{\"body\":\"rack\",\"component\":\"fx\",\"name\":\"tooth_f\"},{\"body\":\"r"
-        "ack\",\"component\":\"fy\",\"name\":\"tooth_f\"},{\"body\":\"rack\",\"component\":\"fx\",\"name\""
-        ":\"tooth_g\"},{\"body\":\"rack\",\"component\":\"fy\",\"name\":\"tooth_g\"},{\"body\":\"lift_ecc"
-        "entric\",\"component\":\"fx\",\"name\":\"lift_pin\"},{\"body\":\"lift_eccentric\",\"component\":"
-        "\"fy\",\"name\":\"lift_pin\"},{\"body\":\"feed_eccentric\",\"component\":\"torque\",\"name\":\"f"
-        "eed_eccentric\"},{\"body\":\"lift_eccentric\",\"component\":\"torque\",\"name\":\"lift_eccentric"
-        "\"},{\"body\":\"strap\",\"component\":\"torque\",\"name\":\"strap\"},{\"body\":\"rock_shaft\",\""
-        "component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"rack\",\"component\":\"torque\",\"na"
-        "me\":\"rack\"},{\"body\":\"lift_link\",\"component\":\"torque\",\"name\":\"lift_link\"}],\"name\""
-        ":\"overlock_feed\",\"observables\":[{\"name\":\"rear_pin.x\",\"unit\":\"m\"},{\"name\":\"rear_pi"
-        "n.y\",\"unit\":\"m\"},{\"name\":\"rear_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rear_pin.y_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"rear_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rear_pin.y_dd\",\"un"
-        "it\":\"m/s^2\"},{\"name\":\"tooth_f.x\",\"unit\":\"m\"},{\"name\":\"tooth_f.y\",\"unit\":\"m\"},"
-        "{\"name\":\"tooth_f.x_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_f.y_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"tooth_f.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_f.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "tooth_g.x\",\"unit\":\"m\"},{\"name\":\"tooth_g.y\",\"unit\":\"m\"},{\"name\":\"tooth_g.x_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"tooth_g.y_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_g.x_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"tooth_g.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_pin.x\",\"unit\":\"m\""
-        "},{\"name\":\"lift_pin.y\",\"unit\":\"m\"},{\"name\":\"lift_pin.x_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"lift_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "lift_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_eccentric.angle\",\"unit\":\"rad\"},{\"name"
-        "\":\"feed_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_eccentric.angle_dd\",\"unit\""
-        ":\"rad/s^2\"},{\"name\":\"feed_eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"feed_eccentric.com."
-        "y\",\"unit\":\"m\"},{\"name\":\"feed_eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_ecce"
-        "ntric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"feed_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.angle\",\"unit\""
-        ":\"rad\"},{\"name\":\"lift_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_eccentric.an"
-        "gle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"li"
-        "ft_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com.x_d\",\"unit\":\"m/s\"},{\"n"
-        "ame\":\"lift_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.x_dd\",\"unit\""
-        ":\"m/s^2\"},{\"name\":\"lift_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"strap.angle\","
-        "\"unit\":\"rad\"},{\"name\":\"strap.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"strap.angle_dd\",\""
-        "unit\":\"rad/s^2\"},{\"name\":\"strap.com.x\",\"unit\":\"m\"},{\"name\":\"strap.com.y\",\"unit\""
-        ":\"m\"},{\"name\":\"strap.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"strap.com.y_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"strap.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"strap.com.y_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\""
-        ":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x"
-        "\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d"
-        "\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.c"
-        "om.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "rack.angle\",\"unit\":\"rad\"},{\"name\":\"rack.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rack.a"
-        "ngle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rack.com.x\",\"unit\":\"m\"},{\"name\":\"rack.com.y\""
-        ",\"unit\":\"m\"},{\"name\":\"rack.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rack.com.y_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"rack.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rack.com.y_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"lift_link.angle\",\"unit\":\"rad\"},{\"name\":\"lift_link.angle_d\",\"unit\""
-        ":\"rad/s\"},{\"name\":\"lift_link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_link.com.x\""
-        ",\"unit\":\"m\"},{\"name\":\"lift_link.com.y\",\"unit\":\"m\"},{\"name\":\"lift_link.com.x_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"lift_link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_link.com.x_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"lift_link.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"defa"
-        "ult\":0.0016,\"display_unit\":\"mm\",\"doc\":\"feed eccentricity AB (estimate)\",\"kind\":\"leng"
-        "th\",\"name\":\"feed_eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
-        "045,\"display_unit\":\"mm\",\"doc\":\"feed eccentric strap BC (estimate)\",\"kind\":\"length\",\""
-        "name\":\"strap\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_un"
-        "it\":\"mm\",\"doc\":\"rock shaft D, x (estimate)\",\"kind\":\"length\",\"name\":\"rock_shaft_x\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"d"
-        "oc\":\"rock shaft D, y (estimate)\",\"kind\":\"length\",\"name\":\"rock_shaft_y\",\"positive\":f"
-        "alse,\"role\":null,\"unit\":\"m\"},{\"default\":0.018000000000000002,\"display_unit\":\"mm\",\"d"
-        "oc\":\"rock-shaft arm DC, below D (estimate)\",\"kind\":\"length\",\"name\":\"rock_arm\",\"posit"
-        "ive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.024,\"display_unit\":\"mm\",\"doc\":\"ro"
-        "ck-shaft arm DE, above D, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"rack_arm\",\"posi"
-        "tive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"r"
-        "ack EF between its rear pin E and front pin F, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\""
-        ":\"rack\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"m"
-        "m\",\"doc\":\"tooth G behind tooth F along the rack (estimate)\",\"kind\":\"length\",\"name\":\""
-        "tooth_spacing\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0012,\"display_un"
-        "it\":\"mm\",\"doc\":\"lift eccentricity AK, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\""
-        "lift_eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit"
-        "\":\"deg\",\"doc\":\"constructive angle \\u03b8 of the lift eccentric ahead of the feed one (est"
-        "imate)\",\"kind\":\"angle\",\"name\":\"lift_angle\",\"positive\":false,\"role\":null,\"unit\":\""
-        "rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"lift link KF, l\\u2086 (estimate)\",\""
-        "kind\":\"length\",\"name\":\"lift_link\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"defa"
-        "ult\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of feed_eccentric relative to the shaft angle"
-        "\",\"kind\":\"angle\",\"name\":\"feed_eccentric.phase\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"rad\"},{\"default\":0.015,\"display_unit\":\"g\",\"doc\":\"mass of feed_eccentric\",\"kind\":"
-        "\"mass\",\"name\":\"feed_eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
-        "efault\":0.0005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_eccentric, local u\",\""
-        "kind\":\"length\",\"name\":\"feed_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_eccentric, local "
-        "v\",\"kind\":\"length\",\"name\":\"feed_eccentric.com_v\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_e"
-        "ccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_eccentric.inertia\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\""
-        "doc\":\"mass of lift_eccentric\",\"kind\":\"mass\",\"name\":\"lift_eccentric.mass\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0004,\"display_unit\":\"mm\",\"doc\":\"cent"
-        "re of mass of lift_eccentric, local u\",\"kind\":\"length\",\"name\":\"lift_eccentric.com_u\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":"
-        "\"centre of mass of lift_eccentric, local v\",\"kind\":\"length\",\"name\":\"lift_eccentric.com_"
-        "v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*"
-        "m**2\",\"doc\":\"moment of inertia of lift_eccentric about its centre of mass\",\"kind\":\"inert"
-        "ia\",\"name\":\"lift_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},"
-        "{\"default\":0.02,\"display_unit\":\"g\",\"doc\":\"mass of strap\",\"kind\":\"mass\",\"name\":\""
-        "strap.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":5e-06,\"display_unit"
-        "\":\"kg*m**2\",\"doc\":\"moment of inertia of strap about its centre of mass\",\"kind\":\"inerti"
-        "a\",\"name\":\"strap.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
-        "\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_"
-        "shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.004,\"display_unit"
-        "\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_"
-        "shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\""
-        ":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_sh"
-        "aft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\""
-        ":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre of mass\",\"kind\":\"ine"
-        "rtia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\""
-        "default\":0.018000000000000002,\"display_unit\":\"g\",\"doc\":\"mass of rack\",\"kind\":\"mass\""
-        ",\"name\":\"rack.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.003,\"d"
-        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of rack, local v\",\"kind\":\"length\",\"name\":\""
-        "rack.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\""
-        ":\"kg*m**2\",\"doc\":\"moment of inertia of rack about its centre of mass\",\"kind\":\"inertia\""
-        ",\"name\":\"rack.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0"
-        ".008,\"display_unit\":\"g\",\"doc\":\"mass of lift_link\",\"kind\":\"mass\",\"name\":\"lift_link"
-        ".mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1.2e-06,\"display_unit\":"
-        "\"kg*m**2\",\"doc\":\"moment of inertia of lift_link about its centre of mass\",\"kind\":\"inert"
-        "ia\",\"name\":\"lift_link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"po"
-        "int_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"do"
-        "c\":\"rack's rear pin E\",\"name\":\"rear_pin\",\"offset\":0,\"role\":null},{\"body\":\"rack\",\""
-        "doc\":\"front tooth F\",\"name\":\"tooth_f\",\"offset\":6,\"role\":\"feed_dog\"},{\"body\":\"rac"
-        "k\",\"doc\":\"tooth G behind F\",\"name\":\"tooth_g\",\"offset\":12,\"role\":null},{\"body\":\"l"
-        "ift_eccentric\",\"doc\":\"lift eccentric's centre K\",\"name\":\"lift_pin\",\"offset\":18,\"role"
-        "\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"feed_eccentric\",\"columns\":[\"fx\",\"fy\"],"
-        "\"grounded\":true,\"kind\":\"revolute\",\"name\":\"feed_eccentric.pivot\",\"offset\":0},{\"a\":\""
-        "ground\",\"b\":\"lift_eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revol"
-        "ute\",\"name\":\"lift_eccentric.pivot\",\"offset\":2},{\"a\":\"feed_eccentric\",\"b\":\"strap\","
-        "\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4"
-        "},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":"
-        "\"revolute\",\"name\":\"D\",\"offset\":6},{\"a\":\"strap\",\"b\":\"rock_shaft\",\"columns\":[\"f"
-        "x\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":8},{\"a\":\"rock_"
-        "shaft\",\"b\":\"rack\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"na"
-        "me\":\"E\",\"offset\":10},{\"a\":\"lift_eccentric\",\"b\":\"lift_link\",\"columns\":[\"fx\",\"fy"
-        "\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"K\",\"offset\":12},{\"a\":\"rack\",\"b\""
-        ":\"lift_link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F"
-        "\",\"offset\":14},{\"a\":\"ground\",\"b\":\"feed_eccentric\",\"columns\":[\"torque\"],\"grounded"
-        "\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"feed_eccentric.drive\",\"offset\":16,\""
-        "sense\":1},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\":[\"torque\"],\"grounded\":true"
-        ",\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"lift_eccentric.drive\",\"offset\":17,\"sense\""
-        ":1}],\"roles\":{\"feed_dog\":{\"kind\":\"point\",\"name\":\"tooth_f\"}},\"sizes\":{\"nanchor_out"
-        "\":52,\"nbranch\":2,\"nc\":96,\"nf\":18,\"nfo\":27,\"nload\":14,\"nobs\":78,\"np\":31,\"nq\":4,\""
-        "nx\":1}}"
+        "com\",\"name\":\"lift_link.com\"}],\"arcs\":[],\"blocks\":[{\"coords\":[1,0],\"joints\":[\"C\"],"
+        "\"rows\":[0,1]},{\"coords\":[3,2],\"joints\":[\"F\"],\"rows\":[2,3]}],\"bodies\":[{\"doc\":\"fee"
+        "d eccentric AB on the main shaft\",\"kind\":\"driven\",\"name\":\"feed_eccentric\",\"offset\":24"
+        ",\"role\":null},{\"doc\":\"lift eccentric AK, \\u03b8 ahead of AB\",\"kind\":\"driven\",\"name\""
+        ":\"lift_eccentric\",\"offset\":33,\"role\":null},{\"doc\":\"feed eccentric strap BC\",\"kind\":\""
+        "link\",\"name\":\"strap\",\"offset\":42,\"role\":null},{\"doc\":\"feed rock shaft 3 with its arm"
+        "s DC (down) and DE (up)\",\"kind\":\"link\",\"name\":\"rock_shaft\",\"offset\":51,\"role\":null}"
+        ",{\"doc\":\"feed rack 4 (the link EF with its teeth F and G)\",\"kind\":\"link\",\"name\":\"rack"
+        "\",\"offset\":60,\"role\":null},{\"doc\":\"lift link 6 (KF)\",\"kind\":\"link\",\"name\":\"lift_"
+        "link\",\"offset\":69,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\""
+        "com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":-1,\"joint\":\"C"
+        "\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C left of the line from B to D\"},{\"default\":-1,\""
+        "joint\":\"F\",\"kind\":\"rrr\",\"meaning\":\"+1: joint F left of the line from E to K\"}],\"clos"
+        "ed_form\":true,\"closure\":[\"C.x\",\"C.y\",\"F.x\",\"F.y\"],\"constants\":[[0],[11],[11],[11],["
+        "2],[3],[1],[4],[1],[4],[5],[8],[9],[9],[9],[6],[10],[6],[10],[2],[3],[10],[8],[4],[1],[5],[6],[0"
+        ",1,2,4],[0,1,3,4],[2,5,6,8,10],[3,5,6,8,10],[0],[6,7],[6,7],[11],[13],[14],[14],[13],[9],[17],[1"
+        "8],[18],[17],[1],[1],[23],[24],[24],[23],[6],[27],[27],[6],[10],[10],[0,1,2,4],[0,1,3,4],[2,5,6,"
+        "8,10],[3,5,6,8,10],[21],[1,20],[1,20],[25],[5,23],[5,23],[22],[26],[28],[6,7],[6,7],[30],[10,29]"
+        ",[10,29],[15],[0,13],[0,13],[12],[19],[8,17],[8,17],[16],[20],[29],[12],[15],[16],[19],[20],[21]"
+        ",[22],[25],[26],[28],[29],[30],[12],[16],[20],[22],[26],[29],[4,23],[4,23]],\"coords\":[{\"guess"
+        "\":1.5707963267948966,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\""
+        "strap.angle\",\"unit\":\"rad\"},{\"guess\":3.141592653589793,\"name\":\"rack.angle\",\"unit\":\""
+        "rad\"},{\"guess\":1.5707963267948966,\"name\":\"lift_link.angle\",\"unit\":\"rad\"}],\"default_s"
+        "peed\":366.51914291880917,\"doc\":\"51-A class overlock: the material feed \\u043c\\u0435\\u0445"
+        "\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0440\\u043e\\u0434\\u0432\\u0438\\u0436\\u0435\\u0"
+        "43d\\u0438\\u044f \\u043c\\u0430\\u0442\\u0435\\u0440\\u0438\\u0430\\u043b\\u0430 (seed 003 fig."
+        " 5, eqs. 3\\u201314).\\n\\nTwo eccentrics on the main shaft A, fixed to each other at the constr"
+        "uctive angle \\u03b8: the feed eccentric AB\\ndrives the rock shaft 3 through the planar four-ba"
+        "r ABCD (\\u03c6\\u2083 by eq. 1 with \\u03b1 = 0), whose arm DE carries the rack's\\nrear pin E;"
+        " the lift eccentric AK (radius l\\u2085) lifts the rack's front through the link KF (l\\u2086). "
+        "The rack 4 \\u2014 the\\nlink EF (l\\u2084) with its teeth at F and G \\u2014 is the two-input g"
+        "roup DEFKA's dyad (links 4 and 6 meeting at F): the\\nseed solves its velocities by Cramer's rul"
+        "e on the velocity plan (eqs. 8\\u201313; eq. 12 needs \\u03c9\\u2083\\u00b7l\\u2083) and G's by "
+        "the\\nsame plan (eq. 14).\\n\\nFrame: the plane across the main shaft, origin on its axis A, x t"
+        "he feed direction, y up. The rock-shaft arm DE is\\nvertical in mid stroke, so E moves about hor"
+        "izontally (the stitch), K about vertically (the lift).\\n\\nEvery dimension is an estimate (seed"
+        " 003 prints none): a rack travel of about 4.3 mm at the largest stitch, a\\nlift of about 2.4 mm"
+        ", the rack's teeth about 40 mm above the shaft. \\u03b8 = 0 puts the teeth at their highest when"
+        "\\nthey move forward fastest, at \\u03c6 \\u2248 90\\u00b0, when the needle (overlock_needle) is"
+        " at its highest: the rack feeds while\\nthe needle is out of the material. The stitch regulator "
+        "(the 51-A's adjustment) is not\\nmodelled yet: the stitch is set by the dimensions.\",\"elements"
+        "\":[],\"force_blocks\":[2,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\""
+        "name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shak"
+        "ing.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_ener"
+        "gy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"u"
+        "nit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"feed_eccentric.x\",\""
+        "feed_eccentric.y\",\"feed_eccentric.moment\",\"lift_eccentric.x\",\"lift_eccentric.y\",\"lift_ec"
+        "centric.moment\",\"strap.x\",\"strap.y\",\"strap.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"ro"
+        "ck_shaft.moment\",\"rack.x\",\"rack.y\",\"rack.moment\",\"lift_link.x\",\"lift_link.y\",\"lift_l"
+        "ink.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle "
+        "phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_o"
+        "verlock_feed_anchors\":{\"ops\":76},\"sg_overlock_feed_blocks\":{\"ops\":46},\"sg_overlock_feed_"
+        "closed\":{\"ops\":49},\"sg_overlock_feed_constants\":{\"ops\":83},\"sg_overlock_feed_force_matri"
+        "x\":{\"ops\":154},\"sg_overlock_feed_forces\":{\"ops\":283},\"sg_overlock_feed_motion\":{\"ops\""
+        ":253},\"sg_overlock_feed_residual\":{\"ops\":45},\"sg_overlock_feed_scales\":{\"ops\":4}},\"load"
+        "s\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rear_pin\"},{\"body\":\"rock_shaft"
+        "\",\"component\":\"fy\",\"name\":\"rear_pin\"},{\"body\":\"rack\",\"component\":\"fx\",\"name\":"
+        "\"tooth_f\"},{\"body\":\"rack\",\"component\":\"fy\",\"name\":\"tooth_f\"},{\"body\":\"rack\",\""
+        "component\":\"fx\",\"name\":\"tooth_g\"},{\"body\":\"rack\",\"component\":\"fy\",\"name\":\"toot"
+        "h_g\"},{\"body\":\"lift_eccentric\",\"component\":\"fx\",\"name\":\"lift_pin\"},{\"body\":\"lift"
+        "_eccentric\",\"component\":\"fy\",\"name\":\"lift_pin\"},{\"body\":\"feed_eccentric\",\"componen"
+        "t\":\"torque\",\"name\":\"feed_eccentric\"},{\"body\":\"lift_eccentric\",\"component\":\"torque\""
+        ",\"name\":\"lift_eccentric\"},{\"body\":\"strap\",\"component\":\"torque\",\"name\":\"strap\"},{"
+        "\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"rack\",\"c"
+        "omponent\":\"torque\",\"name\":\"rack\"},{\"body\":\"lift_link\",\"component\":\"torque\",\"name"
+        "\":\"lift_link\"}],\"name\":\"overlock_feed\",\"observables\":[{\"name\":\"rear_pin.x\",\"unit\""
+        ":\"m\"},{\"name\":\"rear_pin.y\",\"unit\":\"m\"},{\"name\":\"rear_pin.x_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"rear_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rear_pin.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
+        "e\":\"rear_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_f.x\",\"unit\":\"m\"},{\"name\":\"to"
+        "oth_f.y\",\"unit\":\"m\"},{\"name\":\"tooth_f.x_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_f.y_d\","
+        "\"unit\":\"m/s\"},{\"name\":\"tooth_f.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_f.y_dd\",\"un"
+        "it\":\"m/s^2\"},{\"name\":\"tooth_g.x\",\"unit\":\"m\"},{\"name\":\"tooth_g.y\",\"unit\":\"m\"},"
+        "{\"name\":\"tooth_g.x_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_g.y_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"tooth_g.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_g.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "lift_pin.x\",\"unit\":\"m\"},{\"name\":\"lift_pin.y\",\"unit\":\"m\"},{\"name\":\"lift_pin.x_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"lift_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_pin.x_dd\",\"un"
+        "it\":\"m/s^2\"},{\"name\":\"lift_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_eccentric.angle"
+        "\",\"unit\":\"rad\"},{\"name\":\"feed_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_e"
+        "ccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_eccentric.com.x\",\"unit\":\"m\"},{\""
+        "name\":\"feed_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"feed_eccentric.com.x_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"feed_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_eccentric.com.x_d"
+        "d\",\"unit\":\"m/s^2\"},{\"name\":\"feed_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"li"
+        "ft_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"lift_eccentric.angle_d\",\"unit\":\"rad/s\"},"
+        "{\"name\":\"lift_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_eccentric.com.x\",\""
+        "unit\":\"m\"},{\"name\":\"lift_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com."
+        "x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_"
+        "eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.com.y_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"strap.angle\",\"unit\":\"rad\"},{\"name\":\"strap.angle_d\",\"unit\":\"rad/s\"},{\""
+        "name\":\"strap.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"strap.com.x\",\"unit\":\"m\"},{\"nam"
+        "e\":\"strap.com.y\",\"unit\":\"m\"},{\"name\":\"strap.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"st"
+        "rap.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"strap.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"str"
+        "ap.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"r"
+        "ock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},"
+        "{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\""
+        "name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit"
+        "\":\"m/s^2\"},{\"name\":\"rack.angle\",\"unit\":\"rad\"},{\"name\":\"rack.angle_d\",\"unit\":\"r"
+        "ad/s\"},{\"name\":\"rack.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rack.com.x\",\"unit\":\"m\""
+        "},{\"name\":\"rack.com.y\",\"unit\":\"m\"},{\"name\":\"rack.com.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"rack.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rack.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "rack.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_link.angle\",\"unit\":\"rad\"},{\"name\":\""
+        "lift_link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_link.angle_dd\",\"unit\":\"rad/s^2\"},{"
+        "\"name\":\"lift_link.com.x\",\"unit\":\"m\"},{\"name\":\"lift_link.com.y\",\"unit\":\"m\"},{\"na"
+        "me\":\"lift_link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_link.com.y_d\",\"unit\":\"m/s\"},{"
+        "\"name\":\"lift_link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_link.com.y_dd\",\"unit\":\""
+        "m/s^2\"}],\"params\":[{\"default\":0.0016,\"display_unit\":\"mm\",\"doc\":\"feed eccentricity AB"
+        " (estimate)\",\"kind\":\"length\",\"name\":\"feed_eccentric\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"feed eccentric strap BC (esti"
+        "mate)\",\"kind\":\"length\",\"name\":\"strap\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{"
+        "\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"rock shaft D, x (estimate)\",\"kind\":\"leng"
+        "th\",\"name\":\"rock_shaft_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
+        "16,\"display_unit\":\"mm\",\"doc\":\"rock shaft D, y (estimate)\",\"kind\":\"length\",\"name\":\""
+        "rock_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.01800000000000000"
+        "2,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, below D (estimate)\",\"kind\":\"length\","
+        "\"name\":\"rock_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.024,\"displ"
+        "ay_unit\":\"mm\",\"doc\":\"rock-shaft arm DE, above D, l\\u2083 (estimate)\",\"kind\":\"length\""
+        ",\"name\":\"rack_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"disp"
+        "lay_unit\":\"mm\",\"doc\":\"rack EF between its rear pin E and front pin F, l\\u2084 (estimate)\""
+        ",\"kind\":\"length\",\"name\":\"rack\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"defaul"
+        "t\":0.01,\"display_unit\":\"mm\",\"doc\":\"tooth G behind tooth F along the rack (estimate)\",\""
+        "kind\":\"length\",\"name\":\"tooth_spacing\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.0012,\"display_unit\":\"mm\",\"doc\":\"lift eccentricity AK, l\\u2085 (estimate)\",\""
+        "kind\":\"length\",\"name\":\"lift_eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.0,\"display_unit\":\"deg\",\"doc\":\"constructive angle \\u03b8 of the lift eccentri"
+        "c ahead of the feed one (estimate)\",\"kind\":\"angle\",\"name\":\"lift_angle\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"lift link"
+        " KF, l\\u2086 (estimate)\",\"kind\":\"length\",\"name\":\"lift_link\",\"positive\":true,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of feed_eccentri"
+        "c relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_eccentric.phase\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.015,\"display_unit\":\"g\",\"doc\":\"mass "
+        "of feed_eccentric\",\"kind\":\"mass\",\"name\":\"feed_eccentric.mass\",\"positive\":false,\"role"
+        "\":null,\"unit\":\"kg\"},{\"default\":0.0005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
+        " feed_eccentric, local u\",\"kind\":\"length\",\"name\":\"feed_eccentric.com_u\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of m"
+        "ass of feed_eccentric, local v\",\"kind\":\"length\",\"name\":\"feed_eccentric.com_v\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":"
+        "\"moment of inertia of feed_eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\""
+        "feed_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0"
+        "12,\"display_unit\":\"g\",\"doc\":\"mass of lift_eccentric\",\"kind\":\"mass\",\"name\":\"lift_e"
+        "ccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0004,\"display_"
+        "unit\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local u\",\"kind\":\"length\",\"name\""
+        ":\"lift_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"di"
+        "splay_unit\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local v\",\"kind\":\"length\",\""
+        "name\":\"lift_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1."
+        "5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_eccentric about its centr"
+        "e of mass\",\"kind\":\"inertia\",\"name\":\"lift_eccentric.inertia\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.02,\"display_unit\":\"g\",\"doc\":\"mass of strap\",\""
+        "kind\":\"mass\",\"name\":\"strap.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"def"
+        "ault\":5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of strap about its centre "
+        "of mass\",\"kind\":\"inertia\",\"name\":\"strap.inertia\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\""
+        ":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"defa"
+        "ult\":0.004,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\""
+        "length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
+        "lt\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"le"
+        "ngth\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
+        "\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre"
+        " of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"kg*m**2\"},{\"default\":0.018000000000000002,\"display_unit\":\"g\",\"doc\":\"mass o"
+        "f rack\",\"kind\":\"mass\",\"name\":\"rack.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
+        "\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rack, local v\",\"kin"
+        "d\":\"length\",\"name\":\"rack.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
+        "lt\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rack about its centre of "
+        "mass\",\"kind\":\"inertia\",\"name\":\"rack.inertia\",\"positive\":false,\"role\":null,\"unit\":"
+        "\"kg*m**2\"},{\"default\":0.008,\"display_unit\":\"g\",\"doc\":\"mass of lift_link\",\"kind\":\""
+        "mass\",\"name\":\"lift_link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
+        ":1.2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_link about its centre "
+        "of mass\",\"kind\":\"inertia\",\"name\":\"lift_link.inertia\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"b"
+        "ody\":\"rock_shaft\",\"doc\":\"rack's rear pin E\",\"name\":\"rear_pin\",\"offset\":0,\"role\":n"
+        "ull},{\"body\":\"rack\",\"doc\":\"front tooth F\",\"name\":\"tooth_f\",\"offset\":6,\"role\":\"f"
+        "eed_dog\"},{\"body\":\"rack\",\"doc\":\"tooth G behind F\",\"name\":\"tooth_g\",\"offset\":12,\""
+        "role\":null},{\"body\":\"lift_eccentric\",\"doc\":\"lift eccentric's centre K\",\"name\":\"lift_"
+        "pin\",\"offset\":18,\"role\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"feed_eccentric\",\""
+        "columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"feed_eccentric.pivo"
+        "t\",\"offset\":0},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\":[\"fx\",\"fy\"],\"groun"
+        "ded\":true,\"kind\":\"revolute\",\"name\":\"lift_eccentric.pivot\",\"offset\":2},{\"a\":\"feed_e"
+        "ccentric\",\"b\":\"strap\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\","
+        "\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],"
+        "\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":6},{\"a\":\"strap\",\"b\":\"ro"
+        "ck_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\""
+        "offset\":8},{\"a\":\"rock_shaft\",\"b\":\"rack\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,"
+        "\"kind\":\"revolute\",\"name\":\"E\",\"offset\":10},{\"a\":\"lift_eccentric\",\"b\":\"lift_link\""
+        ",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"K\",\"offset\":"
+        "12},{\"a\":\"rack\",\"b\":\"lift_link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":"
+        "\"revolute\",\"name\":\"F\",\"offset\":14},{\"a\":\"ground\",\"b\":\"feed_eccentric\",\"columns\""
+        ":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"feed_eccentric"
+        ".drive\",\"offset\":16,\"sense\":1},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\":[\"to"
+        "rque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"lift_eccentric.drive"
+        "\",\"offset\":17,\"sense\":1}],\"roles\":{\"feed_dog\":{\"kind\":\"point\",\"name\":\"tooth_f\"}"
+        "},\"sizes\":{\"nanchor_out\":52,\"nblock\":2,\"nbranch\":2,\"nc\":104,\"nf\":18,\"nfo\":27,\"nlo"
+        "ad\":14,\"nobs\":78,\"np\":31,\"nq\":4,\"nx\":1}}"
         ;
 }

@@ -6,18 +6,21 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_knife_constants -- Total ops: 34 */
+/* sg_overlock_knife_constants -- Total ops: 42 */
 void sg_overlock_knife_constants(const double *p, double *c)
 {
     const double t0 = sin(p[7]);
     const double t1 = -p[4];
-    const double t2 = -p[5];
-    const double t3 = -p[9];
-    const double t4 = (0.5)*p[1];
-    const double t5 = p[12]*t4;
-    const double t6 = p[15] + t2;
-    const double t7 = p[0] + t3;
-    const double t8 = p[15] + t1;
+    const double t2 = p[0] + p[1] + p[4];
+    const double t3 = t2 + fabs(p[2]);
+    const double t4 = t2 + fabs(p[3]);
+    const double t5 = -p[5];
+    const double t6 = -p[9];
+    const double t7 = (0.5)*p[1];
+    const double t8 = p[12]*t7;
+    const double t9 = p[15] + t5;
+    const double t10 = p[0] + t6;
+    const double t11 = p[15] + t1;
     c[0] = p[0];
     c[1] = cos(p[7]);
     c[2] = -t0;
@@ -32,43 +35,47 @@ void sg_overlock_knife_constants(const double *p, double *c)
     c[11] = t1;
     c[12] = -p[3];
     c[13] = -p[1];
-    c[14] = -p[0];
-    c[15] = p[5];
-    c[16] = t2;
-    c[17] = p[7];
-    c[18] = p[9];
-    c[19] = -p[10];
-    c[20] = p[10];
-    c[21] = t3;
-    c[22] = t4;
-    c[23] = -t4;
-    c[24] = p[15];
-    c[25] = -p[16];
-    c[26] = p[16];
-    c[27] = -p[15];
-    c[28] = p[13];
-    c[29] = t5;
-    c[30] = -t5;
-    c[31] = p[17];
-    c[32] = t6;
-    c[33] = -t6;
-    c[34] = p[14];
-    c[35] = p[11];
-    c[36] = t7;
-    c[37] = -t7;
-    c[38] = p[8];
-    c[39] = p[12];
-    c[40] = (0.5)*p[11];
-    c[41] = (0.5)*p[12];
-    c[42] = (0.5)*p[13];
-    c[43] = (0.5)*p[14];
-    c[44] = (0.5)*p[17];
-    c[45] = (0.5)*p[8];
-    c[46] = -p[12];
-    c[47] = -p[14];
-    c[48] = -p[8];
-    c[49] = t8;
-    c[50] = -t8;
+    c[14] = t3;
+    c[15] = t4;
+    c[16] = -p[0];
+    c[17] = p[5];
+    c[18] = t5;
+    c[19] = p[7];
+    c[20] = p[9];
+    c[21] = -p[10];
+    c[22] = p[10];
+    c[23] = t6;
+    c[24] = t7;
+    c[25] = -t7;
+    c[26] = p[15];
+    c[27] = -p[16];
+    c[28] = p[16];
+    c[29] = -p[15];
+    c[30] = (1.0/(t3));
+    c[31] = (1.0/(t4));
+    c[32] = p[13];
+    c[33] = t8;
+    c[34] = -t8;
+    c[35] = p[17];
+    c[36] = t9;
+    c[37] = -t9;
+    c[38] = p[14];
+    c[39] = p[11];
+    c[40] = t10;
+    c[41] = -t10;
+    c[42] = p[8];
+    c[43] = p[12];
+    c[44] = (0.5)*p[11];
+    c[45] = (0.5)*p[12];
+    c[46] = (0.5)*p[13];
+    c[47] = (0.5)*p[14];
+    c[48] = (0.5)*p[17];
+    c[49] = (0.5)*p[8];
+    c[50] = -p[12];
+    c[51] = -p[14];
+    c[52] = -p[8];
+    c[53] = t11;
+    c[54] = -t11;
 }
 
 /* sg_overlock_knife_closed -- Total ops: 22 */
@@ -109,27 +116,48 @@ void sg_overlock_knife_residual(const double *q, const double *cq, const double 
     jac[3] = t1;
 }
 
+/* sg_overlock_knife_scales -- Total ops: 2 */
+void sg_overlock_knife_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)q;
+    (void)cq;
+    (void)x;
+    (void)cx;
+    out[0] = c[14];
+    out[1] = c[15];
+}
+
+/* sg_overlock_knife_blocks -- Total ops: 15 */
+void sg_overlock_knife_blocks(const double *jac, double *out)
+{
+    /* block 0: joints C */
+    {
+        const double nr = sqrt(sg_row_norm2(2, jac + 0) * sg_row_norm2(2, jac + 2));
+        out[0] = nr > 0.0 ? (jac[1] * jac[2] - jac[0] * jac[3]) / nr : 0.0;
+    }
+}
+
 /* sg_overlock_knife_motion -- Total ops: 118 */
-int sg_overlock_knife_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+int sg_overlock_knife_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[11]*cq[0];
     const double t1 = c[6]*cq[2];
     const double t2 = c[1]*cx[1] + c[3]*cx[0];
     const double t3 = c[0]*t2;
     const double t4 = c[1]*cx[0] + c[2]*cx[1];
-    const double t5 = c[14]*t4;
+    const double t5 = c[16]*t4;
     const double t8 = ((xd[0])*(xd[0]));
     const double t9 = c[0]*t4;
-    const double t12 = c[15]*cq[0];
-    const double t13 = c[16]*cq[1];
-    const double t14 = c[18]*t4 + c[19]*t2;
-    const double t15 = c[19]*t4 + c[21]*t2;
-    const double t16 = c[22]*cq[2];
-    const double t17 = c[23]*cq[3];
-    const double t18 = c[14]*t2;
-    const double t19 = c[24]*cq[0] + c[25]*cq[1];
-    const double t20 = c[25]*cq[0] + c[27]*cq[1];
-    double J[4];
+    const double t12 = c[17]*cq[0];
+    const double t13 = c[18]*cq[1];
+    const double t14 = c[20]*t4 + c[21]*t2;
+    const double t15 = c[21]*t4 + c[23]*t2;
+    const double t16 = c[24]*cq[2];
+    const double t17 = c[25]*cq[3];
+    const double t18 = c[16]*t2;
+    const double t19 = c[26]*cq[0] + c[27]*cq[1];
+    const double t20 = c[27]*cq[0] + c[29]*cq[1];
+    double J[4], rs[2], cs[2];
     int piv[2];
     J[0] = c[7]*cq[1];
     J[1] = c[13]*cq[3];
@@ -137,47 +165,49 @@ int sg_overlock_knife_motion(const double *q, const double *cq, const double *x,
     J[3] = t1;
     qd[0] = t3*xd[0];
     qd[1] = t5*xd[0];
-    if (sg_lu_factor_inl(2, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(2, J, piv, qd);
+    rs[0] = c[30];
+    rs[1] = c[31];
+    if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(2, J, piv, rs, cs, qd);
     const double t6 = ((qd[0])*(qd[0]));
     const double t7 = ((qd[1])*(qd[1]));
     const double t10 = cq[1]*t6;
     const double t11 = cq[3]*t7;
     qdd[0] = t0*t6 + t1*t7 + t3*xdd[0] + t8*t9;
     qdd[1] = c[11]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
-    sg_lu_solve_inl(2, J, piv, qdd);
+    sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
     obs[0] = c[4] + t12;
-    obs[1] = c[15]*cq[1] + c[5];
+    obs[1] = c[17]*cq[1] + c[5];
     obs[2] = qd[0]*t13;
     obs[3] = qd[0]*t12;
-    obs[4] = c[16]*cq[0]*t6 + qdd[0]*t13;
-    obs[5] = c[16]*t10 + qdd[0]*t12;
-    obs[6] = c[17] + x[0];
+    obs[4] = c[18]*cq[0]*t6 + qdd[0]*t13;
+    obs[5] = c[18]*t10 + qdd[0]*t12;
+    obs[6] = c[19] + x[0];
     obs[7] = xd[0];
     obs[8] = xdd[0];
     obs[9] = t14;
-    obs[10] = c[18]*t2 + c[20]*t4;
+    obs[10] = c[20]*t2 + c[22]*t4;
     obs[11] = t15*xd[0];
     obs[12] = t14*xd[0];
-    obs[13] = t15*xdd[0] + t8*(c[20]*t2 + c[21]*t4);
+    obs[13] = t15*xdd[0] + t8*(c[22]*t2 + c[23]*t4);
     obs[14] = t14*xdd[0] + t15*t8;
     obs[15] = q[1];
     obs[16] = qd[1];
     obs[17] = qdd[1];
     obs[18] = t16 + t9;
-    obs[19] = c[22]*cq[3] + t3;
+    obs[19] = c[24]*cq[3] + t3;
     obs[20] = qd[1]*t17 + t18*xd[0];
     obs[21] = qd[1]*t16 + t9*xd[0];
-    obs[22] = c[23]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
-    obs[23] = c[23]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
+    obs[22] = c[25]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
+    obs[23] = c[25]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
     obs[24] = q[0];
     obs[25] = qd[0];
     obs[26] = qdd[0];
     obs[27] = c[4] + t19;
-    obs[28] = c[24]*cq[1] + c[26]*cq[0] + c[5];
+    obs[28] = c[26]*cq[1] + c[28]*cq[0] + c[5];
     obs[29] = qd[0]*t20;
     obs[30] = qd[0]*t19;
-    obs[31] = qdd[0]*t20 + t6*(c[26]*cq[1] + c[27]*cq[0]);
+    obs[31] = qdd[0]*t20 + t6*(c[28]*cq[1] + c[29]*cq[0]);
     obs[32] = qdd[0]*t19 + t20*t6;
     if (!isfinite((((((q[0] + q[1]) + (qd[0] + qd[1])) + ((qdd[0] + qdd[1]) + (obs[0] + (obs[1] + obs[2])))) + (((obs[3] + obs[4]) + (obs[5] + (obs[6] + obs[7]))) + ((obs[8] + obs[9]) + (obs[10] + (obs[11] + obs[12]))))) + ((((obs[13] + obs[14]) + (obs[15] + (obs[16] + obs[17]))) + ((obs[18] + obs[19]) + (obs[20] + (obs[21] + obs[22])))) + (((obs[23] + obs[24]) + (obs[25] + (obs[26] + obs[27]))) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))))))) return SG_NONFINITE;
     return SG_OK;
@@ -190,10 +220,10 @@ int sg_overlock_knife_forces(const double *q, const double *cq, const double *x,
     (void)x;
     const double t0 = -gv[1] + obs[23];
     const double t1 = -gv[0] + obs[22];
-    const double t2 = c[26]*cq[0];
-    const double t3 = c[26]*cq[1];
-    const double t4 = c[34]*(-gv[0] + obs[31]) - ld[0];
-    const double t5 = c[34]*(-gv[1] + obs[32]) - ld[1];
+    const double t2 = c[28]*cq[0];
+    const double t3 = c[28]*cq[1];
+    const double t4 = c[38]*(-gv[0] + obs[31]) - ld[0];
+    const double t5 = c[38]*(-gv[1] + obs[32]) - ld[1];
     const double t6 = c[1]*cx[1] + c[3]*cx[0];
     const double t7 = c[1]*cx[0] + c[2]*cx[1];
     {
@@ -202,10 +232,10 @@ int sg_overlock_knife_forces(const double *q, const double *cq, const double *x,
         int piv[2];
         M[0] = c[11]*cq[1];
         M[1] = c[7]*cq[0];
-        r[0] = c[31]*obs[26] - ld[0]*(c[32]*cq[1] + t2) - ld[1]*(c[33]*cq[0] + t3) - ld[4] - t4*(c[24]*cq[1] + t2) - t5*(c[27]*cq[0] + t3);
+        r[0] = c[35]*obs[26] - ld[0]*(c[36]*cq[1] + t2) - ld[1]*(c[37]*cq[0] + t3) - ld[4] - t4*(c[26]*cq[1] + t2) - t5*(c[29]*cq[0] + t3);
         M[2] = c[6]*cq[3];
         M[3] = c[13]*cq[2];
-        r[1] = c[28]*obs[17] + c[29]*cq[2]*t0 + c[30]*cq[3]*t1 - ld[3];
+        r[1] = c[32]*obs[17] + c[33]*cq[2]*t0 + c[34]*cq[3]*t1 - ld[3];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[6] = r[0];
@@ -213,18 +243,18 @@ int sg_overlock_knife_forces(const double *q, const double *cq, const double *x,
     }
     out[5] = -out[7] + t5;
     out[4] = -out[6] + t4;
-    out[3] = c[39]*t0 + out[7];
-    out[2] = c[39]*t1 + out[6];
-    out[1] = c[38]*(-gv[1] + obs[14]) + out[3];
-    out[0] = c[38]*(-gv[0] + obs[13]) + out[2];
-    out[8] = c[35]*obs[8] - out[0]*(c[18]*t6 + c[20]*t7) - out[1]*(c[20]*t6 + c[21]*t7) - out[2]*(c[19]*t7 + c[36]*t6) - out[3]*(c[19]*t6 + c[37]*t7) - ld[2];
+    out[3] = c[43]*t0 + out[7];
+    out[2] = c[43]*t1 + out[6];
+    out[1] = c[42]*(-gv[1] + obs[14]) + out[3];
+    out[0] = c[42]*(-gv[0] + obs[13]) + out[2];
+    out[8] = c[39]*obs[8] - out[0]*(c[20]*t6 + c[22]*t7) - out[1]*(c[22]*t6 + c[23]*t7) - out[2]*(c[21]*t7 + c[40]*t6) - out[3]*(c[21]*t6 + c[41]*t7) - ld[2];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
     out[11] = out[0] + out[4];
     out[12] = out[1] + out[5];
     out[13] = c[12]*out[4] + c[4]*out[5] + out[8];
-    out[14] = c[40]*((obs[7])*(obs[7])) + c[41]*(((obs[20])*(obs[20])) + ((obs[21])*(obs[21]))) + c[42]*((obs[16])*(obs[16])) + c[43]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[44]*((obs[25])*(obs[25])) + c[45]*(((obs[11])*(obs[11])) + ((obs[12])*(obs[12])));
-    out[15] = c[46]*(gv[0]*obs[18] + gv[1]*obs[19]) + c[47]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[48]*(gv[0]*obs[9] + gv[1]*obs[10]);
+    out[14] = c[44]*((obs[7])*(obs[7])) + c[45]*(((obs[20])*(obs[20])) + ((obs[21])*(obs[21]))) + c[46]*((obs[16])*(obs[16])) + c[47]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[48]*((obs[25])*(obs[25])) + c[49]*(((obs[11])*(obs[11])) + ((obs[12])*(obs[12])));
+    out[15] = c[50]*(gv[0]*obs[18] + gv[1]*obs[19]) + c[51]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[52]*(gv[0]*obs[9] + gv[1]*obs[10]);
     out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[7] + ld[3]*obs[16] + ld[4]*obs[25];
     out[17] = 0.0;
     if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + out[12])) + ((out[13] + out[14]) + (out[15] + (out[16] + out[17]))))))) return SG_NONFINITE;
@@ -238,19 +268,19 @@ void sg_overlock_knife_force_matrix(const double *q, const double *cq, const dou
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[22]*cq[3];
-    const double t3 = c[23]*cq[2];
-    const double t4 = c[26]*cq[0];
-    const double t5 = c[26]*cq[1];
+    const double t2 = c[24]*cq[3];
+    const double t3 = c[25]*cq[2];
+    const double t4 = c[28]*cq[0];
+    const double t5 = c[28]*cq[1];
     for (int k = 0; k < 81; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[2] = -1.0;
     A[10] = 1.0;
     A[12] = -1.0;
-    A[18] = c[18]*t0 + c[20]*t1;
-    A[19] = c[20]*t0 + c[21]*t1;
-    A[20] = c[19]*t1 + c[36]*t0;
-    A[21] = c[19]*t0 + c[37]*t1;
+    A[18] = c[20]*t0 + c[22]*t1;
+    A[19] = c[22]*t0 + c[23]*t1;
+    A[20] = c[21]*t1 + c[40]*t0;
+    A[21] = c[21]*t0 + c[41]*t1;
     A[26] = 1.0;
     A[29] = 1.0;
     A[33] = -1.0;
@@ -264,19 +294,19 @@ void sg_overlock_knife_force_matrix(const double *q, const double *cq, const dou
     A[60] = 1.0;
     A[68] = 1.0;
     A[70] = 1.0;
-    A[76] = c[24]*cq[1] + t4;
-    A[77] = c[27]*cq[0] + t5;
-    A[78] = c[49]*cq[1] + t4;
-    A[79] = c[50]*cq[0] + t5;
-    b[0] = c[38]*(-gv[0] + obs[13]);
-    b[1] = c[38]*(-gv[1] + obs[14]);
-    b[2] = c[35]*obs[8] - ld[2];
-    b[3] = c[39]*(-gv[0] + obs[22]);
-    b[4] = c[39]*(-gv[1] + obs[23]);
-    b[5] = c[28]*obs[17] - ld[3];
-    b[6] = c[34]*(-gv[0] + obs[31]) - ld[0];
-    b[7] = c[34]*(-gv[1] + obs[32]) - ld[1];
-    b[8] = c[31]*obs[26] - ld[0]*(c[32]*cq[1] + t4) - ld[1]*(c[33]*cq[0] + t5) - ld[4];
+    A[76] = c[26]*cq[1] + t4;
+    A[77] = c[29]*cq[0] + t5;
+    A[78] = c[53]*cq[1] + t4;
+    A[79] = c[54]*cq[0] + t5;
+    b[0] = c[42]*(-gv[0] + obs[13]);
+    b[1] = c[42]*(-gv[1] + obs[14]);
+    b[2] = c[39]*obs[8] - ld[2];
+    b[3] = c[43]*(-gv[0] + obs[22]);
+    b[4] = c[43]*(-gv[1] + obs[23]);
+    b[5] = c[32]*obs[17] - ld[3];
+    b[6] = c[38]*(-gv[0] + obs[31]) - ld[0];
+    b[7] = c[38]*(-gv[1] + obs[32]) - ld[1];
+    b[8] = c[35]*obs[26] - ld[0]*(c[36]*cq[1] + t4) - ld[1]*(c[37]*cq[0] + t5) - ld[4];
 }
 
 /* sg_overlock_knife_anchors -- Total ops: 38 */
@@ -304,14 +334,14 @@ void sg_overlock_knife_anchors(const double *q, const double *cq, const double *
     out[13] = c[6]*cq[3] + t3;
     out[14] = c[4] + c[7]*cq[0];
     out[15] = c[5] + c[7]*cq[1];
-    out[16] = c[15]*cq[0] + c[4];
-    out[17] = c[15]*cq[1] + c[5];
-    out[18] = c[18]*t0 + c[19]*t2;
-    out[19] = c[18]*t2 + c[20]*t0;
-    out[20] = c[22]*cq[2] + t1;
-    out[21] = c[22]*cq[3] + t3;
-    out[22] = c[24]*cq[0] + c[25]*cq[1] + c[4];
-    out[23] = c[24]*cq[1] + c[26]*cq[0] + c[5];
+    out[16] = c[17]*cq[0] + c[4];
+    out[17] = c[17]*cq[1] + c[5];
+    out[18] = c[20]*t0 + c[21]*t2;
+    out[19] = c[20]*t2 + c[22]*t0;
+    out[20] = c[24]*cq[2] + t1;
+    out[21] = c[24]*cq[3] + t3;
+    out[22] = c[26]*cq[0] + c[27]*cq[1] + c[4];
+    out[23] = c[26]*cq[1] + c[28]*cq[0] + c[5];
 }
 
 static const unsigned char sg_overlock_knife_coord_is_angle[2] = { 1, 1 };
@@ -321,12 +351,13 @@ static const sg_mechanism sg_overlock_knife_descriptor = {
     .nq = 2,
     .nx = 1,
     .np = 18,
-    .nc = 51,
+    .nc = 55,
     .nobs = 33,
     .nbranch = 1,
     .nf = 9,
     .nfo = 18,
     .nload = 5,
+    .nblock = 1,
     .coord_is_angle = sg_overlock_knife_coord_is_angle,
     .constants = sg_overlock_knife_constants,
     .closed = sg_overlock_knife_closed,
@@ -334,6 +365,8 @@ static const sg_mechanism sg_overlock_knife_descriptor = {
     .motion = sg_overlock_knife_motion,
     .forces = sg_overlock_knife_forces,
     .force_matrix = sg_overlock_knife_force_matrix,
+    .scales = sg_overlock_knife_scales,
+    .blocks = sg_overlock_knife_blocks,
     .anchors = sg_overlock_knife_anchors,
 };
 
@@ -356,103 +389,108 @@ const char *sg_overlock_knife_manifest(void)
         ":\"point\",\"name\":\"knife_edge\"},{\"body\":\"eccentric\",\"joint\":null,\"kind\":\"com\",\"na"
         "me\":\"eccentric.com\"},{\"body\":\"rod\",\"joint\":null,\"kind\":\"com\",\"name\":\"rod.com\"},"
         "{\"body\":\"knife_lever\",\"joint\":null,\"kind\":\"com\",\"name\":\"knife_lever.com\"}],\"arcs\""
-        ":[],\"bodies\":[{\"doc\":\"knife eccentric on the main shaft\",\"kind\":\"driven\",\"name\":\"ec"
-        "centric\",\"offset\":6,\"role\":null},{\"doc\":\"knife rod\",\"kind\":\"link\",\"name\":\"rod\","
-        "\"offset\":15,\"role\":null},{\"doc\":\"upper knife lever with the upper knife\",\"kind\":\"link"
-        "\",\"name\":\"knife_lever\",\"offset\":24,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\""
-        "alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"defaul"
-        "t\":-1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C left of the line from B to P\""
-        "}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\"],\"coords\":[{\"guess\":0.0,\"name\":\"knif"
-        "e_lever.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"rod.angle\",\"unit\":"
-        "\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the knife \\u043c\\u"
-        "0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043d\\u043e\\u0436\\u0430 (seed 003 names it; "
-        "its drive is as on 51-A class machines).\\n\\nThe upper knife is clamped in a knife lever that a"
-        "n eccentric on the main shaft rocks through a rod (a\\ncrank-rocker); it cuts against the fixed "
-        "lower knife, whose edge is the parameter ``lower_edge``. The knife edge\\npoint is the upper kni"
-        "fe's cutting corner; the cutting overlap is how far it passes below the lower knife's edge\\nat "
-        "the bottom of its stroke (about 0.5\\u20131 mm on overlock machines; the analysis reports it).\\n"
-        "\\nFrame: the plane across the main shaft, origin on its axis, x the feed direction, y up. Every"
-        " dimension is an\\nestimate: an edge stroke of about 8.1 mm, an overlap of about 0.56 mm.\",\"el"
-        "ements\":[],\"force_blocks\":[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"}"
-        ",{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\""
-        "shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_"
-        "energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\""
-        ",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\""
-        "eccentric.y\",\"eccentric.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\"knife_lever.x\",\"knife_"
-        "lever.y\",\"knife_lever.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":"
-        "\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}]"
-        ",\"kernels\":{\"sg_overlock_knife_anchors\":{\"ops\":38},\"sg_overlock_knife_closed\":{\"ops\":2"
-        "2},\"sg_overlock_knife_constants\":{\"ops\":34},\"sg_overlock_knife_force_matrix\":{\"ops\":62},"
-        "\"sg_overlock_knife_forces\":{\"ops\":123},\"sg_overlock_knife_motion\":{\"ops\":118},\"sg_overl"
-        "ock_knife_residual\":{\"ops\":20}},\"loads\":[{\"body\":\"knife_lever\",\"component\":\"fx\",\"n"
-        "ame\":\"knife_edge\"},{\"body\":\"knife_lever\",\"component\":\"fy\",\"name\":\"knife_edge\"},{\""
-        "body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"rod\",\"compon"
-        "ent\":\"torque\",\"name\":\"rod\"},{\"body\":\"knife_lever\",\"component\":\"torque\",\"name\":\""
-        "knife_lever\"}],\"name\":\"overlock_knife\",\"observables\":[{\"name\":\"knife_edge.x\",\"unit\""
-        ":\"m\"},{\"name\":\"knife_edge.y\",\"unit\":\"m\"},{\"name\":\"knife_edge.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"knife_edge.y_d\",\"unit\":\"m/s\"},{\"name\":\"knife_edge.x_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"knife_edge.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad"
-        "\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\""
-        ":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit"
-        "\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"un"
-        "it\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_d"
-        "d\",\"unit\":\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"un"
-        "it\":\"rad/s\"},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\""
-        ":\"m\"},{\"name\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"n"
-        "ame\":\"rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_lever.angle\",\"unit\":\"rad\"},{\"name\""
-        ":\"knife_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"knife_lever.angle_dd\",\"unit\":\"rad/s"
-        "^2\"},{\"name\":\"knife_lever.com.x\",\"unit\":\"m\"},{\"name\":\"knife_lever.com.y\",\"unit\":\""
-        "m\"},{\"name\":\"knife_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"knife_lever.com.y_d\",\"uni"
-        "t\":\"m/s\"},{\"name\":\"knife_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_lever.com."
-        "y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.00125,\"display_unit\":\"mm\",\"doc\":\"k"
-        "nife eccentricity (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"ro"
-        "le\":null,\"unit\":\"m\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"knife rod (estimat"
-        "e)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"def"
-        "ault\":-0.02,\"display_unit\":\"mm\",\"doc\":\"knife lever pivot, x (estimate)\",\"kind\":\"leng"
-        "th\",\"name\":\"lever_pivot_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0."
-        "04,\"display_unit\":\"mm\",\"doc\":\"knife lever pivot, y (estimate)\",\"kind\":\"length\",\"nam"
-        "e\":\"lever_pivot_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"displ"
-        "ay_unit\":\"mm\",\"doc\":\"knife lever's arm to the rod (estimate)\",\"kind\":\"length\",\"name\""
-        ":\"lever_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.065,\"display_unit"
-        "\":\"mm\",\"doc\":\"knife lever's arm to the knife edge (estimate)\",\"kind\":\"length\",\"name\""
-        ":\"knife_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0365,\"display_uni"
-        "t\":\"mm\",\"doc\":\"height of the fixed lower knife's edge (estimate)\",\"kind\":\"length\",\"n"
-        "ame\":\"lower_edge\",\"positive\":false,\"role\":\"lower_knife_edge\",\"unit\":\"m\"},{\"default"
-        "\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kin"
-        "d\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\""
-        "default\":0.01,\"display_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\""
-        "eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0005,\"display"
-        "_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"e"
-        "ccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_uni"
-        "t\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccen"
-        "tric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-07,\"display_unit\""
-        ":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about its centre of mass\",\"kind\":\"iner"
-        "tia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"d"
-        "efault\":0.008,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.m"
-        "ass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1.5e-06,\"display_unit\":\""
-        "kg*m**2\",\"doc\":\"moment of inertia of rod about its centre of mass\",\"kind\":\"inertia\",\"n"
-        "ame\":\"rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,"
-        "\"display_unit\":\"g\",\"doc\":\"mass of knife_lever\",\"kind\":\"mass\",\"name\":\"knife_lever."
-        "mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.03,\"display_unit\":\"mm"
-        "\",\"doc\":\"centre of mass of knife_lever, local u\",\"kind\":\"length\",\"name\":\"knife_lever"
-        ".com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm"
-        "\",\"doc\":\"centre of mass of knife_lever, local v\",\"kind\":\"length\",\"name\":\"knife_lever"
-        ".com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-05,\"display_unit\":\""
-        "kg*m**2\",\"doc\":\"moment of inertia of knife_lever about its centre of mass\",\"kind\":\"inert"
-        "ia\",\"name\":\"knife_lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\""
-        "point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"knife_lever\",\""
-        "doc\":\"upper knife's cutting corner\",\"name\":\"knife_edge\",\"offset\":0,\"role\":\"knife_edg"
-        "e\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounde"
-        "d\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"eccentric\",\""
-        "b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\","
-        "\"offset\":2},{\"a\":\"ground\",\"b\":\"knife_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":t"
-        "rue,\"kind\":\"revolute\",\"name\":\"P\",\"offset\":4},{\"a\":\"rod\",\"b\":\"knife_lever\",\"co"
-        "lumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\""
-        "a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\""
-        ",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"knife_e"
-        "dge\":{\"kind\":\"point\",\"name\":\"knife_edge\"},\"lower_knife_edge\":{\"kind\":\"param\",\"na"
-        "me\":\"lower_edge\"}},\"sizes\":{\"nanchor_out\":24,\"nbranch\":1,\"nc\":51,\"nf\":9,\"nfo\":18,"
-        "\"nload\":5,\"nobs\":33,\"np\":18,\"nq\":2,\"nx\":1}}"
+        ":[],\"blocks\":[{\"coords\":[1,0],\"joints\":[\"C\"],\"rows\":[0,1]}],\"bodies\":[{\"doc\":\"kni"
+        "fe eccentric on the main shaft\",\"kind\":\"driven\",\"name\":\"eccentric\",\"offset\":6,\"role\""
+        ":null},{\"doc\":\"knife rod\",\"kind\":\"link\",\"name\":\"rod\",\"offset\":15,\"role\":null},{\""
+        "doc\":\"upper knife lever with the upper knife\",\"kind\":\"link\",\"name\":\"knife_lever\",\"of"
+        "fset\":24,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"c"
+        "om_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":-1,\"joint\":\"C\",\"kind\""
+        ":\"rrr\",\"meaning\":\"+1: joint C left of the line from B to P\"}],\"closed_form\":true,\"closu"
+        "re\":[\"C.x\",\"C.y\"],\"constants\":[[0],[7],[7],[7],[2],[3],[1],[4],[1],[4],[2],[4],[3],[1],[0"
+        ",1,2,4],[0,1,3,4],[0],[5],[5],[7],[9],[10],[10],[9],[1],[1],[15],[16],[16],[15],[0,1,2,4],[0,1,3"
+        ",4],[13],[1,12],[1,12],[17],[5,15],[5,15],[14],[11],[0,9],[0,9],[8],[12],[11],[12],[13],[14],[17"
+        "],[8],[12],[14],[8],[4,15],[4,15]],\"coords\":[{\"guess\":0.0,\"name\":\"knife_lever.angle\",\"u"
+        "nit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"rod.angle\",\"unit\":\"rad\"}],\"default"
+        "_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the knife \\u043c\\u0435\\u0445\\u043"
+        "0\\u043d\\u0438\\u0437\\u043c \\u043d\\u043e\\u0436\\u0430 (seed 003 names it; its drive is as o"
+        "n 51-A class machines).\\n\\nThe upper knife is clamped in a knife lever that an eccentric on th"
+        "e main shaft rocks through a rod (a\\ncrank-rocker); it cuts against the fixed lower knife, whos"
+        "e edge is the parameter ``lower_edge``. The knife edge\\npoint is the upper knife's cutting corn"
+        "er; the cutting overlap is how far it passes below the lower knife's edge\\nat the bottom of its"
+        " stroke (about 0.5\\u20131 mm on overlock machines; the analysis reports it).\\n\\nFrame: the pl"
+        "ane across the main shaft, origin on its axis, x the feed direction, y up. Every dimension is an"
+        "\\nestimate: an edge stroke of about 8.1 mm, an overlap of about 0.56 mm.\",\"elements\":[],\"fo"
+        "rce_blocks\":[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"sha"
+        "ft.power\",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"u"
+        "nit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\""
+        ":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},"
+        "{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"eccentric.y\",\"e"
+        "ccentric.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\"knife_lever.x\",\"knife_lever.y\",\"knife"
+        "_lever.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft ang"
+        "le phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"s"
+        "g_overlock_knife_anchors\":{\"ops\":38},\"sg_overlock_knife_blocks\":{\"ops\":15},\"sg_overlock_"
+        "knife_closed\":{\"ops\":22},\"sg_overlock_knife_constants\":{\"ops\":42},\"sg_overlock_knife_for"
+        "ce_matrix\":{\"ops\":62},\"sg_overlock_knife_forces\":{\"ops\":123},\"sg_overlock_knife_motion\""
+        ":{\"ops\":118},\"sg_overlock_knife_residual\":{\"ops\":20},\"sg_overlock_knife_scales\":{\"ops\""
+        ":2}},\"loads\":[{\"body\":\"knife_lever\",\"component\":\"fx\",\"name\":\"knife_edge\"},{\"body\""
+        ":\"knife_lever\",\"component\":\"fy\",\"name\":\"knife_edge\"},{\"body\":\"eccentric\",\"compone"
+        "nt\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"ro"
+        "d\"},{\"body\":\"knife_lever\",\"component\":\"torque\",\"name\":\"knife_lever\"}],\"name\":\"ov"
+        "erlock_knife\",\"observables\":[{\"name\":\"knife_edge.x\",\"unit\":\"m\"},{\"name\":\"knife_edg"
+        "e.y\",\"unit\":\"m\"},{\"name\":\"knife_edge.x_d\",\"unit\":\"m/s\"},{\"name\":\"knife_edge.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"knife_edge.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_edge.y_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.ang"
+        "le_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"ec"
+        "centric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccent"
+        "ric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"ec"
+        "centric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\""
+        "rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com"
+        ".y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"uni"
+        "t\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":"
+        "\"m/s^2\"},{\"name\":\"knife_lever.angle\",\"unit\":\"rad\"},{\"name\":\"knife_lever.angle_d\",\""
+        "unit\":\"rad/s\"},{\"name\":\"knife_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"knife_lev"
+        "er.com.x\",\"unit\":\"m\"},{\"name\":\"knife_lever.com.y\",\"unit\":\"m\"},{\"name\":\"knife_lev"
+        "er.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"knife_lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"k"
+        "nife_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_lever.com.y_dd\",\"unit\":\"m/s^2\"}"
+        "],\"params\":[{\"default\":0.00125,\"display_unit\":\"mm\",\"doc\":\"knife eccentricity (estimat"
+        "e)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},"
+        "{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"knife rod (estimate)\",\"kind\":\"length\",\""
+        "name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit"
+        "\":\"mm\",\"doc\":\"knife lever pivot, x (estimate)\",\"kind\":\"length\",\"name\":\"lever_pivot"
+        "_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.04,\"display_unit\":\"mm\","
+        "\"doc\":\"knife lever pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"lever_pivot_y\",\"pos"
+        "itive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\""
+        "knife lever's arm to the rod (estimate)\",\"kind\":\"length\",\"name\":\"lever_arm\",\"positive\""
+        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.065,\"display_unit\":\"mm\",\"doc\":\"knife l"
+        "ever's arm to the knife edge (estimate)\",\"kind\":\"length\",\"name\":\"knife_arm\",\"positive\""
+        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0365,\"display_unit\":\"mm\",\"doc\":\"height"
+        " of the fixed lower knife's edge (estimate)\",\"kind\":\"length\",\"name\":\"lower_edge\",\"posi"
+        "tive\":false,\"role\":\"lower_knife_edge\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"d"
+        "eg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"ec"
+        "centric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.01,\"display_u"
+        "nit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positi"
+        "ve\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0005,\"display_unit\":\"mm\",\"doc\":\""
+        "centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positi"
+        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cent"
+        "re of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"m"
+        "oment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentr"
+        "ic.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.008,\"display"
+        "_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"kg\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"mome"
+        "nt of inertia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rod.inertia\",\""
+        "positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\""
+        "doc\":\"mass of knife_lever\",\"kind\":\"mass\",\"name\":\"knife_lever.mass\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"kg\"},{\"default\":0.03,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
+        "ss of knife_lever, local u\",\"kind\":\"length\",\"name\":\"knife_lever.com_u\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
+        "ss of knife_lever, local v\",\"kind\":\"length\",\"name\":\"knife_lever.com_v\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"m\"},{\"default\":2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"momen"
+        "t of inertia of knife_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"knife_lev"
+        "er.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y"
+        "\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"knife_lever\",\"doc\":\"upper knife's cu"
+        "tting corner\",\"name\":\"knife_edge\",\"offset\":0,\"role\":\"knife_edge\"}],\"reactions\":[{\""
+        "a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revo"
+        "lute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"eccentric\",\"b\":\"rod\",\"columns\""
+        ":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":2},{\"a\":\""
+        "ground\",\"b\":\"knife_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute"
+        "\",\"name\":\"P\",\"offset\":4},{\"a\":\"rod\",\"b\":\"knife_lever\",\"columns\":[\"fx\",\"fy\"]"
+        ",\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\""
+        "eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\""
+        "name\":\"eccentric.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"knife_edge\":{\"kind\":\"poin"
+        "t\",\"name\":\"knife_edge\"},\"lower_knife_edge\":{\"kind\":\"param\",\"name\":\"lower_edge\"}},"
+        "\"sizes\":{\"nanchor_out\":24,\"nblock\":1,\"nbranch\":1,\"nc\":55,\"nf\":9,\"nfo\":18,\"nload\""
+        ":5,\"nobs\":33,\"np\":18,\"nq\":2,\"nx\":1}}"
         ;
 }

@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_loopers_constants -- Total ops: 97 */
+/* sg_overlock_loopers_constants -- Total ops: 113 */
 void sg_overlock_loopers_constants(const double *p, double *c)
 {
     const double t0 = sin(p[14]);
@@ -21,25 +21,28 @@ void sg_overlock_loopers_constants(const double *p, double *c)
     const double t9 = -p[9];
     const double t10 = 2.0*p[3];
     const double t11 = -t3;
-    const double t12 = 2.0*t2;
-    const double t13 = 2.0*p[0];
-    const double t14 = ((p[3])*(p[3]));
-    const double t15 = p[4]*cos(p[5]);
-    const double t16 = p[4]*sin(p[5]);
-    const double t17 = -t16;
-    const double t18 = -t15;
-    const double t19 = p[12]*cos(p[13]);
-    const double t20 = p[12]*sin(p[13]);
-    const double t21 = (0.5)*p[8];
-    const double t22 = -p[27];
-    const double t23 = -p[26];
-    const double t24 = (1.0/(p[2]));
-    const double t25 = p[0]*t24;
-    const double t26 = p[20] + t18;
-    const double t27 = p[23]*t21;
-    const double t28 = t19 + t23;
-    const double t29 = p[20] + t11;
-    const double t30 = p[26] + t9;
+    const double t12 = 2.0*p[0];
+    const double t13 = p[0]*t10;
+    const double t14 = 2.0*t2;
+    const double t15 = ((p[3])*(p[3]));
+    const double t16 = ((p[1])*(p[1])) + p[1]*t10 + p[1]*t12 + t1 + t13 + t14 + 5.0*t15;
+    const double t17 = p[10] + 2.0*p[6] + p[8] + p[9];
+    const double t18 = p[4]*cos(p[5]);
+    const double t19 = p[4]*sin(p[5]);
+    const double t20 = -t19;
+    const double t21 = -t18;
+    const double t22 = p[12]*cos(p[13]);
+    const double t23 = p[12]*sin(p[13]);
+    const double t24 = (0.5)*p[8];
+    const double t25 = -p[27];
+    const double t26 = -p[26];
+    const double t27 = (1.0/(p[2]));
+    const double t28 = p[0]*t27;
+    const double t29 = p[20] + t21;
+    const double t30 = p[23]*t24;
+    const double t31 = t22 + t26;
+    const double t32 = p[20] + t11;
+    const double t33 = p[26] + t9;
     c[0] = p[3];
     c[1] = -p[1];
     c[2] = t0;
@@ -70,77 +73,81 @@ void sg_overlock_loopers_constants(const double *p, double *c)
     c[27] = t10;
     c[28] = t11;
     c[29] = -p[8];
-    c[30] = -t12;
-    c[31] = t13;
-    c[32] = 2.0*t14;
-    c[33] = p[0]*t10;
-    c[34] = t12;
-    c[35] = -t13;
-    c[36] = t15;
-    c[37] = t17;
-    c[38] = t16;
-    c[39] = t18;
+    c[30] = t16;
+    c[31] = t17;
+    c[32] = -t14;
+    c[33] = t12;
+    c[34] = 2.0*t15;
+    c[35] = t13;
+    c[36] = t14;
+    c[37] = -t12;
+    c[38] = t18;
+    c[39] = t20;
     c[40] = t19;
-    c[41] = -t20;
-    c[42] = t20;
-    c[43] = -t19;
-    c[44] = p[14];
-    c[45] = p[16];
-    c[46] = -p[17];
-    c[47] = p[17];
-    c[48] = -p[16];
-    c[49] = p[20];
-    c[50] = -p[21];
-    c[51] = p[21];
-    c[52] = -p[20];
-    c[53] = t21;
-    c[54] = -t21;
-    c[55] = p[26];
-    c[56] = t22;
-    c[57] = p[27];
-    c[58] = t23;
-    c[59] = -t14*t24;
-    c[60] = -p[1]*p[3]*t24;
-    c[61] = -p[3]*t25;
-    c[62] = p[22];
-    c[63] = p[21] + t17;
-    c[64] = t26;
-    c[65] = -t26;
-    c[66] = p[19];
-    c[67] = -p[23];
-    c[68] = p[24];
-    c[69] = t27;
-    c[70] = -t27;
-    c[71] = p[28];
-    c[72] = -t20 - t22;
-    c[73] = -t28;
-    c[74] = t28;
-    c[75] = p[25];
-    c[76] = p[18];
-    c[77] = t2*t24;
-    c[78] = -t25;
-    c[79] = p[15];
-    c[80] = t24;
-    c[81] = -t24;
-    c[82] = p[23];
-    c[83] = t25;
-    c[84] = (0.5)*p[15];
-    c[85] = (0.5)*p[18];
-    c[86] = (0.5)*p[19];
-    c[87] = (0.5)*p[22];
-    c[88] = (0.5)*p[23];
-    c[89] = (0.5)*p[24];
-    c[90] = (0.5)*p[25];
-    c[91] = (0.5)*p[28];
-    c[92] = -p[15];
-    c[93] = -p[19];
-    c[94] = -p[25];
-    c[95] = -p[20] - t8;
-    c[96] = -p[21] - t5;
-    c[97] = -t29;
-    c[98] = t29;
-    c[99] = t30;
-    c[100] = -t30;
+    c[41] = t21;
+    c[42] = t22;
+    c[43] = -t23;
+    c[44] = t23;
+    c[45] = -t22;
+    c[46] = p[14];
+    c[47] = p[16];
+    c[48] = -p[17];
+    c[49] = p[17];
+    c[50] = -p[16];
+    c[51] = p[20];
+    c[52] = -p[21];
+    c[53] = p[21];
+    c[54] = -p[20];
+    c[55] = t24;
+    c[56] = -t24;
+    c[57] = p[26];
+    c[58] = t25;
+    c[59] = p[27];
+    c[60] = t26;
+    c[61] = (1.0/(t16));
+    c[62] = (1.0/(t17));
+    c[63] = -t15*t27;
+    c[64] = -p[1]*p[3]*t27;
+    c[65] = -p[3]*t28;
+    c[66] = p[22];
+    c[67] = p[21] + t20;
+    c[68] = t29;
+    c[69] = -t29;
+    c[70] = p[19];
+    c[71] = -p[23];
+    c[72] = p[24];
+    c[73] = t30;
+    c[74] = -t30;
+    c[75] = p[28];
+    c[76] = -t23 - t25;
+    c[77] = -t31;
+    c[78] = t31;
+    c[79] = p[25];
+    c[80] = p[18];
+    c[81] = t2*t27;
+    c[82] = -t28;
+    c[83] = p[15];
+    c[84] = t27;
+    c[85] = -t27;
+    c[86] = p[23];
+    c[87] = t28;
+    c[88] = (0.5)*p[15];
+    c[89] = (0.5)*p[18];
+    c[90] = (0.5)*p[19];
+    c[91] = (0.5)*p[22];
+    c[92] = (0.5)*p[23];
+    c[93] = (0.5)*p[24];
+    c[94] = (0.5)*p[25];
+    c[95] = (0.5)*p[28];
+    c[96] = -p[15];
+    c[97] = -p[19];
+    c[98] = -p[25];
+    c[99] = -p[20] - t8;
+    c[100] = -p[21] - t5;
+    c[101] = -t32;
+    c[102] = t32;
+    c[103] = t33;
+    c[104] = -t33;
 }
 
 /* sg_overlock_loopers_closed -- Total ops: 40 */
@@ -202,8 +209,35 @@ void sg_overlock_loopers_residual(const double *q, const double *cq, const doubl
     jac[8] = t2;
 }
 
+/* sg_overlock_loopers_scales -- Total ops: 3 */
+void sg_overlock_loopers_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)q;
+    (void)cq;
+    (void)x;
+    (void)cx;
+    out[0] = c[30];
+    out[1] = c[31];
+    out[2] = c[31];
+}
+
+/* sg_overlock_loopers_blocks -- Total ops: 28 */
+void sg_overlock_loopers_blocks(const double *jac, double *out)
+{
+    /* block 0: joints rod */
+    {
+        const double nr = sqrt(sg_row_norm2(3, jac + 0));
+        out[0] = nr > 0.0 ? (jac[0]) / nr : 0.0;
+    }
+    /* block 1: joints F */
+    {
+        const double nr = sqrt(sg_row_norm2(3, jac + 3) * sg_row_norm2(3, jac + 6));
+        out[1] = nr > 0.0 ? (jac[5] * jac[7] - jac[4] * jac[8]) / nr : 0.0;
+    }
+}
+
 /* sg_overlock_loopers_motion -- Total ops: 216 */
-int sg_overlock_loopers_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+int sg_overlock_loopers_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[26]*(c[0]*cq[0] + c[18]);
     const double t1 = c[2]*cx[0] + c[3]*cx[1];
@@ -213,22 +247,22 @@ int sg_overlock_loopers_motion(const double *q, const double *cq, const double *
     const double t5 = c[23]*cq[2];
     const double t6 = c[14]*cq[4];
     const double t7 = c[3]*cx[0] + c[6]*cx[1];
-    const double t8 = c[30]*t1*t7 + c[31]*t2*t7;
-    const double t9 = c[33]*cq[0]*t7;
-    const double t16 = c[36]*cq[0] + c[37]*cq[1];
-    const double t17 = c[37]*cq[0] + c[39]*cq[1];
-    const double t18 = c[40]*cq[2] + c[41]*cq[3];
-    const double t19 = c[41]*cq[2] + c[43]*cq[3];
-    const double t20 = c[45]*t7 + c[46]*t1;
-    const double t21 = c[46]*t7 + c[48]*t1;
+    const double t8 = c[32]*t1*t7 + c[33]*t2*t7;
+    const double t9 = c[35]*cq[0]*t7;
+    const double t16 = c[38]*cq[0] + c[39]*cq[1];
+    const double t17 = c[39]*cq[0] + c[41]*cq[1];
+    const double t18 = c[42]*cq[2] + c[43]*cq[3];
+    const double t19 = c[43]*cq[2] + c[45]*cq[3];
+    const double t20 = c[47]*t7 + c[48]*t1;
+    const double t21 = c[48]*t7 + c[50]*t1;
     const double t22 = ((xd[0])*(xd[0]));
-    const double t23 = c[49]*cq[0] + c[50]*cq[1];
-    const double t24 = c[50]*cq[0] + c[52]*cq[1];
-    const double t25 = c[53]*cq[4];
-    const double t26 = c[54]*cq[5];
-    const double t27 = c[55]*cq[2] + c[56]*cq[3];
-    const double t28 = c[56]*cq[2] + c[58]*cq[3];
-    double J[9];
+    const double t23 = c[51]*cq[0] + c[52]*cq[1];
+    const double t24 = c[52]*cq[0] + c[54]*cq[1];
+    const double t25 = c[55]*cq[4];
+    const double t26 = c[56]*cq[5];
+    const double t27 = c[57]*cq[2] + c[58]*cq[3];
+    const double t28 = c[58]*cq[2] + c[60]*cq[3];
+    double J[9], rs[3], cs[3];
     int piv[3];
     J[0] = c[27]*cq[0]*t2 + cq[1]*t0;
     J[1] = 0.0;
@@ -242,65 +276,68 @@ int sg_overlock_loopers_motion(const double *q, const double *cq, const double *
     qd[0] = -t8*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    if (sg_lu_factor_inl(3, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(3, J, piv, qd);
+    rs[0] = c[61];
+    rs[1] = c[62];
+    rs[2] = c[62];
+    if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t10 = ((qd[2])*(qd[2]));
     const double t11 = ((qd[1])*(qd[1]));
     const double t12 = ((qd[0])*(qd[0]));
     const double t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
     const double t14 = cq[5]*t10;
     const double t15 = t12*t3;
-    qdd[0] = -qd[0]*(qd[0]*(c[26]*cq[1]*t2 + c[32]*((cq[0])*(cq[0])) + c[32]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[34]*((t1)*(t1)) + c[35]*t1*t2));
+    qdd[0] = -qd[0]*(qd[0]*(c[26]*cq[1]*t2 + c[34]*((cq[0])*(cq[0])) + c[34]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[36]*((t1)*(t1)) + c[37]*t1*t2));
     qdd[1] = t10*t6 + t11*t5 - t13;
     qdd[2] = c[14]*t14 + c[23]*cq[3]*t11 - t15;
-    sg_lu_solve_inl(3, J, piv, qdd);
+    sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
     obs[0] = t16;
-    obs[1] = c[36]*cq[1] + c[38]*cq[0];
+    obs[1] = c[38]*cq[1] + c[40]*cq[0];
     obs[2] = qd[0]*t17;
     obs[3] = qd[0]*t16;
-    obs[4] = qdd[0]*t17 + t12*(c[38]*cq[1] + c[39]*cq[0]);
+    obs[4] = qdd[0]*t17 + t12*(c[40]*cq[1] + c[41]*cq[0]);
     obs[5] = qdd[0]*t16 + t12*t17;
     obs[6] = c[12] + t18;
-    obs[7] = c[13] + c[40]*cq[3] + c[42]*cq[2];
+    obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
     obs[8] = qd[1]*t19;
     obs[9] = qd[1]*t18;
-    obs[10] = qdd[1]*t19 + t11*(c[42]*cq[3] + c[43]*cq[2]);
+    obs[10] = qdd[1]*t19 + t11*(c[44]*cq[3] + c[45]*cq[2]);
     obs[11] = qdd[1]*t18 + t11*t19;
-    obs[12] = c[44] + x[0];
+    obs[12] = c[46] + x[0];
     obs[13] = xd[0];
     obs[14] = xdd[0];
     obs[15] = c[0] + t20;
-    obs[16] = c[1] + c[45]*t1 + c[47]*t7;
+    obs[16] = c[1] + c[47]*t1 + c[49]*t7;
     obs[17] = t21*xd[0];
     obs[18] = t20*xd[0];
-    obs[19] = t21*xdd[0] + t22*(c[47]*t1 + c[48]*t7);
+    obs[19] = t21*xdd[0] + t22*(c[49]*t1 + c[50]*t7);
     obs[20] = t20*xdd[0] + t21*t22;
     obs[21] = q[0];
     obs[22] = qd[0];
     obs[23] = qdd[0];
     obs[24] = t23;
-    obs[25] = c[49]*cq[1] + c[51]*cq[0];
+    obs[25] = c[51]*cq[1] + c[53]*cq[0];
     obs[26] = qd[0]*t24;
     obs[27] = qd[0]*t23;
-    obs[28] = qdd[0]*t24 + t12*(c[51]*cq[1] + c[52]*cq[0]);
+    obs[28] = qdd[0]*t24 + t12*(c[53]*cq[1] + c[54]*cq[0]);
     obs[29] = qdd[0]*t23 + t12*t24;
     obs[30] = q[2];
     obs[31] = qd[2];
     obs[32] = qdd[2];
     obs[33] = t25 + t4;
-    obs[34] = c[11]*cq[0] + c[53]*cq[5] + c[9]*cq[1];
+    obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
     obs[35] = qd[0]*t3 + qd[2]*t26;
     obs[36] = qd[0]*t4 + qd[2]*t25;
-    obs[37] = c[54]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
-    obs[38] = c[54]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
+    obs[37] = c[56]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
+    obs[38] = c[56]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
     obs[39] = q[1];
     obs[40] = qd[1];
     obs[41] = qdd[1];
     obs[42] = c[12] + t27;
-    obs[43] = c[13] + c[55]*cq[3] + c[57]*cq[2];
+    obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
     obs[44] = qd[1]*t28;
     obs[45] = qd[1]*t27;
-    obs[46] = qdd[1]*t28 + t11*(c[57]*cq[3] + c[58]*cq[2]);
+    obs[46] = qdd[1]*t28 + t11*(c[59]*cq[3] + c[60]*cq[2]);
     obs[47] = qdd[1]*t27 + t11*t28;
     if (!isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + ((qdd[1] + (qdd[2] + obs[0])) + ((obs[1] + obs[2]) + (obs[3] + obs[4])))) + (((obs[5] + (obs[6] + obs[7])) + ((obs[8] + obs[9]) + (obs[10] + obs[11]))) + ((obs[12] + (obs[13] + obs[14])) + ((obs[15] + obs[16]) + (obs[17] + obs[18]))))) + ((((obs[19] + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + obs[25]))) + ((obs[26] + (obs[27] + obs[28])) + ((obs[29] + obs[30]) + (obs[31] + obs[32])))) + (((obs[33] + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39]))) + (((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47])))))))) return SG_NONFINITE;
     return SG_OK;
@@ -316,54 +353,54 @@ int sg_overlock_loopers_forces(const double *q, const double *cq, const double *
     const double t2 = c[11]*cq[1] + c[28]*cq[0];
     const double t3 = -gv[0] + obs[37];
     const double t4 = -gv[1] + obs[38];
-    const double t5 = c[66]*(-gv[0] + obs[28]) - ld[0];
-    const double t6 = c[66]*(-gv[1] + obs[29]) - ld[1];
-    const double t7 = c[75]*(-gv[0] + obs[46]) - ld[2];
-    const double t8 = c[75]*(-gv[1] + obs[47]) - ld[3];
+    const double t5 = c[70]*(-gv[0] + obs[28]) - ld[0];
+    const double t6 = c[70]*(-gv[1] + obs[29]) - ld[1];
+    const double t7 = c[79]*(-gv[0] + obs[46]) - ld[2];
+    const double t8 = c[79]*(-gv[1] + obs[47]) - ld[3];
     const double t9 = c[3]*cx[0] + c[6]*cx[1];
     const double t10 = c[0]*cq[1] + c[19] + c[20]*t0;
     const double t11 = c[0]*cq[0] + c[18];
-    const double t12 = c[81]*t11;
-    const double t13 = c[81]*t10;
+    const double t12 = c[85]*t11;
+    const double t13 = c[85]*t10;
     {
         /* block of unknowns 9, 10 */
         double M[4], r[2];
         int piv[2];
         M[0] = c[23]*cq[3];
         M[1] = c[15]*cq[2];
-        r[0] = c[71]*obs[41] - ld[2]*(c[72]*cq[2] + c[73]*cq[3]) - ld[3]*(c[72]*cq[3] + c[74]*cq[2]) - ld[7] - t7*(c[55]*cq[3] + c[57]*cq[2]) - t8*(c[57]*cq[3] + c[58]*cq[2]);
+        r[0] = c[75]*obs[41] - ld[2]*(c[76]*cq[2] + c[77]*cq[3]) - ld[3]*(c[76]*cq[3] + c[78]*cq[2]) - ld[7] - t7*(c[57]*cq[3] + c[59]*cq[2]) - t8*(c[59]*cq[3] + c[60]*cq[2]);
         M[2] = c[14]*cq[5];
         M[3] = c[29]*cq[4];
-        r[1] = c[68]*obs[32] + c[69]*cq[4]*t4 + c[70]*cq[5]*t3 - ld[6];
+        r[1] = c[72]*obs[32] + c[73]*cq[4]*t4 + c[74]*cq[5]*t3 - ld[6];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[9] = r[0];
         out[10] = r[1];
     }
     {
-        const double d = c[59]*cq[1] + c[60]*cq[0] + c[61]*cq[0]*t0;
-        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[59]*cq[1] + c[60]*cq[0] + c[61]*cq[0]*t0))) return SG_SINGULAR;
-        out[4] = (c[62]*obs[23] + c[67]*t1*t3 + c[67]*t2*t4 - out[10]*t2 - out[9]*t1 - ld[0]*(c[63]*cq[0] + c[64]*cq[1]) - ld[1]*(c[63]*cq[1] + c[65]*cq[0]) - ld[5] - t5*(c[49]*cq[1] + c[51]*cq[0]) - t6*(c[51]*cq[1] + c[52]*cq[0]))/d;
+        const double d = c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[0]*t0;
+        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[0]*t0))) return SG_SINGULAR;
+        out[4] = (c[66]*obs[23] + c[71]*t1*t3 + c[71]*t2*t4 - out[10]*t2 - out[9]*t1 - ld[0]*(c[67]*cq[0] + c[68]*cq[1]) - ld[1]*(c[67]*cq[1] + c[69]*cq[0]) - ld[5] - t5*(c[51]*cq[1] + c[53]*cq[0]) - t6*(c[53]*cq[1] + c[54]*cq[0]))/d;
     }
-    out[6] = c[82]*t4 + out[10];
-    out[5] = c[82]*t3 + out[9];
+    out[6] = c[86]*t4 + out[10];
+    out[5] = c[86]*t3 + out[9];
     out[3] = -out[4]*t13 + out[6] + t6;
     out[2] = -out[4]*t12 + out[5] + t5;
     out[8] = -out[10] + t8;
     out[7] = -out[9] + t7;
-    out[1] = c[79]*(-gv[1] + obs[20]) - c[80]*out[4]*t10;
-    out[0] = c[79]*(-gv[0] + obs[19]) - c[80]*out[4]*t11;
-    out[11] = c[76]*obs[14] - out[0]*(c[45]*t0 + c[47]*t9) - out[1]*(c[47]*t0 + c[48]*t9) - out[4]*(c[77]*t0*t9 + c[78]*t10*t9) - ld[4];
+    out[1] = c[83]*(-gv[1] + obs[20]) - c[84]*out[4]*t10;
+    out[0] = c[83]*(-gv[0] + obs[19]) - c[84]*out[4]*t11;
+    out[11] = c[80]*obs[14] - out[0]*(c[47]*t0 + c[49]*t9) - out[1]*(c[49]*t0 + c[50]*t9) - out[4]*(c[81]*t0*t9 + c[82]*t10*t9) - ld[4];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
     out[14] = out[4]*t12;
     out[15] = out[4]*t13;
-    out[16] = c[83]*out[4]*t9;
+    out[16] = c[87]*out[4]*t9;
     out[17] = out[0] + out[2] + out[7];
     out[18] = out[1] + out[3] + out[8];
     out[19] = c[0]*out[1] + c[12]*out[8] + c[19]*out[0] + c[25]*out[7] + out[11];
-    out[20] = c[84]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18]))) + c[85]*((obs[13])*(obs[13])) + c[86]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[87]*((obs[22])*(obs[22])) + c[88]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[89]*((obs[31])*(obs[31])) + c[90]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[91]*((obs[40])*(obs[40]));
-    out[21] = c[67]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[92]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[93]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[94]*(gv[0]*obs[42] + gv[1]*obs[43]);
+    out[20] = c[88]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18]))) + c[89]*((obs[13])*(obs[13])) + c[90]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[91]*((obs[22])*(obs[22])) + c[92]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[93]*((obs[31])*(obs[31])) + c[94]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[95]*((obs[40])*(obs[40]));
+    out[21] = c[71]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[96]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[97]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[98]*(gv[0]*obs[42] + gv[1]*obs[43]);
     out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
     out[23] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))))) return SG_NONFINITE;
@@ -376,36 +413,36 @@ void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const d
     (void)q;
     (void)x;
     const double t0 = c[0]*cq[0] + c[18];
-    const double t1 = c[80]*t0;
+    const double t1 = c[84]*t0;
     const double t2 = c[2]*cx[0] + c[3]*cx[1];
     const double t3 = c[0]*cq[1] + c[19] + c[20]*t2;
     const double t4 = c[3]*cx[0] + c[6]*cx[1];
-    const double t5 = c[81]*t3;
-    const double t6 = c[51]*cq[1];
-    const double t7 = c[53]*cq[5];
-    const double t8 = c[54]*cq[4];
-    const double t9 = c[57]*cq[2];
-    const double t10 = c[57]*cq[3];
+    const double t5 = c[85]*t3;
+    const double t6 = c[53]*cq[1];
+    const double t7 = c[55]*cq[5];
+    const double t8 = c[56]*cq[4];
+    const double t9 = c[59]*cq[2];
+    const double t10 = c[59]*cq[3];
     for (int k = 0; k < 144; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = t1;
     A[13] = 1.0;
-    A[16] = c[80]*t3;
-    A[24] = c[45]*t2 + c[47]*t4;
-    A[25] = c[47]*t2 + c[48]*t4;
-    A[28] = c[77]*t2*t4 + c[78]*t3*t4;
+    A[16] = c[84]*t3;
+    A[24] = c[47]*t2 + c[49]*t4;
+    A[25] = c[49]*t2 + c[50]*t4;
+    A[28] = c[81]*t2*t4 + c[82]*t3*t4;
     A[35] = 1.0;
     A[38] = 1.0;
-    A[40] = c[81]*t0;
+    A[40] = c[85]*t0;
     A[41] = -1.0;
     A[51] = 1.0;
     A[52] = t5;
     A[54] = -1.0;
-    A[62] = c[49]*cq[1] + c[51]*cq[0];
-    A[63] = c[52]*cq[0] + t6;
-    A[64] = t1*(c[50]*cq[0] + c[95]*cq[1]) + t5*(c[95]*cq[0] + t6);
-    A[65] = c[96]*cq[0] + c[97]*cq[1];
-    A[66] = c[96]*cq[1] + c[98]*cq[0];
+    A[62] = c[51]*cq[1] + c[53]*cq[0];
+    A[63] = c[54]*cq[0] + t6;
+    A[64] = t1*(c[52]*cq[0] + c[99]*cq[1]) + t5*(c[99]*cq[0] + t6);
+    A[65] = c[100]*cq[0] + c[101]*cq[1];
+    A[66] = c[100]*cq[1] + c[102]*cq[0];
     A[77] = 1.0;
     A[81] = -1.0;
     A[90] = 1.0;
@@ -418,22 +455,22 @@ void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const d
     A[117] = 1.0;
     A[128] = 1.0;
     A[130] = 1.0;
-    A[139] = c[55]*cq[3] + t9;
-    A[140] = c[58]*cq[2] + t10;
-    A[141] = c[99]*cq[3] + t9;
-    A[142] = c[100]*cq[2] + t10;
-    b[0] = c[79]*(-gv[0] + obs[19]);
-    b[1] = c[79]*(-gv[1] + obs[20]);
-    b[2] = c[76]*obs[14] - ld[4];
-    b[3] = c[66]*(-gv[0] + obs[28]) - ld[0];
-    b[4] = c[66]*(-gv[1] + obs[29]) - ld[1];
-    b[5] = c[62]*obs[23] - ld[0]*(c[63]*cq[0] + c[64]*cq[1]) - ld[1]*(c[63]*cq[1] + c[65]*cq[0]) - ld[5];
-    b[6] = c[82]*(-gv[0] + obs[37]);
-    b[7] = c[82]*(-gv[1] + obs[38]);
-    b[8] = c[68]*obs[32] - ld[6];
-    b[9] = c[75]*(-gv[0] + obs[46]) - ld[2];
-    b[10] = c[75]*(-gv[1] + obs[47]) - ld[3];
-    b[11] = c[71]*obs[41] - ld[2]*(c[72]*cq[2] + c[73]*cq[3]) - ld[3]*(c[72]*cq[3] + c[74]*cq[2]) - ld[7];
+    A[139] = c[57]*cq[3] + t9;
+    A[140] = c[60]*cq[2] + t10;
+    A[141] = c[103]*cq[3] + t9;
+    A[142] = c[104]*cq[2] + t10;
+    b[0] = c[83]*(-gv[0] + obs[19]);
+    b[1] = c[83]*(-gv[1] + obs[20]);
+    b[2] = c[80]*obs[14] - ld[4];
+    b[3] = c[70]*(-gv[0] + obs[28]) - ld[0];
+    b[4] = c[70]*(-gv[1] + obs[29]) - ld[1];
+    b[5] = c[66]*obs[23] - ld[0]*(c[67]*cq[0] + c[68]*cq[1]) - ld[1]*(c[67]*cq[1] + c[69]*cq[0]) - ld[5];
+    b[6] = c[86]*(-gv[0] + obs[37]);
+    b[7] = c[86]*(-gv[1] + obs[38]);
+    b[8] = c[72]*obs[32] - ld[6];
+    b[9] = c[79]*(-gv[0] + obs[46]) - ld[2];
+    b[10] = c[79]*(-gv[1] + obs[47]) - ld[3];
+    b[11] = c[75]*obs[41] - ld[2]*(c[76]*cq[2] + c[77]*cq[3]) - ld[3]*(c[76]*cq[3] + c[78]*cq[2]) - ld[7];
 }
 
 /* sg_overlock_loopers_anchors -- Total ops: 64 */
@@ -469,18 +506,18 @@ void sg_overlock_loopers_anchors(const double *q, const double *cq, const double
     out[21] = c[14]*cq[5] + t2;
     out[22] = c[12] + c[15]*cq[2];
     out[23] = c[13] + c[15]*cq[3];
-    out[24] = c[36]*cq[0] + c[37]*cq[1];
-    out[25] = c[36]*cq[1] + c[38]*cq[0];
-    out[26] = c[12] + c[40]*cq[2] + c[41]*cq[3];
-    out[27] = c[13] + c[40]*cq[3] + c[42]*cq[2];
-    out[28] = c[0] + c[45]*t3 + c[46]*t0;
-    out[29] = c[1] + c[45]*t0 + c[47]*t3;
-    out[30] = c[49]*cq[0] + c[50]*cq[1];
-    out[31] = c[49]*cq[1] + c[51]*cq[0];
-    out[32] = c[53]*cq[4] + t1;
-    out[33] = c[53]*cq[5] + t2;
-    out[34] = c[12] + c[55]*cq[2] + c[56]*cq[3];
-    out[35] = c[13] + c[55]*cq[3] + c[57]*cq[2];
+    out[24] = c[38]*cq[0] + c[39]*cq[1];
+    out[25] = c[38]*cq[1] + c[40]*cq[0];
+    out[26] = c[12] + c[42]*cq[2] + c[43]*cq[3];
+    out[27] = c[13] + c[42]*cq[3] + c[44]*cq[2];
+    out[28] = c[0] + c[47]*t3 + c[48]*t0;
+    out[29] = c[1] + c[47]*t0 + c[49]*t3;
+    out[30] = c[51]*cq[0] + c[52]*cq[1];
+    out[31] = c[51]*cq[1] + c[53]*cq[0];
+    out[32] = c[55]*cq[4] + t1;
+    out[33] = c[55]*cq[5] + t2;
+    out[34] = c[12] + c[57]*cq[2] + c[58]*cq[3];
+    out[35] = c[13] + c[57]*cq[3] + c[59]*cq[2];
 }
 
 static const unsigned char sg_overlock_loopers_coord_is_angle[3] = { 1, 1, 1 };
@@ -490,12 +527,13 @@ static const sg_mechanism sg_overlock_loopers_descriptor = {
     .nq = 3,
     .nx = 1,
     .np = 29,
-    .nc = 101,
+    .nc = 105,
     .nobs = 48,
     .nbranch = 2,
     .nf = 12,
     .nfo = 24,
     .nload = 8,
+    .nblock = 2,
     .coord_is_angle = sg_overlock_loopers_coord_is_angle,
     .constants = sg_overlock_loopers_constants,
     .closed = sg_overlock_loopers_closed,
@@ -503,6 +541,8 @@ static const sg_mechanism sg_overlock_loopers_descriptor = {
     .motion = sg_overlock_loopers_motion,
     .forces = sg_overlock_loopers_forces,
     .force_matrix = sg_overlock_loopers_force_matrix,
+    .scales = sg_overlock_loopers_scales,
+    .blocks = sg_overlock_loopers_blocks,
     .anchors = sg_overlock_loopers_anchors,
 };
 
@@ -530,154 +570,163 @@ const char *sg_overlock_loopers_manifest(void)
         "looper_tip\"},{\"body\":\"eccentric\",\"joint\":null,\"kind\":\"com\",\"name\":\"eccentric.com\""
         "},{\"body\":\"rock_shaft\",\"joint\":null,\"kind\":\"com\",\"name\":\"rock_shaft.com\"},{\"body\""
         ":\"coupler\",\"joint\":null,\"kind\":\"com\",\"name\":\"coupler.com\"},{\"body\":\"lower_lever\""
-        ",\"joint\":null,\"kind\":\"com\",\"name\":\"lower_lever.com\"}],\"arcs\":[],\"bodies\":[{\"doc\""
-        ":\"looper eccentric on the main shaft 1\",\"kind\":\"driven\",\"name\":\"eccentric\",\"offset\":"
-        "12,\"role\":null},{\"doc\":\"looper rock shaft 3 with the arm DC, the arm DE and the upper loope"
-        "r\",\"kind\":\"link\",\"name\":\"rock_shaft\",\"offset\":21,\"role\":null},{\"doc\":\"coupler EF"
-        "\",\"kind\":\"link\",\"name\":\"coupler\",\"offset\":30,\"role\":null},{\"doc\":\"lower-looper l"
-        "ever 5 with the lower looper\",\"kind\":\"link\",\"name\":\"lower_lever\",\"offset\":39,\"role\""
-        ":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\""
-        ",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":1,\"joint\":\"rod\",\"kind\":\"rrs\",\"meanin"
-        "g\":\"+1: pin rock_shaft of rod rod left of the line from D to the crank pin's projection (seed "
-        "003 eq. 1: \\u03b4\\u2081)\"},{\"default\":1,\"joint\":\"F\",\"kind\":\"rrr\",\"meaning\":\"+1: "
-        "joint F left of the line from E to G\"}],\"closed_form\":true,\"closure\":[\"rod.length\",\"F.x\""
-        ",\"F.y\"],\"coords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":"
-        "0.0,\"name\":\"lower_lever.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"co"
-        "upler.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overl"
-        "ock: the looper mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u043"
-        "5\\u0442\\u043b\\u0438\\u0442\\u0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136).\\n"
-        "\\nAn eccentric on the main shaft 1 drives, through a ball-jointed rod, the looper rock shaft 3 "
-        "(a spatial-planar\\nfour-bar ABCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper loop"
-        "er, whose tip N\\u2082 is at l\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), and dr"
-        "ives through the planar four-bar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081 is a"
-        "t l\\u2086 from G at the angle \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2 (eq."
-        " 6).\\n\\nFrame (the loopers' plane): origin on the rock-shaft axis D, x along the main shaft, y"
-        " up; the main shaft's axis\\nruns parallel to x below D. Angles counter-clockwise from +x. Seed "
-        "003 writes eqs. 4\\u20136 in its own axes (see\\ntests/test_overlock_loopers.py for the mapping)"
-        ".\\n\\nEvery dimension is an estimate (seed 003 prints none): the rock shaft swings about \\u00b"
-        "122\\u00b0, the upper looper's tip\\nthrough about 45 mm of arc, the lower looper's lever about "
-        "\\u00b135\\u00b0; masses of small steel levers and loopers.\",\"elements\":[],\"force_blocks\":["
-        "2,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\""
-        "unit\":\"W\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\""
-        ":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\""
-        "unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit"
-        "\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\""
-        "},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"eccentric.y\",\""
-        "eccentric.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"coupler.x\",\"coupl"
-        "er.y\",\"coupler.moment\",\"lower_lever.x\",\"lower_lever.y\",\"lower_lever.moment\"],\"inputs\""
-        ":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\""
-        ",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_loopers_anchors\""
-        ":{\"ops\":64},\"sg_overlock_loopers_closed\":{\"ops\":40},\"sg_overlock_loopers_constants\":{\"o"
-        "ps\":97},\"sg_overlock_loopers_force_matrix\":{\"ops\":111},\"sg_overlock_loopers_forces\":{\"op"
-        "s\":209},\"sg_overlock_loopers_motion\":{\"ops\":216},\"sg_overlock_loopers_residual\":{\"ops\":"
-        "45}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\"},{\""
-        "body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower_leve"
-        "r\",\"component\":\"fx\",\"name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"component\":"
-        "\"fy\",\"name\":\"lower_looper_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":"
-        "\"eccentric\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"bod"
-        "y\":\"coupler\",\"component\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\"compo"
-        "nent\":\"torque\",\"name\":\"lower_lever\"}],\"name\":\"overlock_loopers\",\"observables\":[{\"n"
-        "ame\":\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\"},{\""
-        "name\":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip.y_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_looper"
-        "_tip.y\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_"
-        "looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"na"
-        "me\":\"lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\""
-        "},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":"
-        "\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\""
-        ":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit"
-        "\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.ang"
-        "le_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"r"
-        "ock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"roc"
-        "k_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\"rad/s\""
-        "},{\"name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\"m/s^2\"},"
-        "{\"name\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"unit\":\"ra"
-        "d\"},{\"name\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angle_dd\",\""
-        "unit\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_lever.com."
-        "y\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever."
-        "com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"l"
-        "ower_lever.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\""
-        ",\"doc\":\"eccentricity AB of the looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"e"
-        "ccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\""
-        "mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":"
-        "\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_uni"
-        "t\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"pos"
-        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\""
-        "rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,"
-        "\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper D"
-        "N\\u2082, l\\u2087 (estimate)\",\"kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,"
-        "\"role\":null,\"unit\":\"m\"},{\"default\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\""
-        "its constructive angle \\u03b3 from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_"
-        "looper_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_un"
-        "it\":\"mm\",\"doc\":\"arm DE of the planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name"
-        "\":\"drive_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,"
-        "\"display_unit\":\"deg\",\"doc\":\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name"
-        "\":\"drive_arm_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"di"
-        "splay_unit\":\"mm\",\"doc\":\"coupler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\""
-        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\""
-        ":\"lower-looper lever GF (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate"
-        ")\",\"kind\":\"length\",\"name\":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m"
-        "\"},{\"default\":2.443460952792061,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u"
-        "03b2 (estimate)\",\"kind\":\"angle\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"rad\"},{\"default\":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081"
-        ", l\\u2086 (estimate)\",\"kind\":\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its co"
-        "nstructive angle \\u03b7 from the lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_loop"
-        "er_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":"
-        "\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\""
-        "eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\""
-        "centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positi"
-        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cent"
-        "re of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\""
-        "moment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccent"
-        "ric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\","
-        "\"doc\":\"moment of inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name"
-        "\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0."
-        "006,\"display_unit\":\"g\",\"doc\":\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass"
-        "\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m*"
-        "*2\",\"doc\":\"moment of inertia of coupler about its centre of mass\",\"kind\":\"inertia\",\"na"
-        "me\":\"coupler.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0"
-        "3,\"display_unit\":\"g\",\"doc\":\"mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_leve"
-        "r.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of lower_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lev"
-        "er.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of lower_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lev"
-        "er.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\""
-        ":\"kg*m**2\",\"doc\":\"moment of inertia of lower_lever about its centre of mass\",\"kind\":\"in"
-        "ertia\",\"name\":\"lower_lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}]"
-        ",\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\""
-        ",\"doc\":\"upper looper tip N\\u2082\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upp"
-        "er_looper_tip\"},{\"body\":\"lower_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lowe"
-        "r_looper_tip\",\"offset\":6,\"role\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b"
-        "\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\""
-        "eccentric.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\""
-        "],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\""
-        ":\"rock_shaft\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\""
-        "offset\":4},{\"a\":\"rock_shaft\",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":fal"
-        "se,\"kind\":\"revolute\",\"name\":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\""
-        "columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{"
-        "\"a\":\"coupler\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":"
-        "\"revolute\",\"name\":\"F\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"t"
-        "orque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\""
-        "offset\":11,\"sense\":1}],\"roles\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_l"
-        "ooper_tip\"},\"upper_looper_tip\":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":"
-        "{\"nanchor_out\":36,\"nbranch\":2,\"nc\":101,\"nf\":12,\"nfo\":24,\"nload\":8,\"nobs\":48,\"np\""
-        ":29,\"nq\":3,\"nx\":1}}"
+        ",\"joint\":null,\"kind\":\"com\",\"name\":\"lower_lever.com\"}],\"arcs\":[],\"blocks\":[{\"coord"
+        "s\":[0],\"joints\":[\"rod\"],\"rows\":[0]},{\"coords\":[2,1],\"joints\":[\"F\"],\"rows\":[1,2]}]"
+        ",\"bodies\":[{\"doc\":\"looper eccentric on the main shaft 1\",\"kind\":\"driven\",\"name\":\"ec"
+        "centric\",\"offset\":12,\"role\":null},{\"doc\":\"looper rock shaft 3 with the arm DC, the arm D"
+        "E and the upper looper\",\"kind\":\"link\",\"name\":\"rock_shaft\",\"offset\":21,\"role\":null},"
+        "{\"doc\":\"coupler EF\",\"kind\":\"link\",\"name\":\"coupler\",\"offset\":30,\"role\":null},{\"d"
+        "oc\":\"lower-looper lever 5 with the lower looper\",\"kind\":\"link\",\"name\":\"lower_lever\",\""
+        "offset\":39,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\""
+        "com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":1,\"joint\":\"rod\",\"kind"
+        "\":\"rrs\",\"meaning\":\"+1: pin rock_shaft of rod rod left of the line from D to the crank pin'"
+        "s projection (seed 003 eq. 1: \\u03b4\\u2081)\"},{\"default\":1,\"joint\":\"F\",\"kind\":\"rrr\""
+        ",\"meaning\":\"+1: joint F left of the line from E to G\"}],\"closed_form\":true,\"closure\":[\""
+        "rod.length\",\"F.x\",\"F.y\"],\"constants\":[[3],[1],[14],[14],[0],[2],[14],[0],[3],[6,7],[6,7],"
+        "[6,7],[10,11],[10,11],[8],[9],[8],[9],[3],[1],[0],[2],[0],[9],[10,11],[10,11],[3],[3],[6,7],[8],"
+        "[0,1,2,3],[6,8,9,10],[0],[0],[3],[0,3],[0],[0],[4,5],[4,5],[4,5],[4,5],[12,13],[12,13],[12,13],["
+        "12,13],[14],[16],[17],[17],[16],[20],[21],[21],[20],[8],[8],[26],[27],[27],[26],[0,1,2,3],[6,8,9"
+        ",10],[2,3],[1,2,3],[0,2,3],[22],[4,5,21],[4,5,20],[4,5,20],[19],[23],[24],[8,23],[8,23],[28],[12"
+        ",13,27],[12,13,26],[12,13,26],[25],[18],[0,2],[0,2],[15],[2],[2],[23],[0,2],[15],[18],[19],[22],"
+        "[23],[24],[25],[28],[15],[19],[25],[3,20],[6,7,21],[6,7,20],[6,7,20],[9,26],[9,26]],\"coords\":["
+        "{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"lower_l"
+        "ever.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"coupler.angle\",\"unit\""
+        ":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the looper mechan"
+        "ism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0435\\u0442\\u043b\\u0438"
+        "\\u0442\\u0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136).\\n\\nAn eccentric on t"
+        "he main shaft 1 drives, through a ball-jointed rod, the looper rock shaft 3 (a spatial-planar\\n"
+        "four-bar ABCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper looper, whose tip N\\u20"
+        "82 is at l\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), and drives through the pla"
+        "nar four-bar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081 is at l\\u2086 from G at"
+        " the angle \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2 (eq. 6).\\n\\nFrame (the"
+        " loopers' plane): origin on the rock-shaft axis D, x along the main shaft, y up; the main shaft'"
+        "s axis\\nruns parallel to x below D. Angles counter-clockwise from +x. Seed 003 writes eqs. 4\\u"
+        "20136 in its own axes (see\\ntests/test_overlock_loopers.py for the mapping).\\n\\nEvery dimensi"
+        "on is an estimate (seed 003 prints none): the rock shaft swings about \\u00b122\\u00b0, the uppe"
+        "r looper's tip\\nthrough about 45 mm of arc, the lower looper's lever about \\u00b135\\u00b0; ma"
+        "sses of small steel levers and loopers.\",\"elements\":[],\"force_blocks\":[2,1],\"force_outputs"
+        "\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"na"
+        "me\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\",\"unit"
+        "\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"n"
+        "ame\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\""
+        ":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elast"
+        "ic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\""
+        ",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"coupler.x\",\"coupler.y\",\"coupler.m"
+        "oment\",\"lower_lever.x\",\"lower_lever.y\",\"lower_lever.moment\"],\"inputs\":[{\"default\":0.0"
+        ",\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\""
+        ",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_loopers_anchors\":{\"ops\":64},\"sg"
+        "_overlock_loopers_blocks\":{\"ops\":28},\"sg_overlock_loopers_closed\":{\"ops\":40},\"sg_overloc"
+        "k_loopers_constants\":{\"ops\":113},\"sg_overlock_loopers_force_matrix\":{\"ops\":111},\"sg_over"
+        "lock_loopers_forces\":{\"ops\":209},\"sg_overlock_loopers_motion\":{\"ops\":216},\"sg_overlock_l"
+        "oopers_residual\":{\"ops\":45},\"sg_overlock_loopers_scales\":{\"ops\":3}},\"loads\":[{\"body\":"
+        "\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\"},{\"body\":\"rock_shaft\",\"co"
+        "mponent\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fx\",\""
+        "name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fy\",\"name\":\"lower_loo"
+        "per_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\""
+        "rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"coupler\",\"component"
+        "\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\"component\":\"torque\",\"name\":"
+        "\"lower_lever\"}],\"name\":\"overlock_loopers\",\"observables\":[{\"name\":\"upper_looper_tip.x\""
+        ",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.x"
+        "_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"upper_lo"
+        "oper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.y\",\"unit\":\"m\"},{\""
+        "name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.y_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.y_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.ang"
+        "le_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"ec"
+        "centric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccent"
+        "ric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"ec"
+        "centric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\""
+        "},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\""
+        ":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\""
+        ":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.angl"
+        "e\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"coupler.angl"
+        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit\":\"m\"},{\"name\":\"coupler.com"
+        ".y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.y_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.com."
+        "y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"unit\":\"rad\"},{\"name\":\"lower_l"
+        "ever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"n"
+        "ame\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.y\",\"unit\":\"m\"},{\"n"
+        "ame\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.y_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.com.y_dd\",\""
+        "unit\":\"m/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity"
+        " AB of the looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\""
+        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-sh"
+        "aft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"posi"
+        "tive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"b"
+        "all-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":"
+        "null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u"
+        "2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":"
+        "\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (est"
+        "imate)\",\"kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\"unit\":"
+        "\"m\"},{\"default\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\"its constructive angle"
+        " \\u03b3 from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\",\"posit"
+        "ive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\""
+        "arm DE of the planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"pos"
+        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg"
+        "\",\"doc\":\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\""
+        "doc\":\"coupler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true,\"rol"
+        "e\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper lever"
+        " GF (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"lengt"
+        "h\",\"name\":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.4"
+        "43460952792061,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\",\""
+        "kind\":\"angle\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad\"}"
+        ",{\"default\":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estimate"
+        ")\",\"kind\":\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u"
+        "03b7 from the lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"ph"
+        "ase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\""
+        "positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc"
+        "\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role"
+        "\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of ec"
+        "centric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccent"
+        "ric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia o"
+        "f eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"pos"
+        "itive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"do"
+        "c\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass o"
+        "f rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass o"
+        "f rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of"
+        " inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.ine"
+        "rtia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\""
+        ":\"g\",\"doc\":\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":fals"
+        "e,\"role\":null,\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"momen"
+        "t of inertia of coupler about its centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.inert"
+        "ia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\""
+        "g\",\"doc\":\"mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centr"
+        "e of mass of lower_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centr"
+        "e of mass of lower_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\""
+        ":\"moment of inertia of lower_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"l"
+        "ower_lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\""
+        "x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper loop"
+        "er tip N\\u2082\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"b"
+        "ody\":\"lower_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\"offs"
+        "et\":6,\"role\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"co"
+        "lumns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"o"
+        "ffset\":0},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,"
+        "\"kind\":\"revolute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"c"
+        "olumns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\""
+        ":\"rock_shaft\",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revo"
+        "lute\",\"name\":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx\","
+        "\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\","
+        "\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"nam"
+        "e\":\"F\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounde"
+        "d\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sen"
+        "se\":1}],\"roles\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\"up"
+        "per_looper_tip\":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":"
+        "36,\"nblock\":2,\"nbranch\":2,\"nc\":105,\"nf\":12,\"nfo\":24,\"nload\":8,\"nobs\":48,\"np\":29,"
+        "\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_needle_constants -- Total ops: 93 */
+/* sg_overlock_needle_constants -- Total ops: 111 */
 void sg_overlock_needle_constants(const double *p, double *c)
 {
     const double t0 = sin(p[10]);
@@ -23,23 +23,27 @@ void sg_overlock_needle_constants(const double *p, double *c)
     const double t11 = 2.0*t9;
     const double t12 = 2.0*t7;
     const double t13 = -p[4];
-    const double t14 = 2.0*t6;
-    const double t15 = 2.0*p[0];
-    const double t16 = -t9;
-    const double t17 = p[8] + p[9];
-    const double t18 = (0.5)*p[6];
-    const double t19 = (1.0/(p[2]));
-    const double t20 = t1*t19;
-    const double t21 = p[1]*t19;
-    const double t22 = p[0]*t19;
-    const double t23 = p[16] + t13;
-    const double t24 = p[17] + t7;
+    const double t14 = 2.0*p[0];
+    const double t15 = 4.0*p[3];
+    const double t16 = 2.0*t6;
+    const double t17 = p[0]*t15 + ((p[1])*(p[1])) + p[1]*t14 + p[1]*t15 + 9.0*t1 + t16 + t5;
+    const double t18 = p[4] + p[6];
+    const double t19 = t18 + fabs(p[7]);
+    const double t20 = -t9;
+    const double t21 = p[8] + p[9];
+    const double t22 = (0.5)*p[6];
+    const double t23 = (1.0/(p[2]));
+    const double t24 = t1*t23;
+    const double t25 = p[1]*t23;
+    const double t26 = p[0]*t23;
+    const double t27 = p[16] + t13;
+    const double t28 = p[17] + t7;
     c[0] = p[3];
     c[1] = -p[1];
     c[2] = t0;
     c[3] = cos(p[10]);
     c[4] = -p[0];
-    c[5] = sqrt(t4);
+    c[5] = sqrt(sg_rounding_clamp(t4, t4));
     c[6] = t5;
     c[7] = -t0;
     c[8] = -t6;
@@ -63,69 +67,74 @@ void sg_overlock_needle_constants(const double *p, double *c)
     c[26] = t11;
     c[27] = t13;
     c[28] = -p[6];
-    c[29] = -t14;
-    c[30] = t15;
-    c[31] = t16;
-    c[32] = -t12;
+    c[29] = t17;
+    c[30] = t19;
+    c[31] = t18;
+    c[32] = -t16;
     c[33] = t14;
-    c[34] = -t15;
-    c[35] = -p[8];
-    c[36] = -t17;
-    c[37] = p[10];
-    c[38] = p[12];
-    c[39] = -p[13];
-    c[40] = p[13];
-    c[41] = -p[12];
-    c[42] = p[16];
-    c[43] = -p[17];
-    c[44] = p[17];
-    c[45] = -p[16];
-    c[46] = t18;
-    c[47] = -t18;
-    c[48] = -p[23] - t10;
-    c[49] = p[22];
-    c[50] = t2*t20;
-    c[51] = -t20*t3;
-    c[52] = -t21*t9;
-    c[53] = -t21*t7;
-    c[54] = -t22*t9;
-    c[55] = -t22*t7;
-    c[56] = p[18];
-    c[57] = t23;
-    c[58] = -t23;
-    c[59] = p[15];
-    c[60] = p[19];
-    c[61] = p[21];
-    c[62] = p[20];
-    c[63] = p[19]*t18;
-    c[64] = p[14];
-    c[65] = t19*t6;
-    c[66] = -t22;
-    c[67] = p[11];
-    c[68] = t19;
-    c[69] = p[24];
-    c[70] = -p[22] - p[8];
-    c[71] = -p[23];
-    c[72] = -p[22] - t17;
-    c[73] = -p[22];
-    c[74] = -t19;
-    c[75] = t22;
-    c[76] = (0.5)*p[11];
-    c[77] = (0.5)*p[14];
-    c[78] = (0.5)*p[15];
-    c[79] = (0.5)*p[18];
-    c[80] = (0.5)*p[19];
-    c[81] = (0.5)*p[20];
-    c[82] = (0.5)*p[21];
-    c[83] = (0.5)*p[24];
-    c[84] = -p[11];
-    c[85] = -p[15];
-    c[86] = -p[19];
-    c[87] = -p[21];
-    c[88] = -t24;
-    c[89] = -p[16] - t16;
-    c[90] = t24;
-    c[91] = p[23];
+    c[34] = t20;
+    c[35] = -t12;
+    c[36] = t16;
+    c[37] = -t14;
+    c[38] = -p[8];
+    c[39] = -t21;
+    c[40] = p[10];
+    c[41] = p[12];
+    c[42] = -p[13];
+    c[43] = p[13];
+    c[44] = -p[12];
+    c[45] = p[16];
+    c[46] = -p[17];
+    c[47] = p[17];
+    c[48] = -p[16];
+    c[49] = t22;
+    c[50] = -t22;
+    c[51] = -p[23] - t10;
+    c[52] = p[22];
+    c[53] = (1.0/(t17));
+    c[54] = (1.0/(t19));
+    c[55] = t2*t24;
+    c[56] = -t24*t3;
+    c[57] = -t25*t9;
+    c[58] = -t25*t7;
+    c[59] = -t26*t9;
+    c[60] = -t26*t7;
+    c[61] = p[18];
+    c[62] = t27;
+    c[63] = -t27;
+    c[64] = p[15];
+    c[65] = p[19];
+    c[66] = p[21];
+    c[67] = p[20];
+    c[68] = p[19]*t22;
+    c[69] = p[14];
+    c[70] = t23*t6;
+    c[71] = -t26;
+    c[72] = p[11];
+    c[73] = t23;
+    c[74] = p[24];
+    c[75] = -p[22] - p[8];
+    c[76] = -p[23];
+    c[77] = -p[22] - t21;
+    c[78] = -p[22];
+    c[79] = -t23;
+    c[80] = t26;
+    c[81] = (0.5)*p[11];
+    c[82] = (0.5)*p[14];
+    c[83] = (0.5)*p[15];
+    c[84] = (0.5)*p[18];
+    c[85] = (0.5)*p[19];
+    c[86] = (0.5)*p[20];
+    c[87] = (0.5)*p[21];
+    c[88] = (0.5)*p[24];
+    c[89] = -p[11];
+    c[90] = -p[15];
+    c[91] = -p[19];
+    c[92] = -p[21];
+    c[93] = -t28;
+    c[94] = -p[16] - t20;
+    c[95] = t28;
+    c[96] = p[23];
 }
 
 /* sg_overlock_needle_closed -- Total ops: 38 */
@@ -184,8 +193,39 @@ void sg_overlock_needle_residual(const double *q, const double *cq, const double
     jac[8] = t3;
 }
 
+/* sg_overlock_needle_scales -- Total ops: 5 */
+void sg_overlock_needle_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)cq;
+    (void)x;
+    (void)cx;
+    out[0] = c[29];
+    out[1] = c[30];
+    out[2] = c[31] + fabs(q[1]);
+}
+
+/* sg_overlock_needle_blocks -- Total ops: 27 */
+void sg_overlock_needle_blocks(const double *jac, double *out)
+{
+    /* block 0: joints rod */
+    {
+        const double nr = sqrt(sg_row_norm2(3, jac + 0));
+        out[0] = nr > 0.0 ? (jac[0]) / nr : 0.0;
+    }
+    /* block 1: joints N */
+    {
+        const double nr = sqrt(sg_row_norm2(3, jac + 3));
+        out[1] = nr > 0.0 ? (jac[5]) / nr : 0.0;
+    }
+    /* block 2: joints N */
+    {
+        const double nr = sqrt(sg_row_norm2(3, jac + 6));
+        out[2] = nr > 0.0 ? (jac[7]) / nr : 0.0;
+    }
+}
+
 /* sg_overlock_needle_motion -- Total ops: 155 */
-int sg_overlock_needle_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+int sg_overlock_needle_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[24]*cq[1] + c[25]*cq[0];
     const double t1 = c[11]*cq[0] + c[13]*cq[1];
@@ -197,17 +237,17 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     const double t7 = c[14]*cq[0];
     const double t8 = c[15]*cq[4];
     const double t9 = c[3]*cx[0] + c[7]*cx[1];
-    const double t10 = c[30]*t9;
-    const double t11 = c[29]*t4*t9 + t10*t5;
+    const double t10 = c[33]*t9;
+    const double t11 = c[32]*t4*t9 + t10*t5;
     const double t14 = c[14]*cq[1];
-    const double t20 = c[38]*t9 + c[39]*t4;
-    const double t21 = c[39]*t9 + c[41]*t4;
+    const double t20 = c[41]*t9 + c[42]*t4;
+    const double t21 = c[42]*t9 + c[44]*t4;
     const double t22 = ((xd[0])*(xd[0]));
-    const double t23 = c[42]*cq[0] + c[43]*cq[1];
-    const double t24 = c[43]*cq[0] + c[45]*cq[1];
-    const double t25 = c[46]*cq[4];
-    const double t26 = c[47]*cq[5];
-    double J[9];
+    const double t23 = c[45]*cq[0] + c[46]*cq[1];
+    const double t24 = c[46]*cq[0] + c[48]*cq[1];
+    const double t25 = c[49]*cq[4];
+    const double t26 = c[50]*cq[5];
+    double J[9], rs[3], cs[3];
     int piv[3];
     J[0] = t0*t2 + t3*t5;
     J[1] = 0.0;
@@ -221,17 +261,20 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     qd[0] = -t11*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    if (sg_lu_factor_inl(3, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(3, J, piv, qd);
+    rs[0] = c[53];
+    rs[1] = c[54];
+    rs[2] = (1.0/(c[31] + fabs(q[1])));
+    if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t12 = ((qd[0])*(qd[0]));
     const double t13 = ((qd[2])*(qd[2]));
     const double t15 = cq[5]*t13;
     const double t16 = qd[0]*t6;
     const double t17 = qd[0]*t7;
-    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[31]*cq[1]) + t1*t3 + t2*(c[24]*cq[0] + c[32]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[20]*qd[0]*t3*t9 + xd[0]*(c[33]*((t4)*(t4)) + c[34]*t4*t5));
+    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[34]*cq[1]) + t1*t3 + t2*(c[24]*cq[0] + c[35]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[20]*qd[0]*t3*t9 + xd[0]*(c[36]*((t4)*(t4)) + c[37]*t4*t5));
     qdd[1] = t12*t7 + t13*t8;
     qdd[2] = c[15]*t15 + t12*t14;
-    sg_lu_solve_inl(3, J, piv, qdd);
+    sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
     const double t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
     const double t19 = qdd[0]*t7 + t12*t6;
     obs[0] = t7;
@@ -241,49 +284,49 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     obs[4] = t18;
     obs[5] = t19;
     obs[6] = c[16];
-    obs[7] = c[35] + q[1];
+    obs[7] = c[38] + q[1];
     obs[8] = 0.0;
     obs[9] = qd[1];
     obs[10] = 0.0;
     obs[11] = qdd[1];
     obs[12] = c[16];
-    obs[13] = c[36] + q[1];
+    obs[13] = c[39] + q[1];
     obs[14] = 0.0;
     obs[15] = qd[1];
     obs[16] = 0.0;
     obs[17] = qdd[1];
-    obs[18] = c[37] + x[0];
+    obs[18] = c[40] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = c[0] + t20;
-    obs[22] = c[1] + c[38]*t4 + c[40]*t9;
+    obs[22] = c[1] + c[41]*t4 + c[43]*t9;
     obs[23] = t21*xd[0];
     obs[24] = t20*xd[0];
-    obs[25] = t21*xdd[0] + t22*(c[40]*t4 + c[41]*t9);
+    obs[25] = t21*xdd[0] + t22*(c[43]*t4 + c[44]*t9);
     obs[26] = t20*xdd[0] + t21*t22;
     obs[27] = q[0];
     obs[28] = qd[0];
     obs[29] = qdd[0];
     obs[30] = t23;
-    obs[31] = c[42]*cq[1] + c[44]*cq[0];
+    obs[31] = c[45]*cq[1] + c[47]*cq[0];
     obs[32] = qd[0]*t24;
     obs[33] = qd[0]*t23;
-    obs[34] = qdd[0]*t24 + t12*(c[44]*cq[1] + c[45]*cq[0]);
+    obs[34] = qdd[0]*t24 + t12*(c[47]*cq[1] + c[48]*cq[0]);
     obs[35] = qdd[0]*t23 + t12*t24;
     obs[36] = q[2];
     obs[37] = qd[2];
     obs[38] = qdd[2];
     obs[39] = t25 + t7;
-    obs[40] = c[46]*cq[5] + t14;
+    obs[40] = c[49]*cq[5] + t14;
     obs[41] = qd[2]*t26 + t16;
     obs[42] = qd[2]*t25 + t17;
-    obs[43] = c[47]*cq[4]*t13 + qdd[2]*t26 + t18;
-    obs[44] = c[47]*t15 + qdd[2]*t25 + t19;
+    obs[43] = c[50]*cq[4]*t13 + qdd[2]*t26 + t18;
+    obs[44] = c[50]*t15 + qdd[2]*t25 + t19;
     obs[45] = (0.5)*3.141592653589793;
     obs[46] = 0.0;
     obs[47] = 0.0;
-    obs[48] = c[48];
-    obs[49] = c[49] + q[1];
+    obs[48] = c[51];
+    obs[49] = c[52] + q[1];
     obs[50] = 0.0;
     obs[51] = qd[1];
     obs[52] = 0.0;
@@ -297,40 +340,40 @@ int sg_overlock_needle_forces(const double *q, const double *cq, const double *x
 {
     (void)x;
     const double t0 = c[2]*cx[0] + c[3]*cx[1];
-    const double t1 = c[44]*cq[0];
-    const double t2 = c[44]*cq[1];
-    const double t3 = c[59]*(-gv[0] + obs[34]) - ld[0];
+    const double t1 = c[47]*cq[0];
+    const double t2 = c[47]*cq[1];
+    const double t3 = c[64]*(-gv[0] + obs[34]) - ld[0];
     const double t4 = -gv[1] + obs[53];
-    const double t5 = c[60]*(-gv[1] + obs[44]) + c[61]*t4 - ld[3] - ld[5];
-    const double t6 = c[59]*(-gv[1] + obs[35]) - ld[1] + t5;
+    const double t5 = c[65]*(-gv[1] + obs[44]) + c[66]*t4 - ld[3] - ld[5];
+    const double t6 = c[64]*(-gv[1] + obs[35]) - ld[1] + t5;
     const double t7 = -gv[0] + obs[43];
-    const double t8 = c[61]*t4 - ld[3] - ld[5];
-    const double t9 = c[46]*cq[4];
+    const double t8 = c[66]*t4 - ld[3] - ld[5];
+    const double t9 = c[49]*cq[4];
     const double t10 = c[3]*cx[0] + c[7]*cx[1];
     const double t11 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t0;
     const double t12 = c[11]*cq[0] + c[13]*cq[1] + c[18];
-    const double t13 = c[74]*t11;
-    const double t14 = c[74]*t12;
+    const double t13 = c[79]*t11;
+    const double t14 = c[79]*t12;
     {
         const double d = c[15]*cq[5];
         if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[14]*cq[1]), fabs(c[15]*cq[5])))) return SG_SINGULAR;
-        out[7] = (c[62]*obs[38] + c[63]*cq[5]*t7 - ld[8] + t5*t9 + t8*t9)/d;
+        out[7] = (c[67]*obs[38] + c[68]*cq[5]*t7 - ld[8] + t5*t9 + t8*t9)/d;
     }
     {
-        const double d = c[50]*cq[0] + c[51]*cq[1] + c[52]*cq[0] + c[53]*cq[1] + c[54]*cq[0]*t0 + c[55]*cq[1]*t0;
-        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[50]*cq[0] + c[51]*cq[1] + c[52]*cq[0] + c[53]*cq[1] + c[54]*cq[0]*t0 + c[55]*cq[1]*t0))) return SG_SINGULAR;
-        out[6] = (-c[14]*cq[1]*out[7] + c[56]*obs[29] - ld[0]*(c[57]*cq[1] + t1) - ld[1]*(c[58]*cq[0] + t2) - ld[7] - t3*(c[42]*cq[1] + t1) - t5*(c[43]*cq[1] + c[57]*cq[0]) - t6*(c[45]*cq[0] + t2))/d;
+        const double d = c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[0]*t0 + c[60]*cq[1]*t0;
+        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[0]*t0 + c[60]*cq[1]*t0))) return SG_SINGULAR;
+        out[6] = (-c[14]*cq[1]*out[7] + c[61]*obs[29] - ld[0]*(c[62]*cq[1] + t1) - ld[1]*(c[63]*cq[0] + t2) - ld[7] - t3*(c[45]*cq[1] + t1) - t5*(c[46]*cq[1] + c[62]*cq[0]) - t6*(c[48]*cq[0] + t2))/d;
     }
     out[4] = -out[6]*t14 + out[7] + t3;
-    out[9] = -c[60]*t7 + out[7];
+    out[9] = -c[65]*t7 + out[7];
     out[5] = -out[6]*t13 + t6;
-    out[2] = -c[61]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
-    out[3] = -c[49]*out[9] + c[69]*obs[47] + c[70]*ld[2] + c[71]*ld[3] + c[71]*ld[5] + c[71]*t8 + c[72]*ld[4] - c[73]*out[2] - ld[9];
+    out[2] = -c[66]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
+    out[3] = -c[52]*out[9] + c[74]*obs[47] + c[75]*ld[2] + c[76]*ld[3] + c[76]*ld[5] + c[76]*t8 + c[77]*ld[4] - c[78]*out[2] - ld[9];
     out[8] = t5;
     out[10] = t8;
-    out[1] = c[67]*(-gv[1] + obs[26]) - c[68]*out[6]*t11;
-    out[0] = c[67]*(-gv[0] + obs[25]) - c[68]*out[6]*t12;
-    out[11] = c[64]*obs[20] - out[0]*(c[38]*t0 + c[40]*t10) - out[1]*(c[40]*t0 + c[41]*t10) - out[6]*(c[65]*t0*t10 + c[66]*t10*t11) - ld[6];
+    out[1] = c[72]*(-gv[1] + obs[26]) - c[73]*out[6]*t11;
+    out[0] = c[72]*(-gv[0] + obs[25]) - c[73]*out[6]*t12;
+    out[11] = c[69]*obs[20] - out[0]*(c[41]*t0 + c[43]*t10) - out[1]*(c[43]*t0 + c[44]*t10) - out[6]*(c[70]*t0*t10 + c[71]*t10*t11) - ld[6];
     const double t15 = -out[2];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
@@ -338,12 +381,12 @@ int sg_overlock_needle_forces(const double *q, const double *cq, const double *x
     out[15] = 0.0;
     out[16] = out[6]*t14;
     out[17] = out[6]*t13;
-    out[18] = c[75]*out[6]*t10;
+    out[18] = c[80]*out[6]*t10;
     out[19] = out[0] + out[4] + t15;
     out[20] = out[1] + out[5];
     out[21] = c[0]*out[1] + c[19]*out[0] + out[11] + out[2]*q[1] + out[3];
-    out[22] = c[76]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[77]*((obs[19])*(obs[19])) + c[78]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[79]*((obs[28])*(obs[28])) + c[80]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[81]*((obs[37])*(obs[37])) + c[82]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[83]*((obs[46])*(obs[46]));
-    out[23] = c[84]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[85]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[86]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[87]*(gv[0]*obs[48] + gv[1]*obs[49]);
+    out[22] = c[81]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[82]*((obs[19])*(obs[19])) + c[83]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[84]*((obs[28])*(obs[28])) + c[85]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[86]*((obs[37])*(obs[37])) + c[87]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[88]*((obs[46])*(obs[46]));
+    out[23] = c[89]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[90]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[91]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[92]*(gv[0]*obs[48] + gv[1]*obs[49]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     out[25] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
@@ -356,35 +399,35 @@ void sg_overlock_needle_force_matrix(const double *q, const double *cq, const do
     (void)q;
     (void)x;
     const double t0 = c[11]*cq[0] + c[13]*cq[1] + c[18];
-    const double t1 = c[68]*t0;
+    const double t1 = c[73]*t0;
     const double t2 = c[2]*cx[0] + c[3]*cx[1];
     const double t3 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t2;
     const double t4 = c[3]*cx[0] + c[7]*cx[1];
-    const double t5 = c[74]*t3;
-    const double t6 = c[44]*cq[0];
-    const double t7 = c[44]*cq[1];
-    const double t8 = c[46]*cq[5];
-    const double t9 = c[47]*cq[4];
+    const double t5 = c[79]*t3;
+    const double t6 = c[47]*cq[0];
+    const double t7 = c[47]*cq[1];
+    const double t8 = c[49]*cq[5];
+    const double t9 = c[50]*cq[4];
     for (int k = 0; k < 144; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[6] = t1;
     A[13] = 1.0;
-    A[18] = c[68]*t3;
-    A[24] = c[38]*t2 + c[40]*t4;
-    A[25] = c[40]*t2 + c[41]*t4;
-    A[30] = c[65]*t2*t4 + c[66]*t3*t4;
+    A[18] = c[73]*t3;
+    A[24] = c[41]*t2 + c[43]*t4;
+    A[25] = c[43]*t2 + c[44]*t4;
+    A[30] = c[70]*t2*t4 + c[71]*t3*t4;
     A[35] = 1.0;
     A[40] = 1.0;
-    A[42] = c[74]*t0;
+    A[42] = c[79]*t0;
     A[43] = -1.0;
     A[53] = 1.0;
     A[54] = t5;
     A[56] = -1.0;
-    A[64] = c[42]*cq[1] + t6;
-    A[65] = c[45]*cq[0] + t7;
-    A[66] = t1*(c[88]*cq[0] + c[89]*cq[1]) + t5*(c[89]*cq[0] + c[90]*cq[1]);
-    A[67] = c[43]*cq[0] + c[58]*cq[1];
-    A[68] = c[43]*cq[1] + c[57]*cq[0];
+    A[64] = c[45]*cq[1] + t6;
+    A[65] = c[48]*cq[0] + t7;
+    A[66] = t1*(c[93]*cq[0] + c[94]*cq[1]) + t5*(c[94]*cq[0] + c[95]*cq[1]);
+    A[67] = c[46]*cq[0] + c[63]*cq[1];
+    A[68] = c[46]*cq[1] + c[62]*cq[0];
     A[79] = 1.0;
     A[81] = -1.0;
     A[92] = 1.0;
@@ -396,22 +439,22 @@ void sg_overlock_needle_force_matrix(const double *q, const double *cq, const do
     A[110] = -1.0;
     A[117] = 1.0;
     A[130] = 1.0;
-    A[134] = c[73];
+    A[134] = c[78];
     A[135] = 1.0;
-    A[141] = c[49];
-    A[142] = c[91];
-    b[0] = c[67]*(-gv[0] + obs[25]);
-    b[1] = c[67]*(-gv[1] + obs[26]);
-    b[2] = c[64]*obs[20] - ld[6];
-    b[3] = c[59]*(-gv[0] + obs[34]) - ld[0];
-    b[4] = c[59]*(-gv[1] + obs[35]) - ld[1];
-    b[5] = c[56]*obs[29] - ld[0]*(c[57]*cq[1] + t6) - ld[1]*(c[58]*cq[0] + t7) - ld[7];
-    b[6] = c[60]*(-gv[0] + obs[43]);
-    b[7] = c[60]*(-gv[1] + obs[44]);
-    b[8] = c[62]*obs[38] - ld[8];
-    b[9] = c[61]*(-gv[0] + obs[52]) - ld[2] - ld[4];
-    b[10] = c[61]*(-gv[1] + obs[53]) - ld[3] - ld[5];
-    b[11] = c[69]*obs[47] + c[70]*ld[2] + c[71]*ld[3] + c[71]*ld[5] + c[72]*ld[4] - ld[9];
+    A[141] = c[52];
+    A[142] = c[96];
+    b[0] = c[72]*(-gv[0] + obs[25]);
+    b[1] = c[72]*(-gv[1] + obs[26]);
+    b[2] = c[69]*obs[20] - ld[6];
+    b[3] = c[64]*(-gv[0] + obs[34]) - ld[0];
+    b[4] = c[64]*(-gv[1] + obs[35]) - ld[1];
+    b[5] = c[61]*obs[29] - ld[0]*(c[62]*cq[1] + t6) - ld[1]*(c[63]*cq[0] + t7) - ld[7];
+    b[6] = c[65]*(-gv[0] + obs[43]);
+    b[7] = c[65]*(-gv[1] + obs[44]);
+    b[8] = c[67]*obs[38] - ld[8];
+    b[9] = c[66]*(-gv[0] + obs[52]) - ld[2] - ld[4];
+    b[10] = c[66]*(-gv[1] + obs[53]) - ld[3] - ld[5];
+    b[11] = c[74]*obs[47] + c[75]*ld[2] + c[76]*ld[3] + c[76]*ld[5] + c[77]*ld[4] - ld[9];
 }
 
 /* sg_overlock_needle_anchors -- Total ops: 41 */
@@ -451,17 +494,17 @@ void sg_overlock_needle_anchors(const double *q, const double *cq, const double 
     out[26] = t1;
     out[27] = t2;
     out[28] = c[16];
-    out[29] = c[35] + q[1];
+    out[29] = c[38] + q[1];
     out[30] = c[16];
-    out[31] = c[36] + q[1];
-    out[32] = c[0] + c[38]*t3 + c[39]*t0;
-    out[33] = c[1] + c[38]*t0 + c[40]*t3;
-    out[34] = c[42]*cq[0] + c[43]*cq[1];
-    out[35] = c[42]*cq[1] + c[44]*cq[0];
-    out[36] = c[46]*cq[4] + t1;
-    out[37] = c[46]*cq[5] + t2;
-    out[38] = c[48];
-    out[39] = c[49] + q[1];
+    out[31] = c[39] + q[1];
+    out[32] = c[0] + c[41]*t3 + c[42]*t0;
+    out[33] = c[1] + c[41]*t0 + c[43]*t3;
+    out[34] = c[45]*cq[0] + c[46]*cq[1];
+    out[35] = c[45]*cq[1] + c[47]*cq[0];
+    out[36] = c[49]*cq[4] + t1;
+    out[37] = c[49]*cq[5] + t2;
+    out[38] = c[51];
+    out[39] = c[52] + q[1];
 }
 
 static const unsigned char sg_overlock_needle_coord_is_angle[3] = { 1, 0, 1 };
@@ -471,12 +514,13 @@ static const sg_mechanism sg_overlock_needle_descriptor = {
     .nq = 3,
     .nx = 1,
     .np = 25,
-    .nc = 92,
+    .nc = 97,
     .nobs = 54,
     .nbranch = 2,
     .nf = 12,
     .nfo = 26,
     .nload = 10,
+    .nblock = 3,
     .coord_is_angle = sg_overlock_needle_coord_is_angle,
     .constants = sg_overlock_needle_constants,
     .closed = sg_overlock_needle_closed,
@@ -484,6 +528,8 @@ static const sg_mechanism sg_overlock_needle_descriptor = {
     .motion = sg_overlock_needle_motion,
     .forces = sg_overlock_needle_forces,
     .force_matrix = sg_overlock_needle_force_matrix,
+    .scales = sg_overlock_needle_scales,
+    .blocks = sg_overlock_needle_blocks,
     .anchors = sg_overlock_needle_anchors,
 };
 
@@ -513,153 +559,161 @@ const char *sg_overlock_needle_manifest(void)
         "name\":\"needle_point\"},{\"body\":\"eccentric\",\"joint\":null,\"kind\":\"com\",\"name\":\"ecce"
         "ntric.com\"},{\"body\":\"lever\",\"joint\":null,\"kind\":\"com\",\"name\":\"lever.com\"},{\"body"
         "\":\"link\",\"joint\":null,\"kind\":\"com\",\"name\":\"link.com\"},{\"body\":\"needle_bar\",\"jo"
-        "int\":null,\"kind\":\"com\",\"name\":\"needle_bar.com\"}],\"arcs\":[],\"bodies\":[{\"doc\":\"nee"
-        "dle eccentric on the main shaft 1\",\"kind\":\"driven\",\"name\":\"eccentric\",\"offset\":18,\"r"
-        "ole\":null},{\"doc\":\"needle-lever rock shaft 3 with its arm DC and lever DL\",\"kind\":\"link\""
-        ",\"name\":\"lever\",\"offset\":27,\"role\":null},{\"doc\":\"needle-bar link 5\",\"kind\":\"link\""
-        ",\"name\":\"link\",\"offset\":36,\"role\":null},{\"doc\":\"needle bar with its needle\",\"kind\""
-        ":\"slider\",\"name\":\"needle_bar\",\"offset\":45,\"role\":\"needle_bar\"}],\"body_fields\":[\"a"
-        "ngle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"br"
-        "anches\":[{\"default\":1,\"joint\":\"rod\",\"kind\":\"rrs\",\"meaning\":\"+1: pin lever of rod r"
-        "od left of the line from D to the crank pin's projection (seed 003 eq. 1: \\u03b4\\u2081)\"},{\""
-        "default\":1,\"joint\":\"N\",\"kind\":\"rrp\",\"meaning\":\"+1: the larger travel of needle_bar a"
-        "t joint N\"}],\"closed_form\":true,\"closure\":[\"rod.length\",\"N.x\",\"N.y\"],\"coords\":[{\"g"
-        "uess\":0.0,\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"guess\":0.04,\"name\":\"needle_bar.trav"
-        "el\",\"unit\":\"m\"},{\"guess\":1.5707963267948966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\""
-        "default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the needle mechanism \\u043c\\u"
-        "0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u0438\\u0433\\u043b\\u044b (seed 003 fig. 1\\u2"
-        "0132, eqs. 1\\u20132).\\n\\nA spatial-planar four-bar: the main shaft 1 (below the bed, along th"
-        "e machine's x) carries an eccentric whose\\npin B drives, through a rod with a ball joint at eac"
-        "h end, the needle-lever rock shaft 3 (axis across the main\\nshaft, through D); its arm l\\u2084"
-        " drives the needle bar through the link l\\u2085 (the needle bar's axis at the offset a\\nfrom D"
-        "). Seed 003 eq. (1) gives the rock shaft's angle \\u03c6\\u2083 in closed form (\\u03b4\\u2081 t"
-        "he assembly sign), eq. (2) the\\nneedle stroke as a second-order expansion in the link's obliqui"
-        "ty \\u2014 here both are exact.\\n\\nFrame (the needle lever's plane): origin on the rock-shaft "
-        "axis D, x along the main shaft, y up, z along the rock\\nshaft. The main shaft's axis runs paral"
-        "lel to x through (l\\u2083, \\u2212h_A, 0): the rod is nearly vertical and the lever\\narm DC ho"
-        "rizontal in mid stroke, so B's up-and-down throw rocks the shaft by about \\u00b1asin(r/l\\u2083"
-        "). The arm DC and\\nthe needle lever DL are one bent lever (DL at ``lever_angle`` from DC). Cran"
-        "k angle zero points the eccentric\\nalong +z (the mechanism's normal): \\u03c6 = 90\\u00b0 puts "
-        "B at its lowest, the needle at its highest (sign of the lever).\\n\\nEvery dimension is an estim"
-        "ate (seed 003 prints none; DOMAIN-NOTES: 51-A class, 3000\\u20134000 r/min): a needle\\nstroke o"
-        "f about 25 mm, the rock shaft swinging about \\u00b127\\u00b0, masses of a small cast lever and "
-        "a light needle bar.\",\"elements\":[],\"force_blocks\":[1,1],\"force_outputs\":[{\"name\":\"shaf"
-        "t.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"needle_bar.gu"
-        "ide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar.guide.fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\","
-        "\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},{\"nam"
-        "e\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking."
-        "moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_en"
-        "ergy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"un"
-        "it\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"lever.x\",\""
-        "lever.y\",\"lever.moment\",\"link.x\",\"link.y\",\"link.moment\",\"needle_bar.x\",\"needle_bar.y"
-        "\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-"
-        "shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kerne"
-        "ls\":{\"sg_overlock_needle_anchors\":{\"ops\":41},\"sg_overlock_needle_closed\":{\"ops\":38},\"s"
-        "g_overlock_needle_constants\":{\"ops\":93},\"sg_overlock_needle_force_matrix\":{\"ops\":105},\"s"
-        "g_overlock_needle_forces\":{\"ops\":208},\"sg_overlock_needle_motion\":{\"ops\":155},\"sg_overlo"
-        "ck_needle_residual\":{\"ops\":43}},\"loads\":[{\"body\":\"lever\",\"component\":\"fx\",\"name\":"
-        "\"lever_pin\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"need"
-        "le_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\""
-        "fy\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_po"
-        "int\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"ecce"
-        "ntric\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"lever\",\"component\":\"tor"
-        "que\",\"name\":\"lever\"},{\"body\":\"link\",\"component\":\"torque\",\"name\":\"link\"},{\"body"
-        "\":\"needle_bar\",\"component\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"overlock_needle\""
-        ",\"observables\":[{\"name\":\"lever_pin.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\""
-        "m\"},{\"name\":\"lever_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"lever_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\""
-        ":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"needle_point.x\",\"unit\":\"m\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"nee"
-        "dle_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"n"
-        "eedle_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"na"
-        "me\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{"
-        "\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m"
-        "\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit"
-        "\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\""
-        ":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\""
-        "},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"link.angle\",\"unit\":\"rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name"
-        "\":\"link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\""
-        "link.com.y\",\"unit\":\"m\"},{\"name\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.a"
-        "ngle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
-        "needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"ne"
-        "edle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\""
-        "}],\"params\":[{\"default\":0.0074,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of the need"
-        "le eccentric on the main shaft (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positiv"
-        "e\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"main-"
-        "shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"po"
-        "sitive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\""
-        "ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u"
-        "2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":"
-        "\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle lever DL, l\\u2084 (estimate)"
-        "\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"def"
-        "ault\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of the needle lever DL from the arm DC (esti"
-        "mate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"positive\":false,\"role\":null,\"unit\":\""
-        "rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"needle-bar link LN, l\\u2085 (estimat"
-        "e)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"de"
-        "fault\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-bar axis from the rock shaft D, a (estima"
-        "te)\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
-        "\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link pin N along the ba"
-        "r (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"needle point below its eye (e"
-        "stimate)\",\"kind\":\"length\",\"name\":\"point_below_eye\",\"positive\":true,\"role\":null,\"un"
-        "it\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric"
-        " relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of ecc"
-        "entric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u"
-        "\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\""
-        "kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},"
-        "{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about i"
-        "ts centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of lever"
-        "\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{"
-        "\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":"
-        "\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\""
-        "name\":\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"dis"
-        "play_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\""
-        ":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{"
-        "\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\"mass\",\"name\":\"l"
-        "ink.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-06,\"display_unit\""
-        ":\"kg*m**2\",\"doc\":\"moment of inertia of link about its centre of mass\",\"kind\":\"inertia\""
-        ",\"name\":\"link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0"
-        ".025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_b"
-        "ar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":"
-        "\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\"needle_b"
-        "ar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar"
-        ".com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\""
-        "kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\":\"inerti"
-        "a\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"po"
-        "int_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"lever\",\"doc\":\""
-        "needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\""
-        ",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_eye\"},{\"body\":"
-        "\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":12,\"role\":\"needl"
-        "e_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"g"
-        "rounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"ground\""
-        ",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic"
-        "\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\",\"columns\":[\""
-        "fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"eccen"
-        "tric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\""
-        "rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":fal"
-        "se,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"needle_bar\",\"col"
-        "umns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\"offset\":9},{\""
-        "a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\""
-        ",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\"needle"
-        "_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"point\",\"name\":\""
-        "needle_eye\"},\"needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"}},\"sizes\":{\"nanc"
-        "hor_out\":40,\"nbranch\":2,\"nc\":92,\"nf\":12,\"nfo\":26,\"nload\":10,\"nobs\":54,\"np\":25,\"n"
-        "q\":3,\"nx\":1}}"
+        "int\":null,\"kind\":\"com\",\"name\":\"needle_bar.com\"}],\"arcs\":[],\"blocks\":[{\"coords\":[0"
+        "],\"joints\":[\"rod\"],\"rows\":[0]},{\"coords\":[2],\"joints\":[\"N\"],\"rows\":[1]},{\"coords\""
+        ":[1],\"joints\":[\"N\"],\"rows\":[2]}],\"bodies\":[{\"doc\":\"needle eccentric on the main shaft"
+        " 1\",\"kind\":\"driven\",\"name\":\"eccentric\",\"offset\":18,\"role\":null},{\"doc\":\"needle-l"
+        "ever rock shaft 3 with its arm DC and lever DL\",\"kind\":\"link\",\"name\":\"lever\",\"offset\""
+        ":27,\"role\":null},{\"doc\":\"needle-bar link 5\",\"kind\":\"link\",\"name\":\"link\",\"offset\""
+        ":36,\"role\":null},{\"doc\":\"needle bar with its needle\",\"kind\":\"slider\",\"name\":\"needle"
+        "_bar\",\"offset\":45,\"role\":\"needle_bar\"}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\""
+        "com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":1,\"jo"
+        "int\":\"rod\",\"kind\":\"rrs\",\"meaning\":\"+1: pin lever of rod rod left of the line from D to"
+        " the crank pin's projection (seed 003 eq. 1: \\u03b4\\u2081)\"},{\"default\":1,\"joint\":\"N\",\""
+        "kind\":\"rrp\",\"meaning\":\"+1: the larger travel of needle_bar at joint N\"}],\"closed_form\":"
+        "true,\"closure\":[\"rod.length\",\"N.x\",\"N.y\"],\"constants\":[[3],[1],[10],[10],[0],[3,5],[2]"
+        ",[10],[0],[3,5],[3,5],[3,5],[3,5],[3,5],[4],[6],[7],[6],[3],[1],[0],[2],[0],[7],[3,5],[3,5],[3,5"
+        "],[4],[6],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[0],[8],[8,9],[10],[12],[13],[13],[12]"
+        ",[16],[17],[17],[16],[6],[6],[7,23],[22],[0,1,2,3],[4,6,7],[2,3,5],[2,3,5],[1,2,3,5],[1,2,3,5],["
+        "0,2,3,5],[0,2,3,5],[18],[4,16],[4,16],[15],[19],[21],[20],[6,19],[14],[0,2],[0,2],[11],[2],[24],"
+        "[8,22],[23],[8,9,22],[22],[2],[0,2],[11],[14],[15],[18],[19],[20],[21],[24],[11],[15],[19],[21],"
+        "[3,5,17],[3,5,16],[3,5,17],[23]],\"coords\":[{\"guess\":0.0,\"name\":\"lever.angle\",\"unit\":\""
+        "rad\"},{\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":1.5707963267948"
+        "966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51"
+        "-A class overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c"
+        " \\u0438\\u0433\\u043b\\u044b (seed 003 fig. 1\\u20132, eqs. 1\\u20132).\\n\\nA spatial-planar f"
+        "our-bar: the main shaft 1 (below the bed, along the machine's x) carries an eccentric whose\\npi"
+        "n B drives, through a rod with a ball joint at each end, the needle-lever rock shaft 3 (axis acr"
+        "oss the main\\nshaft, through D); its arm l\\u2084 drives the needle bar through the link l\\u20"
+        "85 (the needle bar's axis at the offset a\\nfrom D). Seed 003 eq. (1) gives the rock shaft's ang"
+        "le \\u03c6\\u2083 in closed form (\\u03b4\\u2081 the assembly sign), eq. (2) the\\nneedle stroke"
+        " as a second-order expansion in the link's obliquity \\u2014 here both are exact.\\n\\nFrame (th"
+        "e needle lever's plane): origin on the rock-shaft axis D, x along the main shaft, y up, z along "
+        "the rock\\nshaft. The main shaft's axis runs parallel to x through (l\\u2083, \\u2212h_A, 0): th"
+        "e rod is nearly vertical and the lever\\narm DC horizontal in mid stroke, so B's up-and-down thr"
+        "ow rocks the shaft by about \\u00b1asin(r/l\\u2083). The arm DC and\\nthe needle lever DL are on"
+        "e bent lever (DL at ``lever_angle`` from DC). Crank angle zero points the eccentric\\nalong +z ("
+        "the mechanism's normal): \\u03c6 = 90\\u00b0 puts B at its lowest, the needle at its highest (si"
+        "gn of the lever).\\n\\nEvery dimension is an estimate (seed 003 prints none; DOMAIN-NOTES: 51-A "
+        "class, 3000\\u20134000 r/min): a needle\\nstroke of about 25 mm, the rock shaft swinging about \\u"
+        "00b127\\u00b0, masses of a small cast lever and a light needle bar.\",\"elements\":[],\"force_bl"
+        "ocks\":[1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.p"
+        "ower\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar."
+        "guide.fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\""
+        "N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"s"
+        "haking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_e"
+        "nergy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\","
+        "\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"e"
+        "ccentric.y\",\"eccentric.moment\",\"lever.x\",\"lever.y\",\"lever.moment\",\"link.x\",\"link.y\""
+        ",\"link.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default"
+        "\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\""
+        "shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_needle_anchors\":{\"ops\":41"
+        "},\"sg_overlock_needle_blocks\":{\"ops\":27},\"sg_overlock_needle_closed\":{\"ops\":38},\"sg_ove"
+        "rlock_needle_constants\":{\"ops\":111},\"sg_overlock_needle_force_matrix\":{\"ops\":105},\"sg_ov"
+        "erlock_needle_forces\":{\"ops\":208},\"sg_overlock_needle_motion\":{\"ops\":155},\"sg_overlock_n"
+        "eedle_residual\":{\"ops\":43},\"sg_overlock_needle_scales\":{\"ops\":5}},\"loads\":[{\"body\":\""
+        "lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":\"lever\",\"component\":\"fy\",\""
+        "name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\""
+        "body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"c"
+        "omponent\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"nam"
+        "e\":\"needle_point\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\"},{"
+        "\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\":\"link\",\"component\""
+        ":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\"component\":\"torque\",\"name\":\"need"
+        "le_bar\"}],\"name\":\"overlock_needle\",\"observables\":[{\"name\":\"lever_pin.x\",\"unit\":\"m\""
+        "},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"lever_pin.x_d\",\"unit\":\"m/s\"},{\"nam"
+        "e\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name"
+        "\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\""
+        "needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle"
+        "_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needl"
+        "e_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"name\":\"needle"
+        "_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_p"
+        "oint.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"nee"
+        "dle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\""
+        "eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{"
+        "\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"na"
+        "me\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{"
+        "\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/"
+        "s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\""
+        "},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"nam"
+        "e\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name"
+        "\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.angle\",\"unit\":\"rad\"},{\"name\":\""
+        "link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
+        "link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\"unit\":\"m\"},{\"name\":\"link.com.x_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.x_dd\",\"un"
+        "it\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\""
+        "unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angl"
+        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_b"
+        "ar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle"
+        "_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\""
+        "mm\",\"doc\":\"eccentricity AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\""
+        "length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
+        "6,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\""
+        ":\"length\",\"name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":0.06,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"n"
+        "ame\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\""
+        ":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\","
+        "\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc"
+        "\":\"needle lever DL, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":"
+        "true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of "
+        "the needle lever DL from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"p"
+        "ositive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\""
+        ":\"needle-bar link LN, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":"
+        "true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-b"
+        "ar axis from the rock shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"need"
+        "le eye below the link pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_"
+        "pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\""
+        ",\"doc\":\"needle point below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_ey"
+        "e\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_uni"
+        "t\":\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name"
+        "\":\"eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"di"
+        "splay_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\""
+        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
+        ":\"centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"pos"
+        "itive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"c"
+        "entre of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":"
+        "\"moment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"ecce"
+        "ntric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"disp"
+        "lay_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centr"
+        "e of mass of lever, local u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
+        " lever, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of l"
+        "ever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass "
+        "of link\",\"kind\":\"mass\",\"name\":\"link.mass\",\"positive\":false,\"role\":null,\"unit\":\"k"
+        "g\"},{\"default\":1e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of link about i"
+        "ts centre of mass\",\"kind\":\"inertia\",\"name\":\"link.inertia\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"kg*m**2\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar"
+        "\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
+        "\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\""
+        ",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m"
+        "\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\""
+        "kind\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
+        ",{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about"
+        " its centre of mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\""
+        "points\":[{\"body\":\"lever\",\"doc\":\"needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0"
+        ",\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset"
+        "\":6,\"role\":\"needle_eye\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needl"
+        "e_point\",\"offset\":12,\"role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"ecc"
+        "entric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentri"
+        "c.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\""
+        "],\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\""
+        "ground\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"n"
+        "ame\":\"D\",\"offset\":4},{\"a\":\"eccentric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"groun"
+        "ded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"co"
+        "lumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\""
+        "a\":\"link\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revo"
+        "lute\",\"name\":\"N\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\""
+        "],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset"
+        "\":11,\"sense\":1}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"need"
+        "le_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"needle_point\":{\"kind\":\"point\",\"nam"
+        "e\":\"needle_point\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc\":97,\"nf\""
+        ":12,\"nfo\":26,\"nload\":10,\"nobs\":54,\"np\":25,\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -6,24 +6,31 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_take_up_constants -- Total ops: 47 */
+/* sg_take_up_constants -- Total ops: 71 */
 void sg_take_up_constants(const double *p, double *c)
 {
     const double t0 = sin(p[7]);
     const double t1 = (1.0/(p[3]));
     const double t2 = -p[3];
-    const double t3 = ((p[5])*(p[5]));
-    const double t4 = ((p[3])*(p[3]));
-    const double t5 = -((p[6])*(p[6])) + t3 + t4;
-    const double t6 = sqrt(t3 - 0.25*((t5)*(t5))/t4);
-    const double t7 = -t6;
-    const double t8 = (0.5)*t1*t5;
-    const double t9 = -t8;
-    const double t10 = -p[9];
-    const double t11 = (0.5)*p[4];
-    const double t12 = p[13] + t9;
-    const double t13 = p[2] + t10;
-    const double t14 = p[13] + t2;
+    const double t3 = p[2] + p[3] + p[4];
+    const double t4 = t3 + fabs(p[0]);
+    const double t5 = t3 + fabs(p[1]);
+    const double t6 = ((p[5])*(p[5]));
+    const double t7 = ((p[3])*(p[3]));
+    const double t8 = ((p[6])*(p[6]));
+    const double t9 = t6 + t7 - t8;
+    const double t10 = (1.0/(t7));
+    const double t11 = (0.25)*t10;
+    const double t12 = (0.5)*t6;
+    const double t13 = sqrt(sg_rounding_clamp(-t11*((t9)*(t9)) + t6, ((p[5])*(p[5])*(p[5])*(p[5]))*t11 + ((p[6])*(p[6])*(p[6])*(p[6]))*t11 + t10*t12*t8 + t12 + (0.25)*t7 + (0.5)*t8));
+    const double t14 = -t13;
+    const double t15 = (0.5)*t1*t9;
+    const double t16 = -t15;
+    const double t17 = -p[9];
+    const double t18 = (0.5)*p[4];
+    const double t19 = p[13] + t16;
+    const double t20 = p[2] + t17;
+    const double t21 = p[13] + t2;
     c[0] = p[2];
     c[1] = cos(p[7]);
     c[2] = -t0;
@@ -38,44 +45,48 @@ void sg_take_up_constants(const double *p, double *c)
     c[11] = -p[4];
     c[12] = -p[1];
     c[13] = t2;
-    c[14] = -p[2];
-    c[15] = t7;
-    c[16] = t8;
-    c[17] = t6;
-    c[18] = t9;
-    c[19] = p[7];
-    c[20] = p[9];
-    c[21] = -p[10];
-    c[22] = p[10];
-    c[23] = t10;
-    c[24] = p[13];
-    c[25] = -p[14];
-    c[26] = p[14];
-    c[27] = -p[13];
-    c[28] = t11;
-    c[29] = -t11;
-    c[30] = p[15];
-    c[31] = p[14] + t7;
-    c[32] = t12;
-    c[33] = -t12;
-    c[34] = p[12];
-    c[35] = p[17];
-    c[36] = p[16];
-    c[37] = p[11];
-    c[38] = -t13;
-    c[39] = t13;
-    c[40] = p[8];
-    c[41] = (0.5)*p[11];
-    c[42] = (0.5)*p[12];
-    c[43] = (0.5)*p[15];
-    c[44] = (0.5)*p[16];
-    c[45] = (0.5)*p[17];
-    c[46] = (0.5)*p[8];
-    c[47] = -p[12];
-    c[48] = -p[16];
-    c[49] = -p[8];
-    c[50] = -t14;
-    c[51] = t14;
+    c[14] = t4;
+    c[15] = t5;
+    c[16] = -p[2];
+    c[17] = t14;
+    c[18] = t15;
+    c[19] = t13;
+    c[20] = t16;
+    c[21] = p[7];
+    c[22] = p[9];
+    c[23] = -p[10];
+    c[24] = p[10];
+    c[25] = t17;
+    c[26] = p[13];
+    c[27] = -p[14];
+    c[28] = p[14];
+    c[29] = -p[13];
+    c[30] = t18;
+    c[31] = -t18;
+    c[32] = (1.0/(t4));
+    c[33] = (1.0/(t5));
+    c[34] = p[15];
+    c[35] = p[14] + t14;
+    c[36] = t19;
+    c[37] = -t19;
+    c[38] = p[12];
+    c[39] = p[17];
+    c[40] = p[16];
+    c[41] = p[11];
+    c[42] = -t20;
+    c[43] = t20;
+    c[44] = p[8];
+    c[45] = (0.5)*p[11];
+    c[46] = (0.5)*p[12];
+    c[47] = (0.5)*p[15];
+    c[48] = (0.5)*p[16];
+    c[49] = (0.5)*p[17];
+    c[50] = (0.5)*p[8];
+    c[51] = -p[12];
+    c[52] = -p[16];
+    c[53] = -p[8];
+    c[54] = -t21;
+    c[55] = t21;
 }
 
 /* sg_take_up_closed -- Total ops: 22 */
@@ -116,8 +127,29 @@ void sg_take_up_residual(const double *q, const double *cq, const double *x, con
     jac[3] = t1;
 }
 
+/* sg_take_up_scales -- Total ops: 2 */
+void sg_take_up_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
+{
+    (void)q;
+    (void)cq;
+    (void)x;
+    (void)cx;
+    out[0] = c[14];
+    out[1] = c[15];
+}
+
+/* sg_take_up_blocks -- Total ops: 15 */
+void sg_take_up_blocks(const double *jac, double *out)
+{
+    /* block 0: joints C */
+    {
+        const double nr = sqrt(sg_row_norm2(2, jac + 0) * sg_row_norm2(2, jac + 2));
+        out[0] = nr > 0.0 ? (jac[1] * jac[2] - jac[0] * jac[3]) / nr : 0.0;
+    }
+}
+
 /* sg_take_up_motion -- Total ops: 139 */
-int sg_take_up_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs)
+int sg_take_up_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[7]*cq[1];
     const double t1 = c[11]*cq[0];
@@ -125,25 +157,25 @@ int sg_take_up_motion(const double *q, const double *cq, const double *x, const 
     const double t3 = c[1]*cx[1] + c[3]*cx[0];
     const double t4 = c[0]*t3;
     const double t5 = c[1]*cx[0] + c[2]*cx[1];
-    const double t6 = c[14]*t5;
+    const double t6 = c[16]*t5;
     const double t10 = ((xd[0])*(xd[0]));
     const double t11 = c[0]*t5;
     const double t12 = c[11]*cq[1];
-    const double t14 = c[14]*t3;
+    const double t14 = c[16]*t3;
     const double t15 = t14*xd[0];
     const double t16 = t11*xd[0];
     const double t17 = t10*t6 + t14*xdd[0];
     const double t18 = t10*t14 + t11*xdd[0];
     const double t19 = c[7]*cq[0];
-    const double t20 = c[15]*cq[3] + c[16]*cq[2];
-    const double t21 = c[15]*cq[2] + c[18]*cq[3];
-    const double t22 = c[20]*t5 + c[21]*t3;
-    const double t23 = c[21]*t5 + c[23]*t3;
-    const double t24 = c[24]*cq[2] + c[25]*cq[3];
-    const double t25 = c[25]*cq[2] + c[27]*cq[3];
-    const double t26 = c[28]*cq[0];
-    const double t27 = c[29]*cq[1];
-    double J[4];
+    const double t20 = c[17]*cq[3] + c[18]*cq[2];
+    const double t21 = c[17]*cq[2] + c[20]*cq[3];
+    const double t22 = c[22]*t5 + c[23]*t3;
+    const double t23 = c[23]*t5 + c[25]*t3;
+    const double t24 = c[26]*cq[2] + c[27]*cq[3];
+    const double t25 = c[27]*cq[2] + c[29]*cq[3];
+    const double t26 = c[30]*cq[0];
+    const double t27 = c[31]*cq[1];
+    double J[4], rs[2], cs[2];
     int piv[2];
     J[0] = t0;
     J[1] = c[13]*cq[3];
@@ -151,15 +183,17 @@ int sg_take_up_motion(const double *q, const double *cq, const double *x, const 
     J[3] = t2;
     qd[0] = t4*xd[0];
     qd[1] = t6*xd[0];
-    if (sg_lu_factor_inl(2, J, piv, 0) != SG_OK) return SG_SINGULAR;
-    sg_lu_solve_inl(2, J, piv, qd);
+    rs[0] = c[32];
+    rs[1] = c[33];
+    if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(2, J, piv, rs, cs, qd);
     const double t7 = ((qd[0])*(qd[0]));
     const double t8 = t1*t7;
     const double t9 = ((qd[1])*(qd[1]));
     const double t13 = t12*t7;
     qdd[0] = t10*t11 + t2*t9 + t4*xdd[0] + t8;
     qdd[1] = c[6]*cq[3]*t9 + t10*t4 + t13 + t6*xdd[0];
-    sg_lu_solve_inl(2, J, piv, qdd);
+    sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
     obs[0] = t11;
     obs[1] = t4;
     obs[2] = t15;
@@ -173,37 +207,37 @@ int sg_take_up_motion(const double *q, const double *cq, const double *x, const 
     obs[10] = qdd[0]*t12 + t8;
     obs[11] = qdd[0]*t19 + t13;
     obs[12] = t11 + t20;
-    obs[13] = c[16]*cq[3] + c[17]*cq[2] + t4;
+    obs[13] = c[18]*cq[3] + c[19]*cq[2] + t4;
     obs[14] = qd[1]*t21 + t15;
     obs[15] = qd[1]*t20 + t16;
-    obs[16] = qdd[1]*t21 + t17 + t9*(c[17]*cq[3] + c[18]*cq[2]);
+    obs[16] = qdd[1]*t21 + t17 + t9*(c[19]*cq[3] + c[20]*cq[2]);
     obs[17] = qdd[1]*t20 + t18 + t21*t9;
-    obs[18] = c[19] + x[0];
+    obs[18] = c[21] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = t22;
-    obs[22] = c[20]*t3 + c[22]*t5;
+    obs[22] = c[22]*t3 + c[24]*t5;
     obs[23] = t23*xd[0];
     obs[24] = t22*xd[0];
-    obs[25] = t10*(c[22]*t3 + c[23]*t5) + t23*xdd[0];
+    obs[25] = t10*(c[24]*t3 + c[25]*t5) + t23*xdd[0];
     obs[26] = t10*t23 + t22*xdd[0];
     obs[27] = q[1];
     obs[28] = qd[1];
     obs[29] = qdd[1];
     obs[30] = t11 + t24;
-    obs[31] = c[24]*cq[3] + c[26]*cq[2] + t4;
+    obs[31] = c[26]*cq[3] + c[28]*cq[2] + t4;
     obs[32] = qd[1]*t25 + t15;
     obs[33] = qd[1]*t24 + t16;
-    obs[34] = qdd[1]*t25 + t17 + t9*(c[26]*cq[3] + c[27]*cq[2]);
+    obs[34] = qdd[1]*t25 + t17 + t9*(c[28]*cq[3] + c[29]*cq[2]);
     obs[35] = qdd[1]*t24 + t18 + t25*t9;
     obs[36] = q[0];
     obs[37] = qd[0];
     obs[38] = qdd[0];
     obs[39] = c[4] + t26;
-    obs[40] = c[28]*cq[1] + c[5];
+    obs[40] = c[30]*cq[1] + c[5];
     obs[41] = qd[0]*t27;
     obs[42] = qd[0]*t26;
-    obs[43] = c[29]*cq[0]*t7 + qdd[0]*t27;
+    obs[43] = c[31]*cq[0]*t7 + qdd[0]*t27;
     obs[44] = qdd[0]*t26 + t27*t7;
     if (!isfinite((((((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))) + ((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))) + ((obs[12] + (obs[13] + obs[14])) + ((obs[15] + obs[16]) + (obs[17] + obs[18]))))) + ((((obs[19] + (obs[20] + obs[21])) + (obs[22] + (obs[23] + obs[24]))) + ((obs[25] + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31])))) + (((obs[32] + (obs[33] + obs[34])) + (obs[35] + (obs[36] + obs[37]))) + ((obs[38] + (obs[39] + obs[40])) + ((obs[41] + obs[42]) + (obs[43] + obs[44])))))))) return SG_NONFINITE;
     return SG_OK;
@@ -214,24 +248,24 @@ int sg_take_up_forces(const double *q, const double *cq, const double *x, const 
 {
     (void)q;
     (void)x;
-    const double t0 = c[34]*(-gv[0] + obs[34]) - ld[4];
-    const double t1 = c[34]*(-gv[1] + obs[35]) - ld[5];
-    const double t2 = c[36]*(-gv[1] + obs[44]) - ld[3];
-    const double t3 = c[36]*(-gv[0] + obs[43]) - ld[2];
+    const double t0 = c[38]*(-gv[0] + obs[34]) - ld[4];
+    const double t1 = c[38]*(-gv[1] + obs[35]) - ld[5];
+    const double t2 = c[40]*(-gv[1] + obs[44]) - ld[3];
+    const double t3 = c[40]*(-gv[0] + obs[43]) - ld[2];
     const double t4 = c[1]*cx[0] + c[2]*cx[1];
-    const double t5 = c[22]*t4;
+    const double t5 = c[24]*t4;
     const double t6 = c[1]*cx[1] + c[3]*cx[0];
-    const double t7 = c[22]*t6;
+    const double t7 = c[24]*t6;
     {
         /* block of unknowns 6, 7 */
         double M[4], r[2];
         int piv[2];
         M[0] = c[11]*cq[1];
         M[1] = c[7]*cq[0];
-        r[0] = c[28]*cq[0]*t2 + c[28]*cq[1]*ld[2] + c[29]*cq[0]*ld[3] + c[29]*cq[1]*t3 + c[35]*obs[38] - ld[8];
+        r[0] = c[30]*cq[0]*t2 + c[30]*cq[1]*ld[2] + c[31]*cq[0]*ld[3] + c[31]*cq[1]*t3 + c[39]*obs[38] - ld[8];
         M[2] = c[6]*cq[3];
         M[3] = c[13]*cq[2];
-        r[1] = c[30]*obs[29] - ld[4]*(c[31]*cq[2] + c[32]*cq[3]) - ld[5]*(c[31]*cq[3] + c[33]*cq[2]) - ld[7] - t0*(c[24]*cq[3] + c[26]*cq[2]) - t1*(c[26]*cq[3] + c[27]*cq[2]);
+        r[1] = c[34]*obs[29] - ld[4]*(c[35]*cq[2] + c[36]*cq[3]) - ld[5]*(c[35]*cq[3] + c[37]*cq[2]) - ld[7] - t0*(c[26]*cq[3] + c[28]*cq[2]) - t1*(c[28]*cq[3] + c[29]*cq[2]);
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[6] = r[0];
@@ -241,16 +275,16 @@ int sg_take_up_forces(const double *q, const double *cq, const double *x, const 
     out[4] = -out[6] + t3;
     out[3] = out[7] + t1;
     out[2] = out[6] + t0;
-    out[1] = c[40]*(-gv[1] + obs[26]) + out[3] - ld[1];
-    out[0] = c[40]*(-gv[0] + obs[25]) + out[2] - ld[0];
-    out[8] = c[37]*obs[20] - out[0]*(c[20]*t6 + t5) - out[1]*(c[23]*t4 + t7) - out[2]*(c[21]*t4 + c[39]*t6) - out[3]*(c[21]*t6 + c[38]*t4) - ld[0]*(c[38]*t6 + t5) - ld[1]*(c[39]*t4 + t7) - ld[6];
+    out[1] = c[44]*(-gv[1] + obs[26]) + out[3] - ld[1];
+    out[0] = c[44]*(-gv[0] + obs[25]) + out[2] - ld[0];
+    out[8] = c[41]*obs[20] - out[0]*(c[22]*t6 + t5) - out[1]*(c[25]*t4 + t7) - out[2]*(c[23]*t4 + c[43]*t6) - out[3]*(c[23]*t6 + c[42]*t4) - ld[0]*(c[42]*t6 + t5) - ld[1]*(c[43]*t4 + t7) - ld[6];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
     out[11] = out[0] + out[4];
     out[12] = out[1] + out[5];
     out[13] = c[12]*out[4] + c[4]*out[5] + out[8];
-    out[14] = c[41]*((obs[19])*(obs[19])) + c[42]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[43]*((obs[28])*(obs[28])) + c[44]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[45]*((obs[37])*(obs[37])) + c[46]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
-    out[15] = c[47]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[48]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[49]*(gv[0]*obs[21] + gv[1]*obs[22]);
+    out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
+    out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
     out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37];
     out[17] = 0.0;
     if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + out[12])) + ((out[13] + out[14]) + (out[15] + (out[16] + out[17]))))))) return SG_NONFINITE;
@@ -264,45 +298,45 @@ void sg_take_up_force_matrix(const double *q, const double *cq, const double *x,
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[22]*t1;
-    const double t3 = c[22]*t0;
-    const double t4 = c[28]*cq[1];
-    const double t5 = c[29]*cq[0];
+    const double t2 = c[24]*t1;
+    const double t3 = c[24]*t0;
+    const double t4 = c[30]*cq[1];
+    const double t5 = c[31]*cq[0];
     for (int k = 0; k < 81; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[2] = -1.0;
     A[10] = 1.0;
     A[12] = -1.0;
-    A[18] = c[20]*t0 + t2;
-    A[19] = c[23]*t1 + t3;
-    A[20] = c[21]*t1 + c[39]*t0;
-    A[21] = c[21]*t0 + c[38]*t1;
+    A[18] = c[22]*t0 + t2;
+    A[19] = c[25]*t1 + t3;
+    A[20] = c[23]*t1 + c[43]*t0;
+    A[21] = c[23]*t0 + c[42]*t1;
     A[26] = 1.0;
     A[29] = 1.0;
     A[33] = -1.0;
     A[39] = 1.0;
     A[43] = -1.0;
-    A[47] = c[24]*cq[3] + c[26]*cq[2];
-    A[48] = c[26]*cq[3] + c[27]*cq[2];
-    A[51] = c[25]*cq[2] + c[50]*cq[3];
-    A[52] = c[25]*cq[3] + c[51]*cq[2];
+    A[47] = c[26]*cq[3] + c[28]*cq[2];
+    A[48] = c[28]*cq[3] + c[29]*cq[2];
+    A[51] = c[27]*cq[2] + c[54]*cq[3];
+    A[52] = c[27]*cq[3] + c[55]*cq[2];
     A[58] = 1.0;
     A[60] = 1.0;
     A[68] = 1.0;
     A[70] = 1.0;
     A[76] = t4;
     A[77] = t5;
-    A[78] = c[29]*cq[1];
-    A[79] = c[28]*cq[0];
-    b[0] = c[40]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[40]*(-gv[1] + obs[26]) - ld[1];
-    b[2] = c[37]*obs[20] - ld[0]*(c[38]*t0 + t2) - ld[1]*(c[39]*t1 + t3) - ld[6];
-    b[3] = c[34]*(-gv[0] + obs[34]) - ld[4];
-    b[4] = c[34]*(-gv[1] + obs[35]) - ld[5];
-    b[5] = c[30]*obs[29] - ld[4]*(c[31]*cq[2] + c[32]*cq[3]) - ld[5]*(c[31]*cq[3] + c[33]*cq[2]) - ld[7];
-    b[6] = c[36]*(-gv[0] + obs[43]) - ld[2];
-    b[7] = c[36]*(-gv[1] + obs[44]) - ld[3];
-    b[8] = c[35]*obs[38] + ld[2]*t4 + ld[3]*t5 - ld[8];
+    A[78] = c[31]*cq[1];
+    A[79] = c[30]*cq[0];
+    b[0] = c[44]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[44]*(-gv[1] + obs[26]) - ld[1];
+    b[2] = c[41]*obs[20] - ld[0]*(c[42]*t0 + t2) - ld[1]*(c[43]*t1 + t3) - ld[6];
+    b[3] = c[38]*(-gv[0] + obs[34]) - ld[4];
+    b[4] = c[38]*(-gv[1] + obs[35]) - ld[5];
+    b[5] = c[34]*obs[29] - ld[4]*(c[35]*cq[2] + c[36]*cq[3]) - ld[5]*(c[35]*cq[3] + c[37]*cq[2]) - ld[7];
+    b[6] = c[40]*(-gv[0] + obs[43]) - ld[2];
+    b[7] = c[40]*(-gv[1] + obs[44]) - ld[3];
+    b[8] = c[39]*obs[38] + ld[2]*t4 + ld[3]*t5 - ld[8];
 }
 
 /* sg_take_up_anchors -- Total ops: 42 */
@@ -336,14 +370,14 @@ void sg_take_up_anchors(const double *q, const double *cq, const double *x, cons
     out[17] = t3;
     out[18] = t4;
     out[19] = t5;
-    out[20] = c[15]*cq[3] + c[16]*cq[2] + t1;
-    out[21] = c[16]*cq[3] + c[17]*cq[2] + t3;
-    out[22] = c[20]*t0 + c[21]*t2;
-    out[23] = c[20]*t2 + c[22]*t0;
-    out[24] = c[24]*cq[2] + c[25]*cq[3] + t1;
-    out[25] = c[24]*cq[3] + c[26]*cq[2] + t3;
-    out[26] = c[28]*cq[0] + c[4];
-    out[27] = c[28]*cq[1] + c[5];
+    out[20] = c[17]*cq[3] + c[18]*cq[2] + t1;
+    out[21] = c[18]*cq[3] + c[19]*cq[2] + t3;
+    out[22] = c[22]*t0 + c[23]*t2;
+    out[23] = c[22]*t2 + c[24]*t0;
+    out[24] = c[26]*cq[2] + c[27]*cq[3] + t1;
+    out[25] = c[26]*cq[3] + c[28]*cq[2] + t3;
+    out[26] = c[30]*cq[0] + c[4];
+    out[27] = c[30]*cq[1] + c[5];
 }
 
 static const unsigned char sg_take_up_coord_is_angle[2] = { 1, 1 };
@@ -353,12 +387,13 @@ static const sg_mechanism sg_take_up_descriptor = {
     .nq = 2,
     .nx = 1,
     .np = 18,
-    .nc = 52,
+    .nc = 56,
     .nobs = 45,
     .nbranch = 1,
     .nf = 9,
     .nfo = 18,
     .nload = 9,
+    .nblock = 1,
     .coord_is_angle = sg_take_up_coord_is_angle,
     .constants = sg_take_up_constants,
     .closed = sg_take_up_closed,
@@ -366,6 +401,8 @@ static const sg_mechanism sg_take_up_descriptor = {
     .motion = sg_take_up_motion,
     .forces = sg_take_up_forces,
     .force_matrix = sg_take_up_force_matrix,
+    .scales = sg_take_up_scales,
+    .blocks = sg_take_up_blocks,
     .anchors = sg_take_up_anchors,
 };
 
@@ -389,113 +426,118 @@ const char *sg_take_up_manifest(void)
         ":null,\"kind\":\"point\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\"joint\":null,\"kind\":\""
         "com\",\"name\":\"crank.com\"},{\"body\":\"lever\",\"joint\":null,\"kind\":\"com\",\"name\":\"lev"
         "er.com\"},{\"body\":\"rocker\",\"joint\":null,\"kind\":\"com\",\"name\":\"rocker.com\"}],\"arcs\""
-        ":[],\"bodies\":[{\"doc\":\"take-up crank on the upper shaft\",\"kind\":\"driven\",\"name\":\"cra"
-        "nk\",\"offset\":18,\"role\":null},{\"doc\":\"take-up lever \\u6311\\u7ebf\\u6746 (part 16)\",\"k"
-        "ind\":\"link\",\"name\":\"lever\",\"offset\":27,\"role\":\"take_up_lever\"},{\"doc\":\"take-up r"
-        "ocker \\u6311\\u7ebf\\u6447\\u6746 (part 15)\",\"kind\":\"link\",\"name\":\"rocker\",\"offset\":"
-        "36,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\""
-        ",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\""
-        ",\"meaning\":\"+1: joint C left of the line from B to D\"}],\"closed_form\":true,\"closure\":[\""
-        "C.x\",\"C.y\"],\"coords\":[{\"guess\":1.7453292519943295,\"name\":\"rocker.angle\",\"unit\":\"ra"
-        "d\"},{\"guess\":1.0471975511965976,\"name\":\"lever.angle\",\"unit\":\"rad\"}],\"default_speed\""
-        ":523.5987755982989,\"doc\":\"Thread take-up mechanism \\u6311\\u7ebf\\u673a\\u6784: upper-shaft "
-        "crank AB \\u2192 take-up lever \\u6311\\u7ebf\\u6746 BCE (16) \\u2192 rocker CD \\u6311\\u7ebf\\u"
-        "6447\\u6746 (15).\\n\\nA crank-rocker four-bar with the thread eye E on the coupler triangle BCE"
-        " (seed 000 group \\u6311\\u7ebf; seed 004\\n\\u00a71.1, figs. 1-2). Frame as seed 004 with its ("
-        "Z, X) taken as our (x, y): A at the origin, D = (26, \\u221220) mm;\\nthe crank angle runs from "
-        "+x towards +y. E is placed from the triangle's sides by the law of cosines,\\nB\\u2192E at \\u22"
-        "20CBE from B\\u2192C (seed 004 eq. for \\u03c6BE, with \\u03c6BC in place of the paper's misprin"
-        "ted \\u03c6CD).\\nSeed 004 runs the crank at n = 5000 r/min.\\n\\nThe link lengths of seed 004's"
-        " table 1 are not in the text: AB, BC, CD, BE, CE are estimates that make a\\nGrashof crank-rocke"
-        "r (10 + 38 \\u2264 26 + 32.8) with the willow-leaf eye path the paper describes.\",\"elements\":"
-        "[],\"force_blocks\":[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\""
-        ":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy"
-        "\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\""
-        "unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\""
-        "W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"cran"
-        "k.moment\",\"lever.x\",\"lever.y\",\"lever.moment\",\"rocker.x\",\"rocker.y\",\"rocker.moment\"]"
-        ",\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\""
-        ":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_take_up_anchors"
-        "\":{\"ops\":42},\"sg_take_up_closed\":{\"ops\":22},\"sg_take_up_constants\":{\"ops\":47},\"sg_ta"
-        "ke_up_force_matrix\":{\"ops\":84},\"sg_take_up_forces\":{\"ops\":151},\"sg_take_up_motion\":{\"o"
-        "ps\":139},\"sg_take_up_residual\":{\"ops\":20}},\"loads\":[{\"body\":\"crank\",\"component\":\"f"
-        "x\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\""
-        "body\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"rocker\",\"component"
-        "\":\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"thread_ey"
-        "e\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\"com"
-        "ponent\":\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\""
-        "lever\"},{\"body\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\"name\":\"take_up\""
-        ",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\""
-        "m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\"name\""
-        ":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\"thread_"
-        "eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"thread_ey"
-        "e.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank"
-        ".angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.ang"
-        "le_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\""
-        ",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"uni"
-        "t\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"uni"
-        "t\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":"
-        "\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\""
-        ":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},"
-        "{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\""
-        "name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/s^2\""
-        "},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\"name\""
-        ":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],\"param"
-        "s\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, horizontal (seed 004"
-        " \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\":false,\"role\":nul"
-        "l,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed 004 \\u"
-        "00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.03"
-        "8,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name"
-        "\":\"lever_bc\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.02600000000000000"
-        "2,\"display_unit\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker"
-        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\""
-        "doc\":\"take-up lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\",\""
-        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\""
-        ":\"take-up lever C to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"posi"
-        "tive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"ph"
-        "ase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass"
-        " of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":"
-        "\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\""
-        "kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
-        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"len"
-        "gth\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
-        ",\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\""
-        "kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**"
-        "2\"},{\"default\":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\""
-        ":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
-        ":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\","
-        "\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"d"
-        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\""
-        "lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit"
-        "\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inerti"
-        "a\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
-        "\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.m"
-        "ass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg"
-        "*m**2\",\"doc\":\"moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\""
-        "name\":\"rocker.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields"
-        "\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin"
-        " B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rocker\",\"doc\":\"lever-roc"
-        "ker pin C\",\"name\":\"rocker_pin\",\"offset\":6,\"role\":null},{\"body\":\"lever\",\"doc\":\"th"
-        "read eye E of the take-up lever\",\"name\":\"thread_eye\",\"offset\":12,\"role\":\"thread_eye\"}"
-        "],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true"
-        ",\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"crank\",\"b\":\"lever\",\""
-        "columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":2},"
-        "{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revo"
-        "lute\",\"name\":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\""
-        "],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":"
-        "\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"na"
-        "me\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"take_up_lever\":{\"kind\":\"body\","
-        "\"name\":\"lever\"},\"thread_eye\":{\"kind\":\"point\",\"name\":\"thread_eye\"}},\"sizes\":{\"na"
-        "nchor_out\":28,\"nbranch\":1,\"nc\":52,\"nf\":9,\"nfo\":18,\"nload\":9,\"nobs\":45,\"np\":18,\"n"
-        "q\":2,\"nx\":1}}"
+        ":[],\"blocks\":[{\"coords\":[1,0],\"joints\":[\"C\"],\"rows\":[0,1]}],\"bodies\":[{\"doc\":\"tak"
+        "e-up crank on the upper shaft\",\"kind\":\"driven\",\"name\":\"crank\",\"offset\":18,\"role\":nu"
+        "ll},{\"doc\":\"take-up lever \\u6311\\u7ebf\\u6746 (part 16)\",\"kind\":\"link\",\"name\":\"leve"
+        "r\",\"offset\":27,\"role\":\"take_up_lever\"},{\"doc\":\"take-up rocker \\u6311\\u7ebf\\u6447\\u"
+        "6746 (part 15)\",\"kind\":\"link\",\"name\":\"rocker\",\"offset\":36,\"role\":null}],\"body_fiel"
+        "ds\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_a"
+        "y\"],\"branches\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C lef"
+        "t of the line from B to D\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\"],\"constants\":["
+        "[2],[7],[7],[7],[0],[1],[3],[4],[3],[4],[0],[4],[1],[3],[0,2,3,4],[1,2,3,4],[2],[3,5,6],[3,5,6],"
+        "[3,5,6],[3,5,6],[7],[9],[10],[10],[9],[13],[14],[14],[13],[4],[4],[0,2,3,4],[1,2,3,4],[15],[3,5,"
+        "6,14],[3,5,6,13],[3,5,6,13],[12],[17],[16],[11],[2,9],[2,9],[8],[11],[12],[15],[16],[17],[8],[12"
+        "],[16],[8],[3,13],[3,13]],\"coords\":[{\"guess\":1.7453292519943295,\"name\":\"rocker.angle\",\""
+        "unit\":\"rad\"},{\"guess\":1.0471975511965976,\"name\":\"lever.angle\",\"unit\":\"rad\"}],\"defa"
+        "ult_speed\":523.5987755982989,\"doc\":\"Thread take-up mechanism \\u6311\\u7ebf\\u673a\\u6784: u"
+        "pper-shaft crank AB \\u2192 take-up lever \\u6311\\u7ebf\\u6746 BCE (16) \\u2192 rocker CD \\u63"
+        "11\\u7ebf\\u6447\\u6746 (15).\\n\\nA crank-rocker four-bar with the thread eye E on the coupler "
+        "triangle BCE (seed 000 group \\u6311\\u7ebf; seed 004\\n\\u00a71.1, figs. 1-2). Frame as seed 00"
+        "4 with its (Z, X) taken as our (x, y): A at the origin, D = (26, \\u221220) mm;\\nthe crank angl"
+        "e runs from +x towards +y. E is placed from the triangle's sides by the law of cosines,\\nB\\u21"
+        "92E at \\u2220CBE from B\\u2192C (seed 004 eq. for \\u03c6BE, with \\u03c6BC in place of the pap"
+        "er's misprinted \\u03c6CD).\\nSeed 004 runs the crank at n = 5000 r/min.\\n\\nThe link lengths o"
+        "f seed 004's table 1 are not in the text: AB, BC, CD, BE, CE are estimates that make a\\nGrashof"
+        " crank-rocker (10 + 38 \\u2264 26 + 32.8) with the willow-leaf eye path the paper describes.\",\""
+        "elements\":[],\"force_blocks\":[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\""
+        "},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\""
+        "shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_"
+        "energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\""
+        ",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"cran"
+        "k.y\",\"crank.moment\",\"lever.x\",\"lever.y\",\"lever.moment\",\"rocker.x\",\"rocker.y\",\"rock"
+        "er.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle p"
+        "hi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_ta"
+        "ke_up_anchors\":{\"ops\":42},\"sg_take_up_blocks\":{\"ops\":15},\"sg_take_up_closed\":{\"ops\":2"
+        "2},\"sg_take_up_constants\":{\"ops\":71},\"sg_take_up_force_matrix\":{\"ops\":84},\"sg_take_up_f"
+        "orces\":{\"ops\":151},\"sg_take_up_motion\":{\"ops\":139},\"sg_take_up_residual\":{\"ops\":20},\""
+        "sg_take_up_scales\":{\"ops\":2}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\""
+        "crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rocker"
+        "\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"rocker\",\"component\":\"fy\",\"nam"
+        "e\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"thread_eye\"},{\"body\":"
+        "\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\"component\":\"torq"
+        "ue\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"bod"
+        "y\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\"name\":\"take_up\",\"observables"
+        "\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\""
+        ":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"c"
+        "rank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\"name\":\"rocker_pin"
+        ".x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.x"
+        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_e"
+        "ye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\"thread_eye.x_d\",\""
+        "unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.x_dd\",\"u"
+        "nit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"u"
+        "nit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"un"
+        "it\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\""
+        "m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\""
+        "name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"nam"
+        "e\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"le"
+        "ver.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lev"
+        "er.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\"name\":\"rocke"
+        "r.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
+        "rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\"name\":\"rocker.com"
+        ".x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.x"
+        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"defa"
+        "ult\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, horizontal (seed 004 \\u00a71.1."
+        "1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\":false,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed 004 \\u00a71.1.1)\","
+        "\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
+        ",{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\":\"length\",\""
+        "name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.038,\"display_un"
+        "it\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name\":\"lever_bc\""
+        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.026000000000000002,\"display_uni"
+        "t\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\",\"positive\""
+        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up"
+        " lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\",\"positive\":tru"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"take-up lev"
+        "er C to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"positive\":true,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank r"
+        "elative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\""
+        "kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"def"
+        "ault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"lengt"
+        "h\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":"
+        "\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit"
+        "\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\"kind\":\"inerti"
+        "a\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
+        "\":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"nam"
+        "e\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.024,\"displa"
+        "y_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\",\"name\":\"leve"
+        "r.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\""
+        "mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\""
+        "doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"le"
+        "ver.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"displa"
+        "y_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.mass\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg*m**2\",\"doc\":\""
+        "moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rocker.in"
+        "ertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\""
+        "vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"cr"
+        "ank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rocker\",\"doc\":\"lever-rocker pin C\",\"name"
+        "\":\"rocker_pin\",\"offset\":6,\"role\":null},{\"body\":\"lever\",\"doc\":\"thread eye E of the "
+        "take-up lever\",\"name\":\"thread_eye\",\"offset\":12,\"role\":\"thread_eye\"}],\"reactions\":[{"
+        "\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolu"
+        "te\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"fx\""
+        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\""
+        ",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\""
+        "D\",\"offset\":4},{\"a\":\"lever\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":fal"
+        "se,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"column"
+        "s\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive"
+        "\",\"offset\":8,\"sense\":1}],\"roles\":{\"take_up_lever\":{\"kind\":\"body\",\"name\":\"lever\""
+        "},\"thread_eye\":{\"kind\":\"point\",\"name\":\"thread_eye\"}},\"sizes\":{\"nanchor_out\":28,\"n"
+        "block\":1,\"nbranch\":1,\"nc\":56,\"nf\":9,\"nfo\":18,\"nload\":9,\"nobs\":45,\"np\":18,\"nq\":2"
+        ",\"nx\":1}}"
         ;
 }

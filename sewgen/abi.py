@@ -20,7 +20,8 @@ STATUS = (
     ("SG_SINGULAR", 2, errors.SingularPositionError,
      "the constraint Jacobian or a force block is singular here (toggle / dead-centre position)"),
     ("SG_BRANCH_JUMP", 3, errors.BranchJumpError,
-     "Newton landed on another assembly branch than the previous position"),
+     "the declared assembly branch cannot be continued here: Newton, in steps down to 1e-6 rad, finds only "
+     "positions where a closing loop's orientation sign differs from the sweep's first position"),
     ("SG_NAN_INPUT", 4, None, "a shaft angle, speed or acceleration is not finite (Python checks first)"),
     ("SG_NO_CONVERGENCE", 5, errors.ConvergenceError, "Newton ran out of iterations"),
     ("SG_NONFINITE", 6, errors.NonFiniteResultError,
@@ -43,9 +44,13 @@ def status_name(code: int) -> str:
 
 #: Fields of ``sg_options`` (C type, name, meaning).
 OPTIONS = (
-    ("double", "tol", "loop residual tolerance (m); Newton stops below it"),
+    ("double", "tol", "relative loop residual tolerance: Newton stops when every closure equation's residual is "
+                      "below tol times that equation's own loop size (kernel 'scales')"),
     ("int", "max_iter", "Newton iterations per position"),
     ("int", "newton_only", "1: Newton even where a closed form exists (tests, benchmarks)"),
+    ("double", "singular_tol", "largest estimated relative error of the velocities and accelerations; a position "
+                               "above it is SG_SINGULAR unless keep_singular"),
+    ("int", "keep_singular", "1: positions above singular_tol keep their results (status SG_OK, err says why)"),
 )
 
 # Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx their
@@ -63,14 +68,20 @@ KERNELS = {
     "residual": ("void", _Q + (("const double *", "c"), ("double *", "r"), ("double *", "jac")),
                  "loop-closure residual and its Jacobian dPhi/dq (row-major)"),
     "motion": ("int", _Q + (("const double *", "xd"), ("const double *", "xdd"), ("const double *", "c"),
-                            ("double *", "qd"), ("double *", "qdd"), ("double *", "obs")),
-               "velocities, accelerations and observables at a solved position"),
+                            ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"), ("double *", "cond")),
+               "velocities, accelerations and observables at a solved position; cond: the condition number (inf "
+               "norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated"),
     "forces": ("int", _Q + (("const double *", "xd"), ("const double *", "c"), ("const double *", "obs"),
                             ("const double *", "gv"), ("const double *", "ld"), ("double *", "out")),
                "joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld"),
     "force_matrix": ("void", _Q + (("const double *", "c"), ("const double *", "obs"), ("const double *", "gv"),
                                    ("const double *", "ld"), ("double *", "A"), ("double *", "b")),
                      "A (nf x nf, row-major) and b of A f = b, for inspection"),
+    "scales": ("void", _Q + (("const double *", "c"), ("double *", "out")),
+               "each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale"),
+    "blocks": ("void", (("const double *", "jac"), ("double *", "out")),
+               "the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign "
+               "is that closing loop's assembly branch"),
     "anchors": ("void", _Q + (("const double *", "c"), ("double *", "out")),
                 "world x, y of every drawing anchor (manifest \"anchors\"), then the cam arcs' radius and world "
                 "normal sector (manifest \"arcs\"): nanchor_out values, for pictures of any mechanism"),
@@ -89,6 +100,7 @@ DESCRIPTOR = (
     ("int", "nf", "force unknowns: reactions and driving torques"),
     ("int", "nfo", "force outputs per position: nf, then torques, powers, shaking, energies (manifest)"),
     ("int", "nload", "load slots per position: fx, fy per point of a moving body, torque per moving body"),
+    ("int", "nblock", "diagonal blocks of dPhi/dq (closing loops), each with an orientation sign"),
     ("const unsigned char *", "coord_is_angle", "1 for an angle coordinate, 0 for a travel"),
 ) + tuple((f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in KERNELS.items())
 
@@ -101,16 +113,20 @@ EXPORTS = {
     "sg_sweep": ("size_t", (("const sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
                             ("const double *", "omega"), ("const double *", "alpha"), ("const double *", "held"),
                             ("const double *", "p"), ("const int *", "branch"), ("const double *", "q_guess"),
-                            ("const sg_options *", "opt"), ("double *", "q"), ("double *", "qd"),
-                            ("double *", "qdd"), ("double *", "obs"), ("int *", "status")),
+                            ("const sg_options *", "opt"), ("const size_t *", "order"), ("double *", "q"),
+                            ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"), ("double *", "err"),
+                            ("int *", "status")),
                  "a mechanism over n shaft angles in one call: positions, velocities, accelerations, observables; "
-                 "returns the number of positions whose status is not SG_OK"),
+                 "solved in the order 'order' (a permutation of 0..n-1 that sorts phi; NULL: as given), written "
+                 "in the caller's order; err (n, or NULL) the estimated relative error of the rates; returns the "
+                 "number of positions whose status is not SG_OK"),
     "sg_sweep_forces": ("size_t", (("const sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
                                    ("const double *", "omega"), ("const double *", "alpha"),
                                    ("const double *", "held"), ("const double *", "p"), ("const int *", "branch"),
                                    ("const double *", "q_guess"), ("const sg_options *", "opt"),
-                                   ("const double *", "gv"), ("const double *", "loads"), ("double *", "q"),
-                                   ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"),
+                                   ("const size_t *", "order"), ("const double *", "gv"),
+                                   ("const double *", "loads"), ("double *", "q"), ("double *", "qd"),
+                                   ("double *", "qdd"), ("double *", "obs"), ("double *", "err"),
                                    ("double *", "frc"), ("int *", "status")),
                         "sg_sweep plus kinetostatics in the same pass (gv gravity, loads n x nload or NULL, "
                         "frc n x nfo)"),

@@ -59,7 +59,8 @@ def _catalog_ffi() -> cffi.FFI:
 
 catalog_ffi = _catalog_ffi() if (GENERATED / "manifest.json").is_file() else None
 
-SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=undefined", "-fno-omit-frame-pointer", "-g"]
+SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=undefined", "-fno-omit-frame-pointer", "-g",
+            "-DSG_DEBUG"]
 
 
 def build_catalog(outdir: Path, extra_cflags: list[str] | None = None) -> Path:

@@ -85,11 +85,14 @@ class PositionError(SewgenError):
 
     what = "cannot be solved"
 
-    def __init__(self, mechanism: str, angle: float, index: int, count: int, last_angle: float):
+    def __init__(self, mechanism: str, angle: float, index: int, count: int, last_angle: float,
+                 detail: str | None = None):
         span = "" if count == 1 else f" (first of {count} failing positions, up to {math.degrees(last_angle):.6g}°)"
         problem = f"{self.what} at shaft angle {math.degrees(angle):.6g}° (position {index}){span}"
+        if detail:
+            problem += f": {detail}"
         super().__init__(f"{mechanism}: {problem}", problem=problem, mechanism=mechanism, angle=angle, index=index,
-                         count=count, last_angle=last_angle)
+                         count=count, last_angle=last_angle, detail=detail)
 
 
 class AssemblyError(PositionError):
@@ -101,7 +104,7 @@ class ConvergenceError(AssemblyError):
 
 
 class SingularPositionError(PositionError):
-    what = "singular position (toggle or dead centre: the constraint Jacobian or the force matrix is singular)"
+    what = "singular position (a toggle, dead centre or change point)"
 
 
 class BranchJumpError(PositionError):

@@ -17,6 +17,7 @@ import dataclasses
 import hashlib
 import json
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
@@ -24,14 +25,21 @@ import numpy as np
 
 from . import abi
 from .description import describe
-from .errors import InputError, ParameterError
+from .errors import AssemblyError, InputError, ParameterError, SingularPositionError
 from .forces import ForceAnalysis, RunSettings
-from .loads import load_matrix
+from .loads import Load, load_matrix
 from .results import Motion
 from .units import UnitError, to_si
 
 _NONNEGATIVE = {"mass", "inertia"}
 _DEFAULT_MAX_ITER = 50
+_MAX_ITER_LIMIT = 100_000  # Newton iterations per position: more is a hang, not a solve
+#: Newton's relative tolerance: every closure equation's residual below this times its own loop size.
+NEWTON_RTOL = 1e-13
+#: Largest estimated relative error of a position's velocities and accelerations (the conditioning of the
+#: velocity and acceleration solves, with the position's own error): above it the position is singular.
+SINGULAR_TOL = 1e-8
+_SINGULAR_MODES = ("raise", "flag")
 
 
 @dataclass(frozen=True)
@@ -80,10 +88,11 @@ class Mechanism:
             ffi=ffi, lib=lib, name=name, description=desc, _manifest=manifest,
             _descriptor=getattr(lib, f"sg_{name}")(), build_info=MappingProxyType(dict(build_info or {})),
             reference=dataclasses.replace(ref, digest=digest), _defaults=MappingProxyType(defaults),
-            _default_options=MappingProxyType({newton: self._new_options(ffi, desc, p, _DEFAULT_MAX_ITER, newton)
-                                               for newton in (False, True)}))
+            _default_options=MappingProxyType({(newton, keep): self._new_options(ffi, _DEFAULT_MAX_ITER, newton, keep)
+                                               for newton in (False, True) for keep in (False, True)}))
         for key, value in fields.items():
             object.__setattr__(self, key, value)
+        self._check_constants(p)  # a declaration whose defaults give no real dimension
 
     def __setattr__(self, key, value):
         raise AttributeError(f"sewgen.Mechanism is immutable (cannot set {key!r})")
@@ -152,11 +161,31 @@ class Mechanism:
     def param_vector(self, params: dict | None = None) -> np.ndarray:
         """Defaults overridden by ``params`` (SI numbers or quantity strings), checked, as a C-ready vector."""
         values = self.defaults()
-        for key, val in (params or {}).items():
+        given = _mapping(self.name, "params", params)
+        for key, val in given.items():
             if key not in values:
                 raise ParameterError(self.name, key, f"unknown; parameters are: {', '.join(values)}")
             values[key] = val
-        return self._check_params(self.description, values)
+        p = self._check_params(self.description, values)
+        self._check_constants(p, given)
+        return p
+
+    def _check_constants(self, p: np.ndarray, given=()) -> None:
+        """Every dimension derived from the parameters (the hoisted constants: a triangle's height from its sides,
+        ...) must be real: a non-finite one is a ParameterError naming the parameters it is made of (those the
+        caller gave first)."""
+        which = self.manifest.get("constants")
+        if not which:
+            return
+        c = self._constants(p)
+        bad = np.flatnonzero(~np.isfinite(c[:len(which)]))
+        if not bad.size:
+            return
+        names = [self.description.params[i].name for i in which[int(bad[0])]]
+        named = [n for n in names if n in given] or names
+        raise ParameterError(self.name, ", ".join(named),
+                             f"no real value for a dimension derived from {', '.join(names)} (sides that make no "
+                             f"triangle, a zero length under a division, ...)")
 
     @staticmethod
     def _check_params(desc, values: dict) -> np.ndarray:
@@ -172,7 +201,8 @@ class Mechanism:
 
     def _named_vector(self, what: str, names: list[str], defaults: list, given: dict, kind: str) -> list:
         vals = dict(zip(names, defaults))
-        for key, v in given.items():
+        arg = {"held input": "held", "branch joint": "branch"}.get(what, what)
+        for key, v in _mapping(self.name, arg, given).items():
             if key not in vals:
                 known = ", ".join(names) or "none"
                 raise ParameterError(self.name, key, f"is not a {what}; {what}s are: {known}")
@@ -204,6 +234,7 @@ class Mechanism:
     def _guess_vector(self, guess: dict) -> np.ndarray:
         """Newton's start per coordinate (rad or m, or quantity strings): the declaration's unless overridden."""
         names = self.coord_names
+        guess = _mapping(self.name, "guess", guess)
         unknown = sorted(set(guess) - set(names))
         if unknown:
             raise ParameterError(self.name, unknown[0], f"is not a coordinate; coordinates are: {', '.join(names)}")
@@ -219,10 +250,14 @@ class Mechanism:
                 raise InputError(self.name, str(exc)) from None
         if type(value) in (float, int) and math.isfinite(value):  # the common scalar, fast
             return np.full(n, float(value))
-        arr = np.asarray(value)
-        if np.iscomplexobj(arr) or arr.dtype.kind not in "biuf":
+        try:
+            arr = np.asarray(value)
+        except (ValueError, TypeError) as exc:  # ragged nesting and the like
+            raise InputError(self.name, f"{what} must be real numbers: {exc}") from None
+        if np.iscomplexobj(arr) or arr.dtype.kind not in "iuf":  # booleans are not angles or speeds
             raise InputError(self.name, f"{what} must be real numbers, got dtype {arr.dtype}")
-        arr = np.full(n, float(arr)) if arr.ndim == 0 else np.ascontiguousarray(arr, dtype=np.float64)
+        # always a copy: a result owns its inputs (a caller's later phi += 0.5 changes no result)
+        arr = np.full(n, float(arr)) if arr.ndim == 0 else np.array(arr, dtype=np.float64, order="C", copy=True)
         if arr.ndim != 1 or arr.shape[0] != n:
             raise InputError(self.name, f"{what} must be a scalar or have shape ({n},), got {arr.shape}")
         if not np.isfinite(arr).all():
@@ -231,19 +266,20 @@ class Mechanism:
         return arr
 
     def length_scale(self, p: np.ndarray) -> float:
-        """The largest length parameter (m): sets the loop-residual tolerance."""
+        """The largest length parameter (m), 1 mm at least (for checks; Newton's tolerance is per loop now)."""
         return _length_scale(self.description, p)
 
     @staticmethod
-    def _new_options(ffi, desc, p: np.ndarray, max_iter: int, newton: bool):
-        return ffi.new("sg_options *", {"tol": 1e-13 * _length_scale(desc, p), "max_iter": max_iter,
-                                        "newton_only": 1 if newton else 0})
+    def _new_options(ffi, max_iter: int, newton: bool, keep_singular: bool):
+        return ffi.new("sg_options *", {"tol": NEWTON_RTOL, "max_iter": max_iter, "newton_only": 1 if newton else 0,
+                                        "singular_tol": SINGULAR_TOL, "keep_singular": 1 if keep_singular else 0})
 
     # -- sweeps --------------------------------------------------------------------------------------------
     def prepare(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
                 branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
                 newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, forces: bool = False, loads=(),
-                gravity="9.80665 m/s**2", gravity_direction="-90 deg", moment_about=(0.0, 0.0), out=None) -> "Sweep":
+                gravity="9.80665 m/s**2", gravity_direction="-90 deg", moment_about=(0.0, 0.0), out=None,
+                singular: str = "raise") -> "Sweep":
         """Every argument of a sweep checked and converted into a :class:`Sweep`: the arrays the C runtime
         reads and writes, ready to run. :meth:`solve` and :meth:`kinetostatics` are ``prepare`` + ``run`` +
         result; call it yourself to time or repeat the bare C call on exactly those arrays (sewgen.bench).
@@ -260,18 +296,26 @@ class Mechanism:
             phi_v = np.radians(phi_v)
         omega = self._series("speed", self.default_speed if speed is None else speed, n, "speed")
         alpha = self._series("angular acceleration", accel, n, "angular_acceleration")
-        if not isinstance(max_iter, int) or isinstance(max_iter, bool) or max_iter < 1:
-            raise ParameterError(self.name, "max_iter", f"must be a positive integer, got {max_iter!r}")
+        if not isinstance(max_iter, (int, np.integer)) or isinstance(max_iter, (bool, np.bool_)) \
+                or not 1 <= max_iter <= _MAX_ITER_LIMIT:
+            raise ParameterError(self.name, "max_iter", f"must be an integer from 1 to {_MAX_ITER_LIMIT}, got "
+                                                        f"{max_iter!r}")
+        max_iter = int(max_iter)
+        if not isinstance(newton, (bool, np.bool_)):
+            raise ParameterError(self.name, "newton", f"must be True or False, got {newton!r}")
+        if singular not in _SINGULAR_MODES:
+            raise ParameterError(self.name, "singular", f"must be 'raise' or 'flag', got {singular!r}")
+        keep = singular == "flag"
         dflt = self._defaults
         if params is None:
             p = dflt["p"]
         else:
             p = self.param_vector(params)
             p.flags.writeable = False  # it becomes part of the result's run settings
-        if params is None and max_iter == _DEFAULT_MAX_ITER:
-            opt = self._default_options[bool(newton)]
+        if max_iter == _DEFAULT_MAX_ITER:
+            opt = self._default_options[(bool(newton), keep)]
         else:
-            opt = self._new_options(self.ffi, self.description, p, max_iter, bool(newton))
+            opt = self._new_options(self.ffi, max_iter, bool(newton), keep)
         held_v = dflt["held"] if held is None else _readonly(self.held_vector(held))
         branch_v = dflt["branch"] if branch is None else self._branch_vector(branch)
         guess_v = dflt["guess"] if guess is None else self._guess_vector(guess)
@@ -289,6 +333,9 @@ class Mechanism:
             if not (isinstance(moment_about, (tuple, list)) and len(moment_about) == 2):
                 raise ParameterError(self.name, "moment_about", f"must be a point (x, y), got {moment_about!r}")
             about = tuple(_si(self.name, v, "length", "moment_about") for v in moment_about)
+            if isinstance(loads, (Load, str, bytes, Mapping)) or not isinstance(loads, (list, tuple)):
+                raise ParameterError(self.name, "loads", f"must be a list or tuple of sewgen.Load, got "
+                                                         f"{type(loads).__name__} (a single load: loads=[load])")
             ld, placed = load_matrix(self, loads, phi_v, degrees)
             if ld is not None:
                 ld.flags.writeable = False
@@ -300,12 +347,15 @@ class Mechanism:
             if not _reusable(arr, shape, inputs):
                 arr = np.empty(shape)  # C writes every row
             outputs[key] = arr
+        order = None  # Newton continues along the shaft angle: unsorted or repeated angles are solved sorted
+        if n > 1 and not (phi_v[1:] >= phi_v[:-1]).all():
+            order = np.argsort(phi_v, kind="stable").astype(np.uintp)
         return Sweep(self, n, phi_v, omega, alpha, p, held_v, branch_v, guess_v, opt, outputs,
-                     np.zeros(n, dtype=np.intc), settings)
+                     np.zeros(n, dtype=np.intc), settings, order, np.empty(n), keep)
 
     def solve(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
               branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
-              newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, out=None) -> Motion:
+              newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, out=None, singular: str = "raise") -> Motion:
         """Positions, velocities and accelerations of every coordinate, point and body at shaft angles ``phi``.
 
         ``phi`` in rad (or degrees with ``degrees=True``); ``speed`` (rad/s, default the mechanism's
@@ -315,6 +365,13 @@ class Mechanism:
         Newton even where a closed form exists. Raises a :class:`~sewgen.errors.PositionError` subclass at
         the first shaft angle that fails.
 
+        The angles may come in any order, repeated or not: they are solved in sorted order (Newton continues
+        along the shaft angle, in steps of at most 0.2 rad, checking every closing loop's orientation sign) and
+        returned in the caller's order. A position whose velocities and accelerations would carry an estimated
+        relative error above 1e-8 (near a toggle, dead centre or change point) raises
+        :class:`~sewgen.errors.SingularPositionError`; ``singular="flag"`` keeps it instead, with
+        ``Motion.error_estimate`` and ``Motion.singular`` saying which (README "Robustness").
+
         ``out``: a previous result (:class:`Motion` or :class:`ForceAnalysis`) or a dict of arrays (``q``, ``qd``,
         ``qdd``, ``obs``) to write into instead of fresh arrays — in a loop of equal sweeps this spares the
         allocation and the page faults of new memory, which on large sweeps cost as much as the sweep. Arrays
@@ -323,7 +380,7 @@ class Mechanism:
         every call returns new arrays and no earlier result is ever touched.
         """
         sweep = self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
-                             degrees=degrees, newton=newton, max_iter=max_iter, out=out)
+                             degrees=degrees, newton=newton, max_iter=max_iter, out=out, singular=singular)
         sweep.run()
         sweep.check()
         return sweep.motion()
@@ -332,7 +389,7 @@ class Mechanism:
                       gravity_direction="-90 deg", moment_about=(0.0, 0.0), params: dict | None = None,
                       held: dict | None = None, branch: dict | None = None, guess: dict | None = None,
                       degrees: bool = False, newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER,
-                      out=None) -> ForceAnalysis:
+                      out=None, singular: str = "raise") -> ForceAnalysis:
         """Kinematics and every force at shaft angles ``phi``, in one C call (seed 000 §二(三)).
 
         Joint reactions, driving (and holding) torques, the shaking force and moment, kinetic and potential
@@ -346,7 +403,7 @@ class Mechanism:
         sweep = self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
                              degrees=degrees, newton=newton, max_iter=max_iter, forces=True, loads=loads,
                              gravity=gravity, gravity_direction=gravity_direction, moment_about=moment_about,
-                             out=out)
+                             out=out, singular=singular)
         sweep.run()
         sweep.check()
         return sweep.analysis()
@@ -360,6 +417,7 @@ class Mechanism:
         return self._constants(self.param_vector(params))
 
     def _constants(self, p: np.ndarray) -> np.ndarray:
+        p = _vector(self.name, "params", p, len(self.description.params))
         c = np.zeros(max(self.description.sizes["nc"], 1))
         getattr(self.lib, f"sg_{self.name}_constants")(self._ptr("double *", np.ascontiguousarray(p, dtype=float)),
                                                          self._ptr("double *", c))
@@ -368,7 +426,9 @@ class Mechanism:
     def residual(self, q, phi: float, params: dict | None = None, held: dict | None = None):
         """Φ(q, x) and Φ_q at one position (for checks): arrays of shape (nq,) and (nq, nq)."""
         nq = len(self.description.coords)
-        qv = np.ascontiguousarray(q, dtype=np.float64).reshape(nq)
+        qv = np.ascontiguousarray(q, dtype=np.float64)
+        if qv.shape != (nq,):
+            raise InputError(self.name, f"residual needs q of shape ({nq},), got {qv.shape}")
         x = np.concatenate([[float(phi)], self.held_vector(held)])
         r, jac = np.zeros(nq), np.zeros((nq, nq))
         d = self._ptr
@@ -410,36 +470,59 @@ class Mechanism:
         :meth:`ForceAnalysis.force_matrix` passes a run's own settings. Rows: the manifest's "force_rows";
         columns: the reactions' columns in order.
         """
-        p = params if isinstance(params, np.ndarray) else self.param_vector(params)
-        hv = held if isinstance(held, np.ndarray) else self.held_vector(held)
+        p, hv = self._run_vectors(params, held)
         sizes = self.description.sizes
         nf = sizes["nf"]
+        if not isinstance(motion, Motion) or motion.mechanism.reference.digest != self.reference.digest:
+            got = getattr(getattr(motion, "mechanism", None), "name", type(motion).__name__)
+            raise InputError(self.name, f"force_matrix needs a Motion of {self.name}, got one of {got}")
+        n = len(motion.phi)
+        if not isinstance(index, (int, np.integer)) or isinstance(index, bool) or not -n <= index < n:
+            raise InputError(self.name, f"position index {index!r} out of range for a sweep of {n}")
         q = np.ascontiguousarray(motion.q[index], dtype=np.float64)
         x = np.concatenate([[float(motion.phi[index])], hv]).astype(np.float64)
         obs = np.ascontiguousarray(motion.obs[index], dtype=np.float64)
-        ld = np.zeros(max(sizes["nload"], 1)) if load_row is None else np.ascontiguousarray(load_row, dtype=np.float64)
+        gv = _vector(self.name, "gravity", gravity, 2)
+        nload = sizes["nload"]
+        ld = np.zeros(max(nload, 1)) if load_row is None else _vector(self.name, "load_row", load_row, nload)
+        if q.shape != (sizes["nq"],) or obs.shape != (sizes["nobs"],):
+            raise InputError(self.name, "the motion's arrays do not have this mechanism's sizes")
         A, b = np.zeros((nf, nf)), np.zeros(nf)
         d = self._ptr
         getattr(self.lib, f"sg_{self.name}_force_matrix")(
             d("double *", q), d("double *", _cos_sin_pairs(q)), d("double *", x), d("double *", _cos_sin_pairs(x)),
-            d("double *", self._constants(p)), d("double *", obs),
-            d("double *", np.ascontiguousarray(gravity, dtype=np.float64)), d("double *", ld),
+            d("double *", self._constants(p)), d("double *", obs), d("double *", gv), d("double *", ld),
             d("double *", A), d("double *", b))
         return A, b
+
+    def _run_vectors(self, params, held):
+        """A run's parameter and held-input vectors: by name (dicts over the defaults) or C-ready arrays of the
+        right length."""
+        if isinstance(params, np.ndarray):
+            p = _vector(self.name, "params", params, len(self.description.params))
+        else:
+            p = self.param_vector(params)
+        if isinstance(held, np.ndarray):
+            hv = _vector(self.name, "held", held, len(self.description.held_inputs))
+        else:
+            hv = self.held_vector(held)
+        return p, hv
 
 
 class Sweep:
     """One sweep of a mechanism, checked and converted: the C-ready arrays the runtime reads (``phi``, ``omega``,
-    ``alpha``, ``params``, ``held``, ``branch``, ``guess``, ``options``; with forces ``settings.gravity`` and
-    ``settings.loads``) and writes (``q``, ``qd``, ``qdd``, ``obs``, ``frc``, ``status``).
+    ``alpha``, ``params``, ``held``, ``branch``, ``guess``, ``options``, ``order``; with forces
+    ``settings.gravity`` and ``settings.loads``) and writes (``q``, ``qd``, ``qdd``, ``obs``, ``frc``, ``err``,
+    ``status``).
 
     Made by :meth:`Mechanism.prepare`. :meth:`run` calls C once; :meth:`bind` gives that call as a bare
     zero-argument function (its pointers made once), which is what a benchmark times. Running again overwrites
     this sweep's own output arrays, so a Sweep belongs to one thread; the results it makes share its arrays.
+    ``order`` (None when the angles are already non-decreasing) is the permutation C solves the positions in.
     """
 
     def __init__(self, mechanism: Mechanism, n, phi, omega, alpha, params, held, branch, guess, options,
-                 outputs: dict, status, settings: RunSettings | None):
+                 outputs: dict, status, settings: RunSettings | None, order=None, err=None, keep_singular=False):
         self.mechanism, self.n = mechanism, n
         self.phi, self.omega, self.alpha = phi, omega, alpha
         self.params, self.held, self.branch, self.guess, self.options = params, held, branch, guess, options
@@ -447,6 +530,10 @@ class Sweep:
         self.frc = outputs.get("frc")
         self.status = status
         self.settings = settings
+        self.order = order
+        self.err = np.empty(n) if err is None else err
+        self.keep_singular = keep_singular
+        _check_sizes(self)
 
     @property
     def forces(self) -> bool:
@@ -456,10 +543,12 @@ class Sweep:
         """The C call of this sweep as a function of no arguments; it returns how many positions failed."""
         m, ffi = self.mechanism, self.mechanism.ffi
         d = (lambda ctype, arr: _ptr(ffi, ctype, arr))
+        order = ffi.NULL if self.order is None else d("size_t *", self.order)
         head = (m._descriptor, self.n, d("double *", self.phi), d("double *", self.omega), d("double *", self.alpha),
                 d("double *", self.held), d("double *", self.params), d("int *", self.branch),
-                d("double *", self.guess), self.options)
-        tail = (d("double *", self.q), d("double *", self.qd), d("double *", self.qdd), d("double *", self.obs))
+                d("double *", self.guess), self.options, order)
+        tail = (d("double *", self.q), d("double *", self.qd), d("double *", self.qdd), d("double *", self.obs),
+                d("double *", self.err))
         if self.forces:
             s = self.settings
             loads = ffi.NULL if s.loads is None else d("double *", s.loads)
@@ -478,7 +567,7 @@ class Sweep:
         """Run the sweep in C (the GIL released), then make every angle continuous over the sweep; returns the
         number of positions whose status is not SG_OK."""
         failed = self.bind()()
-        continuous_angles(self.mechanism.description, self.q, self.obs)
+        continuous_angles(self.mechanism.description, self.q, self.obs, self.order)
         return failed
 
     def check(self) -> None:
@@ -494,10 +583,16 @@ class Sweep:
         if cls is None:  # SG_NAN_INPUT / SG_BAD_ARGUMENT: Python checks first, so this is a bug
             raise InputError(name, f"runtime refused the sweep ({abi.status_name(code)}) at position {i}")
         same = bad[status[bad] == code]
-        raise cls(name, float(self.phi[i]), i, int(same.size), float(self.phi[same[-1]]))
+        detail = None
+        if cls is SingularPositionError:
+            detail = _singular_detail(self, i)
+        elif issubclass(cls, AssemblyError) and not self.mechanism.closed_form:  # no declared branch: which?
+            detail = _assembly_detail(self, i)
+        raise cls(name, float(self.phi[i]), i, int(same.size), float(self.phi[same[-1]]), detail=detail)
 
     def motion(self) -> Motion:
-        return Motion(self.mechanism, self.phi, self.omega, self.alpha, self.q, self.qd, self.qdd, self.obs)
+        return Motion(self.mechanism, self.phi, self.omega, self.alpha, self.q, self.qd, self.qdd, self.obs,
+                      self.err, SINGULAR_TOL)
 
     def analysis(self) -> ForceAnalysis:
         if not self.forces:
@@ -505,16 +600,175 @@ class Sweep:
         return ForceAnalysis(self.mechanism, self.motion(), self.frc, self.settings)
 
 
-def continuous_angles(desc, q: np.ndarray, obs: np.ndarray) -> None:
+def continuous_angles(desc, q: np.ndarray, obs: np.ndarray, order=None) -> None:
     """Every angle result (angle coordinates, body angles) continuous along the sweep, in place: no 2π jumps
-    (a closed-form dyad's atan2 wraps at ±180°), the first position in (−π, π] (issue 12, item 5). Only angles
-    change, by whole turns, so every sine and cosine — and every result computed from them — stays the same."""
+    (a closed-form dyad's atan2 wraps at ±180°), the first position in (−π, π] (issue 12, item 5). Along the
+    shaft angles in sorted order (``order``, the permutation the sweep was solved in; None: as given). Only
+    angles change, by whole turns, so every sine and cosine — and every result computed from them — stays the
+    same; sweeps that start elsewhere or sample sparsely may differ from each other by whole turns."""
     qa, oa = desc.angle_columns
+    idx = slice(None) if order is None else np.asarray(order, dtype=np.intp)
     for arr, cols in ((q, qa), (obs, oa)):
         if cols and arr.ndim == 2 and len(arr):
-            block = np.unwrap(arr[:, cols], axis=0)
+            block = np.unwrap(arr[idx][:, cols], axis=0)
             block -= 2 * np.pi * np.ceil((block[:1] - np.pi) / (2 * np.pi))
-            arr[:, cols] = block
+            sub = arr[idx]
+            sub[:, cols] = block
+            arr[idx] = sub
+
+
+def _check_sizes(sweep: Sweep) -> None:
+    """Every array C reads or writes has the length the mechanism's description says (the C side reads no
+    sizes: a wrong one would be read or written past its end)."""
+    m, n, sizes = sweep.mechanism, sweep.n, sweep.mechanism.description.sizes
+    nq, nx, nobs = sizes["nq"], sizes["nx"], sizes["nobs"]
+    want = {"phi": (sweep.phi, (n,)), "omega": (sweep.omega, (n,)), "alpha": (sweep.alpha, (n,)),
+            "params": (sweep.params, (sizes["np"],)), "held": (sweep.held, (nx - 1,)),
+            "guess": (sweep.guess, (nq,)), "q": (sweep.q, (n, nq)), "qd": (sweep.qd, (n, nq)),
+            "qdd": (sweep.qdd, (n, nq)), "obs": (sweep.obs, (n, nobs)), "err": (sweep.err, (n,))}
+    for key, (arr, shape) in want.items():
+        if not (isinstance(arr, np.ndarray) and arr.shape == shape and arr.dtype == np.float64
+                and arr.flags.c_contiguous):
+            raise InputError(m.name, f"sweep array {key} must be C-contiguous float64 of shape {shape}")
+    if not (sweep.branch.shape == (sizes["nbranch"],) and sweep.branch.dtype == np.intc):
+        raise InputError(m.name, f"sweep array branch must be int of shape ({sizes['nbranch']},)")
+    if not (sweep.status.shape == (n,) and sweep.status.dtype == np.intc):
+        raise InputError(m.name, f"sweep array status must be int of shape ({n},)")
+    if sweep.order is not None and not (sweep.order.shape == (n,) and sweep.order.dtype == np.uintp):
+        raise InputError(m.name, f"sweep order must be a permutation of shape ({n},)")
+    if sweep.forces:
+        s = sweep.settings
+        if not (s.gravity.shape == (2,) and (s.loads is None or s.loads.shape == (n, sizes["nload"]))
+                and isinstance(sweep.frc, np.ndarray) and sweep.frc.shape == (n, sizes["nfo"])):
+            raise InputError(m.name, "force sweep arrays (gravity, loads, frc) of the wrong shape")
+
+
+def _singular_detail(sweep: Sweep, i: int) -> str:
+    """What makes position ``i`` singular: the estimated error of its rates, or a singular force matrix; and
+    whether it is a change point (the loop assembles on both sides: two branches meet) or a dead centre."""
+    est = float(sweep.err[i])
+    if est <= SINGULAR_TOL:
+        return "the force matrix is singular there"
+    why = ("the velocity solve is singular" if not math.isfinite(est) else
+           f"the velocities and accelerations would carry an estimated relative error of {est:.2g} (above "
+           f"{SINGULAR_TOL:g})")
+    kind = _change_point(sweep, i)
+    return f"{why}; {kind}" if kind else why
+
+
+def _assembly_detail(sweep: Sweep, i: int) -> str:
+    """Newton found no assembly at position ``i`` (from the declared guesses, or continuing from the previous
+    position): is there one in another assembly mode? A damped least-squares search (Levenberg–Marquardt on the
+    loop residual) from the guesses and from starts with the angle coordinates turned, each candidate confirmed
+    by the engine itself (a one-position sweep started there)."""
+    m = sweep.mechanism
+    d = m.description
+    nq = len(d.coords)
+    phi = float(sweep.phi[i])
+    c = m._constants(sweep.params)
+    x = np.concatenate([[phi], sweep.held])
+    cx = _cos_sin_pairs(x)
+    fn = getattr(m.lib, f"sg_{m.name}_residual")
+    r, jac = np.zeros(nq), np.zeros((nq, nq))
+    ptr = m._ptr
+
+    def resid(q):
+        fn(ptr("double *", q), ptr("double *", _cos_sin_pairs(q)), ptr("double *", x), ptr("double *", cx),
+           ptr("double *", c), ptr("double *", r), ptr("double *", jac))
+        return r.copy(), jac.copy()
+
+    angle = np.array([co.unit == "rad" for co in d.coords])
+    guess = np.array(sweep.guess, dtype=float)
+    starts = [guess.copy()]
+    for k in np.flatnonzero(angle):
+        for turn in (math.pi / 2, -math.pi / 2, math.pi):
+            s = guess.copy()
+            s[k] += turn
+            starts.append(s)
+    found = []
+    for q in starts[:25]:
+        q = q.copy()
+        mu = 1e-3
+        res, jac_q = resid(q)
+        cost = float(res @ res)
+        for _ in range(200):
+            if not np.isfinite(cost):
+                break
+            jtj, g = jac_q.T @ jac_q, jac_q.T @ res
+            try:
+                step = np.linalg.solve(jtj + mu * np.diag(np.diag(jtj) + 1e-30), -g)
+            except np.linalg.LinAlgError:
+                break
+            trial = q + step
+            r2, j2 = resid(trial)
+            c2 = float(r2 @ r2)
+            if c2 < cost:
+                q, res, jac_q, cost, mu = trial, r2, j2, c2, max(mu / 3, 1e-12)
+                if math.sqrt(cost) < 1e-14:
+                    break
+            else:
+                mu *= 4
+                if mu > 1e12:
+                    break
+        if math.sqrt(cost) < 1e-11 * m.length_scale(sweep.params):
+            found.append(q)
+    for q in found:  # confirmed by the engine: a sweep of this one position started there
+        probe = m.prepare([phi], 0.0)
+        probe.params, probe.held, probe.branch = sweep.params, sweep.held, sweep.branch
+        probe.guess = _readonly(np.ascontiguousarray(q))
+        probe.options = m._default_options[(True, True)]
+        probe.run()
+        if int(probe.status[0]) == 0:
+            q = probe.q[0]
+            moved = [f"{co.name} {math.degrees(q[k]):.4g}° (guess {math.degrees(guess[k]):.4g}°)"
+                     for k, co in enumerate(d.coords) if angle[k]
+                     and abs((q[k] - guess[k] + math.pi) % (2 * math.pi) - math.pi) > math.radians(20)]
+            where = ("another assembly mode" if moved else "a mode near the guesses that Newton did not reach "
+                     "from the previous position (the followed assembly ends here)")
+            return (f"an assembly exists at this angle in {where}" + (f": {', '.join(moved)}" if moved else "")
+                    + "; pass guess= to start there")
+    return f"no assembly found at this angle by a least-squares search from {min(len(starts), 25)} starts either"
+
+
+def _change_point(sweep: Sweep, i: int) -> str:
+    """Probe the shaft angle on both sides of position ``i``: a change point if the loop closes on both (its
+    assembly branches meet there), a dead centre if on one side only."""
+    m, phi = sweep.mechanism, float(sweep.phi[i])
+    sides = []
+    for delta in (-1e-3, 1e-3):
+        probe = m.prepare([phi + delta], 0.0)
+        probe.params, probe.held, probe.branch, probe.guess = sweep.params, sweep.held, sweep.branch, sweep.guess
+        probe.options = m._default_options[(bool(sweep.options.newton_only), True)]
+        probe.run()
+        sides.append(int(probe.status[0]) == 0)
+    if all(sides):
+        return ("a change point: the loop closes on both sides and two assembly branches meet here (past it the "
+                "declared branch may follow the other circuit)")
+    if any(sides):
+        return "a dead centre: the loop closes on one side only"
+    return ""
+
+
+def _vector(mechanism: str, what: str, value, n: int) -> np.ndarray:
+    """``value`` as a C-ready float64 vector of exactly ``n`` finite entries (C reads n, whatever it is given)."""
+    try:
+        arr = np.ascontiguousarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(mechanism, what, f"must be {n} numbers, got {value!r}") from None
+    if arr.shape != (n,):
+        raise ParameterError(mechanism, what, f"must have {n} entries, got shape {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise ParameterError(mechanism, what, "must be finite")
+    return arr
+
+
+def _mapping(mechanism: str, what: str, value) -> Mapping:
+    """A by-name argument (params, held, branch, guess): a mapping, or None for none."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise ParameterError(mechanism, what, f"must be a dict of names to values, got {type(value).__name__}")
+    return value
 
 
 def _si(mechanism: str, value, kind: str, name: str) -> float:

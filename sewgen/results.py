@@ -42,14 +42,31 @@ class CoordinateMotion:
 class Motion:
     """The kinematics of one mechanism over a sweep of shaft angles (SI units throughout).
 
+    ``error_estimate`` (per position): the estimated relative error of the velocities and accelerations, from
+    the conditioning of their solves and the position's own accuracy (csrc/sg_runtime.c); ``singular`` flags
+    the positions above ``singular_tol`` (kept only by ``solve(..., singular="flag")``).
+
     Plain arrays plus the mechanism (which pickles by reference), so a Motion pickles, crosses processes and
     compares bit for bit; every named view reads the mechanism's description for its column.
     """
 
-    def __init__(self, mechanism, phi, omega, alpha, q, qd, qdd, obs):
+    def __init__(self, mechanism, phi, omega, alpha, q, qd, qdd, obs, error_estimate=None, singular_tol=1e-8):
         self.mechanism = mechanism
         self.phi, self.omega, self.alpha = phi, omega, alpha
         self.q, self.qd, self.qdd, self.obs = q, qd, qdd, obs
+        self.error_estimate = np.zeros(len(phi)) if error_estimate is None else error_estimate
+        self.singular_tol = singular_tol
+
+    @property
+    def singular(self) -> np.ndarray:
+        """Positions whose velocities and accelerations carry an estimated relative error above
+        ``singular_tol`` (only a ``solve(..., singular="flag")`` keeps such positions; otherwise they raise)."""
+        return self.error_estimate > self.singular_tol
+
+    def __setstate__(self, state):  # results pickled before the error estimate existed
+        state.setdefault("error_estimate", np.zeros(len(state["phi"])))
+        state.setdefault("singular_tol", 1e-8)
+        self.__dict__.update(state)
 
     def __len__(self) -> int:
         return len(self.phi)

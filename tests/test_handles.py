@@ -14,6 +14,7 @@ import json
 import multiprocessing
 import os
 import pickle
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -335,3 +336,65 @@ def test_a_module_that_will_not_import_is_a_build_error(user, declaration, monke
         sewgen.load(declaration, cache_dir=Path(user.reference.folder).parent)
     assert e.value.mechanism == "handles_four_bar" and e.value.file == user.build_info["path"]
     assert "refused by the test" in str(e.value) and len(calls) == 2  # the cached module, then the rebuilt one
+
+
+def _race(cache: str, spec: str, prebuilt: str, barrier, queue) -> None:
+    """One process of a race (forked: sewgen is already imported): load the generated files of ``spec`` through
+    the cache ``cache`` when every process of the trial is ready, solve, report to ``queue``."""
+    from handles_worker import PHI as angles, fake_compiler
+    from sewgen.loader import _load_built
+
+    try:
+        if prebuilt:
+            fake_compiler(prebuilt)
+        data = json.loads(Path(spec).read_text())
+        barrier.wait(timeout=120)
+        mech = _load_built(Path(cache), data["name"], data["files"])
+        queue.put({"path": mech.build_info["path"], "cached": mech.build_info["cached"],
+                   "obs": mech.solve(angles, speed=100.0).obs.tobytes().hex()})
+    except BaseException as exc:  # reported, not lost with the process
+        queue.put({"error": f"{type(exc).__name__}: {exc}"})
+
+
+def test_processes_loading_one_new_mechanism_at_once_all_succeed(declaration, tmp_path):
+    """Issue 11 item 1: two and four processes load the same new user mechanism at once, 20 trials each, every
+    trial in an empty cache: every process succeeds (no crash, no error), one entry is built, all load the same
+    module and agree bit for bit. Affordable in CI: the derivation is done once here, the processes are forked
+    from this one (no interpreter start) and start loading together (a barrier); the first trial compiles for
+    real, the others replace the compiler by a copy of that module written in pieces after a random delay
+    (handles_worker.fake_compiler) -- the race under test is the cache's: its lock, temporary folder, rename and
+    marker. (Two interpreters compiling for real at once: test_two_processes_build_one_new_mechanism_at_once.)"""
+    from sewgen.derive import generate, render_files
+    from sewgen.loader import _declaration
+
+    spec = tmp_path / "files.json"
+    spec.write_text(json.dumps({"name": "handles_four_bar",
+                                "files": render_files([generate(_declaration(declaration))])}))
+    import handles_worker  # noqa: F401  (imported before the forks: each child starts ready)
+    import sewgen.build  # noqa: F401
+
+    ctx = multiprocessing.get_context("fork")
+    prebuilt = ""
+    for procs, trials in ((2, 20), (4, 20)):
+        for trial in range(trials):
+            cache = tmp_path / f"cache_{procs}_{trial}"
+            barrier, queue = ctx.Barrier(procs), ctx.Queue()
+            running = [ctx.Process(target=_race, args=(str(cache), str(spec), prebuilt, barrier, queue))
+                       for _ in range(procs)]
+            for p in running:
+                p.start()
+            outs = [queue.get(timeout=300) for _ in running]
+            for p in running:
+                p.join(timeout=60)
+                assert p.exitcode == 0, f"{procs} processes, trial {trial}: exit code {p.exitcode}"
+            assert not [o for o in outs if "error" in o], f"{procs} processes, trial {trial}: {outs}"
+            assert len({o["path"] for o in outs}) == 1
+            assert sorted(o["cached"] for o in outs) == [False] + [True] * (procs - 1)
+            assert len({o["obs"] for o in outs}) == 1
+            entries = [e.name for e in cache.iterdir() if e.is_dir()]
+            assert len([e for e in entries if e.startswith("_sg_user_")]) == 1
+            assert not [e for e in entries if e.startswith(".")]
+            if not prebuilt:
+                (tmp_path / "prebuilt").mkdir()
+                prebuilt = str(tmp_path / "prebuilt" / Path(outs[0]["path"]).name)
+                shutil.copy2(outs[0]["path"], prebuilt)

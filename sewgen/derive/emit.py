@@ -12,7 +12,7 @@ from pathlib import Path
 
 import jinja2
 
-from . import abi_header, drawing
+from . import abi_header, branches, drawing
 from .elements import ELEMENTS
 from .dyads import split_into_dyads
 from .kernels import KernelSet
@@ -59,7 +59,8 @@ def _force_manifest(kst: Kinetostatics) -> dict:
     }
 
 
-def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, kernels, sizes: dict) -> dict:
+def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, kernels, sizes: dict,
+                blocks: list = (), constants: list = ()) -> dict:
     offset = 0
     points, bodies = [], []
     role = mech.role_of
@@ -94,6 +95,8 @@ def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, ker
         "closure": kin.closure_names,
         "branches": [{"joint": d.joint.name, "kind": d.kind, "default": d.joint.branch, "meaning": d.meaning}
                      for d in (dyads or [])],
+        "blocks": [{"joints": b.joints, "rows": b.rows, "coords": b.cols} for b in blocks],
+        "constants": constants,
         "kernels": {k.name: {"ops": k.ops} for k in kernels},
         "sizes": sizes,
         **_force_manifest(kst),
@@ -121,13 +124,19 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     kst = Kinetostatics(kin)
     anchor_list, arc_list = drawing.anchors(kin)
     anchor_out = drawing.outputs(anchor_list, arc_list)
-    kernels = ([ks.closed(dyads)] if dyads is not None else []) + [ks.residual(), ks.motion(), ks.forces(kst),
-                                                                   ks.force_matrix(kst), ks.anchors(anchor_out)]
+    blks = branches.blocks(kin)
+    kernels = ([ks.closed(dyads)] if dyads is not None else []) + [
+        ks.residual(), ks.scales(branches.row_scales(kin)), ks.blocks(blks), ks.motion(branches.row_scales(kin)),
+        ks.forces(kst),
+        ks.force_matrix(kst), ks.anchors(anchor_out)]
     kernels.insert(0, ks.constants_kernel())  # last to build: it evaluates what the others hoisted
     sizes = {"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
              "nbranch": len(dyads or []), "nc": len(ks.constants), "nf": len(kst.f),
-             "nfo": len(kst.f) + len(kst.outputs), "nload": len(kst.load_slots), "nanchor_out": len(anchor_out)}
-    manifest = manifest_of(mech, kin, kst, dyads, kernels, sizes)
+             "nfo": len(kst.f) + len(kst.outputs), "nload": len(kst.load_slots), "nanchor_out": len(anchor_out),
+             "nblock": len(blks)}
+    index = {sym: i for i, sym in enumerate(kin.p)}  # the parameters each hoisted constant reads
+    constants = [sorted(index[s] for s in e.free_symbols if s in index) for e in ks.constants]
+    manifest = manifest_of(mech, kin, kst, dyads, kernels, sizes, blks, constants)
     manifest.update(drawing.manifest(anchor_list, arc_list))
     text = json.dumps(manifest, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
     c_source = _TEMPLATES.get_template("mechanism.c.j2").render(

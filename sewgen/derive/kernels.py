@@ -171,11 +171,16 @@ class KernelSet:
         body = _unused(body, "q", "cq", "x", "cx", "c") + body
         return Kernel(f"{self.prefix}_anchors", self._signature("anchors"), body, ops(e for _, e in repl) + ops(red))
 
-    def motion(self) -> Kernel:
+    def motion(self, scales: list | None = None) -> Kernel:
+        """``scales``: each closure equation's loop size (derive.branches.row_scales): the rows of Φ_q are divided
+        by them before the condition number is taken (their reciprocals mostly hoist into constants)."""
         kin, pr, n = self.kin, self.printer, len(self.kin.q)
         jac = [kin.jac_q[i, j] for i in range(n) for j in range(n)]
-        exprs = self.prepare(jac + list(kin.vel_rhs) + list(kin.gamma) + [o.expr for o in kin.observables])
+        inv = [1 / e for e in (scales or [sp.S.One] * n)]
+        exprs = self.prepare(jac + list(kin.vel_rhs) + list(kin.gamma) + [o.expr for o in kin.observables] + inv)
         repl, red = _cse(exprs)
+        r_inv = red[len(red) - n:] if n else []
+        red = red[:len(red) - n] if n else red
         levels: dict = {}
         for t, e in repl:
             levels[t] = max((_stage(s, levels) for s in e.free_symbols), default=0)
@@ -183,22 +188,26 @@ class KernelSet:
         r_jac, r_vel = red[: n * n], red[n * n: n * n + n]
         r_gam, r_obs = red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:]
         body = self.selection_block() + _temps(pr, staged[0])
-        if n:
-            body += [f"double J[{n * n}];", f"int piv[{n}];"]
+        if n:  # LU of Φ_q, rows over their loop size (an angle row: 1 rad), columns equilibrated, and its
+            # condition number: the runtime's singular-position estimate
+            body += [f"double J[{n * n}], rs[{n}], cs[{n}];", f"int piv[{n}];"]
             body += [f"J[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_jac)]
             body += [f"qd[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_vel)]
-            body += [f"if (sg_lu_factor_inl({n}, J, piv, 0) != SG_OK) return SG_SINGULAR;",
-                     f"sg_lu_solve_inl({n}, J, piv, qd);"]
+            body += [f"rs[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_inv)]
+            body += [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
+                     f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
+        else:
+            body += ["*cond = 1.0;"]
         body += _temps(pr, staged[1])
         if n:
             body += [f"qdd[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_gam)]
-            body += [f"sg_lu_solve_inl({n}, J, piv, qdd);"]
+            body += [f"sg_solve_eq_inl({n}, J, piv, rs, cs, qdd);"]
         body += _temps(pr, staged[2])
         body += [f"obs[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_obs)]
         outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)] + [f"obs[{k}]" for k in range(len(r_obs))]
         if outputs:  # one NaN/inf test per position: a balanced sum is non-finite iff an entry is
             body += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
-        names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "obs")
+        names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "obs", "cond")
         body = _unused(body, *names) + body + ["return SG_OK;"]
         return Kernel(f"{self.prefix}_motion",
                       self._signature("motion"),
@@ -337,16 +346,79 @@ class KernelSet:
                       self._signature("closed"),
                       body, total)
 
-    def constants_kernel(self) -> Kernel:
-        """Call last: it evaluates every constant the other kernels hoisted."""
+    def scales(self, exprs: list) -> Kernel:
+        """Each closure equation's own size (derive.branches.row_scales): Newton's per-equation tolerance."""
         pr = self.printer
-        exprs = list(self.constants)
+        repl, red = _cse(self.prepare(exprs))
+        body = self.selection_block() + _temps(pr, repl) + [f"out[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
+        body = _unused(body, "q", "cq", "x", "cx", "c") + body
+        return Kernel(f"{self.prefix}_scales", self._signature("scales"), body,
+                      ops(e for _, e in repl) + ops(red) + len(red))  # a copy of a hoisted size counts
+
+    def blocks(self, blocks: list) -> Kernel:
+        """The normalised determinant of every diagonal block of Φ_q (derive.branches) from the numeric Φ_q:
+        det over the product of the block rows' norms in Φ_q; its sign is the block's assembly branch."""
+        n = len(self.kin.q)
+        body = []
+        count = 0
+        for k, blk in enumerate(blocks):
+            m = len(blk.rows)
+            count += {1: 0, 2: 3, 3: 14}.get(m, 2 * m ** 3 // 3) + m * (2 * n + 1) + 2  # det, row norms, quotient
+            el = [[f"jac[{i * n + j}]" for j in blk.cols] for i in blk.rows]
+            norms = "sqrt(" + " * ".join(f"sg_row_norm2({n}, jac + {i * n})" for i in blk.rows) + ")"
+            body.append(f"/* block {k}: joints {', '.join(blk.joints)} */")
+            body.append("{")
+            if m == 1:
+                det = el[0][0]
+            elif m == 2:
+                det = f"{el[0][0]} * {el[1][1]} - {el[0][1]} * {el[1][0]}"
+            elif m == 3:
+                det = (f"{el[0][0]} * ({el[1][1]} * {el[2][2]} - {el[1][2]} * {el[2][1]})"
+                       f" - {el[0][1]} * ({el[1][0]} * {el[2][2]} - {el[1][2]} * {el[2][0]})"
+                       f" + {el[0][2]} * ({el[1][0]} * {el[2][1]} - {el[1][1]} * {el[2][0]})")
+            else:
+                body += [f"    double M[{m * m}];", f"    int piv[{m}];"]
+                body += [f"    M[{a * m + b}] = {el[a][b]};" for a in range(m) for b in range(m)]
+                body += [f"    const double d = sg_det_inl({m}, M, piv);"]
+                det = "d"
+            body += [f"    const double nr = {norms};", f"    out[{k}] = nr > 0.0 ? ({det}) / nr : 0.0;", "}"]
+        body = _unused(body, "jac", "out") + body
+        return Kernel(f"{self.prefix}_blocks", self._signature("blocks"), body, count)
+
+    def constants_kernel(self) -> Kernel:
+        """Call last: it evaluates every constant the other kernels hoisted. A square root of a parameter sum
+        (a triangle's height from its sides) takes a negative within rounding of its terms as 0, so a collinear
+        triangle is accepted; a really negative one stays NaN, which sewgen.mechanism reports as a
+        ParameterError naming the parameters of that constant (manifest "constants")."""
+        pr = self.printer
+        exprs = [_guard_sqrt(e) for e in self.constants]
         repl, red = _cse(exprs)
         body = _temps(pr, repl) + [f"c[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
         body = _unused(body, "p", "c") + body
         return Kernel(f"{self.prefix}_constants",
                       self._signature("constants"),
                       body, ops(e for _, e in repl) + ops(red))
+
+
+class RoundingClamp(sp.Function):
+    """``value`` with a negative within 1e-12 of ``scale`` (rounding of a zero) taken as 0 (csrc/sg_runtime.h)."""
+
+    nargs = 2
+
+    def _ccode(self, printer):
+        return f"sg_rounding_clamp({printer._print(self.args[0])}, {printer._print(self.args[1])})"
+
+
+def _guard_sqrt(e: sp.Expr) -> sp.Expr:
+    """Every sqrt (or half-integer power) of a sum in ``e`` with its argument clamped by :class:`RoundingClamp`
+    against the sum of the magnitudes of its expanded terms."""
+    repl = {}
+    for pw in e.atoms(sp.Pow):
+        base, ex = pw.args
+        if isinstance(base, sp.Add) and ex.is_Rational and ex.q == 2:
+            scale = sum((sp.Abs(t) for t in sp.Add.make_args(sp.expand(base))), sp.S.Zero)
+            repl[pw] = sp.Pow(RoundingClamp(_guard_sqrt(base), scale), ex)
+    return e.xreplace(repl) if repl else e
 
 
 def _balanced_sum(terms: list[str]) -> str:
@@ -357,12 +429,12 @@ def _balanced_sum(terms: list[str]) -> str:
     return f"({_balanced_sum(terms[:mid])} + {_balanced_sum(terms[mid:])})"
 
 
-def _fmax(terms: list[str]) -> str:
-    """fmax of the absolute values, as a balanced tree."""
+def _fmax(terms: list[str], absolute: bool = True) -> str:
+    """fmax of the absolute values (or of the values), as a balanced tree."""
     if len(terms) == 1:
-        return f"fabs({terms[0]})"
+        return f"fabs({terms[0]})" if absolute else terms[0]
     mid = len(terms) // 2
-    return f"fmax({_fmax(terms[:mid])}, {_fmax(terms[mid:])})"
+    return f"fmax({_fmax(terms[:mid], absolute)}, {_fmax(terms[mid:], absolute)})"
 
 
 def _stage(sym, levels):
