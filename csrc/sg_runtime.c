@@ -11,6 +11,13 @@
 #define SG_ASSERT(cond) ((void)0)
 #endif
 
+/* memcpy of n doubles; nothing for n = 0 (a mechanism without loops passes empty, possibly NULL, arrays, and
+ * memcpy with a NULL pointer is undefined even for zero bytes). */
+static inline void copy_doubles(double *dst, const double *src, int n)
+{
+    if (n > 0) memcpy(dst, src, sizeof(double) * (size_t)n);
+}
+
 #define SG_TWO_PI 6.283185307179586476925286766559
 /* Unit roundoff. */
 #define SG_EPS 1.1102230246251565e-16
@@ -109,7 +116,7 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
             *resid = norm * opt->tol;
             return SG_OK;
         }
-        memcpy(lu, jac, sizeof(double) * (size_t)(nq * nq));
+        copy_doubles(lu, jac, nq * nq);
         if (sg_lu_factor_inl(nq, lu, piv, 0) != SG_OK) return SG_CANNOT_ASSEMBLE; /* no descent direction */
         if (it >= opt->max_iter) return SG_NO_CONVERGENCE;
         for (int i = 0; i < nq; ++i) dq[i] = -r[i];
@@ -125,9 +132,9 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
             lambda *= 0.5;
         }
         if (k == 30) return SG_CANNOT_ASSEMBLE; /* the residual has a positive local minimum */
-        memcpy(q, qt, sizeof(double) * (size_t)nq);
-        memcpy(cq, cqt, sizeof(double) * (size_t)(2 * nq));
-        memcpy(r, rt, sizeof(double) * (size_t)nq);
+        copy_doubles(q, qt, nq);
+        copy_doubles(cq, cqt, 2 * nq);
+        copy_doubles(r, rt, nq);
         norm = nt;
     }
 }
@@ -152,8 +159,8 @@ static void polish(const sg_mechanism *m, double *q, double *cq, const double *x
     m->residual(qt, cqt, x, cx, c, r, jac);
     const double after = weighted_norm(nq, r, w);
     if (after < before) {
-        memcpy(q, qt, sizeof(double) * (size_t)nq);
-        memcpy(cq, cqt, sizeof(double) * (size_t)(2 * nq));
+        copy_doubles(q, qt, nq);
+        copy_doubles(cq, cqt, 2 * nq);
         *resid = after;
     } else {
         *resid = before;
@@ -235,8 +242,8 @@ static void push(sg_walker *w, double ph, const double *q, const double *cq)
     double *oldest = w->hq[2];
     w->hq[2] = w->hq[1], w->hq[1] = w->hq[0], w->hq[0] = oldest;
     w->hphi[2] = w->hphi[1], w->hphi[1] = w->hphi[0], w->hphi[0] = ph;
-    memcpy(w->hq[0], q, sizeof(double) * (size_t)nq);
-    memcpy(w->hcq, cq, sizeof(double) * (size_t)(2 * nq));
+    copy_doubles(w->hq[0], q, nq);
+    copy_doubles(w->hcq, cq, 2 * nq);
     if (w->nh < 3) ++w->nh;
 }
 
@@ -287,8 +294,8 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
     double cur = w->hphi[0];
     const double total = phi_t - cur;
     if (total == 0.0) { /* a repeated angle: the same solution (Newton only confirms it) */
-        memcpy(q, w->hq[0], sizeof(double) * (size_t)nq);
-        memcpy(cq, w->hcq, sizeof(double) * (size_t)(2 * nq));
+        copy_doubles(q, w->hq[0], nq);
+        copy_doubles(cq, w->hcq, 2 * nq);
         return solve_at(w, phi_t, q, cq, resid);
     }
     const double dir = total > 0.0 ? 1.0 : -1.0;
@@ -406,10 +413,10 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                     have = closed_st == SG_OK;
                 }
                 if (!have && w.nh > 0) {
-                    memcpy(qi, w.hq[0], sizeof(double) * (size_t)nq);
-                    memcpy(cq, w.hcq, sizeof(double) * (size_t)(2 * nq));
+                    copy_doubles(qi, w.hq[0], nq);
+                    copy_doubles(cq, w.hcq, 2 * nq);
                 } else if (!have) {
-                    memcpy(qi, q_guess, sizeof(double) * (size_t)nq);
+                    copy_doubles(qi, q_guess, nq);
                     fill_trig(m, qi, cq);
                 }
                 w.scale_age = 0; /* a fresh start takes the loop sizes anew */
@@ -447,8 +454,8 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                     if (st == SG_SINGULAR) est = INFINITY;
                     else est = cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
                     if (st == SG_OK && w.nh > 0 && !use_closed) { /* the history holds the polished state */
-                        memcpy(w.hq[0], qi, sizeof(double) * (size_t)nq);
-                        memcpy(w.hcq, cq, sizeof(double) * (size_t)(2 * nq));
+                        copy_doubles(w.hq[0], qi, nq);
+                        copy_doubles(w.hcq, cq, 2 * nq);
                     }
                 }
                 if (st == SG_OK && !(est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;
