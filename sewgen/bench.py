@@ -43,6 +43,7 @@ from typing import Callable
 import numpy as np
 
 import sewgen
+from sewgen.mechanism import continuous_angles
 
 # -- configuration and registry -----------------------------------------------------------------------------
 
@@ -309,6 +310,7 @@ def kinematics(name: str, cfg: Config) -> Result:
     raw, sw = raw_sweep(m, phi)
     t_raw = best_time(raw, cfg.repeats, cfg.min_time)
     motion = m.solve(phi)
+    continuous_angles(m.description, sw.q, sw.obs, sw.order)  # what solve() adds after the C call
     if np.any(sw.status) or not np.array_equal(sw.obs, motion.obs):
         raise RuntimeError(f"{name}: the raw sg_sweep call disagrees with solve()")
 
@@ -354,6 +356,7 @@ def kinetostatics(name: str, cfg: Config) -> Result:
     raw, sw = raw_sweep(m, phi, forces=True)  # kinetostatics()'s own defaults, so results are equal
     t_raw = best_time(raw, cfg.repeats, cfg.min_time)
     mo = fa.motion
+    continuous_angles(m.description, sw.q, sw.obs, sw.order)  # what kinetostatics() adds after the C call
     if np.any(sw.status) or not all(np.array_equal(a, b) for a, b in (
             (sw.q, mo.q), (sw.qd, mo.qd), (sw.qdd, mo.qdd), (sw.obs, mo.obs), (sw.frc, fa.frc))):
         raise RuntimeError(f"{name}: the raw sg_sweep_forces call disagrees with kinetostatics()")

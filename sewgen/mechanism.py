@@ -609,12 +609,17 @@ def continuous_angles(desc, q: np.ndarray, obs: np.ndarray, order=None) -> None:
     qa, oa = desc.angle_columns
     idx = slice(None) if order is None else np.asarray(order, dtype=np.intp)
     for arr, cols in ((q, qa), (obs, oa)):
-        if cols and arr.ndim == 2 and len(arr):
-            block = np.unwrap(arr[idx][:, cols], axis=0)
-            block -= 2 * np.pi * np.ceil((block[:1] - np.pi) / (2 * np.pi))
-            sub = arr[idx]
-            sub[:, cols] = block
-            arr[idx] = sub
+        if not cols or arr.ndim != 2 or not len(arr):
+            continue
+        block = arr[idx][:, cols]
+        first = block[0]
+        if not (np.abs(np.diff(block, axis=0)) > np.pi).any() and ((first > -np.pi) & (first <= np.pi)).all():
+            continue  # already continuous and in range: the common case costs one pass
+        block = np.unwrap(block, axis=0)
+        block -= 2 * np.pi * np.ceil((block[:1] - np.pi) / (2 * np.pi))
+        sub = arr[idx]
+        sub[:, cols] = block
+        arr[idx] = sub
 
 
 def _check_sizes(sweep: Sweep) -> None:
