@@ -95,6 +95,16 @@ UNIT_HINTS = {
     "damping": "N*s/m", "torsional_stiffness": "N*m/rad or N*mm/deg",
 }
 
+#: The units declarations and model files use most, with their factor to SI and their kind: read without pint
+#: (the derivation of the catalog needs no units library; pint's factors, so the values are pint's to the bit).
+#: Any other unit, or one of these for another kind, goes through pint.
+_COMMON = {
+    "mm": (1e-3, "length"), "m": (1.0, "length"), "deg": (math.pi / 180, "angle"), "rad": (1.0, "angle"),
+    "g": (1e-3, "mass"), "kg": (1.0, "mass"), "kg*m**2": (1.0, "inertia"), "N": (1.0, "force"),
+    "N*m": (1.0, "torque"), "rpm": (2 * math.pi / 60, "speed"), "rad/s": (1.0, "speed"),
+    "m/s**2": (1.0, "acceleration"),
+}
+
 #: The number a quantity string starts with: digits with a decimal point, an optional exponent; no thousands
 #: separators, no decimal comma, no other digits than 0-9.
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
@@ -156,6 +166,9 @@ def _parse(text: str, kind: str) -> tuple[float, str]:
                           f"e.g. {_show(example)}")
     if not math.isfinite(magnitude):
         return math.nan, "{value} is not finite"
+    common = _COMMON.get(unit)
+    if common is not None and common[1] == kind:  # the units declarations and model files use: no pint needed
+        return magnitude * common[0], ""
     ureg = registry()
     try:
         q = ureg.Quantity(magnitude, unit)
