@@ -339,23 +339,28 @@ class MachineAnalysis:
             out[:, 1] += (sm.z - oz) * force[:, 0]
         return out
 
+    def moving_bodies(self):
+        """(group, mass, inertia, BodyMotion) of every moving body of every group, with the run's parameter
+        values; a mass or inertia declared as an expression (not a parameter) is a ParameterError naming it."""
+        for g in self.machine.groups:
+            fa = self.groups[g.name]
+            values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
+            for body in g.mechanism.description.bodies:
+                if body.mass is None or body.inertia is None:
+                    raise ParameterError(g.mechanism.name, f"{body.name}.mass", "the machine's energy and shaking "
+                                         "need mass and inertia as parameters, not expressions")
+                yield g, values[body.mass], values[body.inertia], fa.motion.body(body.name)
+
     def energy_rate(self) -> np.ndarray:
         """d/dt(kinetic + potential energy) of every moving part, from the kinematics alone, plus the rate at which
         the springs store energy (W)."""
         gv = self.machine.gravity
         rate = self.machine.shaft.inertia * self.omega * self.alpha
-        for g in self.machine.groups:
-            fa = self.groups[g.name]
-            values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
-            for body in g.mechanism.description.bodies:
-                bm = fa.motion.body(body.name)
-                if body.mass is None or body.inertia is None:
-                    raise ParameterError(g.mechanism.name, f"{body.name}.mass", "the machine's energy check needs "
-                                         "mass and inertia as parameters, not expressions")
-                m, inertia = values[body.mass], values[body.inertia]
-                com = bm.com
-                rate = rate + m * (com.vx * com.ax + com.vy * com.ay - gv[0] * com.vx - gv[1] * com.vy)
-                rate = rate + inertia * bm.omega * bm.alpha
+        for _g, m, inertia, bm in self.moving_bodies():
+            com = bm.com
+            rate = rate + m * (com.vx * com.ax + com.vy * com.ay - gv[0] * com.vx - gv[1] * com.vy)
+            rate = rate + inertia * bm.omega * bm.alpha
+        for fa in self.groups.values():
             rate = rate + fa.elastic_power  # the springs' stored energy
         for sm, _pos, vel, acc in self.core:
             rate = rate + sm.mass * np.sum(vel * (acc - gv[None, :]), axis=1)

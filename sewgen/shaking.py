@@ -18,13 +18,7 @@ import numpy as np
 
 def _bodies(a):
     """(group, mass, inertia, BodyMotion) of every moving body of every group of analysis ``a``."""
-    for g in a.machine.groups:
-        fa = a.groups[g.name]
-        values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
-        for body in g.mechanism.description.bodies:
-            m = values[body.mass] if body.mass else 0.0
-            inertia = values[body.inertia] if body.inertia else 0.0
-            yield g, m, inertia, fa.motion.body(body.name)
+    return a.moving_bodies()
 
 
 def moving_mass(a) -> float:
