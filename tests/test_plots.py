@@ -10,6 +10,7 @@ a catalog mechanism or one of its parts.
 from __future__ import annotations
 
 import math
+import os
 import re
 from pathlib import Path
 
@@ -57,12 +58,16 @@ def test_write_all_writes_every_file(written, analysis):
         with Image.open(files[names.index(name)]) as im:
             assert im.format == "PNG"
             assert im.size == tuple(round(s * plots.DPI) for s in plots.figure_size(name, analysis))
-    # progress: once before each file, during the GIF every 8 frames; done counts files
+    # progress: once before each figure, during the GIF every 8 frames; done counts the files finished so far
+    # (the GIF and the figures are shared by two processes, so their reports interleave)
     total = len(files)
     assert all(c[2] == total for c in calls)
-    assert [c[0] for c in calls[:len(plots.FIGURES)]] == [name for name, _ in plots.FIGURES]
+    figure_calls = [c[0] for c in calls if not c[0].startswith(plots.GIF)]
+    assert sorted(figure_calls) == sorted(name for name, _ in plots.FIGURES)
     gif_calls = [c for c in calls if c[0].startswith(plots.GIF)]
-    assert len(gif_calls) == 9 and all(c[1] == total - 1 for c in gif_calls)
+    assert len(gif_calls) == 9 and all(0 <= c[1] < total for c in gif_calls)
+    dones = [c[1] for c in calls]
+    assert dones == sorted(dones) and dones[0] == 0 and dones[-1] < total
 
 
 def test_gif_has_one_frame_per_shaft_angle(written, analysis):
@@ -298,3 +303,42 @@ def test_plots_name_no_catalog_mechanism_or_part():
         code = re.sub(r"#.*", "", code)
         for word in WORDS:
             assert not re.search(rf"""["'.]{word}["'.]""", code), f"{path.relative_to(ROOT)} names {word!r}"
+
+
+def _jobs(folder, n, fail_in_child=(), fail_always=()):
+    """Jobs that each append their index to a log (a file: the child's writes must reach the parent)."""
+    parent = os.getpid()
+    log = folder / "log"
+
+    def job(k):
+        def run(_progress):
+            if k in fail_always or (k in fail_in_child and os.getpid() != parent):
+                raise ValueError(f"job {k}")
+            with open(log, "a") as f:
+                f.write(f"{k}\n")
+        return run
+    return [job(k) for k in range(n)], job(-1), log
+
+
+@pytest.mark.skipif(not plots.can_fork(), reason="needs fork and two CPUs")
+@pytest.mark.parametrize("fail_in_child", [(), (-1,), (5, 4), tuple(range(-1, 6))])
+def test_shared_jobs_run_each_job_once_even_when_the_child_fails(tmp_path, fail_in_child):
+    from sewgen.plots.background import run_shared
+
+    jobs, first, log = _jobs(tmp_path, 6, fail_in_child)
+    started, written = [], []
+    run_shared(jobs, first, parallel=True, on_start=started.append, on_written=written.append,
+               on_progress=lambda *a: None)
+    assert sorted(int(x) for x in log.read_text().split()) == list(range(-1, 6))
+    assert sorted(written) == list(range(-1, 6))
+    assert sorted(set(started)) == list(range(6))
+
+
+@pytest.mark.skipif(not plots.can_fork(), reason="needs fork and two CPUs")
+def test_shared_jobs_raise_the_failure_here(tmp_path):
+    from sewgen.plots.background import run_shared
+
+    jobs, first, _ = _jobs(tmp_path, 4, fail_always=(3,))
+    with pytest.raises(ValueError, match="job 3"):
+        run_shared(jobs, first, parallel=True, on_start=lambda k: None, on_written=lambda k: None,
+                   on_progress=lambda *a: None)

@@ -10,8 +10,8 @@ Lengths are drawn in mm; abscissae are the machine's shaft angle φ.
 
 Modules, one job each: :mod:`.common` (figures, shaft-angle axes, group colours, role look-ups),
 :mod:`.geometry` (a mechanism's drawing from its description and the anchors kernel), :mod:`.drawing` (linkages
-on axes), :mod:`.animation` (the machine's panels and the GIF), :mod:`.background` (the GIF written by a forked
-process while the PNGs are drawn), :mod:`.paths` (trajectories, feed-dog stitch
+on axes), :mod:`.animation` (the machine's panels and the GIF), :mod:`.background` (a forked process that writes the
+GIF and shares the PNGs), :mod:`.paths` (trajectories, feed-dog stitch
 family), :mod:`.curves` (motion against the shaft angle), :mod:`.reactions` (bearing and joint polars, torque,
 shaking force and moments), :mod:`.cycle` (the stitch-formation cycle diagram) and :mod:`.thread` (the thread's
 supply, demand and slack) for a machine with a ``[stitch]`` table.
@@ -21,7 +21,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .animation import GIF_DPI, GIF_FPS, GIF_WIDTH, MachineView, draw_machine, machine_gif, machine_linkages
-from .background import BackgroundGif, can_fork
+from .background import can_fork, run_shared
 from .common import DPI, PALETTE, feed_groups, new_figure, render, throat_plate_height
 from .curves import draw_motion, motion_rows, motion_size
 from .cycle import cycle_size, draw_cycle, draw_cycle_timing, write_timing_plots
@@ -84,9 +84,10 @@ def figures_for(analysis) -> list[tuple]:
 def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool | None = None,
               curves=None) -> list[Path]:
     """Every figure (and the GIF unless ``gif=False``) into ``folder``; returns the paths written.
-    ``progress(message, done, total)`` is called before each file (done = files finished, total = files) and
-    every 8 frames of the GIF (done stays at the GIF's index). The GIF is written by a forked process while the
-    PNGs are drawn where that is safe (:func:`~sewgen.plots.background.can_fork`; ``parallel=False``: never).
+    ``progress(message, done, total)`` is called before each figure (done = files finished so far, total =
+    files) and every 8 frames of the GIF. Where that is safe (:func:`~sewgen.plots.background.can_fork`;
+    ``parallel=False``: never) a forked process writes the GIF and then shares the figures with this one
+    (:func:`~sewgen.plots.background.run_shared`), so two figures may be in progress at once.
 
     The figures are drawn from ``curves`` (default: ``analysis.refined()``, the same analysis every 1° when it
     was run in coarser steps, so no curve is a jagged polyline); the GIF has one frame per position of
@@ -99,28 +100,26 @@ def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool 
     figures = figures_for(analysis)
     total = len(figures) + bool(gif)
     report = progress or (lambda message, done, total: None)
-    gif_progress = (lambda message, i, n: report(message, len(figures), total))  # noqa: E731
-    out, background = [], None
-    links = machine_linkages(analysis) if gif else None  # built here: the geometry's errors raise here
-    if gif and (can_fork() if parallel is None else parallel):
-        background = BackgroundGif(analysis, folder / GIF, links)
-    try:
-        for k, (name, make) in enumerate(figures):
-            report(name, k, total)
-            out.append(make(curves, folder / name))
-        if background is not None:
-            out.append(background.wait(gif_progress))
-            background = None
-        elif gif:
-            out.append(machine_gif(analysis, folder / GIF, gif_progress, links=links))
-    finally:
-        if background is not None:  # a figure failed: stop the GIF
-            background.cancel()
-    return out
+    done = [0]
 
+    def on_start(k):
+        report(figures[k][0], done[0], total)
+
+    def on_written(k):
+        done[0] += 1
+
+    def on_progress(message, i, n):
+        report(message, min(done[0], total - 1), total)
+
+    links = machine_linkages(analysis) if gif else None  # built here: the geometry's errors raise here
+    jobs = [lambda _progress, make=make, name=name: make(curves, folder / name) for name, make in figures]
+    first = (lambda progress: machine_gif(analysis, folder / GIF, progress, links=links)) if gif else None
+    run_shared(jobs, first, parallel=can_fork() if parallel is None else parallel, on_start=on_start,
+               on_written=on_written, on_progress=on_progress)
+    return [folder / name for name, _ in figures] + ([folder / GIF] if gif else [])
 
 __all__ = ["DPI", "FIGURES", "GIF", "GIF_DPI", "GIF_FPS", "GIF_WIDTH", "PALETTE", "SIZES", "STITCHES_MM",
-           "APPLIES", "BackgroundGif", "Linkage", "MachineView", "bearings_polar", "can_fork", "draw_bearings_polar",
+           "APPLIES", "Linkage", "MachineView", "bearings_polar", "can_fork", "draw_bearings_polar",
            "draw_feed_dog_stitches", "draw_joint_reactions_polar", "draw_machine", "draw_motion", "draw_shaking",
            "draw_torque", "draw_trajectories", "feed_dog_stitches", "figure_size", "figures_for", "joint_reactions_polar", "linkage",
            "linkage_of", "machine_gif", "machine_linkages", "main_joints", "motion", "motion_rows", "new_figure",

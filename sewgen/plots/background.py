@@ -1,10 +1,12 @@
-"""The GIF written by a forked child process while the parent draws the PNGs (two cores: about half the time).
+"""A forked child that shares the figures with the parent (two cores: about half the time).
 
-Only where forking is safe and pays: Linux, more than one CPU, no other Python thread running. The child
-inherits the analysis and the linkages already built (no pickling, no linear algebra after the fork), sends its
-progress and its outcome through a pipe, and exits; :meth:`BackgroundGif.wait` relays the progress to the
-caller. If the child fails, the parent writes the GIF itself, so an error is raised where it happens, with its
-own type and traceback.
+The child first writes the GIF, then takes figures from the back of the list while the parent takes them from
+the front, until the two meet (one shared pair of indices under a lock), so neither core idles whatever each
+figure costs. Only where forking is safe and pays: Linux, more than one CPU, no other Python thread running.
+The child inherits the analysis and the linkages already built (no pickling, no linear algebra after the fork)
+and reports through a pipe: which figure it starts, which file it has written, the GIF's progress, and its
+outcome. If it fails, the parent writes what the child had taken itself, so an error is raised where it
+happens, with its own type and traceback.
 """
 from __future__ import annotations
 
@@ -12,7 +14,10 @@ import os
 import sys
 import threading
 import warnings
-from pathlib import Path
+from typing import Callable, Sequence
+
+#: A job: ``write(progress)`` writes one file; ``progress(message, i, n)`` may be called while it runs.
+Job = Callable[[Callable], object]
 
 
 def can_fork() -> bool:
@@ -22,44 +27,89 @@ def can_fork() -> bool:
             and "fork" in multiprocessing.get_all_start_methods())
 
 
-class BackgroundGif:
-    """``machine_gif(analysis, path, links=links)`` in a forked child; :meth:`wait` for it."""
+class SharedJobs:
+    """Jobs ``0 … n−1`` taken from the front by the parent and from the back by the child, each exactly once."""
 
-    def __init__(self, analysis, path, links):
-        import multiprocessing
+    def __init__(self, n: int, ctx):
+        self._ends = ctx.Array("i", [0, n], lock=True)
 
-        self.analysis, self.path, self.links = analysis, Path(path), links
-        ctx = multiprocessing.get_context("fork")
+    def take_front(self) -> int | None:
+        with self._ends.get_lock():
+            head, tail = self._ends[0], self._ends[1]
+            if head >= tail:
+                return None
+            self._ends[0] = head + 1
+            return head
+
+    def take_back(self) -> int | None:
+        with self._ends.get_lock():
+            head, tail = self._ends[0], self._ends[1]
+            if head >= tail:
+                return None
+            self._ends[1] = tail - 1
+            return tail - 1
+
+    def first_of_back(self) -> int:
+        """The first job the back end took (its jobs are this one to the last)."""
+        with self._ends.get_lock():
+            return self._ends[1]
+
+
+class Background:
+    """A forked child that runs ``first`` (if given) and then takes ``jobs`` from the back of ``shared``.
+
+    Messages relayed by :meth:`relay` / :meth:`wait` to the caller's handlers: ``on_start(k)`` before job k,
+    ``on_written(k)`` after it (k = −1 for ``first``), ``on_progress(message, i, n)`` from inside a job."""
+
+    FIRST = -1
+
+    def __init__(self, first: Job | None, jobs: Sequence[Job], shared: SharedJobs, ctx):
+        self.first, self.jobs, self.shared = first, jobs, shared
+        self.written: set[int] = set()
+        self._outcome = None
         self._recv, send = ctx.Pipe(duplex=False)
         with warnings.catch_warnings():  # Python >= 3.12 warns about fork() beside native (BLAS) threads
             warnings.simplefilter("ignore", DeprecationWarning)
-            self._proc = ctx.Process(target=_child, args=(analysis, self.path, links, send), daemon=True)
+            self._proc = ctx.Process(target=_child, args=(first, jobs, shared, send), daemon=True)
             self._proc.start()
         send.close()  # the child holds the only write end: its exit ends the pipe
 
-    def wait(self, progress=None) -> Path:
-        """Relay the child's progress to ``progress(message, frame, frames)`` until it is done; the GIF's path."""
-        from .animation import machine_gif
+    def relay(self, on_start, on_written, on_progress, block: bool = False) -> None:
+        """Pass on the child's messages; without ``block`` only those already sent, else until it is done."""
+        while self._outcome is None and (block or self._recv.poll()):
+            try:
+                msg = self._recv.recv()
+            except EOFError:
+                self._outcome = "failed"
+                break
+            kind = msg[0]
+            if kind == "start":
+                on_start(msg[1])
+            elif kind == "written":
+                self.written.add(msg[1])
+                on_written(msg[1])
+            elif kind == "progress":
+                on_progress(*msg[1:])
+            else:
+                self._outcome = kind
 
-        outcome = None
+    def wait(self, on_start, on_written, on_progress) -> None:
+        """Relay until the child is done; if it failed, run here what it had taken and not written."""
         try:
-            while True:
-                try:
-                    msg = self._recv.recv()
-                except EOFError:
-                    break
-                if msg[0] == "progress":
-                    if progress:
-                        progress(*msg[1:])
-                else:
-                    outcome = msg[0]
-                    break
+            self.relay(on_start, on_written, on_progress, block=True)
         finally:
             self._recv.close()
             self._proc.join()
-        if outcome != "done" or self._proc.exitcode != 0:  # write it here: a failure is raised where it happens
-            return machine_gif(self.analysis, self.path, progress, links=self.links)
-        return self.path
+        if self._outcome == "done" and self._proc.exitcode == 0:
+            return
+        if self.first is not None and self.FIRST not in self.written:
+            self.first(on_progress)
+            on_written(self.FIRST)
+        for k in range(self.shared.first_of_back(), len(self.jobs)):
+            if k not in self.written:
+                on_start(k)
+                self.jobs[k](on_progress)
+                on_written(k)
 
     def cancel(self) -> None:
         if self._proc.is_alive():
@@ -68,11 +118,48 @@ class BackgroundGif:
         self._recv.close()
 
 
-def _child(analysis, path, links, send):
-    from .animation import machine_gif
+def run_shared(jobs: Sequence[Job], first: Job | None, *, parallel: bool, on_start, on_written,
+               on_progress) -> None:
+    """Run every job once (and ``first``, last when alone): with a forked child where ``parallel``, else here."""
+    if not parallel:
+        for k, job in enumerate(jobs):
+            on_start(k)
+            job(on_progress)
+            on_written(k)
+        if first is not None:
+            first(on_progress)
+            on_written(Background.FIRST)
+        return
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")
+    shared = SharedJobs(len(jobs), ctx)
+    child = Background(first, jobs, shared, ctx)
+    try:
+        while (k := shared.take_front()) is not None:
+            child.relay(on_start, on_written, on_progress)
+            on_start(k)
+            jobs[k](on_progress)
+            on_written(k)
+        child.wait(on_start, on_written, on_progress)
+        child = None
+    finally:
+        if child is not None:  # a job failed here: stop the child
+            child.cancel()
+
+
+def _child(first, jobs, shared, send):
+    def progress(message, i, n):
+        send.send(("progress", message, i, n))
 
     try:
-        machine_gif(analysis, path, lambda message, i, n: send.send(("progress", message, i, n)), links=links)
+        if first is not None:
+            first(progress)
+            send.send(("written", Background.FIRST))
+        while (k := shared.take_back()) is not None:
+            send.send(("start", k))
+            jobs[k](progress)
+            send.send(("written", k))
         send.send(("done",))
     except BaseException:  # noqa: BLE001 - the parent redoes the work and raises it
         send.send(("failed",))
