@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_feed_constants -- Total ops: 164 */
+/* sg_feed_constants -- Total ops: 175 */
 void sg_feed_constants(const double *p, double *c)
 {
     const double t0 = -p[6];
@@ -44,16 +44,14 @@ void sg_feed_constants(const double *p, double *c)
     const double t32 = -p[62];
     const double t33 = -p[61];
     const double t34 = t14 + t28;
-    const double t35 = -t34;
-    const double t36 = p[40]*t35;
-    const double t37 = p[21] + t29;
-    const double t38 = p[12] + t30;
-    const double t39 = t11 + t32;
-    const double t40 = t12 + t33;
-    const double t41 = p[13] + t27;
-    const double t42 = p[45] + t4;
-    const double t43 = p[14] + t31;
-    const double t44 = p[17] + t33;
+    const double t35 = p[21] + t29;
+    const double t36 = p[12] + t30;
+    const double t37 = t11 + t32;
+    const double t38 = t12 + t33;
+    const double t39 = p[13] + t27;
+    const double t40 = p[45] + t4;
+    const double t41 = p[14] + t31;
+    const double t42 = p[17] + t33;
     c[0] = t0;
     c[1] = p[2];
     c[2] = -t2;
@@ -166,78 +164,92 @@ void sg_feed_constants(const double *p, double *c)
     c[109] = -p[10];
     c[110] = -p[11];
     c[111] = p[39];
-    c[112] = t35;
-    c[113] = p[38];
-    c[114] = p[40];
+    c[112] = -t34;
+    c[113] = p[40];
+    c[114] = p[38];
     c[115] = t34;
-    c[116] = t36;
-    c[117] = -t36;
-    c[118] = p[47];
-    c[119] = p[48];
-    c[120] = -p[44];
-    c[121] = p[51];
-    c[122] = -t37;
-    c[123] = t37;
-    c[124] = p[55];
-    c[125] = -t38;
-    c[126] = t38;
-    c[127] = p[52];
-    c[128] = p[59];
-    c[129] = -p[56];
-    c[130] = p[63];
-    c[131] = -t39;
-    c[132] = -t40;
-    c[133] = t40;
-    c[134] = p[60];
-    c[135] = p[28];
-    c[136] = p[25];
-    c[137] = p[33];
-    c[138] = t41;
-    c[139] = -t41;
-    c[140] = p[30];
-    c[141] = p[37];
-    c[142] = p[34];
-    c[143] = p[43];
-    c[144] = p[56];
-    c[145] = p[44];
-    c[146] = -t9;
-    c[147] = -p[5];
-    c[148] = (0.5)*p[25];
-    c[149] = (0.5)*p[28];
-    c[150] = (0.5)*p[30];
-    c[151] = (0.5)*p[33];
-    c[152] = (0.5)*p[34];
-    c[153] = (0.5)*p[37];
-    c[154] = (0.5)*p[38];
-    c[155] = (0.5)*p[39];
-    c[156] = (0.5)*p[40];
-    c[157] = (0.5)*p[43];
-    c[158] = (0.5)*p[44];
-    c[159] = (0.5)*p[47];
-    c[160] = (0.5)*p[48];
-    c[161] = (0.5)*p[51];
-    c[162] = (0.5)*p[52];
-    c[163] = (0.5)*p[55];
-    c[164] = (0.5)*p[56];
-    c[165] = (0.5)*p[59];
-    c[166] = (0.5)*p[60];
-    c[167] = (0.5)*p[63];
-    c[168] = -p[25];
-    c[169] = -p[30];
-    c[170] = -p[34];
-    c[171] = -p[38];
-    c[172] = -p[40];
-    c[173] = -p[48];
-    c[174] = -p[52];
-    c[175] = -p[60];
-    c[176] = -t42;
-    c[177] = t42;
-    c[178] = -p[46] - t13;
-    c[179] = t43;
-    c[180] = -t43;
-    c[181] = -t44;
-    c[182] = t44;
-    c[183] = t39;
+    c[116] = p[47];
+    c[117] = p[48];
+    c[118] = -p[44];
+    c[119] = p[51];
+    c[120] = -t35;
+    c[121] = t35;
+    c[122] = p[55];
+    c[123] = -t36;
+    c[124] = t36;
+    c[125] = p[52];
+    c[126] = p[59];
+    c[127] = -p[56];
+    c[128] = p[63];
+    c[129] = -t37;
+    c[130] = -t38;
+    c[131] = t38;
+    c[132] = p[60];
+    c[133] = p[28];
+    c[134] = p[25];
+    c[135] = p[33];
+    c[136] = t39;
+    c[137] = -t39;
+    c[138] = p[30];
+    c[139] = p[37];
+    c[140] = p[34];
+    c[141] = p[43];
+    c[142] = p[56];
+    c[143] = p[44];
+    c[144] = -t9;
+    c[145] = -p[5];
+    c[146] = (0.5)*p[25];
+    c[147] = (0.5)*p[28];
+    c[148] = (0.5)*p[30];
+    c[149] = (0.5)*p[33];
+    c[150] = (0.5)*p[34];
+    c[151] = (0.5)*p[37];
+    c[152] = (0.5)*p[38];
+    c[153] = (0.5)*p[39];
+    c[154] = (0.5)*p[40];
+    c[155] = (0.5)*p[43];
+    c[156] = (0.5)*p[44];
+    c[157] = (0.5)*p[47];
+    c[158] = (0.5)*p[48];
+    c[159] = (0.5)*p[51];
+    c[160] = (0.5)*p[52];
+    c[161] = (0.5)*p[55];
+    c[162] = (0.5)*p[56];
+    c[163] = (0.5)*p[59];
+    c[164] = (0.5)*p[60];
+    c[165] = (0.5)*p[63];
+    c[166] = -p[25];
+    c[167] = -p[30];
+    c[168] = -p[34];
+    c[169] = -p[38];
+    c[170] = -p[40];
+    c[171] = -p[48];
+    c[172] = -p[52];
+    c[173] = -p[60];
+    c[174] = -p[64]*p[65];
+    c[175] = -p[66]*p[67];
+    c[176] = -p[68]*p[69];
+    c[177] = -p[70]*p[71];
+    c[178] = -p[72]*p[73];
+    c[179] = -p[74];
+    c[180] = -p[75];
+    c[181] = -p[76];
+    c[182] = p[64];
+    c[183] = p[66];
+    c[184] = p[68];
+    c[185] = p[70];
+    c[186] = p[72];
+    c[187] = p[74];
+    c[188] = p[75];
+    c[189] = p[76];
+    c[190] = -t40;
+    c[191] = t40;
+    c[192] = -p[46] - t13;
+    c[193] = t41;
+    c[194] = -t41;
+    c[195] = -t42;
+    c[196] = t42;
+    c[197] = t37;
 }
 
 /* sg_feed_residual -- Total ops: 134 */
@@ -784,7 +796,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     return SG_OK;
 }
 
-/* sg_feed_forces -- Total ops: 585 */
+/* sg_feed_forces -- Total ops: 797 */
 int sg_feed_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)x;
@@ -824,136 +836,248 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
             ka[3] = 5.0;
         }
     }
-    const double t0 = cq[6]*cx[2];
-    const double t1 = cq[7]*cx[3];
-    const double t2 = c[9]*cq[0];
-    const double t3 = c[9]*cq[1];
-    const double t4 = c[3]*cx[1] + c[6]*cx[0];
-    const double t5 = c[3]*cx[0] + c[4]*cx[1];
-    const double t6 = c[5]*cq[1];
-    const double t7 = cq[0]*cq[11];
-    const double t8 = cq[1]*cq[10];
-    const double t9 = cq[10]*cq[2];
-    const double t10 = cq[11]*cq[3];
-    const double t11 = c[22]*cq[2] + c[23]*cq[3];
-    const double t12 = c[22]*cq[3] + c[27]*cq[2];
-    const double t13 = cq[5]*t11;
-    const double t14 = cq[4]*t12;
-    const double t15 = cq[4]*t11;
-    const double t16 = cq[5]*t12;
-    const double t17 = -gv[1] + obs[74];
-    const double t18 = -gv[0] + obs[73];
-    const double t19 = c[114]*t17;
-    const double t20 = c[113]*(-gv[1] + obs[65]) - ld[3] - ld[5] + t19;
-    const double t21 = c[114]*t18;
-    const double t22 = c[113]*(-gv[0] + obs[64]) - ld[2] - ld[4] + t21;
-    const double t23 = -gv[0] + obs[82];
-    const double t24 = -gv[1] + obs[83];
-    const double t25 = c[119]*(-gv[0] + obs[91]) - ld[0];
-    const double t26 = c[119]*(-gv[1] + obs[92]) - ld[1];
-    const double t27 = c[91]*cq[10];
-    const double t28 = c[91]*cq[11];
-    const double t29 = c[95]*cq[2];
-    const double t30 = c[95]*cq[3];
-    const double t31 = c[127]*(-gv[0] + obs[100]) - ld[6];
-    const double t32 = c[127]*(-gv[1] + obs[101]) - ld[7];
-    const double t33 = -gv[0] + obs[109];
-    const double t34 = -gv[1] + obs[110];
-    const double t35 = c[134]*(-gv[0] + obs[118]) - ld[8];
-    const double t36 = c[134]*(-gv[1] + obs[119]) - ld[9];
-    const double t37 = c[65] + ka[1];
-    const double t38 = c[67] + ka[0];
-    const double t39 = c[17]*cx[1] + c[21]*cx[0];
-    const double t40 = c[17]*cx[0] + c[18]*cx[1];
-    const double t41 = c[77]*cx[3] + c[78]*cx[2];
-    const double t42 = c[83]*cx[3] + c[84]*cx[2];
-    const double t43 = -cx[3];
-    {
-        const double d = c[109]*cq[10] + c[110]*cq[11] + c[32]*t8 + c[34]*t7 + c[54]*t10 + c[54]*t9 + c[55]*cq[10] + c[57]*cq[11];
-        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[32]*t7 + c[34]*t8), fmax(fabs(c[109]*cq[10] + c[110]*cq[11] + c[32]*t8 + c[34]*t7 + c[54]*t10 + c[54]*t9 + c[55]*cq[10] + c[57]*cq[11]), fabs(c[31]*t10 + c[31]*t9))))) return SG_SINGULAR;
-        out[26] = (c[121]*obs[86] - ld[0]*(c[122]*cq[11] + t27) - ld[1]*(c[123]*cq[10] + t28) - ld[16] - t25*(c[89]*cq[11] + t27) - t26*(c[92]*cq[10] + t28))/d;
+    double fr[8] = {0.0};
+    for (int it = 0; ; ++it) {
+        const double t0 = cq[6]*cx[2];
+        const double t1 = cq[7]*cx[3];
+        const double t2 = c[9]*cq[0];
+        const double t3 = c[9]*cq[1];
+        const double t4 = c[3]*cx[1] + c[6]*cx[0];
+        const double t5 = c[3]*cx[0] + c[4]*cx[1];
+        const double t6 = c[5]*cq[1];
+        const double t7 = c[32]*cq[0];
+        const double t8 = c[34]*cq[1];
+        const double t9 = c[32]*cq[1];
+        const double t10 = c[22]*cq[2] + c[23]*cq[3];
+        const double t11 = c[22]*cq[3] + c[27]*cq[2];
+        const double t12 = c[31]*cq[2];
+        const double t13 = c[31]*cq[3];
+        const double t14 = c[24]*cq[4];
+        const double t15 = c[25]*cq[4];
+        const double t16 = c[25]*cq[5];
+        const double t17 = c[28]*cq[5];
+        const double t18 = cx[3]*fr[5];
+        const double t19 = -gv[1] + obs[74];
+        const double t20 = c[113]*t19 - t18;
+        const double t21 = cx[2]*fr[5];
+        const double t22 = -gv[0] + obs[73];
+        const double t23 = c[113]*t22 - t21;
+        const double t24 = c[113]*t19 + c[114]*(-gv[1] + obs[65]) - ld[3] - ld[5] - t18;
+        const double t25 = c[113]*t22 + c[114]*(-gv[0] + obs[64]) - ld[2] - ld[4] - t21;
+        const double t26 = -gv[0] + obs[82];
+        const double t27 = -gv[1] + obs[83];
+        const double t28 = cq[10]*fr[7];
+        const double t29 = c[117]*(-gv[0] + obs[91]) - ld[0] + t28;
+        const double t30 = cq[11]*fr[7];
+        const double t31 = c[117]*(-gv[1] + obs[92]) - ld[1] + t30;
+        const double t32 = c[91]*cq[10];
+        const double t33 = c[91]*cq[11];
+        const double t34 = c[92]*cq[10] + t33;
+        const double t35 = c[33] + c[90]*cq[10] + c[92]*cq[11] + t13 + t7;
+        const double t36 = c[36] + t12 + t34 + t8;
+        const double t37 = c[95]*cq[2];
+        const double t38 = c[95]*cq[3];
+        const double t39 = c[94]*cq[2] + c[96]*cq[3];
+        const double t40 = t13 + t39;
+        const double t41 = c[96]*cq[2] + t38;
+        const double t42 = t12 + t41;
+        const double t43 = fr[6]*t10;
+        const double t44 = c[125]*(-gv[0] + obs[100]) - ld[6] - t28 + t43;
+        const double t45 = fr[6]*t11;
+        const double t46 = c[125]*(-gv[1] + obs[101]) - ld[7] - t30 + t45;
+        const double t47 = t14 + t16;
+        const double t48 = c[26] + t39 + t47;
+        const double t49 = t15 + t17;
+        const double t50 = c[29] + t41 + t49;
+        const double t51 = -gv[0] + obs[109];
+        const double t52 = -gv[1] + obs[110];
+        const double t53 = c[132]*(-gv[0] + obs[118]) - ld[8] - t43;
+        const double t54 = c[103]*cq[5] + c[104]*cq[4];
+        const double t55 = c[132]*(-gv[1] + obs[119]) - ld[9] - t45;
+        const double t56 = c[102]*cq[4] + c[104]*cq[5] + t47;
+        const double t57 = t49 + t54;
+        const double t58 = c[65] + ka[1];
+        const double t59 = c[67] + ka[0];
+        const double t60 = c[17]*cx[1] + c[21]*cx[0];
+        const double t61 = c[17]*cx[0] + c[18]*cx[1];
+        const double t62 = c[75]*cx[2] + c[78]*cx[3] + cx[3]*q[4];
+        const double t63 = c[77]*cx[3] + c[78]*cx[2];
+        const double t64 = cx[2]*q[4] + t63;
+        const double t65 = c[82]*cx[2] + c[84]*cx[3];
+        const double t66 = c[83]*cx[3] + c[84]*cx[2];
+        const double t67 = -cx[3];
+        const double t69 = fr[0]*obs[76];
+        const double t70 = fr[4]*obs[94];
+        const double t71 = obs[58] - obs[76];
+        const double t72 = fr[1]*t71;
+        const double t73 = -obs[58] + obs[67];
+        const double t74 = fr[2]*t73;
+        const double t75 = -obs[76] + obs[85];
+        const double t76 = fr[3]*t75;
+        const double t77 = cx[2]*(obs[49]*t62 - obs[53] - obs[67]*t65 + obs[71]) + cx[3]*(-obs[49]*t64 - obs[54] + obs[67]*t66 + obs[72]);
+        const double t78 = fr[5]*t77;
+        const double t79 = -obs[99];
+        const double t80 = cq[10]*(obs[85]*t35 - obs[89] - obs[94]*t40 + obs[98]) + cq[11]*(-obs[85]*t36 - obs[90] + obs[94]*t42 - t79);
+        const double t81 = fr[7]*t80;
+        const double t82 = t10*(-obs[112]*t56 + obs[116] + obs[94]*t48 - obs[98]) + t11*(obs[112]*t57 + obs[117] - obs[94]*t50 + t79);
+        const double t83 = fr[6]*t82;
+        {
+            const double d = c[109]*cq[10] + c[110]*cq[11] + c[34]*cq[0]*cq[11] + c[54]*cq[10]*cq[2] + c[54]*cq[11]*cq[3] + c[55]*cq[10] + c[57]*cq[11] + cq[10]*t9;
+            if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(cq[10]*t8 + cq[11]*t7), fmax(fabs(c[109]*cq[10] + c[110]*cq[11] + c[34]*cq[0]*cq[11] + c[54]*cq[10]*cq[2] + c[54]*cq[11]*cq[3] + c[55]*cq[10] + c[57]*cq[11] + cq[10]*t9), fabs(cq[10]*t12 + cq[11]*t13))))) return SG_SINGULAR;
+            out[26] = (c[119]*obs[86] - fr[3] + fr[7]*(-cq[10]*t35 + cq[11]*t36) - ld[0]*(c[120]*cq[11] + t32) - ld[1]*(c[121]*cq[10] + t33) - ld[16] - t29*(c[89]*cq[11] + t32) - t31*t34)/d;
+        }
+        {
+            /* block of unknowns 6, 8 */
+            double M[4], r[2];
+            int piv[2];
+            M[0] = cx[2]*t2 + cx[3]*t3;
+            M[1] = c[5]*cq[0]*cq[6] + cq[7]*t6;
+            r[0] = c[116]*obs[77] + c[118]*t26*(c[85]*cq[1] + c[87]*cq[0]) + c[118]*t27*(c[87]*cq[1] + c[88]*cq[0]) - out[26]*(cq[10]*t8 + cq[11]*t7) - fr[0] + fr[1] + fr[3] - ld[15] + t2*t24 + t25*t6 + t29*t7 + t31*t9;
+            M[2] = c[10]*t0 + c[10]*t1 + c[11]*t0 + c[11]*t1;
+            M[3] = c[55]*cq[6] + c[57]*cq[7] - cq[6]*ka[0]*t5 + cq[6]*ka[1]*t4 + cq[6]*t2 - cq[7]*ka[0]*t4 - cq[7]*ka[1]*t5 + cq[7]*t3;
+            r[1] = c[111]*obs[59] + c[112]*cq[6]*t20 + c[112]*cq[7]*ld[4] + c[115]*cq[6]*ld[5] + c[115]*cq[7]*t23 + c[79]*cq[6]*t24 + c[79]*cq[7]*ld[2] + c[80]*cq[6]*ld[3] + c[80]*cq[7]*t25 - fr[1] + fr[2] - ld[13];
+            if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
+            sg_lu_solve_inl(2, M, piv, r);
+            out[6] = r[0];
+            out[8] = r[1];
+        }
+        {
+            const double d = c[14]*t10 + c[20]*t11 + c[24]*cq[5]*t10 + c[28]*cq[4]*t11 + c[40]*cq[4]*t10 + c[40]*cq[5]*t11 + c[59]*t10 + c[60]*t11;
+            if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[14]*t10 + c[20]*t11 + c[24]*cq[5]*t10 + c[28]*cq[4]*t11 + c[40]*cq[4]*t10 + c[40]*cq[5]*t11 + c[59]*t10 + c[60]*t11), fabs(t10*t15 + t10*t17 + t11*t14 + t11*t16)))) return SG_SINGULAR;
+            out[25] = (c[122]*obs[95] - out[26]*(cq[10]*t12 + cq[11]*t13) - fr[4] + fr[6]*(-t10*t48 + t11*t50) - fr[7]*(-cq[10]*t40 + cq[11]*t42) - ld[17] - ld[6]*(c[123]*cq[3] + t37) - ld[7]*(c[124]*cq[2] + t38) - t41*t46 - t44*(c[93]*cq[3] + t37))/d;
+        }
+        {
+            /* block of unknowns 23, 24 */
+            double M[4], r[2];
+            int piv[2];
+            M[0] = c[19]*cq[5];
+            M[1] = c[38]*cq[4];
+            r[0] = c[128]*obs[113] - out[25]*(t10*t15 + t10*t17 + t11*t14 + t11*t16) - fr[6]*(-t10*t56 + t11*t57) - ld[19] - ld[8]*(c[129]*cq[4] + c[130]*cq[5]) - ld[9]*(c[129]*cq[5] + c[131]*cq[4]) - t53*(c[101]*cq[5] + c[103]*cq[4]) - t54*t55;
+            M[2] = c[15]*cq[13];
+            M[3] = c[39]*cq[12];
+            r[1] = c[126]*obs[104] + c[127]*t51*(c[97]*cq[13] + c[99]*cq[12]) + c[127]*t52*(c[100]*cq[12] + c[99]*cq[13]) - ld[18];
+            if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
+            sg_lu_solve_inl(2, M, piv, r);
+            out[23] = r[0];
+            out[24] = r[1];
+        }
+        out[12] = cq[6]*out[8] - cx[2]*out[6] + t24;
+        out[11] = -cq[7]*out[8] - out[6]*t67 + t25;
+        out[22] = -out[24] - out[25]*t10 + t55;
+        out[21] = -out[23] - out[25]*(c[144]*cq[3] + c[23]*cq[2]) + t53;
+        out[18] = -cq[10]*out[26] - out[25]*(c[144]*cq[2] + c[27]*cq[3]) + t46;
+        out[17] = cq[11]*out[26] - out[25]*t11 + t44;
+        out[16] = cq[10]*out[26] + t31;
+        out[15] = -cq[11]*out[26] + t29;
+        out[10] = c[143]*t27 + out[12] + out[16];
+        out[9] = c[143]*t26 + out[11] + out[15];
+        out[14] = -cx[2]*out[6] + t20;
+        out[13] = -out[6]*t67 + t23;
+        out[20] = c[142]*t52 + out[24];
+        out[19] = c[142]*t51 + out[23];
+        out[7] = c[141]*obs[68] - out[13]*(c[81]*cx[3] + c[83]*cx[2]) - out[14]*t66 - out[6]*(cx[2]*t66 + cx[3]*t65) - fr[2] - fr[5]*(-cx[2]*t65 + cx[3]*t66) - ld[14];
+        out[5] = c[140]*(-gv[1] + obs[56]) + cx[2]*out[6] + t18;
+        out[4] = c[140]*(-gv[0] + obs[55]) - cx[3]*out[6] + t21;
+        out[29] = c[139]*obs[50] - out[4]*(c[74]*cx[3] + c[77]*cx[2]) - out[5]*t63 - out[6]*(-cx[2]*t64 - cx[3]*t62) + out[7] + fr[5]*(-cx[2]*t62 + cx[3]*t64) - ld[12];
+        out[3] = c[138]*(-gv[1] + obs[47]) + out[20];
+        out[2] = c[138]*(-gv[0] + obs[46]) + out[19];
+        out[28] = c[135]*obs[41] - out[19]*(c[136]*t60 + c[70]*t61) - out[2]*(c[69]*t60 + c[71]*t61) - out[20]*(c[137]*t61 + c[70]*t60) - out[3]*(c[71]*t60 + c[72]*t61) - ld[11];
+        out[1] = c[134]*(-gv[1] + obs[38]) - cq[6]*out[8];
+        out[0] = c[134]*(-gv[0] + obs[37]) + cq[7]*out[8];
+        out[27] = c[133]*obs[32] - out[0]*(c[64]*t4 + c[66]*t5) - out[1]*(c[66]*t4 + c[67]*t5) - out[8]*(cq[6]*(-t4*t58 + t5*t59) + cq[7]*(t4*t59 + t5*t58)) - ld[10];
+        const double t68 = out[27] + out[28];
+        if (c[182] == 0.0 && c[183] == 0.0 && c[184] == 0.0 && c[185] == 0.0 && c[186] == 0.0 && c[187] == 0.0 && c[188] == 0.0 && c[189] == 0.0) {
+            out[30] = t68;
+            out[31] = out[29];
+            out[32] = t68*xd[0];
+            out[33] = out[29]*xd[1];
+            out[34] = -cx[3]*out[6];
+            out[35] = cx[2]*out[6];
+            out[36] = cq[7]*out[8];
+            out[37] = -cq[6]*out[8];
+            out[38] = -out[25]*t11;
+            out[39] = out[25]*t10;
+            out[40] = -cq[11]*out[26];
+            out[41] = cq[10]*out[26];
+            out[42] = out[0] + out[17] + out[2] + out[21] + out[4] + out[9];
+            out[43] = out[1] + out[10] + out[18] + out[22] + out[3] + out[5];
+            out[44] = c[110]*out[17] + c[145]*out[4] + c[20]*out[21] + c[55]*out[10] + c[59]*out[18] + c[61]*out[22] + c[7]*out[9] + c[73]*out[5] + out[29] + fr[0] + fr[4] + t68;
+            out[45] = c[146]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[147]*((obs[31])*(obs[31])) + c[148]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[149]*((obs[40])*(obs[40])) + c[150]*(((obs[53])*(obs[53])) + ((obs[54])*(obs[54]))) + c[151]*((obs[49])*(obs[49])) + c[152]*(((obs[62])*(obs[62])) + ((obs[63])*(obs[63]))) + c[153]*((obs[58])*(obs[58])) + c[154]*(((obs[71])*(obs[71])) + ((obs[72])*(obs[72]))) + c[155]*((obs[67])*(obs[67])) + c[156]*(((obs[80])*(obs[80])) + ((obs[81])*(obs[81]))) + c[157]*((obs[76])*(obs[76])) + c[158]*(((obs[89])*(obs[89])) + ((obs[90])*(obs[90]))) + c[159]*((obs[85])*(obs[85])) + c[160]*(((obs[98])*(obs[98])) + ((obs[99])*(obs[99]))) + c[161]*((obs[94])*(obs[94])) + c[162]*(((obs[107])*(obs[107])) + ((obs[108])*(obs[108]))) + c[163]*((obs[103])*(obs[103])) + c[164]*(((obs[116])*(obs[116])) + ((obs[117])*(obs[117]))) + c[165]*((obs[112])*(obs[112]));
+            out[46] = c[118]*(gv[0]*obs[78] + gv[1]*obs[79]) + c[127]*(gv[0]*obs[105] + gv[1]*obs[106]) + c[166]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[167]*(gv[0]*obs[42] + gv[1]*obs[43]) + c[168]*(gv[0]*obs[51] + gv[1]*obs[52]) + c[169]*(gv[0]*obs[60] + gv[1]*obs[61]) + c[170]*(gv[0]*obs[69] + gv[1]*obs[70]) + c[171]*(gv[0]*obs[87] + gv[1]*obs[88]) + c[172]*(gv[0]*obs[96] + gv[1]*obs[97]) + c[173]*(gv[0]*obs[114] + gv[1]*obs[115]);
+            out[47] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[31] + ld[11]*obs[40] + ld[12]*obs[49] + ld[13]*obs[58] + ld[14]*obs[67] + ld[15]*obs[76] + ld[16]*obs[85] + ld[17]*obs[94] + ld[18]*obs[103] + ld[19]*obs[112] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[26] + ld[9]*obs[27] + t69 + t70 + t72 + t74 + t76 + t78 + t81 + t83;
+            out[48] = 0.0;
+            out[49] = fr[0];
+            out[50] = -t69;
+            out[51] = fr[1];
+            out[52] = -t72;
+            out[53] = fr[2];
+            out[54] = -t74;
+            out[55] = fr[3];
+            out[56] = -t76;
+            out[57] = fr[4];
+            out[58] = -t70;
+            out[59] = fr[5];
+            out[60] = -t78;
+            out[61] = fr[6];
+            out[62] = -t83;
+            out[63] = fr[7];
+            out[64] = -t81;
+            if (!isfinite(((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + out[7]))) + (((out[8] + out[9]) + (out[10] + out[11])) + ((out[12] + out[13]) + (out[14] + out[15])))) + ((((out[16] + out[17]) + (out[18] + out[19])) + ((out[20] + out[21]) + (out[22] + out[23]))) + (((out[24] + out[25]) + (out[26] + out[27])) + ((out[28] + out[29]) + (out[30] + out[31]))))) + (((((out[32] + out[33]) + (out[34] + out[35])) + ((out[36] + out[37]) + (out[38] + out[39]))) + (((out[40] + out[41]) + (out[42] + out[43])) + ((out[44] + out[45]) + (out[46] + out[47])))) + ((((out[48] + out[49]) + (out[50] + out[51])) + ((out[52] + out[53]) + (out[54] + out[55]))) + (((out[56] + out[57]) + (out[58] + out[59])) + ((out[60] + out[61]) + (out[62] + (out[63] + out[64]))))))))) return SG_NONFINITE;
+            return SG_OK;
+        }
+        double frn[8];
+        frn[0] = c[174]*sqrt(((out[10])*(out[10])) + ((out[9])*(out[9])))*((obs[76]) > 0.0 ? 1.0 : ((obs[76]) < 0.0 ? -1.0 : 0.0));
+        frn[1] = c[175]*sqrt(((out[11])*(out[11])) + ((out[12])*(out[12])))*((t71) > 0.0 ? 1.0 : ((t71) < 0.0 ? -1.0 : 0.0));
+        frn[2] = c[176]*sqrt(((out[13])*(out[13])) + ((out[14])*(out[14])))*((t73) > 0.0 ? 1.0 : ((t73) < 0.0 ? -1.0 : 0.0));
+        frn[3] = c[177]*sqrt(((out[15])*(out[15])) + ((out[16])*(out[16])))*((t75) > 0.0 ? 1.0 : ((t75) < 0.0 ? -1.0 : 0.0));
+        frn[4] = c[178]*sqrt(((out[17])*(out[17])) + ((out[18])*(out[18])))*((obs[94]) > 0.0 ? 1.0 : ((obs[94]) < 0.0 ? -1.0 : 0.0));
+        frn[5] = c[179]*fabs(out[6])*((t77) > 0.0 ? 1.0 : ((t77) < 0.0 ? -1.0 : 0.0));
+        frn[6] = c[180]*fabs(out[25])*((t82) > 0.0 ? 1.0 : ((t82) < 0.0 ? -1.0 : 0.0));
+        frn[7] = c[181]*fabs(out[26])*((t80) > 0.0 ? 1.0 : ((t80) < 0.0 ? -1.0 : 0.0));
+        double d = 0.0, s = 0.0;
+        for (int k = 0; k < 8; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
+        if (d <= 1e-13 * s) {
+            out[30] = t68;
+            out[31] = out[29];
+            out[32] = t68*xd[0];
+            out[33] = out[29]*xd[1];
+            out[34] = -cx[3]*out[6];
+            out[35] = cx[2]*out[6];
+            out[36] = cq[7]*out[8];
+            out[37] = -cq[6]*out[8];
+            out[38] = -out[25]*t11;
+            out[39] = out[25]*t10;
+            out[40] = -cq[11]*out[26];
+            out[41] = cq[10]*out[26];
+            out[42] = out[0] + out[17] + out[2] + out[21] + out[4] + out[9];
+            out[43] = out[1] + out[10] + out[18] + out[22] + out[3] + out[5];
+            out[44] = c[110]*out[17] + c[145]*out[4] + c[20]*out[21] + c[55]*out[10] + c[59]*out[18] + c[61]*out[22] + c[7]*out[9] + c[73]*out[5] + out[29] + fr[0] + fr[4] + t68;
+            out[45] = c[146]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[147]*((obs[31])*(obs[31])) + c[148]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[149]*((obs[40])*(obs[40])) + c[150]*(((obs[53])*(obs[53])) + ((obs[54])*(obs[54]))) + c[151]*((obs[49])*(obs[49])) + c[152]*(((obs[62])*(obs[62])) + ((obs[63])*(obs[63]))) + c[153]*((obs[58])*(obs[58])) + c[154]*(((obs[71])*(obs[71])) + ((obs[72])*(obs[72]))) + c[155]*((obs[67])*(obs[67])) + c[156]*(((obs[80])*(obs[80])) + ((obs[81])*(obs[81]))) + c[157]*((obs[76])*(obs[76])) + c[158]*(((obs[89])*(obs[89])) + ((obs[90])*(obs[90]))) + c[159]*((obs[85])*(obs[85])) + c[160]*(((obs[98])*(obs[98])) + ((obs[99])*(obs[99]))) + c[161]*((obs[94])*(obs[94])) + c[162]*(((obs[107])*(obs[107])) + ((obs[108])*(obs[108]))) + c[163]*((obs[103])*(obs[103])) + c[164]*(((obs[116])*(obs[116])) + ((obs[117])*(obs[117]))) + c[165]*((obs[112])*(obs[112]));
+            out[46] = c[118]*(gv[0]*obs[78] + gv[1]*obs[79]) + c[127]*(gv[0]*obs[105] + gv[1]*obs[106]) + c[166]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[167]*(gv[0]*obs[42] + gv[1]*obs[43]) + c[168]*(gv[0]*obs[51] + gv[1]*obs[52]) + c[169]*(gv[0]*obs[60] + gv[1]*obs[61]) + c[170]*(gv[0]*obs[69] + gv[1]*obs[70]) + c[171]*(gv[0]*obs[87] + gv[1]*obs[88]) + c[172]*(gv[0]*obs[96] + gv[1]*obs[97]) + c[173]*(gv[0]*obs[114] + gv[1]*obs[115]);
+            out[47] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[31] + ld[11]*obs[40] + ld[12]*obs[49] + ld[13]*obs[58] + ld[14]*obs[67] + ld[15]*obs[76] + ld[16]*obs[85] + ld[17]*obs[94] + ld[18]*obs[103] + ld[19]*obs[112] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[26] + ld[9]*obs[27] + t69 + t70 + t72 + t74 + t76 + t78 + t81 + t83;
+            out[48] = 0.0;
+            out[49] = fr[0];
+            out[50] = -t69;
+            out[51] = fr[1];
+            out[52] = -t72;
+            out[53] = fr[2];
+            out[54] = -t74;
+            out[55] = fr[3];
+            out[56] = -t76;
+            out[57] = fr[4];
+            out[58] = -t70;
+            out[59] = fr[5];
+            out[60] = -t78;
+            out[61] = fr[6];
+            out[62] = -t83;
+            out[63] = fr[7];
+            out[64] = -t81;
+            if (!isfinite(((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + out[7]))) + (((out[8] + out[9]) + (out[10] + out[11])) + ((out[12] + out[13]) + (out[14] + out[15])))) + ((((out[16] + out[17]) + (out[18] + out[19])) + ((out[20] + out[21]) + (out[22] + out[23]))) + (((out[24] + out[25]) + (out[26] + out[27])) + ((out[28] + out[29]) + (out[30] + out[31]))))) + (((((out[32] + out[33]) + (out[34] + out[35])) + ((out[36] + out[37]) + (out[38] + out[39]))) + (((out[40] + out[41]) + (out[42] + out[43])) + ((out[44] + out[45]) + (out[46] + out[47])))) + ((((out[48] + out[49]) + (out[50] + out[51])) + ((out[52] + out[53]) + (out[54] + out[55]))) + (((out[56] + out[57]) + (out[58] + out[59])) + ((out[60] + out[61]) + (out[62] + (out[63] + out[64]))))))))) return SG_NONFINITE;
+            return SG_OK;
+        }
+        if (it >= 100) return SG_NO_CONVERGENCE;
+        for (int k = 0; k < 8; ++k) fr[k] = frn[k];
     }
-    {
-        /* block of unknowns 6, 8 */
-        double M[4], r[2];
-        int piv[2];
-        M[0] = cx[2]*t2 + cx[3]*t3;
-        M[1] = c[5]*cq[0]*cq[6] + cq[7]*t6;
-        r[0] = c[118]*obs[77] + c[120]*t23*(c[85]*cq[1] + c[87]*cq[0]) + c[120]*t24*(c[87]*cq[1] + c[88]*cq[0]) + c[32]*cq[0]*t25 + c[32]*cq[1]*t26 - out[26]*(c[32]*t7 + c[34]*t8) - ld[15] + t2*t20 + t22*t6;
-        M[2] = c[10]*t0 + c[10]*t1 + c[11]*t0 + c[11]*t1;
-        M[3] = c[55]*cq[6] + c[57]*cq[7] - cq[6]*ka[0]*t5 + cq[6]*ka[1]*t4 + cq[6]*t2 - cq[7]*ka[0]*t4 - cq[7]*ka[1]*t5 + cq[7]*t3;
-        r[1] = c[111]*obs[59] + c[112]*cq[7]*ld[4] + c[115]*cq[6]*ld[5] + c[116]*cq[6]*t17 + c[117]*cq[7]*t18 + c[79]*cq[6]*t20 + c[79]*cq[7]*ld[2] + c[80]*cq[6]*ld[3] + c[80]*cq[7]*t22 - ld[13];
-        if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
-        sg_lu_solve_inl(2, M, piv, r);
-        out[6] = r[0];
-        out[8] = r[1];
-    }
-    {
-        const double d = c[14]*t11 + c[20]*t12 + c[24]*t13 + c[28]*t14 + c[40]*t15 + c[40]*t16 + c[59]*t11 + c[60]*t12;
-        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[14]*t11 + c[20]*t12 + c[24]*t13 + c[28]*t14 + c[40]*t15 + c[40]*t16 + c[59]*t11 + c[60]*t12), fabs(c[24]*t14 + c[25]*t15 + c[25]*t16 + c[28]*t13)))) return SG_SINGULAR;
-        out[25] = (c[124]*obs[95] - out[26]*(c[31]*t10 + c[31]*t9) - ld[17] - ld[6]*(c[125]*cq[3] + t29) - ld[7]*(c[126]*cq[2] + t30) - t31*(c[93]*cq[3] + t29) - t32*(c[96]*cq[2] + t30))/d;
-    }
-    {
-        /* block of unknowns 23, 24 */
-        double M[4], r[2];
-        int piv[2];
-        M[0] = c[19]*cq[5];
-        M[1] = c[38]*cq[4];
-        r[0] = c[130]*obs[113] - out[25]*(c[24]*t14 + c[25]*t15 + c[25]*t16 + c[28]*t13) - ld[19] - ld[8]*(c[131]*cq[4] + c[132]*cq[5]) - ld[9]*(c[131]*cq[5] + c[133]*cq[4]) - t35*(c[101]*cq[5] + c[103]*cq[4]) - t36*(c[103]*cq[5] + c[104]*cq[4]);
-        M[2] = c[15]*cq[13];
-        M[3] = c[39]*cq[12];
-        r[1] = c[128]*obs[104] + c[129]*t33*(c[97]*cq[13] + c[99]*cq[12]) + c[129]*t34*(c[100]*cq[12] + c[99]*cq[13]) - ld[18];
-        if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
-        sg_lu_solve_inl(2, M, piv, r);
-        out[23] = r[0];
-        out[24] = r[1];
-    }
-    out[12] = cq[6]*out[8] - cx[2]*out[6] + t20;
-    out[11] = -cq[7]*out[8] - out[6]*t43 + t22;
-    out[22] = -out[24] - out[25]*t11 + t36;
-    out[21] = -out[23] - out[25]*(c[146]*cq[3] + c[23]*cq[2]) + t35;
-    out[18] = -cq[10]*out[26] - out[25]*(c[146]*cq[2] + c[27]*cq[3]) + t32;
-    out[17] = cq[11]*out[26] - out[25]*t12 + t31;
-    out[16] = cq[10]*out[26] + t26;
-    out[15] = -cq[11]*out[26] + t25;
-    out[10] = c[145]*t24 + out[12] + out[16];
-    out[9] = c[145]*t23 + out[11] + out[15];
-    out[14] = -cx[2]*out[6] + t19;
-    out[13] = -out[6]*t43 + t21;
-    out[20] = c[144]*t34 + out[24];
-    out[19] = c[144]*t33 + out[23];
-    out[7] = c[143]*obs[68] - out[13]*(c[81]*cx[3] + c[83]*cx[2]) - out[14]*t42 - out[6]*(cx[2]*t42 + cx[3]*(c[82]*cx[2] + c[84]*cx[3])) - ld[14];
-    out[5] = c[142]*(-gv[1] + obs[56]) + cx[2]*out[6];
-    out[4] = c[142]*(-gv[0] + obs[55]) - cx[3]*out[6];
-    out[29] = c[141]*obs[50] - out[4]*(c[74]*cx[3] + c[77]*cx[2]) - out[5]*t41 - out[6]*(-cx[2]*(cx[2]*q[4] + t41) - cx[3]*(c[75]*cx[2] + c[78]*cx[3] + cx[3]*q[4])) + out[7] - ld[12];
-    out[3] = c[140]*(-gv[1] + obs[47]) + out[20];
-    out[2] = c[140]*(-gv[0] + obs[46]) + out[19];
-    out[28] = c[137]*obs[41] - out[19]*(c[138]*t39 + c[70]*t40) - out[2]*(c[69]*t39 + c[71]*t40) - out[20]*(c[139]*t40 + c[70]*t39) - out[3]*(c[71]*t39 + c[72]*t40) - ld[11];
-    out[1] = c[136]*(-gv[1] + obs[38]) - cq[6]*out[8];
-    out[0] = c[136]*(-gv[0] + obs[37]) + cq[7]*out[8];
-    out[27] = c[135]*obs[32] - out[0]*(c[64]*t4 + c[66]*t5) - out[1]*(c[66]*t4 + c[67]*t5) - out[8]*(cq[6]*(-t37*t4 + t38*t5) + cq[7]*(t37*t5 + t38*t4)) - ld[10];
-    const double t44 = out[27] + out[28];
-    out[30] = t44;
-    out[31] = out[29];
-    out[32] = t44*xd[0];
-    out[33] = out[29]*xd[1];
-    out[34] = -cx[3]*out[6];
-    out[35] = cx[2]*out[6];
-    out[36] = cq[7]*out[8];
-    out[37] = -cq[6]*out[8];
-    out[38] = -out[25]*t12;
-    out[39] = out[25]*t11;
-    out[40] = -cq[11]*out[26];
-    out[41] = cq[10]*out[26];
-    out[42] = out[0] + out[17] + out[2] + out[21] + out[4] + out[9];
-    out[43] = out[1] + out[10] + out[18] + out[22] + out[3] + out[5];
-    out[44] = c[110]*out[17] + c[147]*out[4] + c[20]*out[21] + c[55]*out[10] + c[59]*out[18] + c[61]*out[22] + c[7]*out[9] + c[73]*out[5] + out[29] + t44;
-    out[45] = c[148]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[149]*((obs[31])*(obs[31])) + c[150]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[151]*((obs[40])*(obs[40])) + c[152]*(((obs[53])*(obs[53])) + ((obs[54])*(obs[54]))) + c[153]*((obs[49])*(obs[49])) + c[154]*(((obs[62])*(obs[62])) + ((obs[63])*(obs[63]))) + c[155]*((obs[58])*(obs[58])) + c[156]*(((obs[71])*(obs[71])) + ((obs[72])*(obs[72]))) + c[157]*((obs[67])*(obs[67])) + c[158]*(((obs[80])*(obs[80])) + ((obs[81])*(obs[81]))) + c[159]*((obs[76])*(obs[76])) + c[160]*(((obs[89])*(obs[89])) + ((obs[90])*(obs[90]))) + c[161]*((obs[85])*(obs[85])) + c[162]*(((obs[98])*(obs[98])) + ((obs[99])*(obs[99]))) + c[163]*((obs[94])*(obs[94])) + c[164]*(((obs[107])*(obs[107])) + ((obs[108])*(obs[108]))) + c[165]*((obs[103])*(obs[103])) + c[166]*(((obs[116])*(obs[116])) + ((obs[117])*(obs[117]))) + c[167]*((obs[112])*(obs[112]));
-    out[46] = c[120]*(gv[0]*obs[78] + gv[1]*obs[79]) + c[129]*(gv[0]*obs[105] + gv[1]*obs[106]) + c[168]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[169]*(gv[0]*obs[42] + gv[1]*obs[43]) + c[170]*(gv[0]*obs[51] + gv[1]*obs[52]) + c[171]*(gv[0]*obs[60] + gv[1]*obs[61]) + c[172]*(gv[0]*obs[69] + gv[1]*obs[70]) + c[173]*(gv[0]*obs[87] + gv[1]*obs[88]) + c[174]*(gv[0]*obs[96] + gv[1]*obs[97]) + c[175]*(gv[0]*obs[114] + gv[1]*obs[115]);
-    out[47] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[31] + ld[11]*obs[40] + ld[12]*obs[49] + ld[13]*obs[58] + ld[14]*obs[67] + ld[15]*obs[76] + ld[16]*obs[85] + ld[17]*obs[94] + ld[18]*obs[103] + ld[19]*obs[112] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[26] + ld[9]*obs[27];
-    out[48] = 0.0;
-    if (!isfinite((((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))) + ((((out[24] + (out[25] + out[26])) + (out[27] + (out[28] + out[29]))) + ((out[30] + (out[31] + out[32])) + (out[33] + (out[34] + out[35])))) + (((out[36] + (out[37] + out[38])) + (out[39] + (out[40] + out[41]))) + ((out[42] + (out[43] + out[44])) + ((out[45] + out[46]) + (out[47] + out[48])))))))) return SG_NONFINITE;
-    return SG_OK;
 }
 
 /* sg_feed_force_matrix -- Total ops: 323 */
@@ -1017,10 +1141,10 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     const double t18 = c[96]*cq[2] + t17;
     const double t19 = c[22]*cq[2] + c[23]*cq[3];
     const double t20 = c[94]*cq[2];
-    const double t21 = c[126]*cq[2] + t17;
+    const double t21 = c[124]*cq[2] + t17;
     const double t22 = c[103]*cq[4];
     const double t23 = c[103]*cq[5];
-    const double t24 = c[131]*cq[5] + c[133]*cq[4];
+    const double t24 = c[129]*cq[5] + c[131]*cq[4];
     for (int k = 0; k < 900; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[8] = -cq[7];
@@ -1036,8 +1160,8 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[140] = -1.0;
     A[152] = c[69]*t4 + c[71]*t5;
     A[153] = c[71]*t4 + c[72]*t5;
-    A[169] = c[138]*t4 + c[70]*t5;
-    A[170] = c[139]*t5 + c[70]*t4;
+    A[169] = c[136]*t4 + c[70]*t5;
+    A[170] = c[137]*t5 + c[70]*t4;
     A[178] = 1.0;
     A[184] = 1.0;
     A[186] = cx[3];
@@ -1075,10 +1199,10 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[496] = -1.0;
     A[519] = c[85]*cq[1] + c[87]*cq[0];
     A[520] = c[87]*cq[1] + c[88]*cq[0];
-    A[521] = c[176]*cq[1] + c[86]*cq[0];
-    A[522] = c[177]*cq[0] + c[86]*cq[1];
-    A[525] = c[178]*cq[0] + c[88]*cq[1];
-    A[526] = c[178]*cq[1] + c[85]*cq[0];
+    A[521] = c[190]*cq[1] + c[86]*cq[0];
+    A[522] = c[191]*cq[0] + c[86]*cq[1];
+    A[525] = c[192]*cq[0] + c[88]*cq[1];
+    A[526] = c[192]*cq[1] + c[85]*cq[0];
     A[555] = 1.0;
     A[566] = cq[11];
     A[586] = 1.0;
@@ -1090,61 +1214,61 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     A[655] = t15;
     A[656] = -cq[11];
     A[678] = 1.0;
-    A[685] = c[146]*cq[2] + c[27]*cq[3];
+    A[685] = c[144]*cq[2] + c[27]*cq[3];
     A[686] = cq[10];
     A[707] = c[93]*cq[3] + t16;
     A[708] = t18;
     A[715] = -t15*(c[24]*cq[4] + c[25]*cq[5] + c[26] + c[96]*cq[3] + t20) - t19*(c[25]*cq[4] + c[28]*cq[5] + c[29] + t18);
-    A[716] = cq[10]*t21 + cq[11]*(c[126]*cq[3] + t20);
+    A[716] = cq[10]*t21 + cq[11]*(c[124]*cq[3] + t20);
     A[739] = 1.0;
     A[743] = -1.0;
     A[770] = 1.0;
     A[774] = -1.0;
     A[799] = c[97]*cq[13] + c[99]*cq[12];
     A[800] = c[100]*cq[12] + c[99]*cq[13];
-    A[803] = c[179]*cq[13] + c[98]*cq[12];
-    A[804] = c[180]*cq[12] + c[98]*cq[13];
+    A[803] = c[193]*cq[13] + c[98]*cq[12];
+    A[804] = c[194]*cq[12] + c[98]*cq[13];
     A[831] = 1.0;
     A[833] = 1.0;
-    A[835] = c[146]*cq[3] + c[23]*cq[2];
+    A[835] = c[144]*cq[3] + c[23]*cq[2];
     A[862] = 1.0;
     A[864] = 1.0;
     A[865] = t19;
     A[891] = c[101]*cq[5] + t22;
     A[892] = c[104]*cq[4] + t23;
-    A[893] = c[181]*cq[5] + t22;
-    A[894] = c[182]*cq[4] + t23;
-    A[895] = t15*(c[133]*cq[5] + c[183]*cq[4]) + t19*t24;
-    b[0] = c[136]*(-gv[0] + obs[37]);
-    b[1] = c[136]*(-gv[1] + obs[38]);
-    b[2] = c[135]*obs[32] - ld[10];
-    b[3] = c[140]*(-gv[0] + obs[46]);
-    b[4] = c[140]*(-gv[1] + obs[47]);
-    b[5] = c[137]*obs[41] - ld[11];
-    b[6] = c[142]*(-gv[0] + obs[55]);
-    b[7] = c[142]*(-gv[1] + obs[56]);
-    b[8] = c[141]*obs[50] - ld[12];
-    b[9] = c[113]*(-gv[0] + obs[64]) - ld[2] - ld[4];
-    b[10] = c[113]*(-gv[1] + obs[65]) - ld[3] - ld[5];
+    A[893] = c[195]*cq[5] + t22;
+    A[894] = c[196]*cq[4] + t23;
+    A[895] = t15*(c[131]*cq[5] + c[197]*cq[4]) + t19*t24;
+    b[0] = c[134]*(-gv[0] + obs[37]);
+    b[1] = c[134]*(-gv[1] + obs[38]);
+    b[2] = c[133]*obs[32] - ld[10];
+    b[3] = c[138]*(-gv[0] + obs[46]);
+    b[4] = c[138]*(-gv[1] + obs[47]);
+    b[5] = c[135]*obs[41] - ld[11];
+    b[6] = c[140]*(-gv[0] + obs[55]);
+    b[7] = c[140]*(-gv[1] + obs[56]);
+    b[8] = c[139]*obs[50] - ld[12];
+    b[9] = c[114]*(-gv[0] + obs[64]) - ld[2] - ld[4];
+    b[10] = c[114]*(-gv[1] + obs[65]) - ld[3] - ld[5];
     b[11] = c[111]*obs[59] - ld[13] + ld[2]*t8 + ld[3]*t7 + ld[4]*t9 + ld[5]*t10;
-    b[12] = c[114]*(-gv[0] + obs[73]);
-    b[13] = c[114]*(-gv[1] + obs[74]);
-    b[14] = c[143]*obs[68] - ld[14];
-    b[15] = c[145]*(-gv[0] + obs[82]);
-    b[16] = c[145]*(-gv[1] + obs[83]);
-    b[17] = c[118]*obs[77] - ld[15];
-    b[18] = c[119]*(-gv[0] + obs[91]) - ld[0];
-    b[19] = c[119]*(-gv[1] + obs[92]) - ld[1];
-    b[20] = c[121]*obs[86] - ld[0]*(c[122]*cq[11] + t12) - ld[1]*(c[123]*cq[10] + t13) - ld[16];
-    b[21] = c[127]*(-gv[0] + obs[100]) - ld[6];
-    b[22] = c[127]*(-gv[1] + obs[101]) - ld[7];
-    b[23] = c[124]*obs[95] - ld[17] - ld[6]*(c[125]*cq[3] + t16) - ld[7]*t21;
-    b[24] = c[144]*(-gv[0] + obs[109]);
-    b[25] = c[144]*(-gv[1] + obs[110]);
-    b[26] = c[128]*obs[104] - ld[18];
-    b[27] = c[134]*(-gv[0] + obs[118]) - ld[8];
-    b[28] = c[134]*(-gv[1] + obs[119]) - ld[9];
-    b[29] = c[130]*obs[113] - ld[19] - ld[8]*(c[131]*cq[4] + c[132]*cq[5]) - ld[9]*t24;
+    b[12] = c[113]*(-gv[0] + obs[73]);
+    b[13] = c[113]*(-gv[1] + obs[74]);
+    b[14] = c[141]*obs[68] - ld[14];
+    b[15] = c[143]*(-gv[0] + obs[82]);
+    b[16] = c[143]*(-gv[1] + obs[83]);
+    b[17] = c[116]*obs[77] - ld[15];
+    b[18] = c[117]*(-gv[0] + obs[91]) - ld[0];
+    b[19] = c[117]*(-gv[1] + obs[92]) - ld[1];
+    b[20] = c[119]*obs[86] - ld[0]*(c[120]*cq[11] + t12) - ld[1]*(c[121]*cq[10] + t13) - ld[16];
+    b[21] = c[125]*(-gv[0] + obs[100]) - ld[6];
+    b[22] = c[125]*(-gv[1] + obs[101]) - ld[7];
+    b[23] = c[122]*obs[95] - ld[17] - ld[6]*(c[123]*cq[3] + t16) - ld[7]*t21;
+    b[24] = c[142]*(-gv[0] + obs[109]);
+    b[25] = c[142]*(-gv[1] + obs[110]);
+    b[26] = c[126]*obs[104] - ld[18];
+    b[27] = c[132]*(-gv[0] + obs[118]) - ld[8];
+    b[28] = c[132]*(-gv[1] + obs[119]) - ld[9];
+    b[29] = c[128]*obs[113] - ld[19] - ld[8]*(c[129]*cq[4] + c[130]*cq[5]) - ld[9]*t24;
 }
 
 /* sg_feed_anchors -- Total ops: 181 */
@@ -1317,12 +1441,12 @@ static const sg_mechanism sg_feed_descriptor = {
     .name = "feed",
     .nq = 7,
     .nx = 2,
-    .np = 64,
-    .nc = 184,
+    .np = 77,
+    .nc = 198,
     .nobs = 121,
     .nbranch = 0,
     .nf = 30,
-    .nfo = 49,
+    .nfo = 65,
     .nload = 20,
     .nblock = 4,
     .coord_is_angle = sg_feed_coord_is_angle,
@@ -1431,333 +1555,368 @@ const char *sg_feed_manifest(void)
         "0,11,15,16,18],[6,7,9,10,11,12,22],[13],[12],[6],[21],[7],[21],[10],[11],[15],[16],[24],[26],[27"
         "],[27],[26],[29],[31],[32],[32],[31],[4],[35],[36],[5],[36],[35],[2],[2],[41],[42],[42],[41],[45"
         "],[46],[46],[45],[49],[50],[50],[49],[53],[54],[54],[53],[57],[58],[58],[57],[61],[62],[62],[61]"
-        ",[13,14,15,17],[13,14,16,17],[10,11,15,16,18],[6,7,9,10,11,12,22],[10],[11],[39],[2,3],[38],[40]"
-        ",[2,3],[2,3,40],[2,3,40],[47],[48],[44],[51],[21,49],[21,49],[55],[12,53],[12,53],[52],[59],[56]"
-        ",[63],[18,19,62],[18,19,61],[18,19,61],[60],[28],[25],[33],[13,31],[13,31],[30],[37],[34],[43],["
-        "56],[44],[20],[5],[25],[28],[30],[33],[34],[37],[38],[39],[40],[43],[44],[47],[48],[51],[52],[55"
-        "],[56],[59],[60],[63],[25],[30],[34],[38],[40],[48],[52],[60],[8,45],[8,45],[9,46],[14,57],[14,5"
-        "7],[17,61],[17,61],[18,19,62]],\"coords\":[{\"guess\":0.0,\"name\":\"feed_rock_shaft.angle\",\"u"
-        "nit\":\"rad\"},{\"guess\":3.141592653589793,\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"}"
-        ",{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\""
-        "name\":\"feed_fork.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"stitch_block.travel\",\"u"
-        "nit\":\"m\"},{\"guess\":0.0,\"name\":\"feed_bar.angle\",\"unit\":\"rad\"},{\"guess\":-1.57079632"
-        "67948966,\"name\":\"big_rod.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"do"
-        "c\":\"Feed mechanism \\u9001\\u5e03\\u673a\\u6784 of the JB household machine: feed cam \\u2192 "
-        "feed fork \\u2192 feed rock shaft \\u2192 feed bar, with\\nthe stitch-length regulator \\u9488\\u"
-        "8ddd\\u673a\\u6784 and the feed lift \\u62ac\\u7259 (seed 000 \\u00a7\\u4e00(\\u56db), eqs. 1-1 "
-        "to 1-5; seed 001 \\u00a7\\u4e8c, the\\nsub-mechanisms D (lift), E (stitch length) and F (feed ba"
-        "r with the feed dog)).\\n\\nA two-degree-of-freedom cam\\u2013linkage: the upper shaft turns the"
-        " constant-breadth feed cam \\u9001\\u5e03\\u51f8\\u8f6e (six circular\\narcs, a rounded Reuleaux"
-        " triangle turning about a vertex: 60\\u00b0 dwell, 120\\u00b0 stroke, 60\\u00b0 dwell, 120\\u00b"
-        "0 return)\\ninside the two flat faces of the feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), wh"
-        "ich hangs down the standing arm. The fork's\\nlower end P drives the feed rock shaft \\u9001\\u5"
-        "e03\\u8f74 (part 2) through its rear arm; its middle Q carries the stitch\\nblock \\u9488\\u8ddd"
-        "\\u6ed1\\u5757 (part 8) in the slot of the stitch regulator \\u9488\\u8ddd\\u5ea7, whose angle i"
-        "s the second input (held in a\\nrun; its holding torque is an output). With the slot horizontal "
-        "the fork only rocks about P: zero stitch;\\ntilted by \\u00b1\\u03b1 it makes the fork rise and "
-        "fall, turning the feed rock shaft one way or the other: forward or\\nreverse feed. The feed rock"
-        " shaft's upper arm carries the feed bar \\u7259\\u67b6 (part 6) at R; the feed bar rests in\\nth"
-        "e lift rock shaft's \\u62ac\\u7259\\u8f74 (part 5) roller \\u62ac\\u7259\\u6eda\\u67f1 (part 7),"
-        " a pin in a slot along the bar. The feed dog\\n\\u9001\\u5e03\\u7259 is a point of the feed bar."
-        "\\n\\nThe lift \\u62ac\\u7259 follows seed 001 \\u00a7\\u4e8c's upper branch: upper shaft \\u219"
-        "2 B (the big-rod mechanism \\u5927\\u8fde\\u6746\\u673a\\u6784: hook crank,\\nbig rod \\u5927\\u"
-        "8fde\\u6746 9, rock shaft \\u6446\\u8f74 4 \\u2014 the hook drive's own four-bar) \\u2192 D (the"
-        " lift cam mechanism \\u62ac\\u7259\\u51f8\\u8f6e\\u673a\\u6784: a\\nlift cam on the rock shaft i"
-        "n the fork of the lift crank \\u62ac\\u7259\\u66f2\\u67c4) \\u2192 the lift rock shaft. B is dec"
-        "lared here a\\nsecond time, massless, with the hook drive's dimensions (its parameters must equa"
-        "l ``hook_drive``'s crank,\\nbig_rod, rock_axis_x/_y and rock_front_arm and its phase the hook dr"
-        "ive's): the two groups then move one rock\\nshaft alike, the hook drive's group carries B's mass"
-        "es, and the lift's reaction reaches the hook crank pin and\\nthe rock-shaft bearing through this"
-        " copy \\u2014 kinetostatics is linear in the loads, so the groups' reactions add\\nup to the rea"
-        "l ones. The lift cam is a circular cam (an eccentric of ``lift_cam_eccentricity`` on the rock\\n"
-        "shaft) between the two parallel faces of the lift crank's fork: its equivalent lower pair, the e"
-        "ccentric's\\ncentre as a pin in the fork's centre-line slot, is exact. The rock shaft swings abo"
-        "ut 96\\u00b0 once a turn with its\\nends at the shuttle's reversals (needle top and bottom, \\u0"
-        "3c6 \\u2248 90\\u00b0 and 270\\u00b0); the eccentric sits across the line\\nfrom the rock shaft "
-        "to the lift shaft at mid-swing, so the lift crank turns one way over the whole swing and the\\nd"
-        "og is highest when the needle is highest \\u2014 above the plate while the needle is out of the "
-        "cloth, below it\\nwhile the needle is in (seed 001 \\u00a7\\u4e94 2, \\\"coordination of the fee"
-        "d dog with the other mechanisms\\\").\\n\\nThe cam contact is replaced, arc by arc, by its equiv"
-        "alent lower pair (derive.model.Mechanism.cam), so the\\nloop closes in one set of equations (New"
-        "ton, as seed 000 solves eqs. 1-5). Frame: origin on the upper-shaft\\naxis, x horizontal (feed d"
-        "irection positive), y up; the throat plate is at y = plate_y.\\n\\nEvery dimension here is an es"
-        "timate (seed 000's tables \\u9644\\u8868 and seed 001's \\u9644\\u8868 1 are not in the text): s"
-        "ized so\\nthe fork stroke is 6 mm, the maximum stitch 4 mm at a regulator angle near 40\\u00b0, "
-        "and the feed dog rises about\\n1 mm above the throat plate while the needle is out of the cloth "
-        "(needle top at \\u03c6 = 90\\u00b0).\",\"elements\":[],\"force_blocks\":[1,2,1,2],\"force_output"
-        "s\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"regulator.torque\",\"unit\":\"N*m\""
-        "},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"regulator.power\",\"unit\":\"W\"},{\"nam"
-        "e\":\"stitch_block.guide.fx\",\"unit\":\"N\"},{\"name\":\"stitch_block.guide.fy\",\"unit\":\"N\""
-        "},{\"name\":\"cam.fx\",\"unit\":\"N\"},{\"name\":\"cam.fy\",\"unit\":\"N\"},{\"name\":\"D.fx\",\""
-        "unit\":\"N\"},{\"name\":\"D.fy\",\"unit\":\"N\"},{\"name\":\"L.fx\",\"unit\":\"N\"},{\"name\":\""
-        "L.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\""
-        ":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J"
-        "\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"n"
-        "ame\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"feed_cam.x\",\"feed_cam.y\",\"feed_ca"
-        "m.moment\",\"hook_crank.x\",\"hook_crank.y\",\"hook_crank.moment\",\"regulator.x\",\"regulator.y"
-        "\",\"regulator.moment\",\"feed_fork.x\",\"feed_fork.y\",\"feed_fork.moment\",\"stitch_block.x\","
-        "\"stitch_block.y\",\"stitch_block.moment\",\"feed_rock_shaft.x\",\"feed_rock_shaft.y\",\"feed_ro"
-        "ck_shaft.moment\",\"feed_bar.x\",\"feed_bar.y\",\"feed_bar.moment\",\"lift_rock_shaft.x\",\"lift"
-        "_rock_shaft.y\",\"lift_rock_shaft.moment\",\"big_rod.x\",\"big_rod.y\",\"big_rod.moment\",\"rock"
-        "_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\""
-        ":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\""
-        "unit\":\"rad\"},{\"default\":0.6981317007977318,\"display_unit\":\"deg\",\"doc\":\"stitch regula"
-        "tor \\u9488\\u8ddd\\u5ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"k"
-        "ind\":\"held\",\"name\":\"regulator\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels"
-        "\":{\"sg_feed_anchors\":{\"ops\":181},\"sg_feed_blocks\":{\"ops\":130},\"sg_feed_constants\":{\""
-        "ops\":164},\"sg_feed_force_matrix\":{\"ops\":323},\"sg_feed_forces\":{\"ops\":585},\"sg_feed_mot"
-        "ion\":{\"ops\":608},\"sg_feed_residual\":{\"ops\":134},\"sg_feed_scales\":{\"ops\":18}},\"loads\""
-        ":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"name\":\"feed_dog\"},{\"body\":\"feed_bar\",\"co"
-        "mponent\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\""
-        "fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"fork_top\"},{\"body\":\"feed"
-        "_fork\",\"component\":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"feed_fork\",\"component\":\"fy"
-        "\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fx\",\"name\":\"lift_r"
-        "oller\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fy\",\"name\":\"lift_roller\"},{\"body\":"
-        "\"rock_shaft\",\"component\":\"fx\",\"name\":\"lift_cam\"},{\"body\":\"rock_shaft\",\"component\""
-        ":\"fy\",\"name\":\"lift_cam\"},{\"body\":\"feed_cam\",\"component\":\"torque\",\"name\":\"feed_c"
-        "am\"},{\"body\":\"hook_crank\",\"component\":\"torque\",\"name\":\"hook_crank\"},{\"body\":\"reg"
-        "ulator\",\"component\":\"torque\",\"name\":\"regulator\"},{\"body\":\"feed_fork\",\"component\":"
-        "\"torque\",\"name\":\"feed_fork\"},{\"body\":\"stitch_block\",\"component\":\"torque\",\"name\":"
-        "\"stitch_block\"},{\"body\":\"feed_rock_shaft\",\"component\":\"torque\",\"name\":\"feed_rock_sh"
-        "aft\"},{\"body\":\"feed_bar\",\"component\":\"torque\",\"name\":\"feed_bar\"},{\"body\":\"lift_r"
-        "ock_shaft\",\"component\":\"torque\",\"name\":\"lift_rock_shaft\"},{\"body\":\"big_rod\",\"compo"
-        "nent\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name"
-        "\":\"rock_shaft\"}],\"name\":\"feed\",\"observables\":[{\"name\":\"feed_dog.x\",\"unit\":\"m\"},"
-        "{\"name\":\"feed_dog.y\",\"unit\":\"m\"},{\"name\":\"feed_dog.x_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"feed_dog.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"f"
-        "eed_dog.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.x\",\"unit\":\"m\"},{\"name\":\"fork_top"
-        ".y\",\"unit\":\"m\"},{\"name\":\"fork_top.x_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.y_d\",\"u"
-        "nit\":\"m/s\"},{\"name\":\"fork_top.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.y_dd\",\"uni"
-        "t\":\"m/s^2\"},{\"name\":\"stitch_pin.x\",\"unit\":\"m\"},{\"name\":\"stitch_pin.y\",\"unit\":\""
-        "m\"},{\"name\":\"stitch_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.y_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"stitch_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.y_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"lift_roller.x\",\"unit\":\"m\"},{\"name\":\"lift_roller.y\",\"unit\":\"m\"},{\""
-        "name\":\"lift_roller.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.y_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"lift_roller.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"lift_cam.x\",\"unit\":\"m\"},{\"name\":\"lift_cam.y\",\"unit\":\"m\"},{\"name\":\""
-        "lift_cam.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_cam.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_c"
-        "am.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_cam.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_c"
-        "am.angle\",\"unit\":\"rad\"},{\"name\":\"feed_cam.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed"
-        "_cam.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_cam.com.x\",\"unit\":\"m\"},{\"name\":\"f"
-        "eed_cam.com.y\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"fee"
-        "d_cam.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":"
-        "\"feed_cam.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_crank.angle\",\"unit\":\"rad\"},{\"na"
-        "me\":\"hook_crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"hook_crank.angle_dd\",\"unit\":\"rad"
-        "/s^2\"},{\"name\":\"hook_crank.com.x\",\"unit\":\"m\"},{\"name\":\"hook_crank.com.y\",\"unit\":\""
-        "m\"},{\"name\":\"hook_crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"hook_crank.com.y_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"hook_crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_crank.com.y_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"regulator.angle\",\"unit\":\"rad\"},{\"name\":\"regulator.angle"
-        "_d\",\"unit\":\"rad/s\"},{\"name\":\"regulator.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"regu"
-        "lator.com.x\",\"unit\":\"m\"},{\"name\":\"regulator.com.y\",\"unit\":\"m\"},{\"name\":\"regulato"
-        "r.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"regu"
-        "lator.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"regulator.com.y_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"feed_fork.angle\",\"unit\":\"rad\"},{\"name\":\"feed_fork.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"feed_fork.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_fork.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"feed_fork.com.y\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"feed_fork.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.x_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"feed_fork.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.angle\",\""
-        "unit\":\"rad\"},{\"name\":\"stitch_block.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_block."
-        "angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"stitch_block.com.x\",\"unit\":\"m\"},{\"name\":\"st"
-        "itch_block.com.y\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.x_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"stitch_block.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.x_dd\",\"unit\":\"m/s^2"
-        "\"},{\"name\":\"stitch_block.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.angle\","
-        "\"unit\":\"rad\"},{\"name\":\"feed_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_roc"
-        "k_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_rock_shaft.com.x\",\"unit\":\"m\"},{\""
-        "name\":\"feed_rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.x_d\",\"unit\":"
-        "\"m/s\"},{\"name\":\"feed_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com"
-        ".x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"feed_bar.angle\",\"unit\":\"rad\"},{\"name\":\"feed_bar.angle_d\",\"unit\":\"rad/s\"},{\"name"
-        "\":\"feed_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_bar.com.x\",\"unit\":\"m\"},{\"n"
-        "ame\":\"feed_bar.com.y\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.x_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"feed_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.x_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"feed_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.angle\",\"unit\":"
-        "\"rad\"},{\"name\":\"lift_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_rock_shaft.a"
-        "ngle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\""
-        "lift_rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.x_d\",\"unit\":\"m/s\"},"
-        "{\"name\":\"lift_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.x_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod"
-        ".angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod"
-        ".angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_ro"
-        "d.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.co"
-        "m.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod"
-        ".com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"roc"
-        "k_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\""
-        "name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"na"
-        "me\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\""
-        ":\"m/s^2\"},{\"name\":\"cam.arc\",\"unit\":\"\"}],\"params\":[{\"default\":0.006,\"display_unit\""
-        ":\"mm\",\"doc\":\"feed cam: side of its Reuleaux triangle = fork stroke (estimate)\",\"kind\":\""
-        "length\",\"name\":\"cam_side\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.00"
-        "8,\"display_unit\":\"mm\",\"doc\":\"feed cam: small arc radius; breadth = side + 2 radius (estim"
-        "ate)\",\"kind\":\"length\",\"name\":\"cam_small_radius\",\"positive\":true,\"role\":null,\"unit\""
-        ":\"m\"},{\"default\":0.2,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre line to rock-sh"
-        "aft pin P (estimate)\",\"kind\":\"length\",\"name\":\"fork_p\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre line to "
-        "stitch-block pin Q (estimate)\",\"kind\":\"length\",\"name\":\"fork_q\",\"positive\":true,\"role"
-        "\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"stitch regulator pivo"
-        "t, x (estimate)\",\"kind\":\"length\",\"name\":\"regulator_x\",\"positive\":false,\"role\":null,"
-        "\"unit\":\"m\"},{\"default\":-0.06,\"display_unit\":\"mm\",\"doc\":\"stitch regulator pivot, y ("
-        "estimate)\",\"kind\":\"length\",\"name\":\"regulator_y\",\"positive\":false,\"role\":null,\"unit"
-        "\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, x (estimate"
-        ")\",\"kind\":\"length\",\"name\":\"feed_shaft_x\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":-0.2,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, y (estimate)\",\"kin"
-        "d\":\"length\",\"name\":\"feed_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"def"
-        "ault\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: rear arm to the fork pin P (estim"
-        "ate)\",\"kind\":\"length\",\"name\":\"feed_arm_p\",\"positive\":true,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.0293,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: upper arm to the feed-b"
-        "ar pin R (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_r\",\"positive\":true,\"role\":nul"
-        "l,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis, x (e"
-        "stimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_x\",\"positive\":false,\"role\":null,\"unit"
-        "\":\"m\"},{\"default\":-0.1777,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis, y (estima"
-        "te)\",\"kind\":\"length\",\"name\":\"lift_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft: arm to the roller L ("
-        "estimate)\",\"kind\":\"length\",\"name\":\"lift_arm\",\"positive\":true,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"B: hook crank radius (= hook_drive cra"
-        "nk)\",\"kind\":\"length\",\"name\":\"hook_crank\",\"positive\":true,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":\"B: big rod, pin to pin (= hook_drive bi"
-        "g_rod)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft axis, x (= hook_drive roc"
-        "k_axis_x)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\":null,\"unit"
-        "\":\"m\"},{\"default\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft axis, y (= hook_"
-        "drive rock_axis_y)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft arm driv"
-        "en by the big rod (= hook_drive's)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0039,\"display_unit\":\"mm\",\"doc\":\"D: lif"
-        "t cam (eccentric) centre from the rock-shaft axis (estimate)\",\"kind\":\"length\",\"name\":\"li"
-        "ft_cam_eccentricity\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.97912971036"
-        "88189,\"display_unit\":\"deg\",\"doc\":\"D: lift cam centre's direction on the rock shaft from i"
-        "ts front arm (estimate: across the line to the lift shaft at mid-swing)\",\"kind\":\"angle\",\"n"
-        "ame\":\"lift_cam_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.95818"
-        "57593448869,\"display_unit\":\"deg\",\"doc\":\"D: lift crank's fork centre line on the lift rock"
-        " shaft, from its roller arm (estimate)\",\"kind\":\"angle\",\"name\":\"lift_fork_angle\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\""
-        "feed dog tip along the feed bar from R (estimate)\",\"kind\":\"length\",\"name\":\"dog_u\",\"pos"
-        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.007,\"display_unit\":\"mm\",\"doc\":\""
-        "feed bar: its roller slot below the line R\\u2013feed dog (estimate)\",\"kind\":\"length\",\"nam"
-        "e\":\"bar_slot_v\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1705,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"throat plate surface, y (estimate: the dog rises ~1 mm above it)\",\"k"
-        "ind\":\"length\",\"name\":\"plate_y\",\"positive\":false,\"role\":\"throat_plate\",\"unit\":\"m\""
-        "},{\"default\":1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"phase of feed_cam relative "
-        "to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_cam.phase\",\"positive\":false,\"role\":"
-        "null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of feed_cam\",\"k"
-        "ind\":\"mass\",\"name\":\"feed_cam.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
-        "efault\":0.0015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local u\",\"kind\""
-        ":\"length\",\"name\":\"feed_cam.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
-        "ult\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local v\",\"kind\":\"len"
-        "gth\",\"name\":\"feed_cam.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
-        "4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_cam about its centre of m"
-        "ass\",\"kind\":\"inertia\",\"name\":\"feed_cam.inertia\",\"positive\":false,\"role\":null,\"unit"
-        "\":\"kg*m**2\"},{\"default\":-0.03490658503988659,\"display_unit\":\"deg\",\"doc\":\"phase of ho"
-        "ok_crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"hook_crank.phase\",\"positi"
-        "ve\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mas"
-        "s of hook_crank\",\"kind\":\"mass\",\"name\":\"hook_crank.mass\",\"positive\":false,\"role\":nul"
-        "l,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of hook_cra"
-        "nk, local u\",\"kind\":\"length\",\"name\":\"hook_crank.com_u\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of hook_crank"
-        ", local v\",\"kind\":\"length\",\"name\":\"hook_crank.com_v\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of hook_"
-        "crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"hook_crank.inertia\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"m"
-        "ass of regulator\",\"kind\":\"mass\",\"name\":\"regulator.mass\",\"positive\":false,\"role\":nul"
-        "l,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulato"
-        "r, local u\",\"kind\":\"length\",\"name\":\"regulator.com_u\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, lo"
-        "cal v\",\"kind\":\"length\",\"name\":\"regulator.com_v\",\"positive\":false,\"role\":null,\"unit"
-        "\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of regulator"
-        " about its centre of mass\",\"kind\":\"inertia\",\"name\":\"regulator.inertia\",\"positive\":fal"
-        "se,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass "
-        "of feed_fork\",\"kind\":\"mass\",\"name\":\"feed_fork.mass\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg\"},{\"default\":0.00012,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of "
-        "feed_fork about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_fork.inertia\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\""
-        ":\"mass of stitch_block\",\"kind\":\"mass\",\"name\":\"stitch_block.mass\",\"positive\":false,\""
-        "role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass o"
-        "f stitch_block, local u\",\"kind\":\"length\",\"name\":\"stitch_block.com_u\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass"
-        " of stitch_block, local v\",\"kind\":\"length\",\"name\":\"stitch_block.com_v\",\"positive\":fal"
-        "se,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"momen"
-        "t of inertia of stitch_block about its centre of mass\",\"kind\":\"inertia\",\"name\":\"stitch_b"
-        "lock.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.04,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of feed_rock_shaft\",\"kind\":\"mass\",\"name\":\"feed_rock_shaft."
-        "mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.005,\"display_unit\":\"m"
-        "m\",\"doc\":\"centre of mass of feed_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"feed_r"
-        "ock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.005,\"display_"
-        "unit\":\"mm\",\"doc\":\"centre of mass of feed_rock_shaft, local v\",\"kind\":\"length\",\"name\""
-        ":\"feed_rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\""
-        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_rock_shaft about its centre of ma"
-        "ss\",\"kind\":\"inertia\",\"name\":\"feed_rock_shaft.inertia\",\"positive\":false,\"role\":null,"
-        "\"unit\":\"kg*m**2\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of feed_bar\",\"k"
-        "ind\":\"mass\",\"name\":\"feed_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
-        "efault\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_bar, local u\",\"kind\":"
-        "\"length\",\"name\":\"feed_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
-        "lt\":-0.003,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_bar, local v\",\"kind\":\"l"
-        "ength\",\"name\":\"feed_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_bar about its centre of "
-        "mass\",\"kind\":\"inertia\",\"name\":\"feed_bar.inertia\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of lift_rock_shaft\",\""
-        "kind\":\"mass\",\"name\":\"lift_rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
-        "\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local "
-        "u\",\"kind\":\"length\",\"name\":\"lift_rock_shaft.com_u\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft"
-        ", local v\",\"kind\":\"length\",\"name\":\"lift_rock_shaft.com_v\",\"positive\":false,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia "
-        "of lift_rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_rock_shaft.in"
-        "ertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\""
-        ":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
-        "ss of big_rod, local u\",\"kind\":\"length\",\"name\":\"big_rod.com_u\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of bi"
-        "g_rod, local v\",\"kind\":\"length\",\"name\":\"big_rod.com_v\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of bi"
-        "g_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass"
-        " of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaf"
-        "t, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,"
-        "\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft,"
-        " local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_"
-        "shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\""
-        ",\"ay\"],\"points\":[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (on the line through R: lifti"
-        "ng it does not move it sideways)\",\"name\":\"feed_dog\",\"offset\":0,\"role\":\"feed_dog\"},{\""
-        "body\":\"feed_fork\",\"doc\":\"feed fork on the cam centre line\",\"name\":\"fork_top\",\"offset"
-        "\":6,\"role\":null},{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in the stitch block\",\"name\":"
-        "\"stitch_pin\",\"offset\":12,\"role\":null},{\"body\":\"lift_rock_shaft\",\"doc\":\"lift roller "
-        "L in the feed bar\",\"name\":\"lift_roller\",\"offset\":18,\"role\":null},{\"body\":\"rock_shaft"
-        "\",\"doc\":\"D: lift cam centre, in the fork\",\"name\":\"lift_cam\",\"offset\":24,\"role\":null"
-        "}],\"reactions\":[{\"a\":\"ground\",\"b\":\"feed_cam\",\"columns\":[\"fx\",\"fy\"],\"grounded\":"
-        "true,\"kind\":\"revolute\",\"name\":\"feed_cam.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"h"
-        "ook_crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"hook_"
-        "crank.pivot\",\"offset\":2},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"fx\",\"fy\"],\""
-        "grounded\":true,\"kind\":\"revolute\",\"name\":\"regulator.pivot\",\"offset\":4},{\"a\":\"regula"
-        "tor\",\"b\":\"stitch_block\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"p"
-        "rismatic\",\"name\":\"stitch_block.guide\",\"offset\":6},{\"a\":\"feed_cam\",\"b\":\"feed_fork\""
-        ",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"cam\",\"name\":\"cam\",\"offset\":8},{\""
-        "a\":\"ground\",\"b\":\"feed_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":"
-        "\"revolute\",\"name\":\"O_feed\",\"offset\":9},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_fork\",\""
-        "columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"P\",\"offset\":11}"
-        ",{\"a\":\"feed_fork\",\"b\":\"stitch_block\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"ki"
-        "nd\":\"revolute\",\"name\":\"Q\",\"offset\":13},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_bar\",\""
-        "columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"R\",\"offset\":15}"
-        ",{\"a\":\"ground\",\"b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kin"
-        "d\":\"revolute\",\"name\":\"O_lift\",\"offset\":17},{\"a\":\"hook_crank\",\"b\":\"big_rod\",\"co"
-        "lumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":19},{"
-        "\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"r"
-        "evolute\",\"name\":\"O4\",\"offset\":21},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\""
-        "fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":23},{\"a\":\"lif"
-        "t_rock_shaft\",\"b\":\"rock_shaft\",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"slot\""
-        ",\"name\":\"D\",\"offset\":25},{\"a\":\"feed_bar\",\"b\":\"lift_rock_shaft\",\"columns\":[\"norm"
-        "al\"],\"grounded\":false,\"kind\":\"slot\",\"name\":\"L\",\"offset\":26},{\"a\":\"ground\",\"b\""
-        ":\"feed_cam\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\","
-        "\"name\":\"feed_cam.drive\",\"offset\":27,\"sense\":1},{\"a\":\"ground\",\"b\":\"hook_crank\",\""
-        "columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"hook_"
-        "crank.drive\",\"offset\":28,\"sense\":1},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"to"
-        "rque\"],\"grounded\":true,\"input\":\"regulator\",\"kind\":\"drive\",\"name\":\"regulator.drive\""
-        ",\"offset\":29,\"sense\":1}],\"roles\":{\"feed_bar\":{\"kind\":\"body\",\"name\":\"feed_bar\"},\""
-        "feed_cam\":{\"kind\":\"body\",\"name\":\"feed_cam\"},\"feed_dog\":{\"kind\":\"point\",\"name\":\""
-        "feed_dog\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"regulator\"},\"throat_plate\":{\""
-        "kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":126,\"nblock\":4,\"nbranch\":"
-        "0,\"nc\":184,\"nf\":30,\"nfo\":49,\"nload\":20,\"nobs\":121,\"np\":64,\"nq\":7,\"nx\":2}}"
+        ",[13,14,15,17],[13,14,16,17],[10,11,15,16,18],[6,7,9,10,11,12,22],[10],[11],[39],[2,3],[40],[38]"
+        ",[2,3],[47],[48],[44],[51],[21,49],[21,49],[55],[12,53],[12,53],[52],[59],[56],[63],[18,19,62],["
+        "18,19,61],[18,19,61],[60],[28],[25],[33],[13,31],[13,31],[30],[37],[34],[43],[56],[44],[20],[5],"
+        "[25],[28],[30],[33],[34],[37],[38],[39],[40],[43],[44],[47],[48],[51],[52],[55],[56],[59],[60],["
+        "63],[25],[30],[34],[38],[40],[48],[52],[60],[64,65],[66,67],[68,69],[70,71],[72,73],[74],[75],[7"
+        "6],[64],[66],[68],[70],[72],[74],[75],[76],[8,45],[8,45],[9,46],[14,57],[14,57],[17,61],[17,61],"
+        "[18,19,62]],\"coords\":[{\"guess\":0.0,\"name\":\"feed_rock_shaft.angle\",\"unit\":\"rad\"},{\"g"
+        "uess\":3.141592653589793,\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"n"
+        "ame\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"feed_fork"
+        ".angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"stitch_block.travel\",\"unit\":\"m\"},{\"gu"
+        "ess\":0.0,\"name\":\"feed_bar.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":"
+        "\"big_rod.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Feed mechani"
+        "sm \\u9001\\u5e03\\u673a\\u6784 of the JB household machine: feed cam \\u2192 feed fork \\u2192 "
+        "feed rock shaft \\u2192 feed bar, with\\nthe stitch-length regulator \\u9488\\u8ddd\\u673a\\u678"
+        "4 and the feed lift \\u62ac\\u7259 (seed 000 \\u00a7\\u4e00(\\u56db), eqs. 1-1 to 1-5; seed 001 "
+        "\\u00a7\\u4e8c, the\\nsub-mechanisms D (lift), E (stitch length) and F (feed bar with the feed d"
+        "og)).\\n\\nA two-degree-of-freedom cam\\u2013linkage: the upper shaft turns the constant-breadth"
+        " feed cam \\u9001\\u5e03\\u51f8\\u8f6e (six circular\\narcs, a rounded Reuleaux triangle turning"
+        " about a vertex: 60\\u00b0 dwell, 120\\u00b0 stroke, 60\\u00b0 dwell, 120\\u00b0 return)\\ninsid"
+        "e the two flat faces of the feed fork \\u9001\\u5e03\\u7259\\u53c9 (part 3), which hangs down th"
+        "e standing arm. The fork's\\nlower end P drives the feed rock shaft \\u9001\\u5e03\\u8f74 (part "
+        "2) through its rear arm; its middle Q carries the stitch\\nblock \\u9488\\u8ddd\\u6ed1\\u5757 (p"
+        "art 8) in the slot of the stitch regulator \\u9488\\u8ddd\\u5ea7, whose angle is the second inpu"
+        "t (held in a\\nrun; its holding torque is an output). With the slot horizontal the fork only roc"
+        "ks about P: zero stitch;\\ntilted by \\u00b1\\u03b1 it makes the fork rise and fall, turning the"
+        " feed rock shaft one way or the other: forward or\\nreverse feed. The feed rock shaft's upper ar"
+        "m carries the feed bar \\u7259\\u67b6 (part 6) at R; the feed bar rests in\\nthe lift rock shaft"
+        "'s \\u62ac\\u7259\\u8f74 (part 5) roller \\u62ac\\u7259\\u6eda\\u67f1 (part 7), a pin in a slot "
+        "along the bar. The feed dog\\n\\u9001\\u5e03\\u7259 is a point of the feed bar.\\n\\nThe lift \\u"
+        "62ac\\u7259 follows seed 001 \\u00a7\\u4e8c's upper branch: upper shaft \\u2192 B (the big-rod m"
+        "echanism \\u5927\\u8fde\\u6746\\u673a\\u6784: hook crank,\\nbig rod \\u5927\\u8fde\\u6746 9, roc"
+        "k shaft \\u6446\\u8f74 4 \\u2014 the hook drive's own four-bar) \\u2192 D (the lift cam mechanis"
+        "m \\u62ac\\u7259\\u51f8\\u8f6e\\u673a\\u6784: a\\nlift cam on the rock shaft in the fork of the "
+        "lift crank \\u62ac\\u7259\\u66f2\\u67c4) \\u2192 the lift rock shaft. B is declared here a\\nsec"
+        "ond time, massless, with the hook drive's dimensions (its parameters must equal ``hook_drive``'s"
+        " crank,\\nbig_rod, rock_axis_x/_y and rock_front_arm and its phase the hook drive's): the two gr"
+        "oups then move one rock\\nshaft alike, the hook drive's group carries B's masses, and the lift's"
+        " reaction reaches the hook crank pin and\\nthe rock-shaft bearing through this copy \\u2014 kine"
+        "tostatics is linear in the loads, so the groups' reactions add\\nup to the real ones. The lift c"
+        "am is a circular cam (an eccentric of ``lift_cam_eccentricity`` on the rock\\nshaft) between the"
+        " two parallel faces of the lift crank's fork: its equivalent lower pair, the eccentric's\\ncentr"
+        "e as a pin in the fork's centre-line slot, is exact. The rock shaft swings about 96\\u00b0 once "
+        "a turn with its\\nends at the shuttle's reversals (needle top and bottom, \\u03c6 \\u2248 90\\u0"
+        "0b0 and 270\\u00b0); the eccentric sits across the line\\nfrom the rock shaft to the lift shaft "
+        "at mid-swing, so the lift crank turns one way over the whole swing and the\\ndog is highest when"
+        " the needle is highest \\u2014 above the plate while the needle is out of the cloth, below it\\n"
+        "while the needle is in (seed 001 \\u00a7\\u4e94 2, \\\"coordination of the feed dog with the oth"
+        "er mechanisms\\\").\\n\\nThe cam contact is replaced, arc by arc, by its equivalent lower pair ("
+        "derive.model.Mechanism.cam), so the\\nloop closes in one set of equations (Newton, as seed 000 s"
+        "olves eqs. 1-5). Frame: origin on the upper-shaft\\naxis, x horizontal (feed direction positive)"
+        ", y up; the throat plate is at y = plate_y.\\n\\nEvery dimension here is an estimate (seed 000's"
+        " tables \\u9644\\u8868 and seed 001's \\u9644\\u8868 1 are not in the text): sized so\\nthe fork"
+        " stroke is 6 mm, the maximum stitch 4 mm at a regulator angle near 40\\u00b0, and the feed dog r"
+        "ises about\\n1 mm above the throat plate while the needle is out of the cloth (needle top at \\u"
+        "03c6 = 90\\u00b0).\",\"elements\":[],\"force_blocks\":[1,2,1,2],\"force_outputs\":[{\"name\":\"s"
+        "haft.torque\",\"unit\":\"N*m\"},{\"name\":\"regulator.torque\",\"unit\":\"N*m\"},{\"name\":\"sha"
+        "ft.power\",\"unit\":\"W\"},{\"name\":\"regulator.power\",\"unit\":\"W\"},{\"name\":\"stitch_bloc"
+        "k.guide.fx\",\"unit\":\"N\"},{\"name\":\"stitch_block.guide.fy\",\"unit\":\"N\"},{\"name\":\"cam"
+        ".fx\",\"unit\":\"N\"},{\"name\":\"cam.fy\",\"unit\":\"N\"},{\"name\":\"D.fx\",\"unit\":\"N\"},{\""
+        "name\":\"D.fy\",\"unit\":\"N\"},{\"name\":\"L.fx\",\"unit\":\"N\"},{\"name\":\"L.fy\",\"unit\":\""
+        "N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\""
+        ":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"p"
+        "otential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_p"
+        "ower\",\"unit\":\"W\"},{\"name\":\"O_feed.friction\",\"unit\":\"N*m\"},{\"name\":\"O_feed.fricti"
+        "on_power\",\"unit\":\"W\"},{\"name\":\"P.friction\",\"unit\":\"N*m\"},{\"name\":\"P.friction_pow"
+        "er\",\"unit\":\"W\"},{\"name\":\"Q.friction\",\"unit\":\"N*m\"},{\"name\":\"Q.friction_power\",\""
+        "unit\":\"W\"},{\"name\":\"R.friction\",\"unit\":\"N*m\"},{\"name\":\"R.friction_power\",\"unit\""
+        ":\"W\"},{\"name\":\"O_lift.friction\",\"unit\":\"N*m\"},{\"name\":\"O_lift.friction_power\",\"un"
+        "it\":\"W\"},{\"name\":\"stitch_block.guide.friction\",\"unit\":\"N\"},{\"name\":\"stitch_block.g"
+        "uide.friction_power\",\"unit\":\"W\"},{\"name\":\"D.friction\",\"unit\":\"N\"},{\"name\":\"D.fri"
+        "ction_power\",\"unit\":\"W\"},{\"name\":\"L.friction\",\"unit\":\"N\"},{\"name\":\"L.friction_po"
+        "wer\",\"unit\":\"W\"}],\"force_rows\":[\"feed_cam.x\",\"feed_cam.y\",\"feed_cam.moment\",\"hook_"
+        "crank.x\",\"hook_crank.y\",\"hook_crank.moment\",\"regulator.x\",\"regulator.y\",\"regulator.mom"
+        "ent\",\"feed_fork.x\",\"feed_fork.y\",\"feed_fork.moment\",\"stitch_block.x\",\"stitch_block.y\""
+        ",\"stitch_block.moment\",\"feed_rock_shaft.x\",\"feed_rock_shaft.y\",\"feed_rock_shaft.moment\","
+        "\"feed_bar.x\",\"feed_bar.y\",\"feed_bar.moment\",\"lift_rock_shaft.x\",\"lift_rock_shaft.y\",\""
+        "lift_rock_shaft.moment\",\"big_rod.x\",\"big_rod.y\",\"big_rod.moment\",\"rock_shaft.x\",\"rock_"
+        "shaft.y\",\"rock_shaft.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\""
+        "upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"},{\""
+        "default\":0.6981317007977318,\"display_unit\":\"deg\",\"doc\":\"stitch regulator \\u9488\\u8ddd\\u"
+        "5ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"kind\":\"held\",\"name"
+        "\":\"regulator\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels\":{\"sg_feed_anchors"
+        "\":{\"ops\":181},\"sg_feed_blocks\":{\"ops\":130},\"sg_feed_constants\":{\"ops\":175},\"sg_feed_"
+        "force_matrix\":{\"ops\":323},\"sg_feed_forces\":{\"ops\":797},\"sg_feed_motion\":{\"ops\":608},\""
+        "sg_feed_residual\":{\"ops\":134},\"sg_feed_scales\":{\"ops\":18}},\"loads\":[{\"body\":\"feed_ba"
+        "r\",\"component\":\"fx\",\"name\":\"feed_dog\"},{\"body\":\"feed_bar\",\"component\":\"fy\",\"na"
+        "me\":\"feed_dog\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\"fork_top\"},{\"body\""
+        ":\"feed_fork\",\"component\":\"fy\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\""
+        ":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"stitch_"
+        "pin\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fx\",\"name\":\"lift_roller\"},{\"body\":\""
+        "lift_rock_shaft\",\"component\":\"fy\",\"name\":\"lift_roller\"},{\"body\":\"rock_shaft\",\"comp"
+        "onent\":\"fx\",\"name\":\"lift_cam\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"l"
+        "ift_cam\"},{\"body\":\"feed_cam\",\"component\":\"torque\",\"name\":\"feed_cam\"},{\"body\":\"ho"
+        "ok_crank\",\"component\":\"torque\",\"name\":\"hook_crank\"},{\"body\":\"regulator\",\"component"
+        "\":\"torque\",\"name\":\"regulator\"},{\"body\":\"feed_fork\",\"component\":\"torque\",\"name\":"
+        "\"feed_fork\"},{\"body\":\"stitch_block\",\"component\":\"torque\",\"name\":\"stitch_block\"},{\""
+        "body\":\"feed_rock_shaft\",\"component\":\"torque\",\"name\":\"feed_rock_shaft\"},{\"body\":\"fe"
+        "ed_bar\",\"component\":\"torque\",\"name\":\"feed_bar\"},{\"body\":\"lift_rock_shaft\",\"compone"
+        "nt\":\"torque\",\"name\":\"lift_rock_shaft\"},{\"body\":\"big_rod\",\"component\":\"torque\",\"n"
+        "ame\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"}],\""
+        "name\":\"feed\",\"observables\":[{\"name\":\"feed_dog.x\",\"unit\":\"m\"},{\"name\":\"feed_dog.y"
+        "\",\"unit\":\"m\"},{\"name\":\"feed_dog.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.y_d\",\"uni"
+        "t\":\"m/s\"},{\"name\":\"feed_dog.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_dog.y_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"fork_top.x\",\"unit\":\"m\"},{\"name\":\"fork_top.y\",\"unit\":\"m\"},{\""
+        "name\":\"fork_top.x_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.y_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"fork_top.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"stitch_pin.x\",\"unit\":\"m\"},{\"name\":\"stitch_pin.y\",\"unit\":\"m\"},{\"name\":\"stitch_"
+        "pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pi"
+        "n.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_"
+        "roller.x\",\"unit\":\"m\"},{\"name\":\"lift_roller.y\",\"unit\":\"m\"},{\"name\":\"lift_roller.x"
+        "_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.x"
+        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_ca"
+        "m.x\",\"unit\":\"m\"},{\"name\":\"lift_cam.y\",\"unit\":\"m\"},{\"name\":\"lift_cam.x_d\",\"unit"
+        "\":\"m/s\"},{\"name\":\"lift_cam.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_cam.x_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"lift_cam.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.angle\",\"unit\":\""
+        "rad\"},{\"name\":\"feed_cam.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_cam.angle_dd\",\"unit"
+        "\":\"rad/s^2\"},{\"name\":\"feed_cam.com.x\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.y\",\"unit"
+        "\":\"m\"},{\"name\":\"feed_cam.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.y_d\",\"unit"
+        "\":\"m/s\"},{\"name\":\"feed_cam.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.com.y_dd\","
+        "\"unit\":\"m/s^2\"},{\"name\":\"hook_crank.angle\",\"unit\":\"rad\"},{\"name\":\"hook_crank.angl"
+        "e_d\",\"unit\":\"rad/s\"},{\"name\":\"hook_crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"ho"
+        "ok_crank.com.x\",\"unit\":\"m\"},{\"name\":\"hook_crank.com.y\",\"unit\":\"m\"},{\"name\":\"hook"
+        "_crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"hook_crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"hook_crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_crank.com.y_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"regulator.angle\",\"unit\":\"rad\"},{\"name\":\"regulator.angle_d\",\"unit\":\"rad"
+        "/s\"},{\"name\":\"regulator.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"regulator.com.x\",\"uni"
+        "t\":\"m\"},{\"name\":\"regulator.com.y\",\"unit\":\"m\"},{\"name\":\"regulator.com.x_d\",\"unit\""
+        ":\"m/s\"},{\"name\":\"regulator.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.x_dd\",\"u"
+        "nit\":\"m/s^2\"},{\"name\":\"regulator.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork.angl"
+        "e\",\"unit\":\"rad\"},{\"name\":\"feed_fork.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_fork."
+        "angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_fork.com.x\",\"unit\":\"m\"},{\"name\":\"feed_"
+        "fork.com.y\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_"
+        "fork.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":"
+        "\"feed_fork.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.angle\",\"unit\":\"rad\"},{\""
+        "name\":\"stitch_block.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_block.angle_dd\",\"unit\""
+        ":\"rad/s^2\"},{\"name\":\"stitch_block.com.x\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.y\","
+        "\"unit\":\"m\"},{\"name\":\"stitch_block.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.co"
+        "m.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"st"
+        "itch_block.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.angle\",\"unit\":\"rad\"},"
+        "{\"name\":\"feed_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_rock_shaft.angle_dd\""
+        ",\"unit\":\"rad/s^2\"},{\"name\":\"feed_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"feed_rock"
+        "_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"feed_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.x_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"feed_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.angle\""
+        ",\"unit\":\"rad\"},{\"name\":\"feed_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_bar.angle"
+        "_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_bar.com.x\",\"unit\":\"m\"},{\"name\":\"feed_bar.co"
+        "m.y\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com."
+        "y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar"
+        ".com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":"
+        "\"lift_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_rock_shaft.angle_dd\",\"unit\":"
+        "\"rad/s^2\"},{\"name\":\"lift_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com"
+        ".y\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_ro"
+        "ck_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},"
+        "{\"name\":\"lift_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":"
+        "\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit"
+        "\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\""
+        ":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\""
+        "unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft"
+        ".com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.c"
+        "om.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_s"
+        "haft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"nam"
+        "e\":\"cam.arc\",\"unit\":\"\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\""
+        "feed cam: side of its Reuleaux triangle = fork stroke (estimate)\",\"kind\":\"length\",\"name\":"
+        "\"cam_side\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.008,\"display_unit\""
+        ":\"mm\",\"doc\":\"feed cam: small arc radius; breadth = side + 2 radius (estimate)\",\"kind\":\""
+        "length\",\"name\":\"cam_small_radius\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"defaul"
+        "t\":0.2,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre line to rock-shaft pin P (estima"
+        "te)\",\"kind\":\"length\",\"name\":\"fork_p\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.06,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre line to stitch-block pin "
+        "Q (estimate)\",\"kind\":\"length\",\"name\":\"fork_q\",\"positive\":true,\"role\":null,\"unit\":"
+        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"stitch regulator pivot, x (estimate)\""
+        ",\"kind\":\"length\",\"name\":\"regulator_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
+        "\"default\":-0.06,\"display_unit\":\"mm\",\"doc\":\"stitch regulator pivot, y (estimate)\",\"kin"
+        "d\":\"length\",\"name\":\"regulator_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":-0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, x (estimate)\",\"kind\":\"le"
+        "ngth\",\"name\":\"feed_shaft_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-"
+        "0.2,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, y (estimate)\",\"kind\":\"length\",\""
+        "name\":\"feed_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"dis"
+        "play_unit\":\"mm\",\"doc\":\"feed rock shaft: rear arm to the fork pin P (estimate)\",\"kind\":\""
+        "length\",\"name\":\"feed_arm_p\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
+        "0293,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: upper arm to the feed-bar pin R (estimat"
+        "e)\",\"kind\":\"length\",\"name\":\"feed_arm_r\",\"positive\":true,\"role\":null,\"unit\":\"m\"}"
+        ",{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis, x (estimate)\",\"kind"
+        "\":\"length\",\"name\":\"lift_shaft_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":-0.1777,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis, y (estimate)\",\"kind\":\""
+        "length\",\"name\":\"lift_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":0.015,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft: arm to the roller L (estimate)\",\"kin"
+        "d\":\"length\",\"name\":\"lift_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":0.016,\"display_unit\":\"mm\",\"doc\":\"B: hook crank radius (= hook_drive crank)\",\"kind\":\""
+        "length\",\"name\":\"hook_crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
+        "21776,\"display_unit\":\"mm\",\"doc\":\"B: big rod, pin to pin (= hook_drive big_rod)\",\"kind\""
+        ":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0"
+        ".0179,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft axis, x (= hook_drive rock_axis_x)\",\"kin"
+        "d\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft axis, y (= hook_drive rock_axis_y"
+        ")\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft arm driven by the big rod"
+        " (= hook_drive's)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\":true,\"role\":n"
+        "ull,\"unit\":\"m\"},{\"default\":0.0039,\"display_unit\":\"mm\",\"doc\":\"D: lift cam (eccentric"
+        ") centre from the rock-shaft axis (estimate)\",\"kind\":\"length\",\"name\":\"lift_cam_eccentric"
+        "ity\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.9791297103688189,\"display_"
+        "unit\":\"deg\",\"doc\":\"D: lift cam centre's direction on the rock shaft from its front arm (es"
+        "timate: across the line to the lift shaft at mid-swing)\",\"kind\":\"angle\",\"name\":\"lift_cam"
+        "_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.9581857593448869,\"di"
+        "splay_unit\":\"deg\",\"doc\":\"D: lift crank's fork centre line on the lift rock shaft, from its"
+        " roller arm (estimate)\",\"kind\":\"angle\",\"name\":\"lift_fork_angle\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed dog tip alo"
+        "ng the feed bar from R (estimate)\",\"kind\":\"length\",\"name\":\"dog_u\",\"positive\":true,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":0.007,\"display_unit\":\"mm\",\"doc\":\"feed bar: its ro"
+        "ller slot below the line R\\u2013feed dog (estimate)\",\"kind\":\"length\",\"name\":\"bar_slot_v"
+        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1705,\"display_unit\":\"mm\","
+        "\"doc\":\"throat plate surface, y (estimate: the dog rises ~1 mm above it)\",\"kind\":\"length\""
+        ",\"name\":\"plate_y\",\"positive\":false,\"role\":\"throat_plate\",\"unit\":\"m\"},{\"default\":"
+        "1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"phase of feed_cam relative to the shaft an"
+        "gle\",\"kind\":\"angle\",\"name\":\"feed_cam.phase\",\"positive\":false,\"role\":null,\"unit\":\""
+        "rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of feed_cam\",\"kind\":\"mass\",\""
+        "name\":\"feed_cam.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0015,\""
+        "display_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local u\",\"kind\":\"length\",\"name"
+        "\":\"feed_cam.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"displa"
+        "y_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local v\",\"kind\":\"length\",\"name\":\"f"
+        "eed_cam.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_un"
+        "it\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_cam about its centre of mass\",\"kind\":\"i"
+        "nertia\",\"name\":\"feed_cam.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\""
+        "default\":-0.03490658503988659,\"display_unit\":\"deg\",\"doc\":\"phase of hook_crank relative t"
+        "o the shaft angle\",\"kind\":\"angle\",\"name\":\"hook_crank.phase\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of hook_crank\",\""
+        "kind\":\"mass\",\"name\":\"hook_crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{"
+        "\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of hook_crank, local u\",\"kind"
+        "\":\"length\",\"name\":\"hook_crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of hook_crank, local v\",\"kind\""
+        ":\"length\",\"name\":\"hook_crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
+        "fault\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of hook_crank about its cen"
+        "tre of mass\",\"kind\":\"inertia\",\"name\":\"hook_crank.inertia\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of regulator\","
+        "\"kind\":\"mass\",\"name\":\"regulator.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},"
+        "{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local u\",\"kind"
+        "\":\"length\",\"name\":\"regulator.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local v\",\"kind\":\""
+        "length\",\"name\":\"regulator.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defaul"
+        "t\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of regulator about its centre o"
+        "f mass\",\"kind\":\"inertia\",\"name\":\"regulator.inertia\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of feed_fork\",\"ki"
+        "nd\":\"mass\",\"name\":\"feed_fork.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
+        "efault\":0.00012,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_fork about its"
+        " centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_fork.inertia\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of stitch_b"
+        "lock\",\"kind\":\"mass\",\"name\":\"stitch_block.mass\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, loca"
+        "l u\",\"kind\":\"length\",\"name\":\"stitch_block.com_u\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, lo"
+        "cal v\",\"kind\":\"length\",\"name\":\"stitch_block.com_v\",\"positive\":false,\"role\":null,\"u"
+        "nit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of stit"
+        "ch_block about its centre of mass\",\"kind\":\"inertia\",\"name\":\"stitch_block.inertia\",\"pos"
+        "itive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.04,\"display_unit\":\"g\",\"doc"
+        "\":\"mass of feed_rock_shaft\",\"kind\":\"mass\",\"name\":\"feed_rock_shaft.mass\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre"
+        " of mass of feed_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_u\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\""
+        ":\"centre of mass of feed_rock_shaft, local v\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.c"
+        "om_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg"
+        "*m**2\",\"doc\":\"moment of inertia of feed_rock_shaft about its centre of mass\",\"kind\":\"ine"
+        "rtia\",\"name\":\"feed_rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\""
+        "},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of feed_bar\",\"kind\":\"mass\",\"nam"
+        "e\":\"feed_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"dis"
+        "play_unit\":\"mm\",\"doc\":\"centre of mass of feed_bar, local u\",\"kind\":\"length\",\"name\":"
+        "\"feed_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.003,\"displa"
+        "y_unit\":\"mm\",\"doc\":\"centre of mass of feed_bar, local v\",\"kind\":\"length\",\"name\":\"f"
+        "eed_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_un"
+        "it\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_bar about its centre of mass\",\"kind\":\"i"
+        "nertia\",\"name\":\"feed_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\""
+        "default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of lift_rock_shaft\",\"kind\":\"mass\",\"na"
+        "me\":\"lift_rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0"
+        ",\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local u\",\"kind\":\"lengt"
+        "h\",\"name\":\"lift_rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
+        "lt\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local v\",\"kind\""
+        ":\"length\",\"name\":\"lift_rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},"
+        "{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_rock_shaft a"
+        "bout its centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_rock_shaft.inertia\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mas"
+        "s of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of big_rod, local"
+        " u\",\"kind\":\"length\",\"name\":\"big_rod.com_u\",\"positive\":false,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of big_rod, local v\",\"k"
+        "ind\":\"length\",\"name\":\"big_rod.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_rod about its cent"
+        "re of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"k"
+        "ind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\""
+        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\""
+        ":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
+        "fault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\""
+        "length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
+        "lt\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre"
+        " of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coeffic"
+        "ient of O_feed\",\"kind\":\"dimensionless\",\"name\":\"O_feed.friction\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"pin radius of O_fe"
+        "ed (friction arm)\",\"kind\":\"length\",\"name\":\"O_feed.pin_radius\",\"positive\":false,\"role"
+        "\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coeffi"
+        "cient of P\",\"kind\":\"dimensionless\",\"name\":\"P.friction\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin radius of P (friction "
+        "arm)\",\"kind\":\"length\",\"name\":\"P.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of Q\",\"kind"
+        "\":\"dimensionless\",\"name\":\"Q.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\""
+        "default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin radius of Q (friction arm)\",\"kind\":\"l"
+        "ength\",\"name\":\"Q.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
+        "0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of R\",\"kind\":\"dimensionless"
+        "\",\"name\":\"R.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\""
+        "display_unit\":\"mm\",\"doc\":\"pin radius of R (friction arm)\",\"kind\":\"length\",\"name\":\""
+        "R.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\""
+        ":\"\",\"doc\":\"Coulomb friction coefficient of O_lift\",\"kind\":\"dimensionless\",\"name\":\"O"
+        "_lift.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.004,\"display_un"
+        "it\":\"mm\",\"doc\":\"pin radius of O_lift (friction arm)\",\"kind\":\"length\",\"name\":\"O_lif"
+        "t.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\""
+        ":\"\",\"doc\":\"Coulomb friction coefficient of stitch_block.guide\",\"kind\":\"dimensionless\","
+        "\"name\":\"stitch_block.guide.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"defa"
+        "ult\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of D\",\"kind\":\"dimensi"
+        "onless\",\"name\":\"D.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0."
+        "0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of L\",\"kind\":\"dimensionless\""
+        ",\"name\":\"L.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"}],\"point_fields\":[\"x\""
+        ",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (o"
+        "n the line through R: lifting it does not move it sideways)\",\"name\":\"feed_dog\",\"offset\":0"
+        ",\"role\":\"feed_dog\"},{\"body\":\"feed_fork\",\"doc\":\"feed fork on the cam centre line\",\"n"
+        "ame\":\"fork_top\",\"offset\":6,\"role\":null},{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in t"
+        "he stitch block\",\"name\":\"stitch_pin\",\"offset\":12,\"role\":null},{\"body\":\"lift_rock_sha"
+        "ft\",\"doc\":\"lift roller L in the feed bar\",\"name\":\"lift_roller\",\"offset\":18,\"role\":n"
+        "ull},{\"body\":\"rock_shaft\",\"doc\":\"D: lift cam centre, in the fork\",\"name\":\"lift_cam\","
+        "\"offset\":24,\"role\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"feed_cam\",\"columns\":[\""
+        "fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"feed_cam.pivot\",\"offset\":0},{"
+        "\"a\":\"ground\",\"b\":\"hook_crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"r"
+        "evolute\",\"name\":\"hook_crank.pivot\",\"offset\":2},{\"a\":\"ground\",\"b\":\"regulator\",\"co"
+        "lumns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"regulator.pivot\",\"o"
+        "ffset\":4},{\"a\":\"regulator\",\"b\":\"stitch_block\",\"columns\":[\"normal\",\"moment\"],\"gro"
+        "unded\":false,\"kind\":\"prismatic\",\"name\":\"stitch_block.guide\",\"offset\":6},{\"a\":\"feed"
+        "_cam\",\"b\":\"feed_fork\",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"cam\",\"name\""
+        ":\"cam\",\"offset\":8},{\"a\":\"ground\",\"b\":\"feed_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\""
+        "grounded\":true,\"kind\":\"revolute\",\"name\":\"O_feed\",\"offset\":9},{\"a\":\"feed_rock_shaft"
+        "\",\"b\":\"feed_fork\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"na"
+        "me\":\"P\",\"offset\":11},{\"a\":\"feed_fork\",\"b\":\"stitch_block\",\"columns\":[\"fx\",\"fy\""
+        "],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"Q\",\"offset\":13},{\"a\":\"feed_rock_shaf"
+        "t\",\"b\":\"feed_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"na"
+        "me\":\"R\",\"offset\":15},{\"a\":\"ground\",\"b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\""
+        "],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O_lift\",\"offset\":17},{\"a\":\"hook_crank"
+        "\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name"
+        "\":\"B\",\"offset\":19},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"gro"
+        "unded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"offset\":21},{\"a\":\"big_rod\",\"b\":\"roc"
+        "k_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\""
+        "offset\":23},{\"a\":\"lift_rock_shaft\",\"b\":\"rock_shaft\",\"columns\":[\"normal\"],\"grounded"
+        "\":false,\"kind\":\"slot\",\"name\":\"D\",\"offset\":25},{\"a\":\"feed_bar\",\"b\":\"lift_rock_s"
+        "haft\",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"slot\",\"name\":\"L\",\"offset\":2"
+        "6},{\"a\":\"ground\",\"b\":\"feed_cam\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"s"
+        "haft\",\"kind\":\"drive\",\"name\":\"feed_cam.drive\",\"offset\":27,\"sense\":1},{\"a\":\"ground"
+        "\",\"b\":\"hook_crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":"
+        "\"drive\",\"name\":\"hook_crank.drive\",\"offset\":28,\"sense\":1},{\"a\":\"ground\",\"b\":\"reg"
+        "ulator\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"regulator\",\"kind\":\"drive\",\""
+        "name\":\"regulator.drive\",\"offset\":29,\"sense\":1}],\"roles\":{\"feed_bar\":{\"kind\":\"body\""
+        ",\"name\":\"feed_bar\"},\"feed_cam\":{\"kind\":\"body\",\"name\":\"feed_cam\"},\"feed_dog\":{\"k"
+        "ind\":\"point\",\"name\":\"feed_dog\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"regul"
+        "ator\"},\"throat_plate\":{\"kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":1"
+        "26,\"nblock\":4,\"nbranch\":0,\"nc\":198,\"nf\":30,\"nfo\":65,\"nload\":20,\"nobs\":121,\"np\":7"
+        "7,\"nq\":7,\"nx\":2}}"
         ;
 }

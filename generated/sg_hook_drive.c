@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_hook_drive_constants -- Total ops: 78 */
+/* sg_hook_drive_constants -- Total ops: 89 */
 void sg_hook_drive_constants(const double *p, double *c)
 {
     const double t0 = sin(p[11]);
@@ -120,9 +120,21 @@ void sg_hook_drive_constants(const double *p, double *c)
     c[84] = -p[18];
     c[85] = -p[22];
     c[86] = -p[26];
-    c[87] = -p[20] - t3;
-    c[88] = -t23;
-    c[89] = t23;
+    c[87] = -p[30]*p[31];
+    c[88] = -p[32]*p[33];
+    c[89] = -p[34]*p[35];
+    c[90] = -p[36]*p[37];
+    c[91] = -p[38]*p[39];
+    c[92] = -p[40];
+    c[93] = p[30];
+    c[94] = p[32];
+    c[95] = p[34];
+    c[96] = p[36];
+    c[97] = p[38];
+    c[98] = p[40];
+    c[99] = -p[20] - t3;
+    c[100] = -t23;
+    c[101] = t23;
 }
 
 /* sg_hook_drive_closed -- Total ops: 60 */
@@ -379,75 +391,147 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     return SG_OK;
 }
 
-/* sg_hook_drive_forces -- Total ops: 265 */
+/* sg_hook_drive_forces -- Total ops: 380 */
 int sg_hook_drive_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)x;
-    const double t0 = c[10]*cq[1];
-    const double t1 = c[13]*cq[0];
-    const double t2 = -((cq[2])*(cq[2]))*q[3] - ((cq[3])*(cq[3]))*q[3];
-    const double t3 = -gv[1] + obs[41];
-    const double t4 = -gv[0] + obs[40];
-    const double t5 = c[40]*cq[0];
-    const double t6 = c[40]*cq[1];
-    const double t7 = c[59]*(-gv[0] + obs[67]) - ld[4];
-    const double t8 = c[59]*(-gv[1] + obs[68]) - ld[5];
-    const double t9 = c[58]*(-gv[0] + obs[49]) - ld[2];
-    const double t10 = c[58]*(-gv[1] + obs[50]) - ld[3];
-    const double t11 = c[46]*cq[3] + c[48]*cq[2];
-    const double t12 = c[48]*cq[3] + c[49]*cq[2];
-    const double t13 = c[65]*(-gv[0] + obs[58]) - ld[6];
-    const double t14 = c[65]*(-gv[1] + obs[59]) - ld[7];
-    const double t15 = -c[60]*obs[53] + ld[11] + ld[6]*(c[62]*cq[2] + c[63]*cq[3]) + ld[7]*(c[62]*cq[3] + c[64]*cq[2]) + t13*(c[42]*cq[3] + c[44]*cq[2]) + t14*(c[44]*cq[3] + c[45]*cq[2]);
-    const double t16 = c[1]*cx[0] + c[2]*cx[1];
-    const double t17 = c[34]*t16;
-    const double t18 = c[1]*cx[1] + c[3]*cx[0];
-    const double t19 = c[34]*t18;
-    {
-        const double d = t2;
-        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), fabs(t2)))) return SG_SINGULAR;
-        out[2] = (c[61]*obs[62] - ld[12] - ld[4]*t11 - ld[5]*t12 - t11*t7 - t12*t8 - t15)/d;
+    double fr[6] = {0.0};
+    for (int it = 0; ; ++it) {
+        const double t0 = c[10]*cq[1];
+        const double t1 = c[13]*cq[0];
+        const double t2 = -((cq[2])*(cq[2]))*q[3] - ((cq[3])*(cq[3]))*q[3];
+        const double t3 = -fr[0];
+        const double t4 = -gv[1] + obs[41];
+        const double t5 = -gv[0] + obs[40];
+        const double t6 = c[40]*cq[0];
+        const double t7 = c[40]*cq[1];
+        const double t8 = c[58]*(-gv[0] + obs[49]) - ld[2];
+        const double t9 = c[58]*(-gv[1] + obs[50]) - ld[3];
+        const double t10 = cq[2]*fr[5];
+        const double t11 = c[59]*(-gv[0] + obs[67]) - ld[4] - t10;
+        const double t12 = cq[3]*fr[5];
+        const double t13 = c[59]*(-gv[1] + obs[68]) - ld[5] - t12;
+        const double t14 = c[47]*cq[2] + c[49]*cq[3];
+        const double t15 = c[48]*cq[3] + c[49]*cq[2];
+        const double t16 = c[46]*cq[3] + c[48]*cq[2];
+        const double t17 = c[65]*(-gv[0] + obs[58]) - ld[6] + t10;
+        const double t18 = c[44]*cq[3] + c[45]*cq[2];
+        const double t19 = c[65]*(-gv[1] + obs[59]) - ld[7] + t12;
+        const double t20 = c[43]*cq[2] + c[45]*cq[3] + cq[3]*q[3];
+        const double t21 = cq[2]*q[3] + t18;
+        const double t22 = -c[60]*obs[53] + fr[3] - fr[5]*(-cq[2]*t20 + cq[3]*t21) + ld[11] + ld[6]*(c[62]*cq[2] + c[63]*cq[3]) + ld[7]*(c[62]*cq[3] + c[64]*cq[2]) + t17*(c[42]*cq[3] + c[44]*cq[2]) + t18*t19;
+        const double t23 = c[1]*cx[0] + c[2]*cx[1];
+        const double t24 = c[34]*t23;
+        const double t25 = c[1]*cx[1] + c[3]*cx[0];
+        const double t26 = c[34]*t25;
+        const double t27 = fr[2]*obs[43];
+        const double t28 = fr[3]*obs[52];
+        const double t29 = -obs[25] + obs[34];
+        const double t30 = fr[0]*t29;
+        const double t31 = -obs[34] + obs[43];
+        const double t32 = fr[1]*t31;
+        const double t33 = -obs[43] + obs[61];
+        const double t34 = fr[4]*t33;
+        const double t35 = cq[2]*(obs[52]*t20 - obs[56] - obs[61]*t14 + obs[65]) + cq[3]*(-obs[52]*t21 - obs[57] + obs[61]*t15 + obs[66]);
+        const double t36 = fr[5]*t35;
+        {
+            const double d = t2;
+            if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), fabs(t2)))) return SG_SINGULAR;
+            out[2] = (c[61]*obs[62] - fr[4] - fr[5]*(-cq[2]*t14 + cq[3]*t15) - ld[12] - ld[4]*t16 - ld[5]*t15 - t11*t16 - t13*t15 - t22)/d;
+        }
+        {
+            /* block of unknowns 10, 11 */
+            double M[4], r[2];
+            int piv[2];
+            M[0] = c[16]*cq[1];
+            M[1] = c[7]*cq[0];
+            r[0] = c[55]*obs[44] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - fr[1] - fr[2] + fr[4] - ld[10] - ld[2]*(c[56]*cq[1] + t6) - ld[3]*(c[57]*cq[0] + t7) - t11*(t0 + t1) - t13*(c[13]*cq[1] + c[19]*cq[0]) - t8*(c[38]*cq[1] + t6) - t9*(c[41]*cq[0] + t7);
+            M[2] = c[6]*cq[5];
+            M[3] = c[18]*cq[4];
+            r[1] = c[52]*obs[35] + c[53]*cq[4]*t4 + c[54]*cq[5]*t5 + fr[1] - ld[9] + t3;
+            if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
+            sg_lu_solve_inl(2, M, piv, r);
+            out[10] = r[0];
+            out[11] = r[1];
+        }
+        out[13] = -cq[2]*out[2] + t13;
+        out[12] = cq[3]*out[2] + t11;
+        out[7] = -out[11] + out[13] + t9;
+        out[6] = -out[10] + out[12] + t8;
+        out[3] = out[2]*t2 + t22;
+        out[9] = cq[2]*out[2] + t19;
+        out[8] = -cq[3]*out[2] + t17;
+        out[5] = c[70]*t4 + out[11];
+        out[4] = c[70]*t5 + out[10];
+        out[1] = c[69]*(-gv[1] + obs[32]) + out[5] - ld[1];
+        out[0] = c[69]*(-gv[0] + obs[31]) + out[4] - ld[0];
+        out[14] = c[66]*obs[26] - out[0]*(c[32]*t25 + t24) - out[1]*(c[35]*t23 + t26) - out[4]*(c[33]*t23 + c[68]*t25) - out[5]*(c[33]*t25 + c[67]*t23) - ld[0]*(c[67]*t25 + t24) - ld[1]*(c[68]*t23 + t26) - ld[8] - t3;
+        if (c[93] == 0.0 && c[94] == 0.0 && c[95] == 0.0 && c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0) {
+            out[15] = out[14];
+            out[16] = out[14]*xd[0];
+            out[17] = -cq[3]*out[2];
+            out[18] = cq[2]*out[2];
+            out[19] = out[0] + out[6] + out[8];
+            out[20] = out[1] + out[7] + out[9];
+            out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14] + fr[2] + fr[3];
+            out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
+            out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
+            out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t27 + t28 + t30 + t32 + t34 + t36;
+            out[25] = 0.0;
+            out[26] = fr[0];
+            out[27] = -t30;
+            out[28] = fr[1];
+            out[29] = -t32;
+            out[30] = fr[2];
+            out[31] = -t27;
+            out[32] = fr[3];
+            out[33] = -t28;
+            out[34] = fr[4];
+            out[35] = -t34;
+            out[36] = fr[5];
+            out[37] = -t36;
+            if (!isfinite((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + (out[12] + out[13]))) + ((out[14] + out[15]) + (out[16] + (out[17] + out[18]))))) + ((((out[19] + out[20]) + (out[21] + out[22])) + ((out[23] + out[24]) + (out[25] + (out[26] + out[27])))) + (((out[28] + out[29]) + (out[30] + (out[31] + out[32]))) + ((out[33] + out[34]) + (out[35] + (out[36] + out[37])))))))) return SG_NONFINITE;
+            return SG_OK;
+        }
+        double frn[6];
+        frn[0] = c[87]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t29) > 0.0 ? 1.0 : ((t29) < 0.0 ? -1.0 : 0.0));
+        frn[1] = c[88]*sqrt(((out[10])*(out[10])) + ((out[11])*(out[11])))*((t31) > 0.0 ? 1.0 : ((t31) < 0.0 ? -1.0 : 0.0));
+        frn[2] = c[89]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((obs[43]) > 0.0 ? 1.0 : ((obs[43]) < 0.0 ? -1.0 : 0.0));
+        frn[3] = c[90]*sqrt(((out[8])*(out[8])) + ((out[9])*(out[9])))*((obs[52]) > 0.0 ? 1.0 : ((obs[52]) < 0.0 ? -1.0 : 0.0));
+        frn[4] = c[91]*sqrt(((out[12])*(out[12])) + ((out[13])*(out[13])))*((t33) > 0.0 ? 1.0 : ((t33) < 0.0 ? -1.0 : 0.0));
+        frn[5] = c[92]*fabs(out[2])*((t35) > 0.0 ? 1.0 : ((t35) < 0.0 ? -1.0 : 0.0));
+        double d = 0.0, s = 0.0;
+        for (int k = 0; k < 6; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
+        if (d <= 1e-13 * s) {
+            out[15] = out[14];
+            out[16] = out[14]*xd[0];
+            out[17] = -cq[3]*out[2];
+            out[18] = cq[2]*out[2];
+            out[19] = out[0] + out[6] + out[8];
+            out[20] = out[1] + out[7] + out[9];
+            out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14] + fr[2] + fr[3];
+            out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
+            out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
+            out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t27 + t28 + t30 + t32 + t34 + t36;
+            out[25] = 0.0;
+            out[26] = fr[0];
+            out[27] = -t30;
+            out[28] = fr[1];
+            out[29] = -t32;
+            out[30] = fr[2];
+            out[31] = -t27;
+            out[32] = fr[3];
+            out[33] = -t28;
+            out[34] = fr[4];
+            out[35] = -t34;
+            out[36] = fr[5];
+            out[37] = -t36;
+            if (!isfinite((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + (out[12] + out[13]))) + ((out[14] + out[15]) + (out[16] + (out[17] + out[18]))))) + ((((out[19] + out[20]) + (out[21] + out[22])) + ((out[23] + out[24]) + (out[25] + (out[26] + out[27])))) + (((out[28] + out[29]) + (out[30] + (out[31] + out[32]))) + ((out[33] + out[34]) + (out[35] + (out[36] + out[37])))))))) return SG_NONFINITE;
+            return SG_OK;
+        }
+        if (it >= 100) return SG_NO_CONVERGENCE;
+        for (int k = 0; k < 6; ++k) fr[k] = frn[k];
     }
-    {
-        /* block of unknowns 10, 11 */
-        double M[4], r[2];
-        int piv[2];
-        M[0] = c[16]*cq[1];
-        M[1] = c[7]*cq[0];
-        r[0] = c[55]*obs[44] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - ld[10] - ld[2]*(c[56]*cq[1] + t5) - ld[3]*(c[57]*cq[0] + t6) - t10*(c[41]*cq[0] + t6) - t7*(t0 + t1) - t8*(c[13]*cq[1] + c[19]*cq[0]) - t9*(c[38]*cq[1] + t5);
-        M[2] = c[6]*cq[5];
-        M[3] = c[18]*cq[4];
-        r[1] = c[52]*obs[35] + c[53]*cq[4]*t3 + c[54]*cq[5]*t4 - ld[9];
-        if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
-        sg_lu_solve_inl(2, M, piv, r);
-        out[10] = r[0];
-        out[11] = r[1];
-    }
-    out[13] = -cq[2]*out[2] + t8;
-    out[12] = cq[3]*out[2] + t7;
-    out[7] = -out[11] + out[13] + t10;
-    out[6] = -out[10] + out[12] + t9;
-    out[3] = out[2]*t2 + t15;
-    out[9] = cq[2]*out[2] + t14;
-    out[8] = -cq[3]*out[2] + t13;
-    out[5] = c[70]*t3 + out[11];
-    out[4] = c[70]*t4 + out[10];
-    out[1] = c[69]*(-gv[1] + obs[32]) + out[5] - ld[1];
-    out[0] = c[69]*(-gv[0] + obs[31]) + out[4] - ld[0];
-    out[14] = c[66]*obs[26] - out[0]*(c[32]*t18 + t17) - out[1]*(c[35]*t16 + t19) - out[4]*(c[33]*t16 + c[68]*t18) - out[5]*(c[33]*t18 + c[67]*t16) - ld[0]*(c[67]*t18 + t17) - ld[1]*(c[68]*t16 + t19) - ld[8];
-    out[15] = out[14];
-    out[16] = out[14]*xd[0];
-    out[17] = -cq[3]*out[2];
-    out[18] = cq[2]*out[2];
-    out[19] = out[0] + out[6] + out[8];
-    out[20] = out[1] + out[7] + out[9];
-    out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14];
-    out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
-    out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
-    out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
-    out[25] = 0.0;
-    if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
-    return SG_OK;
 }
 
 /* sg_hook_drive_force_matrix -- Total ops: 138 */
@@ -495,8 +579,8 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     A[127] = c[41]*cq[0] + t7;
     A[130] = t8;
     A[131] = t9;
-    A[132] = c[87]*cq[0] + c[88]*cq[1];
-    A[133] = c[87]*cq[1] + c[89]*cq[0];
+    A[132] = c[100]*cq[1] + c[99]*cq[0];
+    A[133] = c[101]*cq[0] + c[99]*cq[1];
     A[137] = cq[3];
     A[143] = 1.0;
     A[152] = -cq[2];
@@ -598,12 +682,12 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .name = "hook_drive",
     .nq = 4,
     .nx = 1,
-    .np = 30,
-    .nc = 90,
+    .np = 41,
+    .nc = 102,
     .nobs = 69,
     .nbranch = 2,
     .nf = 15,
-    .nfo = 26,
+    .nfo = 38,
     .nload = 13,
     .nblock = 2,
     .coord_is_angle = sg_hook_drive_coord_is_angle,
@@ -667,191 +751,220 @@ const char *sg_hook_drive_manifest(void)
         ",10],[9,10],[11],[13],[14],[14],[13],[1],[1],[19],[20],[20],[19],[23],[24],[24],[23],[27],[28],["
         "28],[27],[0,1,2,4],[0,1,3,4],[17],[1,16],[1,16],[21],[4,19],[4,19],[18],[26],[25],[29],[9,10,24]"
         ",[9,10,23],[9,10,23],[22],[15],[0,13],[0,13],[12],[16],[8],[12],[15],[16],[17],[18],[21],[22],[2"
-        "5],[26],[29],[12],[16],[18],[22],[26],[5,6,20],[5,6,19],[5,6,19]],\"coords\":[{\"guess\":0.0,\"n"
-        "ame\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"lower_sha"
-        "ft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"big_rod.angle\",\"unit\":"
-        "\"rad\"},{\"guess\":0.005,\"name\":\"rock_slider.travel\",\"unit\":\"m\"}],\"default_speed\":104"
-        ".71975511965977,\"doc\":\"Hook drive \\u94a9\\u7ebf\\u673a\\u6784: hook crank 12 \\u2192 big con"
-        "necting rod \\u5927\\u8fde\\u6746 9 \\u2192 rock shaft \\u6446\\u8f74 4 \\u2192 rock-shaft slide"
-        "r\\n\\u6446\\u8f74\\u6ed1\\u5757 10 in the slot of the lower-shaft arm \\u4e0b\\u8f74 11 (an osc"
-        "illating guide bar) \\u2192 oscillating shuttle.\\n\\nTwo loops (seed 000 \\u00a7\\u4e00(\\u4e00"
-        ")3, fig. 1-1; fig. 1-2(c) is the guide-bar unit): the four-bar crank\\u2013rod\\u2013rock\\nshaf"
-        "t, then the guide bar whose slotted arm turns the lower shaft through a large swing. The rock sh"
-        "aft\\nand lower shaft run parallel to the upper shaft, so both loops project onto one plane: ori"
-        "gin on the upper\\nshaft axis, x horizontal, y up. The lower-shaft slot passes through its axis "
-        "(local u axis).\\n\\nThe shuttle's point \\u6446\\u68ad\\u5c16 (point ``hook_point``) is a point"
-        " of the lower-shaft body at ``hook_radius`` from its\\naxis and ``hook_angle`` from the slot: th"
-        "e lower shaft's axis is under the needle (x = 0), so the hook point\\ncrosses the needle's centr"
-        "e line at the top of its circle, moving across it (sewgen.timing measures the\\nneedle's rise fr"
-        "om its bottom dead centre and the hook point's height above the needle eye there).\\n\\nDimensio"
-        "ns are estimates sized to the household machine (seed 000's tables are not in the text); the\\ne"
-        "arlier estimate (crank 12, rod 170, rock arms 13.6 and 20 mm) swung the rock shaft \\u00b162\\u0"
-        "0b0 with a minimum\\ntransmission angle of 23.6\\u00b0, at \\u03c6 = 125\\u00b0 where the hook c"
-        "rank pin's load peaked:\\n\\n* the crank-rocker (crank 16 mm, big rod 217.76 mm, front arm 21.02"
-        " mm, rock axis 217.45 mm below the upper\\n  shaft) swings the rock shaft 99.1\\u00b0 with a min"
-        "imum transmission angle of 40.3\\u00b0 (big rod against the front\\n  arm). A crank-rocker's tra"
-        "nsmission angle falls below 40\\u00b0 once its rocker swings much more than 100\\u00b0, so\\n  t"
-        "he rock swing cannot stay near the old 124\\u00b0. Its ends \\u2014 the shuttle's reversals \\u2"
-        "014 fall at crank angles of\\n  about 89\\u00b0 and 269\\u00b0, so a group phase of \\u22122\\u0"
-        "0b0 puts them at the needle's top and bottom dead centres (an\\n  oscillating shuttle starts fro"
-        "m its end position with the needle at its lowest point);\\n* the guide bar (the lower-shaft axis"
-        " under the needle, 32.4 mm from the rock shaft's, inside the 39.01 mm\\n  rear arm's circle; rea"
-        "r arm 57.63\\u00b0 from the front arm) turns the 99.1\\u00b0 into a shuttle swing of 206.7\\u00b"
-        "0\\n  (household shuttles swing 206\\u00b0\\u2013210\\u00b0). Its own transmission angle is 90\\u"
-        "00b0 (the slot's force is normal to the\\n  slotted arm). The price of the smaller rock swing is"
-        " a less uniform shuttle: the guide bar must multiply\\n  the swing 2.1 times, most of it at mid-"
-        "stroke, so the lower shaft peaks at 4.5 times the upper shaft's speed\\n  (2.7 before) and its i"
-        "nertia, not the transmission, now sets the hook crank pin's peak load. These\\n  dimensions are "
-        "the ones of least peak crank-pin load (167 N at 1000 r/min with the lower shaft's 6e-6\\n  kg\\u"
-        "00b7m\\u00b2) among those with a transmission angle of at least 40.3\\u00b0, a 206.5\\u00b0\\u20"
-        "13210\\u00b0 swing and reversals at 89\\u00b0 and\\n  269\\u00b0 (a local search over rod, rock "
-        "axis, arms and rear-arm angle); a 35\\u00b0 design of the same kind would\\n  carry about 80 N, "
-        "and without the lower shaft's inertia this one would carry 16 N (the old one 44 N);\\n* the shut"
-        "tle (hook point) radius is 12 mm, its axis 20 mm below the throat plate: its point passes over t"
-        "he\\n  needle's centre line at the top of its circle. ``hook_angle`` (132.45\\u00b0) puts it the"
-        "re when the needle has\\n  risen 2.0 mm from its bottom dead centre (JUKI service manuals: 2.0 \\u"
-        "00b1 0.2 mm) at the JB1-3's phase, 1.6 mm\\n  above the top of the needle eye (service manuals: "
-        "1\\u20132.5 mm).\",\"elements\":[],\"force_blocks\":[1,2],\"force_outputs\":[{\"name\":\"shaft.t"
-        "orque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guid"
-        "e.fx\",\"unit\":\"N\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx"
-        "\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\""
-        ":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\""
-        "J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"for"
-        "ce_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"big_rod.x\",\"big_rod.y\",\"big_rod.moment"
-        "\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"lower_shaft.x\",\"lower_shaft.y\",\""
-        "lower_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\",\"rock_slider.moment\"],\"inputs\":[{\""
-        "default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"na"
-        "me\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_hook_drive_anchors\":{\"ops\":"
-        "70},\"sg_hook_drive_blocks\":{\"ops\":46},\"sg_hook_drive_closed\":{\"ops\":60},\"sg_hook_drive_"
-        "constants\":{\"ops\":78},\"sg_hook_drive_force_matrix\":{\"ops\":138},\"sg_hook_drive_forces\":{"
-        "\"ops\":265},\"sg_hook_drive_motion\":{\"ops\":238},\"sg_hook_drive_residual\":{\"ops\":38},\"sg"
-        "_hook_drive_scales\":{\"ops\":7}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\""
-        "crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rock_s"
-        "haft\",\"component\":\"fx\",\"name\":\"rock_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\""
-        ",\"name\":\"rock_pin\"},{\"body\":\"rock_slider\",\"component\":\"fx\",\"name\":\"slider_pin\"},"
-        "{\"body\":\"rock_slider\",\"component\":\"fy\",\"name\":\"slider_pin\"},{\"body\":\"lower_shaft\""
-        ",\"component\":\"fx\",\"name\":\"hook_point\"},{\"body\":\"lower_shaft\",\"component\":\"fy\",\""
-        "name\":\"hook_point\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\""
-        ":\"big_rod\",\"component\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component"
-        "\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"lower_shaft\",\"component\":\"torque\",\"name"
-        "\":\"lower_shaft\"},{\"body\":\"rock_slider\",\"component\":\"torque\",\"name\":\"rock_slider\"}"
-        "],\"name\":\"hook_drive\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\""
-        "crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pi"
-        "n.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin"
-        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\""
-        "unit\":\"m\"},{\"name\":\"rock_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"rock_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/"
-        "s^2\"},{\"name\":\"slider_pin.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\""
-        "name\":\"slider_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"na"
-        "me\":\"slider_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"hook_point.x\",\"unit\":\"m\"},{\"name\":\"hook_point.y\",\"unit\":\"m\"},{\"name\":\""
-        "hook_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"hook_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"ho"
-        "ok_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":"
-        "\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"cr"
-        "ank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank"
-        ".com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d"
-        "\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d"
-        "\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod."
-        "com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.a"
-        "ngle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_s"
-        "haft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\""
-        "rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\""
-        "rad\"},{\"name\":\"lower_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\","
-        "\"unit\":\"rad/s^2\"},{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.co"
-        "m.y\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaf"
-        "t.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "lower_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\""
-        "name\":\"rock_slider.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\""
-        "rad/s^2\"},{\"name\":\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"uni"
-        "t\":\"m\"},{\"name\":\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slide"
-        "r.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.016,\"display_unit\":\"mm\",\"doc\""
-        ":\"hook crank radius on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"po"
-        "sitive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\""
-        ":\"big connecting rod, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positi"
-        "ve\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"r"
-        "ock-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"roc"
-        "k-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":fa"
-        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"rock-sh"
-        "aft arm driven by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"pos"
-        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.039009999999999996,\"display_unit\":\""
-        "mm\",\"doc\":\"rock-shaft arm carrying the slider pin (estimate)\",\"kind\":\"length\",\"name\":"
-        "\"rock_rear_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":1.005833247924332"
-        "2,\"display_unit\":\"deg\",\"doc\":\"rear arm direction relative to the front arm (estimate)\",\""
-        "kind\":\"angle\",\"name\":\"rock_rear_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"}"
-        ",{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, horizontal: under the need"
-        "le (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_x\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":-0.1905,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical "
-        "(estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"m\"},{\"default\":0.012,\"display_unit\":\"mm\",\"doc\":\"shuttle point's radius about th"
-        "e lower-shaft axis (estimate)\",\"kind\":\"length\",\"name\":\"hook_radius\",\"positive\":true,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":2.311688594266489,\"display_unit\":\"deg\",\"doc\":\"sh"
-        "uttle point's direction on the lower shaft from its slot (set for a 2.0 mm loop lift)\",\"kind\""
-        ":\"angle\",\"name\":\"hook_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default"
-        "\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":"
-        "\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default"
-        "\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"do"
-        "c\":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre"
-        " of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of ine"
-        "rtia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\""
-        ":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":nul"
-        "l,\"unit\":\"kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia o"
-        "f big_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\""
-        "mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":"
-        "null,\"unit\":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of roc"
-        "k_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of ro"
-        "ck_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inerti"
-        "a of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\","
-        "\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\","
-        "\"doc\":\"mass of lower_shaft\",\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":fal"
-        "se,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of m"
-        "ass of lower_shaft, local u\",\"kind\":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":fa"
-        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of m"
-        "ass of lower_shaft, local v\",\"kind\":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":fa"
-        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"mome"
-        "nt of inertia of lower_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_sh"
-        "aft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":"
-        "\"centre of mass of rock_slider, local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\""
-        "doc\":\"moment of inertia of rock_slider about its centre of mass\",\"kind\":\"inertia\",\"name\""
-        ":\"rock_slider.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\""
-        ":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B"
-        "\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rock_shaft\",\"doc\":\"big-rod"
-        " pin C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6,\"role\":null},{\"body\":\"roc"
-        "k_slider\",\"doc\":\"slider pin E on the rock-shaft rear arm\",\"name\":\"slider_pin\",\"offset\""
-        ":12,\"role\":null},{\"body\":\"lower_shaft\",\"doc\":\"shuttle point \\u6446\\u68ad\\u5c16\",\"n"
-        "ame\":\"hook_point\",\"offset\":18,\"role\":\"hook_point\"}],\"reactions\":[{\"a\":\"ground\",\""
-        "b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"cra"
-        "nk.pivot\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\"rock_slider\",\"columns\":[\"normal\",\""
-        "moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"rock_slider.guide\",\"offset\":2}"
-        ",{\"a\":\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"re"
-        "volute\",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"offset\":6},{\"a\":\"ground\""
-        ",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"nam"
-        "e\":\"O11\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\""
-        "grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\""
-        ":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\""
-        "E\",\"offset\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,"
-        "\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":14,\"sense\":1}],\"ro"
-        "les\":{\"hook_point\":{\"kind\":\"point\",\"name\":\"hook_point\"},\"hook_shaft\":{\"kind\":\"bo"
-        "dy\",\"name\":\"lower_shaft\"}},\"sizes\":{\"nanchor_out\":48,\"nblock\":2,\"nbranch\":2,\"nc\":"
-        "90,\"nf\":15,\"nfo\":26,\"nload\":13,\"nobs\":69,\"np\":30,\"nq\":4,\"nx\":1}}"
+        "5],[26],[29],[12],[16],[18],[22],[26],[30,31],[32,33],[34,35],[36,37],[38,39],[40],[30],[32],[34"
+        "],[36],[38],[40],[5,6,20],[5,6,19],[5,6,19]],\"coords\":[{\"guess\":0.0,\"name\":\"rock_shaft.an"
+        "gle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"lower_shaft.angle\",\"unit\":\""
+        "rad\"},{\"guess\":-1.5707963267948966,\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"guess\":0."
+        "005,\"name\":\"rock_slider.travel\",\"unit\":\"m\"}],\"default_speed\":104.71975511965977,\"doc\""
+        ":\"Hook drive \\u94a9\\u7ebf\\u673a\\u6784: hook crank 12 \\u2192 big connecting rod \\u5927\\u8"
+        "fde\\u6746 9 \\u2192 rock shaft \\u6446\\u8f74 4 \\u2192 rock-shaft slider\\n\\u6446\\u8f74\\u6e"
+        "d1\\u5757 10 in the slot of the lower-shaft arm \\u4e0b\\u8f74 11 (an oscillating guide bar) \\u"
+        "2192 oscillating shuttle.\\n\\nTwo loops (seed 000 \\u00a7\\u4e00(\\u4e00)3, fig. 1-1; fig. 1-2("
+        "c) is the guide-bar unit): the four-bar crank\\u2013rod\\u2013rock\\nshaft, then the guide bar w"
+        "hose slotted arm turns the lower shaft through a large swing. The rock shaft\\nand lower shaft r"
+        "un parallel to the upper shaft, so both loops project onto one plane: origin on the upper\\nshaf"
+        "t axis, x horizontal, y up. The lower-shaft slot passes through its axis (local u axis).\\n\\nTh"
+        "e shuttle's point \\u6446\\u68ad\\u5c16 (point ``hook_point``) is a point of the lower-shaft bod"
+        "y at ``hook_radius`` from its\\naxis and ``hook_angle`` from the slot: the lower shaft's axis is"
+        " under the needle (x = 0), so the hook point\\ncrosses the needle's centre line at the top of it"
+        "s circle, moving across it (sewgen.timing measures the\\nneedle's rise from its bottom dead cent"
+        "re and the hook point's height above the needle eye there).\\n\\nDimensions are estimates sized "
+        "to the household machine (seed 000's tables are not in the text); the\\nearlier estimate (crank "
+        "12, rod 170, rock arms 13.6 and 20 mm) swung the rock shaft \\u00b162\\u00b0 with a minimum\\ntr"
+        "ansmission angle of 23.6\\u00b0, at \\u03c6 = 125\\u00b0 where the hook crank pin's load peaked:"
+        "\\n\\n* the crank-rocker (crank 16 mm, big rod 217.76 mm, front arm 21.02 mm, rock axis 217.45 m"
+        "m below the upper\\n  shaft) swings the rock shaft 99.1\\u00b0 with a minimum transmission angle"
+        " of 40.3\\u00b0 (big rod against the front\\n  arm). A crank-rocker's transmission angle falls b"
+        "elow 40\\u00b0 once its rocker swings much more than 100\\u00b0, so\\n  the rock swing cannot st"
+        "ay near the old 124\\u00b0. Its ends \\u2014 the shuttle's reversals \\u2014 fall at crank angle"
+        "s of\\n  about 89\\u00b0 and 269\\u00b0, so a group phase of \\u22122\\u00b0 puts them at the ne"
+        "edle's top and bottom dead centres (an\\n  oscillating shuttle starts from its end position with"
+        " the needle at its lowest point);\\n* the guide bar (the lower-shaft axis under the needle, 32.4"
+        " mm from the rock shaft's, inside the 39.01 mm\\n  rear arm's circle; rear arm 57.63\\u00b0 from"
+        " the front arm) turns the 99.1\\u00b0 into a shuttle swing of 206.7\\u00b0\\n  (household shuttl"
+        "es swing 206\\u00b0\\u2013210\\u00b0). Its own transmission angle is 90\\u00b0 (the slot's force"
+        " is normal to the\\n  slotted arm). The price of the smaller rock swing is a less uniform shuttl"
+        "e: the guide bar must multiply\\n  the swing 2.1 times, most of it at mid-stroke, so the lower s"
+        "haft peaks at 4.5 times the upper shaft's speed\\n  (2.7 before) and its inertia, not the transm"
+        "ission, now sets the hook crank pin's peak load. These\\n  dimensions are the ones of least peak"
+        " crank-pin load (167 N at 1000 r/min with the lower shaft's 6e-6\\n  kg\\u00b7m\\u00b2) among th"
+        "ose with a transmission angle of at least 40.3\\u00b0, a 206.5\\u00b0\\u2013210\\u00b0 swing and"
+        " reversals at 89\\u00b0 and\\n  269\\u00b0 (a local search over rod, rock axis, arms and rear-ar"
+        "m angle); a 35\\u00b0 design of the same kind would\\n  carry about 80 N, and without the lower "
+        "shaft's inertia this one would carry 16 N (the old one 44 N);\\n* the shuttle (hook point) radiu"
+        "s is 12 mm, its axis 20 mm below the throat plate: its point passes over the\\n  needle's centre"
+        " line at the top of its circle. ``hook_angle`` (132.45\\u00b0) puts it there when the needle has"
+        "\\n  risen 2.0 mm from its bottom dead centre (JUKI service manuals: 2.0 \\u00b1 0.2 mm) at the "
+        "JB1-3's phase, 1.6 mm\\n  above the top of the needle eye (service manuals: 1\\u20132.5 mm).\",\""
+        "elements\":[],\"force_blocks\":[1,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*"
+        "m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guide.fx\",\"unit\":\"N\""
+        "},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\""
+        "name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\""
+        "kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load"
+        "_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"},{\"name\":\"B.friction\",\""
+        "unit\":\"N*m\"},{\"name\":\"B.friction_power\",\"unit\":\"W\"},{\"name\":\"C.friction\",\"unit\""
+        ":\"N*m\"},{\"name\":\"C.friction_power\",\"unit\":\"W\"},{\"name\":\"O4.friction\",\"unit\":\"N*"
+        "m\"},{\"name\":\"O4.friction_power\",\"unit\":\"W\"},{\"name\":\"O11.friction\",\"unit\":\"N*m\""
+        "},{\"name\":\"O11.friction_power\",\"unit\":\"W\"},{\"name\":\"E.friction\",\"unit\":\"N*m\"},{\""
+        "name\":\"E.friction_power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guide.friction\",\"unit\":\""
+        "N\"},{\"name\":\"rock_slider.guide.friction_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\""
+        ",\"crank.y\",\"crank.moment\",\"big_rod.x\",\"big_rod.y\",\"big_rod.moment\",\"rock_shaft.x\",\""
+        "rock_shaft.y\",\"rock_shaft.moment\",\"lower_shaft.x\",\"lower_shaft.y\",\"lower_shaft.moment\","
+        "\"rock_slider.x\",\"rock_slider.y\",\"rock_slider.moment\"],\"inputs\":[{\"default\":0.0,\"displ"
+        "ay_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role"
+        "\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_hook_drive_anchors\":{\"ops\":70},\"sg_hook_drive_b"
+        "locks\":{\"ops\":46},\"sg_hook_drive_closed\":{\"ops\":60},\"sg_hook_drive_constants\":{\"ops\":"
+        "89},\"sg_hook_drive_force_matrix\":{\"ops\":138},\"sg_hook_drive_forces\":{\"ops\":380},\"sg_hoo"
+        "k_drive_motion\":{\"ops\":238},\"sg_hook_drive_residual\":{\"ops\":38},\"sg_hook_drive_scales\":"
+        "{\"ops\":7}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body"
+        "\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rock_shaft\",\"component\""
+        ":\"fx\",\"name\":\"rock_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"rock_pin"
+        "\"},{\"body\":\"rock_slider\",\"component\":\"fx\",\"name\":\"slider_pin\"},{\"body\":\"rock_sli"
+        "der\",\"component\":\"fy\",\"name\":\"slider_pin\"},{\"body\":\"lower_shaft\",\"component\":\"fx"
+        "\",\"name\":\"hook_point\"},{\"body\":\"lower_shaft\",\"component\":\"fy\",\"name\":\"hook_point"
+        "\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"big_rod\",\"com"
+        "ponent\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"na"
+        "me\":\"rock_shaft\"},{\"body\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"lower_shaft\""
+        "},{\"body\":\"rock_slider\",\"component\":\"torque\",\"name\":\"rock_slider\"}],\"name\":\"hook_"
+        "drive\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"u"
+        "nit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":"
+        "\"m/s^2\"},{\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":\"m\"},{\""
+        "name\":\"rock_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"rock_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"slider_pin.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\":\"slider_"
+        "pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pi"
+        "n.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_"
+        "point.x\",\"unit\":\"m\"},{\"name\":\"hook_point.y\",\"unit\":\"m\"},{\"name\":\"hook_point.x_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"hook_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"hook_point.x_dd\","
+        "\"unit\":\"m/s^2\"},{\"name\":\"hook_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\","
+        "\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\""
+        "unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\""
+        ":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s"
+        "^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad"
+        "/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":"
+        "\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^"
+        "2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":"
+        "\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\","
+        "\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com."
+        "y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.co"
+        "m.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock"
+        "_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"name\""
+        ":\"lower_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"unit\":\"rad/s"
+        "^2\"},{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\",\"unit\":\""
+        "m\"},{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.y_d\",\"uni"
+        "t\":\"m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.com."
+        "y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name\":\"rock_sl"
+        "ider.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad/s^2\"},{\"n"
+        "ame\":\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\":\"m\"},{\"n"
+        "ame\":\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.com.y_dd\",\""
+        "unit\":\"m/s^2\"}],\"params\":[{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"hook crank r"
+        "adius on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":\"big connectin"
+        "g rod, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role"
+        "\":null,\"unit\":\"m\"},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, "
+        "horizontal (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, v"
+        "ertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm driven "
+        "by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\":true,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":0.039009999999999996,\"display_unit\":\"mm\",\"doc\":\""
+        "rock-shaft arm carrying the slider pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm"
+        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":1.0058332479243322,\"display_uni"
+        "t\":\"deg\",\"doc\":\"rear arm direction relative to the front arm (estimate)\",\"kind\":\"angle"
+        "\",\"name\":\"rock_rear_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":"
+        "0.0,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, horizontal: under the needle (estimate)\""
+        ",\"kind\":\"length\",\"name\":\"lower_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},"
+        "{\"default\":-0.1905,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical (estimate)\",\""
+        "kind\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.012,\"display_unit\":\"mm\",\"doc\":\"shuttle point's radius about the lower-shaft a"
+        "xis (estimate)\",\"kind\":\"length\",\"name\":\"hook_radius\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":2.311688594266489,\"display_unit\":\"deg\",\"doc\":\"shuttle point's "
+        "direction on the lower shaft from its slot (set for a 2.0 mm loop lift)\",\"kind\":\"angle\",\"n"
+        "ame\":\"hook_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"displ"
+        "ay_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"na"
+        "me\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"displ"
+        "ay_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre "
+        "of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of c"
+        "rank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank"
+        " about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\"mass of bi"
+        "g_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_rod abo"
+        "ut its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of rock"
+        "_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, loca"
+        "l u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, loca"
+        "l v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaf"
+        "t about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":f"
+        "alse,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass"
+        " of lower_shaft\",\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_s"
+        "haft, local u\",\"kind\":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_s"
+        "haft, local v\",\"kind\":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia "
+        "of lower_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_shaft.inertia\","
+        "\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"display_unit\":\"g\""
+        ",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of "
+        "mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"positive\":f"
+        "alse,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of "
+        "mass of rock_slider, local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positive\":f"
+        "alse,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"mom"
+        "ent of inertia of rock_slider about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_sl"
+        "ider.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display"
+        "_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\",\"name\":\""
+        "B.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\"display_unit\""
+        ":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\"kind\":\"length\",\"name\":\"B.pin_radius\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\""
+        ":\"Coulomb friction coefficient of C\",\"kind\":\"dimensionless\",\"name\":\"C.friction\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\""
+        "pin radius of C (friction arm)\",\"kind\":\"length\",\"name\":\"C.pin_radius\",\"positive\":fals"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb frictio"
+        "n coefficient of O4\",\"kind\":\"dimensionless\",\"name\":\"O4.friction\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"pin radius of O4 "
+        "(friction arm)\",\"kind\":\"length\",\"name\":\"O4.pin_radius\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient o"
+        "f O11\",\"kind\":\"dimensionless\",\"name\":\"O11.friction\",\"positive\":false,\"role\":null,\""
+        "unit\":\"\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"pin radius of O11 (friction ar"
+        "m)\",\"kind\":\"length\",\"name\":\"O11.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of E\",\"kind"
+        "\":\"dimensionless\",\"name\":\"E.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\""
+        "default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin radius of E (friction arm)\",\"kind\":\"l"
+        "ength\",\"name\":\"E.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
+        "0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of rock_slider.guide\",\"kind\""
+        ":\"dimensionless\",\"name\":\"rock_slider.guide.friction\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"c"
+        "rank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"ro"
+        "ck_shaft\",\"doc\":\"big-rod pin C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6,\""
+        "role\":null},{\"body\":\"rock_slider\",\"doc\":\"slider pin E on the rock-shaft rear arm\",\"nam"
+        "e\":\"slider_pin\",\"offset\":12,\"role\":null},{\"body\":\"lower_shaft\",\"doc\":\"shuttle poin"
+        "t \\u6446\\u68ad\\u5c16\",\"name\":\"hook_point\",\"offset\":18,\"role\":\"hook_point\"}],\"reac"
+        "tions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\""
+        ":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\"rock_slider\""
+        ",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"rock_s"
+        "lider.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"gro"
+        "unded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_"
+        "shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"of"
+        "fset\":6},{\"a\":\"ground\",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,"
+        "\"kind\":\"revolute\",\"name\":\"O11\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"c"
+        "olumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},"
+        "{\"a\":\"rock_shaft\",\"b\":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kin"
+        "d\":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\""
+        "torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"of"
+        "fset\":14,\"sense\":1}],\"roles\":{\"hook_point\":{\"kind\":\"point\",\"name\":\"hook_point\"},\""
+        "hook_shaft\":{\"kind\":\"body\",\"name\":\"lower_shaft\"}},\"sizes\":{\"nanchor_out\":48,\"nbloc"
+        "k\":2,\"nbranch\":2,\"nc\":102,\"nf\":15,\"nfo\":38,\"nload\":13,\"nobs\":69,\"np\":41,\"nq\":4,"
+        "\"nx\":1}}"
         ;
 }

@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_needle_bar_constants -- Total ops: 39 */
+/* sg_needle_bar_constants -- Total ops: 44 */
 void sg_needle_bar_constants(const double *p, double *c)
 {
     const double t0 = sin(p[7]);
@@ -50,20 +50,26 @@ void sg_needle_bar_constants(const double *p, double *c)
     c[30] = t7;
     c[31] = p[8];
     c[32] = p[17];
-    c[33] = -p[15];
-    c[34] = -p[16];
+    c[33] = -p[16];
+    c[34] = -p[15];
     c[35] = -p[15] - p[3];
     c[36] = -p[15] - t4;
-    c[37] = (0.5)*p[11];
-    c[38] = (0.5)*p[12];
-    c[39] = (0.5)*p[13];
-    c[40] = (0.5)*p[14];
-    c[41] = (0.5)*p[17];
-    c[42] = (0.5)*p[8];
-    c[43] = -p[12];
-    c[44] = -p[14];
-    c[45] = -p[8];
-    c[46] = p[16];
+    c[37] = p[16];
+    c[38] = (0.5)*p[11];
+    c[39] = (0.5)*p[12];
+    c[40] = (0.5)*p[13];
+    c[41] = (0.5)*p[14];
+    c[42] = (0.5)*p[17];
+    c[43] = (0.5)*p[8];
+    c[44] = -p[12];
+    c[45] = -p[14];
+    c[46] = -p[8];
+    c[47] = -p[18]*p[19];
+    c[48] = -p[20]*p[21];
+    c[49] = -p[22];
+    c[50] = p[18];
+    c[51] = p[20];
+    c[52] = p[22];
 }
 
 /* sg_needle_bar_closed -- Total ops: 15 */
@@ -217,46 +223,93 @@ int sg_needle_bar_motion(const double *q, const double *cq, const double *x, con
     return SG_OK;
 }
 
-/* sg_needle_bar_forces -- Total ops: 144 */
+/* sg_needle_bar_forces -- Total ops: 190 */
 int sg_needle_bar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)x;
-    const double t0 = -gv[0] + obs[40];
-    const double t1 = -c[25]*(-gv[1] + obs[50]) + ld[3] + ld[5] + ld[7];
-    const double t2 = -t1;
-    const double t3 = c[19]*cq[2];
-    const double t4 = c[26]*(-gv[1] + obs[41]) - t1;
-    const double t5 = c[1]*cx[0] + c[2]*cx[1];
-    const double t6 = c[17]*t5;
-    const double t7 = c[1]*cx[1] + c[3]*cx[0];
-    const double t8 = c[17]*t7;
-    {
-        const double d = c[4]*cq[3];
-        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[4]*cq[3]))) return SG_SINGULAR;
-        out[6] = (c[24]*obs[35] + c[27]*cq[3]*t0 - ld[9] + t2*t3 + t3*t4)/d;
+    double fr[3] = {0.0};
+    for (int it = 0; ; ++it) {
+        const double t0 = -fr[0];
+        const double t1 = -gv[0] + obs[40];
+        const double t2 = -c[25]*(-gv[1] + obs[50]) + fr[2] + ld[3] + ld[5] + ld[7];
+        const double t3 = -t2;
+        const double t4 = c[19]*cq[2];
+        const double t5 = c[26]*(-gv[1] + obs[41]) - t2;
+        const double t6 = c[1]*cx[0] + c[2]*cx[1];
+        const double t7 = c[17]*t6;
+        const double t8 = c[1]*cx[1] + c[3]*cx[0];
+        const double t9 = c[17]*t8;
+        const double t11 = -obs[25] + obs[34];
+        const double t12 = fr[0]*t11;
+        const double t13 = -obs[34] + obs[43];
+        const double t14 = fr[1]*t13;
+        const double t15 = c[37]*obs[43] + obs[48];
+        const double t16 = fr[2]*t15;
+        {
+            const double d = c[4]*cq[3];
+            if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[4]*cq[3]))) return SG_SINGULAR;
+            out[6] = (c[24]*obs[35] + c[27]*cq[3]*t1 + fr[1] - ld[9] + t0 + t3*t4 + t4*t5)/d;
+        }
+        out[4] = c[26]*t1 + out[6];
+        out[2] = -c[25]*(-gv[0] + obs[49]) + out[6] + ld[2] + ld[4] + ld[6];
+        out[3] = -c[22]*out[6] + c[32]*obs[44] + c[33]*fr[2] + c[33]*ld[3] + c[33]*ld[5] + c[33]*ld[7] + c[33]*t3 - c[34]*out[2] + c[34]*ld[2] + c[35]*ld[4] + c[36]*ld[6] - fr[1] - ld[10];
+        out[5] = t5;
+        out[7] = t3;
+        out[1] = c[31]*(-gv[1] + obs[32]) + out[5] - ld[1];
+        out[0] = c[31]*(-gv[0] + obs[31]) + out[4] - ld[0];
+        out[8] = c[28]*obs[26] - out[0]*(c[15]*t8 + t7) - out[1]*(c[18]*t6 + t9) - out[4]*(c[16]*t6 + c[30]*t8) - out[5]*(c[16]*t8 + c[29]*t6) - ld[0]*(c[29]*t8 + t7) - ld[1]*(c[30]*t6 + t9) - ld[8] - t0;
+        const double t10 = -out[2];
+        if (c[50] == 0.0 && c[51] == 0.0 && c[52] == 0.0) {
+            out[9] = out[8];
+            out[10] = out[8]*xd[0];
+            out[11] = t10;
+            out[12] = 0.0;
+            out[13] = out[0] + t10;
+            out[14] = out[1] + fr[2];
+            out[15] = c[21]*fr[2] + c[37]*fr[2] + out[2]*q[0] + out[3] + out[8];
+            out[16] = c[38]*((obs[25])*(obs[25])) + c[39]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[40]*((obs[34])*(obs[34])) + c[41]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[42]*((obs[43])*(obs[43])) + c[43]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
+            out[17] = c[44]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[45]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[46]*(gv[0]*obs[27] + gv[1]*obs[28]);
+            out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t12 + t14 + t16;
+            out[19] = 0.0;
+            out[20] = fr[0];
+            out[21] = -t12;
+            out[22] = fr[1];
+            out[23] = -t14;
+            out[24] = fr[2];
+            out[25] = -t16;
+            if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
+            return SG_OK;
+        }
+        double frn[3];
+        frn[0] = c[47]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t11) > 0.0 ? 1.0 : ((t11) < 0.0 ? -1.0 : 0.0));
+        frn[1] = c[48]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t13) > 0.0 ? 1.0 : ((t13) < 0.0 ? -1.0 : 0.0));
+        frn[2] = c[49]*fabs(out[2])*((t15) > 0.0 ? 1.0 : ((t15) < 0.0 ? -1.0 : 0.0));
+        double d = 0.0, s = 0.0;
+        for (int k = 0; k < 3; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
+        if (d <= 1e-13 * s) {
+            out[9] = out[8];
+            out[10] = out[8]*xd[0];
+            out[11] = t10;
+            out[12] = 0.0;
+            out[13] = out[0] + t10;
+            out[14] = out[1] + fr[2];
+            out[15] = c[21]*fr[2] + c[37]*fr[2] + out[2]*q[0] + out[3] + out[8];
+            out[16] = c[38]*((obs[25])*(obs[25])) + c[39]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[40]*((obs[34])*(obs[34])) + c[41]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[42]*((obs[43])*(obs[43])) + c[43]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
+            out[17] = c[44]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[45]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[46]*(gv[0]*obs[27] + gv[1]*obs[28]);
+            out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t12 + t14 + t16;
+            out[19] = 0.0;
+            out[20] = fr[0];
+            out[21] = -t12;
+            out[22] = fr[1];
+            out[23] = -t14;
+            out[24] = fr[2];
+            out[25] = -t16;
+            if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
+            return SG_OK;
+        }
+        if (it >= 100) return SG_NO_CONVERGENCE;
+        for (int k = 0; k < 3; ++k) fr[k] = frn[k];
     }
-    out[4] = c[26]*t0 + out[6];
-    out[2] = -c[25]*(-gv[0] + obs[49]) + out[6] + ld[2] + ld[4] + ld[6];
-    out[3] = -c[22]*out[6] + c[32]*obs[44] - c[33]*out[2] + c[33]*ld[2] + c[34]*ld[3] + c[34]*ld[5] + c[34]*ld[7] + c[34]*t2 + c[35]*ld[4] + c[36]*ld[6] - ld[10];
-    out[5] = t4;
-    out[7] = t2;
-    out[1] = c[31]*(-gv[1] + obs[32]) + out[5] - ld[1];
-    out[0] = c[31]*(-gv[0] + obs[31]) + out[4] - ld[0];
-    out[8] = c[28]*obs[26] - out[0]*(c[15]*t7 + t6) - out[1]*(c[18]*t5 + t8) - out[4]*(c[16]*t5 + c[30]*t7) - out[5]*(c[16]*t7 + c[29]*t5) - ld[0]*(c[29]*t7 + t6) - ld[1]*(c[30]*t5 + t8) - ld[8];
-    const double t9 = -out[2];
-    out[9] = out[8];
-    out[10] = out[8]*xd[0];
-    out[11] = t9;
-    out[12] = 0.0;
-    out[13] = out[0] + t9;
-    out[14] = out[1];
-    out[15] = out[2]*q[0] + out[3] + out[8];
-    out[16] = c[37]*((obs[25])*(obs[25])) + c[38]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[39]*((obs[34])*(obs[34])) + c[40]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[41]*((obs[43])*(obs[43])) + c[42]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
-    out[17] = c[43]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[44]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[45]*(gv[0]*obs[27] + gv[1]*obs[28]);
-    out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
-    out[19] = 0.0;
-    if (!isfinite(((((out[0] + out[1]) + (out[2] + (out[3] + out[4]))) + ((out[5] + out[6]) + (out[7] + (out[8] + out[9])))) + (((out[10] + out[11]) + (out[12] + (out[13] + out[14]))) + ((out[15] + out[16]) + (out[17] + (out[18] + out[19]))))))) return SG_NONFINITE;
-    return SG_OK;
 }
 
 /* sg_needle_bar_force_matrix -- Total ops: 71 */
@@ -291,10 +344,10 @@ void sg_needle_bar_force_matrix(const double *q, const double *cq, const double 
     A[56] = -1.0;
     A[60] = 1.0;
     A[70] = 1.0;
-    A[74] = c[33];
+    A[74] = c[34];
     A[75] = 1.0;
     A[78] = c[22];
-    A[79] = c[46];
+    A[79] = c[37];
     b[0] = c[31]*(-gv[0] + obs[31]) - ld[0];
     b[1] = c[31]*(-gv[1] + obs[32]) - ld[1];
     b[2] = c[28]*obs[26] - ld[0]*(c[29]*t0 + t2) - ld[1]*(c[30]*t1 + t3) - ld[8];
@@ -303,7 +356,7 @@ void sg_needle_bar_force_matrix(const double *q, const double *cq, const double 
     b[5] = c[24]*obs[35] - ld[9];
     b[6] = c[25]*(-gv[0] + obs[49]) - ld[2] - ld[4] - ld[6];
     b[7] = c[25]*(-gv[1] + obs[50]) - ld[3] - ld[5] - ld[7];
-    b[8] = c[32]*obs[44] + c[33]*ld[2] + c[34]*ld[3] + c[34]*ld[5] + c[34]*ld[7] + c[35]*ld[4] + c[36]*ld[6] - ld[10];
+    b[8] = c[32]*obs[44] + c[33]*ld[3] + c[33]*ld[5] + c[33]*ld[7] + c[34]*ld[2] + c[35]*ld[4] + c[36]*ld[6] - ld[10];
 }
 
 /* sg_needle_bar_anchors -- Total ops: 25 */
@@ -354,12 +407,12 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .name = "needle_bar",
     .nq = 2,
     .nx = 1,
-    .np = 18,
-    .nc = 47,
+    .np = 23,
+    .nc = 53,
     .nobs = 51,
     .nbranch = 1,
     .nf = 9,
-    .nfo = 20,
+    .nfo = 26,
     .nload = 11,
     .nblock = 2,
     .coord_is_angle = sg_needle_bar_coord_is_angle,
@@ -407,128 +460,141 @@ const char *sg_needle_bar_manifest(void)
         "nches\":[{\"default\":-1,\"joint\":\"C\",\"kind\":\"rrp\",\"meaning\":\"+1: the larger travel of"
         " needle_bar at joint C\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\"],\"constants\":[[0]"
         ",[7],[7],[7],[1],[2],[1],[2],[1],[0,1,2],[0,1],[0],[3],[3,4],[7],[9],[10],[10],[9],[1],[1],[2,16"
-        "],[15],[0,1,2],[13],[14],[12],[1,12],[11],[0,9],[0,9],[8],[17],[15],[16],[3,15],[3,4,15],[11],[1"
-        "2],[13],[14],[17],[8],[12],[14],[8],[16]],\"coords\":[{\"guess\":-0.04,\"name\":\"needle_bar.tra"
-        "vel\",\"unit\":\"m\"},{\"guess\":-1.5707963267948966,\"name\":\"rod.angle\",\"unit\":\"rad\"}],\""
-        "default_speed\":104.71975511965977,\"doc\":\"Needle-bar mechanism \\u523a\\u5e03\\u673a\\u6784: "
-        "upper-shaft crank \\u2192 needle-bar link \\u5c0f\\u8fde\\u6746 13 \\u2192 needle bar \\u9488\\u"
-        "6746 14.\\n\\nA crank-slider with offset (seed 000 \\u00a7\\u4e00(\\u4e00)1 and fig. 1-6; seed 0"
-        "02 fig. 1: A crank centre, B crank pin,\\nC needle-bar pin). Frame: origin on the upper-shaft ax"
-        "is A, x horizontal, y up; the needle bar slides on\\nthe vertical line x = offset, its travel s "
-        "measured upward from the shaft's horizontal (s = y of C).\\nCrank angle = shaft angle + phase, c"
-        "ounter-clockwise from +x (the needle is highest near phi = 90\\u00b0).\\n\\nDimensions: crank 16"
-        ".7 mm is seed 002's industrial crank (its stroke 33.4 mm is within the 29\\u201335 mm of\\nindus"
-        "trial and household machines). The link length, offset, masses and inertias are estimates (the\\n"
-        "seeds' tables of them are not in the text we have).\\n\\nThe needle itself (stitch formation, se"
-        "wgen.timing): the eye (point ``needle_eye``, the eye's centre), the\\npoint below it (point ``ne"
-        "edle_point``: it enters and leaves the cloth), the eye's length (its top is where\\nthe hook poi"
-        "nt's height is measured from) and the scarf above the eye (the hollow the hook point passes\\nth"
-        "rough). A household 130/705 H (15x1) needle of size 80\\u201390 is assumed: eye about 1.2 mm lon"
-        "g, its centre\\nabout 2.5 mm above the point, scarf about 4 mm long (estimates; no dimensioned d"
-        "rawing was reachable).\",\"elements\":[],\"force_blocks\":[1],\"force_outputs\":[{\"name\":\"sha"
-        "ft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"needle_bar.g"
-        "uide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar.guide.fy\",\"unit\":\"N\"},{\"name\":\"shaking."
-        "fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"uni"
-        "t\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\""
-        ":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\""
-        "force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\"need"
-        "le_bar.x\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\""
-        ":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\""
-        "unit\":\"rad\"}],\"kernels\":{\"sg_needle_bar_anchors\":{\"ops\":25},\"sg_needle_bar_blocks\":{\""
-        "ops\":14},\"sg_needle_bar_closed\":{\"ops\":15},\"sg_needle_bar_constants\":{\"ops\":39},\"sg_ne"
-        "edle_bar_force_matrix\":{\"ops\":71},\"sg_needle_bar_forces\":{\"ops\":144},\"sg_needle_bar_moti"
-        "on\":{\"ops\":79},\"sg_needle_bar_residual\":{\"ops\":16},\"sg_needle_bar_scales\":{\"ops\":4}},"
-        "\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\","
-        "\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"nam"
-        "e\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"link_pin\"},{\"body\""
-        ":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"compone"
-        "nt\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"ne"
-        "edle_point\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_point\"},{\"body\""
-        ":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"rod\",\"component\":\"torque"
-        "\",\"name\":\"rod\"},{\"body\":\"needle_bar\",\"component\":\"torque\",\"name\":\"needle_bar\"}]"
-        ",\"name\":\"needle_bar\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\""
-        "crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pi"
-        "n.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin"
-        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.x\",\"unit\":\"m\"},{\"name\":\"link_pin.y\",\""
-        "unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.y_dd\",\"unit\":\"m/"
-        "s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\""
-        "name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"na"
-        "me\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name"
-        "\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"na"
-        "me\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"nam"
-        "e\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"cr"
-        "ank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cra"
-        "nk.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angl"
-        "e_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x"
-        "\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\""
-        "},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\""
-        ":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"un"
-        "it\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\","
-        "\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.c"
-        "om.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0167,\"display_unit\":\"mm\",\"doc\":\""
-        "crank radius AB (seed 002 \\u00a73)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\""
-        "role\":\"needle_crank_radius\",\"unit\":\"m\"},{\"default\":0.05,\"display_unit\":\"mm\",\"doc\""
-        ":\"needle-bar link BC, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\""
-        ":true,\"role\":\"needle_rod_length\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\""
-        "doc\":\"horizontal offset of the needle-bar axis from the shaft axis\",\"kind\":\"length\",\"nam"
-        "e\":\"offset\",\"positive\":false,\"role\":\"needle_bar_offset\",\"unit\":\"m\"},{\"default\":0."
-        "062,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link pin C along the bar (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},"
-        "{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"needle point below the eye's centre (estim"
-        "ate, 130/705 H size 80-90)\",\"kind\":\"length\",\"name\":\"point_below_eye\",\"positive\":true,"
-        "\"role\":null,\"unit\":\"m\"},{\"default\":0.0012,\"display_unit\":\"mm\",\"doc\":\"length of th"
-        "e needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"eye_length\",\"positiv"
-        "e\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.004,\"display_unit\":\"mm"
-        "\",\"doc\":\"needle scarf above the eye's top, where the hook point passes (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"needle_scarf\",\"unit\":\"m\""
-        "},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle"
-        "\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\""
-        "},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\""
-        "crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\""
-        ":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc"
-        "\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"mom"
-        "ent of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia"
-        "\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\""
-        "g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\",\"positive\":false,\"role\":"
-        "null,\"unit\":\"kg\"},{\"default\":2.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of iner"
-        "tia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rod.inertia\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"m"
-        "ass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\"role\":n"
-        "ull,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of need"
-        "le_bar, local u\",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"role\":"
-        "null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle"
-        "_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"m\"},{\"default\":1.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia"
-        " of needle_bar about its centre of mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\""
-        ",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\""
-        "offset\":0,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle-bar link pin C\",\"name\":\""
-        "link_pin\",\"offset\":6,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye (its centre"
-        ")\",\"name\":\"needle_eye\",\"offset\":12,\"role\":\"needle_eye\"},{\"body\":\"needle_bar\",\"do"
-        "c\":\"needle point\",\"name\":\"needle_point\",\"offset\":18,\"role\":\"needle_point\"}],\"react"
-        "ions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\""
-        ":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"co"
-        "lumns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.g"
-        "uide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":fal"
-        "se,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar\",\"colu"
-        "mns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a"
-        "\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"k"
-        "ind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"needle_bar\":{\""
-        "kind\":\"body\",\"name\":\"needle_bar\"},\"needle_bar_offset\":{\"kind\":\"param\",\"name\":\"of"
-        "fset\"},\"needle_crank\":{\"kind\":\"body\",\"name\":\"crank\"},\"needle_crank_radius\":{\"kind\""
-        ":\"param\",\"name\":\"crank\"},\"needle_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"nee"
-        "dle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\"needle_point\":{\"kind\":\"point"
-        "\",\"name\":\"needle_point\"},\"needle_rod\":{\"kind\":\"body\",\"name\":\"rod\"},\"needle_rod_l"
-        "ength\":{\"kind\":\"param\",\"name\":\"rod\"},\"needle_scarf\":{\"kind\":\"param\",\"name\":\"sc"
-        "arf_length\"}},\"sizes\":{\"nanchor_out\":32,\"nblock\":2,\"nbranch\":1,\"nc\":47,\"nf\":9,\"nfo"
-        "\":20,\"nload\":11,\"nobs\":51,\"np\":18,\"nq\":2,\"nx\":1}}"
+        "],[15],[0,1,2],[13],[14],[12],[1,12],[11],[0,9],[0,9],[8],[17],[16],[15],[3,15],[3,4,15],[16],[1"
+        "1],[12],[13],[14],[17],[8],[12],[14],[8],[18,19],[20,21],[22],[18],[20],[22]],\"coords\":[{\"gue"
+        "ss\":-0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":-1.5707963267948966,\"name\""
+        ":\"rod.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Needle-bar mech"
+        "anism \\u523a\\u5e03\\u673a\\u6784: upper-shaft crank \\u2192 needle-bar link \\u5c0f\\u8fde\\u6"
+        "746 13 \\u2192 needle bar \\u9488\\u6746 14.\\n\\nA crank-slider with offset (seed 000 \\u00a7\\u"
+        "4e00(\\u4e00)1 and fig. 1-6; seed 002 fig. 1: A crank centre, B crank pin,\\nC needle-bar pin). "
+        "Frame: origin on the upper-shaft axis A, x horizontal, y up; the needle bar slides on\\nthe vert"
+        "ical line x = offset, its travel s measured upward from the shaft's horizontal (s = y of C).\\nC"
+        "rank angle = shaft angle + phase, counter-clockwise from +x (the needle is highest near phi = 90"
+        "\\u00b0).\\n\\nDimensions: crank 16.7 mm is seed 002's industrial crank (its stroke 33.4 mm is w"
+        "ithin the 29\\u201335 mm of\\nindustrial and household machines). The link length, offset, masse"
+        "s and inertias are estimates (the\\nseeds' tables of them are not in the text we have).\\n\\nThe"
+        " needle itself (stitch formation, sewgen.timing): the eye (point ``needle_eye``, the eye's centr"
+        "e), the\\npoint below it (point ``needle_point``: it enters and leaves the cloth), the eye's len"
+        "gth (its top is where\\nthe hook point's height is measured from) and the scarf above the eye (t"
+        "he hollow the hook point passes\\nthrough). A household 130/705 H (15x1) needle of size 80\\u201"
+        "390 is assumed: eye about 1.2 mm long, its centre\\nabout 2.5 mm above the point, scarf about 4 "
+        "mm long (estimates; no dimensioned drawing was reachable).\",\"elements\":[],\"force_blocks\":[1"
+        "],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"un"
+        "it\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar.guide.fy\","
+        "\"unit\":\"N\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\""
+        "},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\""
+        "name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\""
+        "elastic_power\",\"unit\":\"W\"},{\"name\":\"B.friction\",\"unit\":\"N*m\"},{\"name\":\"B.frictio"
+        "n_power\",\"unit\":\"W\"},{\"name\":\"C.friction\",\"unit\":\"N*m\"},{\"name\":\"C.friction_powe"
+        "r\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.friction\",\"unit\":\"N\"},{\"name\":\"needle_b"
+        "ar.guide.friction_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.momen"
+        "t\",\"rod.x\",\"rod.y\",\"rod.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar.moment\"],"
+        "\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\""
+        ":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_needle_bar_anch"
+        "ors\":{\"ops\":25},\"sg_needle_bar_blocks\":{\"ops\":14},\"sg_needle_bar_closed\":{\"ops\":15},\""
+        "sg_needle_bar_constants\":{\"ops\":44},\"sg_needle_bar_force_matrix\":{\"ops\":71},\"sg_needle_b"
+        "ar_forces\":{\"ops\":190},\"sg_needle_bar_motion\":{\"ops\":79},\"sg_needle_bar_residual\":{\"op"
+        "s\":16},\"sg_needle_bar_scales\":{\"ops\":4}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\""
+        ",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"bod"
+        "y\":\"needle_bar\",\"component\":\"fx\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"compon"
+        "ent\":\"fy\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"nee"
+        "dle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"ne"
+        "edle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"component\""
+        ":\"fy\",\"name\":\"needle_point\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank"
+        "\"},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"rod\"},{\"body\":\"needle_bar\",\"comp"
+        "onent\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"needle_bar\",\"observables\":[{\"name\":"
+        "\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin."
+        "x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.x\""
+        ",\"unit\":\"m\"},{\"name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"link_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/s^2"
+        "\"},{\"name\":\"link_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{"
+        "\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name"
+        "\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
+        "e\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"name"
+        "\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"n"
+        "ame\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{"
+        "\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"c"
+        "rank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank"
+        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod"
+        ".angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle_d"
+        "d\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"unit"
+        "\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},"
+        "{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad"
+        "/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"u"
+        "nit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"u"
+        "nit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_d"
+        "d\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"de"
+        "fault\":0.0167,\"display_unit\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u00a73)\",\"kind\":"
+        "\"length\",\"name\":\"crank\",\"positive\":true,\"role\":\"needle_crank_radius\",\"unit\":\"m\"}"
+        ",{\"default\":0.05,\"display_unit\":\"mm\",\"doc\":\"needle-bar link BC, pin to pin (estimate)\""
+        ",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":\"needle_rod_length\",\"unit\":"
+        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"horizontal offset of the needle-bar ax"
+        "is from the shaft axis\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":\"n"
+        "eedle_bar_offset\",\"unit\":\"m\"},{\"default\":0.062,\"display_unit\":\"mm\",\"doc\":\"needle e"
+        "ye below the link pin C along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\""
+        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"d"
+        "oc\":\"needle point below the eye's centre (estimate, 130/705 H size 80-90)\",\"kind\":\"length\""
+        ",\"name\":\"point_below_eye\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001"
+        "2,\"display_unit\":\"mm\",\"doc\":\"length of the needle eye along the needle (estimate)\",\"kin"
+        "d\":\"length\",\"name\":\"eye_length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\""
+        ":\"m\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, w"
+        "here the hook point passes (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive"
+        "\":true,\"role\":\"needle_scarf\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"do"
+        "c\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\""
+        "positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\""
+        ":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local"
+        " u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\""
+        ":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
+        "\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mas"
+        "s\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\""
+        "name\":\"rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":2.5e-06,\"dis"
+        "play_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rod about its centre of mass\",\"kind\":\""
+        "inertia\",\"name\":\"rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"def"
+        "ault\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\""
+        "needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display"
+        "_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\""
+        "needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_u"
+        "nit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"ne"
+        "edle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-05,\"display"
+        "_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\""
+        ":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2"
+        "\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\""
+        ":\"dimensionless\",\"name\":\"B.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"de"
+        "fault\":0.003,\"display_unit\":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\"kind\":\"leng"
+        "th\",\"name\":\"B.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
+        ",\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of C\",\"kind\":\"dimensionless\","
+        "\"name\":\"C.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"di"
+        "splay_unit\":\"mm\",\"doc\":\"pin radius of C (friction arm)\",\"kind\":\"length\",\"name\":\"C."
+        "pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
+        "\"\",\"doc\":\"Coulomb friction coefficient of needle_bar.guide\",\"kind\":\"dimensionless\",\"n"
+        "ame\":\"needle_bar.guide.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"}],\"point_fie"
+        "lds\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank "
+        "pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"ne"
+        "edle-bar link pin C\",\"name\":\"link_pin\",\"offset\":6,\"role\":null},{\"body\":\"needle_bar\""
+        ",\"doc\":\"needle eye (its centre)\",\"name\":\"needle_eye\",\"offset\":12,\"role\":\"needle_eye"
+        "\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":18,\""
+        "role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\""
+        "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"gr"
+        "ound\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"pri"
+        "smatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":"
+        "[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"r"
+        "od\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\""
+        "name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded"
+        "\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1"
+        "}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_bar_offset\":{"
+        "\"kind\":\"param\",\"name\":\"offset\"},\"needle_crank\":{\"kind\":\"body\",\"name\":\"crank\"},"
+        "\"needle_crank_radius\":{\"kind\":\"param\",\"name\":\"crank\"},\"needle_eye\":{\"kind\":\"point"
+        "\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\""
+        "needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needle_rod\":{\"kind\":\"body\","
+        "\"name\":\"rod\"},\"needle_rod_length\":{\"kind\":\"param\",\"name\":\"rod\"},\"needle_scarf\":{"
+        "\"kind\":\"param\",\"name\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":32,\"nblock\":2,\"nbra"
+        "nch\":1,\"nc\":53,\"nf\":9,\"nfo\":26,\"nload\":11,\"nobs\":51,\"np\":23,\"nq\":2,\"nx\":1}}"
         ;
 }

@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_take_up_constants -- Total ops: 71 */
+/* sg_take_up_constants -- Total ops: 77 */
 void sg_take_up_constants(const double *p, double *c)
 {
     const double t0 = sin(p[7]);
@@ -85,8 +85,14 @@ void sg_take_up_constants(const double *p, double *c)
     c[51] = -p[12];
     c[52] = -p[16];
     c[53] = -p[8];
-    c[54] = -t21;
-    c[55] = t21;
+    c[54] = -p[18]*p[19];
+    c[55] = -p[20]*p[21];
+    c[56] = -p[22]*p[23];
+    c[57] = p[18];
+    c[58] = p[20];
+    c[59] = p[22];
+    c[60] = -t21;
+    c[61] = t21;
 }
 
 /* sg_take_up_closed -- Total ops: 22 */
@@ -243,52 +249,96 @@ int sg_take_up_motion(const double *q, const double *cq, const double *x, const 
     return SG_OK;
 }
 
-/* sg_take_up_forces -- Total ops: 151 */
+/* sg_take_up_forces -- Total ops: 193 */
 int sg_take_up_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)q;
     (void)x;
-    const double t0 = c[38]*(-gv[0] + obs[34]) - ld[4];
-    const double t1 = c[38]*(-gv[1] + obs[35]) - ld[5];
-    const double t2 = c[40]*(-gv[1] + obs[44]) - ld[3];
-    const double t3 = c[40]*(-gv[0] + obs[43]) - ld[2];
-    const double t4 = c[1]*cx[0] + c[2]*cx[1];
-    const double t5 = c[24]*t4;
-    const double t6 = c[1]*cx[1] + c[3]*cx[0];
-    const double t7 = c[24]*t6;
-    {
-        /* block of unknowns 6, 7 */
-        double M[4], r[2];
-        int piv[2];
-        M[0] = c[11]*cq[1];
-        M[1] = c[7]*cq[0];
-        r[0] = c[30]*cq[0]*t2 + c[30]*cq[1]*ld[2] + c[31]*cq[0]*ld[3] + c[31]*cq[1]*t3 + c[39]*obs[38] - ld[8];
-        M[2] = c[6]*cq[3];
-        M[3] = c[13]*cq[2];
-        r[1] = c[34]*obs[29] - ld[4]*(c[35]*cq[2] + c[36]*cq[3]) - ld[5]*(c[35]*cq[3] + c[37]*cq[2]) - ld[7] - t0*(c[26]*cq[3] + c[28]*cq[2]) - t1*(c[28]*cq[3] + c[29]*cq[2]);
-        if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
-        sg_lu_solve_inl(2, M, piv, r);
-        out[6] = r[0];
-        out[7] = r[1];
+    double fr[3] = {0.0};
+    for (int it = 0; ; ++it) {
+        const double t0 = -fr[1];
+        const double t1 = c[38]*(-gv[0] + obs[34]) - ld[4];
+        const double t2 = c[38]*(-gv[1] + obs[35]) - ld[5];
+        const double t3 = c[40]*(-gv[1] + obs[44]) - ld[3];
+        const double t4 = c[40]*(-gv[0] + obs[43]) - ld[2];
+        const double t5 = c[1]*cx[0] + c[2]*cx[1];
+        const double t6 = c[24]*t5;
+        const double t7 = c[1]*cx[1] + c[3]*cx[0];
+        const double t8 = c[24]*t7;
+        const double t9 = fr[2]*obs[37];
+        const double t10 = -obs[19] + obs[28];
+        const double t11 = fr[0]*t10;
+        const double t12 = -obs[28] + obs[37];
+        const double t13 = fr[1]*t12;
+        {
+            /* block of unknowns 6, 7 */
+            double M[4], r[2];
+            int piv[2];
+            M[0] = c[11]*cq[1];
+            M[1] = c[7]*cq[0];
+            r[0] = c[30]*cq[0]*t3 + c[30]*cq[1]*ld[2] + c[31]*cq[0]*ld[3] + c[31]*cq[1]*t4 + c[39]*obs[38] - fr[2] - ld[8] + t0;
+            M[2] = c[6]*cq[3];
+            M[3] = c[13]*cq[2];
+            r[1] = c[34]*obs[29] - fr[0] - ld[4]*(c[35]*cq[2] + c[36]*cq[3]) - ld[5]*(c[35]*cq[3] + c[37]*cq[2]) - ld[7] - t0 - t1*(c[26]*cq[3] + c[28]*cq[2]) - t2*(c[28]*cq[3] + c[29]*cq[2]);
+            if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
+            sg_lu_solve_inl(2, M, piv, r);
+            out[6] = r[0];
+            out[7] = r[1];
+        }
+        out[5] = -out[7] + t3;
+        out[4] = -out[6] + t4;
+        out[3] = out[7] + t2;
+        out[2] = out[6] + t1;
+        out[1] = c[44]*(-gv[1] + obs[26]) + out[3] - ld[1];
+        out[0] = c[44]*(-gv[0] + obs[25]) + out[2] - ld[0];
+        out[8] = c[41]*obs[20] - out[0]*(c[22]*t7 + t6) - out[1]*(c[25]*t5 + t8) - out[2]*(c[23]*t5 + c[43]*t7) - out[3]*(c[23]*t7 + c[42]*t5) + fr[0] - ld[0]*(c[42]*t7 + t6) - ld[1]*(c[43]*t5 + t8) - ld[6];
+        if (c[57] == 0.0 && c[58] == 0.0 && c[59] == 0.0) {
+            out[9] = out[8];
+            out[10] = out[8]*xd[0];
+            out[11] = out[0] + out[4];
+            out[12] = out[1] + out[5];
+            out[13] = c[12]*out[4] + c[4]*out[5] + out[8] + fr[2];
+            out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
+            out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
+            out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + t11 + t13 + t9;
+            out[17] = 0.0;
+            out[18] = fr[0];
+            out[19] = -t11;
+            out[20] = fr[1];
+            out[21] = -t13;
+            out[22] = fr[2];
+            out[23] = -t9;
+            if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))))) return SG_NONFINITE;
+            return SG_OK;
+        }
+        double frn[3];
+        frn[0] = c[54]*sqrt(((out[2])*(out[2])) + ((out[3])*(out[3])))*((t10) > 0.0 ? 1.0 : ((t10) < 0.0 ? -1.0 : 0.0));
+        frn[1] = c[55]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t12) > 0.0 ? 1.0 : ((t12) < 0.0 ? -1.0 : 0.0));
+        frn[2] = c[56]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((obs[37]) > 0.0 ? 1.0 : ((obs[37]) < 0.0 ? -1.0 : 0.0));
+        double d = 0.0, s = 0.0;
+        for (int k = 0; k < 3; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
+        if (d <= 1e-13 * s) {
+            out[9] = out[8];
+            out[10] = out[8]*xd[0];
+            out[11] = out[0] + out[4];
+            out[12] = out[1] + out[5];
+            out[13] = c[12]*out[4] + c[4]*out[5] + out[8] + fr[2];
+            out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
+            out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
+            out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + t11 + t13 + t9;
+            out[17] = 0.0;
+            out[18] = fr[0];
+            out[19] = -t11;
+            out[20] = fr[1];
+            out[21] = -t13;
+            out[22] = fr[2];
+            out[23] = -t9;
+            if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))))) return SG_NONFINITE;
+            return SG_OK;
+        }
+        if (it >= 100) return SG_NO_CONVERGENCE;
+        for (int k = 0; k < 3; ++k) fr[k] = frn[k];
     }
-    out[5] = -out[7] + t2;
-    out[4] = -out[6] + t3;
-    out[3] = out[7] + t1;
-    out[2] = out[6] + t0;
-    out[1] = c[44]*(-gv[1] + obs[26]) + out[3] - ld[1];
-    out[0] = c[44]*(-gv[0] + obs[25]) + out[2] - ld[0];
-    out[8] = c[41]*obs[20] - out[0]*(c[22]*t6 + t5) - out[1]*(c[25]*t4 + t7) - out[2]*(c[23]*t4 + c[43]*t6) - out[3]*(c[23]*t6 + c[42]*t4) - ld[0]*(c[42]*t6 + t5) - ld[1]*(c[43]*t4 + t7) - ld[6];
-    out[9] = out[8];
-    out[10] = out[8]*xd[0];
-    out[11] = out[0] + out[4];
-    out[12] = out[1] + out[5];
-    out[13] = c[12]*out[4] + c[4]*out[5] + out[8];
-    out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
-    out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
-    out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37];
-    out[17] = 0.0;
-    if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + out[12])) + ((out[13] + out[14]) + (out[15] + (out[16] + out[17]))))))) return SG_NONFINITE;
-    return SG_OK;
 }
 
 /* sg_take_up_force_matrix -- Total ops: 84 */
@@ -318,8 +368,8 @@ void sg_take_up_force_matrix(const double *q, const double *cq, const double *x,
     A[43] = -1.0;
     A[47] = c[26]*cq[3] + c[28]*cq[2];
     A[48] = c[28]*cq[3] + c[29]*cq[2];
-    A[51] = c[27]*cq[2] + c[54]*cq[3];
-    A[52] = c[27]*cq[3] + c[55]*cq[2];
+    A[51] = c[27]*cq[2] + c[60]*cq[3];
+    A[52] = c[27]*cq[3] + c[61]*cq[2];
     A[58] = 1.0;
     A[60] = 1.0;
     A[68] = 1.0;
@@ -386,12 +436,12 @@ static const sg_mechanism sg_take_up_descriptor = {
     .name = "take_up",
     .nq = 2,
     .nx = 1,
-    .np = 18,
-    .nc = 56,
+    .np = 24,
+    .nc = 62,
     .nobs = 45,
     .nbranch = 1,
     .nf = 9,
-    .nfo = 18,
+    .nfo = 24,
     .nload = 9,
     .nblock = 1,
     .coord_is_angle = sg_take_up_coord_is_angle,
@@ -437,107 +487,121 @@ const char *sg_take_up_manifest(void)
         "[2],[7],[7],[7],[0],[1],[3],[4],[3],[4],[0],[4],[1],[3],[0,2,3,4],[1,2,3,4],[2],[3,5,6],[3,5,6],"
         "[3,5,6],[3,5,6],[7],[9],[10],[10],[9],[13],[14],[14],[13],[4],[4],[0,2,3,4],[1,2,3,4],[15],[3,5,"
         "6,14],[3,5,6,13],[3,5,6,13],[12],[17],[16],[11],[2,9],[2,9],[8],[11],[12],[15],[16],[17],[8],[12"
-        "],[16],[8],[3,13],[3,13]],\"coords\":[{\"guess\":1.7453292519943295,\"name\":\"rocker.angle\",\""
-        "unit\":\"rad\"},{\"guess\":1.0471975511965976,\"name\":\"lever.angle\",\"unit\":\"rad\"}],\"defa"
-        "ult_speed\":523.5987755982989,\"doc\":\"Thread take-up mechanism \\u6311\\u7ebf\\u673a\\u6784: u"
-        "pper-shaft crank AB \\u2192 take-up lever \\u6311\\u7ebf\\u6746 BCE (16) \\u2192 rocker CD \\u63"
-        "11\\u7ebf\\u6447\\u6746 (15).\\n\\nA crank-rocker four-bar with the thread eye E on the coupler "
-        "triangle BCE (seed 000 group \\u6311\\u7ebf; seed 004\\n\\u00a71.1, figs. 1-2). Frame as seed 00"
-        "4 with its (Z, X) taken as our (x, y): A at the origin, D = (26, \\u221220) mm;\\nthe crank angl"
-        "e runs from +x towards +y. E is placed from the triangle's sides by the law of cosines,\\nB\\u21"
-        "92E at \\u2220CBE from B\\u2192C (seed 004 eq. for \\u03c6BE, with \\u03c6BC in place of the pap"
-        "er's misprinted \\u03c6CD).\\nSeed 004 runs the crank at n = 5000 r/min.\\n\\nThe link lengths o"
-        "f seed 004's table 1 are not in the text: AB, BC, CD, BE, CE are estimates that make a\\nGrashof"
-        " crank-rocker (10 + 38 \\u2264 26 + 32.8) with the willow-leaf eye path the paper describes.\",\""
-        "elements\":[],\"force_blocks\":[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\""
-        "},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"shaking.fx\",\"unit\":\"N\"},{\"name\":\""
-        "shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\",\"unit\":\"N*m\"},{\"name\":\"kinetic_"
-        "energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\""
-        ",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"cran"
-        "k.y\",\"crank.moment\",\"lever.x\",\"lever.y\",\"lever.moment\",\"rocker.x\",\"rocker.y\",\"rock"
-        "er.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle p"
-        "hi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_ta"
-        "ke_up_anchors\":{\"ops\":42},\"sg_take_up_blocks\":{\"ops\":15},\"sg_take_up_closed\":{\"ops\":2"
-        "2},\"sg_take_up_constants\":{\"ops\":71},\"sg_take_up_force_matrix\":{\"ops\":84},\"sg_take_up_f"
-        "orces\":{\"ops\":151},\"sg_take_up_motion\":{\"ops\":139},\"sg_take_up_residual\":{\"ops\":20},\""
-        "sg_take_up_scales\":{\"ops\":2}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\""
-        "crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rocker"
-        "\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"rocker\",\"component\":\"fy\",\"nam"
-        "e\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"thread_eye\"},{\"body\":"
-        "\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\"component\":\"torq"
-        "ue\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"bod"
-        "y\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\"name\":\"take_up\",\"observables"
-        "\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\""
-        ":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"c"
-        "rank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\"name\":\"rocker_pin"
-        ".x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.x"
-        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_e"
-        "ye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\"thread_eye.x_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.x_dd\",\"u"
-        "nit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"u"
-        "nit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"un"
-        "it\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\""
-        "m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"nam"
-        "e\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"le"
-        "ver.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lev"
-        "er.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\"name\":\"rocke"
-        "r.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
-        "rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\"name\":\"rocker.com"
-        ".x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.x"
-        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"defa"
-        "ult\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, horizontal (seed 004 \\u00a71.1."
-        "1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed 004 \\u00a71.1.1)\","
-        "\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\":\"length\",\""
-        "name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.038,\"display_un"
-        "it\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name\":\"lever_bc\""
-        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.026000000000000002,\"display_uni"
-        "t\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up"
-        " lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\",\"positive\":tru"
-        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"take-up lev"
-        "er C to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"positive\":true,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank r"
-        "elative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\""
-        "kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"def"
-        "ault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"lengt"
-        "h\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
-        "display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":"
-        "\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit"
-        "\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\"kind\":\"inerti"
-        "a\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
-        "\":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"nam"
-        "e\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.024,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\",\"name\":\"leve"
-        "r.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\""
-        "doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"le"
-        "ver.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.mass\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg*m**2\",\"doc\":\""
-        "moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rocker.in"
-        "ertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\""
-        "vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"cr"
-        "ank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rocker\",\"doc\":\"lever-rocker pin C\",\"name"
-        "\":\"rocker_pin\",\"offset\":6,\"role\":null},{\"body\":\"lever\",\"doc\":\"thread eye E of the "
-        "take-up lever\",\"name\":\"thread_eye\",\"offset\":12,\"role\":\"thread_eye\"}],\"reactions\":[{"
-        "\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolu"
-        "te\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\""
-        ",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\""
-        "D\",\"offset\":4},{\"a\":\"lever\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":fal"
-        "se,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"column"
-        "s\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive"
-        "\",\"offset\":8,\"sense\":1}],\"roles\":{\"take_up_lever\":{\"kind\":\"body\",\"name\":\"lever\""
-        "},\"thread_eye\":{\"kind\":\"point\",\"name\":\"thread_eye\"}},\"sizes\":{\"nanchor_out\":28,\"n"
-        "block\":1,\"nbranch\":1,\"nc\":56,\"nf\":9,\"nfo\":18,\"nload\":9,\"nobs\":45,\"np\":18,\"nq\":2"
-        ",\"nx\":1}}"
+        "],[16],[8],[18,19],[20,21],[22,23],[18],[20],[22],[3,13],[3,13]],\"coords\":[{\"guess\":1.745329"
+        "2519943295,\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\"guess\":1.0471975511965976,\"name\":\""
+        "lever.angle\",\"unit\":\"rad\"}],\"default_speed\":523.5987755982989,\"doc\":\"Thread take-up me"
+        "chanism \\u6311\\u7ebf\\u673a\\u6784: upper-shaft crank AB \\u2192 take-up lever \\u6311\\u7ebf\\u"
+        "6746 BCE (16) \\u2192 rocker CD \\u6311\\u7ebf\\u6447\\u6746 (15).\\n\\nA crank-rocker four-bar "
+        "with the thread eye E on the coupler triangle BCE (seed 000 group \\u6311\\u7ebf; seed 004\\n\\u"
+        "00a71.1, figs. 1-2). Frame as seed 004 with its (Z, X) taken as our (x, y): A at the origin, D ="
+        " (26, \\u221220) mm;\\nthe crank angle runs from +x towards +y. E is placed from the triangle's "
+        "sides by the law of cosines,\\nB\\u2192E at \\u2220CBE from B\\u2192C (seed 004 eq. for \\u03c6B"
+        "E, with \\u03c6BC in place of the paper's misprinted \\u03c6CD).\\nSeed 004 runs the crank at n "
+        "= 5000 r/min.\\n\\nThe link lengths of seed 004's table 1 are not in the text: AB, BC, CD, BE, C"
+        "E are estimates that make a\\nGrashof crank-rocker (10 + 38 \\u2264 26 + 32.8) with the willow-l"
+        "eaf eye path the paper describes.\",\"elements\":[],\"force_blocks\":[2],\"force_outputs\":[{\"n"
+        "ame\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"s"
+        "haking.fx\",\"unit\":\"N\"},{\"name\":\"shaking.fy\",\"unit\":\"N\"},{\"name\":\"shaking.moment\""
+        ",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\""
+        "unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\""
+        "},{\"name\":\"B.friction\",\"unit\":\"N*m\"},{\"name\":\"B.friction_power\",\"unit\":\"W\"},{\"n"
+        "ame\":\"C.friction\",\"unit\":\"N*m\"},{\"name\":\"C.friction_power\",\"unit\":\"W\"},{\"name\":"
+        "\"D.friction\",\"unit\":\"N*m\"},{\"name\":\"D.friction_power\",\"unit\":\"W\"}],\"force_rows\":"
+        "[\"crank.x\",\"crank.y\",\"crank.moment\",\"lever.x\",\"lever.y\",\"lever.moment\",\"rocker.x\","
+        "\"rocker.y\",\"rocker.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\""
+        "upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\""
+        "kernels\":{\"sg_take_up_anchors\":{\"ops\":42},\"sg_take_up_blocks\":{\"ops\":15},\"sg_take_up_c"
+        "losed\":{\"ops\":22},\"sg_take_up_constants\":{\"ops\":77},\"sg_take_up_force_matrix\":{\"ops\":"
+        "84},\"sg_take_up_forces\":{\"ops\":193},\"sg_take_up_motion\":{\"ops\":139},\"sg_take_up_residua"
+        "l\":{\"ops\":20},\"sg_take_up_scales\":{\"ops\":2}},\"loads\":[{\"body\":\"crank\",\"component\""
+        ":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"}"
+        ",{\"body\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"rocker\",\"compo"
+        "nent\":\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"threa"
+        "d_eye\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\""
+        "component\":\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\""
+        ":\"lever\"},{\"body\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\"name\":\"take_"
+        "up\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit"
+        "\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m"
+        "/s^2\"},{\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\""
+        "name\":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"na"
+        "me\":\"rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{"
+        "\"name\":\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\""
+        "thread_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"th"
+        "read_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":"
+        "\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"cr"
+        "ank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank"
+        ".com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\""
+        "unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\""
+        "unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^"
+        "2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\""
+        "},{\"name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/"
+        "s^2\"},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\""
+        "name\":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"na"
+        "me\":\"rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],"
+        "\"params\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, horizontal (s"
+        "eed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed "
+        "004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\""
+        "kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":0.038,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\""
+        "name\":\"lever_bc\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0260000000000"
+        "00002,\"display_unit\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"ro"
+        "cker\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\""
+        ",\"doc\":\"take-up lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\""
+        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"do"
+        "c\":\"take-up lever C to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"p"
+        "ositive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\""
+        "phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"posit"
+        "ive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"ma"
+        "ss of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\""
+        "kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"len"
+        "gth\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
+        ",\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\""
+        "kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**"
+        "2\"},{\"default\":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\""
+        ":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
+        ":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\","
+        "\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"d"
+        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\""
+        "lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit"
+        "\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inerti"
+        "a\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
+        "\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.m"
+        "ass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg"
+        "*m**2\",\"doc\":\"moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\""
+        "name\":\"rocker.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0."
+        "0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\""
+        ",\"name\":\"B.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\"di"
+        "splay_unit\":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\"kind\":\"length\",\"name\":\"B."
+        "pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
+        "\"\",\"doc\":\"Coulomb friction coefficient of C\",\"kind\":\"dimensionless\",\"name\":\"C.frict"
+        "ion\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.002,\"display_unit\":\"mm\""
+        ",\"doc\":\"pin radius of C (friction arm)\",\"kind\":\"length\",\"name\":\"C.pin_radius\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coul"
+        "omb friction coefficient of D\",\"kind\":\"dimensionless\",\"name\":\"D.friction\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin rad"
+        "ius of D (friction arm)\",\"kind\":\"length\",\"name\":\"D.pin_radius\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"m\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":"
+        "[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},"
+        "{\"body\":\"rocker\",\"doc\":\"lever-rocker pin C\",\"name\":\"rocker_pin\",\"offset\":6,\"role\""
+        ":null},{\"body\":\"lever\",\"doc\":\"thread eye E of the take-up lever\",\"name\":\"thread_eye\""
+        ",\"offset\":12,\"role\":\"thread_eye\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"colu"
+        "mns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\""
+        ":0},{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"r"
+        "evolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":[\"fx\",\""
+        "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\""
+        ":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\","
+        "\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"inp"
+        "ut\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"roles\":"
+        "{\"take_up_lever\":{\"kind\":\"body\",\"name\":\"lever\"},\"thread_eye\":{\"kind\":\"point\",\"n"
+        "ame\":\"thread_eye\"}},\"sizes\":{\"nanchor_out\":28,\"nblock\":1,\"nbranch\":1,\"nc\":62,\"nf\""
+        ":9,\"nfo\":24,\"nload\":9,\"nobs\":45,\"np\":24,\"nq\":2,\"nx\":1}}"
         ;
 }

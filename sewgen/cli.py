@@ -411,12 +411,19 @@ def cmd_analyze(args, con: Console) -> int:
     con.say(head)
     con.say(f"power balance residual (relative) {summary['power_balance_residual_relative']:.3g}; "
             f"drive torque {summary['drive_torque']['min']:.4g} .. {summary['drive_torque']['max']:.4g} N*m "
-            f"(RMS {summary['drive_torque']['rms']:.4g}, friction left out); bearings front "
+            f"(RMS {summary['drive_torque']['rms']:.4g}, {_friction_words(summary['friction'])}); bearings front "
             f"{summary['bearings']['front']['max']:.4g} N, rear {summary['bearings']['rear']['max']:.4g} N peak; "
             f"shaking force {summary['shaking_force']['max']:.4g} N peak")
     for f in files:
         con.say(f"wrote {out / Path(f).name}")
     return 0
+
+
+def _friction_words(friction: dict) -> str:
+    if not friction["on"]:
+        return "friction left out"
+    return (f"friction {friction['power']['mean']:.4g} W mean, no-load torque "
+            f"{friction['no_load_torque']['value']:.4g} N*m")
 
 
 def cmd_timing(args, con: Console) -> int:

@@ -67,6 +67,16 @@ class Input:
     def held(self) -> bool:
         return self.index > 0
 
+    @property
+    def quantity(self) -> str:
+        """What the input sets: an angle (rad; its output is a torque) or a travel (m; a force)."""
+        return "angle" if self.unit == "rad" else "length"
+
+    @property
+    def effort_unit(self) -> str:
+        """The unit of the input's driving or holding effort: N·m for an angle, N for a travel."""
+        return "N*m" if self.unit == "rad" else "N"
+
 
 @dataclass(frozen=True)
 class Branch:
@@ -126,7 +136,8 @@ class Reaction:
 
     @property
     def is_drive(self) -> bool:
-        return self.kind == "drive"
+        """A drive (an input's torque or, for a travel input, its force), not a joint."""
+        return self.input is not None
 
 
 @dataclass(frozen=True)

@@ -129,7 +129,8 @@ class ForceAnalysis:
         return JointReaction(sign * on_b.fx, sign * on_b.fy, scale(on_b.normal), scale(on_b.moment))
 
     def torque(self, input_name: str = "shaft") -> np.ndarray:
-        """Driving torque of an input (N·m): the shaft's, or a held input's holding torque."""
+        """Driving torque of an input (N·m): the shaft's, or a held input's holding torque; a travel input's
+        holding force (N) along its guide."""
         desc = self.mechanism.description
         if not desc.has("input", input_name):
             raise KeyError(f"{self.mechanism.name} has no input {input_name!r}; inputs: "
@@ -176,8 +177,29 @@ class ForceAnalysis:
 
     @property
     def load_power(self) -> np.ndarray:
-        """Total power of the external loads and of the dampers (a damper's is ≤ 0) (W)."""
+        """Total power of the external loads, the dampers and the joints' friction (the last two ≤ 0) (W)."""
         return self._out("load_power")
+
+    @property
+    def friction_joints(self) -> list[str]:
+        """The joints declaring Coulomb friction (``m.friction``; coefficient 0 switches it off)."""
+        tail = ".friction_power"
+        return [o.name[:-len(tail)] for o in self.mechanism.description.force_outputs if o.name.endswith(tail)]
+
+    def friction(self, joint: str) -> np.ndarray:
+        """Joint ``joint``'s friction moment (N·m, a pin) or force (N, a slide or slot), against the motion."""
+        if joint not in self.friction_joints:
+            raise KeyError(f"{self.mechanism.name}: no friction declared in {joint!r}; joints with friction: "
+                           f"{', '.join(self.friction_joints) or 'none'}")
+        return self._out(f"{joint}.friction")
+
+    @property
+    def friction_power(self) -> np.ndarray:
+        """Power the joints' Coulomb friction dissipates (W, ≥ 0); part of :attr:`load_power` (with a minus)."""
+        out = np.zeros(len(self))
+        for joint in self.friction_joints:
+            out = out + self._out(f"{joint}.friction_power")
+        return out
 
     def load_powers(self) -> dict[str, np.ndarray]:
         """Power of each external load (W), by its label."""
@@ -222,9 +244,10 @@ class ForceAnalysis:
         for name in self.frame_joint_names:
             r = self.frame_force(name)
             cols[f"frame@{name}.fx [N]"], cols[f"frame@{name}.fy [N]"] = r.fx, r.fy
-        for name in (i.name for i in self.mechanism.description.inputs):
-            cols[f"{name}.torque [N*m]"] = self.torque(name)
-            cols[f"{name}.power [W]"] = self.input_power(name)
+        for inp in self.mechanism.description.inputs:
+            cols[f"{inp.name}.{'torque' if inp.quantity == 'angle' else 'force'} [{inp.effort_unit}]"] = \
+                self.torque(inp.name)
+            cols[f"{inp.name}.power [W]"] = self.input_power(inp.name)
         sf = self.shaking_force
         cols["shaking.fx [N]"], cols["shaking.fy [N]"] = sf[:, 0], sf[:, 1]
         cols["shaking.moment [N*m]"] = self.shaking_moment
@@ -232,6 +255,10 @@ class ForceAnalysis:
         cols["potential_energy [J]"] = self.potential_energy
         cols["load_power [W]"] = self.load_power
         units = {o.name: o.unit for o in self.mechanism.description.force_outputs}
+        for joint in self.friction_joints:  # only where friction is on in this run
+            if np.any(self._out(f"{joint}.friction") != 0.0):
+                for out in (f"{joint}.friction", f"{joint}.friction_power"):
+                    cols[f"{out} [{units[out]}]"] = self._out(out)
         for el in self.mechanism.description.elements:
             for out in el.outputs:
                 cols[f"{out} [{units[out]}]"] = self._out(out)

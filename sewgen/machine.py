@@ -95,6 +95,8 @@ class Shaft:
     masses: list = field(default_factory=list)  # ShaftMass: the core's mass, unbalance, counterweights
     pulley: float = 0.0  # z of the pulley (m), where the drive torque enters
     belt: tuple = (0.0, 0.0)  # the belt's pull on the pulley (N, frame x, y): T1 + T2 along the belt
+    friction: float = 0.0  # Coulomb coefficient of the two bearings (0: ideal, the seeds' assumption)
+    journal_radius: float = 0.0  # m, the journals' radius: the friction moment's arm
 
 
 @dataclass
@@ -236,7 +238,12 @@ class MachineAnalysis:
         for sm, pos, _vel, acc in self.core:
             f = sm.mass * (acc - gv[None, :])
             core_torque = core_torque + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
-        self.torque = sum(fa.torque("shaft") for fa in self.groups.values()) + core_torque
+        # Coulomb friction in the bearings (the friction circle): μ·r·(|R_A| + |R_B|) against the rotation. The
+        # torque about the axis does not enter the radial balance above, so no iteration is needed.
+        w = np.broadcast_to(self.omega, (len(self.phi),))
+        self.bearing_friction = (sh.friction * sh.journal_radius * np.sign(w)
+                                 * (np.hypot(*self.front.T) + np.hypot(*self.rear.T)))
+        self.torque = sum(fa.torque("shaft") for fa in self.groups.values()) + core_torque + self.bearing_friction
 
     # -- results ---------------------------------------------------------------------------------------------
     def bearing(self, which: str) -> np.ndarray:
@@ -368,7 +375,24 @@ class MachineAnalysis:
 
     @property
     def load_power(self) -> np.ndarray:
-        return sum(fa.load_power for fa in self.groups.values())
+        """Power of the process loads, dampers and friction (W): the groups' and the shaft bearings' friction."""
+        return sum(fa.load_power for fa in self.groups.values()) - self.bearing_friction * self.omega
+
+    @property
+    def friction_power(self) -> np.ndarray:
+        """Power dissipated by Coulomb friction (W, ≥ 0): every group's joints and the upper shaft's bearings."""
+        return sum(fa.friction_power for fa in self.groups.values()) + self.bearing_friction * self.omega
+
+    def no_load_torque(self) -> float:
+        """Mean driving torque over a turn with the process loads (thread, presser foot, cloth) taken off: at
+        constant speed the inertia and gravity terms average out, so it is the torque the joints' and bearings'
+        friction costs — seed 000's "no-load driving torque at rated speed" (空载驱动力矩, at the analysis'
+        speed). Zero without friction. Needs an analysis of a whole turn at constant speed."""
+        m = self.machine
+        if not any(g.loads for g in m.groups):
+            return float(np.mean(self.torque))
+        unloaded = replace(m, groups=[replace(g, loads=[]) for g in m.groups])
+        return float(np.mean(unloaded.analyze(self.phi, speed=self.run["speed"], accel=self.run["accel"]).torque))
 
     @property
     def power_balance_residual(self) -> float:
@@ -404,6 +428,10 @@ SHAFT = {
     "counterweights": Field("list", False, "planes where `sewgen balance machine` may put counterweights"),
     "belt_pull": Field("force", False, "the belt's radial pull on the pulley, T1 + T2", sign="nonnegative"),
     "belt_direction": Field("angle", False, "direction of the belt pull in the frame (from +x)"),
+    "bearing_friction": Field("dimensionless", False, "Coulomb friction coefficient of the front and rear "
+                              "bearings (default 0: ideal)", sign="nonnegative"),
+    "journal_radius": Field("length", False, "radius of the shaft's journals in the bearings (friction arm)",
+                            sign="nonnegative"),
 }
 SHAFT_MASS = {
     "name": Field("text"),
@@ -454,7 +482,10 @@ def load_machine(name_or_path) -> Machine:
     pull, pull_dir = shaft_doc.get("belt_pull", 0.0), shaft_doc.get("belt_direction", -math.pi / 2)
     shaft = Shaft(shaft_doc["front_bearing"], shaft_doc["rear_bearing"], shaft_doc["inertia"], masses,
                   shaft_doc.get("pulley", shaft_doc["rear_bearing"]),
-                  (pull * math.cos(pull_dir), pull * math.sin(pull_dir)))
+                  (pull * math.cos(pull_dir), pull * math.sin(pull_dir)),
+                  shaft_doc.get("bearing_friction", 0.0), shaft_doc.get("journal_radius", 0.0))
+    if shaft.friction and not shaft.journal_radius:
+        rd.fail("shaft.journal_radius", "bearing friction needs the journals' radius (its arm), e.g. \"6 mm\"")
     if not shaft.rear > shaft.front:
         rd.fail("shaft.rear_bearing", "must lie behind the front bearing (larger z)")
     groups = []

@@ -199,7 +199,8 @@ class Mechanism:
             out[spec.index] = v
         return out
 
-    def _named_vector(self, what: str, names: list[str], defaults: list, given: dict, kind: str) -> list:
+    def _named_vector(self, what: str, names: list[str], defaults: list, given: dict, kind) -> list:
+        """``kind``: the units kind of every entry, "sign", or a list of kinds, one per name."""
         vals = dict(zip(names, defaults))
         arg = {"held input": "held", "branch joint": "branch"}.get(what, what)
         for key, v in _mapping(self.name, arg, given).items():
@@ -208,7 +209,8 @@ class Mechanism:
                 raise ParameterError(self.name, key, f"is not a {what}; {what}s are: {known}")
             vals[key] = v
         out = []
-        for key in names:
+        kinds = kind if isinstance(kind, list) else [kind] * len(names)
+        for key, kind in zip(names, kinds):
             v = vals[key]
             if kind == "sign":
                 if isinstance(v, (bool, np.bool_)) or v not in (1, -1):
@@ -219,12 +221,13 @@ class Mechanism:
         return out
 
     def held_vector(self, held: dict | None = None) -> np.ndarray:
-        """Held inputs (rad; numbers or quantity strings by name) over their defaults, as a C-ready vector."""
+        """Held inputs (rad, or m for a travel; numbers or quantity strings by name) over their defaults, as a
+        C-ready vector."""
         if held is None:
             return self._defaults["held"].copy()
-        return np.array(self._named_vector("held input", self.held_names,
-                                           [i.default for i in self.description.held_inputs], held, "angle"),
-                        dtype=np.float64)
+        inputs = self.description.held_inputs
+        return np.array(self._named_vector("held input", self.held_names, [i.default for i in inputs], held,
+                                           [i.quantity for i in inputs]), dtype=np.float64)
 
     def _branch_vector(self, branch: dict) -> np.ndarray:
         return np.array(self._named_vector("branch joint", self.branch_names,

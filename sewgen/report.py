@@ -47,7 +47,10 @@ CONVENTIONS = {
                    "group's own angle is φ + phase_deg; *_at_deg and *_deg entries are shaft angles",
     "bearings": "magnitude of the load the upper shaft puts on the frame at each bearing",
     "drive_torque": "torque the pulley puts on the upper shaft about +z, positive in the sense of rotation; "
-                    "friction is left out (ideal joints)",
+                    "it includes the Coulomb friction the model file switches on (joints' <joint>.friction, "
+                    "shaft.bearing_friction); none by default (ideal joints, the seeds' assumption)",
+    "friction": "power dissipated by Coulomb friction (≥ 0); no_load_torque: the mean driving torque over a turn "
+                "at the analysis' speed with the process loads off (seed 000's no-load driving torque)",
     "joints": "magnitude of a joint's reaction: the force on the joint's second body from its first",
     "shaking_force": "magnitude of the force the moving parts put on the frame by their inertia, −Σ m·a_G: "
                      "dynamic, the parts' static weight apart (weight_of_moving_parts); process loads (thread, "
@@ -120,6 +123,9 @@ def machine_table(a) -> dict:
     cols["drive_torque [N*m]"] = a.torque
     for name, fa in a.groups.items():
         cols[f"{name}.torque [N*m]"] = fa.torque("shaft")
+    if np.any(a.friction_power):  # columns only where the model switches friction on
+        cols["bearings.friction_torque [N*m]"] = a.bearing_friction
+        cols["friction_power [W]"] = a.friction_power
     sf = shaking.shaking_force(a)  # dynamic, on the frame; the weight apart (summary.json)
     cols["shaking_on_frame.fx [N]"], cols["shaking_on_frame.fy [N]"] = sf[:, 0], sf[:, 1]
     cols["shaking_on_frame.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
@@ -187,6 +193,7 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
         "bearings": {w: dict(_stat(np.hypot(*a.bearing(w).T), phi, "N"), acts_on="frame") for w in ("front", "rear")},
         "drive_torque": _stat(a.torque, phi, "N*m"),
         "drive_power": _stat(a.drive_power, phi, "W"),
+        "friction": friction_summary(a),
         "shaking_force": dict(_stat(np.hypot(*shaking.shaking_force(a).T), phi, "N"), acts_on="frame",
                               what="-sum(m a_G): dynamic, the weight apart"),
         "weight_of_moving_parts": {"unit": "N", "acts_on": "frame", "fx": float(weight[0]), "fy": float(weight[1]),
@@ -203,9 +210,14 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
                  "joints": {n: _stat(fa.reaction(n).magnitude, phi, "N") for n in fa.reaction_names}}
         regulator = g.mechanism.description.role_name(STITCH_REGULATOR)
         if regulator is not None:
-            setting = g.held.get(regulator, g.mechanism.description.input(regulator).default)
-            entry["regulator_deg"] = math.degrees(setting)
-            entry["holding_torque"] = _stat(fa.torque(regulator), phi, "N*m")
+            inp = g.mechanism.description.input(regulator)
+            setting = g.held.get(regulator, inp.default)
+            if inp.quantity == "angle":
+                entry["regulator_deg"] = math.degrees(setting)
+                entry["holding_torque"] = _stat(fa.torque(regulator), phi, inp.effort_unit)
+            else:  # a regulator set by a travel
+                entry["regulator_mm"] = setting * 1e3
+                entry["holding_force"] = _stat(fa.torque(regulator), phi, inp.effort_unit)
         if g.stitch is not None:
             entry["stitch_mm"] = g.stitch * 1e3
         if has_feed(g.mechanism):
@@ -222,6 +234,16 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
     out["units"] = UNITS
     out["conventions"] = CONVENTIONS
     return _clean(out, "summary", m.source or None)
+
+
+def friction_summary(a) -> dict:
+    """Whether friction is on, its dissipated power, the mean driving torque and the no-load torque."""
+    power = a.friction_power
+    on = bool(np.any(power != 0.0))
+    return {"on": on, "power": dict(_stat(power, a.phi, "W"), mean=float(np.mean(power))),
+            "mean_drive_torque": {"value": float(np.mean(a.torque)), "unit": "N*m"},
+            "no_load_torque": {"value": a.no_load_torque() if on else 0.0, "unit": "N*m",
+                               "speed_rpm": float(np.mean(a.omega) * 60 / (2 * math.pi))}}
 
 
 def timing_of(a):

@@ -80,7 +80,8 @@ def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, ker
         "default_speed": to_si(mech.default_speed, "speed", f"{mech.name}.default_speed"),
         "coords": [{"name": c.name, "unit": "rad" if c.kind == "angle" else "m", "guess": c.guess}
                    for c in kin.coords],
-        "inputs": [{"name": i.name, "kind": i.kind, "unit": "rad", "default": i.default,
+        "inputs": [{"name": i.name, "kind": i.kind, "unit": "rad" if i.quantity == "angle" else "m",
+                    "default": i.default,
                     "display_unit": i.display_unit, "doc": i.doc, "role": role("input", i.name)}
                    for i in mech.inputs],
         "params": [{"name": p.name, "kind": p.kind, "unit": p.unit, "default": p.default,

@@ -434,10 +434,35 @@ class Drive(JointKind):
         return {"input": mech.inputs[r.input_index].name, "sense": int(rate) if rate.is_Integer else float(rate)}
 
 
-#: Every joint kind by name: the only registry the derivation consults.
-KINDS: dict[str, JointKind] = {k.name: k for k in (Revolute(), Prismatic(), Slot(), Cam(), Rod(), Drive())}
+class LinearDrive(JointKind):
+    """The force that holds a body at a travel input along its guide (a prismatic input), from the guide's
+    body, at the body's origin on the guide: a reaction, never declared."""
 
-#: The kinds a declaration may use (``Drive`` is implied by driven bodies).
+    name, columns = "linear_drive", ("force",)
+
+    def _along(self, r):
+        return (sp.cos(r.guide_angle), sp.sin(r.guide_angle))
+
+    def rows(self, kst, r, body, sign):
+        tx, ty = self._along(r)
+        dx, dy = (kst.own_arm(r.at) if r.at.body is body else kst.arm(body, kst.kin.world(r.at)))
+        return [(0, 0, sign * tx), (1, 0, sign * ty), (2, 0, sign * (dx * ty - dy * tx))]
+
+    def on_body(self, kst, r, f):
+        px, py = kst.kin.world(r.at)
+        tx, ty = self._along(r)
+        return (tx * f[0], ty * f[0], (px * ty - py * tx) * f[0])
+
+    def manifest(self, mech, r):
+        """Input force = the drive force along the guide (sense 1: the input is the travel itself)."""
+        return {"input": mech.inputs[r.input_index].name, "sense": 1}
+
+
+#: Every joint kind by name: the only registry the derivation consults.
+KINDS: dict[str, JointKind] = {k.name: k for k in (Revolute(), Prismatic(), Slot(), Cam(), Rod(), Drive(),
+                                                   LinearDrive())}
+
+#: The kinds a declaration may use (``Drive`` and ``LinearDrive`` are implied by driven and held bodies).
 DECLARABLE = ("revolute", "prismatic", "slot", "cam", "rod")
 
 

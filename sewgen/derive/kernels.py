@@ -251,7 +251,10 @@ class KernelSet:
         outputs = [f"out[{k}]" for k in range(n + len(r_out))]
         finish += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;", "return SG_OK;"]
         if nfr:  # Coulomb friction: fr <- its value from the reactions, until it settles (A never changes)
-            loop = solve + [f"double frn[{nfr}];"] + [f"frn[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_fr)]
+            # every coefficient 0 (the seeds' assumption, the catalog's default): fr stays 0, the first solve is
+            # the answer, bit for bit the kernel without friction
+            mus = " && ".join(f"{pr.doprint(e)} == 0.0" for e in self.prepare([mu for _, mu, _ in kst.mech.frictions]))
+            loop = solve + [f"if ({mus}) {{"] + ["    " + line for line in finish] + ["}", f"double frn[{nfr}];"] + [f"frn[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_fr)]
             loop += ["double d = 0.0, s = 0.0;",
                      f"for (int k = 0; k < {nfr}; ++k) {{ d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }}",
                      f"if (d <= {FRICTION_RTOL!r} * s) {{"] + ["    " + line for line in finish] + ["}",

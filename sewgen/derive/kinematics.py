@@ -103,6 +103,14 @@ class Kinematics:
                 pending.remove(body)
 
     def _try_place(self, body: Body, known: set):
+        if body.kind == "driven" and body.guide is not None:  # held at a travel along its guide
+            g = body.guide
+            if g.body not in known:
+                return None
+            s = self.x[body.input_index]
+            bx, by = self.world(Attachment(g.body, g.u, g.v))
+            th = self.pose[g.body][2] + g.angle
+            return (bx + s * sp.cos(th), by + s * sp.sin(th), th)
         if body.kind == "driven":  # turns about its pivot relative to the pivot's body (ground: absolutely)
             parent = body.pivot.body
             if parent not in known:

@@ -71,7 +71,12 @@ class Kinetostatics:
         kin, mech = self.kin, self.mech
         out = [kind_of(j).reaction(kin, j) for j in mech.implied_joints() + mech.joints]
         for body in mech.bodies:
-            if body.kind == "driven":
+            if body.kind == "driven" and body.guide is not None:  # a held travel: a force along the guide
+                g = body.guide
+                out.append(Reaction(f"{body.name}.drive", "linear_drive", g.body, body,
+                                    Attachment(body, sp.S.Zero, sp.S.Zero),
+                                    guide_angle=kin.pose[g.body][2] + g.angle, input_index=body.input_index))
+            elif body.kind == "driven":
                 rate = body.sense * body.ratio if body.input_index == 0 else sp.S.One  # d(relative angle)/d(input)
                 out.append(Reaction(f"{body.name}.drive", "drive", body.pivot.body, body, None, sense=rate,
                                     input_index=body.input_index))
@@ -186,7 +191,7 @@ class Kinetostatics:
         for i, inp in enumerate(mech.inputs):
             tau = sum((r.sense * self.f[col[r.name]] for r in self.reactions  # the drives: the reactions
                        if r.input_index == i), sp.S.Zero)                   # with an input
-            out.append((f"{inp.name}.torque", "N*m", tau))
+            out.append((f"{inp.name}.torque", "N*m" if inp.quantity == "angle" else "N", tau))
         for i, inp in enumerate(mech.inputs):
             out.append((f"{inp.name}.power", "W", out[i][2] * kin.xd[i]))
         for r in self.reactions:  # what each kind adds (a normal force in frame components)

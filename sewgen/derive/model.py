@@ -88,12 +88,12 @@ class Body:
     name: str
     kind: str
     doc: str = ""
-    pivot: Attachment | None = None  # driven: its pivot on ground
+    pivot: Attachment | None = None  # driven: its pivot (None: a held travel on ``guide``)
     input_index: int = -1  # driven: which input drives it
     phase: sp.Expr = sp.S.Zero  # driven: angle = pivot body's angle + sense * ratio * input + phase
     sense: int = 1
     ratio: sp.Expr = sp.S.One
-    guide: Line | None = None  # slider: the line it travels on
+    guide: Line | None = None  # slider, or a driven body held at a travel: the line it travels on
     guess: float = 0.0  # link angle (rad) or slider travel (m) to start Newton from
     axis: Axis | None = None  # spatial crank: the axis it turns about (its angle is measured from e1 to e2)
     mass: sp.Expr = sp.S.Zero
@@ -170,9 +170,10 @@ class Input:
 
     name: str
     kind: str  # "shaft" or "held"
-    default: float  # held inputs: SI default value (rad)
+    default: float  # held inputs: SI default value (rad, or m for a travel)
     display_unit: str
     doc: str
+    quantity: str = "angle"  # what it sets: a relative angle ("angle", rad) or a relative travel ("length", m)
 
 
 @dataclass(eq=False)
@@ -282,15 +283,27 @@ class Mechanism:
         return self._body(name, "driven", doc, mass, com, inertia, role=role, pivot=pivot, input_index=0, phase=ph,
                           sense=sense, ratio=ratio)
 
-    def held(self, name: str, pivot: Attachment, default: str, doc: str,
-             mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None) -> Body:
-        """A body set by a held input (stitch regulator): its angle relative to the pivot's body is an input that
-        stays put in a run. ``pivot`` as for :meth:`driven`. ``role`` tags the held input (e.g.
-        "stitch_regulator")."""
-        self._check_pivot(pivot, name)
+    def held(self, name: str, pivot: Attachment | None = None, default: str = "", doc: str = "",
+             mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None, guide: Line | None = None) -> Body:
+        """A body set by a held input (a stitch regulator): an input that stays put in a run. With ``pivot`` the
+        input is the body's angle relative to the pivot's body (``pivot`` as for :meth:`driven`; ``default`` an
+        angle); with ``guide`` (a line of ground or of a moving body declared before) it is the body's travel
+        along that line from the line's origin (a prismatic input: ``default`` a length, its holding force in N
+        is the input's output). ``role`` tags the held input (e.g. "stitch_regulator")."""
+        if (pivot is None) == (guide is None):
+            raise DeclarationError(f"{self.name}: held body {name!r} needs either a pivot (an angle input) or a "
+                                   "guide (a travel input)")
+        quantity = "angle" if guide is None else "length"
+        if guide is None:
+            self._check_pivot(pivot, name)
+        elif not isinstance(guide, Line) or guide.body not in self.bodies:
+            raise DeclarationError(f"{self.name}: guide of {name!r} must be body.line(...) of ground or of a body "
+                                   "declared before it")
         self._role(role, "input", name)
-        self.inputs.append(Input(name, "held", to_si(default, "angle", f"{self.name}.{name}"), unit_of(default), doc))
-        return self._body(name, "driven", doc, mass, com, inertia, pivot=pivot, input_index=len(self.inputs) - 1)
+        self.inputs.append(Input(name, "held", to_si(default, quantity, f"{self.name}.{name}"), unit_of(default), doc,
+                                 quantity))
+        return self._body(name, "driven", doc, mass, com, inertia, pivot=pivot,
+                          guide=guide, input_index=len(self.inputs) - 1)
 
     def spatial_crank(self, name: str, axis_point, axis, phase="0 deg", sense: int = 1, ratio=1, reference=None,
                       doc: str = "", mass="0 g", inertia="0 kg*m**2", role=None) -> Body:
@@ -465,6 +478,15 @@ class Mechanism:
                   if kind.friction_unit == "N*m" else sp.S.Zero)
         self.frictions.append((name, mu, radius))
 
+    def friction_off(self, pins: dict, slides=()) -> None:
+        """Coulomb friction declared but off (coefficient 0, the seeds' assumption) in every pin of ``pins``
+        (joint name -> pin radius, the friction arm) and every slide or slot of ``slides``: a model file turns it
+        on by setting the parameter ``<joint>.friction`` (see :meth:`friction`)."""
+        for joint, radius in pins.items():
+            self.friction(joint, "0", radius)
+        for joint in slides:
+            self.friction(joint, "0")
+
     def point(self, name: str, at: Attachment, doc: str = "", role=None) -> None:
         """A named point whose position, velocity and acceleration are reported."""
         self._claim(name, "point")
@@ -479,9 +501,9 @@ class Mechanism:
         out = []
         for body in self.bodies:
             origin = Attachment(body, sp.S.Zero, sp.S.Zero)
-            if body.kind == "driven":
+            if body.kind == "driven" and body.guide is None:
                 out.append(Joint(f"{body.name}.pivot", "revolute", body.pivot, origin))
-            elif body.kind == "slider":
+            elif body.kind == "slider" or body.kind == "driven":  # a travel input slides on its guide
                 out.append(Joint(f"{body.name}.guide", "prismatic", body.guide, origin))
         return out
 

@@ -117,7 +117,10 @@ def draw_torque(fig, a):
         groups = groups + tg
         ax.plot(d, closed(a, tg), color=color(a, g), lw=1.2, label=f"{g.name}: {_stats(tg)}")
     core = t - groups
-    ax.plot(d, closed(a, core), color="0.55", lw=1, ls=":", label=f"shaft core, counterweights: {_stats(core)}")
+    friction = bool(np.any(a.friction_power))
+    bearings = ", bearing friction" if np.any(a.bearing_friction) else ""
+    ax.plot(d, closed(a, core), color="0.55", lw=1, ls=":",
+            label=f"shaft core, counterweights{bearings}: {_stats(core)}")
     ax.plot(d, closed(a, t), color="k", lw=2.2, label=f"total at the pulley: {_stats(t)}")
     rms = np.sqrt(np.mean(t**2))
     ax.axhline(t.mean(), color="k", lw=0.8, ls="--", label="total: mean (dashed), ±RMS (dash-dot)")
@@ -132,9 +135,12 @@ def draw_torque(fig, a):
                  f"{np.degrees(a.phi[kmin]) % 360:.0f}°", fontsize=9, y=1.0)
     fig.legend(*ax.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8,
                bbox_to_anchor=(0.5, 0.04 / fig.get_size_inches()[1]))
-    ax.text(0.995, 0.015, "ideal joints: friction is left out", transform=ax.transAxes, ha="right", va="bottom",
+    note = (f"with Coulomb friction: {np.mean(a.friction_power):.3g} W dissipated on average" if friction
+            else "ideal joints: friction is left out")
+    ax.text(0.995, 0.015, note, transform=ax.transAxes, ha="right", va="bottom",
             fontsize=8, color="0.25", bbox=dict(fc="w", ec="0.7", alpha=0.85))
-    suptitle(fig, title(a, "driving torque on the upper shaft (the pulley's, and each group's share; friction left out)"))
+    suptitle(fig, title(a, "driving torque on the upper shaft (the pulley's, and each group's share; "
+                           + ("friction included)" if friction else "friction left out)")))
 
 
 # -- shaking force and moments ---------------------------------------------------------------------------------

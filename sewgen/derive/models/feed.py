@@ -115,4 +115,9 @@ def declare() -> Mechanism:
     m.point("stitch_pin", fork.at(tq, 0), "fork pin Q in the stitch block")
     m.point("lift_roller", lift.at(arm_l, 0), "lift roller L in the feed bar")
     m.point("lift_cam", rock.at(ecc * sp.cos(ecc_angle), ecc * sp.sin(ecc_angle)), "D: lift cam centre, in the fork")
+    # Coulomb friction, off (coefficient 0, as seed 000 assumes); radii are estimates (rock-shaft journals Ø8,
+    # fork and block pins Ø5, feed-bar hinge Ø6). B, O4 and C are the hook drive's joints, counted there; the cam
+    # on the fork has no Coulomb model (it rolls and slides at once); the held regulator does not turn.
+    m.friction_off({"O_feed": "4 mm", "P": "2.5 mm", "Q": "2.5 mm", "R": "3 mm", "O_lift": "4 mm"},
+                   slides=["stitch_block.guide", "D", "L"])
     return m

@@ -75,4 +75,9 @@ def declare() -> Mechanism:
     m.point("rock_pin", rock.at(front, 0), "big-rod pin C on the rock-shaft arm")
     m.point("slider_pin", slider.at(0, 0), "slider pin E on the rock-shaft rear arm")
     m.point("hook_point", lower.at(hr * sp.cos(ha), hr * sp.sin(ha)), "shuttle point 摆梭尖", role="hook_point")
+    # Coulomb friction, off (coefficient 0, as seed 000 assumes); radii are estimates (crank pin Ø6, rod pin Ø5,
+    # rock-shaft journal Ø8, lower-shaft journal Ø10, slider pin Ø5). The crank's pivot is the upper shaft's
+    # journal (the machine's bearings).
+    m.friction_off({"B": "3 mm", "C": "2.5 mm", "O4": "4 mm", "O11": "5 mm", "E": "2.5 mm"},
+                   slides=["rock_slider.guide"])
     return m

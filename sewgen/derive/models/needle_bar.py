@@ -44,4 +44,7 @@ def declare() -> Mechanism:
     m.point("link_pin", bar.at(0, 0), "needle-bar link pin C")
     m.point("needle_eye", bar.at(-h, 0), "needle eye (its centre)", role="needle_eye")
     m.point("needle_point", bar.at(-h - tip, 0), "needle point", role="needle_point")
+    # Coulomb friction, off (coefficient 0, as seed 000 assumes); pin radii are estimates (crank pin Ø6, link pin
+    # Ø5). The crank's own pivot is the upper shaft's journal: its friction belongs to the machine's bearings.
+    m.friction_off({"B": "3 mm", "C": "2.5 mm"}, slides=["needle_bar.guide"])
     return m

@@ -36,4 +36,7 @@ def declare() -> Mechanism:
     m.point("crank_pin", crank.at(ab, 0), "crank pin B")
     m.point("rocker_pin", rocker.at(cd, 0), "lever-rocker pin C")
     m.point("thread_eye", lever.at(eu, ev), "thread eye E of the take-up lever", role="thread_eye")
+    # Coulomb friction, off (coefficient 0, as seed 000 assumes); pin radii are estimates (crank pin Ø6, lever
+    # pin Ø4, rocker stud Ø5). The crank's pivot is the upper shaft's journal (the machine's bearings).
+    m.friction_off({"B": "3 mm", "C": "2 mm", "D": "2.5 mm"})
     return m
