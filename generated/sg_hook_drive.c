@@ -466,71 +466,47 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
         out[1] = c[69]*(-gv[1] + obs[32]) + out[5] - ld[1];
         out[0] = c[69]*(-gv[0] + obs[31]) + out[4] - ld[0];
         out[14] = c[66]*obs[26] - out[0]*(c[32]*t25 + t24) - out[1]*(c[35]*t23 + t26) - out[4]*(c[33]*t23 + c[68]*t25) - out[5]*(c[33]*t25 + c[67]*t23) - ld[0]*(c[67]*t25 + t24) - ld[1]*(c[68]*t23 + t26) - ld[8] - t3;
-        if (c[93] == 0.0 && c[94] == 0.0 && c[95] == 0.0 && c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0) {
-            out[15] = out[14];
-            out[16] = out[14]*xd[0];
-            out[17] = -cq[3]*out[2];
-            out[18] = cq[2]*out[2];
-            out[19] = out[0] + out[6] + out[8];
-            out[20] = out[1] + out[7] + out[9];
-            out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14] + fr[2] + fr[3];
-            out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
-            out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
-            out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t27 + t28 + t30 + t32 + t34 + t36;
-            out[25] = 0.0;
-            out[26] = fr[0];
-            out[27] = -t30;
-            out[28] = fr[1];
-            out[29] = -t32;
-            out[30] = fr[2];
-            out[31] = -t27;
-            out[32] = fr[3];
-            out[33] = -t28;
-            out[34] = fr[4];
-            out[35] = -t34;
-            out[36] = fr[5];
-            out[37] = -t36;
-            if (!isfinite((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + (out[12] + out[13]))) + ((out[14] + out[15]) + (out[16] + (out[17] + out[18]))))) + ((((out[19] + out[20]) + (out[21] + out[22])) + ((out[23] + out[24]) + (out[25] + (out[26] + out[27])))) + (((out[28] + out[29]) + (out[30] + (out[31] + out[32]))) + ((out[33] + out[34]) + (out[35] + (out[36] + out[37])))))))) return SG_NONFINITE;
-            return SG_OK;
+        if (!(c[93] == 0.0 && c[94] == 0.0 && c[95] == 0.0 && c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0)) {
+            double frn[6];
+            frn[0] = c[87]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t29) > 0.0 ? 1.0 : ((t29) < 0.0 ? -1.0 : 0.0));
+            frn[1] = c[88]*sqrt(((out[10])*(out[10])) + ((out[11])*(out[11])))*((t31) > 0.0 ? 1.0 : ((t31) < 0.0 ? -1.0 : 0.0));
+            frn[2] = c[89]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((obs[43]) > 0.0 ? 1.0 : ((obs[43]) < 0.0 ? -1.0 : 0.0));
+            frn[3] = c[90]*sqrt(((out[8])*(out[8])) + ((out[9])*(out[9])))*((obs[52]) > 0.0 ? 1.0 : ((obs[52]) < 0.0 ? -1.0 : 0.0));
+            frn[4] = c[91]*sqrt(((out[12])*(out[12])) + ((out[13])*(out[13])))*((t33) > 0.0 ? 1.0 : ((t33) < 0.0 ? -1.0 : 0.0));
+            frn[5] = c[92]*fabs(out[2])*((t35) > 0.0 ? 1.0 : ((t35) < 0.0 ? -1.0 : 0.0));
+            double d = 0.0, s = 0.0;
+            for (int k = 0; k < 6; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
+            if (!(d <= 1e-13 * s)) {
+                if (it >= 100) return SG_NO_CONVERGENCE;
+                for (int k = 0; k < 6; ++k) fr[k] = frn[k];
+                continue;
+            }
         }
-        double frn[6];
-        frn[0] = c[87]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t29) > 0.0 ? 1.0 : ((t29) < 0.0 ? -1.0 : 0.0));
-        frn[1] = c[88]*sqrt(((out[10])*(out[10])) + ((out[11])*(out[11])))*((t31) > 0.0 ? 1.0 : ((t31) < 0.0 ? -1.0 : 0.0));
-        frn[2] = c[89]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((obs[43]) > 0.0 ? 1.0 : ((obs[43]) < 0.0 ? -1.0 : 0.0));
-        frn[3] = c[90]*sqrt(((out[8])*(out[8])) + ((out[9])*(out[9])))*((obs[52]) > 0.0 ? 1.0 : ((obs[52]) < 0.0 ? -1.0 : 0.0));
-        frn[4] = c[91]*sqrt(((out[12])*(out[12])) + ((out[13])*(out[13])))*((t33) > 0.0 ? 1.0 : ((t33) < 0.0 ? -1.0 : 0.0));
-        frn[5] = c[92]*fabs(out[2])*((t35) > 0.0 ? 1.0 : ((t35) < 0.0 ? -1.0 : 0.0));
-        double d = 0.0, s = 0.0;
-        for (int k = 0; k < 6; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
-        if (d <= 1e-13 * s) {
-            out[15] = out[14];
-            out[16] = out[14]*xd[0];
-            out[17] = -cq[3]*out[2];
-            out[18] = cq[2]*out[2];
-            out[19] = out[0] + out[6] + out[8];
-            out[20] = out[1] + out[7] + out[9];
-            out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14] + fr[2] + fr[3];
-            out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
-            out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
-            out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t27 + t28 + t30 + t32 + t34 + t36;
-            out[25] = 0.0;
-            out[26] = fr[0];
-            out[27] = -t30;
-            out[28] = fr[1];
-            out[29] = -t32;
-            out[30] = fr[2];
-            out[31] = -t27;
-            out[32] = fr[3];
-            out[33] = -t28;
-            out[34] = fr[4];
-            out[35] = -t34;
-            out[36] = fr[5];
-            out[37] = -t36;
-            if (!isfinite((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + (out[12] + out[13]))) + ((out[14] + out[15]) + (out[16] + (out[17] + out[18]))))) + ((((out[19] + out[20]) + (out[21] + out[22])) + ((out[23] + out[24]) + (out[25] + (out[26] + out[27])))) + (((out[28] + out[29]) + (out[30] + (out[31] + out[32]))) + ((out[33] + out[34]) + (out[35] + (out[36] + out[37])))))))) return SG_NONFINITE;
-            return SG_OK;
-        }
-        if (it >= 100) return SG_NO_CONVERGENCE;
-        for (int k = 0; k < 6; ++k) fr[k] = frn[k];
+        out[15] = out[14];
+        out[16] = out[14]*xd[0];
+        out[17] = -cq[3]*out[2];
+        out[18] = cq[2]*out[2];
+        out[19] = out[0] + out[6] + out[8];
+        out[20] = out[1] + out[7] + out[9];
+        out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14] + fr[2] + fr[3];
+        out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
+        out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
+        out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t27 + t28 + t30 + t32 + t34 + t36;
+        out[25] = 0.0;
+        out[26] = fr[0];
+        out[27] = -t30;
+        out[28] = fr[1];
+        out[29] = -t32;
+        out[30] = fr[2];
+        out[31] = -t27;
+        out[32] = fr[3];
+        out[33] = -t28;
+        out[34] = fr[4];
+        out[35] = -t34;
+        out[36] = fr[5];
+        out[37] = -t36;
+        if (!isfinite((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + (out[12] + out[13]))) + ((out[14] + out[15]) + (out[16] + (out[17] + out[18]))))) + ((((out[19] + out[20]) + (out[21] + out[22])) + ((out[23] + out[24]) + (out[25] + (out[26] + out[27])))) + (((out[28] + out[29]) + (out[30] + (out[31] + out[32]))) + ((out[33] + out[34]) + (out[35] + (out[36] + out[37])))))))) return SG_NONFINITE;
+        return SG_OK;
     }
 }
 

@@ -259,56 +259,38 @@ int sg_needle_bar_forces(const double *q, const double *cq, const double *x, con
         out[0] = c[31]*(-gv[0] + obs[31]) + out[4] - ld[0];
         out[8] = c[28]*obs[26] - out[0]*(c[15]*t8 + t7) - out[1]*(c[18]*t6 + t9) - out[4]*(c[16]*t6 + c[30]*t8) - out[5]*(c[16]*t8 + c[29]*t6) - ld[0]*(c[29]*t8 + t7) - ld[1]*(c[30]*t6 + t9) - ld[8] - t0;
         const double t10 = -out[2];
-        if (c[50] == 0.0 && c[51] == 0.0 && c[52] == 0.0) {
-            out[9] = out[8];
-            out[10] = out[8]*xd[0];
-            out[11] = t10;
-            out[12] = 0.0;
-            out[13] = out[0] + t10;
-            out[14] = out[1] + fr[2];
-            out[15] = c[21]*fr[2] + c[37]*fr[2] + out[2]*q[0] + out[3] + out[8];
-            out[16] = c[38]*((obs[25])*(obs[25])) + c[39]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[40]*((obs[34])*(obs[34])) + c[41]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[42]*((obs[43])*(obs[43])) + c[43]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
-            out[17] = c[44]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[45]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[46]*(gv[0]*obs[27] + gv[1]*obs[28]);
-            out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t12 + t14 + t16;
-            out[19] = 0.0;
-            out[20] = fr[0];
-            out[21] = -t12;
-            out[22] = fr[1];
-            out[23] = -t14;
-            out[24] = fr[2];
-            out[25] = -t16;
-            if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
-            return SG_OK;
+        if (!(c[50] == 0.0 && c[51] == 0.0 && c[52] == 0.0)) {
+            double frn[3];
+            frn[0] = c[47]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t11) > 0.0 ? 1.0 : ((t11) < 0.0 ? -1.0 : 0.0));
+            frn[1] = c[48]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t13) > 0.0 ? 1.0 : ((t13) < 0.0 ? -1.0 : 0.0));
+            frn[2] = c[49]*fabs(out[2])*((t15) > 0.0 ? 1.0 : ((t15) < 0.0 ? -1.0 : 0.0));
+            double d = 0.0, s = 0.0;
+            for (int k = 0; k < 3; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
+            if (!(d <= 1e-13 * s)) {
+                if (it >= 100) return SG_NO_CONVERGENCE;
+                for (int k = 0; k < 3; ++k) fr[k] = frn[k];
+                continue;
+            }
         }
-        double frn[3];
-        frn[0] = c[47]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t11) > 0.0 ? 1.0 : ((t11) < 0.0 ? -1.0 : 0.0));
-        frn[1] = c[48]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t13) > 0.0 ? 1.0 : ((t13) < 0.0 ? -1.0 : 0.0));
-        frn[2] = c[49]*fabs(out[2])*((t15) > 0.0 ? 1.0 : ((t15) < 0.0 ? -1.0 : 0.0));
-        double d = 0.0, s = 0.0;
-        for (int k = 0; k < 3; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
-        if (d <= 1e-13 * s) {
-            out[9] = out[8];
-            out[10] = out[8]*xd[0];
-            out[11] = t10;
-            out[12] = 0.0;
-            out[13] = out[0] + t10;
-            out[14] = out[1] + fr[2];
-            out[15] = c[21]*fr[2] + c[37]*fr[2] + out[2]*q[0] + out[3] + out[8];
-            out[16] = c[38]*((obs[25])*(obs[25])) + c[39]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[40]*((obs[34])*(obs[34])) + c[41]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[42]*((obs[43])*(obs[43])) + c[43]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
-            out[17] = c[44]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[45]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[46]*(gv[0]*obs[27] + gv[1]*obs[28]);
-            out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t12 + t14 + t16;
-            out[19] = 0.0;
-            out[20] = fr[0];
-            out[21] = -t12;
-            out[22] = fr[1];
-            out[23] = -t14;
-            out[24] = fr[2];
-            out[25] = -t16;
-            if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
-            return SG_OK;
-        }
-        if (it >= 100) return SG_NO_CONVERGENCE;
-        for (int k = 0; k < 3; ++k) fr[k] = frn[k];
+        out[9] = out[8];
+        out[10] = out[8]*xd[0];
+        out[11] = t10;
+        out[12] = 0.0;
+        out[13] = out[0] + t10;
+        out[14] = out[1] + fr[2];
+        out[15] = c[21]*fr[2] + c[37]*fr[2] + out[2]*q[0] + out[3] + out[8];
+        out[16] = c[38]*((obs[25])*(obs[25])) + c[39]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[40]*((obs[34])*(obs[34])) + c[41]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[42]*((obs[43])*(obs[43])) + c[43]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
+        out[17] = c[44]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[45]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[46]*(gv[0]*obs[27] + gv[1]*obs[28]);
+        out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t12 + t14 + t16;
+        out[19] = 0.0;
+        out[20] = fr[0];
+        out[21] = -t12;
+        out[22] = fr[1];
+        out[23] = -t14;
+        out[24] = fr[2];
+        out[25] = -t16;
+        if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
+        return SG_OK;
     }
 }
 

@@ -292,52 +292,36 @@ int sg_take_up_forces(const double *q, const double *cq, const double *x, const 
         out[1] = c[44]*(-gv[1] + obs[26]) + out[3] - ld[1];
         out[0] = c[44]*(-gv[0] + obs[25]) + out[2] - ld[0];
         out[8] = c[41]*obs[20] - out[0]*(c[22]*t7 + t6) - out[1]*(c[25]*t5 + t8) - out[2]*(c[23]*t5 + c[43]*t7) - out[3]*(c[23]*t7 + c[42]*t5) + fr[0] - ld[0]*(c[42]*t7 + t6) - ld[1]*(c[43]*t5 + t8) - ld[6];
-        if (c[57] == 0.0 && c[58] == 0.0 && c[59] == 0.0) {
-            out[9] = out[8];
-            out[10] = out[8]*xd[0];
-            out[11] = out[0] + out[4];
-            out[12] = out[1] + out[5];
-            out[13] = c[12]*out[4] + c[4]*out[5] + out[8] + fr[2];
-            out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
-            out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
-            out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + t11 + t13 + t9;
-            out[17] = 0.0;
-            out[18] = fr[0];
-            out[19] = -t11;
-            out[20] = fr[1];
-            out[21] = -t13;
-            out[22] = fr[2];
-            out[23] = -t9;
-            if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))))) return SG_NONFINITE;
-            return SG_OK;
+        if (!(c[57] == 0.0 && c[58] == 0.0 && c[59] == 0.0)) {
+            double frn[3];
+            frn[0] = c[54]*sqrt(((out[2])*(out[2])) + ((out[3])*(out[3])))*((t10) > 0.0 ? 1.0 : ((t10) < 0.0 ? -1.0 : 0.0));
+            frn[1] = c[55]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t12) > 0.0 ? 1.0 : ((t12) < 0.0 ? -1.0 : 0.0));
+            frn[2] = c[56]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((obs[37]) > 0.0 ? 1.0 : ((obs[37]) < 0.0 ? -1.0 : 0.0));
+            double d = 0.0, s = 0.0;
+            for (int k = 0; k < 3; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
+            if (!(d <= 1e-13 * s)) {
+                if (it >= 100) return SG_NO_CONVERGENCE;
+                for (int k = 0; k < 3; ++k) fr[k] = frn[k];
+                continue;
+            }
         }
-        double frn[3];
-        frn[0] = c[54]*sqrt(((out[2])*(out[2])) + ((out[3])*(out[3])))*((t10) > 0.0 ? 1.0 : ((t10) < 0.0 ? -1.0 : 0.0));
-        frn[1] = c[55]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t12) > 0.0 ? 1.0 : ((t12) < 0.0 ? -1.0 : 0.0));
-        frn[2] = c[56]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((obs[37]) > 0.0 ? 1.0 : ((obs[37]) < 0.0 ? -1.0 : 0.0));
-        double d = 0.0, s = 0.0;
-        for (int k = 0; k < 3; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
-        if (d <= 1e-13 * s) {
-            out[9] = out[8];
-            out[10] = out[8]*xd[0];
-            out[11] = out[0] + out[4];
-            out[12] = out[1] + out[5];
-            out[13] = c[12]*out[4] + c[4]*out[5] + out[8] + fr[2];
-            out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
-            out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
-            out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + t11 + t13 + t9;
-            out[17] = 0.0;
-            out[18] = fr[0];
-            out[19] = -t11;
-            out[20] = fr[1];
-            out[21] = -t13;
-            out[22] = fr[2];
-            out[23] = -t9;
-            if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))))) return SG_NONFINITE;
-            return SG_OK;
-        }
-        if (it >= 100) return SG_NO_CONVERGENCE;
-        for (int k = 0; k < 3; ++k) fr[k] = frn[k];
+        out[9] = out[8];
+        out[10] = out[8]*xd[0];
+        out[11] = out[0] + out[4];
+        out[12] = out[1] + out[5];
+        out[13] = c[12]*out[4] + c[4]*out[5] + out[8] + fr[2];
+        out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
+        out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
+        out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + t11 + t13 + t9;
+        out[17] = 0.0;
+        out[18] = fr[0];
+        out[19] = -t11;
+        out[20] = fr[1];
+        out[21] = -t13;
+        out[22] = fr[2];
+        out[23] = -t9;
+        if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))))) return SG_NONFINITE;
+        return SG_OK;
     }
 }
 

@@ -254,12 +254,14 @@ class KernelSet:
             # every coefficient 0 (the seeds' assumption, the catalog's default): fr stays 0, the first solve is
             # the answer, bit for bit the kernel without friction
             mus = " && ".join(f"{pr.doprint(e)} == 0.0" for e in self.prepare([mu for _, mu, _ in kst.mech.frictions]))
-            loop = solve + [f"if ({mus}) {{"] + ["    " + line for line in finish] + ["}", f"double frn[{nfr}];"] + [f"frn[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_fr)]
-            loop += ["double d = 0.0, s = 0.0;",
+            step = [f"double frn[{nfr}];"] + [f"frn[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_fr)]
+            step += ["double d = 0.0, s = 0.0;",
                      f"for (int k = 0; k < {nfr}; ++k) {{ d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }}",
-                     f"if (d <= {FRICTION_RTOL!r} * s) {{"] + ["    " + line for line in finish] + ["}",
-                     f"if (it >= {FRICTION_ITER}) return SG_NO_CONVERGENCE;",
-                     f"for (int k = 0; k < {nfr}; ++k) fr[k] = frn[k];"]
+                     f"if (!(d <= {FRICTION_RTOL!r} * s)) {{",  # not settled (NaN included): once more
+                     f"    if (it >= {FRICTION_ITER}) return SG_NO_CONVERGENCE;",
+                     f"    for (int k = 0; k < {nfr}; ++k) fr[k] = frn[k];",
+                     "    continue;", "}"]
+            loop = solve + [f"if (!({mus})) {{"] + ["    " + line for line in step] + ["}"] + finish
             body = [f"double fr[{nfr}] = {{0.0}};", "for (int it = 0; ; ++it) {"] + ["    " + x for x in loop] + ["}"]
         else:
             body = solve + finish
