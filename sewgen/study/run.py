@@ -70,7 +70,7 @@ def dask_client(spec):
         n = int(m.group(1)) if m.group(1) else None
         if n is not None and n < 1:
             raise StudyError("--dask", f"local:N needs N >= 1 workers, got {n}")
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
         return Client(cluster), True
     if re.fullmatch(r"(tcp|tls|inproc|ws|wss)://\S+", text):
         try:
