@@ -117,7 +117,7 @@ def cmd_influence(args, con: Console) -> int:
     options = _options(args, loads=not args.no_loads)
     out = check_output_folder(Path(args.out), "--out")
     if not args.param:
-        raise UsageError("--param", "name at least one model-file key, e.g. groups.feed.params.feed_arm_r")
+        raise UsageError("--param", "name at least one model-file key, e.g. groups.GROUP.params.NAME")
     machine = load_machine(args.model)
     res = influence(machine, args.param, args.range or ["-10%..+10%"], args.steps, options,
                     chunk_size=_chunk(args), dask=args.dask, progress=con.show_progress)
@@ -153,12 +153,12 @@ def _tolerances(items) -> dict:
     for item in items or []:
         key, sep, val = item.partition("=")
         if not sep or not key.strip() or not val.strip():
-            raise UsageError("--tolerance", f'"{item}" must be KEY=±TOL, e.g. groups.feed.params.feed_arm_r=±0.02mm')
+            raise UsageError("--tolerance", f'"{item}" must be KEY=±TOL, e.g. groups.GROUP.params.NAME=±0.02mm')
         if key.strip() in out:
             raise UsageError("--tolerance", f"{key.strip()} given twice")
         out[key.strip()] = val.strip()
     if not out:
-        raise UsageError("--tolerance", "give at least one KEY=±TOL, e.g. groups.feed.params.feed_arm_r=±0.02mm")
+        raise UsageError("--tolerance", "give at least one KEY=±TOL, e.g. groups.GROUP.params.NAME=±0.02mm")
     return out
 
 
@@ -223,7 +223,7 @@ def add_parser(sub, common) -> None:
     q = ss.add_parser("influence", help="each parameter moved over a range, the others at nominal; sensitivities")
     _study_common(q, common)
     q.add_argument("--param", action="append", metavar="KEY",
-                   help="a model-file key, e.g. groups.feed.params.feed_arm_r (repeatable)")
+                   help="a model-file key, groups.GROUP.params.NAME, groups.GROUP.phase, shaft.rear_bearing … (repeatable)")
     q.add_argument("--range", action="append", metavar="LO..HI",
                    help='"-10%%..+10%%" of the nominal (default) or "15 mm..18 mm"; one for all or one per --param')
     q.add_argument("--steps", type=int, default=11, help="values per parameter (default 11)")
@@ -232,7 +232,7 @@ def add_parser(sub, common) -> None:
     t = ss.add_parser("tolerance", help="Monte Carlo of tolerances: histograms, percentiles, failing designs")
     _study_common(t, common)
     t.add_argument("--tolerance", action="append", metavar="KEY=±TOL",
-                   help="e.g. groups.feed.params.feed_arm_r=±0.02mm or ...=±1%% (repeatable)")
+                   help="e.g. groups.GROUP.params.NAME=±0.02mm or ...=±1%% (repeatable)")
     t.add_argument("--samples", type=int, default=1000, help="Monte Carlo samples (default 1000)")
     t.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     t.add_argument("--distribution", choices=("normal", "uniform"), default="normal",

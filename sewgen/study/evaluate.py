@@ -191,8 +191,9 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
         pre = "" if len(fgroups) == 1 else f"{g.name}."
         if g.name in varied or nominal or per_design_timing:
             s = sweeps[g.name]
-            rows_g = np.arange(d) if (g.name in varied or nominal) else np.zeros(d, dtype=int)
-            x, y, vx, vy, ax, tilt, arc = fi.group_arrays(g.mechanism, s.obs[rows_g])
+            own = g.name in varied or nominal
+            rows_g = np.arange(d) if own else np.zeros(d, dtype=int)
+            x, y, vx, vy, ax, tilt, arc = fi.group_arrays(g.mechanism, s.obs if own else s.obs[rows_g])
             plate = s.params[rows_g, g.mechanism.description.role(THROAT_PLATE).index]
             n_in = cols.get("needle_in_cloth", np.full(d, np.nan))
             n_out = cols.get("needle_out_cloth", np.full(d, np.nan))

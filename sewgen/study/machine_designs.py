@@ -121,7 +121,7 @@ def parse_key(machine, key: str, doc: dict | None = None) -> DesignKey:
     does not have, or a value that is no quantity, is a ParameterError naming the key."""
     if not isinstance(key, str) or not key.strip():
         raise ParameterError(machine.name, str(key), "a design key must be a dotted model-file key, e.g. "
-                                                     "groups.feed.params.feed_arm_r")
+                                                     "groups.GROUP.params.NAME")
     key = key.strip()
     m = re.match(r"^groups\.(?P<g>[^.]+)\.params\.(?P<p>.+)$", key)
     if m:

@@ -21,7 +21,7 @@ from .evaluate import FAILED, FAILURES, StudyOptions, evaluate_chunk, quantity_c
 from .machine_designs import DesignKey, MachineDesigns, model_doc, parse_key
 
 #: designs per chunk (one batched evaluation call each): parameter-only designs / designs that reload the model
-CHUNK = 500
+CHUNK = 100
 CHUNK_RELOAD = 4
 
 
