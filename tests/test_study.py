@@ -126,6 +126,23 @@ def test_a_study_on_a_two_worker_local_cluster_is_the_in_process_result(jb):
     assert (here.table["status"] == "ok").all()
 
 
+def test_a_study_on_a_running_scheduler_by_its_address(jb):
+    distributed = pytest.importorskip("distributed")
+    from sewgen.study.run import StudyError, dask_client
+
+    designs = [[0.0293], [0.0294], [0.05]]  # the last: the dog never sinks below the plate
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    here = run_designs(jb, ["groups.feed.params.feed_arm_r"], designs, opts, chunk_size=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as c:
+        there = run_designs(jb, ["groups.feed.params.feed_arm_r"], designs, opts, chunk_size=1,
+                            dask=c.scheduler_address)
+    pd.testing.assert_frame_equal(here, there, check_exact=True)
+    assert list(there["status"]) == ["ok", "ok", "FeedDogError"]
+    for bad in ("local:0", "nowhere", "local:two"):
+        with pytest.raises(StudyError, match="--dask"):
+            dask_client(bad)
+
+
 # -- the command --------------------------------------------------------------------------------------------------
 
 def test_study_influence_command_writes_tables_with_units(tmp_path, capsys):
