@@ -111,7 +111,7 @@ def _write_json(path, data):
 
 def cmd_influence(args, con: Console) -> int:
     from ..machine import load_machine
-    from ..report import check_output_folder, staged_folder
+    from ..report import check_output_folder, model_path, staged_folder
     from .run import FD_SCHEME, influence
 
     options = _options(args, loads=not args.no_loads)
@@ -129,7 +129,7 @@ def cmd_influence(args, con: Console) -> int:
             files += influence_plots(res, tmp)
         bad = res.table[res.table["status"] != "ok"]
         files.append(_write_json(tmp / "study.json", {
-            "study": "influence", "machine": machine.name, "model_file": machine.source,
+            "study": "influence", "machine": machine.name, "model_file": model_path(machine.source),
             "parameters": [{"key": k.key, "unit": k.unit, "nominal": k.nominal * k.factor} for k in res.keys],
             "ranges": args.range or ["-10%..+10%"], "steps": args.steps, "sensitivity_scheme": FD_SCHEME,
             "step_deg": options.step_deg, "speed_rad_s": options.speed or machine.speed,
@@ -164,7 +164,7 @@ def _tolerances(items) -> dict:
 
 def cmd_tolerance(args, con: Console) -> int:
     from ..machine import load_machine
-    from ..report import check_output_folder, staged_folder
+    from ..report import check_output_folder, model_path, staged_folder
     from .run import PERCENTILES, tolerance
 
     options = _options(args, loads=args.loads)
@@ -184,7 +184,7 @@ def cmd_tolerance(args, con: Console) -> int:
         if not args.no_plots:
             files += tolerance_plots(res, tmp)
         files.append(_write_json(tmp / "study.json", {
-            "study": "tolerance", "machine": machine.name, "model_file": machine.source,
+            "study": "tolerance", "machine": machine.name, "model_file": model_path(machine.source),
             "tolerances": [{"key": k.key, "unit": k.unit, "nominal": k.nominal * k.factor, "tolerance": t * k.factor}
                            for k, t in zip(res.keys, res.tolerances)],
             "distribution": res.distribution + (": tolerance = 3 sigma, clipped at 3 sigma"
