@@ -89,6 +89,17 @@ def test_a_model_key_reloads_the_machine_and_a_refused_design_names_the_key(jb):
     assert df.columns[:2].tolist() == ["groups.hook_drive.phase [deg]", "shaft.rear_bearing [mm]"]
 
 
+def test_a_machine_design_table_by_column_names_with_units(jb):
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    a = run_designs(jb, ["groups.feed.params.feed_arm_r"], [[0.0293], [0.0295]], opts)
+    b = run_designs(jb, pd.DataFrame({"groups.feed.params.feed_arm_r [mm]": [29.3, 29.5]}), options=opts)
+    c = run_designs(jb, {"groups.feed.params.feed_arm_r": [0.0293, 0.0295]}, options=opts)
+    pd.testing.assert_frame_equal(a, c, check_exact=True)
+    pd.testing.assert_frame_equal(a.drop(columns=a.columns[0]), b.drop(columns=b.columns[0]), check_exact=False,
+                                  rtol=1e-12)
+    assert b.columns[0] == "groups.feed.params.feed_arm_r [mm]"
+
+
 # -- studies ------------------------------------------------------------------------------------------------------
 
 def test_influence_needle_stroke_to_crank_radius_is_two(jb):

@@ -80,14 +80,39 @@ def dask_client(spec):
     raise StudyError("--dask", f'"{text}" is neither local, local:N nor a scheduler address tcp://host:port')
 
 
-def run_designs(machine, keys, values, options: StudyOptions | None = None, *, chunk_size: int | None = None,
+def design_columns(machine, table) -> tuple[list, np.ndarray]:
+    """(keys, SI values) of a design table whose columns are model-file keys, in SI (``groups.feed.params.x``)
+    or with a unit (``groups.feed.params.x [mm]``, as the study tables name them): a DataFrame or a mapping."""
+    keys, cols = [], []
+    names = list(table.columns) if hasattr(table, "columns") else list(table)
+    for name in names:
+        m = re.fullmatch(r"(?P<key>.*?)\s*\[(?P<unit>[^\]]*)\]", str(name))
+        key = parse_keys(machine, [m["key"] if m else str(name)])[0]
+        factor = 1.0
+        if m and m["unit"].strip():
+            try:
+                from ..units import to_si
+
+                factor = to_si(f"1 {m['unit'].strip()}", key.kind, str(name))
+            except SewgenError as exc:
+                raise StudyError(str(name), exc.problem) from None
+        keys.append(key)
+        cols.append(np.asarray(table[name], dtype=float) * factor)
+    return keys, (np.column_stack(cols) if cols else np.zeros((0, 0)))
+
+
+def run_designs(machine, keys, values=None, options: StudyOptions | None = None, *, chunk_size: int | None = None,
                 dask=None, progress=None):
-    """Every design (``keys`` × ``values`` (D, k) in SI) of ``machine`` evaluated: a DataFrame with the keys
-    (display units), ``status``, ``error`` and every quantity, one row per design in the table's order."""
+    """Every design of ``machine`` evaluated: ``keys`` (model-file keys) × ``values`` ((D, k), SI), or ``keys``
+    a design table (a DataFrame or mapping whose columns are keys, SI or with a unit: ``"<key> [mm]"``) and no
+    ``values``. Returns a DataFrame with the keys (display units), ``status``, ``error`` and every quantity, one
+    row per design in the table's order."""
     from ..frames import pandas
 
     pd = pandas()
     options = options or StudyOptions()
+    if values is None:
+        keys, values = design_columns(machine, keys)
     keys = parse_keys(machine, keys)
     values = np.asarray(values, dtype=float)
     MachineDesigns(machine, keys, values[:0])  # the keys checked before any work
