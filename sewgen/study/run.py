@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ParameterError, SewgenError
+from ..errors import SewgenError
 from .evaluate import FAILED, FAILURES, StudyOptions, evaluate_chunk, quantity_columns
 from .machine_designs import DesignKey, MachineDesigns, model_doc, parse_key
 
@@ -335,9 +335,6 @@ def tolerance(machine, tolerances: dict, samples: int = 1000, seed: int | None =
               options: StudyOptions | None = None, **run):
     """Monte Carlo: every key of ``tolerances`` (key -> "±0.02 mm") drawn independently round its nominal —
     ``normal``: the tolerance is 3σ (clipped at ±3σ); ``uniform``: anywhere within ± the tolerance."""
-    from ..frames import pandas
-
-    pd = pandas()
     options = options or StudyOptions(loads=False)
     keys = parse_keys(machine, list(tolerances))
     tol = np.array([parse_tolerance(k, tolerances[k.key]) for k in keys])
