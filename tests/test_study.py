@@ -110,6 +110,18 @@ def test_influence_needle_stroke_to_crank_radius_is_two(jb):
     assert "central difference" in r.scheme
 
 
+def test_linked_keys_move_together(jb):
+    spec = "groups.hook_drive.phase,groups.feed.params.hook_crank.phase"
+    r = influence(jb, [spec], "-4 deg..0 deg", 3, StudyOptions(step_deg=5.0, loads=False))
+    a, b = r.table["groups.hook_drive.phase [deg]"], r.table["groups.feed.params.hook_crank.phase [deg]"]
+    assert np.allclose(a, b, atol=1e-12) and sorted(np.round(a, 9).unique()) == [-4.0, -2.0, 0.0]
+    assert set(r.table["varied"]) == {"", "groups.hook_drive.phase"}
+    t = tolerance(jb, {spec: "±1 deg"}, 6, seed=0, options=StudyOptions(step_deg=5.0, loads=False))
+    assert np.allclose(t.table["groups.hook_drive.phase [deg]"], t.table["groups.feed.params.hook_crank.phase [deg]"])
+    with pytest.raises(Exception, match="cannot move with"):
+        influence(jb, ["groups.hook_drive.phase,groups.feed.params.feed_arm_r"], "-1%..1%", 2)
+
+
 def test_tolerance_with_zero_tolerance_has_zero_spread(jb):
     r = tolerance(jb, {"groups.feed.params.feed_arm_r": "±0 mm", "groups.needle_bar.params.crank": "0 mm"}, 12,
                   seed=5)

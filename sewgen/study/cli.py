@@ -223,7 +223,8 @@ def add_parser(sub, common) -> None:
     q = ss.add_parser("influence", help="each parameter moved over a range, the others at nominal; sensitivities")
     _study_common(q, common)
     q.add_argument("--param", action="append", metavar="KEY",
-                   help="a model-file key, groups.GROUP.params.NAME, groups.GROUP.phase, shaft.rear_bearing … (repeatable)")
+                   help="a model-file key, groups.GROUP.params.NAME, groups.GROUP.phase, shaft.rear_bearing …; "
+                        "KEY,KEY2,... moves KEY2... by the same offset (repeatable)")
     q.add_argument("--range", action="append", metavar="LO..HI",
                    help='"-10%%..+10%%" of the nominal (default) or "15 mm..18 mm"; one for all or one per --param')
     q.add_argument("--steps", type=int, default=11, help="values per parameter (default 11)")

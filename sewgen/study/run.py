@@ -45,6 +45,35 @@ def parse_keys(machine, keys) -> list[DesignKey]:
     return out
 
 
+def linked_keys(machine, specs) -> tuple[list, list]:
+    """Keys that move together: ``"groups.hook_drive.phase,groups.feed.params.hook_crank.phase"`` varies the
+    first and moves the others by the same offset from their own nominals (a model's coupling, such as a
+    crank one group copies from another, stays as the model has it). Returns (the first keys, the followers of
+    each)."""
+    firsts, followers = [], []
+    for spec in specs:
+        parts = [p.strip() for p in str(spec).split(",")] if not isinstance(spec, DesignKey) else [spec]
+        if any(p == "" for p in parts):
+            raise StudyError("--param", f'"{spec}": an empty key in a linked set (KEY,KEY,...)')
+        ks = parse_keys(machine, parts)
+        for k in ks[1:]:
+            if k.kind != ks[0].kind:
+                raise StudyError("--param", f"{k.key} ({k.kind}) cannot move with {ks[0].key} ({ks[0].kind})")
+        firsts.append(ks[0])
+        followers.append(ks[1:])
+    return firsts, followers
+
+
+def _expand(firsts, followers, values):
+    """The design values of the first keys (D, k) with the followers' columns appended: (keys, values)."""
+    keys, cols = list(firsts), [values[:, j] for j in range(len(firsts))]
+    for j, fol in enumerate(followers):
+        for k in fol:
+            keys.append(k)
+            cols.append(k.nominal + (values[:, j] - firsts[j].nominal))
+    return keys, np.column_stack(cols) if cols else values
+
+
 def _progress(total: int, desc: str, enabled):
     if enabled is False or enabled is None:
         return None
@@ -224,7 +253,7 @@ def influence(machine, params, ranges, steps: int = 11, options: StudyOptions | 
 
     pd = pandas()
     options = options or StudyOptions()
-    keys = parse_keys(machine, params)
+    keys, followers = linked_keys(machine, params)
     if isinstance(ranges, str):
         ranges = [ranges]
     if len(ranges) == 1:
@@ -253,7 +282,7 @@ def influence(machine, params, ranges, steps: int = 11, options: StudyOptions | 
             rows.append(row)
             varied.append(k.key)
             role.append("fd+" if sgn > 0 else "fd-")
-    df = run_designs(machine, keys, np.array(rows), options, **run)
+    df = run_designs(machine, *_expand(keys, followers, np.array(rows)), options, **run)
     df.insert(0, "varied", varied)
     df.insert(1, "role", role)
     quantities = [c for c in quantity_columns(machine, options) if c != FAILED]
@@ -336,8 +365,9 @@ def tolerance(machine, tolerances: dict, samples: int = 1000, seed: int | None =
     """Monte Carlo: every key of ``tolerances`` (key -> "±0.02 mm") drawn independently round its nominal —
     ``normal``: the tolerance is 3σ (clipped at ±3σ); ``uniform``: anywhere within ± the tolerance."""
     options = options or StudyOptions(loads=False)
-    keys = parse_keys(machine, list(tolerances))
-    tol = np.array([parse_tolerance(k, tolerances[k.key]) for k in keys])
+    specs = list(tolerances)
+    keys, followers = linked_keys(machine, specs)
+    tol = np.array([parse_tolerance(k, tolerances[spec]) for k, spec in zip(keys, specs)])
     if not (isinstance(samples, (int, np.integer)) and samples >= 1):
         raise StudyError("--samples", f"must be a positive integer, got {samples!r}")
     if distribution not in ("normal", "uniform"):
@@ -349,7 +379,7 @@ def tolerance(machine, tolerances: dict, samples: int = 1000, seed: int | None =
         u = rng.uniform(-1.0, 1.0, (samples, len(keys)))
     nominal = np.array([k.nominal for k in keys])
     values = nominal[None, :] + u * tol[None, :]
-    df = run_designs(machine, keys, np.vstack([nominal[None, :], values]), options, **run)
+    df = run_designs(machine, *_expand(keys, followers, np.vstack([nominal[None, :], values])), options, **run)
     nom, table = df.iloc[0], df.iloc[1:].reset_index(drop=True)
     res = ToleranceResult(machine.name, keys, list(tol), distribution, seed, table, nom)
     res.stats = statistics(res, quantity_columns(machine, options))
