@@ -58,6 +58,7 @@ class Config:
     # Agreement of baseline and compiled results, relative to each column's scale. scipy's root ("hybr",
     # default xtol 1.49e-8) leaves relative errors up to ~1e-8 in the baseline itself (hook_drive: 9e-9).
     rtol: float = 1e-7
+    study_designs: int = 100_000  # designs of the "study" entries (the JB1-3 feed group's tolerance study)
     baseline_angles: str = "spread"  # "spread": every k-th sweep angle; "contiguous": the first ones
 
     def sweep_angles(self) -> np.ndarray:
@@ -462,6 +463,16 @@ def table(rows: list[dict]) -> str:
         if r["kernel"] == "derive":
             lines.append((r["mechanism"], "derive", f"{r['derive_seconds']:.2f} s", "-", "-", "-", "-"))
             continue
+        if r["kernel"] == "study":  # a design study: wall time, the 10 s target, the 2-worker speed-up
+            check = f"{'ok' if x['meets_target'] else 'MISSES'} < {x['target_s']:.0f} s"
+            if "speedup_vs_1_worker" in x:
+                check += (f"; {x['speedup_vs_1_worker']:.2f}x of 1 worker "
+                          f"({'ok' if x['speedup_vs_1_worker'] >= x['target_speedup'] else 'MISSES'} >= 1.7x)")
+            if "agree" in x:
+                check += "; = in-process" if x["agree"] else "; DIFFERS from in-process"
+            lines.append((r["mechanism"], r["kernel"], f"{x['seconds']:.1f} s", "-", "-",
+                          f"{x['designs_per_s']:.0f} designs/s", check))
+            continue
         if "wall_ms" in x:  # a whole command's wall time: ms in the first column, the target in the last
             lines.append((r["mechanism"], r["kernel"], f"{x['wall_ms']:.0f} ms", "-", "-", "-",
                           f"{'ok' if x['meets_target'] else 'MISSES'} < {x['target_ms']:.0f} ms"))
@@ -621,6 +632,80 @@ def _balance_entry(objective: str):
     return run
 
 
+#: The tolerance study the "study" entries time: every feed-group length of the JB1-3 at ±0.02 mm (normal, 3σ),
+#: every feed-dog index per design (sewgen.study), on the model's own 5° sweep; no loads.
+STUDY_TOLERANCES = {f"groups.feed.params.{k}": "±0.02mm" for k in ("feed_arm_r", "feed_arm_p", "lift_arm", "fork_p",
+                                                                  "fork_q", "dog_u", "bar_slot_v", "cam_side")}
+STUDY_TARGET_S = 10.0
+_STUDY: dict = {}
+
+
+def _study_runs(cfg: Config) -> dict:
+    """The same 10⁵-design tolerance study in-process, on a 1-worker and on a 2-worker LocalCluster (each
+    cluster's start-up timed apart); the three results are checked equal bit for bit."""
+    key = cfg.study_designs
+    if key in _STUDY:
+        return _STUDY[key]
+    import pandas as pd
+
+    from .machine import load_machine
+    from .study import StudyOptions, tolerance
+    from .study.run import dask_client
+
+    machine = load_machine("jb1-3")
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    tolerance(machine, STUDY_TOLERANCES, 10, seed=0, options=opts)  # warm-up (the nominal baseline)
+    out = {}
+    t0 = time.perf_counter()
+    ref = tolerance(machine, STUDY_TOLERANCES, cfg.study_designs, seed=0, options=opts)
+    out["in-process"] = {"seconds": time.perf_counter() - t0}
+    for n in (1, 2):
+        t0 = time.perf_counter()
+        client, _ = dask_client(f"local:{n}")
+        start = time.perf_counter() - t0
+        try:
+            client.run(lambda: None)
+            tolerance(machine, STUDY_TOLERANCES, 10, seed=0, options=opts, dask=client)  # workers warm
+            t0 = time.perf_counter()
+            res = tolerance(machine, STUDY_TOLERANCES, cfg.study_designs, seed=0, options=opts, dask=client)
+            secs = time.perf_counter() - t0
+        finally:
+            cluster = client.cluster
+            client.close()
+            cluster.close()
+        try:
+            pd.testing.assert_frame_equal(ref.table, res.table, check_exact=True)
+            same = True
+        except AssertionError:
+            same = False
+        out[f"dask local:{n}"] = {"seconds": secs, "cluster_start_s": start, "same_as_in_process": same}
+    out["failing"] = int(len(ref.failures))
+    _STUDY[key] = out
+    return out
+
+
+def _study_entry(which: str):
+    def run(cfg: Config) -> Result:
+        r = _study_runs(cfg)
+        secs = r[which]["seconds"]
+        extra = {"designs": cfg.study_designs, "seconds": secs, "designs_per_s": cfg.study_designs / secs,
+                 "step_deg": 5.0, "target_s": STUDY_TARGET_S, "meets_target": secs < STUDY_TARGET_S,
+                 "wall_ms": secs * 1e3, "target_ms": STUDY_TARGET_S * 1e3, "failing_designs": r["failing"]}
+        if which != "in-process":
+            extra.update(cluster_start_s=r[which]["cluster_start_s"], agree=r[which]["same_as_in_process"],
+                         max_rel_diff=0.0 if r[which]["same_as_in_process"] else math.inf, worst="table",
+                         dask_overhead_s=secs - r["in-process"]["seconds"] if which.endswith(":1") else None)
+        if which.endswith(":2"):
+            extra["speedup_vs_1_worker"] = r["dask local:1"]["seconds"] / secs
+            extra["target_speedup"] = 1.7
+        return cfg.study_designs / secs, None, extra
+
+    return run
+
+
+for _which in ("in-process", "dask local:1", "dask local:2"):
+    register_entry(f"jb1-3 feed tolerance ({_which})", "study", _study_entry(_which))
+
 register_entry("jb1-3", "balance bearings peak", _balance_entry("peak"))
 register_entry("jb1-3", "balance bearings rms", _balance_entry("rms"))
 register_entry("cli", "import sewgen", _wall_entry(["-c", "import sewgen"], 300.0))
@@ -644,6 +729,8 @@ def main(argv=None) -> int:
                     help="baseline/compiled agreement, relative to each column's scale (default %(default)g)")
     ap.add_argument("--mechanism", action="append", metavar="NAME",
                     help="restrict to this mechanism (repeatable); 'catalog' selects the derive line")
+    ap.add_argument("--study-designs", type=int, default=Config.study_designs,
+                    help="designs of the 'study' entries (default %(default)s)")
     ap.add_argument("--json", action="store_true", help="print a JSON list instead of the table")
     args = ap.parse_args(argv)
     if args.positions < 1 or args.baseline_positions < 1 or args.repeats < 1:
@@ -653,7 +740,8 @@ def main(argv=None) -> int:
         if name not in known:
             ap.error(f"unknown mechanism {name!r}; known: {', '.join(sorted(known))}")
     cfg = Config(positions=args.positions, baseline_positions=args.baseline_positions,
-                 repeats=args.repeats, baseline_angles=args.baseline_angles, rtol=args.rtol)
+                 repeats=args.repeats, baseline_angles=args.baseline_angles, rtol=args.rtol,
+                 study_designs=args.study_designs)
     t0 = time.perf_counter()
     rows = run(cfg, args.mechanism)
     if args.json:

@@ -505,6 +505,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-gif", action="store_true", help="no animation")
     _common(p)
     p.set_defaults(fn=cmd_analyze)
+    from .study import cli as study_cli
+
+    study_cli.add_parser(sub, _common)
     p = sub.add_parser("timing", help="stitch-formation timing: events, rule margins (exit 1 if a rule fails)")
     p.add_argument("model", help='a built-in machine ("jb1-3") or a model file (.toml)')
     p.add_argument("--speed", help='upper-shaft speed for the take-up eye\'s speed, e.g. "1500 rpm"')
@@ -519,8 +522,25 @@ def _one_line(text: str) -> str:
     return " ".join(part.strip() for part in str(text).splitlines() if part.strip())
 
 
+#: Options whose value may start with "-" ("-10%..+10%"): joined to their option before argparse sees them.
+DASH_VALUES = ("--range",)
+
+
+def _join_dash_values(argv: list) -> list:
+    out, i = [], 0
+    while i < len(argv):
+        a = argv[i]
+        if a in DASH_VALUES and i + 1 < len(argv) and str(argv[i + 1]).startswith("-"):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    args = build_parser().parse_args(_join_dash_values(list(sys.argv[1:] if argv is None else argv)))
     con = Console(quiet=getattr(args, "quiet", False))
     try:
         return args.fn(args, con)

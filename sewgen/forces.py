@@ -266,3 +266,28 @@ class ForceAnalysis:
 
     def to_csv(self, path) -> None:
         write_csv(path, self.table())
+
+    def _all_columns(self) -> dict:
+        cols = dict(self.motion.table())
+        cols.update({k: v for k, v in self.table().items() if not k.startswith("phi ")})
+        return cols
+
+    def to_dataframe(self, kinematics: bool = True):
+        """Every force result (and, with ``kinematics``, every kinematic one) as a pandas DataFrame, one row per
+        shaft angle (index ``phi [deg]``), columns ``"<name> [unit]"``."""
+        from .frames import dataframe
+
+        return dataframe(self._all_columns() if kinematics else self.table(), np.degrees(self.phi))
+
+    def to_xarray(self):
+        """Kinematics and forces as an xarray Dataset over ``phi`` (deg) (xarray is optional)."""
+        from .frames import dataset
+
+        return dataset(self._all_columns(), np.degrees(self.phi), {"mechanism": self.mechanism.name})
+
+    def __repr__(self) -> str:
+        from .frames import angle_span, speed_text
+
+        return (f"<ForceAnalysis of {self.mechanism.name}: {angle_span(self.phi)} at "
+                f"{speed_text(self.motion.omega)}; joints {', '.join(self.reaction_names) or 'none'}; inputs "
+                f"{', '.join(i.name for i in self.mechanism.description.inputs)}>")

@@ -245,6 +245,36 @@ class MachineAnalysis:
                                  * (np.hypot(*self.front.T) + np.hypot(*self.rear.T)))
         self.torque = sum(fa.torque("shaft") for fa in self.groups.values()) + core_torque + self.bearing_friction
 
+    # -- tables ----------------------------------------------------------------------------------------------
+    def to_dataframe(self, group: str | None = None):
+        """The machine's table (bearings, torques, shaking force and moments, powers; the report's machine.csv)
+        as a pandas DataFrame indexed by the machine's shaft angle ``phi [deg]``; with ``group``, that group's
+        kinematics and forces (its <group>.csv)."""
+        from .frames import dataframe
+        from .report import group_table, machine_table
+
+        if group is not None:
+            if group not in self.groups:
+                raise KeyError(f"{self.machine.name} has no group {group!r}; groups: {', '.join(self.groups)}")
+            cols = group_table(self.groups[group], self.phi)
+        else:
+            cols = machine_table(self)
+        return dataframe({k: v for k, v in cols.items() if k != "phi [deg]"}, np.degrees(self.phi))
+
+    def to_xarray(self):
+        """The machine's table as an xarray Dataset over ``phi`` (deg) (xarray is optional)."""
+        from .frames import dataset
+        from .report import machine_table
+
+        return dataset({k: v for k, v in machine_table(self).items() if k != "phi [deg]"}, np.degrees(self.phi),
+                       {"machine": self.machine.name})
+
+    def __repr__(self) -> str:
+        from .frames import angle_span, speed_text
+
+        return (f"<MachineAnalysis of {self.machine.name}: {angle_span(self.phi)} at {speed_text(self.omega)}; "
+                f"groups {', '.join(self.groups)}>")
+
     # -- results ---------------------------------------------------------------------------------------------
     def bearing(self, which: str) -> np.ndarray:
         """(n, 2) load the shaft puts on the frame at bearing "front" or "rear" (N)."""
@@ -464,11 +494,13 @@ LOAD = {
 }
 
 
-def load_machine(name_or_path) -> Machine:
-    """A machine from a model file (or a built-in model such as "jb1-3"), checked and converted to SI."""
+def load_machine(name_or_path, doc: dict | None = None) -> Machine:
+    """A machine from a model file (or a built-in model such as "jb1-3"), checked and converted to SI. ``doc``:
+    the file's parsed TOML, changed (a design study's variant, sewgen.study.machine_designs); relative paths in
+    it still resolve beside the file."""
     path = resolve(name_or_path)
     rd = Reader(path)
-    doc = rd.table(load_toml(path), "")
+    doc = rd.table(load_toml(path) if doc is None else doc, "")
     rd.check_keys(doc, "", {"machine": Field("table"), "shaft": Field("table"), "groups": Field("table"),
                             "stitch": Field("table", False), "thread": Field("table", False)})
     mach = rd.read(rd.table(doc["machine"], "machine"), "machine", MACHINE)

@@ -203,6 +203,11 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
                                          for axis, v in zip("xyz", moments.T)},
         "groups": {},
     }
+    if m.stitch is not None:
+        timing = timing or timing_of(a)
+    from .feed_indices import machine_indices
+
+    indices = machine_indices(m, timing, switches=switches)  # seed 001 §五.3, on the timing sweep
     for g in m.groups:
         fa = a.groups[g.name]
         entry = {"mechanism": g.mechanism.name, "phase_deg": math.degrees(g.phase),
@@ -225,12 +230,14 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
             entry[FEED_DOG] = {"travel_above_plate_mm": t.travel * 1e3, "height_above_plate_mm": t.height * 1e3,
                                "rises_at_deg": float(_deg(t.rise - g.phase)),
                                "sinks_at_deg": float(_deg(t.sink - g.phase))}
+        if g.name in indices:
+            entry.setdefault(FEED_DOG, {})["indices"] = indices[g.name]
         if switches and switches.get(g.name):
             entry["cam_arc_switches"] = [dict(s.as_dict(), angle_deg=float(_deg(s.angle - g.phase)))
                                          for s in switches[g.name]]
         out["groups"][g.name] = entry
     if m.stitch is not None:  # stitch-formation timing and thread control (sewgen.timing)
-        out["timing"] = (timing or timing_of(a)).as_dict()
+        out["timing"] = timing.as_dict()
     out["units"] = UNITS
     out["conventions"] = CONVENTIONS
     return _clean(out, "summary", m.source or None)

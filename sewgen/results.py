@@ -123,6 +123,26 @@ class Motion:
     def to_csv(self, path) -> None:
         write_csv(path, self.table())
 
+    def to_dataframe(self):
+        """Every result of :meth:`table` as a pandas DataFrame, one row per shaft angle (index ``phi [deg]``)."""
+        from .frames import dataframe
+
+        return dataframe(self.table(), np.degrees(self.phi))
+
+    def to_xarray(self):
+        """The same as an xarray Dataset over ``phi`` (deg), one variable per output with its unit (xarray is
+        optional)."""
+        from .frames import dataset
+
+        return dataset(self.table(), np.degrees(self.phi), {"mechanism": self.mechanism.name})
+
+    def __repr__(self) -> str:
+        from .frames import angle_span, speed_text
+
+        return (f"<Motion of {self.mechanism.name}: {angle_span(self.phi)} at {speed_text(self.omega)}; "
+                f"{len(self.coord_names)} coordinates, points {', '.join(self.point_names) or 'none'}; "
+                f"bodies {', '.join(self.body_names) or 'none'}>")
+
 
 def write_csv(path, cols: dict):
     """Columns (name -> array, equal lengths) as a CSV file with a header row; returns ``path``."""

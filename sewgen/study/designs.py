@@ -1,0 +1,142 @@
+"""Design tables and the one seam where designs are evaluated.
+
+A *design table* gives one parameter set per row: a pandas DataFrame (columns named by parameter), a mapping
+name -> array, or an ndarray in ``param_names`` order; every value in SI. :func:`design_matrix` turns any of
+them into the (D, n_params) matrix a mechanism's sweep reads, the parameters a table leaves out at their base
+values.
+
+:func:`sweep_group_designs` is the single place where a study evaluates many designs of one mechanism. Today it
+loops over the designs with :meth:`Mechanism.solve` / :meth:`Mechanism.kinetostatics`, catching each design's
+typed error into its status; everything downstream reads its stacked (designs × angles × …) arrays, so the
+batched C call of the sweep engine (``Mechanism.sweep_designs``) replaces the loop without changing a caller.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError, ParameterError, SewgenError
+
+
+def design_matrix(mech, designs, base: dict | None = None) -> np.ndarray:
+    """The (D, n_params) SI matrix of ``designs`` for ``mech``: a DataFrame or mapping (columns by parameter name;
+    the others at ``base``'s or the declaration's values) or an ndarray of shape (D, n_params) in
+    ``mech.param_names`` order. An unknown column is a ParameterError naming it."""
+    names = mech.param_names
+    p0 = mech.param_vector(base)
+    if isinstance(designs, np.ndarray) or (not isinstance(designs, Mapping) and not hasattr(designs, "columns")):
+        arr = np.asarray(designs, dtype=float)
+        if arr.ndim != 2 or arr.shape[1] != len(names):
+            raise InputError(mech.name, f"a design array must have shape (designs, {len(names)}) in param_names "
+                                        f"order, got {arr.shape}")
+        return np.ascontiguousarray(arr)
+    cols = list(designs.columns) if hasattr(designs, "columns") else list(designs)
+    index = {n: k for k, n in enumerate(names)}
+    lengths = {len(np.asarray(designs[c])) for c in cols}
+    if len(lengths) > 1:
+        raise InputError(mech.name, f"design columns of unequal lengths: {sorted(lengths)}")
+    d = lengths.pop() if lengths else 0
+    out = np.tile(p0, (d, 1))
+    for c in cols:
+        if c not in index:
+            raise ParameterError(mech.name, str(c), f"not a parameter of {mech.name}; it has: {', '.join(names)}")
+        out[:, index[c]] = np.asarray(designs[c], dtype=float)
+    return out
+
+
+@dataclass
+class GroupSweep:
+    """Many designs of one mechanism over the same shaft angles: ``status`` ("ok" or the error's type name) and
+    ``error`` (None or the message) per design; ``q``, ``qd``, ``qdd`` (D, N, nq), ``obs`` (D, N, nobs) and,
+    for a kinetostatic sweep, ``frc`` (D, N, nfo) — NaN rows for a failed design."""
+
+    mechanism: object
+    params: np.ndarray
+    phi: np.ndarray
+    omega: float
+    status: np.ndarray
+    error: list
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    obs: np.ndarray
+    frc: np.ndarray | None = None
+    settings: list | None = None  # per design: the ForceAnalysis run settings (kinetostatic sweeps)
+
+    @property
+    def ok(self) -> np.ndarray:
+        return self.status == "ok"
+
+    def __len__(self) -> int:
+        return len(self.status)
+
+    def motion(self, k: int):
+        """Design ``k`` as a :class:`sewgen.Motion`."""
+        from ..results import Motion
+
+        n = len(self.phi)
+        return Motion(self.mechanism, self.phi, np.full(n, self.omega), np.zeros(n), self.q[k], self.qd[k],
+                      self.qdd[k], self.obs[k])
+
+    def analysis(self, k: int):
+        """Design ``k`` as a :class:`sewgen.ForceAnalysis` (a kinetostatic sweep)."""
+        from ..forces import ForceAnalysis
+
+        return ForceAnalysis(self.mechanism, self.motion(k), self.frc[k], self.settings[k])
+
+    def to_dataframe(self):
+        """One row per design: its parameters (SI, by name), ``status`` and ``error``."""
+        from ..frames import pandas
+
+        df = pandas().DataFrame(self.params, columns=self.mechanism.param_names)
+        df["status"], df["error"] = self.status, self.error
+        return df
+
+
+def sweep_group_designs(mech, designs, phi, speed=None, *, base: dict | None = None, held: dict | None = None,
+                        branch: dict | None = None, forces: bool = False, loads=(), gravity="9.80665 m/s**2",
+                        gravity_direction="-90 deg") -> GroupSweep:
+    """Every design of ``designs`` (see :func:`design_matrix`) swept at shaft angles ``phi`` (rad, the
+    mechanism's own) and constant ``speed``; with ``forces``, the kinetostatics (``loads``, ``gravity`` as in
+    :meth:`Mechanism.kinetostatics`). A design that cannot be solved (cannot assemble, a singular position, a
+    parameter out of range …) gets its error's type in ``status`` and its message in ``error``; the others are
+    unaffected.
+
+    THE SEAM: this loop is what ``Mechanism.sweep_designs`` (one batched C call) replaces."""
+    P = design_matrix(mech, designs, base)
+    phi = np.asarray(phi, dtype=float)
+    d, n = P.shape[0], len(phi)
+    sizes = mech.description.sizes
+    w = mech.default_speed if speed is None else speed
+    nan = np.nan
+    q, qd, qdd = (np.full((d, n, sizes["nq"]), nan) for _ in range(3))
+    obs = np.full((d, n, sizes["nobs"]), nan)
+    frc = np.full((d, n, sizes["nfo"]), nan) if forces else None
+    status = np.full(d, "ok", dtype=object)
+    error: list = [None] * d
+    settings: list = [None] * d
+    names = mech.param_names
+    omega = None
+    for k in range(d):
+        params = dict(zip(names, P[k]))
+        try:
+            if forces:
+                fa = mech.kinetostatics(phi, speed=w, params=params, held=held, branch=branch, loads=loads,
+                                        gravity=gravity, gravity_direction=gravity_direction)
+                mo = fa.motion
+                frc[k] = fa.frc
+                settings[k] = fa.run_settings
+            else:
+                mo = mech.solve(phi, speed=w, params=params, held=held, branch=branch)
+        except SewgenError as exc:
+            status[k], error[k] = type(exc).__name__, str(exc)
+            continue
+        q[k], qd[k], qdd[k], obs[k] = mo.q, mo.qd, mo.qdd, mo.obs
+        omega = float(mo.omega[0])
+    if omega is None:
+        from ..units import to_si
+
+        omega = float(to_si(w, "speed", "speed")) if isinstance(w, str) else float(w)
+    return GroupSweep(mech, P, phi, omega, status, error, q, qd, qdd, obs, frc, settings if forces else None)

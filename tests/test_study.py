@@ -1,0 +1,197 @@
+"""Design studies (sewgen.study): design tables, machine-level design keys, influence, tolerance, Dask."""
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import sewgen
+from sewgen.cli import main
+from sewgen.errors import ParameterError
+from sewgen.machine import load_machine
+from sewgen.study import (MachineDesigns, StudyOptions, influence, parse_key, run_designs, sweep_group_designs,
+                          tolerance)
+
+PHI = sewgen.shaft_angles(10)
+
+
+@pytest.fixture(scope="module")
+def jb():
+    return load_machine("jb1-3")
+
+
+# -- design tables ------------------------------------------------------------------------------------------------
+
+def test_a_dataframe_design_table_gives_the_array_s_results():
+    nb = sewgen.mechanism("needle_bar")
+    base = nb.param_vector()
+    P = np.tile(base, (3, 1))
+    P[:, nb.param_names.index("crank")] = [0.015, 0.0167, 0.018]
+    P[:, nb.param_names.index("rod")] = [0.045, 0.05, 0.055]
+    by_array = sweep_group_designs(nb, P, PHI, "1000 rpm")
+    by_frame = sweep_group_designs(nb, pd.DataFrame(P, columns=nb.param_names), PHI, "1000 rpm")
+    by_columns = sweep_group_designs(nb, pd.DataFrame({"crank": P[:, 0], "rod": P[:, 1]}), PHI, "1000 rpm")
+    by_mapping = sweep_group_designs(nb, {"crank": P[:, 0], "rod": P[:, 1]}, PHI, "1000 rpm")
+    for other in (by_frame, by_columns, by_mapping):
+        assert np.array_equal(other.params, by_array.params)
+        assert np.array_equal(other.obs, by_array.obs) and np.array_equal(other.q, by_array.q)
+        assert list(other.status) == ["ok"] * 3
+    # and each design as a plain solve
+    for k in range(3):
+        mo = nb.solve(PHI, speed="1000 rpm", params=dict(zip(nb.param_names, P[k])))
+        assert np.array_equal(mo.obs, by_array.obs[k])
+
+
+def test_a_design_that_cannot_assemble_is_reported_and_the_others_unaffected():
+    nb = sewgen.mechanism("needle_bar")
+    designs = pd.DataFrame({"crank": [0.0167, 0.0167, 0.015], "rod": [0.05, 0.005, 0.05]})  # rod < crank
+    s = sweep_group_designs(nb, designs, PHI, "1000 rpm", forces=True)
+    assert list(s.status) == ["ok", "AssemblyError", "ok"]
+    assert s.error[0] is None and s.error[2] is None and "assemble" in s.error[1]
+    assert np.isnan(s.obs[1]).all() and np.isnan(s.frc[1]).all()
+    for k in (0, 2):
+        fa = nb.kinetostatics(PHI, speed="1000 rpm", params=designs.iloc[k].to_dict())
+        assert np.array_equal(fa.frc, s.frc[k]) and np.array_equal(fa.motion.obs, s.obs[k])
+    df = s.to_dataframe()
+    assert list(df["status"]) == ["ok", "AssemblyError", "ok"] and df["error"][1] == s.error[1]
+
+
+def test_an_unknown_design_column_is_named():
+    nb = sewgen.mechanism("needle_bar")
+    with pytest.raises(ParameterError, match="crnak"):
+        sweep_group_designs(nb, {"crnak": [0.01]}, PHI)
+
+
+# -- machine-level design keys ---------------------------------------------------------------------------------
+
+def test_model_file_keys_with_their_units(jb):
+    k = parse_key(jb, "groups.feed.params.feed_arm_r")
+    assert (k.kind, k.unit, k.group, k.param) == ("length", "mm", "feed", "feed_arm_r")
+    assert k.column == "groups.feed.params.feed_arm_r [mm]"
+    k = parse_key(jb, "groups.hook_drive.phase")
+    assert (k.kind, k.unit, k.group) == ("angle", "deg", None) and k.nominal == pytest.approx(math.radians(-2))
+    assert parse_key(jb, "shaft.masses[0].mass").nominal == pytest.approx(0.020)
+    for bad, word in (("groups.fed.params.x", "no group 'fed'"), ("groups.feed.params.nope", "no parameter"),
+                      ("shaft.nothing", "shaft.nothing"), ("groups.feed.mechanism", "not a quantity")):
+        with pytest.raises(ParameterError, match=word) as info:
+            parse_key(jb, bad)
+        assert info.value.parameter == bad
+
+
+def test_a_model_key_reloads_the_machine_and_a_refused_design_names_the_key(jb):
+    md = MachineDesigns(jb, ["groups.hook_drive.phase", "shaft.rear_bearing"], [[-0.1, 0.2], [-0.1, -1.0]])
+    m0 = md.machine_for(0)
+    assert next(g for g in m0.groups if g.name == "hook_drive").phase == -0.1 and m0.shaft.rear == 0.2
+    df = run_designs(jb, md.keys, md.values, StudyOptions(step_deg=5.0))
+    assert df["status"][0] == "ok"
+    assert df["status"][1] == "ModelFileError" and "shaft.rear_bearing" in df["error"][1]
+    assert df.columns[:2].tolist() == ["groups.hook_drive.phase [deg]", "shaft.rear_bearing [mm]"]
+
+
+def test_a_machine_design_table_by_column_names_with_units(jb):
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    a = run_designs(jb, ["groups.feed.params.feed_arm_r"], [[0.0293], [0.0295]], opts)
+    b = run_designs(jb, pd.DataFrame({"groups.feed.params.feed_arm_r [mm]": [29.3, 29.5]}), options=opts)
+    c = run_designs(jb, {"groups.feed.params.feed_arm_r": [0.0293, 0.0295]}, options=opts)
+    pd.testing.assert_frame_equal(a, c, check_exact=True)
+    pd.testing.assert_frame_equal(a.drop(columns=a.columns[0]), b.drop(columns=b.columns[0]), check_exact=False,
+                                  rtol=1e-12)
+    assert b.columns[0] == "groups.feed.params.feed_arm_r [mm]"
+
+
+# -- studies ------------------------------------------------------------------------------------------------------
+
+def test_influence_needle_stroke_to_crank_radius_is_two(jb):
+    r = influence(jb, ["groups.needle_bar.params.crank"], "-10%..+10%", 3, StudyOptions(loads=False))
+    assert r.sensitivity("groups.needle_bar.params.crank", "needle_stroke [mm]") == pytest.approx(2.0, abs=1e-6)
+    crank = r.table["groups.needle_bar.params.crank [mm]"]
+    assert np.allclose(r.table["needle_stroke [mm]"], 2 * crank, rtol=0, atol=1e-9)
+    assert "central difference" in r.scheme
+
+
+def test_linked_keys_move_together(jb):
+    spec = "groups.hook_drive.phase,groups.feed.params.hook_crank.phase"
+    r = influence(jb, [spec], "-4 deg..0 deg", 3, StudyOptions(step_deg=5.0, loads=False))
+    a, b = r.table["groups.hook_drive.phase [deg]"], r.table["groups.feed.params.hook_crank.phase [deg]"]
+    assert np.allclose(a, b, atol=1e-12) and sorted(np.round(a, 9).unique()) == [-4.0, -2.0, 0.0]
+    assert set(r.table["varied"]) == {"", "groups.hook_drive.phase"}
+    t = tolerance(jb, {spec: "±1 deg"}, 6, seed=0, options=StudyOptions(step_deg=5.0, loads=False))
+    assert np.allclose(t.table["groups.hook_drive.phase [deg]"], t.table["groups.feed.params.hook_crank.phase [deg]"])
+    with pytest.raises(Exception, match="cannot move with"):
+        influence(jb, ["groups.hook_drive.phase,groups.feed.params.feed_arm_r"], "-1%..1%", 2)
+
+
+def test_tolerance_with_zero_tolerance_has_zero_spread(jb):
+    r = tolerance(jb, {"groups.feed.params.feed_arm_r": "±0 mm", "groups.needle_bar.params.crank": "0 mm"}, 12,
+                  seed=5)
+    assert (r.table["status"] == "ok").all()
+    for q in r.stats["quantity"]:
+        v = r.table[q].to_numpy(dtype=float)
+        assert np.all(v == v[0]) and (np.isnan(v[0]) or v[0] == r.nominal[q]), q
+    assert (r.stats["spread"] == 0).all() and (r.stats["std"] == 0).all()
+
+
+def test_tolerance_counts_the_designs_that_fail_a_timing_rule(jb):
+    r = tolerance(jb, {"groups.feed.params.feed_arm_r": "±3 mm"}, 40, seed=1, distribution="uniform")
+    fails = r.failures
+    assert 0 < len(fails) < 40
+    assert all(("dog_" in f) or s != "ok" for f, s in zip(fails["failed_rules"], fails["status"]))
+
+
+def test_a_study_on_a_two_worker_local_cluster_is_the_in_process_result(jb):
+    pytest.importorskip("distributed")
+    tol = {"groups.feed.params.feed_arm_r": "±0.05mm", "groups.needle_bar.params.crank": "±0.05mm"}
+    opts = StudyOptions(step_deg=2.0, loads=True)
+    here = tolerance(jb, tol, 12, seed=2, options=opts, chunk_size=3)
+    there = tolerance(jb, tol, 12, seed=2, options=opts, chunk_size=3, dask="local:2")
+    pd.testing.assert_frame_equal(here.table, there.table, check_exact=True)
+    assert (here.table["status"] == "ok").all()
+
+
+def test_a_study_on_a_running_scheduler_by_its_address(jb):
+    distributed = pytest.importorskip("distributed")
+    from sewgen.study.run import StudyError, dask_client
+
+    designs = [[0.0293], [0.0294], [0.05]]  # the last: the dog never sinks below the plate
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    here = run_designs(jb, ["groups.feed.params.feed_arm_r"], designs, opts, chunk_size=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as c:
+        there = run_designs(jb, ["groups.feed.params.feed_arm_r"], designs, opts, chunk_size=1,
+                            dask=c.scheduler_address)
+    pd.testing.assert_frame_equal(here, there, check_exact=True)
+    assert list(there["status"]) == ["ok", "ok", "FeedDogError"]
+    for bad in ("local:0", "nowhere", "local:two"):
+        with pytest.raises(StudyError, match="--dask"):
+            dask_client(bad)
+
+
+# -- the command --------------------------------------------------------------------------------------------------
+
+def test_study_influence_command_writes_tables_with_units(tmp_path, capsys):
+    out = tmp_path / "inf"
+    rc = main(["study", "influence", "jb1-3", "--param", "groups.needle_bar.params.crank", "--range", "-5%..+5%",
+               "--steps", "3", "--step", "5 deg", "--no-plots", "--out", str(out)])
+    assert rc == 0
+    table = pd.read_csv(out / "influence.csv")
+    assert "needle_stroke [mm]" in table and "groups.needle_bar.params.crank [mm]" in table
+    sens = pd.read_csv(out / "sensitivities.csv")
+    row = sens[(sens["quantity"] == "needle_stroke [mm]")]
+    assert float(row["sensitivity"].iloc[0]) == pytest.approx(2.0, abs=1e-6)
+    assert json.loads((out / "study.json").read_text())["study"] == "influence"
+    assert "wrote" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, word", [
+    (["study", "influence", "jb1-3", "--param", "groups.feed.params.nope"], "groups.feed.params.nope"),
+    (["study", "influence", "jb1-3", "--param", "groups.feed.params.feed_arm_r", "--range", "5%"], "--range"),
+    (["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.feed_arm_r=±0.02 deg"], "--tolerance"),
+    (["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.feed_arm_r=±0.02mm", "--dask", "nowhere"],
+     "--dask"),
+])
+def test_study_mistakes_exit_2_with_one_line_and_nothing_on_stdout(tmp_path, capsys, argv, word):
+    rc = main(argv + ["--out", str(tmp_path / "x"), "--samples" if argv[1] == "tolerance" else "--steps", "2"])
+    cap = capsys.readouterr()
+    assert rc == 2 and cap.out == ""
+    assert word in cap.err and len(cap.err.strip().splitlines()) == 1
+    assert not (tmp_path / "x").exists()
