@@ -63,6 +63,7 @@ def influence_plots(res, folder) -> list[Path]:
             ax.axvline(k.nominal * k.factor, color="0.6", lw=0.8, ls="--")
             ax.set_title(q, fontsize=8)
             ax.tick_params(labelsize=7)
+            ax.ticklabel_format(axis="y", useOffset=False)  # read the values themselves, not "+1.9e2"
             ax.set_xlabel(k.column, fontsize=7)
         for ax in list(axes.flat)[len(quantities):]:
             ax.set_visible(False)
@@ -87,13 +88,18 @@ def tolerance_plots(res, folder) -> list[Path]:
     for ax, q in zip(axes.flat, quantities):
         v = ok[q].to_numpy(dtype=float)
         v = v[np.isfinite(v)]
-        if len(v) and np.ptp(v) > 0:
-            ax.hist(v, bins=min(50, max(5, len(v) // 20)), color="tab:blue", alpha=0.8)
-        elif len(v):
-            ax.axvline(v[0], color="tab:blue", lw=3)
-        ax.axvline(float(res.nominal[q]), color="k", lw=0.8, ls="--")
         ax.set_title(q, fontsize=8)
         ax.tick_params(labelsize=7)
+        if len(v) and np.ptp(v) > 0:
+            ax.hist(v, bins=min(50, max(5, len(v) // 20)), color="tab:blue", alpha=0.8)
+            ax.axvline(float(res.nominal[q]), color="k", lw=0.8, ls="--")
+            ax.ticklabel_format(axis="x", useOffset=False)
+            ax.locator_params(axis="x", nbins=4)  # long values: few ticks, no overlap
+        else:  # no spread: say so instead of an empty histogram
+            ax.text(0.5, 0.5, f"every sample: {v[0]:.6g}" if len(v) else "no finite value", ha="center",
+                    va="center", fontsize=9, transform=ax.transAxes)
+            ax.set_xticks([])
+            ax.set_yticks([])
     for ax in list(axes.flat)[len(quantities):]:
         ax.set_visible(False)
     fig.suptitle(f"{res.machine}: {len(res.table)} samples ({res.distribution}); dashed: nominal", fontsize=10)
