@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..roles import FEED_DOG, NEEDLE_EYE
+from ..roles import FEED_DOG, NEEDLE_EYE, NEEDLE_POINT
 from .common import AT_THE_PLATE, axis_name, color, new_figure, offset, role_point, throat_plate_height
 from .drawing import PanelArtists, Part
 from .geometry import linkage
@@ -45,10 +45,11 @@ def _views(a, links):
 def _zone_parts(a, links):
     """(linkage index, bodies, marks) of the parts that work at the throat plate (needle eye, feed dog)."""
     out = []
+    gn, _ = role_point(a, NEEDLE_POINT)
     for k, lk in enumerate(links):
         marks = [lk.roles[r] for r in AT_THE_PLATE if r in lk.roles]
-        if not marks:
-            continue
+        if not marks or (gn is not None and axis_name(a.machine.groups[k]) != axis_name(gn)):
+            continue  # only the parts drawn in the needle's plane (a group across the shaft, beside one along it)
         bodies = {b for m in marks for b in _bodies_of(a.machine.groups[k].mechanism, m)}
         out.append((k, bodies, marks))
     return out

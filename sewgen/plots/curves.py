@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..roles import FEED_DOG, HOOK_SHAFT, NEEDLE_EYE, THREAD_EYE
+from ..roles import FEED_DOG, HOOK_SHAFT, NEEDLE_EYE, RACK_TOOTH, THREAD_EYE
 from .common import (MM, angle_axis, axis_name, closed, color, deg, offset, place, pretty, role_point, shade,
                      suptitle, throat_plate_height, title)
 
@@ -16,6 +16,7 @@ POINT_ROLES = {
     NEEDLE_EYE: [("y", "needle eye y (needle-bar travel)")],
     THREAD_EYE: [("y", "thread eye y (take-up)")],
     FEED_DOG: [("x", "feed dog x (feed)"), ("y", "feed dog y (lift)")],
+    RACK_TOOTH: [("x", "rack tooth x (feed)"), ("y", "rack tooth y (lift)")],
 }
 #: Body roles whose angle the motion figure shows.
 ANGLE_ROLES = {HOOK_SHAFT: "hook shaft angle"}
@@ -52,6 +53,8 @@ def motion_rows(a) -> list:
                 continue
             p = mo.point(pt.name)
             for comp, text in POINT_ROLES.get(pt.role, [("x", f"{pretty(pt.role)} x"), ("y", f"{pretty(pt.role)} y")]):
+                if np.ptp(getattr(p, comp)) < 1e-9:  # a component that never moves (a needle's sideways): no row
+                    continue
                 if comp == "x" and axis_name(g) != "x":  # a group along the shaft: its x is the machine's z
                     text = text[:-1] + axis_name(g) if text.endswith(" x") else text
                 mine.append(Row(f"{g.name}: {text}", g, LINEAR, [(comp, *_point_series(p, comp, g))], pt.role,

@@ -74,6 +74,6 @@ def declare() -> Mechanism:
     m.revolute(rack.at(l4, 0), link.at(l6, 0), "F", branch=-1)
     m.point("rear_pin", rock.at(l3, 0), "rack's rear pin E")
     m.point("tooth_f", rack.at(l4, 0), "front tooth F", role="feed_dog")
-    m.point("tooth_g", rack.at(l4 - g_from_f, 0), "tooth G behind F")
+    m.point("tooth_g", rack.at(l4 - g_from_f, 0), "tooth G behind F", role="rack_tooth")
     m.point("lift_pin", lift.at(l5, 0), "lift eccentric's centre K")
     return m
