@@ -229,3 +229,30 @@ def test_groups_along_the_shaft(machine, analysis):
     # the throat plate, in the machine frame, is where the needle goes through
     tm = timing(machine)
     assert tm.values["plate"] == pytest.approx(0.0404)
+
+
+def test_along_group_needs_its_origin(tmp_path):
+    from sewgen.machine import ModelFileError
+
+    text = (load_machine("51-a").source and open(load_machine("51-a").source, encoding="utf-8").read())
+    bad = text.replace('origin = ["0 mm", "60 mm", "-28 mm"]', "", 1)
+    assert bad != text
+    path = tmp_path / "m.toml"
+    path.write_text(bad, encoding="utf-8")
+    with pytest.raises(ModelFileError, match="groups.needle.origin"):
+        load_machine(path)
+    wrong = text.replace('frame = "along"\norigin', 'frame = "sideways"\norigin', 1)
+    assert wrong != text
+    path.write_text(wrong, encoding="utf-8")
+    with pytest.raises(ModelFileError, match="frame"):
+        load_machine(path)
+
+
+def test_summary_reports_knife_and_timing(analysis):
+    from sewgen import report
+
+    s = report.summary(analysis)
+    knife = s["groups"]["knife"]["knife_edge"]
+    assert knife["overlap_mm"] == pytest.approx(0.5626, abs=1e-3) and knife["stroke_mm"] == pytest.approx(8.125, abs=1e-3)
+    assert s["groups"]["feed"]["stitch_mm"] == pytest.approx(4.0)
+    assert all(c["ok"] for c in s["timing"]["checks"])

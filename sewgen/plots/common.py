@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from ..feed import has_feed, plate_height
-from ..roles import (FEED_DOG, HOOK_POINT, LOWER_LOOPER_TIP, NEEDLE_EYE, NEEDLE_POINT, THROAT_PLATE,
-                     UPPER_LOOPER_TIP)
+from ..roles import (FEED_DOG, HOOK_POINT, KNIFE_EDGE, LOWER_LOOPER_TIP, NEEDLE_EYE, NEEDLE_POINT, RACK_TOOTH,
+                     THROAT_PLATE, UPPER_LOOPER_TIP)
 
 MM = 1e3  # m -> mm
 DPI = 100
@@ -17,7 +17,8 @@ DPI = 100
 PALETTE = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive",
            "tab:cyan", "tab:gray")
 #: Point roles that work at the throat plate: the plate is drawn beside them.
-AT_THE_PLATE = (NEEDLE_EYE, NEEDLE_POINT, HOOK_POINT, FEED_DOG, LOWER_LOOPER_TIP, UPPER_LOOPER_TIP)
+AT_THE_PLATE = (NEEDLE_EYE, NEEDLE_POINT, HOOK_POINT, FEED_DOG, RACK_TOOTH, LOWER_LOOPER_TIP, UPPER_LOOPER_TIP,
+                KNIFE_EDGE)
 
 
 # -- figures ---------------------------------------------------------------------------------------------------

@@ -12,7 +12,7 @@ from ..feed import dog_travel, has_feed, plate_height, regulator_angle
 from ..roles import FEED_DOG, STITCH_REGULATOR
 from .common import (AT_THE_PLATE, DPI, MM, angle_labels, axis_name, closed, color, feed_groups, offset, place, pretty,
                      role_point, role_points, suptitle, throat_plate_height, title)
-from ..roles import HOOK_POINT, LOWER_LOOPER_TIP, NEEDLE_POINT, UPPER_LOOPER_TIP
+from ..roles import HOOK_POINT, KNIFE_EDGE, LOWER_KNIFE_EDGE, LOWER_LOOPER_TIP, NEEDLE_POINT, UPPER_LOOPER_TIP
 
 #: Points that work at the needle: their panels show the needle's centre line (when drawn in the same plane).
 AT_THE_NEEDLE = (HOOK_POINT, LOWER_LOOPER_TIP, UPPER_LOOPER_TIP)
@@ -97,6 +97,10 @@ def draw_trajectories(fig, a):
             ax.axvline(line, color="0.4", lw=1, ls=":", label=f"needle's centre line, {axis_name(g)} = {line:.4g} mm")
         if plate is not None and roles & set(AT_THE_PLATE + AT_THE_NEEDLE):
             ax.axhline(plate * MM, color="k", lw=1, ls="--", label=f"throat plate, y = {plate * MM:g} mm")
+        d = g.mechanism.description
+        if KNIFE_EDGE in roles and d.has_role(LOWER_KNIFE_EDGE):  # the fixed knife the edge cuts against
+            lower = (float(g.mechanism.param_vector(g.params or None)[d.role(LOWER_KNIFE_EDGE).index]) + dy) * MM
+            ax.axhline(lower, color="tab:red", lw=1, ls="-.", label=f"lower knife's edge, y = {lower:.4g} mm")
         if plate is not None and FEED_DOG in roles:
             name = next(nm for nm, r in pts if r == FEED_DOG)
             x, y = data[f"{g.name}.{name}"]
@@ -111,6 +115,8 @@ def draw_trajectories(fig, a):
             angle_labels(ax, a, *data[f"{g.name}.{name}"], size=6.5)
         ax.set_autoscale_on(False)
         head = pretty(pts[0][1]) if len(pts) == 1 and pts[0][1] else "named points"
+        if len(pts) == 1 and pts[0][1] and pts[0][0] != pts[0][1]:  # the point's own name too (seed 003's F, G)
+            head += f" ({pts[0][0]})"
         ax.set_title(f"{g.name}: {head}", fontsize=10, color=c, y=1.0)
         ax.set(xlabel=f"{axis_name(g)} (mm{', along the main shaft' if axis_name(g) == 'z' else ''})", ylabel="y (mm)")
         ax.grid(alpha=0.3)
