@@ -260,7 +260,28 @@ class MachineAnalysis:
         origin (n,), both in the group's frame."""
         if not g.along:
             return moment
-        return g.origin[0] * force[:, 1]  # the group's plane is x = origin x; its own moment is about −x
+        return g.origin[0] * force[:, 1]  # its own moment is about −x
+
+    def _along_moments(self, g):
+        """((n,) moment about its own z axis through its origin, (n,) about the machine's z) of the frame's
+        reactions on the parts of a group along the shaft, its process loads internal, from the kinematics:
+        Σ m (x (a_y − g_y) − y (a_x − g_x)) + I α over its bodies (its spatial cranks' I α is about the machine's
+        z). The group's own balance cannot give them: its spatial cranks have no moment row about its z, their
+        bearings carry that moment (and its rocker bearings the one about the machine's z)."""
+        cranks = {b.name for b in g.mechanism.description.driven_bodies}
+        gx, gy = 0.0, float(self.machine.gravity[1])  # gravity in the group's plane (the machine's x is its −z)
+        own, about_z = np.zeros(len(self.phi)), np.zeros(len(self.phi))
+        fa = self.groups[g.name]
+        values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
+        for body in g.mechanism.description.bodies:
+            m, inertia, bm = values[body.mass], values[body.inertia], fa.motion.body(body.name)
+            c = bm.com
+            own = own + m * (c.x * (c.ay - gy) - c.y * (c.ax - gx))
+            if body.name in cranks:
+                about_z = about_z + inertia * bm.alpha
+            else:
+                own = own + inertia * bm.alpha
+        return own, about_z
 
     def _shaft(self):
         sh, gv = self.machine.shaft, self.machine.gravity
@@ -314,6 +335,8 @@ class MachineAnalysis:
             sf = fa.shaking_force
             own = fa.shaking_moment + fa.moment_about[0] * sf[:, 1] - fa.moment_about[1] * sf[:, 0]
             out = out + self._group_moment_z(g, sf, own)
+            if g.along:  # its cranks turn about the machine's z
+                out = out + self._along_moments(g)[1]
         for sm, pos, _vel, acc in self.core:
             f = sm.mass * (acc - gv[None, :])
             out = out + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
@@ -380,8 +403,7 @@ class MachineAnalysis:
             lf, lm = self._group_loads(g)
             force = fa.shaking_force + lf
             if g.along:  # F = (0, fy, fx) at the group's origin with its own moment M about −x: (o − O) × F − M x
-                sf = fa.shaking_force
-                own = (fa.shaking_moment + fa.moment_about[0] * sf[:, 1] - fa.moment_about[1] * sf[:, 0] + lm)
+                own = self._along_moments(g)[0]
                 dx, dy, dz = g.origin[0] - ox, g.origin[1] - oy, g.origin[2] - oz
                 out[:, 0] += dy * force[:, 0] - dz * force[:, 1] - own
                 out[:, 1] -= dx * force[:, 0]

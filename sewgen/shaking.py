@@ -21,6 +21,13 @@ def _bodies(a):
     return a.moving_bodies()
 
 
+def _named(a):
+    """(group, mass, inertia, BodyMotion, body name): :func:`_bodies` with each body's name (the same order)."""
+    names = [b.name for g in a.machine.groups for b in g.mechanism.description.bodies]
+    for (g, m, inertia, bm), name in zip(_bodies(a), names):
+        yield g, m, inertia, bm, name
+
+
 def moving_mass(a) -> float:
     """Σ m of every moving part (kg): the groups' bodies and the shaft core's masses."""
     return sum(m for _, m, _, _ in _bodies(a)) + sum(sm.mass for sm in a.machine.shaft.masses)
@@ -31,7 +38,7 @@ def weight(a) -> np.ndarray:
     return moving_mass(a) * np.asarray(a.machine.gravity, dtype=float)
 
 
-def _placed(g, bm):
+def _placed(g, bm, name=""):
     """A body's centre of mass (X, Y, Z), its acceleration (AX, AY, AZ) and its rotation axis (3,) in the machine
     frame: a group across the shaft is its plane at z = ``Group.z``; one along it (``frame = "along"``) has its
     x along the machine's z and turns about the machine's −x (sewgen.machine.Group.to_machine)."""
@@ -41,7 +48,10 @@ def _placed(g, bm):
         return (c.x, c.y, zero + g.z), (c.ax, c.ay, zero), (0.0, 0.0, 1.0)
     pos = tuple(v + zero for v in g.to_machine(c.x, c.y))
     acc = tuple(v + zero for v in g.force_to_machine(c.ax, c.ay, zero))
-    return pos, acc, tuple(float(v) for v in g.force_to_machine(0.0, 0.0, 1.0))
+    axis = tuple(float(v) for v in g.force_to_machine(0.0, 0.0, 1.0))
+    if getattr(g, "along", False) and name in {b.name for b in g.mechanism.description.driven_bodies}:
+        axis = (0.0, 0.0, 1.0)  # a spatial crank of a group along the shaft turns about the shaft (machine z)
+    return pos, acc, axis
 
 
 def shaking_force(a) -> np.ndarray:
@@ -65,8 +75,8 @@ def shaking_moments(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
     ox, oy, oz = about
     out = np.zeros((len(a.phi), 3))
     out[:, 2] -= a.machine.shaft.inertia * a.alpha
-    for g, m, inertia, bm in _bodies(a):
-        (x, y, z), (ax, ay, az), axis = _placed(g, bm)
+    for g, m, inertia, bm, name in _named(a):
+        (x, y, z), (ax, ay, az), axis = _placed(g, bm, name)
         fx, fy, fz = -m * ax, -m * ay, -m * az
         out[:, 0] += (y - oy) * fz - (z - oz) * fy - inertia * bm.alpha * axis[0]
         out[:, 1] += (z - oz) * fx - (x - ox) * fz - inertia * bm.alpha * axis[1]

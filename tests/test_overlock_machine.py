@@ -256,3 +256,20 @@ def test_summary_reports_knife_and_timing(analysis):
     assert knife["overlap_mm"] == pytest.approx(0.5626, abs=1e-3) and knife["stroke_mm"] == pytest.approx(8.125, abs=1e-3)
     assert s["groups"]["feed"]["stitch_mm"] == pytest.approx(4.0)
     assert all(c["ok"] for c in s["timing"]["checks"])
+
+
+@pytest.mark.parametrize("accel", [0.0, 500.0])
+def test_shaking_moments_of_groups_along_the_shaft(accel):
+    """The shaking moments from the parts' inertia (sewgen.shaking, body by body in the machine frame) equal the
+    machine's from the groups' frame reactions (MachineAnalysis.shaking_moments, the groups along the shaft placed
+    by their origin), opposite in sign (on the frame / on the parts); without gravity, whose moment differs."""
+    from sewgen import shaking
+
+    m = load_machine("51-a")
+    m.gravity = np.zeros(2)
+    a = m.analyze(accel=accel)
+    about = (0.01, 0.02, 0.03)
+    on_frame, on_parts = shaking.shaking_moments(a, about), a.shaking_moments(about)
+    np.testing.assert_allclose(on_frame, -on_parts, atol=1e-12 * np.abs(on_frame).max())
+    assert np.abs(on_frame[:, 0]).max() > 1.0  # the needle's and loopers' forces rock the base about x
+    np.testing.assert_allclose(shaking.shaking_force(a), -a.shaking_force, atol=1e-12 * np.abs(a.shaking_force).max())
