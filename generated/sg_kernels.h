@@ -107,4 +107,30 @@ void sg_overlock_knife_anchors(const double *q, const double *cq, const double *
 const sg_mechanism *sg_overlock_knife(void);
 const char *sg_overlock_knife_manifest(void);
 
+/* overlock_needle_planar */
+void sg_overlock_needle_planar_constants(const double *p, double *c);
+int sg_overlock_needle_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+void sg_overlock_needle_planar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
+void sg_overlock_needle_planar_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+void sg_overlock_needle_planar_blocks(const double *jac, double *out);
+int sg_overlock_needle_planar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_overlock_needle_planar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
+void sg_overlock_needle_planar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+void sg_overlock_needle_planar_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+const sg_mechanism *sg_overlock_needle_planar(void);
+const char *sg_overlock_needle_planar_manifest(void);
+
+/* overlock_loopers_planar */
+void sg_overlock_loopers_planar_constants(const double *p, double *c);
+int sg_overlock_loopers_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+void sg_overlock_loopers_planar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
+void sg_overlock_loopers_planar_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+void sg_overlock_loopers_planar_blocks(const double *jac, double *out);
+int sg_overlock_loopers_planar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_overlock_loopers_planar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
+void sg_overlock_loopers_planar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
+void sg_overlock_loopers_planar_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+const sg_mechanism *sg_overlock_loopers_planar(void);
+const char *sg_overlock_loopers_planar_manifest(void);
+
 #endif

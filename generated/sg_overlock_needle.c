@@ -9,7 +9,7 @@
 /* sg_overlock_needle_constants -- Total ops: 111 */
 void sg_overlock_needle_constants(const double *p, double *c)
 {
-    const double t0 = sin(p[10]);
+    const double t0 = sin(p[12]);
     const double t1 = ((p[3])*(p[3]));
     const double t2 = sin(p[5]);
     const double t3 = cos(p[5]);
@@ -36,12 +36,12 @@ void sg_overlock_needle_constants(const double *p, double *c)
     const double t24 = t1*t23;
     const double t25 = p[1]*t23;
     const double t26 = p[0]*t23;
-    const double t27 = p[16] + t13;
-    const double t28 = p[17] + t7;
+    const double t27 = p[18] + t13;
+    const double t28 = p[19] + t7;
     c[0] = p[3];
     c[1] = -p[1];
     c[2] = t0;
-    c[3] = cos(p[10]);
+    c[3] = cos(p[12]);
     c[4] = -p[0];
     c[5] = sqrt(sg_rounding_clamp(t4, t4));
     c[6] = t5;
@@ -78,19 +78,19 @@ void sg_overlock_needle_constants(const double *p, double *c)
     c[37] = -t14;
     c[38] = -p[8];
     c[39] = -t21;
-    c[40] = p[10];
-    c[41] = p[12];
-    c[42] = -p[13];
-    c[43] = p[13];
-    c[44] = -p[12];
-    c[45] = p[16];
-    c[46] = -p[17];
-    c[47] = p[17];
-    c[48] = -p[16];
+    c[40] = p[12];
+    c[41] = p[14];
+    c[42] = -p[15];
+    c[43] = p[15];
+    c[44] = -p[14];
+    c[45] = p[18];
+    c[46] = -p[19];
+    c[47] = p[19];
+    c[48] = -p[18];
     c[49] = t22;
     c[50] = -t22;
-    c[51] = -p[23] - t10;
-    c[52] = p[22];
+    c[51] = -p[25] - t10;
+    c[52] = p[24];
     c[53] = (1.0/(t17));
     c[54] = (1.0/(t19));
     c[55] = t2*t24;
@@ -99,42 +99,42 @@ void sg_overlock_needle_constants(const double *p, double *c)
     c[58] = -t25*t7;
     c[59] = -t26*t9;
     c[60] = -t26*t7;
-    c[61] = p[18];
+    c[61] = p[20];
     c[62] = t27;
     c[63] = -t27;
-    c[64] = p[15];
-    c[65] = p[19];
-    c[66] = p[21];
-    c[67] = p[20];
-    c[68] = p[19]*t22;
-    c[69] = p[14];
+    c[64] = p[17];
+    c[65] = p[21];
+    c[66] = p[23];
+    c[67] = p[22];
+    c[68] = p[21]*t22;
+    c[69] = p[16];
     c[70] = t23*t6;
     c[71] = -t26;
-    c[72] = p[11];
+    c[72] = p[13];
     c[73] = t23;
-    c[74] = p[24];
-    c[75] = -p[22] - p[8];
-    c[76] = -p[23];
-    c[77] = -p[22] - t21;
-    c[78] = -p[22];
+    c[74] = p[26];
+    c[75] = -p[24] - p[8];
+    c[76] = -p[25];
+    c[77] = -p[24] - t21;
+    c[78] = -p[24];
     c[79] = -t23;
     c[80] = t26;
-    c[81] = (0.5)*p[11];
-    c[82] = (0.5)*p[14];
-    c[83] = (0.5)*p[15];
-    c[84] = (0.5)*p[18];
-    c[85] = (0.5)*p[19];
-    c[86] = (0.5)*p[20];
-    c[87] = (0.5)*p[21];
-    c[88] = (0.5)*p[24];
-    c[89] = -p[11];
-    c[90] = -p[15];
-    c[91] = -p[19];
-    c[92] = -p[21];
+    c[81] = (0.5)*p[13];
+    c[82] = (0.5)*p[16];
+    c[83] = (0.5)*p[17];
+    c[84] = (0.5)*p[20];
+    c[85] = (0.5)*p[21];
+    c[86] = (0.5)*p[22];
+    c[87] = (0.5)*p[23];
+    c[88] = (0.5)*p[26];
+    c[89] = -p[13];
+    c[90] = -p[17];
+    c[91] = -p[21];
+    c[92] = -p[23];
     c[93] = -t28;
-    c[94] = -p[16] - t20;
+    c[94] = -p[18] - t20;
     c[95] = t28;
-    c[96] = p[23];
+    c[96] = p[25];
 }
 
 /* sg_overlock_needle_closed -- Total ops: 38 */
@@ -513,7 +513,7 @@ static const sg_mechanism sg_overlock_needle_descriptor = {
     .name = "overlock_needle",
     .nq = 3,
     .nx = 1,
-    .np = 25,
+    .np = 27,
     .nc = 97,
     .nobs = 54,
     .nbranch = 2,
@@ -571,13 +571,13 @@ const char *sg_overlock_needle_manifest(void)
         "int\":\"rod\",\"kind\":\"rrs\",\"meaning\":\"+1: pin lever of rod rod left of the line from D to"
         " the crank pin's projection (seed 003 eq. 1: \\u03b4\\u2081)\"},{\"default\":1,\"joint\":\"N\",\""
         "kind\":\"rrp\",\"meaning\":\"+1: the larger travel of needle_bar at joint N\"}],\"closed_form\":"
-        "true,\"closure\":[\"rod.length\",\"N.x\",\"N.y\"],\"constants\":[[3],[1],[10],[10],[0],[3,5],[2]"
-        ",[10],[0],[3,5],[3,5],[3,5],[3,5],[3,5],[4],[6],[7],[6],[3],[1],[0],[2],[0],[7],[3,5],[3,5],[3,5"
-        "],[4],[6],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[0],[8],[8,9],[10],[12],[13],[13],[12]"
-        ",[16],[17],[17],[16],[6],[6],[7,23],[22],[0,1,2,3],[4,6,7],[2,3,5],[2,3,5],[1,2,3,5],[1,2,3,5],["
-        "0,2,3,5],[0,2,3,5],[18],[4,16],[4,16],[15],[19],[21],[20],[6,19],[14],[0,2],[0,2],[11],[2],[24],"
-        "[8,22],[23],[8,9,22],[22],[2],[0,2],[11],[14],[15],[18],[19],[20],[21],[24],[11],[15],[19],[21],"
-        "[3,5,17],[3,5,16],[3,5,17],[23]],\"coords\":[{\"guess\":0.0,\"name\":\"lever.angle\",\"unit\":\""
+        "true,\"closure\":[\"rod.length\",\"N.x\",\"N.y\"],\"constants\":[[3],[1],[12],[12],[0],[3,5],[2]"
+        ",[12],[0],[3,5],[3,5],[3,5],[3,5],[3,5],[4],[6],[7],[6],[3],[1],[0],[2],[0],[7],[3,5],[3,5],[3,5"
+        "],[4],[6],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[0],[8],[8,9],[12],[14],[15],[15],[14]"
+        ",[18],[19],[19],[18],[6],[6],[7,25],[24],[0,1,2,3],[4,6,7],[2,3,5],[2,3,5],[1,2,3,5],[1,2,3,5],["
+        "0,2,3,5],[0,2,3,5],[20],[4,18],[4,18],[17],[21],[23],[22],[6,21],[16],[0,2],[0,2],[13],[2],[26],"
+        "[8,24],[25],[8,9,24],[24],[2],[0,2],[13],[16],[17],[20],[21],[22],[23],[26],[13],[17],[21],[23],"
+        "[3,5,19],[3,5,18],[3,5,19],[25]],\"coords\":[{\"guess\":0.0,\"name\":\"lever.angle\",\"unit\":\""
         "rad\"},{\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":1.5707963267948"
         "966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51"
         "-A class overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c"
@@ -666,54 +666,60 @@ const char *sg_overlock_needle_manifest(void)
         "le eye below the link pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_"
         "pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\""
         ",\"doc\":\"needle point below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_ey"
-        "e\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_uni"
-        "t\":\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name"
-        "\":\"eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"di"
-        "splay_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"c"
-        "entre of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":"
-        "\"moment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"ecce"
-        "ntric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"disp"
-        "lay_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centr"
-        "e of mass of lever, local u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
-        " lever, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,"
-        "\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of l"
-        "ever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":fal"
-        "se,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass "
-        "of link\",\"kind\":\"mass\",\"name\":\"link.mass\",\"positive\":false,\"role\":null,\"unit\":\"k"
-        "g\"},{\"default\":1e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of link about i"
-        "ts centre of mass\",\"kind\":\"inertia\",\"name\":\"link.inertia\",\"positive\":false,\"role\":n"
-        "ull,\"unit\":\"kg*m**2\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar"
-        "\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
-        "\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\""
-        ",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m"
-        "\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\""
-        "kind\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about"
-        " its centre of mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\""
-        "role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\""
-        "points\":[{\"body\":\"lever\",\"doc\":\"needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0"
-        ",\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset"
-        "\":6,\"role\":\"needle_eye\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needl"
-        "e_point\",\"offset\":12,\"role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"ecc"
-        "entric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentri"
-        "c.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\""
-        "],\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\""
-        "ground\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"n"
-        "ame\":\"D\",\"offset\":4},{\"a\":\"eccentric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"groun"
-        "ded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"co"
-        "lumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\""
-        "a\":\"link\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revo"
-        "lute\",\"name\":\"N\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\""
-        "],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset"
-        "\":11,\"sense\":1}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"need"
-        "le_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"needle_point\":{\"kind\":\"point\",\"nam"
-        "e\":\"needle_point\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc\":97,\"nf\""
-        ":12,\"nfo\":26,\"nload\":10,\"nobs\":54,\"np\":25,\"nq\":3,\"nx\":1}}"
+        "e\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\""
+        "doc\":\"length of the needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"ey"
+        "e_length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,"
+        "\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, where the lower looper's tip"
+        " passes (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\""
+        "needle_scarf\",\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\""
+        "phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"d"
+        "oc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of "
+        "eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccen"
+        "tric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of"
+        " eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc"
+        "\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"kg\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, l"
+        "ocal u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":"
+        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"k"
+        "ind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
+        "fault\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre"
+        " of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\""
+        "mass\",\"name\":\"link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-"
+        "06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of link about its centre of mass\",\""
+        "kind\":\"inertia\",\"name\":\"link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2"
+        "\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\""
+        "name\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,"
+        "\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\""
+        "name\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"na"
+        "me\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\""
+        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\","
+        "\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"l"
+        "ever\",\"doc\":\"needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body"
+        "\":\"needle_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_"
+        "eye\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":12"
+        ",\"role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\""
+        "fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},"
+        "{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"k"
+        "ind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\""
+        ",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4"
+        "},{\"a\":\"eccentric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"r"
+        "od\",\"name\":\"rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],"
+        "\"grounded\":false,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"ne"
+        "edle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\""
+        "offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"i"
+        "nput\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"r"
+        "oles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"po"
+        "int\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\""
+        "},\"needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"p"
+        "aram\",\"name\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc"
+        "\":97,\"nf\":12,\"nfo\":26,\"nload\":10,\"nobs\":54,\"np\":27,\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -62,11 +62,33 @@ class Group:
     loads: list  # windows in the machine's shaft angle (seed 000: "relative to the upper-shaft angle")
     stitch: float | None = None  # m, feed groups: the stitch the regulator was set for
     plane: float | None = None  # z of the group's plane (m); None: the mean z of its driven bodies
+    frame: str = "across"  # "across": the group's plane is across the shaft (its x, y = the machine's x, y);
+    #                       "along": its plane contains the shaft (its x = the machine's z, y = y, z = −x)
+    origin: tuple = (0.0, 0.0, 0.0)  # "along": the group's origin in the machine frame (m)
+
+    @property
+    def along(self) -> bool:
+        return self.frame == "along"
+
+    def to_machine(self, x, y):
+        """(X, Y, Z) in the machine frame of the point (x, y) of the group's plane (arrays or numbers, m)."""
+        if not self.along:
+            return x, y, self.z + 0.0 * np.asarray(x)
+        ox, oy, oz = self.origin
+        return ox + 0.0 * np.asarray(x), oy + y, oz + x
+
+    def force_to_machine(self, fx, fy, fz=0.0):
+        """A force (or any vector) of the group's frame in the machine frame: (X, Y, Z) components."""
+        if not self.along:
+            return fx, fy, fz
+        return -fz, fy, fx
 
     @property
     def z(self) -> float:
         """z of the plane the group's forces act in (m): ``plane`` if the model gives it, else the mean axial
         position of its driven bodies (seed 000 analyses each group as a plane mechanism, §二(三))."""
+        if self.along:
+            return float(self.origin[0])  # its plane is x = origin x (its own z = 0)
         return self.plane if self.plane is not None else float(np.mean(list(self.axial.values())))
 
     @cached_property
@@ -212,13 +234,56 @@ class MachineAnalysis:
         return out
 
     def crank_loads(self):
-        """(name, z, (n, 2) force on the shaft core) for every driven body on the shaft."""
+        """(name, z, (n, 2) force on the shaft core) for every driven body on the shaft. A group whose plane
+        contains the shaft (``frame = "along"``: its cranks are spatial cranks turning about its x axis) puts its
+        pivot's in-plane force (x: along the shaft, a thrust the radial bearings do not take; y) and the
+        out-of-plane force of the rods on its cranks (seed 003's ball-jointed rods, ``<rod>.fz``) on the shaft."""
         out = []
         for g in self.machine.groups:
             fa = self.groups[g.name]
             for body, z in g.axial.items():
-                out.append((f"{g.name}.{body}", z, np.column_stack(_xy(fa.frame_force(f"{body}.pivot")))))
+                fx, fy = _xy(fa.frame_force(f"{body}.pivot"))
+                if g.along:
+                    fz = -sum((fa._out(f"{r.name}.fz") for r in g.mechanism.description.force_joints
+                               if r.kind == "rod" and r.a == body), np.zeros(len(self.phi)))
+                    fx, fy, _ = g.force_to_machine(fx, fy, fz)
+                out.append((f"{g.name}.{body}", z, np.column_stack([fx, fy])))
         return out
+
+    def _group_force(self, g, force):
+        """A group's (n, 2) in-plane force in the machine's x, y (an "along" group's x is axial: dropped)."""
+        if not g.along:
+            return force
+        x, y, _ = g.force_to_machine(force[:, 0], force[:, 1])
+        return np.column_stack([np.zeros(len(y)) + x, y])
+
+    def _group_moment_z(self, g, force, moment):
+        """The z moment about the machine's origin of a group's force (n, 2) and its moment about the group's
+        origin (n,), both in the group's frame."""
+        if not g.along:
+            return moment
+        return g.origin[0] * force[:, 1]  # its own moment is about −x
+
+    def _along_moments(self, g):
+        """((n,) moment about its own z axis through its origin, (n,) about the machine's z) of the frame's
+        reactions on the parts of a group along the shaft, its process loads internal, from the kinematics:
+        Σ m (x (a_y − g_y) − y (a_x − g_x)) + I α over its bodies (its spatial cranks' I α is about the machine's
+        z). The group's own balance cannot give them: its spatial cranks have no moment row about its z, their
+        bearings carry that moment (and its rocker bearings the one about the machine's z)."""
+        cranks = {b.name for b in g.mechanism.description.driven_bodies}
+        gx, gy = 0.0, float(self.machine.gravity[1])  # gravity in the group's plane (the machine's x is its −z)
+        own, about_z = np.zeros(len(self.phi)), np.zeros(len(self.phi))
+        fa = self.groups[g.name]
+        values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
+        for body in g.mechanism.description.bodies:
+            m, inertia, bm = values[body.mass], values[body.inertia], fa.motion.body(body.name)
+            c = bm.com
+            own = own + m * (c.x * (c.ay - gy) - c.y * (c.ax - gx))
+            if body.name in cranks:
+                about_z = about_z + inertia * bm.alpha
+            else:
+                own = own + inertia * bm.alpha
+        return own, about_z
 
     def _shaft(self):
         sh, gv = self.machine.shaft, self.machine.gravity
@@ -292,7 +357,7 @@ class MachineAnalysis:
         the sum of every group's frame-joint reactions (the shaft's pivots excepted) and of the bearings'
         (seed 000's base-support reactions 机座支承反力)."""
         gv = self.machine.gravity
-        out = sum(fa.shaking_force for fa in self.groups.values())
+        out = sum(self._group_force(g, self.groups[g.name].shaking_force) for g in self.machine.groups)
         for sm, _pos, _vel, acc in self.core:
             out = out + sm.mass * (acc - gv[None, :])
         return out - np.asarray(self.machine.shaft.belt, dtype=float)[None, :]
@@ -302,9 +367,13 @@ class MachineAnalysis:
         ox, oy = about
         gv = self.machine.gravity
         out = self.machine.shaft.inertia * self.alpha
-        for fa in self.groups.values():
+        for g in self.machine.groups:
+            fa = self.groups[g.name]
             sf = fa.shaking_force
-            out = out + fa.shaking_moment + fa.moment_about[0] * sf[:, 1] - fa.moment_about[1] * sf[:, 0]
+            own = fa.shaking_moment + fa.moment_about[0] * sf[:, 1] - fa.moment_about[1] * sf[:, 0]
+            out = out + self._group_moment_z(g, sf, own)
+            if g.along:  # its cranks turn about the machine's z
+                out = out + self._along_moments(g)[1]
         for sm, pos, _vel, acc in self.core:
             f = sm.mass * (acc - gv[None, :])
             out = out + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
@@ -337,7 +406,7 @@ class MachineAnalysis:
         force, moment = np.zeros((len(self.phi), 2)), np.zeros(len(self.phi))
         for g in self.machine.groups:
             f, m = self._group_loads(g)
-            force, moment = force + f, moment + m
+            force, moment = force + self._group_force(g, f), moment + self._group_moment_z(g, f, m)
         return force, moment
 
     @property
@@ -367,7 +436,15 @@ class MachineAnalysis:
         out = np.zeros((len(self.phi), 3))
         out[:, 2] = self.shaking_moment((ox, oy))
         for g in self.machine.groups:
-            force = self.groups[g.name].shaking_force + self._group_loads(g)[0]
+            fa = self.groups[g.name]
+            lf, lm = self._group_loads(g)
+            force = fa.shaking_force + lf
+            if g.along:  # F = (0, fy, fx) at the group's origin with its own moment M about −x: (o − O) × F − M x
+                own = self._along_moments(g)[0]
+                dx, dy, dz = g.origin[0] - ox, g.origin[1] - oy, g.origin[2] - oz
+                out[:, 0] += dy * force[:, 0] - dz * force[:, 1] - own
+                out[:, 1] -= dx * force[:, 0]
+                continue
             out[:, 0] -= (g.z - oz) * force[:, 1]
             out[:, 1] += (g.z - oz) * force[:, 0]
         for sm, _pos, _vel, acc in self.core:
@@ -480,6 +557,9 @@ GROUP = {
     "held": Field("table", False),
     "stitch": Field("length", False, "stitch length the stitch regulator is set for (feed groups)"),
     "plane": Field("length", False, "z of the group's plane on the machine (default: mean z of its driven bodies)"),
+    "frame": Field("text", False, "\"across\" (default: the group's plane is across the shaft) or \"along\" (its "
+                   "plane contains the shaft: its x along the shaft, y up; its cranks are spatial cranks about x)"),
+    "origin": Field("list", False, "\"along\" groups: the group's origin in the machine frame, [x, y, z] lengths"),
     "branch": Field("table", False),
     "loads": Field("list", False),
 }
@@ -625,7 +705,21 @@ def _group(rd: Reader, name: str, data: dict) -> Group:
             rd.fail(lk, "give both 'from' and 'to' for a window, or neither")
         loads.append(Load(ld["at"], ld.get("fx", 0.0), ld.get("fy", 0.0), ld.get("torque", 0.0),
                           (ld["from"], ld["to"]) if "from" in ld else None, ld.get("name", "")))
-    group = Group(name, mech, g["phase"], axial, params, held, branch, loads, g.get("stitch"), g.get("plane"))
+    frame = g.get("frame", "across")
+    if frame not in ("across", "along"):
+        rd.fail(f"{key}.frame", f"must be \"across\" or \"along\", got {frame!r}")
+    if ("origin" in g) != (frame == "along"):
+        rd.fail(f"{key}.origin", "give the origin (the group's origin in the machine frame, [x, y, z]) for a group "
+                                 "with frame = \"along\", and only there")
+    origin = (0.0, 0.0, 0.0)
+    if "origin" in g:
+        if not isinstance(g["origin"], list) or len(g["origin"]) != 3:
+            rd.fail(f"{key}.origin", "must be three lengths [x, y, z]")
+        origin = tuple(rd.quantity(v, "length", f"{key}.origin[{i}]") for i, v in enumerate(g["origin"]))
+    if frame == "along" and "plane" in g:
+        rd.fail(f"{key}.plane", "an \"along\" group's plane is x = origin x: give the origin, not the plane")
+    group = Group(name, mech, g["phase"], axial, params, held, branch, loads, g.get("stitch"), g.get("plane"),
+                  frame, origin)
     if group.stitch is not None:
         regulator = desc.role_name(STITCH_REGULATOR)
         if regulator is None:

@@ -34,14 +34,16 @@ from .cams import arc_switches
 from .errors import SewgenError
 from .feed import dog_travel, has_feed, plate_height
 from . import shaking
-from .roles import FEED_DOG, STITCH_REGULATOR
+from .roles import FEED_DOG, KNIFE_EDGE, LOWER_KNIFE_EDGE, STITCH_REGULATOR
 from .units import DisplayUnits
 
 #: What the numbers of summary.json mean: frame, angles, signs (the same words as the README's "Units and
 #: conventions").
 CONVENTIONS = {
     "frame": "x horizontal across the upper shaft (+ = the feed direction), y up, origin on the upper-shaft axis; "
-             "z along the upper shaft from the front bearing towards the hand wheel",
+             "z along the upper shaft from the front bearing towards the hand wheel; a group with frame = \"along\" "
+             "(its plane contains the shaft) has its own x along z and its points placed by its origin; the "
+             "group tables (<group>.csv) stay in each group's own plane",
     "shaft_angle": "φ, the machine's upper-shaft angle in degrees, 0 ≤ φ < 360, increasing counter-clockwise in the "
                    "x-y plane (from +x towards +y); the model's zero has the needle at its top at φ = 90°; a "
                    "group's own angle is φ + phase_deg; *_at_deg and *_deg entries are shaft angles",
@@ -232,6 +234,13 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
                                "sinks_at_deg": float(_deg(t.sink - g.phase))}
         if g.name in indices:
             entry.setdefault(FEED_DOG, {})["indices"] = indices[g.name]
+        d = g.mechanism.description
+        if d.has_role(KNIFE_EDGE) and d.has_role(LOWER_KNIFE_EDGE):  # overlock knife: stroke and cutting overlap
+            ky = fa.motion.point(d.role_name(KNIFE_EDGE)).y
+            lower = float(g.mechanism.param_vector(g.params or None)[d.role(LOWER_KNIFE_EDGE).index])
+            k = int(np.argmin(ky))
+            entry[KNIFE_EDGE] = {"stroke_mm": float(np.ptp(ky)) * 1e3, "overlap_mm": (lower - float(ky[k])) * 1e3,
+                                 "lowest_at_deg": float(_deg(phi[k]))}
         if switches and switches.get(g.name):
             entry["cam_arc_switches"] = [dict(s.as_dict(), angle_deg=float(_deg(s.angle - g.phase)))
                                          for s in switches[g.name]]

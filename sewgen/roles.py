@@ -12,6 +12,7 @@ NEEDLE_EYE = "needle_eye"        #: the needle's eye (stitch formation, needle-i
 NEEDLE_POINT = "needle_point"    #: the needle's point
 THREAD_EYE = "thread_eye"        #: the take-up lever's thread eye (thread supply and demand)
 FEED_DOG = "feed_dog"            #: the feed dog's tooth tip (stitch length, trajectory indices; seed 001 §五)
+RACK_TOOTH = "rack_tooth"        #: another tooth of the feed dog or rack whose path is shown (seed 003's G)
 HOOK_POINT = "hook_point"        #: the hook's or shuttle's point (loop pick-up timing)
 LOOPER_TIP = "looper_tip"        #: a looper's tip (a machine with one looper)
 LOWER_LOOPER_TIP = "lower_looper_tip"  #: the overlock's lower looper tip N₁ (seed 003 eqs. 5–6)

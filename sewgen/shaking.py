@@ -21,6 +21,13 @@ def _bodies(a):
     return a.moving_bodies()
 
 
+def _named(a):
+    """(group, mass, inertia, BodyMotion, body name): :func:`_bodies` with each body's name (the same order)."""
+    names = [b.name for g in a.machine.groups for b in g.mechanism.description.bodies]
+    for (g, m, inertia, bm), name in zip(_bodies(a), names):
+        yield g, m, inertia, bm, name
+
+
 def moving_mass(a) -> float:
     """Σ m of every moving part (kg): the groups' bodies and the shaft core's masses."""
     return sum(m for _, m, _, _ in _bodies(a)) + sum(sm.mass for sm in a.machine.shaft.masses)
@@ -31,12 +38,30 @@ def weight(a) -> np.ndarray:
     return moving_mass(a) * np.asarray(a.machine.gravity, dtype=float)
 
 
+def _placed(g, bm, name=""):
+    """A body's centre of mass (X, Y, Z), its acceleration (AX, AY, AZ) and its rotation axis (3,) in the machine
+    frame: a group across the shaft is its plane at z = ``Group.z``; one along it (``frame = "along"``) has its
+    x along the machine's z and turns about the machine's −x (sewgen.machine.Group.to_machine)."""
+    c = bm.com
+    zero = 0.0 * c.x
+    if not hasattr(g, "to_machine"):
+        return (c.x, c.y, zero + g.z), (c.ax, c.ay, zero), (0.0, 0.0, 1.0)
+    pos = tuple(v + zero for v in g.to_machine(c.x, c.y))
+    acc = tuple(v + zero for v in g.force_to_machine(c.ax, c.ay, zero))
+    axis = tuple(float(v) for v in g.force_to_machine(0.0, 0.0, 1.0))
+    if getattr(g, "along", False) and name in {b.name for b in g.mechanism.description.driven_bodies}:
+        axis = (0.0, 0.0, 1.0)  # a spatial crank of a group along the shaft turns about the shaft (machine z)
+    return pos, acc, axis
+
+
 def shaking_force(a) -> np.ndarray:
-    """(n, 2) the dynamic shaking force on the frame, −Σ m a_G over every moving part (N); no weight."""
+    """(n, 2) the dynamic shaking force on the frame, −Σ m a_G over every moving part (N); no weight. The parts
+    of a group along the shaft move partly along it (z): that component is not in the plane x–y."""
     out = np.zeros((len(a.phi), 2))
-    for _, m, _, bm in _bodies(a):
-        out[:, 0] -= m * bm.com.ax
-        out[:, 1] -= m * bm.com.ay
+    for g, m, _, bm in _bodies(a):
+        _pos, acc, _axis = _placed(g, bm)
+        out[:, 0] -= m * acc[0]
+        out[:, 1] -= m * acc[1]
     for sm, _pos, _vel, acc in a.core:
         out -= sm.mass * acc
     return out
@@ -44,17 +69,18 @@ def shaking_force(a) -> np.ndarray:
 
 def shaking_moments(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
     """(n, 3) the dynamic shaking moment on the frame about the point ``about`` (x, y, z; m), about the x, y and
-    z axes (N m): −Σ (r − O) × m a_G, and −Σ I α about z (the shaft core's included); each group's parts in
-    the group's plane z = ``Group.z``, each core mass at its own z; no weight."""
+    z axes (N m): −Σ (r − O) × m a_G − Σ I α (each about its body's axis: z for a group across the shaft, −x
+    for one along it), the shaft core's included; each group's parts placed in the machine frame (a group across
+    the shaft in its plane z = ``Group.z``), each core mass at its own z; no weight."""
     ox, oy, oz = about
     out = np.zeros((len(a.phi), 3))
     out[:, 2] -= a.machine.shaft.inertia * a.alpha
-    for g, m, inertia, bm in _bodies(a):
-        c = bm.com
-        fx, fy = -m * c.ax, -m * c.ay
-        out[:, 0] -= (g.z - oz) * fy
-        out[:, 1] += (g.z - oz) * fx
-        out[:, 2] += (c.x - ox) * fy - (c.y - oy) * fx - inertia * bm.alpha
+    for g, m, inertia, bm, name in _named(a):
+        (x, y, z), (ax, ay, az), axis = _placed(g, bm, name)
+        fx, fy, fz = -m * ax, -m * ay, -m * az
+        out[:, 0] += (y - oy) * fz - (z - oz) * fy - inertia * bm.alpha * axis[0]
+        out[:, 1] += (z - oz) * fx - (x - ox) * fz - inertia * bm.alpha * axis[1]
+        out[:, 2] += (x - ox) * fy - (y - oy) * fx - inertia * bm.alpha * axis[2]
     for sm, pos, _vel, acc in a.core:
         fx, fy = -sm.mass * acc[:, 0], -sm.mass * acc[:, 1]
         out[:, 0] -= (sm.z - oz) * fy

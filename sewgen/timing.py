@@ -41,7 +41,24 @@ Rules (``rule`` in the model file; ``min``/``max`` with units; ``source`` names 
                                                  both sides: min(from − bottom, top − to)
 ``thread_slack``                       length    the least thread slack S − D + T while the hook carries the
                                                  loop (sewgen.thread)
+``lower_looper_at_needle_rise``        length    overlock: the needle's rise from BDC when the lower looper's tip
+                                                 crosses the needle's centre line (forward pass: loop pick-up)
+``lower_looper_above_eye``             length    the lower looper tip's height above the needle eye's top then
+``lower_looper_passes_level``          length    the needle's height at the lower looper's return pass minus at
+                                                 its forward pass (both passes meet the needle at one height)
+``upper_takes_lower_thread``           length    how far the lower looper's tip stands beyond the needle's line
+                                                 (the way it went) when the rising upper looper's tip passes its
+                                                 height: the upper looper enters the lower looper's thread
+``needle_in_upper_triangle``           length    how far the upper looper's tip stands beyond the needle's line
+                                                 (the way it went) when the needle point enters the material: its
+                                                 thread then runs across the needle's line, from the tip back over
+                                                 the edge, and the needle enters the thread triangle
+``upper_above_material``               length    the upper looper tip's height above the material then
 =====================================  ========  ================================================================
+
+Points of different groups are compared in the machine's frame (``Group.to_machine``: a group whose plane
+contains the shaft, ``frame = "along"``, is placed by its origin). The looper rules measure across the needle in
+the plane the lower looper moves in (the machine's x for a group across the shaft, z for one along it).
 
 Angle differences are wrapped into (−180°, 180°], except ``take_up_rise`` and ``loop_released_before_reversal``
 (a span). A rule whose parts the machine lacks fails with a message saying what is missing.
@@ -55,8 +72,8 @@ import numpy as np
 
 from .errors import SewgenError
 from .feed import plate_height
-from .roles import (FEED_DOG, HOOK_POINT, NEEDLE_EYE, NEEDLE_EYE_LENGTH, NEEDLE_POINT, NEEDLE_SCARF, THREAD_EYE,
-                    THROAT_PLATE)
+from .roles import (FEED_DOG, HOOK_POINT, LOWER_LOOPER_TIP, NEEDLE_EYE, NEEDLE_EYE_LENGTH, NEEDLE_POINT, NEEDLE_SCARF,
+                    THREAD_EYE, THROAT_PLATE, UPPER_LOOPER_TIP)
 
 TWO_PI = 2.0 * math.pi
 STEP_DEG = 0.25  # the timing sweep's step (1440 positions a turn)
@@ -75,6 +92,12 @@ RULES = {
     "take_up_rise": ("angle", "deg", "take-up rises fast"),
     "take_up_rises_over": ("angle", "deg", "take-up rising over the stitch-setting window"),
     "thread_slack": ("length", "mm", "thread slack while the hook carries the loop"),
+    "lower_looper_at_needle_rise": ("length", "mm", "needle rise from BDC when the lower looper reaches the needle"),
+    "lower_looper_above_eye": ("length", "mm", "lower looper tip above the needle eye's top at the needle"),
+    "lower_looper_passes_level": ("length", "mm", "needle height at the lower looper's return minus forward pass"),
+    "upper_takes_lower_thread": ("length", "mm", "lower looper beyond the needle as the upper looper passes it"),
+    "needle_in_upper_triangle": ("length", "mm", "upper looper beyond the needle as the needle enters"),
+    "upper_above_material": ("length", "mm", "upper looper tip above the material as the needle enters"),
 }
 _SCALE = {"length": 1e3, "angle": 180.0 / math.pi}  # SI -> the unit shown
 
@@ -352,18 +375,35 @@ def plate_level(machine):
     """The throat plate's height (m) from the first group with a ``throat_plate`` role, or None."""
     for g in machine.groups:
         if g.mechanism.description.has_role(THROAT_PLATE):
-            return plate_height(g.mechanism, g.params or None)
+            return float(_to_machine(g, 0.0, plate_height(g.mechanism, g.params or None))[1])
     return None
 
 
-class _Point:
-    """A role point's position and its shaft-angle derivatives, as Series."""
+def _to_machine(g, x, y):
+    """(X, Y, Z) of a group's point in the machine frame (groups without a placement: their own x, y)."""
+    place = getattr(g, "to_machine", None)
+    return place(x, y) if place is not None else (x, y, 0.0 * np.asarray(x))
 
-    def __init__(self, phi, motion, name, w):
+
+class _Point:
+    """A role point's position and its shaft-angle derivatives in the machine frame (``group``'s placement), as
+    Series: x, y, and z (along the shaft)."""
+
+    def __init__(self, phi, motion, name, w, group=None):
         p = motion.point(name)
-        self.x, self.dx = _deriv(phi, p.x, p.vx / w, p.ax / w**2)
-        self.y, self.dy = _deriv(phi, p.y, p.vy / w, p.ay / w**2)
+        zero = 0.0 * p.x
+        if group is None or not hasattr(group, "to_machine"):
+            pos, vel, acc = (p.x, p.y, zero), (p.vx, p.vy, zero), (p.ax, p.ay, zero)
+        else:  # positions placed, velocities and accelerations turned
+            pos = group.to_machine(p.x, p.y)
+            vel, acc = group.force_to_machine(p.vx, p.vy, zero), group.force_to_machine(p.ax, p.ay, zero)
+        (self.x, self.dx), (self.y, self.dy), (self.z, self.dz) = (
+            _deriv(phi, c + zero, v / w, a / w**2) for c, v, a in zip(pos, vel, acc))
         self.raw = p
+
+    def lateral(self, g):
+        """(Series, its derivative) across the needle in group ``g``'s plane: z for an "along" group, else x."""
+        return (self.z, self.dz) if getattr(g, "along", False) else (self.x, self.dx)
 
 
 def timing(machine, speed: float | None = None, step_deg: float = STEP_DEG, motions: dict | None = None) -> Timing:
@@ -385,7 +425,7 @@ def timing(machine, speed: float | None = None, step_deg: float = STEP_DEG, moti
     plate = plate_level(machine)
     needle = None
     if gn is not None:
-        needle = _Point(phi, motions[gn.name], npt, w)
+        needle = _Point(phi, motions[gn.name], npt, w, gn)
         top = [a for a, s in needle.dy.crossings() if s == -1]
         bdc = [a for a, s in needle.dy.crossings() if s == 1]
         if len(top) != 1 or len(bdc) != 1:
@@ -423,7 +463,7 @@ def timing(machine, speed: float | None = None, step_deg: float = STEP_DEG, moti
     gh, hpt = _role_group(machine, HOOK_POINT)
     hook = None
     if gh is not None and needle is not None:
-        hook = _Point(phi, motions[gh.name], hpt, w)
+        hook = _Point(phi, motions[gh.name], hpt, w, gh)
         body = gh.mechanism.description.point(hpt).body
         bm = motions[gh.name].body(body)
         theta = np.unwrap(bm.angle)
@@ -468,7 +508,7 @@ def timing(machine, speed: float | None = None, step_deg: float = STEP_DEG, moti
     # take-up ----------------------------------------------------------------------------------------------------
     gt, tpt = _role_group(machine, THREAD_EYE)
     if gt is not None:
-        te = _Point(phi, motions[gt.name], tpt, w)
+        te = _Point(phi, motions[gt.name], tpt, w, gt)
         hi = [a for a, s in te.dy.crossings() if s == -1]
         lo = [a for a, s in te.dy.crossings() if s == 1]
         k_hi = max(hi, key=te.y.at) if hi else None
@@ -485,7 +525,7 @@ def timing(machine, speed: float | None = None, step_deg: float = STEP_DEG, moti
     # feed dog ----------------------------------------------------------------------------------------------------
     gf, fpt = _role_group(machine, FEED_DOG)
     if gf is not None and plate is not None:
-        dog = _Point(phi, motions[gf.name], fpt, w)
+        dog = _Point(phi, motions[gf.name], fpt, w, gf)
         cr = dog.y.crossings(plate)
         up, down = [a for a, s in cr if s == 1], [a for a, s in cr if s == -1]
         if len(up) != 1 or len(down) != 1:
@@ -512,6 +552,12 @@ def timing(machine, speed: float | None = None, step_deg: float = STEP_DEG, moti
                 ev("feed ends", s1, FEED_DOG, f"cloth moved {abs(travel) * 1e3:.2f} mm")
                 phases.append(Phase("feed dog", "feed stroke", s0, s1, "inner"))
 
+    # overlock loopers ---------------------------------------------------------------------------------------------
+    gl, lpt = _role_group(machine, LOWER_LOOPER_TIP)
+    gu, upt = _role_group(machine, UPPER_LOOPER_TIP)
+    if gl is not None and needle is not None:
+        _loopers(machine, phi, w, motions, needle, gl, lpt, gu, upt, values, ev, phases, ge)
+
     tm = Timing(machine, phi, w, events, [], phases, None, values, motions)
     thread_cfg = getattr(machine, "thread", None)
     if thread_cfg is not None and needle is not None:
@@ -520,6 +566,79 @@ def timing(machine, speed: float | None = None, step_deg: float = STEP_DEG, moti
         tm.thread = thread_control(machine, motions, tm, thread_cfg, st)
     tm.checks = [_check(r, tm, st, machine, ge) for r in st.rules]
     return tm
+
+
+def _loopers(machine, phi, w, motions, needle, gl, lpt, gu, upt, values, ev, phases, ge):
+    """The overlock's looper events (ISO 504/505): the lower looper's tip passes behind the needle as the needle
+    rises from BDC (it takes the needle loop), reaches its far end, where the rising upper looper passes it and
+    enters its thread; the upper looper's tip reaches over beyond the needle, and the descending needle enters
+    its thread triangle; the lower looper returns past the needle."""
+    low = _Point(phi, motions[gl.name], lpt, w, gl)
+    lat, dlat = low.lateral(gl)
+    nlat, _ = needle.lateral(gl)
+    rel = Series(phi, lat.y - nlat.y, lat.dy - nlat.dy)
+    near = [(a, s) for a, s in rel.crossings() if abs(low.y.at(a) - needle.y.at(a)) < 0.03]
+    fwd = _first_after(near, values["bdc"])
+    if fwd is None:
+        raise TimingError(f"{machine.name}: the lower looper's tip never crosses the needle's centre line")
+    fsign = next(s for a, s in near if a == fwd)
+    ret = _first_after([(a, s) for a, s in near if s != fsign], fwd)
+    ends = [(a, s) for a, s in dlat.crossings()]
+    far = _first_after(ends, fwd)  # the reversal at its far end
+    values.update(lower_fwd=fwd, lower_far=far, lower_sign=fsign)
+    y_fwd = needle.y.at(fwd)
+    ev("lower looper tip at the needle (forward pass, takes the needle loop)", fwd, LOWER_LOOPER_TIP,
+       f"needle risen {(y_fwd - needle.y.at(values['bdc'])) * 1e3:.2f} mm")
+    if far is not None:
+        ev("lower looper at its far end", far, LOWER_LOOPER_TIP,
+           f"tip {abs(lat.at(far) - nlat.at(far)) * 1e3:.2f} mm beyond the needle")
+    if ret is not None:
+        values["lower_ret"] = ret
+        values["needle_at_lower_fwd"], values["needle_at_lower_ret"] = y_fwd, needle.y.at(ret)
+        ev("lower looper tip at the needle (return pass)", ret, LOWER_LOOPER_TIP)
+        phases.append(Phase("lower looper", "beyond the needle", fwd, ret))
+        phases.append(Phase("lower looper", "returning, behind", ret, fwd))
+    near_end = _first_after(ends, ret if ret is not None else fwd)
+    if far is not None and near_end is not None:
+        phases.append(Phase("lower looper", "forward stroke", near_end, far, "inner"))
+    if gu is None:
+        return
+    up = _Point(phi, motions[gu.name], upt, w, gu)
+    ulat, _ = up.lateral(gl)
+    # the upper looper's tip rising through the lower looper tip's height: it enters the lower looper's thread
+    cross = Series(phi, up.y.y - low.y.y, up.y.dy - low.y.dy).crossings()
+    meet = _first_after([(a, s) for a, s in cross if s == 1], fwd)
+    if meet is not None:
+        values["upper_meets_lower"] = meet
+        values["lower_beyond_at_meet"] = fsign * (lat.at(meet) - nlat.at(meet))
+        ev("upper looper tip rises past the lower looper (takes its thread)", meet, UPPER_LOOPER_TIP,
+           f"lower looper tip {values['lower_beyond_at_meet'] * 1e3:.2f} mm beyond the needle")
+    tops = [a for a, s in up.dy.crossings() if s == -1]
+    bots = [a for a, s in up.dy.crossings() if s == 1]
+    if tops and bots:
+        top, bot = max(tops, key=up.y.at), min(bots, key=up.y.at)
+        values["upper_top"], values["upper_bottom"] = top, bot
+        ev("upper looper at its top", top, UPPER_LOOPER_TIP, f"tip {up.y.at(top) * 1e3:.2f} mm")
+        ev("upper looper at its bottom", bot, UPPER_LOOPER_TIP, f"tip {up.y.at(bot) * 1e3:.2f} mm")
+        phases.append(Phase("upper looper", "rising", bot, top))
+        phases.append(Phase("upper looper", "falling", top, bot))
+        # its way over the needle: the sign of its lateral motion while it rises
+        usign = 1 if ulat.at(top) - ulat.at(bot) > 0 else -1
+        values["upper_sign"] = usign
+        beyond = Series(phi, usign * (ulat.y - nlat.y), usign * (ulat.dy - nlat.dy))
+        over = [(a, s) for a, s in beyond.crossings()]
+        on, off = _first_after(over, bot, 1), None
+        if on is not None:
+            off = _first_after(over, on, -1)
+        if on is not None and off is not None:
+            phases.append(Phase("upper looper", "beyond the needle", on, off, "inner"))
+        # the needle point entering the material: the upper looper's thread must lie across its line, from the
+        # tip beyond the needle back over the material's edge (the needle enters the thread triangle)
+        enter = values.get("needle_in_cloth")
+        if enter is not None:
+            values["needle_at_upper"] = enter
+            values["upper_beyond_at_needle"] = usign * (ulat.at(enter) - nlat.at(enter))
+            values["upper_above_cloth_at_needle"] = up.y.at(enter) - values["cloth_top"]
 
 
 # -- rules -------------------------------------------------------------------------------------------------------
@@ -634,6 +753,52 @@ def _check(rule: Rule, tm: Timing, st: Stitch, machine, ge) -> Check:
         margin = min(m1 if m1 <= span else m1 - TWO_PI, m2)
         return out(margin, f"the take-up rises from φ = {_deg(b)} to φ = {_deg(top)}; the window is "
                            f"φ = {_deg(f)} – {_deg(t)}")
+    if k in ("lower_looper_at_needle_rise", "lower_looper_above_eye"):
+        if missing("lower_fwd", "bdc"):
+            return lacking("the machine needs a needle_point and a lower_looper_tip")
+        a = v["lower_fwd"]
+        gn, npt = _role_group(machine, NEEDLE_POINT)
+        gl, lpt = _role_group(machine, LOWER_LOOPER_TIP)
+        ny, nb = _interp_point(tm, gn, npt, a)[1], _interp_point(tm, gn, npt, v["bdc"])[1]
+        if k == "lower_looper_at_needle_rise":
+            return out(ny - nb, f"the lower looper's tip reaches the needle's centre line at φ = {_deg(a)}, when "
+                                f"the needle has risen this far from its bottom dead centre (φ = {_deg(v['bdc'])})")
+        if ge is None:
+            return lacking("the machine needs a needle_eye")
+        _, eye_name = _role_group(machine, NEEDLE_EYE)
+        ey = _interp_point(tm, ge, eye_name, a)[1]
+        d = ge.mechanism.description
+        half = 0.5 * _param(ge, NEEDLE_EYE_LENGTH) if d.has_role(NEEDLE_EYE_LENGTH) else 0.0
+        ly = _interp_point(tm, gl, lpt, a)[1]
+        return out(ly - (ey + half), f"at φ = {_deg(a)} (lower looper tip at the needle) the tip is this far above "
+                                     f"the top of the needle eye")
+    if k == "lower_looper_passes_level":
+        if missing("lower_ret", "lower_fwd"):
+            return lacking("the lower looper must pass the needle forward and back")
+        return out(v["needle_at_lower_ret"] - v["needle_at_lower_fwd"],
+                   f"the lower looper's tip passes the needle forward at φ = {_deg(v['lower_fwd'])} and back at "
+                   f"φ = {_deg(v['lower_ret'])}; the needle's height then differs by")
+    if k == "upper_takes_lower_thread":
+        if missing("upper_meets_lower"):
+            return lacking("the machine needs an upper_looper_tip that rises past the lower_looper_tip")
+        return out(v["lower_beyond_at_meet"], f"the upper looper's tip rises past the lower looper's at "
+                                              f"φ = {_deg(v['upper_meets_lower'])} (the lower looper at its far end at "
+                                              f"φ = {_deg(v['lower_far'])}); the lower tip is this far beyond the needle")
+    if k == "upper_above_material":
+        if missing("needle_at_upper", "upper_top"):
+            return lacking("the machine needs an upper_looper_tip, a needle_point and a throat_plate")
+        return out(v["upper_above_cloth_at_needle"], f"the needle point enters the material at "
+                                                     f"φ = {_deg(v['needle_at_upper'])}; the upper looper's tip "
+                                                     f"(at its top at φ = {_deg(v['upper_top'])}) is this far above "
+                                                     f"the material")
+    if k == "needle_in_upper_triangle":
+        if missing("needle_at_upper", "upper_top"):
+            return lacking("the machine needs an upper_looper_tip, a needle_point and a throat_plate")
+        return out(v["upper_beyond_at_needle"], f"the needle point enters the material at "
+                                                f"φ = {_deg(v['needle_at_upper'])} (the upper looper at its top at "
+                                                f"φ = {_deg(v['upper_top'])}, its tip "
+                                                f"{v['upper_above_cloth_at_needle'] * 1e3:.2f} mm above the material "
+                                                f"then); the tip is this far beyond the needle")
     if k == "thread_slack":
         th = tm.thread
         if th is None:
@@ -645,7 +810,7 @@ def _check(rule: Rule, tm: Timing, st: Stitch, machine, ge) -> Check:
 
 def _interp_point(tm: Timing, g, name, angle):
     """(x, y) of point ``name`` of group ``g`` at shaft angle ``angle``, Hermite-interpolated on tm's sweep."""
-    p = _Point(tm.phi, tm.motions[g.name], name, tm.speed)
+    p = _Point(tm.phi, tm.motions[g.name], name, tm.speed, g)
     return p.x.at(angle), p.y.at(angle)
 
 

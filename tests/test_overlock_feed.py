@@ -18,6 +18,10 @@ MM = 1e-3
 R1, L2, D, CD, L3, L4, GF, L5, THETA, L6 = (1.6 * MM, 45 * MM, np.array([45 * MM, 16 * MM]), 18 * MM, 24 * MM,
                                             45 * MM, 10 * MM, 1.2 * MM, 0.0, 40 * MM)
 W = 3500 * np.pi / 30
+#: The stitch regulator (the adjustable-throw feed eccentric: e₁ − e₂·u(β), e₁ = e₂ = 2.5 mm) set so its throw
+#: is R1 along the shaft angle: 2e·sin(β/2) = R1 at the angle β/2 − 90° + phase = 0.
+BETA = 2 * np.arcsin(R1 / (2 * 2.5 * MM))
+SETTING = dict(held={"stitch_eccentric": BETA}, params={"feed_eccentric.phase": np.pi / 2 - BETA / 2})
 
 
 def _circle(p, rp, q, rq, sign):
@@ -60,7 +64,7 @@ def feed():
 
 def test_eqs_3_to_5_positions(feed):
     phi = np.radians(np.arange(0, 360, 2.5))
-    m = feed.solve(phi)
+    m = feed.solve(phi, **SETTING)
     _p3, p4, _p5, _p6, e, f = positions(phi)
     np.testing.assert_allclose(np.column_stack([m.point("rear_pin").x, m.point("rear_pin").y]), e, atol=1e-14)
     np.testing.assert_allclose(np.column_stack([m.point("tooth_f").x, m.point("tooth_f").y]), f, atol=1e-14)
@@ -68,7 +72,7 @@ def test_eqs_3_to_5_positions(feed):
     lift = m.point("tooth_f").y.max() - m.point("tooth_f").y.min()
     assert travel == pytest.approx(4.3 * MM, abs=0.1 * MM) and lift == pytest.approx(2.4 * MM, abs=0.1 * MM)
     top = np.degrees(phi[np.argmax(m.point("tooth_f").y)])
-    fastest = np.degrees(phi[np.argmax(feed.solve(phi, speed=W).point("tooth_f").vx)])
+    fastest = np.degrees(phi[np.argmax(feed.solve(phi, speed=W, **SETTING).point("tooth_f").vx)])
     assert abs(top - 90) < 15 and abs(fastest - 90) < 15  # it feeds at the top, while the needle is up
 
 
@@ -94,7 +98,7 @@ def cramer(phi, printed_eq12=False):
 
 def test_eqs_8_to_13_velocity_of_f_by_cramer(feed):
     phi = np.radians(np.arange(0, 360, 5.0))
-    m = feed.solve(phi, speed=W)
+    m = feed.solve(phi, speed=W, **SETTING)
     v, w4 = cramer(phi)
     got = np.column_stack([m.point("tooth_f").vx, m.point("tooth_f").vy])
     np.testing.assert_allclose(got, v, atol=1e-7 * np.abs(v).max())
@@ -105,7 +109,7 @@ def test_eqs_8_to_13_velocity_of_f_by_cramer(feed):
 
 def test_eq_14_velocity_of_g(feed):
     phi = np.radians(np.arange(0, 360, 5.0))
-    m = feed.solve(phi, speed=W)
+    m = feed.solve(phi, speed=W, **SETTING)
     v_f, w4 = cramer(phi)
     _p3, p4, *_ = positions(phi)
     gf = -GF * np.column_stack([np.cos(p4), np.sin(p4)])  # G is GF behind F along the rack, towards E

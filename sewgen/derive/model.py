@@ -306,7 +306,7 @@ class Mechanism:
                           guide=guide, input_index=len(self.inputs) - 1)
 
     def spatial_crank(self, name: str, axis_point, axis, phase="0 deg", sense: int = 1, ratio=1, reference=None,
-                      doc: str = "", mass="0 g", inertia="0 kg*m**2", role=None) -> Body:
+                      doc: str = "", mass="0 g", inertia="0 kg*m**2", role=None, planar: bool = False) -> Body:
         """A crank turned by the upper shaft about a fixed axis in space (seed 003's spatial four-bar: the crank
         of the needle or looper drive, whose shaft is not parallel to the rocker's).
 
@@ -316,7 +316,14 @@ class Mechanism:
         into the plane the crank turns in. Its points are ``crank.pin(radius, along)``; its centre of mass is on
         the axis and ``inertia`` is about the axis. In the force balance its rows are the in-plane components
         of its bearings' resultant (reaction ``<name>.pivot`` at the axis point's projection) and the moment
-        about its own axis (the driving torque)."""
+        about its own axis (the driving torque).
+
+        ``planar=True`` declares the planar equivalent instead (seed 003 computes its spatial four-bars so, eq. 1
+        with α = 0): the crank's axis and the plane it turns in are turned, by the least rotation about the line
+        through the axis point, until the axis is perpendicular to the mechanism's plane (z); the crank pin then
+        moves in the plane, its radius, phase, sense and reference carried along (the reference e₁ and e₂ are
+        rotated with the axis), and a rod to it becomes a plane binary link. An axis already along ±z is
+        unchanged."""
         def coordinate(value, what):
             if isinstance(value, str):
                 return sp.Float(to_si(value, "length", f"{self.name}.{name}.{what}"))
@@ -339,6 +346,16 @@ class Mechanism:
             raise DeclarationError(f"{self.name}: reference of {name!r} is along its axis")
         e1 = sp.simplify(e1 / e1.norm())
         e2 = sp.simplify(a.cross(e1))
+        if planar:  # the least rotation taking the axis a to z (Rodrigues), applied to a, e1 and e2
+            z = sp.Matrix([0, 0, 1])
+            k = a.cross(z)
+            s_, c_ = k.norm(), a.dot(z)
+            if float(s_) > 1e-12:
+                k = k / s_
+                kx = sp.Matrix([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+                rot = sp.eye(3) + s_ * kx + (1 - c_) * kx * kx
+                a, e1, e2 = (sp.simplify(rot * v) for v in (a, e1, e2))
+            point = (point[0], point[1], sp.S.Zero)
         body = self.driven(name, self.ground.at(point[0], point[1]), phase=phase, sense=sense, doc=doc, mass=mass,
                            inertia=inertia, role=role, ratio=ratio)
         body.axis = Axis(point, tuple(a), tuple(e1), tuple(e2))

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..roles import FEED_DOG, NEEDLE_EYE
-from .common import AT_THE_PLATE, color, new_figure, role_point, throat_plate_height
+from ..roles import FEED_DOG, NEEDLE_EYE, NEEDLE_POINT
+from .common import AT_THE_PLATE, axis_name, color, new_figure, offset, role_point, throat_plate_height
 from .drawing import PanelArtists, Part
 from .geometry import linkage
 
@@ -45,10 +45,11 @@ def _views(a, links):
 def _zone_parts(a, links):
     """(linkage index, bodies, marks) of the parts that work at the throat plate (needle eye, feed dog)."""
     out = []
+    gn, _ = role_point(a, NEEDLE_POINT)
     for k, lk in enumerate(links):
         marks = [lk.roles[r] for r in AT_THE_PLATE if r in lk.roles]
-        if not marks:
-            continue
+        if not marks or (gn is not None and axis_name(a.machine.groups[k]) != axis_name(gn)):
+            continue  # only the parts drawn in the needle's plane (a group across the shaft, beside one along it)
         bodies = {b for m in marks for b in _bodies_of(a.machine.groups[k].mechanism, m)}
         out.append((k, bodies, marks))
     return out
@@ -142,7 +143,29 @@ def _layout(aspects, W, H_max):
 
 def machine_linkages(a) -> list:
     """The drawing of every group of analysis ``a`` (:func:`~sewgen.plots.geometry.linkage`), in group order."""
-    return [linkage(g, a.groups[g.name]) for g in a.machine.groups]
+    return [_shifted(linkage(g, a.groups[g.name]), offset(g)) for g in a.machine.groups]
+
+
+def _shifted(lk, shift):
+    """Linkage ``lk`` moved by ``shift`` (m; :func:`~sewgen.plots.common.offset`): a group along the shaft is
+    drawn in the machine's z–y plane, where the groups working at the needle meet."""
+    dx, dy = shift[0] * 1e3, shift[1] * 1e3
+    if dx == 0.0 and dy == 0.0:
+        return lk
+    d = np.array([dx, dy])
+    lk.bodies = {k: v + d for k, v in lk.bodies.items()}
+    lk.joints = {k: {b: v + d for b, v in on.items()} for k, on in lk.joints.items()}
+    lk.pins = None if lk.pins is None else lk.pins + d
+    lk.pivots = None if lk.pivots is None else lk.pivots + d
+    lk.circles = [(np.asarray(c) + d, r) for c, r in lk.circles]
+    for gd in lk.guides:
+        gd.ends = gd.ends + d
+    for sl in lk.sliders:
+        sl.center = sl.center + d
+    lk.cams = {k: v + d for k, v in lk.cams.items()}
+    lk.rods = [(a, b, v + d) for a, b, v in lk.rods]
+    lk.points = {k: v + d for k, v in lk.points.items()}
+    return lk
 
 
 class MachineView:
@@ -179,7 +202,8 @@ class MachineView:
                     ax.text(x1, self.plate * 1e3, "throat plate ", ha="right", va="bottom", fontsize=7)
             ax.set(xlim=(x0, x1), ylim=(y0, y1))
             ax.set_aspect("equal", adjustable="box")
-            ax.set_xlabel("x (mm)", fontsize=7, labelpad=1)
+            names = sorted({axis_name(groups[j]) for j, _b, _m in zone_parts} if k is None else {axis_name(groups[k])})
+            ax.set_xlabel(f"{' or '.join(names)} (mm)", fontsize=7, labelpad=1)
             ax.set_ylabel("y (mm)", fontsize=7, labelpad=1)
             ax.tick_params(labelsize=6, pad=1.5, length=2)
             ax.grid(alpha=0.25, lw=0.5)
@@ -214,7 +238,7 @@ def status(a, i: int) -> str:
                           (FEED_DOG, "feed dog up (feeding)", "feed dog down")):
         g, name = role_point(a, role)
         if g is not None:
-            below = a.groups[g.name].motion.point(name).y[i] < plate
+            below = a.groups[g.name].motion.point(name).y[i] + offset(g)[1] < plate
             words.append((yes if below else no) if role == NEEDLE_EYE else (no if below else yes))
     return ", ".join(words)
 

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from ..feed import has_feed, plate_height
-from ..roles import FEED_DOG, HOOK_POINT, NEEDLE_EYE, NEEDLE_POINT, THROAT_PLATE
+from ..roles import (FEED_DOG, HOOK_POINT, KNIFE_EDGE, LOWER_LOOPER_TIP, NEEDLE_EYE, NEEDLE_POINT, RACK_TOOTH,
+                     THROAT_PLATE, UPPER_LOOPER_TIP)
 
 MM = 1e3  # m -> mm
 DPI = 100
@@ -16,7 +17,8 @@ DPI = 100
 PALETTE = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive",
            "tab:cyan", "tab:gray")
 #: Point roles that work at the throat plate: the plate is drawn beside them.
-AT_THE_PLATE = (NEEDLE_EYE, NEEDLE_POINT, HOOK_POINT, FEED_DOG)
+AT_THE_PLATE = (NEEDLE_EYE, NEEDLE_POINT, HOOK_POINT, FEED_DOG, RACK_TOOTH, LOWER_LOOPER_TIP, UPPER_LOOPER_TIP,
+                KNIFE_EDGE)
 
 
 # -- figures ---------------------------------------------------------------------------------------------------
@@ -165,9 +167,23 @@ def plate(a):
 
 
 def throat_plate_height(a):
-    """The throat plate's height (m), or None."""
+    """The throat plate's height (m) in the machine frame, or None."""
     p = plate(a)
-    return None if p is None else float(p[1])
+    return None if p is None else float(p[1]) + offset(p[0])[1]
+
+
+def offset(g) -> tuple:
+    """(horizontal, vertical) shift (m) from group ``g``'s plane coordinates to the drawing's: zero for a group
+    across the shaft (its x, y are the machine's); for a group whose plane contains the shaft (``frame =
+    "along"``) its origin's (z, y), so it is drawn in the machine's z–y plane (x along the shaft is z)."""
+    if not getattr(g, "along", False):
+        return (0.0, 0.0)
+    return (float(g.origin[2]), float(g.origin[1]))
+
+
+def axis_name(g) -> str:
+    """The drawing's horizontal axis for group ``g``: "x", or "z" for a group along the shaft."""
+    return "z" if getattr(g, "along", False) else "x"
 
 
 def role_points(g) -> list:

@@ -7,15 +7,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..roles import FEED_DOG, HOOK_SHAFT, NEEDLE_EYE, THREAD_EYE
-from .common import (MM, angle_axis, closed, color, deg, place, pretty, role_point, shade, suptitle,
-                     throat_plate_height, title)
+from ..roles import FEED_DOG, HOOK_SHAFT, NEEDLE_EYE, RACK_TOOTH, THREAD_EYE
+from .common import (MM, angle_axis, axis_name, closed, color, deg, offset, place, pretty, role_point, shade,
+                     suptitle, throat_plate_height, title)
 
 #: What the motion figure shows of a role-tagged point: [(component, title)], by role.
 POINT_ROLES = {
     NEEDLE_EYE: [("y", "needle eye y (needle-bar travel)")],
     THREAD_EYE: [("y", "thread eye y (take-up)")],
     FEED_DOG: [("x", "feed dog x (feed)"), ("y", "feed dog y (lift)")],
+    RACK_TOOTH: [("x", "rack tooth x (feed)"), ("y", "rack tooth y (lift)")],
 }
 #: Body roles whose angle the motion figure shows.
 ANGLE_ROLES = {HOOK_SHAFT: "hook shaft angle"}
@@ -34,8 +35,11 @@ class Row:
     component: str | None = None
 
 
-def _point_series(p, comp):
-    return (p.x * MM, p.vx, p.ax) if comp == "x" else (p.y * MM, p.vy, p.ay)
+def _point_series(p, comp, g=None):
+    """(position mm, velocity, acceleration) of a point's component, positions in the drawing's frame (a group
+    along the shaft: its x is the machine's z, shifted by its origin; sewgen.plots.common.offset)."""
+    dx, dy = offset(g) if g is not None else (0.0, 0.0)
+    return ((p.x + dx) * MM, p.vx, p.ax) if comp == "x" else ((p.y + dy) * MM, p.vy, p.ay)
 
 
 def motion_rows(a) -> list:
@@ -49,7 +53,12 @@ def motion_rows(a) -> list:
                 continue
             p = mo.point(pt.name)
             for comp, text in POINT_ROLES.get(pt.role, [("x", f"{pretty(pt.role)} x"), ("y", f"{pretty(pt.role)} y")]):
-                mine.append(Row(f"{g.name}: {text}", g, LINEAR, [(comp, *_point_series(p, comp))], pt.role, comp))
+                if np.ptp(getattr(p, comp)) < 1e-9:  # a component that never moves (a needle's sideways): no row
+                    continue
+                if comp == "x" and axis_name(g) != "x":  # a group along the shaft: its x is the machine's z
+                    text = text[:-1] + axis_name(g) if text.endswith(" x") else text
+                mine.append(Row(f"{g.name}: {text}", g, LINEAR, [(comp, *_point_series(p, comp, g))], pt.role,
+                                comp))
         for b in d.bodies:
             if b.role in ANGLE_ROLES:
                 bm = mo.body(b.name)
@@ -74,7 +83,7 @@ def _masks(a):
                                      (FEED_DOG, "tab:red", "feed dog above the plate", False)):
             g, name = role_point(a, role)
             if g is not None:
-                y = a.groups[g.name].motion.point(name).y
+                y = a.groups[g.name].motion.point(name).y + offset(g)[1]
                 out.append(((y < plate) if below else (y > plate), c, text))
     return out
 

@@ -12,15 +12,16 @@ import math
 
 import numpy as np
 
-from ..roles import FEED_DOG, HOOK_POINT, NEEDLE_EYE, NEEDLE_POINT, THREAD_EYE
+from ..roles import FEED_DOG, HOOK_POINT, LOWER_LOOPER_TIP, NEEDLE_EYE, NEEDLE_POINT, THREAD_EYE, UPPER_LOOPER_TIP
 from .common import new_figure, suptitle
 
-ROWS = ("needle", "shuttle", "take-up", "feed dog")
+ROWS = ("needle", "shuttle", "lower looper", "upper looper", "take-up", "feed dog")
 #: row -> (dark, light, inner) colours
 TONES = {"needle": ("#4a6fa5", "#b9cbe4", "#1f3b66"), "shuttle": ("#d08a2e", "#f2d3a6", "#7a4a0c"),
-         "take-up": ("#3f9a5a", "#bfe3c8", "#195c2c"), "feed dog": ("#b54848", "#efc0c0", "#6b1515")}
+         "take-up": ("#3f9a5a", "#bfe3c8", "#195c2c"), "feed dog": ("#b54848", "#efc0c0", "#6b1515"),
+         "lower looper": ("#d08a2e", "#f2d3a6", "#7a4a0c"), "upper looper": ("#8a5fb0", "#d9c6ea", "#4a2a6b")}
 _ROLE_ROW = {NEEDLE_POINT: "needle", NEEDLE_EYE: "needle", HOOK_POINT: "shuttle", THREAD_EYE: "take-up",
-             FEED_DOG: "feed dog"}
+             FEED_DOG: "feed dog", LOWER_LOOPER_TIP: "lower looper", UPPER_LOOPER_TIP: "upper looper"}
 
 
 def _spans(start, end):
@@ -53,8 +54,9 @@ def draw_cycle_timing(fig, tm):
     rows = [r for r in ROWS if any(p.row == r for p in tm.phases)] or list(ROWS)
     W, H = fig.get_size_inches()
     foot = _foot(len(tm.checks))
-    ax = fig.add_axes([0.9 / W, (foot + 0.55) / H, (W - 5.3) / W, (H - foot - 1.3) / H])
-    per_deg = (W - 5.3) * 72.0 / 360.0  # points per degree of shaft angle
+    left = 0.35 + 0.085 * max(len(r) for r in rows)  # inches: room for the longest row label
+    ax = fig.add_axes([left / W, (foot + 0.55) / H, (W - 4.4 - left) / W, (H - foot - 1.3) / H])
+    per_deg = (W - 4.4 - left) * 72.0 / 360.0  # points per degree of shaft angle
     n = len(rows)
     y_of = {r: n - 1 - k for k, r in enumerate(rows)}
     if "needle_in_cloth" in tm.values and "needle_out_cloth" in tm.values:

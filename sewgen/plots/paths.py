@@ -10,8 +10,12 @@ import numpy as np
 from ..errors import ParameterError
 from ..feed import dog_travel, has_feed, plate_height, regulator_angle
 from ..roles import FEED_DOG, STITCH_REGULATOR
-from .common import (AT_THE_PLATE, DPI, MM, angle_labels, closed, color, feed_groups, place, pretty, role_points, suptitle,
-                     throat_plate_height, title)
+from .common import (AT_THE_PLATE, DPI, MM, angle_labels, axis_name, closed, color, feed_groups, offset, place, pretty,
+                     role_point, role_points, suptitle, throat_plate_height, title)
+from ..roles import HOOK_POINT, KNIFE_EDGE, LOWER_KNIFE_EDGE, LOWER_LOOPER_TIP, NEEDLE_POINT, UPPER_LOOPER_TIP
+
+#: Points that work at the needle: their panels show the needle's centre line (when drawn in the same plane).
+AT_THE_NEEDLE = (HOOK_POINT, LOWER_LOOPER_TIP, UPPER_LOOPER_TIP)
 
 #: Stitch lengths (mm) of the feed-dog family: zero to the household maximum, and reverse feed.
 STITCHES_MM = (0.0, 1.0, 2.0, 3.0, 4.0, -2.0, -4.0)
@@ -78,15 +82,25 @@ def draw_trajectories(fig, a):
     for ax, (g, pts) in zip(axes, panels):
         fa, c = a.groups[g.name], color(a, g)
         styles = ("-", "--", "-.", ":")
+        dx, dy = offset(g)
         for k, (name, role) in enumerate(pts):
             p = fa.motion.point(name)
-            x, y = p.x * MM, p.y * MM
+            x, y = (p.x + dx) * MM, (p.y + dy) * MM
             data[f"{g.name}.{name}"] = (x, y)
             ax.plot(closed(a, x), closed(a, y), color=c, lw=1.5, ls=styles[k % 4],
                     label=f"{pretty(name)} path" if len(pts) > 1 else None, gid=f"{g.name}.{name}")
         roles = {role for _, role in pts}
-        if plate is not None and roles & set(AT_THE_PLATE):
+        gn, npt = role_point(a, NEEDLE_POINT)
+        if gn is not None and roles & set(AT_THE_NEEDLE) and axis_name(gn) == axis_name(g):
+            p = a.groups[gn.name].motion.point(npt)
+            line = float(np.mean(p.x + offset(gn)[0])) * MM
+            ax.axvline(line, color="0.4", lw=1, ls=":", label=f"needle's centre line, {axis_name(g)} = {line:.4g} mm")
+        if plate is not None and roles & set(AT_THE_PLATE + AT_THE_NEEDLE):
             ax.axhline(plate * MM, color="k", lw=1, ls="--", label=f"throat plate, y = {plate * MM:g} mm")
+        d = g.mechanism.description
+        if KNIFE_EDGE in roles and d.has_role(LOWER_KNIFE_EDGE):  # the fixed knife the edge cuts against
+            lower = (float(g.mechanism.param_vector(g.params or None)[d.role(LOWER_KNIFE_EDGE).index]) + dy) * MM
+            ax.axhline(lower, color="tab:red", lw=1, ls="-.", label=f"lower knife's edge, y = {lower:.4g} mm")
         if plate is not None and FEED_DOG in roles:
             name = next(nm for nm, r in pts if r == FEED_DOG)
             x, y = data[f"{g.name}.{name}"]
@@ -101,12 +115,16 @@ def draw_trajectories(fig, a):
             angle_labels(ax, a, *data[f"{g.name}.{name}"], size=6.5)
         ax.set_autoscale_on(False)
         head = pretty(pts[0][1]) if len(pts) == 1 and pts[0][1] else "named points"
+        if len(pts) == 1 and pts[0][1] and pts[0][0] != pts[0][1]:  # the point's own name too (seed 003's F, G)
+            head += f" ({pts[0][0]})"
         ax.set_title(f"{g.name}: {head}", fontsize=10, color=c, y=1.0)
-        ax.set(xlabel="x (mm)", ylabel="y (mm)")
+        ax.set(xlabel=f"{axis_name(g)} (mm{', along the main shaft' if axis_name(g) == 'z' else ''})", ylabel="y (mm)")
         ax.grid(alpha=0.3)
         if ax.get_legend_handles_labels()[1]:  # below the axes: never over a path or its labels
             ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=7, framealpha=0.8)
-    suptitle(fig, title(a, "paths in the machine's plane (labels: shaft angle φ)"))
+    planes = sorted({axis_name(g) for g, _ in panels})
+    where = "paths in the machine's plane" if planes == ["x"] else "paths in the machine's x–y and z–y planes"
+    suptitle(fig, title(a, f"{where} (labels: shaft angle φ)"))
     return data
 
 
@@ -166,13 +184,23 @@ def draw_feed_dog_stitches(fig, a):
         d = mech.description
         dog, reg = d.role_name(FEED_DOG), d.role_name(STITCH_REGULATOR)
         plate = plate_height(mech, params)
-        data = {}
+        data, beyond = {}, []
         for mm in STITCHES_MM:
-            angle = regulator_angle(mech, mm * 1e-3, params=params)
+            try:
+                angle = regulator_angle(mech, mm * 1e-3, params=params)
+            except ParameterError:  # beyond this regulator's range: said under the panel
+                beyond.append(mm)
+                continue
             mo = mech.solve(fa.motion.phi, speed=fa.motion.omega, params=params, held={reg: angle})
             data[mm] = (mo.point(dog).x * MM, mo.point(dog).y * MM, angle)
         for ax, family, text in ((row[0], forward, "forward stitches"), (row[1], reverse, "reverse stitches")):
+            if any(mm in beyond for mm in family):
+                ax.text(0.02, 0.02, "beyond the regulator's range: " + ", ".join(f"{mm:+.0f} mm" for mm in family
+                                                                                  if mm in beyond),
+                        transform=ax.transAxes, fontsize=8, color="0.3")
             for mm in family:
+                if mm not in data:
+                    continue
                 x, y, angle = data[mm]
                 c = cmap(0.5 + mm / 9.0) if mm else "0.55"
                 ax.plot(closed(a, x), closed(a, y), lw=1.5, color=c,

@@ -17,8 +17,10 @@ import sympy as sp
 from sewgen.derive.model import Mechanism
 
 
-def declare() -> Mechanism:
-    m = Mechanism("overlock_loopers", __doc__, default_speed="3500 rpm")
+def declare(planar: bool = False) -> Mechanism:
+    """The mechanism; ``planar=True``: its planar equivalent (``overlock_loopers_planar``: the spatial four-bar's crank
+    turned into the plane, as seed 003 computes it; Mechanism.spatial_crank)."""
+    m = Mechanism("overlock_loopers_planar" if planar else "overlock_loopers", __doc__, default_speed="3500 rpm")
     r = m.length("eccentric", "6 mm", "eccentricity AB of the looper eccentric (estimate)")
     h_a = m.length("shaft_below", "45 mm", "main-shaft axis below the rock shaft D (estimate)")
     rod = m.length("rod", "45 mm", "ball-jointed rod BC (estimate)")
@@ -35,7 +37,7 @@ def declare() -> Mechanism:
     eta = m.angle("lower_looper_angle", "-60 deg", "its constructive angle η from the lever GF (estimate)")
 
     crank = m.spatial_crank("eccentric", (l3, -h_a, 0), (1, 0, 0), doc="looper eccentric on the main shaft 1",
-                            inertia="1.5e-6 kg*m**2", mass="25 g")
+                            inertia="1.5e-6 kg*m**2", mass="25 g", planar=planar)
     rock = m.link("rock_shaft", doc="looper rock shaft 3 with the arm DC, the arm DE and the upper looper",
                   guess="0 deg", mass="45 g", com=("10 mm", "15 mm"), inertia="2.5e-5 kg*m**2")
     coupler = m.link("coupler", doc="coupler EF", guess="90 deg", mass="6 g", com=(ef / 2, 0),

@@ -20,8 +20,10 @@ import sympy as sp
 from sewgen.derive.model import Mechanism
 
 
-def declare() -> Mechanism:
-    m = Mechanism("overlock_needle", __doc__, default_speed="3500 rpm")
+def declare(planar: bool = False) -> Mechanism:
+    """The mechanism; ``planar=True``: its planar equivalent (``overlock_needle_planar``: the spatial four-bar's crank
+    turned into the plane, as seed 003 computes it; Mechanism.spatial_crank)."""
+    m = Mechanism("overlock_needle_planar" if planar else "overlock_needle", __doc__, default_speed="3500 rpm")
     r = m.length("eccentric", "7.4 mm", "eccentricity AB of the needle eccentric on the main shaft (estimate)")
     h_a = m.length("shaft_below", "60 mm", "main-shaft axis below the rock shaft D (estimate)")
     rod = m.length("rod", "60 mm", "ball-jointed rod BC (estimate)")
@@ -32,10 +34,13 @@ def declare() -> Mechanism:
     a = m.length("offset", "28 mm", "needle-bar axis from the rock shaft D, a (estimate)", signed=True)
     eye = m.length("eye_below_pin", "75 mm", "needle eye below the link pin N along the bar (estimate)")
     point = m.length("point_below_eye", "2 mm", "needle point below its eye (estimate)")
+    m.length("eye_length", "1.0 mm", "length of the needle eye along the needle (estimate)", role="needle_eye_length")
+    m.length("scarf_length", "3.5 mm", "needle scarf above the eye's top, where the lower looper's tip passes "
+             "(estimate)", role="needle_scarf")
 
     crank = m.spatial_crank("eccentric", (l3, -h_a, 0), (1, 0, 0), phase="180 deg",
                             doc="needle eccentric on the main shaft 1",
-                            inertia="2e-6 kg*m**2", mass="30 g")
+                            inertia="2e-6 kg*m**2", mass="30 g", planar=planar)
     lever = m.link("lever", doc="needle-lever rock shaft 3 with its arm DC and lever DL", guess="0 deg",
                    mass="35 g", com=("8 mm", "0 mm"), inertia="6e-6 kg*m**2")
     link = m.link("link", doc="needle-bar link 5", guess="90 deg", mass="6 g", com=(l5 / 2, 0),
