@@ -13,7 +13,8 @@ enum sg_status {
     SG_NAN_INPUT = 4, /* a shaft angle, speed or acceleration is not finite (Python checks first) */
     SG_NO_CONVERGENCE = 5, /* Newton ran out of iterations */
     SG_NONFINITE = 6, /* a result came out non-finite (the motion kernel tests every output) */
-    SG_BAD_ARGUMENT = 7 /* sizes or options out of range: nothing was computed */
+    SG_BAD_ARGUMENT = 7, /* sizes or options out of range: nothing was computed */
+    SG_BAD_DESIGN = 8 /* batched designs: a design's parameter or held input is not finite or out of range, a branch sign is not +1 or -1, or a dimension derived from its parameters is not real; the design is skipped (Python names the parameter) */
 };
 
 typedef struct sg_options {
@@ -77,5 +78,7 @@ void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
 size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
 /* sg_sweep plus kinetostatics in the same pass (gv gravity, loads n x nload or NULL, frc n x nfo) */
 size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status);
+/* nd designs over the same n shaft angles, each its own sg_sweep (its own continuation, held inputs nd x (nx-1), parameters nd x np, branch signs nd x nbranch): status[d] (in: nonzero skips the design; out: the status of its first failing position, or SG_BAD_DESIGN), first_bad/last_bad[d] (positions, -1 for none), nbad[d] (positions failing with that status; nbad, last_bad may be NULL). Flat columns of a position: q, qd, qdd (nq each), obs (nobs); the first ncheck constants must be finite; angle_cols are made continuous as sewgen.mechanism.continuous_angles does. sel (nsel columns) writes out[k*out_stride + d*n + i] (NaN for a failed design); red (nred x 3: kind 0 min, 1 max, 2 absmax, 3 rms, 4 mean; column; second column for the norm of two, or -1) writes red_val/red_idx[k*red_stride + d] (the extremum's first position in the caller's order, -1 for rms, mean; NaN and -1 for a failed design). work: n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of failed designs */
+size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, int ncheck, int nangle, const int *angle_cols, int nsel, const int *sel, double *out, size_t out_stride, int nred, const int *red, double *red_val, long long *red_idx, size_t red_stride, double *work, int *work_status, int *status, long long *first_bad, long long *nbad, long long *last_bad);
 
 #endif

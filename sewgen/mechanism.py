@@ -408,6 +408,37 @@ class Mechanism:
         sweep.check()
         return sweep.analysis()
 
+    def sweep_designs(self, designs, phi, speed=None, *, outputs=None, reduce=None, held=None, branch=None,
+                      threads=None, accel=0.0, degrees: bool = False, newton: bool = False,
+                      max_iter: int = _DEFAULT_MAX_ITER, chunk: int | None = None):
+        """Many designs over the same shaft angles, each swept as :meth:`solve` sweeps it (its own continuation,
+        tolerance and per-position status), in C calls over chunks of designs on ``threads`` threads (default:
+        every core; the GIL is released). Returns a :class:`sewgen.designs.DesignSweep`.
+
+        ``designs``: a pandas DataFrame or a mapping parameter name -> values (one per design, or one for all):
+        SI numbers, quantity strings, or a pint Quantity; a column named ``"crank [mm]"`` is in that unit. Units
+        are converted once per column, never per row. Or an (n_designs, n_parameters) array, SI, in
+        :attr:`param_names` order. Parameters not given take their defaults. ``held`` and ``branch``: by name,
+        a scalar or one value per design each (or an (n_designs, n) array). ``phi``, ``speed``, ``accel``,
+        ``degrees``, ``newton``, ``max_iter``: as :meth:`solve`, shared by every design.
+
+        ``outputs``: which per-position results to keep, ``"all"``, ``"coords"``, ``"points"``, ``"bodies"``,
+        ``"points:<name>"``, ``"bodies:<name>"``, ``"coords:<name>"`` or single columns
+        (``"points.thread_eye.y_dd"``); default all unless ``reduce`` is given (then none). ``reduce``: per-design
+        reductions fused into the sweep, ``{"points.thread_eye.a": "max", "coords.lever.angle": ["min",
+        "max"]}`` or ``["points.thread_eye.y:max", ...]`` (kinds min, max, absmax, rms, mean; a point's
+        ``.v``/``.a`` is the magnitude of its velocity/acceleration). Column naming: :mod:`sewgen.designs`.
+
+        A design that fails (parameters out of range, a position that does not assemble, a singular position, …)
+        gets its status, first failing angle and error message; the others are unaffected. Bad arguments (an
+        unknown column, a wrong length, an unknown output) raise a :class:`~sewgen.errors.ParameterError`
+        naming them."""
+        from .designs import sweep_designs
+
+        return sweep_designs(self, designs, phi, speed, accel, outputs=outputs, reduce=reduce, held=held,
+                             branch=branch, threads=threads, degrees=degrees, newton=newton, max_iter=max_iter,
+                             chunk=chunk)
+
     # -- single-position kernels (checks and inspection) -----------------------------------------------------
     def _ptr(self, ctype: str, arr: np.ndarray):
         return _ptr(self.ffi, ctype, arr)
