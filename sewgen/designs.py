@@ -512,3 +512,44 @@ def _columns(mech) -> Columns:
         with _COLUMNS_LOCK:
             cols = _COLUMNS.setdefault(key, Columns(mech.description))
     return cols
+
+
+def solve_selected(mech, outputs, sweep_args: dict, out=None):
+    """``Mechanism.solve(..., outputs=...)``: one sweep writing only the selected columns, each contiguous (a
+    :class:`~sewgen.results.Selection`); the same values as the full sweep's columns, bit for bit. A failing
+    position raises the error :meth:`~sewgen.Mechanism.solve` raises (the full sweep is rerun to diagnose it)."""
+    from .results import Selection
+
+    base = mech.prepare(**sweep_args)
+    cols = _columns(mech)
+    sel = cols.select(mech.name, outputs)
+    n = base.n
+    block = getattr(out, "block", out)
+    if not (isinstance(block, np.ndarray) and block.shape == (len(sel), n) and block.dtype == np.float64
+            and block.flags.c_contiguous and block.flags.writeable
+            and not any(np.may_share_memory(block, x) for x in (base.phi, base.omega, base.alpha))):
+        block = np.empty((len(sel), n))
+    status = np.zeros(1, dtype=np.intc)
+    first = np.full(1, -1, dtype=np.int64)
+    sel_c = np.array(sel, dtype=np.intc)
+    ffi, lib = mech.ffi, mech.lib
+    width = len(cols.names)
+    work = np.empty(max(n * (width + 1), 1))
+    work_st = np.empty(max(n, 1), dtype=np.intc)
+
+    def ptr(ctype, arr):
+        return ffi.from_buffer(ctype.replace(" *", "[]"), arr) if arr.size else ffi.NULL
+
+    ncheck = 0  # prepare() checked the parameters and their derived dimensions
+    lib.sg_sweep_designs(mech._descriptor, 1, n, ptr("double *", base.phi), ptr("double *", base.omega),
+                         ptr("double *", base.alpha), ptr("double *", base.held), ptr("double *", base.params),
+                         ptr("int *", base.branch), ptr("double *", base.guess), base.options,
+                         ffi.NULL if base.order is None else ptr("size_t *", base.order), ncheck,
+                         len(cols.angle_cols), ptr("int *", cols.angle_cols), len(sel), ptr("int *", sel_c),
+                         ptr("double *", block), n, 0, ffi.NULL, ffi.NULL, ffi.NULL, 0, ptr("double *", work),
+                         ptr("int *", work_st), ptr("int *", status), ptr("long long *", first), ffi.NULL, ffi.NULL)
+    if status[0] != 0:  # the full sweep names the failure with its diagnosis
+        base.run()
+        base.check()
+        raise InputError(mech.name, f"runtime refused the sweep ({abi.status_name(int(status[0]))})")
+    return Selection(mech, base.phi, base.omega, base.alpha, block, [cols.names[c] for c in sel])

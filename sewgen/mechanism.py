@@ -355,7 +355,8 @@ class Mechanism:
 
     def solve(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
               branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
-              newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, out=None, singular: str = "raise") -> Motion:
+              newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, out=None, singular: str = "raise",
+              outputs=None) -> Motion:
         """Positions, velocities and accelerations of every coordinate, point and body at shaft angles ``phi``.
 
         ``phi`` in rad (or degrees with ``degrees=True``); ``speed`` (rad/s, default the mechanism's
@@ -378,7 +379,19 @@ class Mechanism:
         of another shape (or not C-contiguous float64, or overlapping an input) are not used. The result given
         as ``out`` is consumed: its arrays now hold this sweep, so use only the returned one. Without ``out``
         every call returns new arrays and no earlier result is ever touched.
+
+        ``outputs``: only these results, each a contiguous array (a :class:`~sewgen.results.Selection`, by column
+        name): ``"coords"``, ``"points"``, ``"bodies"``, ``"points:<name>"``, ``"bodies:<name>"``,
+        ``"coords:<name>"`` or single columns such as ``"points.thread_eye.y_dd"`` (names: :mod:`sewgen.designs`);
+        the values are those of the full sweep's columns, bit for bit. ``out`` may then be a previous Selection
+        of the same columns and length.
         """
+        if outputs is not None:
+            from .designs import solve_selected
+
+            return solve_selected(self, outputs, dict(phi=phi, speed=speed, accel=accel, params=params, held=held,
+                                                      branch=branch, guess=guess, degrees=degrees, newton=newton,
+                                                      max_iter=max_iter, singular=singular), out)
         sweep = self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
                              degrees=degrees, newton=newton, max_iter=max_iter, out=out, singular=singular)
         sweep.run()

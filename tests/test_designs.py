@@ -246,3 +246,36 @@ def test_threads_do_not_change_results():
     for name in a.outputs:
         assert np.array_equal(a[name], b[name], equal_nan=True)
     assert np.array_equal(a["points.thread_eye.a:max"], b["points.thread_eye.a:max"], equal_nan=True)
+
+
+@pytest.mark.parametrize("name", catalog_names())
+def test_selected_outputs_equal_the_full_sweeps_columns_exactly(name):
+    mech = sewgen.mechanism(name)
+    cols = Columns(mech.description)
+    rng = np.random.default_rng(11)
+    phi = np.concatenate([PHI, rng.uniform(-7, 7, 9)])  # unsorted, beyond a turn: the angles made continuous
+    full = mech.solve(phi)
+    flat = np.hstack([full.q, full.qd, full.qdd, full.obs])
+    point = mech.point_names[-1]
+    body = mech.body_names[-1]
+    for outputs in (["all"], ["coords"], [f"points:{point}"], [f"bodies:{body}", f"points.{point}.y_dd"],
+                    [cols.names[-1], cols.names[0]]):
+        sel = mech.solve(phi, outputs=outputs)
+        for cname, arr in sel.columns.items():
+            assert arr.flags.c_contiguous
+            assert np.array_equal(arr, flat[:, cols.index[cname]]), (name, cname)
+    sel = mech.solve(phi, outputs=[f"points:{point}"])
+    assert np.array_equal(sel.point(point).ay, full.point(point).ay)
+    again = mech.solve(phi, outputs=[f"points:{point}"], out=sel)  # out=: the same block, rewritten
+    assert again.block is sel.block
+
+
+def test_selected_outputs_raise_as_solve_does():
+    tu = sewgen.mechanism("take_up")
+    with pytest.raises(sewgen.errors.AssemblyError) as a:
+        tu.solve(PHI, params={"crank": 0.05})
+    with pytest.raises(sewgen.errors.AssemblyError) as b:
+        tu.solve(PHI, params={"crank": 0.05}, outputs=["coords"])
+    assert str(a.value) == str(b.value)
+    with pytest.raises(ParameterError, match="outputs"):
+        tu.solve(PHI, outputs=["nothing"])
