@@ -693,3 +693,14 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
     }
     return failed;
 }
+
+/* sewgen.mechanism.continuous_angles in C (the same operations: equal to the bit): the angle columns qcols of q
+ * (n x nq) and ocols of obs (n x nobs) continuous along the order, the first position in (−π, π]. */
+void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int nqa, const int *qcols, int noa,
+                        const int *ocols, const size_t *order)
+{
+    sg_scratch s;
+    s.nq = nq, s.nobs = nobs, s.q = q, s.qd = NULL, s.qdd = NULL, s.obs = obs;
+    for (int k = 0; k < nqa; ++k) continuous_column(&s, qcols[k], n, order);
+    for (int k = 0; k < noa; ++k) continuous_column(&s, 3 * nq + ocols[k], n, order);
+}

@@ -159,6 +159,12 @@ EXPORTS = {
                          "caller's order, -1 for rms, mean; NaN and -1 for a failed design). work: "
                          "n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of "
                          "failed designs"),
+    "sg_make_continuous": ("void", (("size_t", "n"), ("int", "nq"), ("int", "nobs"), ("double *", "q"),
+                                    ("double *", "obs"), ("int", "nqa"), ("const int *", "qcols"), ("int", "noa"),
+                                    ("const int *", "ocols"), ("const size_t *", "order")),
+                           "sewgen.mechanism.continuous_angles in C, to the bit: the angle columns qcols of q "
+                           "(n x nq) and ocols of obs (n x nobs) without 2 pi jumps along the order (NULL: as "
+                           "given), the first position in (-pi, pi]"),
 }
 
 

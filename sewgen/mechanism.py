@@ -90,6 +90,14 @@ class Mechanism:
             reference=dataclasses.replace(ref, digest=digest), _defaults=MappingProxyType(defaults),
             _default_options=MappingProxyType({(newton, keep): self._new_options(ffi, _DEFAULT_MAX_ITER, newton, keep)
                                                for newton in (False, True) for keep in (False, True)}))
+        qa, oa = desc.angle_columns
+        angle = (np.array(qa, dtype=np.intc), np.array(oa, dtype=np.intc))
+        fields["_angle"] = (angle, len(qa), _ptr(ffi, "int *", angle[0]), len(oa), _ptr(ffi, "int *", angle[1]))
+        # C pointers of the read-only defaults, and the converted parameter vectors of recent params= dicts: the
+        # per-call cost of solve() (issue 14, item 5). Caches, not state: a hit gives what a miss computes.
+        fields["_fast"] = {k: _ptr(ffi, "int *" if k == "branch" else "double *", defaults[k])
+                           for k in ("p", "held", "branch", "guess")}
+        fields["_pcache"] = {}
         for key, value in fields.items():
             object.__setattr__(self, key, value)
         self._check_constants(p)  # a declaration whose defaults give no real dimension
@@ -386,6 +394,13 @@ class Mechanism:
         the values are those of the full sweep's columns, bit for bit. ``out`` may then be a previous Selection
         of the same columns and length.
         """
+        if (outputs is None and held is None and branch is None and guess is None and out is None
+                and degrees is False and newton is False and max_iter == _DEFAULT_MAX_ITER and singular == "raise"
+                and type(phi) is np.ndarray and (speed is None or type(speed) in (float, int))
+                and type(accel) in (float, int) and accel == 0):
+            motion = self._fast_solve(phi, speed, params)
+            if motion is not None:
+                return motion
         if outputs is not None:
             from .designs import solve_selected
 
@@ -397,6 +412,82 @@ class Mechanism:
         sweep.run()
         sweep.check()
         return sweep.motion()
+
+    def _fast_params(self, params):
+        """(vector, C pointer) of a params= dict, converted and checked once and then cached by its items (with
+        their types: 1 and True are different keys); None where the items are not hashable."""
+        if params is None:
+            return self._defaults["p"], self._fast["p"]
+        if type(params) is not dict:
+            return None
+        try:
+            key = tuple((k, type(v), v) for k, v in params.items())
+            hit = self._pcache.get(key)
+        except TypeError:
+            return None
+        if hit is None:
+            p = self.param_vector(params)  # every check, the typed errors
+            p.flags.writeable = False
+            hit = (p, _ptr(self.ffi, "double *", p))
+            if len(self._pcache) >= 256:
+                self._pcache.clear()
+            self._pcache[key] = hit
+        return hit
+
+    def _fast_solve(self, phi: np.ndarray, speed, params):
+        """solve() of a 1-D float64 phi with the default held inputs, branches, guesses and options and zero
+        shaft acceleration: one buffer for every array, one C call, the angles made continuous in C. None where
+        anything needs the general path (which also reports every failure with its diagnosis)."""
+        if phi.ndim != 1 or phi.dtype != np.float64 or not phi.shape[0]:
+            return None
+        n = phi.shape[0]  # a non-finite angle: SG_NAN_INPUT from C, and the general path names it
+        spd = self.default_speed if speed is None else float(speed)
+        if not math.isfinite(spd) or isinstance(speed, bool):
+            return None
+        got = self._fast_params(params)
+        if got is None:
+            return None
+        p, p_ptr = got
+        sizes = self.description.sizes
+        nq, nobs = sizes["nq"], sizes["nobs"]
+        w = 4 + 3 * nq + nobs
+        blk = np.empty(w * n)
+        phi_v, omega, alpha, err = blk[:n], blk[n:2 * n], blk[2 * n:3 * n], blk[3 * n:4 * n]
+        np.copyto(phi_v, phi)
+        omega.fill(spd)
+        alpha.fill(0.0)
+        o = 4 * n
+        q = blk[o:o + n * nq].reshape(n, nq)
+        qd = blk[o + n * nq:o + 2 * n * nq].reshape(n, nq)
+        qdd = blk[o + 2 * n * nq:o + 3 * n * nq].reshape(n, nq)
+        obs = blk[o + 3 * n * nq:].reshape(n, nobs)
+        status = np.empty(n, dtype=np.intc)
+        ffi = self.ffi
+        base = ffi.from_buffer("double[]", blk)
+        order = None
+        if n > 1 and not (phi_v[1:] >= phi_v[:-1]).all():
+            order = np.argsort(phi_v, kind="stable").astype(np.uintp)
+        order_p = ffi.NULL if order is None else ffi.from_buffer("size_t[]", order)
+        f = self._fast
+        failed = self.lib.sg_sweep(self._descriptor, n, base, base + n, base + 2 * n, f["held"], p_ptr, f["branch"],
+                                   f["guess"], self._default_options[(False, False)], order_p, base + o,
+                                   base + o + n * nq, base + o + 2 * n * nq, base + o + 3 * n * nq, base + 3 * n,
+                                   ffi.from_buffer("int[]", status))
+        if failed:
+            return None
+        angle, nqa, qa_p, noa, oa_p = self._angle
+        if nqa or noa:
+            self.lib.sg_make_continuous(n, nq, nobs, base + o, base + o + 3 * n * nq, nqa, qa_p, noa, oa_p, order_p)
+        return Motion(self, phi_v, omega, alpha, q, qd, qdd, obs, err, SINGULAR_TOL)
+
+    def _continuous(self, n: int, q: np.ndarray, obs: np.ndarray, order) -> None:
+        """continuous_angles(self.description, q, obs, order), in C."""
+        angle, nqa, qa_p, noa, oa_p = self._angle
+        if not (nqa or noa) or not n:
+            return
+        ffi = self.ffi
+        self.lib.sg_make_continuous(n, q.shape[1], obs.shape[1], _ptr(ffi, "double *", q), _ptr(ffi, "double *", obs),
+                                    nqa, qa_p, noa, oa_p, ffi.NULL if order is None else _ptr(ffi, "size_t *", order))
 
     def kinetostatics(self, phi, speed=None, accel=0.0, *, loads=(), gravity="9.80665 m/s**2",
                       gravity_direction="-90 deg", moment_about=(0.0, 0.0), params: dict | None = None,
@@ -611,7 +702,7 @@ class Sweep:
         """Run the sweep in C (the GIL released), then make every angle continuous over the sweep; returns the
         number of positions whose status is not SG_OK."""
         failed = self.bind()()
-        continuous_angles(self.mechanism.description, self.q, self.obs, self.order)
+        self.mechanism._continuous(self.n, self.q, self.obs, self.order)  # continuous_angles, in C
         return failed
 
     def check(self) -> None:

@@ -279,3 +279,39 @@ def test_selected_outputs_raise_as_solve_does():
     assert str(a.value) == str(b.value)
     with pytest.raises(ParameterError, match="outputs"):
         tu.solve(PHI, outputs=["nothing"])
+
+
+@pytest.mark.parametrize("name", catalog_names())
+def test_the_lean_solve_path_equals_the_general_one_to_the_bit(name):
+    """solve()'s per-call fast path (one buffer, cached parameter vectors, the angles made continuous in C)
+    against prepare() + the C call + continuous_angles in Python: the same arrays, bit for bit."""
+    from sewgen.mechanism import continuous_angles
+
+    m = sewgen.mechanism(name)
+    rng = np.random.default_rng(5)
+    for phi in (PHI, np.concatenate([PHI, rng.uniform(-9, 9, 11)]), PHI + 7.0, np.array([3.0])):
+        for params in (None, {m.param_names[-1]: m.defaults()[m.param_names[-1]]}):
+            a = m.solve(phi, params=params)
+            s = m.prepare(phi, params=params)
+            s.bind()()
+            continuous_angles(m.description, s.q, s.obs, s.order)
+            for x, y in ((a.q, s.q), (a.qd, s.qd), (a.qdd, s.qdd), (a.obs, s.obs), (a.error_estimate, s.err),
+                         (a.phi, s.phi), (a.omega, s.omega), (a.alpha, s.alpha)):
+                assert np.array_equal(x, y), name
+    with pytest.raises(sewgen.errors.InputError, match="position 1"):
+        m.solve(np.array([0.1, np.nan, 0.3]))
+
+
+def test_cached_parameter_vectors_still_check_every_call():
+    tu = sewgen.mechanism("take_up")
+    tu.solve(PHI, params={"crank.mass": 1})
+    with pytest.raises(ParameterError, match="crank.mass"):
+        tu.solve(PHI, params={"crank.mass": True})  # equal to 1, another type: not the cached vector
+    with pytest.raises(ParameterError, match="crank"):
+        tu.solve(PHI, params={"crank": -0.01})
+    d = {"crank": 0.011}
+    a = tu.solve(PHI, params=d)
+    d["crank"] = 0.009
+    b = tu.solve(PHI, params=d)
+    assert not np.array_equal(a.obs, b.obs)
+    np.testing.assert_array_equal(b.obs, tu.solve(PHI, params={"crank": 0.009}).obs)
