@@ -345,6 +345,8 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         return n;
     }
     const int use_closed = m->closed != NULL && !opt->newton_only;
+    if (use_closed && frc == NULL && m->sweep != NULL && !opt->generic) /* the inlined loop: the same, faster */
+        return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, q, qd, qdd, obs, err, status);
     double c[SG_MAX_C];
     m->constants(p, c);
     double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q];

@@ -23,6 +23,7 @@ typedef struct sg_options {
     int newton_only;     /* 1: Newton even where a closed form exists (tests, benchmarks) */
     double singular_tol; /* largest estimated relative error of the velocities and accelerations; a position above it is SG_SINGULAR unless keep_singular */
     int keep_singular;   /* 1: positions above singular_tol keep their results (status SG_OK, err says why) */
+    int generic;         /* 1: the generic sweep loop (kernels through the descriptor) even where the mechanism has an inlined one (tests: the two agree to the bit) */
 } sg_options;
 
 /* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */
@@ -44,6 +45,11 @@ typedef void (*sg_scales_fn)(const double *q, const double *cq, const double *x,
 typedef void (*sg_blocks_fn)(const double *jac, double *out);
 /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
 typedef void (*sg_anchors_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+
+struct sg_mechanism;
+/* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */
+/* the closed-form kinematic sweep with the kernels inlined (sg_closed_sweep_inl); NULL without a closed form */
+typedef size_t (*sg_sweep_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
 
 /* One mechanism as the generated code describes it. */
 typedef struct sg_mechanism {
@@ -68,6 +74,7 @@ typedef struct sg_mechanism {
     sg_scales_fn scales;                 /* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
     sg_blocks_fn blocks;                 /* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
     sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
+    sg_sweep_fn sweep;                   /* the closed-form kinematic sweep with the kernels inlined (sg_closed_sweep_inl); NULL without a closed form */
 } sg_mechanism;
 
 /* LU with partial pivoting in place (row-major n x n); SG_SINGULAR below the pivot tolerance */

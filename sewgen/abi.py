@@ -55,6 +55,8 @@ OPTIONS = (
     ("double", "singular_tol", "largest estimated relative error of the velocities and accelerations; a position "
                                "above it is SG_SINGULAR unless keep_singular"),
     ("int", "keep_singular", "1: positions above singular_tol keep their results (status SG_OK, err says why)"),
+    ("int", "generic", "1: the generic sweep loop (kernels through the descriptor) even where the mechanism has "
+                       "an inlined one (tests: the two agree to the bit)"),
 )
 
 # Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx their
@@ -91,6 +93,19 @@ KERNELS = {
                 "normal sector (manifest \"arcs\"): nanchor_out values, for pictures of any mechanism"),
 }
 
+#: Sweep loops a generated file may instantiate with its own kernels inlined (csrc/sg_runtime.h): kind ->
+#: (return type, arguments, meaning); the descriptor holds ``sg_<kind>_fn`` pointers to the file's static
+#: ``sg_<m>_<kind>`` (NULL where the mechanism has none).
+HOOKS = {
+    "sweep": ("size_t", (("const struct sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
+                         ("const double *", "omega"), ("const double *", "alpha"), ("const double *", "held"),
+                         ("const double *", "p"), ("const int *", "branch"), ("const sg_options *", "opt"),
+                         ("const size_t *", "order"), ("double *", "q"), ("double *", "qd"), ("double *", "qdd"),
+                         ("double *", "obs"), ("double *", "err"), ("int *", "status")),
+              "the closed-form kinematic sweep with the kernels inlined (sg_closed_sweep_inl); NULL without a "
+              "closed form"),
+}
+
 #: Fields of ``sg_mechanism``, the descriptor every generated file fills (C type, name, meaning); the sizes'
 #: names are the manifest's "sizes" keys, the kernels' are :data:`KERNELS` kinds.
 DESCRIPTOR = (
@@ -106,7 +121,8 @@ DESCRIPTOR = (
     ("int", "nload", "load slots per position: fx, fy per point of a moving body, torque per moving body"),
     ("int", "nblock", "diagonal blocks of dPhi/dq (closing loops), each with an orientation sign"),
     ("const unsigned char *", "coord_is_angle", "1 for an angle coordinate, 0 for a travel"),
-) + tuple((f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in KERNELS.items())
+) + tuple((f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in KERNELS.items()) + tuple(
+    (f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in HOOKS.items())
 
 #: The runtime's exported functions (csrc/sg_runtime.c): name -> (return type, arguments, meaning).
 EXPORTS = {
@@ -177,3 +193,10 @@ def kernel_signature(kind: str, function: str) -> str:
     """The C signature of kernel ``kind`` named ``function`` (no semicolon)."""
     ret, args, _ = KERNELS[kind]
     return f"{ret} {function}({c_args(args)})"
+
+
+def kernel_hook(kind: str, function: str) -> dict:
+    """What a generated file needs to instantiate the inlined loop ``kind`` of :data:`HOOKS` as ``function``:
+    its C signature and the argument names to pass on."""
+    ret, args, _ = HOOKS[kind]
+    return {"signature": f"{ret} {function}({c_args(args)})", "args": ", ".join(n for _, n in args[1:])}
