@@ -508,10 +508,7 @@ void sg_overlock_needle_anchors(const double *q, const double *cq, const double 
 }
 
 /* sg_overlock_needle_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-#if defined(__GNUC__)
-__attribute__((flatten))
-#endif
-static size_t sg_overlock_needle_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+static SG_FLATTEN size_t sg_overlock_needle_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
 SG_CLOSED_SWEEP_BODY(sg_overlock_needle_constants, sg_overlock_needle_closed, sg_overlock_needle_motion)
 
 static const unsigned char sg_overlock_needle_coord_is_angle[3] = { 1, 0, 1 };

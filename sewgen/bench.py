@@ -307,8 +307,17 @@ def kinematics(name: str, cfg: Config) -> Result:
     n = len(phi)
     t_solve = best_time(lambda: m.solve(phi), cfg.repeats, cfg.min_time)
     t_overhead = best_time(lambda: m.solve(phi[:1]), cfg.repeats, cfg.min_time)
+    one, params = phi[:1], {m.param_names[0]: m.defaults()[m.param_names[0]]}
+    t_overhead_params = best_time(lambda: m.solve(one, params=params), cfg.repeats, cfg.min_time)
+    zero = np.zeros(1)  # an array accel: the general path (prepare, run, check), what every call took before
+    t_general = best_time(lambda: m.solve(one, accel=zero), cfg.repeats, cfg.min_time)
     raw, sw = raw_sweep(m, phi)
     t_raw = best_time(raw, cfg.repeats, cfg.min_time)
+    gen = m.prepare(phi)
+    o = gen.options
+    gen.options = m.ffi.new("sg_options *", {"tol": o.tol, "max_iter": o.max_iter, "singular_tol": o.singular_tol,
+                                              "generic": 1})
+    t_generic = best_time(gen.bind(), cfg.repeats, cfg.min_time)  # the generic loop (no inlined sweep)
     motion = m.solve(phi)
     continuous_angles(m.description, sw.q, sw.obs, sw.order)  # what solve() adds after the C call
     if np.any(sw.status) or not np.array_equal(sw.obs, motion.obs):
@@ -329,6 +338,9 @@ def kinematics(name: str, cfg: Config) -> Result:
         "raw_c_positions_per_s": n / t_raw,
         "solve_seconds": t_solve,
         "solve_overhead_seconds": t_overhead,
+        "solve_overhead_params_seconds": t_overhead_params,
+        "solve_overhead_general_path_seconds": t_general,
+        "raw_c_generic_loop_positions_per_s": n / t_generic,
         "baseline_step_deg": float(np.degrees(phi[rows[1]] - phi[rows[0]])) if len(rows) > 1 else None,
         "baseline_nfev_per_position": out[4],
         "baseline_setup_seconds": bl.derive_s + bl.lambdify_s,
