@@ -335,7 +335,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                     double *frc, int *status)
 {
     const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo;
-    double no_loads[SG_MAX_LOAD] = {0.0};
+    double no_loads[SG_MAX_LOAD]; /* zeroed below for a force sweep without loads only: 4 kB a call otherwise */
     SG_ASSERT(phi && omega && alpha && p && branch && q_guess && opt && q && qd && qdd && obs && status);
     SG_ASSERT(nx == 1 || held);
     if (nq > SG_MAX_Q || nx > SG_MAX_Q || nx < 1 || m->nc > SG_MAX_C || m->nload > SG_MAX_LOAD ||
@@ -347,6 +347,8 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     const int use_closed = m->closed != NULL && !opt->newton_only;
     if (use_closed && frc == NULL && m->sweep != NULL && !opt->generic) /* the inlined loop: the same, faster */
         return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, q, qd, qdd, obs, err, status);
+    if (frc != NULL && loads == NULL)
+        for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;
     double c[SG_MAX_C];
     m->constants(p, c);
     double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q];

@@ -363,3 +363,20 @@ def test_the_inlined_sweep_of_a_user_mechanism(user_mechs):
         status = _paths_agree(mech, phi)
         assert (status == 4).sum() == 1
         _paths_agree(mech, phi, params={"crank": mech.defaults()["crank"] * 2.5})
+
+
+def test_a_design_sweep_pickles_and_may_be_empty():
+    import pickle
+
+    tu = sewgen.mechanism("take_up")
+    res = tu.sweep_designs({"crank": [0.01, np.nan, 0.05]}, PHI, reduce={"points.thread_eye.a": "max"},
+                           outputs="coords")
+    back = pickle.loads(pickle.dumps(res))
+    assert list(back.status) == [0, 8, 1] and back.error == res.error
+    np.testing.assert_array_equal(back["points.thread_eye.a:max"], res["points.thread_eye.a:max"])
+    assert isinstance(res.exception(2), sewgen.errors.AssemblyError)
+    assert np.isnan(res.first_bad_phi[0]) and res.first_bad_phi[2] == PHI[res.first_bad_angle[2]]
+    empty = tu.sweep_designs({"crank": np.zeros(0)}, PHI, reduce={"points.thread_eye.a": "max"})
+    assert len(empty) == 0 and empty["points.thread_eye.a:max"].shape == (0,)
+    sel = tu.solve(PHI, outputs="points:thread_eye")
+    assert list(pickle.loads(pickle.dumps(sel)).keys()) == list(sel.keys())
