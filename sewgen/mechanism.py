@@ -97,6 +97,11 @@ class Mechanism:
         # per-call cost of solve() (issue 14, item 5). Caches, not state: a hit gives what a miss computes.
         fields["_fast"] = {k: _ptr(ffi, "int *" if k == "branch" else "double *", defaults[k])
                            for k in ("p", "held", "branch", "guess")}
+        sizes = desc.sizes
+        fields["_fast"]["call"] = (sizes["nq"], sizes["nobs"], 4 + 3 * sizes["nq"] + sizes["nobs"], lib,
+                                   fields["_descriptor"], fields["_fast"]["held"], fields["_fast"]["branch"],
+                                   fields["_fast"]["guess"], fields["_default_options"][(False, False)],
+                                   fields["_angle"][1:] if (qa or oa) else None)
         fields["_pcache"] = {}
         for key, value in fields.items():
             object.__setattr__(self, key, value)
@@ -441,43 +446,34 @@ class Mechanism:
         if phi.ndim != 1 or phi.dtype != np.float64 or not phi.shape[0]:
             return None
         n = phi.shape[0]  # a non-finite angle: SG_NAN_INPUT from C, and the general path names it
-        spd = self.default_speed if speed is None else float(speed)
-        if not math.isfinite(spd) or isinstance(speed, bool):
+        spd = self.description.default_speed if speed is None else float(speed)  # solve(): a float or an int
+        if not math.isfinite(spd):
             return None
         got = self._fast_params(params)
         if got is None:
             return None
         p, p_ptr = got
-        sizes = self.description.sizes
-        nq, nobs = sizes["nq"], sizes["nobs"]
-        w = 4 + 3 * nq + nobs
+        nq, nobs, w, lib, desc, held, branch, guess, opt, angle = self._fast["call"]
         blk = np.empty(w * n)
         phi_v, omega, alpha, err = blk[:n], blk[n:2 * n], blk[2 * n:3 * n], blk[3 * n:4 * n]
-        np.copyto(phi_v, phi)
+        phi_v[:] = phi
         omega.fill(spd)
         alpha.fill(0.0)
-        o = 4 * n
-        q = blk[o:o + n * nq].reshape(n, nq)
-        qd = blk[o + n * nq:o + 2 * n * nq].reshape(n, nq)
-        qdd = blk[o + 2 * n * nq:o + 3 * n * nq].reshape(n, nq)
-        obs = blk[o + 3 * n * nq:].reshape(n, nobs)
+        o, nn = 4 * n, n * nq
+        q, qd, qdd = blk[o:o + 3 * nn].reshape(3, n, nq)  # each C-contiguous (n, nq)
+        obs = blk[o + 3 * nn:].reshape(n, nobs)
         status = np.empty(n, dtype=np.intc)
         ffi = self.ffi
         base = ffi.from_buffer("double[]", blk)
-        order = None
+        order_p = ffi.NULL
         if n > 1 and not (phi_v[1:] >= phi_v[:-1]).all():
-            order = np.argsort(phi_v, kind="stable").astype(np.uintp)
-        order_p = ffi.NULL if order is None else ffi.from_buffer("size_t[]", order)
-        f = self._fast
-        failed = self.lib.sg_sweep(self._descriptor, n, base, base + n, base + 2 * n, f["held"], p_ptr, f["branch"],
-                                   f["guess"], self._default_options[(False, False)], order_p, base + o,
-                                   base + o + n * nq, base + o + 2 * n * nq, base + o + 3 * n * nq, base + 3 * n,
-                                   ffi.from_buffer("int[]", status))
-        if failed:
+            order_p = ffi.from_buffer("size_t[]", np.argsort(phi_v, kind="stable").astype(np.uintp))
+        qp, op = base + o, base + o + 3 * nn
+        if lib.sg_sweep(desc, n, base, base + n, base + 2 * n, held, p_ptr, branch, guess, opt, order_p, qp, qp + nn,
+                        qp + 2 * nn, op, base + 3 * n, ffi.from_buffer("int[]", status)):
             return None
-        angle, nqa, qa_p, noa, oa_p = self._angle
-        if nqa or noa:
-            self.lib.sg_make_continuous(n, nq, nobs, base + o, base + o + 3 * n * nq, nqa, qa_p, noa, oa_p, order_p)
+        if angle is not None:
+            lib.sg_make_continuous(n, nq, nobs, qp, op, angle[0], angle[1], angle[2], angle[3], order_p)
         return Motion(self, phi_v, omega, alpha, q, qd, qdd, obs, err, SINGULAR_TOL)
 
     def _continuous(self, n: int, q: np.ndarray, obs: np.ndarray, order) -> None:
