@@ -48,7 +48,7 @@ typedef void (*sg_anchors_fn)(const double *q, const double *cq, const double *x
 
 struct sg_mechanism;
 /* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */
-/* the closed-form kinematic sweep with the kernels inlined (sg_closed_sweep_inl); NULL without a closed form */
+/* the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a closed form */
 typedef size_t (*sg_sweep_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
 
 /* One mechanism as the generated code describes it. */
@@ -74,7 +74,7 @@ typedef struct sg_mechanism {
     sg_scales_fn scales;                 /* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
     sg_blocks_fn blocks;                 /* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
     sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
-    sg_sweep_fn sweep;                   /* the closed-form kinematic sweep with the kernels inlined (sg_closed_sweep_inl); NULL without a closed form */
+    sg_sweep_fn sweep;                   /* the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a closed form */
 } sg_mechanism;
 
 /* LU with partial pivoting in place (row-major n x n); SG_SINGULAR below the pivot tolerance */

@@ -93,7 +93,7 @@ KERNELS = {
                 "normal sector (manifest \"arcs\"): nanchor_out values, for pictures of any mechanism"),
 }
 
-#: Sweep loops a generated file may instantiate with its own kernels inlined (csrc/sg_runtime.h): kind ->
+#: Sweep loops a generated file instantiates with its own kernels inlined (csrc/sg_runtime.h): kind ->
 #: (return type, arguments, meaning); the descriptor holds ``sg_<kind>_fn`` pointers to the file's static
 #: ``sg_<m>_<kind>`` (NULL where the mechanism has none).
 HOOKS = {
@@ -102,7 +102,7 @@ HOOKS = {
                          ("const double *", "p"), ("const int *", "branch"), ("const sg_options *", "opt"),
                          ("const size_t *", "order"), ("double *", "q"), ("double *", "qd"), ("double *", "qdd"),
                          ("double *", "obs"), ("double *", "err"), ("int *", "status")),
-              "the closed-form kinematic sweep with the kernels inlined (sg_closed_sweep_inl); NULL without a "
+              "the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a "
               "closed form"),
 }
 
