@@ -335,7 +335,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                     double *frc, int *status)
 {
     const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo;
-    double no_loads[SG_MAX_LOAD] = {0.0};
+    double no_loads[SG_MAX_LOAD]; /* zeroed below for a force sweep without loads only: 4 kB a call otherwise */
     SG_ASSERT(phi && omega && alpha && p && branch && q_guess && opt && q && qd && qdd && obs && status);
     SG_ASSERT(nx == 1 || held);
     if (nq > SG_MAX_Q || nx > SG_MAX_Q || nx < 1 || m->nc > SG_MAX_C || m->nload > SG_MAX_LOAD ||
@@ -345,6 +345,10 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         return n;
     }
     const int use_closed = m->closed != NULL && !opt->newton_only;
+    if (use_closed && frc == NULL && m->sweep != NULL && !opt->generic) /* the inlined loop: the same, faster */
+        return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, q, qd, qdd, obs, err, status);
+    if (frc != NULL && loads == NULL)
+        for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;
     double c[SG_MAX_C];
     m->constants(p, c);
     double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q];
@@ -503,4 +507,204 @@ size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const
 {
     return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, gv, loads, q, qd, qdd, obs, err,
                  frc, status);
+}
+
+/* Batched designs (issue 14) -------------------------------------------------------------------------------
+ * Flat columns of one position: q (nq), qd (nq), qdd (nq), then obs (nobs); column j of position i lives at
+ * col_base(j)[i * width(j) + offset(j)] in the scratch sweep arrays. */
+typedef struct {
+    double *q, *qd, *qdd, *obs;
+    int nq, nobs;
+} sg_scratch;
+
+static inline double col_at(const sg_scratch *s, int j, size_t i)
+{
+    const int nq = s->nq;
+    if (j < nq) return s->q[i * (size_t)nq + (size_t)j];
+    if (j < 2 * nq) return s->qd[i * (size_t)nq + (size_t)(j - nq)];
+    if (j < 3 * nq) return s->qdd[i * (size_t)nq + (size_t)(j - 2 * nq)];
+    return s->obs[i * (size_t)s->nobs + (size_t)(j - 3 * nq)];
+}
+
+static inline double *col_ptr(const sg_scratch *s, int j, size_t i)
+{
+    const int nq = s->nq;
+    if (j < nq) return s->q + i * (size_t)nq + (size_t)j;
+    if (j < 2 * nq) return s->qd + i * (size_t)nq + (size_t)(j - nq);
+    if (j < 3 * nq) return s->qdd + i * (size_t)nq + (size_t)(j - 2 * nq);
+    return s->obs + i * (size_t)s->nobs + (size_t)(j - 3 * nq);
+}
+
+/* numpy's float modulo (the sign of the divisor), as np.unwrap computes it */
+static inline double py_mod(double a, double b)
+{
+    double r = fmod(a, b);
+    if (r != 0.0) {
+        if ((b < 0.0) != (r < 0.0)) r += b;
+    } else {
+        r = copysign(0.0, b);
+    }
+    return r;
+}
+
+/* sewgen.mechanism.continuous_angles on one angle column of one design's sweep (every position solved): no 2π
+ * jumps along the solving order, the first position in (−π, π]; whole turns only, as np.unwrap does them. */
+static void continuous_column(const sg_scratch *s, int j, size_t n, const size_t *order)
+{
+    if (n == 0) return;
+    const double pi = 3.14159265358979323846;
+    const size_t i0 = order ? order[0] : 0;
+    const double first = *col_ptr(s, j, i0);
+    int need = !(first > -pi && first <= pi);
+    for (size_t k = 1; k < n && !need; ++k) {
+        const size_t a = order ? order[k - 1] : k - 1, b = order ? order[k] : k;
+        need = fabs(*col_ptr(s, j, b) - *col_ptr(s, j, a)) > pi;
+    }
+    if (!need) return;
+    double corr = 0.0, prev = first;
+    for (size_t k = 1; k < n; ++k) {
+        const size_t b = order ? order[k] : k;
+        double *v = col_ptr(s, j, b);
+        const double raw = *v, dd = raw - prev;
+        double ddmod = py_mod(dd + pi, SG_TWO_PI) - pi;
+        if (ddmod == -pi && dd > 0.0) ddmod = pi;
+        if (!(fabs(dd) < pi)) corr += ddmod - dd;
+        prev = raw;
+        *v = raw + corr;
+    }
+    const double shift = SG_TWO_PI * ceil((first - pi) / SG_TWO_PI);
+    for (size_t k = 0; k < n; ++k) *col_ptr(s, j, order ? order[k] : k) -= shift;
+}
+
+/* One reduction of one design over its n positions: kind (SG_RED_*), column a, and b >= 0 for the norm
+ * sqrt(a² + b²) of two columns (a point's speed or acceleration). *idx: the first position of the extremum
+ * (min, max, absmax) in the caller's order, -1 for the others. */
+enum { SG_RED_MIN = 0, SG_RED_MAX = 1, SG_RED_ABSMAX = 2, SG_RED_RMS = 3, SG_RED_MEAN = 4 };
+
+static double reduce_column(const sg_scratch *s, size_t n, int kind, int a, int b, long long *idx)
+{
+    double acc = kind == SG_RED_MIN ? INFINITY : (kind == SG_RED_MAX ? -INFINITY : 0.0);
+    long long at = -1;
+    for (size_t i = 0; i < n; ++i) {
+        double v = col_at(s, a, i);
+        if (b >= 0) {
+            const double w = col_at(s, b, i);
+            v = sqrt(v * v + w * w);
+        }
+        switch (kind) {
+        case SG_RED_MIN:
+            if (v < acc || at < 0) acc = v, at = (long long)i;
+            break;
+        case SG_RED_MAX:
+            if (v > acc || at < 0) acc = v, at = (long long)i;
+            break;
+        case SG_RED_ABSMAX:
+            if (fabs(v) > acc || at < 0) acc = fabs(v), at = (long long)i;
+            break;
+        case SG_RED_RMS:
+            acc += v * v;
+            break;
+        default:
+            acc += v;
+            break;
+        }
+    }
+    *idx = kind <= SG_RED_ABSMAX ? at : -1;
+    if (kind == SG_RED_RMS) return n ? sqrt(acc / (double)n) : NAN;
+    if (kind == SG_RED_MEAN) return n ? acc / (double)n : NAN;
+    return n ? acc : NAN;
+}
+
+size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double *phi, const double *omega,
+                        const double *alpha, const double *held, const double *p, const int *branch,
+                        const double *q_guess, const sg_options *opt, const size_t *order, int ncheck,
+                        int nangle, const int *angle_cols, int nsel, const int *sel, double *out,
+                        size_t out_stride, int nred, const int *red, double *red_val, long long *red_idx,
+                        size_t red_stride, double *work, int *work_status, int *status, long long *first_bad,
+                        long long *nbad, long long *last_bad)
+{
+    const int nq = m->nq, nobs = m->nobs, nx = m->nx, npar = m->np, nb = m->nbranch;
+    const int width = 3 * nq + nobs;
+    SG_ASSERT(phi && omega && alpha && p && q_guess && opt && work && work_status && status && first_bad);
+    SG_ASSERT(nb == 0 || branch);
+    SG_ASSERT(nx == 1 || held);
+    SG_ASSERT(nsel == 0 || (sel && out));
+    SG_ASSERT(nred == 0 || (red && red_val && red_idx));
+    sg_scratch s;
+    s.nq = nq, s.nobs = nobs;
+    s.q = work, s.qd = work + n * (size_t)nq, s.qdd = work + 2 * n * (size_t)nq, s.obs = work + 3 * n * (size_t)nq;
+    double *err = work + n * (size_t)width;
+    int bad_args = nq > SG_MAX_Q || m->nc > SG_MAX_C || ncheck > m->nc || nangle < 0 || nsel < 0 || nred < 0;
+    for (int k = 0; k < nangle && !bad_args; ++k) bad_args = angle_cols[k] < 0 || angle_cols[k] >= width;
+    for (int k = 0; k < nsel && !bad_args; ++k) bad_args = sel[k] < 0 || sel[k] >= width;
+    for (int k = 0; k < nred && !bad_args; ++k)
+        bad_args = red[3 * k] < SG_RED_MIN || red[3 * k] > SG_RED_MEAN || red[3 * k + 1] < 0 ||
+                   red[3 * k + 1] >= width || red[3 * k + 2] < -1 || red[3 * k + 2] >= width;
+    size_t failed = 0;
+    for (size_t d = 0; d < nd; ++d) {
+        const double *pd = p + d * (size_t)npar;
+        const double *hd = nx > 1 ? held + d * (size_t)(nx - 1) : held;
+        const int *bd = nb > 0 ? branch + d * (size_t)nb : branch;
+        int st = bad_args ? SG_BAD_ARGUMENT : status[d]; /* in: nonzero skips the design (Python's checks) */
+        long long first = -1, count = 0, last = -1;
+        if (st == SG_OK) { /* every parameter and held input finite, every checked derived dimension real */
+            for (int k = 0; k < npar && st == SG_OK; ++k)
+                if (!isfinite(pd[k])) st = SG_BAD_DESIGN;
+            for (int k = 0; k + 1 < nx && st == SG_OK; ++k)
+                if (!isfinite(hd[k])) st = SG_BAD_DESIGN;
+            for (int k = 0; k < nb && st == SG_OK; ++k)
+                if (bd[k] != 1 && bd[k] != -1) st = SG_BAD_DESIGN;
+            if (st == SG_OK && ncheck > 0) {
+                double c[SG_MAX_C];
+                m->constants(pd, c);
+                for (int k = 0; k < ncheck && st == SG_OK; ++k)
+                    if (!isfinite(c[k])) st = SG_BAD_DESIGN;
+            }
+        }
+        if (st == SG_OK) {
+            sweep(m, n, phi, omega, alpha, hd, pd, bd, q_guess, opt, order, NULL, NULL, s.q, s.qd, s.qdd, s.obs, err,
+                  NULL, work_status);
+            for (size_t i = 0; i < n; ++i)
+                if (work_status[i] != SG_OK) {
+                    if (first < 0) first = (long long)i, st = work_status[i];
+                    if (work_status[i] == st) ++count, last = (long long)i;
+                }
+            if (st == SG_OK)
+                for (int k = 0; k < nangle; ++k) continuous_column(&s, angle_cols[k], n, order);
+        }
+        status[d] = st;
+        first_bad[d] = first;
+        if (nbad) nbad[d] = count;
+        if (last_bad) last_bad[d] = last;
+        if (st != SG_OK) ++failed;
+        for (int k = 0; k < nsel; ++k) { /* a failed design's rows: NaN (its status says why) */
+            double *o = out + (size_t)k * out_stride + d * n;
+            if (st == SG_OK)
+                for (size_t i = 0; i < n; ++i) o[i] = col_at(&s, sel[k], i);
+            else
+                for (size_t i = 0; i < n; ++i) o[i] = NAN;
+        }
+        for (int k = 0; k < nred; ++k) {
+            double *v = red_val + (size_t)k * red_stride + d;
+            long long *ix = red_idx + (size_t)k * red_stride + d;
+            if (st == SG_OK) {
+                *v = reduce_column(&s, n, red[3 * k], red[3 * k + 1], red[3 * k + 2], ix);
+            } else {
+                *v = NAN;
+                *ix = -1;
+            }
+        }
+    }
+    return failed;
+}
+
+/* sewgen.mechanism.continuous_angles in C (the same operations: equal to the bit): the angle columns qcols of q
+ * (n x nq) and ocols of obs (n x nobs) continuous along the order, the first position in (−π, π]. */
+void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int nqa, const int *qcols, int noa,
+                        const int *ocols, const size_t *order)
+{
+    sg_scratch s;
+    s.nq = nq, s.nobs = nobs, s.q = q, s.qd = NULL, s.qdd = NULL, s.obs = obs;
+    for (int k = 0; k < nqa; ++k) continuous_column(&s, qcols[k], n, order);
+    for (int k = 0; k < noa; ++k) continuous_column(&s, 3 * nq + ocols[k], n, order);
 }

@@ -28,8 +28,10 @@
 #define SG_PIVOT_RTOL 1e-11
 #if defined(__GNUC__)
 #define SG_INLINE static inline __attribute__((always_inline))
+#define SG_FLATTEN __attribute__((flatten)) /* every call in the function's body inlined */
 #else
 #define SG_INLINE static inline
+#define SG_FLATTEN
 #endif
 
 SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
@@ -270,6 +272,93 @@ static inline int sg_dyad_rpr(const double D[2], const double w0[2], const doubl
     const double wx = w0[0] + *s * u[0], wy = w0[1] + *s * u[1];
     *theta = atan2(D[1], D[0]) - atan2(wy, wx);
     return SG_OK;
+}
+
+/* cos and sin of one angle in one libm call where the compiler offers it (glibc's sincos). */
+static inline void sg_sincos_inl(double a, double *c, double *s)
+{
+#if defined(__GNUC__)
+    __builtin_sincos(a, s, c);
+#else
+    *c = cos(a);
+    *s = sin(a);
+#endif
+}
+
+/* The closed-form kinematic sweep with one mechanism's kernels called directly (issue 14, item 1): the body of
+ * sg_<m>_sweep, which each generated file with a closed form instantiates with its own constants, closed and
+ * motion kernels (a macro, so that the calls are direct and the file's flatten attribute inlines them: no
+ * function pointers per position); the runtime's sweep calls it for a closed-form kinematic sweep unless
+ * opt->generic. The same operations as the generic loop (csrc/sg_runtime.c, sweep) in the same order, so the
+ * two agree to the bit: closed form, unwrap against the last solution, motion, the rates' error estimate (the
+ * closed form's position is exact to rounding: resid = eps, never polished), singular check, status. The
+ * arguments are sewgen.abi.HOOKS["sweep"]'s. */
+#define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION) \
+{                                                                                                  \
+    const int nq = m->nq, nx = m->nx, nobs = m->nobs;                                              \
+    const double eps = 1.1102230246251565e-16, two_pi = 6.283185307179586476925286766559;          \
+    double c[SG_MAX_C];                                                                            \
+    CONSTANTS(p, c);                                                                               \
+    double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q], last[SG_MAX_Q];             \
+    for (int k = 1; k < nx; ++k) {                                                                 \
+        x[k] = held[k - 1];                                                                        \
+        cx[2 * k] = cos(x[k]);                                                                     \
+        cx[2 * k + 1] = sin(x[k]);                                                                 \
+        xd[k] = 0.0;                                                                               \
+        xdd[k] = 0.0;                                                                              \
+    }                                                                                              \
+    x[0] = NAN; /* no angle's cos, sin yet (set at the first position) */                          \
+    cx[0] = 1.0;                                                                                   \
+    cx[1] = 0.0;                                                                                   \
+    int have_last = 0;                                                                             \
+    size_t failures = 0;                                                                           \
+    for (size_t k = 0; k < n; ++k) {                                                               \
+        const size_t i = order ? order[k] : k;                                                     \
+        double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq; \
+        double *oi = obs + i * (size_t)nobs;                                                       \
+        double cq[2 * SG_MAX_Q];                                                                   \
+        int st = SG_OK;                                                                            \
+        const double ph = phi[i];                                                                  \
+        xd[0] = omega[i];                                                                          \
+        xdd[0] = alpha[i];                                                                         \
+        if (!isfinite(ph + omega[i] + alpha[i])) st = SG_NAN_INPUT;                                \
+        if (x[0] != ph) {                                                                          \
+            x[0] = ph;                                                                             \
+            sg_sincos_inl(ph, &cx[0], &cx[1]);                                                     \
+        }                                                                                          \
+        if (st == SG_OK) {                                                                         \
+            st = CLOSED(x, cx, c, branch, qi, cq);                                                 \
+            if (st == SG_OK && have_last) {                                                        \
+                for (int j = 0; j < nq; ++j)                                                       \
+                    if (m->coord_is_angle[j]) {                                                    \
+                        const double turns = (last[j] - qi[j]) * (1.0 / two_pi);                   \
+                        if (fabs(turns) > 0.5) qi[j] += two_pi * nearbyint(turns);                 \
+                    }                                                                              \
+            }                                                                                      \
+            if (st == SG_OK) {                                                                     \
+                for (int j = 0; j < nq; ++j) last[j] = qi[j];                                      \
+                have_last = 1;                                                                     \
+            }                                                                                      \
+        }                                                                                          \
+        double cond = 1.0, est = 0.0;                                                              \
+        if (st == SG_OK) {                                                                         \
+            st = MOTION(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);                          \
+            if (st == SG_SINGULAR) {                                                               \
+                est = INFINITY;                                                                    \
+            } else if (st == SG_OK) {                                                              \
+                est = cond * (eps + cond * eps);                                                   \
+                if (!(est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;          \
+            }                                                                                      \
+        }                                                                                          \
+        status[i] = st;                                                                            \
+        if (err) err[i] = st == SG_OK || st == SG_SINGULAR ? est : 0.0;                            \
+        if (st != SG_OK) {                                                                         \
+            ++failures;                                                                            \
+            for (int j = 0; j < nq; ++j) qi[j] = qdi[j] = qddi[j] = 0.0;                           \
+            for (int j = 0; j < nobs; ++j) oi[j] = 0.0;                                            \
+        }                                                                                          \
+    }                                                                                              \
+    return failures;                                                                               \
 }
 
 #endif

@@ -13,7 +13,8 @@ enum sg_status {
     SG_NAN_INPUT = 4, /* a shaft angle, speed or acceleration is not finite (Python checks first) */
     SG_NO_CONVERGENCE = 5, /* Newton ran out of iterations */
     SG_NONFINITE = 6, /* a result came out non-finite (the motion kernel tests every output) */
-    SG_BAD_ARGUMENT = 7 /* sizes or options out of range: nothing was computed */
+    SG_BAD_ARGUMENT = 7, /* sizes or options out of range: nothing was computed */
+    SG_BAD_DESIGN = 8 /* batched designs: a design's parameter or held input is not finite or out of range, a branch sign is not +1 or -1, or a dimension derived from its parameters is not real; the design is skipped (Python names the parameter) */
 };
 
 typedef struct sg_options {
@@ -22,6 +23,7 @@ typedef struct sg_options {
     int newton_only;     /* 1: Newton even where a closed form exists (tests, benchmarks) */
     double singular_tol; /* largest estimated relative error of the velocities and accelerations; a position above it is SG_SINGULAR unless keep_singular */
     int keep_singular;   /* 1: positions above singular_tol keep their results (status SG_OK, err says why) */
+    int generic;         /* 1: the generic sweep loop (kernels through the descriptor) even where the mechanism has an inlined one (tests: the two agree to the bit) */
 } sg_options;
 
 /* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */
@@ -43,6 +45,11 @@ typedef void (*sg_scales_fn)(const double *q, const double *cq, const double *x,
 typedef void (*sg_blocks_fn)(const double *jac, double *out);
 /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
 typedef void (*sg_anchors_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+
+struct sg_mechanism;
+/* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */
+/* the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a closed form */
+typedef size_t (*sg_sweep_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
 
 /* One mechanism as the generated code describes it. */
 typedef struct sg_mechanism {
@@ -67,6 +74,7 @@ typedef struct sg_mechanism {
     sg_scales_fn scales;                 /* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
     sg_blocks_fn blocks;                 /* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
     sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
+    sg_sweep_fn sweep;                   /* the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a closed form */
 } sg_mechanism;
 
 /* LU with partial pivoting in place (row-major n x n); SG_SINGULAR below the pivot tolerance */
@@ -77,5 +85,9 @@ void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
 size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
 /* sg_sweep plus kinetostatics in the same pass (gv gravity, loads n x nload or NULL, frc n x nfo) */
 size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status);
+/* nd designs over the same n shaft angles, each its own sg_sweep (its own continuation, held inputs nd x (nx-1), parameters nd x np, branch signs nd x nbranch): status[d] (in: nonzero skips the design; out: the status of its first failing position, or SG_BAD_DESIGN), first_bad/last_bad[d] (positions, -1 for none), nbad[d] (positions failing with that status; nbad, last_bad may be NULL). Flat columns of a position: q, qd, qdd (nq each), obs (nobs); the first ncheck constants must be finite; angle_cols are made continuous as sewgen.mechanism.continuous_angles does. sel (nsel columns) writes out[k*out_stride + d*n + i] (NaN for a failed design); red (nred x 3: kind 0 min, 1 max, 2 absmax, 3 rms, 4 mean; column; second column for the norm of two, or -1) writes red_val/red_idx[k*red_stride + d] (the extremum's first position in the caller's order, -1 for rms, mean; NaN and -1 for a failed design). work: n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of failed designs */
+size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, int ncheck, int nangle, const int *angle_cols, int nsel, const int *sel, double *out, size_t out_stride, int nred, const int *red, double *red_val, long long *red_idx, size_t red_stride, double *work, int *work_status, int *status, long long *first_bad, long long *nbad, long long *last_bad);
+/* sewgen.mechanism.continuous_angles in C, to the bit: the angle columns qcols of q (n x nq) and ocols of obs (n x nobs) without 2 pi jumps along the order (NULL: as given), the first position in (-pi, pi] */
+void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int nqa, const int *qcols, int noa, const int *ocols, const size_t *order);
 
 #endif

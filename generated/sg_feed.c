@@ -1423,6 +1423,7 @@ static const sg_mechanism sg_feed_descriptor = {
     .scales = sg_feed_scales,
     .blocks = sg_feed_blocks,
     .anchors = sg_feed_anchors,
+    .sweep = 0,
 };
 
 const sg_mechanism *sg_feed(void)

@@ -652,6 +652,10 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[47] = c[46]*cq[3] + c[48]*cq[2] + t1;
 }
 
+/* sg_hook_drive_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_hook_drive_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+SG_CLOSED_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion)
+
 static const unsigned char sg_hook_drive_coord_is_angle[4] = { 1, 1, 1, 0 };
 
 static const sg_mechanism sg_hook_drive_descriptor = {
@@ -676,6 +680,7 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .scales = sg_hook_drive_scales,
     .blocks = sg_hook_drive_blocks,
     .anchors = sg_hook_drive_anchors,
+    .sweep = sg_hook_drive_sweep,
 };
 
 const sg_mechanism *sg_hook_drive(void)

@@ -383,6 +383,10 @@ void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, c
     out[31] = c[22] + q[0];
 }
 
+/* sg_needle_bar_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_needle_bar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+SG_CLOSED_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion)
+
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };
 
 static const sg_mechanism sg_needle_bar_descriptor = {
@@ -407,6 +411,7 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .scales = sg_needle_bar_scales,
     .blocks = sg_needle_bar_blocks,
     .anchors = sg_needle_bar_anchors,
+    .sweep = sg_needle_bar_sweep,
 };
 
 const sg_mechanism *sg_needle_bar(void)

@@ -744,6 +744,10 @@ void sg_overlock_feed_anchors(const double *q, const double *cq, const double *x
     out[57] = c[60]*cq[7] + t15;
 }
 
+/* sg_overlock_feed_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_overlock_feed_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+SG_CLOSED_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overlock_feed_motion)
+
 static const unsigned char sg_overlock_feed_coord_is_angle[4] = { 1, 1, 1, 1 };
 
 static const sg_mechanism sg_overlock_feed_descriptor = {
@@ -768,6 +772,7 @@ static const sg_mechanism sg_overlock_feed_descriptor = {
     .scales = sg_overlock_feed_scales,
     .blocks = sg_overlock_feed_blocks,
     .anchors = sg_overlock_feed_anchors,
+    .sweep = sg_overlock_feed_sweep,
 };
 
 const sg_mechanism *sg_overlock_feed(void)

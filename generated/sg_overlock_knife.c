@@ -344,6 +344,10 @@ void sg_overlock_knife_anchors(const double *q, const double *cq, const double *
     out[23] = c[26]*cq[1] + c[28]*cq[0] + c[5];
 }
 
+/* sg_overlock_knife_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_overlock_knife_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+SG_CLOSED_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion)
+
 static const unsigned char sg_overlock_knife_coord_is_angle[2] = { 1, 1 };
 
 static const sg_mechanism sg_overlock_knife_descriptor = {
@@ -368,6 +372,7 @@ static const sg_mechanism sg_overlock_knife_descriptor = {
     .scales = sg_overlock_knife_scales,
     .blocks = sg_overlock_knife_blocks,
     .anchors = sg_overlock_knife_anchors,
+    .sweep = sg_overlock_knife_sweep,
 };
 
 const sg_mechanism *sg_overlock_knife(void)

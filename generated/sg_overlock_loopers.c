@@ -520,6 +520,10 @@ void sg_overlock_loopers_anchors(const double *q, const double *cq, const double
     out[35] = c[13] + c[57]*cq[3] + c[59]*cq[2];
 }
 
+/* sg_overlock_loopers_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_overlock_loopers_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg_overlock_loopers_motion)
+
 static const unsigned char sg_overlock_loopers_coord_is_angle[3] = { 1, 1, 1 };
 
 static const sg_mechanism sg_overlock_loopers_descriptor = {
@@ -544,6 +548,7 @@ static const sg_mechanism sg_overlock_loopers_descriptor = {
     .scales = sg_overlock_loopers_scales,
     .blocks = sg_overlock_loopers_blocks,
     .anchors = sg_overlock_loopers_anchors,
+    .sweep = sg_overlock_loopers_sweep,
 };
 
 const sg_mechanism *sg_overlock_loopers(void)

@@ -518,6 +518,10 @@ void sg_overlock_loopers_planar_anchors(const double *q, const double *cq, const
     out[35] = c[12] + c[54]*cq[3] + c[56]*cq[2];
 }
 
+/* sg_overlock_loopers_planar_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_overlock_loopers_planar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_planar_constants, sg_overlock_loopers_planar_closed, sg_overlock_loopers_planar_motion)
+
 static const unsigned char sg_overlock_loopers_planar_coord_is_angle[3] = { 1, 1, 1 };
 
 static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
@@ -542,6 +546,7 @@ static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
     .scales = sg_overlock_loopers_planar_scales,
     .blocks = sg_overlock_loopers_planar_blocks,
     .anchors = sg_overlock_loopers_planar_anchors,
+    .sweep = sg_overlock_loopers_planar_sweep,
 };
 
 const sg_mechanism *sg_overlock_loopers_planar(void)

@@ -507,6 +507,10 @@ void sg_overlock_needle_anchors(const double *q, const double *cq, const double 
     out[39] = c[52] + q[1];
 }
 
+/* sg_overlock_needle_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_overlock_needle_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+SG_CLOSED_SWEEP_BODY(sg_overlock_needle_constants, sg_overlock_needle_closed, sg_overlock_needle_motion)
+
 static const unsigned char sg_overlock_needle_coord_is_angle[3] = { 1, 0, 1 };
 
 static const sg_mechanism sg_overlock_needle_descriptor = {
@@ -531,6 +535,7 @@ static const sg_mechanism sg_overlock_needle_descriptor = {
     .scales = sg_overlock_needle_scales,
     .blocks = sg_overlock_needle_blocks,
     .anchors = sg_overlock_needle_anchors,
+    .sweep = sg_overlock_needle_sweep,
 };
 
 const sg_mechanism *sg_overlock_needle(void)

@@ -414,6 +414,10 @@ void sg_take_up_anchors(const double *q, const double *cq, const double *x, cons
     out[27] = c[30]*cq[1] + c[5];
 }
 
+/* sg_take_up_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_take_up_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+SG_CLOSED_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion)
+
 static const unsigned char sg_take_up_coord_is_angle[2] = { 1, 1 };
 
 static const sg_mechanism sg_take_up_descriptor = {
@@ -438,6 +442,7 @@ static const sg_mechanism sg_take_up_descriptor = {
     .scales = sg_take_up_scales,
     .blocks = sg_take_up_blocks,
     .anchors = sg_take_up_anchors,
+    .sweep = sg_take_up_sweep,
 };
 
 const sg_mechanism *sg_take_up(void)

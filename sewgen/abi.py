@@ -27,6 +27,10 @@ STATUS = (
     ("SG_NONFINITE", 6, errors.NonFiniteResultError,
      "a result came out non-finite (the motion kernel tests every output)"),
     ("SG_BAD_ARGUMENT", 7, None, "sizes or options out of range: nothing was computed"),
+    ("SG_BAD_DESIGN", 8, None,
+     "batched designs: a design's parameter or held input is not finite or out of range, a branch sign is not "
+     "+1 or -1, or a dimension derived from its parameters is not real; the design is skipped (Python names "
+     "the parameter)"),
 )
 
 _ERRORS = {code: cls for _, code, cls, _ in STATUS}
@@ -51,6 +55,8 @@ OPTIONS = (
     ("double", "singular_tol", "largest estimated relative error of the velocities and accelerations; a position "
                                "above it is SG_SINGULAR unless keep_singular"),
     ("int", "keep_singular", "1: positions above singular_tol keep their results (status SG_OK, err says why)"),
+    ("int", "generic", "1: the generic sweep loop (kernels through the descriptor) even where the mechanism has "
+                       "an inlined one (tests: the two agree to the bit)"),
 )
 
 # Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx their
@@ -87,6 +93,19 @@ KERNELS = {
                 "normal sector (manifest \"arcs\"): nanchor_out values, for pictures of any mechanism"),
 }
 
+#: Sweep loops a generated file instantiates with its own kernels inlined (csrc/sg_runtime.h): kind ->
+#: (return type, arguments, meaning); the descriptor holds ``sg_<kind>_fn`` pointers to the file's static
+#: ``sg_<m>_<kind>`` (NULL where the mechanism has none).
+HOOKS = {
+    "sweep": ("size_t", (("const struct sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
+                         ("const double *", "omega"), ("const double *", "alpha"), ("const double *", "held"),
+                         ("const double *", "p"), ("const int *", "branch"), ("const sg_options *", "opt"),
+                         ("const size_t *", "order"), ("double *", "q"), ("double *", "qd"), ("double *", "qdd"),
+                         ("double *", "obs"), ("double *", "err"), ("int *", "status")),
+              "the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a "
+              "closed form"),
+}
+
 #: Fields of ``sg_mechanism``, the descriptor every generated file fills (C type, name, meaning); the sizes'
 #: names are the manifest's "sizes" keys, the kernels' are :data:`KERNELS` kinds.
 DESCRIPTOR = (
@@ -102,7 +121,8 @@ DESCRIPTOR = (
     ("int", "nload", "load slots per position: fx, fy per point of a moving body, torque per moving body"),
     ("int", "nblock", "diagonal blocks of dPhi/dq (closing loops), each with an orientation sign"),
     ("const unsigned char *", "coord_is_angle", "1 for an angle coordinate, 0 for a travel"),
-) + tuple((f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in KERNELS.items())
+) + tuple((f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in KERNELS.items()) + tuple(
+    (f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in HOOKS.items())
 
 #: The runtime's exported functions (csrc/sg_runtime.c): name -> (return type, arguments, meaning).
 EXPORTS = {
@@ -130,6 +150,37 @@ EXPORTS = {
                                    ("double *", "frc"), ("int *", "status")),
                         "sg_sweep plus kinetostatics in the same pass (gv gravity, loads n x nload or NULL, "
                         "frc n x nfo)"),
+    "sg_sweep_designs": ("size_t", (("const sg_mechanism *", "m"), ("size_t", "nd"), ("size_t", "n"),
+                                    ("const double *", "phi"), ("const double *", "omega"),
+                                    ("const double *", "alpha"), ("const double *", "held"),
+                                    ("const double *", "p"), ("const int *", "branch"),
+                                    ("const double *", "q_guess"), ("const sg_options *", "opt"),
+                                    ("const size_t *", "order"), ("int", "ncheck"), ("int", "nangle"),
+                                    ("const int *", "angle_cols"), ("int", "nsel"), ("const int *", "sel"),
+                                    ("double *", "out"), ("size_t", "out_stride"), ("int", "nred"),
+                                    ("const int *", "red"), ("double *", "red_val"), ("long long *", "red_idx"),
+                                    ("size_t", "red_stride"), ("double *", "work"), ("int *", "work_status"),
+                                    ("int *", "status"), ("long long *", "first_bad"), ("long long *", "nbad"),
+                                    ("long long *", "last_bad")),
+                         "nd designs over the same n shaft angles, each its own sg_sweep (its own continuation, "
+                         "held inputs nd x (nx-1), parameters nd x np, branch signs nd x nbranch): status[d] (in: "
+                         "nonzero skips the design; out: the status of its first failing position, or "
+                         "SG_BAD_DESIGN), first_bad/last_bad[d] (positions, -1 for none), nbad[d] (positions "
+                         "failing with that status; nbad, last_bad may be NULL). Flat columns of a position: q, "
+                         "qd, qdd (nq each), obs (nobs); the first ncheck constants must be finite; angle_cols are "
+                         "made continuous as sewgen.mechanism.continuous_angles does. sel (nsel columns) writes "
+                         "out[k*out_stride + d*n + i] (NaN for a failed design); red (nred x 3: kind 0 min, "
+                         "1 max, 2 absmax, 3 rms, 4 mean; column; second column for the norm of two, or -1) "
+                         "writes red_val/red_idx[k*red_stride + d] (the extremum's first position in the "
+                         "caller's order, -1 for rms, mean; NaN and -1 for a failed design). work: "
+                         "n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of "
+                         "failed designs"),
+    "sg_make_continuous": ("void", (("size_t", "n"), ("int", "nq"), ("int", "nobs"), ("double *", "q"),
+                                    ("double *", "obs"), ("int", "nqa"), ("const int *", "qcols"), ("int", "noa"),
+                                    ("const int *", "ocols"), ("const size_t *", "order")),
+                           "sewgen.mechanism.continuous_angles in C, to the bit: the angle columns qcols of q "
+                           "(n x nq) and ocols of obs (n x nobs) without 2 pi jumps along the order (NULL: as "
+                           "given), the first position in (-pi, pi]"),
 }
 
 
@@ -142,3 +193,10 @@ def kernel_signature(kind: str, function: str) -> str:
     """The C signature of kernel ``kind`` named ``function`` (no semicolon)."""
     ret, args, _ = KERNELS[kind]
     return f"{ret} {function}({c_args(args)})"
+
+
+def kernel_hook(kind: str, function: str) -> dict:
+    """What a generated file needs to instantiate the inlined loop ``kind`` of :data:`HOOKS` as ``function``:
+    its C signature and the argument names to pass on."""
+    ret, args, _ = HOOKS[kind]
+    return {"signature": f"{ret} {function}({c_args(args)})", "args": ", ".join(n for _, n in args[1:])}

@@ -308,8 +308,17 @@ def kinematics(name: str, cfg: Config) -> Result:
     n = len(phi)
     t_solve = best_time(lambda: m.solve(phi), cfg.repeats, cfg.min_time)
     t_overhead = best_time(lambda: m.solve(phi[:1]), cfg.repeats, cfg.min_time)
+    one, params = phi[:1], {m.param_names[0]: m.defaults()[m.param_names[0]]}
+    t_overhead_params = best_time(lambda: m.solve(one, params=params), cfg.repeats, cfg.min_time)
+    zero = np.zeros(1)  # an array accel: the general path (prepare, run, check), what every call took before
+    t_general = best_time(lambda: m.solve(one, accel=zero), cfg.repeats, cfg.min_time)
     raw, sw = raw_sweep(m, phi)
     t_raw = best_time(raw, cfg.repeats, cfg.min_time)
+    gen = m.prepare(phi)
+    o = gen.options
+    gen.options = m.ffi.new("sg_options *", {"tol": o.tol, "max_iter": o.max_iter, "singular_tol": o.singular_tol,
+                                              "generic": 1})
+    t_generic = best_time(gen.bind(), cfg.repeats, cfg.min_time)  # the generic loop (no inlined sweep)
     motion = m.solve(phi)
     continuous_angles(m.description, sw.q, sw.obs, sw.order)  # what solve() adds after the C call
     if np.any(sw.status) or not np.array_equal(sw.obs, motion.obs):
@@ -330,6 +339,9 @@ def kinematics(name: str, cfg: Config) -> Result:
         "raw_c_positions_per_s": n / t_raw,
         "solve_seconds": t_solve,
         "solve_overhead_seconds": t_overhead,
+        "solve_overhead_params_seconds": t_overhead_params,
+        "solve_overhead_general_path_seconds": t_general,
+        "raw_c_generic_loop_positions_per_s": n / t_generic,
         "baseline_step_deg": float(np.degrees(phi[rows[1]] - phi[rows[0]])) if len(rows) > 1 else None,
         "baseline_nfev_per_position": out[4],
         "baseline_setup_seconds": bl.derive_s + bl.lambdify_s,
@@ -715,6 +727,137 @@ register_entry("cli", "analyze", _wall_entry(["-m", "sewgen", "analyze", "jb1-3"
 register_entry("cli", "timing", _wall_entry(["-m", "sewgen", "timing", "jb1-3"], 1000.0))
 
 
+
+# -- peers (issue 14, item 6) and batched designs -------------------------------------------------------------
+
+
+def take_up_numpy(phi, omega, alpha, p: dict) -> dict:
+    """The take_up four-bar in closed form with NumPy, vectorised over the shaft angles: every output sewgen's
+    solve() gives (2 coordinates with their rates, 3 points and 3 bodies with their centres of mass), named as
+    :mod:`sewgen.designs` names them. The peer a user could write in thirty lines (crank AB, lever BC with the
+    eye E, rocker DC; the branch +1: C left of B→D)."""
+    th1 = phi + p["crank.phase"]
+    c1, s1 = np.cos(th1), np.sin(th1)
+    ab, bc, cd = p["crank"], p["lever_bc"], p["rocker"]
+    bx, by = ab * c1, ab * s1
+    vbx, vby = -ab * omega * s1, ab * omega * c1
+    abx, aby = -ab * (omega ** 2 * c1 + alpha * s1), ab * (alpha * c1 - omega ** 2 * s1)
+    dx, dy = p["rocker_pivot_x"] - bx, p["rocker_pivot_y"] - by
+    d2 = dx * dx + dy * dy
+    a = 0.5 * (bc * bc - cd * cd + d2) / d2
+    h = np.sqrt(bc * bc / d2 - a * a)
+    cx, cy = bx + a * dx - h * dy, by + a * dy + h * dx
+    r2x, r2y = cx - bx, cy - by
+    r3x, r3y = cx - p["rocker_pivot_x"], cy - p["rocker_pivot_y"]
+    cr = r2x * r3y - r2y * r3x
+    w2 = -(vbx * r3x + vby * r3y) / cr
+    w3 = -(vbx * r2x + vby * r2y) / cr
+    rx = abx - w2 ** 2 * r2x + w3 ** 2 * r3x
+    ry = aby - w2 ** 2 * r2y + w3 ** 2 * r3y
+    a2 = -(rx * r3x + ry * r3y) / cr
+    a3 = -(rx * r2x + ry * r2y) / cr
+    th2, th3 = np.arctan2(r2y, r2x), np.arctan2(r3y, r3x)
+    out = {"coords.rocker.angle": th3, "coords.lever.angle": th2, "coords.rocker.angle_d": w3,
+           "coords.lever.angle_d": w2, "coords.rocker.angle_dd": a3, "coords.lever.angle_dd": a2}
+
+    def point(name, ox, oy, vx, vy, ax, ay, th, w, al, u, v):  # (u, v) in the body frame from (ox, oy)
+        ct, st = np.cos(th), np.sin(th)
+        ex, ey = u * ct - v * st, u * st + v * ct
+        out.update({f"{name}.x": ox + ex, f"{name}.y": oy + ey, f"{name}.x_d": vx - w * ey,
+                    f"{name}.y_d": vy + w * ex, f"{name}.x_dd": ax - al * ey - w * w * ex,
+                    f"{name}.y_dd": ay + al * ex - w * w * ey})
+
+    z = np.zeros_like(phi)
+    bce, bee, cee = p["lever_bc"], p["lever_be"], p["lever_ce"]
+    eu = (bce ** 2 + bee ** 2 - cee ** 2) / (2 * bce)
+    ev = np.sqrt(bee ** 2 - eu ** 2)
+    point("points.crank_pin", bx, by, vbx, vby, abx, aby, th2, w2, a2, 0.0, 0.0)
+    point("points.rocker_pin", bx, by, vbx, vby, abx, aby, th2, w2, a2, bc, 0.0)
+    point("points.thread_eye", bx, by, vbx, vby, abx, aby, th2, w2, a2, eu, ev)
+    pdx, pdy = p["rocker_pivot_x"], p["rocker_pivot_y"]
+    for body, (ox, oy, vx, vy, ax, ay), th, w, al in (
+            ("crank", (z, z, z, z, z, z), th1, omega + z, alpha + z),
+            ("lever", (bx, by, vbx, vby, abx, aby), th2, w2, a2),
+            ("rocker", (pdx + z, pdy + z, z, z, z, z), th3, w3, a3)):
+        out.update({f"bodies.{body}.angle": th, f"bodies.{body}.angle_d": w, f"bodies.{body}.angle_dd": al})
+        com = (p[f"{body}.com_u"], p[f"{body}.com_v"]) if f"{body}.com_u" in p else (cd / 2, 0.0)  # rocker: CD/2
+        point(f"bodies.{body}.com", ox, oy, vx, vy, ax, ay, th, w, al, *com)
+    return out
+
+
+def _peer_check(m, peer: dict, phi) -> float:
+    """The largest difference of a peer's outputs from sewgen's full sweep at the same angles, relative to each
+    column's scale (angles compared modulo whole turns)."""
+    from .designs import Columns
+
+    motion = m.solve(phi)
+    flat = np.hstack([motion.q, motion.qd, motion.qdd, motion.obs])
+    cols = Columns(m.description)
+    if set(peer) != set(cols.names):
+        raise RuntimeError(f"the peer gives {sorted(set(cols.names) ^ set(peer))} differently from sewgen")
+    worst = 0.0
+    for name in cols.names:
+        ref, got = flat[:, cols.index[name]], np.asarray(peer[name], dtype=float)
+        diff = got - ref
+        if cols.unit(name) == "rad":
+            diff = (diff + np.pi) % (2 * np.pi) - np.pi
+        worst = max(worst, float(np.abs(diff).max() / max(np.abs(ref).max(), 1e-12)))
+    return worst
+
+
+def _peer_numpy_entry(cfg: Config) -> Result:
+    """take_up kinematics, all outputs: the NumPy closed form (checked against sewgen, then timed) against
+    sewgen's solve() (all outputs; coordinates and the thread eye only) in the same run."""
+    m = sewgen.mechanism("take_up")
+    phi = cfg.sweep_angles()
+    omega = float(m.default_speed)
+    p = m.defaults()
+    err = _peer_check(m, take_up_numpy(phi, omega, 0.0, p), phi)
+    t_peer = best_time(lambda: take_up_numpy(phi, omega, 0.0, p), cfg.repeats, cfg.min_time)
+    t_all = best_time(lambda: m.solve(phi), cfg.repeats, cfg.min_time)
+    t_sel = best_time(lambda: m.solve(phi, outputs=["coords", "points:thread_eye"]), cfg.repeats, cfg.min_time)
+    n = len(phi)
+    return n / t_peer, None, {"agree": err < 1e-12, "max_rel_diff": err, "worst": "-",
+                              "sewgen_solve_positions_per_s": n / t_all,
+                              "sewgen_over_peer": t_peer / t_all,
+                              "sewgen_selected_positions_per_s": n / t_sel,
+                              "target_sewgen_over_peer": 2.0}
+
+
+def _designs_entry(cfg: Config) -> Result:
+    """10⁵ take_up designs (the crank length varied) × 72 angles with the peak thread-eye acceleration per design,
+    sweep_designs on every core and on one; the baseline: solve() per design (on 2000 of them) in the same run;
+    ``projected_1e6_designs_s`` is the time of 10⁶ at the measured rate (target < 2 s on two cores)."""
+    import os
+
+    m = sewgen.mechanism("take_up")
+    phi = sewgen.shaft_angles(5)
+    nd = 100_000
+    crank = m.defaults()["crank"] * np.linspace(0.9, 1.1, nd)
+    red = {"points.thread_eye.a": "max"}
+    threads = os.cpu_count() or 1
+    run = lambda th: m.sweep_designs({"crank": crank}, phi, reduce=red, threads=th)  # noqa: E731
+    res = run(threads)
+    nb = 2000
+    ref = np.array([np.hypot(mo.point("thread_eye").ax, mo.point("thread_eye").ay).max()
+                    for mo in (m.solve(phi, params={"crank": float(c)}) for c in crank[:nb])])
+    err = float(np.abs(res["points.thread_eye.a:max"][:nb] / ref - 1).max())
+    t_all = min(_timed(run, (threads,)) for _ in range(3))
+    t_one = min(_timed(run, (1,)) for _ in range(2))
+    t_base = min(_timed(lambda: [m.solve(phi, params={"crank": float(c)}) for c in crank[:nb]], ()) for _ in
+                 range(2)) / nb * nd
+    pos = nd * len(phi)
+    return pos / t_all, pos / t_base, {
+        "agree": err < 1e-13, "max_rel_diff": err, "worst": "points.thread_eye.a:max",
+        "designs": nd, "angles": len(phi), "threads": threads, "us_per_design": t_all / nd * 1e6,
+        "us_per_design_one_thread": t_one / nd * 1e6, "thread_speedup": t_one / t_all,
+        "projected_1e6_designs_s": t_all * 1e6 / nd, "target_1e6_designs_s": 2.0,
+        "meets_target": t_all * 1e6 / nd < 2.0}
+
+
+register_entry("take_up", "designs", _designs_entry)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m sewgen.bench", description=__doc__.split("\n\n")[0])
     ap.add_argument("--positions", type=int, default=Config.positions,
@@ -732,6 +875,9 @@ def main(argv=None) -> int:
     ap.add_argument("--study-designs", type=int, default=Config.study_designs,
                     help="designs of the 'study' entries (default %(default)s)")
     ap.add_argument("--json", action="store_true", help="print a JSON list instead of the table")
+    ap.add_argument("--peers", action="store_true",
+                    help="also time the peers of take_up's kinematics (a NumPy closed form; numba, pylinkage "
+                         "when installed), each checked against sewgen first: kernel \"peer:<name>\"")
     args = ap.parse_args(argv)
     if args.positions < 1 or args.baseline_positions < 1 or args.repeats < 1:
         ap.error("--positions, --baseline-positions and --repeats must be positive")
@@ -742,6 +888,8 @@ def main(argv=None) -> int:
     cfg = Config(positions=args.positions, baseline_positions=args.baseline_positions,
                  repeats=args.repeats, baseline_angles=args.baseline_angles, rtol=args.rtol,
                  study_designs=args.study_designs)
+    if args.peers:
+        register_entry("take_up", "peer:numpy", _peer_numpy_entry)
     t0 = time.perf_counter()
     rows = run(cfg, args.mechanism)
     if args.json:

@@ -90,6 +90,19 @@ class Mechanism:
             reference=dataclasses.replace(ref, digest=digest), _defaults=MappingProxyType(defaults),
             _default_options=MappingProxyType({(newton, keep): self._new_options(ffi, _DEFAULT_MAX_ITER, newton, keep)
                                                for newton in (False, True) for keep in (False, True)}))
+        qa, oa = desc.angle_columns
+        angle = (np.array(qa, dtype=np.intc), np.array(oa, dtype=np.intc))
+        fields["_angle"] = (angle, len(qa), _ptr(ffi, "int *", angle[0]), len(oa), _ptr(ffi, "int *", angle[1]))
+        # C pointers of the read-only defaults, and the converted parameter vectors of recent params= dicts: the
+        # per-call cost of solve() (issue 14, item 5). Caches, not state: a hit gives what a miss computes.
+        fields["_fast"] = {k: _ptr(ffi, "int *" if k == "branch" else "double *", defaults[k])
+                           for k in ("p", "held", "branch", "guess")}
+        sizes = desc.sizes
+        fields["_fast"]["call"] = (sizes["nq"], sizes["nobs"], 4 + 3 * sizes["nq"] + sizes["nobs"], lib,
+                                   fields["_descriptor"], fields["_fast"]["held"], fields["_fast"]["branch"],
+                                   fields["_fast"]["guess"], fields["_default_options"][(False, False)],
+                                   fields["_angle"][1:] if (qa or oa) else None)
+        fields["_pcache"] = {}
         for key, value in fields.items():
             object.__setattr__(self, key, value)
         self._check_constants(p)  # a declaration whose defaults give no real dimension
@@ -358,7 +371,8 @@ class Mechanism:
 
     def solve(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
               branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
-              newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, out=None, singular: str = "raise") -> Motion:
+              newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, out=None, singular: str = "raise",
+              outputs=None) -> Motion:
         """Positions, velocities and accelerations of every coordinate, point and body at shaft angles ``phi``.
 
         ``phi`` in rad (or degrees with ``degrees=True``); ``speed`` (rad/s, default the mechanism's
@@ -381,12 +395,98 @@ class Mechanism:
         of another shape (or not C-contiguous float64, or overlapping an input) are not used. The result given
         as ``out`` is consumed: its arrays now hold this sweep, so use only the returned one. Without ``out``
         every call returns new arrays and no earlier result is ever touched.
+
+        ``outputs``: only these results, each a contiguous array (a :class:`~sewgen.results.Selection`, by column
+        name): ``"coords"``, ``"points"``, ``"bodies"``, ``"points:<name>"``, ``"bodies:<name>"``,
+        ``"coords:<name>"`` or single columns such as ``"points.thread_eye.y_dd"`` (names: :mod:`sewgen.designs`);
+        the values are those of the full sweep's columns, bit for bit. ``out`` may then be a previous Selection
+        of the same columns and length.
         """
+        if (outputs is None and held is None and branch is None and guess is None and out is None
+                and degrees is False and newton is False and max_iter == _DEFAULT_MAX_ITER and singular == "raise"
+                and type(phi) is np.ndarray and (speed is None or type(speed) in (float, int))
+                and type(accel) in (float, int) and accel == 0):
+            motion = self._fast_solve(phi, speed, params)
+            if motion is not None:
+                return motion
+        if outputs is not None:
+            from .designs import solve_selected
+
+            return solve_selected(self, outputs, dict(phi=phi, speed=speed, accel=accel, params=params, held=held,
+                                                      branch=branch, guess=guess, degrees=degrees, newton=newton,
+                                                      max_iter=max_iter, singular=singular), out)
         sweep = self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
                              degrees=degrees, newton=newton, max_iter=max_iter, out=out, singular=singular)
         sweep.run()
         sweep.check()
         return sweep.motion()
+
+    def _fast_params(self, params):
+        """(vector, C pointer) of a params= dict, converted and checked once and then cached by its items (with
+        their types: 1 and True are different keys); None where the items are not hashable."""
+        if params is None:
+            return self._defaults["p"], self._fast["p"]
+        if type(params) is not dict:
+            return None
+        try:
+            key = tuple((k, type(v), v) for k, v in params.items())
+            hit = self._pcache.get(key)
+        except TypeError:
+            return None
+        if hit is None:
+            p = self.param_vector(params)  # every check, the typed errors
+            p.flags.writeable = False
+            hit = (p, _ptr(self.ffi, "double *", p))
+            if len(self._pcache) >= 256:
+                self._pcache.clear()
+            self._pcache[key] = hit
+        return hit
+
+    def _fast_solve(self, phi: np.ndarray, speed, params):
+        """solve() of a 1-D float64 phi with the default held inputs, branches, guesses and options and zero
+        shaft acceleration: one buffer for every array, one C call, the angles made continuous in C. None where
+        anything needs the general path (which also reports every failure with its diagnosis)."""
+        if phi.ndim != 1 or phi.dtype != np.float64 or not phi.shape[0]:
+            return None
+        n = phi.shape[0]  # a non-finite angle: SG_NAN_INPUT from C, and the general path names it
+        spd = self.description.default_speed if speed is None else float(speed)  # solve(): a float or an int
+        if not math.isfinite(spd):
+            return None
+        got = self._fast_params(params)
+        if got is None:
+            return None
+        p, p_ptr = got
+        nq, nobs, w, lib, desc, held, branch, guess, opt, angle = self._fast["call"]
+        blk = np.empty(w * n)
+        phi_v, omega, alpha, err = blk[:n], blk[n:2 * n], blk[2 * n:3 * n], blk[3 * n:4 * n]
+        phi_v[:] = phi
+        omega.fill(spd)
+        alpha.fill(0.0)
+        o, nn = 4 * n, n * nq
+        q, qd, qdd = blk[o:o + 3 * nn].reshape(3, n, nq)  # each C-contiguous (n, nq)
+        obs = blk[o + 3 * nn:].reshape(n, nobs)
+        status = np.empty(n, dtype=np.intc)
+        ffi = self.ffi
+        base = ffi.from_buffer("double[]", blk)
+        order_p = ffi.NULL
+        if n > 1 and not (phi_v[1:] >= phi_v[:-1]).all():
+            order_p = ffi.from_buffer("size_t[]", np.argsort(phi_v, kind="stable").astype(np.uintp))
+        qp, op = base + o, base + o + 3 * nn
+        if lib.sg_sweep(desc, n, base, base + n, base + 2 * n, held, p_ptr, branch, guess, opt, order_p, qp, qp + nn,
+                        qp + 2 * nn, op, base + 3 * n, ffi.from_buffer("int[]", status)):
+            return None
+        if angle is not None:
+            lib.sg_make_continuous(n, nq, nobs, qp, op, angle[0], angle[1], angle[2], angle[3], order_p)
+        return Motion(self, phi_v, omega, alpha, q, qd, qdd, obs, err, SINGULAR_TOL)
+
+    def _continuous(self, n: int, q: np.ndarray, obs: np.ndarray, order) -> None:
+        """continuous_angles(self.description, q, obs, order), in C."""
+        angle, nqa, qa_p, noa, oa_p = self._angle
+        if not (nqa or noa) or not n:
+            return
+        ffi = self.ffi
+        self.lib.sg_make_continuous(n, q.shape[1], obs.shape[1], _ptr(ffi, "double *", q), _ptr(ffi, "double *", obs),
+                                    nqa, qa_p, noa, oa_p, ffi.NULL if order is None else _ptr(ffi, "size_t *", order))
 
     def kinetostatics(self, phi, speed=None, accel=0.0, *, loads=(), gravity="9.80665 m/s**2",
                       gravity_direction="-90 deg", moment_about=(0.0, 0.0), params: dict | None = None,
@@ -410,6 +510,37 @@ class Mechanism:
         sweep.run()
         sweep.check()
         return sweep.analysis()
+
+    def sweep_designs(self, designs, phi, speed=None, *, outputs=None, reduce=None, held=None, branch=None,
+                      threads=None, accel=0.0, degrees: bool = False, newton: bool = False,
+                      max_iter: int = _DEFAULT_MAX_ITER, chunk: int | None = None):
+        """Many designs over the same shaft angles, each swept as :meth:`solve` sweeps it (its own continuation,
+        tolerance and per-position status), in C calls over chunks of designs on ``threads`` threads (default:
+        every core; the GIL is released). Returns a :class:`sewgen.designs.DesignSweep`.
+
+        ``designs``: a pandas DataFrame or a mapping parameter name -> values (one per design, or one for all):
+        SI numbers, quantity strings, or a pint Quantity; a column named ``"crank [mm]"`` is in that unit. Units
+        are converted once per column, never per row. Or an (n_designs, n_parameters) array, SI, in
+        :attr:`param_names` order. Parameters not given take their defaults. ``held`` and ``branch``: by name,
+        a scalar or one value per design each (or an (n_designs, n) array). ``phi``, ``speed``, ``accel``,
+        ``degrees``, ``newton``, ``max_iter``: as :meth:`solve`, shared by every design.
+
+        ``outputs``: which per-position results to keep, ``"all"``, ``"coords"``, ``"points"``, ``"bodies"``,
+        ``"points:<name>"``, ``"bodies:<name>"``, ``"coords:<name>"`` or single columns
+        (``"points.thread_eye.y_dd"``); default all unless ``reduce`` is given (then none). ``reduce``: per-design
+        reductions fused into the sweep, ``{"points.thread_eye.a": "max", "coords.lever.angle": ["min",
+        "max"]}`` or ``["points.thread_eye.y:max", ...]`` (kinds min, max, absmax, rms, mean; a point's
+        ``.v``/``.a`` is the magnitude of its velocity/acceleration). Column naming: :mod:`sewgen.designs`.
+
+        A design that fails (parameters out of range, a position that does not assemble, a singular position, …)
+        gets its status, first failing angle and error message; the others are unaffected. Bad arguments (an
+        unknown column, a wrong length, an unknown output) raise a :class:`~sewgen.errors.ParameterError`
+        naming them."""
+        from .designs import sweep_designs
+
+        return sweep_designs(self, designs, phi, speed, accel, outputs=outputs, reduce=reduce, held=held,
+                             branch=branch, threads=threads, degrees=degrees, newton=newton, max_iter=max_iter,
+                             chunk=chunk)
 
     # -- single-position kernels (checks and inspection) -----------------------------------------------------
     def _ptr(self, ctype: str, arr: np.ndarray):
@@ -570,7 +701,7 @@ class Sweep:
         """Run the sweep in C (the GIL released), then make every angle continuous over the sweep; returns the
         number of positions whose status is not SG_OK."""
         failed = self.bind()()
-        continuous_angles(self.mechanism.description, self.q, self.obs, self.order)
+        self.mechanism._continuous(self.n, self.q, self.obs, self.order)  # continuous_angles, in C
         return failed
 
     def check(self) -> None:

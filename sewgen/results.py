@@ -151,3 +151,43 @@ def write_csv(path, cols: dict):
         w.writerow(cols)
         w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
     return path
+
+
+class Selection:
+    """Selected outputs of a sweep (``solve(..., outputs=[...])``): each named column a contiguous array over the
+    shaft angles (structure of arrays; names as :mod:`sewgen.designs` gives them: ``coords.<name>``,
+    ``coords.<name>_d``, ``points.<point>.x`` …). ``point``, ``body`` and ``coord`` work when all their columns
+    were selected. ``block`` is the (n_columns, n) array they are rows of (``out=`` reuses it)."""
+
+    def __init__(self, mechanism, phi, omega, alpha, block, names):
+        self.mechanism = mechanism
+        self.phi, self.omega, self.alpha = phi, omega, alpha
+        self.block = block
+        self.columns = {name: block[k] for k, name in enumerate(names)}
+
+    def __len__(self) -> int:
+        return len(self.phi)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        try:
+            return self.columns[name]
+        except KeyError:
+            raise KeyError(f"{name!r} was not selected; selected: {', '.join(self.columns)}") from None
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.columns
+
+    def keys(self):
+        return self.columns.keys()
+
+    def point(self, name: str) -> PointMotion:
+        return PointMotion(*(self[f"points.{name}.{f}"] for f in ("x", "y", "x_d", "y_d", "x_dd", "y_dd")))
+
+    def body(self, name: str) -> BodyMotion:
+        b = f"bodies.{name}"
+        com = PointMotion(*(self[f"{b}.com.{f}"] for f in ("x", "y", "x_d", "y_d", "x_dd", "y_dd")))
+        return BodyMotion(self[f"{b}.angle"], self[f"{b}.angle_d"], self[f"{b}.angle_dd"], com)
+
+    def coord(self, name: str) -> CoordinateMotion:
+        c = self.mechanism.description.coord(name)
+        return CoordinateMotion(self[f"coords.{name}"], self[f"coords.{name}_d"], self[f"coords.{name}_dd"], c.unit)

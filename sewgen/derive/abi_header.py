@@ -47,6 +47,10 @@ def header() -> str:
     lines.append("/* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */")
     for kind, (ret, args, doc) in abi.KERNELS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
+    lines += ["", "struct sg_mechanism;",
+              "/* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */"]
+    for kind, (ret, args, doc) in abi.HOOKS.items():
+        lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
     lines += ["", "/* One mechanism as the generated code describes it. */"]
     lines += _struct("sg_mechanism", abi.DESCRIPTOR) + [""]
     lines += _exports() + ["", "#endif"]
@@ -72,6 +76,8 @@ def descriptor_initializer(prefix: str, sizes: dict, has: dict) -> list[str]:
             value = f"{prefix}_coord_is_angle"
         elif name in abi.KERNELS:
             value = f"{prefix}_{name}" if has.get(name) else "0"
+        elif name in abi.HOOKS:  # the inlined sweep: instantiated where the mechanism has a closed form
+            value = f"{prefix}_{name}" if has.get("closed") else "0"
         else:
             value = str(sizes[name])
         out.append(f".{name} = {value},")

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import jinja2
 
+from .. import abi
 from . import abi_header, branches, drawing
 from .elements import ELEMENTS
 from .dyads import split_into_dyads
@@ -146,6 +147,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
               "coord_names": ", ".join(c.name for c in kin.coords) or "none",
               "input_names": ", ".join(i.name for i in mech.inputs)},
         prefix=prefix, kernels=kernels,
+        inline_sweep=abi.kernel_hook("sweep", f"{prefix}_sweep") if dyads is not None else None,
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
         descriptor=abi_header.descriptor_initializer(prefix, sizes, {k.name[len(prefix) + 1:]: True for k in kernels}),
         manifest_chunks=_c_string_chunks(text))
