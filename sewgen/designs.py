@@ -172,6 +172,11 @@ class DesignSweep:
     def __len__(self) -> int:
         return len(self.status)
 
+    @property
+    def column_names(self) -> list[str]:
+        """Every per-position column of the mechanism in its layout order: q, q', q'', then the observables."""
+        return list(self._columns.names)
+
     def __getitem__(self, name: str) -> np.ndarray:
         if name in self.outputs:
             return self.outputs[name]

@@ -5,10 +5,10 @@ name -> array, or an ndarray in ``param_names`` order; every value in SI. :func:
 them into the (D, n_params) matrix a mechanism's sweep reads, the parameters a table leaves out at their base
 values.
 
-:func:`sweep_group_designs` is the single place where a study evaluates many designs of one mechanism. Today it
-loops over the designs with :meth:`Mechanism.solve` / :meth:`Mechanism.kinetostatics`, catching each design's
-typed error into its status; everything downstream reads its stacked (designs × angles × …) arrays, so the
-batched C call of the sweep engine (``Mechanism.sweep_designs``) replaces the loop without changing a caller.
+:func:`sweep_group_designs` is the single place where a study evaluates many designs of one mechanism: the
+kinematics through the sweep engine's batched C calls (``Mechanism.sweep_designs``), the kinetostatics by a loop
+over :meth:`Mechanism.kinetostatics` (no batched form yet), each design's typed error caught into its status;
+everything downstream reads the stacked (designs × angles × …) arrays.
 """
 from __future__ import annotations
 
@@ -104,12 +104,16 @@ def sweep_group_designs(mech, designs, phi, speed=None, *, base: dict | None = N
     parameter out of range …) gets its error's type in ``status`` and its message in ``error``; the others are
     unaffected.
 
-    THE SEAM: this loop is what ``Mechanism.sweep_designs`` (one batched C call) replaces."""
+    Kinematic sweeps go through :meth:`Mechanism.sweep_designs` (chunks of designs in batched C calls on every
+    core, the GIL released); kinetostatic ones loop over :meth:`Mechanism.kinetostatics` (the batched call has no
+    forces yet)."""
     P = design_matrix(mech, designs, base)
     phi = np.asarray(phi, dtype=float)
     d, n = P.shape[0], len(phi)
     sizes = mech.description.sizes
     w = mech.default_speed if speed is None else speed
+    if not forces:
+        return _batched(mech, P, phi, w, held, branch)
     nan = np.nan
     q, qd, qdd = (np.full((d, n, sizes["nq"]), nan) for _ in range(3))
     obs = np.full((d, n, sizes["nobs"]), nan)
@@ -140,3 +144,24 @@ def sweep_group_designs(mech, designs, phi, speed=None, *, base: dict | None = N
 
         omega = float(to_si(w, "speed", "speed")) if isinstance(w, str) else float(w)
     return GroupSweep(mech, P, phi, omega, status, error, q, qd, qdd, obs, frc, settings if forces else None)
+
+
+def _batched(mech, P, phi, speed, held, branch) -> GroupSweep:
+    """The kinematic sweep of every design in batched C calls (``Mechanism.sweep_designs``), as the stacked
+    arrays of :class:`GroupSweep`; a failed design's rows are NaN, its error's type and message kept."""
+    res = mech.sweep_designs(P, phi, speed, held=held, branch=branch, outputs=["all"])
+    names = res.column_names
+    full = np.stack([res.outputs[name] for name in names], axis=-1)  # (D, N, 3 nq + nobs)
+    nq = mech.description.sizes["nq"]
+    status = np.full(len(P), "ok", dtype=object)
+    error: list = [None] * len(P)
+    for k in np.flatnonzero(~res.ok):
+        exc = res.exception(int(k))
+        status[k], error[k] = type(exc).__name__, str(exc)
+    w = mech.default_speed if speed is None else speed
+    if isinstance(w, str):
+        from ..units import to_si
+
+        w = to_si(w, "speed", "speed")
+    return GroupSweep(mech, P, phi, float(w), status, error, full[..., :nq], full[..., nq:2 * nq],
+                      full[..., 2 * nq:3 * nq], full[..., 3 * nq:], None, None)
