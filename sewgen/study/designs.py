@@ -97,7 +97,7 @@ class GroupSweep:
 
 def sweep_group_designs(mech, designs, phi, speed=None, *, base: dict | None = None, held: dict | None = None,
                         branch: dict | None = None, forces: bool = False, loads=(), gravity="9.80665 m/s**2",
-                        gravity_direction="-90 deg") -> GroupSweep:
+                        gravity_direction="-90 deg", threads: int | None = None) -> GroupSweep:
     """Every design of ``designs`` (see :func:`design_matrix`) swept at shaft angles ``phi`` (rad, the
     mechanism's own) and constant ``speed``; with ``forces``, the kinetostatics (``loads``, ``gravity`` as in
     :meth:`Mechanism.kinetostatics`). A design that cannot be solved (cannot assemble, a singular position, a
@@ -113,7 +113,7 @@ def sweep_group_designs(mech, designs, phi, speed=None, *, base: dict | None = N
     sizes = mech.description.sizes
     w = mech.default_speed if speed is None else speed
     if not forces:
-        return _batched(mech, P, phi, w, held, branch)
+        return _batched(mech, P, phi, w, held, branch, threads)
     nan = np.nan
     q, qd, qdd = (np.full((d, n, sizes["nq"]), nan) for _ in range(3))
     obs = np.full((d, n, sizes["nobs"]), nan)
@@ -146,10 +146,10 @@ def sweep_group_designs(mech, designs, phi, speed=None, *, base: dict | None = N
     return GroupSweep(mech, P, phi, omega, status, error, q, qd, qdd, obs, frc, settings if forces else None)
 
 
-def _batched(mech, P, phi, speed, held, branch) -> GroupSweep:
+def _batched(mech, P, phi, speed, held, branch, threads=None) -> GroupSweep:
     """The kinematic sweep of every design in batched C calls (``Mechanism.sweep_designs``), as the stacked
     arrays of :class:`GroupSweep`; a failed design's rows are NaN, its error's type and message kept."""
-    res = mech.sweep_designs(P, phi, speed, held=held, branch=branch, outputs=["all"])
+    res = mech.sweep_designs(P, phi, speed, held=held, branch=branch, outputs=["all"], threads=threads)
     names = res.column_names
     full = np.stack([res.outputs[name] for name in names], axis=-1)  # (D, N, 3 nq + nobs)
     nq = mech.description.sizes["nq"]

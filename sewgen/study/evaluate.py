@@ -40,12 +40,15 @@ FEED_RULES = {"dog_sinks_before_needle_enters": "sink_lead", "dog_rises_after_ne
 @dataclass(frozen=True)
 class StudyOptions:
     """``step_deg``: the sweep's step (must divide 360°); ``speed`` (rad/s; None: the machine's); ``loads``:
-    the kinetostatics and the machine's peak loads per design; ``tooth_depth`` (m) for the effective travel."""
+    the kinetostatics and the machine's peak loads per design; ``tooth_depth`` (m) for the effective travel;
+    ``threads``: threads of each batched sweep (None: every core; a Dask worker runs with 1, its cluster being
+    the parallelism). The results do not depend on it."""
 
     step_deg: float = 1.0
     speed: float | None = None
     loads: bool = True
     tooth_depth: float = fi.TOOTH_DEPTH
+    threads: int | None = None
 
     def phi(self) -> np.ndarray:
         n = int(round(360.0 / self.step_deg))
@@ -90,7 +93,8 @@ def _sweep(machine, g, P, phi, w, options):
     mag = float(np.hypot(*gv))
     direction = math.atan2(gv[1], gv[0]) if mag else -math.pi / 2
     return sweep_group_designs(g.mechanism, P, phi + g.phase, w, held=g.held or None, branch=g.branch or None,
-                               forces=options.loads, loads=g.sweep_loads, gravity=mag, gravity_direction=direction)
+                               forces=options.loads, loads=g.sweep_loads, gravity=mag, gravity_direction=direction,
+                               threads=options.threads)
 
 
 def _needle_stroke(g, sweep, w, h):

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import re
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -164,7 +164,9 @@ def run_designs(machine, keys, values=None, options: StudyOptions | None = None,
             client, close = dask_client(dask)
             try:
                 mref = client.scatter(machine, broadcast=True)
-                futures = [client.submit(evaluate_chunk, mref, keys, c, options, pure=False) for c in chunks]
+                # one thread per task: the workers are the parallelism (threads in each would oversubscribe)
+                on_worker = replace(options, threads=1)
+                futures = [client.submit(evaluate_chunk, mref, keys, c, on_worker, pure=False) for c in chunks]
                 size = {f.key: len(c) for f, c in zip(futures, chunks)}
                 for f in as_completed(futures):
                     if f.status == "error":
