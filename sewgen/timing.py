@@ -676,24 +676,14 @@ def _check(rule: Rule, tm: Timing, st: Stitch, machine, ge) -> Check:
     if k in ("hook_at_needle_rise", "hook_above_eye", "hook_in_scarf"):
         if missing("hook_fwd", "bdc"):
             return lacking("the machine needs a needle_point and a hook_point")
-        a = v["hook_fwd"]
-        gn, npt = _role_group(machine, NEEDLE_POINT)
-        gh, hpt = _role_group(machine, HOOK_POINT)
-        ny = _interp_point(tm, gn, npt, a)[1]
-        hy = _interp_point(tm, gh, hpt, a)[1]
-        nb = _interp_point(tm, gn, npt, v["bdc"])[1]
+        a, rise, height = _taker_at_needle(tm, machine, ge, v, "hook_fwd", HOOK_POINT)
         if k == "hook_at_needle_rise":
-            return out(ny - nb, f"the hook point reaches the needle's centre line at φ = {_deg(a)}, when the "
-                                f"needle has risen this far from its bottom dead centre (φ = {_deg(v['bdc'])})")
-        if ge is None:
+            return out(rise, f"the hook point reaches the needle's centre line at φ = {_deg(a)}, when the "
+                             f"needle has risen this far from its bottom dead centre (φ = {_deg(v['bdc'])})")
+        if height is None:
             return lacking("the machine needs a needle_eye")
-        _, eye_name = _role_group(machine, NEEDLE_EYE)
-        ey = _interp_point(tm, ge, eye_name, a)[1]
-        d = ge.mechanism.description
-        half = 0.5 * _param(ge, NEEDLE_EYE_LENGTH) if d.has_role(NEEDLE_EYE_LENGTH) else 0.0
-        height = hy - (ey + half)
         if k == "hook_in_scarf":
-            if not d.has_role(NEEDLE_SCARF):
+            if not ge.mechanism.description.has_role(NEEDLE_SCARF):
                 return lacking("the needle declares no needle_scarf")
             lo, hi = 0.0, _param(ge, NEEDLE_SCARF)
             return out(height, f"at φ = {_deg(a)} the hook point passes this far above the needle eye's top, "
@@ -756,22 +746,14 @@ def _check(rule: Rule, tm: Timing, st: Stitch, machine, ge) -> Check:
     if k in ("lower_looper_at_needle_rise", "lower_looper_above_eye"):
         if missing("lower_fwd", "bdc"):
             return lacking("the machine needs a needle_point and a lower_looper_tip")
-        a = v["lower_fwd"]
-        gn, npt = _role_group(machine, NEEDLE_POINT)
-        gl, lpt = _role_group(machine, LOWER_LOOPER_TIP)
-        ny, nb = _interp_point(tm, gn, npt, a)[1], _interp_point(tm, gn, npt, v["bdc"])[1]
+        a, rise, height = _taker_at_needle(tm, machine, ge, v, "lower_fwd", LOWER_LOOPER_TIP)
         if k == "lower_looper_at_needle_rise":
-            return out(ny - nb, f"the lower looper's tip reaches the needle's centre line at φ = {_deg(a)}, when "
-                                f"the needle has risen this far from its bottom dead centre (φ = {_deg(v['bdc'])})")
-        if ge is None:
+            return out(rise, f"the lower looper's tip reaches the needle's centre line at φ = {_deg(a)}, when "
+                             f"the needle has risen this far from its bottom dead centre (φ = {_deg(v['bdc'])})")
+        if height is None:
             return lacking("the machine needs a needle_eye")
-        _, eye_name = _role_group(machine, NEEDLE_EYE)
-        ey = _interp_point(tm, ge, eye_name, a)[1]
-        d = ge.mechanism.description
-        half = 0.5 * _param(ge, NEEDLE_EYE_LENGTH) if d.has_role(NEEDLE_EYE_LENGTH) else 0.0
-        ly = _interp_point(tm, gl, lpt, a)[1]
-        return out(ly - (ey + half), f"at φ = {_deg(a)} (lower looper tip at the needle) the tip is this far above "
-                                     f"the top of the needle eye")
+        return out(height, f"at φ = {_deg(a)} (lower looper tip at the needle) the tip is this far above "
+                           f"the top of the needle eye")
     if k == "lower_looper_passes_level":
         if missing("lower_ret", "lower_fwd"):
             return lacking("the lower looper must pass the needle forward and back")
@@ -806,6 +788,22 @@ def _check(rule: Rule, tm: Timing, st: Stitch, machine, ge) -> Check:
         return out(th.min_slack, f"the least slack S − D + T while the hook carries the loop "
                                  f"(φ = {_deg(th.window[0])} – {_deg(th.window[1])}) is at φ = {_deg(th.min_slack_at)}")
     raise AssertionError(k)
+
+
+def _taker_at_needle(tm: Timing, machine, ge, v: dict, event: str, taker_role: str):
+    """Where a loop taker (hook point, looper tip: ``taker_role``) meets the needle's centre line, at event
+    ``event`` of ``v``: (its angle, the needle point's rise from bottom dead centre then, the taker's height
+    above the needle eye's top then — None without a needle_eye group ``ge``)."""
+    a = v[event]
+    gn, npt = _role_group(machine, NEEDLE_POINT)
+    gt, tpt = _role_group(machine, taker_role)
+    rise = _interp_point(tm, gn, npt, a)[1] - _interp_point(tm, gn, npt, v["bdc"])[1]
+    if ge is None:
+        return a, rise, None
+    _, eye = _role_group(machine, NEEDLE_EYE)
+    d = ge.mechanism.description
+    half = 0.5 * _param(ge, NEEDLE_EYE_LENGTH) if d.has_role(NEEDLE_EYE_LENGTH) else 0.0
+    return a, rise, _interp_point(tm, gt, tpt, a)[1] - (_interp_point(tm, ge, eye, a)[1] + half)
 
 
 def _interp_point(tm: Timing, g, name, angle):
