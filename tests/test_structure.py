@@ -137,3 +137,15 @@ def test_no_runtime_module_names_a_catalog_part():
             if re.search(rf"""["'.]{word}\b(?![(])""", code) and re.search(rf"""\b{word}["'.]""", code):
                 offenders.append(f"{rel}: {word}")
     assert not offenders, offenders
+
+
+def test_every_package_is_installed():
+    """A non-editable `pip install .` installs exactly the packages pyproject.toml lists: every folder of
+    sewgen/ with an __init__.py must be among them (sewgen.study was missing once: the README's quick start
+    failed on a fresh machine while the editable test install passed)."""
+    import tomllib
+
+    root = Path(__file__).resolve().parent.parent
+    listed = set(tomllib.loads((root / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(root).parts) for p in (root / "sewgen").rglob("__init__.py")}
+    assert found <= listed, f"not installed: {sorted(found - listed)}"
