@@ -102,6 +102,11 @@ class ForceAnalysis:
     def _out(self, name: str) -> np.ndarray:
         return self.frc[:, self.mechanism.description.output_column(name)]
 
+    def output(self, name: str) -> np.ndarray:
+        """Any named force output over the sweep (``Description.force_outputs``: e.g. a rod's ``<rod>.fz``, a
+        joint's ``<joint>.friction``), in SI."""
+        return self._out(name)
+
     def _joint(self, name: str):
         desc = self.mechanism.description
         return desc.reaction(name) if desc.has("reaction", name) else None

@@ -244,7 +244,7 @@ class MachineAnalysis:
             for body, z in g.axial.items():
                 fx, fy = _xy(fa.frame_force(f"{body}.pivot"))
                 if g.along:
-                    fz = -sum((fa._out(f"{r.name}.fz") for r in g.mechanism.description.force_joints
+                    fz = -sum((fa.output(f"{r.name}.fz") for r in g.mechanism.description.force_joints
                                if r.kind == "rod" and r.a == body), np.zeros(len(self.phi)))
                     fx, fy, _ = g.force_to_machine(fx, fy, fz)
                 out.append((f"{g.name}.{body}", z, np.column_stack([fx, fy])))
