@@ -325,6 +325,8 @@ class Mechanism:
         dflt = self._defaults
         if params is None:
             p = dflt["p"]
+        elif (hit := self._fast_params(params)) is not None:  # converted and checked once per distinct dict
+            p = hit[0]
         else:
             p = self.param_vector(params)
             p.flags.writeable = False  # it becomes part of the result's run settings
