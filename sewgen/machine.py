@@ -31,6 +31,7 @@ import re
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -107,6 +108,18 @@ class ShaftMass:
     radius: float
     angle: float
     z: float
+
+
+class MovingBody(NamedTuple):
+    """A moving body of a group in an analysis: its mass and inertia (SI, the run's values), its motion, and
+    whether an input turns it (a crank; a spatial crank of a group along the shaft turns about the shaft)."""
+
+    group: "Group"
+    name: str
+    mass: float
+    inertia: float
+    motion: object  # sewgen.results.BodyMotion
+    driven: bool
 
 
 @dataclass
@@ -270,19 +283,15 @@ class MachineAnalysis:
         Σ m (x (a_y − g_y) − y (a_x − g_x)) + I α over its bodies (its spatial cranks' I α is about the machine's
         z). The group's own balance cannot give them: its spatial cranks have no moment row about its z, their
         bearings carry that moment (and its rocker bearings the one about the machine's z)."""
-        cranks = {b.name for b in g.mechanism.description.driven_bodies}
         gx, gy = 0.0, float(self.machine.gravity[1])  # gravity in the group's plane (the machine's x is its −z)
         own, about_z = np.zeros(len(self.phi)), np.zeros(len(self.phi))
-        fa = self.groups[g.name]
-        values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
-        for body in g.mechanism.description.bodies:
-            m, inertia, bm = values[body.mass], values[body.inertia], fa.motion.body(body.name)
-            c = bm.com
-            own = own + m * (c.x * (c.ay - gy) - c.y * (c.ax - gx))
-            if body.name in cranks:
-                about_z = about_z + inertia * bm.alpha
+        for b in self.moving_bodies(g):
+            c, spin = b.motion.com, b.inertia * b.motion.alpha
+            own = own + b.mass * (c.x * (c.ay - gy) - c.y * (c.ax - gx))
+            if b.driven:
+                about_z = about_z + spin
             else:
-                own = own + inertia * bm.alpha
+                own = own + spin
         return own, about_z
 
     def _shaft(self):
@@ -453,27 +462,29 @@ class MachineAnalysis:
             out[:, 1] += (sm.z - oz) * force[:, 0]
         return out
 
-    def moving_bodies(self):
-        """(group, mass, inertia, BodyMotion) of every moving body of every group, with the run's parameter
+    def moving_bodies(self, group: Group | None = None):
+        """A :class:`MovingBody` for every moving body of every group (or of ``group``), with the run's parameter
         values; a mass or inertia declared as an expression (not a parameter) is a ParameterError naming it."""
-        for g in self.machine.groups:
+        for g in self.machine.groups if group is None else [group]:
             fa = self.groups[g.name]
             values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
+            driven = {b.name for b in g.mechanism.description.driven_bodies}
             for body in g.mechanism.description.bodies:
                 if body.mass is None or body.inertia is None:
                     raise ParameterError(g.mechanism.name, f"{body.name}.mass", "the machine's energy and shaking "
                                          "need mass and inertia as parameters, not expressions")
-                yield g, values[body.mass], values[body.inertia], fa.motion.body(body.name)
+                yield MovingBody(g, body.name, values[body.mass], values[body.inertia], fa.motion.body(body.name),
+                                 body.name in driven)
 
     def energy_rate(self) -> np.ndarray:
         """d/dt(kinetic + potential energy) of every moving part, from the kinematics alone, plus the rate at which
         the springs store energy (W)."""
         gv = self.machine.gravity
         rate = self.machine.shaft.inertia * self.omega * self.alpha
-        for _g, m, inertia, bm in self.moving_bodies():
-            com = bm.com
-            rate = rate + m * (com.vx * com.ax + com.vy * com.ay - gv[0] * com.vx - gv[1] * com.vy)
-            rate = rate + inertia * bm.omega * bm.alpha
+        for b in self.moving_bodies():
+            com, bm = b.motion.com, b.motion
+            rate = rate + b.mass * (com.vx * com.ax + com.vy * com.ay - gv[0] * com.vx - gv[1] * com.vy)
+            rate = rate + b.inertia * bm.omega * bm.alpha
         for fa in self.groups.values():
             rate = rate + fa.elastic_power  # the springs' stored energy
         for sm, _pos, vel, acc in self.core:

@@ -16,21 +16,9 @@ from __future__ import annotations
 import numpy as np
 
 
-def _bodies(a):
-    """(group, mass, inertia, BodyMotion) of every moving body of every group of analysis ``a``."""
-    return a.moving_bodies()
-
-
-def _named(a):
-    """(group, mass, inertia, BodyMotion, body name): :func:`_bodies` with each body's name (the same order)."""
-    names = [b.name for g in a.machine.groups for b in g.mechanism.description.bodies]
-    for (g, m, inertia, bm), name in zip(_bodies(a), names):
-        yield g, m, inertia, bm, name
-
-
 def moving_mass(a) -> float:
     """Σ m of every moving part (kg): the groups' bodies and the shaft core's masses."""
-    return sum(m for _, m, _, _ in _bodies(a)) + sum(sm.mass for sm in a.machine.shaft.masses)
+    return sum(b.mass for b in a.moving_bodies()) + sum(sm.mass for sm in a.machine.shaft.masses)
 
 
 def weight(a) -> np.ndarray:
@@ -38,19 +26,16 @@ def weight(a) -> np.ndarray:
     return moving_mass(a) * np.asarray(a.machine.gravity, dtype=float)
 
 
-def _placed(g, bm, name=""):
-    """A body's centre of mass (X, Y, Z), its acceleration (AX, AY, AZ) and its rotation axis (3,) in the machine
-    frame: a group across the shaft is its plane at z = ``Group.z``; one along it (``frame = "along"``) has its
-    x along the machine's z and turns about the machine's −x (sewgen.machine.Group.to_machine)."""
-    c = bm.com
+def _placed(b):
+    """Moving body ``b``'s (sewgen.machine.MovingBody) centre of mass (X, Y, Z), its acceleration (AX, AY, AZ) and
+    its rotation axis (3,) in the machine frame: a group across the shaft is its plane at z = ``Group.z``; one
+    along it (``frame = "along"``) has its x along the machine's z and turns about the machine's −x
+    (sewgen.machine.Group.to_machine), but for its cranks, which turn about the shaft."""
+    g, c = b.group, b.motion.com
     zero = 0.0 * c.x
-    if not hasattr(g, "to_machine"):
-        return (c.x, c.y, zero + g.z), (c.ax, c.ay, zero), (0.0, 0.0, 1.0)
     pos = tuple(v + zero for v in g.to_machine(c.x, c.y))
     acc = tuple(v + zero for v in g.force_to_machine(c.ax, c.ay, zero))
-    axis = tuple(float(v) for v in g.force_to_machine(0.0, 0.0, 1.0))
-    if getattr(g, "along", False) and name in {b.name for b in g.mechanism.description.driven_bodies}:
-        axis = (0.0, 0.0, 1.0)  # a spatial crank of a group along the shaft turns about the shaft (machine z)
+    axis = (0.0, 0.0, 1.0) if g.along and b.driven else tuple(float(v) for v in g.force_to_machine(0.0, 0.0, 1.0))
     return pos, acc, axis
 
 
@@ -58,10 +43,10 @@ def shaking_force(a) -> np.ndarray:
     """(n, 2) the dynamic shaking force on the frame, −Σ m a_G over every moving part (N); no weight. The parts
     of a group along the shaft move partly along it (z): that component is not in the plane x–y."""
     out = np.zeros((len(a.phi), 2))
-    for g, m, _, bm in _bodies(a):
-        _pos, acc, _axis = _placed(g, bm)
-        out[:, 0] -= m * acc[0]
-        out[:, 1] -= m * acc[1]
+    for b in a.moving_bodies():
+        _pos, acc, _axis = _placed(b)
+        out[:, 0] -= b.mass * acc[0]
+        out[:, 1] -= b.mass * acc[1]
     for sm, _pos, _vel, acc in a.core:
         out -= sm.mass * acc
     return out
@@ -75,12 +60,13 @@ def shaking_moments(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
     ox, oy, oz = about
     out = np.zeros((len(a.phi), 3))
     out[:, 2] -= a.machine.shaft.inertia * a.alpha
-    for g, m, inertia, bm, name in _named(a):
-        (x, y, z), (ax, ay, az), axis = _placed(g, bm, name)
-        fx, fy, fz = -m * ax, -m * ay, -m * az
-        out[:, 0] += (y - oy) * fz - (z - oz) * fy - inertia * bm.alpha * axis[0]
-        out[:, 1] += (z - oz) * fx - (x - ox) * fz - inertia * bm.alpha * axis[1]
-        out[:, 2] += (x - ox) * fy - (y - oy) * fx - inertia * bm.alpha * axis[2]
+    for b in a.moving_bodies():
+        (x, y, z), (ax, ay, az), axis = _placed(b)
+        fx, fy, fz = -b.mass * ax, -b.mass * ay, -b.mass * az
+        spin = b.inertia * b.motion.alpha
+        out[:, 0] += (y - oy) * fz - (z - oz) * fy - spin * axis[0]
+        out[:, 1] += (z - oz) * fx - (x - ox) * fz - spin * axis[1]
+        out[:, 2] += (x - ox) * fy - (y - oy) * fx - spin * axis[2]
     for sm, pos, _vel, acc in a.core:
         fx, fy = -sm.mass * acc[:, 0], -sm.mass * acc[:, 1]
         out[:, 0] -= (sm.z - oz) * fy
