@@ -131,18 +131,10 @@ def maximum(y, dy, h, iters: int = 60):
     return np.maximum(hermite(p0, p1, d0, d1, h, t), y[rows, k]), i, t
 
 
-def _per_row(d, rows, values, fill=np.nan):
-    out = np.full(d, fill)
+def _per_row(d, rows, values):
+    out = np.full(d, np.nan)
     out[rows] = values
     return out
-
-
-def first_after(d, rows, angles, ref):
-    """Per row the first of ``angles`` (flat, with their ``rows``) at or after ``ref`` (D,) going round; NaN if
-    the row has none."""
-    gap = np.full(d, np.inf)
-    np.minimum.at(gap, rows, (angles - ref[rows]) % TWO_PI)
-    return np.where(np.isfinite(gap), (ref + gap) % TWO_PI, np.nan)
 
 
 def wrap(a):
@@ -292,10 +284,11 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
     return out
 
 
-def group_arrays(mech, obs, phase: float = 0.0):
+def group_arrays(mech, obs):
     """From a feed mechanism's observables ``obs`` (D, N, nobs) or (N, nobs): the dog's x, y, vx, vy, ax, the
-    dog body's angle (minus nothing: its declared u axis) and the first cam contact's arc (or None). Parts by
-    role: the ``feed_dog`` point and its body (``feed_bar`` role if declared)."""
+    dog body's angle (its declared u axis) and the first cam contact's arc (or None). Parts by role: the
+    ``feed_dog`` point and its body (``feed_bar`` role if declared)."""
+    from .cams import _arc_columns
     from .roles import FEED_BAR, FEED_DOG
 
     desc = mech.description
@@ -305,11 +298,8 @@ def group_arrays(mech, obs, phase: float = 0.0):
     x, y, vx, vy, ax = (obs[:, :, off + k] for k in (0, 1, 2, 3, 4))
     body = desc.role(FEED_BAR).name if desc.has_role(FEED_BAR) else pt.body
     tilt = obs[:, :, desc.body(body).offset] if body and desc.has("body", body) else None
-    arc = None
-    for k, (name, _) in enumerate(desc.observables):
-        if name.endswith(".arc"):
-            arc = obs[:, :, k]
-            break
+    arcs = _arc_columns(mech)
+    arc = obs[:, :, next(iter(arcs.values()))] if arcs else None
     return x, y, vx, vy, ax, tilt, arc
 
 

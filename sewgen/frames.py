@@ -3,11 +3,9 @@
 so ``import sewgen`` stays light."""
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
-_HEADER = re.compile(r"^(?P<name>.*) \[(?P<unit>[^\]]*)\]$")
+from .units import _HEADER  # "<name> [unit]"
 
 
 def pandas():

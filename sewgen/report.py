@@ -35,6 +35,7 @@ from .errors import SewgenError
 from .feed import dog_travel, has_feed, plate_height
 from . import shaking
 from .roles import FEED_DOG, KNIFE_EDGE, LOWER_KNIFE_EDGE, STITCH_REGULATOR
+from .timing import _param  # a group's parameter by role
 from .units import DisplayUnits
 
 #: What the numbers of summary.json mean: frame, angles, signs (the same words as the README's "Units and
@@ -237,7 +238,7 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
         d = g.mechanism.description
         if d.has_role(KNIFE_EDGE) and d.has_role(LOWER_KNIFE_EDGE):  # overlock knife: stroke and cutting overlap
             ky = fa.motion.point(d.role_name(KNIFE_EDGE)).y
-            lower = float(g.mechanism.param_vector(g.params or None)[d.role(LOWER_KNIFE_EDGE).index])
+            lower = _param(g, LOWER_KNIFE_EDGE)
             k = int(np.argmin(ky))
             entry[KNIFE_EDGE] = {"stroke_mm": float(np.ptp(ky)) * 1e3, "overlap_mm": (lower - float(ky[k])) * 1e3,
                                  "lowest_at_deg": float(_deg(phi[k]))}

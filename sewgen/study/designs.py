@@ -111,45 +111,44 @@ def sweep_group_designs(mech, designs, phi, speed=None, *, base: dict | None = N
     phi = np.asarray(phi, dtype=float)
     d, n = P.shape[0], len(phi)
     sizes = mech.description.sizes
-    w = mech.default_speed if speed is None else speed
+    omega = _omega(mech, speed)
     if not forces:
-        return _batched(mech, P, phi, w, held, branch, threads)
+        return _batched(mech, P, phi, omega, held, branch, threads)
     nan = np.nan
     q, qd, qdd = (np.full((d, n, sizes["nq"]), nan) for _ in range(3))
     obs = np.full((d, n, sizes["nobs"]), nan)
-    frc = np.full((d, n, sizes["nfo"]), nan) if forces else None
+    frc = np.full((d, n, sizes["nfo"]), nan)
     status = np.full(d, "ok", dtype=object)
     error: list = [None] * d
     settings: list = [None] * d
     names = mech.param_names
-    omega = None
     for k in range(d):
-        params = dict(zip(names, P[k]))
         try:
-            if forces:
-                fa = mech.kinetostatics(phi, speed=w, params=params, held=held, branch=branch, loads=loads,
-                                        gravity=gravity, gravity_direction=gravity_direction)
-                mo = fa.motion
-                frc[k] = fa.frc
-                settings[k] = fa.run_settings
-            else:
-                mo = mech.solve(phi, speed=w, params=params, held=held, branch=branch)
+            fa = mech.kinetostatics(phi, speed=omega, params=dict(zip(names, P[k])), held=held, branch=branch,
+                                    loads=loads, gravity=gravity, gravity_direction=gravity_direction)
         except SewgenError as exc:
             status[k], error[k] = type(exc).__name__, str(exc)
             continue
-        q[k], qd[k], qdd[k], obs[k] = mo.q, mo.qd, mo.qdd, mo.obs
-        omega = float(mo.omega[0])
-    if omega is None:
+        mo = fa.motion
+        q[k], qd[k], qdd[k], obs[k], frc[k], settings[k] = mo.q, mo.qd, mo.qdd, mo.obs, fa.frc, fa.run_settings
+    return GroupSweep(mech, P, phi, omega, status, error, q, qd, qdd, obs, frc, settings)
+
+
+def _omega(mech, speed) -> float:
+    """The sweep's constant shaft speed (rad/s): ``speed`` (a number or "1000 rpm"), or the mechanism's default."""
+    w = mech.default_speed if speed is None else speed
+    if isinstance(w, str):
         from ..units import to_si
 
-        omega = float(to_si(w, "speed", "speed")) if isinstance(w, str) else float(w)
-    return GroupSweep(mech, P, phi, omega, status, error, q, qd, qdd, obs, frc, settings if forces else None)
+        w = to_si(w, "speed", "speed")
+    return float(w)
 
 
-def _batched(mech, P, phi, speed, held, branch, threads=None) -> GroupSweep:
-    """The kinematic sweep of every design in batched C calls (``Mechanism.sweep_designs``), as the stacked
-    arrays of :class:`GroupSweep`; a failed design's rows are NaN, its error's type and message kept."""
-    res = mech.sweep_designs(P, phi, speed, held=held, branch=branch, outputs=["all"], threads=threads)
+def _batched(mech, P, phi, omega: float, held, branch, threads=None) -> GroupSweep:
+    """The kinematic sweep of every design at speed ``omega`` (rad/s) in batched C calls
+    (``Mechanism.sweep_designs``), as the stacked arrays of :class:`GroupSweep`; a failed design's rows are NaN,
+    its error's type and message kept."""
+    res = mech.sweep_designs(P, phi, omega, held=held, branch=branch, outputs=["all"], threads=threads)
     names = res.column_names
     full = np.stack([res.outputs[name] for name in names], axis=-1)  # (D, N, 3 nq + nobs)
     nq = mech.description.sizes["nq"]
@@ -158,10 +157,5 @@ def _batched(mech, P, phi, speed, held, branch, threads=None) -> GroupSweep:
     for k in np.flatnonzero(~res.ok):
         exc = res.exception(int(k))
         status[k], error[k] = type(exc).__name__, str(exc)
-    w = mech.default_speed if speed is None else speed
-    if isinstance(w, str):
-        from ..units import to_si
-
-        w = to_si(w, "speed", "speed")
-    return GroupSweep(mech, P, phi, float(w), status, error, full[..., :nq], full[..., nq:2 * nq],
+    return GroupSweep(mech, P, phi, omega, status, error, full[..., :nq], full[..., nq:2 * nq],
                       full[..., 2 * nq:3 * nq], full[..., 3 * nq:], None, None)
