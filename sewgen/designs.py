@@ -23,6 +23,7 @@ import math
 import os
 import re
 import threading
+from functools import partial
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from functools import cached_property
@@ -31,6 +32,7 @@ import numpy as np
 
 from . import abi
 from .errors import InputError, ParameterError
+from .mechanism import _ptr, _si
 from .units import UnitError, to_si
 
 #: Reduction kinds, in the C runtime's numbering (csrc/sg_runtime.c SG_RED_*).
@@ -256,19 +258,13 @@ def _column_values(mech: str, name: str, value, kind: str, unit: str | None):
     name carried one: one factor for the column), a quantity string (all designs), an array of quantity
     strings (each distinct text read once), or a pint Quantity (one factor for the column)."""
     def factor(u: str) -> float:
-        try:
-            return to_si(f"1 {u}", kind, name)
-        except UnitError as exc:
-            raise ParameterError(mech, name, exc.problem) from None
+        return _si(mech, f"1 {u}", kind, name)
 
     if hasattr(value, "magnitude") and hasattr(value, "units"):  # a pint Quantity
         return np.asarray(value.magnitude, dtype=np.float64) * factor(f"{value.units:~}" if str(value.units)
                                                                        else "")
     if isinstance(value, str):
-        try:
-            return np.float64(to_si(value, kind, name))
-        except UnitError as exc:
-            raise ParameterError(mech, name, exc.problem) from None
+        return np.float64(_si(mech, value, kind, name))
     arr = np.asarray(value.to_numpy() if hasattr(value, "to_numpy") else value)
     if arr.dtype.kind in "OUS":  # quantity strings (or numbers among them)
         flat = arr.ravel()
@@ -345,7 +341,9 @@ def _table(mech, designs) -> tuple[int, dict]:
 
 
 def _per_design(mech, what: str, given, names: list[str], defaults: list, nd: int, kind: str) -> np.ndarray:
-    """held (kind "angle") or branch (kind "sign") per design: (nd, len(names))."""
+    """held inputs (kind "held": each an angle or a travel, as its input says) or branch signs (kind "sign")
+    per design: (nd, len(names))."""
+    quantities = {i.name: i.quantity for i in mech.description.held_inputs}
     dtype = np.intc if kind == "sign" else np.float64
     out = np.empty((nd, len(names)), dtype=dtype)
     out[:] = np.asarray(defaults, dtype=dtype) if names else 0
@@ -364,7 +362,7 @@ def _per_design(mech, what: str, given, names: list[str], defaults: list, nd: in
                                               f"({nd}, {len(names)}) array, got {type(given).__name__}")
     for key, value in given.items():
         if key not in names:
-            label = "held input" if kind == "angle" else "branch joint"
+            label = "held input" if kind == "held" else "branch joint"
             raise ParameterError(mech.name, key, f"is not a {label}; {label}s are: {', '.join(names) or 'none'}")
         k = names.index(key)
         if kind == "sign":
@@ -373,7 +371,7 @@ def _per_design(mech, what: str, given, names: list[str], defaults: list, nd: in
                     or v.dtype == bool or not np.isin(v, (1, -1)).all():
                 raise ParameterError(mech.name, key, f"branch must be +1 or -1 (per design), got {value!r}")
         else:
-            v = _column_values(mech.name, key, value, kind, None)
+            v = _column_values(mech.name, key, value, kind if kind != "held" else quantities[key], None)
         v = np.asarray(v)
         if v.ndim == 1 and v.shape[0] != nd:
             raise ParameterError(mech.name, key, f"has {v.shape[0]} values for {nd} designs")
@@ -431,7 +429,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
     p[:] = mech._defaults["p"]
     for key, v in given.items():
         p[:, desc.param(key).index] = v
-    h = _per_design(mech, "held", held, mech.held_names, [i.default for i in desc.held_inputs], nd, "angle")
+    h = _per_design(mech, "held", held, mech.held_names, [i.default for i in desc.held_inputs], nd, "held")
     b = _per_design(mech, "branch", branch, mech.branch_names, [x.default for x in desc.branches], nd, "sign")
     problems = _check_columns(mech, p, h)
     cols = _columns(mech)
@@ -457,9 +455,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
     ncheck = len(mech.manifest.get("constants") or [])
     ffi, lib = mech.ffi, mech.lib
     width = 3 * nq + nobs
-
-    def ptr(ctype, arr):
-        return ffi.from_buffer(ctype.replace(" *", "[]"), arr) if arr.size else ffi.NULL
+    ptr = partial(_ptr, ffi)
 
     shared = (ptr("double *", base.phi), ptr("double *", base.omega), ptr("double *", base.alpha))
     guess, opt = ptr("double *", base.guess), base.options
@@ -541,9 +537,7 @@ def solve_selected(mech, outputs, sweep_args: dict, out=None):
     width = len(cols.names)
     work = np.empty(max(n * (width + 1), 1))
     work_st = np.empty(max(n, 1), dtype=np.intc)
-
-    def ptr(ctype, arr):
-        return ffi.from_buffer(ctype.replace(" *", "[]"), arr) if arr.size else ffi.NULL
+    ptr = partial(_ptr, ffi)
 
     ncheck = 0  # prepare() checked the parameters and their derived dimensions
     lib.sg_sweep_designs(mech._descriptor, 1, n, ptr("double *", base.phi), ptr("double *", base.omega),

@@ -108,3 +108,12 @@ def test_declaration_errors():
         m.held("x", pivot=m.ground.at(0, 0), guide=crank.line(at=(0, 0), angle=0), default="1 mm")
     with pytest.raises(Exception, match="x"):
         m.held("x", guide=crank.line(at=(0, 0), angle=0), default="10 deg")  # a travel needs a length
+
+
+def test_batched_designs_read_a_travel_input_as_a_length(mech):
+    """sweep_designs converts each held input by its own quantity, as solve() does: "14 mm" is a travel."""
+    res = mech.sweep_designs(np.tile(mech.param_vector(), (2, 1)), PHI, 50.0, held={"radius": ["10 mm", "14 mm"]},
+                             outputs=["points:pin"])
+    assert res.ok.all()
+    for k, r in enumerate((0.010, 0.014)):
+        np.testing.assert_allclose(res.outputs["points.pin.y"][k], y_of(PHI, r), rtol=0, atol=1e-14)
