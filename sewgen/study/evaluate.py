@@ -191,6 +191,7 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
             for c in tcols:
                 cols[c] = np.array([nom[c]] * d, dtype=object if c == FAILED else float)
     # feed-dog indices, vectorised
+    ixs = {}  # group -> its indices over the designs
     for g in fgroups:
         pre = "" if len(fgroups) == 1 else f"{g.name}."
         if g.name in varied or nominal or per_design_timing:
@@ -211,11 +212,10 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
         for name, (unit, factor, _) in fi.INDICES.items():
             v = np.asarray(ix[name], float) * factor
             cols[pre + fi.column(name)] = v
-        if g.name in (fgroups[0].name,):
-            cols["_ix"] = ix
+        ixs[g.name] = ix
     # the feed rules from the indices, when the nominal timing holds otherwise
     if machine.stitch is not None and not per_design_timing and fgroups:
-        ix = cols["_ix"]
+        ix = ixs[fgroups[0].name]
         failed = [list(filter(None, str(f).split(";"))) for f in cols[FAILED]]
         for rule in machine.stitch.rules:
             if rule.kind not in FEED_RULES:
@@ -241,7 +241,6 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
         failed = [sorted(f, key=order.index) for f in failed]
         cols[FAILURES] = np.array([len(f) for f in failed], dtype=float)
         cols[FAILED] = np.array([";".join(f) for f in failed], dtype=object)
-    cols.pop("_ix", None)
     gn = _role_group(machine, NEEDLE_POINT)
     if gn is not None:
         if gn.name in varied or nominal:
@@ -286,14 +285,7 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
         if machine.stitch is not None:
             out["timing"]["needle_in_cloth"] = rows[0]["needle_in_cloth"]
             out["timing"]["needle_out_cloth"] = rows[0]["needle_out_cloth"]
-        out["indices"] = {}
-        for g in fgroups:
-            x, y, vx, vy, ax, tilt, arc = fi.group_arrays(g.mechanism, sweeps[g.name].obs)
-            plate = sweeps[g.name].params[:, g.mechanism.description.role(THROAT_PLATE).index]
-            out["indices"][g.name] = {k: v[0] for k, v in fi.feed_indices(
-                phi, x, y, vx, vy, ax, w, plate, needle_in=out["timing"].get("needle_in_cloth", np.nan),
-                needle_out=out["timing"].get("needle_out_cloth", np.nan), tooth_depth=options.tooth_depth,
-                tilt=tilt, arc=arc).items() if k != "error"}
+        out["indices"] = {g.name: {k: v[0] for k, v in ixs[g.name].items() if k != "error"} for g in fgroups}
         out["stroke"] = cols.get(NEEDLE_STROKE, [np.nan])[0]
         if options.loads:
             out["peaks"] = {c: cols[c][0] for c in LOADS}

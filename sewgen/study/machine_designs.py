@@ -178,20 +178,27 @@ def with_params(machine, changes: dict):
     return replace(machine, groups=groups)
 
 
+def parse_keys(machine, keys) -> list[DesignKey]:
+    """Each of ``keys`` (model-file keys, or DesignKeys already parsed) as a :class:`DesignKey` of ``machine``;
+    the model file is read once, and only when a key is not a mechanism parameter."""
+    doc = None
+    out = []
+    for k in keys:
+        if isinstance(k, DesignKey):
+            out.append(k)
+            continue
+        if doc is None and not re.match(r"^groups\.[^.]+\.params\.", str(k).strip()):
+            doc = model_doc(machine)
+        out.append(parse_key(machine, k, doc))
+    return out
+
+
 class MachineDesigns:
     """D designs of ``machine``: ``keys`` (model-file keys) and ``values`` (D, len(keys)) in SI."""
 
     def __init__(self, machine, keys, values):
         self.machine = machine
-        doc = None
-        parsed = []
-        for k in keys:
-            if isinstance(k, DesignKey):
-                parsed.append(k)
-                continue
-            if doc is None and not re.match(r"^groups\.[^.]+\.params\.", str(k).strip()):
-                doc = model_doc(machine)
-            parsed.append(parse_key(machine, k, doc))
+        parsed = parse_keys(machine, keys)
         seen = set()
         for k in parsed:
             if k.key in seen:
@@ -203,7 +210,7 @@ class MachineDesigns:
             raise ParameterError(machine.name, "designs", f"need a (designs, {len(parsed)}) table of values, got "
                                                           f"shape {v.shape}")
         self.values = v
-        self._doc = doc
+        self._doc = None  # the model file's parsed TOML, read on the first design that needs it
 
     def __len__(self) -> int:
         return len(self.values)
@@ -240,7 +247,9 @@ class MachineDesigns:
         if self.model_keys:
             from ..machine import load_machine
 
-            doc = copy.deepcopy(self._doc if self._doc is not None else model_doc(m))
+            if self._doc is None:
+                self._doc = model_doc(m)
+            doc = copy.deepcopy(self._doc)
             for j, k in enumerate(self.keys):
                 if k.group is None:
                     container, last = _walk(doc, k.key.split("."), k.key, m.name)

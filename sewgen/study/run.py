@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import SewgenError
 from .evaluate import FAILED, FAILURES, StudyOptions, evaluate_chunk, quantity_columns
-from .machine_designs import DesignKey, MachineDesigns, model_doc, parse_key
+from .machine_designs import DesignKey, MachineDesigns, parse_keys
 
 #: designs per chunk (one batched evaluation call each): parameter-only designs / designs that reload the model
 CHUNK = 1000  # the batched sweep amortises its calls and threads over a chunk (100: 1.4x slower, 5000: slower again)
@@ -30,19 +30,6 @@ class StudyError(SewgenError, ValueError):
 
     def __init__(self, option: str, problem: str):
         super().__init__(f"{option}: {problem}", problem=problem, parameter=option)
-
-
-def parse_keys(machine, keys) -> list[DesignKey]:
-    doc = None
-    out = []
-    for k in keys:
-        if isinstance(k, DesignKey):
-            out.append(k)
-            continue
-        if doc is None and not re.match(r"^groups\.[^.]+\.params\.", str(k).strip()):
-            doc = model_doc(machine)
-        out.append(parse_key(machine, k, doc))
-    return out
 
 
 def linked_keys(machine, specs) -> tuple[list, list]:
