@@ -18,9 +18,6 @@ static inline void copy_doubles(double *dst, const double *src, int n)
     if (n > 0) memcpy(dst, src, sizeof(double) * (size_t)n);
 }
 
-#define SG_TWO_PI 6.283185307179586476925286766559
-/* Unit roundoff. */
-#define SG_EPS 1.1102230246251565e-16
 /* A relative loop residual below this is rounding of the residual's own terms (sizes taken with every cos and
  * sin as 1): the position is then as exact as a closed form's. */
 #define SG_RESID_FLOOR (64.0 * SG_EPS)
@@ -46,17 +43,6 @@ static double weighted_norm(int n, const double *v, const double *w)
     return m;
 }
 
-/* cos and sin of one angle in one libm call where the compiler offers it (glibc's sincos). */
-static inline void sg_cos_sin(double a, double *c, double *s)
-{
-#if defined(__GNUC__)
-    __builtin_sincos(a, s, c);
-#else
-    *c = cos(a);
-    *s = sin(a);
-#endif
-}
-
 /* cos and sin of q + d from those of q, for the small steps of Newton and of the predictor: the addition
  * formulas with cos d, sin d from their Taylor series (|d| < 1e-2: the first omitted terms, d^10/10! and
  * d^9/9!, are below 1e-26 relative), so a step costs no libm call. Larger steps: sincos. */
@@ -78,7 +64,7 @@ static void shift_trig(const sg_mechanism *m, const double *q, const double *cq,
             cq_out[2 * i] = c * cd - s * sd;
             cq_out[2 * i + 1] = s * cd + c * sd;
         } else {
-            sg_cos_sin(q_out[i], &cq_out[2 * i], &cq_out[2 * i + 1]);
+            sg_sincos_inl(q_out[i], &cq_out[2 * i], &cq_out[2 * i + 1]);
         }
     }
 }
@@ -88,7 +74,7 @@ static void fill_trig(const sg_mechanism *m, const double *q, double *cq)
 {
     for (int i = 0; i < m->nq; ++i) {
         if (m->coord_is_angle[i]) {
-            sg_cos_sin(q[i], &cq[2 * i], &cq[2 * i + 1]);
+            sg_sincos_inl(q[i], &cq[2 * i], &cq[2 * i + 1]);
         } else {
             cq[2 * i] = 1.0;
             cq[2 * i + 1] = 0.0;
@@ -233,7 +219,7 @@ static void set_input(sg_walker *w, double ph)
 {
     if (w->x[0] == ph) return; /* cos, sin already those of ph */
     w->x[0] = ph;
-    sg_cos_sin(ph, &w->cx[0], &w->cx[1]);
+    sg_sincos_inl(ph, &w->cx[0], &w->cx[1]);
 }
 
 static void push(sg_walker *w, double ph, const double *q, const double *cq)
@@ -517,15 +503,6 @@ typedef struct {
     int nq, nobs;
 } sg_scratch;
 
-static inline double col_at(const sg_scratch *s, int j, size_t i)
-{
-    const int nq = s->nq;
-    if (j < nq) return s->q[i * (size_t)nq + (size_t)j];
-    if (j < 2 * nq) return s->qd[i * (size_t)nq + (size_t)(j - nq)];
-    if (j < 3 * nq) return s->qdd[i * (size_t)nq + (size_t)(j - 2 * nq)];
-    return s->obs[i * (size_t)s->nobs + (size_t)(j - 3 * nq)];
-}
-
 static inline double *col_ptr(const sg_scratch *s, int j, size_t i)
 {
     const int nq = s->nq;
@@ -533,6 +510,11 @@ static inline double *col_ptr(const sg_scratch *s, int j, size_t i)
     if (j < 2 * nq) return s->qd + i * (size_t)nq + (size_t)(j - nq);
     if (j < 3 * nq) return s->qdd + i * (size_t)nq + (size_t)(j - 2 * nq);
     return s->obs + i * (size_t)s->nobs + (size_t)(j - 3 * nq);
+}
+
+static inline double col_at(const sg_scratch *s, int j, size_t i)
+{
+    return *col_ptr(s, j, i);
 }
 
 /* numpy's float modulo (the sign of the divisor), as np.unwrap computes it */

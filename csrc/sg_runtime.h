@@ -26,6 +26,9 @@
  * Always inline, so that a kernel's call with a literal n unrolls; sg_lu_factor/sg_lu_solve are the exported
  * copies. */
 #define SG_PIVOT_RTOL 1e-11
+#define SG_TWO_PI 6.283185307179586476925286766559
+/* Unit roundoff. */
+#define SG_EPS 1.1102230246251565e-16
 #if defined(__GNUC__)
 #define SG_INLINE static inline __attribute__((always_inline))
 #define SG_FLATTEN __attribute__((flatten)) /* every call in the function's body inlined */
@@ -296,7 +299,7 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
 #define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION) \
 {                                                                                                  \
     const int nq = m->nq, nx = m->nx, nobs = m->nobs;                                              \
-    const double eps = 1.1102230246251565e-16, two_pi = 6.283185307179586476925286766559;          \
+    const double eps = SG_EPS, two_pi = SG_TWO_PI;                                                 \
     double c[SG_MAX_C];                                                                            \
     CONSTANTS(p, c);                                                                               \
     double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q], last[SG_MAX_Q];             \
