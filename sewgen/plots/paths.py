@@ -13,6 +13,7 @@ from ..roles import FEED_DOG, STITCH_REGULATOR
 from .common import (AT_THE_PLATE, DPI, MM, angle_labels, axis_name, closed, color, feed_groups, offset, place, pretty,
                      role_point, role_points, suptitle, throat_plate_height, title)
 from ..roles import HOOK_POINT, KNIFE_EDGE, LOWER_KNIFE_EDGE, LOWER_LOOPER_TIP, NEEDLE_POINT, UPPER_LOOPER_TIP
+from ..timing import _param  # a group's parameter by role
 
 #: Points that work at the needle: their panels show the needle's centre line (when drawn in the same plane).
 AT_THE_NEEDLE = (HOOK_POINT, LOWER_LOOPER_TIP, UPPER_LOOPER_TIP)
@@ -99,7 +100,7 @@ def draw_trajectories(fig, a):
             ax.axhline(plate * MM, color="k", lw=1, ls="--", label=f"throat plate, y = {plate * MM:g} mm")
         d = g.mechanism.description
         if KNIFE_EDGE in roles and d.has_role(LOWER_KNIFE_EDGE):  # the fixed knife the edge cuts against
-            lower = (float(g.mechanism.param_vector(g.params or None)[d.role(LOWER_KNIFE_EDGE).index]) + dy) * MM
+            lower = (_param(g, LOWER_KNIFE_EDGE) + dy) * MM
             ax.axhline(lower, color="tab:red", lw=1, ls="-.", label=f"lower knife's edge, y = {lower:.4g} mm")
         if plate is not None and FEED_DOG in roles:
             name = next(nm for nm, r in pts if r == FEED_DOG)
