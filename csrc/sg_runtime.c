@@ -22,6 +22,18 @@ static inline void copy_doubles(double *dst, const double *src, int n)
  * sin as 1): the position is then as exact as a closed form's. */
 #define SG_RESID_FLOOR (64.0 * SG_EPS)
 
+int sg_simd_width(const sg_mechanism *m)
+{
+#if SG_SIMD
+    if (m != NULL && m->sweep_simd == NULL) return 1;
+    /* libgcc's CPU model, read: a few loads, no state of ours */
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") ? SG_W : 1;
+#else
+    (void)m;
+    return 1;
+#endif
+}
+
 int sg_lu_factor(int n, double *a, int *piv, double *det_sign)
 {
     return sg_lu_factor_inl(n, a, piv, det_sign);
@@ -331,8 +343,11 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         return n;
     }
     const int use_closed = m->closed != NULL && !opt->newton_only;
-    if (use_closed && frc == NULL && m->sweep != NULL && !opt->generic) /* the inlined loop: the same, faster */
+    if (use_closed && frc == NULL && m->sweep != NULL && !opt->generic) { /* the inlined loop: the same, faster */
+        if (!opt->scalar && sg_simd_width(m) > 1) /* four positions at a time */
+            return m->sweep_simd(m, n, phi, omega, alpha, held, p, branch, opt, order, q, qd, qdd, obs, err, status);
         return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, q, qd, qdd, obs, err, status);
+    }
     if (frc != NULL && loads == NULL)
         for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;
     double c[SG_MAX_C];

@@ -295,9 +295,10 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
  * opt->generic. The same operations as the generic loop (csrc/sg_runtime.c, sweep) in the same order, so the
  * two agree to the bit: closed form, unwrap against the last solution, motion, the rates' error estimate (the
  * closed form's position is exact to rounding: resid = eps, never polished), singular check, status. The
- * arguments are sewgen.abi.HOOKS["sweep"]'s. */
-#define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION) \
-{                                                                                                  \
+ * arguments are sewgen.abi.HOOKS["sweep"]'s. Three parts, shared with the SIMD loop (csrc/sg_simd.h):
+ * SG_CLOSED_SETUP declares the loop's state, SG_CLOSED_STEP solves position I, SG_CLOSED_FINISH the motion and
+ * status of position i from its solved coordinates (st, qi, qdi, qddi, oi, cq in scope). */
+#define SG_CLOSED_SETUP(CONSTANTS)                                                                 \
     const int nq = m->nq, nx = m->nx, nobs = m->nobs;                                              \
     const double eps = SG_EPS, two_pi = SG_TWO_PI;                                                 \
     double c[SG_MAX_C];                                                                            \
@@ -314,9 +315,32 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
     cx[0] = 1.0;                                                                                   \
     cx[1] = 0.0;                                                                                   \
     int have_last = 0;                                                                             \
-    size_t failures = 0;                                                                           \
-    for (size_t k = 0; k < n; ++k) {                                                               \
-        const size_t i = order ? order[k] : k;                                                     \
+    size_t failures = 0;
+
+#define SG_CLOSED_FINISH(MOTION)                                                                   \
+    {                                                                                              \
+        double cond = 1.0, est = 0.0;                                                              \
+        if (st == SG_OK) {                                                                         \
+            st = MOTION(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);                          \
+            if (st == SG_SINGULAR) {                                                               \
+                est = INFINITY;                                                                    \
+            } else if (st == SG_OK) {                                                              \
+                est = cond * (eps + cond * eps);                                                   \
+                if (!(est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;          \
+            }                                                                                      \
+        }                                                                                          \
+        status[i] = st;                                                                            \
+        if (err) err[i] = st == SG_OK || st == SG_SINGULAR ? est : 0.0;                            \
+        if (st != SG_OK) {                                                                         \
+            ++failures;                                                                            \
+            for (int j = 0; j < nq; ++j) qi[j] = qdi[j] = qddi[j] = 0.0;                           \
+            for (int j = 0; j < nobs; ++j) oi[j] = 0.0;                                            \
+        }                                                                                          \
+    }
+
+#define SG_CLOSED_STEP(CLOSED, MOTION, I)                                                          \
+    {                                                                                              \
+        const size_t i = (I);                                                                      \
         double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq; \
         double *oi = obs + i * (size_t)nobs;                                                       \
         double cq[2 * SG_MAX_Q];                                                                   \
@@ -343,25 +367,17 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
                 have_last = 1;                                                                     \
             }                                                                                      \
         }                                                                                          \
-        double cond = 1.0, est = 0.0;                                                              \
-        if (st == SG_OK) {                                                                         \
-            st = MOTION(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);                          \
-            if (st == SG_SINGULAR) {                                                               \
-                est = INFINITY;                                                                    \
-            } else if (st == SG_OK) {                                                              \
-                est = cond * (eps + cond * eps);                                                   \
-                if (!(est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;          \
-            }                                                                                      \
-        }                                                                                          \
-        status[i] = st;                                                                            \
-        if (err) err[i] = st == SG_OK || st == SG_SINGULAR ? est : 0.0;                            \
-        if (st != SG_OK) {                                                                         \
-            ++failures;                                                                            \
-            for (int j = 0; j < nq; ++j) qi[j] = qdi[j] = qddi[j] = 0.0;                           \
-            for (int j = 0; j < nobs; ++j) oi[j] = 0.0;                                            \
-        }                                                                                          \
-    }                                                                                              \
-    return failures;                                                                               \
-}
+        SG_CLOSED_FINISH(MOTION)                                                                   \
+    }
+
+#define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION)                                            \
+    {                                                                                              \
+        SG_CLOSED_SETUP(CONSTANTS)                                                                 \
+        for (size_t k = 0; k < n; ++k) SG_CLOSED_STEP(CLOSED, MOTION, order ? order[k] : k)        \
+        return failures;                                                                           \
+    }
+
+/* The SIMD variant of the loop and its vector helpers (where the build has them). */
+#include "sg_simd.h"
 
 #endif

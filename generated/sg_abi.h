@@ -24,6 +24,7 @@ typedef struct sg_options {
     double singular_tol; /* largest estimated relative error of the velocities and accelerations; a position above it is SG_SINGULAR unless keep_singular */
     int keep_singular;   /* 1: positions above singular_tol keep their results (status SG_OK, err says why) */
     int generic;         /* 1: the generic sweep loop (kernels through the descriptor) even where the mechanism has an inlined one (tests: the two agree to the bit) */
+    int scalar;          /* 1: the scalar closed-form loop even where the mechanism has a SIMD one and the CPU runs it (tests: the two agree to rounding, with the same statuses) */
 } sg_options;
 
 /* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */
@@ -50,6 +51,8 @@ struct sg_mechanism;
 /* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */
 /* the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a closed form */
 typedef size_t (*sg_sweep_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
+/* the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
+typedef size_t (*sg_sweep_simd_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
 
 /* One mechanism as the generated code describes it. */
 typedef struct sg_mechanism {
@@ -75,6 +78,7 @@ typedef struct sg_mechanism {
     sg_blocks_fn blocks;                 /* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
     sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
     sg_sweep_fn sweep;                   /* the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a closed form */
+    sg_sweep_simd_fn sweep_simd;         /* the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
 } sg_mechanism;
 
 /* LU with partial pivoting in place (row-major n x n); SG_SINGULAR below the pivot tolerance */
@@ -87,6 +91,8 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
 size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status);
 /* nd designs over the same n shaft angles, each its own sg_sweep (its own continuation, held inputs nd x (nx-1), parameters nd x np, branch signs nd x nbranch): status[d] (in: nonzero skips the design; out: the status of its first failing position, or SG_BAD_DESIGN), first_bad/last_bad[d] (positions, -1 for none), nbad[d] (positions failing with that status; nbad, last_bad may be NULL). Flat columns of a position: q, qd, qdd (nq each), obs (nobs); the first ncheck constants must be finite; angle_cols are made continuous as sewgen.mechanism.continuous_angles does. sel (nsel columns) writes out[k*out_stride + d*n + i] (NaN for a failed design); red (nred x 3: kind 0 min, 1 max, 2 absmax, 3 rms, 4 mean; column; second column for the norm of two, or -1) writes red_val/red_idx[k*red_stride + d] (the extremum's first position in the caller's order, -1 for rms, mean; NaN and -1 for a failed design). work: n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of failed designs */
 size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, int ncheck, int nangle, const int *angle_cols, int nsel, const int *sel, double *out, size_t out_stride, int nred, const int *red, double *red_val, long long *red_idx, size_t red_stride, double *work, int *work_status, int *status, long long *first_bad, long long *nbad, long long *last_bad);
+/* positions per block of m's closed-form kinematic sweep on this CPU: 4 where m has a SIMD loop (the module built with SIMD, the kernels with a vector form) and the CPU has AVX2 and FMA, else 1 (the scalar loop); m NULL: what this module and CPU offer any mechanism */
+int sg_simd_width(const sg_mechanism *m);
 /* sewgen.mechanism.continuous_angles in C, to the bit: the angle columns qcols of q (n x nq) and ocols of obs (n x nobs) without 2 pi jumps along the order (NULL: as given), the first position in (-pi, pi] */
 void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int nqa, const int *qcols, int noa, const int *ocols, const size_t *order);
 

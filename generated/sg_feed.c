@@ -1424,6 +1424,7 @@ static const sg_mechanism sg_feed_descriptor = {
     .blocks = sg_feed_blocks,
     .anchors = sg_feed_anchors,
     .sweep = 0,
+    .sweep_simd = 0,
 };
 
 const sg_mechanism *sg_feed(void)

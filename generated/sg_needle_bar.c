@@ -387,6 +387,127 @@ void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, c
 static SG_FLATTEN size_t sg_needle_bar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
 SG_CLOSED_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion)
 
+/* The SIMD twins of the closed and motion kernels and the sweep four positions at a time (csrc/sg_simd.h):
+ * compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+#if SG_SIMD
+#pragma GCC push_options
+#pragma GCC target("avx2,fma")
+
+SG_VINLINE sg_vm sg_needle_bar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)
+{
+    (void)x;
+    sg_vm ok = sgv_true();
+    {
+        /* dyad 0: RRP closed at joint C (rod, needle_bar) */
+        const sg_vd P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
+        const sg_vd l[1] = {sgv_set1(c[4])};
+        const sg_vd L0[2] = {sgv_set1(c[5]), sgv_set1(0.0)};
+        const sg_vd u[2] = {sgv_set1(0.0), sgv_set1(1.0)};
+        sg_vd s, J[2];
+        ok &= sgv_dyad_rrp(P, l[0], L0, u, branch[0], &s, J);
+        q[1] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
+        q[0] = s;
+        cq[2] = c[6]*(J[0] - P[0]);
+        cq[3] = c[6]*(J[1] - P[1]);
+    }
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_needle_bar_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
+{
+    const sg_vd t0 = c[4]*cq[2];
+    const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t2 = c[0]*t1;
+    const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t4 = c[11]*t3;
+    const sg_vd t6 = ((xd[0])*(xd[0]));
+    const sg_vd t7 = c[0]*t3;
+    const sg_vd t9 = c[11]*t1;
+    const sg_vd t10 = t9*xd[0];
+    const sg_vd t11 = t7*xd[0];
+    const sg_vd t12 = t4*t6 + t9*xdd[0];
+    const sg_vd t13 = t6*t9 + t7*xdd[0];
+    const sg_vd t14 = c[15]*t3 + c[16]*t1;
+    const sg_vd t15 = c[16]*t3 + c[18]*t1;
+    const sg_vd t16 = c[19]*cq[2];
+    const sg_vd t17 = c[20]*cq[3];
+    sg_vd J[4], rs[2], cs[2];
+    sg_vm piv[2];
+    J[0] = sgv_set1(0.0);
+    J[1] = c[8]*cq[3];
+    J[2] = sgv_set1(-1.0);
+    J[3] = t0;
+    qd[0] = t2*xd[0];
+    qd[1] = t4*xd[0];
+    rs[0] = sgv_set1(c[23]);
+    rs[1] = (1.0/(c[10] + sgv_fabs(q[0])));
+    sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
+    sgv_solve_eq(2, J, piv, rs, cs, qd);
+    const sg_vd t5 = ((qd[1])*(qd[1]));
+    const sg_vd t8 = cq[3]*t5;
+    qdd[0] = t0*t5 + t2*xdd[0] + t6*t7;
+    qdd[1] = c[4]*t8 + t2*t6 + t4*xdd[0];
+    sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    obs[0] = t7;
+    obs[1] = t2;
+    obs[2] = t10;
+    obs[3] = t11;
+    obs[4] = t12;
+    obs[5] = t13;
+    obs[6] = sgv_set1(c[5]);
+    obs[7] = q[0];
+    obs[8] = sgv_set1(0.0);
+    obs[9] = qd[0];
+    obs[10] = sgv_set1(0.0);
+    obs[11] = qdd[0];
+    obs[12] = sgv_set1(c[5]);
+    obs[13] = c[12] + q[0];
+    obs[14] = sgv_set1(0.0);
+    obs[15] = qd[0];
+    obs[16] = sgv_set1(0.0);
+    obs[17] = qdd[0];
+    obs[18] = sgv_set1(c[5]);
+    obs[19] = c[13] + q[0];
+    obs[20] = sgv_set1(0.0);
+    obs[21] = qd[0];
+    obs[22] = sgv_set1(0.0);
+    obs[23] = qdd[0];
+    obs[24] = c[14] + x[0];
+    obs[25] = xd[0];
+    obs[26] = xdd[0];
+    obs[27] = t14;
+    obs[28] = c[15]*t1 + c[17]*t3;
+    obs[29] = t15*xd[0];
+    obs[30] = t14*xd[0];
+    obs[31] = t15*xdd[0] + t6*(c[17]*t1 + c[18]*t3);
+    obs[32] = t14*xdd[0] + t15*t6;
+    obs[33] = q[1];
+    obs[34] = qd[1];
+    obs[35] = qdd[1];
+    obs[36] = t16 + t7;
+    obs[37] = c[19]*cq[3] + t2;
+    obs[38] = qd[1]*t17 + t10;
+    obs[39] = qd[1]*t16 + t11;
+    obs[40] = c[20]*cq[2]*t5 + qdd[1]*t17 + t12;
+    obs[41] = c[20]*t8 + qdd[1]*t16 + t13;
+    obs[42] = sgv_set1((0.5)*3.141592653589793);
+    obs[43] = sgv_set1(0.0);
+    obs[44] = sgv_set1(0.0);
+    obs[45] = sgv_set1(c[21]);
+    obs[46] = c[22] + q[0];
+    obs[47] = sgv_set1(0.0);
+    obs[48] = qd[0];
+    obs[49] = sgv_set1(0.0);
+    obs[50] = qdd[0];
+    ok &= sgv_isfinite((((((q[0] + (q[1] + qd[0])) + ((qd[1] + qdd[0]) + (qdd[1] + obs[0]))) + ((obs[1] + (obs[2] + obs[3])) + ((obs[4] + obs[5]) + (obs[6] + obs[7])))) + (((obs[8] + (obs[9] + obs[10])) + ((obs[11] + obs[12]) + (obs[13] + obs[14]))) + ((obs[15] + (obs[16] + obs[17])) + ((obs[18] + obs[19]) + (obs[20] + obs[21]))))) + ((((obs[22] + (obs[23] + obs[24])) + ((obs[25] + obs[26]) + (obs[27] + obs[28]))) + ((obs[29] + (obs[30] + obs[31])) + ((obs[32] + obs[33]) + (obs[34] + obs[35])))) + (((obs[36] + (obs[37] + obs[38])) + ((obs[39] + obs[40]) + (obs[41] + obs[42]))) + (((obs[43] + obs[44]) + (obs[45] + obs[46])) + ((obs[47] + obs[48]) + (obs[49] + obs[50])))))));
+    return ok;
+}
+
+static SG_FLATTEN size_t sg_needle_bar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
+SG_SIMD_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_closed_v, sg_needle_bar_motion_v, 51)
+#pragma GCC pop_options
+#endif
+
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };
 
 static const sg_mechanism sg_needle_bar_descriptor = {
@@ -412,6 +533,7 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .blocks = sg_needle_bar_blocks,
     .anchors = sg_needle_bar_anchors,
     .sweep = sg_needle_bar_sweep,
+    .sweep_simd = SG_SIMD_HOOK(sg_needle_bar_sweep_simd),
 };
 
 const sg_mechanism *sg_needle_bar(void)

@@ -57,6 +57,8 @@ OPTIONS = (
     ("int", "keep_singular", "1: positions above singular_tol keep their results (status SG_OK, err says why)"),
     ("int", "generic", "1: the generic sweep loop (kernels through the descriptor) even where the mechanism has "
                        "an inlined one (tests: the two agree to the bit)"),
+    ("int", "scalar", "1: the scalar closed-form loop even where the mechanism has a SIMD one and the CPU runs it "
+                      "(tests: the two agree to rounding, with the same statuses)"),
 )
 
 # Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx their
@@ -105,6 +107,9 @@ HOOKS = {
               "the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a "
               "closed form"),
 }
+HOOKS["sweep_simd"] = (HOOKS["sweep"][0], HOOKS["sweep"][1],
+                       "the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL "
+                       "where the build has no SIMD or the mechanism's kernels have no vector form")
 
 #: Fields of ``sg_mechanism``, the descriptor every generated file fills (C type, name, meaning); the sizes'
 #: names are the manifest's "sizes" keys, the kernels' are :data:`KERNELS` kinds.
@@ -175,6 +180,10 @@ EXPORTS = {
                          "caller's order, -1 for rms, mean; NaN and -1 for a failed design). work: "
                          "n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of "
                          "failed designs"),
+    "sg_simd_width": ("int", (("const sg_mechanism *", "m"),),
+                      "positions per block of m's closed-form kinematic sweep on this CPU: 4 where m has a SIMD "
+                      "loop (the module built with SIMD, the kernels with a vector form) and the CPU has AVX2 and "
+                      "FMA, else 1 (the scalar loop); m NULL: what this module and CPU offer any mechanism"),
     "sg_make_continuous": ("void", (("size_t", "n"), ("int", "nq"), ("int", "nobs"), ("double *", "q"),
                                     ("double *", "obs"), ("int", "nqa"), ("const int *", "qcols"), ("int", "noa"),
                                     ("const int *", "ocols"), ("const size_t *", "order")),

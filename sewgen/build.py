@@ -17,6 +17,22 @@ CFLAGS = ["-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-Wno-unused-paramet
           "-fno-semantic-interposition"]  # calls within the module stay direct: the inlined sweep loops inline
 
 
+def simd_flags() -> tuple[list[str], list[str]]:
+    """(compile flags, libraries) of the SIMD loops (csrc/sg_simd.h): glibc's vector math library on x86-64
+    Linux, where the SIMD code is compiled for AVX2 and chosen at run time by the CPU's features; nothing
+    elsewhere (the scalar loops only). SEWGEN_SIMD=0 in the environment builds without it."""
+    import ctypes.util
+    import platform
+    import sys
+
+    if os.environ.get("SEWGEN_SIMD", "1") == "0":
+        return [], []
+    if sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64") and \
+            ctypes.util.find_library("mvec"):
+        return ["-DSG_HAVE_MVEC"], ["mvec"]
+    return [], []
+
+
 def runtime_dir() -> Path:
     """The hand-written runtime sources: installed as sewgen/_csrc, or csrc/ in a checkout."""
     for cand in (HERE / "_csrc", HERE.parent / "csrc"):
@@ -37,11 +53,12 @@ def make_ffi(module: str, kernel_dir: Path, mechanisms: list[str], extra_cflags:
     if relative_to is not None:  # setuptools wants paths relative to setup.py
         sources = [s.relative_to(relative_to) for s in sources]
         incs = [i.relative_to(relative_to) for i in incs]
-    flags = CFLAGS + (extra_cflags or []) + shlex.split(os.environ.get("SEWGEN_CFLAGS", ""))
+    simd_cflags, simd_libs = simd_flags()
+    flags = CFLAGS + simd_cflags + (extra_cflags or []) + shlex.split(os.environ.get("SEWGEN_CFLAGS", ""))
     ffi.set_source(module, '#include "sg_kernels.h"\n',
                    sources=[str(s) for s in sources], include_dirs=[str(i) for i in incs],
                    extra_compile_args=flags, extra_link_args=[f for f in flags if f.startswith("-fsanitize")],
-                   libraries=["m"])
+                   libraries=["m"] + simd_libs)
     return ffi
 
 

@@ -135,6 +135,13 @@ class Mechanism:
         return self.description.closed_form
 
     @property
+    def simd_width(self) -> int:
+        """Shaft positions per block of this mechanism's closed-form kinematic sweep here: 4 where it runs in AVX2
+        (csrc/sg_simd.h: the module built with glibc's vector math, the CPU with AVX2 and FMA), 1 where the
+        scalar loop runs. Results agree to rounding either way (:meth:`Sweep.use_loop`)."""
+        return int(self.lib.sg_simd_width(self._descriptor))
+
+    @property
     def default_speed(self) -> float:
         return self.description.default_speed
 
@@ -674,6 +681,22 @@ class Sweep:
     @property
     def forces(self) -> bool:
         return self.settings is not None
+
+    #: Closed-form loops :meth:`use_loop` chooses between (csrc/sg_runtime.c, sweep).
+    LOOPS = {"auto": {}, "scalar": {"scalar": 1}, "generic": {"generic": 1}}
+
+    def use_loop(self, loop: str) -> "Sweep":
+        """Which closed-form kinematic loop runs: ``"auto"`` (the default: four positions at a time in SIMD where
+        the module and the CPU have it, :attr:`Mechanism.simd_width`), ``"scalar"`` (the scalar inlined loop:
+        the same results on every x86-64 and other CPU, bit for bit) or ``"generic"`` (the runtime's loop
+        through the descriptor's kernels). The three agree to rounding with the same statuses (tests)."""
+        if loop not in self.LOOPS:
+            raise ParameterError(self.mechanism.name, "loop", f"is {loop!r}; use one of {', '.join(self.LOOPS)}")
+        o = self.options
+        fields = {"tol": o.tol, "max_iter": o.max_iter, "newton_only": o.newton_only,
+                  "singular_tol": o.singular_tol, "keep_singular": o.keep_singular}
+        self.options = self.mechanism.ffi.new("sg_options *", {**fields, **self.LOOPS[loop]})
+        return self
 
     def bind(self):
         """The C call of this sweep as a function of no arguments; it returns how many positions failed."""

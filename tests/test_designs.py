@@ -317,17 +317,11 @@ def test_cached_parameter_vectors_still_check_every_call():
     np.testing.assert_array_equal(b.obs, tu.solve(PHI, params={"crank": 0.009}).obs)
 
 
-def _generic_options(mech, sweep):
-    o = sweep.options
-    return mech.ffi.new("sg_options *", {"tol": o.tol, "max_iter": o.max_iter, "newton_only": o.newton_only,
-                                         "singular_tol": o.singular_tol, "keep_singular": o.keep_singular,
-                                         "generic": 1})
-
-
 def _paths_agree(mech, phi, **kw):
     a = mech.prepare(phi, **kw)
     b = mech.prepare(phi, **kw)
-    b.options = _generic_options(mech, b)
+    a.use_loop("scalar")  # the inlined scalar loop (the SIMD one against it: tests/test_simd.py)
+    b.use_loop("generic")
     for s in (a, b):
         s.phi[len(phi) // 3] = np.nan  # a NaN input reaches C (Python refuses it before; C says SG_NAN_INPUT)
         s.bind()()

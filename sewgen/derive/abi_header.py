@@ -76,6 +76,8 @@ def descriptor_initializer(prefix: str, sizes: dict, has: dict) -> list[str]:
             value = f"{prefix}_coord_is_angle"
         elif name in abi.KERNELS:
             value = f"{prefix}_{name}" if has.get(name) else "0"
+        elif name == "sweep_simd":  # where the closed form has vector kernels, and the build SIMD (sg_simd.h)
+            value = f"SG_SIMD_HOOK({prefix}_{name})" if has.get("closed_v") else "0"
         elif name in abi.HOOKS:  # the inlined sweep: instantiated where the mechanism has a closed form
             value = f"{prefix}_{name}" if has.get("closed") else "0"
         else:

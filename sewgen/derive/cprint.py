@@ -66,3 +66,46 @@ class KernelPrinter(C99CodePrinter):
 def ops(exprs) -> int:
     """Operation count of a list of expressions (the 'Total ops' of a kernel)."""
     return int(sum(sp.count_ops(e) for e in exprs))
+
+
+class NoVectorForm(ValueError):
+    """An expression the SIMD kernels cannot print (a function csrc/sg_simd.h has no vector form of)."""
+
+
+class VectorPrinter(KernelPrinter):
+    """KernelPrinter for the SIMD twins of the closed and motion kernels (csrc/sg_simd.h): the same text with the
+    arithmetic on GCC vectors (sg_vd) and the functions sg_simd.h vectorises (sqrt, |x|, atan2). Anything else
+    (trigonometric functions of a coordinate, sign, min/max, piecewise) raises :class:`NoVectorForm`: that
+    mechanism then has no SIMD loop, only the scalar one."""
+
+    def __init__(self):
+        super().__init__()
+        self.known_functions = {"Abs": "sgv_fabs", "atan2": "sgv_atan2", "sqrt": "sgv_sqrt"}
+
+    def _print_math_func(self, expr, nest=False, known=None):
+        name = type(expr).__name__
+        if name not in self.known_functions:
+            raise NoVectorForm(f"no vector form of {name}")
+        return f"{self.known_functions[name]}({', '.join(self._print(a) for a in expr.args)})"
+
+    _print_Abs = _print_atan2 = _print_sqrt = _print_math_func
+
+    def _print_Pow(self, expr):
+        base, exp = expr.args
+        if exp == sp.S.Half:
+            return f"sgv_sqrt({self._print(base)})"
+        if exp == -sp.S.Half:
+            return f"(1.0/sgv_sqrt({self._print(base)}))"
+        if exp.is_Integer and 1 <= abs(int(exp)) <= 4 or exp == -1:
+            return super()._print_Pow(expr)
+        raise NoVectorForm(f"no vector form of the power {exp}")
+
+    def _print_not_supported(self, expr):
+        raise NoVectorForm(f"no vector form of {type(expr).__name__}")
+
+    def _refuse(self, expr):
+        raise NoVectorForm(f"no vector form of {type(expr).__name__}")
+
+    _print_sign = _print_Max = _print_Min = _print_Piecewise = _print_ITE = _print_Relational = _refuse
+    _print_sin = _print_cos = _print_tan = _print_exp = _print_log = _print_floor = _print_ceiling = _refuse
+    _print_acos = _print_asin = _print_atan = _print_Mod = _print_Heaviside = _refuse

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from .. import abi
-from .cprint import KernelPrinter, ops
+from .cprint import KernelPrinter, NoVectorForm, VectorPrinter, ops
 from .dyads import Dyad
 from .joints import KINDS
 from .kinematics import Kinematics
@@ -51,6 +51,35 @@ def _cse(exprs):
 
 def _temps(printer, repl):
     return [f"const double {printer.doprint(t)} = {printer.doprint(e)};" for t, e in repl]
+
+
+class _Flavour:
+    """How a kernel body prints: scalar C (double) or the SIMD twin (sg_vd lanes, csrc/sg_simd.h), where a value
+    that reads only constants c[] (or none) is broadcast to every lane."""
+
+    def __init__(self, vector: bool):
+        self.vector = vector
+        self.printer = VectorPrinter() if vector else KernelPrinter()
+        self.real = "sg_vd" if vector else "double"
+
+    def value(self, e) -> str:
+        text = self.printer.doprint(e)
+        if self.vector and all(s.name.startswith("c_") for s in sp.sympify(e).free_symbols):
+            return f"sgv_set1({text})"
+        return text
+
+    def temps(self, repl) -> list[str]:
+        return [f"const {self.real} {self.printer.doprint(t)} = {self.value(e)};" for t, e in repl]
+
+
+SCALAR, VECTOR = _Flavour(False), _Flavour(True)
+
+#: The SIMD twins' signatures (static in each generated file; called only by its SG_SIMD_SWEEP_BODY).
+VECTOR_SIGNATURES = {
+    "closed": "sg_vm {f}(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)",
+    "motion": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
+              "const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)",
+}
 
 
 def _unused(body, *names):
@@ -171,14 +200,16 @@ class KernelSet:
         body = _unused(body, "q", "cq", "x", "cx", "c") + body
         return Kernel(f"{self.prefix}_anchors", self._signature("anchors"), body, ops(e for _, e in repl) + ops(red))
 
-    def motion(self, scales: list | None = None) -> Kernel:
+    def motion(self, scales: list | None = None, vector: bool = False) -> Kernel:
         """``scales``: each closure equation's loop size (derive.branches.row_scales): the rows of Φ_q are divided
-        by them before the condition number is taken (their reciprocals mostly hoist into constants)."""
-        kin, pr, n = self.kin, self.printer, len(self.kin.q)
-        jac = [kin.jac_q[i, j] for i in range(n) for j in range(n)]
-        inv = [1 / e for e in (scales or [sp.S.One] * n)]
-        exprs = self.prepare(jac + list(kin.vel_rhs) + list(kin.gamma) + [o.expr for o in kin.observables] + inv)
-        repl, red = _cse(exprs)
+        by them before the condition number is taken (their reciprocals mostly hoist into constants).
+        ``vector``: the SIMD twin (csrc/sg_simd.h) from the same expressions; it computes every lane and returns
+        the mask of lanes whose factor and outputs are good (raises NoVectorForm where it cannot be printed)."""
+        kin, n = self.kin, len(self.kin.q)
+        if vector and self.selection_block():
+            raise NoVectorForm("a cam's active arc is chosen per position")
+        fl = VECTOR if vector else SCALAR
+        repl, red = self._motion_cse(scales)
         r_inv = red[len(red) - n:] if n else []
         red = red[:len(red) - n] if n else red
         levels: dict = {}
@@ -187,31 +218,48 @@ class KernelSet:
         staged = [[(t, e) for t, e in repl if levels[t] == k] for k in range(3)]
         r_jac, r_vel = red[: n * n], red[n * n: n * n + n]
         r_gam, r_obs = red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:]
-        body = self.selection_block() + _temps(pr, staged[0])
+        body = self.selection_block() + fl.temps(staged[0])
         if n:  # LU of Φ_q, rows over their loop size (an angle row: 1 rad), columns equilibrated, and its
             # condition number: the runtime's singular-position estimate
-            body += [f"double J[{n * n}], rs[{n}], cs[{n}];", f"int piv[{n}];"]
-            body += [f"J[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_jac)]
-            body += [f"qd[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_vel)]
-            body += [f"rs[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_inv)]
-            body += [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
-                     f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
+            body += [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];", f"{'sg_vm' if vector else 'int'} piv[{n}];"]
+            body += [f"J[{k}] = {fl.value(e)};" for k, e in enumerate(r_jac)]
+            body += [f"qd[{i}] = {fl.value(e)};" for i, e in enumerate(r_vel)]
+            body += [f"rs[{i}] = {fl.value(e)};" for i, e in enumerate(r_inv)]
+            if vector:
+                body += [f"sg_vm ok = sgv_factor_eq({n}, J, piv, rs, cs, cond);",
+                         f"sgv_solve_eq({n}, J, piv, rs, cs, qd);"]
+            else:
+                body += [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
+                         f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
         else:
-            body += ["*cond = 1.0;"]
-        body += _temps(pr, staged[1])
+            body += ["*cond = sgv_set1(1.0);", "sg_vm ok = sgv_true();"] if vector else ["*cond = 1.0;"]
+        body += fl.temps(staged[1])
         if n:
-            body += [f"qdd[{i}] = {pr.doprint(e)};" for i, e in enumerate(r_gam)]
-            body += [f"sg_solve_eq_inl({n}, J, piv, rs, cs, qdd);"]
-        body += _temps(pr, staged[2])
-        body += [f"obs[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_obs)]
+            body += [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)]
+            body += [f"{'sgv_solve_eq' if vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
+        body += fl.temps(staged[2])
+        body += [f"obs[{k}] = {fl.value(e)};" for k, e in enumerate(r_obs)]
         outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)] + [f"obs[{k}]" for k in range(len(r_obs))]
         if outputs:  # one NaN/inf test per position: a balanced sum is non-finite iff an entry is
-            body += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
+            body += [f"ok &= sgv_isfinite({_balanced_sum(outputs)});" if vector
+                     else f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
         names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "obs", "cond")
-        body = _unused(body, *names) + body + ["return SG_OK;"]
-        return Kernel(f"{self.prefix}_motion",
-                      self._signature("motion"),
+        body = _unused(body, *names) + body + ["return ok;" if vector else "return SG_OK;"]
+        name = f"{self.prefix}_motion" + ("_v" if vector else "")
+        return Kernel(name, VECTOR_SIGNATURES["motion"].format(f=name) if vector else self._signature("motion"),
                       body, ops(e for _, e in repl) + ops(red))
+
+    def _motion_cse(self, scales):
+        """The motion kernel's expressions after one joint CSE (shared by the scalar kernel and its SIMD twin)."""
+        key = tuple(scales) if scales else None
+        if getattr(self, "_motion_memo", (None,))[0] != key:
+            kin, n = self.kin, len(self.kin.q)
+            jac = [kin.jac_q[i, j] for i in range(n) for j in range(n)]
+            inv = [1 / e for e in (scales or [sp.S.One] * n)]
+            exprs = self.prepare(jac + list(kin.vel_rhs) + list(kin.gamma) + [o.expr for o in kin.observables]
+                                 + inv)
+            self._motion_memo = (key, _cse(exprs))
+        return self._motion_memo[1]
 
     def forces(self, kst: Kinetostatics) -> Kernel:
         """The solve of A f = b as derive.kinetostatics plans it, then every derived output.
@@ -320,9 +368,12 @@ class KernelSet:
                       self._signature("force_matrix"),
                       body, ops(e for _, e in repl) + ops(red))
 
-    def closed(self, dyads: list[Dyad]) -> Kernel:
-        pr = self.printer
-        body = ["int st;"] if dyads else []  # no loop: nothing to solve
+    def closed(self, dyads: list[Dyad], vector: bool = False) -> Kernel:
+        """The dyad chain: each dyad's inputs, the runtime's solver (csrc/sg_runtime.h sg_dyad_*), its coordinates
+        and their cos, sin. ``vector``: the SIMD twin (csrc/sg_simd.h sgv_dyad_*), which returns the mask of
+        lanes where every dyad closes by a margin."""
+        fl = VECTOR if vector else SCALAR
+        body = (["sg_vm ok = sgv_true();"] if vector else ["int st;"]) if dyads else []  # no loop: nothing to solve
         total = 0
         for k, dyad in enumerate(dyads):
             keys = list(dyad.inputs)
@@ -332,24 +383,35 @@ class KernelSet:
             total += ops(e for _, e in repl) + ops(red) + ops(outs) + ops(trig)
             names = ", ".join(b.name for b in dyad.bodies)
             block = [f"/* dyad {k}: {dyad.kind.upper()} closed at joint {dyad.joint.name} ({names}) */"]
-            block += _temps(pr, repl)
+            block += fl.temps(repl)
             pos = 0
             for key in keys:
                 size = len(dyad.inputs[key])
-                vals = ", ".join(pr.doprint(e) for e in red[pos: pos + size])
-                block.append(f"const double {key}[{size}] = {{{vals}}};")
+                vals = ", ".join(fl.value(e) for e in red[pos: pos + size])
+                block.append(f"const {fl.real} {key}[{size}] = {{{vals}}};")
                 pos += size
             decl, call = _DYAD_CALL[dyad.kind]
-            block += [decl, f"st = {call.format(k=k)};", "if (st != SG_OK) return st;"]
-            block += [f"q[{i}] = {pr.doprint(e)};" for (i, _), e in zip(dyad.outputs, outs)]
+            if vector:
+                block += [decl.replace("double", "sg_vd"), f"ok &= {call.format(k=k).replace('sg_dyad_', 'sgv_dyad_')};"]
+            else:
+                block += [decl, f"st = {call.format(k=k)};", "if (st != SG_OK) return st;"]
+            block += [f"q[{i}] = {fl.value(e)};" for (i, _), e in zip(dyad.outputs, outs)]
             for j, (i, _, _) in enumerate(dyad.trig):
-                block += [f"cq[{2 * i}] = {pr.doprint(trig[2 * j])};",
-                          f"cq[{2 * i + 1}] = {pr.doprint(trig[2 * j + 1])};"]
+                block += [f"cq[{2 * i}] = {fl.value(trig[2 * j])};",
+                          f"cq[{2 * i + 1}] = {fl.value(trig[2 * j + 1])};"]
             body += ["{"] + ["    " + line for line in block] + ["}"]
-        body = _unused(body, "x", "cx", "c", "branch", "q", "cq") + body + ["return SG_OK;"]
-        return Kernel(f"{self.prefix}_closed",
-                      self._signature("closed"),
+        done = ("return ok;" if dyads else "return sgv_true();") if vector else "return SG_OK;"
+        body = _unused(body, "x", "cx", "c", "branch", "q", "cq") + body + [done]
+        name = f"{self.prefix}_closed" + ("_v" if vector else "")
+        return Kernel(name, VECTOR_SIGNATURES["closed"].format(f=name) if vector else self._signature("closed"),
                       body, total)
+
+    def vector_kernels(self, dyads: list[Dyad], scales) -> list[Kernel]:
+        """The SIMD twins of the closed and motion kernels, or none where an expression has no vector form."""
+        try:
+            return [self.closed(dyads, vector=True), self.motion(scales, vector=True)]
+        except NoVectorForm:
+            return []
 
     def scales(self, exprs: list) -> Kernel:
         """Each closure equation's own size (derive.branches.row_scales): Newton's per-equation tolerance."""

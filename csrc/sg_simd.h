@@ -1,0 +1,324 @@
+/* sewgen C runtime, SIMD part (issue 14, item 2): four shaft positions at once in AVX2 registers.
+ *
+ * Built where the compiler is GCC-compatible on x86-64 and the C library has glibc's vector math library
+ * (libmvec: SG_HAVE_MVEC, set by sewgen/build.py); everything here is compiled for AVX2 + FMA (a pragma, not a
+ * module flag), so the module still loads on any x86-64, and csrc/sg_runtime.c calls the SIMD loop only where
+ * the CPU has both (sg_simd_width). No -ffast-math: GCC vector extensions with the ISO C default of no FMA
+ * contraction, NaN tests kept.
+ *
+ * A generated file with a closed form instantiates SG_SIMD_SWEEP_BODY with vector twins of its closed and
+ * motion kernels (sewgen/derive/kernels.py), which compute every lane whatever happens and return a lane mask
+ * of what they vouch for. The loop takes a block's vector results only where they are clearly good: the
+ * inputs finite, every dyad closing with a margin (SG_SIMD_MARGIN: the scalar loop decides triangles that only
+ * just close or fail), the rates' estimated error at most a quarter of opt->singular_tol and every output
+ * finite. Anything else goes through the scalar step of csrc/sg_runtime.h, so statuses, first failing angles
+ * and the singular decision are always the scalar loop's; the values of vector lanes agree with the scalar
+ * loop's to rounding (libmvec's sin, cos, atan2 are within 4 ulp), and a given input gives the same result on
+ * a given machine every time.
+ */
+#ifndef SG_SIMD_H
+#define SG_SIMD_H
+
+#if defined(SG_HAVE_MVEC) && defined(__GNUC__) && defined(__x86_64__)
+#define SG_SIMD 1
+#else
+#define SG_SIMD 0
+#endif
+
+/* The descriptor's sweep_simd: the function where SIMD is built, NULL elsewhere. */
+#if SG_SIMD
+#define SG_SIMD_HOOK(fn) fn
+#else
+#define SG_SIMD_HOOK(fn) 0
+#endif
+
+#if SG_SIMD
+#pragma GCC push_options
+#pragma GCC target("avx2,fma")
+#include <immintrin.h>
+
+/* Lanes per vector, the vector of doubles and a lane mask (all bits set: true). */
+#define SG_W 4
+typedef double sg_vd __attribute__((vector_size(32)));
+typedef long long sg_vm __attribute__((vector_size(32)));
+
+/* A triangle whose height squared is below this fraction of its sides' squares goes to the scalar loop. */
+#define SG_SIMD_MARGIN 1e-10
+
+#define SG_VINLINE static inline __attribute__((always_inline))
+
+/* glibc's vector math (libmvec, x86_64 ABI "d": AVX2, 4 doubles). */
+__m256d _ZGVdN4v_sin(__m256d x);
+__m256d _ZGVdN4v_cos(__m256d x);
+__m256d _ZGVdN4vv_atan2(__m256d y, __m256d x);
+
+SG_VINLINE sg_vd sgv_set1(double a) { return (sg_vd){a, a, a, a}; }
+SG_VINLINE sg_vm sgv_true(void) { return (sg_vm){-1, -1, -1, -1}; }
+SG_VINLINE sg_vd sgv_select(sg_vm m, sg_vd a, sg_vd b) { return (sg_vd)(((sg_vm)a & m) | ((sg_vm)b & ~m)); }
+SG_VINLINE int sgv_all(sg_vm m) { return _mm256_movemask_pd((__m256d)m) == 0xF; }
+SG_VINLINE sg_vm sgv_isfinite(sg_vd a) { return (a - a) == sgv_set1(0.0); } /* inf - inf, NaN: NaN */
+SG_VINLINE sg_vd sgv_sqrt(sg_vd a) { return (sg_vd)_mm256_sqrt_pd((__m256d)a); }
+SG_VINLINE sg_vd sgv_fabs(sg_vd a)
+{
+    const long long mag = 0x7fffffffffffffffLL;
+    return (sg_vd)((sg_vm)a & (sg_vm){mag, mag, mag, mag});
+}
+SG_VINLINE sg_vd sgv_atan2(sg_vd y, sg_vd x) { return (sg_vd)_ZGVdN4vv_atan2((__m256d)y, (__m256d)x); }
+SG_VINLINE void sgv_sincos(sg_vd a, sg_vd *c, sg_vd *s)
+{
+    *c = (sg_vd)_ZGVdN4v_cos((__m256d)a);
+    *s = (sg_vd)_ZGVdN4v_sin((__m256d)a);
+}
+
+/* The closed-form dyads of csrc/sg_runtime.h, lane by lane, with the same operations; the mask says which lanes
+ * close by more than SG_SIMD_MARGIN (the others carry a flat triangle's values, never read). */
+SG_VINLINE sg_vm sgv_dyad_rrr(const sg_vd P[2], const sg_vd Q[2], sg_vd l1, sg_vd l2, int sigma, sg_vd J[2])
+{
+    const sg_vd dx = Q[0] - P[0], dy = Q[1] - P[1];
+    const sg_vd d2 = dx * dx + dy * dy;
+    const sg_vd a = 0.5 * (l1 * l1 - l2 * l2 + d2) / d2;
+    const sg_vd h2 = l1 * l1 / d2 - a * a;
+    const sg_vm ok = (d2 > sgv_set1(1e-30)) & (h2 > SG_SIMD_MARGIN * (l1 * l1 + l2 * l2 + d2) / d2);
+    const sg_vd h = (double)sigma * sgv_sqrt(sgv_select(ok, h2, sgv_set1(0.0)));
+    J[0] = P[0] + a * dx - h * dy;
+    J[1] = P[1] + a * dy + h * dx;
+    return ok;
+}
+
+SG_VINLINE sg_vm sgv_dyad_rrp(const sg_vd P[2], sg_vd l1, const sg_vd L0[2], const sg_vd u[2], int sigma,
+                              sg_vd *s, sg_vd J[2])
+{
+    const sg_vd wx = L0[0] - P[0], wy = L0[1] - P[1];
+    const sg_vd b = u[0] * wx + u[1] * wy;
+    const sg_vd disc = b * b - (wx * wx + wy * wy - l1 * l1);
+    const sg_vm ok = disc > SG_SIMD_MARGIN * (b * b + wx * wx + wy * wy + l1 * l1);
+    *s = -b + (double)sigma * sgv_sqrt(sgv_select(ok, disc, sgv_set1(0.0)));
+    J[0] = L0[0] + *s * u[0];
+    J[1] = L0[1] + *s * u[1];
+    return ok;
+}
+
+SG_VINLINE sg_vm sgv_dyad_rpr(const sg_vd D[2], const sg_vd w0[2], const sg_vd u[2], int sigma, sg_vd *s,
+                              sg_vd *theta)
+{
+    const sg_vd d2 = D[0] * D[0] + D[1] * D[1];
+    const sg_vd b = u[0] * w0[0] + u[1] * w0[1];
+    const sg_vd disc = b * b - (w0[0] * w0[0] + w0[1] * w0[1] - d2);
+    const sg_vm ok = (d2 > sgv_set1(1e-30)) & (disc > SG_SIMD_MARGIN * (b * b + w0[0] * w0[0] + w0[1] * w0[1] + d2));
+    *s = -b + (double)sigma * sgv_sqrt(sgv_select(ok, disc, sgv_set1(0.0)));
+    const sg_vd wx = w0[0] + *s * u[0], wy = w0[1] + *s * u[1];
+    *theta = sgv_atan2(D[1], D[0]) - sgv_atan2(wy, wx);
+    return ok;
+}
+
+/* sg_factor_eq_inl lane by lane: the same scaling, partial pivoting (each lane its own pivot rows, swapped by
+ * selects) and condition bound; the mask is the lanes the scalar factor would accept. */
+SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_vd *cs, sg_vd *cond)
+{
+    const sg_vd zero = sgv_set1(0.0);
+    sg_vm ok = sgv_true();
+    for (int j = 0; j < n; ++j) {
+        sg_vd m = zero;
+        for (int i = 0; i < n; ++i) {
+            a[i * n + j] *= rs[i];
+            const sg_vd v = sgv_fabs(a[i * n + j]);
+            m = sgv_select(~(v <= m), v, m); /* NaN propagates */
+        }
+        ok &= (m > zero) & (m < sgv_set1(INFINITY));
+        cs[j] = 1.0 / m;
+        for (int i = 0; i < n; ++i) a[i * n + j] *= cs[j];
+    }
+    sg_vd anorm = zero;
+    for (int i = 0; i < n; ++i) {
+        sg_vd s = zero;
+        for (int j = 0; j < n; ++j) s += sgv_fabs(a[i * n + j]);
+        anorm = sgv_select(~(s <= anorm), s, anorm);
+    }
+    for (int k = 0; k < n; ++k) {
+        sg_vm pr = (sg_vm){k, k, k, k};
+        sg_vd best = sgv_fabs(a[k * n + k]);
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vd v = sgv_fabs(a[i * n + k]);
+            const sg_vm gt = v > best;
+            best = sgv_select(gt, v, best);
+            pr = (pr & ~gt) | ((sg_vm){i, i, i, i} & gt);
+        }
+        piv[k] = pr;
+        ok &= best > sgv_set1(SG_PIVOT_RTOL);
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vm sw = pr == (sg_vm){i, i, i, i};
+            for (int j = 0; j < n; ++j) {
+                const sg_vd t = a[k * n + j];
+                a[k * n + j] = sgv_select(sw, a[i * n + j], t);
+                a[i * n + j] = sgv_select(sw, t, a[i * n + j]);
+            }
+        }
+        const sg_vd inv = 1.0 / a[k * n + k];
+        a[k * n + k] = inv;
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vd f = a[i * n + k] * inv;
+            a[i * n + k] = f;
+            for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
+        }
+    }
+    sg_vd y[SG_MAX_Q];
+    sg_vd lnorm = zero, inorm = zero;
+    for (int i = 0; i < n; ++i) {
+        sg_vd s = sgv_set1(1.0);
+        for (int j = 0; j < i; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
+        y[i] = s;
+        lnorm = sgv_select(~(s <= lnorm), s, lnorm);
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        sg_vd s = sgv_set1(1.0);
+        for (int j = i + 1; j < n; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
+        y[i] = s * sgv_fabs(a[i * n + i]);
+        inorm = sgv_select(~(y[i] <= inorm), y[i], inorm);
+    }
+    *cond = anorm * (inorm * lnorm);
+    return ok & sgv_isfinite(*cond);
+}
+
+/* sg_solve_eq_inl lane by lane (the row interchanges of each lane's own pivots). */
+SG_VINLINE void sgv_solve_eq(int n, const sg_vd *lu, const sg_vm *piv, const sg_vd *rs, const sg_vd *cs, sg_vd *b)
+{
+    for (int i = 0; i < n; ++i) b[i] *= rs[i];
+    for (int k = 0; k < n; ++k)
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vm sw = piv[k] == (sg_vm){i, i, i, i};
+            const sg_vd t = b[k];
+            b[k] = sgv_select(sw, b[i], t);
+            b[i] = sgv_select(sw, t, b[i]);
+        }
+    for (int k = 0; k < n; ++k)
+        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
+    for (int k = n - 1; k >= 0; --k) {
+        sg_vd s = b[k];
+        for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
+        b[k] = s * lu[k * n + k];
+    }
+    for (int j = 0; j < n; ++j) b[j] *= cs[j];
+}
+
+/* Rows of SG_W positions from count vectors of lanes: dst[l][j] = v[j][l], four columns at a time transposed in
+ * registers (two unpacks and two lane permutes per four) and stored as one 32-byte row piece per lane. */
+SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W])
+{
+    int j = 0;
+    for (; j + 4 <= count; j += 4) {
+        const __m256d r0 = (__m256d)v[j], r1 = (__m256d)v[j + 1], r2 = (__m256d)v[j + 2], r3 = (__m256d)v[j + 3];
+        const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+        const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+        _mm256_storeu_pd(dst[0] + j, _mm256_permute2f128_pd(t0, t2, 0x20));
+        _mm256_storeu_pd(dst[1] + j, _mm256_permute2f128_pd(t1, t3, 0x20));
+        _mm256_storeu_pd(dst[2] + j, _mm256_permute2f128_pd(t0, t2, 0x31));
+        _mm256_storeu_pd(dst[3] + j, _mm256_permute2f128_pd(t1, t3, 0x31));
+    }
+    for (; j < count; ++j)
+        for (int l = 0; l < SG_W; ++l) dst[l][j] = v[j][l];
+}
+
+/* The SIMD closed-form sweep: blocks of SG_W positions in solving order (the last block padded with its last
+ * position), the vector kernels CLOSED_V, MOTION_V (NOBS observables), and the scalar step of
+ * csrc/sg_runtime.h for every block or lane the vector kernels do not vouch for (see the top of this file).
+ * Angle coordinates are unwrapped lane after lane against the last solution, as the scalar loop does. */
+#define SG_SIMD_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, CLOSED_V, MOTION_V, NOBS)                    \
+    {                                                                                              \
+        SG_CLOSED_SETUP(CONSTANTS)                                                                 \
+        sg_vd vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q];                      \
+        for (int k = 1; k < nx; ++k) {                                                             \
+            vx[k] = sgv_set1(x[k]);                                                                \
+            vcx[2 * k] = sgv_set1(cx[2 * k]);                                                      \
+            vcx[2 * k + 1] = sgv_set1(cx[2 * k + 1]);                                              \
+            vxd[k] = vxdd[k] = sgv_set1(0.0);                                                      \
+        }                                                                                          \
+        const sg_vd accept = sgv_set1(0.25 * opt->singular_tol);                                   \
+        for (size_t k = 0; k < n; k += SG_W) {                                                     \
+            const int lanes = n - k < SG_W ? (int)(n - k) : SG_W;                                  \
+            size_t idx[SG_W];                                                                      \
+            sg_vd ph, om, al;                                                                      \
+            for (int l = 0; l < SG_W; ++l) {                                                       \
+                const size_t kk = k + (size_t)(l < lanes ? l : lanes - 1);                         \
+                idx[l] = order ? order[kk] : kk;                                                   \
+                ph[l] = phi[idx[l]];                                                               \
+                om[l] = omega[idx[l]];                                                             \
+                al[l] = alpha[idx[l]];                                                             \
+            }                                                                                      \
+            sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q];                                                 \
+            int vector_block = sgv_all(sgv_isfinite(ph + om + al));                                \
+            if (vector_block) {                                                                    \
+                vx[0] = ph;                                                                        \
+                vxd[0] = om;                                                                       \
+                vxdd[0] = al;                                                                      \
+                sgv_sincos(ph, &vcx[0], &vcx[1]);                                                  \
+                vector_block = sgv_all(CLOSED_V(vx, vcx, c, branch, vq, vcq));                     \
+            }                                                                                      \
+            if (!vector_block) {                                                                   \
+                for (int l = 0; l < lanes; ++l) SG_CLOSED_STEP(CLOSED, MOTION, idx[l])             \
+                continue;                                                                          \
+            }                                                                                      \
+            for (int l = 0; l < SG_W; ++l) {                                                       \
+                for (int j = 0; j < nq; ++j) {                                                     \
+                    if (have_last && m->coord_is_angle[j]) {                                       \
+                        const double turns = (last[j] - vq[j][l]) * (1.0 / two_pi);                \
+                        if (fabs(turns) > 0.5) vq[j][l] += two_pi * nearbyint(turns);              \
+                    }                                                                              \
+                    last[j] = vq[j][l];                                                            \
+                }                                                                                  \
+                have_last = 1;                                                                     \
+            }                                                                                      \
+            sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1], vcond;                          \
+            sg_vm ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);          \
+            const sg_vd vest = vcond * (eps + vcond * eps);                                        \
+            ok &= vest <= accept;                                                                  \
+            if (lanes == SG_W && sgv_all(ok)) { /* the common case: whole rows from registers */   \
+                double *rq[SG_W], *rqd[SG_W], *rqdd[SG_W], *robs[SG_W];                            \
+                for (int l = 0; l < SG_W; ++l) {                                                   \
+                    rq[l] = q + idx[l] * (size_t)nq;                                               \
+                    rqd[l] = qd + idx[l] * (size_t)nq;                                             \
+                    rqdd[l] = qdd + idx[l] * (size_t)nq;                                           \
+                    robs[l] = obs + idx[l] * (size_t)nobs;                                         \
+                    status[idx[l]] = SG_OK;                                                        \
+                    if (err) err[idx[l]] = vest[l];                                                \
+                }                                                                                  \
+                sgv_store_rows(vq, nq, rq);                                                        \
+                sgv_store_rows(vqd, nq, rqd);                                                      \
+                sgv_store_rows(vqdd, nq, rqdd);                                                    \
+                sgv_store_rows(vobs, (NOBS), robs);                                                \
+                continue;                                                                          \
+            }                                                                                      \
+            for (int l = 0; l < lanes; ++l) {                                                      \
+                const size_t i = idx[l];                                                           \
+                double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq;                       \
+                double *qddi = qdd + i * (size_t)nq, *oi = obs + i * (size_t)nobs;                 \
+                if (ok[l]) {                                                                       \
+                    for (int j = 0; j < nq; ++j) {                                                 \
+                        qi[j] = vq[j][l];                                                          \
+                        qdi[j] = vqd[j][l];                                                        \
+                        qddi[j] = vqdd[j][l];                                                      \
+                    }                                                                              \
+                    for (int j = 0; j < (NOBS); ++j) oi[j] = vobs[j][l];                           \
+                    status[i] = SG_OK;                                                             \
+                    if (err) err[i] = vest[l];                                                     \
+                    continue;                                                                      \
+                }                                                                                  \
+                /* the scalar motion at this lane's solved position decides it */                  \
+                double cq[2 * SG_MAX_Q];                                                           \
+                for (int j = 0; j < nq; ++j) qi[j] = vq[j][l];                                     \
+                for (int j = 0; j < 2 * nq; ++j) cq[j] = vcq[j][l];                                \
+                x[0] = ph[l];                                                                      \
+                cx[0] = vcx[0][l];                                                                 \
+                cx[1] = vcx[1][l];                                                                 \
+                xd[0] = om[l];                                                                     \
+                xdd[0] = al[l];                                                                    \
+                int st = SG_OK;                                                                    \
+                SG_CLOSED_FINISH(MOTION)                                                           \
+            }                                                                                      \
+        }                                                                                          \
+        return failures;                                                                           \
+    }
+
+#pragma GCC pop_options
+#endif /* SG_SIMD */
+
+#endif

@@ -1,0 +1,136 @@
+"""The SIMD closed-form loop (issue 14, item 2; csrc/sg_simd.h) against the scalar loop.
+
+Both loops run the same sweep through ``Sweep.use_loop``: every catalog mechanism with a closed form and a user
+mechanism (examples/my_mechanism.py), with unsorted and repeated angles, NaN inputs in the middle of a block,
+designs that fail to assemble at some angles or everywhere, singular positions kept or refused. Statuses must be
+identical (so the first failing angle is too: the SIMD loop hands every position it does not vouch for to the
+scalar step). Values agree to 1e-13 of each column's scale, or, at a position the runtime itself estimates less
+accurate than that (near a toggle, where both paths' rounding is amplified alike), within twice that estimate.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import sewgen
+from sewgen.errors import ParameterError
+from sewgen.loader import catalog_names
+
+ROOT = Path(__file__).resolve().parents[1]
+RNG = np.random.default_rng(14)
+#: a revolution at 0.1° (900 blocks of four), a few unsorted and repeated angles, a block tail of three
+PHI = np.concatenate([np.linspace(0.0, 2 * np.pi, 3600, endpoint=False), RNG.uniform(-7, 7, 13), [1.0, 1.0]])
+
+SIMD_CLOSED = [n for n in catalog_names() if sewgen.mechanism(n).closed_form]
+
+
+def _both(mech, phi, nan_at=(), **kw):
+    """(SIMD sweep, scalar sweep, the scalar loop's sensitivity of every output to the shaft angle) of the same
+    arguments; NaN written into phi at ``nan_at`` (C's own check)."""
+    runs = []
+    for loop in ("auto", "scalar"):
+        s = mech.prepare(phi, **kw).use_loop(loop)
+        for i in nan_at:
+            s.phi[i] = np.nan
+        s.run()
+        runs.append(s)
+    return runs[0], runs[1], _sensitivity(mech, runs[1], kw)
+
+
+def _sensitivity(mech, ref, kw, h=1e-6):
+    """|d output / d phi| per position and column by one-sided differences of the scalar loop at phi ± h (the
+    larger of the two; inf where neither neighbour solves: within h of where the mechanism stops assembling)."""
+    flat = lambda s: np.hstack([s.q, s.qd, s.qdd, s.obs])
+    base = flat(ref)
+    sens = np.full_like(base, -np.inf)
+    for step in (h, -h):
+        s = mech.prepare(np.nan_to_num(ref.phi) + step, **kw).use_loop("scalar")
+        s.run()
+        good = (s.status == 0) & (ref.status == 0)
+        sens[good] = np.maximum(sens[good], np.abs(flat(s)[good] - base[good]) / h)
+    sens[~np.isfinite(sens)] = np.inf
+    return sens
+
+
+def _agree(a, b, sens, label, rtol=1e-13):
+    """Equal statuses; every value within ``rtol`` of its column's scale plus what the position's own rounding
+    makes of it: twice the runtime's error estimate of the rates, and the sensitivity to the shaft angle times
+    16 ulp of it (libmvec's and glibc's sin, cos differ by an ulp or two, which a position near the end of its
+    assembling range amplifies like any perturbation of the input)."""
+    np.testing.assert_array_equal(a.status, b.status, err_msg=f"{label}: statuses")
+    ok = b.status == 0
+    x, y = np.hstack([a.q, a.qd, a.qdd, a.obs])[ok], np.hstack([b.q, b.qd, b.qdd, b.obs])[ok]
+    if not y.size:
+        return
+    scale = np.maximum(np.abs(y).max(axis=0), 1e-300)
+    tol = (rtol + 2.0 * b.err[ok])[:, None] * scale
+    tol = tol + sens[ok] * (16 * np.finfo(float).eps * np.maximum(1.0, np.abs(b.phi[ok])))[:, None]
+    bad = np.abs(x - y) > tol
+    assert not bad.any(), (label, np.argwhere(bad)[:3], (np.abs(x - y) / scale).max())
+    assert np.isinf(sens[ok]).any(axis=1).mean() < 0.02, label  # the sensitivity bounds almost every position
+    flagged = (b.status == 0) | (b.status == 2)
+    np.testing.assert_allclose(a.err[flagged], b.err[flagged], rtol=1e-9, atol=1e-300, err_msg=label)
+
+
+def _needs_simd(mech):
+    if mech.simd_width == 1:
+        pytest.skip(f"{mech.name}: no SIMD loop on this build or CPU (Mechanism.simd_width == 1)")
+
+
+@pytest.mark.parametrize("name", SIMD_CLOSED)
+def test_simd_and_scalar_loops_agree(name):
+    mech = sewgen.mechanism(name)
+    _needs_simd(mech)
+    statuses = []
+    for kw in ({}, {"singular": "flag"}):
+        a, b, sens = _both(mech, PHI, nan_at=(5, 1802), **kw)
+        _agree(a, b, sens, f"{name} {kw}")
+        statuses.append(b.status)
+    lengths = [p for p in mech.description.params if p.kind == "length" and p.positive]
+    for f in (1.3, 2.2, 40.0):
+        try:
+            a, b, sens = _both(mech, PHI, params={lengths[0].name: lengths[0].default * f}, singular="flag")
+        except ParameterError:
+            continue
+        # ×40: a design that assembles over a few degrees only, every position near the end of its range, where
+        # a dyad's discriminant is the small difference of large squares: both loops' rounding is amplified
+        # beyond what the rates' estimate or the angle's ulp account for (needle bar: 8.7e-13 of the column)
+        _agree(a, b, sens, f"{name} {lengths[0].name}×{f}", rtol=1e-13 if f < 10 else 1e-11)
+        statuses.append(b.status)
+    assert all((s[[5, 1802]] == 4).all() for s in statuses[:2])  # the NaN inputs reached C
+    assert sum(int((s == 0).sum()) for s in statuses) > 2 * len(PHI)  # most positions did run in vectors
+
+
+def test_most_positions_take_the_vector_path():
+    """Not a fallback in disguise: on the take-up four-bar every clean block is vector, so its values differ from
+    the scalar loop's by rounding somewhere (libmvec's sin/cos/atan2 are not glibc's scalar ones) and a value
+    does not depend on which lane or block it lands in."""
+    tu = sewgen.mechanism("take_up")
+    _needs_simd(tu)
+    a, b, _ = _both(tu, PHI)
+    assert not np.array_equal(a.obs, b.obs)
+    shifted = tu.prepare(PHI[1:]).use_loop("auto")  # every angle in another lane
+    shifted.run()
+    np.testing.assert_array_equal(shifted.obs[:3599], a.obs[1:3600])
+    again = tu.prepare(PHI).use_loop("auto")
+    again.run()
+    np.testing.assert_array_equal(again.obs, a.obs)  # deterministic
+
+
+def test_a_user_mechanism_in_simd():
+    mech = sewgen.load(ROOT / "examples" / "my_mechanism.py")
+    _needs_simd(mech)
+    a, b, sens = _both(mech, PHI, nan_at=(7,))
+    _agree(a, b, sens, mech.name)
+    a, b, sens = _both(mech, PHI, params={"crank": mech.defaults()["crank"] * 2.5}, singular="flag")
+    _agree(a, b, sens, mech.name + " long crank")
+    assert (b.status != 0).any() and (b.status == 0).any()  # fails at some angles only
+
+
+def test_newton_mechanisms_and_bad_loop_names():
+    feed = sewgen.mechanism("feed")
+    assert feed.simd_width == 1  # Newton: no SIMD loop
+    with pytest.raises(ParameterError, match="loop"):
+        feed.prepare(PHI[:4]).use_loop("vector")
