@@ -343,10 +343,12 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         return n;
     }
     const int use_closed = m->closed != NULL && !opt->newton_only;
-    if (use_closed && frc == NULL && m->sweep != NULL && !opt->generic) { /* the inlined loop: the same, faster */
+    if (use_closed && m->sweep != NULL && !opt->generic) { /* the inlined loop: the same, faster */
         if (!opt->scalar && sg_simd_width(m) > 1) /* four positions at a time */
-            return m->sweep_simd(m, n, phi, omega, alpha, held, p, branch, opt, order, q, qd, qdd, obs, err, status);
-        return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, q, qd, qdd, obs, err, status);
+            return m->sweep_simd(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs,
+                                 err, frc, status);
+        return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs, err, frc,
+                        status);
     }
     if (frc != NULL && loads == NULL)
         for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;

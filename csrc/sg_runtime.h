@@ -288,18 +288,18 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
 #endif
 }
 
-/* The closed-form kinematic sweep with one mechanism's kernels called directly (issue 14, item 1): the body of
- * sg_<m>_sweep, which each generated file with a closed form instantiates with its own constants, closed and
- * motion kernels (a macro, so that the calls are direct and the file's flatten attribute inlines them: no
- * function pointers per position); the runtime's sweep calls it for a closed-form kinematic sweep unless
- * opt->generic. The same operations as the generic loop (csrc/sg_runtime.c, sweep) in the same order, so the
- * two agree to the bit: closed form, unwrap against the last solution, motion, the rates' error estimate (the
- * closed form's position is exact to rounding: resid = eps, never polished), singular check, status. The
- * arguments are sewgen.abi.HOOKS["sweep"]'s. Three parts, shared with the SIMD loop (csrc/sg_simd.h):
- * SG_CLOSED_SETUP declares the loop's state, SG_CLOSED_STEP solves position I, SG_CLOSED_FINISH the motion and
- * status of position i from its solved coordinates (st, qi, qdi, qddi, oi, cq in scope). */
+/* The closed-form sweep with one mechanism's kernels called directly (issue 14, item 1): the body of
+ * sg_<m>_sweep, which each generated file with a closed form instantiates with its own constants, closed, motion
+ * and forces kernels (a macro, so that the calls are direct and the file's flatten attribute inlines them: no
+ * function pointers per position); the runtime's sweep calls it for a closed-form sweep unless opt->generic.
+ * The same operations as the generic loop (csrc/sg_runtime.c, sweep) in the same order, so the two agree to the
+ * bit: closed form, unwrap against the last solution, motion, the rates' error estimate (the closed form's
+ * position is exact to rounding: resid = eps, never polished), singular check, forces (frc != NULL), status.
+ * The arguments are sewgen.abi.HOOKS["sweep"]'s. Parts shared with the SIMD loop (csrc/sg_simd.h):
+ * SG_CLOSED_SETUP declares the loop's state, SG_CLOSED_STEP solves position I, SG_CLOSED_FINISH the motion,
+ * forces and status of position i from its solved coordinates (st, qi, qdi, qddi, oi, cq in scope). */
 #define SG_CLOSED_SETUP(CONSTANTS)                                                                 \
-    const int nq = m->nq, nx = m->nx, nobs = m->nobs;                                              \
+    const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo, nload = m->nload;              \
     const double eps = SG_EPS, two_pi = SG_TWO_PI;                                                 \
     double c[SG_MAX_C];                                                                            \
     CONSTANTS(p, c);                                                                               \
@@ -314,10 +314,13 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
     x[0] = NAN; /* no angle's cos, sin yet (set at the first position) */                          \
     cx[0] = 1.0;                                                                                   \
     cx[1] = 0.0;                                                                                   \
+    double no_loads[SG_MAX_LOAD];                                                                  \
+    if (frc != NULL && loads == NULL)                                                              \
+        for (int k = 0; k < nload; ++k) no_loads[k] = 0.0;                                         \
     int have_last = 0;                                                                             \
     size_t failures = 0;
 
-#define SG_CLOSED_FINISH(MOTION)                                                                   \
+#define SG_CLOSED_FINISH(MOTION, FORCES)                                                           \
     {                                                                                              \
         double cond = 1.0, est = 0.0;                                                              \
         if (st == SG_OK) {                                                                         \
@@ -329,16 +332,21 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
                 if (!(est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;          \
             }                                                                                      \
         }                                                                                          \
+        if (st == SG_OK && frc != NULL)                                                            \
+            st = FORCES(qi, cq, x, cx, xd, c, oi, gv, loads ? loads + i * (size_t)nload : no_loads, \
+                        frc + i * (size_t)nfo);                                                    \
         status[i] = st;                                                                            \
         if (err) err[i] = st == SG_OK || st == SG_SINGULAR ? est : 0.0;                            \
         if (st != SG_OK) {                                                                         \
             ++failures;                                                                            \
             for (int j = 0; j < nq; ++j) qi[j] = qdi[j] = qddi[j] = 0.0;                           \
             for (int j = 0; j < nobs; ++j) oi[j] = 0.0;                                            \
+            if (frc != NULL)                                                                       \
+                for (int j = 0; j < nfo; ++j) frc[i * (size_t)nfo + j] = 0.0;                      \
         }                                                                                          \
     }
 
-#define SG_CLOSED_STEP(CLOSED, MOTION, I)                                                          \
+#define SG_CLOSED_STEP(CLOSED, MOTION, FORCES, I)                                                  \
     {                                                                                              \
         const size_t i = (I);                                                                      \
         double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq; \
@@ -367,13 +375,13 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
                 have_last = 1;                                                                     \
             }                                                                                      \
         }                                                                                          \
-        SG_CLOSED_FINISH(MOTION)                                                                   \
+        SG_CLOSED_FINISH(MOTION, FORCES)                                                           \
     }
 
-#define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION)                                            \
+#define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, FORCES)                                    \
     {                                                                                              \
         SG_CLOSED_SETUP(CONSTANTS)                                                                 \
-        for (size_t k = 0; k < n; ++k) SG_CLOSED_STEP(CLOSED, MOTION, order ? order[k] : k)        \
+        for (size_t k = 0; k < n; ++k) SG_CLOSED_STEP(CLOSED, MOTION, FORCES, order ? order[k] : k) \
         return failures;                                                                           \
     }
 

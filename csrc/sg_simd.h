@@ -54,6 +54,7 @@ __m256d _ZGVdN4vv_atan2(__m256d y, __m256d x);
 
 SG_VINLINE sg_vd sgv_set1(double a) { return (sg_vd){a, a, a, a}; }
 SG_VINLINE sg_vm sgv_true(void) { return (sg_vm){-1, -1, -1, -1}; }
+SG_VINLINE sg_vm sgv_false(void) { return (sg_vm){0, 0, 0, 0}; }
 SG_VINLINE sg_vd sgv_select(sg_vm m, sg_vd a, sg_vd b) { return (sg_vd)(((sg_vm)a & m) | ((sg_vm)b & ~m)); }
 SG_VINLINE int sgv_all(sg_vm m) { return _mm256_movemask_pd((__m256d)m) == 0xF; }
 SG_VINLINE sg_vm sgv_isfinite(sg_vd a) { return (a - a) == sgv_set1(0.0); } /* inf - inf, NaN: NaN */
@@ -63,6 +64,7 @@ SG_VINLINE sg_vd sgv_fabs(sg_vd a)
     const long long mag = 0x7fffffffffffffffLL;
     return (sg_vd)((sg_vm)a & (sg_vm){mag, mag, mag, mag});
 }
+SG_VINLINE sg_vd sgv_fmax(sg_vd a, sg_vd b) { return sgv_select(a > b, a, b); }
 SG_VINLINE sg_vd sgv_atan2(sg_vd y, sg_vd x) { return (sg_vd)_ZGVdN4vv_atan2((__m256d)y, (__m256d)x); }
 SG_VINLINE void sgv_sincos(sg_vd a, sg_vd *c, sg_vd *s)
 {
@@ -200,6 +202,86 @@ SG_VINLINE void sgv_solve_eq(int n, const sg_vd *lu, const sg_vm *piv, const sg_
     for (int j = 0; j < n; ++j) b[j] *= cs[j];
 }
 
+/* sg_lu_factor_inl lane by lane (each lane its own pivot rows, swapped by selects; the multipliers of a zero
+ * entry subtracted too, which changes nothing finite); the mask is the lanes the scalar factor accepts. */
+SG_VINLINE sg_vm sgv_lu_factor(int n, sg_vd *a, sg_vm *piv)
+{
+    sg_vd colmax[SG_MAX_Q];
+    sg_vm ok = sgv_true();
+    for (int j = 0; j < n; ++j) {
+        sg_vd cm = sgv_set1(0.0);
+        for (int i = 0; i < n; ++i) {
+            const sg_vd v = sgv_fabs(a[i * n + j]);
+            cm = sgv_select(v > cm, v, cm);
+        }
+        colmax[j] = cm;
+    }
+    for (int k = 0; k < n; ++k) {
+        sg_vm pr = (sg_vm){k, k, k, k};
+        sg_vd best = sgv_fabs(a[k * n + k]);
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vd v = sgv_fabs(a[i * n + k]);
+            const sg_vm gt = v > best;
+            best = sgv_select(gt, v, best);
+            pr = (pr & ~gt) | ((sg_vm){i, i, i, i} & gt);
+        }
+        piv[k] = pr;
+        ok &= best > SG_PIVOT_RTOL * colmax[k];
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vm sw = pr == (sg_vm){i, i, i, i};
+            for (int j = 0; j < n; ++j) {
+                const sg_vd t = a[k * n + j];
+                a[k * n + j] = sgv_select(sw, a[i * n + j], t);
+                a[i * n + j] = sgv_select(sw, t, a[i * n + j]);
+            }
+        }
+        const sg_vd inv = 1.0 / a[k * n + k];
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vd f = a[i * n + k] * inv;
+            a[i * n + k] = f;
+            for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
+        }
+    }
+    return ok;
+}
+
+/* sg_lu_solve_inl lane by lane. */
+SG_VINLINE void sgv_lu_solve(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *b)
+{
+    for (int k = 0; k < n; ++k)
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vm sw = piv[k] == (sg_vm){i, i, i, i};
+            const sg_vd t = b[k];
+            b[k] = sgv_select(sw, b[i], t);
+            b[i] = sgv_select(sw, t, b[i]);
+        }
+    for (int k = 0; k < n; ++k)
+        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
+    for (int k = n - 1; k >= 0; --k) {
+        sg_vd s = b[k];
+        for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
+        b[k] = s / lu[k * n + k];
+    }
+}
+
+/* count vectors of lanes from rows of SG_W positions: v[j][l] = src[l][j] (sgv_store_rows' inverse). */
+SG_VINLINE void sgv_load_rows(const double *const src[SG_W], int count, sg_vd *v)
+{
+    int j = 0;
+    for (; j + 4 <= count; j += 4) {
+        const __m256d r0 = _mm256_loadu_pd(src[0] + j), r1 = _mm256_loadu_pd(src[1] + j);
+        const __m256d r2 = _mm256_loadu_pd(src[2] + j), r3 = _mm256_loadu_pd(src[3] + j);
+        const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+        const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+        v[j] = (sg_vd)_mm256_permute2f128_pd(t0, t2, 0x20);
+        v[j + 1] = (sg_vd)_mm256_permute2f128_pd(t1, t3, 0x20);
+        v[j + 2] = (sg_vd)_mm256_permute2f128_pd(t0, t2, 0x31);
+        v[j + 3] = (sg_vd)_mm256_permute2f128_pd(t1, t3, 0x31);
+    }
+    for (; j < count; ++j)
+        for (int l = 0; l < SG_W; ++l) v[j][l] = src[l][j];
+}
+
 /* Rows of SG_W positions from count vectors of lanes: dst[l][j] = v[j][l], four columns at a time transposed in
  * registers (two unpacks and two lane permutes per four) and stored as one 32-byte row piece per lane. */
 SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W])
@@ -219,19 +301,28 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
 }
 
 /* The SIMD closed-form sweep: blocks of SG_W positions in solving order (the last block padded with its last
- * position), the vector kernels CLOSED_V, MOTION_V (NOBS observables), and the scalar step of
- * csrc/sg_runtime.h for every block or lane the vector kernels do not vouch for (see the top of this file).
- * Angle coordinates are unwrapped lane after lane against the last solution, as the scalar loop does. */
-#define SG_SIMD_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, CLOSED_V, MOTION_V, NOBS)                    \
+ * position), the vector kernels CLOSED_V, MOTION_V (NOBS observables) and, for forces (frc not NULL), FORCES_V
+ * (NFO outputs, loads transposed in), and the scalar step of csrc/sg_runtime.h for every block or lane the
+ * vector kernels do not vouch for (see the top of this file). A force sweep the vector forces cannot do
+ * (FORCES_IN_SIMD: friction on, or no vector form) runs the scalar loop whole. Angle coordinates are unwrapped
+ * lane after lane against the last solution, as the scalar loop does. */
+#define SG_SIMD_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, FORCES, CLOSED_V, MOTION_V, FORCES_V, FORCES_IN_SIMD, NOBS,  \
+                           NFO)                                                                    \
     {                                                                                              \
         SG_CLOSED_SETUP(CONSTANTS)                                                                 \
-        sg_vd vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q];                      \
+        if (frc != NULL && !FORCES_IN_SIMD(c)) {                                                   \
+            for (size_t k = 0; k < n; ++k) SG_CLOSED_STEP(CLOSED, MOTION, FORCES, order ? order[k] : k) \
+            return failures;                                                                       \
+        }                                                                                          \
+        sg_vd vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q], vld[SG_MAX_LOAD];    \
         for (int k = 1; k < nx; ++k) {                                                             \
             vx[k] = sgv_set1(x[k]);                                                                \
             vcx[2 * k] = sgv_set1(cx[2 * k]);                                                      \
             vcx[2 * k + 1] = sgv_set1(cx[2 * k + 1]);                                              \
             vxd[k] = vxdd[k] = sgv_set1(0.0);                                                      \
         }                                                                                          \
+        if (frc != NULL && loads == NULL)                                                          \
+            for (int k = 0; k < nload; ++k) vld[k] = sgv_set1(0.0);                                \
         const sg_vd accept = sgv_set1(0.25 * opt->singular_tol);                                   \
         for (size_t k = 0; k < n; k += SG_W) {                                                     \
             const int lanes = n - k < SG_W ? (int)(n - k) : SG_W;                                  \
@@ -254,7 +345,7 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 vector_block = sgv_all(CLOSED_V(vx, vcx, c, branch, vq, vcq));                     \
             }                                                                                      \
             if (!vector_block) {                                                                   \
-                for (int l = 0; l < lanes; ++l) SG_CLOSED_STEP(CLOSED, MOTION, idx[l])             \
+                for (int l = 0; l < lanes; ++l) SG_CLOSED_STEP(CLOSED, MOTION, FORCES, idx[l])     \
                 continue;                                                                          \
             }                                                                                      \
             for (int l = 0; l < SG_W; ++l) {                                                       \
@@ -267,17 +358,26 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 }                                                                                  \
                 have_last = 1;                                                                     \
             }                                                                                      \
-            sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1], vcond;                          \
+            sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1], vout[(NFO) + 1], vcond;         \
             sg_vm ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);          \
             const sg_vd vest = vcond * (eps + vcond * eps);                                        \
             ok &= vest <= accept;                                                                  \
+            if (frc != NULL) {                                                                     \
+                if (loads != NULL) {                                                               \
+                    const double *rld[SG_W];                                                       \
+                    for (int l = 0; l < SG_W; ++l) rld[l] = loads + idx[l] * (size_t)nload;        \
+                    sgv_load_rows(rld, nload, vld);                                                \
+                }                                                                                  \
+                ok &= FORCES_V(vq, vcq, vx, vcx, vxd, c, vobs, gv, vld, vout);                     \
+            }                                                                                      \
             if (lanes == SG_W && sgv_all(ok)) { /* the common case: whole rows from registers */   \
-                double *rq[SG_W], *rqd[SG_W], *rqdd[SG_W], *robs[SG_W];                            \
+                double *rq[SG_W], *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];               \
                 for (int l = 0; l < SG_W; ++l) {                                                   \
                     rq[l] = q + idx[l] * (size_t)nq;                                               \
                     rqd[l] = qd + idx[l] * (size_t)nq;                                             \
                     rqdd[l] = qdd + idx[l] * (size_t)nq;                                           \
                     robs[l] = obs + idx[l] * (size_t)nobs;                                         \
+                    rfrc[l] = frc != NULL ? frc + idx[l] * (size_t)nfo : NULL;                     \
                     status[idx[l]] = SG_OK;                                                        \
                     if (err) err[idx[l]] = vest[l];                                                \
                 }                                                                                  \
@@ -285,6 +385,7 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 sgv_store_rows(vqd, nq, rqd);                                                      \
                 sgv_store_rows(vqdd, nq, rqdd);                                                    \
                 sgv_store_rows(vobs, (NOBS), robs);                                                \
+                if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                \
                 continue;                                                                          \
             }                                                                                      \
             for (int l = 0; l < lanes; ++l) {                                                      \
@@ -298,11 +399,13 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                         qddi[j] = vqdd[j][l];                                                      \
                     }                                                                              \
                     for (int j = 0; j < (NOBS); ++j) oi[j] = vobs[j][l];                           \
+                    if (frc != NULL)                                                               \
+                        for (int j = 0; j < (NFO); ++j) frc[i * (size_t)nfo + j] = vout[j][l];     \
                     status[i] = SG_OK;                                                             \
                     if (err) err[i] = vest[l];                                                     \
                     continue;                                                                      \
                 }                                                                                  \
-                /* the scalar motion at this lane's solved position decides it */                  \
+                /* the scalar motion and forces at this lane's solved position decide it */        \
                 double cq[2 * SG_MAX_Q];                                                           \
                 for (int j = 0; j < nq; ++j) qi[j] = vq[j][l];                                     \
                 for (int j = 0; j < 2 * nq; ++j) cq[j] = vcq[j][l];                                \
@@ -312,7 +415,7 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 xd[0] = om[l];                                                                     \
                 xdd[0] = al[l];                                                                    \
                 int st = SG_OK;                                                                    \
-                SG_CLOSED_FINISH(MOTION)                                                           \
+                SG_CLOSED_FINISH(MOTION, FORCES)                                                   \
             }                                                                                      \
         }                                                                                          \
         return failures;                                                                           \

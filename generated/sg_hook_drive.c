@@ -652,12 +652,12 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[47] = c[46]*cq[3] + c[48]*cq[2] + t1;
 }
 
-/* sg_hook_drive_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_hook_drive_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_CLOSED_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion)
+/* sg_hook_drive_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_hook_drive_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_CLOSED_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion, sg_hook_drive_forces)
 
-/* The SIMD twins of the closed and motion kernels and the sweep four positions at a time (csrc/sg_simd.h):
- * compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+ * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
@@ -853,8 +853,114 @@ SG_VINLINE sg_vm sg_hook_drive_motion_v(const sg_vd *q, const sg_vd *cq, const s
     return ok;
 }
 
-static SG_FLATTEN size_t sg_hook_drive_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_SIMD_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion, sg_hook_drive_closed_v, sg_hook_drive_motion_v, 69)
+SG_VINLINE sg_vm sg_hook_drive_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
+{
+    (void)x;
+    sg_vm ok = sgv_true();
+    const double fr[6] = {0.0};
+    const sg_vd t0 = c[10]*cq[1];
+    const sg_vd t1 = c[13]*cq[0];
+    const sg_vd t2 = -((cq[2])*(cq[2]))*q[3] - ((cq[3])*(cq[3]))*q[3];
+    const sg_vd t3 = sgv_set1(-fr[0]);
+    const sg_vd t4 = -gv[1] + obs[41];
+    const sg_vd t5 = -gv[0] + obs[40];
+    const sg_vd t6 = c[40]*cq[0];
+    const sg_vd t7 = c[40]*cq[1];
+    const sg_vd t8 = c[58]*(-gv[0] + obs[49]) - ld[2];
+    const sg_vd t9 = c[58]*(-gv[1] + obs[50]) - ld[3];
+    const sg_vd t10 = cq[2]*fr[5];
+    const sg_vd t11 = c[59]*(-gv[0] + obs[67]) - ld[4] - t10;
+    const sg_vd t12 = cq[3]*fr[5];
+    const sg_vd t13 = c[59]*(-gv[1] + obs[68]) - ld[5] - t12;
+    const sg_vd t14 = c[47]*cq[2] + c[49]*cq[3];
+    const sg_vd t15 = c[48]*cq[3] + c[49]*cq[2];
+    const sg_vd t16 = c[46]*cq[3] + c[48]*cq[2];
+    const sg_vd t17 = c[65]*(-gv[0] + obs[58]) - ld[6] + t10;
+    const sg_vd t18 = c[44]*cq[3] + c[45]*cq[2];
+    const sg_vd t19 = c[65]*(-gv[1] + obs[59]) - ld[7] + t12;
+    const sg_vd t20 = c[43]*cq[2] + c[45]*cq[3] + cq[3]*q[3];
+    const sg_vd t21 = cq[2]*q[3] + t18;
+    const sg_vd t22 = -c[60]*obs[53] + fr[3] - fr[5]*(-cq[2]*t20 + cq[3]*t21) + ld[11] + ld[6]*(c[62]*cq[2] + c[63]*cq[3]) + ld[7]*(c[62]*cq[3] + c[64]*cq[2]) + t17*(c[42]*cq[3] + c[44]*cq[2]) + t18*t19;
+    const sg_vd t23 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t24 = c[34]*t23;
+    const sg_vd t25 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t26 = c[34]*t25;
+    const sg_vd t27 = fr[2]*obs[43];
+    const sg_vd t28 = fr[3]*obs[52];
+    const sg_vd t29 = -obs[25] + obs[34];
+    const sg_vd t30 = fr[0]*t29;
+    const sg_vd t31 = -obs[34] + obs[43];
+    const sg_vd t32 = fr[1]*t31;
+    const sg_vd t33 = -obs[43] + obs[61];
+    const sg_vd t34 = fr[4]*t33;
+    const sg_vd t35 = cq[2]*(obs[52]*t20 - obs[56] - obs[61]*t14 + obs[65]) + cq[3]*(-obs[52]*t21 - obs[57] + obs[61]*t15 + obs[66]);
+    const sg_vd t36 = fr[5]*t35;
+    {
+        const sg_vd d = t2;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), sgv_fabs(t2));
+        out[2] = (c[61]*obs[62] - fr[4] - fr[5]*(-cq[2]*t14 + cq[3]*t15) - ld[12] - ld[4]*t16 - ld[5]*t15 - t11*t16 - t13*t15 - t22)/d;
+    }
+    {
+        /* block of unknowns 10, 11 */
+        sg_vd M[4], r[2];
+        sg_vm piv[2];
+        M[0] = c[16]*cq[1];
+        M[1] = c[7]*cq[0];
+        r[0] = c[55]*obs[44] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - fr[1] - fr[2] + fr[4] - ld[10] - ld[2]*(c[56]*cq[1] + t6) - ld[3]*(c[57]*cq[0] + t7) - t11*(t0 + t1) - t13*(c[13]*cq[1] + c[19]*cq[0]) - t8*(c[38]*cq[1] + t6) - t9*(c[41]*cq[0] + t7);
+        M[2] = c[6]*cq[5];
+        M[3] = c[18]*cq[4];
+        r[1] = c[52]*obs[35] + c[53]*cq[4]*t4 + c[54]*cq[5]*t5 + fr[1] - ld[9] + t3;
+        ok &= sgv_lu_factor(2, M, piv);
+        sgv_lu_solve(2, M, piv, r);
+        out[10] = r[0];
+        out[11] = r[1];
+    }
+    out[13] = -cq[2]*out[2] + t13;
+    out[12] = cq[3]*out[2] + t11;
+    out[7] = -out[11] + out[13] + t9;
+    out[6] = -out[10] + out[12] + t8;
+    out[3] = out[2]*t2 + t22;
+    out[9] = cq[2]*out[2] + t19;
+    out[8] = -cq[3]*out[2] + t17;
+    out[5] = c[70]*t4 + out[11];
+    out[4] = c[70]*t5 + out[10];
+    out[1] = c[69]*(-gv[1] + obs[32]) + out[5] - ld[1];
+    out[0] = c[69]*(-gv[0] + obs[31]) + out[4] - ld[0];
+    out[14] = c[66]*obs[26] - out[0]*(c[32]*t25 + t24) - out[1]*(c[35]*t23 + t26) - out[4]*(c[33]*t23 + c[68]*t25) - out[5]*(c[33]*t25 + c[67]*t23) - ld[0]*(c[67]*t25 + t24) - ld[1]*(c[68]*t23 + t26) - ld[8] - t3;
+    out[15] = out[14];
+    out[16] = out[14]*xd[0];
+    out[17] = -cq[3]*out[2];
+    out[18] = cq[2]*out[2];
+    out[19] = out[0] + out[6] + out[8];
+    out[20] = out[1] + out[7] + out[9];
+    out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14] + fr[2] + fr[3];
+    out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
+    out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
+    out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t27 + t28 + t30 + t32 + t34 + t36;
+    out[25] = sgv_set1(0.0);
+    out[26] = sgv_set1(fr[0]);
+    out[27] = -t30;
+    out[28] = sgv_set1(fr[1]);
+    out[29] = -t32;
+    out[30] = sgv_set1(fr[2]);
+    out[31] = -t27;
+    out[32] = sgv_set1(fr[3]);
+    out[33] = -t28;
+    out[34] = sgv_set1(fr[4]);
+    out[35] = -t34;
+    out[36] = sgv_set1(fr[5]);
+    out[37] = -t36;
+    ok &= sgv_isfinite((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + (out[12] + out[13]))) + ((out[14] + out[15]) + (out[16] + (out[17] + out[18]))))) + ((((out[19] + out[20]) + (out[21] + out[22])) + ((out[23] + out[24]) + (out[25] + (out[26] + out[27])))) + (((out[28] + out[29]) + (out[30] + (out[31] + out[32]))) + ((out[33] + out[34]) + (out[35] + (out[36] + out[37])))))));
+    return ok;
+}
+
+SG_VINLINE int sg_hook_drive_forces_in_simd(const double *c)
+{
+    return c[93] == 0.0 && c[94] == 0.0 && c[95] == 0.0 && c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0;
+}
+
+static SG_FLATTEN size_t sg_hook_drive_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_SIMD_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion, sg_hook_drive_forces, sg_hook_drive_closed_v, sg_hook_drive_motion_v, sg_hook_drive_forces_v, sg_hook_drive_forces_in_simd, 69, 38)
 #pragma GCC pop_options
 #endif
 

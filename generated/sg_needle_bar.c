@@ -383,12 +383,12 @@ void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, c
     out[31] = c[22] + q[0];
 }
 
-/* sg_needle_bar_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_needle_bar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_CLOSED_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion)
+/* sg_needle_bar_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_needle_bar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_CLOSED_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_forces)
 
-/* The SIMD twins of the closed and motion kernels and the sweep four positions at a time (csrc/sg_simd.h):
- * compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+ * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
@@ -503,8 +503,69 @@ SG_VINLINE sg_vm sg_needle_bar_motion_v(const sg_vd *q, const sg_vd *cq, const s
     return ok;
 }
 
-static SG_FLATTEN size_t sg_needle_bar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_SIMD_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_closed_v, sg_needle_bar_motion_v, 51)
+SG_VINLINE sg_vm sg_needle_bar_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
+{
+    (void)x;
+    sg_vm ok = sgv_true();
+    const double fr[3] = {0.0};
+    const sg_vd t0 = sgv_set1(-fr[0]);
+    const sg_vd t1 = -gv[0] + obs[40];
+    const sg_vd t2 = -c[25]*(-gv[1] + obs[50]) + fr[2] + ld[3] + ld[5] + ld[7];
+    const sg_vd t3 = -t2;
+    const sg_vd t4 = c[19]*cq[2];
+    const sg_vd t5 = c[26]*(-gv[1] + obs[41]) - t2;
+    const sg_vd t6 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t7 = c[17]*t6;
+    const sg_vd t8 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t9 = c[17]*t8;
+    const sg_vd t11 = -obs[25] + obs[34];
+    const sg_vd t12 = fr[0]*t11;
+    const sg_vd t13 = -obs[34] + obs[43];
+    const sg_vd t14 = fr[1]*t13;
+    const sg_vd t15 = c[37]*obs[43] + obs[48];
+    const sg_vd t16 = fr[2]*t15;
+    {
+        const sg_vd d = c[4]*cq[3];
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[4]*cq[3]);
+        out[6] = (c[24]*obs[35] + c[27]*cq[3]*t1 + fr[1] - ld[9] + t0 + t3*t4 + t4*t5)/d;
+    }
+    out[4] = c[26]*t1 + out[6];
+    out[2] = -c[25]*(-gv[0] + obs[49]) + out[6] + ld[2] + ld[4] + ld[6];
+    out[3] = -c[22]*out[6] + c[32]*obs[44] + c[33]*fr[2] + c[33]*ld[3] + c[33]*ld[5] + c[33]*ld[7] + c[33]*t3 - c[34]*out[2] + c[34]*ld[2] + c[35]*ld[4] + c[36]*ld[6] - fr[1] - ld[10];
+    out[5] = t5;
+    out[7] = t3;
+    out[1] = c[31]*(-gv[1] + obs[32]) + out[5] - ld[1];
+    out[0] = c[31]*(-gv[0] + obs[31]) + out[4] - ld[0];
+    out[8] = c[28]*obs[26] - out[0]*(c[15]*t8 + t7) - out[1]*(c[18]*t6 + t9) - out[4]*(c[16]*t6 + c[30]*t8) - out[5]*(c[16]*t8 + c[29]*t6) - ld[0]*(c[29]*t8 + t7) - ld[1]*(c[30]*t6 + t9) - ld[8] - t0;
+    const sg_vd t10 = -out[2];
+    out[9] = out[8];
+    out[10] = out[8]*xd[0];
+    out[11] = t10;
+    out[12] = sgv_set1(0.0);
+    out[13] = out[0] + t10;
+    out[14] = out[1] + fr[2];
+    out[15] = c[21]*fr[2] + c[37]*fr[2] + out[2]*q[0] + out[3] + out[8];
+    out[16] = c[38]*((obs[25])*(obs[25])) + c[39]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[40]*((obs[34])*(obs[34])) + c[41]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[42]*((obs[43])*(obs[43])) + c[43]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
+    out[17] = c[44]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[45]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[46]*(gv[0]*obs[27] + gv[1]*obs[28]);
+    out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t12 + t14 + t16;
+    out[19] = sgv_set1(0.0);
+    out[20] = sgv_set1(fr[0]);
+    out[21] = -t12;
+    out[22] = sgv_set1(fr[1]);
+    out[23] = -t14;
+    out[24] = sgv_set1(fr[2]);
+    out[25] = -t16;
+    ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))));
+    return ok;
+}
+
+SG_VINLINE int sg_needle_bar_forces_in_simd(const double *c)
+{
+    return c[50] == 0.0 && c[51] == 0.0 && c[52] == 0.0;
+}
+
+static SG_FLATTEN size_t sg_needle_bar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_SIMD_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_forces, sg_needle_bar_closed_v, sg_needle_bar_motion_v, sg_needle_bar_forces_v, sg_needle_bar_forces_in_simd, 51, 26)
 #pragma GCC pop_options
 #endif
 

@@ -744,12 +744,12 @@ void sg_overlock_feed_anchors(const double *q, const double *cq, const double *x
     out[57] = c[60]*cq[7] + t15;
 }
 
-/* sg_overlock_feed_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_feed_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_CLOSED_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overlock_feed_motion)
+/* sg_overlock_feed_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_overlock_feed_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_CLOSED_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overlock_feed_motion, sg_overlock_feed_forces)
 
-/* The SIMD twins of the closed and motion kernels and the sweep four positions at a time (csrc/sg_simd.h):
- * compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+ * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
@@ -994,8 +994,104 @@ SG_VINLINE sg_vm sg_overlock_feed_motion_v(const sg_vd *q, const sg_vd *cq, cons
     return ok;
 }
 
-static SG_FLATTEN size_t sg_overlock_feed_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_SIMD_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overlock_feed_motion, sg_overlock_feed_closed_v, sg_overlock_feed_motion_v, 87)
+SG_VINLINE sg_vm sg_overlock_feed_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
+{
+    (void)q;
+    (void)x;
+    sg_vm ok = sgv_true();
+    const sg_vd t0 = -gv[1] + obs[59];
+    const sg_vd t1 = -gv[0] + obs[58];
+    const sg_vd t2 = c[54]*cq[0];
+    const sg_vd t3 = c[54]*cq[1];
+    const sg_vd t4 = c[73]*(-gv[1] + obs[77]) - ld[3] - ld[5];
+    const sg_vd t5 = c[73]*(-gv[0] + obs[76]) - ld[2] - ld[4];
+    const sg_vd t6 = c[72]*(-gv[0] + obs[67]) - ld[0];
+    const sg_vd t7 = c[72]*(-gv[1] + obs[68]) - ld[1];
+    const sg_vd t8 = c[58]*cq[4];
+    const sg_vd t9 = c[58]*cq[5];
+    const sg_vd t10 = -gv[1] + obs[86];
+    const sg_vd t11 = -gv[0] + obs[85];
+    const sg_vd t12 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t13 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t14 = c[1]*cx[3] + c[3]*cx[2];
+    const sg_vd t15 = c[1]*cx[2] + c[2]*cx[3];
+    const sg_vd t16 = cx[0]*t14 + cx[1]*t15;
+    const sg_vd t17 = cx[0]*t15 - cx[1]*t14;
+    const sg_vd t18 = c[13]*cx[0] + c[14]*cx[1];
+    const sg_vd t19 = c[48]*t18;
+    const sg_vd t20 = c[13]*cx[1] + c[15]*cx[0];
+    const sg_vd t21 = c[48]*t20;
+    {
+        /* block of unknowns 16, 17 */
+        sg_vd M[4], r[2];
+        sg_vm piv[2];
+        M[0] = c[22]*cq[7];
+        M[1] = c[17]*cq[6];
+        r[0] = c[77]*obs[80] + c[78]*cq[6]*t10 + c[79]*cq[7]*t11 - ld[14];
+        M[2] = c[16]*cq[5];
+        M[3] = c[27]*cq[4];
+        r[1] = c[74]*obs[71] - ld[13] - ld[2]*(c[59]*cq[5] + t8) - ld[3]*(c[56]*cq[4] + t9) - ld[4]*(c[75]*cq[5] + t8) - ld[5]*(c[76]*cq[4] + t9) - t4*(c[59]*cq[4] + t9) - t5*(c[56]*cq[5] + t8);
+        ok &= sgv_lu_factor(2, M, piv);
+        sgv_lu_solve(2, M, piv, r);
+        out[16] = r[0];
+        out[17] = r[1];
+    }
+    {
+        /* block of unknowns 10, 11 */
+        sg_vd M[4], r[2];
+        sg_vm piv[2];
+        M[0] = c[8]*cq[1];
+        M[1] = c[24]*cq[0];
+        r[0] = c[11]*cq[0]*t4 - c[11]*cq[1]*out[16] - c[26]*cq[0]*out[17] + c[26]*cq[1]*t5 + c[69]*obs[62] - ld[0]*(c[70]*cq[1] + t2) - ld[1]*(c[71]*cq[0] + t3) - ld[12] - t6*(c[52]*cq[1] + t2) - t7*(c[55]*cq[0] + t3);
+        M[2] = c[7]*cq[3];
+        M[3] = c[25]*cq[2];
+        r[1] = c[66]*obs[53] + c[67]*cq[2]*t0 + c[68]*cq[3]*t1 - ld[11];
+        ok &= sgv_lu_factor(2, M, piv);
+        sgv_lu_solve(2, M, piv, r);
+        out[10] = r[0];
+        out[11] = r[1];
+    }
+    out[13] = out[17] + t4;
+    out[12] = out[16] + t5;
+    out[9] = -out[11] + out[13] + t7;
+    out[8] = -out[10] + out[12] + t6;
+    out[15] = c[93]*t10 - out[17];
+    out[14] = c[93]*t11 - out[16];
+    out[7] = c[92]*t0 + out[11];
+    out[6] = c[92]*t1 + out[10];
+    out[5] = c[91]*(-gv[1] + obs[50]) + out[15] - ld[7];
+    out[4] = c[91]*(-gv[0] + obs[49]) + out[14] - ld[6];
+    out[20] = c[88]*obs[44] - out[14]*(c[47]*t18 + c[90]*t20) - out[15]*(c[47]*t20 + c[89]*t18) - out[4]*(c[46]*t20 + t19) - out[5]*(c[49]*t18 + t21) - ld[10] - ld[6]*(c[89]*t20 + t19) - ld[7]*(c[90]*t18 + t21);
+    out[3] = c[87]*(-gv[1] + obs[41]) + out[7];
+    out[2] = c[87]*(-gv[0] + obs[40]) + out[6];
+    out[19] = c[84]*obs[35] - out[2]*(c[41]*t16 + c[43]*t17) - out[3]*(c[43]*t16 + c[44]*t17) - out[6]*(c[42]*t17 + c[85]*t16) - out[7]*(c[42]*t16 + c[86]*t17) - ld[9];
+    out[1] = c[83]*(-gv[1] + obs[32]) + out[3];
+    out[0] = c[83]*(-gv[0] + obs[31]) + out[2];
+    out[18] = c[80]*obs[26] - out[0]*(c[37]*t12 + c[39]*t13) - out[1]*(c[39]*t12 + c[40]*t13) + out[19] - out[2]*(c[38]*t13 + c[81]*t12) - out[3]*(c[38]*t12 + c[82]*t13) - ld[8];
+    const sg_vd t22 = out[18] + out[20];
+    out[21] = t22;
+    out[22] = out[19];
+    out[23] = t22*xd[0];
+    out[24] = out[19]*xd[1];
+    out[25] = out[0] + out[4] + out[8];
+    out[26] = out[1] + out[5] + out[9];
+    out[27] = c[21]*out[8] + c[5]*out[9] + t22;
+    out[28] = c[100]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[101]*((obs[52])*(obs[52])) + c[102]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[103]*((obs[61])*(obs[61])) + c[104]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[105]*((obs[70])*(obs[70])) + c[106]*(((obs[83])*(obs[83])) + ((obs[84])*(obs[84]))) + c[107]*((obs[79])*(obs[79])) + c[94]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[95]*((obs[25])*(obs[25])) + c[96]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[97]*((obs[34])*(obs[34])) + c[98]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[99]*((obs[43])*(obs[43]));
+    out[29] = c[108]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[109]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[110]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[111]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[112]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[113]*(gv[0]*obs[72] + gv[1]*obs[73]) + c[114]*(gv[0]*obs[81] + gv[1]*obs[82]);
+    out[30] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[13]*obs[70] + ld[14]*obs[79] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
+    out[31] = sgv_set1(0.0);
+    ok &= sgv_isfinite((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + out[7]))) + (((out[8] + out[9]) + (out[10] + out[11])) + ((out[12] + out[13]) + (out[14] + out[15])))) + ((((out[16] + out[17]) + (out[18] + out[19])) + ((out[20] + out[21]) + (out[22] + out[23]))) + (((out[24] + out[25]) + (out[26] + out[27])) + ((out[28] + out[29]) + (out[30] + out[31]))))));
+    return ok;
+}
+
+SG_VINLINE int sg_overlock_feed_forces_in_simd(const double *c)
+{
+    (void)c;
+    return 1;
+}
+
+static SG_FLATTEN size_t sg_overlock_feed_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_SIMD_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overlock_feed_motion, sg_overlock_feed_forces, sg_overlock_feed_closed_v, sg_overlock_feed_motion_v, sg_overlock_feed_forces_v, sg_overlock_feed_forces_in_simd, 87, 32)
 #pragma GCC pop_options
 #endif
 

@@ -344,12 +344,12 @@ void sg_overlock_knife_anchors(const double *q, const double *cq, const double *
     out[23] = c[26]*cq[1] + c[28]*cq[0] + c[5];
 }
 
-/* sg_overlock_knife_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_knife_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_CLOSED_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion)
+/* sg_overlock_knife_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_overlock_knife_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_CLOSED_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion, sg_overlock_knife_forces)
 
-/* The SIMD twins of the closed and motion kernels and the sweep four positions at a time (csrc/sg_simd.h):
- * compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+ * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
@@ -450,8 +450,62 @@ SG_VINLINE sg_vm sg_overlock_knife_motion_v(const sg_vd *q, const sg_vd *cq, con
     return ok;
 }
 
-static SG_FLATTEN size_t sg_overlock_knife_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_SIMD_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion, sg_overlock_knife_closed_v, sg_overlock_knife_motion_v, 33)
+SG_VINLINE sg_vm sg_overlock_knife_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
+{
+    (void)q;
+    (void)x;
+    sg_vm ok = sgv_true();
+    const sg_vd t0 = -gv[1] + obs[23];
+    const sg_vd t1 = -gv[0] + obs[22];
+    const sg_vd t2 = c[28]*cq[0];
+    const sg_vd t3 = c[28]*cq[1];
+    const sg_vd t4 = c[38]*(-gv[0] + obs[31]) - ld[0];
+    const sg_vd t5 = c[38]*(-gv[1] + obs[32]) - ld[1];
+    const sg_vd t6 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t7 = c[1]*cx[0] + c[2]*cx[1];
+    {
+        /* block of unknowns 6, 7 */
+        sg_vd M[4], r[2];
+        sg_vm piv[2];
+        M[0] = c[11]*cq[1];
+        M[1] = c[7]*cq[0];
+        r[0] = c[35]*obs[26] - ld[0]*(c[36]*cq[1] + t2) - ld[1]*(c[37]*cq[0] + t3) - ld[4] - t4*(c[26]*cq[1] + t2) - t5*(c[29]*cq[0] + t3);
+        M[2] = c[6]*cq[3];
+        M[3] = c[13]*cq[2];
+        r[1] = c[32]*obs[17] + c[33]*cq[2]*t0 + c[34]*cq[3]*t1 - ld[3];
+        ok &= sgv_lu_factor(2, M, piv);
+        sgv_lu_solve(2, M, piv, r);
+        out[6] = r[0];
+        out[7] = r[1];
+    }
+    out[5] = -out[7] + t5;
+    out[4] = -out[6] + t4;
+    out[3] = c[43]*t0 + out[7];
+    out[2] = c[43]*t1 + out[6];
+    out[1] = c[42]*(-gv[1] + obs[14]) + out[3];
+    out[0] = c[42]*(-gv[0] + obs[13]) + out[2];
+    out[8] = c[39]*obs[8] - out[0]*(c[20]*t6 + c[22]*t7) - out[1]*(c[22]*t6 + c[23]*t7) - out[2]*(c[21]*t7 + c[40]*t6) - out[3]*(c[21]*t6 + c[41]*t7) - ld[2];
+    out[9] = out[8];
+    out[10] = out[8]*xd[0];
+    out[11] = out[0] + out[4];
+    out[12] = out[1] + out[5];
+    out[13] = c[12]*out[4] + c[4]*out[5] + out[8];
+    out[14] = c[44]*((obs[7])*(obs[7])) + c[45]*(((obs[20])*(obs[20])) + ((obs[21])*(obs[21]))) + c[46]*((obs[16])*(obs[16])) + c[47]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[48]*((obs[25])*(obs[25])) + c[49]*(((obs[11])*(obs[11])) + ((obs[12])*(obs[12])));
+    out[15] = c[50]*(gv[0]*obs[18] + gv[1]*obs[19]) + c[51]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[52]*(gv[0]*obs[9] + gv[1]*obs[10]);
+    out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[7] + ld[3]*obs[16] + ld[4]*obs[25];
+    out[17] = sgv_set1(0.0);
+    ok &= sgv_isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + out[12])) + ((out[13] + out[14]) + (out[15] + (out[16] + out[17]))))));
+    return ok;
+}
+
+SG_VINLINE int sg_overlock_knife_forces_in_simd(const double *c)
+{
+    (void)c;
+    return 1;
+}
+
+static SG_FLATTEN size_t sg_overlock_knife_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_SIMD_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion, sg_overlock_knife_forces, sg_overlock_knife_closed_v, sg_overlock_knife_motion_v, sg_overlock_knife_forces_v, sg_overlock_knife_forces_in_simd, 33, 18)
 #pragma GCC pop_options
 #endif
 

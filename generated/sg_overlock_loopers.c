@@ -520,12 +520,12 @@ void sg_overlock_loopers_anchors(const double *q, const double *cq, const double
     out[35] = c[13] + c[57]*cq[3] + c[59]*cq[2];
 }
 
-/* sg_overlock_loopers_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_loopers_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg_overlock_loopers_motion)
+/* sg_overlock_loopers_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_overlock_loopers_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg_overlock_loopers_motion, sg_overlock_loopers_forces)
 
-/* The SIMD twins of the closed and motion kernels and the sweep four positions at a time (csrc/sg_simd.h):
- * compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+ * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
@@ -668,8 +668,78 @@ SG_VINLINE sg_vm sg_overlock_loopers_motion_v(const sg_vd *q, const sg_vd *cq, c
     return ok;
 }
 
-static SG_FLATTEN size_t sg_overlock_loopers_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_SIMD_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg_overlock_loopers_motion, sg_overlock_loopers_closed_v, sg_overlock_loopers_motion_v, 48)
+SG_VINLINE sg_vm sg_overlock_loopers_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
+{
+    (void)q;
+    (void)x;
+    sg_vm ok = sgv_true();
+    const sg_vd t0 = c[2]*cx[0] + c[3]*cx[1];
+    const sg_vd t1 = c[11]*cq[0] + c[9]*cq[1];
+    const sg_vd t2 = c[11]*cq[1] + c[28]*cq[0];
+    const sg_vd t3 = -gv[0] + obs[37];
+    const sg_vd t4 = -gv[1] + obs[38];
+    const sg_vd t5 = c[70]*(-gv[0] + obs[28]) - ld[0];
+    const sg_vd t6 = c[70]*(-gv[1] + obs[29]) - ld[1];
+    const sg_vd t7 = c[79]*(-gv[0] + obs[46]) - ld[2];
+    const sg_vd t8 = c[79]*(-gv[1] + obs[47]) - ld[3];
+    const sg_vd t9 = c[3]*cx[0] + c[6]*cx[1];
+    const sg_vd t10 = c[0]*cq[1] + c[19] + c[20]*t0;
+    const sg_vd t11 = c[0]*cq[0] + c[18];
+    const sg_vd t12 = c[85]*t11;
+    const sg_vd t13 = c[85]*t10;
+    {
+        /* block of unknowns 9, 10 */
+        sg_vd M[4], r[2];
+        sg_vm piv[2];
+        M[0] = c[23]*cq[3];
+        M[1] = c[15]*cq[2];
+        r[0] = c[75]*obs[41] - ld[2]*(c[76]*cq[2] + c[77]*cq[3]) - ld[3]*(c[76]*cq[3] + c[78]*cq[2]) - ld[7] - t7*(c[57]*cq[3] + c[59]*cq[2]) - t8*(c[59]*cq[3] + c[60]*cq[2]);
+        M[2] = c[14]*cq[5];
+        M[3] = c[29]*cq[4];
+        r[1] = c[72]*obs[32] + c[73]*cq[4]*t4 + c[74]*cq[5]*t3 - ld[6];
+        ok &= sgv_lu_factor(2, M, piv);
+        sgv_lu_solve(2, M, piv, r);
+        out[9] = r[0];
+        out[10] = r[1];
+    }
+    {
+        const sg_vd d = c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[0]*t0;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[0]*t0);
+        out[4] = (c[66]*obs[23] + c[71]*t1*t3 + c[71]*t2*t4 - out[10]*t2 - out[9]*t1 - ld[0]*(c[67]*cq[0] + c[68]*cq[1]) - ld[1]*(c[67]*cq[1] + c[69]*cq[0]) - ld[5] - t5*(c[51]*cq[1] + c[53]*cq[0]) - t6*(c[53]*cq[1] + c[54]*cq[0]))/d;
+    }
+    out[6] = c[86]*t4 + out[10];
+    out[5] = c[86]*t3 + out[9];
+    out[3] = -out[4]*t13 + out[6] + t6;
+    out[2] = -out[4]*t12 + out[5] + t5;
+    out[8] = -out[10] + t8;
+    out[7] = -out[9] + t7;
+    out[1] = c[83]*(-gv[1] + obs[20]) - c[84]*out[4]*t10;
+    out[0] = c[83]*(-gv[0] + obs[19]) - c[84]*out[4]*t11;
+    out[11] = c[80]*obs[14] - out[0]*(c[47]*t0 + c[49]*t9) - out[1]*(c[49]*t0 + c[50]*t9) - out[4]*(c[81]*t0*t9 + c[82]*t10*t9) - ld[4];
+    out[12] = out[11];
+    out[13] = out[11]*xd[0];
+    out[14] = out[4]*t12;
+    out[15] = out[4]*t13;
+    out[16] = c[87]*out[4]*t9;
+    out[17] = out[0] + out[2] + out[7];
+    out[18] = out[1] + out[3] + out[8];
+    out[19] = c[0]*out[1] + c[12]*out[8] + c[19]*out[0] + c[25]*out[7] + out[11];
+    out[20] = c[88]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18]))) + c[89]*((obs[13])*(obs[13])) + c[90]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[91]*((obs[22])*(obs[22])) + c[92]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[93]*((obs[31])*(obs[31])) + c[94]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[95]*((obs[40])*(obs[40]));
+    out[21] = c[71]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[96]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[97]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[98]*(gv[0]*obs[42] + gv[1]*obs[43]);
+    out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
+    out[23] = sgv_set1(0.0);
+    ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))));
+    return ok;
+}
+
+SG_VINLINE int sg_overlock_loopers_forces_in_simd(const double *c)
+{
+    (void)c;
+    return 1;
+}
+
+static SG_FLATTEN size_t sg_overlock_loopers_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_SIMD_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg_overlock_loopers_motion, sg_overlock_loopers_forces, sg_overlock_loopers_closed_v, sg_overlock_loopers_motion_v, sg_overlock_loopers_forces_v, sg_overlock_loopers_forces_in_simd, 48, 24)
 #pragma GCC pop_options
 #endif
 

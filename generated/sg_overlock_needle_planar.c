@@ -506,12 +506,12 @@ void sg_overlock_needle_planar_anchors(const double *q, const double *cq, const 
     out[39] = c[49] + q[1];
 }
 
-/* sg_overlock_needle_planar_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_needle_planar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_CLOSED_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_planar_closed, sg_overlock_needle_planar_motion)
+/* sg_overlock_needle_planar_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_overlock_needle_planar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_CLOSED_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_planar_closed, sg_overlock_needle_planar_motion, sg_overlock_needle_planar_forces)
 
-/* The SIMD twins of the closed and motion kernels and the sweep four positions at a time (csrc/sg_simd.h):
- * compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+ * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
@@ -660,8 +660,72 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_motion_v(const sg_vd *q, const sg_vd 
     return ok;
 }
 
-static SG_FLATTEN size_t sg_overlock_needle_planar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_SIMD_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_planar_closed, sg_overlock_needle_planar_motion, sg_overlock_needle_planar_closed_v, sg_overlock_needle_planar_motion_v, 54)
+SG_VINLINE sg_vm sg_overlock_needle_planar_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
+{
+    (void)x;
+    sg_vm ok = sgv_true();
+    const sg_vd t0 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t1 = c[1]*cx[1] + c[5]*cx[0];
+    const sg_vd t2 = c[44]*cq[0];
+    const sg_vd t3 = c[44]*cq[1];
+    const sg_vd t4 = c[62]*(-gv[0] + obs[34]) - ld[0];
+    const sg_vd t5 = -gv[1] + obs[53];
+    const sg_vd t6 = c[63]*(-gv[1] + obs[44]) + c[64]*t5 - ld[3] - ld[5];
+    const sg_vd t7 = c[62]*(-gv[1] + obs[35]) - ld[1] + t6;
+    const sg_vd t8 = -gv[0] + obs[43];
+    const sg_vd t9 = c[64]*t5 - ld[3] - ld[5];
+    const sg_vd t10 = c[46]*cq[4];
+    const sg_vd t11 = c[10]*cq[0] + c[12]*cq[1] + c[18]*t0 + c[19];
+    const sg_vd t12 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t1;
+    const sg_vd t13 = c[77]*t12;
+    const sg_vd t14 = c[77]*t11;
+    {
+        const sg_vd d = c[14]*cq[5];
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[13]*cq[1]), sgv_fabs(c[14]*cq[5]));
+        out[7] = (c[65]*obs[38] + c[66]*cq[5]*t8 - ld[8] + t10*t6 + t10*t9)/d;
+    }
+    {
+        const sg_vd d = c[52]*cq[0] + c[53]*cq[1] + c[54]*cq[0] + c[55]*cq[1] + c[56]*cq[1]*t0 + c[57]*cq[0]*t0 + c[57]*cq[1]*t1 + c[58]*cq[0]*t1;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[52]*cq[0] + c[53]*cq[1] + c[54]*cq[0] + c[55]*cq[1] + c[56]*cq[1]*t0 + c[57]*cq[0]*t0 + c[57]*cq[1]*t1 + c[58]*cq[0]*t1);
+        out[6] = (-c[13]*cq[1]*out[7] + c[59]*obs[29] - ld[0]*(c[60]*cq[1] + t2) - ld[1]*(c[61]*cq[0] + t3) - ld[7] - t4*(c[42]*cq[1] + t2) - t6*(c[43]*cq[1] + c[60]*cq[0]) - t7*(c[45]*cq[0] + t3))/d;
+    }
+    out[4] = -out[6]*t14 + out[7] + t4;
+    out[9] = -c[63]*t8 + out[7];
+    out[5] = -out[6]*t13 + t7;
+    out[2] = -c[64]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
+    out[3] = -c[49]*out[9] + c[72]*obs[47] + c[73]*ld[2] + c[74]*ld[3] + c[74]*ld[5] + c[74]*t9 + c[75]*ld[4] - c[76]*out[2] - ld[9];
+    out[8] = t6;
+    out[10] = t9;
+    out[1] = c[70]*(-gv[1] + obs[26]) - c[71]*out[6]*t12;
+    out[0] = c[70]*(-gv[0] + obs[25]) - c[71]*out[6]*t11;
+    out[11] = c[67]*obs[20] - out[0]*(c[38]*t1 + c[40]*t0) - out[1]*(c[40]*t1 + c[41]*t0) - out[6]*(c[68]*t1*t11 + c[69]*t0*t12) - ld[6];
+    const sg_vd t15 = -out[2];
+    out[12] = out[11];
+    out[13] = out[11]*xd[0];
+    out[14] = t15;
+    out[15] = sgv_set1(0.0);
+    out[16] = out[6]*t14;
+    out[17] = out[6]*t13;
+    out[18] = sgv_set1(0.0);
+    out[19] = out[0] + out[4] + t15;
+    out[20] = out[1] + out[5];
+    out[21] = c[0]*out[1] + c[17]*out[0] + out[11] + out[2]*q[1] + out[3];
+    out[22] = c[78]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[79]*((obs[19])*(obs[19])) + c[80]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[81]*((obs[28])*(obs[28])) + c[82]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[83]*((obs[37])*(obs[37])) + c[84]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[85]*((obs[46])*(obs[46]));
+    out[23] = c[86]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[87]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[88]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[89]*(gv[0]*obs[48] + gv[1]*obs[49]);
+    out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
+    out[25] = sgv_set1(0.0);
+    ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))));
+    return ok;
+}
+
+SG_VINLINE int sg_overlock_needle_planar_forces_in_simd(const double *c)
+{
+    (void)c;
+    return 1;
+}
+
+static SG_FLATTEN size_t sg_overlock_needle_planar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_SIMD_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_planar_closed, sg_overlock_needle_planar_motion, sg_overlock_needle_planar_forces, sg_overlock_needle_planar_closed_v, sg_overlock_needle_planar_motion_v, sg_overlock_needle_planar_forces_v, sg_overlock_needle_planar_forces_in_simd, 54, 26)
 #pragma GCC pop_options
 #endif
 

@@ -414,12 +414,12 @@ void sg_take_up_anchors(const double *q, const double *cq, const double *x, cons
     out[27] = c[30]*cq[1] + c[5];
 }
 
-/* sg_take_up_sweep: the closed-form kinematic sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_take_up_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_CLOSED_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion)
+/* sg_take_up_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
+static SG_FLATTEN size_t sg_take_up_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_CLOSED_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_forces)
 
-/* The SIMD twins of the closed and motion kernels and the sweep four positions at a time (csrc/sg_simd.h):
- * compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+ * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
@@ -539,8 +539,74 @@ SG_VINLINE sg_vm sg_take_up_motion_v(const sg_vd *q, const sg_vd *cq, const sg_v
     return ok;
 }
 
-static SG_FLATTEN size_t sg_take_up_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status)
-SG_SIMD_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_closed_v, sg_take_up_motion_v, 45)
+SG_VINLINE sg_vm sg_take_up_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
+{
+    (void)q;
+    (void)x;
+    sg_vm ok = sgv_true();
+    const double fr[3] = {0.0};
+    const sg_vd t0 = sgv_set1(-fr[1]);
+    const sg_vd t1 = c[38]*(-gv[0] + obs[34]) - ld[4];
+    const sg_vd t2 = c[38]*(-gv[1] + obs[35]) - ld[5];
+    const sg_vd t3 = c[40]*(-gv[1] + obs[44]) - ld[3];
+    const sg_vd t4 = c[40]*(-gv[0] + obs[43]) - ld[2];
+    const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t6 = c[24]*t5;
+    const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t8 = c[24]*t7;
+    const sg_vd t9 = fr[2]*obs[37];
+    const sg_vd t10 = -obs[19] + obs[28];
+    const sg_vd t11 = fr[0]*t10;
+    const sg_vd t12 = -obs[28] + obs[37];
+    const sg_vd t13 = fr[1]*t12;
+    {
+        /* block of unknowns 6, 7 */
+        sg_vd M[4], r[2];
+        sg_vm piv[2];
+        M[0] = c[11]*cq[1];
+        M[1] = c[7]*cq[0];
+        r[0] = c[30]*cq[0]*t3 + c[30]*cq[1]*ld[2] + c[31]*cq[0]*ld[3] + c[31]*cq[1]*t4 + c[39]*obs[38] - fr[2] - ld[8] + t0;
+        M[2] = c[6]*cq[3];
+        M[3] = c[13]*cq[2];
+        r[1] = c[34]*obs[29] - fr[0] - ld[4]*(c[35]*cq[2] + c[36]*cq[3]) - ld[5]*(c[35]*cq[3] + c[37]*cq[2]) - ld[7] - t0 - t1*(c[26]*cq[3] + c[28]*cq[2]) - t2*(c[28]*cq[3] + c[29]*cq[2]);
+        ok &= sgv_lu_factor(2, M, piv);
+        sgv_lu_solve(2, M, piv, r);
+        out[6] = r[0];
+        out[7] = r[1];
+    }
+    out[5] = -out[7] + t3;
+    out[4] = -out[6] + t4;
+    out[3] = out[7] + t2;
+    out[2] = out[6] + t1;
+    out[1] = c[44]*(-gv[1] + obs[26]) + out[3] - ld[1];
+    out[0] = c[44]*(-gv[0] + obs[25]) + out[2] - ld[0];
+    out[8] = c[41]*obs[20] - out[0]*(c[22]*t7 + t6) - out[1]*(c[25]*t5 + t8) - out[2]*(c[23]*t5 + c[43]*t7) - out[3]*(c[23]*t7 + c[42]*t5) + fr[0] - ld[0]*(c[42]*t7 + t6) - ld[1]*(c[43]*t5 + t8) - ld[6];
+    out[9] = out[8];
+    out[10] = out[8]*xd[0];
+    out[11] = out[0] + out[4];
+    out[12] = out[1] + out[5];
+    out[13] = c[12]*out[4] + c[4]*out[5] + out[8] + fr[2];
+    out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
+    out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
+    out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + t11 + t13 + t9;
+    out[17] = sgv_set1(0.0);
+    out[18] = sgv_set1(fr[0]);
+    out[19] = -t11;
+    out[20] = sgv_set1(fr[1]);
+    out[21] = -t13;
+    out[22] = sgv_set1(fr[2]);
+    out[23] = -t9;
+    ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))));
+    return ok;
+}
+
+SG_VINLINE int sg_take_up_forces_in_simd(const double *c)
+{
+    return c[57] == 0.0 && c[58] == 0.0 && c[59] == 0.0;
+}
+
+static SG_FLATTEN size_t sg_take_up_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
+SG_SIMD_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_forces, sg_take_up_closed_v, sg_take_up_motion_v, sg_take_up_forces_v, sg_take_up_forces_in_simd, 45, 24)
 #pragma GCC pop_options
 #endif
 

@@ -102,10 +102,11 @@ HOOKS = {
     "sweep": ("size_t", (("const struct sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
                          ("const double *", "omega"), ("const double *", "alpha"), ("const double *", "held"),
                          ("const double *", "p"), ("const int *", "branch"), ("const sg_options *", "opt"),
-                         ("const size_t *", "order"), ("double *", "q"), ("double *", "qd"), ("double *", "qdd"),
-                         ("double *", "obs"), ("double *", "err"), ("int *", "status")),
-              "the closed-form kinematic sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY); NULL without a "
-              "closed form"),
+                         ("const size_t *", "order"), ("const double *", "gv"), ("const double *", "loads"),
+                         ("double *", "q"), ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"),
+                         ("double *", "err"), ("double *", "frc"), ("int *", "status")),
+              "the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not "
+              "NULL) kinetostatics as sg_sweep_forces; NULL without a closed form"),
 }
 HOOKS["sweep_simd"] = (HOOKS["sweep"][0], HOOKS["sweep"][1],
                        "the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL "

@@ -327,7 +327,18 @@ def _paths_agree(mech, phi, **kw):
         s.bind()()
     for x, y in ((a.q, b.q), (a.qd, b.qd), (a.qdd, b.qdd), (a.obs, b.obs), (a.err, b.err), (a.status, b.status)):
         assert np.array_equal(x, y), mech.name
+    if a.forces:
+        assert np.array_equal(a.frc, b.frc), mech.name
     return a.status
+
+
+def varying_loads(mech):
+    """A force at the first point over part of the turn and a torque on the first moving body: loads that change
+    from position to position (the kinetostatic loops read a row of them per position)."""
+    from sewgen.loads import Load
+
+    body = mech.description.bodies[0].name  # the description lists moving bodies only
+    return [Load(mech.point_names[0], fx=3.0, fy=-2.0, window=(1.0, 2.5)), Load(body, torque=0.4)]
 
 
 @pytest.mark.parametrize("name", catalog_names())
@@ -340,6 +351,8 @@ def test_the_inlined_sweep_equals_the_generic_loop_to_the_bit(name):
     phi = np.concatenate([PHI, rng.uniform(-7, 7, 13)])
     statuses = [_paths_agree(mech, phi)]
     statuses.append(_paths_agree(mech, phi, singular="flag"))
+    _paths_agree(mech, phi, forces=True)  # the inlined loop's kinetostatics, with loads and without
+    _paths_agree(mech, phi, forces=True, loads=varying_loads(mech), singular="flag")
     lengths = [p for p in mech.description.params if p.kind == "length" and p.positive]
     for f in (1.3, 2.2, 40.0):
         try:

@@ -131,7 +131,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
         ks.residual(), ks.scales(branches.row_scales(kin)), ks.blocks(blks), ks.motion(branches.row_scales(kin)),
         ks.forces(kst),
         ks.force_matrix(kst), ks.anchors(anchor_out)]
-    vector_kernels = ks.vector_kernels(dyads, branches.row_scales(kin)) if dyads is not None else []
+    vector_kernels = ks.vector_kernels(dyads, branches.row_scales(kin), kst) if dyads is not None else []
     kernels.insert(0, ks.constants_kernel())  # last to build: it evaluates what the others hoisted
     sizes = {"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
              "nbranch": len(dyads or []), "nc": len(ks.constants), "nf": len(kst.f),
@@ -149,7 +149,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
               "input_names": ", ".join(i.name for i in mech.inputs)},
         prefix=prefix, kernels=kernels,
         inline_sweep=abi.kernel_hook("sweep", f"{prefix}_sweep") if dyads is not None else None,
-        vector_kernels=vector_kernels, nobs=len(kin.observables),
+        vector_kernels=vector_kernels, nobs=len(kin.observables), nfo=len(kst.f) + len(kst.outputs),
         simd_sweep=abi.kernel_hook("sweep_simd", f"{prefix}_sweep_simd") if vector_kernels else None,
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
         descriptor=abi_header.descriptor_initializer(prefix, sizes, {k.name[len(prefix) + 1:]: True for k in kernels + vector_kernels}),

@@ -64,7 +64,7 @@ class _Flavour:
 
     def value(self, e) -> str:
         text = self.printer.doprint(e)
-        if self.vector and all(s.name.startswith("c_") for s in sp.sympify(e).free_symbols):
+        if self.vector and all(s.name.startswith(_PER_SWEEP) for s in sp.sympify(e).free_symbols):
             return f"sgv_set1({text})"
         return text
 
@@ -73,12 +73,18 @@ class _Flavour:
 
 
 SCALAR, VECTOR = _Flavour(False), _Flavour(True)
+#: Symbols that are one number for a whole sweep (constants c[], gravity gv[], friction loads fr[] of the
+#: frictionless solve): scalars in the SIMD kernels, broadcast where a value is made of them alone.
+_PER_SWEEP = ("c_", "gv_", "fr_")
+_VECTOR_FORCE_ARGS = ("q", "cq", "x", "cx", "xd", "c", "obs", "gv", "ld", "out")
 
 #: The SIMD twins' signatures (static in each generated file; called only by its SG_SIMD_SWEEP_BODY).
 VECTOR_SIGNATURES = {
     "closed": "sg_vm {f}(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)",
     "motion": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
               "const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)",
+    "forces": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
+              "const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)",
 }
 
 
@@ -110,6 +116,7 @@ class KernelSet:
         self.constants: dict = {}  # expression -> symbol c_k, in first-seen order
         self.trig: dict = {}  # angle symbol -> (cos symbol, sin symbol)
         self._selection_lines = None
+        self._memo: dict = {}  # CSE results a scalar kernel and its SIMD twin share
         for i, (c, q) in enumerate(zip(kin.coords, kin.q)):
             if c.kind == "angle":
                 self.trig[q] = (sp.Symbol(f"cq_{2 * i}", real=True), sp.Symbol(f"cq_{2 * i + 1}", real=True))
@@ -251,30 +258,32 @@ class KernelSet:
 
     def _motion_cse(self, scales):
         """The motion kernel's expressions after one joint CSE (shared by the scalar kernel and its SIMD twin)."""
-        key = tuple(scales) if scales else None
-        if getattr(self, "_motion_memo", (None,))[0] != key:
+        key = ("motion", tuple(scales or ()))
+        if key not in self._memo:
             kin, n = self.kin, len(self.kin.q)
             jac = [kin.jac_q[i, j] for i in range(n) for j in range(n)]
             inv = [1 / e for e in (scales or [sp.S.One] * n)]
             exprs = self.prepare(jac + list(kin.vel_rhs) + list(kin.gamma) + [o.expr for o in kin.observables]
                                  + inv)
-            self._motion_memo = (key, _cse(exprs))
-        return self._motion_memo[1]
+            self._memo[key] = _cse(exprs)
+        return self._memo[key]
 
-    def forces(self, kst: Kinetostatics) -> Kernel:
+    def forces(self, kst: Kinetostatics, vector: bool = False) -> Kernel:
         """The solve of A f = b as derive.kinetostatics plans it, then every derived output.
 
         Schur-complement blocks by the runtime's pivoted LU (a division for 1 × 1), then back substitution
         through the constant-pivot eliminations, then the outputs. Temporaries are staged like the motion
-        kernel's: those of the matrices first, those that read the solved reactions after."""
-        pr, f = self.printer, kst.f
+        kernel's: those of the matrices first, those that read the solved reactions after. ``vector``: the SIMD
+        twin (csrc/sg_simd.h), the frictionless solve only (the SIMD loop runs it only where every friction
+        coefficient is 0: :meth:`forces_in_simd`), returning the mask of lanes whose blocks and outputs are
+        good."""
+        if vector and self.selection_block():
+            raise NoVectorForm("a cam's active arc is chosen per position")
+        fl = VECTOR if vector else SCALAR
+        pr, f = fl.printer, kst.f
         schur = sorted(kst.schur)
         steps = kst.eliminated
-        outs = kst.outputs
-        exprs = ([kst.schur[ij] for ij in schur] + [kst.schur_rhs[i] for i in sorted(kst.schur_rhs)]
-                 + [e for *_, b_i, row in steps for e in [b_i] + [v for _, v in row]]
-                 + [e for _, _, e in outs] + [update for *_, update in kst.frictions])
-        repl, red = _cse(self.prepare(exprs))
+        repl, red = self._forces_cse(kst)
         late: set = set()
         for t, e in repl:
             if e.free_symbols & (set(f) | late):
@@ -289,40 +298,67 @@ class KernelSet:
         rest = list(it)
         nfr = len(kst.frictions)
         r_out, r_fr = rest[:len(rest) - nfr], rest[len(rest) - nfr:]
-        solve = _temps(pr, [(t, e) for t, e in repl if t not in late])
+        solve = fl.temps([(t, e) for t, e in repl if t not in late])
         for rows, cols in kst.blocks:
-            solve += self._block_solve(rows, cols, a, rhs, f)
-        solve += [f"out[{j}] = {pr.doprint(e)};" for j, e in reversed(back)]
-        solve += _temps(pr, [(t, e) for t, e in repl if t in late])
+            solve += self._block_solve(rows, cols, a, rhs, f, fl)
+        solve += [f"out[{j}] = {fl.value(e)};" for j, e in reversed(back)]
+        solve += fl.temps([(t, e) for t, e in repl if t in late])
         n = len(f)
-        finish = [f"out[{n + k}] = {pr.doprint(e)};" for k, e in enumerate(r_out)]
+        finish = [f"out[{n + k}] = {fl.value(e)};" for k, e in enumerate(r_out)]
         outputs = [f"out[{k}]" for k in range(n + len(r_out))]
-        finish += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;", "return SG_OK;"]
-        if nfr:  # Coulomb friction: fr <- its value from the reactions, until it settles (A never changes)
-            # every coefficient 0 (the seeds' assumption, the catalog's default): fr stays 0, the first solve is
-            # the answer, bit for bit the kernel without friction
-            mus = " && ".join(f"{pr.doprint(e)} == 0.0" for e in self.prepare([mu for _, mu, _ in kst.mech.frictions]))
-            step = [f"double frn[{nfr}];"] + [f"frn[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_fr)]
-            step += ["double d = 0.0, s = 0.0;",
-                     f"for (int k = 0; k < {nfr}; ++k) {{ d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }}",
-                     f"if (!(d <= {FRICTION_RTOL!r} * s)) {{",  # not settled (NaN included): once more
-                     f"    if (it >= {FRICTION_ITER}) return SG_NO_CONVERGENCE;",
-                     f"    for (int k = 0; k < {nfr}; ++k) fr[k] = frn[k];",
-                     "    continue;", "}"]
-            loop = solve + [f"if (!({mus})) {{"] + ["    " + line for line in step] + ["}"] + finish
-            body = [f"double fr[{nfr}] = {{0.0}};", "for (int it = 0; ; ++it) {"] + ["    " + x for x in loop] + ["}"]
+        if vector:
+            head = ["sg_vm ok = sgv_true();"] + ([f"const double fr[{nfr}] = {{0.0}};"] if nfr else [])
+            body = head + solve + finish + [f"ok &= sgv_isfinite({_balanced_sum(outputs)});", "return ok;"]
         else:
-            body = solve + finish
+            finish += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;", "return SG_OK;"]
+            if nfr:  # Coulomb friction: fr <- its value from the reactions, until it settles (A never changes)
+                # every coefficient 0 (the seeds' assumption, the catalog's default): fr stays 0, the first solve
+                # is the answer, bit for bit the kernel without friction
+                step = [f"double frn[{nfr}];"] + [f"frn[{k}] = {pr.doprint(e)};" for k, e in enumerate(r_fr)]
+                step += ["double d = 0.0, s = 0.0;",
+                         f"for (int k = 0; k < {nfr}; ++k) {{ d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }}",
+                         f"if (!(d <= {FRICTION_RTOL!r} * s)) {{",  # not settled (NaN included): once more
+                         f"    if (it >= {FRICTION_ITER}) return SG_NO_CONVERGENCE;",
+                         f"    for (int k = 0; k < {nfr}; ++k) fr[k] = frn[k];",
+                         "    continue;", "}"]
+                loop = (solve + [f"if (!({self._frictionless(kst)})) {{"] + ["    " + line for line in step] + ["}"]
+                        + finish)
+                body = [f"double fr[{nfr}] = {{0.0}};", "for (int it = 0; ; ++it) {"] + ["    " + x for x in loop] + ["}"]
+            else:
+                body = solve + finish
         body = self.selection_block() + body
-        names = ("q", "cq", "x", "cx", "xd", "c", "obs", "gv", "ld", "out")
-        body = _unused(body, *names) + body
-        return Kernel(f"{self.prefix}_forces",
-                      self._signature("forces"),
+        body = _unused(body, *_VECTOR_FORCE_ARGS) + body
+        name = f"{self.prefix}_forces" + ("_v" if vector else "")
+        return Kernel(name, VECTOR_SIGNATURES["forces"].format(f=name) if vector else self._signature("forces"),
                       body, ops(e for _, e in repl) + ops(red))
 
-    def _block_solve(self, rows, cols, a, rhs, f) -> list[str]:
-        """C for one diagonal block: its right-hand side less the columns solved before, then LU or a division."""
-        pr, n = self.printer, len(f)
+    def _forces_cse(self, kst: Kinetostatics):
+        """The forces kernel's expressions after one joint CSE (shared by the scalar kernel and its SIMD twin)."""
+        key = ("forces", id(kst))
+        if key not in self._memo:
+            exprs = ([kst.schur[ij] for ij in sorted(kst.schur)] + [kst.schur_rhs[i] for i in sorted(kst.schur_rhs)]
+                     + [e for *_, b_i, row in kst.eliminated for e in [b_i] + [v for _, v in row]]
+                     + [e for _, _, e in kst.outputs] + [update for *_, update in kst.frictions])
+            self._memo[key] = (kst, _cse(self.prepare(exprs)))  # kst kept alive: its id stays its own
+        return self._memo[key][1]
+
+    def _frictionless(self, kst: Kinetostatics) -> str:
+        """C test that every Coulomb coefficient of the mechanism is 0 ("1" without friction)."""
+        mus = self.prepare([mu for _, mu, _ in kst.mech.frictions])
+        return " && ".join(f"{SCALAR.printer.doprint(e)} == 0.0" for e in mus) or "1"
+
+    def forces_in_simd(self, kst: Kinetostatics, has_vector: bool) -> Kernel:
+        """Whether the SIMD loop may run this mechanism's forces: it has the vector twin and every friction
+        coefficient is 0 (the twin is the frictionless solve); else that sweep runs the scalar loop."""
+        body = [f"return {self._frictionless(kst)};" if has_vector else "return 0;"]
+        body = _unused(body, "c") + body
+        name = f"{self.prefix}_forces_in_simd"
+        return Kernel(name, f"int {name}(const double *c)", body, 0)
+
+    def _block_solve(self, rows, cols, a, rhs, f, fl) -> list[str]:
+        """C for one diagonal block: its right-hand side less the columns solved before, then LU or a division
+        (the SIMD twin: lane masks instead of early returns)."""
+        n = len(f)
         inside = set(cols)
 
         def known_part(i):
@@ -334,22 +370,28 @@ class KernelSet:
             (i,), (j,) = rows, cols
             piv = a[(i, j)]
             if piv.is_Number:
-                return [f"out[{j}] = {pr.doprint(known_part(i) / piv)};"]
-            column = [pr.doprint(a[(k, j)]) for k in range(n) if (k, j) in a]  # the LU's column-scaled test
-            return ["{", f"    const double d = {pr.doprint(piv)};",
-                    f"    if (!(fabs(d) > SG_PIVOT_RTOL * {_fmax(column)})) return SG_SINGULAR;",
-                    f"    out[{j}] = ({pr.doprint(known_part(i))})/d;", "}"]
+                return [f"out[{j}] = {fl.value(known_part(i) / piv)};"]
+            column = [fl.value(a[(k, j)]) for k in range(n) if (k, j) in a]  # the LU's column-scaled test
+            test = (f"    ok &= sgv_fabs(d) > SG_PIVOT_RTOL * {_fmax(column, fab='sgv_fabs', fmx='sgv_fmax')};"
+                    if fl.vector else f"    if (!(fabs(d) > SG_PIVOT_RTOL * {_fmax(column)})) return SG_SINGULAR;")
+            return ["{", f"    const {fl.real} d = {fl.value(piv)};", test,
+                    f"    out[{j}] = ({fl.value(known_part(i))})/d;", "}"]
         k = len(cols)
         if k > MAX_BLOCK:
             raise DeclarationError(f"{self.kin.mech.name}: a force block of {k} unknowns ({label}) is larger "
                                    f"than the runtime's {MAX_BLOCK} (csrc/sg_runtime.h SG_MAX_Q)")
-        lines = [f"/* block of unknowns {label} */", f"double M[{k * k}], r[{k}];", f"int piv[{k}];"]
+        lines = [f"/* block of unknowns {label} */", f"{fl.real} M[{k * k}], r[{k}];",
+                 f"{'sg_vm' if fl.vector else 'int'} piv[{k}];"]
+        zero = "sgv_set1(0.0)" if fl.vector else "0.0"
         for bi, i in enumerate(rows):
             for bj, j in enumerate(cols):
-                lines.append(f"M[{bi * k + bj}] = {pr.doprint(a[(i, j)]) if (i, j) in a else '0.0'};")
-            lines.append(f"r[{bi}] = {pr.doprint(known_part(i))};")
-        lines += [f"if (sg_lu_factor_inl({k}, M, piv, 0) != SG_OK) return SG_SINGULAR;",
-                  f"sg_lu_solve_inl({k}, M, piv, r);"]
+                lines.append(f"M[{bi * k + bj}] = {fl.value(a[(i, j)]) if (i, j) in a else zero};")
+            lines.append(f"r[{bi}] = {fl.value(known_part(i))};")
+        if fl.vector:
+            lines += [f"ok &= sgv_lu_factor({k}, M, piv);", f"sgv_lu_solve({k}, M, piv, r);"]
+        else:
+            lines += [f"if (sg_lu_factor_inl({k}, M, piv, 0) != SG_OK) return SG_SINGULAR;",
+                      f"sg_lu_solve_inl({k}, M, piv, r);"]
         lines += [f"out[{j}] = r[{bj}];" for bj, j in enumerate(cols)]
         return ["{"] + ["    " + line for line in lines] + ["}"]
 
@@ -406,12 +448,21 @@ class KernelSet:
         return Kernel(name, VECTOR_SIGNATURES["closed"].format(f=name) if vector else self._signature("closed"),
                       body, total)
 
-    def vector_kernels(self, dyads: list[Dyad], scales) -> list[Kernel]:
-        """The SIMD twins of the closed and motion kernels, or none where an expression has no vector form."""
+    def vector_kernels(self, dyads: list[Dyad], scales, kst: Kinetostatics) -> list[Kernel]:
+        """The SIMD twins of the closed, motion and forces kernels and the forces' run-time test, or none where the
+        kinematics have no vector form (a stub twin and a test that says no where only the forces have none)."""
         try:
-            return [self.closed(dyads, vector=True), self.motion(scales, vector=True)]
+            kernels = [self.closed(dyads, vector=True), self.motion(scales, vector=True)]
         except NoVectorForm:
             return []
+        try:
+            kernels.append(self.forces(kst, vector=True))
+        except NoVectorForm:
+            name = f"{self.prefix}_forces_v"
+            kernels.append(Kernel(name, VECTOR_SIGNATURES["forces"].format(f=name),
+                                  [f"(void){a};" for a in _VECTOR_FORCE_ARGS] + ["return sgv_false();"]))
+            return kernels + [self.forces_in_simd(kst, has_vector=False)]
+        return kernels + [self.forces_in_simd(kst, has_vector=True)]
 
     def scales(self, exprs: list) -> Kernel:
         """Each closure equation's own size (derive.branches.row_scales): Newton's per-equation tolerance."""
@@ -496,12 +547,13 @@ def _balanced_sum(terms: list[str]) -> str:
     return f"({_balanced_sum(terms[:mid])} + {_balanced_sum(terms[mid:])})"
 
 
-def _fmax(terms: list[str], absolute: bool = True) -> str:
-    """fmax of the absolute values (or of the values), as a balanced tree."""
+def _fmax(terms: list[str], absolute: bool = True, fab: str = "fabs", fmx: str = "fmax") -> str:
+    """fmax of the absolute values (or of the values), as a balanced tree (``fab``, ``fmx``: the functions' names,
+    sgv_fabs and sgv_fmax in the SIMD kernels)."""
     if len(terms) == 1:
-        return f"fabs({terms[0]})" if absolute else terms[0]
+        return f"{fab}({terms[0]})" if absolute else terms[0]
     mid = len(terms) // 2
-    return f"fmax({_fmax(terms[:mid], absolute)}, {_fmax(terms[mid:], absolute)})"
+    return f"{fmx}({_fmax(terms[:mid], absolute, fab, fmx)}, {_fmax(terms[mid:], absolute, fab, fmx)})"
 
 
 def _stage(sym, levels):
