@@ -72,6 +72,16 @@ class NoVectorForm(ValueError):
     """An expression the SIMD kernels cannot print (a function csrc/sg_simd.h has no vector form of)."""
 
 
+#: Symbols that are one number for a whole sweep (constants c[], gravity gv[], friction loads fr[] of the
+#: frictionless solve): scalars in the SIMD kernels.
+PER_SWEEP = ("c_", "gv_", "fr_")
+
+
+def per_sweep(expr) -> bool:
+    """Whether ``expr`` reads only per-sweep scalars (or nothing): one number for every lane of a SIMD block."""
+    return all(s.name.startswith(PER_SWEEP) for s in sp.sympify(expr).free_symbols)
+
+
 class VectorPrinter(KernelPrinter):
     """KernelPrinter for the SIMD twins of the closed and motion kernels (csrc/sg_simd.h): the same text with the
     arithmetic on GCC vectors (sg_vd) and the functions sg_simd.h vectorises (sqrt, |x|, atan2). Anything else
@@ -81,8 +91,11 @@ class VectorPrinter(KernelPrinter):
     def __init__(self):
         super().__init__()
         self.known_functions = {"Abs": "sgv_fabs", "atan2": "sgv_atan2", "sqrt": "sgv_sqrt"}
+        self._scalar = KernelPrinter()
 
     def _print_math_func(self, expr, nest=False, known=None):
+        if per_sweep(expr):  # sqrt(5), |c|: a scalar, which the vector arithmetic around it broadcasts
+            return self._scalar.doprint(expr)
         name = type(expr).__name__
         if name not in self.known_functions:
             raise NoVectorForm(f"no vector form of {name}")
@@ -92,6 +105,8 @@ class VectorPrinter(KernelPrinter):
 
     def _print_Pow(self, expr):
         base, exp = expr.args
+        if per_sweep(expr):
+            return self._scalar.doprint(expr)
         if exp == sp.S.Half:
             return f"sgv_sqrt({self._print(base)})"
         if exp == -sp.S.Half:
@@ -104,6 +119,8 @@ class VectorPrinter(KernelPrinter):
         raise NoVectorForm(f"no vector form of {type(expr).__name__}")
 
     def _refuse(self, expr):
+        if per_sweep(expr):
+            return self._scalar.doprint(expr)
         raise NoVectorForm(f"no vector form of {type(expr).__name__}")
 
     _print_sign = _print_Max = _print_Min = _print_Piecewise = _print_ITE = _print_Relational = _refuse

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from .. import abi
-from .cprint import KernelPrinter, NoVectorForm, VectorPrinter, ops
+from .cprint import KernelPrinter, NoVectorForm, VectorPrinter, ops, per_sweep
 from .dyads import Dyad
 from .joints import KINDS
 from .kinematics import Kinematics
@@ -64,7 +64,7 @@ class _Flavour:
 
     def value(self, e) -> str:
         text = self.printer.doprint(e)
-        if self.vector and all(s.name.startswith(_PER_SWEEP) for s in sp.sympify(e).free_symbols):
+        if self.vector and per_sweep(e):
             return f"sgv_set1({text})"
         return text
 
@@ -73,9 +73,6 @@ class _Flavour:
 
 
 SCALAR, VECTOR = _Flavour(False), _Flavour(True)
-#: Symbols that are one number for a whole sweep (constants c[], gravity gv[], friction loads fr[] of the
-#: frictionless solve): scalars in the SIMD kernels, broadcast where a value is made of them alone.
-_PER_SWEEP = ("c_", "gv_", "fr_")
 _VECTOR_FORCE_ARGS = ("q", "cq", "x", "cx", "xd", "c", "obs", "gv", "ld", "out")
 
 #: The SIMD twins' signatures (static in each generated file; called only by its SG_SIMD_SWEEP_BODY).
