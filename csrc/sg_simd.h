@@ -113,8 +113,62 @@ SG_VINLINE sg_vm sgv_dyad_rpr(const sg_vd D[2], const sg_vd w0[2], const sg_vd u
     return ok;
 }
 
-/* sg_factor_eq_inl lane by lane: the same scaling, partial pivoting (each lane its own pivot rows, swapped by
- * selects) and condition bound; the mask is the lanes the scalar factor would accept. */
+/* LU with partial pivoting of an n x n matrix of lanes, in place, each lane with its own pivot rows (found by
+ * compares, swapped by selects; the multipliers of a zero entry are subtracted too, which changes nothing
+ * finite): the pivot rows in piv, each pivot's magnitude in best; U's diagonal kept, or its reciprocal where
+ * reciprocal (sg_factor_eq_inl's form). The elimination of sg_lu_factor_inl and sg_factor_eq_inl. */
+SG_VINLINE void sgv_eliminate(int n, sg_vd *a, sg_vm *piv, sg_vd *best, int reciprocal)
+{
+    for (int k = 0; k < n; ++k) {
+        sg_vm pr = (sg_vm){k, k, k, k};
+        sg_vd bk = sgv_fabs(a[k * n + k]);
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vd v = sgv_fabs(a[i * n + k]);
+            const sg_vm gt = v > bk;
+            bk = sgv_select(gt, v, bk);
+            pr = (pr & ~gt) | ((sg_vm){i, i, i, i} & gt);
+        }
+        piv[k] = pr;
+        best[k] = bk;
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vm sw = pr == (sg_vm){i, i, i, i};
+            for (int j = 0; j < n; ++j) {
+                const sg_vd t = a[k * n + j];
+                a[k * n + j] = sgv_select(sw, a[i * n + j], t);
+                a[i * n + j] = sgv_select(sw, t, a[i * n + j]);
+            }
+        }
+        const sg_vd inv = 1.0 / a[k * n + k];
+        if (reciprocal) a[k * n + k] = inv;
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vd f = a[i * n + k] * inv;
+            a[i * n + k] = f;
+            for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
+        }
+    }
+}
+
+/* Solve with a factor of sgv_eliminate (b overwritten): each lane's interchanges, then the two substitutions. */
+SG_VINLINE void sgv_substitute(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *b, int reciprocal)
+{
+    for (int k = 0; k < n; ++k)
+        for (int i = k + 1; i < n; ++i) {
+            const sg_vm sw = piv[k] == (sg_vm){i, i, i, i};
+            const sg_vd t = b[k];
+            b[k] = sgv_select(sw, b[i], t);
+            b[i] = sgv_select(sw, t, b[i]);
+        }
+    for (int k = 0; k < n; ++k)
+        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
+    for (int k = n - 1; k >= 0; --k) {
+        sg_vd s = b[k];
+        for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
+        b[k] = reciprocal ? s * lu[k * n + k] : s / lu[k * n + k];
+    }
+}
+
+/* sg_factor_eq_inl lane by lane: the same scaling, pivoting and condition bound; the mask is the lanes the
+ * scalar factor would accept. */
 SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_vd *cs, sg_vd *cond)
 {
     const sg_vd zero = sgv_set1(0.0);
@@ -136,34 +190,9 @@ SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_
         for (int j = 0; j < n; ++j) s += sgv_fabs(a[i * n + j]);
         anorm = sgv_select(~(s <= anorm), s, anorm);
     }
-    for (int k = 0; k < n; ++k) {
-        sg_vm pr = (sg_vm){k, k, k, k};
-        sg_vd best = sgv_fabs(a[k * n + k]);
-        for (int i = k + 1; i < n; ++i) {
-            const sg_vd v = sgv_fabs(a[i * n + k]);
-            const sg_vm gt = v > best;
-            best = sgv_select(gt, v, best);
-            pr = (pr & ~gt) | ((sg_vm){i, i, i, i} & gt);
-        }
-        piv[k] = pr;
-        ok &= best > sgv_set1(SG_PIVOT_RTOL);
-        for (int i = k + 1; i < n; ++i) {
-            const sg_vm sw = pr == (sg_vm){i, i, i, i};
-            for (int j = 0; j < n; ++j) {
-                const sg_vd t = a[k * n + j];
-                a[k * n + j] = sgv_select(sw, a[i * n + j], t);
-                a[i * n + j] = sgv_select(sw, t, a[i * n + j]);
-            }
-        }
-        const sg_vd inv = 1.0 / a[k * n + k];
-        a[k * n + k] = inv;
-        for (int i = k + 1; i < n; ++i) {
-            const sg_vd f = a[i * n + k] * inv;
-            a[i * n + k] = f;
-            for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
-        }
-    }
-    sg_vd y[SG_MAX_Q];
+    sg_vd best[SG_MAX_Q], y[SG_MAX_Q];
+    sgv_eliminate(n, a, piv, best, 1);
+    for (int k = 0; k < n; ++k) ok &= best[k] > sgv_set1(SG_PIVOT_RTOL);
     sg_vd lnorm = zero, inorm = zero;
     for (int i = 0; i < n; ++i) {
         sg_vd s = sgv_set1(1.0);
@@ -181,88 +210,31 @@ SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_
     return ok & sgv_isfinite(*cond);
 }
 
-/* sg_solve_eq_inl lane by lane (the row interchanges of each lane's own pivots). */
+/* sg_solve_eq_inl lane by lane. */
 SG_VINLINE void sgv_solve_eq(int n, const sg_vd *lu, const sg_vm *piv, const sg_vd *rs, const sg_vd *cs, sg_vd *b)
 {
     for (int i = 0; i < n; ++i) b[i] *= rs[i];
-    for (int k = 0; k < n; ++k)
-        for (int i = k + 1; i < n; ++i) {
-            const sg_vm sw = piv[k] == (sg_vm){i, i, i, i};
-            const sg_vd t = b[k];
-            b[k] = sgv_select(sw, b[i], t);
-            b[i] = sgv_select(sw, t, b[i]);
-        }
-    for (int k = 0; k < n; ++k)
-        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
-    for (int k = n - 1; k >= 0; --k) {
-        sg_vd s = b[k];
-        for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
-        b[k] = s * lu[k * n + k];
-    }
+    sgv_substitute(n, lu, piv, b, 1);
     for (int j = 0; j < n; ++j) b[j] *= cs[j];
 }
 
-/* sg_lu_factor_inl lane by lane (each lane its own pivot rows, swapped by selects; the multipliers of a zero
- * entry subtracted too, which changes nothing finite); the mask is the lanes the scalar factor accepts. */
+/* sg_lu_factor_inl lane by lane (the pivot test against each column's largest original entry). */
 SG_VINLINE sg_vm sgv_lu_factor(int n, sg_vd *a, sg_vm *piv)
 {
-    sg_vd colmax[SG_MAX_Q];
-    sg_vm ok = sgv_true();
+    sg_vd colmax[SG_MAX_Q], best[SG_MAX_Q];
     for (int j = 0; j < n; ++j) {
         sg_vd cm = sgv_set1(0.0);
-        for (int i = 0; i < n; ++i) {
-            const sg_vd v = sgv_fabs(a[i * n + j]);
-            cm = sgv_select(v > cm, v, cm);
-        }
+        for (int i = 0; i < n; ++i) cm = sgv_fmax(sgv_fabs(a[i * n + j]), cm);
         colmax[j] = cm;
     }
-    for (int k = 0; k < n; ++k) {
-        sg_vm pr = (sg_vm){k, k, k, k};
-        sg_vd best = sgv_fabs(a[k * n + k]);
-        for (int i = k + 1; i < n; ++i) {
-            const sg_vd v = sgv_fabs(a[i * n + k]);
-            const sg_vm gt = v > best;
-            best = sgv_select(gt, v, best);
-            pr = (pr & ~gt) | ((sg_vm){i, i, i, i} & gt);
-        }
-        piv[k] = pr;
-        ok &= best > SG_PIVOT_RTOL * colmax[k];
-        for (int i = k + 1; i < n; ++i) {
-            const sg_vm sw = pr == (sg_vm){i, i, i, i};
-            for (int j = 0; j < n; ++j) {
-                const sg_vd t = a[k * n + j];
-                a[k * n + j] = sgv_select(sw, a[i * n + j], t);
-                a[i * n + j] = sgv_select(sw, t, a[i * n + j]);
-            }
-        }
-        const sg_vd inv = 1.0 / a[k * n + k];
-        for (int i = k + 1; i < n; ++i) {
-            const sg_vd f = a[i * n + k] * inv;
-            a[i * n + k] = f;
-            for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
-        }
-    }
+    sgv_eliminate(n, a, piv, best, 0);
+    sg_vm ok = sgv_true();
+    for (int k = 0; k < n; ++k) ok &= best[k] > SG_PIVOT_RTOL * colmax[k];
     return ok;
 }
 
 /* sg_lu_solve_inl lane by lane. */
-SG_VINLINE void sgv_lu_solve(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *b)
-{
-    for (int k = 0; k < n; ++k)
-        for (int i = k + 1; i < n; ++i) {
-            const sg_vm sw = piv[k] == (sg_vm){i, i, i, i};
-            const sg_vd t = b[k];
-            b[k] = sgv_select(sw, b[i], t);
-            b[i] = sgv_select(sw, t, b[i]);
-        }
-    for (int k = 0; k < n; ++k)
-        for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
-    for (int k = n - 1; k >= 0; --k) {
-        sg_vd s = b[k];
-        for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
-        b[k] = s / lu[k * n + k];
-    }
-}
+SG_VINLINE void sgv_lu_solve(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *b) { sgv_substitute(n, lu, piv, b, 0); }
 
 /* count vectors of lanes from rows of SG_W positions: v[j][l] = src[l][j] (sgv_store_rows' inverse). */
 SG_VINLINE void sgv_load_rows(const double *const src[SG_W], int count, sg_vd *v)
