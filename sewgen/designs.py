@@ -88,6 +88,12 @@ class Columns:
         qa, oa = desc.angle_columns
         self.angle_cols = np.array(list(qa) + [3 * nq + k for k in oa], dtype=np.intc)
 
+    def angles_among(self, columns) -> np.ndarray:
+        """The angle columns among ``columns`` (flat indices): the only ones whose 2π jumps a design sweep that
+        writes or reduces just ``columns`` must take out (C does it per design, a pass over every position)."""
+        wanted = {int(c) for c in columns}
+        return np.array([c for c in self.angle_cols if int(c) in wanted], dtype=np.intc)
+
     def unit(self, name: str) -> str:
         if name in self.norms:
             return self.norms[name][2]
@@ -460,7 +466,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
     shared = (ptr("double *", base.phi), ptr("double *", base.omega), ptr("double *", base.alpha))
     guess, opt = ptr("double *", base.guess), base.options
     order = ffi.NULL if base.order is None else ptr("size_t *", base.order)
-    angle_c = cols.angle_cols
+    angle_c = cols.angles_among(list(sel) + [c for _, _, a, bb in reds for c in (a, bb) if c >= 0])
     angle_p = ptr("int *", angle_c)
     sel_p, red_p = ptr("int *", sel_c), ptr("int *", red_c)
     bases = {"p": ptr("double *", p), "h": ptr("double *", h), "b": ptr("int *", b), "out": ptr("double *", out),
@@ -540,11 +546,12 @@ def solve_selected(mech, outputs, sweep_args: dict, out=None):
     ptr = partial(_ptr, ffi)
 
     ncheck = 0  # prepare() checked the parameters and their derived dimensions
+    angle_c = cols.angles_among(sel)
     lib.sg_sweep_designs(mech._descriptor, 1, n, ptr("double *", base.phi), ptr("double *", base.omega),
                          ptr("double *", base.alpha), ptr("double *", base.held), ptr("double *", base.params),
                          ptr("int *", base.branch), ptr("double *", base.guess), base.options,
                          ffi.NULL if base.order is None else ptr("size_t *", base.order), ncheck,
-                         len(cols.angle_cols), ptr("int *", cols.angle_cols), len(sel), ptr("int *", sel_c),
+                         len(angle_c), ptr("int *", angle_c), len(sel), ptr("int *", sel_c),
                          ptr("double *", block), n, 0, ffi.NULL, ffi.NULL, ffi.NULL, 0, ptr("double *", work),
                          ptr("int *", work_st), ptr("int *", status), ptr("long long *", first), ffi.NULL, ffi.NULL)
     if status[0] != 0:  # the full sweep names the failure with its diagnosis
