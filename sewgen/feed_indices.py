@@ -66,75 +66,63 @@ def column(name: str) -> str:
     return f"feed_{name} [{unit}]" if unit else f"feed_{name}"
 
 
-# -- cubic Hermite pieces, vectorised -------------------------------------------------------------------------
-
-def hermite(p0, p1, d0, d1, h, t):
-    """Cubic Hermite on [0, h] at t: values p0, p1, slopes d0, d1 (all broadcast)."""
-    s = t / h
-    return ((2 * s**3 - 3 * s**2 + 1) * p0 + (s**3 - 2 * s**2 + s) * h * d0
-            + (-2 * s**3 + 3 * s**2) * p1 + (s**3 - s**2) * h * d1)
-
-
-def hermite_slope(p0, p1, d0, d1, h, t):
-    """d/dt of :func:`hermite`."""
-    s = t / h
-    return ((6 * s**2 - 6 * s) * p0 / h + (3 * s**2 - 4 * s + 1) * d0
-            + (-6 * s**2 + 6 * s) * p1 / h + (3 * s**2 - 2 * s) * d1)
+# the cubic Hermite pieces (one implementation, sewgen.hermite): re-exported for the callers of this module
+from .hermite import at, crossings, hermite, hermite_slope, maximum, power_form  # noqa: E402,F401
 
 
 def _next(a):
     return np.roll(a, -1, axis=-1)
 
 
-def crossings(z, dz, h, iters: int = 60):
-    """Every sign change of z (D, N) over one periodic turn: rows, sample index i (the step i..i+1), the offset
-    t in [0, h] of the crossing on the Hermite piece, and the sign (+1 rising through 0, −1 falling)."""
-    neg = z < 0.0
-    rows, cols = np.nonzero(neg != _next(neg))
-    n = z.shape[1]
-    j = (cols + 1) % n
-    p0, p1, d0, d1 = z[rows, cols], z[rows, j], dz[rows, cols], dz[rows, j]
-    lo, hi = np.zeros(len(rows)), np.full(len(rows), h)
-    f_lo_neg = p0 < 0.0
-    for _ in range(iters):
-        mid = 0.5 * (lo + hi)
-        same = (hermite(p0, p1, d0, d1, h, mid) < 0.0) == f_lo_neg
-        lo = np.where(same, mid, lo)
-        hi = np.where(same, hi, mid)
-    return rows, cols, 0.5 * (lo + hi), np.where(f_lo_neg, 1, -1)
-
-
-def at(y, dy, h, rows, cols, t):
-    """The Hermite interpolant of y (D, N) on the pieces (rows, cols) at offsets t."""
-    j = (cols + 1) % y.shape[1]
-    return hermite(y[rows, cols], y[rows, j], dy[rows, cols], dy[rows, j], h, t)
-
-
-def maximum(y, dy, h, iters: int = 60):
-    """Per row: the largest value of the Hermite interpolant (found near the largest sample) and its (index,
-    offset). The slope dy changes sign at the extreme; it is bisected on the derivative of the piece."""
-    d, n = y.shape
-    rows = np.arange(d)
-    k = np.argmax(y, axis=1)
-    left = dy[rows, k] < 0.0  # the maximum lies before sample k
-    i = np.where(left, (k - 1) % n, k)
-    j = (i + 1) % n
-    p0, p1, d0, d1 = y[rows, i], y[rows, j], dy[rows, i], dy[rows, j]
-    lo, hi = np.zeros(d), np.full(d, h)
-    ok = (d0 >= 0.0) & (d1 <= 0.0)
-    for _ in range(iters):
-        mid = 0.5 * (lo + hi)
-        up = hermite_slope(p0, p1, d0, d1, h, mid) > 0.0
-        lo = np.where(up, mid, lo)
-        hi = np.where(up, hi, mid)
-    t = np.where(ok, 0.5 * (lo + hi), np.where(left, h, 0.0))
-    return np.maximum(hermite(p0, p1, d0, d1, h, t), y[rows, k]), i, t
-
-
 def _per_row(d, rows, values):
     out = np.full(d, np.nan)
     out[rows] = values
     return out
+
+
+def _arc_integrals(z, dz, x, dx, h, u, span, good):
+    """Per row: ∫ z dx and ∫ |dx/dφ| dφ over the arc [rise, rise + span] (``u`` (D, N): each step's start
+    measured from the rise), by 3-point Gauss on each step's part inside the arc (exact for z·x′, a quintic).
+    Every step of every row at once in the power form of its pieces; the one step per row that wraps past
+    the rise (its start a little less than 2π after it) is added apart."""
+    zc = power_form(z, _next(z), dz, _next(dz), h)
+    xc = power_form(x, _next(x), dx, _next(dx), h)
+    area, absx = np.zeros(len(z)), np.zeros(len(z))
+    sp = span[:, None]
+
+    def add(rows, zc, xc, t0, t1, out_area, out_absx):
+        half = 0.5 * (t1 - t0)
+        for xi, wi in zip(_GAUSS_X, _GAUSS_W):
+            s = (t0 + half * (1.0 + xi)) / h
+            zq = ((zc[3] * s + zc[2]) * s + zc[1]) * s + zc[0]
+            xq = ((3.0 * xc[3] * s + 2.0 * xc[2]) * s + xc[1]) / h  # dx/dφ
+            wh = wi * half
+            if rows is None:
+                out_area += (wh * zq * xq).sum(axis=1)
+                out_absx += (wh * np.abs(xq)).sum(axis=1)
+            else:
+                np.add.at(out_area, rows, wh * zq * xq)
+                np.add.at(out_absx, rows, wh * np.abs(xq))
+
+    with np.errstate(invalid="ignore"):
+        # every step: its part [a, b] ⊂ [0, span] (no part: a = b, weight 0)
+        t0 = np.maximum(-u, 0.0)
+        t1 = np.minimum(sp - u, h)
+        use = (t1 > t0) & good[:, None]
+    t0 = np.where(use, t0, 0.0)
+    t1 = np.where(use, t1, 0.0)
+    zs = tuple(np.where(use, c, 0.0) for c in zc)
+    xs = tuple(np.where(use, c, 0.0) for c in xc)
+    add(None, zs, xs, t0, t1, area, absx)
+    # the step that starts before the rise (u near 2π): its part from the rise on
+    with np.errstate(invalid="ignore"):
+        t0w = (TWO_PI - u)
+        t1w = np.minimum(sp + TWO_PI - u, h)
+        wrapped = (t1w > t0w) & good[:, None]
+    rr, cc = np.nonzero(wrapped)
+    if len(rr):
+        add(rr, tuple(c[rr, cc] for c in zc), tuple(c[rr, cc] for c in xc), t0w[rr, cc], t1w[rr, cc], area, absx)
+    return area, absx
 
 
 def wrap(a):
@@ -197,24 +185,7 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
     # the arc above the plate: every step's part inside [rise, sink] (round the turn), as sub-intervals of the step
     span = (sink - rise) % TWO_PI  # NaN rows stay NaN
     u = (phi[None, :] - rise[:, None]) % TWO_PI  # each step's start, measured from the rise
-    area, absx = np.zeros(d), np.zeros(d)
-    jn = (np.arange(n) + 1) % n
-    for shift in (0.0, TWO_PI):
-        a = np.clip(np.maximum(u - shift, 0.0), None, span[:, None])
-        b = np.clip(np.minimum(u - shift + h, span[:, None]), 0.0, None)
-        inside = b > a
-        if not inside.any():
-            continue
-        rr, cc = np.nonzero(inside & good[:, None])
-        t0, t1 = a[rr, cc] - (u[rr, cc] - shift), b[rr, cc] - (u[rr, cc] - shift)
-        half = 0.5 * (t1 - t0)
-        for xi, wi in zip(_GAUSS_X, _GAUSS_W):
-            tq = t0 + half * (1.0 + xi)
-            jj = jn[cc]
-            zq = hermite(z[rr, cc], z[rr, jj], dz[rr, cc], dz[rr, jj], h, tq)
-            xq = hermite_slope(x[rr, cc], x[rr, jj], dx[rr, cc], dx[rr, jj], h, tq)
-            np.add.at(area, rr, wi * half * zq * xq)
-            np.add.at(absx, rr, wi * half * np.abs(xq))
+    area, absx = _arc_integrals(z, dz, x, dx, h, u, span, good)
     with np.errstate(invalid="ignore", divide="ignore"):
         out["fullness"] = np.where(good, np.abs(area) / (np.abs(out["travel"]) * out["height"]), np.nan)
 
@@ -284,23 +255,35 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
     return out
 
 
-def group_arrays(mech, obs):
-    """From a feed mechanism's observables ``obs`` (D, N, nobs) or (N, nobs): the dog's x, y, vx, vy, ax, the
-    dog body's angle (its declared u axis) and the first cam contact's arc (or None). Parts by role: the
-    ``feed_dog`` point and its body (``feed_bar`` role if declared)."""
+def feed_observables(mech) -> tuple:
+    """The indices, among ``mech``'s observables, of the dog's x, y, vx, vy, ax, the dog body's angle (its
+    declared u axis; None without one) and the first cam contact's arc (None without a cam). Parts by role:
+    the ``feed_dog`` point and its body (``feed_bar`` role if declared)."""
     from .cams import _arc_columns
     from .roles import FEED_BAR, FEED_DOG
 
     desc = mech.description
-    obs = obs if obs.ndim == 3 else obs[None]
     pt = desc.role(FEED_DOG)
-    off = pt.offset
-    x, y, vx, vy, ax = (obs[:, :, off + k] for k in (0, 1, 2, 3, 4))
     body = desc.role(FEED_BAR).name if desc.has_role(FEED_BAR) else pt.body
-    tilt = obs[:, :, desc.body(body).offset] if body and desc.has("body", body) else None
+    tilt = desc.body(body).offset if body and desc.has("body", body) else None
     arcs = _arc_columns(mech)
-    arc = obs[:, :, next(iter(arcs.values()))] if arcs else None
-    return x, y, vx, vy, ax, tilt, arc
+    arc = next(iter(arcs.values())) if arcs else None
+    return tuple(pt.offset + k for k in range(5)) + (tilt, arc)
+
+
+def group_arrays(mech, obs):
+    """From a feed mechanism's observables ``obs`` (D, N, nobs) or (N, nobs), or a function observable index ->
+    (D, N): the dog's x, y, vx, vy, ax, the dog body's angle and the first cam contact's arc (None where the
+    mechanism has none; see :func:`feed_observables`)."""
+    if callable(obs):
+        get = obs
+    else:
+        obs = obs if obs.ndim == 3 else obs[None]
+
+        def get(k):
+            return obs[:, :, k]
+
+    return tuple(None if k is None else get(k) for k in feed_observables(mech))
 
 
 def as_dict(ix: dict, k: int = 0, exact_jump: float | None = None) -> dict:

@@ -88,18 +88,34 @@ def _speed(machine, options):
     return float(machine.speed if options.speed is None else options.speed)
 
 
-def _sweep(machine, g, P, phi, w, options):
+def _sweep(machine, g, P, phi, w, options, observables=None):
     gv = machine.gravity
     mag = float(np.hypot(*gv))
     direction = math.atan2(gv[1], gv[0]) if mag else -math.pi / 2
     return sweep_group_designs(g.mechanism, P, phi + g.phase, w, held=g.held or None, branch=g.branch or None,
                                forces=options.loads, loads=g.sweep_loads, gravity=mag, gravity_direction=direction,
-                               threads=options.threads)
+                               threads=options.threads, observables=None if options.loads else observables)
+
+
+def _needle_observables(g) -> tuple:
+    off = g.mechanism.description.role(NEEDLE_POINT).offset
+    return off + 1, off + 3  # y, vy
+
+
+def _kept_observables(machine, g) -> tuple:
+    """The only observables of group ``g`` a study reads when nothing needs its whole motion (no per-design
+    timing, no loads): the feed dog's (feed groups) and the needle point's height and speed."""
+    kept = []
+    if g in feed_groups(machine):
+        kept += [k for k in fi.feed_observables(g.mechanism) if k is not None]
+    if _role_group(machine, NEEDLE_POINT) is g:
+        kept += [k for k in _needle_observables(g) if k not in kept]
+    return tuple(kept)
 
 
 def _needle_stroke(g, sweep, w, h):
-    off = g.mechanism.description.role(NEEDLE_POINT).offset
-    y, dy = sweep.obs[:, :, off + 1], sweep.obs[:, :, off + 3] / w
+    iy, ivy = _needle_observables(g)
+    y, dy = sweep.observable(iy), sweep.observable(ivy) / w
     hi, _, _ = fi.maximum(y, dy, h)
     lo, _, _ = fi.maximum(-y, -dy, h)
     return hi + lo
@@ -156,9 +172,13 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
     d = len(designs)
     varied = set(designs.varied_groups)
     sweeps, status, error = {}, np.full(d, "ok", dtype=object), [None] * d
+    fnames = {g.name for g in feed_groups(machine)}
+    per_design_timing = machine.stitch is not None and (nominal or bool(varied - fnames))
+    whole = nominal or per_design_timing or options.loads  # something reads each design's whole motion
     for g in machine.groups:
         if nominal or g.name in varied:
-            s = _sweep(machine, g, designs.group_matrix(g), phi, w, options)
+            s = _sweep(machine, g, designs.group_matrix(g), phi, w, options,
+                       None if whole else _kept_observables(machine, g))
             for k in np.flatnonzero(~s.ok):
                 if error[k] is None:
                     status[k], error[k] = s.status[k], f"groups.{g.name}: {s.error[k]}"
@@ -167,8 +187,6 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
         sweeps[g.name] = s
     cols: dict = {}
     fgroups = feed_groups(machine)
-    fnames = {g.name for g in fgroups}
-    per_design_timing = machine.stitch is not None and (nominal or bool(varied - fnames))
     rows = [None] * d
     if machine.stitch is not None:
         tcols = (HOOK_RISE, HOOK_MARGIN, TAKE_UP, FAILURES, FAILED, "needle_in_cloth", "needle_out_cloth")
@@ -198,7 +216,8 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
             s = sweeps[g.name]
             own = g.name in varied or nominal
             rows_g = np.arange(d) if own else np.zeros(d, dtype=int)
-            x, y, vx, vy, ax, tilt, arc = fi.group_arrays(g.mechanism, s.obs if own else s.obs[rows_g])
+            x, y, vx, vy, ax, tilt, arc = fi.group_arrays(
+                g.mechanism, s.observable if own else (lambda k, s=s: s.observable(k)[rows_g]))
             plate = s.params[rows_g, g.mechanism.description.role(THROAT_PLATE).index]
             n_in = cols.get("needle_in_cloth", np.full(d, np.nan))
             n_out = cols.get("needle_out_cloth", np.full(d, np.nan))
