@@ -23,8 +23,9 @@ Every crossing and extreme is found on the cubic Hermite interpolant of the samp
 derivatives (dx/dφ = vx/ω, as sewgen.timing does), so the indices are accurate far below the sweep's step; the
 integrals are 3-point Gauss on each step (exact for the interpolants' product); the peaks of |vx|, |ax| are the
 sampled ones (and the interpolated ends of the arc). The acceleration jump at an arc switch between two samples
-is estimated by extrapolating ax linearly from each side to the step's middle (to O(h); sewgen.cams brackets
-the switch exactly, which summary.json uses).
+is extrapolated from each side's samples to where the two sides' velocities meet (:func:`arc_jumps`, O(h³);
+sewgen.cams brackets the switch exactly, which summary.json uses, and studies with
+``StudyOptions.exact_jumps``).
 
 A design whose dog does not rise above the plate exactly once a turn gets NaN indices and an ``error``.
 """
@@ -67,7 +68,7 @@ def column(name: str) -> str:
 
 
 # the cubic Hermite pieces (one implementation, sewgen.hermite): re-exported for the callers of this module
-from .hermite import at, crossings, hermite, hermite_slope, maximum, power_form  # noqa: E402,F401
+from .hermite import _bracketed_root, at, crossings, hermite, hermite_slope, maximum, power_form  # noqa: E402,F401
 
 
 def _next(a):
@@ -123,6 +124,49 @@ def _arc_integrals(z, dz, x, dx, h, u, span, good):
     if len(rr):
         add(rr, tuple(c[rr, cc] for c in zc), tuple(c[rr, cc] for c in xc), t0w[rr, cc], t1w[rr, cc], area, absx)
     return area, absx
+
+
+def arc_jumps(arc, v, a, h):
+    """Every switch of a cam contact's arc in ``arc`` (D, N) between two samples, and the jump of a (D, N), the
+    shaft-angle derivative of v (D, N), there: (rows, sample index i before the switch, a after − a before).
+
+    A G1 cam keeps v continuous and makes a jump at the switch (sewgen.cams). Each side's a is the quadratic
+    through its last three samples on its own arc (two: linear; one: constant) and v is its integral from the
+    side's last sample; the switch is where the two sides' v agree (the root of their difference, a cubic, in
+    the step; the nearer end without a sign change) and the jump is the difference of the two sides' a there.
+    Error O(h³) against the exact jump of sewgen.cams.arc_switches (JB1-3 feed: 2e-4 of it at 5° steps, 2e-6
+    at 1°); the exact one needs a solve at each design's own switch angle (StudyOptions.exact_jumps)."""
+    d, n = arc.shape
+    rows, i = np.nonzero(arc != _next(arc))
+    if not len(rows):
+        return rows, i, np.zeros(0)
+    j = (i + 1) % n
+    im, im2, jp, jp2 = (i - 1) % n, (i - 2) % n, (j + 1) % n, (j + 2) % n
+    al, alm, alm2 = a[rows, i], a[rows, im], a[rows, im2]
+    ar_, arp, arp2 = a[rows, j], a[rows, jp], a[rows, jp2]
+    same = lambda k: arc[rows, k] == arc[rows, i]  # noqa: E731
+    other = lambda k: arc[rows, k] == arc[rows, j]  # noqa: E731
+    l1, l2 = same(im), same(im) & same(im2)
+    r1, r2 = other(jp), other(jp) & other(jp2)
+    # derivatives at the side's last sample (one-sided differences of order 2, 1 or 0)
+    jl = np.where(l2, (3 * al - 4 * alm + alm2) / (2 * h), np.where(l1, (al - alm) / h, 0.0))
+    kl = np.where(l2, (al - 2 * alm + alm2) / h**2, 0.0)
+    jr = np.where(r2, (-3 * ar_ + 4 * arp - arp2) / (2 * h), np.where(r1, (arp - ar_) / h, 0.0))
+    kr = np.where(r2, (ar_ - 2 * arp + arp2) / h**2, 0.0)
+    vl, vr = v[rows, i], v[rows, j]
+    # Δv(t) = v_right − v_left at offset t from sample i, in powers of s = t/h
+    c0 = vr - ar_ * h + jr * h**2 / 2 - kr * h**3 / 6 - vl
+    c1 = (ar_ - jr * h + kr * h**2 / 2 - al) * h
+    c2 = (jr / 2 - kr * h / 2 - jl / 2) * h**2
+    c3 = (kr - kl) / 6 * h**3
+    f0, f1 = c0, c0 + c1 + c2 + c3
+    t = np.where(np.abs(f0) <= np.abs(f1), 0.0, h)
+    b = np.flatnonzero((f0 < 0.0) != (f1 < 0.0))
+    if len(b):
+        t[b] = h * _bracketed_root(c0[b], c1[b], c2[b], c3[b], f0[b] < 0.0)
+    left = al + jl * t + kl * t * t / 2
+    right = ar_ + jr * (t - h) + kr * (t - h) ** 2 / 2
+    return rows, i, right - left
 
 
 def wrap(a):
@@ -230,16 +274,12 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
                   + np.where(lag < 0, np.abs(x_at(safe_out) - x_rise), 0.0))
         out["overlap_travel"] = np.where(ok, ov, np.nan)
 
-    # cam-arc switches: ax extrapolated from each side to the middle of the step
+    # cam-arc switches: each side's acceleration extrapolated to the switch, located where the two sides'
+    # velocities meet (the function below)
     if arc is not None:
-        arc = np.atleast_2d(arc)
-        sw = arc != _next(arc)
-        ar, ac = np.nonzero(sw)
-        prev, nxt, nxt2 = (ac - 1) % n, (ac + 1) % n, (ac + 2) % n
-        left = ax[ar, ac] + 0.5 * (ax[ar, ac] - ax[ar, prev])
-        right = ax[ar, nxt] + 0.5 * (ax[ar, nxt] - ax[ar, nxt2])
+        ar, ac, jumps = arc_jumps(np.atleast_2d(arc), vx, dvx, h)  # v and its slope dv/dφ = a/ω
         jump = np.zeros(d)
-        np.maximum.at(jump, ar, np.abs(right - left))
+        np.maximum.at(jump, ar, np.abs(jumps) * omega)
         out["accel_jump"] = np.where(good, jump, np.nan)
 
     if tilt is not None:

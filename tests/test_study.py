@@ -10,6 +10,7 @@ import sewgen
 from sewgen.cli import main
 from sewgen.errors import ParameterError
 from sewgen.machine import load_machine
+from sewgen.roles import FEED_DOG
 from sewgen.study import (MachineDesigns, StudyOptions, influence, parse_key, run_designs, sweep_group_designs,
                           tolerance)
 
@@ -219,3 +220,33 @@ def test_study_mistakes_exit_2_with_one_line_and_nothing_on_stdout(tmp_path, cap
     assert rc == 2 and cap.out == ""
     assert word in cap.err and len(cap.err.strip().splitlines()) == 1
     assert not (tmp_path / "x").exists()
+
+
+def test_a_study_reading_only_the_feed_sweeps_only_its_observables_bit_for_bit(jb):
+    """A feed-only study without loads sweeps just the observables it reads: the same values as the whole
+    sweep, bit for bit; with exact_jumps the jump is summary.json's (each switch solved at its own angle)."""
+    from sewgen import feed_indices as fi
+    from sewgen.cams import arc_switches
+
+    feed = next(g for g in jb.groups if g.name == "feed")
+    mech = feed.mechanism
+    P = np.tile(mech.param_vector(feed.params or None), (3, 1))
+    P[:, mech.param_names.index("lift_arm")] *= [0.99, 1.0, 1.01]
+    kept = tuple(k for k in fi.feed_observables(mech) if k is not None)
+    whole = sweep_group_designs(mech, P, PHI, None, held=feed.held or None)
+    some = sweep_group_designs(mech, P, PHI, None, held=feed.held or None, observables=kept)
+    assert some.q is None and some.obs.shape == (3, len(PHI), len(kept))
+    for k in kept:
+        assert np.array_equal(some.observable(k), whole.obs[:, :, k])
+    opts = StudyOptions(step_deg=5.0, loads=False, exact_jumps=True)
+    r = run_designs(jb, ["groups.feed.params.lift_arm"], P[:, [mech.param_names.index("lift_arm")]], opts)
+    dog = mech.description.role(FEED_DOG).name
+    for k in range(3):
+        mo = mech.solve(np.radians(np.arange(0.0, 360.0, 5.0)) + feed.phase, speed=jb.speed,
+                        params=dict(zip(mech.param_names, P[k])), held=feed.held or None)
+        want = max(abs(s.jumps[dog][0]) for s in arc_switches(mech, mo, params=dict(zip(mech.param_names, P[k])),
+                                                             held=feed.held or None))
+        assert r["feed_accel_jump [m/s^2]"][k] == pytest.approx(want, rel=1e-9)
+    est = run_designs(jb, ["groups.feed.params.lift_arm"], P[:, [mech.param_names.index("lift_arm")]],
+                      StudyOptions(step_deg=5.0, loads=False))
+    assert np.allclose(est["feed_accel_jump [m/s^2]"], r["feed_accel_jump [m/s^2]"], rtol=1.5e-3)

@@ -42,13 +42,16 @@ class StudyOptions:
     """``step_deg``: the sweep's step (must divide 360°); ``speed`` (rad/s; None: the machine's); ``loads``:
     the kinetostatics and the machine's peak loads per design; ``tooth_depth`` (m) for the effective travel;
     ``threads``: threads of each batched sweep (None: every core; a Dask worker runs with 1, its cluster being
-    the parallelism). The results do not depend on it."""
+    the parallelism). The results do not depend on it. ``exact_jumps``: each design's cam-arc acceleration
+    jumps by sewgen.cams.arc_switches (the switch bracketed and solved at its own angle, as summary.json; ~20
+    ms a design) instead of extrapolated from the sweep (sewgen.feed_indices.arc_jumps, O(h³))."""
 
     step_deg: float = 1.0
     speed: float | None = None
     loads: bool = True
     tooth_depth: float = fi.TOOTH_DEPTH
     threads: int | None = None
+    exact_jumps: bool = False
 
     def phi(self) -> np.ndarray:
         n = int(round(360.0 / self.step_deg))
@@ -121,6 +124,27 @@ def _needle_stroke(g, sweep, w, h):
     return hi + lo
 
 
+def _exact_jumps(g, sweep, status, error, estimate):
+    """Per design of ``sweep`` (feed group ``g``): the largest |horizontal acceleration jump| of the feed dog at
+    a cam-arc switch, each switch bracketed and solved at its own shaft angle (sewgen.cams.arc_switches, as
+    summary.json's); ``estimate`` where a design failed (its value is NaN then anyway). A switch that cannot be
+    solved fails its design (``status``/``error`` updated), the others unaffected."""
+    from ..cams import arc_switches
+
+    mech = g.mechanism
+    dog = mech.description.role(FEED_DOG).name
+    out = np.array(estimate, dtype=float)
+    for k in np.flatnonzero(status == "ok"):
+        try:
+            switches = arc_switches(mech, sweep.motion(int(k)),
+                                    params=dict(zip(mech.param_names, sweep.params[k])), held=g.held or None)
+        except SewgenError as exc:
+            status[k], error[k] = type(exc).__name__, f"groups.{g.name}: cam-arc switch: {exc}"
+            continue
+        out[k] = max((abs(s.jumps[dog][0]) for s in switches), default=0.0)
+    return out
+
+
 def _timing_values(tm, machine):
     """hook_at_needle_rise value and margin (mm), take-up amount (mm), failed rules."""
     out = {HOOK_RISE: math.nan, HOOK_MARGIN: math.nan, TAKE_UP: math.nan}
@@ -174,7 +198,8 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
     sweeps, status, error = {}, np.full(d, "ok", dtype=object), [None] * d
     fnames = {g.name for g in feed_groups(machine)}
     per_design_timing = machine.stitch is not None and (nominal or bool(varied - fnames))
-    whole = nominal or per_design_timing or options.loads  # something reads each design's whole motion
+    # something reads each design's whole motion
+    whole = nominal or per_design_timing or options.loads or options.exact_jumps
     for g in machine.groups:
         if nominal or g.name in varied:
             s = _sweep(machine, g, designs.group_matrix(g), phi, w, options,
@@ -226,6 +251,8 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
             for k, e in enumerate(ix["error"]):
                 if e is not None and status[k] == "ok":
                     status[k], error[k] = "FeedDogError", f"groups.{g.name}: {e}"
+            if options.exact_jumps and own:
+                ix["accel_jump"] = _exact_jumps(g, s, status, error, ix["accel_jump"])
         else:
             ix = {name: np.repeat(base["indices"][g.name][name], d) for name in fi.INDICES}
         for name, (unit, factor, _) in fi.INDICES.items():
