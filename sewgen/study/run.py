@@ -117,6 +117,38 @@ def design_columns(machine, table) -> tuple[list, np.ndarray]:
     return keys, (np.column_stack(cols) if cols else np.zeros((0, 0)))
 
 
+def _in_process(machine, keys, chunks, options, bar) -> list:
+    """Every chunk evaluated in this process, in order. With ``options.threads`` None (every core) and more
+    than one chunk, the chunks run on a pool of one thread a core, each chunk's sweep on one thread: the
+    C sweep and NumPy (both releasing the GIL) of different chunks overlap instead of the NumPy part running
+    alone while the cores wait. Each chunk is evaluated as it would be alone, so the result is the same."""
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    workers = min(os.cpu_count() or 1, len(chunks)) if options.threads is None else 1
+    if workers <= 1:
+        parts = []
+        for c in chunks:
+            parts.append(evaluate_chunk(machine, keys, c, options))
+            if bar is not None:
+                bar.update(len(c))
+        return parts
+    one = replace(options, threads=1)
+    parts = [evaluate_chunk(machine, keys, chunks[0], one)]  # the nominal baseline, once, before the pool
+    if bar is not None:
+        bar.update(len(chunks[0]))
+
+    def run(c):
+        df = evaluate_chunk(machine, keys, c, one)
+        if bar is not None:
+            bar.update(len(c))
+        return df
+
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        parts += list(pool.map(run, chunks[1:]))
+    return parts
+
+
 def run_designs(machine, keys, values=None, options: StudyOptions | None = None, *, chunk_size: int | None = None,
                 dask=None, progress=None):
     """Every design of ``machine`` evaluated: ``keys`` (model-file keys) × ``values`` ((D, k), SI), or ``keys``
@@ -141,10 +173,7 @@ def run_designs(machine, keys, values=None, options: StudyOptions | None = None,
     parts = []
     try:
         if dask is None:
-            for c in chunks:
-                parts.append(evaluate_chunk(machine, keys, c, options))
-                if bar is not None:
-                    bar.update(len(c))
+            parts = _in_process(machine, keys, chunks, options, bar)
         else:
             from distributed import as_completed
 
@@ -154,13 +183,15 @@ def run_designs(machine, keys, values=None, options: StudyOptions | None = None,
                 # one thread per task: the workers are the parallelism (threads in each would oversubscribe)
                 on_worker = replace(options, threads=1)
                 futures = [client.submit(evaluate_chunk, mref, keys, c, on_worker, pure=False) for c in chunks]
-                size = {f.key: len(c) for f, c in zip(futures, chunks)}
-                for f in as_completed(futures):
-                    if f.status == "error":
-                        f.result()  # raises the worker's error here
+                where = {f.key: k for k, f in enumerate(futures)}
+                parts = [None] * len(futures)
+                # each result fetched as its task ends (overlapping the transfers with the other tasks' work),
+                # placed by its chunk's index; a task's error raises here
+                for f, df in as_completed(futures, with_results=True, raise_errors=True):
+                    k = where[f.key]
+                    parts[k] = df
                     if bar is not None:
-                        bar.update(size[f.key])
-                parts = client.gather(futures)
+                        bar.update(len(chunks[k]))
             finally:
                 if close:
                     cluster = getattr(client, "cluster", None)
