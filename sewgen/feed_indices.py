@@ -110,11 +110,10 @@ def _arc_integrals(z, dz, x, dx, h, u, span, good):
         t0 = np.maximum(-u, 0.0)
         t1 = np.minimum(sp - u, h)
         use = (t1 > t0) & good[:, None]
+    # a step outside the arc has weight 0 (its pieces are finite in a row that rises and sinks once: ``good``)
     t0 = np.where(use, t0, 0.0)
     t1 = np.where(use, t1, 0.0)
-    zs = tuple(np.where(use, c, 0.0) for c in zc)
-    xs = tuple(np.where(use, c, 0.0) for c in xc)
-    add(None, zs, xs, t0, t1, area, absx)
+    add(None, zc, xc, t0, t1, area, absx)
     # the step that starts before the rise (u near 2π): its part from the rise on
     with np.errstate(invalid="ignore"):
         t0w = (TWO_PI - u)

@@ -207,6 +207,28 @@ def test_study_influence_command_writes_tables_with_units(tmp_path, capsys):
     assert "wrote" in capsys.readouterr().out
 
 
+def test_study_tolerance_command_with_exact_jumps(tmp_path, capsys):
+    """--exact-jumps: the feed's acceleration jump of the nominal design is summary.json's exact one."""
+    from sewgen import feed_indices as fi
+    from sewgen.cams import arc_switches
+
+    out = tmp_path / "tol"
+    rc = main(["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.lift_arm=±0.0mm", "--samples", "2",
+               "--step", "5 deg", "--exact-jumps", "--no-plots", "--out", str(out)])
+    assert rc == 0
+    assert json.loads((out / "study.json").read_text())["exact_jumps"] is True
+    jb = load_machine("jb1-3")
+    feed = next(g for g in jb.groups if g.name == "feed")
+    mech = feed.mechanism
+    mo = mech.solve(np.radians(np.arange(0.0, 360.0, 5.0)) + feed.phase, speed=jb.speed,
+                    params=feed.params or None, held=feed.held or None)
+    dog = mech.description.role(FEED_DOG).name
+    want = max(abs(s.jumps[dog][0]) for s in arc_switches(mech, mo, params=feed.params or None,
+                                                         held=feed.held or None))
+    samples = pd.read_csv(out / "samples.csv")
+    assert samples[fi.column("accel_jump")].to_numpy() == pytest.approx([want, want], rel=1e-9)
+
+
 @pytest.mark.parametrize("argv, word", [
     (["study", "influence", "jb1-3", "--param", "groups.feed.params.nope"], "groups.feed.params.nope"),
     (["study", "influence", "jb1-3", "--param", "groups.feed.params.feed_arm_r", "--range", "5%"], "--range"),

@@ -221,7 +221,7 @@ def _study_common(p, common):
     p.add_argument("--no-plots", action="store_true", help="tables and study.json only")
     p.add_argument("--exact-jumps", action="store_true",
                    help="the cam-arc acceleration jumps solved at each design's own switch angles (as summary.json; "
-                        "about 20 ms a design) instead of extrapolated from the sweep's samples")
+                        "5-30 ms a design) instead of extrapolated from the sweep's samples")
     common(p)
 
 

@@ -43,7 +43,7 @@ class StudyOptions:
     the kinetostatics and the machine's peak loads per design; ``tooth_depth`` (m) for the effective travel;
     ``threads``: threads of each batched sweep (None: every core; a Dask worker runs with 1, its cluster being
     the parallelism). The results do not depend on it. ``exact_jumps``: each design's cam-arc acceleration
-    jumps by sewgen.cams.arc_switches (the switch bracketed and solved at its own angle, as summary.json; ~20
+    jumps by sewgen.cams.arc_switches (the switch bracketed and solved at its own angle, as summary.json; 5–30
     ms a design) instead of extrapolated from the sweep (sewgen.feed_indices.arc_jumps, O(h³))."""
 
     step_deg: float = 1.0
