@@ -20,8 +20,10 @@ plate the tip's height above the plate, x its horizontal position (+ forward), �
 =========================  ===========================================================================  ======
 
 Every crossing and extreme is found on the cubic Hermite interpolant of the samples and their exact shaft-angle
-derivatives (dx/dφ = vx/ω, as sewgen.timing does), so the indices are accurate far below the sweep's step; the
-integrals are 3-point Gauss on each step (exact for the interpolants' product); the peaks of |vx|, |ax| are the
+derivatives (dx/dφ = vx/ω; sewgen.hermite, which sewgen.timing uses too: crossings by bracketed Newton steps,
+extremes as roots of the pieces' quadratic slopes), so the indices are accurate far below the sweep's step; the
+integrals are 3-point Gauss on each step (exact for the interpolants' product), over the whole (designs ×
+steps) array at once; the peaks of |vx|, |ax| are the
 sampled ones (and the interpolated ends of the arc). The acceleration jump at an arc switch between two samples
 is extrapolated from each side's samples to where the two sides' velocities meet (:func:`arc_jumps`, O(h³);
 sewgen.cams brackets the switch exactly, which summary.json uses, and studies with
