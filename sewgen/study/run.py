@@ -86,7 +86,13 @@ def dask_client(spec):
         n = int(m.group(1)) if m.group(1) else None
         if n is not None and n < 1:
             raise StudyError("--dask", f"local:N needs N >= 1 workers, got {n}")
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
+        import dask
+
+        # Dask's nanny starts workers with MALLOC_TRIM_THRESHOLD_=65536, which turns glibc's adaptive mmap
+        # threshold off: every NumPy temporary above 128 KiB is then mapped and unmapped afresh (twice the page
+        # faults, 20-40 % more CPU for a study's chunk; BENCHMARKS.md). A study's workers run without it.
+        with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
         return Client(cluster), True
     if re.fullmatch(r"(tcp|tls|inproc|ws|wss)://\S+", text):
         try:
