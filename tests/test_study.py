@@ -269,6 +269,9 @@ def test_a_study_reading_only_the_feed_sweeps_only_its_observables_bit_for_bit(j
         want = max(abs(s.jumps[dog][0]) for s in arc_switches(mech, mo, params=dict(zip(mech.param_names, P[k])),
                                                              held=feed.held or None))
         assert r["feed_accel_jump [m/s^2]"][k] == pytest.approx(want, rel=1e-9)
+    # a study that leaves the feed at nominal broadcasts the nominal's exact jump
+    other = run_designs(jb, ["groups.needle_bar.params.crank"], [[0.0167], [0.0168]], opts)
+    assert other["feed_accel_jump [m/s^2]"].tolist() == [r["feed_accel_jump [m/s^2]"][1]] * 2
     est = run_designs(jb, ["groups.feed.params.lift_arm"], P[:, [mech.param_names.index("lift_arm")]],
                       StudyOptions(step_deg=5.0, loads=False))
     assert np.allclose(est["feed_accel_jump [m/s^2]"], r["feed_accel_jump [m/s^2]"], rtol=1.5e-3)

@@ -251,8 +251,9 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
             for k, e in enumerate(ix["error"]):
                 if e is not None and status[k] == "ok":
                     status[k], error[k] = "FeedDogError", f"groups.{g.name}: {e}"
-            if options.exact_jumps and own:
-                ix["accel_jump"] = _exact_jumps(g, s, status, error, ix["accel_jump"])
+            if options.exact_jumps:  # the group's own designs solved; the nominal's (exact) broadcast
+                ix["accel_jump"] = (_exact_jumps(g, s, status, error, ix["accel_jump"]) if own else
+                                    np.repeat(base["indices"][g.name]["accel_jump"], d))
         else:
             ix = {name: np.repeat(base["indices"][g.name][name], d) for name in fi.INDICES}
         for name, (unit, factor, _) in fi.INDICES.items():
