@@ -696,7 +696,7 @@ def _study_runs(cfg: Config) -> dict:
 
     from .machine import load_machine
     from .study import StudyOptions, tolerance
-    from .study.run import CHUNK, dask_client
+    from .study.run import dask_chunk, dask_client
 
     machine = load_machine("jb1-3")
     opts = StudyOptions(step_deg=5.0, loads=False)
@@ -749,7 +749,8 @@ def _study_runs(cfg: Config) -> dict:
         for k in ("cluster_start_s", "worker_warm_s"):
             if k in r:
                 r[k] = min(r[k])
-    tasks = -(-(cfg.study_designs + 1) // CHUNK)
+    n = cfg.study_designs + 1  # the nominal design leads the table
+    tasks = -(-n // dask_chunk(n, 1))
     overhead = out["dask local:1"]["seconds"] - out["in-process (1 thread)"]["seconds"]
     out["dask_overhead"] = {"seconds": overhead, "per_task_ms": overhead / tasks * 1e3, "tasks": tasks,
                             "fraction": overhead / out["in-process (1 thread)"]["seconds"]}

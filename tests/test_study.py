@@ -174,6 +174,19 @@ def test_a_study_on_a_two_worker_local_cluster_is_the_in_process_result(jb):
     assert (here.table["status"] == "ok").all()
 
 
+def test_the_chunking_does_not_change_a_bit(jb):
+    """Each design is evaluated independently of its chunk: any chunk size (and Dask's larger default ones)
+    gives the same table exactly."""
+    from sewgen.study.run import dask_chunk
+
+    tol = {"groups.feed.params.feed_arm_r": "±0.05mm", "groups.feed.params.lift_arm": "±0.05mm"}
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    tables = [tolerance(jb, tol, 11, seed=4, options=opts, chunk_size=c).table for c in (12, 5, 1)]
+    for t in tables[1:]:
+        pd.testing.assert_frame_equal(tables[0], t, check_exact=True)
+    assert dask_chunk(100_000, 2) == 4000 and dask_chunk(10_000, 2) == 1000 and dask_chunk(30_000, 2) == 2500
+
+
 def test_a_study_on_a_running_scheduler_by_its_address(jb):
     distributed = pytest.importorskip("distributed")
     from sewgen.study.run import StudyError, dask_client

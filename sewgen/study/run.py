@@ -4,8 +4,9 @@ Dask.
 :func:`run_designs` is the engine: the design table is split into chunks of ``chunk_size`` rows; each chunk is
 one :func:`sewgen.study.evaluate.evaluate_chunk` call — in this process, or one task on a Dask worker
 (``dask="local"``, ``"local:4"`` for a LocalCluster of 4 worker processes on this machine, or a scheduler's
-address ``"tcp://host:8786"``, or a ``distributed.Client``). The chunks are gathered in order into one DataFrame;
-with or without Dask, the same chunks are evaluated the same way, so the result is the same bit for bit.
+address ``"tcp://host:8786"``, or a ``distributed.Client``). The chunks are gathered in order into one DataFrame.
+Each design is evaluated independently of the chunk it falls in (its own sweep, every index per row), so the
+result is the same bit for bit with or without Dask, whatever the chunks (Dask's are larger: :func:`dask_chunk`).
 """
 from __future__ import annotations
 
@@ -23,6 +24,14 @@ from .machine_designs import DesignKey, MachineDesigns, parse_keys
 #: designs per chunk (one batched evaluation call each): parameter-only designs / designs that reload the model
 CHUNK = 1000  # the batched sweep amortises its calls and threads over a chunk (100: 1.4x slower, 5000: slower again)
 CHUNK_RELOAD = 4
+#: Dask tasks: fewer, larger chunks (the scheduler and client spend ≈ 20 ms of CPU a task, on the workers'
+#: cores), at least 6 a worker so the last ones balance: between CHUNK and DASK_CHUNK_MAX designs
+DASK_CHUNK_MAX = 4000
+
+
+def dask_chunk(designs: int, workers: int) -> int:
+    """Designs per Dask task for ``designs`` designs on ``workers`` workers (parameter-only designs)."""
+    return int(min(DASK_CHUNK_MAX, max(CHUNK, -(-designs // (6 * workers)))))
 
 
 class StudyError(SewgenError, ValueError):
@@ -171,20 +180,28 @@ def run_designs(machine, keys, values=None, options: StudyOptions | None = None,
     values = np.asarray(values, dtype=float)
     MachineDesigns(machine, keys, values[:0])  # the keys checked before any work
     d = len(values)
-    if chunk_size is None:
-        chunk_size = CHUNK_RELOAD if any(k.group is None for k in keys) else CHUNK
-    bounds = list(range(0, d, chunk_size)) + [d]
-    chunks = [values[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+    reload = any(k.group is None for k in keys)
+
+    def cut(size):
+        bounds = list(range(0, d, size)) + [d]
+        return [values[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+
     bar = _progress(d, f"{machine.name}: {d} designs", progress)
     parts = []
     try:
         if dask is None:
+            chunks = cut(chunk_size or (CHUNK_RELOAD if reload else CHUNK))
             parts = _in_process(machine, keys, chunks, options, bar)
         else:
             from distributed import as_completed
 
             client, close = dask_client(dask)
             try:
+                size = chunk_size
+                if size is None:
+                    workers = max(1, len(client.scheduler_info().get("workers", {})))
+                    size = CHUNK_RELOAD if reload else dask_chunk(d, workers)
+                chunks = cut(size)
                 mref = client.scatter(machine, broadcast=True)
                 # one thread per task: the workers are the parallelism (threads in each would oversubscribe)
                 on_worker = replace(options, threads=1)
