@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ParameterError
+from .hermite import hermite
 from .roles import FEED_DOG, STITCH_REGULATOR, THROAT_PLATE
 from .units import UnitError, to_si
 
@@ -28,13 +29,6 @@ class DogTravel:
     rise: float
     sink: float
     height: float  # highest point above the plate (m)
-
-
-def _hermite(t, p0, p1, d0, d1, h):
-    """Cubic Hermite on [0, h] at t: values p0, p1 and slopes d0, d1."""
-    s = t / h
-    return ((2 * s**3 - 3 * s**2 + 1) * p0 + (s**3 - 2 * s**2 + s) * h * d0
-            + (-2 * s**3 + 3 * s**2) * p1 + (s**3 - s**2) * h * d1)
 
 
 def has_feed(mech) -> bool:
@@ -74,8 +68,8 @@ def dog_travel(motion, plate: float, point: str | None = None) -> DogTravel:
 
     def crossing(i):
         j = (i + 1) % len(phi)
-        t = brentq(lambda t: _hermite(t, z[i], z[j], dz[i], dz[j], h), 0.0, h, xtol=1e-15)
-        return phi[i] + t, _hermite(t, pt.x[i], pt.x[j], dx[i], dx[j], h)
+        t = brentq(lambda t: hermite(z[i], z[j], dz[i], dz[j], h, t), 0.0, h, xtol=1e-15)
+        return phi[i] + t, hermite(pt.x[i], pt.x[j], dx[i], dx[j], h, t)
 
     (rise, x0), (sink, x1) = crossing(int(up[0])), crossing(int(down[0]))
     return DogTravel(float(x1 - x0), float(rise % (2 * math.pi)), float(sink % (2 * math.pi)), float(z.max()))

@@ -20,11 +20,14 @@ plate the tip's height above the plate, x its horizontal position (+ forward), �
 =========================  ===========================================================================  ======
 
 Every crossing and extreme is found on the cubic Hermite interpolant of the samples and their exact shaft-angle
-derivatives (dx/dφ = vx/ω, as sewgen.timing does), so the indices are accurate far below the sweep's step; the
-integrals are 3-point Gauss on each step (exact for the interpolants' product); the peaks of |vx|, |ax| are the
+derivatives (dx/dφ = vx/ω; sewgen.hermite, which sewgen.timing uses too: crossings by bracketed Newton steps,
+extremes as roots of the pieces' quadratic slopes), so the indices are accurate far below the sweep's step; the
+integrals are 3-point Gauss on each step (exact for the interpolants' product), over the whole (designs ×
+steps) array at once; the peaks of |vx|, |ax| are the
 sampled ones (and the interpolated ends of the arc). The acceleration jump at an arc switch between two samples
-is estimated by extrapolating ax linearly from each side to the step's middle (to O(h); sewgen.cams brackets
-the switch exactly, which summary.json uses).
+is extrapolated from each side's samples to where the two sides' velocities meet (:func:`arc_jumps`, O(h³);
+sewgen.cams brackets the switch exactly, which summary.json uses, and studies with
+``StudyOptions.exact_jumps``).
 
 A design whose dog does not rise above the plate exactly once a turn gets NaN indices and an ``error``.
 """
@@ -66,75 +69,105 @@ def column(name: str) -> str:
     return f"feed_{name} [{unit}]" if unit else f"feed_{name}"
 
 
-# -- cubic Hermite pieces, vectorised -------------------------------------------------------------------------
-
-def hermite(p0, p1, d0, d1, h, t):
-    """Cubic Hermite on [0, h] at t: values p0, p1, slopes d0, d1 (all broadcast)."""
-    s = t / h
-    return ((2 * s**3 - 3 * s**2 + 1) * p0 + (s**3 - 2 * s**2 + s) * h * d0
-            + (-2 * s**3 + 3 * s**2) * p1 + (s**3 - s**2) * h * d1)
-
-
-def hermite_slope(p0, p1, d0, d1, h, t):
-    """d/dt of :func:`hermite`."""
-    s = t / h
-    return ((6 * s**2 - 6 * s) * p0 / h + (3 * s**2 - 4 * s + 1) * d0
-            + (-6 * s**2 + 6 * s) * p1 / h + (3 * s**2 - 2 * s) * d1)
+# the cubic Hermite pieces (one implementation, sewgen.hermite): re-exported for the callers of this module
+from .hermite import _bracketed_root, at, crossings, hermite, hermite_slope, maximum, power_form  # noqa: E402,F401
 
 
 def _next(a):
     return np.roll(a, -1, axis=-1)
 
 
-def crossings(z, dz, h, iters: int = 60):
-    """Every sign change of z (D, N) over one periodic turn: rows, sample index i (the step i..i+1), the offset
-    t in [0, h] of the crossing on the Hermite piece, and the sign (+1 rising through 0, −1 falling)."""
-    neg = z < 0.0
-    rows, cols = np.nonzero(neg != _next(neg))
-    n = z.shape[1]
-    j = (cols + 1) % n
-    p0, p1, d0, d1 = z[rows, cols], z[rows, j], dz[rows, cols], dz[rows, j]
-    lo, hi = np.zeros(len(rows)), np.full(len(rows), h)
-    f_lo_neg = p0 < 0.0
-    for _ in range(iters):
-        mid = 0.5 * (lo + hi)
-        same = (hermite(p0, p1, d0, d1, h, mid) < 0.0) == f_lo_neg
-        lo = np.where(same, mid, lo)
-        hi = np.where(same, hi, mid)
-    return rows, cols, 0.5 * (lo + hi), np.where(f_lo_neg, 1, -1)
-
-
-def at(y, dy, h, rows, cols, t):
-    """The Hermite interpolant of y (D, N) on the pieces (rows, cols) at offsets t."""
-    j = (cols + 1) % y.shape[1]
-    return hermite(y[rows, cols], y[rows, j], dy[rows, cols], dy[rows, j], h, t)
-
-
-def maximum(y, dy, h, iters: int = 60):
-    """Per row: the largest value of the Hermite interpolant (found near the largest sample) and its (index,
-    offset). The slope dy changes sign at the extreme; it is bisected on the derivative of the piece."""
-    d, n = y.shape
-    rows = np.arange(d)
-    k = np.argmax(y, axis=1)
-    left = dy[rows, k] < 0.0  # the maximum lies before sample k
-    i = np.where(left, (k - 1) % n, k)
-    j = (i + 1) % n
-    p0, p1, d0, d1 = y[rows, i], y[rows, j], dy[rows, i], dy[rows, j]
-    lo, hi = np.zeros(d), np.full(d, h)
-    ok = (d0 >= 0.0) & (d1 <= 0.0)
-    for _ in range(iters):
-        mid = 0.5 * (lo + hi)
-        up = hermite_slope(p0, p1, d0, d1, h, mid) > 0.0
-        lo = np.where(up, mid, lo)
-        hi = np.where(up, hi, mid)
-    t = np.where(ok, 0.5 * (lo + hi), np.where(left, h, 0.0))
-    return np.maximum(hermite(p0, p1, d0, d1, h, t), y[rows, k]), i, t
-
-
 def _per_row(d, rows, values):
     out = np.full(d, np.nan)
     out[rows] = values
     return out
+
+
+def _arc_integrals(z, dz, x, dx, h, u, span, good):
+    """Per row: ∫ z dx and ∫ |dx/dφ| dφ over the arc [rise, rise + span] (``u`` (D, N): each step's start
+    measured from the rise), by 3-point Gauss on each step's part inside the arc (exact for z·x′, a quintic).
+    Every step of every row at once in the power form of its pieces; the one step per row that wraps past
+    the rise (its start a little less than 2π after it) is added apart."""
+    zc = power_form(z, _next(z), dz, _next(dz), h)
+    xc = power_form(x, _next(x), dx, _next(dx), h)
+    area, absx = np.zeros(len(z)), np.zeros(len(z))
+    sp = span[:, None]
+
+    def add(rows, zc, xc, t0, t1, out_area, out_absx):
+        half = 0.5 * (t1 - t0)
+        for xi, wi in zip(_GAUSS_X, _GAUSS_W):
+            s = (t0 + half * (1.0 + xi)) / h
+            zq = ((zc[3] * s + zc[2]) * s + zc[1]) * s + zc[0]
+            xq = ((3.0 * xc[3] * s + 2.0 * xc[2]) * s + xc[1]) / h  # dx/dφ
+            wh = wi * half
+            if rows is None:
+                out_area += (wh * zq * xq).sum(axis=1)
+                out_absx += (wh * np.abs(xq)).sum(axis=1)
+            else:
+                np.add.at(out_area, rows, wh * zq * xq)
+                np.add.at(out_absx, rows, wh * np.abs(xq))
+
+    with np.errstate(invalid="ignore"):
+        # every step: its part [a, b] ⊂ [0, span] (no part: a = b, weight 0)
+        t0 = np.maximum(-u, 0.0)
+        t1 = np.minimum(sp - u, h)
+        use = (t1 > t0) & good[:, None]
+    # a step outside the arc has weight 0 (its pieces are finite in a row that rises and sinks once: ``good``)
+    t0 = np.where(use, t0, 0.0)
+    t1 = np.where(use, t1, 0.0)
+    add(None, zc, xc, t0, t1, area, absx)
+    # the step that starts before the rise (u near 2π): its part from the rise on
+    with np.errstate(invalid="ignore"):
+        t0w = (TWO_PI - u)
+        t1w = np.minimum(sp + TWO_PI - u, h)
+        wrapped = (t1w > t0w) & good[:, None]
+    rr, cc = np.nonzero(wrapped)
+    if len(rr):
+        add(rr, tuple(c[rr, cc] for c in zc), tuple(c[rr, cc] for c in xc), t0w[rr, cc], t1w[rr, cc], area, absx)
+    return area, absx
+
+
+def arc_jumps(arc, v, a, h):
+    """Every switch of a cam contact's arc in ``arc`` (D, N) between two samples, and the jump of a (D, N), the
+    shaft-angle derivative of v (D, N), there: (rows, sample index i before the switch, a after − a before).
+
+    A G1 cam keeps v continuous and makes a jump at the switch (sewgen.cams). Each side's a is the quadratic
+    through its last three samples on its own arc (two: linear; one: constant) and v is its integral from the
+    side's last sample; the switch is where the two sides' v agree (the root of their difference, a cubic, in
+    the step; the nearer end without a sign change) and the jump is the difference of the two sides' a there.
+    Error O(h³) against the exact jump of sewgen.cams.arc_switches (JB1-3 feed: 2e-4 of it at 5° steps, 2e-6
+    at 1°); the exact one needs a solve at each design's own switch angle (StudyOptions.exact_jumps)."""
+    d, n = arc.shape
+    rows, i = np.nonzero(arc != _next(arc))
+    if not len(rows):
+        return rows, i, np.zeros(0)
+    j = (i + 1) % n
+    im, im2, jp, jp2 = (i - 1) % n, (i - 2) % n, (j + 1) % n, (j + 2) % n
+    al, alm, alm2 = a[rows, i], a[rows, im], a[rows, im2]
+    ar_, arp, arp2 = a[rows, j], a[rows, jp], a[rows, jp2]
+    same = lambda k: arc[rows, k] == arc[rows, i]  # noqa: E731
+    other = lambda k: arc[rows, k] == arc[rows, j]  # noqa: E731
+    l1, l2 = same(im), same(im) & same(im2)
+    r1, r2 = other(jp), other(jp) & other(jp2)
+    # derivatives at the side's last sample (one-sided differences of order 2, 1 or 0)
+    jl = np.where(l2, (3 * al - 4 * alm + alm2) / (2 * h), np.where(l1, (al - alm) / h, 0.0))
+    kl = np.where(l2, (al - 2 * alm + alm2) / h**2, 0.0)
+    jr = np.where(r2, (-3 * ar_ + 4 * arp - arp2) / (2 * h), np.where(r1, (arp - ar_) / h, 0.0))
+    kr = np.where(r2, (ar_ - 2 * arp + arp2) / h**2, 0.0)
+    vl, vr = v[rows, i], v[rows, j]
+    # Δv(t) = v_right − v_left at offset t from sample i, in powers of s = t/h
+    c0 = vr - ar_ * h + jr * h**2 / 2 - kr * h**3 / 6 - vl
+    c1 = (ar_ - jr * h + kr * h**2 / 2 - al) * h
+    c2 = (jr / 2 - kr * h / 2 - jl / 2) * h**2
+    c3 = (kr - kl) / 6 * h**3
+    f0, f1 = c0, c0 + c1 + c2 + c3
+    t = np.where(np.abs(f0) <= np.abs(f1), 0.0, h)
+    b = np.flatnonzero((f0 < 0.0) != (f1 < 0.0))
+    if len(b):
+        t[b] = h * _bracketed_root(c0[b], c1[b], c2[b], c3[b], f0[b] < 0.0)
+    left = al + jl * t + kl * t * t / 2
+    right = ar_ + jr * (t - h) + kr * (t - h) ** 2 / 2
+    return rows, i, right - left
 
 
 def wrap(a):
@@ -197,24 +230,7 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
     # the arc above the plate: every step's part inside [rise, sink] (round the turn), as sub-intervals of the step
     span = (sink - rise) % TWO_PI  # NaN rows stay NaN
     u = (phi[None, :] - rise[:, None]) % TWO_PI  # each step's start, measured from the rise
-    area, absx = np.zeros(d), np.zeros(d)
-    jn = (np.arange(n) + 1) % n
-    for shift in (0.0, TWO_PI):
-        a = np.clip(np.maximum(u - shift, 0.0), None, span[:, None])
-        b = np.clip(np.minimum(u - shift + h, span[:, None]), 0.0, None)
-        inside = b > a
-        if not inside.any():
-            continue
-        rr, cc = np.nonzero(inside & good[:, None])
-        t0, t1 = a[rr, cc] - (u[rr, cc] - shift), b[rr, cc] - (u[rr, cc] - shift)
-        half = 0.5 * (t1 - t0)
-        for xi, wi in zip(_GAUSS_X, _GAUSS_W):
-            tq = t0 + half * (1.0 + xi)
-            jj = jn[cc]
-            zq = hermite(z[rr, cc], z[rr, jj], dz[rr, cc], dz[rr, jj], h, tq)
-            xq = hermite_slope(x[rr, cc], x[rr, jj], dx[rr, cc], dx[rr, jj], h, tq)
-            np.add.at(area, rr, wi * half * zq * xq)
-            np.add.at(absx, rr, wi * half * np.abs(xq))
+    area, absx = _arc_integrals(z, dz, x, dx, h, u, span, good)
     with np.errstate(invalid="ignore", divide="ignore"):
         out["fullness"] = np.where(good, np.abs(area) / (np.abs(out["travel"]) * out["height"]), np.nan)
 
@@ -259,16 +275,12 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
                   + np.where(lag < 0, np.abs(x_at(safe_out) - x_rise), 0.0))
         out["overlap_travel"] = np.where(ok, ov, np.nan)
 
-    # cam-arc switches: ax extrapolated from each side to the middle of the step
+    # cam-arc switches: each side's acceleration extrapolated to the switch, located where the two sides'
+    # velocities meet (the function below)
     if arc is not None:
-        arc = np.atleast_2d(arc)
-        sw = arc != _next(arc)
-        ar, ac = np.nonzero(sw)
-        prev, nxt, nxt2 = (ac - 1) % n, (ac + 1) % n, (ac + 2) % n
-        left = ax[ar, ac] + 0.5 * (ax[ar, ac] - ax[ar, prev])
-        right = ax[ar, nxt] + 0.5 * (ax[ar, nxt] - ax[ar, nxt2])
+        ar, ac, jumps = arc_jumps(np.atleast_2d(arc), vx, dvx, h)  # v and its slope dv/dφ = a/ω
         jump = np.zeros(d)
-        np.maximum.at(jump, ar, np.abs(right - left))
+        np.maximum.at(jump, ar, np.abs(jumps) * omega)
         out["accel_jump"] = np.where(good, jump, np.nan)
 
     if tilt is not None:
@@ -284,23 +296,35 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
     return out
 
 
-def group_arrays(mech, obs):
-    """From a feed mechanism's observables ``obs`` (D, N, nobs) or (N, nobs): the dog's x, y, vx, vy, ax, the
-    dog body's angle (its declared u axis) and the first cam contact's arc (or None). Parts by role: the
-    ``feed_dog`` point and its body (``feed_bar`` role if declared)."""
+def feed_observables(mech) -> tuple:
+    """The indices, among ``mech``'s observables, of the dog's x, y, vx, vy, ax, the dog body's angle (its
+    declared u axis; None without one) and the first cam contact's arc (None without a cam). Parts by role:
+    the ``feed_dog`` point and its body (``feed_bar`` role if declared)."""
     from .cams import _arc_columns
     from .roles import FEED_BAR, FEED_DOG
 
     desc = mech.description
-    obs = obs if obs.ndim == 3 else obs[None]
     pt = desc.role(FEED_DOG)
-    off = pt.offset
-    x, y, vx, vy, ax = (obs[:, :, off + k] for k in (0, 1, 2, 3, 4))
     body = desc.role(FEED_BAR).name if desc.has_role(FEED_BAR) else pt.body
-    tilt = obs[:, :, desc.body(body).offset] if body and desc.has("body", body) else None
+    tilt = desc.body(body).offset if body and desc.has("body", body) else None
     arcs = _arc_columns(mech)
-    arc = obs[:, :, next(iter(arcs.values()))] if arcs else None
-    return x, y, vx, vy, ax, tilt, arc
+    arc = next(iter(arcs.values())) if arcs else None
+    return tuple(pt.offset + k for k in range(5)) + (tilt, arc)
+
+
+def group_arrays(mech, obs):
+    """From a feed mechanism's observables ``obs`` (D, N, nobs) or (N, nobs), or a function observable index ->
+    (D, N): the dog's x, y, vx, vy, ax, the dog body's angle and the first cam contact's arc (None where the
+    mechanism has none; see :func:`feed_observables`)."""
+    if callable(obs):
+        get = obs
+    else:
+        obs = obs if obs.ndim == 3 else obs[None]
+
+        def get(k):
+            return obs[:, :, k]
+
+    return tuple(None if k is None else get(k) for k in feed_observables(mech))
 
 
 def as_dict(ix: dict, k: int = 0, exact_jump: float | None = None) -> dict:

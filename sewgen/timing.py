@@ -15,7 +15,7 @@ shuttle body: its body's angle is the shuttle's), the take-up's ``thread_eye``, 
 
 Events are found to well below the sweep's step: between two sweep angles a quantity is the cubic Hermite
 interpolant of its values and exact shaft-angle derivatives (v/ω, a/ω² from the kinematics at constant
-speed), and a crossing or an extreme is bisected on it. Angles are the machine's shaft angle φ (needle top at
+speed; sewgen.hermite), and a crossing or an extreme is found on it to the last bit. Angles are the machine's shaft angle φ (needle top at
 90° on the JB1-3), in [0°, 360°).
 
 Rules (``rule`` in the model file; ``min``/``max`` with units; ``source`` names the manual, text or seed):
@@ -72,6 +72,7 @@ import numpy as np
 
 from .errors import SewgenError
 from .feed import plate_height
+from .hermite import Series  # the one cubic Hermite implementation (crossings, values between samples)
 from .roles import (FEED_DOG, HOOK_POINT, LOWER_LOOPER_TIP, NEEDLE_EYE, NEEDLE_EYE_LENGTH, NEEDLE_POINT, NEEDLE_SCARF,
                     THREAD_EYE, THROAT_PLATE, UPPER_LOOPER_TIP)
 
@@ -295,46 +296,6 @@ class Timing:
 
 
 # -- interpolation on a sweep -----------------------------------------------------------------------------------
-
-class Series:
-    """A quantity over one revolution of equal steps: values ``y`` and shaft-angle derivatives ``dy`` (dy/dφ),
-    interpolated by cubic Hermite pieces; crossings and extremes bisected on them."""
-
-    def __init__(self, phi, y, dy):
-        self.phi, self.y, self.dy = np.asarray(phi), np.asarray(y, float), np.asarray(dy, float)
-        self.h = float(self.phi[1] - self.phi[0])
-
-    def _piece(self, i, t):
-        j = (i + 1) % len(self.y)
-        s = t / self.h
-        p0, p1, d0, d1 = self.y[i], self.y[j], self.dy[i] * self.h, self.dy[j] * self.h
-        return ((2 * s**3 - 3 * s**2 + 1) * p0 + (s**3 - 2 * s**2 + s) * d0
-                + (-2 * s**3 + 3 * s**2) * p1 + (s**3 - s**2) * d1)
-
-    def at(self, angle: float) -> float:
-        """The value at shaft angle ``angle`` (rad)."""
-        u = (angle - self.phi[0]) % TWO_PI
-        i = min(int(u // self.h), len(self.y) - 1)
-        return float(self._piece(i, u - i * self.h))
-
-    def crossings(self, level: float = 0.0) -> list:
-        """[(angle, +1 rising / −1 falling)] where the quantity crosses ``level``, over the turn."""
-        z = self.y - level
-        neg = z < 0.0
-        out = []
-        for i in np.flatnonzero(neg != np.roll(neg, -1)):
-            j = (i + 1) % len(z)
-            a, b, fa = 0.0, self.h, z[i]
-            for _ in range(60):
-                m = 0.5 * (a + b)
-                fm = self._piece(i, m) - level
-                if (fm < 0.0) == (fa < 0.0):
-                    a, fa = m, fm
-                else:
-                    b = m
-            out.append(((self.phi[i] + 0.5 * (a + b)) % TWO_PI, 1 if z[j] > z[i] else -1))
-        return out
-
 
 def _deriv(phi, y, dy, d2y):
     """(Series of y, Series of dy/dφ) from values and their first and second shaft-angle derivatives."""

@@ -145,3 +145,25 @@ def test_summary_has_the_indices(jb, tmp_path):
     assert entry["travel_mm"] == pytest.approx(4.0, abs=1e-4)
     assert entry["rise_lag_deg"] == pytest.approx(tm.check("dog_rises_after_needle_leaves").value, abs=1e-3)
     assert entry["sink_lead_deg"] == pytest.approx(tm.check("dog_sinks_before_needle_enters").value, abs=1e-3)
+
+
+@pytest.mark.parametrize("step, rel", [(5.0, 1.5e-3), (1.0, 2e-5)])
+def test_the_arc_jumps_against_each_switch_solved_at_its_own_angle(jb, step, rel):
+    """feed_indices.arc_jumps extrapolates each side's acceleration to where the sides' velocities meet; the
+    reference brackets every switch and solves both sides at it (sewgen.cams.arc_switches, summary.json's)."""
+    from sewgen.cams import arc_switches
+    from sewgen.feed_indices import arc_jumps
+
+    m, _ = jb
+    g = _group(m)
+    phi = np.radians(np.arange(0.0, 360.0, step))
+    mo, dog, _ = _dense(g, phi, m.speed, 0.0)
+    exact = arc_switches(g.mechanism, mo, params=_params(g, 0.0), held=g.held or None)
+    x, y, vx, vy, ax, tilt, arc = group_arrays(g.mechanism, mo.obs)
+    rows, i, jumps = arc_jumps(arc, vx, ax / m.speed, phi[1] - phi[0])
+    assert len(exact) == len(jumps) == 6
+    name = g.mechanism.description.role(FEED_DOG).name
+    ref = {round(math.degrees(s.angle) / step - 0.5) % len(phi): s.jumps[name][0] for s in exact}
+    for k, jmp in zip(i, jumps * m.speed):
+        want = ref.get(int(k), ref.get(int(k) - 1, ref.get(int(k) + 1)))
+        assert jmp == pytest.approx(want, rel=rel)

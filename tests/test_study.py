@@ -10,6 +10,7 @@ import sewgen
 from sewgen.cli import main
 from sewgen.errors import ParameterError
 from sewgen.machine import load_machine
+from sewgen.roles import FEED_DOG
 from sewgen.study import (MachineDesigns, StudyOptions, influence, parse_key, run_designs, sweep_group_designs,
                           tolerance)
 
@@ -173,6 +174,19 @@ def test_a_study_on_a_two_worker_local_cluster_is_the_in_process_result(jb):
     assert (here.table["status"] == "ok").all()
 
 
+def test_the_chunking_does_not_change_a_bit(jb):
+    """Each design is evaluated independently of its chunk: any chunk size (and Dask's larger default ones)
+    gives the same table exactly."""
+    from sewgen.study.run import dask_chunk
+
+    tol = {"groups.feed.params.feed_arm_r": "±0.05mm", "groups.feed.params.lift_arm": "±0.05mm"}
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    tables = [tolerance(jb, tol, 11, seed=4, options=opts, chunk_size=c).table for c in (12, 5, 1)]
+    for t in tables[1:]:
+        pd.testing.assert_frame_equal(tables[0], t, check_exact=True)
+    assert dask_chunk(100_000, 2) == 4000 and dask_chunk(10_000, 2) == 1000 and dask_chunk(30_000, 2) == 2500
+
+
 def test_a_study_on_a_running_scheduler_by_its_address(jb):
     distributed = pytest.importorskip("distributed")
     from sewgen.study.run import StudyError, dask_client
@@ -206,6 +220,28 @@ def test_study_influence_command_writes_tables_with_units(tmp_path, capsys):
     assert "wrote" in capsys.readouterr().out
 
 
+def test_study_tolerance_command_with_exact_jumps(tmp_path, capsys):
+    """--exact-jumps: the feed's acceleration jump of the nominal design is summary.json's exact one."""
+    from sewgen import feed_indices as fi
+    from sewgen.cams import arc_switches
+
+    out = tmp_path / "tol"
+    rc = main(["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.lift_arm=±0.0mm", "--samples", "2",
+               "--step", "5 deg", "--exact-jumps", "--no-plots", "--out", str(out)])
+    assert rc == 0
+    assert json.loads((out / "study.json").read_text())["exact_jumps"] is True
+    jb = load_machine("jb1-3")
+    feed = next(g for g in jb.groups if g.name == "feed")
+    mech = feed.mechanism
+    mo = mech.solve(np.radians(np.arange(0.0, 360.0, 5.0)) + feed.phase, speed=jb.speed,
+                    params=feed.params or None, held=feed.held or None)
+    dog = mech.description.role(FEED_DOG).name
+    want = max(abs(s.jumps[dog][0]) for s in arc_switches(mech, mo, params=feed.params or None,
+                                                         held=feed.held or None))
+    samples = pd.read_csv(out / "samples.csv")
+    assert samples[fi.column("accel_jump")].to_numpy() == pytest.approx([want, want], rel=1e-9)
+
+
 @pytest.mark.parametrize("argv, word", [
     (["study", "influence", "jb1-3", "--param", "groups.feed.params.nope"], "groups.feed.params.nope"),
     (["study", "influence", "jb1-3", "--param", "groups.feed.params.feed_arm_r", "--range", "5%"], "--range"),
@@ -219,3 +255,36 @@ def test_study_mistakes_exit_2_with_one_line_and_nothing_on_stdout(tmp_path, cap
     assert rc == 2 and cap.out == ""
     assert word in cap.err and len(cap.err.strip().splitlines()) == 1
     assert not (tmp_path / "x").exists()
+
+
+def test_a_study_reading_only_the_feed_sweeps_only_its_observables_bit_for_bit(jb):
+    """A feed-only study without loads sweeps just the observables it reads: the same values as the whole
+    sweep, bit for bit; with exact_jumps the jump is summary.json's (each switch solved at its own angle)."""
+    from sewgen import feed_indices as fi
+    from sewgen.cams import arc_switches
+
+    feed = next(g for g in jb.groups if g.name == "feed")
+    mech = feed.mechanism
+    P = np.tile(mech.param_vector(feed.params or None), (3, 1))
+    P[:, mech.param_names.index("lift_arm")] *= [0.99, 1.0, 1.01]
+    kept = tuple(k for k in fi.feed_observables(mech) if k is not None)
+    whole = sweep_group_designs(mech, P, PHI, None, held=feed.held or None)
+    some = sweep_group_designs(mech, P, PHI, None, held=feed.held or None, observables=kept)
+    assert some.q is None and some.obs.shape == (3, len(PHI), len(kept))
+    for k in kept:
+        assert np.array_equal(some.observable(k), whole.obs[:, :, k])
+    opts = StudyOptions(step_deg=5.0, loads=False, exact_jumps=True)
+    r = run_designs(jb, ["groups.feed.params.lift_arm"], P[:, [mech.param_names.index("lift_arm")]], opts)
+    dog = mech.description.role(FEED_DOG).name
+    for k in range(3):
+        mo = mech.solve(np.radians(np.arange(0.0, 360.0, 5.0)) + feed.phase, speed=jb.speed,
+                        params=dict(zip(mech.param_names, P[k])), held=feed.held or None)
+        want = max(abs(s.jumps[dog][0]) for s in arc_switches(mech, mo, params=dict(zip(mech.param_names, P[k])),
+                                                             held=feed.held or None))
+        assert r["feed_accel_jump [m/s^2]"][k] == pytest.approx(want, rel=1e-9)
+    # a study that leaves the feed at nominal broadcasts the nominal's exact jump
+    other = run_designs(jb, ["groups.needle_bar.params.crank"], [[0.0167], [0.0168]], opts)
+    assert other["feed_accel_jump [m/s^2]"].tolist() == [r["feed_accel_jump [m/s^2]"][1]] * 2
+    est = run_designs(jb, ["groups.feed.params.lift_arm"], P[:, [mech.param_names.index("lift_arm")]],
+                      StudyOptions(step_deg=5.0, loads=False))
+    assert np.allclose(est["feed_accel_jump [m/s^2]"], r["feed_accel_jump [m/s^2]"], rtol=1.5e-3)

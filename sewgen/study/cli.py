@@ -26,7 +26,7 @@ def _options(args, loads: bool):
     if n is None:
         raise UsageError("--step", problem)
     speed = _quantity(args.speed, "speed", "--speed", "positive")
-    return StudyOptions(step_deg=360.0 / n, speed=speed, loads=loads)
+    return StudyOptions(step_deg=360.0 / n, speed=speed, loads=loads, exact_jumps=args.exact_jumps)
 
 
 def _chunk(args):
@@ -138,7 +138,7 @@ def cmd_influence(args, con: Console) -> int:
             "study": "influence", "machine": machine.name, "model_file": model_path(machine.source),
             "parameters": [{"key": k.key, "unit": k.unit, "nominal": k.nominal * k.factor} for k in res.keys],
             "ranges": args.range or ["-10%..+10%"], "steps": args.steps, "sensitivity_scheme": FD_SCHEME,
-            "step_deg": options.step_deg, "speed_rad_s": options.speed or machine.speed,
+            "step_deg": options.step_deg, "exact_jumps": options.exact_jumps, "speed_rad_s": options.speed or machine.speed,
             "designs": int(len(res.table)), "failed_designs": int(len(bad))}))
     con.say(f"{machine.name}: influence of {', '.join(k.key for k in res.keys)}: {len(res.table)} designs, "
             f"{len(bad)} failed; sensitivities by {FD_SCHEME}")
@@ -196,7 +196,8 @@ def cmd_tolerance(args, con: Console) -> int:
             "distribution": res.distribution + (": tolerance = 3 sigma, clipped at 3 sigma"
                                                 if res.distribution == "normal" else ": within ± the tolerance"),
             "samples": int(len(res.table)), "seed": args.seed, "percentiles": list(PERCENTILES),
-            "failing_designs": int(len(fails)), "step_deg": options.step_deg}))
+            "failing_designs": int(len(fails)), "step_deg": options.step_deg,
+            "exact_jumps": options.exact_jumps}))
     con.say(f"{machine.name}: {len(res.table)} samples ({res.distribution}, seed {args.seed}) of "
             f"{', '.join(k.key for k in res.keys)}; {len(fails)} fail a timing rule or cannot be evaluated")
     st = res.stats.set_index("quantity")
@@ -218,6 +219,9 @@ def _study_common(p, common):
                                                    "or tcp://host:port (a running scheduler)")
     p.add_argument("--chunk", type=int, metavar="N", help="designs per evaluation call / Dask task")
     p.add_argument("--no-plots", action="store_true", help="tables and study.json only")
+    p.add_argument("--exact-jumps", action="store_true",
+                   help="the cam-arc acceleration jumps solved at each design's own switch angles (as summary.json; "
+                        "5-30 ms a design) instead of extrapolated from the sweep's samples")
     common(p)
 
 

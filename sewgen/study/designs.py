@@ -64,6 +64,16 @@ class GroupSweep:
     obs: np.ndarray
     frc: np.ndarray | None = None
     settings: list | None = None  # per design: the ForceAnalysis run settings (kinetostatic sweeps)
+    kept: tuple | None = None  # a sweep of some observables only: their indices (``obs``'s last axis); q… None
+
+    def observable(self, k: int) -> np.ndarray:
+        """Observable ``k`` (its index in the mechanism's observables) of every design: (D, N)."""
+        if self.kept is None:
+            return self.obs[:, :, k]
+        try:
+            return self.obs[:, :, self.kept.index(k)]
+        except ValueError:
+            raise KeyError(f"observable {k} of {self.mechanism.name} was not kept by this sweep") from None
 
     @property
     def ok(self) -> np.ndarray:
@@ -76,6 +86,8 @@ class GroupSweep:
         """Design ``k`` as a :class:`sewgen.Motion`."""
         from ..results import Motion
 
+        if self.kept is not None:
+            raise ValueError("a sweep of some observables only has no Motion: sweep with every output")
         n = len(self.phi)
         return Motion(self.mechanism, self.phi, np.full(n, self.omega), np.zeros(n), self.q[k], self.qd[k],
                       self.qdd[k], self.obs[k])
@@ -97,12 +109,14 @@ class GroupSweep:
 
 def sweep_group_designs(mech, designs, phi, speed=None, *, base: dict | None = None, held: dict | None = None,
                         branch: dict | None = None, forces: bool = False, loads=(), gravity="9.80665 m/s**2",
-                        gravity_direction="-90 deg", threads: int | None = None) -> GroupSweep:
+                        gravity_direction="-90 deg", threads: int | None = None, observables=None) -> GroupSweep:
     """Every design of ``designs`` (see :func:`design_matrix`) swept at shaft angles ``phi`` (rad, the
     mechanism's own) and constant ``speed``; with ``forces``, the kinetostatics (``loads``, ``gravity`` as in
     :meth:`Mechanism.kinetostatics`). A design that cannot be solved (cannot assemble, a singular position, a
     parameter out of range …) gets its error's type in ``status`` and its message in ``error``; the others are
-    unaffected.
+    unaffected. ``observables`` (kinematic sweeps): the indices of the only observables to keep (``obs`` then
+    holds them in that order, ``q``, ``qd``, ``qdd`` are None; :meth:`GroupSweep.observable` reads them) —
+    the C sweep writes less, the same values bit for bit.
 
     Kinematic sweeps go through :meth:`Mechanism.sweep_designs` (chunks of designs in batched C calls on every
     core, the GIL released); kinetostatic ones loop over :meth:`Mechanism.kinetostatics` (the batched call has no
@@ -113,7 +127,7 @@ def sweep_group_designs(mech, designs, phi, speed=None, *, base: dict | None = N
     sizes = mech.description.sizes
     omega = _omega(mech, speed)
     if not forces:
-        return _batched(mech, P, phi, omega, held, branch, threads)
+        return _batched(mech, P, phi, omega, held, branch, threads, observables)
     nan = np.nan
     q, qd, qdd = (np.full((d, n, sizes["nq"]), nan) for _ in range(3))
     obs = np.full((d, n, sizes["nobs"]), nan)
@@ -144,18 +158,41 @@ def _omega(mech, speed) -> float:
     return float(w)
 
 
-def _batched(mech, P, phi, omega: float, held, branch, threads=None) -> GroupSweep:
+def _batched(mech, P, phi, omega: float, held, branch, threads=None, observables=None) -> GroupSweep:
     """The kinematic sweep of every design at speed ``omega`` (rad/s) in batched C calls
-    (``Mechanism.sweep_designs``), as the stacked arrays of :class:`GroupSweep`; a failed design's rows are NaN,
-    its error's type and message kept."""
-    res = mech.sweep_designs(P, phi, omega, held=held, branch=branch, outputs=["all"], threads=threads)
-    names = res.column_names
-    full = np.stack([res.outputs[name] for name in names], axis=-1)  # (D, N, 3 nq + nobs)
+    (``Mechanism.sweep_designs``), as the stacked arrays of :class:`GroupSweep` (views of the sweep's block, no
+    copy); a failed design's rows are NaN, its error's type and message kept. ``observables``: see
+    :func:`sweep_group_designs`."""
     nq = mech.description.sizes["nq"]
+    if observables is None:
+        outputs = ["all"]
+    else:
+        from ..designs import _columns
+
+        names = _columns(mech).names
+        observables = tuple(int(k) for k in observables)
+        outputs = [names[3 * nq + k] for k in observables]
+    res = mech.sweep_designs(P, phi, omega, held=held, branch=branch, outputs=outputs, threads=threads)
     status = np.full(len(P), "ok", dtype=object)
     error: list = [None] * len(P)
     for k in np.flatnonzero(~res.ok):
         exc = res.exception(int(k))
         status[k], error[k] = type(exc).__name__, str(exc)
+    full = _stacked([res.outputs[name] for name in (res.column_names if observables is None else outputs)])
+    if observables is not None:
+        return GroupSweep(mech, P, phi, omega, status, error, None, None, None, full, None, None, observables)
     return GroupSweep(mech, P, phi, omega, status, error, full[..., :nq], full[..., nq:2 * nq],
                       full[..., 2 * nq:3 * nq], full[..., 3 * nq:], None, None)
+
+
+def _stacked(columns: list) -> np.ndarray:
+    """The (D, N) ``columns`` as one (D, N, C) array: a view without a copy when they are the consecutive
+    slices of one (C, D, N) block (as the batched sweep writes them), else stacked."""
+    first = columns[0]
+    block = first.base
+    if (isinstance(block, np.ndarray) and block.ndim == 3 and block.shape == (len(columns),) + first.shape
+            and block.flags.c_contiguous
+            and all(c.base is block and c.__array_interface__["data"][0]
+                    == block.__array_interface__["data"][0] + k * block.strides[0] for k, c in enumerate(columns))):
+        return np.moveaxis(block, 0, -1)
+    return np.stack(columns, axis=-1)

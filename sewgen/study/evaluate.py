@@ -42,13 +42,16 @@ class StudyOptions:
     """``step_deg``: the sweep's step (must divide 360°); ``speed`` (rad/s; None: the machine's); ``loads``:
     the kinetostatics and the machine's peak loads per design; ``tooth_depth`` (m) for the effective travel;
     ``threads``: threads of each batched sweep (None: every core; a Dask worker runs with 1, its cluster being
-    the parallelism). The results do not depend on it."""
+    the parallelism). The results do not depend on it. ``exact_jumps``: each design's cam-arc acceleration
+    jumps by sewgen.cams.arc_switches (the switch bracketed and solved at its own angle, as summary.json; 5–30
+    ms a design) instead of extrapolated from the sweep (sewgen.feed_indices.arc_jumps, O(h³))."""
 
     step_deg: float = 1.0
     speed: float | None = None
     loads: bool = True
     tooth_depth: float = fi.TOOTH_DEPTH
     threads: int | None = None
+    exact_jumps: bool = False
 
     def phi(self) -> np.ndarray:
         n = int(round(360.0 / self.step_deg))
@@ -88,21 +91,58 @@ def _speed(machine, options):
     return float(machine.speed if options.speed is None else options.speed)
 
 
-def _sweep(machine, g, P, phi, w, options):
+def _sweep(machine, g, P, phi, w, options, observables=None):
     gv = machine.gravity
     mag = float(np.hypot(*gv))
     direction = math.atan2(gv[1], gv[0]) if mag else -math.pi / 2
     return sweep_group_designs(g.mechanism, P, phi + g.phase, w, held=g.held or None, branch=g.branch or None,
                                forces=options.loads, loads=g.sweep_loads, gravity=mag, gravity_direction=direction,
-                               threads=options.threads)
+                               threads=options.threads, observables=None if options.loads else observables)
+
+
+def _needle_observables(g) -> tuple:
+    off = g.mechanism.description.role(NEEDLE_POINT).offset
+    return off + 1, off + 3  # y, vy
+
+
+def _kept_observables(machine, g) -> tuple:
+    """The only observables of group ``g`` a study reads when nothing needs its whole motion (no per-design
+    timing, no loads): the feed dog's (feed groups) and the needle point's height and speed."""
+    kept = []
+    if g in feed_groups(machine):
+        kept += [k for k in fi.feed_observables(g.mechanism) if k is not None]
+    if _role_group(machine, NEEDLE_POINT) is g:
+        kept += [k for k in _needle_observables(g) if k not in kept]
+    return tuple(kept)
 
 
 def _needle_stroke(g, sweep, w, h):
-    off = g.mechanism.description.role(NEEDLE_POINT).offset
-    y, dy = sweep.obs[:, :, off + 1], sweep.obs[:, :, off + 3] / w
+    iy, ivy = _needle_observables(g)
+    y, dy = sweep.observable(iy), sweep.observable(ivy) / w
     hi, _, _ = fi.maximum(y, dy, h)
     lo, _, _ = fi.maximum(-y, -dy, h)
     return hi + lo
+
+
+def _exact_jumps(g, sweep, status, error, estimate):
+    """Per design of ``sweep`` (feed group ``g``): the largest |horizontal acceleration jump| of the feed dog at
+    a cam-arc switch, each switch bracketed and solved at its own shaft angle (sewgen.cams.arc_switches, as
+    summary.json's); ``estimate`` where a design failed (its value is NaN then anyway). A switch that cannot be
+    solved fails its design (``status``/``error`` updated), the others unaffected."""
+    from ..cams import arc_switches
+
+    mech = g.mechanism
+    dog = mech.description.role(FEED_DOG).name
+    out = np.array(estimate, dtype=float)
+    for k in np.flatnonzero(status == "ok"):
+        try:
+            switches = arc_switches(mech, sweep.motion(int(k)),
+                                    params=dict(zip(mech.param_names, sweep.params[k])), held=g.held or None)
+        except SewgenError as exc:
+            status[k], error[k] = type(exc).__name__, f"groups.{g.name}: cam-arc switch: {exc}"
+            continue
+        out[k] = max((abs(s.jumps[dog][0]) for s in switches), default=0.0)
+    return out
 
 
 def _timing_values(tm, machine):
@@ -156,9 +196,14 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
     d = len(designs)
     varied = set(designs.varied_groups)
     sweeps, status, error = {}, np.full(d, "ok", dtype=object), [None] * d
+    fnames = {g.name for g in feed_groups(machine)}
+    per_design_timing = machine.stitch is not None and (nominal or bool(varied - fnames))
+    # something reads each design's whole motion
+    whole = nominal or per_design_timing or options.loads or options.exact_jumps
     for g in machine.groups:
         if nominal or g.name in varied:
-            s = _sweep(machine, g, designs.group_matrix(g), phi, w, options)
+            s = _sweep(machine, g, designs.group_matrix(g), phi, w, options,
+                       None if whole else _kept_observables(machine, g))
             for k in np.flatnonzero(~s.ok):
                 if error[k] is None:
                     status[k], error[k] = s.status[k], f"groups.{g.name}: {s.error[k]}"
@@ -167,8 +212,6 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
         sweeps[g.name] = s
     cols: dict = {}
     fgroups = feed_groups(machine)
-    fnames = {g.name for g in fgroups}
-    per_design_timing = machine.stitch is not None and (nominal or bool(varied - fnames))
     rows = [None] * d
     if machine.stitch is not None:
         tcols = (HOOK_RISE, HOOK_MARGIN, TAKE_UP, FAILURES, FAILED, "needle_in_cloth", "needle_out_cloth")
@@ -198,7 +241,8 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
             s = sweeps[g.name]
             own = g.name in varied or nominal
             rows_g = np.arange(d) if own else np.zeros(d, dtype=int)
-            x, y, vx, vy, ax, tilt, arc = fi.group_arrays(g.mechanism, s.obs if own else s.obs[rows_g])
+            x, y, vx, vy, ax, tilt, arc = fi.group_arrays(
+                g.mechanism, s.observable if own else (lambda k, s=s: s.observable(k)[rows_g]))
             plate = s.params[rows_g, g.mechanism.description.role(THROAT_PLATE).index]
             n_in = cols.get("needle_in_cloth", np.full(d, np.nan))
             n_out = cols.get("needle_out_cloth", np.full(d, np.nan))
@@ -207,6 +251,9 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
             for k, e in enumerate(ix["error"]):
                 if e is not None and status[k] == "ok":
                     status[k], error[k] = "FeedDogError", f"groups.{g.name}: {e}"
+            if options.exact_jumps:  # the group's own designs solved; the nominal's (exact) broadcast
+                ix["accel_jump"] = (_exact_jumps(g, s, status, error, ix["accel_jump"]) if own else
+                                    np.repeat(base["indices"][g.name]["accel_jump"], d))
         else:
             ix = {name: np.repeat(base["indices"][g.name][name], d) for name in fi.INDICES}
         for name, (unit, factor, _) in fi.INDICES.items():

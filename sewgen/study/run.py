@@ -4,8 +4,9 @@ Dask.
 :func:`run_designs` is the engine: the design table is split into chunks of ``chunk_size`` rows; each chunk is
 one :func:`sewgen.study.evaluate.evaluate_chunk` call — in this process, or one task on a Dask worker
 (``dask="local"``, ``"local:4"`` for a LocalCluster of 4 worker processes on this machine, or a scheduler's
-address ``"tcp://host:8786"``, or a ``distributed.Client``). The chunks are gathered in order into one DataFrame;
-with or without Dask, the same chunks are evaluated the same way, so the result is the same bit for bit.
+address ``"tcp://host:8786"``, or a ``distributed.Client``). The chunks are gathered in order into one DataFrame.
+Each design is evaluated independently of the chunk it falls in (its own sweep, every index per row), so the
+result is the same bit for bit with or without Dask, whatever the chunks (Dask's are larger: :func:`dask_chunk`).
 """
 from __future__ import annotations
 
@@ -23,6 +24,14 @@ from .machine_designs import DesignKey, MachineDesigns, parse_keys
 #: designs per chunk (one batched evaluation call each): parameter-only designs / designs that reload the model
 CHUNK = 1000  # the batched sweep amortises its calls and threads over a chunk (100: 1.4x slower, 5000: slower again)
 CHUNK_RELOAD = 4
+#: Dask tasks: fewer, larger chunks (the scheduler and client spend ≈ 20 ms of CPU a task, on the workers'
+#: cores), at least 6 a worker so the last ones balance: between CHUNK and DASK_CHUNK_MAX designs
+DASK_CHUNK_MAX = 4000
+
+
+def dask_chunk(designs: int, workers: int) -> int:
+    """Designs per Dask task for ``designs`` designs on ``workers`` workers (parameter-only designs)."""
+    return int(min(DASK_CHUNK_MAX, max(CHUNK, -(-designs // (6 * workers)))))
 
 
 class StudyError(SewgenError, ValueError):
@@ -86,7 +95,13 @@ def dask_client(spec):
         n = int(m.group(1)) if m.group(1) else None
         if n is not None and n < 1:
             raise StudyError("--dask", f"local:N needs N >= 1 workers, got {n}")
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
+        import dask
+
+        # Dask's nanny starts workers with MALLOC_TRIM_THRESHOLD_=65536, which turns glibc's adaptive mmap
+        # threshold off: every NumPy temporary above 128 KiB is then mapped and unmapped afresh (twice the page
+        # faults, 20-40 % more CPU for a study's chunk; BENCHMARKS.md). A study's workers run without it.
+        with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
         return Client(cluster), True
     if re.fullmatch(r"(tcp|tls|inproc|ws|wss)://\S+", text):
         try:
@@ -117,6 +132,38 @@ def design_columns(machine, table) -> tuple[list, np.ndarray]:
     return keys, (np.column_stack(cols) if cols else np.zeros((0, 0)))
 
 
+def _in_process(machine, keys, chunks, options, bar) -> list:
+    """Every chunk evaluated in this process, in order. With ``options.threads`` None (every core) and more
+    than one chunk, the chunks run on a pool of one thread a core, each chunk's sweep on one thread: the
+    C sweep and NumPy (both releasing the GIL) of different chunks overlap instead of the NumPy part running
+    alone while the cores wait. Each chunk is evaluated as it would be alone, so the result is the same."""
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    workers = min(os.cpu_count() or 1, len(chunks)) if options.threads is None else 1
+    if workers <= 1:
+        parts = []
+        for c in chunks:
+            parts.append(evaluate_chunk(machine, keys, c, options))
+            if bar is not None:
+                bar.update(len(c))
+        return parts
+    one = replace(options, threads=1)
+    parts = [evaluate_chunk(machine, keys, chunks[0], one)]  # the nominal baseline, once, before the pool
+    if bar is not None:
+        bar.update(len(chunks[0]))
+
+    def run(c):
+        df = evaluate_chunk(machine, keys, c, one)
+        if bar is not None:
+            bar.update(len(c))
+        return df
+
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        parts += list(pool.map(run, chunks[1:]))
+    return parts
+
+
 def run_designs(machine, keys, values=None, options: StudyOptions | None = None, *, chunk_size: int | None = None,
                 dask=None, progress=None):
     """Every design of ``machine`` evaluated: ``keys`` (model-file keys) × ``values`` ((D, k), SI), or ``keys``
@@ -133,34 +180,41 @@ def run_designs(machine, keys, values=None, options: StudyOptions | None = None,
     values = np.asarray(values, dtype=float)
     MachineDesigns(machine, keys, values[:0])  # the keys checked before any work
     d = len(values)
-    if chunk_size is None:
-        chunk_size = CHUNK_RELOAD if any(k.group is None for k in keys) else CHUNK
-    bounds = list(range(0, d, chunk_size)) + [d]
-    chunks = [values[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+    reload = any(k.group is None for k in keys)
+
+    def cut(size):
+        bounds = list(range(0, d, size)) + [d]
+        return [values[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+
     bar = _progress(d, f"{machine.name}: {d} designs", progress)
     parts = []
     try:
         if dask is None:
-            for c in chunks:
-                parts.append(evaluate_chunk(machine, keys, c, options))
-                if bar is not None:
-                    bar.update(len(c))
+            chunks = cut(chunk_size or (CHUNK_RELOAD if reload else CHUNK))
+            parts = _in_process(machine, keys, chunks, options, bar)
         else:
             from distributed import as_completed
 
             client, close = dask_client(dask)
             try:
+                size = chunk_size
+                if size is None:
+                    workers = max(1, len(client.scheduler_info().get("workers", {})))
+                    size = CHUNK_RELOAD if reload else dask_chunk(d, workers)
+                chunks = cut(size)
                 mref = client.scatter(machine, broadcast=True)
                 # one thread per task: the workers are the parallelism (threads in each would oversubscribe)
                 on_worker = replace(options, threads=1)
                 futures = [client.submit(evaluate_chunk, mref, keys, c, on_worker, pure=False) for c in chunks]
-                size = {f.key: len(c) for f, c in zip(futures, chunks)}
-                for f in as_completed(futures):
-                    if f.status == "error":
-                        f.result()  # raises the worker's error here
+                where = {f.key: k for k, f in enumerate(futures)}
+                parts = [None] * len(futures)
+                # each result fetched as its task ends (overlapping the transfers with the other tasks' work),
+                # placed by its chunk's index; a task's error raises here
+                for f, df in as_completed(futures, with_results=True, raise_errors=True):
+                    k = where[f.key]
+                    parts[k] = df
                     if bar is not None:
-                        bar.update(size[f.key])
-                parts = client.gather(futures)
+                        bar.update(len(chunks[k]))
             finally:
                 if close:
                     cluster = getattr(client, "cluster", None)
