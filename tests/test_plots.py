@@ -342,3 +342,37 @@ def test_shared_jobs_raise_the_failure_here(tmp_path):
     with pytest.raises(ValueError, match="job 3"):
         run_shared(jobs, first, parallel=True, on_start=lambda k: None, on_written=lambda k: None,
                    on_progress=lambda *a: None)
+
+
+def _ink_box(canvas_cls, text_kw):
+    """(x0, x1, y0, y1) pixel box of the ink of one text drawn alone on ``canvas_cls``."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4, 2), dpi=100)
+    canvas_cls(fig)
+    fig.text(0.31, 0.43, **text_kw)
+    fig.canvas.draw()
+    ink = np.asarray(fig.canvas.buffer_rgba())[..., 0] < 250
+    ys, xs = np.nonzero(ink)
+    return xs.min(), xs.max(), ys.min(), ys.max()
+
+
+@pytest.mark.parametrize("kw", [dict(s="shaft angle φ (deg)", fontsize=10),
+                                dict(s="−180", fontsize=8, ha="right", va="center"),
+                                dict(s="displacement (mm)", fontsize=9, rotation=90, va="bottom"),
+                                dict(s="gyp 10³ deg/s²", fontsize=12, color="tab:red", alpha=0.5),
+                                dict(s=" 1    9.95°  feed dog rises", fontsize=7, family="monospace")])
+def test_cached_text_lands_where_matplotlib_draws_it(kw):
+    """sewgen.plots.canvas draws plain text from whole-string bitmaps (speed); its ink covers the box
+    matplotlib's own renderer inks, to a pixel, at 0° and 90°."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from sewgen.plots.canvas import TextCacheCanvas
+
+    kw = dict(kw)
+    s = kw.pop("s")
+    ref = _ink_box(FigureCanvasAgg, dict(s=s, **kw))
+    got = _ink_box(TextCacheCanvas, dict(s=s, **kw))
+    got_again = _ink_box(TextCacheCanvas, dict(s=s, **kw))  # from the cache
+    assert got == got_again
+    assert all(abs(g - r) <= 1 for g, r in zip(got, ref)), (got, ref)

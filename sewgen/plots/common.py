@@ -24,13 +24,14 @@ AT_THE_PLATE = (NEEDLE_EYE, NEEDLE_POINT, HOOK_POINT, FEED_DOG, RACK_TOOTH, LOWE
 # -- figures ---------------------------------------------------------------------------------------------------
 
 def new_figure(size, dpi=DPI):
-    """A figure on its own Agg canvas (no pyplot, no global backend change). No layout engine: the figures place
+    """A figure on its own Agg canvas (no pyplot, no global backend change; :mod:`.canvas`). No layout engine: the figures place
     their axes once (:func:`place`), so drawing never re-runs a layout."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from .canvas import TextCacheCanvas
+
     fig = Figure(figsize=size, dpi=dpi)
-    FigureCanvasAgg(fig)
+    TextCacheCanvas(fig)  # Agg, its plain text drawn from cached whole-string bitmaps (sewgen.plots.canvas)
     return fig
 
 
