@@ -18,6 +18,7 @@ supply, demand and slack) for a machine with a ``[stitch]`` table.
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from .animation import GIF_DPI, GIF_FPS, GIF_WIDTH, MachineView, draw_machine, machine_gif, machine_linkages
@@ -121,14 +122,25 @@ def start_all(analysis, folder, progress=None, gif: bool = True, parallel: bool 
         refine = getattr(analysis, "refined", None)
         curves = refine() if refine is not None else analysis
     figures = figures_for(analysis)
+    paths = [folder / name for name, _ in figures] + ([folder / GIF] if gif else [])
+    figures = _big_ends_first(figures, curves)
     total = len(figures) + bool(gif)
     report = progress or (lambda message, done, total: None)
     links = machine_linkages(analysis) if gif else None  # built here: the geometry's errors raise here
     jobs = [lambda _progress, make=make, name=name: make(curves, folder / name) for name, make in figures]
     first = (lambda progress: machine_gif(analysis, folder / GIF, progress, links=links)) if gif else None
     run = start_shared(jobs, first, parallel=can_fork() if parallel is None else parallel)
-    paths = [folder / name for name, _ in figures] + ([folder / GIF] if gif else [])
     return PendingPlots(run, paths, figures, total, report)
+
+
+def _big_ends_first(figures, analysis) -> list:
+    """``figures`` ordered for two processes taking them from the two ends (sewgen.plots.background): the
+    costliest at the ends, the cheapest in the middle where the two meet, so neither waits long for the other's
+    last figure. A figure's cost is estimated by its area (its axes, texts and pixels grow with it: on JB1-3
+    the motion figure, the largest, takes three times the torque figure's time)."""
+    ranked = sorted(figures, key=lambda f: -math.prod(figure_size(f[0], analysis)))
+    front, back = ranked[0::2], ranked[1::2]
+    return front + back[::-1]
 
 
 def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool | None = None,

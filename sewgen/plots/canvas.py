@@ -10,6 +10,8 @@ hinting, antialiasing) is rendered once per process and blitted as an image (``d
 colour. A string is placed at whole pixels (its glyphs keep their relative sub-pixel positions), which can move
 it by up to half a pixel against matplotlib's own placement.
 
+Measures of plain strings (``get_text_width_height_descent``) are kept per process in the same way.
+
 Math text (``$...$``), text at angles other than 0° and 90°, and text with font features or a language set
 are left to matplotlib.
 """
@@ -21,6 +23,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hi
 #: Rendered strings kept (a figure set uses a few hundred distinct ones).
 CACHE_SIZE = 4096
 _bitmaps: dict = {}
+_extents: dict = {}
 
 
 class TextCacheRenderer(RendererAgg):
@@ -50,6 +53,20 @@ class TextCacheRenderer(RendererAgg):
         # draw_image takes the rows bottom first and their bottom-left corner measured up from the canvas' bottom
         self.draw_image(gc, left, self.height - top - img.shape[0], np.ascontiguousarray(img[::-1]))
         return None
+
+    def get_text_width_height_descent(self, s, prop, ismath):
+        """matplotlib's measure of a string, kept per process (its own cache lives and dies with each figure's
+        renderer, and each measure shapes the string anew)."""
+        if ismath:
+            return super().get_text_width_height_descent(s, prop, ismath)
+        key = (s, hash(prop), prop.get_size_in_points(), self.dpi, get_hinting_flag())
+        hit = _extents.get(key)
+        if hit is None:
+            hit = super().get_text_width_height_descent(s, prop, ismath)
+            if len(_extents) >= CACHE_SIZE:
+                _extents.clear()
+            _extents[key] = hit
+        return hit
 
     def _bitmap(self, s, prop, antialiased):
         """(coverage (h, w) uint8, dx, dy): the string's bitmap and its top-left corner from the baseline start,
