@@ -8,7 +8,8 @@ the sweep and :func:`draw_machine` draws one position of it; :func:`write_all` w
 ``matplotlib.figure.Figure`` objects on the Agg canvas: nothing here touches pyplot or a caller's backend.
 Lengths are drawn in mm; abscissae are the machine's shaft angle φ.
 
-Modules, one job each: :mod:`.common` (figures, shaft-angle axes, group colours, role look-ups),
+Modules, one job each: :mod:`.canvas` (the Agg canvas, its plain text drawn from cached whole-string bitmaps),
+:mod:`.common` (figures, shaft-angle axes, group colours, role look-ups),
 :mod:`.geometry` (a mechanism's drawing from its description and the anchors kernel), :mod:`.drawing` (linkages
 on axes), :mod:`.animation` (the machine's panels and the GIF), :mod:`.background` (a forked process that writes the
 GIF and shares the PNGs), :mod:`.paths` (trajectories, feed-dog stitch
