@@ -53,7 +53,8 @@ def test_analyze_without_plots_loads_no_scipy(tmp_path):
     code = ("import sys\n"
             "from sewgen.cli import main\n"
             f"assert main(['analyze', 'jb1-3', '--out', {str(tmp_path / 'out')!r}, '--no-plots']) == 0\n"
-            "print(sorted(k for k in ('scipy', 'sympy', 'jinja2', 'matplotlib') if k in sys.modules), file=sys.stderr)\n")
+            "print(sorted(k for k in ('scipy', 'sympy', 'jinja2', 'matplotlib') if k in sys.modules),\n"
+            "      file=sys.stderr)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
     assert out.stderr.strip().splitlines()[-1] == "[]"
 

@@ -159,7 +159,8 @@ def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool 
 
 
 __all__ = ["DPI", "FIGURES", "GIF", "GIF_DPI", "GIF_FPS", "GIF_WIDTH", "PALETTE", "SIZES", "STITCHES_MM",
-           "APPLIES", "Linkage", "MachineView", "PendingPlots", "start_all", "bearings_polar", "can_fork", "draw_bearings_polar",
+           "APPLIES", "Linkage", "MachineView", "PendingPlots", "start_all", "bearings_polar", "can_fork",
+           "draw_bearings_polar",
            "draw_feed_dog_stitches", "draw_joint_reactions_polar", "draw_machine", "draw_motion", "draw_shaking",
            "draw_torque", "draw_trajectories", "feed_dog_stitches", "figure_size", "figures_for", "joint_reactions_polar", "linkage",
            "linkage_of", "machine_gif", "machine_linkages", "main_joints", "motion", "motion_rows", "new_figure",

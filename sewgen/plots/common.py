@@ -24,8 +24,8 @@ AT_THE_PLATE = (NEEDLE_EYE, NEEDLE_POINT, HOOK_POINT, FEED_DOG, RACK_TOOTH, LOWE
 # -- figures ---------------------------------------------------------------------------------------------------
 
 def new_figure(size, dpi=DPI):
-    """A figure on its own Agg canvas (no pyplot, no global backend change; :mod:`.canvas`). No layout engine: the figures place
-    their axes once (:func:`place`), so drawing never re-runs a layout."""
+    """A figure on its own Agg canvas (no pyplot, no global backend change; :mod:`.canvas`). No layout engine:
+    the figures place their axes once (:func:`place`), so drawing never re-runs a layout."""
     from matplotlib.figure import Figure
 
     from .canvas import TextCacheCanvas
