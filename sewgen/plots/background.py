@@ -2,11 +2,11 @@
 
 The child is forked as soon as the analysis is done (:func:`start_shared`: the parent writes its tables while the
 child imports matplotlib and draws). It first writes the GIF, then takes figures from the back of the list while
-the parent takes them from the front, until the two meet (one shared pair of indices under a lock), so neither
-core idles whatever each figure costs. Only where forking is safe and pays: Linux, more than one CPU, no other
-Python thread running. The child inherits the analysis and the linkages already built (no pickling, no linear algebra after the fork)
-and reports through a pipe: which figure it starts, which file it has written, the GIF's progress, and its
-outcome. If it fails, the parent writes what the child had taken itself, so an error is raised where it
+the parent takes them from the front, until the two meet (one shared pair of indices under a lock), so neither core
+idles whatever each figure costs. Only where forking is safe and pays: Linux, more than one CPU, no other Python
+thread running. The child inherits the analysis and the linkages already built (no pickling, no linear algebra
+after the fork) and reports through a pipe: which figure it starts, which file it has written, the GIF's progress,
+and its outcome. If it fails, the parent writes what the child had taken itself, so an error is raised where it
 happens, with its own type and traceback.
 """
 from __future__ import annotations
