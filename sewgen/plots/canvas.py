@@ -30,8 +30,7 @@ class TextCacheRenderer(RendererAgg):
     """:class:`RendererAgg` drawing plain text from the cache of whole-string bitmaps (see the module)."""
 
     def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
-        if (ismath or angle not in (0, 0.0, 90, 90.0) or not s
-                or (mtext is not None and (mtext.get_fontfeatures() or mtext.get_language()))):
+        if ismath or angle not in (0, 90) or not s or _shaped(mtext):
             return super().draw_text(gc, x, y, s, prop, angle, ismath=ismath, mtext=mtext)
         coverage, dx, dy = self._bitmap(s, prop, gc.get_antialiased())
         if coverage is None:
@@ -91,6 +90,14 @@ class TextCacheRenderer(RendererAgg):
             _bitmaps.clear()
         _bitmaps[key] = hit
         return hit
+
+
+def _shaped(mtext) -> bool:
+    """Whether the text asks for font features or a language (matplotlib ≥ 3.10's shaping options)."""
+    if mtext is None:
+        return False
+    features, language = getattr(mtext, "get_fontfeatures", None), getattr(mtext, "get_language", None)
+    return bool((features and features()) or (language and language()))
 
 
 class TextCacheCanvas(FigureCanvasAgg):
