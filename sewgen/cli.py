@@ -401,12 +401,18 @@ def cmd_analyze(args, con: Console) -> int:
     with np.errstate(all="ignore"):  # non-finite results are refused by name, not warned about
         analysis = machine.analyze(phi, speed=speed, progress=con.progress)
     with np.errstate(all="ignore"), staged_folder(out, "--out") as tmp:
-        files = write_tables(analysis, tmp, progress=con.progress, units=units)
-        if not args.no_plots:
-            from .plots import write_all
+        plots = None
+        if not args.no_plots:  # the plotting child is forked first: it draws while the tables are written here
+            from .plots import start_all
 
-            files += write_all(analysis, tmp, progress=con.progress, gif=not args.no_gif,
-                               curves=analysis.refined())
+            plots = start_all(analysis, tmp, progress=con.progress, gif=not args.no_gif, curves=analysis.refined())
+        try:
+            files = write_tables(analysis, tmp, progress=con.progress, units=units)
+            if plots is not None:
+                files += plots.finish()
+        finally:
+            if plots is not None:
+                plots.cancel()
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     con.say(head)
     con.say(f"power balance residual (relative) {summary['power_balance_residual_relative']:.3g}; "

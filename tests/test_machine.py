@@ -485,6 +485,21 @@ def test_regulator_direction_and_range(settings, feed, plate_y):
         assert sign * measured_travel(m, plate_y)[0] > 4.0 * MM
 
 
+@pytest.mark.parametrize("stitch", [4.0, -3.0, 0.1, 4.5])
+def test_regulator_angle_agrees_with_an_independent_brent_solve(feed, stitch):
+    """sewgen.feed solves the regulator without SciPy (a bracketing secant, for the analysis' start-up time):
+    the same root as SciPy's Brent method to 1e-12 rad, and the stitch it gives is the one asked for."""
+    from scipy.optimize import brentq
+
+    from sewgen.feed import stitch_length
+
+    got = regulator_angle(feed, stitch * MM)
+    ref = brentq(lambda a: stitch_length(feed, a).travel - stitch * MM, -math.radians(45), math.radians(45),
+                 xtol=1e-15)
+    assert abs(got - ref) < 1e-12
+    assert abs(stitch_length(feed, got).travel - stitch * MM) < 1e-15
+
+
 def test_too_long_a_stitch_is_refused(feed):
     with pytest.raises(ParameterError) as exc:
         regulator_angle(feed, 20.0 * MM)

@@ -342,3 +342,99 @@ def test_shared_jobs_raise_the_failure_here(tmp_path):
     with pytest.raises(ValueError, match="job 3"):
         run_shared(jobs, first, parallel=True, on_start=lambda k: None, on_written=lambda k: None,
                    on_progress=lambda *a: None)
+
+
+@pytest.mark.skipif(not plots.can_fork(), reason="needs fork and two CPUs")
+def test_a_started_run_works_while_the_caller_does_and_cancels_cleanly(tmp_path):
+    """sewgen analyze forks the plotting child before writing its tables (start_shared), then finishes the
+    figures; after an error in the tables it cancels the child."""
+    import multiprocessing
+    import time
+
+    from sewgen.plots.background import start_shared
+
+    jobs, first, log = _jobs(tmp_path, 5)
+    run = start_shared(jobs, first, parallel=True)
+    deadline = time.monotonic() + 30
+    while not log.exists() and time.monotonic() < deadline:  # the child works before finish() is called
+        time.sleep(0.01)
+    assert log.exists()
+    written = []
+    run.finish(on_start=lambda k: None, on_written=written.append, on_progress=lambda *a: None)
+    assert sorted(int(x) for x in log.read_text().split()) == list(range(-1, 5))
+    assert sorted(written) == list(range(-1, 5))
+
+    slow = [lambda _p: time.sleep(30)] * 2
+    run = start_shared(slow, slow[0], parallel=True)
+    proc = run.child._proc
+    t0 = time.monotonic()
+    run.cancel()
+    run.cancel()  # twice: a no-op
+    assert time.monotonic() - t0 < 10 and not proc.is_alive() and proc not in multiprocessing.active_children()
+
+
+def test_figures_are_scheduled_costliest_at_both_ends(analysis):
+    """The two processes take figures from the two ends of the list: the largest (by area) come first at each
+    end and the smallest meet in the middle."""
+    import math
+
+    from sewgen.plots import _big_ends_first
+
+    order = _big_ends_first(plots.figures_for(analysis), analysis)
+    assert sorted(n for n, _ in order) == sorted(n for n, _ in plots.figures_for(analysis))
+    area = [math.prod(plots.figure_size(n, analysis)) for n, _ in order]
+    k = area.index(min(area))
+    assert area[:k + 1] == sorted(area[:k + 1], reverse=True) and area[k:] == sorted(area[k:])
+    assert max(area[0], area[-1]) == max(area)
+
+
+def _ink_box(canvas_cls, text_kw):
+    """(x0, x1, y0, y1) pixel box of the ink of one text drawn alone on ``canvas_cls``."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4, 2), dpi=100)
+    canvas_cls(fig)
+    fig.text(0.31, 0.43, **text_kw)
+    fig.canvas.draw()
+    ink = np.asarray(fig.canvas.buffer_rgba())[..., 0] < 250
+    ys, xs = np.nonzero(ink)
+    return xs.min(), xs.max(), ys.min(), ys.max()
+
+
+@pytest.mark.parametrize("kw", [dict(s="shaft angle φ (deg)", fontsize=10),
+                                dict(s="−180", fontsize=8, ha="right", va="center"),
+                                dict(s="displacement (mm)", fontsize=9, rotation=90, va="bottom"),
+                                dict(s="gyp 10³ deg/s²", fontsize=12, color="tab:red", alpha=0.5),
+                                dict(s=" 1    9.95°  feed dog rises", fontsize=7, family="monospace")])
+def test_cached_text_lands_where_matplotlib_draws_it(kw):
+    """sewgen.plots.canvas draws plain text from whole-string bitmaps (speed); its ink covers the box
+    matplotlib's own renderer inks, to a pixel, at 0° and 90°."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from sewgen.plots.canvas import TextCacheCanvas
+
+    kw = dict(kw)
+    s = kw.pop("s")
+    ref = _ink_box(FigureCanvasAgg, dict(s=s, **kw))
+    got = _ink_box(TextCacheCanvas, dict(s=s, **kw))
+    got_again = _ink_box(TextCacheCanvas, dict(s=s, **kw))  # from the cache
+    assert got == got_again
+    assert all(abs(g - r) <= 1 for g, r in zip(got, ref)), (got, ref)
+
+
+def test_cached_text_falls_back_on_matplotlib_where_its_internals_differ(monkeypatch):
+    """A matplotlib whose renderer lacks what the text cache uses (its whole-string bitmap raises
+    AttributeError) still gets every string drawn, by matplotlib itself, exactly where it draws it."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from sewgen.plots import canvas
+
+    def missing(self, s, prop, antialiased):
+        raise AttributeError("'RendererAgg' object has no attribute '_prepare_font'")
+
+    kw = dict(s="a string not drawn before 12", fontsize=10)
+    ref = _ink_box(FigureCanvasAgg, kw)
+    monkeypatch.setattr(canvas, "_unsupported", False)
+    monkeypatch.setattr(canvas.TextCacheRenderer, "_bitmap", missing)
+    assert _ink_box(canvas.TextCacheCanvas, kw) == ref
+    assert canvas._unsupported

@@ -47,6 +47,18 @@ def test_a_machine_analysis_loads_no_derivation():
     assert out.stdout.strip() == "[]"
 
 
+def test_analyze_without_plots_loads_no_scipy(tmp_path):
+    """``sewgen analyze jb1-3 --no-plots``: the stitch regulator's solve and the dog's plate crossings need no
+    SciPy (its import cost 0.4–0.7 s of the command; sewgen.feed)."""
+    code = ("import sys\n"
+            "from sewgen.cli import main\n"
+            f"assert main(['analyze', 'jb1-3', '--out', {str(tmp_path / 'out')!r}, '--no-plots']) == 0\n"
+            "print(sorted(k for k in ('scipy', 'sympy', 'jinja2', 'matplotlib') if k in sys.modules),\n"
+            "      file=sys.stderr)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stderr.strip().splitlines()[-1] == "[]"
+
+
 def test_errors_carry_their_fields():
     nb = sewgen.mechanism("needle_bar")
     with pytest.raises(ParameterError) as e:

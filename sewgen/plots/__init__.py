@@ -8,7 +8,8 @@ the sweep and :func:`draw_machine` draws one position of it; :func:`write_all` w
 ``matplotlib.figure.Figure`` objects on the Agg canvas: nothing here touches pyplot or a caller's backend.
 Lengths are drawn in mm; abscissae are the machine's shaft angle φ.
 
-Modules, one job each: :mod:`.common` (figures, shaft-angle axes, group colours, role look-ups),
+Modules, one job each: :mod:`.canvas` (the Agg canvas, its plain text drawn from cached whole-string bitmaps),
+:mod:`.common` (figures, shaft-angle axes, group colours, role look-ups),
 :mod:`.geometry` (a mechanism's drawing from its description and the anchors kernel), :mod:`.drawing` (linkages
 on axes), :mod:`.animation` (the machine's panels and the GIF), :mod:`.background` (a forked process that writes the
 GIF and shares the PNGs), :mod:`.paths` (trajectories, feed-dog stitch
@@ -18,10 +19,11 @@ supply, demand and slack) for a machine with a ``[stitch]`` table.
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from .animation import GIF_DPI, GIF_FPS, GIF_WIDTH, MachineView, draw_machine, machine_gif, machine_linkages
-from .background import can_fork, run_shared
+from .background import can_fork, run_shared, start_shared
 from .common import DPI, PALETTE, feed_groups, new_figure, render, throat_plate_height
 from .curves import draw_motion, motion_rows, motion_size
 from .cycle import cycle_size, draw_cycle, draw_cycle_timing, write_timing_plots
@@ -81,6 +83,67 @@ def figures_for(analysis) -> list[tuple]:
     return [(name, make) for name, make in FIGURES if APPLIES.get(name, lambda a: True)(analysis)]
 
 
+class PendingPlots:
+    """Figures and GIF being written (:func:`start_all`): :meth:`finish` draws this process's share and returns
+    the paths once every file is written; :meth:`cancel` stops the forked child (after an error elsewhere)."""
+
+    def __init__(self, run, paths, figures, total, report):
+        self._run, self.paths, self._figures, self._total, self._report = run, paths, figures, total, report
+        self._done = 0
+
+    def finish(self) -> list[Path]:
+        figures, total, report = self._figures, self._total, self._report
+
+        def on_start(k):
+            report(figures[k][0], self._done, total)
+
+        def on_written(k):
+            self._done += 1
+
+        def on_progress(message, i, n):
+            report(message, min(self._done, total - 1), total)
+
+        self._run.finish(on_start=on_start, on_written=on_written, on_progress=on_progress)
+        return list(self.paths)
+
+    def cancel(self) -> None:
+        self._run.cancel()
+
+
+def start_all(analysis, folder, progress=None, gif: bool = True, parallel: bool | None = None,
+              curves=None) -> PendingPlots:
+    """Start writing every figure (and the GIF unless ``gif=False``) into ``folder``; returns a
+    :class:`PendingPlots` whose ``finish()`` completes them. Where that is safe
+    (:func:`~sewgen.plots.background.can_fork`; ``parallel=False``: never) a process forked here writes the GIF
+    and then shares the figures with this one (:func:`~sewgen.plots.background.start_shared`), so the caller
+    can write its tables in the meantime. Arguments as :func:`write_all`."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    if curves is None:
+        refine = getattr(analysis, "refined", None)
+        curves = refine() if refine is not None else analysis
+    figures = figures_for(analysis)
+    paths = [folder / name for name, _ in figures] + ([folder / GIF] if gif else [])
+    figures = _big_ends_first(figures, curves)
+    total = len(figures) + bool(gif)
+    report = progress or (lambda message, done, total: None)
+    links = machine_linkages(analysis) if gif else None  # built here: the geometry's errors raise here
+    jobs = [lambda _progress, make=make, name=name: make(curves, folder / name) for name, make in figures]
+    first = (lambda progress: machine_gif(analysis, folder / GIF, progress, links=links)) if gif else None
+    run = start_shared(jobs, first, parallel=can_fork() if parallel is None else parallel)
+    return PendingPlots(run, paths, figures, total, report)
+
+
+def _big_ends_first(figures, analysis) -> list:
+    """``figures`` ordered for two processes taking them from the two ends (sewgen.plots.background): the
+    costliest at the ends, the cheapest in the middle where the two meet, so neither waits long for the other's
+    last figure. A figure's cost is estimated by its area (its axes, texts and pixels grow with it: on JB1-3
+    the motion figure, the largest, takes three times the torque figure's time)."""
+    ranked = sorted(figures, key=lambda f: -math.prod(figure_size(f[0], analysis)))
+    front, back = ranked[0::2], ranked[1::2]
+    return front + back[::-1]
+
+
 def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool | None = None,
               curves=None) -> list[Path]:
     """Every figure (and the GIF unless ``gif=False``) into ``folder``; returns the paths written.
@@ -92,34 +155,12 @@ def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool 
     The figures are drawn from ``curves`` (default: ``analysis.refined()``, the same analysis every 1° when it
     was run in coarser steps, so no curve is a jagged polyline); the GIF has one frame per position of
     ``analysis``."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    if curves is None:
-        refine = getattr(analysis, "refined", None)
-        curves = refine() if refine is not None else analysis
-    figures = figures_for(analysis)
-    total = len(figures) + bool(gif)
-    report = progress or (lambda message, done, total: None)
-    done = [0]
+    return start_all(analysis, folder, progress, gif, parallel, curves).finish()
 
-    def on_start(k):
-        report(figures[k][0], done[0], total)
-
-    def on_written(k):
-        done[0] += 1
-
-    def on_progress(message, i, n):
-        report(message, min(done[0], total - 1), total)
-
-    links = machine_linkages(analysis) if gif else None  # built here: the geometry's errors raise here
-    jobs = [lambda _progress, make=make, name=name: make(curves, folder / name) for name, make in figures]
-    first = (lambda progress: machine_gif(analysis, folder / GIF, progress, links=links)) if gif else None
-    run_shared(jobs, first, parallel=can_fork() if parallel is None else parallel, on_start=on_start,
-               on_written=on_written, on_progress=on_progress)
-    return [folder / name for name, _ in figures] + ([folder / GIF] if gif else [])
 
 __all__ = ["DPI", "FIGURES", "GIF", "GIF_DPI", "GIF_FPS", "GIF_WIDTH", "PALETTE", "SIZES", "STITCHES_MM",
-           "APPLIES", "Linkage", "MachineView", "bearings_polar", "can_fork", "draw_bearings_polar",
+           "APPLIES", "Linkage", "MachineView", "PendingPlots", "start_all", "bearings_polar", "can_fork",
+           "draw_bearings_polar",
            "draw_feed_dog_stitches", "draw_joint_reactions_polar", "draw_machine", "draw_motion", "draw_shaking",
            "draw_torque", "draw_trajectories", "feed_dog_stitches", "figure_size", "figures_for", "joint_reactions_polar", "linkage",
            "linkage_of", "machine_gif", "machine_linkages", "main_joints", "motion", "motion_rows", "new_figure",

@@ -1,11 +1,12 @@
 """A forked child that shares the figures with the parent (two cores: about half the time).
 
-The child first writes the GIF, then takes figures from the back of the list while the parent takes them from
-the front, until the two meet (one shared pair of indices under a lock), so neither core idles whatever each
-figure costs. Only where forking is safe and pays: Linux, more than one CPU, no other Python thread running.
-The child inherits the analysis and the linkages already built (no pickling, no linear algebra after the fork)
-and reports through a pipe: which figure it starts, which file it has written, the GIF's progress, and its
-outcome. If it fails, the parent writes what the child had taken itself, so an error is raised where it
+The child is forked as soon as the analysis is done (:func:`start_shared`: the parent writes its tables while the
+child imports matplotlib and draws). It first writes the GIF, then takes figures from the back of the list while
+the parent takes them from the front, until the two meet (one shared pair of indices under a lock), so neither core
+idles whatever each figure costs. Only where forking is safe and pays: Linux, more than one CPU, no other Python
+thread running. The child inherits the analysis and the linkages already built (no pickling, no linear algebra
+after the fork) and reports through a pipe: which figure it starts, which file it has written, the GIF's progress,
+and its outcome. If it fails, the parent writes what the child had taken itself, so an error is raised where it
 happens, with its own type and traceback.
 """
 from __future__ import annotations
@@ -118,34 +119,60 @@ class Background:
         self._recv.close()
 
 
+class SharedRun:
+    """Jobs started by :func:`start_shared`: :meth:`finish` runs this process's share and waits for the child's;
+    :meth:`cancel` stops the child (a no-op once finished). The child starts at construction, so the caller may
+    do other work (write its tables) while it runs."""
+
+    def __init__(self, jobs: Sequence[Job], first: Job | None, parallel: bool):
+        self.jobs, self.first = jobs, first
+        self.child = self.shared = None
+        if parallel:
+            import multiprocessing
+
+            ctx = multiprocessing.get_context("fork")
+            self.shared = SharedJobs(len(jobs), ctx)
+            self.child = Background(first, jobs, self.shared, ctx)
+
+    def finish(self, *, on_start, on_written, on_progress) -> None:
+        """Run every job not taken by the child, here; then wait for the child (and redo what it failed)."""
+        if self.child is None:
+            for k, job in enumerate(self.jobs):
+                on_start(k)
+                job(on_progress)
+                on_written(k)
+            if self.first is not None:
+                self.first(on_progress)
+                on_written(Background.FIRST)
+            return
+        try:
+            while (k := self.shared.take_front()) is not None:
+                self.child.relay(on_start, on_written, on_progress)
+                on_start(k)
+                self.jobs[k](on_progress)
+                on_written(k)
+            self.child.wait(on_start, on_written, on_progress)
+            self.child = None
+        finally:
+            self.cancel()  # a job failed here: stop the child
+
+    def cancel(self) -> None:
+        if self.child is not None:
+            self.child.cancel()
+            self.child = None
+
+
+def start_shared(jobs: Sequence[Job], first: Job | None, *, parallel: bool) -> SharedRun:
+    """Fork the child now (where ``parallel``) that runs ``first`` and then takes jobs from the back; the
+    returned run's :meth:`~SharedRun.finish` does the rest here."""
+    return SharedRun(jobs, first, parallel)
+
+
 def run_shared(jobs: Sequence[Job], first: Job | None, *, parallel: bool, on_start, on_written,
                on_progress) -> None:
     """Run every job once (and ``first``, last when alone): with a forked child where ``parallel``, else here."""
-    if not parallel:
-        for k, job in enumerate(jobs):
-            on_start(k)
-            job(on_progress)
-            on_written(k)
-        if first is not None:
-            first(on_progress)
-            on_written(Background.FIRST)
-        return
-    import multiprocessing
-
-    ctx = multiprocessing.get_context("fork")
-    shared = SharedJobs(len(jobs), ctx)
-    child = Background(first, jobs, shared, ctx)
-    try:
-        while (k := shared.take_front()) is not None:
-            child.relay(on_start, on_written, on_progress)
-            on_start(k)
-            jobs[k](on_progress)
-            on_written(k)
-        child.wait(on_start, on_written, on_progress)
-        child = None
-    finally:
-        if child is not None:  # a job failed here: stop the child
-            child.cancel()
+    start_shared(jobs, first, parallel=parallel).finish(on_start=on_start, on_written=on_written,
+                                                        on_progress=on_progress)
 
 
 def _child(first, jobs, shared, send):

@@ -24,13 +24,14 @@ AT_THE_PLATE = (NEEDLE_EYE, NEEDLE_POINT, HOOK_POINT, FEED_DOG, RACK_TOOTH, LOWE
 # -- figures ---------------------------------------------------------------------------------------------------
 
 def new_figure(size, dpi=DPI):
-    """A figure on its own Agg canvas (no pyplot, no global backend change). No layout engine: the figures place
-    their axes once (:func:`place`), so drawing never re-runs a layout."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    """A figure on its own Agg canvas (no pyplot, no global backend change; :mod:`.canvas`). No layout engine:
+    the figures place their axes once (:func:`place`), so drawing never re-runs a layout."""
     from matplotlib.figure import Figure
 
+    from .canvas import TextCacheCanvas
+
     fig = Figure(figsize=size, dpi=dpi)
-    FigureCanvasAgg(fig)
+    TextCacheCanvas(fig)  # Agg, its plain text drawn from cached whole-string bitmaps (sewgen.plots.canvas)
     return fig
 
 
@@ -83,18 +84,38 @@ def deg(a):
     return np.append(d, d[0] + 360.0) if full_turn(a.phi) else d
 
 
-def angle_axis(ax, label=True, step=45):
-    ax.set_xlim(0, 360)
-    ax.set_xticks(np.arange(0, 361, step))
+def angle_axis(ax, label=True, step=45, limits=True):
+    """A shaft-angle abscissa 0–360° with a tick every ``step`` degrees and a light grid. ``limits=False``: only
+    the grid and label — for all but the first of axes that share x (sharing, they share the limits and ticks,
+    and setting them on each would re-set every sibling: 24 × 24 limit changes on the motion figure)."""
+    if limits:
+        ax.set_xlim(0, 360)
+        ax.set_xticks(np.arange(0, 361, step))
     ax.grid(alpha=0.3)
     if label:
         ax.set_xlabel("shaft angle φ (deg)")
 
 
+def runs(mask) -> list[tuple[int, int]]:
+    """(first, last) indices of every run of True in ``mask``."""
+    m = np.concatenate([[False], np.asarray(mask, bool), [False]])
+    edges = np.flatnonzero(m[1:] != m[:-1])
+    return [(int(i), int(j) - 1) for i, j in zip(edges[::2], edges[1::2])]
+
+
 def shade(ax, a, mask, color, label=None):
-    """Shade the shaft angles where ``mask`` holds (full height of the axes)."""
-    ax.fill_between(deg(a), 0, 1, where=closed(a, mask), color=color, alpha=0.12, lw=0,
-                    transform=ax.get_xaxis_transform(), label=label)
+    """Shade the shaft angles where ``mask`` holds (full height of the axes): one rectangle per run of samples
+    where it holds, from the run's first sample to its last (what ``fill_between(where=mask)`` draws), as one
+    collection added without autoscaling (fill_between re-scales the axes and, through them, every axes sharing
+    x: a third of the motion figure's time)."""
+    from matplotlib.collections import PolyCollection
+
+    x = deg(a)
+    verts = [[(x[i], 0.0), (x[j], 0.0), (x[j], 1.0), (x[i], 1.0)] for i, j in runs(closed(a, mask))]
+    pc = PolyCollection(verts, facecolors=color, edgecolors="none", alpha=0.12, linewidths=0,
+                        transform=ax.get_xaxis_transform(), label=label)
+    ax.add_collection(pc, autolim=False)
+    return pc
 
 
 def angle_labels(ax, a, x, y, *, at=None, step=45.0, color="0.2", size=7):

@@ -142,7 +142,7 @@ def draw_motion(fig, a):
             ax.yaxis.set_major_locator(MaxNLocator(5, steps=[1, 2, 2.5, 5, 10]))
             ax.ticklabel_format(axis="y", style="plain", useOffset=False)  # no "1e4" offsets: the power is in the label
             ax.tick_params(labelsize=8)
-            angle_axis(ax, label=r == n - 1, step=90)
+            angle_axis(ax, label=r == n - 1, step=90, limits=r == 0 and k == 0)  # the axes share x
     handles, labels = [], []
     for ax in axes.ravel():
         for h, lab in zip(*ax.get_legend_handles_labels()):
