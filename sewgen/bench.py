@@ -142,13 +142,24 @@ def best_time(fn: Callable[[], object], repeats: int, min_time: float) -> float:
 # -- the compiled sweep -------------------------------------------------------------------------------------
 
 
-def raw_sweep(m: sewgen.Mechanism, phi: np.ndarray, **forces):
+def raw_sweep(m: sewgen.Mechanism, phi: np.ndarray, loop: str = "auto", **forces):
     """The bare C call of ``m.solve(phi)`` (or, with ``forces=True`` and kinetostatics()'s force arguments, of
     ``m.kinetostatics(phi, ...)``) on its own arrays: :meth:`Mechanism.prepare` converts every argument exactly
-    as solve() does, :meth:`Sweep.bind` makes the pointers once. Returns (call, sweep): time ``call``, read the
-    results (``sweep.q``, ``.obs``, ``.frc``, ``.status``) from ``sweep``."""
-    sweep = m.prepare(phi, **forces)
+    as solve() does, :meth:`Sweep.bind` makes the pointers once; ``loop``: :meth:`Sweep.use_loop`'s (the SIMD
+    loop where it runs by default). Returns (call, sweep): time ``call``, read the results (``sweep.q``,
+    ``.obs``, ``.frc``, ``.status``) from ``sweep``."""
+    sweep = m.prepare(phi, **forces).use_loop(loop)
     return sweep.bind(), sweep
+
+
+def loop_rates(m: sewgen.Mechanism, phi: np.ndarray, cfg, **forces) -> dict:
+    """Positions/s of the bare C call through the scalar inlined loop and the generic loop, in the same run as
+    the default (SIMD where it runs) one, and the SIMD width: the extra fields of a kernel's row."""
+    out = {"simd_width": m.simd_width}
+    for loop in ("scalar", "generic"):
+        call, _ = raw_sweep(m, phi, loop, **forces)
+        out[f"raw_c_{loop}_loop_positions_per_s"] = len(phi) / best_time(call, cfg.repeats, cfg.min_time)
+    return out
 
 
 # -- the lambdify + scipy baseline --------------------------------------------------------------------------
@@ -316,11 +327,7 @@ def kinematics(name: str, cfg: Config) -> Result:
     t_general = best_time(lambda: m.solve(one, accel=zero), cfg.repeats, cfg.min_time)
     raw, sw = raw_sweep(m, phi)
     t_raw = best_time(raw, cfg.repeats, cfg.min_time)
-    gen = m.prepare(phi)
-    o = gen.options
-    gen.options = m.ffi.new("sg_options *", {"tol": o.tol, "max_iter": o.max_iter, "singular_tol": o.singular_tol,
-                                              "generic": 1})
-    t_generic = best_time(gen.bind(), cfg.repeats, cfg.min_time)  # the generic loop (no inlined sweep)
+    loops = loop_rates(m, phi, cfg)
     motion = m.solve(phi)
     continuous_angles(m.description, sw.q, sw.obs, sw.order)  # what solve() adds after the C call
     if np.any(sw.status) or not np.array_equal(sw.obs, motion.obs):
@@ -343,7 +350,7 @@ def kinematics(name: str, cfg: Config) -> Result:
         "solve_overhead_seconds": t_overhead,
         "solve_overhead_params_seconds": t_overhead_params,
         "solve_overhead_general_path_seconds": t_general,
-        "raw_c_generic_loop_positions_per_s": n / t_generic,
+        **loops,
         "baseline_step_deg": float(np.degrees(phi[rows[1]] - phi[rows[0]])) if len(rows) > 1 else None,
         "baseline_nfev_per_position": out[4],
         "baseline_setup_seconds": bl.derive_s + bl.lambdify_s,
@@ -370,6 +377,7 @@ def kinetostatics(name: str, cfg: Config) -> Result:
     fa = m.kinetostatics(phi)
     raw, sw = raw_sweep(m, phi, forces=True)  # kinetostatics()'s own defaults, so results are equal
     t_raw = best_time(raw, cfg.repeats, cfg.min_time)
+    loops = loop_rates(m, phi, cfg, forces=True)
     mo = fa.motion
     continuous_angles(m.description, sw.q, sw.obs, sw.order)  # what kinetostatics() adds after the C call
     if np.any(sw.status) or not all(np.array_equal(a, b) for a, b in (
@@ -396,6 +404,7 @@ def kinetostatics(name: str, cfg: Config) -> Result:
         "raw_c_positions_per_s": n / t_raw,
         "kinetostatics_seconds": t_kst,
         "kinetostatics_overhead_seconds": t_overhead,
+        **loops,
         "baseline_step_deg": float(np.degrees(phi[rows[1]] - phi[rows[0]])) if len(rows) > 1 else None,
         "baseline_nfev_per_position": out[4],
         "baseline_setup_seconds": bl.derive_s + bl.lambdify_s,
