@@ -49,13 +49,10 @@ def _cse(exprs):
     return sp.cse(list(exprs), symbols=sp.numbered_symbols("t", real=True), order="canonical")
 
 
-def _temps(printer, repl):
-    return [f"const double {printer.doprint(t)} = {printer.doprint(e)};" for t, e in repl]
-
-
 class _Flavour:
     """How a kernel body prints: scalar C (double) or the SIMD twin (sg_vd lanes, csrc/sg_simd.h), where a value
-    that reads only constants c[] (or none) is broadcast to every lane."""
+    that reads only per-sweep scalars (constants c[], gravity gv[], friction fr[]; cprint.per_sweep) or nothing
+    is broadcast to every lane."""
 
     def __init__(self, vector: bool):
         self.vector = vector
@@ -188,7 +185,7 @@ class KernelSet:
         kin, pr, n = self.kin, self.printer, len(self.kin.q)
         exprs = self.prepare(list(kin.closure) + [kin.jac_q[i, j] for i in range(n) for j in range(n)])
         repl, red = _cse(exprs)
-        body = self.selection_block() + _temps(pr, repl)
+        body = self.selection_block() + SCALAR.temps(repl)
         body += [f"r[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[:n])]
         body += [f"jac[{k}] = {pr.doprint(e)};" for k, e in enumerate(red[n:])]
         body = _unused(body, "q", "cq", "x", "cx", "c") + body
@@ -200,7 +197,7 @@ class KernelSet:
         """World x, y of every drawing anchor, then the cam arcs' radii and normal sectors (derive.drawing)."""
         pr = self.printer
         repl, red = _cse(self.prepare(exprs))
-        body = _temps(pr, repl) + [f"out[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
+        body = SCALAR.temps(repl) + [f"out[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
         body = _unused(body, "q", "cq", "x", "cx", "c") + body
         return Kernel(f"{self.prefix}_anchors", self._signature("anchors"), body, ops(e for _, e in repl) + ops(red))
 
@@ -399,7 +396,7 @@ class KernelSet:
         nz = [(i, j) for i in range(n) for j in range(n) if A[i, j] != 0]
         no_friction = {fr: 0 for _r, fr, _u in kst.frictions}  # b as without friction (it needs the reactions)
         repl, red = _cse(self.prepare([A[i, j] for i, j in nz] + [e.xreplace(no_friction) for e in kst.b]))
-        body = self.selection_block() + _temps(pr, repl) + [f"for (int k = 0; k < {n * n}; ++k) A[k] = 0.0;"]
+        body = self.selection_block() + SCALAR.temps(repl) + [f"for (int k = 0; k < {n * n}; ++k) A[k] = 0.0;"]
         body += [f"A[{i * n + j}] = {pr.doprint(e)};" for (i, j), e in zip(nz, red)]
         body += [f"b[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[len(nz):])]
         body = _unused(body, "q", "cq", "x", "cx", "c", "obs", "gv", "ld") + body
@@ -465,7 +462,7 @@ class KernelSet:
         """Each closure equation's own size (derive.branches.row_scales): Newton's per-equation tolerance."""
         pr = self.printer
         repl, red = _cse(self.prepare(exprs))
-        body = self.selection_block() + _temps(pr, repl) + [f"out[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
+        body = self.selection_block() + SCALAR.temps(repl) + [f"out[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
         body = _unused(body, "q", "cq", "x", "cx", "c") + body
         return Kernel(f"{self.prefix}_scales", self._signature("scales"), body,
                       ops(e for _, e in repl) + ops(red) + len(red))  # a copy of a hoisted size counts
@@ -508,7 +505,7 @@ class KernelSet:
         pr = self.printer
         exprs = [_guard_sqrt(e) for e in self.constants]
         repl, red = _cse(exprs)
-        body = _temps(pr, repl) + [f"c[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
+        body = SCALAR.temps(repl) + [f"c[{k}] = {pr.doprint(e)};" for k, e in enumerate(red)]
         body = _unused(body, "p", "c") + body
         return Kernel(f"{self.prefix}_constants",
                       self._signature("constants"),
