@@ -6,12 +6,12 @@
  * the CPU has both (sg_simd_width). No -ffast-math: GCC vector extensions with the ISO C default of no FMA
  * contraction, NaN tests kept.
  *
- * A generated file with a closed form instantiates SG_SIMD_SWEEP_BODY with vector twins of its closed and
- * motion kernels (sewgen/derive/kernels.py), which compute every lane whatever happens and return a lane mask
- * of what they vouch for. The loop takes a block's vector results only where they are clearly good: the
+ * A generated file with a closed form instantiates SG_SIMD_SWEEP_BODY with vector twins of its closed, motion
+ * and forces kernels (sewgen/derive/kernels.py), which compute every lane whatever happens and return a lane
+ * mask of what they vouch for. The loop takes a block's vector results only where they are clearly good: the
  * inputs finite, every dyad closing with a margin (SG_SIMD_MARGIN: the scalar loop decides triangles that only
- * just close or fail), the rates' estimated error at most a quarter of opt->singular_tol and every output
- * finite. Anything else goes through the scalar step of csrc/sg_runtime.h, so statuses, first failing angles
+ * just close or fail), the rates' estimated error at most a quarter of opt->singular_tol, every force block
+ * above its pivot tolerance and every output finite. Anything else goes through the scalar step of csrc/sg_runtime.h, so statuses, first failing angles
  * and the singular decision are always the scalar loop's; the values of vector lanes agree with the scalar
  * loop's to rounding (libmvec's sin, cos, atan2 are within 4 ulp), and a given input gives the same result on
  * a given machine every time.
