@@ -72,6 +72,15 @@ SG_VINLINE void sgv_sincos(sg_vd a, sg_vd *c, sg_vd *s)
     *s = (sg_vd)_ZGVdN4v_sin((__m256d)a);
 }
 
+/* The forces twin of a mechanism whose forces have no vector form: never called (its sg_<m>_forces_in_simd says
+ * no, and a force sweep then runs scalar), there to fill SG_SIMD_SWEEP_BODY's argument. */
+SG_VINLINE sg_vm sgv_no_forces(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd,
+                               const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
+{
+    (void)q, (void)cq, (void)x, (void)cx, (void)xd, (void)c, (void)obs, (void)gv, (void)ld, (void)out;
+    return sgv_false();
+}
+
 /* The closed-form dyads of csrc/sg_runtime.h, lane by lane, with the same operations; the mask says which lanes
  * close by more than SG_SIMD_MARGIN (the others carry a flat triangle's values, never read). */
 SG_VINLINE sg_vm sgv_dyad_rrr(const sg_vd P[2], const sg_vd Q[2], sg_vd l1, sg_vd l2, int sigma, sg_vd J[2])
@@ -342,44 +351,31 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 }                                                                                  \
                 ok &= FORCES_V(vq, vcq, vx, vcx, vxd, c, vobs, gv, vld, vout);                     \
             }                                                                                      \
-            if (lanes == SG_W && sgv_all(ok)) { /* the common case: whole rows from registers */   \
-                double *rq[SG_W], *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];               \
-                for (int l = 0; l < SG_W; ++l) {                                                   \
-                    rq[l] = q + idx[l] * (size_t)nq;                                               \
-                    rqd[l] = qd + idx[l] * (size_t)nq;                                             \
-                    rqdd[l] = qdd + idx[l] * (size_t)nq;                                           \
-                    robs[l] = obs + idx[l] * (size_t)nobs;                                         \
-                    rfrc[l] = frc != NULL ? frc + idx[l] * (size_t)nfo : NULL;                     \
-                    status[idx[l]] = SG_OK;                                                        \
-                    if (err) err[idx[l]] = vest[l];                                                \
-                }                                                                                  \
-                sgv_store_rows(vq, nq, rq);                                                        \
-                sgv_store_rows(vqd, nq, rqd);                                                      \
-                sgv_store_rows(vqdd, nq, rqdd);                                                    \
-                sgv_store_rows(vobs, (NOBS), robs);                                                \
-                if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                \
-                continue;                                                                          \
+            /* every lane's rows from registers (a padded lane repeats the last real one's         \
+             * row); a lane the vector kernels do not vouch for is rewritten below by the          \
+             * scalar motion and forces at its solved position */                                  \
+            double *rq[SG_W], *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];                   \
+            for (int l = 0; l < SG_W; ++l) {                                                       \
+                rq[l] = q + idx[l] * (size_t)nq;                                                   \
+                rqd[l] = qd + idx[l] * (size_t)nq;                                                 \
+                rqdd[l] = qdd + idx[l] * (size_t)nq;                                               \
+                robs[l] = obs + idx[l] * (size_t)nobs;                                             \
+                rfrc[l] = frc != NULL ? frc + idx[l] * (size_t)nfo : NULL;                         \
             }                                                                                      \
+            sgv_store_rows(vq, nq, rq);                                                            \
+            sgv_store_rows(vqd, nq, rqd);                                                          \
+            sgv_store_rows(vqdd, nq, rqdd);                                                        \
+            sgv_store_rows(vobs, (NOBS), robs);                                                    \
+            if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                    \
             for (int l = 0; l < lanes; ++l) {                                                      \
                 const size_t i = idx[l];                                                           \
-                double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq;                       \
-                double *qddi = qdd + i * (size_t)nq, *oi = obs + i * (size_t)nobs;                 \
                 if (ok[l]) {                                                                       \
-                    for (int j = 0; j < nq; ++j) {                                                 \
-                        qi[j] = vq[j][l];                                                          \
-                        qdi[j] = vqd[j][l];                                                        \
-                        qddi[j] = vqdd[j][l];                                                      \
-                    }                                                                              \
-                    for (int j = 0; j < (NOBS); ++j) oi[j] = vobs[j][l];                           \
-                    if (frc != NULL)                                                               \
-                        for (int j = 0; j < (NFO); ++j) frc[i * (size_t)nfo + j] = vout[j][l];     \
                     status[i] = SG_OK;                                                             \
                     if (err) err[i] = vest[l];                                                     \
                     continue;                                                                      \
                 }                                                                                  \
-                /* the scalar motion and forces at this lane's solved position decide it */        \
-                double cq[2 * SG_MAX_Q];                                                           \
-                for (int j = 0; j < nq; ++j) qi[j] = vq[j][l];                                     \
+                double *qi = rq[l], *qdi = rqd[l], *qddi = rqdd[l], *oi = robs[l];                 \
+                double cq[2 * SG_MAX_Q]; /* qi holds the lane's coordinates already */             \
                 for (int j = 0; j < 2 * nq; ++j) cq[j] = vcq[j][l];                                \
                 x[0] = ph[l];                                                                      \
                 cx[0] = vcx[0][l];                                                                 \

@@ -182,7 +182,7 @@ EXPORTS = {
                          "n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of "
                          "failed designs"),
     "sg_simd_width": ("int", (("const sg_mechanism *", "m"),),
-                      "positions per block of m's closed-form kinematic sweep on this CPU: 4 where m has a SIMD "
+                      "positions per block of m's closed-form sweeps (kinematics, kinetostatics) on this CPU: 4 where m has a SIMD "
                       "loop (the module built with SIMD, the kernels with a vector form) and the CPU has AVX2 and "
                       "FMA, else 1 (the scalar loop); m NULL: what this module and CPU offer any mechanism"),
     "sg_make_continuous": ("void", (("size_t", "n"), ("int", "nq"), ("int", "nobs"), ("double *", "q"),

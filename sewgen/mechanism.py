@@ -136,7 +136,7 @@ class Mechanism:
 
     @property
     def simd_width(self) -> int:
-        """Shaft positions per block of this mechanism's closed-form kinematic sweep here: 4 where it runs in AVX2
+        """Shaft positions per block of this mechanism's closed-form sweeps here: 4 where they run in AVX2
         (csrc/sg_simd.h: the module built with glibc's vector math, the CPU with AVX2 and FMA), 1 where the
         scalar loop runs. Results agree to rounding either way (:meth:`Sweep.use_loop`)."""
         return int(self.lib.sg_simd_width(self._descriptor))
@@ -682,19 +682,19 @@ class Sweep:
     def forces(self) -> bool:
         return self.settings is not None
 
-    #: Closed-form loops :meth:`use_loop` chooses between (csrc/sg_runtime.c, sweep).
-    LOOPS = {"auto": {}, "scalar": {"scalar": 1}, "generic": {"generic": 1}}
+    #: Closed-form loops :meth:`use_loop` chooses between (csrc/sg_runtime.c, sweep): the options it sets.
+    LOOPS = {"auto": {"scalar": 0, "generic": 0}, "scalar": {"scalar": 1, "generic": 0},
+             "generic": {"scalar": 0, "generic": 1}}
 
     def use_loop(self, loop: str) -> "Sweep":
-        """Which closed-form kinematic loop runs: ``"auto"`` (the default: four positions at a time in SIMD where
-        the module and the CPU have it, :attr:`Mechanism.simd_width`), ``"scalar"`` (the scalar inlined loop:
-        the same results on every x86-64 and other CPU, bit for bit) or ``"generic"`` (the runtime's loop
-        through the descriptor's kernels). The three agree to rounding with the same statuses (tests)."""
+        """Which closed-form loop runs (kinematics and kinetostatics): ``"auto"`` (the default: four positions
+        at a time in SIMD where the module and the CPU have it, :attr:`Mechanism.simd_width`), ``"scalar"`` (the
+        scalar inlined loop, which does not depend on the CPU's vector units) or ``"generic"`` (the runtime's
+        loop through the descriptor's kernels). The three agree to rounding with the same statuses (tests).
+        Every other option stays as it was (the fields of :data:`sewgen.abi.OPTIONS`)."""
         if loop not in self.LOOPS:
             raise ParameterError(self.mechanism.name, "loop", f"is {loop!r}; use one of {', '.join(self.LOOPS)}")
-        o = self.options
-        fields = {"tol": o.tol, "max_iter": o.max_iter, "newton_only": o.newton_only,
-                  "singular_tol": o.singular_tol, "keep_singular": o.keep_singular}
+        fields = {name: getattr(self.options, name) for _, name, _ in abi.OPTIONS}
         self.options = self.mechanism.ffi.new("sg_options *", {**fields, **self.LOOPS[loop]})
         return self
 

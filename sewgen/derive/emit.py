@@ -150,6 +150,8 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
         prefix=prefix, kernels=kernels,
         inline_sweep=abi.kernel_hook("sweep", f"{prefix}_sweep") if dyads is not None else None,
         vector_kernels=vector_kernels, nobs=len(kin.observables), nfo=len(kst.f) + len(kst.outputs),
+        forces_v=(f"{prefix}_forces_v" if any(k.name == f"{prefix}_forces_v" for k in vector_kernels)
+                  else "sgv_no_forces"),
         simd_sweep=abi.kernel_hook("sweep_simd", f"{prefix}_sweep_simd") if vector_kernels else None,
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
         descriptor=abi_header.descriptor_initializer(prefix, sizes, {k.name[len(prefix) + 1:]: True for k in kernels + vector_kernels}),

@@ -444,7 +444,8 @@ class KernelSet:
 
     def vector_kernels(self, dyads: list[Dyad], scales, kst: Kinetostatics) -> list[Kernel]:
         """The SIMD twins of the closed, motion and forces kernels and the forces' run-time test, or none where the
-        kinematics have no vector form (a stub twin and a test that says no where only the forces have none)."""
+        kinematics have no vector form (where only the forces have none, the test says no: the SIMD loop then
+        runs a force sweep scalar, and the template passes csrc/sg_simd.h's sgv_no_forces for the twin)."""
         try:
             kernels = [self.closed(dyads, vector=True), self.motion(scales, vector=True)]
         except NoVectorForm:
@@ -452,9 +453,6 @@ class KernelSet:
         try:
             kernels.append(self.forces(kst, vector=True))
         except NoVectorForm:
-            name = f"{self.prefix}_forces_v"
-            kernels.append(Kernel(name, VECTOR_SIGNATURES["forces"].format(f=name),
-                                  [f"(void){a};" for a in _VECTOR_FORCE_ARGS] + ["return sgv_false();"]))
             return kernels + [self.forces_in_simd(kst, has_vector=False)]
         return kernels + [self.forces_in_simd(kst, has_vector=True)]
 
