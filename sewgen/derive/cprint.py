@@ -83,10 +83,11 @@ def per_sweep(expr) -> bool:
 
 
 class VectorPrinter(KernelPrinter):
-    """KernelPrinter for the SIMD twins of the closed and motion kernels (csrc/sg_simd.h): the same text with the
-    arithmetic on GCC vectors (sg_vd) and the functions sg_simd.h vectorises (sqrt, |x|, atan2). Anything else
-    (trigonometric functions of a coordinate, sign, min/max, piecewise) raises :class:`NoVectorForm`: that
-    mechanism then has no SIMD loop, only the scalar one."""
+    """KernelPrinter for the SIMD twins of the closed, motion and forces kernels (csrc/sg_simd.h): the same text
+    with the arithmetic on GCC vectors (sg_vd) and the functions sg_simd.h vectorises (sqrt, |x|, atan2); a
+    subexpression of per-sweep scalars only prints as scalar C. Anything else (trigonometric functions of a
+    coordinate, sign, min/max, piecewise) raises :class:`NoVectorForm`: that mechanism then has no SIMD loop, only
+    the scalar one."""
 
     def __init__(self):
         super().__init__()
@@ -118,11 +119,8 @@ class VectorPrinter(KernelPrinter):
     def _print_not_supported(self, expr):
         raise NoVectorForm(f"no vector form of {type(expr).__name__}")
 
-    def _refuse(self, expr):
-        if per_sweep(expr):
-            return self._scalar.doprint(expr)
-        raise NoVectorForm(f"no vector form of {type(expr).__name__}")
-
-    _print_sign = _print_Max = _print_Min = _print_Piecewise = _print_ITE = _print_Relational = _refuse
-    _print_sin = _print_cos = _print_tan = _print_exp = _print_log = _print_floor = _print_ceiling = _refuse
-    _print_acos = _print_asin = _print_atan = _print_Mod = _print_Heaviside = _refuse
+    # everything else the C99 printer would print as C of doubles: a scalar where it reads per-sweep values
+    # only, refused otherwise (_print_math_func)
+    _print_sign = _print_Max = _print_Min = _print_Piecewise = _print_ITE = _print_Relational = _print_math_func
+    _print_sin = _print_cos = _print_tan = _print_exp = _print_log = _print_floor = _print_math_func
+    _print_ceiling = _print_acos = _print_asin = _print_atan = _print_Mod = _print_Heaviside = _print_math_func
