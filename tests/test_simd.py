@@ -26,9 +26,8 @@ PHI = np.concatenate([np.linspace(0.0, 2 * np.pi, 3600, endpoint=False), RNG.uni
 SIMD_CLOSED = [n for n in catalog_names() if sewgen.mechanism(n).closed_form]
 
 
-def _both(mech, phi, nan_at=(), **kw):
-    """(SIMD sweep, scalar sweep, the scalar loop's sensitivity of every output to the shaft angle) of the same
-    arguments; NaN written into phi at ``nan_at`` (C's own check)."""
+def _run_both(mech, phi, nan_at=(), **kw):
+    """(SIMD sweep, scalar sweep) of the same arguments, run; NaN written into phi at ``nan_at`` (C's own check)."""
     runs = []
     for loop in ("auto", "scalar"):
         s = mech.prepare(phi, **kw).use_loop(loop)
@@ -36,7 +35,13 @@ def _both(mech, phi, nan_at=(), **kw):
             s.phi[i] = np.nan
         s.run()
         runs.append(s)
-    return runs[0], runs[1], _sensitivity(mech, runs[1], kw)
+    return runs
+
+
+def _both(mech, phi, nan_at=(), **kw):
+    """:func:`_run_both` and the scalar loop's sensitivity of every output to the shaft angle."""
+    a, b = _run_both(mech, phi, nan_at, **kw)
+    return a, b, _sensitivity(mech, b, kw)
 
 
 def _sensitivity(mech, ref, kw, h=1e-6):
@@ -114,13 +119,7 @@ def test_simd_kinetostatics_agree_with_the_scalar_loop(name):
     from test_designs import varying_loads
 
     for kw in ({}, {"loads": varying_loads(mech), "singular": "flag"}):
-        runs = []
-        for loop in ("auto", "scalar"):
-            s = mech.prepare(PHI, forces=True, **kw).use_loop(loop)
-            s.phi[9] = np.nan
-            s.run()
-            runs.append(s)
-        a, b = runs
+        a, b = _run_both(mech, PHI, nan_at=(9,), forces=True, **kw)
         np.testing.assert_array_equal(a.status, b.status)
         ok = b.status == 0
         scale = np.maximum(np.abs(b.frc[ok]).max(axis=0), 1e-300)
@@ -129,11 +128,7 @@ def test_simd_kinetostatics_agree_with_the_scalar_loop(name):
         assert not np.array_equal(a.frc, b.frc)  # the vector forces did run
     frictions = [p.name for p in mech.description.params if p.name.endswith(".friction")]
     if frictions:
-        runs = []
-        for loop in ("auto", "scalar"):
-            s = mech.prepare(PHI, forces=True, params={frictions[0]: 0.1}).use_loop(loop)
-            s.run()
-            runs.append(s)
+        runs = _run_both(mech, PHI, forces=True, params={frictions[0]: 0.1})
         for k in ("q", "qd", "qdd", "obs", "frc", "err", "status"):
             np.testing.assert_array_equal(getattr(runs[0], k), getattr(runs[1], k), err_msg=f"{name} {k}")
 
