@@ -167,7 +167,7 @@ class DesignSweep:
     """
 
     def __init__(self, mechanism, phi, params, held, branch, status, first_bad, nbad, last_bad, outputs,
-                 reductions, problems, columns):
+                 reductions, problems, columns, block=None):
         self.mechanism = mechanism
         self.phi = phi
         self.params, self.held, self.branch = params, held, branch
@@ -176,6 +176,14 @@ class DesignSweep:
         self.outputs, self.reductions = outputs, reductions
         self._problems = problems  # design -> ParameterError found by Python's checks
         self._columns = columns
+        self._block = block  # (outputs, designs, angles): the one array ``outputs`` are slices of
+
+    def stacked(self) -> np.ndarray:
+        """Every output as one (designs, angles, outputs) array, in the order of ``outputs``: a view of the block
+        the C sweep wrote, no copy."""
+        if self._block is None:
+            return np.stack(list(self.outputs.values()), axis=-1)
+        return np.moveaxis(self._block, 0, -1)
 
     def __len__(self) -> int:
         return len(self.status)
@@ -505,7 +513,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
         red[f"{col}:{kind}"] = red_val[k]
         if kind in _EXTREMA:
             red[f"{col}:{kind}.index"] = red_idx[k]
-    return DesignSweep(mech, base.phi, p, h, b, status, first, nbad, last, outs, red, problems, cols)
+    return DesignSweep(mech, base.phi, p, h, b, status, first, nbad, last, outs, red, problems, cols, out)
 
 
 _COLUMNS: dict = {}

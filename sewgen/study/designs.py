@@ -178,21 +178,9 @@ def _batched(mech, P, phi, omega: float, held, branch, threads=None, observables
     for k in np.flatnonzero(~res.ok):
         exc = res.exception(int(k))
         status[k], error[k] = type(exc).__name__, str(exc)
-    full = _stacked([res.outputs[name] for name in (res.column_names if observables is None else outputs)])
+    full = res.stacked()  # (D, N, columns): the outputs in the order asked
     if observables is not None:
         return GroupSweep(mech, P, phi, omega, status, error, None, None, None, full, None, None, observables)
     return GroupSweep(mech, P, phi, omega, status, error, full[..., :nq], full[..., nq:2 * nq],
                       full[..., 2 * nq:3 * nq], full[..., 3 * nq:], None, None)
 
-
-def _stacked(columns: list) -> np.ndarray:
-    """The (D, N) ``columns`` as one (D, N, C) array: a view without a copy when they are the consecutive
-    slices of one (C, D, N) block (as the batched sweep writes them), else stacked."""
-    first = columns[0]
-    block = first.base
-    if (isinstance(block, np.ndarray) and block.ndim == 3 and block.shape == (len(columns),) + first.shape
-            and block.flags.c_contiguous
-            and all(c.base is block and c.__array_interface__["data"][0]
-                    == block.__array_interface__["data"][0] + k * block.strides[0] for k, c in enumerate(columns))):
-        return np.moveaxis(block, 0, -1)
-    return np.stack(columns, axis=-1)
