@@ -206,7 +206,7 @@ class KernelSet:
         by them before the condition number is taken (their reciprocals mostly hoist into constants).
         ``vector``: the SIMD twin (csrc/sg_simd.h) from the same expressions; it computes every lane and returns
         the mask of lanes whose factor and outputs are good (raises NoVectorForm where it cannot be printed)."""
-        kin, n = self.kin, len(self.kin.q)
+        n = len(self.kin.q)
         if vector and self.selection_block():
             raise NoVectorForm("a cam's active arc is chosen per position")
         fl = VECTOR if vector else SCALAR

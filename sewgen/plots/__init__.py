@@ -23,7 +23,7 @@ import math
 from pathlib import Path
 
 from .animation import GIF_DPI, GIF_FPS, GIF_WIDTH, MachineView, draw_machine, machine_gif, machine_linkages
-from .background import can_fork, run_shared, start_shared
+from .background import can_fork, start_shared
 from .common import DPI, PALETTE, feed_groups, new_figure, render, throat_plate_height
 from .curves import draw_motion, motion_rows, motion_size
 from .cycle import cycle_size, draw_cycle, draw_cycle_timing, write_timing_plots
@@ -150,7 +150,7 @@ def write_all(analysis, folder, progress=None, gif: bool = True, parallel: bool 
     ``progress(message, done, total)`` is called before each figure (done = files finished so far, total =
     files) and every 8 frames of the GIF. Where that is safe (:func:`~sewgen.plots.background.can_fork`;
     ``parallel=False``: never) a forked process writes the GIF and then shares the figures with this one
-    (:func:`~sewgen.plots.background.run_shared`), so two figures may be in progress at once.
+    (:func:`~sewgen.plots.background.start_shared`), so two figures may be in progress at once.
 
     The figures are drawn from ``curves`` (default: ``analysis.refined()``, the same analysis every 1° when it
     was run in coarser steps, so no curve is a jagged polyline); the GIF has one frame per position of
