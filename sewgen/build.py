@@ -6,6 +6,7 @@ own, so it imports nothing from the sewgen package. Flags: -O2 -std=c99 and warn
 """
 from __future__ import annotations
 
+import functools
 import os
 import shlex
 from pathlib import Path
@@ -17,20 +18,33 @@ CFLAGS = ["-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-Wno-unused-paramet
           "-fno-semantic-interposition"]  # calls within the module stay direct: the inlined sweep loops inline
 
 
+#: The hand-written runtime files every compiled module reads (a user build's cache key hashes them).
+RUNTIME_FILES = ("sg_runtime.c", "sg_runtime.h", "sg_simd.h")
+
+
 def simd_flags() -> tuple[list[str], list[str]]:
     """(compile flags, libraries) of the SIMD loops (csrc/sg_simd.h): glibc's vector math library on x86-64
     Linux, where the SIMD code is compiled for AVX2 and chosen at run time by the CPU's features; nothing
     elsewhere (the scalar loops only). SEWGEN_SIMD=0 in the environment builds without it."""
+    return _simd_flags(os.environ.get("SEWGEN_SIMD", "1") != "0")
+
+
+@functools.lru_cache(maxsize=None)
+def _simd_flags(wanted: bool) -> tuple[list[str], list[str]]:
+    """simd_flags(), the library looked up once a process (find_library runs ldconfig)."""
     import ctypes.util
     import platform
     import sys
 
-    if os.environ.get("SEWGEN_SIMD", "1") == "0":
-        return [], []
-    if sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64") and \
+    if wanted and sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64") and \
             ctypes.util.find_library("mvec"):
         return ["-DSG_HAVE_MVEC"], ["mvec"]
     return [], []
+
+
+def compile_flags(extra: list[str] | None = None) -> list[str]:
+    """Every flag a module is compiled with: CFLAGS, the SIMD ones, ``extra``, then SEWGEN_CFLAGS."""
+    return CFLAGS + simd_flags()[0] + (extra or []) + shlex.split(os.environ.get("SEWGEN_CFLAGS", ""))
 
 
 def runtime_dir() -> Path:
@@ -53,12 +67,11 @@ def make_ffi(module: str, kernel_dir: Path, mechanisms: list[str], extra_cflags:
     if relative_to is not None:  # setuptools wants paths relative to setup.py
         sources = [s.relative_to(relative_to) for s in sources]
         incs = [i.relative_to(relative_to) for i in incs]
-    simd_cflags, simd_libs = simd_flags()
-    flags = CFLAGS + simd_cflags + (extra_cflags or []) + shlex.split(os.environ.get("SEWGEN_CFLAGS", ""))
+    flags = compile_flags(extra_cflags)
     ffi.set_source(module, '#include "sg_kernels.h"\n',
                    sources=[str(s) for s in sources], include_dirs=[str(i) for i in incs],
                    extra_compile_args=flags, extra_link_args=[f for f in flags if f.startswith("-fsanitize")],
-                   libraries=["m"] + simd_libs)
+                   libraries=["m"] + simd_flags()[1])
     return ffi
 
 

@@ -131,15 +131,15 @@ def load_user(source, *, closed_form: bool = True, cache_dir: Path | None = None
 def _derivation_fingerprint() -> bytes:
     """What a build of the same declaration depends on besides its text: the derivation's sources and
     templates, the ABI and units tables, the runtime and the compiler flags."""
-    from .build import CFLAGS, runtime_dir
+    from .build import RUNTIME_FILES, compile_flags, runtime_dir
 
     here = Path(__file__).resolve().parent
     h = hashlib.sha256()
     sources = sorted((here / "derive").rglob("*.py")) + sorted((here / "derive").rglob("*.j2"))
-    sources += [here / "abi.py", here / "units.py", runtime_dir() / "sg_runtime.c", runtime_dir() / "sg_runtime.h"]
+    sources += [here / "abi.py", here / "units.py"] + [runtime_dir() / name for name in RUNTIME_FILES]
     for f in sources:
         h.update(f.name.encode() + b"\0" + f.read_bytes() + b"\0")
-    h.update(" ".join(CFLAGS + [os.environ.get("SEWGEN_CFLAGS", "")]).encode())
+    h.update(" ".join(compile_flags()).encode())
     return h.digest()
 
 
@@ -181,15 +181,15 @@ def _write_json(path: Path, data: dict) -> None:
 
 def _build_key(files: dict) -> str:
     """Hash of everything a build depends on: the generated files, the runtime sources, the compiler flags."""
-    from .build import CFLAGS, runtime_dir
+    from .build import RUNTIME_FILES, compile_flags, runtime_dir
 
     h = hashlib.sha256()
     rt = runtime_dir()
     for name in sorted(files):
         h.update(name.encode() + b"\0" + files[name].encode() + b"\0")
-    for name in ("sg_runtime.c", "sg_runtime.h"):  # the ABI (sg_abi.*) is among the generated files
+    for name in RUNTIME_FILES:  # the ABI (sg_abi.*) is among the generated files
         h.update((rt / name).read_bytes())
-    h.update(" ".join(CFLAGS + [os.environ.get("SEWGEN_CFLAGS", "")]).encode())
+    h.update(" ".join(compile_flags()).encode())
     return h.hexdigest()[:20]
 
 
