@@ -198,7 +198,7 @@ def _sha256(path: Path) -> str:
 
 
 @contextlib.contextmanager
-def _locked(path: Path):
+def locked(path: Path):
     """An exclusive lock on ``path`` (created if missing) for the ``with`` block: one builder per cache entry."""
     with open(path, "a+") as fh:
         if fcntl is not None:
@@ -262,7 +262,7 @@ def _load_built(root: Path, name: str, files: dict, declaration: str = "") -> Me
     except OSError as exc:
         raise BuildError(f"{name}: cannot use the build cache {root}: {exc}", mechanism=name, file=str(root)) from None
     cached, failure = True, None
-    with _locked(lock):
+    with locked(lock):
         so = _built(folder, key)
         if so is not None:
             try:

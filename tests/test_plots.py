@@ -438,3 +438,65 @@ def test_cached_text_falls_back_on_matplotlib_where_its_internals_differ(monkeyp
     monkeypatch.setattr(canvas.TextCacheRenderer, "_bitmap", missing)
     assert _ink_box(canvas.TextCacheCanvas, kw) == ref
     assert canvas._unsupported
+
+
+@pytest.mark.skipif(not plots.can_fork(), reason="needs fork and two CPUs")
+def test_shared_runs_call_after_in_each_process_the_child_first(tmp_path):
+    """``after`` (the text cache's save) runs once in the child, once its share is done, and then once here."""
+    from sewgen.plots.background import run_shared
+
+    jobs, first, _ = _jobs(tmp_path, 4)
+    log = tmp_path / "after"
+
+    def after():
+        with open(log, "a") as f:
+            f.write(f"{os.getpid()}\n")
+
+    run_shared(jobs, first, parallel=True, on_start=lambda k: None, on_written=lambda k: None,
+               on_progress=lambda *a: None, after=after)
+    pids = [int(x) for x in log.read_text().split()]
+    assert len(pids) == 2 and pids[1] == os.getpid() and pids[0] != os.getpid()
+
+
+def test_text_cache_is_kept_on_disk_between_runs(tmp_path, monkeypatch):
+    """The whole-string bitmaps and measures go to $SEWGEN_CACHE/text (canvas.save) and come back in another
+    run (canvas.load) under keys that do not depend on the process; a string drawn from the loaded cache lands
+    where matplotlib draws it. A damaged file is an empty cache, not an error."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from sewgen.plots import canvas
+
+    monkeypatch.setenv("SEWGEN_CACHE", str(tmp_path))
+    monkeypatch.setattr(canvas, "_bitmaps", {})
+    monkeypatch.setattr(canvas, "_extents", {})
+    monkeypatch.setattr(canvas, "_loaded", (0, 0))
+    kw = dict(s="a string kept between runs 417", fontsize=11, weight="bold")
+    drawn = _ink_box(canvas.TextCacheCanvas, kw)
+    assert any(key[0] == kw["s"] for key in canvas._bitmaps)
+    canvas.save()
+    path = canvas._cache_file()
+    assert path.parent == tmp_path / "text" and path.is_file()
+    # keys name the font file (never a per-process hash), so another process finds them
+    key = next(key for key in canvas._bitmaps if key[0] == kw["s"])
+    assert key[1].endswith(".ttf") and "Bold" in key[1]
+
+    monkeypatch.setattr(canvas, "_bitmaps", {})
+    monkeypatch.setattr(canvas, "_extents", {})
+    canvas.load()
+    assert key in canvas._bitmaps and len(canvas._extents) >= 1
+
+    def no_rendering(self, *a, **k):
+        raise AssertionError("rendered again although loaded from disk")
+
+    monkeypatch.setattr(canvas.RendererAgg, "_prepare_font", no_rendering)
+    assert _ink_box(canvas.TextCacheCanvas, kw) == drawn
+    monkeypatch.undo()
+    monkeypatch.setenv("SEWGEN_CACHE", str(tmp_path))
+    ref = _ink_box(FigureCanvasAgg, kw)
+    assert all(abs(g - r) <= 1 for g, r in zip(drawn, ref)), (drawn, ref)
+
+    path.write_bytes(b"not a pickle")
+    monkeypatch.setattr(canvas, "_bitmaps", {})
+    monkeypatch.setattr(canvas, "_extents", {})
+    canvas.load()
+    assert canvas._bitmaps == {} and canvas._extents == {}

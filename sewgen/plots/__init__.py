@@ -24,7 +24,7 @@ from pathlib import Path
 
 from .animation import GIF_DPI, GIF_FPS, GIF_WIDTH, MachineView, draw_machine, machine_gif, machine_linkages
 from .background import can_fork, start_shared
-from .common import DPI, PALETTE, feed_groups, new_figure, render, throat_plate_height
+from .common import DPI, PALETTE, feed_groups, import_drawing, new_figure, render, throat_plate_height
 from .curves import draw_motion, motion_rows, motion_size
 from .cycle import cycle_size, draw_cycle, draw_cycle_timing, write_timing_plots
 from .geometry import Linkage, linkage, linkage_of
@@ -130,7 +130,12 @@ def start_all(analysis, folder, progress=None, gif: bool = True, parallel: bool 
     links = machine_linkages(analysis) if gif else None  # built here: the geometry's errors raise here
     jobs = [lambda _progress, make=make, name=name: make(curves, folder / name) for name, make in figures]
     first = (lambda progress: machine_gif(analysis, folder / GIF, progress, links=links)) if gif else None
-    run = start_shared(jobs, first, parallel=can_fork() if parallel is None else parallel)
+    parallel = can_fork() if parallel is None else parallel
+    import_drawing()  # before the fork: the child inherits the imports and the strings kept on disk
+    from . import canvas
+
+    canvas.load()
+    run = start_shared(jobs, first, parallel=parallel, after=canvas.save)
     return PendingPlots(run, paths, figures, total, report)
 
 

@@ -64,14 +64,14 @@ class Background:
 
     FIRST = -1
 
-    def __init__(self, first: Job | None, jobs: Sequence[Job], shared: SharedJobs, ctx):
+    def __init__(self, first: Job | None, jobs: Sequence[Job], shared: SharedJobs, ctx, after=None):
         self.first, self.jobs, self.shared = first, jobs, shared
         self.written: set[int] = set()
         self._outcome = None
         self._recv, send = ctx.Pipe(duplex=False)
         with warnings.catch_warnings():  # Python >= 3.12 warns about fork() beside native (BLAS) threads
             warnings.simplefilter("ignore", DeprecationWarning)
-            self._proc = ctx.Process(target=_child, args=(first, jobs, shared, send), daemon=True)
+            self._proc = ctx.Process(target=_child, args=(first, jobs, shared, send, after), daemon=True)
             self._proc.start()
         send.close()  # the child holds the only write end: its exit ends the pipe
 
@@ -122,17 +122,18 @@ class Background:
 class SharedRun:
     """Jobs started by :func:`start_shared`: :meth:`finish` runs this process's share and waits for the child's;
     :meth:`cancel` stops the child (a no-op once finished). The child starts at construction, so the caller may
-    do other work (write its tables) while it runs."""
+    do other work (write its tables) while it runs. ``after()``, if given, runs in each process once its share is
+    done (the child's before the parent's)."""
 
-    def __init__(self, jobs: Sequence[Job], first: Job | None, parallel: bool):
-        self.jobs, self.first = jobs, first
+    def __init__(self, jobs: Sequence[Job], first: Job | None, parallel: bool, after=None):
+        self.jobs, self.first, self.after = jobs, first, after
         self.child = self.shared = None
         if parallel:
             import multiprocessing
 
             ctx = multiprocessing.get_context("fork")
             self.shared = SharedJobs(len(jobs), ctx)
-            self.child = Background(first, jobs, self.shared, ctx)
+            self.child = Background(first, jobs, self.shared, ctx, after)
 
     def finish(self, *, on_start, on_written, on_progress) -> None:
         """Run every job not taken by the child, here; then wait for the child (and redo what it failed)."""
@@ -144,17 +145,19 @@ class SharedRun:
             if self.first is not None:
                 self.first(on_progress)
                 on_written(Background.FIRST)
-            return
-        try:
-            while (k := self.shared.take_front()) is not None:
-                self.child.relay(on_start, on_written, on_progress)
-                on_start(k)
-                self.jobs[k](on_progress)
-                on_written(k)
-            self.child.wait(on_start, on_written, on_progress)
-            self.child = None
-        finally:
-            self.cancel()  # a job failed here: stop the child
+        else:
+            try:
+                while (k := self.shared.take_front()) is not None:
+                    self.child.relay(on_start, on_written, on_progress)
+                    on_start(k)
+                    self.jobs[k](on_progress)
+                    on_written(k)
+                self.child.wait(on_start, on_written, on_progress)
+                self.child = None
+            finally:
+                self.cancel()  # a job failed here: stop the child
+        if self.after is not None:
+            self.after()
 
     def cancel(self) -> None:
         if self.child is not None:
@@ -162,20 +165,20 @@ class SharedRun:
             self.child = None
 
 
-def start_shared(jobs: Sequence[Job], first: Job | None, *, parallel: bool) -> SharedRun:
+def start_shared(jobs: Sequence[Job], first: Job | None, *, parallel: bool, after=None) -> SharedRun:
     """Fork the child now (where ``parallel``) that runs ``first`` and then takes jobs from the back; the
-    returned run's :meth:`~SharedRun.finish` does the rest here."""
-    return SharedRun(jobs, first, parallel)
+    returned run's :meth:`~SharedRun.finish` does the rest here. ``after``: see :class:`SharedRun`."""
+    return SharedRun(jobs, first, parallel, after)
 
 
 def run_shared(jobs: Sequence[Job], first: Job | None, *, parallel: bool, on_start, on_written,
-               on_progress) -> None:
+               on_progress, after=None) -> None:
     """Run every job once (and ``first``, last when alone): with a forked child where ``parallel``, else here."""
-    start_shared(jobs, first, parallel=parallel).finish(on_start=on_start, on_written=on_written,
-                                                        on_progress=on_progress)
+    start_shared(jobs, first, parallel=parallel, after=after).finish(on_start=on_start, on_written=on_written,
+                                                                     on_progress=on_progress)
 
 
-def _child(first, jobs, shared, send):
+def _child(first, jobs, shared, send, after):
     def progress(message, i, n):
         send.send(("progress", message, i, n))
 
@@ -187,6 +190,8 @@ def _child(first, jobs, shared, send):
             send.send(("start", k))
             jobs[k](progress)
             send.send(("written", k))
+        if after is not None:
+            after()
         send.send(("done",))
     except BaseException:  # noqa: BLE001 - the parent redoes the work and raises it
         send.send(("failed",))

@@ -12,18 +12,31 @@ it by up to half a pixel against matplotlib's own placement.
 
 Measures of plain strings (``get_text_width_height_descent``) are kept per process in the same way.
 
+Both are also kept on disk between runs (:func:`load`, :func:`save`: ``$SEWGEN_CACHE/text``, one file per
+matplotlib, FreeType and font set-up): shaping a string costs matplotlib 3.11 40–60 µs a glyph (libraqm and
+FreeType's hinter, no glyph cache), so the strings of a first ``sewgen analyze`` took ~0.8 s of CPU per process;
+a later run renders only the strings it has not met before. A key names the font file the string is drawn in,
+never a per-process hash.
+
 Math text (``$...$``), text at angles other than 0° and 90°, and text with font features or a language set
 are left to matplotlib.
 """
 from __future__ import annotations
 
+import os
+import pickle
+from pathlib import Path
+
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag
+from matplotlib.font_manager import findfont
 
 #: Rendered strings kept (a figure set uses a few hundred distinct ones).
 CACHE_SIZE = 4096
 _bitmaps: dict = {}
 _extents: dict = {}
+#: How many of each were loaded from disk (:func:`save` writes only when more are known).
+_loaded = (0, 0)
 #: Set once the renderer's internals this module uses (``_prepare_font``, FT2Font's whole-string calls) turn
 #: out missing or different in the installed matplotlib: every string is then drawn by matplotlib itself.
 _unsupported = False
@@ -66,7 +79,7 @@ class TextCacheRenderer(RendererAgg):
         renderer, and each measure shapes the string anew)."""
         if ismath:
             return super().get_text_width_height_descent(s, prop, ismath)
-        key = (s, hash(prop), prop.get_size_in_points(), self.dpi, get_hinting_flag())
+        key = (s, *_font_file(prop), prop.get_size_in_points(), self.dpi, _hinting())
         hit = _extents.get(key)
         if hit is None:
             hit = super().get_text_width_height_descent(s, prop, ismath)
@@ -79,7 +92,7 @@ class TextCacheRenderer(RendererAgg):
         """(coverage (h, w) uint8, dx, dy): the string's bitmap and its top-left corner from the baseline start,
         in pixels (y down); rendered once per distinct key."""
         flags = get_hinting_flag()
-        key = (s, hash(prop), prop.get_size_in_points(), self.dpi, bool(antialiased), flags)
+        key = (s, *_font_file(prop), prop.get_size_in_points(), self.dpi, bool(antialiased), _hinting())
         hit = _bitmaps.get(key)
         if hit is not None:
             return hit
@@ -98,6 +111,96 @@ class TextCacheRenderer(RendererAgg):
             _bitmaps.clear()
         _bitmaps[key] = hit
         return hit
+
+
+def _font_file(prop) -> tuple[str, int]:
+    """(path, face index) of the font file ``prop`` is drawn in, as plain values (matplotlib 3.11's ``findfont``
+    returns a str subclass that does not unpickle)."""
+    found = findfont(prop)
+    return str(found), int(getattr(found, "face_index", 0))
+
+
+def _hinting():
+    """matplotlib's hinting flags as a plain value (an enum in matplotlib >= 3.10, an int before): kept in keys
+    that are pickled."""
+    flags = get_hinting_flag()
+    return getattr(flags, "value", flags)
+
+
+def _cache_file() -> Path | None:
+    """The on-disk cache of this matplotlib, FreeType and font set-up, or None where there is no writable
+    cache folder."""
+    import hashlib
+
+    import matplotlib
+    from matplotlib import ft2font, rcParams
+
+    from ..loader import cache_root
+
+    setup = repr((matplotlib.__version__, ft2font.__freetype_version__, getattr(ft2font, "__libraqm_version__", ""),
+                  rcParams["text.hinting"], rcParams["text.hinting_factor"], rcParams["text.antialiased"],
+                  rcParams["font.family"], rcParams["font.sans-serif"], rcParams["font.monospace"]))
+    folder = cache_root() / "text"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    if not os.access(folder, os.W_OK):
+        return None
+    return folder / f"{hashlib.sha256(setup.encode()).hexdigest()[:20]}.pickle"
+
+
+def _read(path: Path) -> tuple[dict, dict]:
+    try:
+        with open(path, "rb") as fh:
+            bitmaps, extents = pickle.load(fh)
+        if isinstance(bitmaps, dict) and isinstance(extents, dict):
+            return bitmaps, extents
+    except Exception:  # noqa: BLE001 - a missing, partly written or foreign file is an empty cache
+        pass
+    return {}, {}
+
+
+def load() -> None:
+    """Add the strings kept on disk (by earlier runs) to this process's cache."""
+    global _loaded
+    path = _cache_file()
+    if path is None or not path.is_file():
+        return
+    bitmaps, extents = _read(path)
+    for mine, theirs in ((_bitmaps, bitmaps), (_extents, extents)):
+        for key, value in theirs.items():
+            if len(mine) < CACHE_SIZE:
+                mine.setdefault(key, value)
+    _loaded = (len(_bitmaps), len(_extents))
+
+
+def save() -> None:
+    """Merge this process's strings into the cache on disk (under a lock; written whole to a temporary file and
+    renamed, so a reader never sees half a file); nothing when it knows no string the disk lacks. Never
+    raises: the cache only saves time."""
+    global _loaded
+    if (len(_bitmaps), len(_extents)) == _loaded:
+        return
+    try:
+        from ..loader import locked
+
+        path = _cache_file()
+        if path is None:
+            return
+        with locked(path.with_suffix(".lock")):
+            bitmaps, extents = _read(path)
+            for theirs, mine in ((bitmaps, _bitmaps), (extents, _extents)):
+                if len(theirs) + len(mine) > CACHE_SIZE:
+                    theirs.clear()  # a full cache starts again from this run's strings
+                theirs.update(mine)
+            tmp = path.with_suffix(f".{os.getpid()}.tmp")
+            with open(tmp, "wb") as fh:
+                pickle.dump((bitmaps, extents), fh, protocol=pickle.HIGHEST_PROTOCOL)
+            os.replace(tmp, path)
+        _loaded = (len(_bitmaps), len(_extents))
+    except OSError:
+        pass
 
 
 def _shaped(mtext) -> bool:

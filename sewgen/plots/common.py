@@ -23,6 +23,14 @@ AT_THE_PLATE = (NEEDLE_EYE, NEEDLE_POINT, HOOK_POINT, FEED_DOG, RACK_TOOTH, LOWE
 
 # -- figures ---------------------------------------------------------------------------------------------------
 
+def import_drawing() -> None:
+    """Import what drawing a figure needs (matplotlib's figure, axes and Agg canvas: ~0.5 s): done before the
+    plotting child is forked, the child shares it instead of paying it again (sewgen.plots.start_all)."""
+    import matplotlib.figure  # noqa: F401
+
+    from . import canvas  # noqa: F401
+
+
 def new_figure(size, dpi=DPI):
     """A figure on its own Agg canvas (no pyplot, no global backend change; :mod:`.canvas`). No layout engine:
     the figures place their axes once (:func:`place`), so drawing never re-runs a layout."""
@@ -84,16 +92,32 @@ def deg(a):
     return np.append(d, d[0] + 360.0) if full_turn(a.phi) else d
 
 
-def angle_axis(ax, label=True, step=45, limits=True):
-    """A shaft-angle abscissa 0–360° with a tick every ``step`` degrees and a light grid. ``limits=False``: only
-    the grid and label — for all but the first of axes that share x (sharing, they share the limits and ticks,
-    and setting them on each would re-set every sibling: 24 × 24 limit changes on the motion figure)."""
-    if limits:
-        ax.set_xlim(0, 360)
-        ax.set_xticks(np.arange(0, 361, step))
+def angle_axis(ax, label=True, step=45):
+    """A shaft-angle abscissa 0–360° with a tick every ``step`` degrees and a light grid."""
+    ax.set_xlim(0, 360)
+    ax.set_xticks(np.arange(0, 361, step))
     ax.grid(alpha=0.3)
     if label:
         ax.set_xlabel("shaft angle φ (deg)")
+
+
+def angle_grid(ax, bottom: bool, step=90):
+    """A shaft-angle abscissa 0–360° for one of a column of panels: grid lines every ``step`` degrees, ticks and
+    their labels only on the ``bottom`` panel (a tick costs matplotlib about a millisecond to build: on the
+    motion figure's 24 panels the hidden x ticks of all but the bottom row were a fifth of its time)."""
+    from matplotlib import rcParams
+    from matplotlib.ticker import NullLocator
+
+    ax.set_xlim(0, 360)
+    grid = np.arange(0, 361, step)
+    if bottom:
+        ax.set_xticks(grid)
+        ax.set_xlabel("shaft angle φ (deg)")
+    else:
+        ax.xaxis.set_major_locator(NullLocator())
+    ax.grid(axis="y", alpha=0.3)
+    ax.vlines(grid[1:-1], 0, 1, transform=ax.get_xaxis_transform(), colors=rcParams["grid.color"],
+              linewidths=rcParams["grid.linewidth"], alpha=0.3, zorder=0.5)  # the x grid, as ax.grid draws it
 
 
 def runs(mask) -> list[tuple[int, int]]:

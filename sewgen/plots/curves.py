@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..roles import FEED_DOG, HOOK_SHAFT, NEEDLE_EYE, RACK_TOOTH, THREAD_EYE
-from .common import (MM, angle_axis, axis_name, closed, color, deg, offset, place, pretty, role_point, shade,
+from .common import (MM, angle_grid, axis_name, closed, color, deg, offset, place, pretty, role_point, shade,
                      suptitle, throat_plate_height, title)
 
 #: What the motion figure shows of a role-tagged point: [(component, title)], by role.
@@ -114,8 +114,7 @@ def draw_motion(fig, a):
 
     rows = motion_rows(a)
     n = max(len(rows), 1)
-    axes = place(fig, n, 3, left=0.85, right=0.3, top=0.55, bottom=_bottom(a), wspace=0.85, hspace=0.5,
-                 sharex=True)
+    axes = place(fig, n, 3, left=0.85, right=0.3, top=0.55, bottom=_bottom(a), wspace=0.85, hspace=0.5)
     plate = throat_plate_height(a)
     masks = _masks(a)
     d = deg(a)
@@ -142,7 +141,7 @@ def draw_motion(fig, a):
             ax.yaxis.set_major_locator(MaxNLocator(5, steps=[1, 2, 2.5, 5, 10]))
             ax.ticklabel_format(axis="y", style="plain", useOffset=False)  # no "1e4" offsets: the power is in the label
             ax.tick_params(labelsize=8)
-            angle_axis(ax, label=r == n - 1, step=90, limits=r == 0 and k == 0)  # the axes share x
+            angle_grid(ax, bottom=r == n - 1, step=90)
     handles, labels = [], []
     for ax in axes.ravel():
         for h, lab in zip(*ax.get_legend_handles_labels()):
