@@ -500,3 +500,25 @@ def test_text_cache_is_kept_on_disk_between_runs(tmp_path, monkeypatch):
     monkeypatch.setattr(canvas, "_extents", {})
     canvas.load()
     assert canvas._bitmaps == {} and canvas._extents == {}
+
+
+def test_text_cache_on_disk_stays_within_its_size(tmp_path, monkeypatch):
+    """Runs meeting ever new strings (tick labels of other machines) never grow the file past CACHE_SIZE: a full
+    file starts again from the strings of the process that saves."""
+    import pickle
+
+    from sewgen.plots import canvas
+
+    monkeypatch.setenv("SEWGEN_CACHE", str(tmp_path))
+    monkeypatch.setattr(canvas, "CACHE_SIZE", 6)
+    for run in range(4):
+        monkeypatch.setattr(canvas, "_bitmaps", {})
+        monkeypatch.setattr(canvas, "_extents", {})
+        monkeypatch.setattr(canvas, "_loaded", (0, 0))
+        canvas.load()
+        for k in range(2):
+            _ink_box(canvas.TextCacheCanvas, dict(s=f"run {run} string {k}", fontsize=9))
+        canvas.save()
+        bitmaps, extents = pickle.loads(canvas._cache_file().read_bytes())
+        assert len(bitmaps) <= 6 and len(extents) <= 6
+        assert {f"run {run} string {k}" for k in range(2)} <= {key[0] for key in bitmaps}

@@ -191,8 +191,8 @@ def save() -> None:
         with locked(path.with_suffix(".lock")):
             bitmaps, extents = _read(path)
             for theirs, mine in ((bitmaps, _bitmaps), (extents, _extents)):
-                if len(theirs) + len(mine) > CACHE_SIZE:
-                    theirs.clear()  # a full cache starts again from this run's strings
+                if len(theirs.keys() | mine.keys()) > CACHE_SIZE:
+                    theirs.clear()  # a full cache starts again from this process's strings
                 theirs.update(mine)
             tmp = path.with_suffix(f".{os.getpid()}.tmp")
             with open(tmp, "wb") as fh:
