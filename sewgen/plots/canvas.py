@@ -35,6 +35,7 @@ from matplotlib.font_manager import findfont
 CACHE_SIZE = 4096
 _bitmaps: dict = {}
 _extents: dict = {}
+_files: dict = {}  # hash(FontProperties) -> _font_file(...), in this process
 #: How many of each were loaded from disk (:func:`save` writes only when more are known).
 _loaded = (0, 0)
 #: Set once the renderer's internals this module uses (``_prepare_font``, FT2Font's whole-string calls) turn
@@ -115,9 +116,13 @@ class TextCacheRenderer(RendererAgg):
 
 def _font_file(prop) -> tuple[str, int]:
     """(path, face index) of the font file ``prop`` is drawn in, as plain values (matplotlib 3.11's ``findfont``
-    returns a str subclass that does not unpickle)."""
-    found = findfont(prop)
-    return str(found), int(getattr(found, "face_index", 0))
+    returns a str subclass that does not unpickle); looked up once a process per font property."""
+    key = hash(prop)
+    hit = _files.get(key)
+    if hit is None:
+        found = findfont(prop)
+        hit = _files[key] = (str(found), int(getattr(found, "face_index", 0)))
+    return hit
 
 
 def _hinting():
