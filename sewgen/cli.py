@@ -408,10 +408,12 @@ def cmd_analyze(args, con: Console) -> int:
             from .plots import import_drawing, start_all
 
             import_drawing()
-            # this process ends with the command: what is alive now (the modules, matplotlib's among them, and
-            # the analysis) is never garbage, so the collector skips it from here on — in the collections that
-            # drawing triggers (in both processes) and in the one at exit (0.3-0.4 s on JB1-3 before)
-            gc.freeze()
+            if args.process_ends:
+                # what is alive now (the modules, matplotlib's among them, and the analysis) lives until the
+                # process ends with this command, so the collector skips it from here on — in the collections
+                # that drawing triggers (in both processes) and in the one at exit (0.3-0.4 s on JB1-3 before).
+                # Not when called in-process (main(argv)): garbage waiting for a collection would stay for good.
+                gc.freeze()
             plots = start_all(analysis, tmp, progress=con.progress, gif=not args.no_gif, curves=analysis.refined())
         try:
             files = write_tables(analysis, tmp, progress=con.progress, units=units)
@@ -553,7 +555,10 @@ def _join_dash_values(argv: list) -> list:
 
 
 def main(argv=None) -> int:
+    """Run the command ``argv`` (None: this process's own command line, ``sys.argv[1:]``); returns the exit
+    status."""
     args = build_parser().parse_args(_join_dash_values(list(sys.argv[1:] if argv is None else argv)))
+    args.process_ends = argv is None  # the process's own command line: it ends when the command does
     con = Console(quiet=getattr(args, "quiet", False))
     try:
         return args.fn(args, con)
