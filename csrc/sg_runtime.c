@@ -325,12 +325,31 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
     }
 }
 
-/* The sweep: kinematics at every position, then (frc != NULL) the forces from the same solution. */
+/* The rates and observables at a solved position: the joint motion kernel where every observable is wanted (want
+ * NULL), else the rates kernel and the wanted groups of observables (kernel 'observe'), which compute the same
+ * values to the bit (derive.kernels: the joint kernel's own statements) and fail alike: the rates test q, q', q'',
+ * each group its own observables, and a group that could be non-finite from finite rates and constants is always
+ * wanted (descriptor group_always; sg_sweep_designs). The observables of a group not wanted are left as they
+ * are. */
+static inline int motion_at(const sg_mechanism *m, const unsigned char *want, const double *q, const double *cq,
+                            const double *x, const double *cx, const double *xd, const double *xdd, const double *c,
+                            double *qd, double *qdd, double *obs, double *cond)
+{
+    if (want == NULL) return m->motion(q, cq, x, cx, xd, xdd, c, qd, qdd, obs, cond);
+    int st = m->rates(q, cq, x, cx, xd, xdd, c, qd, qdd, cond);
+    for (int g = 0; g < m->ngroup && st == SG_OK; ++g)
+        if (want[g]) st = m->observe(q, cq, x, cx, xd, xdd, c, qd, qdd, g, obs);
+    return st;
+}
+
+/* The sweep: kinematics at every position, then (frc != NULL) the forces from the same solution. want (NULL:
+ * every observable) flags the groups of observables to compute (a kinematic sweep that keeps a few outputs:
+ * sg_sweep_designs); the closed-form inlined loops compute every one. */
 static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
                     const double *alpha, const double *held, const double *p, const int *branch,
                     const double *q_guess, const sg_options *opt, const size_t *order, const double *gv,
                     const double *loads, double *q, double *qd, double *qdd, double *obs, double *err,
-                    double *frc, int *status)
+                    double *frc, int *status, const unsigned char *want)
 {
     const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo;
     double no_loads[SG_MAX_LOAD]; /* zeroed below for a force sweep without loads only: 4 kB a call otherwise */
@@ -354,6 +373,9 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;
     double c[SG_MAX_C];
     m->constants(p, c);
+    if (frc != NULL || m->rates == NULL || m->observe == NULL) want = NULL; /* forces read every observable */
+    for (int k = 0; k < m->nc && want != NULL; ++k)
+        if (!isfinite(c[k])) want = NULL; /* an observable of a constant alone may be all that fails: all of them */
     double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q];
     for (int k = 1; k < nx; ++k) {
         x[k] = held[k - 1];
@@ -449,7 +471,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         }
         double cond = 1.0, est = 0.0;
         if (st == SG_OK) {
-            st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
+            st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
             if (st == SG_SINGULAR) {
                 est = INFINITY; /* the velocity solve itself is singular */
             } else if (st == SG_OK) { /* the rates' relative error: the solve's own (eps cond) plus what the
@@ -457,7 +479,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                 est = cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
                 if (!(est <= opt->singular_tol) && resid > SG_RESID_FLOOR) { /* Newton's last residual */
                     polish(m, qi, cq, x, cx, c, opt, &resid);
-                    st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
+                    st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
                     if (st == SG_SINGULAR) est = INFINITY;
                     else est = cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
                     if (st == SG_OK && w.nh > 0 && !use_closed) { /* the history holds the polished state */
@@ -497,7 +519,7 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
                 double *qdd, double *obs, double *err, int *status)
 {
     return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, NULL, NULL, q, qd, qdd, obs, err,
-                 NULL, status);
+                 NULL, status, NULL);
 }
 
 /* sg_sweep plus kinetostatics in the same pass: gv is gravity (2), loads is n x nload (NULL: no loads),
@@ -509,7 +531,7 @@ size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const
                        double *frc, int *status)
 {
     return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, gv, loads, q, qd, qdd, obs, err,
-                 frc, status);
+                 frc, status, NULL);
 }
 
 /* Batched designs (issue 14) -------------------------------------------------------------------------------
@@ -639,6 +661,23 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
     for (int k = 0; k < nred && !bad_args; ++k)
         bad_args = red[3 * k] < SG_RED_MIN || red[3 * k] > SG_RED_MEAN || red[3 * k + 1] < 0 ||
                    red[3 * k + 1] >= width || red[3 * k + 2] < -1 || red[3 * k + 2] >= width;
+    /* the groups of observables the selection and the reductions read (and those always computed): the others
+     * are never computed (NULL: all of them, by the joint motion kernel) */
+    unsigned char want_store[SG_MAX_GROUP];
+    const unsigned char *want = NULL;
+    if (!bad_args && m->ngroup > 0 && m->ngroup <= SG_MAX_GROUP && m->group_start != NULL) {
+        int all = 1;
+        for (int g = 0; g < m->ngroup; ++g) want_store[g] = m->group_always[g];
+        for (int k = 0; k < nsel + 2 * nred; ++k) {
+            const int j = (k < nsel ? sel[k] : red[3 * ((k - nsel) / 2) + 1 + (k - nsel) % 2]) - 3 * nq;
+            if (j < 0) continue; /* a coordinate or its rates (or no second column) */
+            int g = 0;
+            while (g + 1 < m->ngroup && m->group_start[g + 1] <= j) ++g;
+            want_store[g] = 1;
+        }
+        for (int g = 0; g < m->ngroup; ++g) all &= want_store[g];
+        if (!all) want = want_store;
+    }
     size_t failed = 0;
     for (size_t d = 0; d < nd; ++d) {
         const double *pd = p + d * (size_t)npar;
@@ -662,7 +701,7 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
         }
         if (st == SG_OK) {
             sweep(m, n, phi, omega, alpha, hd, pd, bd, q_guess, opt, order, NULL, NULL, s.q, s.qd, s.qdd, s.obs, err,
-                  NULL, work_status);
+                  NULL, work_status, want);
             for (size_t i = 0; i < n; ++i)
                 if (work_status[i] != SG_OK) {
                     if (first < 0) first = (long long)i, st = work_status[i];

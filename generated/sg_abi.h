@@ -36,6 +36,10 @@ typedef int (*sg_closed_fn)(const double *x, const double *cx, const double *c, 
 typedef void (*sg_residual_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 /* velocities, accelerations and observables at a solved position; cond: the condition number (inf norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated */
 typedef int (*sg_motion_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+/* the motion kernel without its observables: velocities, accelerations and cond, equal to the bit (a sweep that keeps a few outputs adds only their groups, kernel 'observe') */
+typedef int (*sg_rates_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+/* one group of observables (a point's, a body's, a cam's arc: obs[group_start[group]] up to obs[group_start[group + 1]]) from a position and its rates, equal to the bit to the motion kernel's; SG_NONFINITE where one of them is not finite */
+typedef int (*sg_observe_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 /* joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld */
 typedef int (*sg_forces_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 /* A (nf x nf, row-major) and b of A f = b, for inspection */
@@ -68,10 +72,15 @@ typedef struct sg_mechanism {
     int nload;                           /* load slots per position: fx, fy per point of a moving body, torque per moving body */
     int nblock;                          /* diagonal blocks of dPhi/dq (closing loops), each with an orientation sign */
     const unsigned char *coord_is_angle; /* 1 for an angle coordinate, 0 for a travel */
+    int ngroup;                          /* groups of observables (kernel 'observe'): each point, each moving body, each cam's arc */
+    const int *group_start;              /* ngroup + 1 entries: group g is obs[group_start[g]] to obs[group_start[g+1]-1] */
+    const unsigned char *group_always;   /* 1 for a group that may be non-finite where the coordinates, rates and constants are finite: a selective sweep computes it always */
     sg_constants_fn constants;           /* every parameter-only subexpression, once per sweep */
     sg_closed_fn closed;                 /* the dyad chain in closed form; NULL in the descriptor where the loops do not split */
     sg_residual_fn residual;             /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
     sg_motion_fn motion;                 /* velocities, accelerations and observables at a solved position; cond: the condition number (inf norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated */
+    sg_rates_fn rates;                   /* the motion kernel without its observables: velocities, accelerations and cond, equal to the bit (a sweep that keeps a few outputs adds only their groups, kernel 'observe') */
+    sg_observe_fn observe;               /* one group of observables (a point's, a body's, a cam's arc: obs[group_start[group]] up to obs[group_start[group + 1]]) from a position and its rates, equal to the bit to the motion kernel's; SG_NONFINITE where one of them is not finite */
     sg_forces_fn forces;                 /* joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld */
     sg_force_matrix_fn force_matrix;     /* A (nf x nf, row-major) and b of A f = b, for inspection */
     sg_scales_fn scales;                 /* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
