@@ -192,7 +192,9 @@ EXPORTS = {
                          "out[k*out_stride + d*n + i] (NaN for a failed design); red (nred x 3: kind 0 min, "
                          "1 max, 2 absmax, 3 rms, 4 mean; column; second column for the norm of two, or -1) "
                          "writes red_val/red_idx[k*red_stride + d] (the extremum's first position in the "
-                         "caller's order, -1 for rms, mean; NaN and -1 for a failed design). work: "
+                         "caller's order, -1 for rms, mean; NaN and -1 for a failed design). A Newton sweep computes only "
+                         "the groups of observables sel and red read (kernels 'rates', 'observe'; the same values "
+                         "and statuses as the joint kernel's). work: "
                          "n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of "
                          "failed designs"),
     "sg_simd_width": ("int", (("const sg_mechanism *", "m"),),

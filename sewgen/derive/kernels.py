@@ -1,6 +1,6 @@
 """Kernel bodies as C text, computed in Python (DESIGN.md §4): the templates only lay them out.
 
-Four kernels per mechanism, each one joint CSE over everything it returns:
+The kernels of a mechanism, each one joint CSE over everything it returns:
 
 * ``constants`` — every subexpression of the parameters alone (link lengths from triangle sides, cos and
   sin of fixed angles, 1/l² ...), evaluated once per sweep into ``c[]``;
@@ -8,7 +8,10 @@ Four kernels per mechanism, each one joint CSE over everything it returns:
   coordinates and the cos/sin of every angle coordinate straight from the geometry;
 * ``residual``  — Φ and Φ_q for Newton and residual checks;
 * ``motion``    — Φ_q, −Φ_x x', LU, q'; γ, q''; every observable. Its CSE temporaries are emitted in
-  three stages by what they depend on (positions only / q' / q''), so each is computed once.
+  three stages by what they depend on (positions only / q' / q''), so each is computed once;
+* ``rates`` and ``observe`` — the motion kernel split for sweeps that keep a few outputs: q', q'' without the
+  observables, and one group of observables (a point, a body, a cam's arc) at a time, each printed from the
+  motion kernel's own CSE statements (those its outputs read), so the values are the motion kernel's to the bit.
 
 No kernel calls a trigonometric function of a coordinate or input: sin(a + c) of an angle a and a fixed
 c is expanded by the addition formulas and sin a, cos a are read from ``cq[]`` (coordinates) and ``cx[]``
