@@ -99,7 +99,8 @@ static void fill_trig(const sg_mechanism *m, const double *q, double *cq)
  * 'scales' kernel's sizes, refreshed by the caller). On success jac holds dPhi/dq at the solution and *resid
  * the largest relative residual. */
 static int newton(const sg_mechanism *m, double *q, double *cq, const double *x, const double *cx,
-                  const double *c, const sg_options *opt, const double *inv_scale, double *jac, double *resid)
+                  const double *c, const sg_options *opt, const double *inv_scale, int min_iter, double *jac,
+                  double *resid)
 {
     const int nq = m->nq;
     double r[SG_MAX_Q], w[SG_MAX_Q], lu[SG_MAX_Q * SG_MAX_Q];
@@ -110,15 +111,36 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
     double norm = weighted_norm(nq, r, w);
     for (int it = 0;; ++it) {
         if (!isfinite(norm)) return SG_NO_CONVERGENCE;
-        if (norm <= 1.0) {
+        if (norm <= 1.0 && it >= min_iter) {
             *resid = norm * opt->tol;
             return SG_OK;
         }
         copy_doubles(lu, jac, nq * nq);
-        if (sg_lu_factor_inl(nq, lu, piv, 0) != SG_OK) return SG_CANNOT_ASSEMBLE; /* no descent direction */
+        if (sg_lu_factor_inl(nq, lu, piv, 0) != SG_OK) {
+            if (norm <= 1.0) { /* converged already: the step asked for cannot be taken */
+                *resid = norm * opt->tol;
+                return SG_OK;
+            }
+            return SG_CANNOT_ASSEMBLE; /* no descent direction */
+        }
         if (it >= opt->max_iter) return SG_NO_CONVERGENCE;
         for (int i = 0; i < nq; ++i) dq[i] = -r[i];
         sg_lu_solve_inl(nq, lu, piv, dq);
+        if (norm <= 1.0) { /* min_iter: a start within the tolerance gets one full step all the same, kept if it
+                            * lowers the residual (a prediction within the tolerance is only that accurate; a
+                            * step makes it as accurate as a solution Newton reached) */
+            shift_trig(m, q, cq, dq, qt, cqt);
+            m->residual(qt, cqt, x, cx, c, rt, lu); /* lu: free now, holds the trial's dPhi/dq */
+            const double nt = weighted_norm(nq, rt, w);
+            if (nt < norm) {
+                copy_doubles(q, qt, nq);
+                copy_doubles(cq, cqt, 2 * nq);
+                copy_doubles(jac, lu, nq * nq);
+                norm = nt;
+            }
+            *resid = norm * opt->tol;
+            return SG_OK;
+        }
         double lambda = 1.0, nt = 0.0;
         int k;
         for (k = 0; k < 30; ++k) {
@@ -289,7 +311,7 @@ static int small_change(const sg_walker *w, const double *d)
 }
 
 /* Newton at shaft angle ph from q (cq its cos, sin), then the loops' orientation signs against the reference. */
-static int solve_at(sg_walker *w, double ph, double *q, double *cq, double *resid)
+static int solve_at(sg_walker *w, double ph, double *q, double *cq, int min_iter, double *resid)
 {
     const sg_mechanism *m = w->m;
     double jac[SG_MAX_Q * SG_MAX_Q], bv[SG_MAX_Q];
@@ -300,7 +322,7 @@ static int solve_at(sg_walker *w, double ph, double *q, double *cq, double *resi
         w->scale_age = 16;
     }
     --w->scale_age;
-    const int st = newton(m, q, cq, w->x, w->cx, w->c, w->opt, w->inv_scale, jac, resid);
+    const int st = newton(m, q, cq, w->x, w->cx, w->c, w->opt, w->inv_scale, min_iter, jac, resid);
     if (st != SG_OK || m->nblock == 0) return st;
     m->blocks(jac, bv);
     if (!w->has_ref) {
@@ -326,7 +348,7 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
     if (total == 0.0) { /* a repeated angle: the same solution (Newton only confirms it) */
         copy_doubles(q, w->hq[0], nq);
         copy_doubles(cq, w->hcq, 2 * nq);
-        return solve_at(w, phi_t, q, cq, resid);
+        return solve_at(w, phi_t, q, cq, 0, resid);
     }
     const double dir = total > 0.0 ? 1.0 : -1.0;
     double h = fmin(fabs(total), SG_H_MAX);
@@ -335,7 +357,8 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
     for (;;) {
         const double next = h >= fabs(phi_t - cur) ? phi_t : cur + dir * h;
         double d[SG_MAX_Q], qp[SG_MAX_Q];
-        if (rates_ok && w->hasd[0])
+        const int hermite = rates_ok && w->hasd[0];
+        if (hermite)
             predict_hermite(nq, w->nh > 1 && w->hasd[1] && w->hphi[1] != w->hphi[0], w->hphi[0], w->hq[0],
                             w->hd[0], w->hphi[1], w->hq[1], w->hd[1], next, qp);
         else
@@ -343,7 +366,7 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
         for (int k = 0; k < nq; ++k) d[k] = qp[k] - w->hq[0][k];
         if (small_change(w, d)) {
             shift_trig(w->m, w->hq[0], w->hcq, d, q, cq);
-            int st = solve_at(w, next, q, cq, resid);
+            int st = solve_at(w, next, q, cq, hermite, resid); /* from the rates' prediction: a step at least */
             if (st == SG_OK) {
                 for (int k = 0; k < nq; ++k) d[k] = q[k] - qp[k];
                 if (!small_change(w, d)) st = SG_BRANCH_JUMP; /* somewhere else than where the step leads */
@@ -499,7 +522,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                 if (!have && m->closed != NULL && !w.has_ref)
                     st = closed_st; /* the declared branch assembles nowhere in the sweep: nothing to follow */
                 else
-                    st = solve_at(&w, ph, qi, cq, &resid);
+                    st = solve_at(&w, ph, qi, cq, 0, &resid);
                 if (st == SG_BRANCH_JUMP && !have && m->closed != NULL)
                     st = closed_st; /* the declared branch does not assemble here: Newton found another */
                 if (st == SG_OK) {
