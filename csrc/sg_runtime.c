@@ -99,7 +99,8 @@ static void fill_trig(const sg_mechanism *m, const double *q, double *cq)
  * 'scales' kernel's sizes, refreshed by the caller). On success jac holds dPhi/dq at the solution and *resid
  * the largest relative residual. */
 static int newton(const sg_mechanism *m, double *q, double *cq, const double *x, const double *cx,
-                  const double *c, const sg_options *opt, const double *inv_scale, double *jac, double *resid)
+                  const double *c, const sg_options *opt, const double *inv_scale, int min_iter, double *jac,
+                  double *resid)
 {
     const int nq = m->nq;
     double r[SG_MAX_Q], w[SG_MAX_Q], lu[SG_MAX_Q * SG_MAX_Q];
@@ -110,15 +111,36 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
     double norm = weighted_norm(nq, r, w);
     for (int it = 0;; ++it) {
         if (!isfinite(norm)) return SG_NO_CONVERGENCE;
-        if (norm <= 1.0) {
+        if (norm <= 1.0 && it >= min_iter) {
             *resid = norm * opt->tol;
             return SG_OK;
         }
         copy_doubles(lu, jac, nq * nq);
-        if (sg_lu_factor_inl(nq, lu, piv, 0) != SG_OK) return SG_CANNOT_ASSEMBLE; /* no descent direction */
+        if (sg_lu_factor_inl(nq, lu, piv, 0) != SG_OK) {
+            if (norm <= 1.0) { /* converged already: the step asked for cannot be taken */
+                *resid = norm * opt->tol;
+                return SG_OK;
+            }
+            return SG_CANNOT_ASSEMBLE; /* no descent direction */
+        }
         if (it >= opt->max_iter) return SG_NO_CONVERGENCE;
         for (int i = 0; i < nq; ++i) dq[i] = -r[i];
         sg_lu_solve_inl(nq, lu, piv, dq);
+        if (norm <= 1.0) { /* min_iter: a start within the tolerance gets one full step all the same, kept if it
+                            * lowers the residual (a prediction within the tolerance is only that accurate; a
+                            * step makes it as accurate as a solution Newton reached) */
+            shift_trig(m, q, cq, dq, qt, cqt);
+            m->residual(qt, cqt, x, cx, c, rt, lu); /* lu: free now, holds the trial's dPhi/dq */
+            const double nt = weighted_norm(nq, rt, w);
+            if (nt < norm) {
+                copy_doubles(q, qt, nq);
+                copy_doubles(cq, cqt, 2 * nq);
+                copy_doubles(jac, lu, nq * nq);
+                norm = nt;
+            }
+            *resid = norm * opt->tol;
+            return SG_OK;
+        }
         double lambda = 1.0, nt = 0.0;
         int k;
         for (k = 0; k < 30; ++k) {
@@ -193,6 +215,33 @@ static void predict(int nq, int nh, const double *hphi, double *const *hq, doubl
     }
 }
 
+/* Quintic Hermite extrapolation in the shaft angle from the two newest states with their slopes q_phi = dq/dphi and
+ * curvatures q_phiphi (from the rates the motion kernel computed there): the polynomial of degree 5 through
+ * both states, slopes and curvatures, at phi_new; with only the newest one's, its Taylor polynomial of degree 2.
+ * In t = phi - phi0 (phi0 the newest angle, u = phi1 - phi0 the one before): p = q0 + q0' t + q0'' t^2 / 2 +
+ * b3 r^3 + b4 r^4 + b5 r^5, r = t / u, the b's from p, p', p'' at t = u (the conditions solved by hand: the
+ * three equations' matrix [1 1 1; 3 4 5; 6 12 20] in b3, b4, b5). Its error is O(h^6) against the Lagrange
+ * predictor's O(h^3): Newton starts within one step of the tolerance. */
+static void predict_hermite(int nq, int two, double phi0, const double *q0, const double *d0, double phi1,
+                            const double *q1, const double *d1, double phi_new, double *out)
+{
+    const double t = phi_new - phi0, u = phi1 - phi0, r = t / u;
+    for (int i = 0; i < nq; ++i) {
+        const double a1 = d0[i], a2 = 0.5 * d0[nq + i];
+        double v = q0[i] + t * (a1 + t * a2);
+        if (two) {
+            const double r0 = q1[i] - (q0[i] + u * (a1 + u * a2));
+            const double r1 = (d1[i] - (a1 + 2.0 * a2 * u)) * u;
+            const double r2 = (d1[nq + i] - 2.0 * a2) * u * u;
+            const double b5 = 0.5 * (r2 + 12.0 * r0 - 6.0 * r1);
+            const double b4 = r1 - 3.0 * r0 - 2.0 * b5;
+            const double b3 = r0 - b4 - b5;
+            v += r * r * r * (b3 + r * (b4 + r * b5));
+        }
+        out[i] = v;
+    }
+}
+
 static void zero_row(double *v, int n)
 {
     for (int i = 0; i < n; ++i) v[i] = 0.0;
@@ -209,6 +258,9 @@ typedef struct {
     double hphi[3];
     double *hq[3];            /* newest first: pointers into store, rotated (no copies) */
     double store[3][SG_MAX_Q];
+    double *hd[3];            /* dq/dphi, then d2q/dphi2 of each state where hasd: pointers into dstore, rotated */
+    double dstore[3][2 * SG_MAX_Q];
+    int hasd[3];
     double hcq[2 * SG_MAX_Q]; /* cos, sin of the newest state */
     int has_ref;
     double ref[SG_MAX_Q];
@@ -237,8 +289,10 @@ static void set_input(sg_walker *w, double ph)
 static void push(sg_walker *w, double ph, const double *q, const double *cq)
 {
     const int nq = w->m->nq;
-    double *oldest = w->hq[2];
+    double *oldest = w->hq[2], *oldest_d = w->hd[2];
     w->hq[2] = w->hq[1], w->hq[1] = w->hq[0], w->hq[0] = oldest;
+    w->hd[2] = w->hd[1], w->hd[1] = w->hd[0], w->hd[0] = oldest_d;
+    w->hasd[2] = w->hasd[1], w->hasd[1] = w->hasd[0], w->hasd[0] = 0; /* the rates come later, if at all */
     w->hphi[2] = w->hphi[1], w->hphi[1] = w->hphi[0], w->hphi[0] = ph;
     copy_doubles(w->hq[0], q, nq);
     copy_doubles(w->hcq, cq, 2 * nq);
@@ -257,7 +311,7 @@ static int small_change(const sg_walker *w, const double *d)
 }
 
 /* Newton at shaft angle ph from q (cq its cos, sin), then the loops' orientation signs against the reference. */
-static int solve_at(sg_walker *w, double ph, double *q, double *cq, double *resid)
+static int solve_at(sg_walker *w, double ph, double *q, double *cq, int min_iter, double *resid)
 {
     const sg_mechanism *m = w->m;
     double jac[SG_MAX_Q * SG_MAX_Q], bv[SG_MAX_Q];
@@ -268,7 +322,7 @@ static int solve_at(sg_walker *w, double ph, double *q, double *cq, double *resi
         w->scale_age = 16;
     }
     --w->scale_age;
-    const int st = newton(m, q, cq, w->x, w->cx, w->c, w->opt, w->inv_scale, jac, resid);
+    const int st = newton(m, q, cq, w->x, w->cx, w->c, w->opt, w->inv_scale, min_iter, jac, resid);
     if (st != SG_OK || m->nblock == 0) return st;
     m->blocks(jac, bv);
     if (!w->has_ref) {
@@ -294,19 +348,25 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
     if (total == 0.0) { /* a repeated angle: the same solution (Newton only confirms it) */
         copy_doubles(q, w->hq[0], nq);
         copy_doubles(cq, w->hcq, 2 * nq);
-        return solve_at(w, phi_t, q, cq, resid);
+        return solve_at(w, phi_t, q, cq, 0, resid);
     }
     const double dir = total > 0.0 ? 1.0 : -1.0;
     double h = fmin(fabs(total), SG_H_MAX);
     int last = SG_NO_CONVERGENCE;
+    int rates_ok = 1; /* the rates' predictor until a step fails: then the Lagrange one, as before */
     for (;;) {
         const double next = h >= fabs(phi_t - cur) ? phi_t : cur + dir * h;
         double d[SG_MAX_Q], qp[SG_MAX_Q];
-        predict(nq, w->nh, w->hphi, w->hq, next, qp);
+        const int hermite = rates_ok && w->hasd[0];
+        if (hermite)
+            predict_hermite(nq, w->nh > 1 && w->hasd[1] && w->hphi[1] != w->hphi[0], w->hphi[0], w->hq[0],
+                            w->hd[0], w->hphi[1], w->hq[1], w->hd[1], next, qp);
+        else
+            predict(nq, w->nh, w->hphi, w->hq, next, qp);
         for (int k = 0; k < nq; ++k) d[k] = qp[k] - w->hq[0][k];
         if (small_change(w, d)) {
             shift_trig(w->m, w->hq[0], w->hcq, d, q, cq);
-            int st = solve_at(w, next, q, cq, resid);
+            int st = solve_at(w, next, q, cq, hermite, resid); /* from the rates' prediction: a step at least */
             if (st == SG_OK) {
                 for (int k = 0; k < nq; ++k) d[k] = q[k] - qp[k];
                 if (!small_change(w, d)) st = SG_BRANCH_JUMP; /* somewhere else than where the step leads */
@@ -320,17 +380,37 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
             }
             last = st;
         }
+        rates_ok = 0;
         h *= 0.5;
         if (h < SG_H_MIN) return last;
     }
 }
 
-/* The sweep: kinematics at every position, then (frc != NULL) the forces from the same solution. */
+/* The rates and observables at a solved position: the joint motion kernel where every observable is wanted (want
+ * NULL), else the rates kernel and the wanted groups of observables (kernel 'observe'), which compute the same
+ * values to the bit (derive.kernels: the joint kernel's own statements) and fail alike: the rates test q, q', q'',
+ * each group its own observables, and a group that could be non-finite from finite rates and constants is always
+ * wanted (descriptor group_always; sg_sweep_designs). The observables of a group not wanted are left as they
+ * are. */
+static inline int motion_at(const sg_mechanism *m, const unsigned char *want, const double *q, const double *cq,
+                            const double *x, const double *cx, const double *xd, const double *xdd, const double *c,
+                            double *qd, double *qdd, double *obs, double *cond)
+{
+    if (want == NULL) return m->motion(q, cq, x, cx, xd, xdd, c, qd, qdd, obs, cond);
+    int st = m->rates(q, cq, x, cx, xd, xdd, c, qd, qdd, cond);
+    for (int g = 0; g < m->ngroup && st == SG_OK; ++g)
+        if (want[g]) st = m->observe(q, cq, x, cx, xd, xdd, c, qd, qdd, g, obs);
+    return st;
+}
+
+/* The sweep: kinematics at every position, then (frc != NULL) the forces from the same solution. want (NULL:
+ * every observable) flags the groups of observables to compute (a kinematic sweep that keeps a few outputs:
+ * sg_sweep_designs); the closed-form inlined loops compute every one. */
 static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
                     const double *alpha, const double *held, const double *p, const int *branch,
                     const double *q_guess, const sg_options *opt, const size_t *order, const double *gv,
                     const double *loads, double *q, double *qd, double *qdd, double *obs, double *err,
-                    double *frc, int *status)
+                    double *frc, int *status, const unsigned char *want)
 {
     const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo;
     double no_loads[SG_MAX_LOAD]; /* zeroed below for a force sweep without loads only: 4 kB a call otherwise */
@@ -354,6 +434,9 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;
     double c[SG_MAX_C];
     m->constants(p, c);
+    if (frc != NULL || m->rates == NULL || m->observe == NULL) want = NULL; /* forces read every observable */
+    for (int k = 0; k < m->nc && want != NULL; ++k)
+        if (!isfinite(c[k])) want = NULL; /* an observable of a constant alone may be all that fails: all of them */
     double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q];
     for (int k = 1; k < nx; ++k) {
         x[k] = held[k - 1];
@@ -365,6 +448,8 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     sg_walker w;
     w.m = m, w.opt = opt, w.c = c, w.x = x, w.cx = cx, w.nh = 0, w.has_ref = 0, w.lscale = 0.0, w.scale_age = 0;
     w.hq[0] = w.store[0], w.hq[1] = w.store[1], w.hq[2] = w.store[2];
+    w.hd[0] = w.dstore[0], w.hd[1] = w.dstore[1], w.hd[2] = w.dstore[2];
+    w.hasd[0] = w.hasd[1] = w.hasd[2] = 0;
     x[0] = NAN; /* no angle's cos, sin yet */
     if (!use_closed && m->closed != NULL && m->nblock > 0) {
         /* Newton on a mechanism with a closed form: the loops' orientation signs are those of the declared
@@ -437,7 +522,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                 if (!have && m->closed != NULL && !w.has_ref)
                     st = closed_st; /* the declared branch assembles nowhere in the sweep: nothing to follow */
                 else
-                    st = solve_at(&w, ph, qi, cq, &resid);
+                    st = solve_at(&w, ph, qi, cq, 0, &resid);
                 if (st == SG_BRANCH_JUMP && !have && m->closed != NULL)
                     st = closed_st; /* the declared branch does not assemble here: Newton found another */
                 if (st == SG_OK) {
@@ -449,7 +534,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         }
         double cond = 1.0, est = 0.0;
         if (st == SG_OK) {
-            st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
+            st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
             if (st == SG_SINGULAR) {
                 est = INFINITY; /* the velocity solve itself is singular */
             } else if (st == SG_OK) { /* the rates' relative error: the solve's own (eps cond) plus what the
@@ -457,7 +542,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                 est = cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
                 if (!(est <= opt->singular_tol) && resid > SG_RESID_FLOOR) { /* Newton's last residual */
                     polish(m, qi, cq, x, cx, c, opt, &resid);
-                    st = m->motion(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
+                    st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
                     if (st == SG_SINGULAR) est = INFINITY;
                     else est = cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
                     if (st == SG_OK && w.nh > 0 && !use_closed) { /* the history holds the polished state */
@@ -467,6 +552,19 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                 }
                 if (st == SG_OK && !(est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;
             }
+        }
+        if (st == SG_OK && !use_closed && w.nh > 0 && w.hphi[0] == ph && xd[0] != 0.0) {
+            /* the newest state's slope and curvature in the shaft angle, for the next step's predictor:
+             * q' = q_phi omega, q'' = q_phiphi omega^2 + q_phi alpha (the held inputs stand still) */
+            double *dd = w.hd[0];
+            const double iw = 1.0 / xd[0];
+            int fin = 1;
+            for (int j = 0; j < nq; ++j) {
+                dd[j] = qdi[j] * iw;
+                dd[nq + j] = (qddi[j] - dd[j] * xdd[0]) * iw * iw;
+                fin &= isfinite(dd[j]) && isfinite(dd[nq + j]);
+            }
+            w.hasd[0] = fin;
         }
         if (st == SG_OK && frc != NULL)
             st = m->forces(qi, cq, x, cx, xd, c, oi, gv, loads ? loads + i * (size_t)m->nload : no_loads,
@@ -497,7 +595,7 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
                 double *qdd, double *obs, double *err, int *status)
 {
     return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, NULL, NULL, q, qd, qdd, obs, err,
-                 NULL, status);
+                 NULL, status, NULL);
 }
 
 /* sg_sweep plus kinetostatics in the same pass: gv is gravity (2), loads is n x nload (NULL: no loads),
@@ -509,7 +607,7 @@ size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const
                        double *frc, int *status)
 {
     return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, gv, loads, q, qd, qdd, obs, err,
-                 frc, status);
+                 frc, status, NULL);
 }
 
 /* Batched designs (issue 14) -------------------------------------------------------------------------------
@@ -639,6 +737,23 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
     for (int k = 0; k < nred && !bad_args; ++k)
         bad_args = red[3 * k] < SG_RED_MIN || red[3 * k] > SG_RED_MEAN || red[3 * k + 1] < 0 ||
                    red[3 * k + 1] >= width || red[3 * k + 2] < -1 || red[3 * k + 2] >= width;
+    /* the groups of observables the selection and the reductions read (and those always computed): the others
+     * are never computed (NULL: all of them, by the joint motion kernel) */
+    unsigned char want_store[SG_MAX_GROUP];
+    const unsigned char *want = NULL;
+    if (!bad_args && m->ngroup > 0 && m->ngroup <= SG_MAX_GROUP && m->group_start != NULL) {
+        int all = 1;
+        for (int g = 0; g < m->ngroup; ++g) want_store[g] = m->group_always[g];
+        for (int k = 0; k < nsel + 2 * nred; ++k) {
+            const int j = (k < nsel ? sel[k] : red[3 * ((k - nsel) / 2) + 1 + (k - nsel) % 2]) - 3 * nq;
+            if (j < 0) continue; /* a coordinate or its rates (or no second column) */
+            int g = 0;
+            while (g + 1 < m->ngroup && m->group_start[g + 1] <= j) ++g;
+            want_store[g] = 1;
+        }
+        for (int g = 0; g < m->ngroup; ++g) all &= want_store[g];
+        if (!all) want = want_store;
+    }
     size_t failed = 0;
     for (size_t d = 0; d < nd; ++d) {
         const double *pd = p + d * (size_t)npar;
@@ -662,7 +777,7 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
         }
         if (st == SG_OK) {
             sweep(m, n, phi, omega, alpha, hd, pd, bd, q_guess, opt, order, NULL, NULL, s.q, s.qd, s.qdd, s.obs, err,
-                  NULL, work_status);
+                  NULL, work_status, want);
             for (size_t i = 0; i < n; ++i)
                 if (work_status[i] != SG_OK) {
                     if (first < 0) first = (long long)i, st = work_status[i];

@@ -18,6 +18,8 @@
  * mechanism may have (stack work arrays). */
 #define SG_MAX_Q 48
 #define SG_MAX_C 2048
+/* Largest number of groups of observables a sweep computes selectively (more: the joint motion kernel). */
+#define SG_MAX_GROUP 4096
 /* Largest number of load slots per position. */
 #define SG_MAX_LOAD 512
 

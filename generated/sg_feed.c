@@ -796,6 +796,538 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     return SG_OK;
 }
 
+/* sg_feed_rates -- Total ops: 288 */
+int sg_feed_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    double ka[4];
+    {
+        /* cam cam: the arc whose normal sector holds e */
+        const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
+        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+            ka[0] = 0.0;
+            ka[1] = 0.0;
+            ka[2] = c[41];
+            ka[3] = 0.0;
+        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+            ka[0] = 0.0;
+            ka[1] = 0.0;
+            ka[2] = c[42];
+            ka[3] = 1.0;
+        } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+            ka[0] = c[43];
+            ka[1] = c[44];
+            ka[2] = c[41];
+            ka[3] = 2.0;
+        } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+            ka[0] = c[43];
+            ka[1] = c[44];
+            ka[2] = c[42];
+            ka[3] = 3.0;
+        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+            ka[0] = c[45];
+            ka[1] = c[44];
+            ka[2] = c[41];
+            ka[3] = 4.0;
+        } else {
+            ka[0] = c[45];
+            ka[1] = c[44];
+            ka[2] = c[42];
+            ka[3] = 5.0;
+        }
+    }
+    const double t0 = c[9]*cq[0];
+    const double t1 = c[9]*cq[1];
+    const double t2 = c[11]*cq[7];
+    const double t3 = c[2]*cq[6] + t2;
+    const double t4 = c[1]*cq[6];
+    const double t5 = c[2]*cq[7] + t4;
+    const double t6 = c[1]*cq[7];
+    const double t7 = c[5]*cq[1];
+    const double t8 = c[3]*cx[1] + c[6]*cx[0];
+    const double t9 = c[3]*cx[0] + c[4]*cx[1];
+    const double t10 = ka[0]*t8 + ka[1]*t9;
+    const double t11 = c[7] + c[8]*cq[6] + t10 + t6 + t7;
+    const double t12 = c[5]*cq[0];
+    const double t13 = ka[0]*t9 - ka[1]*t8;
+    const double t14 = c[0] + t12 + t13 + t5;
+    const double t15 = c[37]*cq[7] + t6;
+    const double t16 = c[11]*cq[6];
+    const double t17 = c[10]*cq[6] + t16;
+    const double t18 = c[19]*cq[4];
+    const double t19 = c[15]*cq[12];
+    const double t20 = c[22]*cq[2] + c[23]*cq[3];
+    const double t21 = c[25]*cq[4] + c[28]*cq[5];
+    const double t22 = c[29] + t21;
+    const double t23 = c[22]*cq[3] + c[27]*cq[2];
+    const double t24 = c[24]*cq[4] + c[25]*cq[5];
+    const double t25 = c[26] + t24;
+    const double t26 = c[28]*cq[4] + c[40]*cq[5];
+    const double t27 = c[32]*cq[0];
+    const double t28 = c[34]*cq[1];
+    const double t29 = c[31]*cq[2];
+    const double t30 = c[31]*cq[3];
+    const double t31 = c[35]*cq[11] + c[36] + t28 + t29;
+    const double t32 = c[30]*cq[10] + c[33] + t27 + t30;
+    const double t33 = -t10;
+    const double t34 = -cq[6]*t13 + cq[7]*t33;
+    const double t35 = cx[3]*q[4];
+    const double t36 = -t35*xd[1];
+    const double t37 = cx[2]*q[4];
+    const double t38 = t37*xd[1];
+    const double t39 = c[17]*cx[1] + c[21]*cx[0];
+    const double t40 = c[16]*t39;
+    const double t41 = c[17]*cx[0] + c[18]*cx[1];
+    const double t42 = c[53]*t41;
+    const double t43 = cq[6]*t1 + cq[7]*t12;
+    const double t44 = cq[6]*t33;
+    const double t45 = cq[7]*t13 + t44;
+    const double t56 = ((xd[0])*(xd[0]));
+    const double t57 = c[16]*t41;
+    const double t58 = t20*t26;
+    const double t59 = c[24]*cq[5] + c[40]*cq[4];
+    const double t60 = -t21*t23 - t58;
+    const double t61 = c[34]*cq[0];
+    const double t62 = c[32]*cq[1];
+    const double t63 = cq[10]*t27 + cq[11]*t62;
+    const double t64 = c[54]*cq[3];
+    const double t65 = c[54]*cq[2];
+    const double t66 = cq[10]*t30 + cq[11]*t65;
+    const double t107 = fabs(q[4]);
+    double J[49], rs[7], cs[7];
+    int piv[7];
+    J[0] = cq[6]*t0 + cq[7]*t1;
+    J[1] = 0.0;
+    J[2] = 0.0;
+    J[3] = cq[6]*t14 - cq[6]*t5 + cq[7]*t11 + cq[7]*t3;
+    J[4] = 0.0;
+    J[5] = 0.0;
+    J[6] = 0.0;
+    J[7] = t7;
+    J[8] = 0.0;
+    J[9] = 0.0;
+    J[10] = t15;
+    J[11] = -cx[2];
+    J[12] = 0.0;
+    J[13] = 0.0;
+    J[14] = t0;
+    J[15] = 0.0;
+    J[16] = 0.0;
+    J[17] = t17;
+    J[18] = -cx[3];
+    J[19] = 0.0;
+    J[20] = 0.0;
+    J[21] = 0.0;
+    J[22] = 0.0;
+    J[23] = c[38]*cq[5];
+    J[24] = 0.0;
+    J[25] = 0.0;
+    J[26] = 0.0;
+    J[27] = c[39]*cq[13];
+    J[28] = 0.0;
+    J[29] = 0.0;
+    J[30] = t18;
+    J[31] = 0.0;
+    J[32] = 0.0;
+    J[33] = 0.0;
+    J[34] = t19;
+    J[35] = 0.0;
+    J[36] = -t20*t22 - t23*t25;
+    J[37] = t20*t21 - t23*t26;
+    J[38] = 0.0;
+    J[39] = 0.0;
+    J[40] = 0.0;
+    J[41] = 0.0;
+    J[42] = cq[10]*t28 + cq[11]*t27;
+    J[43] = cq[10]*t29 + cq[11]*t30;
+    J[44] = 0.0;
+    J[45] = 0.0;
+    J[46] = 0.0;
+    J[47] = -cq[10]*t31 - cq[11]*t32;
+    J[48] = 0.0;
+    qd[0] = -t34*xd[0];
+    qd[1] = t36;
+    qd[2] = t38;
+    qd[3] = t40*xd[0];
+    qd[4] = t42*xd[0];
+    qd[5] = 0.0;
+    qd[6] = 0.0;
+    rs[0] = (1.0/(c[46] + 2.0*fabs(ka[0]) + 2.0*fabs(ka[1]) + fabs(ka[2])));
+    rs[1] = (1.0/(c[47] + t107));
+    rs[2] = (1.0/(c[48] + t107));
+    rs[3] = c[105];
+    rs[4] = c[106];
+    rs[5] = c[107];
+    rs[6] = c[108];
+    if (sg_factor_eq_inl(7, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(7, J, piv, rs, cs, qd);
+    const double t46 = cx[3]*qd[4];
+    const double t47 = t46*xd[1];
+    const double t48 = ((qd[0])*(qd[0]));
+    const double t49 = ((qd[3])*(qd[3]));
+    const double t50 = t49*(c[37]*cq[6] + t4);
+    const double t51 = cx[2]*qd[4];
+    const double t52 = t51*xd[1];
+    const double t53 = t15*t49;
+    const double t54 = ((qd[6])*(qd[6]));
+    const double t55 = ((qd[2])*(qd[2]));
+    qdd[0] = -qd[0]*(qd[0]*(cq[6]*t7 + cq[7]*t0) + qd[3]*t43) - qd[3]*(qd[0]*t43 + qd[3]*(cq[6]*t11 + cq[6]*t3 - cq[7]*t14 + 2.0*cq[7]*t5 + cq[7]*(c[8]*cq[7] + t16)) + t45*xd[0]) - t34*xdd[0] - xd[0]*(qd[3]*t45 + xd[0]*(-cq[7]*t13 - t44));
+    qdd[1] = c[9]*cq[0]*t48 - t35*xdd[1] - t47 - t50 - xd[1]*(t38 + t46);
+    qdd[2] = t1*t48 + t37*xdd[1] + t52 - t53 - xd[1]*(-t36 - t51);
+    qdd[3] = t18*t55 + t19*t54 + t40*xdd[0] + t56*t57;
+    qdd[4] = c[15]*cq[13]*t54 + c[19]*cq[5]*t55 + t40*t56 + t42*xdd[0];
+    qdd[5] = -qd[1]*(qd[1]*(-t20*t25 + t22*t23) + qd[2]*t60) - qd[2]*(qd[1]*t60 + qd[2]*(-t23*t59 + t58));
+    qdd[6] = -qd[0]*(qd[0]*(cq[10]*t61 + cq[11]*t28) + qd[5]*t63) - qd[1]*(qd[1]*(cq[10]*t64 + cq[11]*t29) + qd[5]*t66) - qd[5]*(qd[0]*t63 + qd[1]*t66 + qd[5]*(c[30]*((cq[10])*(cq[10])) + c[30]*((cq[11])*(cq[11])) - cq[10]*t32 + cq[11]*t31));
+    sg_solve_eq_inl(7, J, piv, rs, cs, qdd);
+    if (!isfinite(((((q[0] + q[1]) + (q[2] + (q[3] + q[4]))) + ((q[5] + q[6]) + (qd[0] + (qd[1] + qd[2])))) + (((qd[3] + qd[4]) + (qd[5] + (qd[6] + qdd[0]))) + ((qdd[1] + (qdd[2] + qdd[3])) + (qdd[4] + (qdd[5] + qdd[6]))))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_feed_observe -- Total ops: 460 */
+int sg_feed_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t27 = c[32]*cq[0];
+        const double t28 = c[34]*cq[1];
+        const double t48 = ((qd[0])*(qd[0]));
+        const double t61 = c[34]*cq[0];
+        const double t62 = c[32]*cq[1];
+        const double t67 = c[56]*cq[10];
+        const double t68 = c[55] + t62;
+        const double t69 = c[57] + t61;
+        const double t70 = qd[0]*t27;
+        const double t71 = c[58]*cq[11];
+        const double t72 = qd[0]*t62;
+        const double t73 = ((qd[5])*(qd[5]));
+        const double t74 = qdd[0]*t27 + t28*t48;
+        const double t75 = qdd[0]*t62 + t27*t48;
+        obs[0] = t67 + t68;
+        obs[1] = c[56]*cq[11] + t69;
+        obs[2] = qd[5]*t71 + t70;
+        obs[3] = qd[5]*t67 + t72;
+        obs[4] = c[58]*cq[10]*t73 + qdd[5]*t71 + t74;
+        obs[5] = qdd[5]*t67 + t71*t73 + t75;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        const double t0 = c[9]*cq[0];
+        const double t1 = c[9]*cq[1];
+        const double t2 = c[11]*cq[7];
+        const double t4 = c[1]*cq[6];
+        const double t6 = c[1]*cq[7];
+        const double t7 = c[5]*cq[1];
+        const double t12 = c[5]*cq[0];
+        const double t16 = c[11]*cq[6];
+        const double t48 = ((qd[0])*(qd[0]));
+        const double t49 = ((qd[3])*(qd[3]));
+        const double t76 = c[55] + t0;
+        const double t77 = c[57] + t1;
+        const double t78 = t2 + t77;
+        const double t79 = qd[0]*t7;
+        const double t80 = qd[0]*t0;
+        const double t81 = qdd[0]*t7 + t12*t48;
+        const double t82 = qdd[0]*t0 + t48*t7;
+        obs[6] = t16 + t76;
+        obs[7] = t78;
+        obs[8] = qd[3]*t6 + t79;
+        obs[9] = qd[3]*t16 + t80;
+        obs[10] = qdd[3]*t6 + t4*t49 + t81;
+        obs[11] = qdd[3]*t16 + t49*t6 + t82;
+        return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        const double t0 = c[9]*cq[0];
+        const double t1 = c[9]*cq[1];
+        const double t2 = c[11]*cq[7];
+        const double t4 = c[1]*cq[6];
+        const double t6 = c[1]*cq[7];
+        const double t7 = c[5]*cq[1];
+        const double t12 = c[5]*cq[0];
+        const double t15 = c[37]*cq[7] + t6;
+        const double t16 = c[11]*cq[6];
+        const double t17 = c[10]*cq[6] + t16;
+        const double t48 = ((qd[0])*(qd[0]));
+        const double t49 = ((qd[3])*(qd[3]));
+        const double t50 = t49*(c[37]*cq[6] + t4);
+        const double t53 = t15*t49;
+        const double t76 = c[55] + t0;
+        const double t77 = c[57] + t1;
+        const double t78 = t2 + t77;
+        const double t79 = qd[0]*t7;
+        const double t80 = qd[0]*t0;
+        const double t81 = qdd[0]*t7 + t12*t48;
+        const double t82 = qdd[0]*t0 + t48*t7;
+        obs[12] = t17 + t76;
+        obs[13] = c[10]*cq[7] + t78;
+        obs[14] = qd[3]*t15 + t79;
+        obs[15] = qd[3]*t17 + t80;
+        obs[16] = qdd[3]*t15 + t50 + t81;
+        obs[17] = qdd[3]*t17 + t53 + t82;
+        return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        const double t29 = c[31]*cq[2];
+        const double t30 = c[31]*cq[3];
+        const double t64 = c[54]*cq[3];
+        const double t65 = c[54]*cq[2];
+        const double t83 = ((qd[1])*(qd[1]));
+        obs[18] = c[59] + t29;
+        obs[19] = c[60] + t30;
+        obs[20] = qd[1]*t64;
+        obs[21] = qd[1]*t29;
+        obs[22] = qdd[1]*t64 + t65*t83;
+        obs[23] = qdd[1]*t29 + t64*t83;
+        return isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 4: {
+        const double t21 = c[25]*cq[4] + c[28]*cq[5];
+        const double t24 = c[24]*cq[4] + c[25]*cq[5];
+        const double t26 = c[28]*cq[4] + c[40]*cq[5];
+        const double t55 = ((qd[2])*(qd[2]));
+        const double t59 = c[24]*cq[5] + c[40]*cq[4];
+        obs[24] = c[61] + t21;
+        obs[25] = c[62] + t24;
+        obs[26] = qd[2]*t26;
+        obs[27] = qd[2]*t21;
+        obs[28] = qdd[2]*t26 + t55*t59;
+        obs[29] = qdd[2]*t21 + t26*t55;
+        return isfinite(((obs[24] + (obs[25] + obs[26])) + (obs[27] + (obs[28] + obs[29])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 5: {
+        const double t8 = c[3]*cx[1] + c[6]*cx[0];
+        const double t9 = c[3]*cx[0] + c[4]*cx[1];
+        const double t56 = ((xd[0])*(xd[0]));
+        const double t84 = c[64]*t9 + c[65]*t8;
+        const double t85 = c[65]*t9 + c[67]*t8;
+        obs[30] = c[63] + x[0];
+        obs[31] = xd[0];
+        obs[32] = xdd[0];
+        obs[33] = t84;
+        obs[34] = c[64]*t8 + c[66]*t9;
+        obs[35] = t85*xd[0];
+        obs[36] = t84*xd[0];
+        obs[37] = t56*(c[66]*t8 + c[67]*t9) + t85*xdd[0];
+        obs[38] = t56*t85 + t84*xdd[0];
+        return isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 6: {
+        const double t39 = c[17]*cx[1] + c[21]*cx[0];
+        const double t41 = c[17]*cx[0] + c[18]*cx[1];
+        const double t56 = ((xd[0])*(xd[0]));
+        const double t86 = c[69]*t41 + c[70]*t39;
+        const double t87 = c[70]*t41 + c[72]*t39;
+        obs[39] = c[68] + x[0];
+        obs[40] = xd[0];
+        obs[41] = xdd[0];
+        obs[42] = t86;
+        obs[43] = c[69]*t39 + c[71]*t41;
+        obs[44] = t87*xd[0];
+        obs[45] = t86*xd[0];
+        obs[46] = t56*(c[71]*t39 + c[72]*t41) + t87*xdd[0];
+        obs[47] = t56*t87 + t86*xdd[0];
+        return isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 7: {
+        const double t88 = c[74]*cx[2] + c[75]*cx[3];
+        const double t89 = c[75]*cx[2] + c[78]*cx[3];
+        const double t90 = ((xd[1])*(xd[1]));
+        obs[48] = x[1];
+        obs[49] = xd[1];
+        obs[50] = xdd[1];
+        obs[51] = c[73] + t88;
+        obs[52] = c[74]*cx[3] + c[76] + c[77]*cx[2];
+        obs[53] = t89*xd[1];
+        obs[54] = t88*xd[1];
+        obs[55] = t89*xdd[1] + t90*(c[77]*cx[3] + c[78]*cx[2]);
+        obs[56] = t88*xdd[1] + t89*t90;
+        return isfinite((((obs[48] + obs[49]) + (obs[50] + obs[51])) + ((obs[52] + obs[53]) + (obs[54] + (obs[55] + obs[56]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 8: {
+        const double t0 = c[9]*cq[0];
+        const double t1 = c[9]*cq[1];
+        const double t7 = c[5]*cq[1];
+        const double t12 = c[5]*cq[0];
+        const double t48 = ((qd[0])*(qd[0]));
+        const double t49 = ((qd[3])*(qd[3]));
+        const double t76 = c[55] + t0;
+        const double t77 = c[57] + t1;
+        const double t79 = qd[0]*t7;
+        const double t80 = qd[0]*t0;
+        const double t81 = qdd[0]*t7 + t12*t48;
+        const double t82 = qdd[0]*t0 + t48*t7;
+        const double t91 = c[79]*cq[6];
+        const double t92 = c[80]*cq[7];
+        obs[57] = q[3];
+        obs[58] = qd[3];
+        obs[59] = qdd[3];
+        obs[60] = t76 + t91;
+        obs[61] = c[79]*cq[7] + t77;
+        obs[62] = qd[3]*t92 + t79;
+        obs[63] = qd[3]*t91 + t80;
+        obs[64] = c[80]*cq[6]*t49 + qdd[3]*t92 + t81;
+        obs[65] = qdd[3]*t91 + t49*t92 + t82;
+        return isfinite((((obs[57] + obs[58]) + (obs[59] + obs[60])) + ((obs[61] + obs[62]) + (obs[63] + (obs[64] + obs[65]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 9: {
+        const double t35 = cx[3]*q[4];
+        const double t37 = cx[2]*q[4];
+        const double t46 = cx[3]*qd[4];
+        const double t47 = t46*xd[1];
+        const double t51 = cx[2]*qd[4];
+        const double t52 = t51*xd[1];
+        const double t93 = c[81]*cx[2] + c[82]*cx[3] + t37;
+        const double t94 = c[82]*cx[2] + c[84]*cx[3] - t35;
+        const double t95 = t51 + t94*xd[1];
+        obs[66] = x[1];
+        obs[67] = xd[1];
+        obs[68] = xdd[1];
+        obs[69] = c[73] + t93;
+        obs[70] = c[76] + c[81]*cx[3] + c[83]*cx[2] + t35;
+        obs[71] = t95;
+        obs[72] = t46 + t93*xd[1];
+        obs[73] = cx[2]*qdd[4] - t47 + t94*xdd[1] + xd[1]*(-t46 + xd[1]*(c[83]*cx[3] + c[84]*cx[2] - t37));
+        obs[74] = cx[3]*qdd[4] + t52 + t93*xdd[1] + t95*xd[1];
+        return isfinite((((obs[66] + obs[67]) + (obs[68] + obs[69])) + ((obs[70] + obs[71]) + (obs[72] + (obs[73] + obs[74]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 10: {
+        const double t48 = ((qd[0])*(qd[0]));
+        const double t96 = c[85]*cq[0] + c[86]*cq[1];
+        const double t97 = c[86]*cq[0] + c[88]*cq[1];
+        obs[75] = q[0];
+        obs[76] = qd[0];
+        obs[77] = qdd[0];
+        obs[78] = c[55] + t96;
+        obs[79] = c[57] + c[85]*cq[1] + c[87]*cq[0];
+        obs[80] = qd[0]*t97;
+        obs[81] = qd[0]*t96;
+        obs[82] = qdd[0]*t97 + t48*(c[87]*cq[1] + c[88]*cq[0]);
+        obs[83] = qdd[0]*t96 + t48*t97;
+        return isfinite((((obs[75] + obs[76]) + (obs[77] + obs[78])) + ((obs[79] + obs[80]) + (obs[81] + (obs[82] + obs[83]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 11: {
+        const double t27 = c[32]*cq[0];
+        const double t28 = c[34]*cq[1];
+        const double t48 = ((qd[0])*(qd[0]));
+        const double t61 = c[34]*cq[0];
+        const double t62 = c[32]*cq[1];
+        const double t68 = c[55] + t62;
+        const double t69 = c[57] + t61;
+        const double t70 = qd[0]*t27;
+        const double t72 = qd[0]*t62;
+        const double t73 = ((qd[5])*(qd[5]));
+        const double t74 = qdd[0]*t27 + t28*t48;
+        const double t75 = qdd[0]*t62 + t27*t48;
+        const double t98 = c[89]*cq[10] + c[90]*cq[11];
+        const double t99 = c[90]*cq[10] + c[92]*cq[11];
+        obs[84] = q[5];
+        obs[85] = qd[5];
+        obs[86] = qdd[5];
+        obs[87] = t68 + t98;
+        obs[88] = c[89]*cq[11] + c[91]*cq[10] + t69;
+        obs[89] = qd[5]*t99 + t70;
+        obs[90] = qd[5]*t98 + t72;
+        obs[91] = qdd[5]*t99 + t73*(c[91]*cq[11] + c[92]*cq[10]) + t74;
+        obs[92] = qdd[5]*t98 + t73*t99 + t75;
+        return isfinite((((obs[84] + obs[85]) + (obs[86] + obs[87])) + ((obs[88] + obs[89]) + (obs[90] + (obs[91] + obs[92]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 12: {
+        const double t83 = ((qd[1])*(qd[1]));
+        const double t100 = c[93]*cq[2] + c[94]*cq[3];
+        const double t101 = c[94]*cq[2] + c[96]*cq[3];
+        obs[93] = q[1];
+        obs[94] = qd[1];
+        obs[95] = qdd[1];
+        obs[96] = c[59] + t100;
+        obs[97] = c[60] + c[93]*cq[3] + c[95]*cq[2];
+        obs[98] = qd[1]*t101;
+        obs[99] = qd[1]*t100;
+        obs[100] = qdd[1]*t101 + t83*(c[95]*cq[3] + c[96]*cq[2]);
+        obs[101] = qdd[1]*t100 + t101*t83;
+        return isfinite((((obs[93] + obs[94]) + (obs[95] + obs[96])) + ((obs[97] + obs[98]) + (obs[99] + (obs[100] + obs[101]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 13: {
+        const double t39 = c[17]*cx[1] + c[21]*cx[0];
+        const double t40 = c[16]*t39;
+        const double t41 = c[17]*cx[0] + c[18]*cx[1];
+        const double t42 = c[53]*t41;
+        const double t54 = ((qd[6])*(qd[6]));
+        const double t56 = ((xd[0])*(xd[0]));
+        const double t57 = c[16]*t41;
+        const double t102 = c[97]*cq[12] + c[98]*cq[13];
+        const double t103 = c[100]*cq[13] + c[98]*cq[12];
+        const double t104 = c[53]*t39;
+        obs[102] = q[6];
+        obs[103] = qd[6];
+        obs[104] = qdd[6];
+        obs[105] = t102 + t57;
+        obs[106] = c[97]*cq[13] + c[99]*cq[12] + t40;
+        obs[107] = qd[6]*t103 + t104*xd[0];
+        obs[108] = qd[6]*t102 + t57*xd[0];
+        obs[109] = qdd[6]*t103 + t104*xdd[0] + t42*t56 + t54*(c[100]*cq[12] + c[99]*cq[13]);
+        obs[110] = qdd[6]*t102 + t103*t54 + t104*t56 + t57*xdd[0];
+        return isfinite((((obs[102] + obs[103]) + (obs[104] + obs[105])) + ((obs[106] + obs[107]) + (obs[108] + (obs[109] + obs[110]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 14: {
+        const double t55 = ((qd[2])*(qd[2]));
+        const double t105 = c[101]*cq[4] + c[102]*cq[5];
+        const double t106 = c[102]*cq[4] + c[104]*cq[5];
+        obs[111] = q[2];
+        obs[112] = qd[2];
+        obs[113] = qdd[2];
+        obs[114] = c[61] + t105;
+        obs[115] = c[101]*cq[5] + c[103]*cq[4] + c[62];
+        obs[116] = qd[2]*t106;
+        obs[117] = qd[2]*t105;
+        obs[118] = qdd[2]*t106 + t55*(c[103]*cq[5] + c[104]*cq[4]);
+        obs[119] = qdd[2]*t105 + t106*t55;
+        return isfinite((((obs[111] + obs[112]) + (obs[113] + obs[114])) + ((obs[115] + obs[116]) + (obs[117] + (obs[118] + obs[119]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 15: {
+        double ka[4];
+        {
+            /* cam cam: the arc whose normal sector holds e */
+            const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
+            if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+                ka[0] = 0.0;
+                ka[1] = 0.0;
+                ka[2] = c[41];
+                ka[3] = 0.0;
+            } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+                ka[0] = 0.0;
+                ka[1] = 0.0;
+                ka[2] = c[42];
+                ka[3] = 1.0;
+            } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+                ka[0] = c[43];
+                ka[1] = c[44];
+                ka[2] = c[41];
+                ka[3] = 2.0;
+            } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+                ka[0] = c[43];
+                ka[1] = c[44];
+                ka[2] = c[42];
+                ka[3] = 3.0;
+            } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+                ka[0] = c[45];
+                ka[1] = c[44];
+                ka[2] = c[41];
+                ka[3] = 4.0;
+            } else {
+                ka[0] = c[45];
+                ka[1] = c[44];
+                ka[2] = c[42];
+                ka[3] = 5.0;
+            }
+        }
+        obs[120] = ka[3];
+        return isfinite(obs[120]) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_feed_forces -- Total ops: 797 */
 int sg_feed_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -1400,6 +1932,8 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
 }
 
 static const unsigned char sg_feed_coord_is_angle[7] = { 1, 1, 1, 1, 0, 1, 1 };
+static const int sg_feed_group_start[17] = { 0, 6, 12, 18, 24, 30, 39, 48, 57, 66, 75, 84, 93, 102, 111, 120, 121 };
+static const unsigned char sg_feed_group_always[16] = { 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
 
 static const sg_mechanism sg_feed_descriptor = {
     .name = "feed",
@@ -1414,10 +1948,15 @@ static const sg_mechanism sg_feed_descriptor = {
     .nload = 20,
     .nblock = 4,
     .coord_is_angle = sg_feed_coord_is_angle,
+    .ngroup = 16,
+    .group_start = sg_feed_group_start,
+    .group_always = sg_feed_group_always,
     .constants = sg_feed_constants,
     .closed = 0,
     .residual = sg_feed_residual,
     .motion = sg_feed_motion,
+    .rates = sg_feed_rates,
+    .observe = sg_feed_observe,
     .forces = sg_feed_forces,
     .force_matrix = sg_feed_force_matrix,
     .scales = sg_feed_scales,
@@ -1605,284 +2144,284 @@ const char *sg_feed_manifest(void)
         "\":\"regulator\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels\":{\"sg_feed_anchors"
         "\":{\"ops\":181},\"sg_feed_blocks\":{\"ops\":130},\"sg_feed_constants\":{\"ops\":175},\"sg_feed_"
         "force_matrix\":{\"ops\":323},\"sg_feed_forces\":{\"ops\":797},\"sg_feed_motion\":{\"ops\":608},\""
-        "sg_feed_residual\":{\"ops\":134},\"sg_feed_scales\":{\"ops\":18}},\"loads\":[{\"body\":\"feed_ba"
-        "r\",\"component\":\"fx\",\"name\":\"feed_dog\"},{\"body\":\"feed_bar\",\"component\":\"fy\",\"na"
-        "me\":\"feed_dog\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\"fork_top\"},{\"body\""
-        ":\"feed_fork\",\"component\":\"fy\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\""
-        ":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"stitch_"
-        "pin\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fx\",\"name\":\"lift_roller\"},{\"body\":\""
-        "lift_rock_shaft\",\"component\":\"fy\",\"name\":\"lift_roller\"},{\"body\":\"rock_shaft\",\"comp"
-        "onent\":\"fx\",\"name\":\"lift_cam\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"l"
-        "ift_cam\"},{\"body\":\"feed_cam\",\"component\":\"torque\",\"name\":\"feed_cam\"},{\"body\":\"ho"
-        "ok_crank\",\"component\":\"torque\",\"name\":\"hook_crank\"},{\"body\":\"regulator\",\"component"
-        "\":\"torque\",\"name\":\"regulator\"},{\"body\":\"feed_fork\",\"component\":\"torque\",\"name\":"
-        "\"feed_fork\"},{\"body\":\"stitch_block\",\"component\":\"torque\",\"name\":\"stitch_block\"},{\""
-        "body\":\"feed_rock_shaft\",\"component\":\"torque\",\"name\":\"feed_rock_shaft\"},{\"body\":\"fe"
-        "ed_bar\",\"component\":\"torque\",\"name\":\"feed_bar\"},{\"body\":\"lift_rock_shaft\",\"compone"
-        "nt\":\"torque\",\"name\":\"lift_rock_shaft\"},{\"body\":\"big_rod\",\"component\":\"torque\",\"n"
-        "ame\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"}],\""
-        "name\":\"feed\",\"observables\":[{\"name\":\"feed_dog.x\",\"unit\":\"m\"},{\"name\":\"feed_dog.y"
-        "\",\"unit\":\"m\"},{\"name\":\"feed_dog.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.y_d\",\"uni"
-        "t\":\"m/s\"},{\"name\":\"feed_dog.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_dog.y_dd\",\"unit\""
-        ":\"m/s^2\"},{\"name\":\"fork_top.x\",\"unit\":\"m\"},{\"name\":\"fork_top.y\",\"unit\":\"m\"},{\""
-        "name\":\"fork_top.x_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.y_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"fork_top.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_top.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"stitch_pin.x\",\"unit\":\"m\"},{\"name\":\"stitch_pin.y\",\"unit\":\"m\"},{\"name\":\"stitch_"
-        "pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pi"
-        "n.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_"
-        "roller.x\",\"unit\":\"m\"},{\"name\":\"lift_roller.y\",\"unit\":\"m\"},{\"name\":\"lift_roller.x"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.x"
-        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_ca"
-        "m.x\",\"unit\":\"m\"},{\"name\":\"lift_cam.y\",\"unit\":\"m\"},{\"name\":\"lift_cam.x_d\",\"unit"
-        "\":\"m/s\"},{\"name\":\"lift_cam.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_cam.x_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"lift_cam.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.angle\",\"unit\":\""
-        "rad\"},{\"name\":\"feed_cam.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_cam.angle_dd\",\"unit"
-        "\":\"rad/s^2\"},{\"name\":\"feed_cam.com.x\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.y\",\"unit"
-        "\":\"m\"},{\"name\":\"feed_cam.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.y_d\",\"unit"
-        "\":\"m/s\"},{\"name\":\"feed_cam.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.com.y_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"hook_crank.angle\",\"unit\":\"rad\"},{\"name\":\"hook_crank.angl"
-        "e_d\",\"unit\":\"rad/s\"},{\"name\":\"hook_crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"ho"
-        "ok_crank.com.x\",\"unit\":\"m\"},{\"name\":\"hook_crank.com.y\",\"unit\":\"m\"},{\"name\":\"hook"
-        "_crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"hook_crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"hook_crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_crank.com.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"regulator.angle\",\"unit\":\"rad\"},{\"name\":\"regulator.angle_d\",\"unit\":\"rad"
-        "/s\"},{\"name\":\"regulator.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"regulator.com.x\",\"uni"
-        "t\":\"m\"},{\"name\":\"regulator.com.y\",\"unit\":\"m\"},{\"name\":\"regulator.com.x_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"regulator.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.x_dd\",\"u"
-        "nit\":\"m/s^2\"},{\"name\":\"regulator.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork.angl"
-        "e\",\"unit\":\"rad\"},{\"name\":\"feed_fork.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_fork."
-        "angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_fork.com.x\",\"unit\":\"m\"},{\"name\":\"feed_"
-        "fork.com.y\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_"
-        "fork.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":"
-        "\"feed_fork.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.angle\",\"unit\":\"rad\"},{\""
-        "name\":\"stitch_block.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_block.angle_dd\",\"unit\""
-        ":\"rad/s^2\"},{\"name\":\"stitch_block.com.x\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.y\","
-        "\"unit\":\"m\"},{\"name\":\"stitch_block.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.co"
-        "m.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"st"
-        "itch_block.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_shaft.angle\",\"unit\":\"rad\"},"
-        "{\"name\":\"feed_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_rock_shaft.angle_dd\""
-        ",\"unit\":\"rad/s^2\"},{\"name\":\"feed_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"feed_rock"
-        "_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"feed_rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.x_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"feed_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.angle\""
-        ",\"unit\":\"rad\"},{\"name\":\"feed_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_bar.angle"
-        "_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_bar.com.x\",\"unit\":\"m\"},{\"name\":\"feed_bar.co"
-        "m.y\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com."
-        "y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar"
-        ".com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":"
-        "\"lift_rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_rock_shaft.angle_dd\",\"unit\":"
-        "\"rad/s^2\"},{\"name\":\"lift_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com"
-        ".y\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_ro"
-        "ck_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},"
-        "{\"name\":\"lift_rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":"
-        "\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit"
-        "\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\""
-        ":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\""
-        ":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\""
-        "unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft"
-        ".com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.c"
-        "om.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_s"
-        "haft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"cam.arc\",\"unit\":\"\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\""
-        "feed cam: side of its Reuleaux triangle = fork stroke (estimate)\",\"kind\":\"length\",\"name\":"
-        "\"cam_side\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.008,\"display_unit\""
-        ":\"mm\",\"doc\":\"feed cam: small arc radius; breadth = side + 2 radius (estimate)\",\"kind\":\""
-        "length\",\"name\":\"cam_small_radius\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"defaul"
-        "t\":0.2,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre line to rock-shaft pin P (estima"
-        "te)\",\"kind\":\"length\",\"name\":\"fork_p\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.06,\"display_unit\":\"mm\",\"doc\":\"feed fork: cam centre line to stitch-block pin "
-        "Q (estimate)\",\"kind\":\"length\",\"name\":\"fork_q\",\"positive\":true,\"role\":null,\"unit\":"
-        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"stitch regulator pivot, x (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"regulator_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
-        "\"default\":-0.06,\"display_unit\":\"mm\",\"doc\":\"stitch regulator pivot, y (estimate)\",\"kin"
-        "d\":\"length\",\"name\":\"regulator_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
-        "ult\":-0.02,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, x (estimate)\",\"kind\":\"le"
-        "ngth\",\"name\":\"feed_shaft_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-"
-        "0.2,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft axis, y (estimate)\",\"kind\":\"length\",\""
-        "name\":\"feed_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"dis"
-        "play_unit\":\"mm\",\"doc\":\"feed rock shaft: rear arm to the fork pin P (estimate)\",\"kind\":\""
-        "length\",\"name\":\"feed_arm_p\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
-        "0293,\"display_unit\":\"mm\",\"doc\":\"feed rock shaft: upper arm to the feed-bar pin R (estimat"
-        "e)\",\"kind\":\"length\",\"name\":\"feed_arm_r\",\"positive\":true,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis, x (estimate)\",\"kind"
-        "\":\"length\",\"name\":\"lift_shaft_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
-        "ult\":-0.1777,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft axis, y (estimate)\",\"kind\":\""
-        "length\",\"name\":\"lift_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":0.015,\"display_unit\":\"mm\",\"doc\":\"lift rock shaft: arm to the roller L (estimate)\",\"kin"
-        "d\":\"length\",\"name\":\"lift_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":0.016,\"display_unit\":\"mm\",\"doc\":\"B: hook crank radius (= hook_drive crank)\",\"kind\":\""
-        "length\",\"name\":\"hook_crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
-        "21776,\"display_unit\":\"mm\",\"doc\":\"B: big rod, pin to pin (= hook_drive big_rod)\",\"kind\""
-        ":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0"
-        ".0179,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft axis, x (= hook_drive rock_axis_x)\",\"kin"
-        "d\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
-        "ult\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft axis, y (= hook_drive rock_axis_y"
-        ")\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"B: rock-shaft arm driven by the big rod"
-        " (= hook_drive's)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\":true,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":0.0039,\"display_unit\":\"mm\",\"doc\":\"D: lift cam (eccentric"
-        ") centre from the rock-shaft axis (estimate)\",\"kind\":\"length\",\"name\":\"lift_cam_eccentric"
-        "ity\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.9791297103688189,\"display_"
-        "unit\":\"deg\",\"doc\":\"D: lift cam centre's direction on the rock shaft from its front arm (es"
-        "timate: across the line to the lift shaft at mid-swing)\",\"kind\":\"angle\",\"name\":\"lift_cam"
-        "_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.9581857593448869,\"di"
-        "splay_unit\":\"deg\",\"doc\":\"D: lift crank's fork centre line on the lift rock shaft, from its"
-        " roller arm (estimate)\",\"kind\":\"angle\",\"name\":\"lift_fork_angle\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed dog tip alo"
-        "ng the feed bar from R (estimate)\",\"kind\":\"length\",\"name\":\"dog_u\",\"positive\":true,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":0.007,\"display_unit\":\"mm\",\"doc\":\"feed bar: its ro"
-        "ller slot below the line R\\u2013feed dog (estimate)\",\"kind\":\"length\",\"name\":\"bar_slot_v"
-        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1705,\"display_unit\":\"mm\","
-        "\"doc\":\"throat plate surface, y (estimate: the dog rises ~1 mm above it)\",\"kind\":\"length\""
-        ",\"name\":\"plate_y\",\"positive\":false,\"role\":\"throat_plate\",\"unit\":\"m\"},{\"default\":"
-        "1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"phase of feed_cam relative to the shaft an"
-        "gle\",\"kind\":\"angle\",\"name\":\"feed_cam.phase\",\"positive\":false,\"role\":null,\"unit\":\""
-        "rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of feed_cam\",\"kind\":\"mass\",\""
-        "name\":\"feed_cam.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0015,\""
-        "display_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local u\",\"kind\":\"length\",\"name"
-        "\":\"feed_cam.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"centre of mass of feed_cam, local v\",\"kind\":\"length\",\"name\":\"f"
-        "eed_cam.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_un"
-        "it\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_cam about its centre of mass\",\"kind\":\"i"
-        "nertia\",\"name\":\"feed_cam.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\""
-        "default\":-0.03490658503988659,\"display_unit\":\"deg\",\"doc\":\"phase of hook_crank relative t"
-        "o the shaft angle\",\"kind\":\"angle\",\"name\":\"hook_crank.phase\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of hook_crank\",\""
-        "kind\":\"mass\",\"name\":\"hook_crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{"
-        "\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of hook_crank, local u\",\"kind"
-        "\":\"length\",\"name\":\"hook_crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of hook_crank, local v\",\"kind\""
-        ":\"length\",\"name\":\"hook_crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
-        "fault\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of hook_crank about its cen"
-        "tre of mass\",\"kind\":\"inertia\",\"name\":\"hook_crank.inertia\",\"positive\":false,\"role\":n"
-        "ull,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of regulator\","
-        "\"kind\":\"mass\",\"name\":\"regulator.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},"
-        "{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local u\",\"kind"
-        "\":\"length\",\"name\":\"regulator.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
-        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of regulator, local v\",\"kind\":\""
-        "length\",\"name\":\"regulator.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defaul"
-        "t\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of regulator about its centre o"
-        "f mass\",\"kind\":\"inertia\",\"name\":\"regulator.inertia\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of feed_fork\",\"ki"
-        "nd\":\"mass\",\"name\":\"feed_fork.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
-        "efault\":0.00012,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_fork about its"
-        " centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_fork.inertia\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of stitch_b"
-        "lock\",\"kind\":\"mass\",\"name\":\"stitch_block.mass\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, loca"
-        "l u\",\"kind\":\"length\",\"name\":\"stitch_block.com_u\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, lo"
-        "cal v\",\"kind\":\"length\",\"name\":\"stitch_block.com_v\",\"positive\":false,\"role\":null,\"u"
-        "nit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of stit"
-        "ch_block about its centre of mass\",\"kind\":\"inertia\",\"name\":\"stitch_block.inertia\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.04,\"display_unit\":\"g\",\"doc"
-        "\":\"mass of feed_rock_shaft\",\"kind\":\"mass\",\"name\":\"feed_rock_shaft.mass\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre"
-        " of mass of feed_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_u\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of feed_rock_shaft, local v\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.c"
-        "om_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg"
-        "*m**2\",\"doc\":\"moment of inertia of feed_rock_shaft about its centre of mass\",\"kind\":\"ine"
-        "rtia\",\"name\":\"feed_rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\""
-        "},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of feed_bar\",\"kind\":\"mass\",\"nam"
-        "e\":\"feed_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"dis"
-        "play_unit\":\"mm\",\"doc\":\"centre of mass of feed_bar, local u\",\"kind\":\"length\",\"name\":"
-        "\"feed_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.003,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"centre of mass of feed_bar, local v\",\"kind\":\"length\",\"name\":\"f"
-        "eed_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_un"
-        "it\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_bar about its centre of mass\",\"kind\":\"i"
-        "nertia\",\"name\":\"feed_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\""
-        "default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of lift_rock_shaft\",\"kind\":\"mass\",\"na"
-        "me\":\"lift_rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0"
-        ",\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local u\",\"kind\":\"lengt"
-        "h\",\"name\":\"lift_rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
-        "lt\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_rock_shaft, local v\",\"kind\""
-        ":\"length\",\"name\":\"lift_rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},"
-        "{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_rock_shaft a"
-        "bout its centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_rock_shaft.inertia\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mas"
-        "s of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of big_rod, local"
-        " u\",\"kind\":\"length\",\"name\":\"big_rod.com_u\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of big_rod, local v\",\"k"
-        "ind\":\"length\",\"name\":\"big_rod.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_rod about its cent"
-        "re of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":false,\"role\":null,"
-        "\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"k"
-        "ind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\""
-        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\""
-        ":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
-        "fault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\""
-        "length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
-        "lt\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre"
-        " of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coeffic"
-        "ient of O_feed\",\"kind\":\"dimensionless\",\"name\":\"O_feed.friction\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"pin radius of O_fe"
-        "ed (friction arm)\",\"kind\":\"length\",\"name\":\"O_feed.pin_radius\",\"positive\":false,\"role"
-        "\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coeffi"
-        "cient of P\",\"kind\":\"dimensionless\",\"name\":\"P.friction\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin radius of P (friction "
-        "arm)\",\"kind\":\"length\",\"name\":\"P.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of Q\",\"kind"
-        "\":\"dimensionless\",\"name\":\"Q.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\""
-        "default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin radius of Q (friction arm)\",\"kind\":\"l"
-        "ength\",\"name\":\"Q.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
-        "0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of R\",\"kind\":\"dimensionless"
-        "\",\"name\":\"R.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\""
-        "display_unit\":\"mm\",\"doc\":\"pin radius of R (friction arm)\",\"kind\":\"length\",\"name\":\""
-        "R.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\""
-        ":\"\",\"doc\":\"Coulomb friction coefficient of O_lift\",\"kind\":\"dimensionless\",\"name\":\"O"
-        "_lift.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.004,\"display_un"
-        "it\":\"mm\",\"doc\":\"pin radius of O_lift (friction arm)\",\"kind\":\"length\",\"name\":\"O_lif"
-        "t.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\""
-        ":\"\",\"doc\":\"Coulomb friction coefficient of stitch_block.guide\",\"kind\":\"dimensionless\","
-        "\"name\":\"stitch_block.guide.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"defa"
-        "ult\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of D\",\"kind\":\"dimensi"
-        "onless\",\"name\":\"D.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0."
-        "0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of L\",\"kind\":\"dimensionless\""
-        ",\"name\":\"L.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"}],\"point_fields\":[\"x\""
-        ",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (o"
-        "n the line through R: lifting it does not move it sideways)\",\"name\":\"feed_dog\",\"offset\":0"
-        ",\"role\":\"feed_dog\"},{\"body\":\"feed_fork\",\"doc\":\"feed fork on the cam centre line\",\"n"
-        "ame\":\"fork_top\",\"offset\":6,\"role\":null},{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in t"
-        "he stitch block\",\"name\":\"stitch_pin\",\"offset\":12,\"role\":null},{\"body\":\"lift_rock_sha"
-        "ft\",\"doc\":\"lift roller L in the feed bar\",\"name\":\"lift_roller\",\"offset\":18,\"role\":n"
-        "ull},{\"body\":\"rock_shaft\",\"doc\":\"D: lift cam centre, in the fork\",\"name\":\"lift_cam\","
-        "\"offset\":24,\"role\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"feed_cam\",\"columns\":[\""
-        "fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"feed_cam.pivot\",\"offset\":0},{"
-        "\"a\":\"ground\",\"b\":\"hook_crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"r"
-        "evolute\",\"name\":\"hook_crank.pivot\",\"offset\":2},{\"a\":\"ground\",\"b\":\"regulator\",\"co"
-        "lumns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"regulator.pivot\",\"o"
-        "ffset\":4},{\"a\":\"regulator\",\"b\":\"stitch_block\",\"columns\":[\"normal\",\"moment\"],\"gro"
-        "unded\":false,\"kind\":\"prismatic\",\"name\":\"stitch_block.guide\",\"offset\":6},{\"a\":\"feed"
-        "_cam\",\"b\":\"feed_fork\",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"cam\",\"name\""
-        ":\"cam\",\"offset\":8},{\"a\":\"ground\",\"b\":\"feed_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\""
-        "grounded\":true,\"kind\":\"revolute\",\"name\":\"O_feed\",\"offset\":9},{\"a\":\"feed_rock_shaft"
-        "\",\"b\":\"feed_fork\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"na"
-        "me\":\"P\",\"offset\":11},{\"a\":\"feed_fork\",\"b\":\"stitch_block\",\"columns\":[\"fx\",\"fy\""
-        "],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"Q\",\"offset\":13},{\"a\":\"feed_rock_shaf"
-        "t\",\"b\":\"feed_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"na"
-        "me\":\"R\",\"offset\":15},{\"a\":\"ground\",\"b\":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\""
-        "],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O_lift\",\"offset\":17},{\"a\":\"hook_crank"
-        "\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name"
-        "\":\"B\",\"offset\":19},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"gro"
-        "unded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"offset\":21},{\"a\":\"big_rod\",\"b\":\"roc"
-        "k_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\""
-        "offset\":23},{\"a\":\"lift_rock_shaft\",\"b\":\"rock_shaft\",\"columns\":[\"normal\"],\"grounded"
-        "\":false,\"kind\":\"slot\",\"name\":\"D\",\"offset\":25},{\"a\":\"feed_bar\",\"b\":\"lift_rock_s"
-        "haft\",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"slot\",\"name\":\"L\",\"offset\":2"
-        "6},{\"a\":\"ground\",\"b\":\"feed_cam\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"s"
-        "haft\",\"kind\":\"drive\",\"name\":\"feed_cam.drive\",\"offset\":27,\"sense\":1},{\"a\":\"ground"
-        "\",\"b\":\"hook_crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":"
-        "\"drive\",\"name\":\"hook_crank.drive\",\"offset\":28,\"sense\":1},{\"a\":\"ground\",\"b\":\"reg"
-        "ulator\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"regulator\",\"kind\":\"drive\",\""
-        "name\":\"regulator.drive\",\"offset\":29,\"sense\":1}],\"roles\":{\"feed_bar\":{\"kind\":\"body\""
-        ",\"name\":\"feed_bar\"},\"feed_cam\":{\"kind\":\"body\",\"name\":\"feed_cam\"},\"feed_dog\":{\"k"
-        "ind\":\"point\",\"name\":\"feed_dog\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"regul"
-        "ator\"},\"throat_plate\":{\"kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":1"
-        "26,\"nblock\":4,\"nbranch\":0,\"nc\":198,\"nf\":30,\"nfo\":65,\"nload\":20,\"nobs\":121,\"np\":7"
-        "7,\"nq\":7,\"nx\":2}}"
+        "sg_feed_observe\":{\"ops\":460},\"sg_feed_rates\":{\"ops\":288},\"sg_feed_residual\":{\"ops\":13"
+        "4},\"sg_feed_scales\":{\"ops\":18}},\"loads\":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"nam"
+        "e\":\"feed_dog\"},{\"body\":\"feed_bar\",\"component\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\""
+        "feed_fork\",\"component\":\"fx\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\":\""
+        "fy\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\"stitch_pin\""
+        "},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_sh"
+        "aft\",\"component\":\"fx\",\"name\":\"lift_roller\"},{\"body\":\"lift_rock_shaft\",\"component\""
+        ":\"fy\",\"name\":\"lift_roller\"},{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"lift_"
+        "cam\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"lift_cam\"},{\"body\":\"feed_cam"
+        "\",\"component\":\"torque\",\"name\":\"feed_cam\"},{\"body\":\"hook_crank\",\"component\":\"torq"
+        "ue\",\"name\":\"hook_crank\"},{\"body\":\"regulator\",\"component\":\"torque\",\"name\":\"regula"
+        "tor\"},{\"body\":\"feed_fork\",\"component\":\"torque\",\"name\":\"feed_fork\"},{\"body\":\"stit"
+        "ch_block\",\"component\":\"torque\",\"name\":\"stitch_block\"},{\"body\":\"feed_rock_shaft\",\"c"
+        "omponent\":\"torque\",\"name\":\"feed_rock_shaft\"},{\"body\":\"feed_bar\",\"component\":\"torqu"
+        "e\",\"name\":\"feed_bar\"},{\"body\":\"lift_rock_shaft\",\"component\":\"torque\",\"name\":\"lif"
+        "t_rock_shaft\"},{\"body\":\"big_rod\",\"component\":\"torque\",\"name\":\"big_rod\"},{\"body\":\""
+        "rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"}],\"name\":\"feed\",\"observables\""
+        ":[{\"name\":\"feed_dog.x\",\"unit\":\"m\"},{\"name\":\"feed_dog.y\",\"unit\":\"m\"},{\"name\":\""
+        "feed_dog.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_dog.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_d"
+        "og.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_dog.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"fork_t"
+        "op.x\",\"unit\":\"m\"},{\"name\":\"fork_top.y\",\"unit\":\"m\"},{\"name\":\"fork_top.x_d\",\"uni"
+        "t\":\"m/s\"},{\"name\":\"fork_top.y_d\",\"unit\":\"m/s\"},{\"name\":\"fork_top.x_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"fork_top.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_pin.x\",\"unit\":\"m"
+        "\"},{\"name\":\"stitch_pin.y\",\"unit\":\"m\"},{\"name\":\"stitch_pin.x_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"stitch_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_pin.x_dd\",\"unit\":\"m/s^2\"},{\""
+        "name\":\"stitch_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_roller.x\",\"unit\":\"m\"},{\"na"
+        "me\":\"lift_roller.y\",\"unit\":\"m\"},{\"name\":\"lift_roller.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"lift_roller.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_roller.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
+        "e\":\"lift_roller.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_cam.x\",\"unit\":\"m\"},{\"name\":"
+        "\"lift_cam.y\",\"unit\":\"m\"},{\"name\":\"lift_cam.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_cam"
+        ".y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_cam.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_cam.y_"
+        "dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.angle\",\"unit\":\"rad\"},{\"name\":\"feed_cam.ang"
+        "le_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_cam.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"fee"
+        "d_cam.com.x\",\"unit\":\"m\"},{\"name\":\"feed_cam.com.y\",\"unit\":\"m\"},{\"name\":\"feed_cam."
+        "com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_cam.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_ca"
+        "m.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_cam.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "hook_crank.angle\",\"unit\":\"rad\"},{\"name\":\"hook_crank.angle_d\",\"unit\":\"rad/s\"},{\"nam"
+        "e\":\"hook_crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"hook_crank.com.x\",\"unit\":\"m\"}"
+        ",{\"name\":\"hook_crank.com.y\",\"unit\":\"m\"},{\"name\":\"hook_crank.com.x_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"hook_crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"hook_crank.com.x_dd\",\"unit\":"
+        "\"m/s^2\"},{\"name\":\"hook_crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"regulator.angle\",\""
+        "unit\":\"rad\"},{\"name\":\"regulator.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"regulator.angle_"
+        "dd\",\"unit\":\"rad/s^2\"},{\"name\":\"regulator.com.x\",\"unit\":\"m\"},{\"name\":\"regulator.c"
+        "om.y\",\"unit\":\"m\"},{\"name\":\"regulator.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.c"
+        "om.y_d\",\"unit\":\"m/s\"},{\"name\":\"regulator.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"regu"
+        "lator.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork.angle\",\"unit\":\"rad\"},{\"name\":\""
+        "feed_fork.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_fork.angle_dd\",\"unit\":\"rad/s^2\"},{"
+        "\"name\":\"feed_fork.com.x\",\"unit\":\"m\"},{\"name\":\"feed_fork.com.y\",\"unit\":\"m\"},{\"na"
+        "me\":\"feed_fork.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_fork.com.y_d\",\"unit\":\"m/s\"},{"
+        "\"name\":\"feed_fork.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_fork.com.y_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"stitch_block.angle\",\"unit\":\"rad\"},{\"name\":\"stitch_block.angle_d\",\""
+        "unit\":\"rad/s\"},{\"name\":\"stitch_block.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"stitch_b"
+        "lock.com.x\",\"unit\":\"m\"},{\"name\":\"stitch_block.com.y\",\"unit\":\"m\"},{\"name\":\"stitch"
+        "_block.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_block.com.y_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"stitch_block.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_block.com.y_dd\",\"unit\":\"m/"
+        "s^2\"},{\"name\":\"feed_rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"feed_rock_shaft.angle_d"
+        "\",\"unit\":\"rad/s\"},{\"name\":\"feed_rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
+        "feed_rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"feed_rock_shaft.com.y\",\"unit\":\"m\"},{\"n"
+        "ame\":\"feed_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.y_d\",\"unit"
+        "\":\"m/s\"},{\"name\":\"feed_rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_rock_sha"
+        "ft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.angle\",\"unit\":\"rad\"},{\"name\":\"fee"
+        "d_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"nam"
+        "e\":\"feed_bar.com.x\",\"unit\":\"m\"},{\"name\":\"feed_bar.com.y\",\"unit\":\"m\"},{\"name\":\""
+        "feed_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"feed_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\""
+        "name\":\"lift_rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"lift_rock_shaft.angle_d\",\"unit\""
+        ":\"rad/s\"},{\"name\":\"lift_rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_rock_s"
+        "haft.com.x\",\"unit\":\"m\"},{\"name\":\"lift_rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lif"
+        "t_rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_rock_shaft.com.y_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"lift_rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_rock_shaft.com.y_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d"
+        "\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod."
+        "com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.a"
+        "ngle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_s"
+        "haft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\""
+        "rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{"
+        "\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"cam.arc\",\"unit\":\"\"}],\"par"
+        "ams\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"feed cam: side of its Reuleaux trian"
+        "gle = fork stroke (estimate)\",\"kind\":\"length\",\"name\":\"cam_side\",\"positive\":true,\"rol"
+        "e\":null,\"unit\":\"m\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"feed cam: small ar"
+        "c radius; breadth = side + 2 radius (estimate)\",\"kind\":\"length\",\"name\":\"cam_small_radius"
+        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.2,\"display_unit\":\"mm\",\"do"
+        "c\":\"feed fork: cam centre line to rock-shaft pin P (estimate)\",\"kind\":\"length\",\"name\":\""
+        "fork_p\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm"
+        "\",\"doc\":\"feed fork: cam centre line to stitch-block pin Q (estimate)\",\"kind\":\"length\",\""
+        "name\":\"fork_q\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_uni"
+        "t\":\"mm\",\"doc\":\"stitch regulator pivot, x (estimate)\",\"kind\":\"length\",\"name\":\"regul"
+        "ator_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.06,\"display_unit\":\""
+        "mm\",\"doc\":\"stitch regulator pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"regulator_y"
+        "\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\""
+        "doc\":\"feed rock shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_x\",\"pos"
+        "itive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.2,\"display_unit\":\"mm\",\"doc\":\""
+        "feed rock shaft axis, y (estimate)\",\"kind\":\"length\",\"name\":\"feed_shaft_y\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"feed roc"
+        "k shaft: rear arm to the fork pin P (estimate)\",\"kind\":\"length\",\"name\":\"feed_arm_p\",\"p"
+        "ositive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0293,\"display_unit\":\"mm\",\"doc\""
+        ":\"feed rock shaft: upper arm to the feed-bar pin R (estimate)\",\"kind\":\"length\",\"name\":\""
+        "feed_arm_r\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":"
+        "\"mm\",\"doc\":\"lift rock shaft axis, x (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_"
+        "x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1777,\"display_unit\":\"mm\""
+        ",\"doc\":\"lift rock shaft axis, y (estimate)\",\"kind\":\"length\",\"name\":\"lift_shaft_y\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\""
+        ":\"lift rock shaft: arm to the roller L (estimate)\",\"kind\":\"length\",\"name\":\"lift_arm\",\""
+        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\""
+        ":\"B: hook crank radius (= hook_drive crank)\",\"kind\":\"length\",\"name\":\"hook_crank\",\"pos"
+        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":"
+        "\"B: big rod, pin to pin (= hook_drive big_rod)\",\"kind\":\"length\",\"name\":\"big_rod\",\"pos"
+        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":"
+        "\"B: rock-shaft axis, x (= hook_drive rock_axis_x)\",\"kind\":\"length\",\"name\":\"rock_axis_x\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.21745,\"display_unit\":\"mm\","
+        "\"doc\":\"B: rock-shaft axis, y (= hook_drive rock_axis_y)\",\"kind\":\"length\",\"name\":\"rock"
+        "_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\""
+        ":\"mm\",\"doc\":\"B: rock-shaft arm driven by the big rod (= hook_drive's)\",\"kind\":\"length\""
+        ",\"name\":\"rock_front_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0039"
+        ",\"display_unit\":\"mm\",\"doc\":\"D: lift cam (eccentric) centre from the rock-shaft axis (esti"
+        "mate)\",\"kind\":\"length\",\"name\":\"lift_cam_eccentricity\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.9791297103688189,\"display_unit\":\"deg\",\"doc\":\"D: lift cam cen"
+        "tre's direction on the rock shaft from its front arm (estimate: across the line to the lift shaf"
+        "t at mid-swing)\",\"kind\":\"angle\",\"name\":\"lift_cam_angle\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"rad\"},{\"default\":0.9581857593448869,\"display_unit\":\"deg\",\"doc\":\"D: lift c"
+        "rank's fork centre line on the lift rock shaft, from its roller arm (estimate)\",\"kind\":\"angl"
+        "e\",\"name\":\"lift_fork_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\""
+        ":0.02,\"display_unit\":\"mm\",\"doc\":\"feed dog tip along the feed bar from R (estimate)\",\"ki"
+        "nd\":\"length\",\"name\":\"dog_u\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":"
+        "0.007,\"display_unit\":\"mm\",\"doc\":\"feed bar: its roller slot below the line R\\u2013feed do"
+        "g (estimate)\",\"kind\":\"length\",\"name\":\"bar_slot_v\",\"positive\":true,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":-0.1705,\"display_unit\":\"mm\",\"doc\":\"throat plate surface, y (estim"
+        "ate: the dog rises ~1 mm above it)\",\"kind\":\"length\",\"name\":\"plate_y\",\"positive\":false"
+        ",\"role\":\"throat_plate\",\"unit\":\"m\"},{\"default\":1.0471975511965976,\"display_unit\":\"de"
+        "g\",\"doc\":\"phase of feed_cam relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed"
+        "_cam.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit"
+        "\":\"g\",\"doc\":\"mass of feed_cam\",\"kind\":\"mass\",\"name\":\"feed_cam.mass\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0015,\"display_unit\":\"mm\",\"doc\":\"centr"
+        "e of mass of feed_cam, local u\",\"kind\":\"length\",\"name\":\"feed_cam.com_u\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of m"
+        "ass of feed_cam, local v\",\"kind\":\"length\",\"name\":\"feed_cam.com_v\",\"positive\":false,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of "
+        "inertia of feed_cam about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_cam.inertia\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":-0.03490658503988659,\"disp"
+        "lay_unit\":\"deg\",\"doc\":\"phase of hook_crank relative to the shaft angle\",\"kind\":\"angle\""
+        ",\"name\":\"hook_crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0"
+        ".0,\"display_unit\":\"g\",\"doc\":\"mass of hook_crank\",\"kind\":\"mass\",\"name\":\"hook_crank"
+        ".mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm"
+        "\",\"doc\":\"centre of mass of hook_crank, local u\",\"kind\":\"length\",\"name\":\"hook_crank.c"
+        "om_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\""
+        ",\"doc\":\"centre of mass of hook_crank, local v\",\"kind\":\"length\",\"name\":\"hook_crank.com"
+        "_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**"
+        "2\",\"doc\":\"moment of inertia of hook_crank about its centre of mass\",\"kind\":\"inertia\",\""
+        "name\":\"hook_crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\""
+        ":0.0,\"display_unit\":\"g\",\"doc\":\"mass of regulator\",\"kind\":\"mass\",\"name\":\"regulator"
+        ".mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm"
+        "\",\"doc\":\"centre of mass of regulator, local u\",\"kind\":\"length\",\"name\":\"regulator.com"
+        "_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\""
+        "doc\":\"centre of mass of regulator, local v\",\"kind\":\"length\",\"name\":\"regulator.com_v\","
+        "\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\""
+        "doc\":\"moment of inertia of regulator about its centre of mass\",\"kind\":\"inertia\",\"name\":"
+        "\"regulator.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,"
+        "\"display_unit\":\"g\",\"doc\":\"mass of feed_fork\",\"kind\":\"mass\",\"name\":\"feed_fork.mass"
+        "\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.00012,\"display_unit\":\"kg*"
+        "m**2\",\"doc\":\"moment of inertia of feed_fork about its centre of mass\",\"kind\":\"inertia\","
+        "\"name\":\"feed_fork.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
+        "\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of stitch_block\",\"kind\":\"mass\",\"name\":\"st"
+        "itch_block.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_u"
+        "nit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local u\",\"kind\":\"length\",\"name\":\""
+        "stitch_block.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display"
+        "_unit\":\"mm\",\"doc\":\"centre of mass of stitch_block, local v\",\"kind\":\"length\",\"name\":"
+        "\"stitch_block.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"dis"
+        "play_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of stitch_block about its centre of mass\",\""
+        "kind\":\"inertia\",\"name\":\"stitch_block.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg*m**2\"},{\"default\":0.04,\"display_unit\":\"g\",\"doc\":\"mass of feed_rock_shaft\",\"kind\""
+        ":\"mass\",\"name\":\"feed_rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\""
+        "default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_rock_shaft, local u\",\""
+        "kind\":\"length\",\"name\":\"feed_rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_rock_shaft, loc"
+        "al v\",\"kind\":\"length\",\"name\":\"feed_rock_shaft.com_v\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of fee"
+        "d_rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_rock_shaft.inertia\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.025,\"display_unit\":\"g\""
+        ",\"doc\":\"mass of feed_bar\",\"kind\":\"mass\",\"name\":\"feed_bar.mass\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass"
+        " of feed_bar, local u\",\"kind\":\"length\",\"name\":\"feed_bar.com_u\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"m\"},{\"default\":-0.003,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
+        " feed_bar, local v\",\"kind\":\"length\",\"name\":\"feed_bar.com_v\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inerti"
+        "a of feed_bar about its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_bar.inertia\",\"po"
+        "sitive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"do"
+        "c\":\"mass of lift_rock_shaft\",\"kind\":\"mass\",\"name\":\"lift_rock_shaft.mass\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre "
+        "of mass of lift_rock_shaft, local u\",\"kind\":\"length\",\"name\":\"lift_rock_shaft.com_u\",\"p"
+        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\""
+        "centre of mass of lift_rock_shaft, local v\",\"kind\":\"length\",\"name\":\"lift_rock_shaft.com_"
+        "v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit\":\"kg*m*"
+        "*2\",\"doc\":\"moment of inertia of lift_rock_shaft about its centre of mass\",\"kind\":\"inerti"
+        "a\",\"name\":\"lift_rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},"
+        "{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\""
+        "big_rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit"
+        "\":\"mm\",\"doc\":\"centre of mass of big_rod, local u\",\"kind\":\"length\",\"name\":\"big_rod."
+        "com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\""
+        ",\"doc\":\"centre of mass of big_rod, local v\",\"kind\":\"length\",\"name\":\"big_rod.com_v\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"d"
+        "oc\":\"moment of inertia of big_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"b"
+        "ig_rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"displ"
+        "ay_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\""
+        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
+        ":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"p"
+        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\""
+        "centre of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\""
+        ":\"moment of inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"ro"
+        "ck_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"dis"
+        "play_unit\":\"\",\"doc\":\"Coulomb friction coefficient of O_feed\",\"kind\":\"dimensionless\",\""
+        "name\":\"O_feed.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.004,\""
+        "display_unit\":\"mm\",\"doc\":\"pin radius of O_feed (friction arm)\",\"kind\":\"length\",\"name"
+        "\":\"O_feed.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"dis"
+        "play_unit\":\"\",\"doc\":\"Coulomb friction coefficient of P\",\"kind\":\"dimensionless\",\"name"
+        "\":\"P.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_"
+        "unit\":\"mm\",\"doc\":\"pin radius of P (friction arm)\",\"kind\":\"length\",\"name\":\"P.pin_ra"
+        "dius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\""
+        "doc\":\"Coulomb friction coefficient of Q\",\"kind\":\"dimensionless\",\"name\":\"Q.friction\",\""
+        "positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\""
+        ":\"pin radius of Q (friction arm)\",\"kind\":\"length\",\"name\":\"Q.pin_radius\",\"positive\":f"
+        "alse,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb fric"
+        "tion coefficient of R\",\"kind\":\"dimensionless\",\"name\":\"R.friction\",\"positive\":false,\""
+        "role\":null,\"unit\":\"\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"pin radius of R "
+        "(friction arm)\",\"kind\":\"length\",\"name\":\"R.pin_radius\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of"
+        " O_lift\",\"kind\":\"dimensionless\",\"name\":\"O_lift.friction\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"pin radius of O_lift (fri"
+        "ction arm)\",\"kind\":\"length\",\"name\":\"O_lift.pin_radius\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient o"
+        "f stitch_block.guide\",\"kind\":\"dimensionless\",\"name\":\"stitch_block.guide.friction\",\"pos"
+        "itive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coul"
+        "omb friction coefficient of D\",\"kind\":\"dimensionless\",\"name\":\"D.friction\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb fric"
+        "tion coefficient of L\",\"kind\":\"dimensionless\",\"name\":\"L.friction\",\"positive\":false,\""
+        "role\":null,\"unit\":\"\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\""
+        ":[{\"body\":\"feed_bar\",\"doc\":\"feed dog tip (on the line through R: lifting it does not move"
+        " it sideways)\",\"name\":\"feed_dog\",\"offset\":0,\"role\":\"feed_dog\"},{\"body\":\"feed_fork\""
+        ",\"doc\":\"feed fork on the cam centre line\",\"name\":\"fork_top\",\"offset\":6,\"role\":null},"
+        "{\"body\":\"feed_fork\",\"doc\":\"fork pin Q in the stitch block\",\"name\":\"stitch_pin\",\"off"
+        "set\":12,\"role\":null},{\"body\":\"lift_rock_shaft\",\"doc\":\"lift roller L in the feed bar\","
+        "\"name\":\"lift_roller\",\"offset\":18,\"role\":null},{\"body\":\"rock_shaft\",\"doc\":\"D: lift"
+        " cam centre, in the fork\",\"name\":\"lift_cam\",\"offset\":24,\"role\":null}],\"reactions\":[{\""
+        "a\":\"ground\",\"b\":\"feed_cam\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revol"
+        "ute\",\"name\":\"feed_cam.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"hook_crank\",\"columns"
+        "\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"hook_crank.pivot\",\"offse"
+        "t\":2},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kin"
+        "d\":\"revolute\",\"name\":\"regulator.pivot\",\"offset\":4},{\"a\":\"regulator\",\"b\":\"stitch_"
+        "block\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\""
+        "stitch_block.guide\",\"offset\":6},{\"a\":\"feed_cam\",\"b\":\"feed_fork\",\"columns\":[\"normal"
+        "\"],\"grounded\":false,\"kind\":\"cam\",\"name\":\"cam\",\"offset\":8},{\"a\":\"ground\",\"b\":\""
+        "feed_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\""
+        "O_feed\",\"offset\":9},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_fork\",\"columns\":[\"fx\",\"fy\""
+        "],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"P\",\"offset\":11},{\"a\":\"feed_fork\",\""
+        "b\":\"stitch_block\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name"
+        "\":\"Q\",\"offset\":13},{\"a\":\"feed_rock_shaft\",\"b\":\"feed_bar\",\"columns\":[\"fx\",\"fy\""
+        "],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"R\",\"offset\":15},{\"a\":\"ground\",\"b\""
+        ":\"lift_rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\""
+        ":\"O_lift\",\"offset\":17},{\"a\":\"hook_crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\""
+        "grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":19},{\"a\":\"ground\",\"b\":\"r"
+        "ock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\","
+        "\"offset\":21},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":"
+        "false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":23},{\"a\":\"lift_rock_shaft\",\"b\":\"roc"
+        "k_shaft\",\"columns\":[\"normal\"],\"grounded\":false,\"kind\":\"slot\",\"name\":\"D\",\"offset\""
+        ":25},{\"a\":\"feed_bar\",\"b\":\"lift_rock_shaft\",\"columns\":[\"normal\"],\"grounded\":false,\""
+        "kind\":\"slot\",\"name\":\"L\",\"offset\":26},{\"a\":\"ground\",\"b\":\"feed_cam\",\"columns\":["
+        "\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"feed_cam.drive\""
+        ",\"offset\":27,\"sense\":1},{\"a\":\"ground\",\"b\":\"hook_crank\",\"columns\":[\"torque\"],\"gr"
+        "ounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"hook_crank.drive\",\"offset\":28"
+        ",\"sense\":1},{\"a\":\"ground\",\"b\":\"regulator\",\"columns\":[\"torque\"],\"grounded\":true,\""
+        "input\":\"regulator\",\"kind\":\"drive\",\"name\":\"regulator.drive\",\"offset\":29,\"sense\":1}"
+        "],\"roles\":{\"feed_bar\":{\"kind\":\"body\",\"name\":\"feed_bar\"},\"feed_cam\":{\"kind\":\"bod"
+        "y\",\"name\":\"feed_cam\"},\"feed_dog\":{\"kind\":\"point\",\"name\":\"feed_dog\"},\"stitch_regu"
+        "lator\":{\"kind\":\"input\",\"name\":\"regulator\"},\"throat_plate\":{\"kind\":\"param\",\"name\""
+        ":\"plate_y\"}},\"sizes\":{\"nanchor_out\":126,\"nblock\":4,\"nbranch\":0,\"nc\":198,\"nf\":30,\""
+        "nfo\":65,\"ngroup\":16,\"nload\":20,\"nobs\":121,\"np\":77,\"nq\":7,\"nx\":2}}"
         ;
 }

@@ -391,6 +391,249 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     return SG_OK;
 }
 
+/* sg_hook_drive_rates -- Total ops: 72 */
+int sg_hook_drive_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    const double t0 = c[7]*cq[1];
+    const double t1 = c[16]*cq[0];
+    const double t2 = c[6]*cq[4];
+    const double t3 = c[11]*cq[0] + c[19]*cq[1];
+    const double t4 = cq[3]*q[3];
+    const double t5 = cq[2]*q[3];
+    const double t6 = -t5;
+    const double t7 = c[1]*cx[1] + c[3]*cx[0];
+    const double t8 = c[0]*t7;
+    const double t9 = c[1]*cx[0] + c[2]*cx[1];
+    const double t10 = c[24]*t9;
+    const double t14 = ((xd[0])*(xd[0]));
+    const double t15 = c[0]*t9;
+    const double t16 = c[16]*cq[1];
+    const double t49 = fabs(q[3]);
+    double J[16], rs[4], cs[4];
+    int piv[4];
+    J[0] = t0;
+    J[1] = 0.0;
+    J[2] = c[18]*cq[5];
+    J[3] = 0.0;
+    J[4] = t1;
+    J[5] = 0.0;
+    J[6] = t2;
+    J[7] = 0.0;
+    J[8] = t3;
+    J[9] = t4;
+    J[10] = 0.0;
+    J[11] = -cq[2];
+    J[12] = c[10]*cq[0] + c[11]*cq[1];
+    J[13] = t6;
+    J[14] = 0.0;
+    J[15] = -cq[3];
+    qd[0] = t8*xd[0];
+    qd[1] = t10*xd[0];
+    qd[2] = 0.0;
+    qd[3] = 0.0;
+    rs[0] = c[50];
+    rs[1] = c[51];
+    rs[2] = (1.0/(c[22] + t49));
+    rs[3] = (1.0/(c[23] + t49));
+    if (sg_factor_eq_inl(4, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(4, J, piv, rs, cs, qd);
+    const double t11 = ((qd[0])*(qd[0]));
+    const double t12 = t1*t11;
+    const double t13 = ((qd[2])*(qd[2]));
+    const double t17 = t11*t16;
+    const double t18 = cq[5]*t13;
+    const double t19 = cq[3]*qd[3];
+    const double t20 = qd[1]*t19;
+    const double t21 = qd[1]*t5 + t19;
+    const double t22 = cq[2]*qd[3];
+    const double t23 = -cq[3]*q[3]*qd[1] + t22;
+    qdd[0] = t12 + t13*t2 + t14*t15 + t8*xdd[0];
+    qdd[1] = c[6]*t18 + t10*xdd[0] + t14*t8 + t17;
+    qdd[2] = -qd[1]*t21 - t11*(c[13]*cq[1] + c[19]*cq[0]) - t20;
+    qdd[3] = cq[2]*qd[1]*qd[3] + qd[1]*t23 - t11*t3;
+    sg_solve_eq_inl(4, J, piv, rs, cs, qdd);
+    if (!isfinite((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_hook_drive_observe -- Total ops: 239 */
+int sg_hook_drive_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t7 = c[1]*cx[1] + c[3]*cx[0];
+        const double t8 = c[0]*t7;
+        const double t9 = c[1]*cx[0] + c[2]*cx[1];
+        const double t10 = c[24]*t9;
+        const double t14 = ((xd[0])*(xd[0]));
+        const double t15 = c[0]*t9;
+        const double t24 = c[24]*t7;
+        const double t25 = t24*xd[0];
+        const double t26 = t15*xd[0];
+        const double t27 = t10*t14 + t24*xdd[0];
+        const double t28 = t14*t24 + t15*xdd[0];
+        obs[0] = t15;
+        obs[1] = t8;
+        obs[2] = t25;
+        obs[3] = t26;
+        obs[4] = t27;
+        obs[5] = t28;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        const double t0 = c[7]*cq[1];
+        const double t1 = c[16]*cq[0];
+        const double t11 = ((qd[0])*(qd[0]));
+        const double t12 = t1*t11;
+        const double t16 = c[16]*cq[1];
+        const double t17 = t11*t16;
+        const double t29 = c[7]*cq[0];
+        obs[6] = c[4] + t29;
+        obs[7] = c[5] + t0;
+        obs[8] = qd[0]*t16;
+        obs[9] = qd[0]*t29;
+        obs[10] = qdd[0]*t16 + t12;
+        obs[11] = qdd[0]*t29 + t17;
+        return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        const double t4 = cq[3]*q[3];
+        const double t5 = cq[2]*q[3];
+        const double t19 = cq[3]*qd[3];
+        const double t20 = qd[1]*t19;
+        const double t21 = qd[1]*t5 + t19;
+        const double t22 = cq[2]*qd[3];
+        const double t23 = -cq[3]*q[3]*qd[1] + t22;
+        const double t30 = c[25] + t5;
+        const double t31 = c[26] + t4;
+        const double t32 = cq[2]*qdd[3] - t20;
+        const double t33 = cq[3]*qdd[3] + qd[1]*t22;
+        obs[12] = t30;
+        obs[13] = t31;
+        obs[14] = t23;
+        obs[15] = t21;
+        obs[16] = -qd[1]*t21 - qdd[1]*t4 + t32;
+        obs[17] = qd[1]*t23 + qdd[1]*t5 + t33;
+        return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        const double t34 = c[27]*cq[2] + c[28]*cq[3];
+        const double t35 = c[28]*cq[2] + c[30]*cq[3];
+        const double t36 = ((qd[1])*(qd[1]));
+        obs[18] = c[25] + t34;
+        obs[19] = c[26] + c[27]*cq[3] + c[29]*cq[2];
+        obs[20] = qd[1]*t35;
+        obs[21] = qd[1]*t34;
+        obs[22] = qdd[1]*t35 + t36*(c[29]*cq[3] + c[30]*cq[2]);
+        obs[23] = qdd[1]*t34 + t35*t36;
+        return isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 4: {
+        const double t7 = c[1]*cx[1] + c[3]*cx[0];
+        const double t9 = c[1]*cx[0] + c[2]*cx[1];
+        const double t14 = ((xd[0])*(xd[0]));
+        const double t37 = c[32]*t9 + c[33]*t7;
+        const double t38 = c[33]*t9 + c[35]*t7;
+        obs[24] = c[31] + x[0];
+        obs[25] = xd[0];
+        obs[26] = xdd[0];
+        obs[27] = t37;
+        obs[28] = c[32]*t7 + c[34]*t9;
+        obs[29] = t38*xd[0];
+        obs[30] = t37*xd[0];
+        obs[31] = t14*(c[34]*t7 + c[35]*t9) + t38*xdd[0];
+        obs[32] = t14*t38 + t37*xdd[0];
+        return isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 5: {
+        const double t7 = c[1]*cx[1] + c[3]*cx[0];
+        const double t8 = c[0]*t7;
+        const double t9 = c[1]*cx[0] + c[2]*cx[1];
+        const double t10 = c[24]*t9;
+        const double t13 = ((qd[2])*(qd[2]));
+        const double t14 = ((xd[0])*(xd[0]));
+        const double t15 = c[0]*t9;
+        const double t18 = cq[5]*t13;
+        const double t24 = c[24]*t7;
+        const double t25 = t24*xd[0];
+        const double t26 = t15*xd[0];
+        const double t27 = t10*t14 + t24*xdd[0];
+        const double t28 = t14*t24 + t15*xdd[0];
+        const double t39 = c[36]*cq[4];
+        const double t40 = c[37]*cq[5];
+        obs[33] = q[2];
+        obs[34] = qd[2];
+        obs[35] = qdd[2];
+        obs[36] = t15 + t39;
+        obs[37] = c[36]*cq[5] + t8;
+        obs[38] = qd[2]*t40 + t25;
+        obs[39] = qd[2]*t39 + t26;
+        obs[40] = c[37]*cq[4]*t13 + qdd[2]*t40 + t27;
+        obs[41] = c[37]*t18 + qdd[2]*t39 + t28;
+        return isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 6: {
+        const double t11 = ((qd[0])*(qd[0]));
+        const double t41 = c[38]*cq[0] + c[39]*cq[1];
+        const double t42 = c[39]*cq[0] + c[41]*cq[1];
+        obs[42] = q[0];
+        obs[43] = qd[0];
+        obs[44] = qdd[0];
+        obs[45] = c[4] + t41;
+        obs[46] = c[38]*cq[1] + c[40]*cq[0] + c[5];
+        obs[47] = qd[0]*t42;
+        obs[48] = qd[0]*t41;
+        obs[49] = qdd[0]*t42 + t11*(c[40]*cq[1] + c[41]*cq[0]);
+        obs[50] = qdd[0]*t41 + t11*t42;
+        return isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 7: {
+        const double t36 = ((qd[1])*(qd[1]));
+        const double t43 = c[42]*cq[2] + c[43]*cq[3];
+        const double t44 = c[43]*cq[2] + c[45]*cq[3];
+        obs[51] = q[1];
+        obs[52] = qd[1];
+        obs[53] = qdd[1];
+        obs[54] = c[25] + t43;
+        obs[55] = c[26] + c[42]*cq[3] + c[44]*cq[2];
+        obs[56] = qd[1]*t44;
+        obs[57] = qd[1]*t43;
+        obs[58] = qdd[1]*t44 + t36*(c[44]*cq[3] + c[45]*cq[2]);
+        obs[59] = qdd[1]*t43 + t36*t44;
+        return isfinite((((obs[51] + obs[52]) + (obs[53] + obs[54])) + ((obs[55] + obs[56]) + (obs[57] + (obs[58] + obs[59]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 8: {
+        const double t4 = cq[3]*q[3];
+        const double t5 = cq[2]*q[3];
+        const double t6 = -t5;
+        const double t19 = cq[3]*qd[3];
+        const double t20 = qd[1]*t19;
+        const double t22 = cq[2]*qd[3];
+        const double t30 = c[25] + t5;
+        const double t31 = c[26] + t4;
+        const double t32 = cq[2]*qdd[3] - t20;
+        const double t33 = cq[3]*qdd[3] + qd[1]*t22;
+        const double t45 = c[46]*cq[2] + c[47]*cq[3];
+        const double t46 = c[47]*cq[2] + c[49]*cq[3] - t4;
+        const double t47 = qd[1]*t46 + t22;
+        const double t48 = t45 + t5;
+        obs[60] = q[1];
+        obs[61] = qd[1];
+        obs[62] = qdd[1];
+        obs[63] = t30 + t45;
+        obs[64] = c[46]*cq[3] + c[48]*cq[2] + t31;
+        obs[65] = t47;
+        obs[66] = qd[1]*t48 + t19;
+        obs[67] = qd[1]*(qd[1]*(c[48]*cq[3] + c[49]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
+        obs[68] = qd[1]*t47 + qdd[1]*t48 + t33;
+        return isfinite((((obs[60] + obs[61]) + (obs[62] + obs[63])) + ((obs[64] + obs[65]) + (obs[66] + (obs[67] + obs[68]))))) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_hook_drive_forces -- Total ops: 380 */
 int sg_hook_drive_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -965,6 +1208,8 @@ SG_SIMD_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_
 #endif
 
 static const unsigned char sg_hook_drive_coord_is_angle[4] = { 1, 1, 1, 0 };
+static const int sg_hook_drive_group_start[10] = { 0, 6, 12, 18, 24, 33, 42, 51, 60, 69 };
+static const unsigned char sg_hook_drive_group_always[9] = { 0, 0, 0, 0, 0, 0, 0, 0, 0 };
 
 static const sg_mechanism sg_hook_drive_descriptor = {
     .name = "hook_drive",
@@ -979,10 +1224,15 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .nload = 13,
     .nblock = 2,
     .coord_is_angle = sg_hook_drive_coord_is_angle,
+    .ngroup = 9,
+    .group_start = sg_hook_drive_group_start,
+    .group_always = sg_hook_drive_group_always,
     .constants = sg_hook_drive_constants,
     .closed = sg_hook_drive_closed,
     .residual = sg_hook_drive_residual,
     .motion = sg_hook_drive_motion,
+    .rates = sg_hook_drive_rates,
+    .observe = sg_hook_drive_observe,
     .forces = sg_hook_drive_forces,
     .force_matrix = sg_hook_drive_force_matrix,
     .scales = sg_hook_drive_scales,
@@ -1105,156 +1355,156 @@ const char *sg_hook_drive_manifest(void)
         "\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_hook_drive_anchors\":{\"ops\":70},\"sg_hook_drive_b"
         "locks\":{\"ops\":46},\"sg_hook_drive_closed\":{\"ops\":60},\"sg_hook_drive_constants\":{\"ops\":"
         "89},\"sg_hook_drive_force_matrix\":{\"ops\":138},\"sg_hook_drive_forces\":{\"ops\":380},\"sg_hoo"
-        "k_drive_motion\":{\"ops\":238},\"sg_hook_drive_residual\":{\"ops\":38},\"sg_hook_drive_scales\":"
-        "{\"ops\":7}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body"
-        "\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rock_shaft\",\"component\""
-        ":\"fx\",\"name\":\"rock_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"rock_pin"
-        "\"},{\"body\":\"rock_slider\",\"component\":\"fx\",\"name\":\"slider_pin\"},{\"body\":\"rock_sli"
-        "der\",\"component\":\"fy\",\"name\":\"slider_pin\"},{\"body\":\"lower_shaft\",\"component\":\"fx"
-        "\",\"name\":\"hook_point\"},{\"body\":\"lower_shaft\",\"component\":\"fy\",\"name\":\"hook_point"
-        "\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"big_rod\",\"com"
-        "ponent\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"na"
-        "me\":\"rock_shaft\"},{\"body\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"lower_shaft\""
-        "},{\"body\":\"rock_slider\",\"component\":\"torque\",\"name\":\"rock_slider\"}],\"name\":\"hook_"
-        "drive\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"u"
-        "nit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":"
-        "\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":\"m\"},{\""
-        "name\":\"rock_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"rock_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"slider_pin.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\":\"slider_"
-        "pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pi"
-        "n.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_"
-        "point.x\",\"unit\":\"m\"},{\"name\":\"hook_point.y\",\"unit\":\"m\"},{\"name\":\"hook_point.x_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"hook_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"hook_point.x_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"hook_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\","
-        "\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\""
-        "unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\""
-        ":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad"
-        "/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":"
-        "\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^"
-        "2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":"
-        "\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\","
-        "\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com."
-        "y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.co"
-        "m.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock"
-        "_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"name\""
-        ":\"lower_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"unit\":\"rad/s"
-        "^2\"},{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\",\"unit\":\""
-        "m\"},{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.y_d\",\"uni"
-        "t\":\"m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.com."
-        "y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name\":\"rock_sl"
-        "ider.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad/s^2\"},{\"n"
-        "ame\":\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\":\"m\"},{\"n"
-        "ame\":\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.com.y_dd\",\""
-        "unit\":\"m/s^2\"}],\"params\":[{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"hook crank r"
-        "adius on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":\"big connectin"
-        "g rod, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role"
-        "\":null,\"unit\":\"m\"},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, "
-        "horizontal (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, v"
-        "ertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm driven "
-        "by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\":true,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":0.039009999999999996,\"display_unit\":\"mm\",\"doc\":\""
-        "rock-shaft arm carrying the slider pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm"
-        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":1.0058332479243322,\"display_uni"
-        "t\":\"deg\",\"doc\":\"rear arm direction relative to the front arm (estimate)\",\"kind\":\"angle"
-        "\",\"name\":\"rock_rear_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":"
-        "0.0,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, horizontal: under the needle (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"lower_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},"
-        "{\"default\":-0.1905,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical (estimate)\",\""
-        "kind\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.012,\"display_unit\":\"mm\",\"doc\":\"shuttle point's radius about the lower-shaft a"
-        "xis (estimate)\",\"kind\":\"length\",\"name\":\"hook_radius\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":2.311688594266489,\"display_unit\":\"deg\",\"doc\":\"shuttle point's "
-        "direction on the lower shaft from its slot (set for a 2.0 mm loop lift)\",\"kind\":\"angle\",\"n"
-        "ame\":\"hook_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"displ"
-        "ay_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"na"
-        "me\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"displ"
-        "ay_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre "
-        "of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of c"
-        "rank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank"
-        " about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\""
-        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\"mass of bi"
-        "g_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\"unit\":\""
-        "kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_rod abo"
-        "ut its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of rock"
-        "_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, loca"
-        "l u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, loca"
-        "l v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaf"
-        "t about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":f"
-        "alse,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass"
-        " of lower_shaft\",\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_s"
-        "haft, local u\",\"kind\":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":false,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_s"
-        "haft, local v\",\"kind\":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":false,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia "
-        "of lower_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_shaft.inertia\","
-        "\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"display_unit\":\"g\""
-        ",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\"positive\":fa"
-        "lse,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of "
-        "mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"positive\":f"
-        "alse,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of "
-        "mass of rock_slider, local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positive\":f"
-        "alse,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"mom"
-        "ent of inertia of rock_slider about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_sl"
-        "ider.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display"
-        "_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\",\"name\":\""
-        "B.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\"display_unit\""
-        ":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\"kind\":\"length\",\"name\":\"B.pin_radius\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\""
-        ":\"Coulomb friction coefficient of C\",\"kind\":\"dimensionless\",\"name\":\"C.friction\",\"posi"
-        "tive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\""
-        "pin radius of C (friction arm)\",\"kind\":\"length\",\"name\":\"C.pin_radius\",\"positive\":fals"
+        "k_drive_motion\":{\"ops\":238},\"sg_hook_drive_observe\":{\"ops\":239},\"sg_hook_drive_rates\":{"
+        "\"ops\":72},\"sg_hook_drive_residual\":{\"ops\":38},\"sg_hook_drive_scales\":{\"ops\":7}},\"load"
+        "s\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"comp"
+        "onent\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\""
+        "rock_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"rock_pin\"},{\"body\":\"roc"
+        "k_slider\",\"component\":\"fx\",\"name\":\"slider_pin\"},{\"body\":\"rock_slider\",\"component\""
+        ":\"fy\",\"name\":\"slider_pin\"},{\"body\":\"lower_shaft\",\"component\":\"fx\",\"name\":\"hook_"
+        "point\"},{\"body\":\"lower_shaft\",\"component\":\"fy\",\"name\":\"hook_point\"},{\"body\":\"cra"
+        "nk\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"big_rod\",\"component\":\"torque\""
+        ",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\""
+        "},{\"body\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"lower_shaft\"},{\"body\":\"rock_"
+        "slider\",\"component\":\"torque\",\"name\":\"rock_slider\"}],\"name\":\"hook_drive\",\"observabl"
+        "es\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"nam"
+        "e\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":\"m\"},{\"name\":\"rock_pin.x_"
+        "d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.x_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.x\",\"u"
+        "nit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\":\"slider_pin.x_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.x_dd\",\"unit\":\"m"
+        "/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_point.x\",\"unit\":\""
+        "m\"},{\"name\":\"hook_point.y\",\"unit\":\"m\"},{\"name\":\"hook_point.x_d\",\"unit\":\"m/s\"},{"
+        "\"name\":\"hook_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"hook_point.x_dd\",\"unit\":\"m/s^2\"},"
+        "{\"name\":\"hook_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\""
+        "name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},"
+        "{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\""
+        "crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"cran"
+        "k.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"bi"
+        "g_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"bi"
+        "g_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"b"
+        "ig_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_r"
+        "od.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"bi"
+        "g_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":"
+        "\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\""
+        "},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},"
+        "{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"lower_shaft.angl"
+        "e_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"l"
+        "ower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"l"
+        "ower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.y_d\",\"unit\":\"m/s\"},{\"na"
+        "me\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.com.y_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name\":\"rock_slider.angle_d\",\"u"
+        "nit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_slide"
+        "r.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\":\"m\"},{\"name\":\"rock_slide"
+        "r.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"ro"
+        "ck_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.com.y_dd\",\"unit\":\"m/s^2\"}]"
+        ",\"params\":[{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"hook crank radius on the upper"
+        " shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":\"big connecting rod, pin to pin"
+        " (estimate)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\":true,\"role\":null,\"unit\":"
+        "\"m\"},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, horizontal (estim"
+        "ate)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":false,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"rock-shaft axis, vertical (estimate"
+        ")\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm driven by the big rod (e"
+        "stimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positive\":true,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":0.039009999999999996,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm ca"
+        "rrying the slider pin (estimate)\",\"kind\":\"length\",\"name\":\"rock_rear_arm\",\"positive\":t"
+        "rue,\"role\":null,\"unit\":\"m\"},{\"default\":1.0058332479243322,\"display_unit\":\"deg\",\"doc"
+        "\":\"rear arm direction relative to the front arm (estimate)\",\"kind\":\"angle\",\"name\":\"roc"
+        "k_rear_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_uni"
+        "t\":\"mm\",\"doc\":\"lower-shaft axis, horizontal: under the needle (estimate)\",\"kind\":\"leng"
+        "th\",\"name\":\"lower_axis_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0."
+        "1905,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical (estimate)\",\"kind\":\"length"
+        "\",\"name\":\"lower_axis_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.012"
+        ",\"display_unit\":\"mm\",\"doc\":\"shuttle point's radius about the lower-shaft axis (estimate)\""
+        ",\"kind\":\"length\",\"name\":\"hook_radius\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":2.311688594266489,\"display_unit\":\"deg\",\"doc\":\"shuttle point's direction on the "
+        "lower shaft from its slot (set for a 2.0 mm loop lift)\",\"kind\":\"angle\",\"name\":\"hook_angl"
+        "e\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\""
+        ",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phas"
+        "e\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\""
+        "doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, "
+        "local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\""
+        "kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre "
+        "of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":"
+        "\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
+        ":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of big_rod about its centre of m"
+        "ass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\""
+        "mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default"
+        "\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\"le"
+        "ngth\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
+        "\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"l"
+        "ength\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defaul"
+        "t\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centr"
+        "e of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mass of lower_shaft\""
+        ",\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\""
+        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local u\",\""
+        "kind\":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_shaft, local v\",\""
+        "kind\":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lower_shaft abo"
+        "ut its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_shaft.inertia\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"display_unit\":\"g\",\"doc\":\"mass of"
+        " rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slide"
+        "r, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_slide"
+        "r, local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of "
+        "rock_slider about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_slider.inertia\",\"p"
+        "ositive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\":\"\",\"doc"
+        "\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\",\"name\":\"B.friction\",\"po"
+        "sitive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\""
+        "pin radius of B (friction arm)\",\"kind\":\"length\",\"name\":\"B.pin_radius\",\"positive\":fals"
         "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb frictio"
-        "n coefficient of O4\",\"kind\":\"dimensionless\",\"name\":\"O4.friction\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"pin radius of O4 "
-        "(friction arm)\",\"kind\":\"length\",\"name\":\"O4.pin_radius\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient o"
-        "f O11\",\"kind\":\"dimensionless\",\"name\":\"O11.friction\",\"positive\":false,\"role\":null,\""
-        "unit\":\"\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"pin radius of O11 (friction ar"
-        "m)\",\"kind\":\"length\",\"name\":\"O11.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of E\",\"kind"
-        "\":\"dimensionless\",\"name\":\"E.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\""
-        "default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin radius of E (friction arm)\",\"kind\":\"l"
-        "ength\",\"name\":\"E.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
-        "0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of rock_slider.guide\",\"kind\""
-        ":\"dimensionless\",\"name\":\"rock_slider.guide.friction\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"c"
-        "rank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"ro"
-        "ck_shaft\",\"doc\":\"big-rod pin C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6,\""
-        "role\":null},{\"body\":\"rock_slider\",\"doc\":\"slider pin E on the rock-shaft rear arm\",\"nam"
-        "e\":\"slider_pin\",\"offset\":12,\"role\":null},{\"body\":\"lower_shaft\",\"doc\":\"shuttle poin"
-        "t \\u6446\\u68ad\\u5c16\",\"name\":\"hook_point\",\"offset\":18,\"role\":\"hook_point\"}],\"reac"
-        "tions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\""
-        ":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\"rock_slider\""
-        ",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"rock_s"
-        "lider.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"gro"
-        "unded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_"
-        "shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"of"
-        "fset\":6},{\"a\":\"ground\",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,"
-        "\"kind\":\"revolute\",\"name\":\"O11\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"c"
-        "olumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},"
-        "{\"a\":\"rock_shaft\",\"b\":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kin"
-        "d\":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\""
-        "torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"of"
-        "fset\":14,\"sense\":1}],\"roles\":{\"hook_point\":{\"kind\":\"point\",\"name\":\"hook_point\"},\""
-        "hook_shaft\":{\"kind\":\"body\",\"name\":\"lower_shaft\"}},\"sizes\":{\"nanchor_out\":48,\"nbloc"
-        "k\":2,\"nbranch\":2,\"nc\":102,\"nf\":15,\"nfo\":38,\"nload\":13,\"nobs\":69,\"np\":41,\"nq\":4,"
-        "\"nx\":1}}"
+        "n coefficient of C\",\"kind\":\"dimensionless\",\"name\":\"C.friction\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin radius of C (f"
+        "riction arm)\",\"kind\":\"length\",\"name\":\"C.pin_radius\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of O"
+        "4\",\"kind\":\"dimensionless\",\"name\":\"O4.friction\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"pin radius of O4 (friction arm)\",\""
+        "kind\":\"length\",\"name\":\"O4.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of O11\",\"kind\":\"d"
+        "imensionless\",\"name\":\"O11.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"defa"
+        "ult\":0.005,\"display_unit\":\"mm\",\"doc\":\"pin radius of O11 (friction arm)\",\"kind\":\"leng"
+        "th\",\"name\":\"O11.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0"
+        ".0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of E\",\"kind\":\"dimensionless\""
+        ",\"name\":\"E.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"d"
+        "isplay_unit\":\"mm\",\"doc\":\"pin radius of E (friction arm)\",\"kind\":\"length\",\"name\":\"E"
+        ".pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\""
+        ":\"\",\"doc\":\"Coulomb friction coefficient of rock_slider.guide\",\"kind\":\"dimensionless\",\""
+        "name\":\"rock_slider.guide.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"}],\"point_f"
+        "ields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"cran"
+        "k pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rock_shaft\",\"doc\":\""
+        "big-rod pin C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6,\"role\":null},{\"body\""
+        ":\"rock_slider\",\"doc\":\"slider pin E on the rock-shaft rear arm\",\"name\":\"slider_pin\",\"o"
+        "ffset\":12,\"role\":null},{\"body\":\"lower_shaft\",\"doc\":\"shuttle point \\u6446\\u68ad\\u5c1"
+        "6\",\"name\":\"hook_point\",\"offset\":18,\"role\":\"hook_point\"}],\"reactions\":[{\"a\":\"grou"
+        "nd\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\""
+        ":\"crank.pivot\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\"rock_slider\",\"columns\":[\"norma"
+        "l\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"rock_slider.guide\",\"offse"
+        "t\":2},{\"a\":\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\""
+        ":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\""
+        "fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"offset\":6},{\"a\":\"grou"
+        "nd\",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\""
+        "name\":\"O11\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"]"
+        ",\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\""
+        "b\":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\""
+        ":\"E\",\"offset\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":tr"
+        "ue,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":14,\"sense\":1}],\""
+        "roles\":{\"hook_point\":{\"kind\":\"point\",\"name\":\"hook_point\"},\"hook_shaft\":{\"kind\":\""
+        "body\",\"name\":\"lower_shaft\"}},\"sizes\":{\"nanchor_out\":48,\"nblock\":2,\"nbranch\":2,\"nc\""
+        ":102,\"nf\":15,\"nfo\":38,\"ngroup\":9,\"nload\":13,\"nobs\":69,\"np\":41,\"nq\":4,\"nx\":1}}"
         ;
 }

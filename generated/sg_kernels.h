@@ -11,6 +11,8 @@ void sg_needle_bar_residual(const double *q, const double *cq, const double *x, 
 void sg_needle_bar_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_needle_bar_blocks(const double *jac, double *out);
 int sg_needle_bar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_needle_bar_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_needle_bar_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_needle_bar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_needle_bar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
@@ -24,6 +26,8 @@ void sg_take_up_residual(const double *q, const double *cq, const double *x, con
 void sg_take_up_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_take_up_blocks(const double *jac, double *out);
 int sg_take_up_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_take_up_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_take_up_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_take_up_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_take_up_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_take_up_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
@@ -37,6 +41,8 @@ void sg_hook_drive_residual(const double *q, const double *cq, const double *x, 
 void sg_hook_drive_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_hook_drive_blocks(const double *jac, double *out);
 int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_hook_drive_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_hook_drive_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_hook_drive_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_hook_drive_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
@@ -49,6 +55,8 @@ void sg_feed_residual(const double *q, const double *cq, const double *x, const 
 void sg_feed_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_feed_blocks(const double *jac, double *out);
 int sg_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_feed_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_feed_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_feed_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_feed_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_feed_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
@@ -62,6 +70,8 @@ void sg_overlock_needle_residual(const double *q, const double *cq, const double
 void sg_overlock_needle_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_overlock_needle_blocks(const double *jac, double *out);
 int sg_overlock_needle_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_overlock_needle_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_overlock_needle_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_overlock_needle_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_overlock_needle_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_overlock_needle_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
@@ -75,6 +85,8 @@ void sg_overlock_loopers_residual(const double *q, const double *cq, const doubl
 void sg_overlock_loopers_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_overlock_loopers_blocks(const double *jac, double *out);
 int sg_overlock_loopers_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_overlock_loopers_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_overlock_loopers_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_overlock_loopers_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_overlock_loopers_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
@@ -88,6 +100,8 @@ void sg_overlock_feed_residual(const double *q, const double *cq, const double *
 void sg_overlock_feed_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_overlock_feed_blocks(const double *jac, double *out);
 int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_overlock_feed_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_overlock_feed_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_overlock_feed_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_overlock_feed_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
@@ -101,6 +115,8 @@ void sg_overlock_knife_residual(const double *q, const double *cq, const double 
 void sg_overlock_knife_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_overlock_knife_blocks(const double *jac, double *out);
 int sg_overlock_knife_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_overlock_knife_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_overlock_knife_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_overlock_knife_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_overlock_knife_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_overlock_knife_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
@@ -114,6 +130,8 @@ void sg_overlock_needle_planar_residual(const double *q, const double *cq, const
 void sg_overlock_needle_planar_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_overlock_needle_planar_blocks(const double *jac, double *out);
 int sg_overlock_needle_planar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_overlock_needle_planar_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_overlock_needle_planar_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_overlock_needle_planar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_overlock_needle_planar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_overlock_needle_planar_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
@@ -127,6 +145,8 @@ void sg_overlock_loopers_planar_residual(const double *q, const double *cq, cons
 void sg_overlock_loopers_planar_scales(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 void sg_overlock_loopers_planar_blocks(const double *jac, double *out);
 int sg_overlock_loopers_planar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
+int sg_overlock_loopers_planar_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
+int sg_overlock_loopers_planar_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
 int sg_overlock_loopers_planar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 void sg_overlock_loopers_planar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 void sg_overlock_loopers_planar_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);

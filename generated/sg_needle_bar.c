@@ -223,6 +223,150 @@ int sg_needle_bar_motion(const double *q, const double *cq, const double *x, con
     return SG_OK;
 }
 
+/* sg_needle_bar_rates -- Total ops: 30 */
+int sg_needle_bar_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    const double t0 = c[4]*cq[2];
+    const double t1 = c[1]*cx[1] + c[3]*cx[0];
+    const double t2 = c[0]*t1;
+    const double t3 = c[1]*cx[0] + c[2]*cx[1];
+    const double t4 = c[11]*t3;
+    const double t6 = ((xd[0])*(xd[0]));
+    const double t7 = c[0]*t3;
+    double J[4], rs[2], cs[2];
+    int piv[2];
+    J[0] = 0.0;
+    J[1] = c[8]*cq[3];
+    J[2] = -1.0;
+    J[3] = t0;
+    qd[0] = t2*xd[0];
+    qd[1] = t4*xd[0];
+    rs[0] = c[23];
+    rs[1] = (1.0/(c[10] + fabs(q[0])));
+    if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(2, J, piv, rs, cs, qd);
+    const double t5 = ((qd[1])*(qd[1]));
+    const double t8 = cq[3]*t5;
+    qdd[0] = t0*t5 + t2*xdd[0] + t6*t7;
+    qdd[1] = c[4]*t8 + t2*t6 + t4*xdd[0];
+    sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
+    if (!isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_needle_bar_observe -- Total ops: 90 */
+int sg_needle_bar_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t1 = c[1]*cx[1] + c[3]*cx[0];
+        const double t2 = c[0]*t1;
+        const double t3 = c[1]*cx[0] + c[2]*cx[1];
+        const double t4 = c[11]*t3;
+        const double t6 = ((xd[0])*(xd[0]));
+        const double t7 = c[0]*t3;
+        const double t9 = c[11]*t1;
+        const double t10 = t9*xd[0];
+        const double t11 = t7*xd[0];
+        const double t12 = t4*t6 + t9*xdd[0];
+        const double t13 = t6*t9 + t7*xdd[0];
+        obs[0] = t7;
+        obs[1] = t2;
+        obs[2] = t10;
+        obs[3] = t11;
+        obs[4] = t12;
+        obs[5] = t13;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        obs[6] = c[5];
+        obs[7] = q[0];
+        obs[8] = 0.0;
+        obs[9] = qd[0];
+        obs[10] = 0.0;
+        obs[11] = qdd[0];
+        return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        obs[12] = c[5];
+        obs[13] = c[12] + q[0];
+        obs[14] = 0.0;
+        obs[15] = qd[0];
+        obs[16] = 0.0;
+        obs[17] = qdd[0];
+        return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        obs[18] = c[5];
+        obs[19] = c[13] + q[0];
+        obs[20] = 0.0;
+        obs[21] = qd[0];
+        obs[22] = 0.0;
+        obs[23] = qdd[0];
+        return isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 4: {
+        const double t1 = c[1]*cx[1] + c[3]*cx[0];
+        const double t3 = c[1]*cx[0] + c[2]*cx[1];
+        const double t6 = ((xd[0])*(xd[0]));
+        const double t14 = c[15]*t3 + c[16]*t1;
+        const double t15 = c[16]*t3 + c[18]*t1;
+        obs[24] = c[14] + x[0];
+        obs[25] = xd[0];
+        obs[26] = xdd[0];
+        obs[27] = t14;
+        obs[28] = c[15]*t1 + c[17]*t3;
+        obs[29] = t15*xd[0];
+        obs[30] = t14*xd[0];
+        obs[31] = t15*xdd[0] + t6*(c[17]*t1 + c[18]*t3);
+        obs[32] = t14*xdd[0] + t15*t6;
+        return isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 5: {
+        const double t1 = c[1]*cx[1] + c[3]*cx[0];
+        const double t2 = c[0]*t1;
+        const double t3 = c[1]*cx[0] + c[2]*cx[1];
+        const double t4 = c[11]*t3;
+        const double t5 = ((qd[1])*(qd[1]));
+        const double t6 = ((xd[0])*(xd[0]));
+        const double t7 = c[0]*t3;
+        const double t8 = cq[3]*t5;
+        const double t9 = c[11]*t1;
+        const double t10 = t9*xd[0];
+        const double t11 = t7*xd[0];
+        const double t12 = t4*t6 + t9*xdd[0];
+        const double t13 = t6*t9 + t7*xdd[0];
+        const double t16 = c[19]*cq[2];
+        const double t17 = c[20]*cq[3];
+        obs[33] = q[1];
+        obs[34] = qd[1];
+        obs[35] = qdd[1];
+        obs[36] = t16 + t7;
+        obs[37] = c[19]*cq[3] + t2;
+        obs[38] = qd[1]*t17 + t10;
+        obs[39] = qd[1]*t16 + t11;
+        obs[40] = c[20]*cq[2]*t5 + qdd[1]*t17 + t12;
+        obs[41] = c[20]*t8 + qdd[1]*t16 + t13;
+        return isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 6: {
+        obs[42] = (0.5)*3.141592653589793;
+        obs[43] = 0.0;
+        obs[44] = 0.0;
+        obs[45] = c[21];
+        obs[46] = c[22] + q[0];
+        obs[47] = 0.0;
+        obs[48] = qd[0];
+        obs[49] = 0.0;
+        obs[50] = qdd[0];
+        return isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50]))))) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_needle_bar_forces -- Total ops: 190 */
 int sg_needle_bar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -570,6 +714,8 @@ SG_SIMD_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_
 #endif
 
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };
+static const int sg_needle_bar_group_start[8] = { 0, 6, 12, 18, 24, 33, 42, 51 };
+static const unsigned char sg_needle_bar_group_always[7] = { 0, 0, 0, 0, 0, 0, 0 };
 
 static const sg_mechanism sg_needle_bar_descriptor = {
     .name = "needle_bar",
@@ -584,10 +730,15 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .nload = 11,
     .nblock = 2,
     .coord_is_angle = sg_needle_bar_coord_is_angle,
+    .ngroup = 7,
+    .group_start = sg_needle_bar_group_start,
+    .group_always = sg_needle_bar_group_always,
     .constants = sg_needle_bar_constants,
     .closed = sg_needle_bar_closed,
     .residual = sg_needle_bar_residual,
     .motion = sg_needle_bar_motion,
+    .rates = sg_needle_bar_rates,
+    .observe = sg_needle_bar_observe,
     .forces = sg_needle_bar_forces,
     .force_matrix = sg_needle_bar_force_matrix,
     .scales = sg_needle_bar_scales,
@@ -663,108 +814,109 @@ const char *sg_needle_bar_manifest(void)
         ":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_needle_bar_anch"
         "ors\":{\"ops\":25},\"sg_needle_bar_blocks\":{\"ops\":14},\"sg_needle_bar_closed\":{\"ops\":15},\""
         "sg_needle_bar_constants\":{\"ops\":44},\"sg_needle_bar_force_matrix\":{\"ops\":71},\"sg_needle_b"
-        "ar_forces\":{\"ops\":190},\"sg_needle_bar_motion\":{\"ops\":79},\"sg_needle_bar_residual\":{\"op"
-        "s\":16},\"sg_needle_bar_scales\":{\"ops\":4}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\""
-        ",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"bod"
-        "y\":\"needle_bar\",\"component\":\"fx\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"compon"
-        "ent\":\"fy\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"nee"
-        "dle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"ne"
-        "edle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"component\""
-        ":\"fy\",\"name\":\"needle_point\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank"
-        "\"},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"rod\"},{\"body\":\"needle_bar\",\"comp"
-        "onent\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"needle_bar\",\"observables\":[{\"name\":"
-        "\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin."
-        "x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.x\""
-        ",\"unit\":\"m\"},{\"name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"link_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/s^2"
-        "\"},{\"name\":\"link_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{"
-        "\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name"
-        "\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"name"
-        "\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"n"
-        "ame\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{"
-        "\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"c"
-        "rank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank"
-        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod"
-        ".angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle_d"
-        "d\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"unit"
-        "\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},"
-        "{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad"
-        "/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"u"
-        "nit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"u"
-        "nit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_d"
-        "d\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"de"
-        "fault\":0.0167,\"display_unit\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u00a73)\",\"kind\":"
-        "\"length\",\"name\":\"crank\",\"positive\":true,\"role\":\"needle_crank_radius\",\"unit\":\"m\"}"
-        ",{\"default\":0.05,\"display_unit\":\"mm\",\"doc\":\"needle-bar link BC, pin to pin (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":\"needle_rod_length\",\"unit\":"
-        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"horizontal offset of the needle-bar ax"
-        "is from the shaft axis\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":\"n"
-        "eedle_bar_offset\",\"unit\":\"m\"},{\"default\":0.062,\"display_unit\":\"mm\",\"doc\":\"needle e"
-        "ye below the link pin C along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\""
-        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"d"
-        "oc\":\"needle point below the eye's centre (estimate, 130/705 H size 80-90)\",\"kind\":\"length\""
-        ",\"name\":\"point_below_eye\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001"
-        "2,\"display_unit\":\"mm\",\"doc\":\"length of the needle eye along the needle (estimate)\",\"kin"
-        "d\":\"length\",\"name\":\"eye_length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\""
-        ":\"m\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, w"
-        "here the hook point passes (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive"
-        "\":true,\"role\":\"needle_scarf\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"do"
-        "c\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\""
-        "positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\""
-        ":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local"
-        " u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\""
-        ":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
-        "\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mas"
-        "s\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
-        "kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\""
-        "name\":\"rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":2.5e-06,\"dis"
-        "play_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rod about its centre of mass\",\"kind\":\""
-        "inertia\",\"name\":\"rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"def"
-        "ault\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\""
-        "needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display"
-        "_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\""
-        "needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_u"
-        "nit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"ne"
-        "edle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-05,\"display"
-        "_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\""
-        ":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2"
-        "\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\""
-        ":\"dimensionless\",\"name\":\"B.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"de"
-        "fault\":0.003,\"display_unit\":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\"kind\":\"leng"
-        "th\",\"name\":\"B.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
-        ",\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of C\",\"kind\":\"dimensionless\","
-        "\"name\":\"C.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"di"
-        "splay_unit\":\"mm\",\"doc\":\"pin radius of C (friction arm)\",\"kind\":\"length\",\"name\":\"C."
-        "pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
-        "\"\",\"doc\":\"Coulomb friction coefficient of needle_bar.guide\",\"kind\":\"dimensionless\",\"n"
-        "ame\":\"needle_bar.guide.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"}],\"point_fie"
-        "lds\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank "
-        "pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"ne"
-        "edle-bar link pin C\",\"name\":\"link_pin\",\"offset\":6,\"role\":null},{\"body\":\"needle_bar\""
-        ",\"doc\":\"needle eye (its centre)\",\"name\":\"needle_eye\",\"offset\":12,\"role\":\"needle_eye"
-        "\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":18,\""
-        "role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\""
-        "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"gr"
-        "ound\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"pri"
-        "smatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":"
-        "[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"r"
-        "od\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\""
-        "name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded"
-        "\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1"
-        "}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_bar_offset\":{"
-        "\"kind\":\"param\",\"name\":\"offset\"},\"needle_crank\":{\"kind\":\"body\",\"name\":\"crank\"},"
-        "\"needle_crank_radius\":{\"kind\":\"param\",\"name\":\"crank\"},\"needle_eye\":{\"kind\":\"point"
-        "\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\""
-        "needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needle_rod\":{\"kind\":\"body\","
-        "\"name\":\"rod\"},\"needle_rod_length\":{\"kind\":\"param\",\"name\":\"rod\"},\"needle_scarf\":{"
-        "\"kind\":\"param\",\"name\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":32,\"nblock\":2,\"nbra"
-        "nch\":1,\"nc\":53,\"nf\":9,\"nfo\":26,\"nload\":11,\"nobs\":51,\"np\":23,\"nq\":2,\"nx\":1}}"
+        "ar_forces\":{\"ops\":190},\"sg_needle_bar_motion\":{\"ops\":79},\"sg_needle_bar_observe\":{\"ops"
+        "\":90},\"sg_needle_bar_rates\":{\"ops\":30},\"sg_needle_bar_residual\":{\"ops\":16},\"sg_needle_"
+        "bar_scales\":{\"ops\":4}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_p"
+        "in\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"needle_bar\","
+        "\"component\":\"fx\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name"
+        "\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\"body\""
+        ":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"compone"
+        "nt\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\""
+        "needle_point\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"rod"
+        "\",\"component\":\"torque\",\"name\":\"rod\"},{\"body\":\"needle_bar\",\"component\":\"torque\","
+        "\"name\":\"needle_bar\"}],\"name\":\"needle_bar\",\"observables\":[{\"name\":\"crank_pin.x\",\"u"
+        "nit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/"
+        "s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2"
+        "\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin.x\",\"unit\":\"m\"},{\""
+        "name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"l"
+        "ink_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link"
+        "_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_ey"
+        "e.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"name\":\"needle_point.y\""
+        ",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point."
+        "y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d"
+        "\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com."
+        "x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit"
+        "\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":"
+        "\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"r"
+        "ad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^"
+        "2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\""
+        "rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com."
+        "x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar"
+        ".angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"need"
+        "le_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\""
+        ":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name"
+        "\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0167,\"displ"
+        "ay_unit\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u00a73)\",\"kind\":\"length\",\"name\":\""
+        "crank\",\"positive\":true,\"role\":\"needle_crank_radius\",\"unit\":\"m\"},{\"default\":0.05,\"d"
+        "isplay_unit\":\"mm\",\"doc\":\"needle-bar link BC, pin to pin (estimate)\",\"kind\":\"length\",\""
+        "name\":\"rod\",\"positive\":true,\"role\":\"needle_rod_length\",\"unit\":\"m\"},{\"default\":0.0"
+        ",\"display_unit\":\"mm\",\"doc\":\"horizontal offset of the needle-bar axis from the shaft axis\""
+        ",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":\"needle_bar_offset\",\"uni"
+        "t\":\"m\"},{\"default\":0.062,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link pin C "
+        "along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":true,\"ro"
+        "le\":null,\"unit\":\"m\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"needle point bel"
+        "ow the eye's centre (estimate, 130/705 H size 80-90)\",\"kind\":\"length\",\"name\":\"point_belo"
+        "w_eye\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0012,\"display_unit\":\"m"
+        "m\",\"doc\":\"length of the needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\""
+        ":\"eye_length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0."
+        "004,\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, where the hook point pas"
+        "ses (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"need"
+        "le_scarf\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank re"
+        "lative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"k"
+        "ind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"defa"
+        "ult\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"length"
+        "\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":"
+        "\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit"
+        "\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\"kind\":\"inerti"
+        "a\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
+        "\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\","
+        "\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":2.5e-06,\"display_unit\":\"kg*m**"
+        "2\",\"doc\":\"moment of inertia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":"
+        "\"rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"disp"
+        "lay_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\""
+        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc"
+        "\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":"
+        "\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar.com_v\",\"po"
+        "sitive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-05,\"display_unit\":\"kg*m**2\",\""
+        "doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\":\"inertia\",\"name\""
+        ":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,"
+        "\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\",\""
+        "name\":\"B.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\"displ"
+        "ay_unit\":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\"kind\":\"length\",\"name\":\"B.pin"
+        "_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\""
+        ",\"doc\":\"Coulomb friction coefficient of C\",\"kind\":\"dimensionless\",\"name\":\"C.friction\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"d"
+        "oc\":\"pin radius of C (friction arm)\",\"kind\":\"length\",\"name\":\"C.pin_radius\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb "
+        "friction coefficient of needle_bar.guide\",\"kind\":\"dimensionless\",\"name\":\"needle_bar.guid"
+        "e.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"}],\"point_fields\":[\"x\",\"y\",\"vx"
+        "\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"cran"
+        "k_pin\",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle-bar link pin C\",\""
+        "name\":\"link_pin\",\"offset\":6,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye (i"
+        "ts centre)\",\"name\":\"needle_eye\",\"offset\":12,\"role\":\"needle_eye\"},{\"body\":\"needle_b"
+        "ar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":18,\"role\":\"needle_point\"}"
+        "],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true"
+        ",\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_b"
+        "ar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"nee"
+        "dle_bar.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"groun"
+        "ded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar"
+        "\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\""
+        ":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"sha"
+        "ft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"needle_"
+        "bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_bar_offset\":{\"kind\":\"param\",\"na"
+        "me\":\"offset\"},\"needle_crank\":{\"kind\":\"body\",\"name\":\"crank\"},\"needle_crank_radius\""
+        ":{\"kind\":\"param\",\"name\":\"crank\"},\"needle_eye\":{\"kind\":\"point\",\"name\":\"needle_ey"
+        "e\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\"needle_point\":{\"kind"
+        "\":\"point\",\"name\":\"needle_point\"},\"needle_rod\":{\"kind\":\"body\",\"name\":\"rod\"},\"ne"
+        "edle_rod_length\":{\"kind\":\"param\",\"name\":\"rod\"},\"needle_scarf\":{\"kind\":\"param\",\"n"
+        "ame\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":32,\"nblock\":2,\"nbranch\":1,\"nc\":53,\"nf"
+        "\":9,\"nfo\":26,\"ngroup\":7,\"nload\":11,\"nobs\":51,\"np\":23,\"nq\":2,\"nx\":1}}"
         ;
 }

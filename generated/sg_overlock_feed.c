@@ -460,6 +460,340 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     return SG_OK;
 }
 
+/* sg_overlock_feed_rates -- Total ops: 113 */
+int sg_overlock_feed_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    const double t0 = c[24]*cq[1];
+    const double t1 = c[8]*cq[0];
+    const double t2 = c[7]*cq[2];
+    const double t3 = c[26]*cq[1];
+    const double t4 = c[27]*cq[5];
+    const double t5 = c[11]*cq[0];
+    const double t6 = c[16]*cq[4];
+    const double t7 = c[22]*cq[6];
+    const double t8 = c[1]*cx[3] + c[3]*cx[2];
+    const double t9 = c[1]*cx[2] + c[2]*cx[3];
+    const double t10 = cx[0]*t8 + cx[1]*t9;
+    const double t11 = c[4]*t10;
+    const double t12 = c[1]*cx[1] + c[3]*cx[0];
+    const double t13 = c[33]*t12;
+    const double t14 = c[32]*t10;
+    const double t15 = t13 + t14;
+    const double t16 = t15*xd[0];
+    const double t17 = cx[0]*t9 - cx[1]*t8;
+    const double t18 = c[32]*t17;
+    const double t19 = t18*xd[1];
+    const double t20 = c[1]*cx[0] + c[2]*cx[1];
+    const double t21 = c[0]*t20;
+    const double t22 = c[4]*t17 + t21;
+    const double t23 = c[13]*cx[1] + c[15]*cx[0];
+    const double t24 = c[23]*t23;
+    const double t25 = t24*xd[0];
+    const double t26 = c[13]*cx[0] + c[14]*cx[1];
+    const double t27 = c[12]*t26;
+    const double t28 = t27*xd[0];
+    const double t32 = c[33]*t20;
+    const double t34 = c[8]*cq[1];
+    const double t36 = t14*xd[1];
+    const double t39 = ((xd[0])*(xd[0]));
+    const double t40 = c[23]*t26*t39 + t24*xdd[0];
+    const double t41 = c[11]*cq[1];
+    const double t42 = c[16]*cq[5];
+    const double t44 = t24*t39 + t27*xdd[0];
+    double J[16], rs[4], cs[4];
+    int piv[4];
+    J[0] = t0;
+    J[1] = c[25]*cq[3];
+    J[2] = 0.0;
+    J[3] = 0.0;
+    J[4] = t1;
+    J[5] = t2;
+    J[6] = 0.0;
+    J[7] = 0.0;
+    J[8] = t3;
+    J[9] = 0.0;
+    J[10] = t4;
+    J[11] = c[17]*cq[7];
+    J[12] = t5;
+    J[13] = 0.0;
+    J[14] = t6;
+    J[15] = t7;
+    qd[0] = t11*xd[1] - t16;
+    qd[1] = t19 - t22*xd[0];
+    qd[2] = t25;
+    qd[3] = t28;
+    rs[0] = c[62];
+    rs[1] = c[63];
+    rs[2] = c[64];
+    rs[3] = c[65];
+    if (sg_factor_eq_inl(4, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(4, J, piv, rs, cs, qd);
+    const double t29 = ((qd[1])*(qd[1]));
+    const double t30 = ((qd[0])*(qd[0]));
+    const double t31 = t1*t30;
+    const double t33 = cq[3]*t29;
+    const double t35 = t30*t34;
+    const double t37 = ((qd[2])*(qd[2]));
+    const double t38 = ((qd[3])*(qd[3]));
+    const double t43 = cq[7]*t38;
+    qdd[0] = t11*xdd[1] - t15*xdd[0] + t2*t29 + t31 - xd[0]*(t19 + xd[0]*(t18 + t32)) - xd[1]*(t18*xd[0] + t19);
+    qdd[1] = c[7]*t33 + t18*xdd[1] - t22*xdd[0] + t35 - xd[0]*(t16 + t36) - xd[1]*(t14*xd[0] + t36);
+    qdd[2] = t30*t5 + t37*t6 + t38*t7 + t40;
+    qdd[3] = c[22]*t43 + t30*t41 + t37*t42 + t44;
+    sg_solve_eq_inl(4, J, piv, rs, cs, qdd);
+    if (!isfinite((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_overlock_feed_observe -- Total ops: 366 */
+int sg_overlock_feed_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t3 = c[26]*cq[1];
+        const double t5 = c[11]*cq[0];
+        const double t30 = ((qd[0])*(qd[0]));
+        const double t41 = c[11]*cq[1];
+        const double t45 = c[5] + t5;
+        const double t46 = c[6] + t41;
+        const double t47 = qd[0]*t3;
+        const double t48 = qd[0]*t5;
+        const double t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const double t50 = qdd[0]*t5 + t3*t30;
+        obs[0] = t45;
+        obs[1] = t46;
+        obs[2] = t47;
+        obs[3] = t48;
+        obs[4] = t49;
+        obs[5] = t50;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        const double t3 = c[26]*cq[1];
+        const double t4 = c[27]*cq[5];
+        const double t5 = c[11]*cq[0];
+        const double t6 = c[16]*cq[4];
+        const double t30 = ((qd[0])*(qd[0]));
+        const double t37 = ((qd[2])*(qd[2]));
+        const double t41 = c[11]*cq[1];
+        const double t42 = c[16]*cq[5];
+        const double t45 = c[5] + t5;
+        const double t46 = c[6] + t41;
+        const double t47 = qd[0]*t3;
+        const double t48 = qd[0]*t5;
+        const double t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const double t50 = qdd[0]*t5 + t3*t30;
+        const double t51 = cq[4]*t37;
+        obs[6] = t45 + t6;
+        obs[7] = t42 + t46;
+        obs[8] = qd[2]*t4 + t47;
+        obs[9] = qd[2]*t6 + t48;
+        obs[10] = c[27]*t51 + qdd[2]*t4 + t49;
+        obs[11] = qdd[2]*t6 + t37*t4 + t50;
+        return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        const double t3 = c[26]*cq[1];
+        const double t5 = c[11]*cq[0];
+        const double t30 = ((qd[0])*(qd[0]));
+        const double t37 = ((qd[2])*(qd[2]));
+        const double t41 = c[11]*cq[1];
+        const double t45 = c[5] + t5;
+        const double t46 = c[6] + t41;
+        const double t47 = qd[0]*t3;
+        const double t48 = qd[0]*t5;
+        const double t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const double t50 = qdd[0]*t5 + t3*t30;
+        const double t51 = cq[4]*t37;
+        const double t52 = c[34]*cq[4];
+        const double t53 = c[35]*cq[5];
+        obs[12] = t45 + t52;
+        obs[13] = c[34]*cq[5] + t46;
+        obs[14] = qd[2]*t53 + t47;
+        obs[15] = qd[2]*t52 + t48;
+        obs[16] = c[35]*t51 + qdd[2]*t53 + t49;
+        obs[17] = qdd[2]*t52 + t37*t53 + t50;
+        return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        const double t23 = c[13]*cx[1] + c[15]*cx[0];
+        const double t24 = c[23]*t23;
+        const double t25 = t24*xd[0];
+        const double t26 = c[13]*cx[0] + c[14]*cx[1];
+        const double t27 = c[12]*t26;
+        const double t28 = t27*xd[0];
+        const double t39 = ((xd[0])*(xd[0]));
+        const double t40 = c[23]*t26*t39 + t24*xdd[0];
+        const double t44 = t24*t39 + t27*xdd[0];
+        const double t54 = c[12]*t23;
+        obs[18] = t27;
+        obs[19] = t54;
+        obs[20] = t25;
+        obs[21] = t28;
+        obs[22] = t40;
+        obs[23] = t44;
+        return isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 4: {
+        const double t12 = c[1]*cx[1] + c[3]*cx[0];
+        const double t20 = c[1]*cx[0] + c[2]*cx[1];
+        const double t39 = ((xd[0])*(xd[0]));
+        const double t55 = c[36] + x[0];
+        const double t56 = c[37]*t20 + c[38]*t12;
+        const double t57 = c[38]*t20 + c[40]*t12;
+        obs[24] = t55;
+        obs[25] = xd[0];
+        obs[26] = xdd[0];
+        obs[27] = t56;
+        obs[28] = c[37]*t12 + c[39]*t20;
+        obs[29] = t57*xd[0];
+        obs[30] = t56*xd[0];
+        obs[31] = t39*(c[39]*t12 + c[40]*t20) + t57*xdd[0];
+        obs[32] = t39*t57 + t56*xdd[0];
+        return isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 5: {
+        const double t8 = c[1]*cx[3] + c[3]*cx[2];
+        const double t9 = c[1]*cx[2] + c[2]*cx[3];
+        const double t10 = cx[0]*t8 + cx[1]*t9;
+        const double t12 = c[1]*cx[1] + c[3]*cx[0];
+        const double t13 = c[33]*t12;
+        const double t17 = cx[0]*t9 - cx[1]*t8;
+        const double t20 = c[1]*cx[0] + c[2]*cx[1];
+        const double t21 = c[0]*t20;
+        const double t32 = c[33]*t20;
+        const double t55 = c[36] + x[0];
+        const double t58 = c[41]*t17 + c[42]*t10;
+        const double t59 = t21 + t58;
+        const double t60 = c[42]*t17 + c[44]*t10;
+        const double t61 = t60*xd[1];
+        const double t62 = t13 + t60;
+        const double t63 = t61 + t62*xd[0];
+        const double t64 = c[43]*t10 + c[44]*t17;
+        const double t65 = t64*xd[1];
+        obs[33] = t55 + x[1];
+        obs[34] = xd[0] + xd[1];
+        obs[35] = xdd[0] + xdd[1];
+        obs[36] = t59;
+        obs[37] = c[0]*t12 + c[41]*t10 + c[43]*t17;
+        obs[38] = t63;
+        obs[39] = t58*xd[1] + t59*xd[0];
+        obs[40] = t60*xdd[1] + t62*xdd[0] + xd[0]*(t65 + xd[0]*(t32 + t64)) + xd[1]*(t64*xd[0] + t65);
+        obs[41] = t58*xdd[1] + t59*xdd[0] + t63*xd[0] + xd[1]*(t60*xd[0] + t61);
+        return isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 6: {
+        const double t23 = c[13]*cx[1] + c[15]*cx[0];
+        const double t26 = c[13]*cx[0] + c[14]*cx[1];
+        const double t39 = ((xd[0])*(xd[0]));
+        const double t66 = c[46]*t26 + c[47]*t23;
+        const double t67 = c[47]*t26 + c[49]*t23;
+        obs[42] = c[45] + x[0];
+        obs[43] = xd[0];
+        obs[44] = xdd[0];
+        obs[45] = t66;
+        obs[46] = c[46]*t23 + c[48]*t26;
+        obs[47] = t67*xd[0];
+        obs[48] = t66*xd[0];
+        obs[49] = t39*(c[48]*t23 + c[49]*t26) + t67*xdd[0];
+        obs[50] = t39*t67 + t66*xdd[0];
+        return isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 7: {
+        const double t0 = c[24]*cq[1];
+        const double t1 = c[8]*cq[0];
+        const double t29 = ((qd[1])*(qd[1]));
+        const double t30 = ((qd[0])*(qd[0]));
+        const double t31 = t1*t30;
+        const double t33 = cq[3]*t29;
+        const double t34 = c[8]*cq[1];
+        const double t35 = t30*t34;
+        const double t68 = c[24]*cq[0];
+        const double t69 = c[50]*cq[2];
+        const double t70 = c[51]*cq[3];
+        obs[51] = q[1];
+        obs[52] = qd[1];
+        obs[53] = qdd[1];
+        obs[54] = c[5] + t68 + t69;
+        obs[55] = c[50]*cq[3] + c[6] + t0;
+        obs[56] = qd[0]*t34 + qd[1]*t70;
+        obs[57] = qd[0]*t68 + qd[1]*t69;
+        obs[58] = c[51]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
+        obs[59] = c[51]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
+        return isfinite((((obs[51] + obs[52]) + (obs[53] + obs[54])) + ((obs[55] + obs[56]) + (obs[57] + (obs[58] + obs[59]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 8: {
+        const double t30 = ((qd[0])*(qd[0]));
+        const double t71 = c[52]*cq[0] + c[53]*cq[1];
+        const double t72 = c[53]*cq[0] + c[55]*cq[1];
+        obs[60] = q[0];
+        obs[61] = qd[0];
+        obs[62] = qdd[0];
+        obs[63] = c[5] + t71;
+        obs[64] = c[52]*cq[1] + c[54]*cq[0] + c[6];
+        obs[65] = qd[0]*t72;
+        obs[66] = qd[0]*t71;
+        obs[67] = qdd[0]*t72 + t30*(c[54]*cq[1] + c[55]*cq[0]);
+        obs[68] = qdd[0]*t71 + t30*t72;
+        return isfinite((((obs[60] + obs[61]) + (obs[62] + obs[63])) + ((obs[64] + obs[65]) + (obs[66] + (obs[67] + obs[68]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 9: {
+        const double t3 = c[26]*cq[1];
+        const double t5 = c[11]*cq[0];
+        const double t30 = ((qd[0])*(qd[0]));
+        const double t37 = ((qd[2])*(qd[2]));
+        const double t41 = c[11]*cq[1];
+        const double t45 = c[5] + t5;
+        const double t46 = c[6] + t41;
+        const double t47 = qd[0]*t3;
+        const double t48 = qd[0]*t5;
+        const double t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const double t50 = qdd[0]*t5 + t3*t30;
+        const double t73 = c[56]*cq[4] + c[57]*cq[5];
+        const double t74 = c[57]*cq[4] + c[59]*cq[5];
+        obs[69] = q[2];
+        obs[70] = qd[2];
+        obs[71] = qdd[2];
+        obs[72] = t45 + t73;
+        obs[73] = c[56]*cq[5] + c[58]*cq[4] + t46;
+        obs[74] = qd[2]*t74 + t47;
+        obs[75] = qd[2]*t73 + t48;
+        obs[76] = qdd[2]*t74 + t37*(c[58]*cq[5] + c[59]*cq[4]) + t49;
+        obs[77] = qdd[2]*t73 + t37*t74 + t50;
+        return isfinite((((obs[69] + obs[70]) + (obs[71] + obs[72])) + ((obs[73] + obs[74]) + (obs[75] + (obs[76] + obs[77]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 10: {
+        const double t23 = c[13]*cx[1] + c[15]*cx[0];
+        const double t24 = c[23]*t23;
+        const double t25 = t24*xd[0];
+        const double t26 = c[13]*cx[0] + c[14]*cx[1];
+        const double t27 = c[12]*t26;
+        const double t28 = t27*xd[0];
+        const double t38 = ((qd[3])*(qd[3]));
+        const double t39 = ((xd[0])*(xd[0]));
+        const double t40 = c[23]*t26*t39 + t24*xdd[0];
+        const double t43 = cq[7]*t38;
+        const double t44 = t24*t39 + t27*xdd[0];
+        const double t54 = c[12]*t23;
+        const double t75 = c[60]*cq[6];
+        const double t76 = c[61]*cq[7];
+        obs[78] = q[3];
+        obs[79] = qd[3];
+        obs[80] = qdd[3];
+        obs[81] = t27 + t75;
+        obs[82] = c[60]*cq[7] + t54;
+        obs[83] = qd[3]*t76 + t25;
+        obs[84] = qd[3]*t75 + t28;
+        obs[85] = c[61]*cq[6]*t38 + qdd[3]*t76 + t40;
+        obs[86] = c[61]*t43 + qdd[3]*t75 + t44;
+        return isfinite((((obs[78] + obs[79]) + (obs[80] + obs[81])) + ((obs[82] + obs[83]) + (obs[84] + (obs[85] + obs[86]))))) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_overlock_feed_forces -- Total ops: 332 */
 int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -1096,6 +1430,8 @@ SG_SIMD_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overl
 #endif
 
 static const unsigned char sg_overlock_feed_coord_is_angle[4] = { 1, 1, 1, 1 };
+static const int sg_overlock_feed_group_start[12] = { 0, 6, 12, 18, 24, 33, 42, 51, 60, 69, 78, 87 };
+static const unsigned char sg_overlock_feed_group_always[11] = { 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
 
 static const sg_mechanism sg_overlock_feed_descriptor = {
     .name = "overlock_feed",
@@ -1110,10 +1446,15 @@ static const sg_mechanism sg_overlock_feed_descriptor = {
     .nload = 15,
     .nblock = 2,
     .coord_is_angle = sg_overlock_feed_coord_is_angle,
+    .ngroup = 11,
+    .group_start = sg_overlock_feed_group_start,
+    .group_always = sg_overlock_feed_group_always,
     .constants = sg_overlock_feed_constants,
     .closed = sg_overlock_feed_closed,
     .residual = sg_overlock_feed_residual,
     .motion = sg_overlock_feed_motion,
+    .rates = sg_overlock_feed_rates,
+    .observe = sg_overlock_feed_observe,
     .forces = sg_overlock_feed_forces,
     .force_matrix = sg_overlock_feed_force_matrix,
     .scales = sg_overlock_feed_scales,
@@ -1235,170 +1576,171 @@ const char *sg_overlock_feed_manifest(void)
         "}],\"kernels\":{\"sg_overlock_feed_anchors\":{\"ops\":100},\"sg_overlock_feed_blocks\":{\"ops\":"
         "46},\"sg_overlock_feed_closed\":{\"ops\":65},\"sg_overlock_feed_constants\":{\"ops\":92},\"sg_ov"
         "erlock_feed_force_matrix\":{\"ops\":187},\"sg_overlock_feed_forces\":{\"ops\":332},\"sg_overlock"
-        "_feed_motion\":{\"ops\":339},\"sg_overlock_feed_residual\":{\"ops\":61},\"sg_overlock_feed_scale"
-        "s\":{\"ops\":4}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rear_pin\"}"
-        ",{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"rear_pin\"},{\"body\":\"rack\",\"compo"
-        "nent\":\"fx\",\"name\":\"tooth_f\"},{\"body\":\"rack\",\"component\":\"fy\",\"name\":\"tooth_f\""
-        "},{\"body\":\"rack\",\"component\":\"fx\",\"name\":\"tooth_g\"},{\"body\":\"rack\",\"component\""
-        ":\"fy\",\"name\":\"tooth_g\"},{\"body\":\"lift_eccentric\",\"component\":\"fx\",\"name\":\"lift_"
-        "pin\"},{\"body\":\"lift_eccentric\",\"component\":\"fy\",\"name\":\"lift_pin\"},{\"body\":\"feed"
-        "_eccentric\",\"component\":\"torque\",\"name\":\"feed_eccentric\"},{\"body\":\"stitch_eccentric\""
-        ",\"component\":\"torque\",\"name\":\"stitch_eccentric\"},{\"body\":\"lift_eccentric\",\"componen"
-        "t\":\"torque\",\"name\":\"lift_eccentric\"},{\"body\":\"strap\",\"component\":\"torque\",\"name\""
-        ":\"strap\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\""
-        ":\"rack\",\"component\":\"torque\",\"name\":\"rack\"},{\"body\":\"lift_link\",\"component\":\"to"
-        "rque\",\"name\":\"lift_link\"}],\"name\":\"overlock_feed\",\"observables\":[{\"name\":\"rear_pin"
-        ".x\",\"unit\":\"m\"},{\"name\":\"rear_pin.y\",\"unit\":\"m\"},{\"name\":\"rear_pin.x_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"rear_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rear_pin.x_dd\",\"unit\":\"m/"
-        "s^2\"},{\"name\":\"rear_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_f.x\",\"unit\":\"m\"},{"
-        "\"name\":\"tooth_f.y\",\"unit\":\"m\"},{\"name\":\"tooth_f.x_d\",\"unit\":\"m/s\"},{\"name\":\"t"
-        "ooth_f.y_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_f.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_"
-        "f.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_g.x\",\"unit\":\"m\"},{\"name\":\"tooth_g.y\",\"u"
-        "nit\":\"m\"},{\"name\":\"tooth_g.x_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_g.y_d\",\"unit\":\"m/"
-        "s\"},{\"name\":\"tooth_g.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_g.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"lift_pin.x\",\"unit\":\"m\"},{\"name\":\"lift_pin.y\",\"unit\":\"m\"},{\"name\":\""
-        "lift_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_p"
-        "in.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_e"
-        "ccentric.angle\",\"unit\":\"rad\"},{\"name\":\"feed_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"n"
-        "ame\":\"feed_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_eccentric.com.x\",\"uni"
-        "t\":\"m\"},{\"name\":\"feed_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"feed_eccentric.com.x_d"
-        "\",\"unit\":\"m/s\"},{\"name\":\"feed_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_ecc"
-        "entric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},"
-        "{\"name\":\"stitch_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"stitch_eccentric.angle_d\",\""
-        "unit\":\"rad/s\"},{\"name\":\"stitch_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"stit"
-        "ch_eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"stitch_eccentric.com.y\",\"unit\":\"m\"},{\"nam"
-        "e\":\"stitch_eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_eccentric.com.y_d\",\"unit"
-        "\":\"m/s\"},{\"name\":\"stitch_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_eccen"
-        "tric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.angle\",\"unit\":\"rad\"},{\"name"
-        "\":\"lift_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_eccentric.angle_dd\",\"unit\""
-        ":\"rad/s^2\"},{\"name\":\"lift_eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com."
-        "y\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_ecce"
-        "ntric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"lift_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"strap.angle\",\"unit\":\"rad\""
-        "},{\"name\":\"strap.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"strap.angle_dd\",\"unit\":\"rad/s^"
-        "2\"},{\"name\":\"strap.com.x\",\"unit\":\"m\"},{\"name\":\"strap.com.y\",\"unit\":\"m\"},{\"name"
-        "\":\"strap.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"strap.com.y_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "strap.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"strap.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":"
-        "\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"n"
-        "ame\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\""
-        ":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rack.angle\",\"uni"
-        "t\":\"rad\"},{\"name\":\"rack.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rack.angle_dd\",\"unit\""
-        ":\"rad/s^2\"},{\"name\":\"rack.com.x\",\"unit\":\"m\"},{\"name\":\"rack.com.y\",\"unit\":\"m\"},"
-        "{\"name\":\"rack.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rack.com.y_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"rack.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rack.com.y_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"lift_link.angle\",\"unit\":\"rad\"},{\"name\":\"lift_link.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"lift_link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_link.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"lift_link.com.y\",\"unit\":\"m\"},{\"name\":\"lift_link.com.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"lift_link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_link.com.x_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"lift_link.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0025,\""
-        "display_unit\":\"mm\",\"doc\":\"outer feed eccentric's eccentricity AB\\u2080, e\\u2081 (estimat"
-        "e)\",\"kind\":\"length\",\"name\":\"feed_eccentric\",\"positive\":true,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"inner (stitch) eccentric's eccentrici"
-        "ty B\\u2080B, e\\u2082 (estimate)\",\"kind\":\"length\",\"name\":\"stitch_eccentric\",\"positive"
-        "\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"feed "
-        "eccentric strap BC (estimate)\",\"kind\":\"length\",\"name\":\"strap\",\"positive\":true,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"rock shaft D, x (esti"
-        "mate)\",\"kind\":\"length\",\"name\":\"rock_shaft_x\",\"positive\":false,\"role\":null,\"unit\":"
-        "\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock shaft D, y (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"rock_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defaul"
-        "t\":0.018000000000000002,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, below D (estimate)"
-        "\",\"kind\":\"length\",\"name\":\"rock_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.024,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DE, above D, l\\u2083 (estimate"
-        ")\",\"kind\":\"length\",\"name\":\"rack_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.045,\"display_unit\":\"mm\",\"doc\":\"rack EF between its rear pin E and front pin F"
-        ", l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"rack\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"tooth G behind tooth F along t"
-        "he rack (estimate)\",\"kind\":\"length\",\"name\":\"tooth_spacing\",\"positive\":true,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":0.0012,\"display_unit\":\"mm\",\"doc\":\"lift eccentricity AK, "
-        "l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"lift_eccentric\",\"positive\":true,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"constructive angle \\u"
-        "03b8 of the lift eccentric ahead of the feed one (estimate)\",\"kind\":\"angle\",\"name\":\"lift"
-        "_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\""
-        "mm\",\"doc\":\"lift link KF, l\\u2086 (estimate)\",\"kind\":\"length\",\"name\":\"lift_link\",\""
-        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.04020000000000001,\"display_unit\":"
-        "\"mm\",\"doc\":\"throat plate surface above the main shaft, y (estimate: the teeth rise about 1 "
-        "mm above it)\",\"kind\":\"length\",\"name\":\"plate_y\",\"positive\":false,\"role\":\"throat_pla"
-        "te\",\"unit\":\"m\"},{\"default\":1.2540190675579257,\"display_unit\":\"deg\",\"doc\":\"phase of"
-        " feed_eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_eccentric.phase"
-        "\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.015,\"display_unit\":\"g\","
-        "\"doc\":\"mass of feed_eccentric\",\"kind\":\"mass\",\"name\":\"feed_eccentric.mass\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0008,\"display_unit\":\"mm\",\"doc\":\"ce"
-        "ntre of mass of feed_eccentric, local u\",\"kind\":\"length\",\"name\":\"feed_eccentric.com_u\","
-        "\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of feed_eccentric, local v\",\"kind\":\"length\",\"name\":\"feed_eccentric.com"
-        "_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m"
-        "**2\",\"doc\":\"moment of inertia of feed_eccentric about its centre of mass\",\"kind\":\"inerti"
-        "a\",\"name\":\"feed_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{"
-        "\"default\":0.008,\"display_unit\":\"g\",\"doc\":\"mass of stitch_eccentric\",\"kind\":\"mass\","
-        "\"name\":\"stitch_eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
-        ":-0.0008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_eccentric, local u\",\"kind\""
-        ":\"length\",\"name\":\"stitch_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_eccentric, local v\""
-        ",\"kind\":\"length\",\"name\":\"stitch_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit"
-        "\":\"m\"},{\"default\":6e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of stitch_"
-        "eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"stitch_eccentric.inertia\","
-        "\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\""
-        ",\"doc\":\"mass of lift_eccentric\",\"kind\":\"mass\",\"name\":\"lift_eccentric.mass\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0004,\"display_unit\":\"mm\",\"doc\":\"c"
-        "entre of mass of lift_eccentric, local u\",\"kind\":\"length\",\"name\":\"lift_eccentric.com_u\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc"
-        "\":\"centre of mass of lift_eccentric, local v\",\"kind\":\"length\",\"name\":\"lift_eccentric.c"
-        "om_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\""
-        "kg*m**2\",\"doc\":\"moment of inertia of lift_eccentric about its centre of mass\",\"kind\":\"in"
-        "ertia\",\"name\":\"lift_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\""
-        "},{\"default\":0.02,\"display_unit\":\"g\",\"doc\":\"mass of strap\",\"kind\":\"mass\",\"name\":"
-        "\"strap.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":5e-06,\"display_un"
-        "it\":\"kg*m**2\",\"doc\":\"moment of inertia of strap about its centre of mass\",\"kind\":\"iner"
-        "tia\",\"name\":\"strap.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"defau"
-        "lt\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"roc"
-        "k_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.004,\"display_un"
-        "it\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"roc"
-        "k_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit"
-        "\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_"
-        "shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit"
-        "\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre of mass\",\"kind\":\"i"
-        "nertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},"
-        "{\"default\":0.018000000000000002,\"display_unit\":\"g\",\"doc\":\"mass of rack\",\"kind\":\"mas"
-        "s\",\"name\":\"rack.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.003,"
-        "\"display_unit\":\"mm\",\"doc\":\"centre of mass of rack, local v\",\"kind\":\"length\",\"name\""
-        ":\"rack.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_un"
-        "it\":\"kg*m**2\",\"doc\":\"moment of inertia of rack about its centre of mass\",\"kind\":\"inert"
-        "ia\",\"name\":\"rack.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
-        "\":0.008,\"display_unit\":\"g\",\"doc\":\"mass of lift_link\",\"kind\":\"mass\",\"name\":\"lift_"
-        "link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1.2e-06,\"display_uni"
-        "t\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_link about its centre of mass\",\"kind\":\"i"
-        "nertia\",\"name\":\"lift_link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],"
-        "\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\","
-        "\"doc\":\"rack's rear pin E\",\"name\":\"rear_pin\",\"offset\":0,\"role\":null},{\"body\":\"rack"
-        "\",\"doc\":\"front tooth F\",\"name\":\"tooth_f\",\"offset\":6,\"role\":\"feed_dog\"},{\"body\":"
-        "\"rack\",\"doc\":\"tooth G behind F\",\"name\":\"tooth_g\",\"offset\":12,\"role\":\"rack_tooth\""
-        "},{\"body\":\"lift_eccentric\",\"doc\":\"lift eccentric's centre K\",\"name\":\"lift_pin\",\"off"
-        "set\":18,\"role\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"feed_eccentric\",\"columns\":["
-        "\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"feed_eccentric.pivot\",\"offse"
-        "t\":0},{\"a\":\"feed_eccentric\",\"b\":\"stitch_eccentric\",\"columns\":[\"fx\",\"fy\"],\"ground"
-        "ed\":false,\"kind\":\"revolute\",\"name\":\"stitch_eccentric.pivot\",\"offset\":2},{\"a\":\"grou"
-        "nd\",\"b\":\"lift_eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\""
-        ",\"name\":\"lift_eccentric.pivot\",\"offset\":4},{\"a\":\"stitch_eccentric\",\"b\":\"strap\",\"c"
-        "olumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":6},{"
-        "\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"r"
-        "evolute\",\"name\":\"D\",\"offset\":8},{\"a\":\"strap\",\"b\":\"rock_shaft\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_sh"
-        "aft\",\"b\":\"rack\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name"
-        "\":\"E\",\"offset\":12},{\"a\":\"lift_eccentric\",\"b\":\"lift_link\",\"columns\":[\"fx\",\"fy\""
-        "],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"K\",\"offset\":14},{\"a\":\"rack\",\"b\":\""
-        "lift_link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F\","
-        "\"offset\":16},{\"a\":\"ground\",\"b\":\"feed_eccentric\",\"columns\":[\"torque\"],\"grounded\":"
-        "true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"feed_eccentric.drive\",\"offset\":18,\"se"
-        "nse\":1},{\"a\":\"feed_eccentric\",\"b\":\"stitch_eccentric\",\"columns\":[\"torque\"],\"grounde"
-        "d\":false,\"input\":\"stitch_eccentric\",\"kind\":\"drive\",\"name\":\"stitch_eccentric.drive\","
-        "\"offset\":19,\"sense\":1},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\":[\"torque\"],\""
-        "grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"lift_eccentric.drive\",\"offse"
-        "t\":20,\"sense\":1}],\"roles\":{\"feed_dog\":{\"kind\":\"point\",\"name\":\"tooth_f\"},\"rack_to"
-        "oth\":{\"kind\":\"point\",\"name\":\"tooth_g\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\""
-        ":\"stitch_eccentric\"},\"throat_plate\":{\"kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\""
-        "nanchor_out\":58,\"nblock\":2,\"nbranch\":2,\"nc\":117,\"nf\":21,\"nfo\":32,\"nload\":15,\"nobs\""
+        "_feed_motion\":{\"ops\":339},\"sg_overlock_feed_observe\":{\"ops\":366},\"sg_overlock_feed_rates"
+        "\":{\"ops\":113},\"sg_overlock_feed_residual\":{\"ops\":61},\"sg_overlock_feed_scales\":{\"ops\""
+        ":4}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rear_pin\"},{\"body\":\""
+        "rock_shaft\",\"component\":\"fy\",\"name\":\"rear_pin\"},{\"body\":\"rack\",\"component\":\"fx\""
+        ",\"name\":\"tooth_f\"},{\"body\":\"rack\",\"component\":\"fy\",\"name\":\"tooth_f\"},{\"body\":\""
+        "rack\",\"component\":\"fx\",\"name\":\"tooth_g\"},{\"body\":\"rack\",\"component\":\"fy\",\"name"
+        "\":\"tooth_g\"},{\"body\":\"lift_eccentric\",\"component\":\"fx\",\"name\":\"lift_pin\"},{\"body"
+        "\":\"lift_eccentric\",\"component\":\"fy\",\"name\":\"lift_pin\"},{\"body\":\"feed_eccentric\",\""
+        "component\":\"torque\",\"name\":\"feed_eccentric\"},{\"body\":\"stitch_eccentric\",\"component\""
+        ":\"torque\",\"name\":\"stitch_eccentric\"},{\"body\":\"lift_eccentric\",\"component\":\"torque\""
+        ",\"name\":\"lift_eccentric\"},{\"body\":\"strap\",\"component\":\"torque\",\"name\":\"strap\"},{"
+        "\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"rack\",\"c"
+        "omponent\":\"torque\",\"name\":\"rack\"},{\"body\":\"lift_link\",\"component\":\"torque\",\"name"
+        "\":\"lift_link\"}],\"name\":\"overlock_feed\",\"observables\":[{\"name\":\"rear_pin.x\",\"unit\""
+        ":\"m\"},{\"name\":\"rear_pin.y\",\"unit\":\"m\"},{\"name\":\"rear_pin.x_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"rear_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rear_pin.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
+        "e\":\"rear_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_f.x\",\"unit\":\"m\"},{\"name\":\"to"
+        "oth_f.y\",\"unit\":\"m\"},{\"name\":\"tooth_f.x_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_f.y_d\","
+        "\"unit\":\"m/s\"},{\"name\":\"tooth_f.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_f.y_dd\",\"un"
+        "it\":\"m/s^2\"},{\"name\":\"tooth_g.x\",\"unit\":\"m\"},{\"name\":\"tooth_g.y\",\"unit\":\"m\"},"
+        "{\"name\":\"tooth_g.x_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_g.y_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"tooth_g.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_g.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "lift_pin.x\",\"unit\":\"m\"},{\"name\":\"lift_pin.y\",\"unit\":\"m\"},{\"name\":\"lift_pin.x_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"lift_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_pin.x_dd\",\"un"
+        "it\":\"m/s^2\"},{\"name\":\"lift_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_eccentric.angle"
+        "\",\"unit\":\"rad\"},{\"name\":\"feed_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_e"
+        "ccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_eccentric.com.x\",\"unit\":\"m\"},{\""
+        "name\":\"feed_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"feed_eccentric.com.x_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"feed_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_eccentric.com.x_d"
+        "d\",\"unit\":\"m/s^2\"},{\"name\":\"feed_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"st"
+        "itch_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"stitch_eccentric.angle_d\",\"unit\":\"rad/s"
+        "\"},{\"name\":\"stitch_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"stitch_eccentric.c"
+        "om.x\",\"unit\":\"m\"},{\"name\":\"stitch_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"stitch_e"
+        "ccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_eccentric.com.y_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"stitch_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_eccentric.com.y_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"lift_eccen"
+        "tric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{"
+        "\"name\":\"lift_eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com.y\",\"unit\":\""
+        "m\"},{\"name\":\"lift_eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_ec"
+        "centric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"strap.angle\",\"unit\":\"rad\"},{\"name\":\"s"
+        "trap.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"strap.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":"
+        "\"strap.com.x\",\"unit\":\"m\"},{\"name\":\"strap.com.y\",\"unit\":\"m\"},{\"name\":\"strap.com."
+        "x_d\",\"unit\":\"m/s\"},{\"name\":\"strap.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"strap.com.x_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"strap.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.a"
+        "ngle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_s"
+        "haft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\""
+        "rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{"
+        "\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rack.angle\",\"unit\":\"rad\"},"
+        "{\"name\":\"rack.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rack.angle_dd\",\"unit\":\"rad/s^2\"}"
+        ",{\"name\":\"rack.com.x\",\"unit\":\"m\"},{\"name\":\"rack.com.y\",\"unit\":\"m\"},{\"name\":\"r"
+        "ack.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rack.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rack.co"
+        "m.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rack.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_li"
+        "nk.angle\",\"unit\":\"rad\"},{\"name\":\"lift_link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lif"
+        "t_link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_link.com.x\",\"unit\":\"m\"},{\"name\":"
+        "\"lift_link.com.y\",\"unit\":\"m\"},{\"name\":\"lift_link.com.x_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"lift_link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_link.com.x_dd\",\"unit\":\"m/s^2\"},{\""
+        "name\":\"lift_link.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0025,\"display_uni"
+        "t\":\"mm\",\"doc\":\"outer feed eccentric's eccentricity AB\\u2080, e\\u2081 (estimate)\",\"kind"
+        "\":\"length\",\"name\":\"feed_eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"def"
+        "ault\":0.0025,\"display_unit\":\"mm\",\"doc\":\"inner (stitch) eccentric's eccentricity B\\u2080"
+        "B, e\\u2082 (estimate)\",\"kind\":\"length\",\"name\":\"stitch_eccentric\",\"positive\":true,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"feed eccentric s"
+        "trap BC (estimate)\",\"kind\":\"length\",\"name\":\"strap\",\"positive\":true,\"role\":null,\"un"
+        "it\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"rock shaft D, x (estimate)\",\""
+        "kind\":\"length\",\"name\":\"rock_shaft_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock shaft D, y (estimate)\",\"kind\":\"length"
+        "\",\"name\":\"rock_shaft_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.018"
+        "000000000000002,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, below D (estimate)\",\"kind"
+        "\":\"length\",\"name\":\"rock_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":0.024,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DE, above D, l\\u2083 (estimate)\",\"kin"
+        "d\":\"length\",\"name\":\"rack_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":0.045,\"display_unit\":\"mm\",\"doc\":\"rack EF between its rear pin E and front pin F, l\\u208"
+        "4 (estimate)\",\"kind\":\"length\",\"name\":\"rack\",\"positive\":true,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"tooth G behind tooth F along the rack ("
+        "estimate)\",\"kind\":\"length\",\"name\":\"tooth_spacing\",\"positive\":true,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":0.0012,\"display_unit\":\"mm\",\"doc\":\"lift eccentricity AK, l\\u2085 "
+        "(estimate)\",\"kind\":\"length\",\"name\":\"lift_eccentric\",\"positive\":true,\"role\":null,\"u"
+        "nit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"constructive angle \\u03b8 of t"
+        "he lift eccentric ahead of the feed one (estimate)\",\"kind\":\"angle\",\"name\":\"lift_angle\","
+        "\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"d"
+        "oc\":\"lift link KF, l\\u2086 (estimate)\",\"kind\":\"length\",\"name\":\"lift_link\",\"positive"
+        "\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.04020000000000001,\"display_unit\":\"mm\",\""
+        "doc\":\"throat plate surface above the main shaft, y (estimate: the teeth rise about 1 mm above "
+        "it)\",\"kind\":\"length\",\"name\":\"plate_y\",\"positive\":false,\"role\":\"throat_plate\",\"un"
+        "it\":\"m\"},{\"default\":1.2540190675579257,\"display_unit\":\"deg\",\"doc\":\"phase of feed_ecc"
+        "entric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"feed_eccentric.phase\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.015,\"display_unit\":\"g\",\"doc\":\""
+        "mass of feed_eccentric\",\"kind\":\"mass\",\"name\":\"feed_eccentric.mass\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg\"},{\"default\":0.0008,\"display_unit\":\"mm\",\"doc\":\"centre of mas"
+        "s of feed_eccentric, local u\",\"kind\":\"length\",\"name\":\"feed_eccentric.com_u\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre o"
+        "f mass of feed_eccentric, local v\",\"kind\":\"length\",\"name\":\"feed_eccentric.com_v\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc"
+        "\":\"moment of inertia of feed_eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\""
+        ":\"feed_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":"
+        "0.008,\"display_unit\":\"g\",\"doc\":\"mass of stitch_eccentric\",\"kind\":\"mass\",\"name\":\"s"
+        "titch_eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.0008,\""
+        "display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_eccentric, local u\",\"kind\":\"length\""
+        ",\"name\":\"stitch_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
+        "\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_eccentric, local v\",\"kind\":"
+        "\"length\",\"name\":\"stitch_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},"
+        "{\"default\":6e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of stitch_eccentric "
+        "about its centre of mass\",\"kind\":\"inertia\",\"name\":\"stitch_eccentric.inertia\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\""
+        "mass of lift_eccentric\",\"kind\":\"mass\",\"name\":\"lift_eccentric.mass\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg\"},{\"default\":0.0004,\"display_unit\":\"mm\",\"doc\":\"centre of mas"
+        "s of lift_eccentric, local u\",\"kind\":\"length\",\"name\":\"lift_eccentric.com_u\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre o"
+        "f mass of lift_eccentric, local v\",\"kind\":\"length\",\"name\":\"lift_eccentric.com_v\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"d"
+        "oc\":\"moment of inertia of lift_eccentric about its centre of mass\",\"kind\":\"inertia\",\"nam"
+        "e\":\"lift_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
+        "\":0.02,\"display_unit\":\"g\",\"doc\":\"mass of strap\",\"kind\":\"mass\",\"name\":\"strap.mass"
+        "\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":5e-06,\"display_unit\":\"kg*m*"
+        "*2\",\"doc\":\"moment of inertia of strap about its centre of mass\",\"kind\":\"inertia\",\"name"
+        "\":\"strap.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\""
+        "display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass"
+        "\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.004,\"display_unit\":\"mm\","
+        "\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_"
+        "u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\""
+        "doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\""
+        ",\"doc\":\"moment of inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"nam"
+        "e\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0"
+        ".018000000000000002,\"display_unit\":\"g\",\"doc\":\"mass of rack\",\"kind\":\"mass\",\"name\":\""
+        "rack.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.003,\"display_unit\""
+        ":\"mm\",\"doc\":\"centre of mass of rack, local v\",\"kind\":\"length\",\"name\":\"rack.com_v\","
+        "\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\""
+        ",\"doc\":\"moment of inertia of rack about its centre of mass\",\"kind\":\"inertia\",\"name\":\""
+        "rack.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.008,\"displ"
+        "ay_unit\":\"g\",\"doc\":\"mass of lift_link\",\"kind\":\"mass\",\"name\":\"lift_link.mass\",\"po"
+        "sitive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1.2e-06,\"display_unit\":\"kg*m**2\","
+        "\"doc\":\"moment of inertia of lift_link about its centre of mass\",\"kind\":\"inertia\",\"name\""
+        ":\"lift_link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":"
+        "[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"rack's "
+        "rear pin E\",\"name\":\"rear_pin\",\"offset\":0,\"role\":null},{\"body\":\"rack\",\"doc\":\"fron"
+        "t tooth F\",\"name\":\"tooth_f\",\"offset\":6,\"role\":\"feed_dog\"},{\"body\":\"rack\",\"doc\":"
+        "\"tooth G behind F\",\"name\":\"tooth_g\",\"offset\":12,\"role\":\"rack_tooth\"},{\"body\":\"lif"
+        "t_eccentric\",\"doc\":\"lift eccentric's centre K\",\"name\":\"lift_pin\",\"offset\":18,\"role\""
+        ":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"feed_eccentric\",\"columns\":[\"fx\",\"fy\"],\""
+        "grounded\":true,\"kind\":\"revolute\",\"name\":\"feed_eccentric.pivot\",\"offset\":0},{\"a\":\"f"
+        "eed_eccentric\",\"b\":\"stitch_eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind"
+        "\":\"revolute\",\"name\":\"stitch_eccentric.pivot\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lift"
+        "_eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"lift"
+        "_eccentric.pivot\",\"offset\":4},{\"a\":\"stitch_eccentric\",\"b\":\"strap\",\"columns\":[\"fx\""
+        ",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":6},{\"a\":\"ground\""
+        ",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name"
+        "\":\"D\",\"offset\":8},{\"a\":\"strap\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"groun"
+        "ded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\":\"ra"
+        "ck\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"offse"
+        "t\":12},{\"a\":\"lift_eccentric\",\"b\":\"lift_link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":f"
+        "alse,\"kind\":\"revolute\",\"name\":\"K\",\"offset\":14},{\"a\":\"rack\",\"b\":\"lift_link\",\"c"
+        "olumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F\",\"offset\":16},"
+        "{\"a\":\"ground\",\"b\":\"feed_eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":"
+        "\"shaft\",\"kind\":\"drive\",\"name\":\"feed_eccentric.drive\",\"offset\":18,\"sense\":1},{\"a\""
+        ":\"feed_eccentric\",\"b\":\"stitch_eccentric\",\"columns\":[\"torque\"],\"grounded\":false,\"inp"
+        "ut\":\"stitch_eccentric\",\"kind\":\"drive\",\"name\":\"stitch_eccentric.drive\",\"offset\":19,\""
+        "sense\":1},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\":[\"torque\"],\"grounded\":true"
+        ",\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"lift_eccentric.drive\",\"offset\":20,\"sense\""
+        ":1}],\"roles\":{\"feed_dog\":{\"kind\":\"point\",\"name\":\"tooth_f\"},\"rack_tooth\":{\"kind\":"
+        "\"point\",\"name\":\"tooth_g\"},\"stitch_regulator\":{\"kind\":\"input\",\"name\":\"stitch_eccen"
+        "tric\"},\"throat_plate\":{\"kind\":\"param\",\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":5"
+        "8,\"nblock\":2,\"nbranch\":2,\"nc\":117,\"nf\":21,\"nfo\":32,\"ngroup\":11,\"nload\":15,\"nobs\""
         ":87,\"np\":37,\"nq\":4,\"nx\":2}}"
         ;
 }

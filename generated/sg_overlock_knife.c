@@ -213,6 +213,118 @@ int sg_overlock_knife_motion(const double *q, const double *cq, const double *x,
     return SG_OK;
 }
 
+/* sg_overlock_knife_rates -- Total ops: 34 */
+int sg_overlock_knife_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    const double t0 = c[11]*cq[0];
+    const double t1 = c[6]*cq[2];
+    const double t2 = c[1]*cx[1] + c[3]*cx[0];
+    const double t3 = c[0]*t2;
+    const double t4 = c[1]*cx[0] + c[2]*cx[1];
+    const double t5 = c[16]*t4;
+    const double t8 = ((xd[0])*(xd[0]));
+    const double t9 = c[0]*t4;
+    double J[4], rs[2], cs[2];
+    int piv[2];
+    J[0] = c[7]*cq[1];
+    J[1] = c[13]*cq[3];
+    J[2] = t0;
+    J[3] = t1;
+    qd[0] = t3*xd[0];
+    qd[1] = t5*xd[0];
+    rs[0] = c[30];
+    rs[1] = c[31];
+    if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(2, J, piv, rs, cs, qd);
+    const double t6 = ((qd[0])*(qd[0]));
+    const double t7 = ((qd[1])*(qd[1]));
+    const double t10 = cq[1]*t6;
+    const double t11 = cq[3]*t7;
+    qdd[0] = t0*t6 + t1*t7 + t3*xdd[0] + t8*t9;
+    qdd[1] = c[11]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
+    sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
+    if (!isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_overlock_knife_observe -- Total ops: 106 */
+int sg_overlock_knife_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t6 = ((qd[0])*(qd[0]));
+        const double t10 = cq[1]*t6;
+        const double t12 = c[17]*cq[0];
+        const double t13 = c[18]*cq[1];
+        obs[0] = c[4] + t12;
+        obs[1] = c[17]*cq[1] + c[5];
+        obs[2] = qd[0]*t13;
+        obs[3] = qd[0]*t12;
+        obs[4] = c[18]*cq[0]*t6 + qdd[0]*t13;
+        obs[5] = c[18]*t10 + qdd[0]*t12;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        const double t2 = c[1]*cx[1] + c[3]*cx[0];
+        const double t4 = c[1]*cx[0] + c[2]*cx[1];
+        const double t8 = ((xd[0])*(xd[0]));
+        const double t14 = c[20]*t4 + c[21]*t2;
+        const double t15 = c[21]*t4 + c[23]*t2;
+        obs[6] = c[19] + x[0];
+        obs[7] = xd[0];
+        obs[8] = xdd[0];
+        obs[9] = t14;
+        obs[10] = c[20]*t2 + c[22]*t4;
+        obs[11] = t15*xd[0];
+        obs[12] = t14*xd[0];
+        obs[13] = t15*xdd[0] + t8*(c[22]*t2 + c[23]*t4);
+        obs[14] = t14*xdd[0] + t15*t8;
+        return isfinite((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + (obs[13] + obs[14]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        const double t2 = c[1]*cx[1] + c[3]*cx[0];
+        const double t3 = c[0]*t2;
+        const double t4 = c[1]*cx[0] + c[2]*cx[1];
+        const double t5 = c[16]*t4;
+        const double t7 = ((qd[1])*(qd[1]));
+        const double t8 = ((xd[0])*(xd[0]));
+        const double t9 = c[0]*t4;
+        const double t11 = cq[3]*t7;
+        const double t16 = c[24]*cq[2];
+        const double t17 = c[25]*cq[3];
+        const double t18 = c[16]*t2;
+        obs[15] = q[1];
+        obs[16] = qd[1];
+        obs[17] = qdd[1];
+        obs[18] = t16 + t9;
+        obs[19] = c[24]*cq[3] + t3;
+        obs[20] = qd[1]*t17 + t18*xd[0];
+        obs[21] = qd[1]*t16 + t9*xd[0];
+        obs[22] = c[25]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
+        obs[23] = c[25]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
+        return isfinite((((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        const double t6 = ((qd[0])*(qd[0]));
+        const double t19 = c[26]*cq[0] + c[27]*cq[1];
+        const double t20 = c[27]*cq[0] + c[29]*cq[1];
+        obs[24] = q[0];
+        obs[25] = qd[0];
+        obs[26] = qdd[0];
+        obs[27] = c[4] + t19;
+        obs[28] = c[26]*cq[1] + c[28]*cq[0] + c[5];
+        obs[29] = qd[0]*t20;
+        obs[30] = qd[0]*t19;
+        obs[31] = qdd[0]*t20 + t6*(c[28]*cq[1] + c[29]*cq[0]);
+        obs[32] = qdd[0]*t19 + t20*t6;
+        return isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))))) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_overlock_knife_forces -- Total ops: 123 */
 int sg_overlock_knife_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -510,6 +622,8 @@ SG_SIMD_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_ove
 #endif
 
 static const unsigned char sg_overlock_knife_coord_is_angle[2] = { 1, 1 };
+static const int sg_overlock_knife_group_start[5] = { 0, 6, 15, 24, 33 };
+static const unsigned char sg_overlock_knife_group_always[4] = { 0, 0, 0, 0 };
 
 static const sg_mechanism sg_overlock_knife_descriptor = {
     .name = "overlock_knife",
@@ -524,10 +638,15 @@ static const sg_mechanism sg_overlock_knife_descriptor = {
     .nload = 5,
     .nblock = 1,
     .coord_is_angle = sg_overlock_knife_coord_is_angle,
+    .ngroup = 4,
+    .group_start = sg_overlock_knife_group_start,
+    .group_always = sg_overlock_knife_group_always,
     .constants = sg_overlock_knife_constants,
     .closed = sg_overlock_knife_closed,
     .residual = sg_overlock_knife_residual,
     .motion = sg_overlock_knife_motion,
+    .rates = sg_overlock_knife_rates,
+    .observe = sg_overlock_knife_observe,
     .forces = sg_overlock_knife_forces,
     .force_matrix = sg_overlock_knife_force_matrix,
     .scales = sg_overlock_knife_scales,
@@ -588,76 +707,77 @@ const char *sg_overlock_knife_manifest(void)
         "g_overlock_knife_anchors\":{\"ops\":38},\"sg_overlock_knife_blocks\":{\"ops\":15},\"sg_overlock_"
         "knife_closed\":{\"ops\":22},\"sg_overlock_knife_constants\":{\"ops\":42},\"sg_overlock_knife_for"
         "ce_matrix\":{\"ops\":62},\"sg_overlock_knife_forces\":{\"ops\":123},\"sg_overlock_knife_motion\""
-        ":{\"ops\":118},\"sg_overlock_knife_residual\":{\"ops\":20},\"sg_overlock_knife_scales\":{\"ops\""
-        ":2}},\"loads\":[{\"body\":\"knife_lever\",\"component\":\"fx\",\"name\":\"knife_edge\"},{\"body\""
-        ":\"knife_lever\",\"component\":\"fy\",\"name\":\"knife_edge\"},{\"body\":\"eccentric\",\"compone"
-        "nt\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"ro"
-        "d\"},{\"body\":\"knife_lever\",\"component\":\"torque\",\"name\":\"knife_lever\"}],\"name\":\"ov"
-        "erlock_knife\",\"observables\":[{\"name\":\"knife_edge.x\",\"unit\":\"m\"},{\"name\":\"knife_edg"
-        "e.y\",\"unit\":\"m\"},{\"name\":\"knife_edge.x_d\",\"unit\":\"m/s\"},{\"name\":\"knife_edge.y_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"knife_edge.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_edge.y_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.ang"
-        "le_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"ec"
-        "centric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccent"
-        "ric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"ec"
-        "centric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\""
-        "rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com"
-        ".y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"uni"
-        "t\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"knife_lever.angle\",\"unit\":\"rad\"},{\"name\":\"knife_lever.angle_d\",\""
-        "unit\":\"rad/s\"},{\"name\":\"knife_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"knife_lev"
-        "er.com.x\",\"unit\":\"m\"},{\"name\":\"knife_lever.com.y\",\"unit\":\"m\"},{\"name\":\"knife_lev"
-        "er.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"knife_lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"k"
-        "nife_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_lever.com.y_dd\",\"unit\":\"m/s^2\"}"
-        "],\"params\":[{\"default\":0.00125,\"display_unit\":\"mm\",\"doc\":\"knife eccentricity (estimat"
-        "e)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},"
-        "{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"knife rod (estimate)\",\"kind\":\"length\",\""
-        "name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit"
-        "\":\"mm\",\"doc\":\"knife lever pivot, x (estimate)\",\"kind\":\"length\",\"name\":\"lever_pivot"
-        "_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.04,\"display_unit\":\"mm\","
-        "\"doc\":\"knife lever pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"lever_pivot_y\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\""
-        "knife lever's arm to the rod (estimate)\",\"kind\":\"length\",\"name\":\"lever_arm\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.065,\"display_unit\":\"mm\",\"doc\":\"knife l"
-        "ever's arm to the knife edge (estimate)\",\"kind\":\"length\",\"name\":\"knife_arm\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0365,\"display_unit\":\"mm\",\"doc\":\"height"
-        " of the fixed lower knife's edge (estimate)\",\"kind\":\"length\",\"name\":\"lower_edge\",\"posi"
-        "tive\":false,\"role\":\"lower_knife_edge\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"d"
-        "eg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"ec"
-        "centric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.01,\"display_u"
-        "nit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positi"
-        "ve\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0005,\"display_unit\":\"mm\",\"doc\":\""
-        "centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positi"
-        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cent"
-        "re of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"m"
-        "oment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentr"
-        "ic.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.008,\"display"
-        "_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"kg\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"mome"
-        "nt of inertia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rod.inertia\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\""
-        "doc\":\"mass of knife_lever\",\"kind\":\"mass\",\"name\":\"knife_lever.mass\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"kg\"},{\"default\":0.03,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
-        "ss of knife_lever, local u\",\"kind\":\"length\",\"name\":\"knife_lever.com_u\",\"positive\":fal"
+        ":{\"ops\":118},\"sg_overlock_knife_observe\":{\"ops\":106},\"sg_overlock_knife_rates\":{\"ops\":"
+        "34},\"sg_overlock_knife_residual\":{\"ops\":20},\"sg_overlock_knife_scales\":{\"ops\":2}},\"load"
+        "s\":[{\"body\":\"knife_lever\",\"component\":\"fx\",\"name\":\"knife_edge\"},{\"body\":\"knife_l"
+        "ever\",\"component\":\"fy\",\"name\":\"knife_edge\"},{\"body\":\"eccentric\",\"component\":\"tor"
+        "que\",\"name\":\"eccentric\"},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"rod\"},{\"bo"
+        "dy\":\"knife_lever\",\"component\":\"torque\",\"name\":\"knife_lever\"}],\"name\":\"overlock_kni"
+        "fe\",\"observables\":[{\"name\":\"knife_edge.x\",\"unit\":\"m\"},{\"name\":\"knife_edge.y\",\"un"
+        "it\":\"m\"},{\"name\":\"knife_edge.x_d\",\"unit\":\"m/s\"},{\"name\":\"knife_edge.y_d\",\"unit\""
+        ":\"m/s\"},{\"name\":\"knife_edge.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_edge.y_dd\",\"unit"
+        "\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\""
+        "unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.c"
+        "om.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x"
+        "_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.c"
+        "om.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"r"
+        "od.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angle"
+        "_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"un"
+        "it\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"knife_lever.angle\",\"unit\":\"rad\"},{\"name\":\"knife_lever.angle_d\",\"unit\":\""
+        "rad/s\"},{\"name\":\"knife_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"knife_lever.com.x\""
+        ",\"unit\":\"m\"},{\"name\":\"knife_lever.com.y\",\"unit\":\"m\"},{\"name\":\"knife_lever.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"knife_lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"knife_lever"
+        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_lever.com.y_dd\",\"unit\":\"m/s^2\"}],\"params"
+        "\":[{\"default\":0.00125,\"display_unit\":\"mm\",\"doc\":\"knife eccentricity (estimate)\",\"kin"
+        "d\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default"
+        "\":0.04,\"display_unit\":\"mm\",\"doc\":\"knife rod (estimate)\",\"kind\":\"length\",\"name\":\""
+        "rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\""
+        ",\"doc\":\"knife lever pivot, x (estimate)\",\"kind\":\"length\",\"name\":\"lever_pivot_x\",\"po"
+        "sitive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\""
+        "knife lever pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"lever_pivot_y\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"knife leve"
+        "r's arm to the rod (estimate)\",\"kind\":\"length\",\"name\":\"lever_arm\",\"positive\":true,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":0.065,\"display_unit\":\"mm\",\"doc\":\"knife lever's ar"
+        "m to the knife edge (estimate)\",\"kind\":\"length\",\"name\":\"knife_arm\",\"positive\":true,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":0.0365,\"display_unit\":\"mm\",\"doc\":\"height of the "
+        "fixed lower knife's edge (estimate)\",\"kind\":\"length\",\"name\":\"lower_edge\",\"positive\":f"
+        "alse,\"role\":\"lower_knife_edge\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"d"
+        "oc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric."
+        "phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.01,\"display_unit\":\""
+        "g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0005,\"display_unit\":\"mm\",\"doc\":\"centre o"
+        "f mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":fal"
         "se,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
-        "ss of knife_lever, local v\",\"kind\":\"length\",\"name\":\"knife_lever.com_v\",\"positive\":fal"
-        "se,\"role\":null,\"unit\":\"m\"},{\"default\":2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"momen"
-        "t of inertia of knife_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"knife_lev"
-        "er.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y"
-        "\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"knife_lever\",\"doc\":\"upper knife's cu"
-        "tting corner\",\"name\":\"knife_edge\",\"offset\":0,\"role\":\"knife_edge\"}],\"reactions\":[{\""
-        "a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revo"
-        "lute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"eccentric\",\"b\":\"rod\",\"columns\""
-        ":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":2},{\"a\":\""
-        "ground\",\"b\":\"knife_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute"
-        "\",\"name\":\"P\",\"offset\":4},{\"a\":\"rod\",\"b\":\"knife_lever\",\"columns\":[\"fx\",\"fy\"]"
-        ",\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\""
-        "eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\""
-        "name\":\"eccentric.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"knife_edge\":{\"kind\":\"poin"
-        "t\",\"name\":\"knife_edge\"},\"lower_knife_edge\":{\"kind\":\"param\",\"name\":\"lower_edge\"}},"
-        "\"sizes\":{\"nanchor_out\":24,\"nblock\":1,\"nbranch\":1,\"nc\":55,\"nf\":9,\"nfo\":18,\"nload\""
-        ":5,\"nobs\":33,\"np\":18,\"nq\":2,\"nx\":1}}"
+        "ss of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of "
+        "inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inerti"
+        "a\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.008,\"display_unit\":\""
+        "g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"kg\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of iner"
+        "tia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rod.inertia\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"m"
+        "ass of knife_lever\",\"kind\":\"mass\",\"name\":\"knife_lever.mass\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg\"},{\"default\":0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of kni"
+        "fe_lever, local u\",\"kind\":\"length\",\"name\":\"knife_lever.com_u\",\"positive\":false,\"role"
+        "\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of kni"
+        "fe_lever, local v\",\"kind\":\"length\",\"name\":\"knife_lever.com_v\",\"positive\":false,\"role"
+        "\":null,\"unit\":\"m\"},{\"default\":2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of iner"
+        "tia of knife_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"knife_lever.inerti"
+        "a\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\""
+        ",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"knife_lever\",\"doc\":\"upper knife's cutting cor"
+        "ner\",\"name\":\"knife_edge\",\"offset\":0,\"role\":\"knife_edge\"}],\"reactions\":[{\"a\":\"gro"
+        "und\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\""
+        "name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"eccentric\",\"b\":\"rod\",\"columns\":[\"fx\","
+        "\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\","
+        "\"b\":\"knife_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name"
+        "\":\"P\",\"offset\":4},{\"a\":\"rod\",\"b\":\"knife_lever\",\"columns\":[\"fx\",\"fy\"],\"ground"
+        "ed\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"eccentri"
+        "c\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\""
+        "eccentric.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"knife_edge\":{\"kind\":\"point\",\"nam"
+        "e\":\"knife_edge\"},\"lower_knife_edge\":{\"kind\":\"param\",\"name\":\"lower_edge\"}},\"sizes\""
+        ":{\"nanchor_out\":24,\"nblock\":1,\"nbranch\":1,\"nc\":55,\"nf\":9,\"nfo\":18,\"ngroup\":4,\"nlo"
+        "ad\":5,\"nobs\":33,\"np\":18,\"nq\":2,\"nx\":1}}"
         ;
 }

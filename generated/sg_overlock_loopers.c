@@ -343,6 +343,154 @@ int sg_overlock_loopers_motion(const double *q, const double *cq, const double *
     return SG_OK;
 }
 
+/* sg_overlock_loopers_rates -- Total ops: 81 */
+int sg_overlock_loopers_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    const double t0 = c[26]*(c[0]*cq[0] + c[18]);
+    const double t1 = c[2]*cx[0] + c[3]*cx[1];
+    const double t2 = c[0]*cq[1] + c[19] + c[20]*t1;
+    const double t3 = c[10]*cq[0] + c[28]*cq[1];
+    const double t4 = c[10]*cq[1] + c[9]*cq[0];
+    const double t5 = c[23]*cq[2];
+    const double t6 = c[14]*cq[4];
+    const double t7 = c[3]*cx[0] + c[6]*cx[1];
+    const double t8 = c[32]*t1*t7 + c[33]*t2*t7;
+    const double t9 = c[35]*cq[0]*t7;
+    double J[9], rs[3], cs[3];
+    int piv[3];
+    J[0] = c[27]*cq[0]*t2 + cq[1]*t0;
+    J[1] = 0.0;
+    J[2] = 0.0;
+    J[3] = t3;
+    J[4] = c[15]*cq[3];
+    J[5] = c[29]*cq[5];
+    J[6] = t4;
+    J[7] = t5;
+    J[8] = t6;
+    qd[0] = -t8*xd[0];
+    qd[1] = 0.0;
+    qd[2] = 0.0;
+    rs[0] = c[61];
+    rs[1] = c[62];
+    rs[2] = c[62];
+    if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qd);
+    const double t10 = ((qd[2])*(qd[2]));
+    const double t11 = ((qd[1])*(qd[1]));
+    const double t12 = ((qd[0])*(qd[0]));
+    const double t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+    const double t14 = cq[5]*t10;
+    const double t15 = t12*t3;
+    qdd[0] = -qd[0]*(qd[0]*(c[26]*cq[1]*t2 + c[34]*((cq[0])*(cq[0])) + c[34]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[36]*((t1)*(t1)) + c[37]*t1*t2));
+    qdd[1] = t10*t6 + t11*t5 - t13;
+    qdd[2] = c[14]*t14 + c[23]*cq[3]*t11 - t15;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    if (!isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_overlock_loopers_observe -- Total ops: 159 */
+int sg_overlock_loopers_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t12 = ((qd[0])*(qd[0]));
+        const double t16 = c[38]*cq[0] + c[39]*cq[1];
+        const double t17 = c[39]*cq[0] + c[41]*cq[1];
+        obs[0] = t16;
+        obs[1] = c[38]*cq[1] + c[40]*cq[0];
+        obs[2] = qd[0]*t17;
+        obs[3] = qd[0]*t16;
+        obs[4] = qdd[0]*t17 + t12*(c[40]*cq[1] + c[41]*cq[0]);
+        obs[5] = qdd[0]*t16 + t12*t17;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        const double t11 = ((qd[1])*(qd[1]));
+        const double t18 = c[42]*cq[2] + c[43]*cq[3];
+        const double t19 = c[43]*cq[2] + c[45]*cq[3];
+        obs[6] = c[12] + t18;
+        obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
+        obs[8] = qd[1]*t19;
+        obs[9] = qd[1]*t18;
+        obs[10] = qdd[1]*t19 + t11*(c[44]*cq[3] + c[45]*cq[2]);
+        obs[11] = qdd[1]*t18 + t11*t19;
+        return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        const double t1 = c[2]*cx[0] + c[3]*cx[1];
+        const double t7 = c[3]*cx[0] + c[6]*cx[1];
+        const double t20 = c[47]*t7 + c[48]*t1;
+        const double t21 = c[48]*t7 + c[50]*t1;
+        const double t22 = ((xd[0])*(xd[0]));
+        obs[12] = c[46] + x[0];
+        obs[13] = xd[0];
+        obs[14] = xdd[0];
+        obs[15] = c[0] + t20;
+        obs[16] = c[1] + c[47]*t1 + c[49]*t7;
+        obs[17] = t21*xd[0];
+        obs[18] = t20*xd[0];
+        obs[19] = t21*xdd[0] + t22*(c[49]*t1 + c[50]*t7);
+        obs[20] = t20*xdd[0] + t21*t22;
+        return isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        const double t12 = ((qd[0])*(qd[0]));
+        const double t23 = c[51]*cq[0] + c[52]*cq[1];
+        const double t24 = c[52]*cq[0] + c[54]*cq[1];
+        obs[21] = q[0];
+        obs[22] = qd[0];
+        obs[23] = qdd[0];
+        obs[24] = t23;
+        obs[25] = c[51]*cq[1] + c[53]*cq[0];
+        obs[26] = qd[0]*t24;
+        obs[27] = qd[0]*t23;
+        obs[28] = qdd[0]*t24 + t12*(c[53]*cq[1] + c[54]*cq[0]);
+        obs[29] = qdd[0]*t23 + t12*t24;
+        return isfinite((((obs[21] + obs[22]) + (obs[23] + obs[24])) + ((obs[25] + obs[26]) + (obs[27] + (obs[28] + obs[29]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 4: {
+        const double t3 = c[10]*cq[0] + c[28]*cq[1];
+        const double t4 = c[10]*cq[1] + c[9]*cq[0];
+        const double t10 = ((qd[2])*(qd[2]));
+        const double t12 = ((qd[0])*(qd[0]));
+        const double t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+        const double t14 = cq[5]*t10;
+        const double t15 = t12*t3;
+        const double t25 = c[55]*cq[4];
+        const double t26 = c[56]*cq[5];
+        obs[30] = q[2];
+        obs[31] = qd[2];
+        obs[32] = qdd[2];
+        obs[33] = t25 + t4;
+        obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
+        obs[35] = qd[0]*t3 + qd[2]*t26;
+        obs[36] = qd[0]*t4 + qd[2]*t25;
+        obs[37] = c[56]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
+        obs[38] = c[56]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
+        return isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 5: {
+        const double t11 = ((qd[1])*(qd[1]));
+        const double t27 = c[57]*cq[2] + c[58]*cq[3];
+        const double t28 = c[58]*cq[2] + c[60]*cq[3];
+        obs[39] = q[1];
+        obs[40] = qd[1];
+        obs[41] = qdd[1];
+        obs[42] = c[12] + t27;
+        obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
+        obs[44] = qd[1]*t28;
+        obs[45] = qd[1]*t27;
+        obs[46] = qdd[1]*t28 + t11*(c[59]*cq[3] + c[60]*cq[2]);
+        obs[47] = qdd[1]*t27 + t11*t28;
+        return isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_overlock_loopers_forces -- Total ops: 209 */
 int sg_overlock_loopers_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -744,6 +892,8 @@ SG_SIMD_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg
 #endif
 
 static const unsigned char sg_overlock_loopers_coord_is_angle[3] = { 1, 1, 1 };
+static const int sg_overlock_loopers_group_start[7] = { 0, 6, 12, 21, 30, 39, 48 };
+static const unsigned char sg_overlock_loopers_group_always[6] = { 0, 0, 0, 0, 0, 0 };
 
 static const sg_mechanism sg_overlock_loopers_descriptor = {
     .name = "overlock_loopers",
@@ -758,10 +908,15 @@ static const sg_mechanism sg_overlock_loopers_descriptor = {
     .nload = 8,
     .nblock = 2,
     .coord_is_angle = sg_overlock_loopers_coord_is_angle,
+    .ngroup = 6,
+    .group_start = sg_overlock_loopers_group_start,
+    .group_always = sg_overlock_loopers_group_always,
     .constants = sg_overlock_loopers_constants,
     .closed = sg_overlock_loopers_closed,
     .residual = sg_overlock_loopers_residual,
     .motion = sg_overlock_loopers_motion,
+    .rates = sg_overlock_loopers_rates,
+    .observe = sg_overlock_loopers_observe,
     .forces = sg_overlock_loopers_forces,
     .force_matrix = sg_overlock_loopers_force_matrix,
     .scales = sg_overlock_loopers_scales,
@@ -843,115 +998,116 @@ const char *sg_overlock_loopers_manifest(void)
         "_overlock_loopers_blocks\":{\"ops\":28},\"sg_overlock_loopers_closed\":{\"ops\":40},\"sg_overloc"
         "k_loopers_constants\":{\"ops\":113},\"sg_overlock_loopers_force_matrix\":{\"ops\":111},\"sg_over"
         "lock_loopers_forces\":{\"ops\":209},\"sg_overlock_loopers_motion\":{\"ops\":216},\"sg_overlock_l"
-        "oopers_residual\":{\"ops\":45},\"sg_overlock_loopers_scales\":{\"ops\":3}},\"loads\":[{\"body\":"
-        "\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\"},{\"body\":\"rock_shaft\",\"co"
-        "mponent\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fx\",\""
-        "name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fy\",\"name\":\"lower_loo"
-        "per_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\""
-        "rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"coupler\",\"component"
-        "\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\"component\":\"torque\",\"name\":"
-        "\"lower_lever\"}],\"name\":\"overlock_loopers\",\"observables\":[{\"name\":\"upper_looper_tip.x\""
-        ",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.x"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"upper_lo"
-        "oper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.y\",\"unit\":\"m\"},{\""
-        "name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.y_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.y_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.ang"
-        "le_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"ec"
-        "centric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccent"
-        "ric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"ec"
-        "centric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\""
-        "},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\""
-        ":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.angl"
-        "e\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"coupler.angl"
-        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit\":\"m\"},{\"name\":\"coupler.com"
-        ".y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.y_d"
-        "\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.com."
-        "y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"unit\":\"rad\"},{\"name\":\"lower_l"
-        "ever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"n"
-        "ame\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.y\",\"unit\":\"m\"},{\"n"
-        "ame\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.y_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.com.y_dd\",\""
-        "unit\":\"m/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity"
-        " AB of the looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-sh"
-        "aft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"posi"
-        "tive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"b"
-        "all-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":"
-        "null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u"
-        "2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":"
-        "\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (est"
-        "imate)\",\"kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\"unit\":"
-        "\"m\"},{\"default\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\"its constructive angle"
-        " \\u03b3 from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\""
-        "arm DE of the planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"pos"
-        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg"
-        "\",\"doc\":\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\""
-        "doc\":\"coupler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true,\"rol"
-        "e\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper lever"
-        " GF (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\""
-        ":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"lengt"
-        "h\",\"name\":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.4"
-        "43460952792061,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\",\""
-        "kind\":\"angle\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad\"}"
-        ",{\"default\":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estimate"
-        ")\",\"kind\":\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u"
-        "03b7 from the lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"ph"
-        "ase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\""
-        "positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc"
-        "\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role"
-        "\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of ec"
-        "centric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":"
-        "null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccent"
-        "ric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia o"
-        "f eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"do"
-        "c\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass o"
-        "f rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass o"
-        "f rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of"
-        " inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.ine"
-        "rtia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\""
-        ":\"g\",\"doc\":\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"momen"
-        "t of inertia of coupler about its centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.inert"
-        "ia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\""
-        "g\",\"doc\":\"mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centr"
-        "e of mass of lower_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centr"
-        "e of mass of lower_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\""
-        ":\"moment of inertia of lower_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"l"
-        "ower_lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\""
-        "x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper loop"
-        "er tip N\\u2082\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"b"
-        "ody\":\"lower_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\"offs"
-        "et\":6,\"role\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"co"
-        "lumns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"o"
-        "ffset\":0},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,"
-        "\"kind\":\"revolute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"c"
-        "olumns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\""
-        ":\"rock_shaft\",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revo"
-        "lute\",\"name\":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx\","
-        "\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\","
-        "\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"nam"
-        "e\":\"F\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounde"
-        "d\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sen"
-        "se\":1}],\"roles\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\"up"
-        "per_looper_tip\":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":"
-        "36,\"nblock\":2,\"nbranch\":2,\"nc\":105,\"nf\":12,\"nfo\":24,\"nload\":8,\"nobs\":48,\"np\":29,"
-        "\"nq\":3,\"nx\":1}}"
+        "oopers_observe\":{\"ops\":159},\"sg_overlock_loopers_rates\":{\"ops\":81},\"sg_overlock_loopers_"
+        "residual\":{\"ops\":45},\"sg_overlock_loopers_scales\":{\"ops\":3}},\"loads\":[{\"body\":\"rock_"
+        "shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\"},{\"body\":\"rock_shaft\",\"component"
+        "\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fx\",\"name\""
+        ":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fy\",\"name\":\"lower_looper_ti"
+        "p\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"rock_s"
+        "haft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"coupler\",\"component\":\"t"
+        "orque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\"component\":\"torque\",\"name\":\"lowe"
+        "r_lever\"}],\"name\":\"overlock_loopers\",\"observables\":[{\"name\":\"upper_looper_tip.x\",\"un"
+        "it\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.x_d\","
+        "\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_"
+        "tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.y\",\"unit\":\"m\"},{\"name"
+        "\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.y_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.y_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\""
+        ",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentri"
+        "c.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.co"
+        "m.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentri"
+        "c.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":"
+        "\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"n"
+        "ame\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\""
+        "},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.angle\",\""
+        "unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"coupler.angle_dd\""
+        ",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit\":\"m\"},{\"name\":\"coupler.com.y\",\""
+        "unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.y_d\",\"un"
+        "it\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.com.y_dd\","
+        "\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"unit\":\"rad\"},{\"name\":\"lower_lever.an"
+        "gle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
+        "lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.y\",\"unit\":\"m\"},{\"name\":\""
+        "lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.y_d\",\"unit\":\"m/s\"},{\"n"
+        "ame\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.com.y_dd\",\"unit\":\""
+        "m/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of th"
+        "e looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis "
+        "below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive\":tr"
+        "ue,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"ball-joint"
+        "ed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"un"
+        "it\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (es"
+        "timate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{"
+        "\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (estimate)\""
+        ",\"kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{"
+        "\"default\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b3"
+        " from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"arm DE o"
+        "f the planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"positive\":"
+        "true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc"
+        "\":\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\",\"posit"
+        "ive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\""
+        "coupler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper lever GF (est"
+        "imate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},"
+        "{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"length\",\"na"
+        "me\":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.443460952"
+        "792061,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\",\"kind\":\""
+        "angle\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"defau"
+        "lt\":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estimate)\",\"kin"
+        "d\":\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b7 from"
+        " the lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of ec"
+        "centric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mas"
+        "s of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric,"
+        " local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"u"
+        "nit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, loc"
+        "al v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentr"
+        "ic about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":f"
+        "alse,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mas"
+        "s of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_sh"
+        "aft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_sh"
+        "aft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia "
+        "of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\""
+        "positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\""
+        "doc\":\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inert"
+        "ia of coupler about its centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.inertia\",\"pos"
+        "itive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc"
+        "\":\"mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass"
+        " of lower_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass"
+        " of lower_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"momen"
+        "t of inertia of lower_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_lev"
+        "er.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y"
+        "\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper looper tip "
+        "N\\u2082\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"body\":\""
+        "lower_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\"offset\":6,\""
+        "role\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":["
+        "\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0"
+        "},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":"
+        "\"revolute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"columns\":"
+        "[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\":\"rock_s"
+        "haft\",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\""
+        "name\":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\""
+        "grounded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\",\"b\":\"lo"
+        "wer_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F\","
+        "\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\""
+        "input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\""
+        "roles\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\"upper_looper_"
+        "tip\":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":36,\"nblock"
+        "\":2,\"nbranch\":2,\"nc\":105,\"nf\":12,\"nfo\":24,\"ngroup\":6,\"nload\":8,\"nobs\":48,\"np\":2"
+        "9,\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -341,6 +341,156 @@ int sg_overlock_loopers_planar_motion(const double *q, const double *cq, const d
     return SG_OK;
 }
 
+/* sg_overlock_loopers_planar_rates -- Total ops: 91 */
+int sg_overlock_loopers_planar_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    const double t0 = c[1]*cx[0] + c[2]*cx[1];
+    const double t1 = c[0]*cq[0] + c[18]*t0 + c[19];
+    const double t2 = c[24]*t1;
+    const double t3 = c[1]*cx[1] + c[5]*cx[0];
+    const double t4 = c[0]*cq[1] + c[17] + c[18]*t3;
+    const double t5 = c[26]*cq[1] + c[9]*cq[0];
+    const double t6 = c[8]*cq[0] + c[9]*cq[1];
+    const double t7 = c[21]*cq[2];
+    const double t8 = c[13]*cq[4];
+    const double t9 = c[30]*t1;
+    const double t10 = c[31]*t0*t4 + t3*t9;
+    const double t11 = c[33]*cq[0]*t0 + c[33]*cq[1]*t3;
+    double J[9], rs[3], cs[3];
+    int piv[3];
+    J[0] = c[25]*cq[0]*t4 + cq[1]*t2;
+    J[1] = 0.0;
+    J[2] = 0.0;
+    J[3] = t5;
+    J[4] = c[14]*cq[3];
+    J[5] = c[27]*cq[5];
+    J[6] = t6;
+    J[7] = t7;
+    J[8] = t8;
+    qd[0] = -t10*xd[0];
+    qd[1] = 0.0;
+    qd[2] = 0.0;
+    rs[0] = c[58];
+    rs[1] = c[59];
+    rs[2] = c[59];
+    if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qd);
+    const double t12 = ((qd[2])*(qd[2]));
+    const double t13 = ((qd[1])*(qd[1]));
+    const double t14 = ((qd[0])*(qd[0]));
+    const double t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+    const double t16 = cq[5]*t12;
+    const double t17 = t14*t5;
+    qdd[0] = -qd[0]*(qd[0]*(c[24]*cq[1]*t4 + c[32]*((cq[0])*(cq[0])) + c[32]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[30]*t3*t4 + c[34]*((t0)*(t0)) + c[34]*((t3)*(t3)) + t0*t9));
+    qdd[1] = t12*t8 + t13*t7 - t15;
+    qdd[2] = c[13]*t16 + c[21]*cq[3]*t13 - t17;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    if (!isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_overlock_loopers_planar_observe -- Total ops: 159 */
+int sg_overlock_loopers_planar_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t14 = ((qd[0])*(qd[0]));
+        const double t18 = c[35]*cq[0] + c[36]*cq[1];
+        const double t19 = c[36]*cq[0] + c[38]*cq[1];
+        obs[0] = t18;
+        obs[1] = c[35]*cq[1] + c[37]*cq[0];
+        obs[2] = qd[0]*t19;
+        obs[3] = qd[0]*t18;
+        obs[4] = qdd[0]*t19 + t14*(c[37]*cq[1] + c[38]*cq[0]);
+        obs[5] = qdd[0]*t18 + t14*t19;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        const double t13 = ((qd[1])*(qd[1]));
+        const double t20 = c[39]*cq[2] + c[40]*cq[3];
+        const double t21 = c[40]*cq[2] + c[42]*cq[3];
+        obs[6] = c[11] + t20;
+        obs[7] = c[12] + c[39]*cq[3] + c[41]*cq[2];
+        obs[8] = qd[1]*t21;
+        obs[9] = qd[1]*t20;
+        obs[10] = qdd[1]*t21 + t13*(c[41]*cq[3] + c[42]*cq[2]);
+        obs[11] = qdd[1]*t20 + t13*t21;
+        return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        const double t0 = c[1]*cx[0] + c[2]*cx[1];
+        const double t3 = c[1]*cx[1] + c[5]*cx[0];
+        const double t22 = c[44]*t0 + c[45]*t3;
+        const double t23 = c[45]*t0 + c[47]*t3;
+        const double t24 = ((xd[0])*(xd[0]));
+        obs[12] = c[43] + x[0];
+        obs[13] = xd[0];
+        obs[14] = xdd[0];
+        obs[15] = c[0] + t22;
+        obs[16] = c[4] + c[44]*t3 + c[46]*t0;
+        obs[17] = t23*xd[0];
+        obs[18] = t22*xd[0];
+        obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
+        obs[20] = t22*xdd[0] + t23*t24;
+        return isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        const double t14 = ((qd[0])*(qd[0]));
+        const double t25 = c[48]*cq[0] + c[49]*cq[1];
+        const double t26 = c[49]*cq[0] + c[51]*cq[1];
+        obs[21] = q[0];
+        obs[22] = qd[0];
+        obs[23] = qdd[0];
+        obs[24] = t25;
+        obs[25] = c[48]*cq[1] + c[50]*cq[0];
+        obs[26] = qd[0]*t26;
+        obs[27] = qd[0]*t25;
+        obs[28] = qdd[0]*t26 + t14*(c[50]*cq[1] + c[51]*cq[0]);
+        obs[29] = qdd[0]*t25 + t14*t26;
+        return isfinite((((obs[21] + obs[22]) + (obs[23] + obs[24])) + ((obs[25] + obs[26]) + (obs[27] + (obs[28] + obs[29]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 4: {
+        const double t5 = c[26]*cq[1] + c[9]*cq[0];
+        const double t6 = c[8]*cq[0] + c[9]*cq[1];
+        const double t12 = ((qd[2])*(qd[2]));
+        const double t14 = ((qd[0])*(qd[0]));
+        const double t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+        const double t16 = cq[5]*t12;
+        const double t17 = t14*t5;
+        const double t27 = c[52]*cq[4];
+        const double t28 = c[53]*cq[5];
+        obs[30] = q[2];
+        obs[31] = qd[2];
+        obs[32] = qdd[2];
+        obs[33] = t27 + t6;
+        obs[34] = c[10]*cq[0] + c[52]*cq[5] + c[8]*cq[1];
+        obs[35] = qd[0]*t5 + qd[2]*t28;
+        obs[36] = qd[0]*t6 + qd[2]*t27;
+        obs[37] = c[53]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
+        obs[38] = c[53]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
+        return isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 5: {
+        const double t13 = ((qd[1])*(qd[1]));
+        const double t29 = c[54]*cq[2] + c[55]*cq[3];
+        const double t30 = c[55]*cq[2] + c[57]*cq[3];
+        obs[39] = q[1];
+        obs[40] = qd[1];
+        obs[41] = qdd[1];
+        obs[42] = c[11] + t29;
+        obs[43] = c[12] + c[54]*cq[3] + c[56]*cq[2];
+        obs[44] = qd[1]*t30;
+        obs[45] = qd[1]*t29;
+        obs[46] = qdd[1]*t30 + t13*(c[56]*cq[3] + c[57]*cq[2]);
+        obs[47] = qdd[1]*t29 + t13*t30;
+        return isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_overlock_loopers_planar_forces -- Total ops: 212 */
 int sg_overlock_loopers_planar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -744,6 +894,8 @@ SG_SIMD_SWEEP_BODY(sg_overlock_loopers_planar_constants, sg_overlock_loopers_pla
 #endif
 
 static const unsigned char sg_overlock_loopers_planar_coord_is_angle[3] = { 1, 1, 1 };
+static const int sg_overlock_loopers_planar_group_start[7] = { 0, 6, 12, 21, 30, 39, 48 };
+static const unsigned char sg_overlock_loopers_planar_group_always[6] = { 0, 0, 0, 0, 0, 0 };
 
 static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
     .name = "overlock_loopers_planar",
@@ -758,10 +910,15 @@ static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
     .nload = 8,
     .nblock = 2,
     .coord_is_angle = sg_overlock_loopers_planar_coord_is_angle,
+    .ngroup = 6,
+    .group_start = sg_overlock_loopers_planar_group_start,
+    .group_always = sg_overlock_loopers_planar_group_always,
     .constants = sg_overlock_loopers_planar_constants,
     .closed = sg_overlock_loopers_planar_closed,
     .residual = sg_overlock_loopers_planar_residual,
     .motion = sg_overlock_loopers_planar_motion,
+    .rates = sg_overlock_loopers_planar_rates,
+    .observe = sg_overlock_loopers_planar_observe,
     .forces = sg_overlock_loopers_planar_forces,
     .force_matrix = sg_overlock_loopers_planar_force_matrix,
     .scales = sg_overlock_loopers_planar_scales,
@@ -843,115 +1000,116 @@ const char *sg_overlock_loopers_planar_manifest(void)
         "verlock_loopers_planar_blocks\":{\"ops\":28},\"sg_overlock_loopers_planar_closed\":{\"ops\":37},"
         "\"sg_overlock_loopers_planar_constants\":{\"ops\":112},\"sg_overlock_loopers_planar_force_matrix"
         "\":{\"ops\":113},\"sg_overlock_loopers_planar_forces\":{\"ops\":212},\"sg_overlock_loopers_plana"
-        "r_motion\":{\"ops\":226},\"sg_overlock_loopers_planar_residual\":{\"ops\":44},\"sg_overlock_loop"
-        "ers_planar_scales\":{\"ops\":3}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name"
-        "\":\"upper_looper_tip\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"upper_looper_t"
-        "ip\"},{\"body\":\"lower_lever\",\"component\":\"fx\",\"name\":\"lower_looper_tip\"},{\"body\":\""
-        "lower_lever\",\"component\":\"fy\",\"name\":\"lower_looper_tip\"},{\"body\":\"eccentric\",\"comp"
-        "onent\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"n"
-        "ame\":\"rock_shaft\"},{\"body\":\"coupler\",\"component\":\"torque\",\"name\":\"coupler\"},{\"bo"
-        "dy\":\"lower_lever\",\"component\":\"torque\",\"name\":\"lower_lever\"}],\"name\":\"overlock_loo"
-        "pers_planar\",\"observables\":[{\"name\":\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"uppe"
-        "r_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"upper_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"upper_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"uni"
-        "t\":\"m\"},{\"name\":\"lower_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"lower_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_ti"
-        "p.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\""
-        ":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"n"
-        "ame\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"n"
-        "ame\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\""
-        "rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\""
-        "unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\""
-        ",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_sh"
-        "aft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"cou"
-        "pler.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\""
-        ":\"coupler.com.x\",\"unit\":\"m\"},{\"name\":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupl"
-        "er.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupl"
-        "er.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "lower_lever.angle\",\"unit\":\"rad\"},{\"name\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"n"
-        "ame\":\"lower_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\""
-        "m\"},{\"name\":\"lower_lever.com.y\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":"
-        "\"m/s\"},{\"name\":\"lower_lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"defau"
-        "lt\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of the looper eccentric (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"d"
-        "efault\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimat"
-        "e)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,"
-        "\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\""
-        "name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\""
-        ":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (estimate)\",\"kind\":\"length\",\"name\":\"u"
-        "pper_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":1.7453292519943295,\""
-        "display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b3 from the arm DC (estimate)\",\"k"
-        "ind\":\"angle\",\"name\":\"upper_looper_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\""
-        "},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"arm DE of the planar four-bar DEFG (estima"
-        "te)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"arm DE from the arm DC (estim"
-        "ate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"coupler EF (estimate)\",\"kind\":\""
-        "length\",\"name\":\"coupler\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022"
-        ",\"display_unit\":\"mm\",\"doc\":\"lower-looper lever GF (estimate)\",\"kind\":\"length\",\"name"
-        "\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\""
-        ":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"length\",\"name\":\"pivot_distance\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.443460952792061,\"display_unit\":\"deg\",\"do"
-        "c\":\"direction of G from D, \\u03b2 (estimate)\",\"kind\":\"angle\",\"name\":\"pivot_direction\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.055,\"display_unit\":\"mm\",\""
-        "doc\":\"lower looper GN\\u2081, l\\u2086 (estimate)\",\"kind\":\"length\",\"name\":\"lower_loope"
-        "r\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-1.0471975511965976,\"display_u"
-        "nit\":\"deg\",\"doc\":\"its constructive angle \\u03b7 from the lever GF (estimate)\",\"kind\":\""
-        "angle\",\"name\":\"lower_looper_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"de"
-        "fault\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\","
-        "\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\""
-        "},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"na"
-        "me\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"dis"
-        "play_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\""
-        ":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display"
-        "_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"e"
-        "ccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-06,\"display"
-        "_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about its centre of mass\",\"kind\""
-        ":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\""
-        "},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"n"
-        "ame\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.01,\""
-        "display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\",\"na"
-        "me\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.015,\""
-        "display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\":\"length\",\"na"
-        "me\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2.5e-05,"
-        "\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its centre of mass\""
-        ",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":"
-        "\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of coupler\",\"kind\":\"ma"
-        "ss\",\"name\":\"coupler.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":8e"
-        "-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of coupler about its centre of mass"
-        "\",\"kind\":\"inertia\",\"name\":\"coupler.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
-        "kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of lower_lever\",\"kind\":\"m"
-        "ass\",\"name\":\"lower_lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default"
-        "\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_lever, local u\",\"kind\":\"l"
-        "ength\",\"name\":\"lower_lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
-        "lt\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_lever, local v\",\"kind\":\"l"
-        "ength\",\"name\":\"lower_lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
-        "lt\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lower_lever about its c"
-        "entre of mass\",\"kind\":\"inertia\",\"name\":\"lower_lever.inertia\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points"
-        "\":[{\"body\":\"rock_shaft\",\"doc\":\"upper looper tip N\\u2082\",\"name\":\"upper_looper_tip\""
-        ",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\"doc\":\"lower looper ti"
-        "p N\\u2081\",\"name\":\"lower_looper_tip\",\"offset\":6,\"role\":\"lower_looper_tip\"}],\"reacti"
-        "ons\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kin"
-        "d\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"rock_shaft"
-        "\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\""
-        ":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"columns\":[\"tension\"],\"grounded\":false,\"kin"
-        "d\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\":\"rock_shaft\",\"b\":\"coupler\",\"columns\":["
-        "\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"offset\":5},{\"a\":\"gr"
-        "ound\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\""
-        ",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\""
-        "],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F\",\"offset\":9},{\"a\":\"ground\",\"b\":"
-        "\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\","
-        "\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\"lower_looper_tip\":{\"kind"
-        "\":\"point\",\"name\":\"lower_looper_tip\"},\"upper_looper_tip\":{\"kind\":\"point\",\"name\":\""
-        "upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":36,\"nblock\":2,\"nbranch\":2,\"nc\":102,\"nf\":"
-        "12,\"nfo\":24,\"nload\":8,\"nobs\":48,\"np\":29,\"nq\":3,\"nx\":1}}"
+        "r_motion\":{\"ops\":226},\"sg_overlock_loopers_planar_observe\":{\"ops\":159},\"sg_overlock_loop"
+        "ers_planar_rates\":{\"ops\":91},\"sg_overlock_loopers_planar_residual\":{\"ops\":44},\"sg_overlo"
+        "ck_loopers_planar_scales\":{\"ops\":3}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\""
+        ",\"name\":\"upper_looper_tip\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"upper_l"
+        "ooper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fx\",\"name\":\"lower_looper_tip\"},{\"bo"
+        "dy\":\"lower_lever\",\"component\":\"fy\",\"name\":\"lower_looper_tip\"},{\"body\":\"eccentric\""
+        ",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"rock_shaft\",\"component\":\"torqu"
+        "e\",\"name\":\"rock_shaft\"},{\"body\":\"coupler\",\"component\":\"torque\",\"name\":\"coupler\""
+        "},{\"body\":\"lower_lever\",\"component\":\"torque\",\"name\":\"lower_lever\"}],\"name\":\"overl"
+        "ock_loopers_planar\",\"observables\":[{\"name\":\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\""
+        ":\"upper_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"upper_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"upper_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\""
+        ",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x"
+        "_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lo"
+        "oper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},"
+        "{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\""
+        "m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/"
+        "s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\","
+        "\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.an"
+        "gle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_s"
+        "haft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock"
+        "_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name"
+        "\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.angle\",\"unit\":\"rad\"},{\""
+        "name\":\"coupler.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2"
+        "\"},{\"name\":\"coupler.com.x\",\"unit\":\"m\"},{\"name\":\"coupler.com.y\",\"unit\":\"m\"},{\"n"
+        "ame\":\"coupler.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"n"
+        "ame\":\"coupler.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"lower_lever.angle\",\"unit\":\"rad\"},{\"name\":\"lower_lever.angle_d\",\"unit\":\""
+        "rad/s\"},{\"name\":\"lower_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\""
+        ",\"unit\":\"m\"},{\"name\":\"lower_lever.com.y\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever"
+        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.com.y_dd\",\"unit\":\"m/s^2\"}],\"params"
+        "\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of the looper eccentric"
+        " (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock shaf"
+        "t D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate"
+        ")\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":"
+        "\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\""
+        "display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (estimate)\",\"kind\":\"length\""
+        ",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":1.745329"
+        "2519943295,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b3 from the arm DC (es"
+        "timate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\",\"positive\":false,\"role\":null,\""
+        "unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"arm DE of the planar four-ba"
+        "r DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"arm DE from the "
+        "arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"coupler EF (estimate)"
+        "\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper lever GF (estimate)\",\"kind\":\"l"
+        "ength\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\""
+        "display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"length\",\"name\":\"pivot_distance"
+        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.443460952792061,\"display_unit"
+        "\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\",\"kind\":\"angle\",\"name\":\"p"
+        "ivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.055,\"display"
+        "_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estimate)\",\"kind\":\"length\",\"nam"
+        "e\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-1.04719755119"
+        "65976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b7 from the lever GF (estim"
+        "ate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric relative to "
+        "the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of eccentric\",\"k"
+        "ind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\""
+        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u\",\"kind\":"
+        "\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\"kind\":\"le"
+        "ngth\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about its centre "
+        "of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"k"
+        "ind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\""
+        "default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind\""
+        ":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
+        "fault\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\""
+        ":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
+        "fault\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its"
+        " centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role"
+        "\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of couple"
+        "r\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\""
+        "},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of coupler about i"
+        "ts centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.inertia\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of lower_lev"
+        "er\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_lever, local "
+        "u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_lever, local "
+        "v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lower_l"
+        "ever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_lever.inertia\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\""
+        ",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper looper tip N\\u2082\",\"name\":\"u"
+        "pper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\"doc\":"
+        "\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\"offset\":6,\"role\":\"lower_looper"
+        "_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grou"
+        "nded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"ground\",\""
+        "b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":"
+        "\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"columns\":[\"tension\"],\"ground"
+        "ed\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\":\"rock_shaft\",\"b\":\"coupler"
+        "\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"offset\""
+        ":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind"
+        "\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\",\"b\":\"lower_lever\",\"columns\""
+        ":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F\",\"offset\":9},{\"a\":\""
+        "ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"ki"
+        "nd\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\"lower_loope"
+        "r_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\"upper_looper_tip\":{\"kind\":\"poin"
+        "t\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":36,\"nblock\":2,\"nbranch\":2,\"n"
+        "c\":102,\"nf\":12,\"nfo\":24,\"ngroup\":6,\"nload\":8,\"nobs\":48,\"np\":29,\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -335,6 +335,165 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     return SG_OK;
 }
 
+/* sg_overlock_needle_rates -- Total ops: 83 */
+int sg_overlock_needle_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    const double t0 = c[24]*cq[1] + c[25]*cq[0];
+    const double t1 = c[11]*cq[0] + c[13]*cq[1];
+    const double t2 = c[18] + t1;
+    const double t3 = c[25]*cq[1] + c[26]*cq[0];
+    const double t4 = c[2]*cx[0] + c[3]*cx[1];
+    const double t5 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t4;
+    const double t6 = c[27]*cq[1];
+    const double t7 = c[14]*cq[0];
+    const double t8 = c[15]*cq[4];
+    const double t9 = c[3]*cx[0] + c[7]*cx[1];
+    const double t10 = c[33]*t9;
+    const double t11 = c[32]*t4*t9 + t10*t5;
+    const double t14 = c[14]*cq[1];
+    double J[9], rs[3], cs[3];
+    int piv[3];
+    J[0] = t0*t2 + t3*t5;
+    J[1] = 0.0;
+    J[2] = 0.0;
+    J[3] = t6;
+    J[4] = 0.0;
+    J[5] = c[28]*cq[5];
+    J[6] = t7;
+    J[7] = -1.0;
+    J[8] = t8;
+    qd[0] = -t11*xd[0];
+    qd[1] = 0.0;
+    qd[2] = 0.0;
+    rs[0] = c[53];
+    rs[1] = c[54];
+    rs[2] = (1.0/(c[31] + fabs(q[1])));
+    if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qd);
+    const double t12 = ((qd[0])*(qd[0]));
+    const double t13 = ((qd[2])*(qd[2]));
+    const double t15 = cq[5]*t13;
+    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[34]*cq[1]) + t1*t3 + t2*(c[24]*cq[0] + c[35]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[20]*qd[0]*t3*t9 + xd[0]*(c[36]*((t4)*(t4)) + c[37]*t4*t5));
+    qdd[1] = t12*t7 + t13*t8;
+    qdd[2] = c[15]*t15 + t12*t14;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    if (!isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_overlock_needle_observe -- Total ops: 101 */
+int sg_overlock_needle_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t6 = c[27]*cq[1];
+        const double t7 = c[14]*cq[0];
+        const double t12 = ((qd[0])*(qd[0]));
+        const double t14 = c[14]*cq[1];
+        const double t16 = qd[0]*t6;
+        const double t17 = qd[0]*t7;
+        const double t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+        const double t19 = qdd[0]*t7 + t12*t6;
+        obs[0] = t7;
+        obs[1] = t14;
+        obs[2] = t16;
+        obs[3] = t17;
+        obs[4] = t18;
+        obs[5] = t19;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        obs[6] = c[16];
+        obs[7] = c[38] + q[1];
+        obs[8] = 0.0;
+        obs[9] = qd[1];
+        obs[10] = 0.0;
+        obs[11] = qdd[1];
+        return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        obs[12] = c[16];
+        obs[13] = c[39] + q[1];
+        obs[14] = 0.0;
+        obs[15] = qd[1];
+        obs[16] = 0.0;
+        obs[17] = qdd[1];
+        return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        const double t4 = c[2]*cx[0] + c[3]*cx[1];
+        const double t9 = c[3]*cx[0] + c[7]*cx[1];
+        const double t20 = c[41]*t9 + c[42]*t4;
+        const double t21 = c[42]*t9 + c[44]*t4;
+        const double t22 = ((xd[0])*(xd[0]));
+        obs[18] = c[40] + x[0];
+        obs[19] = xd[0];
+        obs[20] = xdd[0];
+        obs[21] = c[0] + t20;
+        obs[22] = c[1] + c[41]*t4 + c[43]*t9;
+        obs[23] = t21*xd[0];
+        obs[24] = t20*xd[0];
+        obs[25] = t21*xdd[0] + t22*(c[43]*t4 + c[44]*t9);
+        obs[26] = t20*xdd[0] + t21*t22;
+        return isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 4: {
+        const double t12 = ((qd[0])*(qd[0]));
+        const double t23 = c[45]*cq[0] + c[46]*cq[1];
+        const double t24 = c[46]*cq[0] + c[48]*cq[1];
+        obs[27] = q[0];
+        obs[28] = qd[0];
+        obs[29] = qdd[0];
+        obs[30] = t23;
+        obs[31] = c[45]*cq[1] + c[47]*cq[0];
+        obs[32] = qd[0]*t24;
+        obs[33] = qd[0]*t23;
+        obs[34] = qdd[0]*t24 + t12*(c[47]*cq[1] + c[48]*cq[0]);
+        obs[35] = qdd[0]*t23 + t12*t24;
+        return isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 5: {
+        const double t6 = c[27]*cq[1];
+        const double t7 = c[14]*cq[0];
+        const double t12 = ((qd[0])*(qd[0]));
+        const double t13 = ((qd[2])*(qd[2]));
+        const double t14 = c[14]*cq[1];
+        const double t15 = cq[5]*t13;
+        const double t16 = qd[0]*t6;
+        const double t17 = qd[0]*t7;
+        const double t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+        const double t19 = qdd[0]*t7 + t12*t6;
+        const double t25 = c[49]*cq[4];
+        const double t26 = c[50]*cq[5];
+        obs[36] = q[2];
+        obs[37] = qd[2];
+        obs[38] = qdd[2];
+        obs[39] = t25 + t7;
+        obs[40] = c[49]*cq[5] + t14;
+        obs[41] = qd[2]*t26 + t16;
+        obs[42] = qd[2]*t25 + t17;
+        obs[43] = c[50]*cq[4]*t13 + qdd[2]*t26 + t18;
+        obs[44] = c[50]*t15 + qdd[2]*t25 + t19;
+        return isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 6: {
+        obs[45] = (0.5)*3.141592653589793;
+        obs[46] = 0.0;
+        obs[47] = 0.0;
+        obs[48] = c[51];
+        obs[49] = c[52] + q[1];
+        obs[50] = 0.0;
+        obs[51] = qd[1];
+        obs[52] = 0.0;
+        obs[53] = qdd[1];
+        return isfinite((((obs[45] + obs[46]) + (obs[47] + obs[48])) + ((obs[49] + obs[50]) + (obs[51] + (obs[52] + obs[53]))))) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_overlock_needle_forces -- Total ops: 208 */
 int sg_overlock_needle_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -728,6 +887,8 @@ SG_SIMD_SWEEP_BODY(sg_overlock_needle_constants, sg_overlock_needle_closed, sg_o
 #endif
 
 static const unsigned char sg_overlock_needle_coord_is_angle[3] = { 1, 0, 1 };
+static const int sg_overlock_needle_group_start[8] = { 0, 6, 12, 18, 27, 36, 45, 54 };
+static const unsigned char sg_overlock_needle_group_always[7] = { 0, 0, 0, 0, 0, 0, 0 };
 
 static const sg_mechanism sg_overlock_needle_descriptor = {
     .name = "overlock_needle",
@@ -742,10 +903,15 @@ static const sg_mechanism sg_overlock_needle_descriptor = {
     .nload = 10,
     .nblock = 3,
     .coord_is_angle = sg_overlock_needle_coord_is_angle,
+    .ngroup = 7,
+    .group_start = sg_overlock_needle_group_start,
+    .group_always = sg_overlock_needle_group_always,
     .constants = sg_overlock_needle_constants,
     .closed = sg_overlock_needle_closed,
     .residual = sg_overlock_needle_residual,
     .motion = sg_overlock_needle_motion,
+    .rates = sg_overlock_needle_rates,
+    .observe = sg_overlock_needle_observe,
     .forces = sg_overlock_needle_forces,
     .force_matrix = sg_overlock_needle_force_matrix,
     .scales = sg_overlock_needle_scales,
@@ -833,72 +999,73 @@ const char *sg_overlock_needle_manifest(void)
         "},\"sg_overlock_needle_blocks\":{\"ops\":27},\"sg_overlock_needle_closed\":{\"ops\":38},\"sg_ove"
         "rlock_needle_constants\":{\"ops\":111},\"sg_overlock_needle_force_matrix\":{\"ops\":105},\"sg_ov"
         "erlock_needle_forces\":{\"ops\":208},\"sg_overlock_needle_motion\":{\"ops\":155},\"sg_overlock_n"
-        "eedle_residual\":{\"ops\":43},\"sg_overlock_needle_scales\":{\"ops\":5}},\"loads\":[{\"body\":\""
-        "lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":\"lever\",\"component\":\"fy\",\""
-        "name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\""
-        "body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"c"
-        "omponent\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"nam"
-        "e\":\"needle_point\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\"},{"
-        "\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\":\"link\",\"component\""
-        ":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\"component\":\"torque\",\"name\":\"need"
-        "le_bar\"}],\"name\":\"overlock_needle\",\"observables\":[{\"name\":\"lever_pin.x\",\"unit\":\"m\""
-        "},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"lever_pin.x_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name"
-        "\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\""
-        "needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle"
-        "_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needl"
-        "e_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"name\":\"needle"
-        "_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_p"
-        "oint.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"nee"
-        "dle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\""
-        "eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{"
-        "\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"na"
-        "me\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{"
-        "\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/"
-        "s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name"
-        "\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.angle\",\"unit\":\"rad\"},{\"name\":\""
-        "link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
-        "link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\"unit\":\"m\"},{\"name\":\"link.com.x_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.x_dd\",\"un"
-        "it\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\""
-        "unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angl"
-        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_b"
-        "ar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle"
-        "_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\""
-        "mm\",\"doc\":\"eccentricity AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\""
-        "length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
-        "6,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":0.06,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"n"
-        "ame\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\""
-        ":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\","
-        "\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc"
-        "\":\"needle lever DL, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":"
-        "true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of "
-        "the needle lever DL from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\""
-        ":\"needle-bar link LN, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":"
-        "true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-b"
-        "ar axis from the rock shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"need"
-        "le eye below the link pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_"
-        "pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\""
-        ",\"doc\":\"needle point below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_ey"
-        "e\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\""
-        "doc\":\"length of the needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"ey"
-        "e_length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,"
-        "\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, where the lower looper's tip"
-        " passes (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\""
-        "needle_scarf\",\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\""
-        "phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"d"
-        "oc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of "
-        "eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\""
+        "eedle_observe\":{\"ops\":101},\"sg_overlock_needle_rates\":{\"ops\":83},\"sg_overlock_needle_res"
+        "idual\":{\"ops\":43},\"sg_overlock_needle_scales\":{\"ops\":5}},\"loads\":[{\"body\":\"lever\",\""
+        "component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"l"
+        "ever_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\"body\":\"n"
+        "eedle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\""
+        ":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"need"
+        "le_point\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\""
+        "lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\":\"link\",\"component\":\"torque\""
+        ",\"name\":\"link\"},{\"body\":\"needle_bar\",\"component\":\"torque\",\"name\":\"needle_bar\"}],"
+        "\"name\":\"overlock_needle\",\"observables\":[{\"name\":\"lever_pin.x\",\"unit\":\"m\"},{\"name\""
+        ":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"lever_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever"
+        "_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever_"
+        "pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye"
+        ".y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"name\":\"needle_point.y\""
+        ",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point."
+        "y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric"
+        ".angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":"
+        "\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"ec"
+        "centric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},"
+        "{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"n"
+        "ame\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name"
+        "\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lev"
+        "er.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"leve"
+        "r.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.angle\",\"unit\":\"rad\"},{\"name\":\"link.ang"
+        "le_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"link.co"
+        "m.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\"unit\":\"m\"},{\"name\":\"link.com.x_d\",\"unit"
+        "\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.x_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\""
+        ":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\""
+        ",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com"
+        ".y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.c"
+        "om.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"nee"
+        "dle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\"mm\","
+        "\"doc\":\"eccentricity AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\"leng"
+        "th\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\""
+        "display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"l"
+        "ength\",\"name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
+        "06,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name"
+        "\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\""
+        "mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"p"
+        "ositive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":"
+        "\"needle lever DL, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":tru"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of the"
+        " needle lever DL from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\""
+        "needle-bar link LN, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":tru"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-bar "
+        "axis from the rock shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"needle "
+        "eye below the link pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin"
+        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\""
+        "doc\":\"needle point below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_eye\""
+        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\"do"
+        "c\":\"length of the needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"eye_"
+        "length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,\""
+        "display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, where the lower looper's tip p"
+        "asses (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"ne"
+        "edle_scarf\",\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"p"
+        "hase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\","
+        "\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"do"
+        "c\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of e"
+        "ccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\""
         ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccen"
         "tric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":nul"
         "l,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of"
@@ -942,6 +1109,6 @@ const char *sg_overlock_needle_manifest(void)
         "int\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\""
         "},\"needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"p"
         "aram\",\"name\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc"
-        "\":97,\"nf\":12,\"nfo\":26,\"nload\":10,\"nobs\":54,\"np\":27,\"nq\":3,\"nx\":1}}"
+        "\":97,\"nf\":12,\"nfo\":26,\"ngroup\":7,\"nload\":10,\"nobs\":54,\"np\":27,\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -334,6 +334,168 @@ int sg_overlock_needle_planar_motion(const double *q, const double *cq, const do
     return SG_OK;
 }
 
+/* sg_overlock_needle_planar_rates -- Total ops: 94 */
+int sg_overlock_needle_planar_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    const double t0 = c[22]*cq[1] + c[23]*cq[0];
+    const double t1 = c[1]*cx[0] + c[2]*cx[1];
+    const double t2 = c[18]*t1;
+    const double t3 = c[10]*cq[0] + c[12]*cq[1];
+    const double t4 = c[19] + t2 + t3;
+    const double t5 = c[23]*cq[1] + c[24]*cq[0];
+    const double t6 = c[1]*cx[1] + c[5]*cx[0];
+    const double t7 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t6;
+    const double t8 = c[25]*cq[1];
+    const double t9 = c[13]*cq[0];
+    const double t10 = c[14]*cq[4];
+    const double t11 = c[30]*t6;
+    const double t12 = c[31]*t1;
+    const double t13 = t11*t4 + t12*t7;
+    const double t14 = c[12]*cq[0] + c[32]*cq[1];
+    const double t17 = c[13]*cq[1];
+    double J[9], rs[3], cs[3];
+    int piv[3];
+    J[0] = t0*t4 + t5*t7;
+    J[1] = 0.0;
+    J[2] = 0.0;
+    J[3] = t8;
+    J[4] = 0.0;
+    J[5] = c[26]*cq[5];
+    J[6] = t9;
+    J[7] = -1.0;
+    J[8] = t10;
+    qd[0] = -t13*xd[0];
+    qd[1] = 0.0;
+    qd[2] = 0.0;
+    rs[0] = c[50];
+    rs[1] = c[51];
+    rs[2] = (1.0/(c[29] + fabs(q[1])));
+    if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qd);
+    const double t15 = ((qd[0])*(qd[0]));
+    const double t16 = ((qd[2])*(qd[2]));
+    const double t18 = cq[5]*t16;
+    qdd[0] = -qd[0]*(qd[0]*(t0*t14 + t0*t7 + t3*t5 + t4*(c[22]*cq[0] + c[33]*cq[1])) + xd[0]*(t11*t14 + t12*t3)) - t13*xdd[0] - xd[0]*(qd[0]*(c[3]*t0*t6 + t2*t5) + xd[0]*(c[30]*t1*t4 + c[34]*((t1)*(t1)) + c[34]*((t6)*(t6)) + t11*t7));
+    qdd[1] = t10*t16 + t15*t9;
+    qdd[2] = c[14]*t18 + t15*t17;
+    sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    if (!isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_overlock_needle_planar_observe -- Total ops: 101 */
+int sg_overlock_needle_planar_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t8 = c[25]*cq[1];
+        const double t9 = c[13]*cq[0];
+        const double t15 = ((qd[0])*(qd[0]));
+        const double t17 = c[13]*cq[1];
+        const double t19 = qd[0]*t8;
+        const double t20 = qd[0]*t9;
+        const double t21 = c[25]*cq[0]*t15 + qdd[0]*t8;
+        const double t22 = qdd[0]*t9 + t15*t8;
+        obs[0] = t9;
+        obs[1] = t17;
+        obs[2] = t19;
+        obs[3] = t20;
+        obs[4] = t21;
+        obs[5] = t22;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        obs[6] = c[15];
+        obs[7] = c[35] + q[1];
+        obs[8] = 0.0;
+        obs[9] = qd[1];
+        obs[10] = 0.0;
+        obs[11] = qdd[1];
+        return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        obs[12] = c[15];
+        obs[13] = c[36] + q[1];
+        obs[14] = 0.0;
+        obs[15] = qd[1];
+        obs[16] = 0.0;
+        obs[17] = qdd[1];
+        return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        const double t1 = c[1]*cx[0] + c[2]*cx[1];
+        const double t6 = c[1]*cx[1] + c[5]*cx[0];
+        const double t23 = c[38]*t1 + c[39]*t6;
+        const double t24 = c[39]*t1 + c[41]*t6;
+        const double t25 = ((xd[0])*(xd[0]));
+        obs[18] = c[37] + x[0];
+        obs[19] = xd[0];
+        obs[20] = xdd[0];
+        obs[21] = c[0] + t23;
+        obs[22] = c[38]*t6 + c[4] + c[40]*t1;
+        obs[23] = t24*xd[0];
+        obs[24] = t23*xd[0];
+        obs[25] = t24*xdd[0] + t25*(c[40]*t6 + c[41]*t1);
+        obs[26] = t23*xdd[0] + t24*t25;
+        return isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 4: {
+        const double t15 = ((qd[0])*(qd[0]));
+        const double t26 = c[42]*cq[0] + c[43]*cq[1];
+        const double t27 = c[43]*cq[0] + c[45]*cq[1];
+        obs[27] = q[0];
+        obs[28] = qd[0];
+        obs[29] = qdd[0];
+        obs[30] = t26;
+        obs[31] = c[42]*cq[1] + c[44]*cq[0];
+        obs[32] = qd[0]*t27;
+        obs[33] = qd[0]*t26;
+        obs[34] = qdd[0]*t27 + t15*(c[44]*cq[1] + c[45]*cq[0]);
+        obs[35] = qdd[0]*t26 + t15*t27;
+        return isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 5: {
+        const double t8 = c[25]*cq[1];
+        const double t9 = c[13]*cq[0];
+        const double t15 = ((qd[0])*(qd[0]));
+        const double t16 = ((qd[2])*(qd[2]));
+        const double t17 = c[13]*cq[1];
+        const double t18 = cq[5]*t16;
+        const double t19 = qd[0]*t8;
+        const double t20 = qd[0]*t9;
+        const double t21 = c[25]*cq[0]*t15 + qdd[0]*t8;
+        const double t22 = qdd[0]*t9 + t15*t8;
+        const double t28 = c[46]*cq[4];
+        const double t29 = c[47]*cq[5];
+        obs[36] = q[2];
+        obs[37] = qd[2];
+        obs[38] = qdd[2];
+        obs[39] = t28 + t9;
+        obs[40] = c[46]*cq[5] + t17;
+        obs[41] = qd[2]*t29 + t19;
+        obs[42] = qd[2]*t28 + t20;
+        obs[43] = c[47]*cq[4]*t16 + qdd[2]*t29 + t21;
+        obs[44] = c[47]*t18 + qdd[2]*t28 + t22;
+        return isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 6: {
+        obs[45] = (0.5)*3.141592653589793;
+        obs[46] = 0.0;
+        obs[47] = 0.0;
+        obs[48] = c[48];
+        obs[49] = c[49] + q[1];
+        obs[50] = 0.0;
+        obs[51] = qd[1];
+        obs[52] = 0.0;
+        obs[53] = qdd[1];
+        return isfinite((((obs[45] + obs[46]) + (obs[47] + obs[48])) + ((obs[49] + obs[50]) + (obs[51] + (obs[52] + obs[53]))))) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_overlock_needle_planar_forces -- Total ops: 214 */
 int sg_overlock_needle_planar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -730,6 +892,8 @@ SG_SIMD_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_plana
 #endif
 
 static const unsigned char sg_overlock_needle_planar_coord_is_angle[3] = { 1, 0, 1 };
+static const int sg_overlock_needle_planar_group_start[8] = { 0, 6, 12, 18, 27, 36, 45, 54 };
+static const unsigned char sg_overlock_needle_planar_group_always[7] = { 0, 0, 0, 0, 0, 0, 0 };
 
 static const sg_mechanism sg_overlock_needle_planar_descriptor = {
     .name = "overlock_needle_planar",
@@ -744,10 +908,15 @@ static const sg_mechanism sg_overlock_needle_planar_descriptor = {
     .nload = 10,
     .nblock = 3,
     .coord_is_angle = sg_overlock_needle_planar_coord_is_angle,
+    .ngroup = 7,
+    .group_start = sg_overlock_needle_planar_group_start,
+    .group_always = sg_overlock_needle_planar_group_always,
     .constants = sg_overlock_needle_planar_constants,
     .closed = sg_overlock_needle_planar_closed,
     .residual = sg_overlock_needle_planar_residual,
     .motion = sg_overlock_needle_planar_motion,
+    .rates = sg_overlock_needle_planar_rates,
+    .observe = sg_overlock_needle_planar_observe,
     .forces = sg_overlock_needle_planar_forces,
     .force_matrix = sg_overlock_needle_planar_force_matrix,
     .scales = sg_overlock_needle_planar_scales,
@@ -835,116 +1004,117 @@ const char *sg_overlock_needle_planar_manifest(void)
         "sg_overlock_needle_planar_blocks\":{\"ops\":27},\"sg_overlock_needle_planar_closed\":{\"ops\":35"
         "},\"sg_overlock_needle_planar_constants\":{\"ops\":109},\"sg_overlock_needle_planar_force_matrix"
         "\":{\"ops\":107},\"sg_overlock_needle_planar_forces\":{\"ops\":214},\"sg_overlock_needle_planar_"
-        "motion\":{\"ops\":166},\"sg_overlock_needle_planar_residual\":{\"ops\":42},\"sg_overlock_needle_"
-        "planar_scales\":{\"ops\":5}},\"loads\":[{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"leve"
-        "r_pin\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"needle_bar"
-        "\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\""
-        "name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},"
-        "{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"eccentric\""
-        ",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"lever\",\"component\":\"torque\",\""
-        "name\":\"lever\"},{\"body\":\"link\",\"component\":\"torque\",\"name\":\"link\"},{\"body\":\"nee"
-        "dle_bar\",\"component\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"overlock_needle_planar\""
-        ",\"observables\":[{\"name\":\"lever_pin.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\""
-        "m\"},{\"name\":\"lever_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"lever_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\""
-        ":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"needle_point.x\",\"unit\":\"m\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"nee"
-        "dle_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"n"
-        "eedle_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"na"
-        "me\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{"
-        "\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m"
-        "\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit"
-        "\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\""
-        ":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\""
-        "},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"link.angle\",\"unit\":\"rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name"
-        "\":\"link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\""
-        "link.com.y\",\"unit\":\"m\"},{\"name\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.a"
-        "ngle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\""
-        "needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"ne"
-        "edle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\""
-        ":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\""
-        "}],\"params\":[{\"default\":0.0074,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of the need"
-        "le eccentric on the main shaft (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positiv"
-        "e\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"main-"
-        "shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"po"
-        "sitive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\""
-        "ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u"
-        "2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":"
-        "\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle lever DL, l\\u2084 (estimate)"
-        "\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"def"
-        "ault\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of the needle lever DL from the arm DC (esti"
-        "mate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"positive\":false,\"role\":null,\"unit\":\""
-        "rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"needle-bar link LN, l\\u2085 (estimat"
-        "e)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"de"
-        "fault\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-bar axis from the rock shaft D, a (estima"
-        "te)\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
-        "\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link pin N along the ba"
-        "r (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"needle point below its eye (e"
-        "stimate)\",\"kind\":\"length\",\"name\":\"point_below_eye\",\"positive\":true,\"role\":null,\"un"
-        "it\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\"doc\":\"length of the needle eye along "
-        "the needle (estimate)\",\"kind\":\"length\",\"name\":\"eye_length\",\"positive\":true,\"role\":\""
-        "needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,\"display_unit\":\"mm\",\"doc\":\"needle"
-        " scarf above the eye's top, where the lower looper's tip passes (estimate)\",\"kind\":\"length\""
-        ",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"needle_scarf\",\"unit\":\"m\"},{\"defaul"
-        "t\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric relative to the shaf"
-        "t angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"m"
-        "ass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
-        ":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u\",\"kind\":\"length\""
-        ",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,"
-        "\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\"kind\":\"length\",\"n"
-        "ame\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-06,\""
-        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about its centre of mass\",\""
-        "kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg"
-        "*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\""
-        "name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.008,\"dis"
-        "play_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\",\"name\":\"l"
-        "ever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
-        "\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\""
-        ",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\""
-        "lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"disp"
-        "lay_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\"mass\",\"name\":\"link.mass\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"m"
-        "oment of inertia of link about its centre of mass\",\"kind\":\"inertia\",\"name\":\"link.inertia"
-        "\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.025,\"display_unit\":\""
-        "g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":f"
-        "alse,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre "
-        "of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of"
-        " mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":fa"
-        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"mome"
-        "nt of inertia of needle_bar about its centre of mass\",\"kind\":\"inertia\",\"name\":\"needle_ba"
-        "r.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\""
-        ",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"lever\",\"doc\":\"needle-lever pin L\",\"n"
-        "ame\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye\","
-        "\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_eye\"},{\"body\":\"needle_bar\",\"doc\":\""
-        "needle point\",\"name\":\"needle_point\",\"offset\":12,\"role\":\"needle_point\"}],\"reactions\""
-        ":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\""
-        "revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"c"
-        "olumns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar."
-        "guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
-        ":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"eccentric\",\"b\":\"lever\",\""
-        "columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":6},{\"a\""
-        ":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\""
-        "name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"gr"
-        "ounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\"offset\":9},{\"a\":\"ground\",\"b\":\"ecce"
-        "ntric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name"
-        "\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\"needle_bar\":{\"kind\":\"body\","
-        "\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"needle_ey"
-        "e_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\"needle_point\":{\"kind\":\"point\",\"n"
-        "ame\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"param\",\"name\":\"scarf_length\"}},\"sizes"
-        "\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc\":94,\"nf\":12,\"nfo\":26,\"nload\":10,\""
-        "nobs\":54,\"np\":27,\"nq\":3,\"nx\":1}}"
+        "motion\":{\"ops\":166},\"sg_overlock_needle_planar_observe\":{\"ops\":101},\"sg_overlock_needle_"
+        "planar_rates\":{\"ops\":94},\"sg_overlock_needle_planar_residual\":{\"ops\":42},\"sg_overlock_ne"
+        "edle_planar_scales\":{\"ops\":5}},\"loads\":[{\"body\":\"lever\",\"component\":\"fx\",\"name\":\""
+        "lever_pin\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"needle"
+        "_bar\",\"component\":\"fx\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy"
+        "\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_poin"
+        "t\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"eccent"
+        "ric\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"lever\",\"component\":\"torqu"
+        "e\",\"name\":\"lever\"},{\"body\":\"link\",\"component\":\"torque\",\"name\":\"link\"},{\"body\""
+        ":\"needle_bar\",\"component\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"overlock_needle_pl"
+        "anar\",\"observables\":[{\"name\":\"lever_pin.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"un"
+        "it\":\"m\"},{\"name\":\"lever_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"lever_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{"
+        "\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"}"
+        ",{\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"na"
+        "me\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^"
+        "2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\""
+        "rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\""
+        "unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"un"
+        "it\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angl"
+        "e\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd"
+        "\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"u"
+        "nit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":"
+        "\"m/s^2\"},{\"name\":\"link.angle\",\"unit\":\"rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/"
+        "s\"},{\"name\":\"link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},"
+        "{\"name\":\"link.com.y\",\"unit\":\"m\"},{\"name\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":"
+        "\"link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"l"
+        "ink.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\""
+        "needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"}"
+        ",{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{"
+        "\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/"
+        "s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"u"
+        "nit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\"mm\",\"doc\":\"eccentricity"
+        " AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\"length\",\"name\":\"eccent"
+        "ric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\","
+        "\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"sha"
+        "ft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\""
+        "mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\""
+        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-sh"
+        "aft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle lever DL, l\\u"
+        "2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of the needle lever DL from th"
+        "e arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"needle-bar link LN, l\\u"
+        "2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":true,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-bar axis from the rock shaft"
+        " D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link pin N"
+        " along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":true,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"needle point bel"
+        "ow its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_eye\",\"positive\":true,\"rol"
+        "e\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\"doc\":\"length of the need"
+        "le eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"eye_length\",\"positive\":tr"
+        "ue,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,\"display_unit\":\"mm\",\""
+        "doc\":\"needle scarf above the eye's top, where the lower looper's tip passes (estimate)\",\"kin"
+        "d\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"needle_scarf\",\"unit\":\""
+        "m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric relati"
+        "ve to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of eccentric\""
+        ",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"}"
+        ",{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u\",\"kin"
+        "d\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\"kind\":"
+        "\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about its cent"
+        "re of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"ki"
+        "nd\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"defau"
+        "lt\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"lengt"
+        "h\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":"
+        "\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_un"
+        "it\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"iner"
+        "tia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"defau"
+        "lt\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\"mass\",\"name\":\"link.mas"
+        "s\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-06,\"display_unit\":\"kg*m"
+        "**2\",\"doc\":\"moment of inertia of link about its centre of mass\",\"kind\":\"inertia\",\"name"
+        "\":\"link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.025,\""
+        "display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar.mass"
+        "\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"mm\","
+        "\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\"needle_bar.com_"
+        "u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\""
+        "doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar.com_v\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\""
+        ",\"doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\":\"inertia\",\"nam"
+        "e\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_field"
+        "s\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"lever\",\"doc\":\"needle-l"
+        "ever pin L\",\"name\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\",\"doc\""
+        ":\"needle eye\",\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_eye\"},{\"body\":\"needle"
+        "_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":12,\"role\":\"needle_point\""
+        "}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
+        ":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\""
+        "needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic\",\"name"
+        "\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy"
+        "\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"eccentric\",\""
+        "b\":\"lever\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"o"
+        "ffset\":6},{\"a\":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind"
+        "\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"needle_bar\",\"columns\":[\""
+        "fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\"offset\":9},{\"a\":\"grou"
+        "nd\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\""
+        ":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\"needle_bar\":{\""
+        "kind\":\"body\",\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"point\",\"name\":\"needle_ey"
+        "e\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\"needle_point\":{\"kind"
+        "\":\"point\",\"name\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"param\",\"name\":\"scarf_le"
+        "ngth\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc\":94,\"nf\":12,\"nfo\":26"
+        ",\"ngroup\":7,\"nload\":10,\"nobs\":54,\"np\":27,\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -249,6 +249,169 @@ int sg_take_up_motion(const double *q, const double *cq, const double *x, const 
     return SG_OK;
 }
 
+/* sg_take_up_rates -- Total ops: 34 */
+int sg_take_up_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
+{
+    (void)x;
+    const double t0 = c[7]*cq[1];
+    const double t1 = c[11]*cq[0];
+    const double t2 = c[6]*cq[2];
+    const double t3 = c[1]*cx[1] + c[3]*cx[0];
+    const double t4 = c[0]*t3;
+    const double t5 = c[1]*cx[0] + c[2]*cx[1];
+    const double t6 = c[16]*t5;
+    const double t10 = ((xd[0])*(xd[0]));
+    const double t11 = c[0]*t5;
+    const double t12 = c[11]*cq[1];
+    double J[4], rs[2], cs[2];
+    int piv[2];
+    J[0] = t0;
+    J[1] = c[13]*cq[3];
+    J[2] = t1;
+    J[3] = t2;
+    qd[0] = t4*xd[0];
+    qd[1] = t6*xd[0];
+    rs[0] = c[32];
+    rs[1] = c[33];
+    if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
+    sg_solve_eq_inl(2, J, piv, rs, cs, qd);
+    const double t7 = ((qd[0])*(qd[0]));
+    const double t8 = t1*t7;
+    const double t9 = ((qd[1])*(qd[1]));
+    const double t13 = t12*t7;
+    qdd[0] = t10*t11 + t2*t9 + t4*xdd[0] + t8;
+    qdd[1] = c[6]*cq[3]*t9 + t10*t4 + t13 + t6*xdd[0];
+    sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
+    if (!isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))))) return SG_NONFINITE;
+    return SG_OK;
+}
+
+/* sg_take_up_observe -- Total ops: 169 */
+int sg_take_up_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
+{
+    switch (group) {
+    case 0: {
+        const double t3 = c[1]*cx[1] + c[3]*cx[0];
+        const double t4 = c[0]*t3;
+        const double t5 = c[1]*cx[0] + c[2]*cx[1];
+        const double t6 = c[16]*t5;
+        const double t10 = ((xd[0])*(xd[0]));
+        const double t11 = c[0]*t5;
+        const double t14 = c[16]*t3;
+        const double t15 = t14*xd[0];
+        const double t16 = t11*xd[0];
+        const double t17 = t10*t6 + t14*xdd[0];
+        const double t18 = t10*t14 + t11*xdd[0];
+        obs[0] = t11;
+        obs[1] = t4;
+        obs[2] = t15;
+        obs[3] = t16;
+        obs[4] = t17;
+        obs[5] = t18;
+        return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 1: {
+        const double t0 = c[7]*cq[1];
+        const double t1 = c[11]*cq[0];
+        const double t7 = ((qd[0])*(qd[0]));
+        const double t8 = t1*t7;
+        const double t12 = c[11]*cq[1];
+        const double t13 = t12*t7;
+        const double t19 = c[7]*cq[0];
+        obs[6] = c[4] + t19;
+        obs[7] = c[5] + t0;
+        obs[8] = qd[0]*t12;
+        obs[9] = qd[0]*t19;
+        obs[10] = qdd[0]*t12 + t8;
+        obs[11] = qdd[0]*t19 + t13;
+        return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 2: {
+        const double t3 = c[1]*cx[1] + c[3]*cx[0];
+        const double t4 = c[0]*t3;
+        const double t5 = c[1]*cx[0] + c[2]*cx[1];
+        const double t6 = c[16]*t5;
+        const double t9 = ((qd[1])*(qd[1]));
+        const double t10 = ((xd[0])*(xd[0]));
+        const double t11 = c[0]*t5;
+        const double t14 = c[16]*t3;
+        const double t15 = t14*xd[0];
+        const double t16 = t11*xd[0];
+        const double t17 = t10*t6 + t14*xdd[0];
+        const double t18 = t10*t14 + t11*xdd[0];
+        const double t20 = c[17]*cq[3] + c[18]*cq[2];
+        const double t21 = c[17]*cq[2] + c[20]*cq[3];
+        obs[12] = t11 + t20;
+        obs[13] = c[18]*cq[3] + c[19]*cq[2] + t4;
+        obs[14] = qd[1]*t21 + t15;
+        obs[15] = qd[1]*t20 + t16;
+        obs[16] = qdd[1]*t21 + t17 + t9*(c[19]*cq[3] + c[20]*cq[2]);
+        obs[17] = qdd[1]*t20 + t18 + t21*t9;
+        return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
+    }
+    case 3: {
+        const double t3 = c[1]*cx[1] + c[3]*cx[0];
+        const double t5 = c[1]*cx[0] + c[2]*cx[1];
+        const double t10 = ((xd[0])*(xd[0]));
+        const double t22 = c[22]*t5 + c[23]*t3;
+        const double t23 = c[23]*t5 + c[25]*t3;
+        obs[18] = c[21] + x[0];
+        obs[19] = xd[0];
+        obs[20] = xdd[0];
+        obs[21] = t22;
+        obs[22] = c[22]*t3 + c[24]*t5;
+        obs[23] = t23*xd[0];
+        obs[24] = t22*xd[0];
+        obs[25] = t10*(c[24]*t3 + c[25]*t5) + t23*xdd[0];
+        obs[26] = t10*t23 + t22*xdd[0];
+        return isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 4: {
+        const double t3 = c[1]*cx[1] + c[3]*cx[0];
+        const double t4 = c[0]*t3;
+        const double t5 = c[1]*cx[0] + c[2]*cx[1];
+        const double t6 = c[16]*t5;
+        const double t9 = ((qd[1])*(qd[1]));
+        const double t10 = ((xd[0])*(xd[0]));
+        const double t11 = c[0]*t5;
+        const double t14 = c[16]*t3;
+        const double t15 = t14*xd[0];
+        const double t16 = t11*xd[0];
+        const double t17 = t10*t6 + t14*xdd[0];
+        const double t18 = t10*t14 + t11*xdd[0];
+        const double t24 = c[26]*cq[2] + c[27]*cq[3];
+        const double t25 = c[27]*cq[2] + c[29]*cq[3];
+        obs[27] = q[1];
+        obs[28] = qd[1];
+        obs[29] = qdd[1];
+        obs[30] = t11 + t24;
+        obs[31] = c[26]*cq[3] + c[28]*cq[2] + t4;
+        obs[32] = qd[1]*t25 + t15;
+        obs[33] = qd[1]*t24 + t16;
+        obs[34] = qdd[1]*t25 + t17 + t9*(c[28]*cq[3] + c[29]*cq[2]);
+        obs[35] = qdd[1]*t24 + t18 + t25*t9;
+        return isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35]))))) ? SG_OK : SG_NONFINITE;
+    }
+    case 5: {
+        const double t7 = ((qd[0])*(qd[0]));
+        const double t26 = c[30]*cq[0];
+        const double t27 = c[31]*cq[1];
+        obs[36] = q[0];
+        obs[37] = qd[0];
+        obs[38] = qdd[0];
+        obs[39] = c[4] + t26;
+        obs[40] = c[30]*cq[1] + c[5];
+        obs[41] = qd[0]*t27;
+        obs[42] = qd[0]*t26;
+        obs[43] = c[31]*cq[0]*t7 + qdd[0]*t27;
+        obs[44] = qdd[0]*t26 + t27*t7;
+        return isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44]))))) ? SG_OK : SG_NONFINITE;
+    }
+    default:
+        return SG_BAD_ARGUMENT;
+    }
+}
+
 /* sg_take_up_forces -- Total ops: 193 */
 int sg_take_up_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
@@ -611,6 +774,8 @@ SG_SIMD_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, s
 #endif
 
 static const unsigned char sg_take_up_coord_is_angle[2] = { 1, 1 };
+static const int sg_take_up_group_start[7] = { 0, 6, 12, 18, 27, 36, 45 };
+static const unsigned char sg_take_up_group_always[6] = { 0, 0, 0, 0, 0, 0 };
 
 static const sg_mechanism sg_take_up_descriptor = {
     .name = "take_up",
@@ -625,10 +790,15 @@ static const sg_mechanism sg_take_up_descriptor = {
     .nload = 9,
     .nblock = 1,
     .coord_is_angle = sg_take_up_coord_is_angle,
+    .ngroup = 6,
+    .group_start = sg_take_up_group_start,
+    .group_always = sg_take_up_group_always,
     .constants = sg_take_up_constants,
     .closed = sg_take_up_closed,
     .residual = sg_take_up_residual,
     .motion = sg_take_up_motion,
+    .rates = sg_take_up_rates,
+    .observe = sg_take_up_observe,
     .forces = sg_take_up_forces,
     .force_matrix = sg_take_up_force_matrix,
     .scales = sg_take_up_scales,
@@ -694,96 +864,97 @@ const char *sg_take_up_manifest(void)
         "upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\""
         "kernels\":{\"sg_take_up_anchors\":{\"ops\":42},\"sg_take_up_blocks\":{\"ops\":15},\"sg_take_up_c"
         "losed\":{\"ops\":22},\"sg_take_up_constants\":{\"ops\":77},\"sg_take_up_force_matrix\":{\"ops\":"
-        "84},\"sg_take_up_forces\":{\"ops\":193},\"sg_take_up_motion\":{\"ops\":139},\"sg_take_up_residua"
-        "l\":{\"ops\":20},\"sg_take_up_scales\":{\"ops\":2}},\"loads\":[{\"body\":\"crank\",\"component\""
-        ":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"}"
-        ",{\"body\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"rocker\",\"compo"
-        "nent\":\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"threa"
-        "d_eye\"},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\""
-        "component\":\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\""
-        ":\"lever\"},{\"body\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\"name\":\"take_"
-        "up\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit"
-        "\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m"
-        "/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m"
-        "/s^2\"},{\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\""
-        "name\":\"rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"na"
-        "me\":\"rocker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\""
-        "thread_eye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"th"
-        "read_eye.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":"
-        "\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"cr"
-        "ank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank"
-        ".com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d"
-        "\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\""
-        "unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\""
-        "unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m"
-        "/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^"
-        "2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\""
-        "},{\"name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/"
-        "s^2\"},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\""
-        "name\":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"na"
-        "me\":\"rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],"
-        "\"params\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, horizontal (s"
-        "eed 004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed "
-        "004 \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"role\":"
-        "null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\""
-        "kind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":0.038,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\""
-        "name\":\"lever_bc\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0260000000000"
-        "00002,\"display_unit\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"ro"
-        "cker\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\""
-        ",\"doc\":\"take-up lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\""
-        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"do"
-        "c\":\"take-up lever C to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"p"
-        "ositive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\""
-        "phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"ma"
-        "ss of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\""
-        "kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
-        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"len"
-        "gth\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
-        ",\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\""
-        "kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**"
-        "2\"},{\"default\":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\""
-        ":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
-        ":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\","
-        "\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"d"
-        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\""
-        "lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit"
-        "\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inerti"
-        "a\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
-        "\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.m"
-        "ass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg"
-        "*m**2\",\"doc\":\"moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\""
-        "name\":\"rocker.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0."
-        "0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\""
-        ",\"name\":\"B.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\"di"
-        "splay_unit\":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\"kind\":\"length\",\"name\":\"B."
-        "pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
-        "\"\",\"doc\":\"Coulomb friction coefficient of C\",\"kind\":\"dimensionless\",\"name\":\"C.frict"
-        "ion\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.002,\"display_unit\":\"mm\""
-        ",\"doc\":\"pin radius of C (friction arm)\",\"kind\":\"length\",\"name\":\"C.pin_radius\",\"posi"
+        "84},\"sg_take_up_forces\":{\"ops\":193},\"sg_take_up_motion\":{\"ops\":139},\"sg_take_up_observe"
+        "\":{\"ops\":169},\"sg_take_up_rates\":{\"ops\":34},\"sg_take_up_residual\":{\"ops\":20},\"sg_tak"
+        "e_up_scales\":{\"ops\":2}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_"
+        "pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rocker\",\"c"
+        "omponent\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"rocker\",\"component\":\"fy\",\"name\":\""
+        "rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"thread_eye\"},{\"body\":\"leve"
+        "r\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\"component\":\"torque\",\""
+        "name\":\"crank\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\":\"r"
+        "ocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\"name\":\"take_up\",\"observables\":[{\""
+        "name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"cra"
+        "nk_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_p"
+        "in.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocke"
+        "r_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\"name\":\"rocker_pin.x_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.x_dd\","
+        "\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.x\""
+        ",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\"thread_eye.x_d\",\"unit\""
+        ":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.x_dd\",\"unit\":"
+        "\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":"
+        "\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\""
+        "rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{"
+        "\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"na"
+        "me\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\""
+        "name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name"
+        "\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":"
+        "\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever."
+        "com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.c"
+        "om.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\"name\":\"rocker.an"
+        "gle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock"
+        "er.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\"name\":\"rocker.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.x_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\""
+        ":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, horizontal (seed 004 \\u00a71.1.1)\","
+        "\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
+        ",{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed 004 \\u00a71.1.1)\",\"ki"
+        "nd\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\":\"length\",\"nam"
+        "e\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.038,\"display_unit\""
+        ":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name\":\"lever_bc\",\""
+        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.026000000000000002,\"display_unit\""
+        ":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\",\"positive\":tr"
+        "ue,\"role\":null,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\"doc\":\"take-up le"
+        "ver B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\",\"positive\":true,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"take-up lever C"
+        " to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"positive\":true,\"role"
+        "\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relat"
+        "ive to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind"
+        "\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default"
+        "\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"length\","
+        "\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"dis"
+        "play_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"c"
+        "rank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
+        "\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\"kind\":\"inertia\""
+        ",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":"
+        "0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\""
+        ":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.024,\"display_u"
+        "nit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\",\"name\":\"lever.c"
+        "om_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm"
+        "\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\"p"
+        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit\":\"kg*m**2\",\""
+        "doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"le"
+        "ver.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.004,\"displa"
+        "y_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.mass\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg*m**2\",\"doc\":\""
+        "moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rocker.in"
+        "ertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"display_unit\""
+        ":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\",\"name\":\"B.fric"
+        "tion\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\"display_unit\":\"mm\""
+        ",\"doc\":\"pin radius of B (friction arm)\",\"kind\":\"length\",\"name\":\"B.pin_radius\",\"posi"
         "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coul"
-        "omb friction coefficient of D\",\"kind\":\"dimensionless\",\"name\":\"D.friction\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin rad"
-        "ius of D (friction arm)\",\"kind\":\"length\",\"name\":\"D.pin_radius\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"m\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":"
-        "[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},"
-        "{\"body\":\"rocker\",\"doc\":\"lever-rocker pin C\",\"name\":\"rocker_pin\",\"offset\":6,\"role\""
-        ":null},{\"body\":\"lever\",\"doc\":\"thread eye E of the take-up lever\",\"name\":\"thread_eye\""
-        ",\"offset\":12,\"role\":\"thread_eye\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"colu"
-        "mns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\""
-        ":0},{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"r"
-        "evolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":[\"fx\",\""
-        "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\""
-        ":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\","
-        "\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"inp"
-        "ut\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"roles\":"
-        "{\"take_up_lever\":{\"kind\":\"body\",\"name\":\"lever\"},\"thread_eye\":{\"kind\":\"point\",\"n"
-        "ame\":\"thread_eye\"}},\"sizes\":{\"nanchor_out\":28,\"nblock\":1,\"nbranch\":1,\"nc\":62,\"nf\""
-        ":9,\"nfo\":24,\"nload\":9,\"nobs\":45,\"np\":24,\"nq\":2,\"nx\":1}}"
+        "omb friction coefficient of C\",\"kind\":\"dimensionless\",\"name\":\"C.friction\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"pin radi"
+        "us of C (friction arm)\",\"kind\":\"length\",\"name\":\"C.pin_radius\",\"positive\":false,\"role"
+        "\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coeffi"
+        "cient of D\",\"kind\":\"dimensionless\",\"name\":\"D.friction\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin radius of D (friction "
+        "arm)\",\"kind\":\"length\",\"name\":\"D.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\""
+        "m\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\""
+        ",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rocker\""
+        ",\"doc\":\"lever-rocker pin C\",\"name\":\"rocker_pin\",\"offset\":6,\"role\":null},{\"body\":\""
+        "lever\",\"doc\":\"thread eye E of the take-up lever\",\"name\":\"thread_eye\",\"offset\":12,\"ro"
+        "le\":\"thread_eye\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\""
+        "],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"crank\""
+        ",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\""
+        "B\",\"offset\":2},{\"a\":\"ground\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":tr"
+        "ue,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\":\"rocker\",\"column"
+        "s\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\""
+        ":\"ground\",\"b\":\"crank\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kin"
+        "d\":\"drive\",\"name\":\"crank.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"take_up_lever\":{"
+        "\"kind\":\"body\",\"name\":\"lever\"},\"thread_eye\":{\"kind\":\"point\",\"name\":\"thread_eye\""
+        "}},\"sizes\":{\"nanchor_out\":28,\"nblock\":1,\"nbranch\":1,\"nc\":62,\"nf\":9,\"nfo\":24,\"ngro"
+        "up\":6,\"nload\":9,\"nobs\":45,\"np\":24,\"nq\":2,\"nx\":1}}"
         ;
 }

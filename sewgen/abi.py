@@ -79,6 +79,16 @@ KERNELS = {
                             ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"), ("double *", "cond")),
                "velocities, accelerations and observables at a solved position; cond: the condition number (inf "
                "norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated"),
+    "rates": ("int", _Q + (("const double *", "xd"), ("const double *", "xdd"), ("const double *", "c"),
+                           ("double *", "qd"), ("double *", "qdd"), ("double *", "cond")),
+              "the motion kernel without its observables: velocities, accelerations and cond, equal to the bit "
+              "(a sweep that keeps a few outputs adds only their groups, kernel 'observe')"),
+    "observe": ("int", _Q + (("const double *", "xd"), ("const double *", "xdd"), ("const double *", "c"),
+                             ("const double *", "qd"), ("const double *", "qdd"), ("int", "group"),
+                             ("double *", "obs")),
+                "one group of observables (a point's, a body's, a cam's arc: obs[group_start[group]] up to "
+                "obs[group_start[group + 1]]) from a position and its rates, equal to the bit to the motion "
+                "kernel's; SG_NONFINITE where one of them is not finite"),
     "forces": ("int", _Q + (("const double *", "xd"), ("const double *", "c"), ("const double *", "obs"),
                             ("const double *", "gv"), ("const double *", "ld"), ("double *", "out")),
                "joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld"),
@@ -127,6 +137,10 @@ DESCRIPTOR = (
     ("int", "nload", "load slots per position: fx, fy per point of a moving body, torque per moving body"),
     ("int", "nblock", "diagonal blocks of dPhi/dq (closing loops), each with an orientation sign"),
     ("const unsigned char *", "coord_is_angle", "1 for an angle coordinate, 0 for a travel"),
+    ("int", "ngroup", "groups of observables (kernel 'observe'): each point, each moving body, each cam's arc"),
+    ("const int *", "group_start", "ngroup + 1 entries: group g is obs[group_start[g]] to obs[group_start[g+1]-1]"),
+    ("const unsigned char *", "group_always", "1 for a group that may be non-finite where the coordinates, rates "
+                                              "and constants are finite: a selective sweep computes it always"),
 ) + tuple((f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in KERNELS.items()) + tuple(
     (f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in HOOKS.items())
 
@@ -178,7 +192,9 @@ EXPORTS = {
                          "out[k*out_stride + d*n + i] (NaN for a failed design); red (nred x 3: kind 0 min, "
                          "1 max, 2 absmax, 3 rms, 4 mean; column; second column for the norm of two, or -1) "
                          "writes red_val/red_idx[k*red_stride + d] (the extremum's first position in the "
-                         "caller's order, -1 for rms, mean; NaN and -1 for a failed design). work: "
+                         "caller's order, -1 for rms, mean; NaN and -1 for a failed design). A Newton sweep computes only "
+                         "the groups of observables sel and red read (kernels 'rates', 'observe'; the same values "
+                         "and statuses as the joint kernel's). work: "
                          "n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of "
                          "failed designs"),
     "sg_simd_width": ("int", (("const sg_mechanism *", "m"),),

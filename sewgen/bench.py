@@ -938,6 +938,34 @@ def _designs_entry(cfg: Config) -> Result:
 register_entry("take_up", "designs", _designs_entry)
 
 
+def _feed_designs_entry(cfg: Config) -> Result:
+    """5000 JB1-3 feed designs (every parameter scaled by 1 + 1e-4 noise) × 72 angles (5°), a Newton mechanism,
+    keeping the feed dog's x and y only (issue 14, item 3: the rates kernel and the feed dog's group of
+    observables, not the joint motion kernel), on one thread; the baseline: the same designs with every column
+    (the joint kernel) in the same run, checked equal to the bit on the kept columns."""
+    m = sewgen.mechanism("feed")
+    phi = sewgen.shaft_angles(5)
+    nd = 5000
+    p0 = m.param_vector()
+    P = np.tile(p0, (nd, 1)) * (1 + 1e-4 * np.random.default_rng(0).standard_normal((nd, p0.size)))
+    dog = m.description.role("feed_dog").name
+    kept = [f"points.{dog}.x", f"points.{dog}.y"]
+    run = lambda outputs: m.sweep_designs(P, phi, outputs=outputs, threads=1, chunk=1000)  # noqa: E731
+    sel, full = run(kept), run(["all"])
+    agree = all(np.array_equal(sel[k], full[k], equal_nan=True) for k in kept) and np.array_equal(sel.status,
+                                                                                                  full.status)
+    t_sel = min(_timed(run, (kept,)) for _ in range(3))
+    t_full = min(_timed(run, (["all"],)) for _ in range(2))
+    pos = nd * len(phi)
+    return pos / t_sel, pos / t_full, {
+        "agree": agree, "max_rel_diff": 0.0 if agree else math.inf, "worst": kept[0], "designs": nd,
+        "angles": len(phi), "threads": 1, "us_per_design": t_sel / nd * 1e6,
+        "us_per_design_all_columns": t_full / nd * 1e6, "failing_designs": int((sel.status != 0).sum())}
+
+
+register_entry("feed", "designs (feed dog x, y)", _feed_designs_entry)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m sewgen.bench", description=__doc__.split("\n\n")[0])
     ap.add_argument("--positions", type=int, default=Config.positions,

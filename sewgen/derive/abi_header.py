@@ -72,8 +72,8 @@ def descriptor_initializer(prefix: str, sizes: dict, has: dict) -> list[str]:
     for _t, name, _doc in abi.DESCRIPTOR:
         if name == "name":
             value = f'"{prefix[3:]}"'
-        elif name == "coord_is_angle":
-            value = f"{prefix}_coord_is_angle"
+        elif name in ("coord_is_angle", "group_start", "group_always"):
+            value = f"{prefix}_{name}"
         elif name in abi.KERNELS:
             value = f"{prefix}_{name}" if has.get(name) else "0"
         elif name == "sweep_simd":  # where the closed form has vector kernels, and the build SIMD (sg_simd.h)

@@ -105,6 +105,20 @@ def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, ker
     }
 
 
+def observable_groups(mech: Mechanism, kin: Kinematics) -> list[int]:
+    """Where each group of observables starts (and, last, their number): each point's POINT_FIELDS, each moving
+    body's BODY_FIELDS, each cam's arc index, in the manifest's order (kinematics._derive_observables). A sweep
+    that keeps a few outputs computes only their groups (kernel 'observe')."""
+    sizes = ([len(POINT_FIELDS)] * len(mech.points) + [len(BODY_FIELDS)] * sum(b.moving for b in mech.bodies)
+             + [1] * len(kin.cams))
+    starts = [0]
+    for k in sizes:
+        starts.append(starts[-1] + k)
+    if starts[-1] != len(kin.observables):
+        raise AssertionError(f"{mech.name}: observable groups cover {starts[-1]} of {len(kin.observables)}")
+    return starts
+
+
 def _c_string_chunks(text: str, width: int = 96) -> list[str]:
     esc = text.replace("\\", "\\\\").replace('"', '\\"').replace("?", "\\?")  # \? : no trigraphs
     chunks = []
@@ -127,16 +141,18 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     anchor_list, arc_list = drawing.anchors(kin)
     anchor_out = drawing.outputs(anchor_list, arc_list)
     blks = branches.blocks(kin)
+    groups = observable_groups(mech, kin)
+    row_scales = branches.row_scales(kin)
     kernels = ([ks.closed(dyads)] if dyads is not None else []) + [
-        ks.residual(), ks.scales(branches.row_scales(kin)), ks.blocks(blks), ks.motion(branches.row_scales(kin)),
-        ks.forces(kst),
+        ks.residual(), ks.scales(row_scales), ks.blocks(blks), ks.motion(row_scales),
+        ks.rates(row_scales), ks.observe(groups, row_scales), ks.forces(kst),
         ks.force_matrix(kst), ks.anchors(anchor_out)]
     vector_kernels = ks.vector_kernels(dyads, branches.row_scales(kin), kst) if dyads is not None else []
     kernels.insert(0, ks.constants_kernel())  # last to build: it evaluates what the others hoisted
     sizes = {"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
              "nbranch": len(dyads or []), "nc": len(ks.constants), "nf": len(kst.f),
              "nfo": len(kst.f) + len(kst.outputs), "nload": len(kst.load_slots), "nanchor_out": len(anchor_out),
-             "nblock": len(blks)}
+             "nblock": len(blks), "ngroup": len(groups) - 1}
     index = {sym: i for i, sym in enumerate(kin.p)}  # the parameters each hoisted constant reads
     constants = [sorted(index[s] for s in e.free_symbols if s in index) for e in ks.constants]
     manifest = manifest_of(mech, kin, kst, dyads, kernels, sizes, blks, constants)
@@ -154,6 +170,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
                   else "sgv_no_forces"),
         simd_sweep=abi.kernel_hook("sweep_simd", f"{prefix}_sweep_simd") if vector_kernels else None,
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
+        group_start=groups, group_always=ks.observe_always(groups, row_scales),
         descriptor=abi_header.descriptor_initializer(prefix, sizes, {k.name[len(prefix) + 1:]: True for k in kernels + vector_kernels}),
         manifest_chunks=_c_string_chunks(text))
     prototypes = [k.prototype for k in kernels] + [

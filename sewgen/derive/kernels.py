@@ -1,6 +1,6 @@
 """Kernel bodies as C text, computed in Python (DESIGN.md §4): the templates only lay them out.
 
-Four kernels per mechanism, each one joint CSE over everything it returns:
+The kernels of a mechanism, each one joint CSE over everything it returns:
 
 * ``constants`` — every subexpression of the parameters alone (link lengths from triangle sides, cos and
   sin of fixed angles, 1/l² ...), evaluated once per sweep into ``c[]``;
@@ -8,7 +8,10 @@ Four kernels per mechanism, each one joint CSE over everything it returns:
   coordinates and the cos/sin of every angle coordinate straight from the geometry;
 * ``residual``  — Φ and Φ_q for Newton and residual checks;
 * ``motion``    — Φ_q, −Φ_x x', LU, q'; γ, q''; every observable. Its CSE temporaries are emitted in
-  three stages by what they depend on (positions only / q' / q''), so each is computed once.
+  three stages by what they depend on (positions only / q' / q''), so each is computed once;
+* ``rates`` and ``observe`` — the motion kernel split for sweeps that keep a few outputs: q', q'' without the
+  observables, and one group of observables (a point, a body, a cam's arc) at a time, each printed from the
+  motion kernel's own CSE statements (those its outputs read), so the values are the motion kernel's to the bit.
 
 No kernel calls a trigonometric function of a coordinate or input: sin(a + c) of an angle a and a fixed
 c is expanded by the addition formulas and sin a, cos a are read from ``cq[]`` (coordinates) and ``cx[]``
@@ -249,6 +252,103 @@ class KernelSet:
         name = f"{self.prefix}_motion" + ("_v" if vector else "")
         return Kernel(name, VECTOR_SIGNATURES["motion"].format(f=name) if vector else self._signature("motion"),
                       body, ops(e for _, e in repl) + ops(red))
+
+    def _motion_parts(self, scales):
+        """The motion kernel's CSE split as the kernels read it: (temporaries, Φ_q entries, −Φ_x x', γ, every
+        observable, the rows' 1/loop size)."""
+        n = len(self.kin.q)
+        repl, red = self._motion_cse(scales)
+        r_inv = red[len(red) - n:] if n else []
+        red = red[:len(red) - n] if n else red
+        return repl, red[: n * n], red[n * n: n * n + n], red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:], r_inv
+
+    @staticmethod
+    def _needed(repl, exprs) -> list:
+        """The temporaries of ``repl`` that ``exprs`` read, directly or through other temporaries, in ``repl``'s
+        order: the same statements as the joint kernel's, so every value they give is the joint kernel's to the
+        bit (the same C expressions of the same inputs, no reassociation: no -ffast-math)."""
+        defs = dict(repl)
+        need: set = set()
+        stack = [s for e in exprs for s in sp.sympify(e).free_symbols if s in defs]
+        while stack:
+            t = stack.pop()
+            if t in need:
+                continue
+            need.add(t)
+            stack.extend(s for s in defs[t].free_symbols if s in defs and s not in need)
+        return [(t, e) for t, e in repl if t in need]
+
+    def rates(self, scales: list | None = None) -> Kernel:
+        """q', q'' and the condition estimate of the motion kernel without its observables (issue 14, item 3: a
+        sweep that keeps a few outputs computes only their groups, kernel ``observe``). The same temporaries
+        and LU as :meth:`motion`, those the observables alone read left out: q', q'', cond equal the motion
+        kernel's to the bit, and the status too but for a non-finite observable (``observe`` tests those)."""
+        n = len(self.kin.q)
+        repl, r_jac, r_vel, r_gam, _r_obs, r_inv = self._motion_parts(scales)
+        used = self._needed(repl, r_jac + r_vel + r_gam + r_inv)
+        levels: dict = {}
+        for t, e in repl:
+            levels[t] = max((_stage(s, levels) for s in e.free_symbols), default=0)
+        pr = SCALAR
+        early = [(t, e) for t, e in used if levels[t] == 0]
+        late = [(t, e) for t, e in used if levels[t] >= 1]
+        body = list(self.selection_block()) if _reads_ka(early + late, r_jac + r_vel + r_gam + r_inv) else []
+        body += pr.temps(early)
+        if n:
+            body += [f"double J[{n * n}], rs[{n}], cs[{n}];", f"int piv[{n}];"]
+            body += [f"J[{k}] = {pr.value(e)};" for k, e in enumerate(r_jac)]
+            body += [f"qd[{i}] = {pr.value(e)};" for i, e in enumerate(r_vel)]
+            body += [f"rs[{i}] = {pr.value(e)};" for i, e in enumerate(r_inv)]
+            body += [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
+                     f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
+        else:
+            body += ["*cond = 1.0;"]
+        body += pr.temps(late)
+        if n:
+            body += [f"qdd[{i}] = {pr.value(e)};" for i, e in enumerate(r_gam)]
+            body += [f"sg_solve_eq_inl({n}, J, piv, rs, cs, qdd);"]
+            outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)]
+            body += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
+        names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "cond")
+        body = _unused(body, *names) + body + ["return SG_OK;"]
+        return Kernel(f"{self.prefix}_rates", self._signature("rates"), body,
+                      ops(e for _, e in used) + ops(r_jac + r_vel + r_gam + r_inv))
+
+    def observe(self, groups: list, scales: list | None = None) -> Kernel:
+        """One group of observables (a point's or a body's columns, a cam's arc) from a position and its rates
+        (kernel ``rates``): ``groups`` lists each group's first observable and the next group's. Each case emits
+        the temporaries its observables read, as the joint motion kernel does (the same values to the bit), and
+        tests its own outputs for a non-finite value."""
+        repl, *_rest, r_obs, _r_inv = self._motion_parts(scales)
+        pr = SCALAR
+        body = ["switch (group) {"]
+        total = 0
+        for g, (a, b) in enumerate(zip(groups[:-1], groups[1:])):
+            exprs = r_obs[a:b]
+            used = self._needed(repl, exprs)
+            total += ops(e for _, e in used) + ops(exprs)
+            case = (list(self.selection_block()) if _reads_ka(used, exprs) else []) + pr.temps(used)
+            case += [f"obs[{k}] = {pr.value(e)};" for k, e in zip(range(a, b), exprs)]
+            outs = [f"obs[{k}]" for k in range(a, b)]
+            case += [f"return isfinite({_balanced_sum(outs)}) ? SG_OK : SG_NONFINITE;" if outs else "return SG_OK;"]
+            body += [f"case {g}: {{"] + ["    " + line for line in case] + ["}"]
+        body += ["default:", "    return SG_BAD_ARGUMENT;", "}"]
+        names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "obs")
+        body = _unused(body, *names) + body
+        return Kernel(f"{self.prefix}_observe", self._signature("observe"), body, total)
+
+    def observe_always(self, groups: list, scales: list | None = None) -> list[int]:
+        """Per group, 1 where its observables may come out non-finite from finite coordinates, rates, inputs and
+        constants (a division by a coordinate's function, a square root, any function): the runtime computes
+        such a group in every sweep, selected or not, so a selective sweep fails where the full one does. A
+        polynomial group (the catalog's) is 0: only an overflow past 1e308 could make it non-finite."""
+        repl, *_rest, r_obs, _r_inv = self._motion_parts(scales)
+        flags = []
+        for a, b in zip(groups[:-1], groups[1:]):
+            exprs = r_obs[a:b]
+            used = self._needed(repl, exprs)
+            flags.append(0 if all(_polynomial(e) for e in [e for _, e in used] + list(exprs)) else 1)
+        return flags
 
     def _motion_cse(self, scales):
         """The motion kernel's expressions after one joint CSE (shared by the scalar kernel and its SIMD twin)."""
@@ -546,6 +646,26 @@ def _fmax(terms: list[str], absolute: bool = True, fab: str = "fabs", fmx: str =
         return f"{fab}({terms[0]})" if absolute else terms[0]
     mid = len(terms) // 2
     return f"{fmx}({_fmax(terms[:mid], absolute, fab, fmx)}, {_fmax(terms[mid:], absolute, fab, fmx)})"
+
+
+def _reads_ka(temps, exprs) -> bool:
+    """Whether any of these temporaries or expressions reads a cam's run-time selection ka[]."""
+    return any(s.name.startswith("ka_") for e in [e for _, e in temps] + list(exprs)
+               for s in sp.sympify(e).free_symbols)
+
+
+def _polynomial(e) -> bool:
+    """Sums and products of symbols and numbers with non-negative integer powers only: finite wherever its
+    symbols are (but for an overflow)."""
+    e = sp.sympify(e)
+    if e.is_Symbol or e.is_number:
+        return e.is_Symbol or bool(e.is_finite)
+    if isinstance(e, (sp.Add, sp.Mul)):
+        return all(_polynomial(a) for a in e.args)
+    if isinstance(e, sp.Pow):
+        ex = e.args[1]
+        return bool(ex.is_Integer and ex >= 0) and _polynomial(e.args[0])
+    return False
 
 
 def _stage(sym, levels):

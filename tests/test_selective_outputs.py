@@ -1,0 +1,137 @@
+"""Observables computed only when asked (issue 14, item 3): a design sweep or ``solve(outputs=...)`` that keeps a
+few columns runs the ``rates`` kernel (q', q'', the condition estimate) and the ``observe`` groups its columns
+need, instead of the joint ``motion`` kernel; the generic (Newton) loop does this. The selected columns must equal
+the full sweep's exactly, with the same statuses and failing angles, on every catalog mechanism and on a user
+mechanism; the kernels themselves are checked against the joint motion kernel at solved positions, bit for bit.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import sewgen
+from sewgen.designs import Columns
+from sewgen.loader import catalog_names
+
+ROOT = Path(__file__).resolve().parents[1]
+PHI = sewgen.shaft_angles(7.5)
+
+
+def _table(mech):
+    """Scaled lengths with a NaN, a design that cannot assemble and some that fail at some angles only."""
+    lengths = [p for p in mech.description.params if p.kind == "length" and p.positive]
+    factors = [1.0, 0.97, 1.04, float("nan"), 1.1, 40.0, 0.9, 1.25, 1.6, 1.0]
+    table = {lengths[0].name: np.array([lengths[0].default * f for f in factors])}
+    if len(lengths) > 1:
+        table[lengths[1].name] = np.array([lengths[1].default * f for f in (1, 1, 0.98, 1, 1.03, 1, 1.01, 1, 1, 0.5)])
+    return table
+
+
+def _selections(mech):
+    point, last_point = mech.point_names[0], mech.point_names[-1]
+    body = mech.body_names[-1]
+    return [(["coords"], None), ([f"points:{point}"], None), ([f"bodies:{body}"], None),
+            ([f"points.{last_point}.y_dd", "coords"], None),
+            ([], {f"points.{point}.a": "max", f"points.{last_point}.y": "min"}),
+            ([f"bodies.{body}.angle"], {f"bodies.{body}.angle": "rms"})]
+
+
+def _same(full, part):
+    assert np.array_equal(part.status, full.status)
+    assert np.array_equal(part.first_bad_angle, full.first_bad_angle)
+    for key, arr in part.outputs.items():
+        assert np.array_equal(arr, full.outputs[key], equal_nan=True), key
+    for key in part.reductions:
+        assert np.array_equal(part[key], full[key], equal_nan=True), key
+
+
+def _check_mechanism(mech, newton):
+    table = _table(mech)
+    everything = mech.sweep_designs(table, PHI, newton=newton, threads=1)  # the joint motion kernel
+    cols = Columns(mech.description)
+    n_failed = int((everything.status != 0).sum())
+    assert 0 < n_failed < len(everything.status)
+    for outputs, reduce in _selections(mech):
+        part = mech.sweep_designs(table, PHI, newton=newton, threads=1, outputs=outputs, reduce=reduce)
+        full = mech.sweep_designs(table, PHI, newton=newton, threads=1, outputs=["all"], reduce=reduce)
+        _same(full, part)
+        for key, arr in part.outputs.items():
+            assert np.array_equal(arr, everything.outputs[key], equal_nan=True), key
+        assert set(part.outputs) <= set(cols.names)
+
+
+@pytest.mark.parametrize("name", catalog_names())
+def test_selected_groups_equal_the_joint_kernel_to_the_bit(name):
+    _check_mechanism(sewgen.mechanism(name), newton=True)
+
+
+def test_a_user_mechanism_selected_groups_equal_the_joint_kernel(tmp_path):
+    path = ROOT / "examples" / "my_mechanism.py"
+    _check_mechanism(sewgen.load(path, closed_form=False), newton=False)
+    _check_mechanism(sewgen.load(path), newton=True)
+
+
+def _kernel(mech, kind):
+    return getattr(mech.lib, f"sg_{mech.name}_{kind}")
+
+
+@pytest.mark.parametrize("name", ["feed", "take_up", "overlock_loopers"])
+def test_rates_and_observe_kernels_equal_motion_at_solved_positions(name):
+    """At every solved position of a sweep (a cam's arcs switching within it for the feed), rates gives the motion
+    kernel's q', q'' and cond, and the observe groups together its every observable, bit for bit."""
+    mech = sewgen.mechanism(name)
+    ffi = mech.ffi
+    desc = mech.description
+    sizes = desc.sizes
+    nq, nobs, ngroup = sizes["nq"], sizes["nobs"], sizes["ngroup"]
+    arcs = sum(o["name"].endswith(".arc") for o in mech.manifest["observables"])
+    assert ngroup == len(mech.manifest["points"]) + len(mech.manifest["bodies"]) + arcs
+    sweep = mech.prepare(PHI, newton=True)
+    sweep.run()
+    assert (sweep.status == 0).all()
+    c = np.empty(sizes["nc"])
+    _kernel(mech, "constants")(ffi.from_buffer("double[]", mech.param_vector()), ffi.from_buffer("double[]", c))
+    held = [i.default for i in desc.held_inputs]
+    motion, rates, observe = (_kernel(mech, k) for k in ("motion", "rates", "observe"))
+    seen = set()
+    buf = lambda a: ffi.from_buffer("double[]", a)  # noqa: E731
+    for i in range(len(PHI)):
+        q = sweep.q[i].copy()
+        cq = np.empty(2 * nq)
+        for k in range(nq):
+            cq[2 * k], cq[2 * k + 1] = (np.cos(q[k]), np.sin(q[k])) if mech.manifest["coords"][k]["unit"] == "rad" \
+                else (1.0, 0.0)
+        x = np.array([sweep.phi[i]] + held)
+        cx = np.ravel([(np.cos(v), np.sin(v)) for v in x])
+        xd = np.array([sweep.omega[i]] + [0.0] * len(held))
+        xdd = np.array([sweep.alpha[i]] + [0.0] * len(held))
+        qd1, qdd1, obs1, cond1 = np.empty(nq), np.empty(nq), np.empty(nobs), np.empty(1)
+        qd2, qdd2, obs2, cond2 = np.empty(nq), np.empty(nq), np.full(nobs, np.nan), np.empty(1)
+        args = (buf(q), buf(cq), buf(x), buf(cx), buf(xd), buf(xdd), buf(c))
+        assert motion(*args, buf(qd1), buf(qdd1), buf(obs1), buf(cond1)) == 0
+        assert rates(*args, buf(qd2), buf(qdd2), buf(cond2)) == 0
+        assert np.array_equal(qd1, qd2) and np.array_equal(qdd1, qdd2) and np.array_equal(cond1, cond2)
+        for g in range(ngroup):
+            assert observe(*args, buf(qd2), buf(qdd2), g, buf(obs2)) == 0
+        assert observe(*args, buf(qd2), buf(qdd2), ngroup, buf(obs2)) == 7  # SG_BAD_ARGUMENT
+        assert np.array_equal(obs1, obs2)
+        if arcs:
+            seen.add(obs1[-1])
+    if name == "feed":
+        assert len(seen) >= 2  # more than one cam arc met: the groups read the run-time selection too
+
+
+def test_polynomial_groups_need_not_be_computed_for_the_status():
+    """A group whose observables are polynomials of finite values cannot fail where the rates did not; a
+    division by a coordinate's function or a square root can, and such a group is computed in every sweep."""
+    from sewgen.derive.kernels import _polynomial
+
+    q, c = sp.Symbol("q_0", real=True), sp.Symbol("c_1", real=True)
+    assert _polynomial(3 * q ** 2 + c * q - 1)
+    assert not _polynomial(1 / (q + c))
+    assert not _polynomial(sp.sqrt(q))
+    assert not _polynomial(sp.atan2(q, c))
+    assert not _polynomial(c ** -1)
