@@ -187,6 +187,24 @@ def test_the_chunking_does_not_change_a_bit(jb):
     assert dask_chunk(100_000, 2) == 4000 and dask_chunk(10_000, 2) == 1000 and dask_chunk(30_000, 2) == 2500
 
 
+def test_a_dask_task_evaluates_its_designs_in_pieces_to_the_same_table(jb, monkeypatch):
+    """A Dask task larger than a chunk runs its designs in pieces of CHUNK (cache-sized arrays): the same table
+    as the whole task at once, bit for bit, with a failing design in the middle of a piece."""
+    from sewgen.study import run as study_run
+    from sewgen.study.evaluate import evaluate_chunk
+    from sewgen.study.run import evaluate_pieces, linked_keys
+
+    keys, _ = linked_keys(jb, ["groups.feed.params.feed_arm_r"])
+    values = np.linspace(0.0290, 0.0298, 11)[:, None]
+    values[4, 0] = 0.05  # the dog never sinks below the plate: a failing design
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    monkeypatch.setattr(study_run, "CHUNK", 3)
+    pieces = evaluate_pieces(jb, keys, values, opts)
+    whole = evaluate_chunk(jb, keys, values, opts)
+    pd.testing.assert_frame_equal(pieces, whole, check_exact=True)
+    assert (pieces["status"] != "ok").sum() == 1 and pieces["status"][4] != "ok"
+
+
 def test_a_study_on_a_running_scheduler_by_its_address(jb):
     distributed = pytest.importorskip("distributed")
     from sewgen.study.run import StudyError, dask_client

@@ -164,6 +164,18 @@ def _in_process(machine, keys, chunks, options, bar) -> list:
     return parts
 
 
+def evaluate_pieces(machine, keys, values, options):
+    """A Dask task's designs evaluated in pieces of :data:`CHUNK` (:func:`evaluate_chunk` each, the results
+    joined): a task is larger than a chunk (fewer tasks, less scheduler work), but the chunk's arrays are the
+    size that keeps a core's caches warm. Each design is evaluated as it would be alone: the same table."""
+    from ..frames import pandas
+
+    if len(values) <= CHUNK:
+        return evaluate_chunk(machine, keys, values, options)
+    parts = [evaluate_chunk(machine, keys, values[a:a + CHUNK], options) for a in range(0, len(values), CHUNK)]
+    return pandas().concat(parts, ignore_index=True)
+
+
 def run_designs(machine, keys, values=None, options: StudyOptions | None = None, *, chunk_size: int | None = None,
                 dask=None, progress=None):
     """Every design of ``machine`` evaluated: ``keys`` (model-file keys) × ``values`` ((D, k), SI), or ``keys``
@@ -205,7 +217,7 @@ def run_designs(machine, keys, values=None, options: StudyOptions | None = None,
                 mref = client.scatter(machine, broadcast=True)
                 # one thread per task: the workers are the parallelism (threads in each would oversubscribe)
                 on_worker = replace(options, threads=1)
-                futures = [client.submit(evaluate_chunk, mref, keys, c, on_worker, pure=False) for c in chunks]
+                futures = [client.submit(evaluate_pieces, mref, keys, c, on_worker, pure=False) for c in chunks]
                 where = {f.key: k for k, f in enumerate(futures)}
                 parts = [None] * len(futures)
                 # each result fetched as its task ends (overlapping the transfers with the other tasks' work),
