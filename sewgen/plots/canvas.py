@@ -200,9 +200,12 @@ def save() -> None:
                     theirs.clear()  # a full cache starts again from this process's strings
                 theirs.update(mine)
             tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            with open(tmp, "wb") as fh:
-                pickle.dump((bitmaps, extents), fh, protocol=pickle.HIGHEST_PROTOCOL)
-            os.replace(tmp, path)
+            try:
+                with open(tmp, "wb") as fh:
+                    pickle.dump((bitmaps, extents), fh, protocol=pickle.HIGHEST_PROTOCOL)
+                os.replace(tmp, path)
+            finally:
+                tmp.unlink(missing_ok=True)  # left only where writing or renaming failed
         _loaded = (len(_bitmaps), len(_extents))
     except OSError:
         pass
