@@ -94,6 +94,25 @@ static void fill_trig(const sg_mechanism *m, const double *q, double *cq)
     }
 }
 
+/* The full Newton step dq from (q, cq), kept if it lowers the weighted residual *norm: then q, cq, *norm (and
+ * jac, unless NULL) take the trial's. A converged position's last step (polish, and a Newton start within the
+ * tolerance): the position becomes exact to rounding. */
+static void keep_step_if_lower(const sg_mechanism *m, double *q, double *cq, const double *dq, const double *x,
+                               const double *cx, const double *c, const double *w, double *norm, double *jac)
+{
+    const int nq = m->nq;
+    double qt[SG_MAX_Q], cqt[2 * SG_MAX_Q], rt[SG_MAX_Q], jt[SG_MAX_Q * SG_MAX_Q];
+    shift_trig(m, q, cq, dq, qt, cqt);
+    m->residual(qt, cqt, x, cx, c, rt, jt);
+    const double nt = weighted_norm(nq, rt, w);
+    if (nt < *norm) {
+        copy_doubles(q, qt, nq);
+        copy_doubles(cq, cqt, 2 * nq);
+        if (jac != NULL) copy_doubles(jac, jt, nq * nq);
+        *norm = nt;
+    }
+}
+
 /* Damped Newton on Phi(q, x) = 0 from q (in place), with cq kept in step with q. Converged when every closure
  * equation's residual is below opt->tol times that equation's own loop size (inv_scale: the reciprocals of the
  * 'scales' kernel's sizes, refreshed by the caller). On success jac holds dPhi/dq at the solution and *resid
@@ -129,15 +148,7 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
         if (norm <= 1.0) { /* min_iter: a start within the tolerance gets one full step all the same, kept if it
                             * lowers the residual (a prediction within the tolerance is only that accurate; a
                             * step makes it as accurate as a solution Newton reached) */
-            shift_trig(m, q, cq, dq, qt, cqt);
-            m->residual(qt, cqt, x, cx, c, rt, lu); /* lu: free now, holds the trial's dPhi/dq */
-            const double nt = weighted_norm(nq, rt, w);
-            if (nt < norm) {
-                copy_doubles(q, qt, nq);
-                copy_doubles(cq, cqt, 2 * nq);
-                copy_doubles(jac, lu, nq * nq);
-                norm = nt;
-            }
+            keep_step_if_lower(m, q, cq, dq, x, cx, c, w, &norm, jac);
             *resid = norm * opt->tol;
             return SG_OK;
         }
@@ -166,25 +177,17 @@ static void polish(const sg_mechanism *m, double *q, double *cq, const double *x
                    const sg_options *opt, double *resid)
 {
     const int nq = m->nq;
-    double r[SG_MAX_Q], w[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q], qt[SG_MAX_Q], cqt[2 * SG_MAX_Q], dq[SG_MAX_Q];
+    double r[SG_MAX_Q], w[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q], dq[SG_MAX_Q];
     int piv[SG_MAX_Q];
     m->scales(q, cq, x, cx, c, w);
     for (int i = 0; i < nq; ++i) w[i] = 1.0 / w[i];
     m->residual(q, cq, x, cx, c, r, jac);
-    const double before = weighted_norm(nq, r, w);
+    double norm = weighted_norm(nq, r, w);
     if (sg_lu_factor_inl(nq, jac, piv, 0) != SG_OK) return;
     for (int i = 0; i < nq; ++i) dq[i] = -r[i];
     sg_lu_solve_inl(nq, jac, piv, dq);
-    shift_trig(m, q, cq, dq, qt, cqt);
-    m->residual(qt, cqt, x, cx, c, r, jac);
-    const double after = weighted_norm(nq, r, w);
-    if (after < before) {
-        copy_doubles(q, qt, nq);
-        copy_doubles(cq, cqt, 2 * nq);
-        *resid = after;
-    } else {
-        *resid = before;
-    }
+    keep_step_if_lower(m, q, cq, dq, x, cx, c, w, &norm, NULL);
+    *resid = norm;
     (void)opt;
 }
 
