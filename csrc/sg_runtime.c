@@ -408,7 +408,7 @@ static inline int motion_at(const sg_mechanism *m, const unsigned char *want, co
 
 /* The sweep: kinematics at every position, then (frc != NULL) the forces from the same solution. want (NULL:
  * every observable) flags the groups of observables to compute (a kinematic sweep that keeps a few outputs:
- * sg_sweep_designs); the closed-form inlined loops compute every one. */
+ * sg_sweep_designs), in every loop. */
 static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
                     const double *alpha, const double *held, const double *p, const int *branch,
                     const double *q_guess, const sg_options *opt, const size_t *order, const double *gv,
@@ -429,9 +429,9 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     if (use_closed && m->sweep != NULL && !opt->generic) { /* the inlined loop: the same, faster */
         if (!opt->scalar && sg_simd_width(m) > 1) /* four positions at a time */
             return m->sweep_simd(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs,
-                                 err, frc, status);
+                                 err, frc, status, want);
         return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs, err, frc,
-                        status);
+                        status, want);
     }
     if (frc != NULL && loads == NULL)
         for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;

@@ -291,12 +291,14 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
 }
 
 /* The closed-form sweep with one mechanism's kernels called directly (issue 14, item 1): the body of
- * sg_<m>_sweep, which each generated file with a closed form instantiates with its own constants, closed, motion
- * and forces kernels (a macro, so that the calls are direct and the file's flatten attribute inlines them: no
+ * sg_<m>_sweep, which each generated file with a closed form instantiates with its own constants, closed, motion,
+ * rates, observe and forces kernels (a macro, so that the calls are direct and the file's flatten attribute inlines them: no
  * function pointers per position); the runtime's sweep calls it for a closed-form sweep unless opt->generic.
  * The same operations as the generic loop (csrc/sg_runtime.c, sweep) in the same order, so the two agree to the
  * bit: closed form, unwrap against the last solution, motion, the rates' error estimate (the closed form's
  * position is exact to rounding: resid = eps, never polished), singular check, forces (frc != NULL), status.
+ * want (not NULL: a kinematic sweep that keeps a few outputs) flags the groups of observables to compute: the
+ * rates kernel and the wanted groups' observe kernel then stand for the motion kernel, as in the generic loop.
  * The arguments are sewgen.abi.HOOKS["sweep"]'s. Parts shared with the SIMD loop (csrc/sg_simd.h):
  * SG_CLOSED_SETUP declares the loop's state, SG_CLOSED_STEP solves position I, SG_CLOSED_FINISH the motion,
  * forces and status of position i from its solved coordinates (st, qi, qdi, qddi, oi, cq in scope). */
@@ -320,13 +322,23 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
     if (frc != NULL && loads == NULL)                                                              \
         for (int k = 0; k < nload; ++k) no_loads[k] = 0.0;                                         \
     int have_last = 0;                                                                             \
-    size_t failures = 0;
+    size_t failures = 0;                                                                           \
+    if (frc != NULL) want = NULL; /* forces read every observable */                              \
+    for (int k = 0; k < m->nc && want != NULL; ++k)                                                \
+        if (!isfinite(c[k])) want = NULL; /* as the generic loop: then every observable */        \
+    if (want != NULL && (m->ngroup < 1 || m->ngroup > SG_MAX_GROUP)) want = NULL;
 
-#define SG_CLOSED_FINISH(MOTION, FORCES)                                                           \
+#define SG_CLOSED_FINISH(MOTION, RATES, OBSERVE, FORCES)                                            \
     {                                                                                              \
         double cond = 1.0, est = 0.0;                                                              \
         if (st == SG_OK) {                                                                         \
-            st = MOTION(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);                          \
+            if (want == NULL) {                                                                    \
+                st = MOTION(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);                      \
+            } else { /* the rates and the wanted groups only: the same values to the bit */        \
+                st = RATES(qi, cq, x, cx, xd, xdd, c, qdi, qddi, &cond);                           \
+                for (int g = 0; g < m->ngroup && st == SG_OK; ++g)                                 \
+                    if (want[g]) st = OBSERVE(qi, cq, x, cx, xd, xdd, c, qdi, qddi, g, oi);        \
+            }                                                                                      \
             if (st == SG_SINGULAR) {                                                               \
                 est = INFINITY;                                                                    \
             } else if (st == SG_OK) {                                                              \
@@ -348,7 +360,7 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
         }                                                                                          \
     }
 
-#define SG_CLOSED_STEP(CLOSED, MOTION, FORCES, I)                                                  \
+#define SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, I)                                  \
     {                                                                                              \
         const size_t i = (I);                                                                      \
         double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq; \
@@ -377,13 +389,14 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
                 have_last = 1;                                                                     \
             }                                                                                      \
         }                                                                                          \
-        SG_CLOSED_FINISH(MOTION, FORCES)                                                           \
+        SG_CLOSED_FINISH(MOTION, RATES, OBSERVE, FORCES)                                           \
     }
 
-#define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, FORCES)                                    \
+#define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, RATES, OBSERVE, FORCES)                    \
     {                                                                                              \
         SG_CLOSED_SETUP(CONSTANTS)                                                                 \
-        for (size_t k = 0; k < n; ++k) SG_CLOSED_STEP(CLOSED, MOTION, FORCES, order ? order[k] : k) \
+        for (size_t k = 0; k < n; ++k)                                                             \
+            SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, order ? order[k] : k)           \
         return failures;                                                                           \
     }
 

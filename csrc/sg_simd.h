@@ -277,22 +277,39 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
         _mm256_storeu_pd(dst[2] + j, _mm256_permute2f128_pd(t0, t2, 0x31));
         _mm256_storeu_pd(dst[3] + j, _mm256_permute2f128_pd(t1, t3, 0x31));
     }
-    for (; j < count; ++j)
-        for (int l = 0; l < SG_W; ++l) dst[l][j] = v[j][l];
+    if (j + 2 <= count) { /* two columns: one 16-byte piece a lane */
+        const __m256d lo = _mm256_unpacklo_pd((__m256d)v[j], (__m256d)v[j + 1]);
+        const __m256d hi = _mm256_unpackhi_pd((__m256d)v[j], (__m256d)v[j + 1]);
+        _mm_storeu_pd(dst[0] + j, _mm256_castpd256_pd128(lo));
+        _mm_storeu_pd(dst[1] + j, _mm256_castpd256_pd128(hi));
+        _mm_storeu_pd(dst[2] + j, _mm256_extractf128_pd(lo, 1));
+        _mm_storeu_pd(dst[3] + j, _mm256_extractf128_pd(hi, 1));
+        j += 2;
+    }
+    if (j < count) { /* the last column */
+        const __m128d a = _mm256_castpd256_pd128((__m256d)v[j]), b = _mm256_extractf128_pd((__m256d)v[j], 1);
+        _mm_storel_pd(dst[0] + j, a);
+        _mm_storeh_pd(dst[1] + j, a);
+        _mm_storel_pd(dst[2] + j, b);
+        _mm_storeh_pd(dst[3] + j, b);
+    }
 }
 
 /* The SIMD closed-form sweep: blocks of SG_W positions in solving order (the last block padded with its last
- * position), the vector kernels CLOSED_V, MOTION_V (NOBS observables) and, for forces (frc not NULL), FORCES_V
+ * position), the vector kernels CLOSED_V, MOTION_V (NOBS observables; with want, RATES_V and the wanted groups'
+ * OBSERVE_V, whose rows alone are stored) and, for forces (frc not NULL), FORCES_V
  * (NFO outputs, loads transposed in), and the scalar step of csrc/sg_runtime.h for every block or lane the
  * vector kernels do not vouch for (see the top of this file). A force sweep the vector forces cannot do
  * (FORCES_IN_SIMD: friction on, or no vector form) runs the scalar loop whole. Angle coordinates are unwrapped
- * lane after lane against the last solution, as the scalar loop does. */
-#define SG_SIMD_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, FORCES, CLOSED_V, MOTION_V, FORCES_V, FORCES_IN_SIMD, NOBS,  \
-                           NFO)                                                                    \
+ * lane after lane against the last solution, as the scalar loop does (tested four lanes at once: where no lane
+ * is over half a turn from the one before, the scalar loop changes none). */
+#define SG_SIMD_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, RATES, OBSERVE, FORCES, CLOSED_V, MOTION_V, RATES_V,        \
+                           OBSERVE_V, FORCES_V, FORCES_IN_SIMD, NOBS, NFO)                         \
     {                                                                                              \
         SG_CLOSED_SETUP(CONSTANTS)                                                                 \
         if (frc != NULL && !FORCES_IN_SIMD(c)) {                                                   \
-            for (size_t k = 0; k < n; ++k) SG_CLOSED_STEP(CLOSED, MOTION, FORCES, order ? order[k] : k) \
+            for (size_t k = 0; k < n; ++k)                                                         \
+                SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, order ? order[k] : k)       \
             return failures;                                                                       \
         }                                                                                          \
         sg_vd vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q], vld[SG_MAX_LOAD];    \
@@ -312,9 +329,17 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
             for (int l = 0; l < SG_W; ++l) {                                                       \
                 const size_t kk = k + (size_t)(l < lanes ? l : lanes - 1);                         \
                 idx[l] = order ? order[kk] : kk;                                                   \
-                ph[l] = phi[idx[l]];                                                               \
-                om[l] = omega[idx[l]];                                                             \
-                al[l] = alpha[idx[l]];                                                             \
+            }                                                                                      \
+            if (order == NULL && lanes == SG_W) { /* loads: no lane-by-lane stores read back */    \
+                ph = (sg_vd)_mm256_loadu_pd(phi + k);                                              \
+                om = (sg_vd)_mm256_loadu_pd(omega + k);                                            \
+                al = (sg_vd)_mm256_loadu_pd(alpha + k);                                            \
+            } else {                                                                               \
+                for (int l = 0; l < SG_W; ++l) {                                                   \
+                    ph[l] = phi[idx[l]];                                                           \
+                    om[l] = omega[idx[l]];                                                         \
+                    al[l] = alpha[idx[l]];                                                         \
+                }                                                                                  \
             }                                                                                      \
             sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q];                                                 \
             int vector_block = sgv_all(sgv_isfinite(ph + om + al));                                \
@@ -326,21 +351,33 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 vector_block = sgv_all(CLOSED_V(vx, vcx, c, branch, vq, vcq));                     \
             }                                                                                      \
             if (!vector_block) {                                                                   \
-                for (int l = 0; l < lanes; ++l) SG_CLOSED_STEP(CLOSED, MOTION, FORCES, idx[l])     \
+                for (int l = 0; l < lanes; ++l)                                                    \
+                    SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, idx[l])                 \
                 continue;                                                                          \
             }                                                                                      \
-            for (int l = 0; l < SG_W; ++l) {                                                       \
-                for (int j = 0; j < nq; ++j) {                                                     \
-                    if (have_last && m->coord_is_angle[j]) {                                       \
-                        const double turns = (last[j] - vq[j][l]) * (1.0 / two_pi);                \
-                        if (fabs(turns) > 0.5) vq[j][l] += two_pi * nearbyint(turns);              \
-                    }                                                                              \
-                    last[j] = vq[j][l];                                                            \
+            for (int j = 0; j < nq; ++j) { /* no lane a half turn from the one before: none moves */ \
+                if (m->coord_is_angle[j]) {                                                        \
+                    const sg_vd v = vq[j];                                                         \
+                    const sg_vd prev = {have_last ? last[j] : v[0], v[0], v[1], v[2]};             \
+                    if (!sgv_all(~(sgv_fabs((prev - v) * (1.0 / two_pi)) > sgv_set1(0.5))))        \
+                        for (int l = have_last ? 0 : 1; l < SG_W; ++l) {                           \
+                            const double ref = l > 0 ? vq[j][l - 1] : last[j];                     \
+                            const double turns = (ref - vq[j][l]) * (1.0 / two_pi);                \
+                            if (fabs(turns) > 0.5) vq[j][l] += two_pi * nearbyint(turns);          \
+                        }                                                                          \
                 }                                                                                  \
-                have_last = 1;                                                                     \
+                last[j] = vq[j][SG_W - 1];                                                         \
             }                                                                                      \
+            have_last = 1;                                                                         \
             sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1], vout[(NFO) + 1], vcond;         \
-            sg_vm ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);          \
+            sg_vm ok;                                                                              \
+            if (want == NULL) {                                                                    \
+                ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);            \
+            } else { /* the rates and the wanted groups: the motion twin's values to the bit */    \
+                ok = RATES_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);                   \
+                for (int g = 0; g < m->ngroup; ++g)                                                \
+                    if (want[g]) ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs); \
+            }                                                                                      \
             const sg_vd vest = vcond * (eps + vcond * eps);                                        \
             ok &= vest <= accept;                                                                  \
             if (frc != NULL) {                                                                     \
@@ -365,7 +402,17 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
             sgv_store_rows(vq, nq, rq);                                                            \
             sgv_store_rows(vqd, nq, rqd);                                                          \
             sgv_store_rows(vqdd, nq, rqdd);                                                        \
-            sgv_store_rows(vobs, (NOBS), robs);                                                    \
+            if (want == NULL) {                                                                    \
+                sgv_store_rows(vobs, (NOBS), robs);                                                \
+            } else {                                                                               \
+                for (int g = 0; g < m->ngroup; ++g) {                                              \
+                    if (!want[g]) continue;                                                        \
+                    const int g0 = m->group_start[g];                                              \
+                    double *rg[SG_W];                                                              \
+                    for (int l = 0; l < SG_W; ++l) rg[l] = robs[l] + g0;                           \
+                    sgv_store_rows(vobs + g0, m->group_start[g + 1] - g0, rg);                     \
+                }                                                                                  \
+            }                                                                                      \
             if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                    \
             for (int l = 0; l < lanes; ++l) {                                                      \
                 const size_t i = idx[l];                                                           \
@@ -383,7 +430,7 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 xd[0] = om[l];                                                                     \
                 xdd[0] = al[l];                                                                    \
                 int st = SG_OK;                                                                    \
-                SG_CLOSED_FINISH(MOTION, FORCES)                                                   \
+                SG_CLOSED_FINISH(MOTION, RATES, OBSERVE, FORCES)                                   \
             }                                                                                      \
         }                                                                                          \
         return failures;                                                                           \

@@ -896,10 +896,10 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
 }
 
 /* sg_hook_drive_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_hook_drive_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_CLOSED_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion, sg_hook_drive_forces)
+static SG_FLATTEN size_t sg_hook_drive_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_CLOSED_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion, sg_hook_drive_rates, sg_hook_drive_observe, sg_hook_drive_forces)
 
-/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
  * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
@@ -1096,6 +1096,247 @@ SG_VINLINE sg_vm sg_hook_drive_motion_v(const sg_vd *q, const sg_vd *cq, const s
     return ok;
 }
 
+SG_VINLINE sg_vm sg_hook_drive_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
+{
+    (void)x;
+    const sg_vd t0 = c[7]*cq[1];
+    const sg_vd t1 = c[16]*cq[0];
+    const sg_vd t2 = c[6]*cq[4];
+    const sg_vd t3 = c[11]*cq[0] + c[19]*cq[1];
+    const sg_vd t4 = cq[3]*q[3];
+    const sg_vd t5 = cq[2]*q[3];
+    const sg_vd t6 = -t5;
+    const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t8 = c[0]*t7;
+    const sg_vd t9 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t10 = c[24]*t9;
+    const sg_vd t14 = ((xd[0])*(xd[0]));
+    const sg_vd t15 = c[0]*t9;
+    const sg_vd t16 = c[16]*cq[1];
+    const sg_vd t49 = sgv_fabs(q[3]);
+    sg_vd J[16], rs[4], cs[4];
+    sg_vm piv[4];
+    J[0] = t0;
+    J[1] = sgv_set1(0.0);
+    J[2] = c[18]*cq[5];
+    J[3] = sgv_set1(0.0);
+    J[4] = t1;
+    J[5] = sgv_set1(0.0);
+    J[6] = t2;
+    J[7] = sgv_set1(0.0);
+    J[8] = t3;
+    J[9] = t4;
+    J[10] = sgv_set1(0.0);
+    J[11] = -cq[2];
+    J[12] = c[10]*cq[0] + c[11]*cq[1];
+    J[13] = t6;
+    J[14] = sgv_set1(0.0);
+    J[15] = -cq[3];
+    qd[0] = t8*xd[0];
+    qd[1] = t10*xd[0];
+    qd[2] = sgv_set1(0.0);
+    qd[3] = sgv_set1(0.0);
+    rs[0] = sgv_set1(c[50]);
+    rs[1] = sgv_set1(c[51]);
+    rs[2] = (1.0/(c[22] + t49));
+    rs[3] = (1.0/(c[23] + t49));
+    sg_vm ok = sgv_factor_eq(4, J, piv, rs, cs, cond);
+    sgv_solve_eq(4, J, piv, rs, cs, qd);
+    const sg_vd t11 = ((qd[0])*(qd[0]));
+    const sg_vd t12 = t1*t11;
+    const sg_vd t13 = ((qd[2])*(qd[2]));
+    const sg_vd t17 = t11*t16;
+    const sg_vd t18 = cq[5]*t13;
+    const sg_vd t19 = cq[3]*qd[3];
+    const sg_vd t20 = qd[1]*t19;
+    const sg_vd t21 = qd[1]*t5 + t19;
+    const sg_vd t22 = cq[2]*qd[3];
+    const sg_vd t23 = -cq[3]*q[3]*qd[1] + t22;
+    qdd[0] = t12 + t13*t2 + t14*t15 + t8*xdd[0];
+    qdd[1] = c[6]*t18 + t10*xdd[0] + t14*t8 + t17;
+    qdd[2] = -qd[1]*t21 - t11*(c[13]*cq[1] + c[19]*cq[0]) - t20;
+    qdd[3] = cq[2]*qd[1]*qd[3] + qd[1]*t23 - t11*t3;
+    sgv_solve_eq(4, J, piv, rs, cs, qdd);
+    ok &= sgv_isfinite((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_hook_drive_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)
+{
+    switch (group) {
+    case 0: {
+        const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t8 = c[0]*t7;
+        const sg_vd t9 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t10 = c[24]*t9;
+        const sg_vd t14 = ((xd[0])*(xd[0]));
+        const sg_vd t15 = c[0]*t9;
+        const sg_vd t24 = c[24]*t7;
+        const sg_vd t25 = t24*xd[0];
+        const sg_vd t26 = t15*xd[0];
+        const sg_vd t27 = t10*t14 + t24*xdd[0];
+        const sg_vd t28 = t14*t24 + t15*xdd[0];
+        obs[0] = t15;
+        obs[1] = t8;
+        obs[2] = t25;
+        obs[3] = t26;
+        obs[4] = t27;
+        obs[5] = t28;
+        return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
+    }
+    case 1: {
+        const sg_vd t0 = c[7]*cq[1];
+        const sg_vd t1 = c[16]*cq[0];
+        const sg_vd t11 = ((qd[0])*(qd[0]));
+        const sg_vd t12 = t1*t11;
+        const sg_vd t16 = c[16]*cq[1];
+        const sg_vd t17 = t11*t16;
+        const sg_vd t29 = c[7]*cq[0];
+        obs[6] = c[4] + t29;
+        obs[7] = c[5] + t0;
+        obs[8] = qd[0]*t16;
+        obs[9] = qd[0]*t29;
+        obs[10] = qdd[0]*t16 + t12;
+        obs[11] = qdd[0]*t29 + t17;
+        return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
+    }
+    case 2: {
+        const sg_vd t4 = cq[3]*q[3];
+        const sg_vd t5 = cq[2]*q[3];
+        const sg_vd t19 = cq[3]*qd[3];
+        const sg_vd t20 = qd[1]*t19;
+        const sg_vd t21 = qd[1]*t5 + t19;
+        const sg_vd t22 = cq[2]*qd[3];
+        const sg_vd t23 = -cq[3]*q[3]*qd[1] + t22;
+        const sg_vd t30 = c[25] + t5;
+        const sg_vd t31 = c[26] + t4;
+        const sg_vd t32 = cq[2]*qdd[3] - t20;
+        const sg_vd t33 = cq[3]*qdd[3] + qd[1]*t22;
+        obs[12] = t30;
+        obs[13] = t31;
+        obs[14] = t23;
+        obs[15] = t21;
+        obs[16] = -qd[1]*t21 - qdd[1]*t4 + t32;
+        obs[17] = qd[1]*t23 + qdd[1]*t5 + t33;
+        return sgv_isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))));
+    }
+    case 3: {
+        const sg_vd t34 = c[27]*cq[2] + c[28]*cq[3];
+        const sg_vd t35 = c[28]*cq[2] + c[30]*cq[3];
+        const sg_vd t36 = ((qd[1])*(qd[1]));
+        obs[18] = c[25] + t34;
+        obs[19] = c[26] + c[27]*cq[3] + c[29]*cq[2];
+        obs[20] = qd[1]*t35;
+        obs[21] = qd[1]*t34;
+        obs[22] = qdd[1]*t35 + t36*(c[29]*cq[3] + c[30]*cq[2]);
+        obs[23] = qdd[1]*t34 + t35*t36;
+        return sgv_isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23]))));
+    }
+    case 4: {
+        const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t9 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t14 = ((xd[0])*(xd[0]));
+        const sg_vd t37 = c[32]*t9 + c[33]*t7;
+        const sg_vd t38 = c[33]*t9 + c[35]*t7;
+        obs[24] = c[31] + x[0];
+        obs[25] = xd[0];
+        obs[26] = xdd[0];
+        obs[27] = t37;
+        obs[28] = c[32]*t7 + c[34]*t9;
+        obs[29] = t38*xd[0];
+        obs[30] = t37*xd[0];
+        obs[31] = t14*(c[34]*t7 + c[35]*t9) + t38*xdd[0];
+        obs[32] = t14*t38 + t37*xdd[0];
+        return sgv_isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))));
+    }
+    case 5: {
+        const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t8 = c[0]*t7;
+        const sg_vd t9 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t10 = c[24]*t9;
+        const sg_vd t13 = ((qd[2])*(qd[2]));
+        const sg_vd t14 = ((xd[0])*(xd[0]));
+        const sg_vd t15 = c[0]*t9;
+        const sg_vd t18 = cq[5]*t13;
+        const sg_vd t24 = c[24]*t7;
+        const sg_vd t25 = t24*xd[0];
+        const sg_vd t26 = t15*xd[0];
+        const sg_vd t27 = t10*t14 + t24*xdd[0];
+        const sg_vd t28 = t14*t24 + t15*xdd[0];
+        const sg_vd t39 = c[36]*cq[4];
+        const sg_vd t40 = c[37]*cq[5];
+        obs[33] = q[2];
+        obs[34] = qd[2];
+        obs[35] = qdd[2];
+        obs[36] = t15 + t39;
+        obs[37] = c[36]*cq[5] + t8;
+        obs[38] = qd[2]*t40 + t25;
+        obs[39] = qd[2]*t39 + t26;
+        obs[40] = c[37]*cq[4]*t13 + qdd[2]*t40 + t27;
+        obs[41] = c[37]*t18 + qdd[2]*t39 + t28;
+        return sgv_isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41])))));
+    }
+    case 6: {
+        const sg_vd t11 = ((qd[0])*(qd[0]));
+        const sg_vd t41 = c[38]*cq[0] + c[39]*cq[1];
+        const sg_vd t42 = c[39]*cq[0] + c[41]*cq[1];
+        obs[42] = q[0];
+        obs[43] = qd[0];
+        obs[44] = qdd[0];
+        obs[45] = c[4] + t41;
+        obs[46] = c[38]*cq[1] + c[40]*cq[0] + c[5];
+        obs[47] = qd[0]*t42;
+        obs[48] = qd[0]*t41;
+        obs[49] = qdd[0]*t42 + t11*(c[40]*cq[1] + c[41]*cq[0]);
+        obs[50] = qdd[0]*t41 + t11*t42;
+        return sgv_isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50])))));
+    }
+    case 7: {
+        const sg_vd t36 = ((qd[1])*(qd[1]));
+        const sg_vd t43 = c[42]*cq[2] + c[43]*cq[3];
+        const sg_vd t44 = c[43]*cq[2] + c[45]*cq[3];
+        obs[51] = q[1];
+        obs[52] = qd[1];
+        obs[53] = qdd[1];
+        obs[54] = c[25] + t43;
+        obs[55] = c[26] + c[42]*cq[3] + c[44]*cq[2];
+        obs[56] = qd[1]*t44;
+        obs[57] = qd[1]*t43;
+        obs[58] = qdd[1]*t44 + t36*(c[44]*cq[3] + c[45]*cq[2]);
+        obs[59] = qdd[1]*t43 + t36*t44;
+        return sgv_isfinite((((obs[51] + obs[52]) + (obs[53] + obs[54])) + ((obs[55] + obs[56]) + (obs[57] + (obs[58] + obs[59])))));
+    }
+    case 8: {
+        const sg_vd t4 = cq[3]*q[3];
+        const sg_vd t5 = cq[2]*q[3];
+        const sg_vd t6 = -t5;
+        const sg_vd t19 = cq[3]*qd[3];
+        const sg_vd t20 = qd[1]*t19;
+        const sg_vd t22 = cq[2]*qd[3];
+        const sg_vd t30 = c[25] + t5;
+        const sg_vd t31 = c[26] + t4;
+        const sg_vd t32 = cq[2]*qdd[3] - t20;
+        const sg_vd t33 = cq[3]*qdd[3] + qd[1]*t22;
+        const sg_vd t45 = c[46]*cq[2] + c[47]*cq[3];
+        const sg_vd t46 = c[47]*cq[2] + c[49]*cq[3] - t4;
+        const sg_vd t47 = qd[1]*t46 + t22;
+        const sg_vd t48 = t45 + t5;
+        obs[60] = q[1];
+        obs[61] = qd[1];
+        obs[62] = qdd[1];
+        obs[63] = t30 + t45;
+        obs[64] = c[46]*cq[3] + c[48]*cq[2] + t31;
+        obs[65] = t47;
+        obs[66] = qd[1]*t48 + t19;
+        obs[67] = qd[1]*(qd[1]*(c[48]*cq[3] + c[49]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
+        obs[68] = qd[1]*t47 + qdd[1]*t48 + t33;
+        return sgv_isfinite((((obs[60] + obs[61]) + (obs[62] + obs[63])) + ((obs[64] + obs[65]) + (obs[66] + (obs[67] + obs[68])))));
+    }
+    default:
+        return sgv_false();
+    }
+}
+
 SG_VINLINE sg_vm sg_hook_drive_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)x;
@@ -1202,8 +1443,8 @@ SG_VINLINE int sg_hook_drive_forces_in_simd(const double *c)
     return c[93] == 0.0 && c[94] == 0.0 && c[95] == 0.0 && c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0;
 }
 
-static SG_FLATTEN size_t sg_hook_drive_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_SIMD_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion, sg_hook_drive_forces, sg_hook_drive_closed_v, sg_hook_drive_motion_v, sg_hook_drive_forces_v, sg_hook_drive_forces_in_simd, 69, 38)
+static SG_FLATTEN size_t sg_hook_drive_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_SIMD_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion, sg_hook_drive_rates, sg_hook_drive_observe, sg_hook_drive_forces, sg_hook_drive_closed_v, sg_hook_drive_motion_v, sg_hook_drive_rates_v, sg_hook_drive_observe_v, sg_hook_drive_forces_v, sg_hook_drive_forces_in_simd, 69, 38)
 #pragma GCC pop_options
 #endif
 

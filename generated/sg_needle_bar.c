@@ -528,10 +528,10 @@ void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, c
 }
 
 /* sg_needle_bar_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_needle_bar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_CLOSED_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_forces)
+static SG_FLATTEN size_t sg_needle_bar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_CLOSED_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_rates, sg_needle_bar_observe, sg_needle_bar_forces)
 
-/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
  * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
@@ -647,6 +647,148 @@ SG_VINLINE sg_vm sg_needle_bar_motion_v(const sg_vd *q, const sg_vd *cq, const s
     return ok;
 }
 
+SG_VINLINE sg_vm sg_needle_bar_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
+{
+    (void)x;
+    const sg_vd t0 = c[4]*cq[2];
+    const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t2 = c[0]*t1;
+    const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t4 = c[11]*t3;
+    const sg_vd t6 = ((xd[0])*(xd[0]));
+    const sg_vd t7 = c[0]*t3;
+    sg_vd J[4], rs[2], cs[2];
+    sg_vm piv[2];
+    J[0] = sgv_set1(0.0);
+    J[1] = c[8]*cq[3];
+    J[2] = sgv_set1(-1.0);
+    J[3] = t0;
+    qd[0] = t2*xd[0];
+    qd[1] = t4*xd[0];
+    rs[0] = sgv_set1(c[23]);
+    rs[1] = (1.0/(c[10] + sgv_fabs(q[0])));
+    sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
+    sgv_solve_eq(2, J, piv, rs, cs, qd);
+    const sg_vd t5 = ((qd[1])*(qd[1]));
+    const sg_vd t8 = cq[3]*t5;
+    qdd[0] = t0*t5 + t2*xdd[0] + t6*t7;
+    qdd[1] = c[4]*t8 + t2*t6 + t4*xdd[0];
+    sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    ok &= sgv_isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_needle_bar_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)
+{
+    switch (group) {
+    case 0: {
+        const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t2 = c[0]*t1;
+        const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t4 = c[11]*t3;
+        const sg_vd t6 = ((xd[0])*(xd[0]));
+        const sg_vd t7 = c[0]*t3;
+        const sg_vd t9 = c[11]*t1;
+        const sg_vd t10 = t9*xd[0];
+        const sg_vd t11 = t7*xd[0];
+        const sg_vd t12 = t4*t6 + t9*xdd[0];
+        const sg_vd t13 = t6*t9 + t7*xdd[0];
+        obs[0] = t7;
+        obs[1] = t2;
+        obs[2] = t10;
+        obs[3] = t11;
+        obs[4] = t12;
+        obs[5] = t13;
+        return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
+    }
+    case 1: {
+        obs[6] = sgv_set1(c[5]);
+        obs[7] = q[0];
+        obs[8] = sgv_set1(0.0);
+        obs[9] = qd[0];
+        obs[10] = sgv_set1(0.0);
+        obs[11] = qdd[0];
+        return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
+    }
+    case 2: {
+        obs[12] = sgv_set1(c[5]);
+        obs[13] = c[12] + q[0];
+        obs[14] = sgv_set1(0.0);
+        obs[15] = qd[0];
+        obs[16] = sgv_set1(0.0);
+        obs[17] = qdd[0];
+        return sgv_isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))));
+    }
+    case 3: {
+        obs[18] = sgv_set1(c[5]);
+        obs[19] = c[13] + q[0];
+        obs[20] = sgv_set1(0.0);
+        obs[21] = qd[0];
+        obs[22] = sgv_set1(0.0);
+        obs[23] = qdd[0];
+        return sgv_isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23]))));
+    }
+    case 4: {
+        const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t6 = ((xd[0])*(xd[0]));
+        const sg_vd t14 = c[15]*t3 + c[16]*t1;
+        const sg_vd t15 = c[16]*t3 + c[18]*t1;
+        obs[24] = c[14] + x[0];
+        obs[25] = xd[0];
+        obs[26] = xdd[0];
+        obs[27] = t14;
+        obs[28] = c[15]*t1 + c[17]*t3;
+        obs[29] = t15*xd[0];
+        obs[30] = t14*xd[0];
+        obs[31] = t15*xdd[0] + t6*(c[17]*t1 + c[18]*t3);
+        obs[32] = t14*xdd[0] + t15*t6;
+        return sgv_isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))));
+    }
+    case 5: {
+        const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t2 = c[0]*t1;
+        const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t4 = c[11]*t3;
+        const sg_vd t5 = ((qd[1])*(qd[1]));
+        const sg_vd t6 = ((xd[0])*(xd[0]));
+        const sg_vd t7 = c[0]*t3;
+        const sg_vd t8 = cq[3]*t5;
+        const sg_vd t9 = c[11]*t1;
+        const sg_vd t10 = t9*xd[0];
+        const sg_vd t11 = t7*xd[0];
+        const sg_vd t12 = t4*t6 + t9*xdd[0];
+        const sg_vd t13 = t6*t9 + t7*xdd[0];
+        const sg_vd t16 = c[19]*cq[2];
+        const sg_vd t17 = c[20]*cq[3];
+        obs[33] = q[1];
+        obs[34] = qd[1];
+        obs[35] = qdd[1];
+        obs[36] = t16 + t7;
+        obs[37] = c[19]*cq[3] + t2;
+        obs[38] = qd[1]*t17 + t10;
+        obs[39] = qd[1]*t16 + t11;
+        obs[40] = c[20]*cq[2]*t5 + qdd[1]*t17 + t12;
+        obs[41] = c[20]*t8 + qdd[1]*t16 + t13;
+        return sgv_isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41])))));
+    }
+    case 6: {
+        obs[42] = sgv_set1((0.5)*3.141592653589793);
+        obs[43] = sgv_set1(0.0);
+        obs[44] = sgv_set1(0.0);
+        obs[45] = sgv_set1(c[21]);
+        obs[46] = c[22] + q[0];
+        obs[47] = sgv_set1(0.0);
+        obs[48] = qd[0];
+        obs[49] = sgv_set1(0.0);
+        obs[50] = qdd[0];
+        return sgv_isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50])))));
+    }
+    default:
+        return sgv_false();
+    }
+}
+
 SG_VINLINE sg_vm sg_needle_bar_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)x;
@@ -708,8 +850,8 @@ SG_VINLINE int sg_needle_bar_forces_in_simd(const double *c)
     return c[50] == 0.0 && c[51] == 0.0 && c[52] == 0.0;
 }
 
-static SG_FLATTEN size_t sg_needle_bar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_SIMD_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_forces, sg_needle_bar_closed_v, sg_needle_bar_motion_v, sg_needle_bar_forces_v, sg_needle_bar_forces_in_simd, 51, 26)
+static SG_FLATTEN size_t sg_needle_bar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_SIMD_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_rates, sg_needle_bar_observe, sg_needle_bar_forces, sg_needle_bar_closed_v, sg_needle_bar_motion_v, sg_needle_bar_rates_v, sg_needle_bar_observe_v, sg_needle_bar_forces_v, sg_needle_bar_forces_in_simd, 51, 26)
 #pragma GCC pop_options
 #endif
 

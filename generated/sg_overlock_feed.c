@@ -1079,10 +1079,10 @@ void sg_overlock_feed_anchors(const double *q, const double *cq, const double *x
 }
 
 /* sg_overlock_feed_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_feed_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_CLOSED_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overlock_feed_motion, sg_overlock_feed_forces)
+static SG_FLATTEN size_t sg_overlock_feed_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_CLOSED_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overlock_feed_motion, sg_overlock_feed_rates, sg_overlock_feed_observe, sg_overlock_feed_forces)
 
-/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
  * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
@@ -1328,6 +1328,338 @@ SG_VINLINE sg_vm sg_overlock_feed_motion_v(const sg_vd *q, const sg_vd *cq, cons
     return ok;
 }
 
+SG_VINLINE sg_vm sg_overlock_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
+{
+    (void)x;
+    const sg_vd t0 = c[24]*cq[1];
+    const sg_vd t1 = c[8]*cq[0];
+    const sg_vd t2 = c[7]*cq[2];
+    const sg_vd t3 = c[26]*cq[1];
+    const sg_vd t4 = c[27]*cq[5];
+    const sg_vd t5 = c[11]*cq[0];
+    const sg_vd t6 = c[16]*cq[4];
+    const sg_vd t7 = c[22]*cq[6];
+    const sg_vd t8 = c[1]*cx[3] + c[3]*cx[2];
+    const sg_vd t9 = c[1]*cx[2] + c[2]*cx[3];
+    const sg_vd t10 = cx[0]*t8 + cx[1]*t9;
+    const sg_vd t11 = c[4]*t10;
+    const sg_vd t12 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t13 = c[33]*t12;
+    const sg_vd t14 = c[32]*t10;
+    const sg_vd t15 = t13 + t14;
+    const sg_vd t16 = t15*xd[0];
+    const sg_vd t17 = cx[0]*t9 - cx[1]*t8;
+    const sg_vd t18 = c[32]*t17;
+    const sg_vd t19 = t18*xd[1];
+    const sg_vd t20 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t21 = c[0]*t20;
+    const sg_vd t22 = c[4]*t17 + t21;
+    const sg_vd t23 = c[13]*cx[1] + c[15]*cx[0];
+    const sg_vd t24 = c[23]*t23;
+    const sg_vd t25 = t24*xd[0];
+    const sg_vd t26 = c[13]*cx[0] + c[14]*cx[1];
+    const sg_vd t27 = c[12]*t26;
+    const sg_vd t28 = t27*xd[0];
+    const sg_vd t32 = c[33]*t20;
+    const sg_vd t34 = c[8]*cq[1];
+    const sg_vd t36 = t14*xd[1];
+    const sg_vd t39 = ((xd[0])*(xd[0]));
+    const sg_vd t40 = c[23]*t26*t39 + t24*xdd[0];
+    const sg_vd t41 = c[11]*cq[1];
+    const sg_vd t42 = c[16]*cq[5];
+    const sg_vd t44 = t24*t39 + t27*xdd[0];
+    sg_vd J[16], rs[4], cs[4];
+    sg_vm piv[4];
+    J[0] = t0;
+    J[1] = c[25]*cq[3];
+    J[2] = sgv_set1(0.0);
+    J[3] = sgv_set1(0.0);
+    J[4] = t1;
+    J[5] = t2;
+    J[6] = sgv_set1(0.0);
+    J[7] = sgv_set1(0.0);
+    J[8] = t3;
+    J[9] = sgv_set1(0.0);
+    J[10] = t4;
+    J[11] = c[17]*cq[7];
+    J[12] = t5;
+    J[13] = sgv_set1(0.0);
+    J[14] = t6;
+    J[15] = t7;
+    qd[0] = t11*xd[1] - t16;
+    qd[1] = t19 - t22*xd[0];
+    qd[2] = t25;
+    qd[3] = t28;
+    rs[0] = sgv_set1(c[62]);
+    rs[1] = sgv_set1(c[63]);
+    rs[2] = sgv_set1(c[64]);
+    rs[3] = sgv_set1(c[65]);
+    sg_vm ok = sgv_factor_eq(4, J, piv, rs, cs, cond);
+    sgv_solve_eq(4, J, piv, rs, cs, qd);
+    const sg_vd t29 = ((qd[1])*(qd[1]));
+    const sg_vd t30 = ((qd[0])*(qd[0]));
+    const sg_vd t31 = t1*t30;
+    const sg_vd t33 = cq[3]*t29;
+    const sg_vd t35 = t30*t34;
+    const sg_vd t37 = ((qd[2])*(qd[2]));
+    const sg_vd t38 = ((qd[3])*(qd[3]));
+    const sg_vd t43 = cq[7]*t38;
+    qdd[0] = t11*xdd[1] - t15*xdd[0] + t2*t29 + t31 - xd[0]*(t19 + xd[0]*(t18 + t32)) - xd[1]*(t18*xd[0] + t19);
+    qdd[1] = c[7]*t33 + t18*xdd[1] - t22*xdd[0] + t35 - xd[0]*(t16 + t36) - xd[1]*(t14*xd[0] + t36);
+    qdd[2] = t30*t5 + t37*t6 + t38*t7 + t40;
+    qdd[3] = c[22]*t43 + t30*t41 + t37*t42 + t44;
+    sgv_solve_eq(4, J, piv, rs, cs, qdd);
+    ok &= sgv_isfinite((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_overlock_feed_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)
+{
+    switch (group) {
+    case 0: {
+        const sg_vd t3 = c[26]*cq[1];
+        const sg_vd t5 = c[11]*cq[0];
+        const sg_vd t30 = ((qd[0])*(qd[0]));
+        const sg_vd t41 = c[11]*cq[1];
+        const sg_vd t45 = c[5] + t5;
+        const sg_vd t46 = c[6] + t41;
+        const sg_vd t47 = qd[0]*t3;
+        const sg_vd t48 = qd[0]*t5;
+        const sg_vd t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const sg_vd t50 = qdd[0]*t5 + t3*t30;
+        obs[0] = t45;
+        obs[1] = t46;
+        obs[2] = t47;
+        obs[3] = t48;
+        obs[4] = t49;
+        obs[5] = t50;
+        return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
+    }
+    case 1: {
+        const sg_vd t3 = c[26]*cq[1];
+        const sg_vd t4 = c[27]*cq[5];
+        const sg_vd t5 = c[11]*cq[0];
+        const sg_vd t6 = c[16]*cq[4];
+        const sg_vd t30 = ((qd[0])*(qd[0]));
+        const sg_vd t37 = ((qd[2])*(qd[2]));
+        const sg_vd t41 = c[11]*cq[1];
+        const sg_vd t42 = c[16]*cq[5];
+        const sg_vd t45 = c[5] + t5;
+        const sg_vd t46 = c[6] + t41;
+        const sg_vd t47 = qd[0]*t3;
+        const sg_vd t48 = qd[0]*t5;
+        const sg_vd t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const sg_vd t50 = qdd[0]*t5 + t3*t30;
+        const sg_vd t51 = cq[4]*t37;
+        obs[6] = t45 + t6;
+        obs[7] = t42 + t46;
+        obs[8] = qd[2]*t4 + t47;
+        obs[9] = qd[2]*t6 + t48;
+        obs[10] = c[27]*t51 + qdd[2]*t4 + t49;
+        obs[11] = qdd[2]*t6 + t37*t4 + t50;
+        return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
+    }
+    case 2: {
+        const sg_vd t3 = c[26]*cq[1];
+        const sg_vd t5 = c[11]*cq[0];
+        const sg_vd t30 = ((qd[0])*(qd[0]));
+        const sg_vd t37 = ((qd[2])*(qd[2]));
+        const sg_vd t41 = c[11]*cq[1];
+        const sg_vd t45 = c[5] + t5;
+        const sg_vd t46 = c[6] + t41;
+        const sg_vd t47 = qd[0]*t3;
+        const sg_vd t48 = qd[0]*t5;
+        const sg_vd t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const sg_vd t50 = qdd[0]*t5 + t3*t30;
+        const sg_vd t51 = cq[4]*t37;
+        const sg_vd t52 = c[34]*cq[4];
+        const sg_vd t53 = c[35]*cq[5];
+        obs[12] = t45 + t52;
+        obs[13] = c[34]*cq[5] + t46;
+        obs[14] = qd[2]*t53 + t47;
+        obs[15] = qd[2]*t52 + t48;
+        obs[16] = c[35]*t51 + qdd[2]*t53 + t49;
+        obs[17] = qdd[2]*t52 + t37*t53 + t50;
+        return sgv_isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))));
+    }
+    case 3: {
+        const sg_vd t23 = c[13]*cx[1] + c[15]*cx[0];
+        const sg_vd t24 = c[23]*t23;
+        const sg_vd t25 = t24*xd[0];
+        const sg_vd t26 = c[13]*cx[0] + c[14]*cx[1];
+        const sg_vd t27 = c[12]*t26;
+        const sg_vd t28 = t27*xd[0];
+        const sg_vd t39 = ((xd[0])*(xd[0]));
+        const sg_vd t40 = c[23]*t26*t39 + t24*xdd[0];
+        const sg_vd t44 = t24*t39 + t27*xdd[0];
+        const sg_vd t54 = c[12]*t23;
+        obs[18] = t27;
+        obs[19] = t54;
+        obs[20] = t25;
+        obs[21] = t28;
+        obs[22] = t40;
+        obs[23] = t44;
+        return sgv_isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23]))));
+    }
+    case 4: {
+        const sg_vd t12 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t20 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t39 = ((xd[0])*(xd[0]));
+        const sg_vd t55 = c[36] + x[0];
+        const sg_vd t56 = c[37]*t20 + c[38]*t12;
+        const sg_vd t57 = c[38]*t20 + c[40]*t12;
+        obs[24] = t55;
+        obs[25] = xd[0];
+        obs[26] = xdd[0];
+        obs[27] = t56;
+        obs[28] = c[37]*t12 + c[39]*t20;
+        obs[29] = t57*xd[0];
+        obs[30] = t56*xd[0];
+        obs[31] = t39*(c[39]*t12 + c[40]*t20) + t57*xdd[0];
+        obs[32] = t39*t57 + t56*xdd[0];
+        return sgv_isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))));
+    }
+    case 5: {
+        const sg_vd t8 = c[1]*cx[3] + c[3]*cx[2];
+        const sg_vd t9 = c[1]*cx[2] + c[2]*cx[3];
+        const sg_vd t10 = cx[0]*t8 + cx[1]*t9;
+        const sg_vd t12 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t13 = c[33]*t12;
+        const sg_vd t17 = cx[0]*t9 - cx[1]*t8;
+        const sg_vd t20 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t21 = c[0]*t20;
+        const sg_vd t32 = c[33]*t20;
+        const sg_vd t55 = c[36] + x[0];
+        const sg_vd t58 = c[41]*t17 + c[42]*t10;
+        const sg_vd t59 = t21 + t58;
+        const sg_vd t60 = c[42]*t17 + c[44]*t10;
+        const sg_vd t61 = t60*xd[1];
+        const sg_vd t62 = t13 + t60;
+        const sg_vd t63 = t61 + t62*xd[0];
+        const sg_vd t64 = c[43]*t10 + c[44]*t17;
+        const sg_vd t65 = t64*xd[1];
+        obs[33] = t55 + x[1];
+        obs[34] = xd[0] + xd[1];
+        obs[35] = xdd[0] + xdd[1];
+        obs[36] = t59;
+        obs[37] = c[0]*t12 + c[41]*t10 + c[43]*t17;
+        obs[38] = t63;
+        obs[39] = t58*xd[1] + t59*xd[0];
+        obs[40] = t60*xdd[1] + t62*xdd[0] + xd[0]*(t65 + xd[0]*(t32 + t64)) + xd[1]*(t64*xd[0] + t65);
+        obs[41] = t58*xdd[1] + t59*xdd[0] + t63*xd[0] + xd[1]*(t60*xd[0] + t61);
+        return sgv_isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41])))));
+    }
+    case 6: {
+        const sg_vd t23 = c[13]*cx[1] + c[15]*cx[0];
+        const sg_vd t26 = c[13]*cx[0] + c[14]*cx[1];
+        const sg_vd t39 = ((xd[0])*(xd[0]));
+        const sg_vd t66 = c[46]*t26 + c[47]*t23;
+        const sg_vd t67 = c[47]*t26 + c[49]*t23;
+        obs[42] = c[45] + x[0];
+        obs[43] = xd[0];
+        obs[44] = xdd[0];
+        obs[45] = t66;
+        obs[46] = c[46]*t23 + c[48]*t26;
+        obs[47] = t67*xd[0];
+        obs[48] = t66*xd[0];
+        obs[49] = t39*(c[48]*t23 + c[49]*t26) + t67*xdd[0];
+        obs[50] = t39*t67 + t66*xdd[0];
+        return sgv_isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50])))));
+    }
+    case 7: {
+        const sg_vd t0 = c[24]*cq[1];
+        const sg_vd t1 = c[8]*cq[0];
+        const sg_vd t29 = ((qd[1])*(qd[1]));
+        const sg_vd t30 = ((qd[0])*(qd[0]));
+        const sg_vd t31 = t1*t30;
+        const sg_vd t33 = cq[3]*t29;
+        const sg_vd t34 = c[8]*cq[1];
+        const sg_vd t35 = t30*t34;
+        const sg_vd t68 = c[24]*cq[0];
+        const sg_vd t69 = c[50]*cq[2];
+        const sg_vd t70 = c[51]*cq[3];
+        obs[51] = q[1];
+        obs[52] = qd[1];
+        obs[53] = qdd[1];
+        obs[54] = c[5] + t68 + t69;
+        obs[55] = c[50]*cq[3] + c[6] + t0;
+        obs[56] = qd[0]*t34 + qd[1]*t70;
+        obs[57] = qd[0]*t68 + qd[1]*t69;
+        obs[58] = c[51]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
+        obs[59] = c[51]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
+        return sgv_isfinite((((obs[51] + obs[52]) + (obs[53] + obs[54])) + ((obs[55] + obs[56]) + (obs[57] + (obs[58] + obs[59])))));
+    }
+    case 8: {
+        const sg_vd t30 = ((qd[0])*(qd[0]));
+        const sg_vd t71 = c[52]*cq[0] + c[53]*cq[1];
+        const sg_vd t72 = c[53]*cq[0] + c[55]*cq[1];
+        obs[60] = q[0];
+        obs[61] = qd[0];
+        obs[62] = qdd[0];
+        obs[63] = c[5] + t71;
+        obs[64] = c[52]*cq[1] + c[54]*cq[0] + c[6];
+        obs[65] = qd[0]*t72;
+        obs[66] = qd[0]*t71;
+        obs[67] = qdd[0]*t72 + t30*(c[54]*cq[1] + c[55]*cq[0]);
+        obs[68] = qdd[0]*t71 + t30*t72;
+        return sgv_isfinite((((obs[60] + obs[61]) + (obs[62] + obs[63])) + ((obs[64] + obs[65]) + (obs[66] + (obs[67] + obs[68])))));
+    }
+    case 9: {
+        const sg_vd t3 = c[26]*cq[1];
+        const sg_vd t5 = c[11]*cq[0];
+        const sg_vd t30 = ((qd[0])*(qd[0]));
+        const sg_vd t37 = ((qd[2])*(qd[2]));
+        const sg_vd t41 = c[11]*cq[1];
+        const sg_vd t45 = c[5] + t5;
+        const sg_vd t46 = c[6] + t41;
+        const sg_vd t47 = qd[0]*t3;
+        const sg_vd t48 = qd[0]*t5;
+        const sg_vd t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const sg_vd t50 = qdd[0]*t5 + t3*t30;
+        const sg_vd t73 = c[56]*cq[4] + c[57]*cq[5];
+        const sg_vd t74 = c[57]*cq[4] + c[59]*cq[5];
+        obs[69] = q[2];
+        obs[70] = qd[2];
+        obs[71] = qdd[2];
+        obs[72] = t45 + t73;
+        obs[73] = c[56]*cq[5] + c[58]*cq[4] + t46;
+        obs[74] = qd[2]*t74 + t47;
+        obs[75] = qd[2]*t73 + t48;
+        obs[76] = qdd[2]*t74 + t37*(c[58]*cq[5] + c[59]*cq[4]) + t49;
+        obs[77] = qdd[2]*t73 + t37*t74 + t50;
+        return sgv_isfinite((((obs[69] + obs[70]) + (obs[71] + obs[72])) + ((obs[73] + obs[74]) + (obs[75] + (obs[76] + obs[77])))));
+    }
+    case 10: {
+        const sg_vd t23 = c[13]*cx[1] + c[15]*cx[0];
+        const sg_vd t24 = c[23]*t23;
+        const sg_vd t25 = t24*xd[0];
+        const sg_vd t26 = c[13]*cx[0] + c[14]*cx[1];
+        const sg_vd t27 = c[12]*t26;
+        const sg_vd t28 = t27*xd[0];
+        const sg_vd t38 = ((qd[3])*(qd[3]));
+        const sg_vd t39 = ((xd[0])*(xd[0]));
+        const sg_vd t40 = c[23]*t26*t39 + t24*xdd[0];
+        const sg_vd t43 = cq[7]*t38;
+        const sg_vd t44 = t24*t39 + t27*xdd[0];
+        const sg_vd t54 = c[12]*t23;
+        const sg_vd t75 = c[60]*cq[6];
+        const sg_vd t76 = c[61]*cq[7];
+        obs[78] = q[3];
+        obs[79] = qd[3];
+        obs[80] = qdd[3];
+        obs[81] = t27 + t75;
+        obs[82] = c[60]*cq[7] + t54;
+        obs[83] = qd[3]*t76 + t25;
+        obs[84] = qd[3]*t75 + t28;
+        obs[85] = c[61]*cq[6]*t38 + qdd[3]*t76 + t40;
+        obs[86] = c[61]*t43 + qdd[3]*t75 + t44;
+        return sgv_isfinite((((obs[78] + obs[79]) + (obs[80] + obs[81])) + ((obs[82] + obs[83]) + (obs[84] + (obs[85] + obs[86])))));
+    }
+    default:
+        return sgv_false();
+    }
+}
+
 SG_VINLINE sg_vm sg_overlock_feed_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)q;
@@ -1424,8 +1756,8 @@ SG_VINLINE int sg_overlock_feed_forces_in_simd(const double *c)
     return 1;
 }
 
-static SG_FLATTEN size_t sg_overlock_feed_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_SIMD_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overlock_feed_motion, sg_overlock_feed_forces, sg_overlock_feed_closed_v, sg_overlock_feed_motion_v, sg_overlock_feed_forces_v, sg_overlock_feed_forces_in_simd, 87, 32)
+static SG_FLATTEN size_t sg_overlock_feed_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_SIMD_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overlock_feed_motion, sg_overlock_feed_rates, sg_overlock_feed_observe, sg_overlock_feed_forces, sg_overlock_feed_closed_v, sg_overlock_feed_motion_v, sg_overlock_feed_rates_v, sg_overlock_feed_observe_v, sg_overlock_feed_forces_v, sg_overlock_feed_forces_in_simd, 87, 32)
 #pragma GCC pop_options
 #endif
 

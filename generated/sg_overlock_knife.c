@@ -457,10 +457,10 @@ void sg_overlock_knife_anchors(const double *q, const double *cq, const double *
 }
 
 /* sg_overlock_knife_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_knife_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_CLOSED_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion, sg_overlock_knife_forces)
+static SG_FLATTEN size_t sg_overlock_knife_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_CLOSED_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion, sg_overlock_knife_rates, sg_overlock_knife_observe, sg_overlock_knife_forces)
 
-/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
  * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
@@ -562,6 +562,116 @@ SG_VINLINE sg_vm sg_overlock_knife_motion_v(const sg_vd *q, const sg_vd *cq, con
     return ok;
 }
 
+SG_VINLINE sg_vm sg_overlock_knife_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
+{
+    (void)x;
+    const sg_vd t0 = c[11]*cq[0];
+    const sg_vd t1 = c[6]*cq[2];
+    const sg_vd t2 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t3 = c[0]*t2;
+    const sg_vd t4 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t5 = c[16]*t4;
+    const sg_vd t8 = ((xd[0])*(xd[0]));
+    const sg_vd t9 = c[0]*t4;
+    sg_vd J[4], rs[2], cs[2];
+    sg_vm piv[2];
+    J[0] = c[7]*cq[1];
+    J[1] = c[13]*cq[3];
+    J[2] = t0;
+    J[3] = t1;
+    qd[0] = t3*xd[0];
+    qd[1] = t5*xd[0];
+    rs[0] = sgv_set1(c[30]);
+    rs[1] = sgv_set1(c[31]);
+    sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
+    sgv_solve_eq(2, J, piv, rs, cs, qd);
+    const sg_vd t6 = ((qd[0])*(qd[0]));
+    const sg_vd t7 = ((qd[1])*(qd[1]));
+    const sg_vd t10 = cq[1]*t6;
+    const sg_vd t11 = cq[3]*t7;
+    qdd[0] = t0*t6 + t1*t7 + t3*xdd[0] + t8*t9;
+    qdd[1] = c[11]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
+    sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    ok &= sgv_isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_overlock_knife_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)
+{
+    switch (group) {
+    case 0: {
+        const sg_vd t6 = ((qd[0])*(qd[0]));
+        const sg_vd t10 = cq[1]*t6;
+        const sg_vd t12 = c[17]*cq[0];
+        const sg_vd t13 = c[18]*cq[1];
+        obs[0] = c[4] + t12;
+        obs[1] = c[17]*cq[1] + c[5];
+        obs[2] = qd[0]*t13;
+        obs[3] = qd[0]*t12;
+        obs[4] = c[18]*cq[0]*t6 + qdd[0]*t13;
+        obs[5] = c[18]*t10 + qdd[0]*t12;
+        return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
+    }
+    case 1: {
+        const sg_vd t2 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t4 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t8 = ((xd[0])*(xd[0]));
+        const sg_vd t14 = c[20]*t4 + c[21]*t2;
+        const sg_vd t15 = c[21]*t4 + c[23]*t2;
+        obs[6] = c[19] + x[0];
+        obs[7] = xd[0];
+        obs[8] = xdd[0];
+        obs[9] = t14;
+        obs[10] = c[20]*t2 + c[22]*t4;
+        obs[11] = t15*xd[0];
+        obs[12] = t14*xd[0];
+        obs[13] = t15*xdd[0] + t8*(c[22]*t2 + c[23]*t4);
+        obs[14] = t14*xdd[0] + t15*t8;
+        return sgv_isfinite((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + (obs[13] + obs[14])))));
+    }
+    case 2: {
+        const sg_vd t2 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t3 = c[0]*t2;
+        const sg_vd t4 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t5 = c[16]*t4;
+        const sg_vd t7 = ((qd[1])*(qd[1]));
+        const sg_vd t8 = ((xd[0])*(xd[0]));
+        const sg_vd t9 = c[0]*t4;
+        const sg_vd t11 = cq[3]*t7;
+        const sg_vd t16 = c[24]*cq[2];
+        const sg_vd t17 = c[25]*cq[3];
+        const sg_vd t18 = c[16]*t2;
+        obs[15] = q[1];
+        obs[16] = qd[1];
+        obs[17] = qdd[1];
+        obs[18] = t16 + t9;
+        obs[19] = c[24]*cq[3] + t3;
+        obs[20] = qd[1]*t17 + t18*xd[0];
+        obs[21] = qd[1]*t16 + t9*xd[0];
+        obs[22] = c[25]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
+        obs[23] = c[25]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
+        return sgv_isfinite((((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23])))));
+    }
+    case 3: {
+        const sg_vd t6 = ((qd[0])*(qd[0]));
+        const sg_vd t19 = c[26]*cq[0] + c[27]*cq[1];
+        const sg_vd t20 = c[27]*cq[0] + c[29]*cq[1];
+        obs[24] = q[0];
+        obs[25] = qd[0];
+        obs[26] = qdd[0];
+        obs[27] = c[4] + t19;
+        obs[28] = c[26]*cq[1] + c[28]*cq[0] + c[5];
+        obs[29] = qd[0]*t20;
+        obs[30] = qd[0]*t19;
+        obs[31] = qdd[0]*t20 + t6*(c[28]*cq[1] + c[29]*cq[0]);
+        obs[32] = qdd[0]*t19 + t20*t6;
+        return sgv_isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))));
+    }
+    default:
+        return sgv_false();
+    }
+}
+
 SG_VINLINE sg_vm sg_overlock_knife_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)q;
@@ -616,8 +726,8 @@ SG_VINLINE int sg_overlock_knife_forces_in_simd(const double *c)
     return 1;
 }
 
-static SG_FLATTEN size_t sg_overlock_knife_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_SIMD_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion, sg_overlock_knife_forces, sg_overlock_knife_closed_v, sg_overlock_knife_motion_v, sg_overlock_knife_forces_v, sg_overlock_knife_forces_in_simd, 33, 18)
+static SG_FLATTEN size_t sg_overlock_knife_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_SIMD_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion, sg_overlock_knife_rates, sg_overlock_knife_observe, sg_overlock_knife_forces, sg_overlock_knife_closed_v, sg_overlock_knife_motion_v, sg_overlock_knife_rates_v, sg_overlock_knife_observe_v, sg_overlock_knife_forces_v, sg_overlock_knife_forces_in_simd, 33, 18)
 #pragma GCC pop_options
 #endif
 

@@ -669,10 +669,10 @@ void sg_overlock_loopers_anchors(const double *q, const double *cq, const double
 }
 
 /* sg_overlock_loopers_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_loopers_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg_overlock_loopers_motion, sg_overlock_loopers_forces)
+static SG_FLATTEN size_t sg_overlock_loopers_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg_overlock_loopers_motion, sg_overlock_loopers_rates, sg_overlock_loopers_observe, sg_overlock_loopers_forces)
 
-/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
  * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
@@ -816,6 +816,152 @@ SG_VINLINE sg_vm sg_overlock_loopers_motion_v(const sg_vd *q, const sg_vd *cq, c
     return ok;
 }
 
+SG_VINLINE sg_vm sg_overlock_loopers_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
+{
+    (void)x;
+    const sg_vd t0 = c[26]*(c[0]*cq[0] + c[18]);
+    const sg_vd t1 = c[2]*cx[0] + c[3]*cx[1];
+    const sg_vd t2 = c[0]*cq[1] + c[19] + c[20]*t1;
+    const sg_vd t3 = c[10]*cq[0] + c[28]*cq[1];
+    const sg_vd t4 = c[10]*cq[1] + c[9]*cq[0];
+    const sg_vd t5 = c[23]*cq[2];
+    const sg_vd t6 = c[14]*cq[4];
+    const sg_vd t7 = c[3]*cx[0] + c[6]*cx[1];
+    const sg_vd t8 = c[32]*t1*t7 + c[33]*t2*t7;
+    const sg_vd t9 = c[35]*cq[0]*t7;
+    sg_vd J[9], rs[3], cs[3];
+    sg_vm piv[3];
+    J[0] = c[27]*cq[0]*t2 + cq[1]*t0;
+    J[1] = sgv_set1(0.0);
+    J[2] = sgv_set1(0.0);
+    J[3] = t3;
+    J[4] = c[15]*cq[3];
+    J[5] = c[29]*cq[5];
+    J[6] = t4;
+    J[7] = t5;
+    J[8] = t6;
+    qd[0] = -t8*xd[0];
+    qd[1] = sgv_set1(0.0);
+    qd[2] = sgv_set1(0.0);
+    rs[0] = sgv_set1(c[61]);
+    rs[1] = sgv_set1(c[62]);
+    rs[2] = sgv_set1(c[62]);
+    sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
+    sgv_solve_eq(3, J, piv, rs, cs, qd);
+    const sg_vd t10 = ((qd[2])*(qd[2]));
+    const sg_vd t11 = ((qd[1])*(qd[1]));
+    const sg_vd t12 = ((qd[0])*(qd[0]));
+    const sg_vd t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+    const sg_vd t14 = cq[5]*t10;
+    const sg_vd t15 = t12*t3;
+    qdd[0] = -qd[0]*(qd[0]*(c[26]*cq[1]*t2 + c[34]*((cq[0])*(cq[0])) + c[34]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[36]*((t1)*(t1)) + c[37]*t1*t2));
+    qdd[1] = t10*t6 + t11*t5 - t13;
+    qdd[2] = c[14]*t14 + c[23]*cq[3]*t11 - t15;
+    sgv_solve_eq(3, J, piv, rs, cs, qdd);
+    ok &= sgv_isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_overlock_loopers_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)
+{
+    switch (group) {
+    case 0: {
+        const sg_vd t12 = ((qd[0])*(qd[0]));
+        const sg_vd t16 = c[38]*cq[0] + c[39]*cq[1];
+        const sg_vd t17 = c[39]*cq[0] + c[41]*cq[1];
+        obs[0] = t16;
+        obs[1] = c[38]*cq[1] + c[40]*cq[0];
+        obs[2] = qd[0]*t17;
+        obs[3] = qd[0]*t16;
+        obs[4] = qdd[0]*t17 + t12*(c[40]*cq[1] + c[41]*cq[0]);
+        obs[5] = qdd[0]*t16 + t12*t17;
+        return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
+    }
+    case 1: {
+        const sg_vd t11 = ((qd[1])*(qd[1]));
+        const sg_vd t18 = c[42]*cq[2] + c[43]*cq[3];
+        const sg_vd t19 = c[43]*cq[2] + c[45]*cq[3];
+        obs[6] = c[12] + t18;
+        obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
+        obs[8] = qd[1]*t19;
+        obs[9] = qd[1]*t18;
+        obs[10] = qdd[1]*t19 + t11*(c[44]*cq[3] + c[45]*cq[2]);
+        obs[11] = qdd[1]*t18 + t11*t19;
+        return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
+    }
+    case 2: {
+        const sg_vd t1 = c[2]*cx[0] + c[3]*cx[1];
+        const sg_vd t7 = c[3]*cx[0] + c[6]*cx[1];
+        const sg_vd t20 = c[47]*t7 + c[48]*t1;
+        const sg_vd t21 = c[48]*t7 + c[50]*t1;
+        const sg_vd t22 = ((xd[0])*(xd[0]));
+        obs[12] = c[46] + x[0];
+        obs[13] = xd[0];
+        obs[14] = xdd[0];
+        obs[15] = c[0] + t20;
+        obs[16] = c[1] + c[47]*t1 + c[49]*t7;
+        obs[17] = t21*xd[0];
+        obs[18] = t20*xd[0];
+        obs[19] = t21*xdd[0] + t22*(c[49]*t1 + c[50]*t7);
+        obs[20] = t20*xdd[0] + t21*t22;
+        return sgv_isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20])))));
+    }
+    case 3: {
+        const sg_vd t12 = ((qd[0])*(qd[0]));
+        const sg_vd t23 = c[51]*cq[0] + c[52]*cq[1];
+        const sg_vd t24 = c[52]*cq[0] + c[54]*cq[1];
+        obs[21] = q[0];
+        obs[22] = qd[0];
+        obs[23] = qdd[0];
+        obs[24] = t23;
+        obs[25] = c[51]*cq[1] + c[53]*cq[0];
+        obs[26] = qd[0]*t24;
+        obs[27] = qd[0]*t23;
+        obs[28] = qdd[0]*t24 + t12*(c[53]*cq[1] + c[54]*cq[0]);
+        obs[29] = qdd[0]*t23 + t12*t24;
+        return sgv_isfinite((((obs[21] + obs[22]) + (obs[23] + obs[24])) + ((obs[25] + obs[26]) + (obs[27] + (obs[28] + obs[29])))));
+    }
+    case 4: {
+        const sg_vd t3 = c[10]*cq[0] + c[28]*cq[1];
+        const sg_vd t4 = c[10]*cq[1] + c[9]*cq[0];
+        const sg_vd t10 = ((qd[2])*(qd[2]));
+        const sg_vd t12 = ((qd[0])*(qd[0]));
+        const sg_vd t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+        const sg_vd t14 = cq[5]*t10;
+        const sg_vd t15 = t12*t3;
+        const sg_vd t25 = c[55]*cq[4];
+        const sg_vd t26 = c[56]*cq[5];
+        obs[30] = q[2];
+        obs[31] = qd[2];
+        obs[32] = qdd[2];
+        obs[33] = t25 + t4;
+        obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
+        obs[35] = qd[0]*t3 + qd[2]*t26;
+        obs[36] = qd[0]*t4 + qd[2]*t25;
+        obs[37] = c[56]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
+        obs[38] = c[56]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
+        return sgv_isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38])))));
+    }
+    case 5: {
+        const sg_vd t11 = ((qd[1])*(qd[1]));
+        const sg_vd t27 = c[57]*cq[2] + c[58]*cq[3];
+        const sg_vd t28 = c[58]*cq[2] + c[60]*cq[3];
+        obs[39] = q[1];
+        obs[40] = qd[1];
+        obs[41] = qdd[1];
+        obs[42] = c[12] + t27;
+        obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
+        obs[44] = qd[1]*t28;
+        obs[45] = qd[1]*t27;
+        obs[46] = qdd[1]*t28 + t11*(c[59]*cq[3] + c[60]*cq[2]);
+        obs[47] = qdd[1]*t27 + t11*t28;
+        return sgv_isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47])))));
+    }
+    default:
+        return sgv_false();
+    }
+}
+
 SG_VINLINE sg_vm sg_overlock_loopers_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)q;
@@ -886,8 +1032,8 @@ SG_VINLINE int sg_overlock_loopers_forces_in_simd(const double *c)
     return 1;
 }
 
-static SG_FLATTEN size_t sg_overlock_loopers_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_SIMD_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg_overlock_loopers_motion, sg_overlock_loopers_forces, sg_overlock_loopers_closed_v, sg_overlock_loopers_motion_v, sg_overlock_loopers_forces_v, sg_overlock_loopers_forces_in_simd, 48, 24)
+static SG_FLATTEN size_t sg_overlock_loopers_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_SIMD_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg_overlock_loopers_motion, sg_overlock_loopers_rates, sg_overlock_loopers_observe, sg_overlock_loopers_forces, sg_overlock_loopers_closed_v, sg_overlock_loopers_motion_v, sg_overlock_loopers_rates_v, sg_overlock_loopers_observe_v, sg_overlock_loopers_forces_v, sg_overlock_loopers_forces_in_simd, 48, 24)
 #pragma GCC pop_options
 #endif
 

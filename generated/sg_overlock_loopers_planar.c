@@ -669,10 +669,10 @@ void sg_overlock_loopers_planar_anchors(const double *q, const double *cq, const
 }
 
 /* sg_overlock_loopers_planar_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_loopers_planar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_planar_constants, sg_overlock_loopers_planar_closed, sg_overlock_loopers_planar_motion, sg_overlock_loopers_planar_forces)
+static SG_FLATTEN size_t sg_overlock_loopers_planar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_planar_constants, sg_overlock_loopers_planar_closed, sg_overlock_loopers_planar_motion, sg_overlock_loopers_planar_rates, sg_overlock_loopers_planar_observe, sg_overlock_loopers_planar_forces)
 
-/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
  * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
@@ -818,6 +818,154 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_motion_v(const sg_vd *q, const sg_vd
     return ok;
 }
 
+SG_VINLINE sg_vm sg_overlock_loopers_planar_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
+{
+    (void)x;
+    const sg_vd t0 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t1 = c[0]*cq[0] + c[18]*t0 + c[19];
+    const sg_vd t2 = c[24]*t1;
+    const sg_vd t3 = c[1]*cx[1] + c[5]*cx[0];
+    const sg_vd t4 = c[0]*cq[1] + c[17] + c[18]*t3;
+    const sg_vd t5 = c[26]*cq[1] + c[9]*cq[0];
+    const sg_vd t6 = c[8]*cq[0] + c[9]*cq[1];
+    const sg_vd t7 = c[21]*cq[2];
+    const sg_vd t8 = c[13]*cq[4];
+    const sg_vd t9 = c[30]*t1;
+    const sg_vd t10 = c[31]*t0*t4 + t3*t9;
+    const sg_vd t11 = c[33]*cq[0]*t0 + c[33]*cq[1]*t3;
+    sg_vd J[9], rs[3], cs[3];
+    sg_vm piv[3];
+    J[0] = c[25]*cq[0]*t4 + cq[1]*t2;
+    J[1] = sgv_set1(0.0);
+    J[2] = sgv_set1(0.0);
+    J[3] = t5;
+    J[4] = c[14]*cq[3];
+    J[5] = c[27]*cq[5];
+    J[6] = t6;
+    J[7] = t7;
+    J[8] = t8;
+    qd[0] = -t10*xd[0];
+    qd[1] = sgv_set1(0.0);
+    qd[2] = sgv_set1(0.0);
+    rs[0] = sgv_set1(c[58]);
+    rs[1] = sgv_set1(c[59]);
+    rs[2] = sgv_set1(c[59]);
+    sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
+    sgv_solve_eq(3, J, piv, rs, cs, qd);
+    const sg_vd t12 = ((qd[2])*(qd[2]));
+    const sg_vd t13 = ((qd[1])*(qd[1]));
+    const sg_vd t14 = ((qd[0])*(qd[0]));
+    const sg_vd t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+    const sg_vd t16 = cq[5]*t12;
+    const sg_vd t17 = t14*t5;
+    qdd[0] = -qd[0]*(qd[0]*(c[24]*cq[1]*t4 + c[32]*((cq[0])*(cq[0])) + c[32]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[30]*t3*t4 + c[34]*((t0)*(t0)) + c[34]*((t3)*(t3)) + t0*t9));
+    qdd[1] = t12*t8 + t13*t7 - t15;
+    qdd[2] = c[13]*t16 + c[21]*cq[3]*t13 - t17;
+    sgv_solve_eq(3, J, piv, rs, cs, qdd);
+    ok &= sgv_isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_overlock_loopers_planar_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)
+{
+    switch (group) {
+    case 0: {
+        const sg_vd t14 = ((qd[0])*(qd[0]));
+        const sg_vd t18 = c[35]*cq[0] + c[36]*cq[1];
+        const sg_vd t19 = c[36]*cq[0] + c[38]*cq[1];
+        obs[0] = t18;
+        obs[1] = c[35]*cq[1] + c[37]*cq[0];
+        obs[2] = qd[0]*t19;
+        obs[3] = qd[0]*t18;
+        obs[4] = qdd[0]*t19 + t14*(c[37]*cq[1] + c[38]*cq[0]);
+        obs[5] = qdd[0]*t18 + t14*t19;
+        return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
+    }
+    case 1: {
+        const sg_vd t13 = ((qd[1])*(qd[1]));
+        const sg_vd t20 = c[39]*cq[2] + c[40]*cq[3];
+        const sg_vd t21 = c[40]*cq[2] + c[42]*cq[3];
+        obs[6] = c[11] + t20;
+        obs[7] = c[12] + c[39]*cq[3] + c[41]*cq[2];
+        obs[8] = qd[1]*t21;
+        obs[9] = qd[1]*t20;
+        obs[10] = qdd[1]*t21 + t13*(c[41]*cq[3] + c[42]*cq[2]);
+        obs[11] = qdd[1]*t20 + t13*t21;
+        return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
+    }
+    case 2: {
+        const sg_vd t0 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t3 = c[1]*cx[1] + c[5]*cx[0];
+        const sg_vd t22 = c[44]*t0 + c[45]*t3;
+        const sg_vd t23 = c[45]*t0 + c[47]*t3;
+        const sg_vd t24 = ((xd[0])*(xd[0]));
+        obs[12] = c[43] + x[0];
+        obs[13] = xd[0];
+        obs[14] = xdd[0];
+        obs[15] = c[0] + t22;
+        obs[16] = c[4] + c[44]*t3 + c[46]*t0;
+        obs[17] = t23*xd[0];
+        obs[18] = t22*xd[0];
+        obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
+        obs[20] = t22*xdd[0] + t23*t24;
+        return sgv_isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20])))));
+    }
+    case 3: {
+        const sg_vd t14 = ((qd[0])*(qd[0]));
+        const sg_vd t25 = c[48]*cq[0] + c[49]*cq[1];
+        const sg_vd t26 = c[49]*cq[0] + c[51]*cq[1];
+        obs[21] = q[0];
+        obs[22] = qd[0];
+        obs[23] = qdd[0];
+        obs[24] = t25;
+        obs[25] = c[48]*cq[1] + c[50]*cq[0];
+        obs[26] = qd[0]*t26;
+        obs[27] = qd[0]*t25;
+        obs[28] = qdd[0]*t26 + t14*(c[50]*cq[1] + c[51]*cq[0]);
+        obs[29] = qdd[0]*t25 + t14*t26;
+        return sgv_isfinite((((obs[21] + obs[22]) + (obs[23] + obs[24])) + ((obs[25] + obs[26]) + (obs[27] + (obs[28] + obs[29])))));
+    }
+    case 4: {
+        const sg_vd t5 = c[26]*cq[1] + c[9]*cq[0];
+        const sg_vd t6 = c[8]*cq[0] + c[9]*cq[1];
+        const sg_vd t12 = ((qd[2])*(qd[2]));
+        const sg_vd t14 = ((qd[0])*(qd[0]));
+        const sg_vd t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+        const sg_vd t16 = cq[5]*t12;
+        const sg_vd t17 = t14*t5;
+        const sg_vd t27 = c[52]*cq[4];
+        const sg_vd t28 = c[53]*cq[5];
+        obs[30] = q[2];
+        obs[31] = qd[2];
+        obs[32] = qdd[2];
+        obs[33] = t27 + t6;
+        obs[34] = c[10]*cq[0] + c[52]*cq[5] + c[8]*cq[1];
+        obs[35] = qd[0]*t5 + qd[2]*t28;
+        obs[36] = qd[0]*t6 + qd[2]*t27;
+        obs[37] = c[53]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
+        obs[38] = c[53]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
+        return sgv_isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38])))));
+    }
+    case 5: {
+        const sg_vd t13 = ((qd[1])*(qd[1]));
+        const sg_vd t29 = c[54]*cq[2] + c[55]*cq[3];
+        const sg_vd t30 = c[55]*cq[2] + c[57]*cq[3];
+        obs[39] = q[1];
+        obs[40] = qd[1];
+        obs[41] = qdd[1];
+        obs[42] = c[11] + t29;
+        obs[43] = c[12] + c[54]*cq[3] + c[56]*cq[2];
+        obs[44] = qd[1]*t30;
+        obs[45] = qd[1]*t29;
+        obs[46] = qdd[1]*t30 + t13*(c[56]*cq[3] + c[57]*cq[2]);
+        obs[47] = qdd[1]*t29 + t13*t30;
+        return sgv_isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47])))));
+    }
+    default:
+        return sgv_false();
+    }
+}
+
 SG_VINLINE sg_vm sg_overlock_loopers_planar_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)q;
@@ -888,8 +1036,8 @@ SG_VINLINE int sg_overlock_loopers_planar_forces_in_simd(const double *c)
     return 1;
 }
 
-static SG_FLATTEN size_t sg_overlock_loopers_planar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_SIMD_SWEEP_BODY(sg_overlock_loopers_planar_constants, sg_overlock_loopers_planar_closed, sg_overlock_loopers_planar_motion, sg_overlock_loopers_planar_forces, sg_overlock_loopers_planar_closed_v, sg_overlock_loopers_planar_motion_v, sg_overlock_loopers_planar_forces_v, sg_overlock_loopers_planar_forces_in_simd, 48, 24)
+static SG_FLATTEN size_t sg_overlock_loopers_planar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_SIMD_SWEEP_BODY(sg_overlock_loopers_planar_constants, sg_overlock_loopers_planar_closed, sg_overlock_loopers_planar_motion, sg_overlock_loopers_planar_rates, sg_overlock_loopers_planar_observe, sg_overlock_loopers_planar_forces, sg_overlock_loopers_planar_closed_v, sg_overlock_loopers_planar_motion_v, sg_overlock_loopers_planar_rates_v, sg_overlock_loopers_planar_observe_v, sg_overlock_loopers_planar_forces_v, sg_overlock_loopers_planar_forces_in_simd, 48, 24)
 #pragma GCC pop_options
 #endif
 

@@ -667,10 +667,10 @@ void sg_overlock_needle_anchors(const double *q, const double *cq, const double 
 }
 
 /* sg_overlock_needle_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_needle_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_CLOSED_SWEEP_BODY(sg_overlock_needle_constants, sg_overlock_needle_closed, sg_overlock_needle_motion, sg_overlock_needle_forces)
+static SG_FLATTEN size_t sg_overlock_needle_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_CLOSED_SWEEP_BODY(sg_overlock_needle_constants, sg_overlock_needle_closed, sg_overlock_needle_motion, sg_overlock_needle_rates, sg_overlock_needle_observe, sg_overlock_needle_forces)
 
-/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
  * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
@@ -817,6 +817,163 @@ SG_VINLINE sg_vm sg_overlock_needle_motion_v(const sg_vd *q, const sg_vd *cq, co
     return ok;
 }
 
+SG_VINLINE sg_vm sg_overlock_needle_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
+{
+    (void)x;
+    const sg_vd t0 = c[24]*cq[1] + c[25]*cq[0];
+    const sg_vd t1 = c[11]*cq[0] + c[13]*cq[1];
+    const sg_vd t2 = c[18] + t1;
+    const sg_vd t3 = c[25]*cq[1] + c[26]*cq[0];
+    const sg_vd t4 = c[2]*cx[0] + c[3]*cx[1];
+    const sg_vd t5 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t4;
+    const sg_vd t6 = c[27]*cq[1];
+    const sg_vd t7 = c[14]*cq[0];
+    const sg_vd t8 = c[15]*cq[4];
+    const sg_vd t9 = c[3]*cx[0] + c[7]*cx[1];
+    const sg_vd t10 = c[33]*t9;
+    const sg_vd t11 = c[32]*t4*t9 + t10*t5;
+    const sg_vd t14 = c[14]*cq[1];
+    sg_vd J[9], rs[3], cs[3];
+    sg_vm piv[3];
+    J[0] = t0*t2 + t3*t5;
+    J[1] = sgv_set1(0.0);
+    J[2] = sgv_set1(0.0);
+    J[3] = t6;
+    J[4] = sgv_set1(0.0);
+    J[5] = c[28]*cq[5];
+    J[6] = t7;
+    J[7] = sgv_set1(-1.0);
+    J[8] = t8;
+    qd[0] = -t11*xd[0];
+    qd[1] = sgv_set1(0.0);
+    qd[2] = sgv_set1(0.0);
+    rs[0] = sgv_set1(c[53]);
+    rs[1] = sgv_set1(c[54]);
+    rs[2] = (1.0/(c[31] + sgv_fabs(q[1])));
+    sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
+    sgv_solve_eq(3, J, piv, rs, cs, qd);
+    const sg_vd t12 = ((qd[0])*(qd[0]));
+    const sg_vd t13 = ((qd[2])*(qd[2]));
+    const sg_vd t15 = cq[5]*t13;
+    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[34]*cq[1]) + t1*t3 + t2*(c[24]*cq[0] + c[35]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[20]*qd[0]*t3*t9 + xd[0]*(c[36]*((t4)*(t4)) + c[37]*t4*t5));
+    qdd[1] = t12*t7 + t13*t8;
+    qdd[2] = c[15]*t15 + t12*t14;
+    sgv_solve_eq(3, J, piv, rs, cs, qdd);
+    ok &= sgv_isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_overlock_needle_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)
+{
+    switch (group) {
+    case 0: {
+        const sg_vd t6 = c[27]*cq[1];
+        const sg_vd t7 = c[14]*cq[0];
+        const sg_vd t12 = ((qd[0])*(qd[0]));
+        const sg_vd t14 = c[14]*cq[1];
+        const sg_vd t16 = qd[0]*t6;
+        const sg_vd t17 = qd[0]*t7;
+        const sg_vd t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+        const sg_vd t19 = qdd[0]*t7 + t12*t6;
+        obs[0] = t7;
+        obs[1] = t14;
+        obs[2] = t16;
+        obs[3] = t17;
+        obs[4] = t18;
+        obs[5] = t19;
+        return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
+    }
+    case 1: {
+        obs[6] = sgv_set1(c[16]);
+        obs[7] = c[38] + q[1];
+        obs[8] = sgv_set1(0.0);
+        obs[9] = qd[1];
+        obs[10] = sgv_set1(0.0);
+        obs[11] = qdd[1];
+        return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
+    }
+    case 2: {
+        obs[12] = sgv_set1(c[16]);
+        obs[13] = c[39] + q[1];
+        obs[14] = sgv_set1(0.0);
+        obs[15] = qd[1];
+        obs[16] = sgv_set1(0.0);
+        obs[17] = qdd[1];
+        return sgv_isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))));
+    }
+    case 3: {
+        const sg_vd t4 = c[2]*cx[0] + c[3]*cx[1];
+        const sg_vd t9 = c[3]*cx[0] + c[7]*cx[1];
+        const sg_vd t20 = c[41]*t9 + c[42]*t4;
+        const sg_vd t21 = c[42]*t9 + c[44]*t4;
+        const sg_vd t22 = ((xd[0])*(xd[0]));
+        obs[18] = c[40] + x[0];
+        obs[19] = xd[0];
+        obs[20] = xdd[0];
+        obs[21] = c[0] + t20;
+        obs[22] = c[1] + c[41]*t4 + c[43]*t9;
+        obs[23] = t21*xd[0];
+        obs[24] = t20*xd[0];
+        obs[25] = t21*xdd[0] + t22*(c[43]*t4 + c[44]*t9);
+        obs[26] = t20*xdd[0] + t21*t22;
+        return sgv_isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26])))));
+    }
+    case 4: {
+        const sg_vd t12 = ((qd[0])*(qd[0]));
+        const sg_vd t23 = c[45]*cq[0] + c[46]*cq[1];
+        const sg_vd t24 = c[46]*cq[0] + c[48]*cq[1];
+        obs[27] = q[0];
+        obs[28] = qd[0];
+        obs[29] = qdd[0];
+        obs[30] = t23;
+        obs[31] = c[45]*cq[1] + c[47]*cq[0];
+        obs[32] = qd[0]*t24;
+        obs[33] = qd[0]*t23;
+        obs[34] = qdd[0]*t24 + t12*(c[47]*cq[1] + c[48]*cq[0]);
+        obs[35] = qdd[0]*t23 + t12*t24;
+        return sgv_isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35])))));
+    }
+    case 5: {
+        const sg_vd t6 = c[27]*cq[1];
+        const sg_vd t7 = c[14]*cq[0];
+        const sg_vd t12 = ((qd[0])*(qd[0]));
+        const sg_vd t13 = ((qd[2])*(qd[2]));
+        const sg_vd t14 = c[14]*cq[1];
+        const sg_vd t15 = cq[5]*t13;
+        const sg_vd t16 = qd[0]*t6;
+        const sg_vd t17 = qd[0]*t7;
+        const sg_vd t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+        const sg_vd t19 = qdd[0]*t7 + t12*t6;
+        const sg_vd t25 = c[49]*cq[4];
+        const sg_vd t26 = c[50]*cq[5];
+        obs[36] = q[2];
+        obs[37] = qd[2];
+        obs[38] = qdd[2];
+        obs[39] = t25 + t7;
+        obs[40] = c[49]*cq[5] + t14;
+        obs[41] = qd[2]*t26 + t16;
+        obs[42] = qd[2]*t25 + t17;
+        obs[43] = c[50]*cq[4]*t13 + qdd[2]*t26 + t18;
+        obs[44] = c[50]*t15 + qdd[2]*t25 + t19;
+        return sgv_isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44])))));
+    }
+    case 6: {
+        obs[45] = sgv_set1((0.5)*3.141592653589793);
+        obs[46] = sgv_set1(0.0);
+        obs[47] = sgv_set1(0.0);
+        obs[48] = sgv_set1(c[51]);
+        obs[49] = c[52] + q[1];
+        obs[50] = sgv_set1(0.0);
+        obs[51] = qd[1];
+        obs[52] = sgv_set1(0.0);
+        obs[53] = qdd[1];
+        return sgv_isfinite((((obs[45] + obs[46]) + (obs[47] + obs[48])) + ((obs[49] + obs[50]) + (obs[51] + (obs[52] + obs[53])))));
+    }
+    default:
+        return sgv_false();
+    }
+}
+
 SG_VINLINE sg_vm sg_overlock_needle_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)x;
@@ -881,8 +1038,8 @@ SG_VINLINE int sg_overlock_needle_forces_in_simd(const double *c)
     return 1;
 }
 
-static SG_FLATTEN size_t sg_overlock_needle_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_SIMD_SWEEP_BODY(sg_overlock_needle_constants, sg_overlock_needle_closed, sg_overlock_needle_motion, sg_overlock_needle_forces, sg_overlock_needle_closed_v, sg_overlock_needle_motion_v, sg_overlock_needle_forces_v, sg_overlock_needle_forces_in_simd, 54, 26)
+static SG_FLATTEN size_t sg_overlock_needle_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_SIMD_SWEEP_BODY(sg_overlock_needle_constants, sg_overlock_needle_closed, sg_overlock_needle_motion, sg_overlock_needle_rates, sg_overlock_needle_observe, sg_overlock_needle_forces, sg_overlock_needle_closed_v, sg_overlock_needle_motion_v, sg_overlock_needle_rates_v, sg_overlock_needle_observe_v, sg_overlock_needle_forces_v, sg_overlock_needle_forces_in_simd, 54, 26)
 #pragma GCC pop_options
 #endif
 

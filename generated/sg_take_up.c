@@ -578,10 +578,10 @@ void sg_take_up_anchors(const double *q, const double *cq, const double *x, cons
 }
 
 /* sg_take_up_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_take_up_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_CLOSED_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_forces)
+static SG_FLATTEN size_t sg_take_up_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_CLOSED_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_rates, sg_take_up_observe, sg_take_up_forces)
 
-/* The SIMD twins of the closed, motion and forces kernels and the sweep four positions at a time
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
  * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
 #pragma GCC push_options
@@ -702,6 +702,167 @@ SG_VINLINE sg_vm sg_take_up_motion_v(const sg_vd *q, const sg_vd *cq, const sg_v
     return ok;
 }
 
+SG_VINLINE sg_vm sg_take_up_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
+{
+    (void)x;
+    const sg_vd t0 = c[7]*cq[1];
+    const sg_vd t1 = c[11]*cq[0];
+    const sg_vd t2 = c[6]*cq[2];
+    const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
+    const sg_vd t4 = c[0]*t3;
+    const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
+    const sg_vd t6 = c[16]*t5;
+    const sg_vd t10 = ((xd[0])*(xd[0]));
+    const sg_vd t11 = c[0]*t5;
+    const sg_vd t12 = c[11]*cq[1];
+    sg_vd J[4], rs[2], cs[2];
+    sg_vm piv[2];
+    J[0] = t0;
+    J[1] = c[13]*cq[3];
+    J[2] = t1;
+    J[3] = t2;
+    qd[0] = t4*xd[0];
+    qd[1] = t6*xd[0];
+    rs[0] = sgv_set1(c[32]);
+    rs[1] = sgv_set1(c[33]);
+    sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
+    sgv_solve_eq(2, J, piv, rs, cs, qd);
+    const sg_vd t7 = ((qd[0])*(qd[0]));
+    const sg_vd t8 = t1*t7;
+    const sg_vd t9 = ((qd[1])*(qd[1]));
+    const sg_vd t13 = t12*t7;
+    qdd[0] = t10*t11 + t2*t9 + t4*xdd[0] + t8;
+    qdd[1] = c[6]*cq[3]*t9 + t10*t4 + t13 + t6*xdd[0];
+    sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    ok &= sgv_isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_take_up_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)
+{
+    switch (group) {
+    case 0: {
+        const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t4 = c[0]*t3;
+        const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t6 = c[16]*t5;
+        const sg_vd t10 = ((xd[0])*(xd[0]));
+        const sg_vd t11 = c[0]*t5;
+        const sg_vd t14 = c[16]*t3;
+        const sg_vd t15 = t14*xd[0];
+        const sg_vd t16 = t11*xd[0];
+        const sg_vd t17 = t10*t6 + t14*xdd[0];
+        const sg_vd t18 = t10*t14 + t11*xdd[0];
+        obs[0] = t11;
+        obs[1] = t4;
+        obs[2] = t15;
+        obs[3] = t16;
+        obs[4] = t17;
+        obs[5] = t18;
+        return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
+    }
+    case 1: {
+        const sg_vd t0 = c[7]*cq[1];
+        const sg_vd t1 = c[11]*cq[0];
+        const sg_vd t7 = ((qd[0])*(qd[0]));
+        const sg_vd t8 = t1*t7;
+        const sg_vd t12 = c[11]*cq[1];
+        const sg_vd t13 = t12*t7;
+        const sg_vd t19 = c[7]*cq[0];
+        obs[6] = c[4] + t19;
+        obs[7] = c[5] + t0;
+        obs[8] = qd[0]*t12;
+        obs[9] = qd[0]*t19;
+        obs[10] = qdd[0]*t12 + t8;
+        obs[11] = qdd[0]*t19 + t13;
+        return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
+    }
+    case 2: {
+        const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t4 = c[0]*t3;
+        const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t6 = c[16]*t5;
+        const sg_vd t9 = ((qd[1])*(qd[1]));
+        const sg_vd t10 = ((xd[0])*(xd[0]));
+        const sg_vd t11 = c[0]*t5;
+        const sg_vd t14 = c[16]*t3;
+        const sg_vd t15 = t14*xd[0];
+        const sg_vd t16 = t11*xd[0];
+        const sg_vd t17 = t10*t6 + t14*xdd[0];
+        const sg_vd t18 = t10*t14 + t11*xdd[0];
+        const sg_vd t20 = c[17]*cq[3] + c[18]*cq[2];
+        const sg_vd t21 = c[17]*cq[2] + c[20]*cq[3];
+        obs[12] = t11 + t20;
+        obs[13] = c[18]*cq[3] + c[19]*cq[2] + t4;
+        obs[14] = qd[1]*t21 + t15;
+        obs[15] = qd[1]*t20 + t16;
+        obs[16] = qdd[1]*t21 + t17 + t9*(c[19]*cq[3] + c[20]*cq[2]);
+        obs[17] = qdd[1]*t20 + t18 + t21*t9;
+        return sgv_isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))));
+    }
+    case 3: {
+        const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t10 = ((xd[0])*(xd[0]));
+        const sg_vd t22 = c[22]*t5 + c[23]*t3;
+        const sg_vd t23 = c[23]*t5 + c[25]*t3;
+        obs[18] = c[21] + x[0];
+        obs[19] = xd[0];
+        obs[20] = xdd[0];
+        obs[21] = t22;
+        obs[22] = c[22]*t3 + c[24]*t5;
+        obs[23] = t23*xd[0];
+        obs[24] = t22*xd[0];
+        obs[25] = t10*(c[24]*t3 + c[25]*t5) + t23*xdd[0];
+        obs[26] = t10*t23 + t22*xdd[0];
+        return sgv_isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26])))));
+    }
+    case 4: {
+        const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
+        const sg_vd t4 = c[0]*t3;
+        const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
+        const sg_vd t6 = c[16]*t5;
+        const sg_vd t9 = ((qd[1])*(qd[1]));
+        const sg_vd t10 = ((xd[0])*(xd[0]));
+        const sg_vd t11 = c[0]*t5;
+        const sg_vd t14 = c[16]*t3;
+        const sg_vd t15 = t14*xd[0];
+        const sg_vd t16 = t11*xd[0];
+        const sg_vd t17 = t10*t6 + t14*xdd[0];
+        const sg_vd t18 = t10*t14 + t11*xdd[0];
+        const sg_vd t24 = c[26]*cq[2] + c[27]*cq[3];
+        const sg_vd t25 = c[27]*cq[2] + c[29]*cq[3];
+        obs[27] = q[1];
+        obs[28] = qd[1];
+        obs[29] = qdd[1];
+        obs[30] = t11 + t24;
+        obs[31] = c[26]*cq[3] + c[28]*cq[2] + t4;
+        obs[32] = qd[1]*t25 + t15;
+        obs[33] = qd[1]*t24 + t16;
+        obs[34] = qdd[1]*t25 + t17 + t9*(c[28]*cq[3] + c[29]*cq[2]);
+        obs[35] = qdd[1]*t24 + t18 + t25*t9;
+        return sgv_isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35])))));
+    }
+    case 5: {
+        const sg_vd t7 = ((qd[0])*(qd[0]));
+        const sg_vd t26 = c[30]*cq[0];
+        const sg_vd t27 = c[31]*cq[1];
+        obs[36] = q[0];
+        obs[37] = qd[0];
+        obs[38] = qdd[0];
+        obs[39] = c[4] + t26;
+        obs[40] = c[30]*cq[1] + c[5];
+        obs[41] = qd[0]*t27;
+        obs[42] = qd[0]*t26;
+        obs[43] = c[31]*cq[0]*t7 + qdd[0]*t27;
+        obs[44] = qdd[0]*t26 + t27*t7;
+        return sgv_isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44])))));
+    }
+    default:
+        return sgv_false();
+    }
+}
+
 SG_VINLINE sg_vm sg_take_up_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)q;
@@ -768,8 +929,8 @@ SG_VINLINE int sg_take_up_forces_in_simd(const double *c)
     return c[57] == 0.0 && c[58] == 0.0 && c[59] == 0.0;
 }
 
-static SG_FLATTEN size_t sg_take_up_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status)
-SG_SIMD_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_forces, sg_take_up_closed_v, sg_take_up_motion_v, sg_take_up_forces_v, sg_take_up_forces_in_simd, 45, 24)
+static SG_FLATTEN size_t sg_take_up_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want)
+SG_SIMD_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_rates, sg_take_up_observe, sg_take_up_forces, sg_take_up_closed_v, sg_take_up_motion_v, sg_take_up_rates_v, sg_take_up_observe_v, sg_take_up_forces_v, sg_take_up_forces_in_simd, 45, 24)
 #pragma GCC pop_options
 #endif
 

@@ -114,9 +114,12 @@ HOOKS = {
                          ("const double *", "p"), ("const int *", "branch"), ("const sg_options *", "opt"),
                          ("const size_t *", "order"), ("const double *", "gv"), ("const double *", "loads"),
                          ("double *", "q"), ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"),
-                         ("double *", "err"), ("double *", "frc"), ("int *", "status")),
+                         ("double *", "err"), ("double *", "frc"), ("int *", "status"),
+                         ("const unsigned char *", "want")),
               "the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not "
-              "NULL) kinetostatics as sg_sweep_forces; NULL without a closed form"),
+              "NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the groups of "
+              "observables a kinematic sweep computes (kernels 'rates' and 'observe'); NULL without a closed "
+              "form"),
 }
 HOOKS["sweep_simd"] = (HOOKS["sweep"][0], HOOKS["sweep"][1],
                        "the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL "

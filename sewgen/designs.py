@@ -425,8 +425,19 @@ def _check_columns(mech, p: np.ndarray, held: np.ndarray) -> dict:
 _local = threading.local()
 
 
+def _work(n: int, width: int) -> tuple:
+    """This thread's scratch of sg_sweep_designs (one design's sweep: n rows of width + 1 doubles, n statuses),
+    kept between calls: fresh memory of this size would cost its page faults on every call, as much as a short
+    sweep itself. Never handed out: every result is copied from it."""
+    work = getattr(_local, "work", None)
+    if work is None or work[0].shape[0] < n * (width + 1) or work[1].shape[0] < n:
+        work = (np.empty(max(n * (width + 1), 1)), np.empty(max(n, 1), dtype=np.intc))
+        _local.work = work
+    return work
+
+
 def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, reduce=None, held=None, branch=None,
-                  threads=None, degrees=False, newton=False, max_iter=None, chunk=None) -> DesignSweep:
+                  threads=None, degrees=False, newton=False, max_iter=None, chunk=None, loop="auto") -> DesignSweep:
     """:meth:`sewgen.Mechanism.sweep_designs` (its documentation)."""
     from .mechanism import _DEFAULT_MAX_ITER
 
@@ -436,7 +447,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
     nq, nobs, npar = sizes["nq"], sizes["nobs"], sizes["np"]
     # the shaft angles, speed and acceleration: as prepare() checks them (one sweep's worth, shared)
     base = mech.prepare(phi, speed, accel, degrees=degrees, newton=newton,
-                        max_iter=_DEFAULT_MAX_ITER if max_iter is None else max_iter)
+                        max_iter=_DEFAULT_MAX_ITER if max_iter is None else max_iter).use_loop(loop)
     n = base.n
     nd, given = _table(mech, designs)
     p = np.empty((nd, npar))
@@ -487,10 +498,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
 
     def run(span):
         d0, d1 = span
-        work = getattr(_local, "work", None)
-        if work is None or work[0].shape[0] < n * (width + 1) or work[1].shape[0] < n:
-            work = (np.empty(max(n * (width + 1), 1)), np.empty(max(n, 1), dtype=np.intc))
-            _local.work = work
+        work = _work(n, width)
         lib.sg_sweep_designs(mech._descriptor, d1 - d0, n, *shared, offset("h", d0 * (len(desc.inputs) - 1)),
                              offset("p", d0 * npar), offset("b", d0 * len(desc.branches)), guess, opt, order,
                              ncheck, len(angle_c), angle_p, len(sel), sel_p, offset("out", d0 * n), nd * n,
@@ -549,8 +557,7 @@ def solve_selected(mech, outputs, sweep_args: dict, out=None):
     sel_c = np.array(sel, dtype=np.intc)
     ffi, lib = mech.ffi, mech.lib
     width = len(cols.names)
-    work = np.empty(max(n * (width + 1), 1))
-    work_st = np.empty(max(n, 1), dtype=np.intc)
+    work, work_st = _work(n, width)
     ptr = partial(_ptr, ffi)
 
     ncheck = 0  # prepare() checked the parameters and their derived dimensions

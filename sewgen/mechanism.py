@@ -522,7 +522,7 @@ class Mechanism:
 
     def sweep_designs(self, designs, phi, speed=None, *, outputs=None, reduce=None, held=None, branch=None,
                       threads=None, accel=0.0, degrees: bool = False, newton: bool = False,
-                      max_iter: int = _DEFAULT_MAX_ITER, chunk: int | None = None):
+                      max_iter: int = _DEFAULT_MAX_ITER, chunk: int | None = None, loop: str = "auto"):
         """Many designs over the same shaft angles, each swept as :meth:`solve` sweeps it (its own continuation,
         tolerance and per-position status), in C calls over chunks of designs on ``threads`` threads (default:
         every core; the GIL is released). Returns a :class:`sewgen.designs.DesignSweep`.
@@ -532,7 +532,8 @@ class Mechanism:
         are converted once per column, never per row. Or an (n_designs, n_parameters) array, SI, in
         :attr:`param_names` order. Parameters not given take their defaults. ``held`` and ``branch``: by name,
         a scalar or one value per design each (or an (n_designs, n) array). ``phi``, ``speed``, ``accel``,
-        ``degrees``, ``newton``, ``max_iter``: as :meth:`solve`, shared by every design.
+        ``degrees``, ``newton``, ``max_iter``: as :meth:`solve`, shared by every design; ``loop``: which
+        closed-form loop runs, as :meth:`Sweep.use_loop` (``"auto"``, ``"scalar"``, ``"generic"``).
 
         ``outputs``: which per-position results to keep, ``"all"``, ``"coords"``, ``"points"``, ``"bodies"``,
         ``"points:<name>"``, ``"bodies:<name>"``, ``"coords:<name>"`` or single columns
@@ -549,7 +550,7 @@ class Mechanism:
 
         return sweep_designs(self, designs, phi, speed, accel, outputs=outputs, reduce=reduce, held=held,
                              branch=branch, threads=threads, degrees=degrees, newton=newton, max_iter=max_iter,
-                             chunk=chunk)
+                             chunk=chunk, loop=loop)
 
     # -- single-position kernels (checks and inspection) -----------------------------------------------------
     def _ptr(self, ctype: str, arr: np.ndarray):

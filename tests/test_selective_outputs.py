@@ -1,6 +1,6 @@
 """Observables computed only when asked (issue 14, item 3): a design sweep or ``solve(outputs=...)`` that keeps a
 few columns runs the ``rates`` kernel (q', q'', the condition estimate) and the ``observe`` groups its columns
-need, instead of the joint ``motion`` kernel; the generic (Newton) loop does this. The selected columns must equal
+need, instead of the joint ``motion`` kernel, in every loop (generic, inlined scalar, SIMD). The selected columns must equal
 the full sweep's exactly, with the same statuses and failing angles, on every catalog mechanism and on a user
 mechanism; the kernels themselves are checked against the joint motion kernel at solved positions, bit for bit.
 """
@@ -48,15 +48,15 @@ def _same(full, part):
         assert np.array_equal(part[key], full[key], equal_nan=True), key
 
 
-def _check_mechanism(mech, newton):
+def _check_mechanism(mech, newton, loop="auto"):
     table = _table(mech)
-    everything = mech.sweep_designs(table, PHI, newton=newton, threads=1)  # the joint motion kernel
+    everything = mech.sweep_designs(table, PHI, newton=newton, threads=1, loop=loop)  # the joint motion kernel
     cols = Columns(mech.description)
     n_failed = int((everything.status != 0).sum())
     assert 0 < n_failed < len(everything.status)
     for outputs, reduce in _selections(mech):
-        part = mech.sweep_designs(table, PHI, newton=newton, threads=1, outputs=outputs, reduce=reduce)
-        full = mech.sweep_designs(table, PHI, newton=newton, threads=1, outputs=["all"], reduce=reduce)
+        part = mech.sweep_designs(table, PHI, newton=newton, threads=1, outputs=outputs, reduce=reduce, loop=loop)
+        full = mech.sweep_designs(table, PHI, newton=newton, threads=1, outputs=["all"], reduce=reduce, loop=loop)
         _same(full, part)
         for key, arr in part.outputs.items():
             assert np.array_equal(arr, everything.outputs[key], equal_nan=True), key
@@ -68,10 +68,26 @@ def test_selected_groups_equal_the_joint_kernel_to_the_bit(name):
     _check_mechanism(sewgen.mechanism(name), newton=True)
 
 
+CLOSED = [n for n in catalog_names() if sewgen.mechanism(n).manifest.get("closed_form")]
+
+
+@pytest.mark.parametrize("loop", ["auto", "scalar"])
+@pytest.mark.parametrize("name", CLOSED)
+def test_closed_form_loops_compute_only_the_selected_groups_to_the_bit(name, loop):
+    """The inlined closed-form loops (four positions at a time in SIMD where it runs, and scalar) compute the
+    rates and the wanted groups only, with the same values, statuses and failing angles as their full sweep."""
+    mech = sewgen.mechanism(name)
+    if loop == "auto" and mech.simd_width == 1:
+        pytest.skip("no SIMD loop in this build or on this CPU")
+    _check_mechanism(mech, newton=False, loop=loop)
+
+
 def test_a_user_mechanism_selected_groups_equal_the_joint_kernel(tmp_path):
     path = ROOT / "examples" / "my_mechanism.py"
     _check_mechanism(sewgen.load(path, closed_form=False), newton=False)
     _check_mechanism(sewgen.load(path), newton=True)
+    for loop in ("auto", "scalar"):
+        _check_mechanism(sewgen.load(path), newton=False, loop=loop)
 
 
 def _kernel(mech, kind):

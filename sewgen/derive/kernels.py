@@ -82,6 +82,10 @@ VECTOR_SIGNATURES = {
               "const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)",
     "forces": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
               "const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)",
+    "rates": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
+             "const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)",
+    "observe": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
+               "const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)",
 }
 
 
@@ -278,64 +282,83 @@ class KernelSet:
             stack.extend(s for s in defs[t].free_symbols if s in defs and s not in need)
         return [(t, e) for t, e in repl if t in need]
 
-    def rates(self, scales: list | None = None) -> Kernel:
+    def rates(self, scales: list | None = None, vector: bool = False) -> Kernel:
         """q', q'' and the condition estimate of the motion kernel without its observables (issue 14, item 3: a
         sweep that keeps a few outputs computes only their groups, kernel ``observe``). The same temporaries
         and LU as :meth:`motion`, those the observables alone read left out: q', q'', cond equal the motion
-        kernel's to the bit, and the status too but for a non-finite observable (``observe`` tests those)."""
+        kernel's to the bit, and the status too but for a non-finite observable (``observe`` tests those).
+        ``vector``: the SIMD twin, equal to the bit to the motion kernel's SIMD twin; it returns the mask of
+        lanes whose factor and rates are good (the selection of a cam's arc has no vector form)."""
         n = len(self.kin.q)
+        if vector and self.selection_block():
+            raise NoVectorForm("a cam's active arc is chosen per position")
+        fl = VECTOR if vector else SCALAR
         repl, r_jac, r_vel, r_gam, _r_obs, r_inv = self._motion_parts(scales)
         used = self._needed(repl, r_jac + r_vel + r_gam + r_inv)
         levels: dict = {}
         for t, e in repl:
             levels[t] = max((_stage(s, levels) for s in e.free_symbols), default=0)
-        pr = SCALAR
         early = [(t, e) for t, e in used if levels[t] == 0]
         late = [(t, e) for t, e in used if levels[t] >= 1]
         body = list(self.selection_block()) if _reads_ka(early + late, r_jac + r_vel + r_gam + r_inv) else []
-        body += pr.temps(early)
+        body += fl.temps(early)
         if n:
-            body += [f"double J[{n * n}], rs[{n}], cs[{n}];", f"int piv[{n}];"]
-            body += [f"J[{k}] = {pr.value(e)};" for k, e in enumerate(r_jac)]
-            body += [f"qd[{i}] = {pr.value(e)};" for i, e in enumerate(r_vel)]
-            body += [f"rs[{i}] = {pr.value(e)};" for i, e in enumerate(r_inv)]
-            body += [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
-                     f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
+            body += [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];", f"{'sg_vm' if vector else 'int'} piv[{n}];"]
+            body += [f"J[{k}] = {fl.value(e)};" for k, e in enumerate(r_jac)]
+            body += [f"qd[{i}] = {fl.value(e)};" for i, e in enumerate(r_vel)]
+            body += [f"rs[{i}] = {fl.value(e)};" for i, e in enumerate(r_inv)]
+            if vector:
+                body += [f"sg_vm ok = sgv_factor_eq({n}, J, piv, rs, cs, cond);",
+                         f"sgv_solve_eq({n}, J, piv, rs, cs, qd);"]
+            else:
+                body += [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
+                         f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
         else:
-            body += ["*cond = 1.0;"]
-        body += pr.temps(late)
+            body += ["*cond = sgv_set1(1.0);", "sg_vm ok = sgv_true();"] if vector else ["*cond = 1.0;"]
+        body += fl.temps(late)
         if n:
-            body += [f"qdd[{i}] = {pr.value(e)};" for i, e in enumerate(r_gam)]
-            body += [f"sg_solve_eq_inl({n}, J, piv, rs, cs, qdd);"]
+            body += [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)]
+            body += [f"{'sgv_solve_eq' if vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
             outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)]
-            body += [f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
+            body += [f"ok &= sgv_isfinite({_balanced_sum(outputs)});" if vector
+                     else f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
         names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "cond")
-        body = _unused(body, *names) + body + ["return SG_OK;"]
-        return Kernel(f"{self.prefix}_rates", self._signature("rates"), body,
-                      ops(e for _, e in used) + ops(r_jac + r_vel + r_gam + r_inv))
+        body = _unused(body, *names) + body + ["return ok;" if vector else "return SG_OK;"]
+        name = f"{self.prefix}_rates" + ("_v" if vector else "")
+        return Kernel(name, VECTOR_SIGNATURES["rates"].format(f=name) if vector else self._signature("rates"),
+                      body, ops(e for _, e in used) + ops(r_jac + r_vel + r_gam + r_inv))
 
-    def observe(self, groups: list, scales: list | None = None) -> Kernel:
+    def observe(self, groups: list, scales: list | None = None, vector: bool = False) -> Kernel:
         """One group of observables (a point's or a body's columns, a cam's arc) from a position and its rates
         (kernel ``rates``): ``groups`` lists each group's first observable and the next group's. Each case emits
         the temporaries its observables read, as the joint motion kernel does (the same values to the bit), and
-        tests its own outputs for a non-finite value."""
+        tests its own outputs for a non-finite value. ``vector``: the SIMD twin (the motion twin's values to the
+        bit), returning the mask of lanes whose group is finite."""
+        if vector and self.selection_block():
+            raise NoVectorForm("a cam's active arc is chosen per position")
+        fl = VECTOR if vector else SCALAR
         repl, *_rest, r_obs, _r_inv = self._motion_parts(scales)
-        pr = SCALAR
         body = ["switch (group) {"]
         total = 0
         for g, (a, b) in enumerate(zip(groups[:-1], groups[1:])):
             exprs = r_obs[a:b]
             used = self._needed(repl, exprs)
             total += ops(e for _, e in used) + ops(exprs)
-            case = (list(self.selection_block()) if _reads_ka(used, exprs) else []) + pr.temps(used)
-            case += [f"obs[{k}] = {pr.value(e)};" for k, e in zip(range(a, b), exprs)]
+            case = (list(self.selection_block()) if _reads_ka(used, exprs) else []) + fl.temps(used)
+            case += [f"obs[{k}] = {fl.value(e)};" for k, e in zip(range(a, b), exprs)]
             outs = [f"obs[{k}]" for k in range(a, b)]
-            case += [f"return isfinite({_balanced_sum(outs)}) ? SG_OK : SG_NONFINITE;" if outs else "return SG_OK;"]
+            if vector:
+                case += [f"return sgv_isfinite({_balanced_sum(outs)});" if outs else "return sgv_true();"]
+            else:
+                case += [f"return isfinite({_balanced_sum(outs)}) ? SG_OK : SG_NONFINITE;" if outs
+                         else "return SG_OK;"]
             body += [f"case {g}: {{"] + ["    " + line for line in case] + ["}"]
-        body += ["default:", "    return SG_BAD_ARGUMENT;", "}"]
+        body += ["default:", "    return sgv_false();" if vector else "    return SG_BAD_ARGUMENT;", "}"]
         names = ("q", "cq", "x", "cx", "xd", "xdd", "c", "qd", "qdd", "obs")
         body = _unused(body, *names) + body
-        return Kernel(f"{self.prefix}_observe", self._signature("observe"), body, total)
+        name = f"{self.prefix}_observe" + ("_v" if vector else "")
+        return Kernel(name, VECTOR_SIGNATURES["observe"].format(f=name) if vector else self._signature("observe"),
+                      body, total)
 
     def observe_always(self, groups: list, scales: list | None = None) -> list[int]:
         """Per group, 1 where its observables may come out non-finite from finite coordinates, rates, inputs and
@@ -542,12 +565,14 @@ class KernelSet:
         return Kernel(name, VECTOR_SIGNATURES["closed"].format(f=name) if vector else self._signature("closed"),
                       body, total)
 
-    def vector_kernels(self, dyads: list[Dyad], scales, kst: Kinetostatics) -> list[Kernel]:
-        """The SIMD twins of the closed, motion and forces kernels and the forces' run-time test, or none where the
-        kinematics have no vector form (where only the forces have none, the test says no: the SIMD loop then
-        runs a force sweep scalar, and the template passes csrc/sg_simd.h's sgv_no_forces for the twin)."""
+    def vector_kernels(self, dyads: list[Dyad], scales, kst: Kinetostatics, groups: list) -> list[Kernel]:
+        """The SIMD twins of the closed, motion, rates, observe and forces kernels and the forces' run-time test,
+        or none where the kinematics have no vector form (where only the forces have none, the test says no: the
+        SIMD loop then runs a force sweep scalar, and the template passes csrc/sg_simd.h's sgv_no_forces for the
+        twin)."""
         try:
-            kernels = [self.closed(dyads, vector=True), self.motion(scales, vector=True)]
+            kernels = [self.closed(dyads, vector=True), self.motion(scales, vector=True),
+                       self.rates(scales, vector=True), self.observe(groups, scales, vector=True)]
         except NoVectorForm:
             return []
         try:
