@@ -630,9 +630,10 @@ static inline double *col_ptr(const sg_scratch *s, int j, size_t i)
     return s->obs + i * (size_t)s->nobs + (size_t)(j - 3 * nq);
 }
 
-static inline double col_at(const sg_scratch *s, int j, size_t i)
+/* The distance between a column's entries of two successive positions (a position's row). */
+static inline size_t col_step(const sg_scratch *s, int j)
 {
-    return *col_ptr(s, j, i);
+    return (size_t)(j < 3 * s->nq ? s->nq : s->nobs);
 }
 
 /* numpy's float modulo (the sign of the divisor), as np.unwrap computes it */
@@ -666,14 +667,42 @@ static void continuous_column(const sg_scratch *s, int j, size_t n, const size_t
         const size_t b = order ? order[k] : k;
         double *v = col_ptr(s, j, b);
         const double raw = *v, dd = raw - prev;
-        double ddmod = py_mod(dd + pi, SG_TWO_PI) - pi;
-        if (ddmod == -pi && dd > 0.0) ddmod = pi;
-        if (!(fabs(dd) < pi)) corr += ddmod - dd;
+        if (!(fabs(dd) < pi)) { /* a jump (np.unwrap's correction; the modulo only where it is used) */
+            double ddmod = py_mod(dd + pi, SG_TWO_PI) - pi;
+            if (ddmod == -pi && dd > 0.0) ddmod = pi;
+            corr += ddmod - dd;
+        }
         prev = raw;
         *v = raw + corr;
     }
     const double shift = SG_TWO_PI * ceil((first - pi) / SG_TWO_PI);
     for (size_t k = 0; k < n; ++k) *col_ptr(s, j, order ? order[k] : k) -= shift;
+}
+
+/* continuous_column on columns cols[0..ncol) (offset by add). In position order each column is first scanned
+ * for a reason to change it (a start outside (−π, π] or a step over π), without a branch a position, and only
+ * such a column is made continuous; a solving order other than the positions' takes continuous_column's own
+ * test. */
+static void continuous_columns(const sg_scratch *s, int ncol, const int *cols, int add, size_t n,
+                               const size_t *order)
+{
+    const double pi = 3.14159265358979323846;
+    for (int c = 0; c < ncol; ++c) {
+        const int j = cols[c] + add;
+        if (order == NULL && n > 0) {
+            const double *v = col_ptr(s, j, 0);
+            const size_t step = col_step(s, j);
+            double prev = v[0];
+            int jump = !(prev > -pi && prev <= pi);
+            for (size_t k = 1; k < n; ++k) {
+                const double x = v[k * step];
+                jump |= fabs(x - prev) > pi;
+                prev = x;
+            }
+            if (!jump) continue;
+        }
+        continuous_column(s, j, n, order);
+    }
 }
 
 /* One reduction of one design over its n positions: kind (SG_RED_*), column a, and b >= 0 for the norm
@@ -685,10 +714,12 @@ static double reduce_column(const sg_scratch *s, size_t n, int kind, int a, int 
 {
     double acc = kind == SG_RED_MIN ? INFINITY : (kind == SG_RED_MAX ? -INFINITY : 0.0);
     long long at = -1;
+    const double *va = col_ptr(s, a, 0), *vb = b >= 0 ? col_ptr(s, b, 0) : NULL;
+    const size_t sa = col_step(s, a), sb = b >= 0 ? col_step(s, b) : 0;
     for (size_t i = 0; i < n; ++i) {
-        double v = col_at(s, a, i);
-        if (b >= 0) {
-            const double w = col_at(s, b, i);
+        double v = va[i * sa];
+        if (vb != NULL) {
+            const double w = vb[i * sb];
             v = sqrt(v * v + w * w);
         }
         switch (kind) {
@@ -786,8 +817,7 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
                     if (first < 0) first = (long long)i, st = work_status[i];
                     if (work_status[i] == st) ++count, last = (long long)i;
                 }
-            if (st == SG_OK)
-                for (int k = 0; k < nangle; ++k) continuous_column(&s, angle_cols[k], n, order);
+            if (st == SG_OK) continuous_columns(&s, nangle, angle_cols, 0, n, order);
         }
         status[d] = st;
         first_bad[d] = first;
@@ -796,8 +826,11 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
         if (st != SG_OK) ++failed;
         for (int k = 0; k < nsel; ++k) { /* a failed design's rows: NaN (its status says why) */
             double *o = out + (size_t)k * out_stride + d * n;
-            if (st == SG_OK)
-                for (size_t i = 0; i < n; ++i) o[i] = col_at(&s, sel[k], i);
+            if (st == SG_OK) {
+                const double *v = col_ptr(&s, sel[k], 0);
+                const size_t step = col_step(&s, sel[k]);
+                for (size_t i = 0; i < n; ++i) o[i] = v[i * step];
+            }
             else
                 for (size_t i = 0; i < n; ++i) o[i] = NAN;
         }
@@ -822,6 +855,6 @@ void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int 
 {
     sg_scratch s;
     s.nq = nq, s.nobs = nobs, s.q = q, s.qd = NULL, s.qdd = NULL, s.obs = obs;
-    for (int k = 0; k < nqa; ++k) continuous_column(&s, qcols[k], n, order);
-    for (int k = 0; k < noa; ++k) continuous_column(&s, 3 * nq + ocols[k], n, order);
+    continuous_columns(&s, nqa, qcols, 0, n, order);
+    continuous_columns(&s, noa, ocols, 3 * nq, n, order);
 }
