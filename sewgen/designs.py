@@ -33,6 +33,7 @@ import numpy as np
 from . import abi
 from .errors import InputError, ParameterError
 from .mechanism import _ptr, _si
+from .results import Selection
 from .units import UnitError, to_si
 
 #: Reduction kinds, in the C runtime's numbering (csrc/sg_runtime.c SG_RED_*).
@@ -537,12 +538,74 @@ def _columns(mech) -> Columns:
     return cols
 
 
+def _one_design(ffi, n: int, width: int) -> tuple:
+    """This thread's scratch of a one-design sg_sweep_designs call (:func:`_work`, a status and a first failing
+    position) with its C pointers, made again only when the scratch grows or the module differs."""
+    work, work_st = _work(n, width)
+    one = getattr(_local, "one", None)
+    if one is None or one[0] is not ffi or one[1] is not work:
+        status, first = np.zeros(1, dtype=np.intc), np.full(1, -1, dtype=np.int64)
+        one = (ffi, work, status, ffi.from_buffer("int[]", status), ffi.from_buffer("long long[]", first),
+               ffi.from_buffer("double[]", work), ffi.from_buffer("int[]", work_st), first)
+        _local.one = one
+    return one[2:7]
+
+
+def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
+    """solve(phi, outputs=...) on the defaults but ``params`` (solve()'s lean path, as ``Mechanism._fast_solve``):
+    the selection parsed once per ``outputs`` and cached, the angles copied into one buffer, one C call. None
+    where anything needs :func:`solve_selected` (which also raises every failure with its diagnosis)."""
+    if phi.ndim != 1 or phi.dtype != np.float64 or not phi.shape[0]:
+        return None
+    try:
+        key = tuple(outputs) if isinstance(outputs, (list, tuple)) else (outputs,)
+        plan = mech._selections.get(key)
+    except TypeError:
+        return None
+    if plan is None:
+        cols = _columns(mech)
+        sel = np.array(cols.select(mech.name, outputs), dtype=np.intc)  # a bad name raises here, as below
+        angle = cols.angles_among(list(sel))
+        names = [cols.names[c] for c in sel]
+        plan = (len(sel), _ptr(mech.ffi, "int *", sel), len(angle), _ptr(mech.ffi, "int *", angle), names,
+                len(cols.names), sel, angle)
+        if len(mech._selections) >= 64:
+            mech._selections.clear()
+        mech._selections[key] = plan
+    nsel, sel_p, nangle, angle_p, names, width = plan[:6]
+    spd = mech.description.default_speed if speed is None else float(speed)
+    if not math.isfinite(spd):
+        return None
+    got = mech._fast_params(params)
+    if got is None:
+        return None
+    n = phi.shape[0]
+    _nq, _nobs, _w, lib, desc, held, branch, guess, opt, _angle = mech._fast["call"]
+    ffi = mech.ffi
+    inputs = np.empty(3 * n)
+    phi_v, omega, alpha = inputs[:n], inputs[n:2 * n], inputs[2 * n:]
+    phi_v[:] = phi
+    omega.fill(spd)
+    alpha.fill(0.0)
+    order_p = ffi.NULL
+    if n > 1 and not (phi_v[1:] >= phi_v[:-1]).all():
+        order_p = ffi.from_buffer("size_t[]", np.argsort(phi_v, kind="stable").astype(np.uintp))
+    block = np.empty((nsel, n))
+    status, status_p, first_p, work_p, work_st_p = _one_design(ffi, n, width)
+    status[0] = 0
+    base = ffi.from_buffer("double[]", inputs)
+    lib.sg_sweep_designs(desc, 1, n, base, base + n, base + 2 * n, held, got[1], branch, guess, opt, order_p, 0,
+                         nangle, angle_p, nsel, sel_p, ffi.from_buffer("double[]", block), n, 0, ffi.NULL,
+                         ffi.NULL, ffi.NULL, 0, work_p, work_st_p, status_p, first_p, ffi.NULL, ffi.NULL)
+    if status[0] != 0:
+        return None
+    return Selection(mech, phi_v, omega, alpha, block, names)
+
+
 def solve_selected(mech, outputs, sweep_args: dict, out=None):
     """``Mechanism.solve(..., outputs=...)``: one sweep writing only the selected columns, each contiguous (a
     :class:`~sewgen.results.Selection`); the same values as the full sweep's columns, bit for bit. A failing
     position raises the error :meth:`~sewgen.Mechanism.solve` raises (the full sweep is rerun to diagnose it)."""
-    from .results import Selection
-
     base = mech.prepare(**sweep_args)
     cols = _columns(mech)
     sel = cols.select(mech.name, outputs)

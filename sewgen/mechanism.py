@@ -103,6 +103,7 @@ class Mechanism:
                                    fields["_fast"]["guess"], fields["_default_options"][(False, False)],
                                    fields["_angle"][1:] if (qa or oa) else None)
         fields["_pcache"] = {}
+        fields["_selections"] = {}  # solve(outputs=...)'s parsed selections (sewgen.designs.fast_selected)
         for key, value in fields.items():
             object.__setattr__(self, key, value)
         self._check_constants(p)  # a declaration whose defaults give no real dimension
@@ -411,11 +412,16 @@ class Mechanism:
         the values are those of the full sweep's columns, bit for bit. ``out`` may then be a previous Selection
         of the same columns and length.
         """
-        if (outputs is None and held is None and branch is None and guess is None and out is None
+        if (held is None and branch is None and guess is None and out is None
                 and degrees is False and newton is False and max_iter == _DEFAULT_MAX_ITER and singular == "raise"
                 and type(phi) is np.ndarray and (speed is None or type(speed) in (float, int))
                 and type(accel) in (float, int) and accel == 0):
-            motion = self._fast_solve(phi, speed, params)
+            if outputs is None:
+                motion = self._fast_solve(phi, speed, params)
+            else:
+                from .designs import fast_selected
+
+                motion = fast_selected(self, phi, speed, params, outputs)
             if motion is not None:
                 return motion
         if outputs is not None:

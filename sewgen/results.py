@@ -163,7 +163,15 @@ class Selection:
         self.mechanism = mechanism
         self.phi, self.omega, self.alpha = phi, omega, alpha
         self.block = block
-        self.columns = {name: block[k] for k, name in enumerate(names)}
+        self._names = names
+
+    @property
+    def columns(self) -> dict:
+        """Column name -> its row of ``block`` (made at the first look: a sweep's result costs no views)."""
+        cols = self.__dict__.get("_columns")
+        if cols is None:
+            cols = self.__dict__["_columns"] = {name: self.block[k] for k, name in enumerate(self._names)}
+        return cols
 
     def __len__(self) -> int:
         return len(self.phi)
