@@ -848,6 +848,13 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
     return failed;
 }
 
+int sg_sorted(size_t n, const double *phi)
+{
+    for (size_t i = 1; i < n; ++i)
+        if (!(phi[i] >= phi[i - 1])) return 0;
+    return 1;
+}
+
 /* sewgen.mechanism.continuous_angles in C (the same operations: equal to the bit): the angle columns qcols of q
  * (n x nq) and ocols of obs (n x nobs) continuous along the order, the first position in (−π, π]. */
 void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int nqa, const int *qcols, int noa,

@@ -195,7 +195,7 @@ EXPORTS = {
                          "out[k*out_stride + d*n + i] (NaN for a failed design); red (nred x 3: kind 0 min, "
                          "1 max, 2 absmax, 3 rms, 4 mean; column; second column for the norm of two, or -1) "
                          "writes red_val/red_idx[k*red_stride + d] (the extremum's first position in the "
-                         "caller's order, -1 for rms, mean; NaN and -1 for a failed design). A Newton sweep computes only "
+                         "caller's order, -1 for rms, mean; NaN and -1 for a failed design). Every loop computes only "
                          "the groups of observables sel and red read (kernels 'rates', 'observe'; the same values "
                          "and statuses as the joint kernel's). work: "
                          "n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of "
@@ -204,6 +204,9 @@ EXPORTS = {
                       "positions per block of m's closed-form sweeps (kinematics, kinetostatics) on this CPU: 4 where m has a SIMD "
                       "loop (the module built with SIMD, the kernels with a vector form) and the CPU has AVX2 and "
                       "FMA, else 1 (the scalar loop); m NULL: what this module and CPU offer any mechanism"),
+    "sg_sorted": ("int", (("size_t", "n"), ("const double *", "phi")),
+                  "1 where every phi[i] >= phi[i-1] (a NaN breaks it), else 0: whether a sweep of these shaft "
+                  "angles needs a solving order"),
     "sg_make_continuous": ("void", (("size_t", "n"), ("int", "nq"), ("int", "nobs"), ("double *", "q"),
                                     ("double *", "obs"), ("int", "nqa"), ("const int *", "qcols"), ("int", "noa"),
                                     ("const int *", "ocols"), ("const size_t *", "order")),

@@ -587,13 +587,13 @@ def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
     phi_v[:] = phi
     omega.fill(spd)
     alpha.fill(0.0)
+    base = ffi.from_buffer("double[]", inputs)
     order_p = ffi.NULL
-    if n > 1 and not (phi_v[1:] >= phi_v[:-1]).all():
+    if n > 1 and not lib.sg_sorted(n, base):
         order_p = ffi.from_buffer("size_t[]", np.argsort(phi_v, kind="stable").astype(np.uintp))
     block = np.empty((nsel, n))
     status, status_p, first_p, work_p, work_st_p = _one_design(ffi, n, width)
     status[0] = 0
-    base = ffi.from_buffer("double[]", inputs)
     lib.sg_sweep_designs(desc, 1, n, base, base + n, base + 2 * n, held, got[1], branch, guess, opt, order_p, 0,
                          nangle, angle_p, nsel, sel_p, ffi.from_buffer("double[]", block), n, 0, ffi.NULL,
                          ffi.NULL, ffi.NULL, 0, work_p, work_st_p, status_p, first_p, ffi.NULL, ffi.NULL)

@@ -484,7 +484,7 @@ class Mechanism:
         ffi = self.ffi
         base = ffi.from_buffer("double[]", blk)
         order_p = ffi.NULL
-        if n > 1 and not (phi_v[1:] >= phi_v[:-1]).all():
+        if n > 1 and not lib.sg_sorted(n, base):
             order_p = ffi.from_buffer("size_t[]", np.argsort(phi_v, kind="stable").astype(np.uintp))
         qp, op = base + o, base + o + 3 * nn
         if lib.sg_sweep(desc, n, base, base + n, base + 2 * n, held, p_ptr, branch, guess, opt, order_p, qp, qp + nn,
