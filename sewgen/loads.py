@@ -118,6 +118,8 @@ def place_loads(layout, phi: np.ndarray, nload: int, out: np.ndarray | None = No
     for load, cols, window in layout:
         mask = window_mask(phi, window)
         for k, value in cols:
+            if value == 0.0:  # x + 0 is x: a column holds no -0.0 (it starts at +0.0, and sums that cancel are +0.0)
+                continue
             col = out[:, k]
             np.add(col, value, out=col, where=mask)  # out[mask, k] += value, without the gather and scatter
         placed.append((load, list(cols), mask))

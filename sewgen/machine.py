@@ -46,6 +46,8 @@ from .units import UnitError, steps_per_turn, to_si
 
 #: Names a group may not take: its table would overwrite the machine's (machine.csv, summary.json).
 RESERVED_GROUP_NAMES = ("machine", "summary")
+_TURN = np.array([-1.0, 1.0])  # (x, y) -> (-y, x) applied to (y, x): a vector turned +90°
+_TURN.flags.writeable = False
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
@@ -211,8 +213,8 @@ class Machine:
         out = plan.run(phi, w, al, progress)
         if out is None:
             return None
-        groups, stack = out
-        analysis = MachineAnalysis(self, phi, groups, None if stack is None else (plan.shaft, stack))
+        groups, stack, torques = out
+        analysis = MachineAnalysis(self, phi, groups, None if stack is None else (plan.shaft, stack, torques))
         analysis.run = {"speed": self.speed if speed is None else speed, "accel": accel}
         return analysis
 
@@ -275,7 +277,7 @@ class MachineAnalysis:
             u = np.empty((len(self.phi), 2))  # radial unit vector
             u[:, 0] = cphi * cb - sphi * sb
             u[:, 1] = sphi * cb + cphi * sb
-            t = u[:, ::-1] * np.array([-1.0, 1.0])  # tangential: u turned +90°
+            t = u[:, ::-1] * _TURN  # tangential: u turned +90°
             pos = sm.radius * u
             vel = (sm.radius * w)[:, None] * t
             acc = (sm.radius * al)[:, None] * t - (sm.radius * w * w)[:, None] * u
@@ -346,17 +348,24 @@ class MachineAnalysis:
                 total = total + d
                 arm = arm + (sm.z - zA) * d
         else:  # the same sums, in the same order: the plan's stack of forces reduced along its first axis
-            sp, stack = plan
+            sp, stack, torques = plan
             k = len(sp.cranks)
             stack[k + 1] = sp.belt
             for j, (sm, _pos, _vel, acc) in enumerate(self.core):
-                np.multiply(sm.mass, gv[None, :] - acc, out=stack[k + 2 + j])  # d'Alembert force of a core mass
+                if sm.radius == 0.0:  # acc is zero: m (g − 0), the same numbers without the (n, 2) arithmetic
+                    stack[k + 2 + j] = sm.mass * (gv[None, :] - 0.0)
+                else:
+                    np.multiply(sm.mass, gv[None, :] - acc, out=stack[k + 2 + j])  # d'Alembert force of a core mass
             total = np.add.reduce(stack, axis=0)
             arm = np.add.reduce(stack * sp.weights, axis=0)
         self.rear = -arm / (zB - zA)  # frame on shaft at B
         self.front = -self.rear - total
         core_torque = sh.inertia * self.alpha  # I·α of the core, and r × m(a − g) of its point masses
         for sm, pos, _vel, acc in self.core:
+            if plan is not None and sm.radius == 0.0:  # pos is zero: 0·f, elementwise the same, as two scalars
+                f = sm.mass * (np.zeros((1, 2)) - gv[None, :])
+                core_torque = core_torque + 0.0 * f[0, 1] - 0.0 * f[0, 0]
+                continue
             f = sm.mass * (acc - gv[None, :])
             core_torque = core_torque + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
         # Coulomb friction in the bearings (the friction circle): μ·r·(|R_A| + |R_B|) against the rotation. The
@@ -364,7 +373,11 @@ class MachineAnalysis:
         w = self.omega if np.shape(self.omega) == self.phi.shape else np.broadcast_to(self.omega, (len(self.phi),))
         self.bearing_friction = (sh.friction * sh.journal_radius * np.sign(w)
                                  * (np.hypot(*self.front.T) + np.hypot(*self.rear.T)))
-        self.torque = sum(fa.torque("shaft") for fa in self.groups.values()) + core_torque + self.bearing_friction
+        if plan is None:
+            self.torque = sum(fa.torque("shaft") for fa in self.groups.values()) + core_torque + self.bearing_friction
+        else:  # rows: 0, the groups' shaft torques, the core's, the bearings' friction; summed in that order
+            torques[-2], torques[-1] = core_torque, self.bearing_friction
+            self.torque = np.add.reduce(torques, axis=0)
 
     # -- tables ----------------------------------------------------------------------------------------------
     def to_dataframe(self, group: str | None = None):

@@ -57,7 +57,7 @@ class GroupCall:
     branch=...)`` (the same arrays, bit for bit) without the per-call conversions."""
 
     __slots__ = ("group", "mech", "phase", "loads", "settings", "nq", "nobs", "nfo", "nload", "width", "call",
-                 "angle", "keep")
+                 "angle", "keep", "torque_column")
 
     def __init__(self, g, g_mag: float, g_dir: float):
         mech = g.mechanism
@@ -76,6 +76,7 @@ class GroupCall:
         sizes = mech.description.sizes
         self.nq, self.nobs, self.nfo = sizes["nq"], sizes["nobs"], sizes["nfo"]
         self.nload = sizes["nload"] if loads else 0
+        self.torque_column = mech.description.output_column("shaft.torque")  # ForceAnalysis.torque("shaft")
         self.width = 4 + 3 * self.nq + self.nobs + self.nfo + self.nload  # doubles per position in the block
         ffi, d = mech.ffi, mech._ptr
         self.keep = (probe.params, probe.held, probe.branch, probe.guess, s.gravity)  # alive with the pointers
@@ -192,7 +193,9 @@ class Plan:
             idx = np.array([index[gname][0] + rows * index[gname][1] + np.array([cx, cy])
                             for gname, _label, _z, cx, cy, _sign, _along in self.shaft.cranks], dtype=np.intp)
             sign = np.array([c[5] for c in self.shaft.cranks], dtype=float)[:, None, None]
-            got = (offsets, o, idx.reshape(len(self.shaft.cranks), n, 2), sign)
+            torque = np.array([off + call.frc_offset(n) + np.arange(n) * call.nfo + call.torque_column
+                               for call, off in zip(self.groups, offsets)], dtype=np.intp)
+            got = (offsets, o, idx.reshape(len(self.shaft.cranks), n, 2), sign, torque.reshape(ng, n))
             if len(self._layouts) >= 8:
                 self._layouts.clear()
             self._layouts[n] = got
@@ -202,7 +205,7 @@ class Plan:
         """(group name -> ForceAnalysis, the crank forces stacked for the shaft or None) at machine shaft angles
         ``phi``, in one fresh block; None where anything fails."""
         n, ng = phi.shape[0], len(self.groups)
-        offsets, size, idx, sign = self.layout(n)
+        offsets, size, idx, sign, torque = self.layout(n)
         sort = n > 1 and not (phi[1:] >= phi[:-1]).all()
         blk = np.empty(size)
         rows = blk[:4 * ng * n].reshape(4, ng, n)
@@ -220,12 +223,15 @@ class Plan:
             if fa is None:
                 return None
             out[call.group.name] = fa
-        stack = None
+        stack = torques = None
         if not self.shaft.along:  # the crank forces, sign applied, after a zero row (sewgen.machine: _shaft)
             stack = np.empty((1 + len(idx) + 1 + self.shaft.ncore, n, 2))
             stack[0] = 0.0
             np.multiply(blk[idx], sign, out=stack[1:1 + len(idx)])
-        return out, stack
+            torques = np.empty((ng + 3, n))  # 0, the groups' shaft torques, the core's, the bearings' friction
+            torques[0] = 0.0
+            torques[1:ng + 1] = blk[torque]
+        return out, stack, torques
 
 
 def plan_of(machine) -> Plan:
