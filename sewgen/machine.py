@@ -274,13 +274,13 @@ class MachineAnalysis:
                 out.append((sm, zero, zero, zero))
                 continue
             cb, sb = math.cos(sm.angle), math.sin(sm.angle)
-            u = np.empty((len(self.phi), 2))  # radial unit vector
-            u[:, 0] = cphi * cb - sphi * sb
-            u[:, 1] = sphi * cb + cphi * sb
+            # radial unit vector (cos φ cb − sin φ sb, sin φ cb + cos φ sb), both columns at once
+            u = cphi[:, None] * np.array([cb, sb]) + sphi[:, None] * np.array([-sb, cb])
             t = u[:, ::-1] * _TURN  # tangential: u turned +90°
             pos = sm.radius * u
-            vel = (sm.radius * w)[:, None] * t
-            acc = (sm.radius * al)[:, None] * t - (sm.radius * w * w)[:, None] * u
+            rw = sm.radius * w
+            vel = rw[:, None] * t
+            acc = (sm.radius * al)[:, None] * t - (rw * w)[:, None] * u
             out.append((sm, pos, vel, acc))
         return out
 
@@ -353,7 +353,7 @@ class MachineAnalysis:
             stack[k + 1] = sp.belt
             for j, (sm, _pos, _vel, acc) in enumerate(self.core):
                 if sm.radius == 0.0:  # acc is zero: m (g − 0), the same numbers without the (n, 2) arithmetic
-                    stack[k + 2 + j] = sm.mass * (gv[None, :] - 0.0)
+                    stack[k + 2 + j] = sp.axis_force[j]
                 else:
                     np.multiply(sm.mass, gv[None, :] - acc, out=stack[k + 2 + j])  # d'Alembert force of a core mass
             total = np.add.reduce(stack, axis=0)
@@ -361,18 +361,19 @@ class MachineAnalysis:
         self.rear = -arm / (zB - zA)  # frame on shaft at B
         self.front = -self.rear - total
         core_torque = sh.inertia * self.alpha  # I·α of the core, and r × m(a − g) of its point masses
-        for sm, pos, _vel, acc in self.core:
+        for j, (sm, pos, _vel, acc) in enumerate(self.core):
             if plan is not None and sm.radius == 0.0:  # pos is zero: 0·f, elementwise the same, as two scalars
-                f = sm.mass * (np.zeros((1, 2)) - gv[None, :])
-                core_torque = core_torque + 0.0 * f[0, 1] - 0.0 * f[0, 0]
+                c1, c0 = plan[0].axis_moment[j]
+                core_torque = core_torque + c1 - c0
                 continue
             f = sm.mass * (acc - gv[None, :])
             core_torque = core_torque + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
         # Coulomb friction in the bearings (the friction circle): μ·r·(|R_A| + |R_B|) against the rotation. The
         # torque about the axis does not enter the radial balance above, so no iteration is needed.
         w = self.omega if np.shape(self.omega) == self.phi.shape else np.broadcast_to(self.omega, (len(self.phi),))
-        self.bearing_friction = (sh.friction * sh.journal_radius * np.sign(w)
-                                 * (np.hypot(*self.front.T) + np.hypot(*self.rear.T)))
+        self.bearing_friction = sh.friction * sh.journal_radius * np.sign(w)
+        if plan is None or sh.friction * sh.journal_radius != 0.0:  # else ±0 · (|R_A| + |R_B|) is that ±0 (finite R)
+            self.bearing_friction = self.bearing_friction * (np.hypot(*self.front.T) + np.hypot(*self.rear.T))
         if plan is None:
             self.torque = sum(fa.torque("shaft") for fa in self.groups.values()) + core_torque + self.bearing_friction
         else:  # rows: 0, the groups' shaft torques, the core's, the bearings' friction; summed in that order

@@ -140,7 +140,8 @@ class ShaftPlan:
     """The upper shaft's fixed data: bearings, belt, core masses, and per group across the shaft the columns of
     its cranks' pivot forces on the frame (``frame_force(<crank>.pivot)``) with their sign and axial z."""
 
-    __slots__ = ("zA", "zB", "belt", "pulley_belt", "cranks", "along", "ncore", "weights")
+    __slots__ = ("zA", "zB", "belt", "pulley_belt", "cranks", "along", "ncore", "weights", "axis_force",
+                 "axis_moment")
 
     def __init__(self, machine):
         sh = machine.shaft
@@ -161,6 +162,14 @@ class ShaftPlan:
                 self.cranks.append((g.name, f"{g.name}.{body}", z, cx, cy, -1.0 if r.a == "ground" else 1.0,
                                     g.along))
         self.ncore = len(sh.masses)
+        # a core mass on the axis (r = 0) is at rest: its d'Alembert force m (g − 0) and the terms 0·f of its
+        # moment r × m (a − g) are constants (the same operations as sewgen.machine's _shaft on arrays of zeros)
+        gv = np.asarray(machine.gravity)[None, :]
+        self.axis_force = [sm.mass * (gv - 0.0) for sm in sh.masses]
+        self.axis_moment = []
+        for sm in sh.masses:
+            f = sm.mass * (np.zeros((1, 2)) - gv)
+            self.axis_moment.append((0.0 * f[0, 1], 0.0 * f[0, 0]))
         # arms about the front bearing of the stacked forces: the zero row, the cranks, the belt, the core masses
         self.weights = np.array([1.0] + [c[2] - sh.front for c in self.cranks] + [sh.pulley - sh.front]
                                 + [sm.z - sh.front for sm in sh.masses])[:, None, None]
