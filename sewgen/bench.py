@@ -501,6 +501,11 @@ def table(rows: list[dict]) -> str:
             lines.append((r["mechanism"], r["kernel"], f"{x['seconds']:.1f} s", "-", "-",
                           f"{x['designs_per_s']:.0f} designs/s", check))
             continue
+        if "ms_per_analysis" in x:  # a whole machine through the API: ms an analysis against the issue's target
+            lines.append((r["mechanism"], r["kernel"], _si(r["positions_per_s"]), "-", "-", "-",
+                          f"{'ok' if x['meets_target'] else 'MISSES'} {x['ms_per_analysis']:.3g} ms "
+                          f"< {x['target_ms']:.3g} ms"))
+            continue
         if "wall_ms" in x:  # a whole command's wall time: ms in the first column, the target in the last
             lines.append((r["mechanism"], r["kernel"], f"{x['wall_ms']:.0f} ms", "-", "-", "-",
                           f"{'ok' if x['meets_target'] else 'MISSES'} < {x['target_ms']:.0f} ms"))
@@ -537,8 +542,8 @@ def _machine_entry(positions: int, target_ms: float):
     return run
 
 
-register_entry("jb1-3", "machine@72", _machine_entry(72, 1.0))
-register_entry("jb1-3", "machine@3600", _machine_entry(3600, 10.0))
+register_entry("jb1-3", "machine@72", _machine_entry(72, 0.3))  # issue 14: < 0.3 ms
+register_entry("jb1-3", "machine@3600", _machine_entry(3600, 3.0))  # issue 14: < 3 ms
 
 
 def _wall_entry(args: list[str], target_ms: float, repeats: int | None = None):

@@ -65,10 +65,15 @@ def load_matrix(mech, loads, phi: np.ndarray, degrees: bool = False) -> tuple[np
     """
     if not loads:
         return None, []
+    return place_loads(load_layout(mech, loads, degrees), phi, len(mech.description.loads))
+
+
+def load_layout(mech, loads, degrees: bool = False) -> list[tuple]:
+    """Every load checked and converted once: (load, [(slot, SI value)], window in rad or None) per load, in
+    order. What depends on the shaft angles (the windows' masks) is :func:`place_loads`'s."""
     slots = mech.description.loads
     index = {(s.name, s.component): s.index for s in slots}
-    out = np.zeros((phi.shape[0], len(slots)))
-    placed = []
+    layout = []
     for load in loads:
         if not isinstance(load, Load):
             raise ParameterError(mech.name, "loads", f"expected sewgen.Load entries, got {type(load).__name__}")
@@ -95,12 +100,27 @@ def load_matrix(mech, loads, phi: np.ndarray, degrees: bool = False) -> tuple[np
         if is_body and not is_point and (fx != 0.0 or fy != 0.0):
             raise ParameterError(mech.name, what, f"{load.at!r} is a body: give a torque, or put the force at "
                                  "a named point")
+        cols = [(k, value) for k, value in ((index.get((load.at, comp)), value)
+                                            for comp, value in (("fx", fx), ("fy", fy), ("torque", tz)))
+                if k is not None]
+        layout.append((load, cols, window))
+    return layout
+
+
+def place_loads(layout, phi: np.ndarray, nload: int, out: np.ndarray | None = None):
+    """The (n, nload) load array of a :func:`load_layout` at shaft angles ``phi`` (into ``out``, zeroed, if
+    given), and (load, slot indices, mask) per load."""
+    if out is None:
+        out = np.zeros((phi.shape[0], nload))
+    else:
+        out.fill(0.0)
+    placed = []
+    for load, cols, window in layout:
         mask = window_mask(phi, window)
-        cols = []
-        for comp, value in (("fx", fx), ("fy", fy), ("torque", tz)):
-            k = index.get((load.at, comp))
-            if k is not None:
-                out[mask, k] += value
-                cols.append((k, value))
-        placed.append((load, cols, mask))
+        for k, value in cols:
+            if value == 0.0:  # x + 0 is x: a column holds no -0.0 (it starts at +0.0, and sums that cancel are +0.0)
+                continue
+            col = out[:, k]
+            np.add(col, value, out=col, where=mask)  # out[mask, k] += value, without the gather and scatter
+        placed.append((load, list(cols), mask))
     return out, placed

@@ -29,7 +29,6 @@ import copy
 import math
 import re
 from dataclasses import dataclass, field, replace
-from functools import cached_property
 from pathlib import Path
 from typing import NamedTuple
 
@@ -39,6 +38,7 @@ from . import mechanism as catalog_mechanism
 from .errors import BuildError, ParameterError, SewgenError
 from .feed import regulator_angle
 from .loads import Load, load_matrix
+from .machine_plan import gravity_polar, plan_of, scalar
 from .modelfile import (Field, ModelFileError, Reader, declaration_problem, load_toml,  # noqa: F401 (re-exported)
                         resolve)
 from .roles import STITCH_REGULATOR
@@ -46,6 +46,8 @@ from .units import UnitError, steps_per_turn, to_si
 
 #: Names a group may not take: its table would overwrite the machine's (machine.csv, summary.json).
 RESERVED_GROUP_NAMES = ("machine", "summary")
+_TURN = np.array([-1.0, 1.0])  # (x, y) -> (-y, x) applied to (y, x): a vector turned +90°
+_TURN.flags.writeable = False
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
@@ -92,7 +94,7 @@ class Group:
             return float(self.origin[0])  # its plane is x = origin x (its own z = 0)
         return self.plane if self.plane is not None else float(np.mean(list(self.axial.values())))
 
-    @cached_property
+    @property
     def sweep_loads(self) -> list:
         """The loads with their windows moved into the group's own shaft angle (machine angle + phase)."""
         return [replace(ld, window=None if ld.window is None else tuple(w + self.phase for w in ld.window))
@@ -161,7 +163,14 @@ class Machine:
 
         A group that cannot be solved raises its typed error (AssemblyError, SingularPositionError, ...) with
         the model file (``file``) and the group's key (``key``, e.g. ``groups.take_up``) added to its fields and
-        its message."""
+        its message.
+
+        Repeated analyses of one machine reuse its call plan (:mod:`sewgen.machine_plan`: everything that
+        depends on the machine alone, converted once, rebuilt when the machine is changed in place); every
+        analysis returns new arrays."""
+        fast = self._planned_analysis(phi, speed, accel, progress)
+        if fast is not None:
+            return fast
         phi = self.shaft_angles() if phi is None else np.asarray(phi, dtype=float)
         w = self.speed if speed is None else speed
         if isinstance(w, str):
@@ -169,8 +178,7 @@ class Machine:
                 w = to_si(w, "speed", "speed")
             except UnitError as exc:
                 raise ParameterError(self.name, "speed", exc.problem) from None
-        g_mag = float(np.hypot(*self.gravity))
-        g_dir = math.atan2(self.gravity[1], self.gravity[0]) if g_mag else -math.pi / 2
+        g_mag, g_dir = gravity_polar(self.gravity)
         out = {}
         for k, g in enumerate(self.groups):
             if progress:
@@ -185,6 +193,36 @@ class Machine:
         analysis.run = {"speed": w, "accel": accel}
         return analysis
 
+    def _planned_analysis(self, phi, speed, accel, progress):
+        """analyze() through the machine's call plan, or None where the general path must run (per-position or
+        string speeds, a non-finite or non-1-D phi, a position that fails: that path raises the typed error)."""
+        if phi is None:
+            phi = self.shaft_angles()
+        elif type(phi) is not np.ndarray or phi.dtype != np.float64 or phi.ndim != 1:
+            return None
+        if not phi.shape[0] or not np.isfinite(phi).all():
+            return None
+        w, al = scalar(self.speed if speed is None else speed), scalar(accel)
+        if w is None or al is None:
+            return None
+        try:
+            plan = plan_of(self)
+        except (SewgenError, KeyError):  # the general path raises it, located
+            return None
+        phi = phi.copy()  # the analysis owns its angles
+        out = plan.run(phi, w, al, progress)
+        if out is None:
+            return None
+        groups, stack, torques = out
+        analysis = MachineAnalysis(self, phi, groups, None if stack is None else (plan.shaft, stack, torques))
+        analysis.run = {"speed": self.speed if speed is None else speed, "accel": accel}
+        return analysis
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_plan", None)  # compiled pointers: made again where it is used
+        return state
+
     def kinematics(self, phi, speed=None) -> dict:
         """Group name -> Motion at machine shaft angles ``phi`` (rad), constant ``speed`` (sewgen.timing)."""
         w = self.speed if speed is None else speed
@@ -195,13 +233,13 @@ class Machine:
 class MachineAnalysis:
     """Every group's results and the machine-level ones, indexed by the machine's shaft angle."""
 
-    def __init__(self, machine: Machine, phi: np.ndarray, groups: dict):
+    def __init__(self, machine: Machine, phi: np.ndarray, groups: dict, shaft_plan=None):
         self.machine, self.phi, self.groups = machine, phi, groups
         first = next(iter(groups.values()))
         self.omega, self.alpha = first.motion.omega, first.motion.alpha
         self.run = {"speed": self.omega, "accel": self.alpha}  # what analyze() was given
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, as a typed error
-            self._shaft()
+            self._shaft(shaft_plan)
         for what, values in (("shaft.front_bearing", self.front), ("shaft.rear_bearing", self.rear),
                              ("shaft", self.torque)):
             if not np.isfinite(values).all():
@@ -236,13 +274,13 @@ class MachineAnalysis:
                 out.append((sm, zero, zero, zero))
                 continue
             cb, sb = math.cos(sm.angle), math.sin(sm.angle)
-            u = np.empty((len(self.phi), 2))  # radial unit vector
-            u[:, 0] = cphi * cb - sphi * sb
-            u[:, 1] = sphi * cb + cphi * sb
-            t = u[:, ::-1] * np.array([-1.0, 1.0])  # tangential: u turned +90°
+            # radial unit vector (cos φ cb − sin φ sb, sin φ cb + cos φ sb), both columns at once
+            u = cphi[:, None] * np.array([cb, sb]) + sphi[:, None] * np.array([-sb, cb])
+            t = u[:, ::-1] * _TURN  # tangential: u turned +90°
             pos = sm.radius * u
-            vel = (sm.radius * w)[:, None] * t
-            acc = (sm.radius * al)[:, None] * t - (sm.radius * w * w)[:, None] * u
+            rw = sm.radius * w
+            vel = rw[:, None] * t
+            acc = (sm.radius * al)[:, None] * t - (rw * w)[:, None] * u
             out.append((sm, pos, vel, acc))
         return out
 
@@ -251,16 +289,18 @@ class MachineAnalysis:
         contains the shaft (``frame = "along"``: its cranks are spatial cranks turning about its x axis) puts its
         pivot's in-plane force (x: along the shaft, a thrust the radial bearings do not take; y) and the
         out-of-plane force of the rods on its cranks (seed 003's ball-jointed rods, ``<rod>.fz``) on the shaft."""
+        return [load for g in self.machine.groups for load in self._crank_loads(g)]
+
+    def _crank_loads(self, g):
+        fa = self.groups[g.name]
         out = []
-        for g in self.machine.groups:
-            fa = self.groups[g.name]
-            for body, z in g.axial.items():
-                fx, fy = _xy(fa.frame_force(f"{body}.pivot"))
-                if g.along:
-                    fz = -sum((fa.output(f"{r.name}.fz") for r in g.mechanism.description.force_joints
-                               if r.kind == "rod" and r.a == body), np.zeros(len(self.phi)))
-                    fx, fy, _ = g.force_to_machine(fx, fy, fz)
-                out.append((f"{g.name}.{body}", z, np.column_stack([fx, fy])))
+        for body, z in g.axial.items():
+            fx, fy = _xy(fa.frame_force(f"{body}.pivot"))
+            if g.along:
+                fz = -sum((fa.output(f"{r.name}.fz") for r in g.mechanism.description.force_joints
+                           if r.kind == "rod" and r.a == body), np.zeros(len(self.phi)))
+                fx, fy, _ = g.force_to_machine(fx, fy, fz)
+            out.append((f"{g.name}.{body}", z, np.column_stack([fx, fy])))
         return out
 
     def _group_force(self, g, force):
@@ -294,30 +334,51 @@ class MachineAnalysis:
                 own = own + spin
         return own, about_z
 
-    def _shaft(self):
+    def _shaft(self, plan=None):
         sh, gv = self.machine.shaft, self.machine.gravity
         zA, zB = sh.front, sh.rear
         self.core = self._core_masses()
-        loads = self.crank_loads()
-        belt = np.asarray(sh.belt, dtype=float)[None, :]
-        total = sum(F for _, _, F in loads) + belt
-        arm = sum((z - zA) * F for _, z, F in loads) + (sh.pulley - zA) * belt
-        for sm, _pos, _vel, acc in self.core:
-            d = sm.mass * (gv[None, :] - acc)  # d'Alembert force of a core mass
-            total = total + d
-            arm = arm + (sm.z - zA) * d
+        if plan is None:
+            loads = self.crank_loads()
+            belt = np.asarray(sh.belt, dtype=float)[None, :]
+            total = sum(F for _, _, F in loads) + belt
+            arm = sum((z - zA) * F for _, z, F in loads) + (sh.pulley - zA) * belt
+            for sm, _pos, _vel, acc in self.core:
+                d = sm.mass * (gv[None, :] - acc)  # d'Alembert force of a core mass
+                total = total + d
+                arm = arm + (sm.z - zA) * d
+        else:  # the same sums, in the same order: the plan's stack of forces reduced along its first axis
+            sp, stack, torques = plan
+            k = len(sp.cranks)
+            stack[k + 1] = sp.belt
+            for j, (sm, _pos, _vel, acc) in enumerate(self.core):
+                if sm.radius == 0.0:  # acc is zero: m (g − 0), the same numbers without the (n, 2) arithmetic
+                    stack[k + 2 + j] = sp.axis_force[j]
+                else:
+                    np.multiply(sm.mass, gv[None, :] - acc, out=stack[k + 2 + j])  # d'Alembert force of a core mass
+            total = np.add.reduce(stack, axis=0)
+            arm = np.add.reduce(stack * sp.weights, axis=0)
         self.rear = -arm / (zB - zA)  # frame on shaft at B
         self.front = -self.rear - total
         core_torque = sh.inertia * self.alpha  # I·α of the core, and r × m(a − g) of its point masses
-        for sm, pos, _vel, acc in self.core:
+        for j, (sm, pos, _vel, acc) in enumerate(self.core):
+            if plan is not None and sm.radius == 0.0:  # pos is zero: 0·f, elementwise the same, as two scalars
+                c1, c0 = plan[0].axis_moment[j]
+                core_torque = core_torque + c1 - c0
+                continue
             f = sm.mass * (acc - gv[None, :])
             core_torque = core_torque + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
         # Coulomb friction in the bearings (the friction circle): μ·r·(|R_A| + |R_B|) against the rotation. The
         # torque about the axis does not enter the radial balance above, so no iteration is needed.
-        w = np.broadcast_to(self.omega, (len(self.phi),))
-        self.bearing_friction = (sh.friction * sh.journal_radius * np.sign(w)
-                                 * (np.hypot(*self.front.T) + np.hypot(*self.rear.T)))
-        self.torque = sum(fa.torque("shaft") for fa in self.groups.values()) + core_torque + self.bearing_friction
+        w = self.omega if np.shape(self.omega) == self.phi.shape else np.broadcast_to(self.omega, (len(self.phi),))
+        self.bearing_friction = sh.friction * sh.journal_radius * np.sign(w)
+        if plan is None or sh.friction * sh.journal_radius != 0.0:  # else ±0 · (|R_A| + |R_B|) is that ±0 (finite R)
+            self.bearing_friction = self.bearing_friction * (np.hypot(*self.front.T) + np.hypot(*self.rear.T))
+        if plan is None:
+            self.torque = sum(fa.torque("shaft") for fa in self.groups.values()) + core_torque + self.bearing_friction
+        else:  # rows: 0, the groups' shaft torques, the core's, the bearings' friction; summed in that order
+            torques[-2], torques[-1] = core_torque, self.bearing_friction
+            self.torque = np.add.reduce(torques, axis=0)
 
     # -- tables ----------------------------------------------------------------------------------------------
     def to_dataframe(self, group: str | None = None):
