@@ -390,7 +390,8 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
 }
 
 /* The rates and observables at a solved position: the joint motion kernel where every observable is wanted (want
- * NULL), else the rates kernel and the wanted groups of observables (kernel 'observe'), which compute the same
+ * NULL), else the rates kernel and the wanted groups of observables (kernel 'observe': want's first ngroup
+ * flags; want[ngroup], whether the coordinates are read, matters to the SIMD loop only), which compute the same
  * values to the bit (derive.kernels: the joint kernel's own statements) and fail alike: the rates test q, q', q'',
  * each group its own observables, and a group that could be non-finite from finite rates and constants is always
  * wanted (descriptor group_always; sg_sweep_designs). The observables of a group not wanted are left as they
@@ -773,13 +774,16 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
                    red[3 * k + 1] >= width || red[3 * k + 2] < -1 || red[3 * k + 2] >= width;
     /* the groups of observables the selection and the reductions read (and those always computed): the others
      * are never computed (NULL: all of them, by the joint motion kernel) */
-    unsigned char want_store[SG_MAX_GROUP];
+    unsigned char want_store[SG_MAX_GROUP + 1]; /* the groups, then whether the coordinates are read */
     const unsigned char *want = NULL;
     if (!bad_args && m->ngroup > 0 && m->ngroup <= SG_MAX_GROUP && m->group_start != NULL) {
         int all = 1;
         for (int g = 0; g < m->ngroup; ++g) want_store[g] = m->group_always[g];
+        want_store[m->ngroup] = 0;
         for (int k = 0; k < nsel + 2 * nred; ++k) {
-            const int j = (k < nsel ? sel[k] : red[3 * ((k - nsel) / 2) + 1 + (k - nsel) % 2]) - 3 * nq;
+            const int col = k < nsel ? sel[k] : red[3 * ((k - nsel) / 2) + 1 + (k - nsel) % 2];
+            const int j = col - 3 * nq;
+            if (col >= 0 && col < nq) want_store[m->ngroup] = 1; /* a coordinate's value */
             if (j < 0) continue; /* a coordinate or its rates (or no second column) */
             int g = 0;
             while (g + 1 < m->ngroup && m->group_start[g + 1] <= j) ++g;

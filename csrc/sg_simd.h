@@ -322,6 +322,10 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
         if (frc != NULL && loads == NULL)                                                          \
             for (int k = 0; k < nload; ++k) vld[k] = sgv_set1(0.0);                                \
         const sg_vd accept = sgv_set1(0.25 * opt->singular_tol);                                   \
+        /* the angles (the dyads' atan2) where anything reads them: every output, the caller's coordinates \
+         * (want[ngroup]), a wanted group or the rates that read an angle itself (group_angles) */ \
+        int angles = want == NULL || want[m->ngroup] || m->group_angles[m->ngroup];               \
+        for (int g = 0; g < m->ngroup && !angles; ++g) angles = want[g] && m->group_angles[g];     \
         for (size_t k = 0; k < n; k += SG_W) {                                                     \
             const int lanes = n - k < SG_W ? (int)(n - k) : SG_W;                                  \
             size_t idx[SG_W];                                                                      \
@@ -348,7 +352,7 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 vxd[0] = om;                                                                       \
                 vxdd[0] = al;                                                                      \
                 sgv_sincos(ph, &vcx[0], &vcx[1]);                                                  \
-                vector_block = sgv_all(CLOSED_V(vx, vcx, c, branch, vq, vcq));                     \
+                vector_block = sgv_all(CLOSED_V(vx, vcx, c, branch, angles, vq, vcq));             \
             }                                                                                      \
             if (!vector_block) {                                                                   \
                 for (int l = 0; l < lanes; ++l)                                                    \
@@ -356,7 +360,7 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 continue;                                                                          \
             }                                                                                      \
             for (int j = 0; j < nq; ++j) { /* no lane a half turn from the one before: none moves */ \
-                if (m->coord_is_angle[j]) {                                                        \
+                if (angles && m->coord_is_angle[j]) {                                              \
                     const sg_vd v = vq[j];                                                         \
                     const sg_vd prev = {have_last ? last[j] : v[0], v[0], v[1], v[2]};             \
                     if (!sgv_all(~(sgv_fabs((prev - v) * (1.0 / two_pi)) > sgv_set1(0.5))))        \

@@ -53,7 +53,7 @@ typedef void (*sg_anchors_fn)(const double *q, const double *cq, const double *x
 
 struct sg_mechanism;
 /* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */
-/* the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'); NULL without a closed form */
+/* the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the ngroup groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the caller reads the coordinates (want[ngroup]); NULL without a closed form */
 typedef size_t (*sg_sweep_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want);
 /* the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
 typedef size_t (*sg_sweep_simd_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want);
@@ -75,6 +75,7 @@ typedef struct sg_mechanism {
     int ngroup;                          /* groups of observables (kernel 'observe'): each point, each moving body, each cam's arc */
     const int *group_start;              /* ngroup + 1 entries: group g is obs[group_start[g]] to obs[group_start[g+1]-1] */
     const unsigned char *group_always;   /* 1 for a group that may be non-finite where the coordinates, rates and constants are finite: a selective sweep computes it always */
+    const unsigned char *group_angles;   /* ngroup + 1 entries: 1 for a group that reads an angle coordinate's value (not only its cos, sin), then 1 where the rates do: a selective SIMD sweep computes the angles (atan2) only where they are read */
     sg_constants_fn constants;           /* every parameter-only subexpression, once per sweep */
     sg_closed_fn closed;                 /* the dyad chain in closed form; NULL in the descriptor where the loops do not split */
     sg_residual_fn residual;             /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
@@ -86,7 +87,7 @@ typedef struct sg_mechanism {
     sg_scales_fn scales;                 /* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
     sg_blocks_fn blocks;                 /* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
     sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
-    sg_sweep_fn sweep;                   /* the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'); NULL without a closed form */
+    sg_sweep_fn sweep;                   /* the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the ngroup groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the caller reads the coordinates (want[ngroup]); NULL without a closed form */
     sg_sweep_simd_fn sweep_simd;         /* the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
 } sg_mechanism;
 

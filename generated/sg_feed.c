@@ -1934,6 +1934,7 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
 static const unsigned char sg_feed_coord_is_angle[7] = { 1, 1, 1, 1, 0, 1, 1 };
 static const int sg_feed_group_start[17] = { 0, 6, 12, 18, 24, 30, 39, 48, 57, 66, 75, 84, 93, 102, 111, 120, 121 };
 static const unsigned char sg_feed_group_always[16] = { 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_feed_group_angles[17] = { 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 1, 1, 1, 1, 1, 0, 0 };
 
 static const sg_mechanism sg_feed_descriptor = {
     .name = "feed",
@@ -1951,6 +1952,7 @@ static const sg_mechanism sg_feed_descriptor = {
     .ngroup = 16,
     .group_start = sg_feed_group_start,
     .group_always = sg_feed_group_always,
+    .group_angles = sg_feed_group_angles,
     .constants = sg_feed_constants,
     .closed = 0,
     .residual = sg_feed_residual,

@@ -905,7 +905,7 @@ SG_CLOSED_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_driv
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
 
-SG_VINLINE sg_vm sg_hook_drive_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_hook_drive_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
 {
     (void)x;
     sg_vm ok = sgv_true();
@@ -916,8 +916,8 @@ SG_VINLINE sg_vm sg_hook_drive_closed_v(const sg_vd *x, const sg_vd *cx, const d
         const sg_vd l[2] = {sgv_set1(c[6]), sgv_set1(c[7])};
         sg_vd J[2];
         ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
-        q[2] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
-        q[0] = sgv_atan2(J[1] - Q[1], J[0] - Q[0]);
+        q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
+        q[0] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
         cq[4] = c[8]*(J[0] - P[0]);
         cq[5] = c[8]*(J[1] - P[1]);
         cq[0] = c[9]*(J[0] - Q[0]);
@@ -931,7 +931,7 @@ SG_VINLINE sg_vm sg_hook_drive_closed_v(const sg_vd *x, const sg_vd *cx, const d
         sg_vd s, theta;
         ok &= sgv_dyad_rpr(D, w0, u, branch[1], &s, &theta);
         q[3] = s;
-        q[1] = theta;
+        q[1] = angles ? theta : sgv_set1(0.0);
         cq[2] = (D[0]*(s*u[0] + w0[0]) + D[1]*(s*u[1] + w0[1]))/(((s*u[0] + w0[0])*(s*u[0] + w0[0])) + ((s*u[1] + w0[1])*(s*u[1] + w0[1])));
         cq[3] = (-D[0]*(s*u[1] + w0[1]) + D[1]*(s*u[0] + w0[0]))/(((s*u[0] + w0[0])*(s*u[0] + w0[0])) + ((s*u[1] + w0[1])*(s*u[1] + w0[1])));
     }
@@ -1451,6 +1451,7 @@ SG_SIMD_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_
 static const unsigned char sg_hook_drive_coord_is_angle[4] = { 1, 1, 1, 0 };
 static const int sg_hook_drive_group_start[10] = { 0, 6, 12, 18, 24, 33, 42, 51, 60, 69 };
 static const unsigned char sg_hook_drive_group_always[9] = { 0, 0, 0, 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_hook_drive_group_angles[10] = { 0, 0, 0, 0, 0, 1, 1, 1, 1, 0 };
 
 static const sg_mechanism sg_hook_drive_descriptor = {
     .name = "hook_drive",
@@ -1468,6 +1469,7 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .ngroup = 9,
     .group_start = sg_hook_drive_group_start,
     .group_always = sg_hook_drive_group_always,
+    .group_angles = sg_hook_drive_group_angles,
     .constants = sg_hook_drive_constants,
     .closed = sg_hook_drive_closed,
     .residual = sg_hook_drive_residual,

@@ -537,7 +537,7 @@ SG_CLOSED_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_ba
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
 
-SG_VINLINE sg_vm sg_needle_bar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_needle_bar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
 {
     (void)x;
     sg_vm ok = sgv_true();
@@ -549,7 +549,7 @@ SG_VINLINE sg_vm sg_needle_bar_closed_v(const sg_vd *x, const sg_vd *cx, const d
         const sg_vd u[2] = {sgv_set1(0.0), sgv_set1(1.0)};
         sg_vd s, J[2];
         ok &= sgv_dyad_rrp(P, l[0], L0, u, branch[0], &s, J);
-        q[1] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
+        q[1] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[0] = s;
         cq[2] = c[6]*(J[0] - P[0]);
         cq[3] = c[6]*(J[1] - P[1]);
@@ -858,6 +858,7 @@ SG_SIMD_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };
 static const int sg_needle_bar_group_start[8] = { 0, 6, 12, 18, 24, 33, 42, 51 };
 static const unsigned char sg_needle_bar_group_always[7] = { 0, 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_needle_bar_group_angles[8] = { 0, 0, 0, 0, 0, 1, 0, 0 };
 
 static const sg_mechanism sg_needle_bar_descriptor = {
     .name = "needle_bar",
@@ -875,6 +876,7 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .ngroup = 7,
     .group_start = sg_needle_bar_group_start,
     .group_always = sg_needle_bar_group_always,
+    .group_angles = sg_needle_bar_group_angles,
     .constants = sg_needle_bar_constants,
     .closed = sg_needle_bar_closed,
     .residual = sg_needle_bar_residual,

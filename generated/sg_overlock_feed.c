@@ -1088,7 +1088,7 @@ SG_CLOSED_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_ove
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
 
-SG_VINLINE sg_vm sg_overlock_feed_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_feed_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
 {
     (void)x;
     sg_vm ok = sgv_true();
@@ -1101,8 +1101,8 @@ SG_VINLINE sg_vm sg_overlock_feed_closed_v(const sg_vd *x, const sg_vd *cx, cons
         const sg_vd l[2] = {sgv_set1(c[7]), sgv_set1(c[8])};
         sg_vd J[2];
         ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
-        q[1] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
-        q[0] = sgv_atan2(J[1] - Q[1], J[0] - Q[0]) - 3.141592653589793;
+        q[1] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
+        q[0] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) - 3.141592653589793 : sgv_set1(0.0);
         cq[2] = c[9]*(J[0] - P[0]);
         cq[3] = c[9]*(J[1] - P[1]);
         cq[0] = c[10]*(J[0] - Q[0]);
@@ -1115,8 +1115,8 @@ SG_VINLINE sg_vm sg_overlock_feed_closed_v(const sg_vd *x, const sg_vd *cx, cons
         const sg_vd l[2] = {sgv_set1(c[16]), sgv_set1(c[17])};
         sg_vd J[2];
         ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[1], J);
-        q[2] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
-        q[3] = sgv_atan2(J[1] - Q[1], J[0] - Q[0]);
+        q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
+        q[3] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
         cq[4] = c[18]*(J[0] - P[0]);
         cq[5] = c[18]*(J[1] - P[1]);
         cq[6] = c[19]*(J[0] - Q[0]);
@@ -1764,6 +1764,7 @@ SG_SIMD_SWEEP_BODY(sg_overlock_feed_constants, sg_overlock_feed_closed, sg_overl
 static const unsigned char sg_overlock_feed_coord_is_angle[4] = { 1, 1, 1, 1 };
 static const int sg_overlock_feed_group_start[12] = { 0, 6, 12, 18, 24, 33, 42, 51, 60, 69, 78, 87 };
 static const unsigned char sg_overlock_feed_group_always[11] = { 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_overlock_feed_group_angles[12] = { 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 0 };
 
 static const sg_mechanism sg_overlock_feed_descriptor = {
     .name = "overlock_feed",
@@ -1781,6 +1782,7 @@ static const sg_mechanism sg_overlock_feed_descriptor = {
     .ngroup = 11,
     .group_start = sg_overlock_feed_group_start,
     .group_always = sg_overlock_feed_group_always,
+    .group_angles = sg_overlock_feed_group_angles,
     .constants = sg_overlock_feed_constants,
     .closed = sg_overlock_feed_closed,
     .residual = sg_overlock_feed_residual,

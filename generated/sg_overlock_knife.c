@@ -466,7 +466,7 @@ SG_CLOSED_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_o
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
 
-SG_VINLINE sg_vm sg_overlock_knife_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_knife_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
 {
     (void)x;
     sg_vm ok = sgv_true();
@@ -477,8 +477,8 @@ SG_VINLINE sg_vm sg_overlock_knife_closed_v(const sg_vd *x, const sg_vd *cx, con
         const sg_vd l[2] = {sgv_set1(c[6]), sgv_set1(c[7])};
         sg_vd J[2];
         ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
-        q[1] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
-        q[0] = sgv_atan2(J[1] - Q[1], J[0] - Q[0]);
+        q[1] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
+        q[0] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
         cq[2] = c[8]*(J[0] - P[0]);
         cq[3] = c[8]*(J[1] - P[1]);
         cq[0] = c[9]*(J[0] - Q[0]);
@@ -734,6 +734,7 @@ SG_SIMD_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_ove
 static const unsigned char sg_overlock_knife_coord_is_angle[2] = { 1, 1 };
 static const int sg_overlock_knife_group_start[5] = { 0, 6, 15, 24, 33 };
 static const unsigned char sg_overlock_knife_group_always[4] = { 0, 0, 0, 0 };
+static const unsigned char sg_overlock_knife_group_angles[5] = { 0, 0, 1, 1, 0 };
 
 static const sg_mechanism sg_overlock_knife_descriptor = {
     .name = "overlock_knife",
@@ -751,6 +752,7 @@ static const sg_mechanism sg_overlock_knife_descriptor = {
     .ngroup = 4,
     .group_start = sg_overlock_knife_group_start,
     .group_always = sg_overlock_knife_group_always,
+    .group_angles = sg_overlock_knife_group_angles,
     .constants = sg_overlock_knife_constants,
     .closed = sg_overlock_knife_closed,
     .residual = sg_overlock_knife_residual,

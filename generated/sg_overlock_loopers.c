@@ -678,7 +678,7 @@ SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, 
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
 
-SG_VINLINE sg_vm sg_overlock_loopers_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_loopers_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
 {
     (void)x;
     sg_vm ok = sgv_true();
@@ -689,7 +689,7 @@ SG_VINLINE sg_vm sg_overlock_loopers_closed_v(const sg_vd *x, const sg_vd *cx, c
         const sg_vd l[2] = {sgv_set1(c[0]), sgv_sqrt(c[5] + c[7]*((c[3]*cx[0] + c[6]*cx[1])*(c[3]*cx[0] + c[6]*cx[1])))};
         sg_vd J[2];
         ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
-        q[0] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
+        q[0] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         cq[0] = c[8]*(J[0] - P[0]);
         cq[1] = c[8]*(J[1] - P[1]);
     }
@@ -700,8 +700,8 @@ SG_VINLINE sg_vm sg_overlock_loopers_closed_v(const sg_vd *x, const sg_vd *cx, c
         const sg_vd l[2] = {sgv_set1(c[14]), sgv_set1(c[15])};
         sg_vd J[2];
         ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[1], J);
-        q[2] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
-        q[1] = sgv_atan2(J[1] - Q[1], J[0] - Q[0]);
+        q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
+        q[1] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
         cq[4] = c[16]*(J[0] - P[0]);
         cq[5] = c[16]*(J[1] - P[1]);
         cq[2] = c[17]*(J[0] - Q[0]);
@@ -1040,6 +1040,7 @@ SG_SIMD_SWEEP_BODY(sg_overlock_loopers_constants, sg_overlock_loopers_closed, sg
 static const unsigned char sg_overlock_loopers_coord_is_angle[3] = { 1, 1, 1 };
 static const int sg_overlock_loopers_group_start[7] = { 0, 6, 12, 21, 30, 39, 48 };
 static const unsigned char sg_overlock_loopers_group_always[6] = { 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_overlock_loopers_group_angles[7] = { 0, 0, 0, 1, 1, 1, 0 };
 
 static const sg_mechanism sg_overlock_loopers_descriptor = {
     .name = "overlock_loopers",
@@ -1057,6 +1058,7 @@ static const sg_mechanism sg_overlock_loopers_descriptor = {
     .ngroup = 6,
     .group_start = sg_overlock_loopers_group_start,
     .group_always = sg_overlock_loopers_group_always,
+    .group_angles = sg_overlock_loopers_group_angles,
     .constants = sg_overlock_loopers_constants,
     .closed = sg_overlock_loopers_closed,
     .residual = sg_overlock_loopers_residual,

@@ -678,7 +678,7 @@ SG_CLOSED_SWEEP_BODY(sg_overlock_loopers_planar_constants, sg_overlock_loopers_p
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
 
-SG_VINLINE sg_vm sg_overlock_loopers_planar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_loopers_planar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
 {
     (void)x;
     sg_vm ok = sgv_true();
@@ -689,7 +689,7 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_closed_v(const sg_vd *x, const sg_vd
         const sg_vd l[2] = {sgv_set1(c[0]), sgv_set1(c[6])};
         sg_vd J[2];
         ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
-        q[0] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
+        q[0] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         cq[0] = c[7]*(J[0] - P[0]);
         cq[1] = c[7]*(J[1] - P[1]);
     }
@@ -700,8 +700,8 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_closed_v(const sg_vd *x, const sg_vd
         const sg_vd l[2] = {sgv_set1(c[13]), sgv_set1(c[14])};
         sg_vd J[2];
         ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[1], J);
-        q[2] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
-        q[1] = sgv_atan2(J[1] - Q[1], J[0] - Q[0]);
+        q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
+        q[1] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
         cq[4] = c[15]*(J[0] - P[0]);
         cq[5] = c[15]*(J[1] - P[1]);
         cq[2] = c[16]*(J[0] - Q[0]);
@@ -1044,6 +1044,7 @@ SG_SIMD_SWEEP_BODY(sg_overlock_loopers_planar_constants, sg_overlock_loopers_pla
 static const unsigned char sg_overlock_loopers_planar_coord_is_angle[3] = { 1, 1, 1 };
 static const int sg_overlock_loopers_planar_group_start[7] = { 0, 6, 12, 21, 30, 39, 48 };
 static const unsigned char sg_overlock_loopers_planar_group_always[6] = { 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_overlock_loopers_planar_group_angles[7] = { 0, 0, 0, 1, 1, 1, 0 };
 
 static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
     .name = "overlock_loopers_planar",
@@ -1061,6 +1062,7 @@ static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
     .ngroup = 6,
     .group_start = sg_overlock_loopers_planar_group_start,
     .group_always = sg_overlock_loopers_planar_group_always,
+    .group_angles = sg_overlock_loopers_planar_group_angles,
     .constants = sg_overlock_loopers_planar_constants,
     .closed = sg_overlock_loopers_planar_closed,
     .residual = sg_overlock_loopers_planar_residual,

@@ -678,7 +678,7 @@ SG_CLOSED_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_pla
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
 
-SG_VINLINE sg_vm sg_overlock_needle_planar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_needle_planar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
 {
     (void)x;
     sg_vm ok = sgv_true();
@@ -689,7 +689,7 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_closed_v(const sg_vd *x, const sg_vd 
         const sg_vd l[2] = {sgv_set1(c[6]), sgv_set1(c[7])};
         sg_vd J[2];
         ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
-        q[0] = c[8] + sgv_atan2(J[1] - P[1], J[0] - P[0]);
+        q[0] = angles ? c[8] + sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         cq[0] = c[9]*(c[10]*(J[0] - P[0]) + c[11]*(J[1] - P[1]));
         cq[1] = c[9]*(c[10]*(J[1] - P[1]) + c[12]*(J[0] - P[0]));
     }
@@ -701,7 +701,7 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_closed_v(const sg_vd *x, const sg_vd 
         const sg_vd u[2] = {sgv_set1(0.0), sgv_set1(1.0)};
         sg_vd s, J[2];
         ok &= sgv_dyad_rrp(P, l[0], L0, u, branch[1], &s, J);
-        q[2] = sgv_atan2(J[1] - P[1], J[0] - P[0]);
+        q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[1] = s;
         cq[4] = c[16]*(J[0] - P[0]);
         cq[5] = c[16]*(J[1] - P[1]);
@@ -1054,6 +1054,7 @@ SG_SIMD_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_plana
 static const unsigned char sg_overlock_needle_planar_coord_is_angle[3] = { 1, 0, 1 };
 static const int sg_overlock_needle_planar_group_start[8] = { 0, 6, 12, 18, 27, 36, 45, 54 };
 static const unsigned char sg_overlock_needle_planar_group_always[7] = { 0, 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_overlock_needle_planar_group_angles[8] = { 0, 0, 0, 0, 1, 1, 0, 0 };
 
 static const sg_mechanism sg_overlock_needle_planar_descriptor = {
     .name = "overlock_needle_planar",
@@ -1071,6 +1072,7 @@ static const sg_mechanism sg_overlock_needle_planar_descriptor = {
     .ngroup = 7,
     .group_start = sg_overlock_needle_planar_group_start,
     .group_always = sg_overlock_needle_planar_group_always,
+    .group_angles = sg_overlock_needle_planar_group_angles,
     .constants = sg_overlock_needle_planar_constants,
     .closed = sg_overlock_needle_planar_closed,
     .residual = sg_overlock_needle_planar_residual,

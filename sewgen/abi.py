@@ -117,9 +117,9 @@ HOOKS = {
                          ("double *", "err"), ("double *", "frc"), ("int *", "status"),
                          ("const unsigned char *", "want")),
               "the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not "
-              "NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the groups of "
-              "observables a kinematic sweep computes (kernels 'rates' and 'observe'); NULL without a closed "
-              "form"),
+              "NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the ngroup groups of "
+              "observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the "
+              "caller reads the coordinates (want[ngroup]); NULL without a closed form"),
 }
 HOOKS["sweep_simd"] = (HOOKS["sweep"][0], HOOKS["sweep"][1],
                        "the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL "
@@ -144,6 +144,10 @@ DESCRIPTOR = (
     ("const int *", "group_start", "ngroup + 1 entries: group g is obs[group_start[g]] to obs[group_start[g+1]-1]"),
     ("const unsigned char *", "group_always", "1 for a group that may be non-finite where the coordinates, rates "
                                               "and constants are finite: a selective sweep computes it always"),
+    ("const unsigned char *", "group_angles", "ngroup + 1 entries: 1 for a group that reads an angle coordinate's "
+                                              "value (not only its cos, sin), then 1 where the rates do: a "
+                                              "selective SIMD sweep computes the angles (atan2) only where they "
+                                              "are read"),
 ) + tuple((f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in KERNELS.items()) + tuple(
     (f"sg_{kind}_fn", kind, meaning) for kind, (_, _, meaning) in HOOKS.items())
 

@@ -6,6 +6,7 @@ mechanism; the kernels themselves are checked against the joint motion kernel at
 """
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -151,3 +152,22 @@ def test_polynomial_groups_need_not_be_computed_for_the_status():
     assert not _polynomial(sp.sqrt(q))
     assert not _polynomial(sp.atan2(q, c))
     assert not _polynomial(c ** -1)
+
+
+def test_the_simd_loop_computes_angles_only_where_they_are_read():
+    """group_angles: a body whose angle is a coordinate reads it (the SIMD loop then keeps the dyads' atan2);
+    points, the crank (its angle is the shaft's) and the rates read only cos and sin. A selection of points alone
+    skips the atan2 and still equals the full sweep (test_closed_form_loops_...), bodies and coords keep it."""
+    tu = sewgen.mechanism("take_up")
+    assert list(tu.point_names) + list(tu.body_names) == ["crank_pin", "rocker_pin", "thread_eye", "crank", "lever",
+                                                          "rocker"]  # the groups, in order
+    text = (ROOT / "generated" / "sg_take_up.c").read_text()
+    flags = re.search(r"sg_take_up_group_angles\[7\] = \{ ([0-9, ]+) \}", text).group(1)
+    assert flags == "0, 0, 0, 0, 1, 1, 0"
+    crank = tu.defaults()["crank"] * np.array([1.0, 1.05])
+    eye = tu.sweep_designs({"crank": crank}, PHI, outputs=["points:thread_eye"], threads=1)
+    both = tu.sweep_designs({"crank": crank}, PHI, outputs=["points:thread_eye", "bodies:lever"], threads=1)
+    for key, arr in eye.outputs.items():
+        assert np.array_equal(arr, both.outputs[key])
+    lever = both.outputs["bodies.lever.angle"]
+    assert np.isfinite(lever).all() and np.ptp(lever[0]) > 0.1  # the lever swings: a real angle, not a skipped 0

@@ -72,7 +72,7 @@ def descriptor_initializer(prefix: str, sizes: dict, has: dict) -> list[str]:
     for _t, name, _doc in abi.DESCRIPTOR:
         if name == "name":
             value = f'"{prefix[3:]}"'
-        elif name in ("coord_is_angle", "group_start", "group_always"):
+        elif name in ("coord_is_angle", "group_start", "group_always", "group_angles"):
             value = f"{prefix}_{name}"
         elif name in abi.KERNELS:
             value = f"{prefix}_{name}" if has.get(name) else "0"

@@ -171,6 +171,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
         simd_sweep=abi.kernel_hook("sweep_simd", f"{prefix}_sweep_simd") if vector_kernels else None,
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
         group_start=groups, group_always=ks.observe_always(groups, row_scales),
+        group_angles=ks.angle_readers(groups, row_scales),
         descriptor=abi_header.descriptor_initializer(prefix, sizes, {k.name[len(prefix) + 1:]: True for k in kernels + vector_kernels}),
         manifest_chunks=_c_string_chunks(text))
     prototypes = [k.prototype for k in kernels] + [

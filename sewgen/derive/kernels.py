@@ -77,7 +77,8 @@ _VECTOR_FORCE_ARGS = ("q", "cq", "x", "cx", "xd", "c", "obs", "gv", "ld", "out")
 
 #: The SIMD twins' signatures (static in each generated file; called only by its SG_SIMD_SWEEP_BODY).
 VECTOR_SIGNATURES = {
-    "closed": "sg_vm {f}(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, sg_vd *q, sg_vd *cq)",
+    "closed": "sg_vm {f}(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, "
+              "sg_vd *cq)",
     "motion": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
               "const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)",
     "forces": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
@@ -373,6 +374,24 @@ class KernelSet:
             flags.append(0 if all(_polynomial(e) for e in [e for _, e in used] + list(exprs)) else 1)
         return flags
 
+    def _angle_symbols(self) -> set:
+        return {q for q, c in zip(self.kin.q, self.kin.coords) if c.kind == "angle"}
+
+    def angle_readers(self, groups: list, scales: list | None = None) -> list[int]:
+        """Per group, 1 where its observables read an angle coordinate's value itself (a body's angle), not only
+        its cos and sin; then 1 where the rates do (none in the catalog): a selective SIMD sweep whose wanted
+        groups and caller read no angle skips the dyads' atan2 (kernel ``closed``'s ``angles``)."""
+        repl, r_jac, r_vel, r_gam, r_obs, r_inv = self._motion_parts(scales)
+        angles = self._angle_symbols()
+
+        def reads(exprs) -> int:
+            exprs = list(exprs)
+            used = [e for _, e in self._needed(repl, exprs)]
+            return int(any(sym in angles for e in used + exprs for sym in sp.sympify(e).free_symbols))
+
+        flags = [reads(r_obs[a:b]) for a, b in zip(groups[:-1], groups[1:])]
+        return flags + [reads(r_jac + r_vel + r_gam + r_inv)]
+
     def _motion_cse(self, scales):
         """The motion kernel's expressions after one joint CSE (shared by the scalar kernel and its SIMD twin)."""
         key = ("motion", tuple(scales or ()))
@@ -534,6 +553,12 @@ class KernelSet:
         fl = VECTOR if vector else SCALAR
         body = (["sg_vm ok = sgv_true();"] if vector else ["int st;"]) if dyads else []  # no loop: nothing to solve
         total = 0
+        # the SIMD twin's angles: computed only where asked (angles != 0) when no dyad reads an angle's value
+        angle_syms = self._angle_symbols()
+        skippable = vector and not any(
+            sym in angle_syms for dyad in dyads for key in dyad.inputs
+            for e in self.prepare(dyad.inputs[key]) + self.prepare(e for _, cs, sn in dyad.trig for e in (cs, sn))
+            for sym in e.free_symbols)
         for k, dyad in enumerate(dyads):
             keys = list(dyad.inputs)
             repl, red = _cse(self.prepare(e for key in keys for e in dyad.inputs[key]))
@@ -554,13 +579,17 @@ class KernelSet:
                 block += [decl.replace("double", "sg_vd"), f"ok &= {call.format(k=k).replace('sg_dyad_', 'sgv_dyad_')};"]
             else:
                 block += [decl, f"st = {call.format(k=k)};", "if (st != SG_OK) return st;"]
-            block += [f"q[{i}] = {fl.value(e)};" for (i, _), e in zip(dyad.outputs, outs)]
+            for (i, _), e in zip(dyad.outputs, outs):
+                if skippable and self.kin.q[i] in angle_syms:
+                    block.append(f"q[{i}] = angles ? {fl.value(e)} : sgv_set1(0.0);")
+                else:
+                    block.append(f"q[{i}] = {fl.value(e)};")
             for j, (i, _, _) in enumerate(dyad.trig):
                 block += [f"cq[{2 * i}] = {fl.value(trig[2 * j])};",
                           f"cq[{2 * i + 1}] = {fl.value(trig[2 * j + 1])};"]
             body += ["{"] + ["    " + line for line in block] + ["}"]
         done = ("return ok;" if dyads else "return sgv_true();") if vector else "return SG_OK;"
-        body = _unused(body, "x", "cx", "c", "branch", "q", "cq") + body + [done]
+        body = _unused(body, "x", "cx", "c", "branch", "q", "cq", *(("angles",) if vector else ())) + body + [done]
         name = f"{self.prefix}_closed" + ("_v" if vector else "")
         return Kernel(name, VECTOR_SIGNATURES["closed"].format(f=name) if vector else self._signature("closed"),
                       body, total)
