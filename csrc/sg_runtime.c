@@ -414,7 +414,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                     const double *alpha, const double *held, const double *p, const int *branch,
                     const double *q_guess, const sg_options *opt, const size_t *order, const double *gv,
                     const double *loads, double *q, double *qd, double *qdd, double *obs, double *err,
-                    double *frc, int *status, const unsigned char *want)
+                    double *frc, int *status, const unsigned char *want, const double *trig)
 {
     const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo;
     double no_loads[SG_MAX_LOAD]; /* zeroed below for a force sweep without loads only: 4 kB a call otherwise */
@@ -430,9 +430,9 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     if (use_closed && m->sweep != NULL && !opt->generic) { /* the inlined loop: the same, faster */
         if (!opt->scalar && sg_simd_width(m) > 1) /* four positions at a time */
             return m->sweep_simd(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs,
-                                 err, frc, status, want);
+                                 err, frc, status, want, trig);
         return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs, err, frc,
-                        status, want);
+                        status, want, NULL); /* the scalar loop's own sin, cos */
     }
     if (frc != NULL && loads == NULL)
         for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;
@@ -599,7 +599,7 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
                 double *qdd, double *obs, double *err, int *status)
 {
     return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, NULL, NULL, q, qd, qdd, obs, err,
-                 NULL, status, NULL);
+                 NULL, status, NULL, NULL);
 }
 
 /* sg_sweep plus kinetostatics in the same pass: gv is gravity (2), loads is n x nload (NULL: no loads),
@@ -611,7 +611,7 @@ size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const
                        double *frc, int *status)
 {
     return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, gv, loads, q, qd, qdd, obs, err,
-                 frc, status, NULL);
+                 frc, status, NULL, NULL);
 }
 
 /* Batched designs (issue 14) -------------------------------------------------------------------------------
@@ -792,6 +792,15 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
         for (int g = 0; g < m->ngroup; ++g) all &= want_store[g];
         if (!all) want = want_store;
     }
+    /* the shaft angles' cos, sin as the SIMD loop computes them, once for every design (the last 2n of work) */
+    const double *trig = NULL;
+#if SG_SIMD
+    if (!bad_args && nd > 1 && m->closed != NULL && m->sweep_simd != NULL && !opt->newton_only && !opt->generic &&
+        !opt->scalar && sg_simd_width(m) > 1) {
+        sgv_trig_table(n, phi, work + n * (size_t)(width + 1));
+        trig = work + n * (size_t)(width + 1);
+    }
+#endif
     size_t failed = 0;
     for (size_t d = 0; d < nd; ++d) {
         const double *pd = p + d * (size_t)npar;
@@ -815,7 +824,7 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
         }
         if (st == SG_OK) {
             sweep(m, n, phi, omega, alpha, hd, pd, bd, q_guess, opt, order, NULL, NULL, s.q, s.qd, s.qdd, s.obs, err,
-                  NULL, work_status, want);
+                  NULL, work_status, want, trig);
             for (size_t i = 0; i < n; ++i)
                 if (work_status[i] != SG_OK) {
                     if (first < 0) first = (long long)i, st = work_status[i];

@@ -295,6 +295,21 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
     }
 }
 
+/* cos, sin of n angles as the SIMD loop computes them (each lane on its own: the values do not depend on the
+ * block): cos to out[0..n), sin to out[n..2n); a last partial block padded with its last angle. */
+static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, double *out)
+{
+    for (size_t k = 0; k < n; k += SG_W) {
+        sg_vd a, c, s;
+        for (int l = 0; l < SG_W; ++l) a[l] = phi[k + l < n ? k + l : n - 1];
+        sgv_sincos(a, &c, &s);
+        for (int l = 0; l < SG_W && k + l < n; ++l) {
+            out[k + l] = c[l];
+            out[n + k + l] = s[l];
+        }
+    }
+}
+
 /* The SIMD closed-form sweep: blocks of SG_W positions in solving order (the last block padded with its last
  * position), the vector kernels CLOSED_V, MOTION_V (NOBS observables; with want, RATES_V and the wanted groups'
  * OBSERVE_V, whose rows alone are stored) and, for forces (frc not NULL), FORCES_V
@@ -351,7 +366,12 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
                 vx[0] = ph;                                                                        \
                 vxd[0] = om;                                                                       \
                 vxdd[0] = al;                                                                      \
-                sgv_sincos(ph, &vcx[0], &vcx[1]);                                                  \
+                if (trig != NULL && order == NULL && lanes == SG_W) { /* sg_sweep_designs' table */ \
+                    vcx[0] = (sg_vd)_mm256_loadu_pd(trig + k);                                     \
+                    vcx[1] = (sg_vd)_mm256_loadu_pd(trig + n + k);                                 \
+                } else {                                                                           \
+                    sgv_sincos(ph, &vcx[0], &vcx[1]);                                              \
+                }                                                                                  \
                 vector_block = sgv_all(CLOSED_V(vx, vcx, c, branch, angles, vq, vcq));             \
             }                                                                                      \
             if (!vector_block) {                                                                   \

@@ -115,11 +115,13 @@ HOOKS = {
                          ("const size_t *", "order"), ("const double *", "gv"), ("const double *", "loads"),
                          ("double *", "q"), ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"),
                          ("double *", "err"), ("double *", "frc"), ("int *", "status"),
-                         ("const unsigned char *", "want")),
+                         ("const unsigned char *", "want"), ("const double *", "trig")),
               "the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not "
               "NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the ngroup groups of "
               "observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the "
-              "caller reads the coordinates (want[ngroup]); NULL without a closed form"),
+              "caller reads the coordinates (want[ngroup]); trig (NULL: computed) the shaft angles' cos (n) then sin "
+              "(n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); NULL "
+              "without a closed form"),
 }
 HOOKS["sweep_simd"] = (HOOKS["sweep"][0], HOOKS["sweep"][1],
                        "the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL "
@@ -202,7 +204,7 @@ EXPORTS = {
                          "caller's order, -1 for rms, mean; NaN and -1 for a failed design). Every loop computes only "
                          "the groups of observables sel and red read (kernels 'rates', 'observe'; the same values "
                          "and statuses as the joint kernel's). work: "
-                         "n*(3nq+nobs+1) doubles, work_status n ints (one design's sweep). Returns the number of "
+                         "n*(3nq+nobs+3) doubles, work_status n ints (one design's sweep). Returns the number of "
                          "failed designs"),
     "sg_simd_width": ("int", (("const sg_mechanism *", "m"),),
                       "positions per block of m's closed-form sweeps (kinematics, kinetostatics) on this CPU: 4 where m has a SIMD "

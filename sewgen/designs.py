@@ -427,12 +427,12 @@ _local = threading.local()
 
 
 def _work(n: int, width: int) -> tuple:
-    """This thread's scratch of sg_sweep_designs (one design's sweep: n rows of width + 1 doubles, n statuses),
+    """This thread's scratch of sg_sweep_designs (one design's sweep: n rows of width + 3 doubles, n statuses),
     kept between calls: fresh memory of this size would cost its page faults on every call, as much as a short
     sweep itself. Never handed out: every result is copied from it."""
     work = getattr(_local, "work", None)
-    if work is None or work[0].shape[0] < n * (width + 1) or work[1].shape[0] < n:
-        work = (np.empty(max(n * (width + 1), 1)), np.empty(max(n, 1), dtype=np.intc))
+    if work is None or work[0].shape[0] < n * (width + 3) or work[1].shape[0] < n:
+        work = (np.empty(max(n * (width + 3), 1)), np.empty(max(n, 1), dtype=np.intc))
         _local.work = work
     return work
 

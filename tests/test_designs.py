@@ -404,3 +404,20 @@ def test_a_design_sweep_pickles_and_may_be_empty():
     assert len(empty) == 0 and empty["points.thread_eye.a:max"].shape == (0,)
     sel = tu.solve(PHI, outputs="points:thread_eye")
     assert list(pickle.loads(pickle.dumps(sel)).keys()) == list(sel.keys())
+
+
+@pytest.mark.parametrize("name", [n for n in catalog_names() if sewgen.mechanism(n).manifest.get("closed_form")])
+def test_a_batch_equals_its_designs_solved_alone_to_the_bit(name):
+    """A batch of designs takes the shaft angles' cos and sin from one table for every design (the SIMD loop's
+    own vector math, computed once): each design's columns equal its own solve() bit for bit."""
+    m = sewgen.mechanism(name)
+    length = next(p for p in m.description.params if p.kind == "length" and p.positive)
+    values = length.default * np.array([1.0, 1.01, 0.995])
+    res = m.sweep_designs({length.name: values}, PHI, threads=1)
+    cols = Columns(m.description)
+    assert (res.status == 0).all()
+    for d, v in enumerate(values):
+        alone = m.solve(PHI, params={length.name: float(v)})
+        flat = np.hstack([alone.q, alone.qd, alone.qdd, alone.obs])
+        for col, arr in res.outputs.items():
+            assert np.array_equal(arr[d], flat[:, cols.index[col]]), (name, d, col)
