@@ -394,6 +394,7 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
 
 #define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, RATES, OBSERVE, FORCES)                    \
     {                                                                                              \
+        (void)trig; /* the SIMD loop's cos, sin: this loop computes its own */                     \
         SG_CLOSED_SETUP(CONSTANTS)                                                                 \
         for (size_t k = 0; k < n; ++k)                                                             \
             SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, order ? order[k] : k)           \
