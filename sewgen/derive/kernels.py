@@ -227,25 +227,8 @@ class KernelSet:
         staged = [[(t, e) for t, e in repl if levels[t] == k] for k in range(3)]
         r_jac, r_vel = red[: n * n], red[n * n: n * n + n]
         r_gam, r_obs = red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:]
-        body = self.selection_block() + fl.temps(staged[0])
-        if n:  # LU of Φ_q, rows over their loop size (an angle row: 1 rad), columns equilibrated, and its
-            # condition number: the runtime's singular-position estimate
-            body += [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];", f"{'sg_vm' if vector else 'int'} piv[{n}];"]
-            body += [f"J[{k}] = {fl.value(e)};" for k, e in enumerate(r_jac)]
-            body += [f"qd[{i}] = {fl.value(e)};" for i, e in enumerate(r_vel)]
-            body += [f"rs[{i}] = {fl.value(e)};" for i, e in enumerate(r_inv)]
-            if vector:
-                body += [f"sg_vm ok = sgv_factor_eq({n}, J, piv, rs, cs, cond);",
-                         f"sgv_solve_eq({n}, J, piv, rs, cs, qd);"]
-            else:
-                body += [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
-                         f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
-        else:
-            body += ["*cond = sgv_set1(1.0);", "sg_vm ok = sgv_true();"] if vector else ["*cond = 1.0;"]
-        body += fl.temps(staged[1])
-        if n:
-            body += [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)]
-            body += [f"{'sgv_solve_eq' if vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
+        body = self.selection_block() + fl.temps(staged[0]) + self._velocity_lines(fl, n, r_jac, r_vel, r_inv)
+        body += fl.temps(staged[1]) + self._acceleration_lines(fl, n, r_gam)
         body += fl.temps(staged[2])
         body += [f"obs[{k}] = {fl.value(e)};" for k, e in enumerate(r_obs)]
         outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)] + [f"obs[{k}]" for k in range(len(r_obs))]
@@ -257,6 +240,31 @@ class KernelSet:
         name = f"{self.prefix}_motion" + ("_v" if vector else "")
         return Kernel(name, VECTOR_SIGNATURES["motion"].format(f=name) if vector else self._signature("motion"),
                       body, ops(e for _, e in repl) + ops(red))
+
+    @staticmethod
+    def _velocity_lines(fl: _Flavour, n: int, r_jac, r_vel, r_inv) -> list[str]:
+        """The motion and rates kernels' LU of Φ_q — rows over their loop size (an angle row: 1 rad), columns
+        equilibrated — with its condition number (the runtime's singular-position estimate), and q'."""
+        vector = fl.vector
+        if not n:
+            return ["*cond = sgv_set1(1.0);", "sg_vm ok = sgv_true();"] if vector else ["*cond = 1.0;"]
+        body = [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];", f"{'sg_vm' if vector else 'int'} piv[{n}];"]
+        body += [f"J[{k}] = {fl.value(e)};" for k, e in enumerate(r_jac)]
+        body += [f"qd[{i}] = {fl.value(e)};" for i, e in enumerate(r_vel)]
+        body += [f"rs[{i}] = {fl.value(e)};" for i, e in enumerate(r_inv)]
+        if vector:
+            return body + [f"sg_vm ok = sgv_factor_eq({n}, J, piv, rs, cs, cond);",
+                           f"sgv_solve_eq({n}, J, piv, rs, cs, qd);"]
+        return body + [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
+                       f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
+
+    @staticmethod
+    def _acceleration_lines(fl: _Flavour, n: int, r_gam) -> list[str]:
+        """q'' from γ with the same factor (after :meth:`_velocity_lines`)."""
+        if not n:
+            return []
+        return [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)] + [
+            f"{'sgv_solve_eq' if fl.vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
 
     def _motion_parts(self, scales):
         """The motion kernel's CSE split as the kernels read it: (temporaries, Φ_q entries, −Φ_x x', γ, every
@@ -302,24 +310,9 @@ class KernelSet:
         early = [(t, e) for t, e in used if levels[t] == 0]
         late = [(t, e) for t, e in used if levels[t] >= 1]
         body = list(self.selection_block()) if _reads_ka(early + late, r_jac + r_vel + r_gam + r_inv) else []
-        body += fl.temps(early)
+        body += fl.temps(early) + self._velocity_lines(fl, n, r_jac, r_vel, r_inv)
+        body += fl.temps(late) + self._acceleration_lines(fl, n, r_gam)
         if n:
-            body += [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];", f"{'sg_vm' if vector else 'int'} piv[{n}];"]
-            body += [f"J[{k}] = {fl.value(e)};" for k, e in enumerate(r_jac)]
-            body += [f"qd[{i}] = {fl.value(e)};" for i, e in enumerate(r_vel)]
-            body += [f"rs[{i}] = {fl.value(e)};" for i, e in enumerate(r_inv)]
-            if vector:
-                body += [f"sg_vm ok = sgv_factor_eq({n}, J, piv, rs, cs, cond);",
-                         f"sgv_solve_eq({n}, J, piv, rs, cs, qd);"]
-            else:
-                body += [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
-                         f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
-        else:
-            body += ["*cond = sgv_set1(1.0);", "sg_vm ok = sgv_true();"] if vector else ["*cond = 1.0;"]
-        body += fl.temps(late)
-        if n:
-            body += [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)]
-            body += [f"{'sgv_solve_eq' if vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
             outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)]
             body += [f"ok &= sgv_isfinite({_balanced_sum(outputs)});" if vector
                      else f"if (!isfinite({_balanced_sum(outputs)})) return SG_NONFINITE;"]
