@@ -168,7 +168,7 @@ class Selection:
     @property
     def columns(self) -> dict:
         """Column name -> its row of ``block`` (made at the first look: a sweep's result costs no views)."""
-        cols = self.__dict__.get("_columns")
+        cols = self.__dict__.get("_columns") or self.__dict__.get("columns")  # the latter: pickled before
         if cols is None:
             cols = self.__dict__["_columns"] = {name: self.block[k] for k, name in enumerate(self._names)}
         return cols
