@@ -34,9 +34,11 @@
 #if defined(__GNUC__)
 #define SG_INLINE static inline __attribute__((always_inline))
 #define SG_FLATTEN __attribute__((flatten)) /* every call in the function's body inlined */
+#define SG_NOINLINE __attribute__((noinline))
 #else
 #define SG_INLINE static inline
 #define SG_FLATTEN
+#define SG_NOINLINE
 #endif
 
 SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)

@@ -315,18 +315,19 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
  * OBSERVE_V, whose rows alone are stored) and, for forces (frc not NULL), FORCES_V
  * (NFO outputs, loads transposed in), and the scalar step of csrc/sg_runtime.h for every block or lane the
  * vector kernels do not vouch for (see the top of this file). A force sweep the vector forces cannot do
- * (FORCES_IN_SIMD: friction on, or no vector form) runs the scalar loop whole. Angle coordinates are unwrapped
+ * (FORCES_IN_SIMD: friction on, or no vector form) runs the scalar loop SCALAR_SWEEP whole. The scalar
+ * fallbacks call the descriptor's own kernels (m->closed, m->motion, ...: the same code, so the same values to
+ * the bit) rather than inlining a third copy of them: they run only for lanes the vector kernels refuse, and the
+ * copies doubled the file's compile time, under the sanitizers above all. Angle coordinates are unwrapped
  * lane after lane against the last solution, as the scalar loop does (tested four lanes at once: where no lane
  * is over half a turn from the one before, the scalar loop changes none). */
-#define SG_SIMD_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, RATES, OBSERVE, FORCES, CLOSED_V, MOTION_V, RATES_V,        \
-                           OBSERVE_V, FORCES_V, FORCES_IN_SIMD, NOBS, NFO)                         \
+#define SG_SIMD_SWEEP_BODY(CONSTANTS, SCALAR_SWEEP, CLOSED_V, MOTION_V, RATES_V, OBSERVE_V, FORCES_V,        \
+                           FORCES_IN_SIMD, NOBS, NFO)                                              \
     {                                                                                              \
         SG_CLOSED_SETUP(CONSTANTS)                                                                 \
-        if (frc != NULL && !FORCES_IN_SIMD(c)) {                                                   \
-            for (size_t k = 0; k < n; ++k)                                                         \
-                SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, order ? order[k] : k)       \
-            return failures;                                                                       \
-        }                                                                                          \
+        if (frc != NULL && !FORCES_IN_SIMD(c))                                                     \
+            return SCALAR_SWEEP(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, \
+                                obs, err, frc, status, want, trig);                                \
         sg_vd vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q], vld[SG_MAX_LOAD];    \
         for (int k = 1; k < nx; ++k) {                                                             \
             vx[k] = sgv_set1(x[k]);                                                                \
@@ -376,7 +377,7 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
             }                                                                                      \
             if (!vector_block) {                                                                   \
                 for (int l = 0; l < lanes; ++l)                                                    \
-                    SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, idx[l])                 \
+                    SG_CLOSED_STEP(m->closed, m->motion, m->rates, m->observe, m->forces, idx[l])                 \
                 continue;                                                                          \
             }                                                                                      \
             for (int j = 0; j < nq; ++j) { /* no lane a half turn from the one before: none moves */ \
@@ -454,7 +455,7 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
                 xd[0] = om[l];                                                                     \
                 xdd[0] = al[l];                                                                    \
                 int st = SG_OK;                                                                    \
-                SG_CLOSED_FINISH(MOTION, RATES, OBSERVE, FORCES)                                   \
+                SG_CLOSED_FINISH(m->motion, m->rates, m->observe, m->forces)                                   \
             }                                                                                      \
         }                                                                                          \
         return failures;                                                                           \

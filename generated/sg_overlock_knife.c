@@ -456,8 +456,9 @@ void sg_overlock_knife_anchors(const double *q, const double *cq, const double *
     out[23] = c[26]*cq[1] + c[28]*cq[0] + c[5];
 }
 
-/* sg_overlock_knife_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY) */
-static SG_FLATTEN size_t sg_overlock_knife_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig)
+/* sg_overlock_knife_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY); never
+ * inlined itself (the SIMD sweep calls it for the force sweeps it cannot do) */
+static SG_FLATTEN SG_NOINLINE size_t sg_overlock_knife_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig)
 SG_CLOSED_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion, sg_overlock_knife_rates, sg_overlock_knife_observe, sg_overlock_knife_forces)
 
 /* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
@@ -727,7 +728,7 @@ SG_VINLINE int sg_overlock_knife_forces_in_simd(const double *c)
 }
 
 static SG_FLATTEN size_t sg_overlock_knife_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig)
-SG_SIMD_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_closed, sg_overlock_knife_motion, sg_overlock_knife_rates, sg_overlock_knife_observe, sg_overlock_knife_forces, sg_overlock_knife_closed_v, sg_overlock_knife_motion_v, sg_overlock_knife_rates_v, sg_overlock_knife_observe_v, sg_overlock_knife_forces_v, sg_overlock_knife_forces_in_simd, 33, 18)
+SG_SIMD_SWEEP_BODY(sg_overlock_knife_constants, sg_overlock_knife_sweep, sg_overlock_knife_closed_v, sg_overlock_knife_motion_v, sg_overlock_knife_rates_v, sg_overlock_knife_observe_v, sg_overlock_knife_forces_v, sg_overlock_knife_forces_in_simd, 33, 18)
 #pragma GCC pop_options
 #endif
 
