@@ -44,6 +44,16 @@ void sg_lu_solve(int n, const double *lu, const int *piv, double *b)
     sg_lu_solve_inl(n, lu, piv, b);
 }
 
+int sg_factor_eq(int n, double *a, int *piv, const double *rs, double *cs, double *cond)
+{
+    return sg_factor_eq_inl(n, a, piv, rs, cs, cond);
+}
+
+void sg_solve_eq(int n, const double *lu, const int *piv, const double *rs, const double *cs, double *b)
+{
+    sg_solve_eq_inl(n, lu, piv, rs, cs, b);
+}
+
 /* max |v_i| w_i; NaN propagates: a NaN entry makes the norm NaN */
 static double weighted_norm(int n, const double *v, const double *w)
 {

@@ -106,14 +106,45 @@ SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *
     }
 }
 
+/* The 2 x 2 case of sg_factor_eq_inl in closed form (issue 14, item 1: one dyad's loop, the commonest): a
+ * (row-major) is overwritten by the inverse of B = R A, B^-1 = adj(B) / det B, so that the solve is a product.
+ * With E = B C the equilibrated matrix (C = diag(1/m0, 1/m1), m_j the largest |entry| of B's column j):
+ *   - the singular test is sg_factor_eq_inl's second pivot, |det E| = |det B| / (m0 m1) > SG_PIVOT_RTOL (its
+ *     first pivot is 1), made without a division;
+ *   - cond is E's condition number in the inf norm exactly, ||E|| ||E^-1|| with
+ *     ||E|| = max_i (|b_i0| m1 + |b_i1| m0) / (m0 m1) and ||E^-1|| = max(m0 (|b11| + |b01|), m1 (|b10| + |b00|))
+ *     / |det B| (E^-1 = diag(m) adj(B) / det B), where the general factor gives an upper bound of it (at most a
+ *     few times larger).
+ * One division for all of it (the general factor takes four, three of them in a chain), and no pivoting: the
+ * adjugate needs none. csrc/sg_simd.h's sgv_factor_eq2 is this lane by lane, operation for operation, so the
+ * two loops agree to the bit. A NaN, a zero column (a coordinate no loop reads) or a singular B gives
+ * SG_SINGULAR. */
+SG_INLINE int sg_factor_eq2_inl(double *a, const double *rs, double *cond)
+{
+    const double b00 = a[0] * rs[0], b01 = a[1] * rs[0], b10 = a[2] * rs[1], b11 = a[3] * rs[1];
+    const double f00 = fabs(b00), f01 = fabs(b01), f10 = fabs(b10), f11 = fabs(b11);
+    const double m0 = f00 > f10 ? f00 : f10, m1 = f01 > f11 ? f01 : f11;
+    const double det = b00 * b11 - b01 * b10, mm = m0 * m1;
+    const double r = 1.0 / (mm * det), inv = r * mm;
+    const double n1a = f00 * m1 + f01 * m0, n1b = f10 * m1 + f11 * m0;
+    const double n2a = m0 * (f11 + f01), n2b = m1 * (f10 + f00);
+    *cond = (n1a > n1b ? n1a : n1b) * (n2a > n2b ? n2a : n2b) * fabs(r);
+    a[0] = b11 * inv;
+    a[1] = -b01 * inv;
+    a[2] = -b10 * inv;
+    a[3] = b00 * inv;
+    return fabs(det) > SG_PIVOT_RTOL * mm && isfinite(*cond) ? SG_OK : SG_SINGULAR;
+}
+
 /* LU of A scaled, R A C: R = diag(rs) given in natural units (sewgen's motion kernels: each row over its loop's
  * size, so that a loop near its toggle, whose rows all but vanish, stays near-singular), C = diag(cs) found here
  * (each column of R A to its largest entry 1: rad and m columns alike, the solution's components each to its
  * own scale); and a bound of the condition number of R A C in the inf norm (from the factor, below). The
  * runtime turns it into the estimated relative error of the rates (csrc/sg_runtime.c). Solve with
- * sg_solve_eq_inl. */
+ * sg_solve_eq_inl. n = 2 is sg_factor_eq2_inl (piv and cs unused). */
 SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, double *cs, double *cond)
 {
+    if (n == 2) return sg_factor_eq2_inl(a, rs, cond);
     *cond = INFINITY;
     for (int j = 0; j < n; ++j) {
         double m = 0.0;
@@ -179,10 +210,17 @@ SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, dou
     return isfinite(*cond) ? SG_OK : SG_SINGULAR;
 }
 
-/* Solve A x = b with a factor of sg_factor_eq_inl (b overwritten by x; U's diagonal holds reciprocals). */
+/* Solve A x = b with a factor of sg_factor_eq_inl (b overwritten by x; U's diagonal holds reciprocals; for
+ * n = 2, x = B^-1 (R b)). */
 SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const double *rs, const double *cs,
                                double *b)
 {
+    if (n == 2) {
+        const double b0 = b[0] * rs[0], b1 = b[1] * rs[1];
+        b[0] = lu[0] * b0 + lu[1] * b1;
+        b[1] = lu[2] * b0 + lu[3] * b1;
+        return;
+    }
     for (int i = 0; i < n; ++i) b[i] *= rs[i];
     for (int k = 0; k < n; ++k)
         if (piv[k] != k) {

@@ -176,10 +176,29 @@ SG_VINLINE void sgv_substitute(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *
     }
 }
 
-/* sg_factor_eq_inl lane by lane: the same scaling, pivoting and condition bound; the mask is the lanes the
- * scalar factor would accept. */
+/* sg_factor_eq2_inl lane by lane, operation for operation (the same values to the bit). */
+SG_VINLINE sg_vm sgv_factor_eq2(sg_vd *a, const sg_vd *rs, sg_vd *cond)
+{
+    const sg_vd b00 = a[0] * rs[0], b01 = a[1] * rs[0], b10 = a[2] * rs[1], b11 = a[3] * rs[1];
+    const sg_vd f00 = sgv_fabs(b00), f01 = sgv_fabs(b01), f10 = sgv_fabs(b10), f11 = sgv_fabs(b11);
+    const sg_vd m0 = sgv_fmax(f00, f10), m1 = sgv_fmax(f01, f11);
+    const sg_vd det = b00 * b11 - b01 * b10, mm = m0 * m1;
+    const sg_vd r = 1.0 / (mm * det), inv = r * mm;
+    const sg_vd n1a = f00 * m1 + f01 * m0, n1b = f10 * m1 + f11 * m0;
+    const sg_vd n2a = m0 * (f11 + f01), n2b = m1 * (f10 + f00);
+    *cond = sgv_fmax(n1a, n1b) * sgv_fmax(n2a, n2b) * sgv_fabs(r);
+    a[0] = b11 * inv;
+    a[1] = -b01 * inv;
+    a[2] = -b10 * inv;
+    a[3] = b00 * inv;
+    return (sgv_fabs(det) > SG_PIVOT_RTOL * mm) & sgv_isfinite(*cond);
+}
+
+/* sg_factor_eq_inl lane by lane: the same scaling, pivoting and condition bound (n = 2: sgv_factor_eq2); the
+ * mask is the lanes the scalar factor would accept. */
 SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_vd *cs, sg_vd *cond)
 {
+    if (n == 2) return sgv_factor_eq2(a, rs, cond);
     const sg_vd zero = sgv_set1(0.0);
     sg_vm ok = sgv_true();
     for (int j = 0; j < n; ++j) {
@@ -219,9 +238,15 @@ SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_
     return ok & sgv_isfinite(*cond);
 }
 
-/* sg_solve_eq_inl lane by lane. */
+/* sg_solve_eq_inl lane by lane (n = 2: the product with sgv_factor_eq2's inverse). */
 SG_VINLINE void sgv_solve_eq(int n, const sg_vd *lu, const sg_vm *piv, const sg_vd *rs, const sg_vd *cs, sg_vd *b)
 {
+    if (n == 2) {
+        const sg_vd b0 = b[0] * rs[0], b1 = b[1] * rs[1];
+        b[0] = lu[0] * b0 + lu[1] * b1;
+        b[1] = lu[2] * b0 + lu[3] * b1;
+        return;
+    }
     for (int i = 0; i < n; ++i) b[i] *= rs[i];
     sgv_substitute(n, lu, piv, b, 1);
     for (int j = 0; j < n; ++j) b[j] *= cs[j];

@@ -95,6 +95,10 @@ typedef struct sg_mechanism {
 int sg_lu_factor(int n, double *a, int *piv, double *det_sign);
 /* solve with a factor of sg_lu_factor, b overwritten */
 void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
+/* the rates' equilibrated factor of the motion kernels in place (row-major n x n, rows scaled by rs; n = 2: the inverse in closed form), the condition number of the equilibrated matrix (n = 2: exact; else an upper bound); SG_SINGULAR below the pivot tolerance */
+int sg_factor_eq(int n, double *a, int *piv, const double *rs, double *cs, double *cond);
+/* solve with a factor of sg_factor_eq, b overwritten */
+void sg_solve_eq(int n, const double *lu, const int *piv, const double *rs, const double *cs, double *b);
 /* a mechanism over n shaft angles in one call: positions, velocities, accelerations, observables; solved in the order 'order' (a permutation of 0..n-1 that sorts phi; NULL: as given), written in the caller's order; err (n, or NULL) the estimated relative error of the rates; returns the number of positions whose status is not SG_OK */
 size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
 /* sg_sweep plus kinetostatics in the same pass (gv gravity, loads n x nload or NULL, frc n x nfo) */

@@ -159,6 +159,14 @@ EXPORTS = {
                      "LU with partial pivoting in place (row-major n x n); SG_SINGULAR below the pivot tolerance"),
     "sg_lu_solve": ("void", (("int", "n"), ("const double *", "lu"), ("const int *", "piv"), ("double *", "b")),
                     "solve with a factor of sg_lu_factor, b overwritten"),
+    "sg_factor_eq": ("int", (("int", "n"), ("double *", "a"), ("int *", "piv"), ("const double *", "rs"),
+                             ("double *", "cs"), ("double *", "cond")),
+                     "the rates' equilibrated factor of the motion kernels in place (row-major n x n, rows scaled "
+                     "by rs; n = 2: the inverse in closed form), the condition number of the equilibrated matrix "
+                     "(n = 2: exact; else an upper bound); SG_SINGULAR below the pivot tolerance"),
+    "sg_solve_eq": ("void", (("int", "n"), ("const double *", "lu"), ("const int *", "piv"), ("const double *", "rs"),
+                             ("const double *", "cs"), ("double *", "b")),
+                    "solve with a factor of sg_factor_eq, b overwritten"),
     "sg_sweep": ("size_t", (("const sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
                             ("const double *", "omega"), ("const double *", "alpha"), ("const double *", "held"),
                             ("const double *", "p"), ("const int *", "branch"), ("const double *", "q_guess"),
