@@ -99,6 +99,8 @@ void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
 int sg_factor_eq(int n, double *a, int *piv, const double *rs, double *cs, double *cond);
 /* solve with a factor of sg_factor_eq, b overwritten */
 void sg_solve_eq(int n, const double *lu, const int *piv, const double *rs, const double *cs, double *b);
+/* solve()'s lean path in one call: phi copied into blk, then the speed, zero acceleration, err, q, qd, qdd and obs (n rows each; status NULL: the statuses after them), sg_sweep and sg_make_continuous; SIZE_MAX and nothing done where order is NULL and phi not ascending */
+size_t sg_solve_lean(const sg_mechanism *m, size_t n, const double *phi, double speed, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, int nqa, const int *qcols, int noa, const int *ocols, double *blk, int *status);
 /* a mechanism over n shaft angles in one call: positions, velocities, accelerations, observables; solved in the order 'order' (a permutation of 0..n-1 that sorts phi; NULL: as given), written in the caller's order; err (n, or NULL) the estimated relative error of the rates; returns the number of positions whose status is not SG_OK */
 size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
 /* sg_sweep plus kinetostatics in the same pass (gv gravity, loads n x nload or NULL, frc n x nfo) */

@@ -580,8 +580,8 @@ def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
     if got is None:
         return None
     n = phi.shape[0]
-    _nq, _nobs, _w, lib, desc, held, branch, guess, opt, _angle = mech._fast["call"]
-    ffi = mech.ffi
+    desc, held, branch, guess, opt = mech._fast["lean"][4:9]
+    ffi, lib = mech.ffi, mech.lib
     inputs = np.empty(3 * n)
     phi_v, omega, alpha = inputs[:n], inputs[n:2 * n], inputs[2 * n:]
     phi_v[:] = phi

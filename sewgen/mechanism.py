@@ -33,6 +33,7 @@ from .units import UnitError, to_si
 
 _NONNEGATIVE = {"mass", "inertia"}
 _DEFAULT_MAX_ITER = 50
+_SIZE_MAX = (1 << (8 * np.dtype(np.uintp).itemsize)) - 1  # sg_solve_lean's "not ascending" (size_t is uintp)
 _MAX_ITER_LIMIT = 100_000  # Newton iterations per position: more is a hang, not a solve
 #: Newton's relative tolerance: every closure equation's residual below this times its own loop size.
 NEWTON_RTOL = 1e-13
@@ -98,10 +99,10 @@ class Mechanism:
         fields["_fast"] = {k: _ptr(ffi, "int *" if k == "branch" else "double *", defaults[k])
                            for k in ("p", "held", "branch", "guess")}
         sizes = desc.sizes
-        fields["_fast"]["call"] = (sizes["nq"], sizes["nobs"], 4 + 3 * sizes["nq"] + sizes["nobs"], lib,
-                                   fields["_descriptor"], fields["_fast"]["held"], fields["_fast"]["branch"],
-                                   fields["_fast"]["guess"], fields["_default_options"][(False, False)],
-                                   fields["_angle"][1:] if (qa or oa) else None)
+        fields["_fast"]["lean"] = (sizes["nq"], sizes["nobs"], 4 + 3 * sizes["nq"] + sizes["nobs"],
+                                   lib.sg_solve_lean, fields["_descriptor"], fields["_fast"]["held"],
+                                   fields["_fast"]["branch"], fields["_fast"]["guess"],
+                                   fields["_default_options"][(False, False)], *fields["_angle"][1:])
         fields["_pcache"] = {}
         fields["_selections"] = {}  # solve(outputs=...)'s parsed selections (sewgen.designs.fast_selected)
         for key, value in fields.items():
@@ -459,8 +460,9 @@ class Mechanism:
 
     def _fast_solve(self, phi: np.ndarray, speed, params):
         """solve() of a 1-D float64 phi with the default held inputs, branches, guesses and options and zero
-        shaft acceleration: one buffer for every array, one C call, the angles made continuous in C. None where
-        anything needs the general path (which also reports every failure with its diagnosis)."""
+        shaft acceleration: one buffer for every array and one C call (sg_solve_lean: the inputs filled in, the
+        sweep, the angles made continuous). None where anything needs the general path (which also reports
+        every failure with its diagnosis)."""
         if phi.ndim != 1 or phi.dtype != np.float64 or not phi.shape[0]:
             return None
         n = phi.shape[0]  # a non-finite angle: SG_NAN_INPUT from C, and the general path names it
@@ -470,29 +472,21 @@ class Mechanism:
         got = self._fast_params(params)
         if got is None:
             return None
-        p, p_ptr = got
-        nq, nobs, w, lib, desc, held, branch, guess, opt, angle = self._fast["call"]
-        blk = np.empty(w * n)
-        phi_v, omega, alpha, err = blk[:n], blk[n:2 * n], blk[2 * n:3 * n], blk[3 * n:4 * n]
-        phi_v[:] = phi
-        omega.fill(spd)
-        alpha.fill(0.0)
-        o, nn = 4 * n, n * nq
-        q, qd, qdd = blk[o:o + 3 * nn].reshape(3, n, nq)  # each C-contiguous (n, nq)
-        obs = blk[o + 3 * nn:].reshape(n, nobs)
-        status = np.empty(n, dtype=np.intc)
+        nq, nobs, w, solve_lean, desc, held, branch, guess, opt, nqa, qa, noa, oa = self._fast["lean"]
+        if not phi.flags.c_contiguous:
+            phi = np.ascontiguousarray(phi)
+        blk = np.empty(w * n + (n + 1) // 2)  # the statuses (C int) at the tail
         ffi = self.ffi
-        base = ffi.from_buffer("double[]", blk)
-        order_p = ffi.NULL
-        if n > 1 and not lib.sg_sorted(n, base):
-            order_p = ffi.from_buffer("size_t[]", np.argsort(phi_v, kind="stable").astype(np.uintp))
-        qp, op = base + o, base + o + 3 * nn
-        if lib.sg_sweep(desc, n, base, base + n, base + 2 * n, held, p_ptr, branch, guess, opt, order_p, qp, qp + nn,
-                        qp + 2 * nn, op, base + 3 * n, ffi.from_buffer("int[]", status)):
+        phi_p, blk_p = ffi.from_buffer("double[]", phi), ffi.from_buffer("double[]", blk)
+        failed = solve_lean(desc, n, phi_p, spd, held, got[1], branch, guess, opt, ffi.NULL, nqa, qa, noa, oa, blk_p,
+                            ffi.NULL)
+        if failed == _SIZE_MAX:  # not ascending: solved in sorted order, returned in the caller's
+            order = np.argsort(phi, kind="stable").astype(np.uintp)
+            failed = solve_lean(desc, n, phi_p, spd, held, got[1], branch, guess, opt,
+                                ffi.from_buffer("size_t[]", order), nqa, qa, noa, oa, blk_p, ffi.NULL)
+        if failed:
             return None
-        if angle is not None:
-            lib.sg_make_continuous(n, nq, nobs, qp, op, angle[0], angle[1], angle[2], angle[3], order_p)
-        return Motion(self, phi_v, omega, alpha, q, qd, qdd, obs, err, SINGULAR_TOL)
+        return Motion.of_block(self, blk, n, nq, nobs, SINGULAR_TOL)
 
     def _continuous(self, n: int, q: np.ndarray, obs: np.ndarray, order) -> None:
         """continuous_angles(self.description, q, obs, order), in C."""

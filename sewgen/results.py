@@ -7,6 +7,10 @@ from dataclasses import dataclass
 import numpy as np
 
 
+#: The arrays of a :class:`Motion` (those :meth:`Motion.of_block` makes as views at the first look).
+_BLOCK_ARRAYS = frozenset({"phi", "omega", "alpha", "error_estimate", "q", "qd", "qdd", "obs"})
+
+
 @dataclass(frozen=True)
 class PointMotion:
     """A point's path: position (m), velocity (m/s), acceleration (m/s²), one entry per shaft angle."""
@@ -56,6 +60,37 @@ class Motion:
         self.q, self.qd, self.qdd, self.obs = q, qd, qdd, obs
         self.error_estimate = np.zeros(len(phi)) if error_estimate is None else error_estimate
         self.singular_tol = singular_tol
+
+    @classmethod
+    def of_block(cls, mechanism, blk: np.ndarray, n: int, nq: int, nobs: int, singular_tol: float) -> "Motion":
+        """A Motion over one buffer in sg_solve_lean's layout (csrc/sg_runtime.c: phi, omega, alpha, the error
+        estimate, then q, qd, qdd and obs by rows), its arrays made as views at the first look at any of them:
+        a solve() whose result is read in part, or not at once, does not pay for eight views (issue 14, item 5)."""
+        self = object.__new__(cls)
+        self.__dict__.update(mechanism=mechanism, singular_tol=singular_tol, _lean=(blk, n, nq, nobs))
+        return self
+
+    def __getattr__(self, name):
+        """The arrays of a Motion made by :meth:`of_block`, at the first look (only attributes not yet set come
+        here)."""
+        state = self.__dict__
+        layout = state.get("_lean") if name in _BLOCK_ARRAYS else None
+        if layout is None:
+            if name in _BLOCK_ARRAYS and name in state:  # made by another thread since this one looked
+                return state[name]
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        blk, n, nq, nobs = layout
+        o = 4 * n + 3 * n * nq
+        rows, rates = blk[:4 * n].reshape(4, n), blk[4 * n:o].reshape(3, n, nq)  # each C-contiguous
+        state.update(phi=rows[0], omega=rows[1], alpha=rows[2], error_estimate=rows[3], q=rates[0],
+                     qd=rates[1], qdd=rates[2], obs=blk[o:o + n * nobs].reshape(n, nobs))
+        state.pop("_lean", None)
+        return state[name]
+
+    def __getstate__(self):
+        if "_lean" in self.__dict__:
+            self.phi  # noqa: B018 -- the views, so that a pickle holds the arrays
+        return self.__dict__
 
     @property
     def singular(self) -> np.ndarray:

@@ -319,6 +319,36 @@ def test_the_lean_solve_path_equals_the_general_one_to_the_bit(name):
         m.solve(np.array([0.1, np.nan, 0.3]))
 
 
+def test_a_lean_motion_reads_pickles_and_copies_as_any_other():
+    """solve()'s lean Motion makes its arrays at the first look (Motion.of_block): a strided phi, a pickle of a
+    result not yet looked at, and a result read in any order give the general path's arrays."""
+    import pickle
+
+    m = sewgen.mechanism("take_up")
+    phi = np.linspace(6.0, -1.0, 40)[::-2]  # strided, and ascending only after the reversal
+    ref = m.prepare(phi)
+    ref.bind()()
+    from sewgen.mechanism import continuous_angles
+
+    continuous_angles(m.description, ref.q, ref.obs, ref.order)
+    for look in ("pickle", "qdd", "error_estimate", "len"):
+        a = m.solve(phi)
+        assert "_lean" in vars(a)  # nothing made yet
+        if look == "pickle":
+            a = pickle.loads(pickle.dumps(a))
+        elif look == "len":
+            assert len(a) == len(phi)
+        else:
+            getattr(a, look)
+        assert "_lean" not in vars(a)
+        for x, y in ((a.q, ref.q), (a.qd, ref.qd), (a.qdd, ref.qdd), (a.obs, ref.obs), (a.error_estimate, ref.err),
+                     (a.phi, ref.phi), (a.omega, ref.omega), (a.alpha, ref.alpha)):
+            assert np.array_equal(x, y), look
+        assert np.array_equal(a.point("thread_eye").y, ref.obs[:, m.description.point("thread_eye").offset + 1])
+    with pytest.raises(AttributeError, match="no attribute 'nonsense'"):
+        m.solve(phi).nonsense  # noqa: B018
+
+
 def test_cached_parameter_vectors_still_check_every_call():
     tu = sewgen.mechanism("take_up")
     tu.solve(PHI, params={"crank.mass": 1})
