@@ -178,7 +178,7 @@ class ShaftPlan:
 class Plan:
     """A machine's analysis plan (see the module docstring)."""
 
-    __slots__ = ("state", "gravity", "groups", "shaft", "_layouts")
+    __slots__ = ("state", "gravity", "groups", "shaft", "_layouts", "sorted")
 
     def __init__(self, machine, state):
         self.state = state
@@ -186,6 +186,8 @@ class Plan:
         self.groups = [GroupCall(g, *self.gravity) for g in machine.groups]
         self.shaft = ShaftPlan(machine)
         self._layouts = {}
+        first = self.groups[0].mech
+        self.sorted = (first.lib.sg_sorted, first.ffi)  # the runtime's test of ascending angles
 
     def layout(self, n: int):
         """(group offsets in the block, block size, flat indices (k, n, 2) of the crank forces' columns in the
@@ -215,12 +217,14 @@ class Plan:
         ``phi``, in one fresh block; None where anything fails."""
         n, ng = phi.shape[0], len(self.groups)
         offsets, size, idx, sign, torque = self.layout(n)
-        sort = n > 1 and not (phi[1:] >= phi[:-1]).all()
         blk = np.empty(size)
         rows = blk[:4 * ng * n].reshape(4, ng, n)
         phis, omegas, alphas = rows[0], rows[1], rows[2]
         for k, call in enumerate(self.groups):
             np.add(phi, call.phase, out=phis[k])
+        sorted_, ffi = self.sorted
+        sort = n > 1 and not (sorted_(n, ffi.from_buffer("double[]", phi)) if phi.flags.c_contiguous
+                              else (phi[1:] >= phi[:-1]).all())
         omegas.fill(w)
         alphas.fill(accel)
         status = np.zeros((ng, n), dtype=np.intc)
