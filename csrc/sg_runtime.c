@@ -879,29 +879,34 @@ int sg_sorted(size_t n, const double *phi)
     return 1;
 }
 
-/* solve()'s lean path in one call (issue 14, item 5: the Python of a call on the defaults is one buffer and this):
- * blk (n (4 + 3 nq + nobs) doubles) gets the angles phi, the speed, zero acceleration, the rates' error estimate,
- * then q, qd, qdd (n x nq) and obs (n x nobs); the positions are swept in the order 'order' (NULL: phi must be
- * ascending, else SIZE_MAX is returned with nothing written, and the caller sorts) and, where none fails, the
- * angle columns made continuous. status NULL: the n statuses go to blk's tail, after those doubles (blk then
- * holds ceil(n/2) more). Returns sg_sweep's count of failed positions. */
+/* solve()'s and kinetostatics()' lean path in one call (issue 14, item 5: the Python of a call on the defaults is
+ * one buffer and this): blk (n (4 + 3 nq + nobs) doubles, n nfo more with forces) gets the angles phi, the speed,
+ * zero acceleration, the rates' error estimate, then q, qd, qdd (n x nq), obs (n x nobs) and, where gv (gravity,
+ * 2) is not NULL, the forces without loads (n x nfo, sg_sweep_forces); the positions are swept in the order
+ * 'order' (NULL: phi must be ascending, else SIZE_MAX is returned with nothing written, and the caller sorts)
+ * and, where none fails, the angle columns made continuous. status NULL: the n statuses go to blk's tail, after
+ * those doubles (blk then holds ceil(n/2) more). Returns the count of failed positions. */
 size_t sg_solve_lean(const sg_mechanism *m, size_t n, const double *phi, double speed, const double *held,
                      const double *p, const int *branch, const double *q_guess, const sg_options *opt,
-                     const size_t *order, int nqa, const int *qcols, int noa, const int *ocols, double *blk,
-                     int *status)
+                     const size_t *order, int nqa, const int *qcols, int noa, const int *ocols, const double *gv,
+                     double *blk, int *status)
 {
     if (order == NULL && !sg_sorted(n, phi)) return SIZE_MAX;
     const size_t nn = n * (size_t)m->nq;
     double *ph = blk, *om = blk + n, *al = blk + 2 * n, *err = blk + 3 * n, *q = blk + 4 * n;
-    double *qd = q + nn, *qdd = qd + nn, *obs = qdd + nn;
-    if (status == NULL) status = (int *)(obs + n * (size_t)m->nobs);
+    double *qd = q + nn, *qdd = qd + nn, *obs = qdd + nn, *frc = obs + n * (size_t)m->nobs;
+    if (status == NULL) status = (int *)(gv != NULL ? frc + n * (size_t)m->nfo : frc);
     for (size_t i = 0; i < n; ++i) {
         ph[i] = phi[i];
         om[i] = speed;
         al[i] = 0.0;
     }
-    const size_t failed = sg_sweep(m, n, ph, om, al, held, p, branch, q_guess, opt, order, q, qd, qdd, obs, err,
-                                   status);
+    size_t failed;
+    if (gv != NULL)
+        failed = sg_sweep_forces(m, n, ph, om, al, held, p, branch, q_guess, opt, order, gv, NULL, q, qd, qdd, obs,
+                                 err, frc, status);
+    else
+        failed = sg_sweep(m, n, ph, om, al, held, p, branch, q_guess, opt, order, q, qd, qdd, obs, err, status);
     if (failed == 0 && (nqa > 0 || noa > 0))
         sg_make_continuous(n, m->nq, m->nobs, q, obs, nqa, qcols, noa, ocols, order);
     return failed;

@@ -172,10 +172,11 @@ EXPORTS = {
                                  ("const int *", "branch"), ("const double *", "q_guess"),
                                  ("const sg_options *", "opt"), ("const size_t *", "order"), ("int", "nqa"),
                                  ("const int *", "qcols"), ("int", "noa"), ("const int *", "ocols"),
-                                 ("double *", "blk"), ("int *", "status")),
-                      "solve()'s lean path in one call: phi copied into blk, then the speed, zero acceleration, "
-                      "err, q, qd, qdd and obs (n rows each; status NULL: the statuses after them), sg_sweep and "
-                      "sg_make_continuous; SIZE_MAX and nothing done where order is NULL and phi not ascending"),
+                                 ("const double *", "gv"), ("double *", "blk"), ("int *", "status")),
+                      "solve()'s and kinetostatics()' lean path in one call: phi copied into blk, then the speed, "
+                      "zero acceleration, err, q, qd, qdd, obs and (gv not NULL) frc without loads (n rows each; "
+                      "status NULL: the statuses after them), the sweep and sg_make_continuous; SIZE_MAX and "
+                      "nothing done where order is NULL and phi not ascending"),
     "sg_sweep": ("size_t", (("const sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
                             ("const double *", "omega"), ("const double *", "alpha"), ("const double *", "held"),
                             ("const double *", "p"), ("const int *", "branch"), ("const double *", "q_guess"),

@@ -580,7 +580,7 @@ def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
     if got is None:
         return None
     n = phi.shape[0]
-    desc, held, branch, guess, opt = mech._fast["lean"][4:9]
+    desc, held, branch, guess, opt = mech._fast["lean"][5:10]
     ffi, lib = mech.ffi, mech.lib
     inputs = np.empty(3 * n)
     phi_v, omega, alpha = inputs[:n], inputs[n:2 * n], inputs[2 * n:]

@@ -34,6 +34,8 @@ from .units import UnitError, to_si
 _NONNEGATIVE = {"mass", "inertia"}
 _DEFAULT_MAX_ITER = 50
 _SIZE_MAX = (1 << (8 * np.dtype(np.uintp).itemsize)) - 1  # sg_solve_lean's "not ascending" (size_t is uintp)
+#: kinetostatics()' defaults: gravity, its direction (−y, the catalog's "down"), the shaking moment's point.
+_GRAVITY, _DOWN, _ORIGIN = "9.80665 m/s**2", "-90 deg", (0.0, 0.0)
 _MAX_ITER_LIMIT = 100_000  # Newton iterations per position: more is a hang, not a solve
 #: Newton's relative tolerance: every closure equation's residual below this times its own loop size.
 NEWTON_RTOL = 1e-13
@@ -99,7 +101,7 @@ class Mechanism:
         fields["_fast"] = {k: _ptr(ffi, "int *" if k == "branch" else "double *", defaults[k])
                            for k in ("p", "held", "branch", "guess")}
         sizes = desc.sizes
-        fields["_fast"]["lean"] = (sizes["nq"], sizes["nobs"], 4 + 3 * sizes["nq"] + sizes["nobs"],
+        fields["_fast"]["lean"] = (sizes["nq"], sizes["nobs"], sizes["nfo"], 4 + 3 * sizes["nq"] + sizes["nobs"],
                                    lib.sg_solve_lean, fields["_descriptor"], fields["_fast"]["held"],
                                    fields["_fast"]["branch"], fields["_fast"]["guess"],
                                    fields["_default_options"][(False, False)], *fields["_angle"][1:])
@@ -303,7 +305,7 @@ class Mechanism:
     def prepare(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
                 branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
                 newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, forces: bool = False, loads=(),
-                gravity="9.80665 m/s**2", gravity_direction="-90 deg", moment_about=(0.0, 0.0), out=None,
+                gravity=_GRAVITY, gravity_direction=_DOWN, moment_about=_ORIGIN, out=None,
                 singular: str = "raise") -> "Sweep":
         """Every argument of a sweep checked and converted into a :class:`Sweep`: the arrays the C runtime
         reads and writes, ready to run. :meth:`solve` and :meth:`kinetostatics` are ``prepare`` + ``run`` +
@@ -458,11 +460,12 @@ class Mechanism:
             self._pcache[key] = hit
         return hit
 
-    def _fast_solve(self, phi: np.ndarray, speed, params):
-        """solve() of a 1-D float64 phi with the default held inputs, branches, guesses and options and zero
-        shaft acceleration: one buffer for every array and one C call (sg_solve_lean: the inputs filled in, the
-        sweep, the angles made continuous). None where anything needs the general path (which also reports
-        every failure with its diagnosis)."""
+    def _fast_solve(self, phi: np.ndarray, speed, params, forces: bool = False):
+        """solve() (or, ``forces``, kinetostatics() without loads, with the default gravity and moment point) of a
+        1-D float64 phi with the default held inputs, branches, guesses and options and zero shaft acceleration:
+        one buffer for every array and one C call (sg_solve_lean: the inputs filled in, the sweep, the angles made
+        continuous). None where anything needs the general path (which also reports every failure with its
+        diagnosis)."""
         if phi.ndim != 1 or phi.dtype != np.float64 or not phi.shape[0]:
             return None
         n = phi.shape[0]  # a non-finite angle: SG_NAN_INPUT from C, and the general path names it
@@ -472,21 +475,42 @@ class Mechanism:
         got = self._fast_params(params)
         if got is None:
             return None
-        nq, nobs, w, solve_lean, desc, held, branch, guess, opt, nqa, qa, noa, oa = self._fast["lean"]
+        nq, nobs, nfo, w, solve_lean, desc, held, branch, guess, opt, nqa, qa, noa, oa = self._fast["lean"]
         if not phi.flags.c_contiguous:
             phi = np.ascontiguousarray(phi)
-        blk = np.empty(w * n + (n + 1) // 2)  # the statuses (C int) at the tail
         ffi = self.ffi
+        gv_p = self._lean_forces()[1] if forces else ffi.NULL
+        blk = np.empty((w + nfo if forces else w) * n + (n + 1) // 2)  # the statuses (C int) at the tail
         phi_p, blk_p = ffi.from_buffer("double[]", phi), ffi.from_buffer("double[]", blk)
-        failed = solve_lean(desc, n, phi_p, spd, held, got[1], branch, guess, opt, ffi.NULL, nqa, qa, noa, oa, blk_p,
-                            ffi.NULL)
+        failed = solve_lean(desc, n, phi_p, spd, held, got[1], branch, guess, opt, ffi.NULL, nqa, qa, noa, oa, gv_p,
+                            blk_p, ffi.NULL)
         if failed == _SIZE_MAX:  # not ascending: solved in sorted order, returned in the caller's
             order = np.argsort(phi, kind="stable").astype(np.uintp)
             failed = solve_lean(desc, n, phi_p, spd, held, got[1], branch, guess, opt,
-                                ffi.from_buffer("size_t[]", order), nqa, qa, noa, oa, blk_p, ffi.NULL)
+                                ffi.from_buffer("size_t[]", order), nqa, qa, noa, oa, gv_p, blk_p, ffi.NULL)
         if failed:
             return None
-        return Motion.of_block(self, blk, n, nq, nobs, SINGULAR_TOL)
+        motion = Motion.of_block(self, blk, n, nq, nobs, SINGULAR_TOL)
+        if not forces:
+            return motion
+        o = w * n
+        return ForceAnalysis(self, motion, blk[o:o + n * nfo].reshape(n, nfo), self._lean_forces(got[0])[0])
+
+    def _lean_forces(self, p=None):
+        """(RunSettings of a kinetostatics() on the defaults but the parameter vector ``p``, C pointer of its
+        gravity vector): the default gravity and moment point converted once, by prepare() itself."""
+        cache = self._fast.get("forces")
+        if cache is None:
+            s = self.prepare(np.zeros(1), forces=True).settings
+            cache = self._fast["forces"] = {None: (s, _ptr(self.ffi, "double *", s.gravity))}
+        got = cache.get(id(p))  # p: a cached parameter vector, kept alive by its settings here
+        if got is None:
+            base = cache[None][0]
+            got = (dataclasses.replace(base, params=p), cache[None][1])
+            if len(cache) >= 256:
+                del cache[next(k for k in cache if k is not None)]
+            cache[id(p)] = got
+        return got
 
     def _continuous(self, n: int, q: np.ndarray, obs: np.ndarray, order) -> None:
         """continuous_angles(self.description, q, obs, order), in C."""
@@ -497,8 +521,8 @@ class Mechanism:
         self.lib.sg_make_continuous(n, q.shape[1], obs.shape[1], _ptr(ffi, "double *", q), _ptr(ffi, "double *", obs),
                                     nqa, qa_p, noa, oa_p, ffi.NULL if order is None else _ptr(ffi, "size_t *", order))
 
-    def kinetostatics(self, phi, speed=None, accel=0.0, *, loads=(), gravity="9.80665 m/s**2",
-                      gravity_direction="-90 deg", moment_about=(0.0, 0.0), params: dict | None = None,
+    def kinetostatics(self, phi, speed=None, accel=0.0, *, loads=(), gravity=_GRAVITY,
+                      gravity_direction=_DOWN, moment_about=_ORIGIN, params: dict | None = None,
                       held: dict | None = None, branch: dict | None = None, guess: dict | None = None,
                       degrees: bool = False, newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER,
                       out=None, singular: str = "raise") -> ForceAnalysis:
@@ -512,6 +536,16 @@ class Mechanism:
         (a previous :class:`ForceAnalysis` gives all five arrays). A singular force matrix (a toggle position)
         raises :class:`~sewgen.errors.SingularPositionError` naming the shaft angle.
         """
+        if (held is None and branch is None and guess is None and out is None and degrees is False
+                and newton is False and max_iter == _DEFAULT_MAX_ITER and singular == "raise"
+                and moment_about is _ORIGIN and type(loads) in (tuple, list) and not loads
+                and type(gravity) is str and gravity == _GRAVITY
+                and type(gravity_direction) is str and gravity_direction == _DOWN
+                and type(phi) is np.ndarray and (speed is None or type(speed) in (float, int))
+                and type(accel) in (float, int) and accel == 0):
+            analysis = self._fast_solve(phi, speed, params, forces=True)
+            if analysis is not None:
+                return analysis
         sweep = self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
                              degrees=degrees, newton=newton, max_iter=max_iter, forces=True, loads=loads,
                              gravity=gravity, gravity_direction=gravity_direction, moment_about=moment_about,

@@ -319,6 +319,30 @@ def test_the_lean_solve_path_equals_the_general_one_to_the_bit(name):
         m.solve(np.array([0.1, np.nan, 0.3]))
 
 
+@pytest.mark.parametrize("name", catalog_names())
+def test_the_lean_kinetostatics_path_equals_the_general_one_to_the_bit(name):
+    """kinetostatics() on the defaults (no loads, default gravity and moment point) takes solve()'s one-call lean
+    path with forces: every array and the run settings equal the general path's (held={} forces it) bit for bit,
+    and a failure still raises the general path's typed error."""
+    m = sewgen.mechanism(name)
+    rng = np.random.default_rng(6)
+    for phi in (PHI, np.concatenate([PHI, rng.uniform(-9, 9, 11)]), np.array([3.0])):
+        for params in (None, {m.param_names[-1]: m.defaults()[m.param_names[-1]]}):
+            a = m.kinetostatics(phi, params=params)
+            b = m.kinetostatics(phi, params=params, held={})
+            assert "_lean" in vars(a.motion)  # the lean path ran
+            for x, y in ((a.frc, b.frc), (a.motion.q, b.motion.q), (a.motion.qd, b.motion.qd),
+                         (a.motion.qdd, b.motion.qdd), (a.motion.obs, b.motion.obs),
+                         (a.motion.error_estimate, b.motion.error_estimate), (a.phi, b.phi)):
+                assert np.array_equal(x, y), name
+            sa, sb = a.run_settings, b.run_settings
+            for x, y in ((sa.params, sb.params), (sa.held, sb.held), (sa.branch, sb.branch), (sa.gravity, sb.gravity)):
+                assert np.array_equal(x, y), name
+            assert sa.loads is None and sb.loads is None and sa.moment_about == sb.moment_about == (0.0, 0.0)
+    with pytest.raises(sewgen.errors.InputError, match="position 1"):
+        m.kinetostatics(np.array([0.1, np.nan, 0.3]))
+
+
 def test_a_lean_motion_reads_pickles_and_copies_as_any_other():
     """solve()'s lean Motion makes its arrays at the first look (Motion.of_block): a strided phi, a pickle of a
     result not yet looked at, and a result read in any order give the general path's arrays."""
