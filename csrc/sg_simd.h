@@ -402,7 +402,7 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
             }                                                                                      \
             if (!vector_block) {                                                                   \
                 for (int l = 0; l < lanes; ++l)                                                    \
-                    SG_CLOSED_STEP(m->closed, m->motion, m->rates, m->observe, m->forces, idx[l])                 \
+                    SG_CLOSED_STEP(m->closed, m->motion, m->rates, m->observe, m->forces, idx[l]) \
                 continue;                                                                          \
             }                                                                                      \
             for (int j = 0; j < nq; ++j) { /* no lane a half turn from the one before: none moves */ \
@@ -480,7 +480,7 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
                 xd[0] = om[l];                                                                     \
                 xdd[0] = al[l];                                                                    \
                 int st = SG_OK;                                                                    \
-                SG_CLOSED_FINISH(m->motion, m->rates, m->observe, m->forces)                                   \
+                SG_CLOSED_FINISH(m->motion, m->rates, m->observe, m->forces)                      \
             }                                                                                      \
         }                                                                                          \
         return failures;                                                                           \
