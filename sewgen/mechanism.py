@@ -479,7 +479,7 @@ class Mechanism:
         if not phi.flags.c_contiguous:
             phi = np.ascontiguousarray(phi)
         ffi = self.ffi
-        gv_p = self._lean_forces()[1] if forces else ffi.NULL
+        settings, gv_p = self._lean_forces(got[0]) if forces else (None, ffi.NULL)
         blk = np.empty((w + nfo if forces else w) * n + (n + 1) // 2)  # the statuses (C int) at the tail
         phi_p, blk_p = ffi.from_buffer("double[]", phi), ffi.from_buffer("double[]", blk)
         failed = solve_lean(desc, n, phi_p, spd, held, got[1], branch, guess, opt, ffi.NULL, nqa, qa, noa, oa, gv_p,
@@ -494,23 +494,23 @@ class Mechanism:
         if not forces:
             return motion
         o = w * n
-        return ForceAnalysis(self, motion, blk[o:o + n * nfo].reshape(n, nfo), self._lean_forces(got[0])[0])
+        return ForceAnalysis(self, motion, blk[o:o + n * nfo].reshape(n, nfo), settings)
 
-    def _lean_forces(self, p=None):
+    def _lean_forces(self, p):
         """(RunSettings of a kinetostatics() on the defaults but the parameter vector ``p``, C pointer of its
-        gravity vector): the default gravity and moment point converted once, by prepare() itself."""
-        cache = self._fast.get("forces")
-        if cache is None:
-            s = self.prepare(np.zeros(1), forces=True).settings
-            cache = self._fast["forces"] = {None: (s, _ptr(self.ffi, "double *", s.gravity))}
-        got = cache.get(id(p))  # p: a cached parameter vector, kept alive by its settings here
+        gravity vector): the default gravity and moment point converted once, by prepare() itself; the settings
+        cached by the vector's identity (each keeps its vector alive, so an id is never reused while cached)."""
+        got = self._fast.get("forces")
         if got is None:
-            base = cache[None][0]
-            got = (dataclasses.replace(base, params=p), cache[None][1])
-            if len(cache) >= 256:
-                del cache[next(k for k in cache if k is not None)]
-            cache[id(p)] = got
-        return got
+            base = self.prepare(np.zeros(1), forces=True).settings
+            got = self._fast["forces"] = (base, _ptr(self.ffi, "double *", base.gravity), {})
+        base, gravity_p, by_params = got
+        settings = by_params.get(id(p))
+        if settings is None:
+            if len(by_params) >= 256:
+                by_params.clear()
+            settings = by_params[id(p)] = dataclasses.replace(base, params=p)
+        return settings, gravity_p
 
     def _continuous(self, n: int, q: np.ndarray, obs: np.ndarray, order) -> None:
         """continuous_angles(self.description, q, obs, order), in C."""
