@@ -56,6 +56,34 @@ void sg_solve_eq(int n, const double *lu, const int *piv, const double *rs, cons
 }
 
 /* max |v_i| w_i; NaN propagates: a NaN entry makes the norm NaN */
+/* Newton's LU and solve with a literal n for the common sizes, so that their loops unroll whole (SG_UNROLL);
+ * the generic loops otherwise. The same operations in the same order either way. */
+static int lu_factor_q(int n, double *a, int *piv)
+{
+    switch (n) {
+    case 3: return sg_lu_factor_inl(3, a, piv, 0);
+    case 4: return sg_lu_factor_inl(4, a, piv, 0);
+    case 5: return sg_lu_factor_inl(5, a, piv, 0);
+    case 6: return sg_lu_factor_inl(6, a, piv, 0);
+    case 7: return sg_lu_factor_inl(7, a, piv, 0);
+    case 8: return sg_lu_factor_inl(8, a, piv, 0);
+    default: return sg_lu_factor_inl(n, a, piv, 0);
+    }
+}
+
+static void lu_solve_q(int n, const double *lu, const int *piv, double *b)
+{
+    switch (n) {
+    case 3: sg_lu_solve_inl(3, lu, piv, b); return;
+    case 4: sg_lu_solve_inl(4, lu, piv, b); return;
+    case 5: sg_lu_solve_inl(5, lu, piv, b); return;
+    case 6: sg_lu_solve_inl(6, lu, piv, b); return;
+    case 7: sg_lu_solve_inl(7, lu, piv, b); return;
+    case 8: sg_lu_solve_inl(8, lu, piv, b); return;
+    default: sg_lu_solve_inl(n, lu, piv, b); return;
+    }
+}
+
 static double weighted_norm(int n, const double *v, const double *w)
 {
     double m = 0.0;
@@ -146,7 +174,7 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
             return SG_OK;
         }
         copy_doubles(lu, jac, nq * nq);
-        if (sg_lu_factor_inl(nq, lu, piv, 0) != SG_OK) {
+        if (lu_factor_q(nq, lu, piv) != SG_OK) {
             if (norm <= 1.0) { /* converged already: the step asked for cannot be taken */
                 *resid = norm * opt->tol;
                 return SG_OK;
@@ -155,7 +183,7 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
         }
         if (it >= opt->max_iter) return SG_NO_CONVERGENCE;
         for (int i = 0; i < nq; ++i) dq[i] = -r[i];
-        sg_lu_solve_inl(nq, lu, piv, dq);
+        lu_solve_q(nq, lu, piv, dq);
         if (norm <= 1.0) { /* min_iter: a start within the tolerance gets one full step all the same, kept if it
                             * lowers the residual (a prediction within the tolerance is only that accurate; a
                             * step makes it as accurate as a solution Newton reached) */
@@ -194,9 +222,9 @@ static void polish(const sg_mechanism *m, double *q, double *cq, const double *x
     for (int i = 0; i < nq; ++i) w[i] = 1.0 / w[i];
     m->residual(q, cq, x, cx, c, r, jac);
     double norm = weighted_norm(nq, r, w);
-    if (sg_lu_factor_inl(nq, jac, piv, 0) != SG_OK) return;
+    if (lu_factor_q(nq, jac, piv) != SG_OK) return;
     for (int i = 0; i < nq; ++i) dq[i] = -r[i];
-    sg_lu_solve_inl(nq, jac, piv, dq);
+    lu_solve_q(nq, jac, piv, dq);
     keep_step_if_lower(m, q, cq, dq, x, cx, c, w, &norm, NULL);
     *resid = norm;
     (void)opt;
@@ -921,4 +949,67 @@ void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int 
     s.nq = nq, s.nobs = nobs, s.q = q, s.qd = NULL, s.qdd = NULL, s.obs = obs;
     continuous_columns(&s, nqa, qcols, 0, n, order);
     continuous_columns(&s, noa, ocols, 3 * nq, n, order);
+}
+
+/* The upper shaft by d'Alembert (seed 000 §二(二)1(6): the shaft as a beam on its bearings A, front, and B,
+ * rear; sewgen.machine's MachineAnalysis). At each of n positions the forces on the shaft core are
+ *   - the cranks' pivot forces: x at src[f_off[2j] + i f_step[j]], y at src[f_off[2j + 1] + i f_step[j]], times
+ *     f_sign[j], at arm f_arm[j] = z_j - z_A;
+ *   - the belt pull (belt, at belt_arm);
+ *   - the d'Alembert forces m (g - a) of the core's point masses (core: ncore x (mass, radius r, angle theta,
+ *     arm)), at r (cos(phi + theta), sin(phi + theta)) turning with the shaft;
+ * and the bearings' forces on the shaft are rear = -Sum arm F / span, front = -rear - Sum F (span = z_B - z_A).
+ * The driving torque sums the groups' shaft torques (src[t_off[k] + i t_step[k]]), the core's inertia times
+ * alpha, r x m (a - g) of its masses and the bearings' Coulomb friction mu_r sign(omega) (|front| + |rear|) (the
+ * friction circle: it does not enter the radial balance).
+ * out: front (n x 2), rear (n x 2), torque (n), the bearings' friction torque (n), then per core mass its
+ * position, velocity and acceleration (3 x n x 2). Every sum runs in the order listed, from zero; the planned
+ * and the general analysis both call this, so they agree to the bit. Returns 1 where front, rear and torque
+ * are finite everywhere, else 0. */
+int sg_shaft(size_t n, const double *phi, const double *omega, const double *alpha, const double *src, int nf,
+             const size_t *f_off, const size_t *f_step, const double *f_sign, const double *f_arm, int nt,
+             const size_t *t_off, const size_t *t_step, const double *belt, double belt_arm, int ncore,
+             const double *core, const double *gravity, double inertia, double span, double mu_r, double *out)
+{
+    double *front = out, *rear = out + 2 * n, *torque = out + 4 * n, *fric = out + 5 * n, *kin = out + 6 * n;
+    const double gx = gravity[0], gy = gravity[1];
+    int finite = 1;
+    for (size_t i = 0; i < n; ++i) {
+        double tx = 0.0, ty = 0.0, mx = 0.0, my = 0.0; /* Sum F, Sum arm F */
+        for (int j = 0; j < nf; ++j) {
+            const double fx = src[f_off[2 * j] + i * f_step[j]] * f_sign[j];
+            const double fy = src[f_off[2 * j + 1] + i * f_step[j]] * f_sign[j];
+            tx += fx, ty += fy;
+            mx += f_arm[j] * fx, my += f_arm[j] * fy;
+        }
+        tx += belt[0], ty += belt[1];
+        mx += belt_arm * belt[0], my += belt_arm * belt[1];
+        const double c = cos(phi[i]), s = sin(phi[i]), w = omega[i], al = alpha[i];
+        double core_torque = inertia * al;
+        for (int k = 0; k < ncore; ++k) {
+            const double *cm = core + 4 * k;
+            const double mass = cm[0], r = cm[1], cb = cos(cm[2]), sb = sin(cm[2]), arm = cm[3];
+            double *pos = kin + 6 * n * (size_t)k + 2 * i, *vel = pos + 2 * n, *acc = pos + 4 * n;
+            const double ux = c * cb - s * sb, uy = c * sb + s * cb; /* radial unit vector */
+            const double rw = r * w, ra = r * al, cen = rw * w;
+            pos[0] = r * ux, pos[1] = r * uy;
+            vel[0] = -rw * uy, vel[1] = rw * ux; /* r omega times the tangent (-uy, ux) */
+            acc[0] = -ra * uy - cen * ux, acc[1] = ra * ux - cen * uy;
+            const double dx = mass * (gx - acc[0]), dy = mass * (gy - acc[1]); /* d'Alembert force */
+            tx += dx, ty += dy;
+            mx += arm * dx, my += arm * dy;
+            core_torque = core_torque + pos[0] * (-dy) - pos[1] * (-dx); /* r x m (a - g) */
+        }
+        const double rx = -mx / span, ry = -my / span;
+        rear[2 * i] = rx, rear[2 * i + 1] = ry;
+        front[2 * i] = -rx - tx, front[2 * i + 1] = -ry - ty;
+        const double sign = w > 0.0 ? 1.0 : w < 0.0 ? -1.0 : w;
+        const double fr = mu_r * sign * (hypot(front[2 * i], front[2 * i + 1]) + hypot(rx, ry));
+        double t = 0.0;
+        for (int k = 0; k < nt; ++k) t += src[t_off[k] + i * t_step[k]];
+        t = t + core_torque + fr;
+        torque[i] = t, fric[i] = fr;
+        finite &= isfinite(rx + ry + front[2 * i] + front[2 * i + 1] + t);
+    }
+    return finite;
 }

@@ -33,10 +33,14 @@
 #define SG_EPS 1.1102230246251565e-16
 #if defined(__GNUC__)
 #define SG_INLINE static inline __attribute__((always_inline))
+/* A loop of the small dense solves (n <= 8 with a literal n: the kernels' rates, Newton's switch over n) unrolled
+ * whole: -O2 alone keeps the loops, whose counters and branches cost as much as the arithmetic at n = 7. */
+#define SG_UNROLL _Pragma("GCC unroll 8")
 #define SG_FLATTEN __attribute__((flatten)) /* every call in the function's body inlined */
 #define SG_NOINLINE __attribute__((noinline))
 #else
 #define SG_INLINE static inline
+#define SG_UNROLL
 #define SG_FLATTEN
 #define SG_NOINLINE
 #endif
@@ -45,17 +49,21 @@ SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
 {
     double colmax[SG_MAX_Q];
     double sign = 1.0;
+    SG_UNROLL
     for (int j = 0; j < n; ++j) {
         double cm = 0.0;
+        SG_UNROLL
         for (int i = 0; i < n; ++i) {
             const double v = fabs(a[i * n + j]);
             if (v > cm) cm = v;
         }
         colmax[j] = cm;
     }
+    SG_UNROLL
     for (int k = 0; k < n; ++k) {
         int pr = k;
         double best = fabs(a[k * n + k]);
+        SG_UNROLL
         for (int i = k + 1; i < n; ++i) {
             const double v = fabs(a[i * n + k]);
             if (v > best) {
@@ -67,6 +75,7 @@ SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
         if (!(best > SG_PIVOT_RTOL * colmax[k])) return SG_SINGULAR;
         if (pr != k) {
             sign = -sign;
+            SG_UNROLL
             for (int j = 0; j < n; ++j) {
                 const double t = a[k * n + j];
                 a[k * n + j] = a[pr * n + j];
@@ -75,10 +84,12 @@ SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
         }
         const double inv = 1.0 / a[k * n + k];
         if (a[k * n + k] < 0.0) sign = -sign;
+        SG_UNROLL
         for (int i = k + 1; i < n; ++i) {
             const double f = a[i * n + k] * inv;
             a[i * n + k] = f;
             if (f != 0.0)
+                SG_UNROLL
                 for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
         }
     }
@@ -90,6 +101,7 @@ SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
  * to b before the forward substitution. */
 SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *b)
 {
+    SG_UNROLL
     for (int k = 0; k < n; ++k) {
         if (piv[k] != k) {
             const double t = b[k];
@@ -97,10 +109,14 @@ SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *
             b[piv[k]] = t;
         }
     }
+    SG_UNROLL
     for (int k = 0; k < n; ++k)
+        SG_UNROLL
         for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
+    SG_UNROLL
     for (int k = n - 1; k >= 0; --k) {
         double s = b[k];
+        SG_UNROLL
         for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
         b[k] = s / lu[k * n + k];
     }
@@ -146,8 +162,10 @@ SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, dou
 {
     if (n == 2) return sg_factor_eq2_inl(a, rs, cond);
     *cond = INFINITY;
+    SG_UNROLL
     for (int j = 0; j < n; ++j) {
         double m = 0.0;
+        SG_UNROLL
         for (int i = 0; i < n; ++i) {
             a[i * n + j] *= rs[i];
             const double v = fabs(a[i * n + j]);
@@ -155,17 +173,22 @@ SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, dou
         }
         if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR; /* a coordinate no loop reads */
         cs[j] = 1.0 / m;
+        SG_UNROLL
         for (int i = 0; i < n; ++i) a[i * n + j] *= cs[j];
     }
     double anorm = 0.0;
+    SG_UNROLL
     for (int i = 0; i < n; ++i) {
         double s = 0.0;
+        SG_UNROLL
         for (int j = 0; j < n; ++j) s += fabs(a[i * n + j]);
         if (!(s <= anorm)) anorm = s; /* NaN propagates */
     }
+    SG_UNROLL
     for (int k = 0; k < n; ++k) { /* LU with partial pivoting: every column's largest entry is 1 already */
         int pr = k;
         double best = fabs(a[k * n + k]);
+        SG_UNROLL
         for (int i = k + 1; i < n; ++i) {
             const double v = fabs(a[i * n + k]);
             if (v > best) best = v, pr = i;
@@ -173,6 +196,7 @@ SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, dou
         piv[k] = pr;
         if (!(best > SG_PIVOT_RTOL)) return SG_SINGULAR;
         if (pr != k)
+            SG_UNROLL
             for (int j = 0; j < n; ++j) {
                 const double t = a[k * n + j];
                 a[k * n + j] = a[pr * n + j];
@@ -180,10 +204,12 @@ SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, dou
             }
         const double inv = 1.0 / a[k * n + k];
         a[k * n + k] = inv; /* U's diagonal kept as its reciprocal: the solves multiply */
+        SG_UNROLL
         for (int i = k + 1; i < n; ++i) {
             const double f = a[i * n + k] * inv;
             a[i * n + k] = f;
             if (f != 0.0)
+                SG_UNROLL
                 for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
         }
     }
@@ -193,14 +219,18 @@ SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, dou
      * instead of n solves. */
     double y[SG_MAX_Q];
     double lnorm = 0.0, inorm = 0.0;
+    SG_UNROLL
     for (int i = 0; i < n; ++i) {
         double s = 1.0;
+        SG_UNROLL
         for (int j = 0; j < i; ++j) s += fabs(a[i * n + j]) * y[j];
         y[i] = s;
         if (!(s <= lnorm)) lnorm = s;
     }
+    SG_UNROLL
     for (int i = n - 1; i >= 0; --i) {
         double s = 1.0;
+        SG_UNROLL
         for (int j = i + 1; j < n; ++j) s += fabs(a[i * n + j]) * y[j];
         y[i] = s * fabs(a[i * n + i]);
         if (!(y[i] <= inorm)) inorm = y[i];
@@ -221,20 +251,27 @@ SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const do
         b[1] = lu[2] * b0 + lu[3] * b1;
         return;
     }
+    SG_UNROLL
     for (int i = 0; i < n; ++i) b[i] *= rs[i];
+    SG_UNROLL
     for (int k = 0; k < n; ++k)
         if (piv[k] != k) {
             const double t = b[k];
             b[k] = b[piv[k]];
             b[piv[k]] = t;
         }
+    SG_UNROLL
     for (int k = 0; k < n; ++k)
+        SG_UNROLL
         for (int i = k + 1; i < n; ++i) b[i] -= lu[i * n + k] * b[k];
+    SG_UNROLL
     for (int k = n - 1; k >= 0; --k) {
         double s = b[k];
+        SG_UNROLL
         for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
         b[k] = s * lu[k * n + k];
     }
+    SG_UNROLL
     for (int j = 0; j < n; ++j) b[j] *= cs[j];
 }
 

@@ -231,6 +231,20 @@ EXPORTS = {
     "sg_sorted": ("int", (("size_t", "n"), ("const double *", "phi")),
                   "1 where every phi[i] >= phi[i-1] (a NaN breaks it), else 0: whether a sweep of these shaft "
                   "angles needs a solving order"),
+    "sg_shaft": ("int", (("size_t", "n"), ("const double *", "phi"), ("const double *", "omega"),
+                         ("const double *", "alpha"), ("const double *", "src"), ("int", "nf"),
+                         ("const size_t *", "f_off"), ("const size_t *", "f_step"), ("const double *", "f_sign"),
+                         ("const double *", "f_arm"), ("int", "nt"), ("const size_t *", "t_off"),
+                         ("const size_t *", "t_step"), ("const double *", "belt"), ("double", "belt_arm"),
+                         ("int", "ncore"), ("const double *", "core"), ("const double *", "gravity"),
+                         ("double", "inertia"), ("double", "span"), ("double", "mu_r"), ("double *", "out")),
+                 "the upper shaft by d'Alembert at n positions: the bearings' forces on the shaft (front, rear: n x "
+                 "2 each), the driving torque and the bearings' friction torque (n each) and the core masses' "
+                 "position, velocity, acceleration (ncore x 3 x n x 2) into out, from the forces on the core "
+                 "(x at src[f_off[2j] + i f_step[j]], y at src[f_off[2j+1] + i f_step[j]], times f_sign[j], at "
+                 "arm f_arm[j]), the belt, the core masses "
+                 "(ncore x (mass, radius, angle, arm)) and the groups' shaft torques (src[t_off[k] + i "
+                 "t_step[k]]); 1 where front, rear and torque are finite, else 0"),
     "sg_make_continuous": ("void", (("size_t", "n"), ("int", "nq"), ("int", "nobs"), ("double *", "q"),
                                     ("double *", "obs"), ("int", "nqa"), ("const int *", "qcols"), ("int", "noa"),
                                     ("const int *", "ocols"), ("const size_t *", "order")),

@@ -38,7 +38,7 @@ from . import mechanism as catalog_mechanism
 from .errors import BuildError, ParameterError, SewgenError
 from .feed import regulator_angle
 from .loads import Load, load_matrix
-from .machine_plan import gravity_polar, plan_of, scalar
+from .machine_plan import ShaftCall, gravity_polar, plan_of, scalar
 from .modelfile import (Field, ModelFileError, Reader, declaration_problem, load_toml,  # noqa: F401 (re-exported)
                         resolve)
 from .roles import STITCH_REGULATOR
@@ -46,8 +46,6 @@ from .units import UnitError, steps_per_turn, to_si
 
 #: Names a group may not take: its table would overwrite the machine's (machine.csv, summary.json).
 RESERVED_GROUP_NAMES = ("machine", "summary")
-_TURN = np.array([-1.0, 1.0])  # (x, y) -> (-y, x) applied to (y, x): a vector turned +90°
-_TURN.flags.writeable = False
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
@@ -213,8 +211,8 @@ class Machine:
         out = plan.run(phi, w, al, progress)
         if out is None:
             return None
-        groups, stack, torques = out
-        analysis = MachineAnalysis(self, phi, groups, None if stack is None else (plan.shaft, stack, torques))
+        groups, shaft = out
+        analysis = MachineAnalysis(self, phi, groups, shaft)
         analysis.run = {"speed": self.speed if speed is None else speed, "accel": accel}
         return analysis
 
@@ -233,20 +231,13 @@ class Machine:
 class MachineAnalysis:
     """Every group's results and the machine-level ones, indexed by the machine's shaft angle."""
 
-    def __init__(self, machine: Machine, phi: np.ndarray, groups: dict, shaft_plan=None):
+    def __init__(self, machine: Machine, phi: np.ndarray, groups: dict, shaft=None):
         self.machine, self.phi, self.groups = machine, phi, groups
         first = next(iter(groups.values()))
         self.omega, self.alpha = first.motion.omega, first.motion.alpha
         self.run = {"speed": self.omega, "accel": self.alpha}  # what analyze() was given
-        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, as a typed error
-            self._shaft(shaft_plan)
-        for what, values in (("shaft.front_bearing", self.front), ("shaft.rear_bearing", self.rear),
-                             ("shaft", self.torque)):
-            if not np.isfinite(values).all():
-                from .report import NonFiniteOutputError
-
-                raise NonFiniteOutputError(f"{what}: the {'driving torque' if what == 'shaft' else 'bearing load'}",
-                                           values[~np.isfinite(values)].flat[0], machine.source or None)
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported as a typed error
+            self._shaft(shaft)
 
     def refined(self, step: float = math.radians(1.0)) -> "MachineAnalysis":
         """The same analysis (speed, acceleration) every ``step`` (rad) over one revolution, when this one is a
@@ -262,27 +253,6 @@ class MachineAnalysis:
         if np.ndim(speed) or np.ndim(accel):  # per-position speeds cannot be resampled
             return self
         return self.machine.analyze(self.machine.shaft_angles(step), speed=speed, accel=accel)
-
-    def _core_masses(self):
-        """Position, velocity and acceleration (n, 2 each) of every core point mass (r at φ + angle)."""
-        out = []
-        cphi, sphi = np.cos(self.phi), np.sin(self.phi)
-        w, al = self.omega, self.alpha
-        for sm in self.machine.shaft.masses:
-            if sm.radius == 0.0:  # on the axis: at rest in the plane
-                zero = np.zeros((len(self.phi), 2))
-                out.append((sm, zero, zero, zero))
-                continue
-            cb, sb = math.cos(sm.angle), math.sin(sm.angle)
-            # radial unit vector (cos φ cb − sin φ sb, sin φ cb + cos φ sb), both columns at once
-            u = cphi[:, None] * np.array([cb, sb]) + sphi[:, None] * np.array([-sb, cb])
-            t = u[:, ::-1] * _TURN  # tangential: u turned +90°
-            pos = sm.radius * u
-            rw = sm.radius * w
-            vel = rw[:, None] * t
-            acc = (sm.radius * al)[:, None] * t - (rw * w)[:, None] * u
-            out.append((sm, pos, vel, acc))
-        return out
 
     def crank_loads(self):
         """(name, z, (n, 2) force on the shaft core) for every driven body on the shaft. A group whose plane
@@ -334,51 +304,34 @@ class MachineAnalysis:
                 own = own + spin
         return own, about_z
 
-    def _shaft(self, plan=None):
-        sh, gv = self.machine.shaft, self.machine.gravity
-        zA, zB = sh.front, sh.rear
-        self.core = self._core_masses()
-        if plan is None:
+    def _shaft(self, shaft=None):
+        """The bearings' forces on the shaft (``front``, ``rear``), the driving ``torque``, the bearings' friction
+        torque and the core masses' motion (``core``: (mass, position, velocity, acceleration) each), by
+        d'Alembert in one C call (csrc/sg_runtime.c: sg_shaft). ``shaft``: its results from the machine's plan,
+        else the cranks' forces and the groups' shaft torques are gathered here (crank_loads: any machine)."""
+        if shaft is None:
+            call = ShaftCall(self.machine)
+            n = len(self.phi)
             loads = self.crank_loads()
-            belt = np.asarray(sh.belt, dtype=float)[None, :]
-            total = sum(F for _, _, F in loads) + belt
-            arm = sum((z - zA) * F for _, z, F in loads) + (sh.pulley - zA) * belt
-            for sm, _pos, _vel, acc in self.core:
-                d = sm.mass * (gv[None, :] - acc)  # d'Alembert force of a core mass
-                total = total + d
-                arm = arm + (sm.z - zA) * d
-        else:  # the same sums, in the same order: the plan's stack of forces reduced along its first axis
-            sp, stack, torques = plan
-            k = len(sp.cranks)
-            stack[k + 1] = sp.belt
-            for j, (sm, _pos, _vel, acc) in enumerate(self.core):
-                if sm.radius == 0.0:  # acc is zero: m (g − 0), the same numbers without the (n, 2) arithmetic
-                    stack[k + 2 + j] = sp.axis_force[j]
-                else:
-                    np.multiply(sm.mass, gv[None, :] - acc, out=stack[k + 2 + j])  # d'Alembert force of a core mass
-            total = np.add.reduce(stack, axis=0)
-            arm = np.add.reduce(stack * sp.weights, axis=0)
-        self.rear = -arm / (zB - zA)  # frame on shaft at B
-        self.front = -self.rear - total
-        core_torque = sh.inertia * self.alpha  # I·α of the core, and r × m(a − g) of its point masses
-        for j, (sm, pos, _vel, acc) in enumerate(self.core):
-            if plan is not None and sm.radius == 0.0:  # pos is zero: 0·f, elementwise the same, as two scalars
-                c1, c0 = plan[0].axis_moment[j]
-                core_torque = core_torque + c1 - c0
-                continue
-            f = sm.mass * (acc - gv[None, :])
-            core_torque = core_torque + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
-        # Coulomb friction in the bearings (the friction circle): μ·r·(|R_A| + |R_B|) against the rotation. The
-        # torque about the axis does not enter the radial balance above, so no iteration is needed.
-        w = self.omega if np.shape(self.omega) == self.phi.shape else np.broadcast_to(self.omega, (len(self.phi),))
-        self.bearing_friction = sh.friction * sh.journal_radius * np.sign(w)
-        if plan is None or sh.friction * sh.journal_radius != 0.0:  # else ±0 · (|R_A| + |R_B|) is that ±0 (finite R)
-            self.bearing_friction = self.bearing_friction * (np.hypot(*self.front.T) + np.hypot(*self.rear.T))
-        if plan is None:
-            self.torque = sum(fa.torque("shaft") for fa in self.groups.values()) + core_torque + self.bearing_friction
-        else:  # rows: 0, the groups' shaft torques, the core's, the bearings' friction; summed in that order
-            torques[-2], torques[-1] = core_torque, self.bearing_friction
-            self.torque = np.add.reduce(torques, axis=0)
+            torques = [fa.torque("shaft") for fa in self.groups.values()]
+            src = np.concatenate([np.ravel(F) for _, _, F in loads] + [np.ravel(t) for t in torques]).astype(float)
+            forces, tq = ShaftCall.layout([(2 * n * j, 2 * n * j + 1) for j in range(len(loads))], [2] * len(loads),
+                                          [1.0] * len(loads), [z - call.front for _, z, _ in loads],
+                                          [2 * n * len(loads) + n * k for k in range(len(torques))],
+                                          [1] * len(torques))
+            rates = [np.ascontiguousarray(np.broadcast_to(np.asarray(v, dtype=float), (n,)))
+                     for v in (self.omega, self.alpha)]
+            shaft = call.run(np.ascontiguousarray(self.phi, dtype=float), *rates, src, forces, tq)
+        self.front, self.rear, self.torque, self.bearing_friction, self.core, finite = shaft
+        if finite:
+            return
+        for what, values in (("shaft.front_bearing", self.front), ("shaft.rear_bearing", self.rear),
+                             ("shaft", self.torque)):
+            if not np.isfinite(values).all():
+                from .report import NonFiniteOutputError
+
+                raise NonFiniteOutputError(f"{what}: the {'driving torque' if what == 'shaft' else 'bearing load'}",
+                                           values[~np.isfinite(values)].flat[0], self.machine.source or None)
 
     # -- tables ----------------------------------------------------------------------------------------------
     def to_dataframe(self, group: str | None = None):

@@ -136,18 +136,67 @@ class GroupCall:
         return (3 * self.nq + self.nobs) * n
 
 
-class ShaftPlan:
-    """The upper shaft's fixed data: bearings, belt, core masses, and per group across the shaft the columns of
-    its cranks' pivot forces on the frame (``frame_force(<crank>.pivot)``) with their sign and axial z."""
+class ShaftCall:
+    """The upper shaft's constants as sg_shaft (csrc/sg_runtime.c) reads them: the core masses (mass, radius,
+    angle, arm about the front bearing), the belt and its arm, gravity, the core's inertia, the bearings' span and
+    friction radius. The planned and the general analysis both run :meth:`run`, so they agree to the bit."""
 
-    __slots__ = ("zA", "zB", "belt", "pulley_belt", "cranks", "along", "ncore", "weights", "axis_force",
-                 "axis_moment")
+    __slots__ = ("masses", "core", "belt", "belt_arm", "gravity", "inertia", "span", "mu_r", "front", "fn", "ffi",
+                 "_p")
 
     def __init__(self, machine):
         sh = machine.shaft
-        self.zA, self.zB = sh.front, sh.rear
-        self.belt = np.asarray(sh.belt, dtype=float)[None, :]
-        self.pulley_belt = (sh.pulley - sh.front) * self.belt
+        self.masses, self.front = tuple(sh.masses), sh.front
+        self.core = np.array([(sm.mass, sm.radius, sm.angle, sm.z - sh.front) for sm in sh.masses],
+                             dtype=float).reshape(len(sh.masses), 4)
+        self.belt = np.array(sh.belt, dtype=float)
+        self.belt_arm = float(sh.pulley - sh.front)
+        self.gravity = np.array(machine.gravity, dtype=float)
+        self.inertia, self.span = float(sh.inertia), float(sh.rear - sh.front)
+        self.mu_r = float(sh.friction * sh.journal_radius)
+        mech = machine.groups[0].mechanism
+        self.fn, ffi = mech.lib.sg_shaft, mech.ffi
+        self.ffi = ffi
+        self._p = tuple(ffi.from_buffer("double[]", a) for a in (self.belt, self.core, self.gravity))
+
+    def run(self, phi, omega, alpha, src, forces, torques):
+        """(front (n, 2), rear (n, 2), torque (n,), the bearings' friction torque (n,), [(mass, position,
+        velocity, acceleration)] of the core, all finite) at ``phi`` with ``omega``, ``alpha`` ((n,) each,
+        contiguous), the forces on the core and the groups' shaft torques read from ``src`` at ``forces`` =
+        (offsets (2 per force), steps, signs, arms) and ``torques`` = (offsets, steps): :meth:`layout`'s."""
+        n, ffi = phi.shape[0], self.ffi
+        out = np.empty(n * (6 + 6 * len(self.masses)))
+        f_off, f_step, f_sign, f_arm = forces
+        t_off, t_step = torques
+        belt_p, core_p, g_p = self._p
+        d = ffi.from_buffer
+        finite = self.fn(n, d("double[]", phi), d("double[]", omega), d("double[]", alpha), d("double[]", src),
+                         f_step.shape[0], d("size_t[]", f_off), d("size_t[]", f_step), d("double[]", f_sign),
+                         d("double[]", f_arm), t_step.shape[0], d("size_t[]", t_off), d("size_t[]", t_step), belt_p,
+                         self.belt_arm, len(self.masses), core_p, g_p, self.inertia, self.span, self.mu_r,
+                         d("double[]", out))
+        kin = out[6 * n:].reshape(len(self.masses), 3, n, 2)
+        core = [(sm, kin[k, 0], kin[k, 1], kin[k, 2]) for k, sm in enumerate(self.masses)]
+        return out[:2 * n].reshape(n, 2), out[2 * n:4 * n].reshape(n, 2), out[4 * n:5 * n], out[5 * n:6 * n], core, \
+            bool(finite)
+
+    @staticmethod
+    def layout(columns, steps, signs, arms, torque_offsets, torque_steps):
+        """(forces, torques) as :meth:`run` reads them: offsets, steps as size_t arrays, signs and arms as
+        doubles (the cranks' x and y columns, then the torques')."""
+        forces = (np.asarray(columns, dtype=np.uintp).reshape(-1), np.asarray(steps, dtype=np.uintp),
+                  np.asarray(signs, dtype=float), np.asarray(arms, dtype=float))
+        return forces, (np.asarray(torque_offsets, dtype=np.uintp), np.asarray(torque_steps, dtype=np.uintp))
+
+
+class ShaftPlan:
+    """The upper shaft's fixed data: its :class:`ShaftCall`, and per group across the shaft the columns of its
+    cranks' pivot forces on the frame (``frame_force(<crank>.pivot)``) with their sign and axial z."""
+
+    __slots__ = ("call", "cranks", "along")
+
+    def __init__(self, machine):
+        self.call = ShaftCall(machine)
         self.cranks = []  # (group name, label, z, column x, column y, sign) of every crank across the shaft
         self.along = any(g.along for g in machine.groups)
         for g in machine.groups:
@@ -159,20 +208,7 @@ class ShaftPlan:
                     cx, cy = r.offset, r.offset + 1
                 else:
                     cx, cy = desc.output_column(f"{name}.fx"), desc.output_column(f"{name}.fy")
-                self.cranks.append((g.name, f"{g.name}.{body}", z, cx, cy, -1.0 if r.a == "ground" else 1.0,
-                                    g.along))
-        self.ncore = len(sh.masses)
-        # a core mass on the axis (r = 0) is at rest: its d'Alembert force m (g − 0) and the terms 0·f of its
-        # moment r × m (a − g) are constants (the same operations as sewgen.machine's _shaft on arrays of zeros)
-        gv = np.asarray(machine.gravity)[None, :]
-        self.axis_force = [sm.mass * (gv - 0.0) for sm in sh.masses]
-        self.axis_moment = []
-        for sm in sh.masses:
-            f = sm.mass * (np.zeros((1, 2)) - gv)
-            self.axis_moment.append((0.0 * f[0, 1], 0.0 * f[0, 0]))
-        # arms about the front bearing of the stacked forces: the zero row, the cranks, the belt, the core masses
-        self.weights = np.array([1.0] + [c[2] - sh.front for c in self.cranks] + [sh.pulley - sh.front]
-                                + [sm.z - sh.front for sm in sh.masses])[:, None, None]
+                self.cranks.append((g.name, f"{g.name}.{body}", z, cx, cy, -1.0 if r.a == "ground" else 1.0))
 
 
 class Plan:
@@ -190,8 +226,8 @@ class Plan:
         self.sorted = (first.lib.sg_sorted, first.ffi)  # the runtime's test of ascending angles
 
     def layout(self, n: int):
-        """(group offsets in the block, block size, flat indices (k, n, 2) of the crank forces' columns in the
-        block, (k, 1, 1) their signs) at ``n`` positions; made once per ``n``."""
+        """(group offsets in the block, block size, the shaft's (forces, torques) in the block for
+        :meth:`ShaftCall.run`) at ``n`` positions; made once per ``n``."""
         got = self._layouts.get(n)
         if got is None:
             ng = len(self.groups)
@@ -199,24 +235,24 @@ class Plan:
             for call in self.groups:
                 offsets.append(o)
                 o += call.size(n)
-            index = {call.group.name: (off + call.frc_offset(n), call.nfo) for call, off in zip(self.groups, offsets)}
-            rows = np.arange(n)[:, None]
-            idx = np.array([index[gname][0] + rows * index[gname][1] + np.array([cx, cy])
-                            for gname, _label, _z, cx, cy, _sign, _along in self.shaft.cranks], dtype=np.intp)
-            sign = np.array([c[5] for c in self.shaft.cranks], dtype=float)[:, None, None]
-            torque = np.array([off + call.frc_offset(n) + np.arange(n) * call.nfo + call.torque_column
-                               for call, off in zip(self.groups, offsets)], dtype=np.intp)
-            got = (offsets, o, idx.reshape(len(self.shaft.cranks), n, 2), sign, torque.reshape(ng, n))
+            frc = {call.group.name: (off + call.frc_offset(n), call.nfo) for call, off in zip(self.groups, offsets)}
+            cranks = self.shaft.cranks
+            shaft = ShaftCall.layout([(frc[c[0]][0] + c[3], frc[c[0]][0] + c[4]) for c in cranks],
+                                     [frc[c[0]][1] for c in cranks], [c[5] for c in cranks],
+                                     [c[2] - self.shaft.call.front for c in cranks],
+                                     [off + call.frc_offset(n) + call.torque_column
+                                      for call, off in zip(self.groups, offsets)], [call.nfo for call in self.groups])
+            got = (offsets, o, shaft)
             if len(self._layouts) >= 8:
                 self._layouts.clear()
             self._layouts[n] = got
         return got
 
     def run(self, phi: np.ndarray, w: float, accel: float, progress=None):
-        """(group name -> ForceAnalysis, the crank forces stacked for the shaft or None) at machine shaft angles
-        ``phi``, in one fresh block; None where anything fails."""
+        """(group name -> ForceAnalysis, the shaft's results of :meth:`ShaftCall.run` or None) at machine shaft
+        angles ``phi``, in one fresh block; None where anything fails."""
         n, ng = phi.shape[0], len(self.groups)
-        offsets, size, idx, sign, torque = self.layout(n)
+        offsets, size, shaft = self.layout(n)
         blk = np.empty(size)
         rows = blk[:4 * ng * n].reshape(4, ng, n)
         phis, omegas, alphas = rows[0], rows[1], rows[2]
@@ -236,15 +272,9 @@ class Plan:
             if fa is None:
                 return None
             out[call.group.name] = fa
-        stack = torques = None
-        if not self.shaft.along:  # the crank forces, sign applied, after a zero row (sewgen.machine: _shaft)
-            stack = np.empty((1 + len(idx) + 1 + self.shaft.ncore, n, 2))
-            stack[0] = 0.0
-            np.multiply(blk[idx], sign, out=stack[1:1 + len(idx)])
-            torques = np.empty((ng + 3, n))  # 0, the groups' shaft torques, the core's, the bearings' friction
-            torques[0] = 0.0
-            torques[1:ng + 1] = blk[torque]
-        return out, stack, torques
+        if self.shaft.along:  # its cranks' forces need the groups' frames (sewgen.machine: crank_loads)
+            return out, None
+        return out, self.shaft.call.run(phi, omegas[0], alphas[0], blk, *shaft)
 
 
 def plan_of(machine) -> Plan:
