@@ -109,8 +109,11 @@ static void shift_trig(const sg_mechanism *m, const double *q, const double *cq,
             cq_out[2 * i + 1] = 0.0;
         } else if (fabs(d[i]) < SG_SMALL_STEP) {
             const double h = d[i], h2 = h * h;
-            const double sd = h * (1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0)));
-            const double cd = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)));
+            /* the series' divisions as products with their reciprocals (constants): within an ulp of the
+             * quotients, in a correction already below 1e-4 of the result, and no division on Newton's path */
+            const double sd = h * (1.0 - h2 * (1.0 / 6.0) * (1.0 - h2 * (1.0 / 20.0) * (1.0 - h2 * (1.0 / 42.0))));
+            const double cd = 1.0 - h2 * 0.5 * (1.0 - h2 * (1.0 / 12.0) * (1.0 - h2 * (1.0 / 30.0) *
+                                                                           (1.0 - h2 * (1.0 / 56.0))));
             const double c = cq[2 * i], s = cq[2 * i + 1];
             cq_out[2 * i] = c * cd - s * sd;
             cq_out[2 * i + 1] = s * cd + c * sd;
@@ -973,6 +976,19 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
 {
     double *front = out, *rear = out + 2 * n, *torque = out + 4 * n, *fric = out + 5 * n, *kin = out + 6 * n;
     const double gx = gravity[0], gy = gravity[1];
+    for (int k = 0; k < ncore; ++k) { /* the core masses' motion, mass by mass (their angles' trig once) */
+        const double r = core[4 * k + 1], cb = cos(core[4 * k + 2]), sb = sin(core[4 * k + 2]);
+        double *pos = kin + 6 * n * (size_t)k, *vel = pos + 2 * n, *acc = pos + 4 * n;
+        for (size_t i = 0; i < n; ++i) {
+            double c, s;
+            sg_sincos_inl(phi[i], &c, &s);
+            const double ux = c * cb - s * sb, uy = c * sb + s * cb; /* radial unit vector */
+            const double rw = r * omega[i], ra = r * alpha[i], cen = rw * omega[i];
+            pos[2 * i] = r * ux, pos[2 * i + 1] = r * uy;
+            vel[2 * i] = -rw * uy, vel[2 * i + 1] = rw * ux; /* r omega times the tangent (-uy, ux) */
+            acc[2 * i] = -ra * uy - cen * ux, acc[2 * i + 1] = ra * ux - cen * uy;
+        }
+    }
     int finite = 1;
     for (size_t i = 0; i < n; ++i) {
         double tx = 0.0, ty = 0.0, mx = 0.0, my = 0.0; /* Sum F, Sum arm F */
@@ -984,17 +1000,10 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
         }
         tx += belt[0], ty += belt[1];
         mx += belt_arm * belt[0], my += belt_arm * belt[1];
-        const double c = cos(phi[i]), s = sin(phi[i]), w = omega[i], al = alpha[i];
-        double core_torque = inertia * al;
+        double core_torque = inertia * alpha[i];
         for (int k = 0; k < ncore; ++k) {
-            const double *cm = core + 4 * k;
-            const double mass = cm[0], r = cm[1], cb = cos(cm[2]), sb = sin(cm[2]), arm = cm[3];
-            double *pos = kin + 6 * n * (size_t)k + 2 * i, *vel = pos + 2 * n, *acc = pos + 4 * n;
-            const double ux = c * cb - s * sb, uy = c * sb + s * cb; /* radial unit vector */
-            const double rw = r * w, ra = r * al, cen = rw * w;
-            pos[0] = r * ux, pos[1] = r * uy;
-            vel[0] = -rw * uy, vel[1] = rw * ux; /* r omega times the tangent (-uy, ux) */
-            acc[0] = -ra * uy - cen * ux, acc[1] = ra * ux - cen * uy;
+            const double mass = core[4 * k], arm = core[4 * k + 3];
+            const double *pos = kin + 6 * n * (size_t)k + 2 * i, *acc = pos + 4 * n;
             const double dx = mass * (gx - acc[0]), dy = mass * (gy - acc[1]); /* d'Alembert force */
             tx += dx, ty += dy;
             mx += arm * dx, my += arm * dy;
@@ -1003,7 +1012,7 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
         const double rx = -mx / span, ry = -my / span;
         rear[2 * i] = rx, rear[2 * i + 1] = ry;
         front[2 * i] = -rx - tx, front[2 * i + 1] = -ry - ty;
-        const double sign = w > 0.0 ? 1.0 : w < 0.0 ? -1.0 : w;
+        const double w = omega[i], sign = w > 0.0 ? 1.0 : w < 0.0 ? -1.0 : w;
         const double fr = mu_r * sign * (hypot(front[2 * i], front[2 * i + 1]) + hypot(rx, ry));
         double t = 0.0;
         for (int k = 0; k < nt; ++k) t += src[t_off[k] + i * t_step[k]];
@@ -1012,4 +1021,24 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
         finite &= isfinite(rx + ry + front[2 * i] + front[2 * i + 1] + t);
     }
     return finite;
+}
+
+/* sewgen.loads.place_loads in C (the same operations: equal to the bit): out (n x nload) zeroed, then for each
+ * of the nl loads in order and each of its ncol[l] slots (col, val: consecutive in col, val across the loads),
+ * out[i nload + col] += val wherever the load is on: everywhere where its window's start win[2l] is NaN, else
+ * where (phi[i] - start) mod 2 pi (numpy's modulo) <= win[2l + 1] (the window's span plus its tolerance). mask
+ * (nl x n) gets 1 where the load is on, else 0. */
+void sg_place_loads(size_t n, const double *phi, int nload, int nl, const double *win, const int *ncol,
+                    const int *col, const double *val, double *out, unsigned char *mask)
+{
+    for (size_t i = 0; i < n * (size_t)nload; ++i) out[i] = 0.0;
+    for (int l = 0, k0 = 0; l < nl; k0 += ncol[l], ++l) {
+        const double start = win[2 * l], limit = win[2 * l + 1];
+        unsigned char *on = mask + (size_t)l * n;
+        for (size_t i = 0; i < n; ++i) {
+            on[i] = isnan(start) || py_mod(phi[i] - start, SG_TWO_PI) <= limit;
+            if (on[i])
+                for (int k = k0; k < k0 + ncol[l]; ++k) out[i * (size_t)nload + (size_t)col[k]] += val[k];
+        }
+    }
 }

@@ -245,6 +245,12 @@ EXPORTS = {
                  "arm f_arm[j]), the belt, the core masses "
                  "(ncore x (mass, radius, angle, arm)) and the groups' shaft torques (src[t_off[k] + i "
                  "t_step[k]]); 1 where front, rear and torque are finite, else 0"),
+    "sg_place_loads": ("void", (("size_t", "n"), ("const double *", "phi"), ("int", "nload"), ("int", "nl"),
+                                ("const double *", "win"), ("const int *", "ncol"), ("const int *", "col"),
+                                ("const double *", "val"), ("double *", "out"), ("unsigned char *", "mask")),
+                       "sewgen.loads.place_loads in C, to the bit: the (n x nload) load slots of nl loads (each "
+                       "ncol[l] slots col, val; on where win[2l] (its window's start) is NaN or (phi - start) mod "
+                       "2 pi <= win[2l+1]) and their (nl x n) on-masks"),
     "sg_make_continuous": ("void", (("size_t", "n"), ("int", "nq"), ("int", "nobs"), ("double *", "q"),
                                     ("double *", "obs"), ("int", "nqa"), ("const int *", "qcols"), ("int", "noa"),
                                     ("const int *", "ocols"), ("const size_t *", "order")),

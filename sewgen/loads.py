@@ -68,7 +68,32 @@ def load_matrix(mech, loads, phi: np.ndarray, degrees: bool = False) -> tuple[np
     return place_loads(load_layout(mech, loads, degrees), phi, len(mech.description.loads))
 
 
-def load_layout(mech, loads, degrees: bool = False) -> list[tuple]:
+class LoadLayout(list):
+    """:func:`load_layout`'s list, (load, [(slot, SI value)], window in rad or None) per load, with the C arrays
+    sg_place_loads reads (csrc/sg_runtime.c: each window's start, NaN for always on, and its span plus the
+    tolerance; the slots and values, zeros left out) and the mechanism's C module."""
+
+    def __init__(self, mech, entries):
+        super().__init__(entries)
+        win, ncol, col, val = [], [], [], []
+        for _load, cols, window in entries:
+            if window is None or abs(window[1] - window[0]) >= 2 * math.pi - _WINDOW_TOL:  # a whole turn or more
+                win += [math.nan, math.inf]
+            else:
+                win += [window[0], (window[1] - window[0]) % (2 * math.pi) + _WINDOW_TOL]
+            kept = [(k, value) for k, value in cols if value != 0.0]  # x + 0 is x: no -0.0 made +0.0
+            ncol.append(len(kept))
+            col += [k for k, _ in kept]
+            val += [value for _, value in kept]
+        ffi = mech.ffi
+        self.c = (mech.lib.sg_place_loads, ffi, len(entries)) + tuple(
+            ffi.from_buffer(t, a) for t, a in (("double[]", np.array(win, dtype=float)),
+                                               ("int[]", np.array(ncol, dtype=np.intc)),
+                                               ("int[]", np.array(col, dtype=np.intc)),
+                                               ("double[]", np.array(val, dtype=float))))
+
+
+def load_layout(mech, loads, degrees: bool = False) -> LoadLayout:
     """Every load checked and converted once: (load, [(slot, SI value)], window in rad or None) per load, in
     order. What depends on the shaft angles (the windows' masks) is :func:`place_loads`'s."""
     slots = mech.description.loads
@@ -104,23 +129,19 @@ def load_layout(mech, loads, degrees: bool = False) -> list[tuple]:
                                             for comp, value in (("fx", fx), ("fy", fy), ("torque", tz)))
                 if k is not None]
         layout.append((load, cols, window))
-    return layout
+    return LoadLayout(mech, layout)
 
 
-def place_loads(layout, phi: np.ndarray, nload: int, out: np.ndarray | None = None):
-    """The (n, nload) load array of a :func:`load_layout` at shaft angles ``phi`` (into ``out``, zeroed, if
-    given), and (load, slot indices, mask) per load."""
+def place_loads(layout: LoadLayout, phi: np.ndarray, nload: int, out: np.ndarray | None = None):
+    """The (n, nload) load array of a :func:`load_layout` at shaft angles ``phi`` (into ``out``, C-contiguous, if
+    given), and (load, slot indices, mask) per load: each load's SI values added where its window holds the
+    angle (:func:`window_mask`'s test), in one C call (sg_place_loads)."""
+    n = phi.shape[0]
     if out is None:
-        out = np.zeros((phi.shape[0], nload))
-    else:
-        out.fill(0.0)
-    placed = []
-    for load, cols, window in layout:
-        mask = window_mask(phi, window)
-        for k, value in cols:
-            if value == 0.0:  # x + 0 is x: a column holds no -0.0 (it starts at +0.0, and sums that cancel are +0.0)
-                continue
-            col = out[:, k]
-            np.add(col, value, out=col, where=mask)  # out[mask, k] += value, without the gather and scatter
-        placed.append((load, list(cols), mask))
-    return out, placed
+        out = np.empty((n, nload))
+    fn, ffi, nl, win, ncol, col, val = layout.c
+    masks = np.empty((nl, n), dtype=bool)
+    d = ffi.from_buffer
+    fn(n, d("double[]", np.ascontiguousarray(phi, dtype=float)), nload, nl, win, ncol, col, val,
+       d("double[]", out), d("unsigned char[]", masks))
+    return out, [(load, list(cols), masks[k]) for k, (load, cols, _window) in enumerate(layout)]

@@ -315,10 +315,9 @@ class MachineAnalysis:
             loads = self.crank_loads()
             torques = [fa.torque("shaft") for fa in self.groups.values()]
             src = np.concatenate([np.ravel(F) for _, _, F in loads] + [np.ravel(t) for t in torques]).astype(float)
-            forces, tq = ShaftCall.layout([(2 * n * j, 2 * n * j + 1) for j in range(len(loads))], [2] * len(loads),
-                                          [1.0] * len(loads), [z - call.front for _, z, _ in loads],
-                                          [2 * n * len(loads) + n * k for k in range(len(torques))],
-                                          [1] * len(torques))
+            forces, tq = call.layout([(2 * n * j, 2 * n * j + 1) for j in range(len(loads))], [2] * len(loads),
+                                     [1.0] * len(loads), [z - call.front for _, z, _ in loads],
+                                     [2 * n * len(loads) + n * k for k in range(len(torques))], [1] * len(torques))
             rates = [np.ascontiguousarray(np.broadcast_to(np.asarray(v, dtype=float), (n,)))
                      for v in (self.omega, self.alpha)]
             shaft = call.run(np.ascontiguousarray(self.phi, dtype=float), *rates, src, forces, tq)

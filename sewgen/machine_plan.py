@@ -57,7 +57,7 @@ class GroupCall:
     branch=...)`` (the same arrays, bit for bit) without the per-call conversions."""
 
     __slots__ = ("group", "mech", "phase", "loads", "settings", "nq", "nobs", "nfo", "nload", "width", "call",
-                 "angle", "keep", "torque_column")
+                 "angle", "keep", "torque_column", "fixed")
 
     def __init__(self, g, g_mag: float, g_dir: float):
         mech = g.mechanism
@@ -73,6 +73,8 @@ class GroupCall:
             arr.flags.writeable = False  # shared by every result of this plan, like the mechanism's defaults
         self.loads = load_layout(mech, loads) if loads else None
         self.settings = (probe.params, probe.held, probe.branch, s.gravity, s.moment_about)
+        # without loads the run's settings are the same every call: one frozen object of read-only arrays
+        self.fixed = None if loads else RunSettings(*self.settings[:4], None, s.moment_about, ())
         sizes = mech.description.sizes
         self.nq, self.nobs, self.nfo = sizes["nq"], sizes["nobs"], sizes["nfo"]
         self.nload = sizes["nload"] if loads else 0
@@ -86,54 +88,50 @@ class GroupCall:
         _angle, nqa, qa_p, noa, oa_p = mech._angle
         self.angle = (nqa, qa_p, noa, oa_p) if (nqa or noa) else None
 
-    def run(self, rows, k: int, status, blk, o: int, sort: bool):
-        """The group's ForceAnalysis over its rows ``k`` of ``rows`` (phi, omega, alpha, err: (4, groups, n), the
-        head of the analysis' block ``blk``), ``status`` and its own region of ``blk`` from offset ``o`` (q,
-        qd, qdd, obs, frc, loads), or None where a position fails (the general path then raises its typed
-        error). ``sort``: the angles are not in non-decreasing order."""
-        phi_g, omega, alpha, err = rows[:, k]
-        ng, n = rows.shape[1], rows.shape[2]
-        nq, nobs, nfo, nload = self.nq, self.nobs, self.nfo, self.nload
+    def run(self, phi, w: float, accel: float, blk, base, o: int, status, sort: bool):
+        """The group's ForceAnalysis at machine shaft angles ``phi`` (``sort``: they do not ascend) in its region of the analysis' block ``blk`` from offset ``o`` (``base``: the block's
+        C pointer): sg_solve_lean's layout (phi + phase, omega, alpha, err, then q, qd, qdd, obs by rows; see
+        :meth:`Motion.of_block`) followed by frc and the loads; or None where a position fails (the general path
+        then raises its typed error). ``status``: the positions' C statuses (scratch)."""
+        n, nq, nobs, nfo = phi.shape[0], self.nq, self.nobs, self.nfo
         nn = n * nq
-        q, qd, qdd = blk[o:o + 3 * nn].reshape(3, n, nq)
-        o2 = o + 3 * nn
-        obs = blk[o2:o2 + n * nobs].reshape(n, nobs)
-        o3 = o2 + n * nobs
-        frc = blk[o3:o3 + n * nfo].reshape(n, nfo)
-        o4 = o3 + n * nfo
+        ph = blk[o:o + 3 * n]
+        np.add(phi, self.phase, out=ph[:n])
+        ph[n:2 * n] = w
+        ph[2 * n:] = accel
+        o2 = o + 4 * n + 3 * nn  # obs
+        o3 = o2 + n * nobs  # frc
         fn, desc, held_p, p_p, branch_p, guess_p, opt, gv_p, ffi = self.call
-        base = ffi.from_buffer("double[]", blk)
-        head = base + k * n  # phi; omega, alpha, err each ng * n further
-        ld, placed = None, []
-        loads_p = ffi.NULL
+        head = base + o
+        loads_p, settings = ffi.NULL, self.fixed
         if self.loads is not None:
-            ld, placed = place_loads(self.loads, phi_g, nload, blk[o4:o4 + n * nload].reshape(n, nload))
+            o4 = o3 + n * nfo
+            ld, placed = place_loads(self.loads, ph[:n], self.nload, blk[o4:o4 + n * self.nload].reshape(n, -1))
             ld.flags.writeable = False
             loads_p = base + o4
-        order, order_p = None, ffi.NULL
+            p, held, branch, gv, about = self.settings
+            settings = RunSettings(p, held, branch, gv, ld, about, tuple(placed))
+        order_p = ffi.NULL
         if sort:
-            order = np.argsort(phi_g, kind="stable").astype(np.uintp)
+            order = np.argsort(ph[:n], kind="stable").astype(np.uintp)
             order_p = ffi.from_buffer("size_t[]", order)
-        qp, op = base + o, base + o2
-        step = ng * n
-        if fn(desc, n, head, head + step, head + 2 * step, held_p, p_p, branch_p, guess_p, opt, order_p, gv_p,
-              loads_p, qp, qp + nn, qp + 2 * nn, op, head + 3 * step, base + o3, ffi.from_buffer("int[]", status)):
+        qp = head + 4 * n
+        if fn(desc, n, head, head + n, head + 2 * n, held_p, p_p, branch_p, guess_p, opt, order_p, gv_p, loads_p,
+              qp, qp + nn, qp + 2 * nn, base + o2, head + 3 * n, base + o3, status):
             return None
         if self.angle is not None:
             nqa, qa_p, noa, oa_p = self.angle
-            self.mech.lib.sg_make_continuous(n, nq, nobs, qp, op, nqa, qa_p, noa, oa_p, order_p)
-        p, held, branch, gv, about = self.settings
-        settings = RunSettings(p, held, branch, gv, ld, about, tuple(placed))
-        motion = Motion(self.mech, phi_g, omega, alpha, q, qd, qdd, obs, err, SINGULAR_TOL)
-        return ForceAnalysis(self.mech, motion, frc, settings)
+            self.mech.lib.sg_make_continuous(n, nq, nobs, qp, base + o2, nqa, qa_p, noa, oa_p, order_p)
+        motion = Motion.of_block(self.mech, blk[o:o3], n, nq, nobs, SINGULAR_TOL)
+        return ForceAnalysis(self.mech, motion, blk[o3:o3 + n * nfo].reshape(n, nfo), settings)
 
     def size(self, n: int) -> int:
         """Doubles of the group's own region of an analysis' block at ``n`` positions."""
-        return (3 * self.nq + self.nobs + self.nfo + self.nload) * n
+        return self.width * n
 
     def frc_offset(self, n: int) -> int:
         """Offset of ``frc`` in the group's region."""
-        return (3 * self.nq + self.nobs) * n
+        return (4 + 3 * self.nq + self.nobs) * n
 
 
 class ShaftCall:
@@ -162,31 +160,31 @@ class ShaftCall:
     def run(self, phi, omega, alpha, src, forces, torques):
         """(front (n, 2), rear (n, 2), torque (n,), the bearings' friction torque (n,), [(mass, position,
         velocity, acceleration)] of the core, all finite) at ``phi`` with ``omega``, ``alpha`` ((n,) each,
-        contiguous), the forces on the core and the groups' shaft torques read from ``src`` at ``forces`` =
-        (offsets (2 per force), steps, signs, arms) and ``torques`` = (offsets, steps): :meth:`layout`'s."""
-        n, ffi = phi.shape[0], self.ffi
-        out = np.empty(n * (6 + 6 * len(self.masses)))
-        f_off, f_step, f_sign, f_arm = forces
-        t_off, t_step = torques
+        contiguous), the forces on the core and the groups' shaft torques read from ``src`` at ``forces`` and
+        ``torques``: :meth:`layout`'s."""
+        n, d = phi.shape[0], self.ffi.from_buffer
+        ncore = len(self.masses)
+        out = np.empty(n * (6 + 6 * ncore))
+        nf, f_off, f_step, f_sign, f_arm = forces
+        nt, t_off, t_step = torques
         belt_p, core_p, g_p = self._p
-        d = ffi.from_buffer
-        finite = self.fn(n, d("double[]", phi), d("double[]", omega), d("double[]", alpha), d("double[]", src),
-                         f_step.shape[0], d("size_t[]", f_off), d("size_t[]", f_step), d("double[]", f_sign),
-                         d("double[]", f_arm), t_step.shape[0], d("size_t[]", t_off), d("size_t[]", t_step), belt_p,
-                         self.belt_arm, len(self.masses), core_p, g_p, self.inertia, self.span, self.mu_r,
-                         d("double[]", out))
-        kin = out[6 * n:].reshape(len(self.masses), 3, n, 2)
+        finite = self.fn(n, d("double[]", phi), d("double[]", omega), d("double[]", alpha), d("double[]", src), nf,
+                         f_off, f_step, f_sign, f_arm, nt, t_off, t_step, belt_p, self.belt_arm, ncore, core_p, g_p,
+                         self.inertia, self.span, self.mu_r, d("double[]", out))
+        kin = out[6 * n:].reshape(ncore, 3, n, 2)
         core = [(sm, kin[k, 0], kin[k, 1], kin[k, 2]) for k, sm in enumerate(self.masses)]
         return out[:2 * n].reshape(n, 2), out[2 * n:4 * n].reshape(n, 2), out[4 * n:5 * n], out[5 * n:6 * n], core, \
             bool(finite)
 
-    @staticmethod
-    def layout(columns, steps, signs, arms, torque_offsets, torque_steps):
-        """(forces, torques) as :meth:`run` reads them: offsets, steps as size_t arrays, signs and arms as
-        doubles (the cranks' x and y columns, then the torques')."""
-        forces = (np.asarray(columns, dtype=np.uintp).reshape(-1), np.asarray(steps, dtype=np.uintp),
-                  np.asarray(signs, dtype=float), np.asarray(arms, dtype=float))
-        return forces, (np.asarray(torque_offsets, dtype=np.uintp), np.asarray(torque_steps, dtype=np.uintp))
+    def layout(self, columns, steps, signs, arms, torque_offsets, torque_steps):
+        """(forces, torques) as :meth:`run` reads them: the count and C arrays of the cranks' x and y columns'
+        offsets, their steps, signs and arms, then of the torques' offsets and steps."""
+        d = self.ffi.from_buffer
+        forces = (len(steps), d("size_t[]", np.asarray(columns, dtype=np.uintp).reshape(-1)),
+                  d("size_t[]", np.asarray(steps, dtype=np.uintp)), d("double[]", np.asarray(signs, dtype=float)),
+                  d("double[]", np.asarray(arms, dtype=float)))
+        return forces, (len(torque_steps), d("size_t[]", np.asarray(torque_offsets, dtype=np.uintp)),
+                        d("size_t[]", np.asarray(torque_steps, dtype=np.uintp)))
 
 
 class ShaftPlan:
@@ -231,13 +229,13 @@ class Plan:
         got = self._layouts.get(n)
         if got is None:
             ng = len(self.groups)
-            offsets, o = [], 4 * ng * n
+            offsets, o = [], 0
             for call in self.groups:
                 offsets.append(o)
                 o += call.size(n)
             frc = {call.group.name: (off + call.frc_offset(n), call.nfo) for call, off in zip(self.groups, offsets)}
             cranks = self.shaft.cranks
-            shaft = ShaftCall.layout([(frc[c[0]][0] + c[3], frc[c[0]][0] + c[4]) for c in cranks],
+            shaft = self.shaft.call.layout([(frc[c[0]][0] + c[3], frc[c[0]][0] + c[4]) for c in cranks],
                                      [frc[c[0]][1] for c in cranks], [c[5] for c in cranks],
                                      [c[2] - self.shaft.call.front for c in cranks],
                                      [off + call.frc_offset(n) + call.torque_column
@@ -250,31 +248,26 @@ class Plan:
 
     def run(self, phi: np.ndarray, w: float, accel: float, progress=None):
         """(group name -> ForceAnalysis, the shaft's results of :meth:`ShaftCall.run` or None) at machine shaft
-        angles ``phi``, in one fresh block; None where anything fails."""
+        angles ``phi`` (contiguous), in one fresh block; None where anything fails."""
         n, ng = phi.shape[0], len(self.groups)
         offsets, size, shaft = self.layout(n)
         blk = np.empty(size)
-        rows = blk[:4 * ng * n].reshape(4, ng, n)
-        phis, omegas, alphas = rows[0], rows[1], rows[2]
-        for k, call in enumerate(self.groups):
-            np.add(phi, call.phase, out=phis[k])
         sorted_, ffi = self.sorted
-        sort = n > 1 and not (sorted_(n, ffi.from_buffer("double[]", phi)) if phi.flags.c_contiguous
-                              else (phi[1:] >= phi[:-1]).all())
-        omegas.fill(w)
-        alphas.fill(accel)
-        status = np.zeros((ng, n), dtype=np.intc)
+        sort = n > 1 and not sorted_(n, ffi.from_buffer("double[]", phi))
+        base = ffi.from_buffer("double[]", blk)
+        status = ffi.new("int[]", n)
         out = {}
         for k, call in enumerate(self.groups):
             if progress:
                 progress(f"{call.group.name}: {n} positions", k, ng)
-            fa = call.run(rows, k, status[k], blk, offsets[k], sort)
+            fa = call.run(phi, w, accel, blk, base, offsets[k], status, sort)
             if fa is None:
                 return None
             out[call.group.name] = fa
         if self.shaft.along:  # its cranks' forces need the groups' frames (sewgen.machine: crank_loads)
             return out, None
-        return out, self.shaft.call.run(phi, omegas[0], alphas[0], blk, *shaft)
+        o = offsets[0]
+        return out, self.shaft.call.run(phi, blk[o + n:o + 2 * n], blk[o + 2 * n:o + 3 * n], blk, *shaft)
 
 
 def plan_of(machine) -> Plan:
