@@ -5,10 +5,11 @@ machine at 72 positions in < 0.3 ms).
 A plan holds, per group, the C-ready vectors of its run (SI parameters, held inputs, branches, gravity, Newton
 options: harvested from one :meth:`Mechanism.prepare` of the group, so every conversion and check is the
 engine's own), its loads converted once (:func:`sewgen.loads.load_layout`), the C function and descriptor of
-its sweep, and for the shaft the bearing positions, the belt, the crank-pin force columns of the groups across
-the shaft. Per call only what depends on the shaft angles is computed: each group's arrays in one fresh block
-(inputs, outputs, loads; never shared with an earlier result), the load windows' masks, one C call, the angles
-made continuous in C.
+its sweep, and for the shaft its constants (:class:`ShaftCall`) and the crank-pin force columns of the groups
+across the shaft. Per call only what depends on the shaft angles is computed: each group's arrays in one fresh
+block (inputs, outputs, loads; never shared with an earlier result), its loads placed (one C call), its sweep
+(one C call), its angles made continuous (one C call), and then the shaft's bearings and torque (one C call,
+sg_shaft, which the general path calls too).
 
 Machines are plain (mutable) dataclasses and callers do change them in place (``m.gravity = ...``), so a plan
 carries the :func:`machine_state` it was made from and is rebuilt whenever the machine's state differs: a
@@ -89,10 +90,11 @@ class GroupCall:
         self.angle = (nqa, qa_p, noa, oa_p) if (nqa or noa) else None
 
     def run(self, phi, w: float, accel: float, blk, base, o: int, status, sort: bool):
-        """The group's ForceAnalysis at machine shaft angles ``phi`` (``sort``: they do not ascend) in its region of the analysis' block ``blk`` from offset ``o`` (``base``: the block's
-        C pointer): sg_solve_lean's layout (phi + phase, omega, alpha, err, then q, qd, qdd, obs by rows; see
-        :meth:`Motion.of_block`) followed by frc and the loads; or None where a position fails (the general path
-        then raises its typed error). ``status``: the positions' C statuses (scratch)."""
+        """The group's ForceAnalysis at machine shaft angles ``phi`` (``sort``: they do not ascend) in its region
+        of the analysis' block ``blk`` from offset ``o`` (``base``: the block's C pointer), laid out as
+        sg_solve_lean's (phi + phase, omega, alpha, err, then q, qd, qdd, obs by rows; see
+        :meth:`Motion.of_block`) and followed by frc and the loads; or None where a position fails (the general
+        path then raises its typed error). ``status``: the positions' C statuses (scratch)."""
         n, nq, nobs, nfo = phi.shape[0], self.nq, self.nobs, self.nfo
         nn = n * nq
         ph = blk[o:o + 3 * n]
