@@ -56,34 +56,6 @@ void sg_solve_eq(int n, const double *lu, const int *piv, const double *rs, cons
 }
 
 /* max |v_i| w_i; NaN propagates: a NaN entry makes the norm NaN */
-/* Newton's LU and solve with a literal n for the common sizes, so that their loops unroll whole (SG_UNROLL);
- * the generic loops otherwise. The same operations in the same order either way. */
-static int lu_factor_q(int n, double *a, int *piv)
-{
-    switch (n) {
-    case 3: return sg_lu_factor_inl(3, a, piv, 0);
-    case 4: return sg_lu_factor_inl(4, a, piv, 0);
-    case 5: return sg_lu_factor_inl(5, a, piv, 0);
-    case 6: return sg_lu_factor_inl(6, a, piv, 0);
-    case 7: return sg_lu_factor_inl(7, a, piv, 0);
-    case 8: return sg_lu_factor_inl(8, a, piv, 0);
-    default: return sg_lu_factor_inl(n, a, piv, 0);
-    }
-}
-
-static void lu_solve_q(int n, const double *lu, const int *piv, double *b)
-{
-    switch (n) {
-    case 3: sg_lu_solve_inl(3, lu, piv, b); return;
-    case 4: sg_lu_solve_inl(4, lu, piv, b); return;
-    case 5: sg_lu_solve_inl(5, lu, piv, b); return;
-    case 6: sg_lu_solve_inl(6, lu, piv, b); return;
-    case 7: sg_lu_solve_inl(7, lu, piv, b); return;
-    case 8: sg_lu_solve_inl(8, lu, piv, b); return;
-    default: sg_lu_solve_inl(n, lu, piv, b); return;
-    }
-}
-
 static double weighted_norm(int n, const double *v, const double *w)
 {
     double m = 0.0;
@@ -172,12 +144,14 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
     double norm = weighted_norm(nq, r, w);
     for (int it = 0;; ++it) {
         if (!isfinite(norm)) return SG_NO_CONVERGENCE;
-        if (norm <= 1.0 && it >= min_iter) {
+        /* min_iter's step (below) is not taken from a start already exact to rounding (the continuation's
+         * prediction at fine steps): it could not make the position more accurate */
+        if (norm <= 1.0 && (it >= min_iter || norm * opt->tol <= SG_RESID_FLOOR)) {
             *resid = norm * opt->tol;
             return SG_OK;
         }
         copy_doubles(lu, jac, nq * nq);
-        if (lu_factor_q(nq, lu, piv) != SG_OK) {
+        if (sg_lu_factor(nq, lu, piv, NULL) != SG_OK) {
             if (norm <= 1.0) { /* converged already: the step asked for cannot be taken */
                 *resid = norm * opt->tol;
                 return SG_OK;
@@ -186,7 +160,7 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
         }
         if (it >= opt->max_iter) return SG_NO_CONVERGENCE;
         for (int i = 0; i < nq; ++i) dq[i] = -r[i];
-        lu_solve_q(nq, lu, piv, dq);
+        sg_lu_solve(nq, lu, piv, dq);
         if (norm <= 1.0) { /* min_iter: a start within the tolerance gets one full step all the same, kept if it
                             * lowers the residual (a prediction within the tolerance is only that accurate; a
                             * step makes it as accurate as a solution Newton reached) */
@@ -225,9 +199,9 @@ static void polish(const sg_mechanism *m, double *q, double *cq, const double *x
     for (int i = 0; i < nq; ++i) w[i] = 1.0 / w[i];
     m->residual(q, cq, x, cx, c, r, jac);
     double norm = weighted_norm(nq, r, w);
-    if (lu_factor_q(nq, jac, piv) != SG_OK) return;
+    if (sg_lu_factor(nq, jac, piv, NULL) != SG_OK) return;
     for (int i = 0; i < nq; ++i) dq[i] = -r[i];
-    lu_solve_q(nq, jac, piv, dq);
+    sg_lu_solve(nq, jac, piv, dq);
     keep_step_if_lower(m, q, cq, dq, x, cx, c, w, &norm, NULL);
     *resid = norm;
     (void)opt;
