@@ -933,8 +933,8 @@ void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int 
  *   - the cranks' pivot forces: x at src[f_off[2j] + i f_step[j]], y at src[f_off[2j + 1] + i f_step[j]], times
  *     f_sign[j], at arm f_arm[j] = z_j - z_A;
  *   - the belt pull (belt, at belt_arm);
- *   - the d'Alembert forces m (g - a) of the core's point masses (core: ncore x (mass, radius r, angle theta,
- *     arm)), at r (cos(phi + theta), sin(phi + theta)) turning with the shaft;
+ *   - the d'Alembert forces m (g - a) of the core's point masses (core: ncore x (mass, radius r, cos theta,
+ *     sin theta, arm)), at r (cos(phi + theta), sin(phi + theta)) turning with the shaft;
  * and the bearings' forces on the shaft are rear = -Sum arm F / span, front = -rear - Sum F (span = z_B - z_A).
  * The driving torque sums the groups' shaft torques (src[t_off[k] + i t_step[k]]), the core's inertia times
  * alpha, r x m (a - g) of its masses and the bearings' Coulomb friction mu_r sign(omega) (|front| + |rear|) (the
@@ -950,19 +950,6 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
 {
     double *front = out, *rear = out + 2 * n, *torque = out + 4 * n, *fric = out + 5 * n, *kin = out + 6 * n;
     const double gx = gravity[0], gy = gravity[1];
-    for (int k = 0; k < ncore; ++k) { /* the core masses' motion, mass by mass (their angles' trig once) */
-        const double r = core[4 * k + 1], cb = cos(core[4 * k + 2]), sb = sin(core[4 * k + 2]);
-        double *pos = kin + 6 * n * (size_t)k, *vel = pos + 2 * n, *acc = pos + 4 * n;
-        for (size_t i = 0; i < n; ++i) {
-            double c, s;
-            sg_sincos_inl(phi[i], &c, &s);
-            const double ux = c * cb - s * sb, uy = c * sb + s * cb; /* radial unit vector */
-            const double rw = r * omega[i], ra = r * alpha[i], cen = rw * omega[i];
-            pos[2 * i] = r * ux, pos[2 * i + 1] = r * uy;
-            vel[2 * i] = -rw * uy, vel[2 * i + 1] = rw * ux; /* r omega times the tangent (-uy, ux) */
-            acc[2 * i] = -ra * uy - cen * ux, acc[2 * i + 1] = ra * ux - cen * uy;
-        }
-    }
     int finite = 1;
     for (size_t i = 0; i < n; ++i) {
         double tx = 0.0, ty = 0.0, mx = 0.0, my = 0.0; /* Sum F, Sum arm F */
@@ -974,10 +961,17 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
         }
         tx += belt[0], ty += belt[1];
         mx += belt_arm * belt[0], my += belt_arm * belt[1];
-        double core_torque = inertia * alpha[i];
+        double c, s, core_torque = inertia * alpha[i];
+        sg_sincos_inl(phi[i], &c, &s);
         for (int k = 0; k < ncore; ++k) {
-            const double mass = core[4 * k], arm = core[4 * k + 3];
-            const double *pos = kin + 6 * n * (size_t)k + 2 * i, *acc = pos + 4 * n;
+            const double *cm = core + 5 * k;
+            const double mass = cm[0], r = cm[1], cb = cm[2], sb = cm[3], arm = cm[4];
+            double *pos = kin + 6 * n * (size_t)k + 2 * i, *vel = pos + 2 * n, *acc = pos + 4 * n;
+            const double ux = c * cb - s * sb, uy = c * sb + s * cb; /* radial unit vector */
+            const double rw = r * omega[i], ra = r * alpha[i], cen = rw * omega[i];
+            pos[0] = r * ux, pos[1] = r * uy;
+            vel[0] = -rw * uy, vel[1] = rw * ux; /* r omega times the tangent (-uy, ux) */
+            acc[0] = -ra * uy - cen * ux, acc[1] = ra * ux - cen * uy;
             const double dx = mass * (gx - acc[0]), dy = mass * (gy - acc[1]); /* d'Alembert force */
             tx += dx, ty += dy;
             mx += arm * dx, my += arm * dy;

@@ -33,9 +33,9 @@
 #define SG_EPS 1.1102230246251565e-16
 #if defined(__GNUC__)
 #define SG_INLINE static inline __attribute__((always_inline))
-/* A loop of the small dense solves unrolled: whole where n is a literal (the generated rates kernels: the feed's
- * 7 x 7 took a quarter fewer instructions a position); -O2 alone kept the loops, whose counters and branches
- * cost as much as the arithmetic. */
+/* A loop of the small dense solves unrolled: whole where n is a literal (the generated rates kernels). -O2 alone
+ * kept the loops; without their counters and hard-to-predict branches the feed's sweep takes 15-20 % less time
+ * for the same instruction count (BENCHMARKS.md). */
 #define SG_UNROLL _Pragma("GCC unroll 8")
 #define SG_FLATTEN __attribute__((flatten)) /* every call in the function's body inlined */
 #define SG_NOINLINE __attribute__((noinline))

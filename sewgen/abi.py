@@ -242,9 +242,9 @@ EXPORTS = {
                  "2 each), the driving torque and the bearings' friction torque (n each) and the core masses' "
                  "position, velocity, acceleration (ncore x 3 x n x 2) into out, from the forces on the core "
                  "(x at src[f_off[2j] + i f_step[j]], y at src[f_off[2j+1] + i f_step[j]], times f_sign[j], at "
-                 "arm f_arm[j]), the belt, the core masses "
-                 "(ncore x (mass, radius, angle, arm)) and the groups' shaft torques (src[t_off[k] + i "
-                 "t_step[k]]); 1 where front, rear and torque are finite, else 0"),
+                 "arm f_arm[j]), the belt, the core masses (ncore x (mass, radius, cos and sin of the angle, "
+                 "arm)) and the groups' shaft torques (src[t_off[k] + i t_step[k]]); 1 where front, rear and "
+                 "torque are finite, else 0"),
     "sg_place_loads": ("void", (("size_t", "n"), ("const double *", "phi"), ("int", "nload"), ("int", "nl"),
                                 ("const double *", "win"), ("const int *", "ncol"), ("const int *", "col"),
                                 ("const double *", "val"), ("double *", "out"), ("unsigned char *", "mask")),

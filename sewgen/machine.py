@@ -314,7 +314,7 @@ class MachineAnalysis:
             n = len(self.phi)
             loads = self.crank_loads()
             torques = [fa.torque("shaft") for fa in self.groups.values()]
-            src = np.concatenate([np.ravel(F) for _, _, F in loads] + [np.ravel(t) for t in torques]).astype(float)
+            src = np.concatenate([np.ravel(F) for _, _, F in loads] + [np.ravel(t) for t in torques], dtype=float)
             forces, tq = call.layout([(2 * n * j, 2 * n * j + 1) for j in range(len(loads))], [2] * len(loads),
                                      [1.0] * len(loads), [z - call.front for _, z, _ in loads],
                                      [2 * n * len(loads) + n * k for k in range(len(torques))], [1] * len(torques))

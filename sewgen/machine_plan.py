@@ -137,9 +137,10 @@ class GroupCall:
 
 
 class ShaftCall:
-    """The upper shaft's constants as sg_shaft (csrc/sg_runtime.c) reads them: the core masses (mass, radius,
-    angle, arm about the front bearing), the belt and its arm, gravity, the core's inertia, the bearings' span and
-    friction radius. The planned and the general analysis both run :meth:`run`, so they agree to the bit."""
+    """The upper shaft's constants as sg_shaft (csrc/sg_runtime.c) reads them: the core masses (mass, radius, cos
+    and sin of the angle, arm about the front bearing), the belt and its arm, gravity, the core's inertia, the
+    bearings' span and friction radius. The planned and the general analysis both run :meth:`run`, so they
+    agree to the bit."""
 
     __slots__ = ("masses", "core", "belt", "belt_arm", "gravity", "inertia", "span", "mu_r", "front", "fn", "ffi",
                  "_p")
@@ -147,17 +148,16 @@ class ShaftCall:
     def __init__(self, machine):
         sh = machine.shaft
         self.masses, self.front = tuple(sh.masses), sh.front
-        self.core = np.array([(sm.mass, sm.radius, sm.angle, sm.z - sh.front) for sm in sh.masses],
-                             dtype=float).reshape(len(sh.masses), 4)
+        self.core = np.array([(sm.mass, sm.radius, math.cos(sm.angle), math.sin(sm.angle), sm.z - sh.front)
+                              for sm in sh.masses], dtype=float).reshape(len(sh.masses), 5)
         self.belt = np.array(sh.belt, dtype=float)
         self.belt_arm = float(sh.pulley - sh.front)
         self.gravity = np.array(machine.gravity, dtype=float)
         self.inertia, self.span = float(sh.inertia), float(sh.rear - sh.front)
         self.mu_r = float(sh.friction * sh.journal_radius)
         mech = machine.groups[0].mechanism
-        self.fn, ffi = mech.lib.sg_shaft, mech.ffi
-        self.ffi = ffi
-        self._p = tuple(ffi.from_buffer("double[]", a) for a in (self.belt, self.core, self.gravity))
+        self.fn, self.ffi = mech.lib.sg_shaft, mech.ffi
+        self._p = tuple(self.ffi.from_buffer("double[]", a) for a in (self.belt, self.core, self.gravity))
 
     def run(self, phi, omega, alpha, src, forces, torques):
         """(front (n, 2), rear (n, 2), torque (n,), the bearings' friction torque (n,), [(mass, position,
@@ -191,13 +191,14 @@ class ShaftCall:
 
 class ShaftPlan:
     """The upper shaft's fixed data: its :class:`ShaftCall`, and per group across the shaft the columns of its
-    cranks' pivot forces on the frame (``frame_force(<crank>.pivot)``) with their sign and axial z."""
+    cranks' pivot forces on the frame (``frame_force(<crank>.pivot)``) with their sign and arm about the front
+    bearing."""
 
     __slots__ = ("call", "cranks", "along")
 
     def __init__(self, machine):
         self.call = ShaftCall(machine)
-        self.cranks = []  # (group name, label, z, column x, column y, sign) of every crank across the shaft
+        self.cranks = []  # (group name, column x, column y, sign, arm z - z_A) of every crank across the shaft
         self.along = any(g.along for g in machine.groups)
         for g in machine.groups:
             desc = g.mechanism.description
@@ -208,7 +209,7 @@ class ShaftPlan:
                     cx, cy = r.offset, r.offset + 1
                 else:
                     cx, cy = desc.output_column(f"{name}.fx"), desc.output_column(f"{name}.fy")
-                self.cranks.append((g.name, f"{g.name}.{body}", z, cx, cy, -1.0 if r.a == "ground" else 1.0))
+                self.cranks.append((g.name, cx, cy, -1.0 if r.a == "ground" else 1.0, z - self.call.front))
 
 
 class Plan:
@@ -236,12 +237,13 @@ class Plan:
                 offsets.append(o)
                 o += call.size(n)
             frc = {call.group.name: (off + call.frc_offset(n), call.nfo) for call, off in zip(self.groups, offsets)}
-            cranks = self.shaft.cranks
-            shaft = self.shaft.call.layout([(frc[c[0]][0] + c[3], frc[c[0]][0] + c[4]) for c in cranks],
-                                     [frc[c[0]][1] for c in cranks], [c[5] for c in cranks],
-                                     [c[2] - self.shaft.call.front for c in cranks],
-                                     [off + call.frc_offset(n) + call.torque_column
-                                      for call, off in zip(self.groups, offsets)], [call.nfo for call in self.groups])
+            cranks = [(frc[g][0] + cx, frc[g][0] + cy, frc[g][1], sign, arm)
+                      for g, cx, cy, sign, arm in self.shaft.cranks]
+            shaft = self.shaft.call.layout([c[:2] for c in cranks], [c[2] for c in cranks], [c[3] for c in cranks],
+                                           [c[4] for c in cranks],
+                                           [off + call.frc_offset(n) + call.torque_column
+                                            for call, off in zip(self.groups, offsets)],
+                                           [call.nfo for call in self.groups])
             got = (offsets, o, shaft)
             if len(self._layouts) >= 8:
                 self._layouts.clear()
