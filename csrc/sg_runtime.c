@@ -430,7 +430,8 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                     const double *alpha, const double *held, const double *p, const int *branch,
                     const double *q_guess, const sg_options *opt, const size_t *order, const double *gv,
                     const double *loads, double *q, double *qd, double *qdd, double *obs, double *err,
-                    double *frc, int *status, const unsigned char *want, const double *trig)
+                    double *frc, int *status, const unsigned char *want, const double *trig,
+                    sg_columns *cols)
 {
     const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo;
     double no_loads[SG_MAX_LOAD]; /* zeroed below for a force sweep without loads only: 4 kB a call otherwise */
@@ -446,9 +447,9 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     if (use_closed && m->sweep != NULL && !opt->generic) { /* the inlined loop: the same, faster */
         if (!opt->scalar && sg_simd_width(m) > 1) /* four positions at a time */
             return m->sweep_simd(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs,
-                                 err, frc, status, want, trig);
+                                 err, frc, status, want, trig, cols);
         return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs, err, frc,
-                        status, want, NULL); /* the scalar loop's own sin, cos */
+                        status, want, NULL, NULL); /* the scalar loop's own sin, cos; rows only */
     }
     if (frc != NULL && loads == NULL)
         for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;
@@ -615,7 +616,7 @@ size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double
                 double *qdd, double *obs, double *err, int *status)
 {
     return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, NULL, NULL, q, qd, qdd, obs, err,
-                 NULL, status, NULL, NULL);
+                 NULL, status, NULL, NULL, NULL);
 }
 
 /* sg_sweep plus kinetostatics in the same pass: gv is gravity (2), loads is n x nload (NULL: no loads),
@@ -627,7 +628,7 @@ size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const
                        double *frc, int *status)
 {
     return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, gv, loads, q, qd, qdd, obs, err,
-                 frc, status, NULL, NULL);
+                 frc, status, NULL, NULL, NULL);
 }
 
 /* Batched designs (issue 14) -------------------------------------------------------------------------------
@@ -636,11 +637,22 @@ size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const
 typedef struct {
     double *q, *qd, *qdd, *obs;
     int nq, nobs;
+    const sg_columns *direct; /* not NULL: these columns live in their own arrays (the SIMD loop wrote them) */
 } sg_scratch;
+
+/* The index of flat column j among s->direct's, -1 where it is in the rows. */
+static inline int direct_index(const sg_scratch *s, int j)
+{
+    for (int k = 0; s->direct != NULL && k < s->direct->n; ++k)
+        if (s->direct->col[k] == j) return k;
+    return -1;
+}
 
 static inline double *col_ptr(const sg_scratch *s, int j, size_t i)
 {
     const int nq = s->nq;
+    const int k = direct_index(s, j);
+    if (k >= 0) return s->direct->dst[k] + i;
     if (j < nq) return s->q + i * (size_t)nq + (size_t)j;
     if (j < 2 * nq) return s->qd + i * (size_t)nq + (size_t)(j - nq);
     if (j < 3 * nq) return s->qdd + i * (size_t)nq + (size_t)(j - 2 * nq);
@@ -650,6 +662,7 @@ static inline double *col_ptr(const sg_scratch *s, int j, size_t i)
 /* The distance between a column's entries of two successive positions (a position's row). */
 static inline size_t col_step(const sg_scratch *s, int j)
 {
+    if (direct_index(s, j) >= 0) return 1;
     return (size_t)(j < 3 * s->nq ? s->nq : s->nobs);
 }
 
@@ -667,59 +680,82 @@ static inline double py_mod(double a, double b)
 
 /* sewgen.mechanism.continuous_angles on one angle column of one design's sweep (every position solved): no 2π
  * jumps along the solving order, the first position in (−π, π]; whole turns only, as np.unwrap does them. */
-static void continuous_column(const sg_scratch *s, int j, size_t n, const size_t *order)
+static void continuous_column(double *v, size_t step, size_t n, const size_t *order)
 {
     if (n == 0) return;
     const double pi = 3.14159265358979323846;
-    const size_t i0 = order ? order[0] : 0;
-    const double first = *col_ptr(s, j, i0);
+#define SG_AT(k) v[(order ? order[k] : (k)) * step] /* the k-th position in solving order */
+    const double first = SG_AT(0);
     int need = !(first > -pi && first <= pi);
-    for (size_t k = 1; k < n && !need; ++k) {
-        const size_t a = order ? order[k - 1] : k - 1, b = order ? order[k] : k;
-        need = fabs(*col_ptr(s, j, b) - *col_ptr(s, j, a)) > pi;
-    }
+    for (size_t k = 1; k < n && !need; ++k) need = fabs(SG_AT(k) - SG_AT(k - 1)) > pi;
     if (!need) return;
     double corr = 0.0, prev = first;
     for (size_t k = 1; k < n; ++k) {
-        const size_t b = order ? order[k] : k;
-        double *v = col_ptr(s, j, b);
-        const double raw = *v, dd = raw - prev;
+        const double raw = SG_AT(k), dd = raw - prev;
         if (!(fabs(dd) < pi)) { /* a jump (np.unwrap's correction; the modulo only where it is used) */
             double ddmod = py_mod(dd + pi, SG_TWO_PI) - pi;
             if (ddmod == -pi && dd > 0.0) ddmod = pi;
             corr += ddmod - dd;
         }
         prev = raw;
-        *v = raw + corr;
+        SG_AT(k) = raw + corr;
     }
     const double shift = SG_TWO_PI * ceil((first - pi) / SG_TWO_PI);
-    for (size_t k = 0; k < n; ++k) *col_ptr(s, j, order ? order[k] : k) -= shift;
+    for (size_t k = 0; k < n; ++k) SG_AT(k) -= shift;
+#undef SG_AT
+}
+
+/* The largest step |v[k] − v[k−1]| (k = 1..n−1) of a column of stride step, NaN steps skipped (they never exceed
+ * anything, as in continuous_column's test): four steps at a time with four maxima, no branch a position. */
+static double largest_step(const double *v, size_t step, size_t n)
+{
+    double m0 = 0.0, m1 = 0.0, m2 = 0.0, m3 = 0.0, prev = v[0];
+    size_t k = 1;
+    for (; k + 4 <= n; k += 4) {
+        const double *r = v + k * step;
+        const double x0 = r[0], x1 = r[step], x2 = r[2 * step], x3 = r[3 * step];
+        const double d0 = fabs(x0 - prev), d1 = fabs(x1 - x0), d2 = fabs(x2 - x1), d3 = fabs(x3 - x2);
+        m0 = d0 > m0 ? d0 : m0;
+        m1 = d1 > m1 ? d1 : m1;
+        m2 = d2 > m2 ? d2 : m2;
+        m3 = d3 > m3 ? d3 : m3;
+        prev = x3;
+    }
+    for (; k < n; ++k) {
+        const double x = v[k * step], d = fabs(x - prev);
+        m0 = d > m0 ? d : m0;
+        prev = x;
+    }
+    m0 = m1 > m0 ? m1 : m0;
+    m2 = m3 > m2 ? m3 : m2;
+    return m2 > m0 ? m2 : m0;
 }
 
 /* continuous_column on columns cols[0..ncol) (offset by add). In position order each column is first scanned
- * for a reason to change it (a start outside (−π, π] or a step over π), without a branch a position, and only
- * such a column is made continuous; a solving order other than the positions' takes continuous_column's own
- * test. */
+ * for a reason to change it (a start outside (−π, π] or a step over π: largest_step), and only such a column is
+ * made continuous; a solving order other than the positions' takes continuous_column's own test. */
 static void continuous_columns(const sg_scratch *s, int ncol, const int *cols, int add, size_t n,
                                const size_t *order)
 {
     const double pi = 3.14159265358979323846;
     for (int c = 0; c < ncol; ++c) {
         const int j = cols[c] + add;
-        if (order == NULL && n > 0) {
-            const double *v = col_ptr(s, j, 0);
-            const size_t step = col_step(s, j);
-            double prev = v[0];
-            int jump = !(prev > -pi && prev <= pi);
-            for (size_t k = 1; k < n; ++k) {
-                const double x = v[k * step];
-                jump |= fabs(x - prev) > pi;
-                prev = x;
-            }
-            if (!jump) continue;
-        }
-        continuous_column(s, j, n, order);
+        double *v = col_ptr(s, j, 0);
+        const size_t step = col_step(s, j);
+        if (order == NULL && n > 0 && v[0] > -pi && v[0] <= pi && !(largest_step(v, step, n) > pi)) continue;
+        continuous_column(v, step, n, order);
     }
+}
+
+/* dst[i] = v[i step] for i < n, four at a time. */
+static void copy_column(const double *v, size_t step, size_t n, double *dst)
+{
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4, v += 4 * step) {
+        const double a = v[0], b = v[step], c = v[2 * step], d = v[3 * step];
+        dst[i] = a, dst[i + 1] = b, dst[i + 2] = c, dst[i + 3] = d;
+    }
+    for (; i < n; ++i, v += step) dst[i] = *v;
 }
 
 /* One reduction of one design over its n positions: kind (SG_RED_*), column a, and b >= 0 for the norm
@@ -779,7 +815,7 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
     SG_ASSERT(nsel == 0 || (sel && out));
     SG_ASSERT(nred == 0 || (red && red_val && red_idx));
     sg_scratch s;
-    s.nq = nq, s.nobs = nobs;
+    s.nq = nq, s.nobs = nobs, s.direct = NULL;
     s.q = work, s.qd = work + n * (size_t)nq, s.qdd = work + 2 * n * (size_t)nq, s.obs = work + 3 * n * (size_t)nq;
     double *err = work + n * (size_t)width;
     int bad_args = nq > SG_MAX_Q || m->nc > SG_MAX_C || ncheck > m->nc || nangle < 0 || nsel < 0 || nred < 0;
@@ -817,6 +853,12 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
         trig = work + n * (size_t)(width + 1);
     }
 #endif
+    /* selected columns without reductions: the SIMD loop stores them straight to out (no rows, no copy) */
+    double *dst[SG_MAX_DIRECT];
+    sg_columns direct = {nsel, sel, dst, 0};
+    int use_direct = !bad_args && nsel > 0 && nsel <= SG_MAX_DIRECT && nred == 0;
+    for (int k = 0; k < nsel && use_direct; ++k) /* a column selected twice: rows (made continuous once) */
+        for (int j = 0; j < k && use_direct; ++j) use_direct = sel[j] != sel[k];
     size_t failed = 0;
     for (size_t d = 0; d < nd; ++d) {
         const double *pd = p + d * (size_t)npar;
@@ -838,9 +880,13 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
                     if (!isfinite(c[k])) st = SG_BAD_DESIGN;
             }
         }
+        s.direct = NULL;
         if (st == SG_OK) {
+            for (int k = 0; use_direct && k < nsel; ++k) dst[k] = out + (size_t)k * out_stride + d * n;
+            direct.written = 0;
             sweep(m, n, phi, omega, alpha, hd, pd, bd, q_guess, opt, order, NULL, NULL, s.q, s.qd, s.qdd, s.obs, err,
-                  NULL, work_status, want, trig);
+                  NULL, work_status, want, trig, use_direct ? &direct : NULL);
+            if (direct.written) s.direct = &direct;
             for (size_t i = 0; i < n; ++i)
                 if (work_status[i] != SG_OK) {
                     if (first < 0) first = (long long)i, st = work_status[i];
@@ -856,9 +902,7 @@ size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double
         for (int k = 0; k < nsel; ++k) { /* a failed design's rows: NaN (its status says why) */
             double *o = out + (size_t)k * out_stride + d * n;
             if (st == SG_OK) {
-                const double *v = col_ptr(&s, sel[k], 0);
-                const size_t step = col_step(&s, sel[k]);
-                for (size_t i = 0; i < n; ++i) o[i] = v[i * step];
+                if (s.direct == NULL) copy_column(col_ptr(&s, sel[k], 0), col_step(&s, sel[k]), n, o);
             }
             else
                 for (size_t i = 0; i < n; ++i) o[i] = NAN;
@@ -923,7 +967,7 @@ void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int 
                         const int *ocols, const size_t *order)
 {
     sg_scratch s;
-    s.nq = nq, s.nobs = nobs, s.q = q, s.qd = NULL, s.qdd = NULL, s.obs = obs;
+    s.nq = nq, s.nobs = nobs, s.q = q, s.qd = NULL, s.qdd = NULL, s.obs = obs, s.direct = NULL;
     continuous_columns(&s, nqa, qcols, 0, n, order);
     continuous_columns(&s, noa, ocols, 3 * nq, n, order);
 }

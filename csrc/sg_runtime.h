@@ -22,6 +22,19 @@
 #define SG_MAX_GROUP 4096
 /* Largest number of load slots per position. */
 #define SG_MAX_LOAD 512
+/* Largest number of columns a SIMD sweep writes straight to their own arrays (more: rows, then copies). */
+#define SG_MAX_DIRECT 64
+
+/* Columns a SIMD sweep writes straight to their own arrays (issue 14, item 3: sg_sweep_designs' selected outputs,
+ * no row then copy): column k is the flat column col[k] (q, qd, qdd, then obs, as sg_runtime.c's sg_scratch), its
+ * position i at dst[k][i]. The SIMD loop sets written to 1 when it takes them; the scalar loops leave it 0 and
+ * write rows only. */
+typedef struct sg_columns {
+    int n;
+    const int *col;
+    double *const *dst;
+    int written;
+} sg_columns;
 
 /* LU with partial pivoting, in place, row-major n x n. Returns SG_SINGULAR when a pivot is below
  * 1e-11 of its column's largest original entry (column-scale invariant: columns may be rad or m).
@@ -472,7 +485,7 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
 
 #define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, RATES, OBSERVE, FORCES)                    \
     {                                                                                              \
-        (void)trig; /* the SIMD loop's cos, sin: this loop computes its own */                     \
+        (void)trig, (void)cols; /* the SIMD loop's cos, sin: this loop computes its own; rows only */ \
         SG_CLOSED_SETUP(CONSTANTS)                                                                 \
         for (size_t k = 0; k < n; ++k)                                                             \
             SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, order ? order[k] : k)           \

@@ -335,6 +335,16 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
     }
 }
 
+/* A lane's selected columns from its rows (a lane the scalar step solved, in a sweep writing sg_columns). */
+static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i, const double *qi,
+                                        const double *qdi, const double *qddi, const double *oi)
+{
+    for (int k = 0; k < cols->n; ++k) {
+        const int j = cols->col[k];
+        cols->dst[k][i] = j < nq ? qi[j] : (j < 2 * nq ? qdi[j - nq] : (j < 3 * nq ? qddi[j - 2 * nq] : oi[j - 3 * nq]));
+    }
+}
+
 /* The SIMD closed-form sweep: blocks of SG_W positions in solving order (the last block padded with its last
  * position), the vector kernels CLOSED_V, MOTION_V (NOBS observables; with want, RATES_V and the wanted groups'
  * OBSERVE_V, whose rows alone are stored) and, for forces (frc not NULL), FORCES_V
@@ -345,14 +355,16 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
  * the bit) rather than inlining a third copy of them: they run only for lanes the vector kernels refuse, and the
  * copies doubled the file's compile time, under the sanitizers above all. Angle coordinates are unwrapped
  * lane after lane against the last solution, as the scalar loop does (tested four lanes at once: where no lane
- * is over half a turn from the one before, the scalar loop changes none). */
+ * is over half a turn from the one before, the scalar loop changes none). A kinematic sweep given cols
+ * (sg_columns, at most SG_MAX_DIRECT) stores those columns' vectors straight to their arrays, four contiguous
+ * positions at a time, and no row: a lane the scalar step solves gets its rows, then its columns from them. */
 #define SG_SIMD_SWEEP_BODY(CONSTANTS, SCALAR_SWEEP, CLOSED_V, MOTION_V, RATES_V, OBSERVE_V, FORCES_V,        \
                            FORCES_IN_SIMD, NOBS, NFO)                                              \
     {                                                                                              \
         SG_CLOSED_SETUP(CONSTANTS)                                                                 \
         if (frc != NULL && !FORCES_IN_SIMD(c))                                                     \
             return SCALAR_SWEEP(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, \
-                                obs, err, frc, status, want, trig);                                \
+                                obs, err, frc, status, want, trig, NULL);                          \
         sg_vd vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q], vld[SG_MAX_LOAD];    \
         for (int k = 1; k < nx; ++k) {                                                             \
             vx[k] = sgv_set1(x[k]);                                                                \
@@ -367,15 +379,25 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
          * (want[ngroup]), a wanted group or the rates that read an angle itself (group_angles) */ \
         int angles = want == NULL || want[m->ngroup] || m->group_angles[m->ngroup];               \
         for (int g = 0; g < m->ngroup && !angles; ++g) angles = want[g] && m->group_angles[g];     \
+        sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1];    \
+        const sg_vd *csrc[SG_MAX_DIRECT]; /* the vector each direct column is stored from */     \
+        if (cols != NULL && (frc != NULL || cols->n < 1 || cols->n > SG_MAX_DIRECT)) cols = NULL; \
+        for (int k = 0; cols != NULL && k < cols->n; ++k) {                                        \
+            const int j = cols->col[k];                                                            \
+            csrc[k] = j < nq ? &vq[j] : (j < 2 * nq ? &vqd[j - nq] : (j < 3 * nq ? &vqdd[j - 2 * nq] \
+                                                                           : &vobs[j - 3 * nq])); \
+        }                                                                                          \
+        if (cols != NULL) cols->written = 1;                                                       \
         for (size_t k = 0; k < n; k += SG_W) {                                                     \
             const int lanes = n - k < SG_W ? (int)(n - k) : SG_W;                                  \
+            const int contiguous = order == NULL && lanes == SG_W;                                 \
             size_t idx[SG_W];                                                                      \
             sg_vd ph, om, al;                                                                      \
             for (int l = 0; l < SG_W; ++l) {                                                       \
                 const size_t kk = k + (size_t)(l < lanes ? l : lanes - 1);                         \
                 idx[l] = order ? order[kk] : kk;                                                   \
             }                                                                                      \
-            if (order == NULL && lanes == SG_W) { /* loads: no lane-by-lane stores read back */    \
+            if (contiguous) { /* loads: no lane-by-lane stores read back */                        \
                 ph = (sg_vd)_mm256_loadu_pd(phi + k);                                              \
                 om = (sg_vd)_mm256_loadu_pd(omega + k);                                            \
                 al = (sg_vd)_mm256_loadu_pd(alpha + k);                                            \
@@ -386,13 +408,12 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
                     al[l] = alpha[idx[l]];                                                         \
                 }                                                                                  \
             }                                                                                      \
-            sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q];                                                 \
             int vector_block = sgv_all(sgv_isfinite(ph + om + al));                                \
             if (vector_block) {                                                                    \
                 vx[0] = ph;                                                                        \
                 vxd[0] = om;                                                                       \
                 vxdd[0] = al;                                                                      \
-                if (trig != NULL && order == NULL && lanes == SG_W) { /* sg_sweep_designs' table */ \
+                if (trig != NULL && contiguous) { /* sg_sweep_designs' table */                    \
                     vcx[0] = (sg_vd)_mm256_loadu_pd(trig + k);                                     \
                     vcx[1] = (sg_vd)_mm256_loadu_pd(trig + n + k);                                 \
                 } else {                                                                           \
@@ -401,8 +422,13 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
                 vector_block = sgv_all(CLOSED_V(vx, vcx, c, branch, angles, vq, vcq));             \
             }                                                                                      \
             if (!vector_block) {                                                                   \
-                for (int l = 0; l < lanes; ++l)                                                    \
-                    SG_CLOSED_STEP(m->closed, m->motion, m->rates, m->observe, m->forces, idx[l]) \
+                for (int l = 0; l < lanes; ++l) {                                                  \
+                    SG_CLOSED_STEP(m->closed, m->motion, m->rates, m->observe, m->forces, idx[l])  \
+                    if (cols != NULL)                                                              \
+                        sg_columns_from_rows(cols, nq, idx[l], q + idx[l] * (size_t)nq,            \
+                                             qd + idx[l] * (size_t)nq, qdd + idx[l] * (size_t)nq,  \
+                                             obs + idx[l] * (size_t)nobs);                         \
+                }                                                                                  \
                 continue;                                                                          \
             }                                                                                      \
             for (int j = 0; j < nq; ++j) { /* no lane a half turn from the one before: none moves */ \
@@ -419,7 +445,7 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
                 last[j] = vq[j][SG_W - 1];                                                         \
             }                                                                                      \
             have_last = 1;                                                                         \
-            sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1], vout[(NFO) + 1], vcond;         \
+            sg_vd vout[(NFO) + 1], vcond;                                                          \
             sg_vm ok;                                                                              \
             if (want == NULL) {                                                                    \
                 ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);            \
@@ -438,32 +464,44 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
                 }                                                                                  \
                 ok &= FORCES_V(vq, vcq, vx, vcx, vxd, c, vobs, gv, vld, vout);                     \
             }                                                                                      \
-            /* every lane's rows from registers (a padded lane repeats the last real one's         \
-             * row); a lane the vector kernels do not vouch for is rewritten below by the          \
-             * scalar motion and forces at its solved position */                                  \
-            double *rq[SG_W], *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];                   \
-            for (int l = 0; l < SG_W; ++l) {                                                       \
-                rq[l] = q + idx[l] * (size_t)nq;                                                   \
-                rqd[l] = qd + idx[l] * (size_t)nq;                                                 \
-                rqdd[l] = qdd + idx[l] * (size_t)nq;                                               \
-                robs[l] = obs + idx[l] * (size_t)nobs;                                             \
-                rfrc[l] = frc != NULL ? frc + idx[l] * (size_t)nfo : NULL;                         \
-            }                                                                                      \
-            sgv_store_rows(vq, nq, rq);                                                            \
-            sgv_store_rows(vqd, nq, rqd);                                                          \
-            sgv_store_rows(vqdd, nq, rqdd);                                                        \
-            if (want == NULL) {                                                                    \
-                sgv_store_rows(vobs, (NOBS), robs);                                                \
-            } else {                                                                               \
-                for (int g = 0; g < m->ngroup; ++g) {                                              \
-                    if (!want[g]) continue;                                                        \
-                    const int g0 = m->group_start[g];                                              \
-                    double *rg[SG_W];                                                              \
-                    for (int l = 0; l < SG_W; ++l) rg[l] = robs[l] + g0;                           \
-                    sgv_store_rows(vobs + g0, m->group_start[g + 1] - g0, rg);                     \
+            if (cols != NULL) { /* the columns' four positions at once (a padded lane: not stored) */ \
+                if (contiguous)                                                                    \
+                    for (int j = 0; j < cols->n; ++j) _mm256_storeu_pd(cols->dst[j] + k, (__m256d)*csrc[j]); \
+                else                                                                               \
+                    for (int j = 0; j < cols->n; ++j)                                              \
+                        for (int l = 0; l < lanes; ++l) cols->dst[j][idx[l]] = (*csrc[j])[l];      \
+            } else { /* every lane's rows from registers (a padded lane repeats the last real one's \
+                      * row); a lane the vector kernels do not vouch for is rewritten below by the \
+                      * scalar motion and forces at its solved position */                         \
+                double *rq[SG_W], *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];               \
+                for (int l = 0; l < SG_W; ++l) {                                                   \
+                    rq[l] = q + idx[l] * (size_t)nq;                                               \
+                    rqd[l] = qd + idx[l] * (size_t)nq;                                             \
+                    rqdd[l] = qdd + idx[l] * (size_t)nq;                                           \
+                    robs[l] = obs + idx[l] * (size_t)nobs;                                         \
+                    rfrc[l] = frc != NULL ? frc + idx[l] * (size_t)nfo : NULL;                     \
                 }                                                                                  \
+                sgv_store_rows(vq, nq, rq);                                                        \
+                sgv_store_rows(vqd, nq, rqd);                                                      \
+                sgv_store_rows(vqdd, nq, rqdd);                                                    \
+                if (want == NULL) {                                                                \
+                    sgv_store_rows(vobs, (NOBS), robs);                                            \
+                } else {                                                                           \
+                    for (int g = 0; g < m->ngroup; ++g) {                                          \
+                        if (!want[g]) continue;                                                    \
+                        const int g0 = m->group_start[g];                                          \
+                        double *rg[SG_W];                                                          \
+                        for (int l = 0; l < SG_W; ++l) rg[l] = robs[l] + g0;                       \
+                        sgv_store_rows(vobs + g0, m->group_start[g + 1] - g0, rg);                 \
+                    }                                                                              \
+                }                                                                                  \
+                if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                \
             }                                                                                      \
-            if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                    \
+            if (contiguous && sgv_all(ok)) { /* the usual block: four statuses at once */          \
+                status[k] = status[k + 1] = status[k + 2] = status[k + 3] = SG_OK;                 \
+                if (err) _mm256_storeu_pd(err + k, (__m256d)vest);                                 \
+                continue;                                                                          \
+            }                                                                                      \
             for (int l = 0; l < lanes; ++l) {                                                      \
                 const size_t i = idx[l];                                                           \
                 if (ok[l]) {                                                                       \
@@ -471,8 +509,10 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
                     if (err) err[i] = vest[l];                                                     \
                     continue;                                                                      \
                 }                                                                                  \
-                double *qi = rq[l], *qdi = rqd[l], *qddi = rqdd[l], *oi = robs[l];                 \
-                double cq[2 * SG_MAX_Q]; /* qi holds the lane's coordinates already */             \
+                double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq; \
+                double *oi = obs + i * (size_t)nobs;                                               \
+                double cq[2 * SG_MAX_Q];                                                           \
+                for (int j = 0; j < nq; ++j) qi[j] = vq[j][l]; /* the lane's solved coordinates */ \
                 for (int j = 0; j < 2 * nq; ++j) cq[j] = vcq[j][l];                                \
                 x[0] = ph[l];                                                                      \
                 cx[0] = vcx[0][l];                                                                 \
@@ -481,6 +521,7 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
                 xdd[0] = al[l];                                                                    \
                 int st = SG_OK;                                                                    \
                 SG_CLOSED_FINISH(m->motion, m->rates, m->observe, m->forces)                      \
+                if (cols != NULL) sg_columns_from_rows(cols, nq, i, qi, qdi, qddi, oi);            \
             }                                                                                      \
         }                                                                                          \
         return failures;                                                                           \

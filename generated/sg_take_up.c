@@ -579,7 +579,7 @@ void sg_take_up_anchors(const double *q, const double *cq, const double *x, cons
 
 /* sg_take_up_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY); never
  * inlined itself (the SIMD sweep calls it for the force sweeps it cannot do) */
-static SG_FLATTEN SG_NOINLINE size_t sg_take_up_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig)
+static SG_FLATTEN SG_NOINLINE size_t sg_take_up_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
 SG_CLOSED_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_rates, sg_take_up_observe, sg_take_up_forces)
 
 /* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
@@ -930,7 +930,7 @@ SG_VINLINE int sg_take_up_forces_in_simd(const double *c)
     return c[57] == 0.0 && c[58] == 0.0 && c[59] == 0.0;
 }
 
-static SG_FLATTEN size_t sg_take_up_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig)
+static SG_FLATTEN size_t sg_take_up_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
 SG_SIMD_SWEEP_BODY(sg_take_up_constants, sg_take_up_sweep, sg_take_up_closed_v, sg_take_up_motion_v, sg_take_up_rates_v, sg_take_up_observe_v, sg_take_up_forces_v, sg_take_up_forces_in_simd, 45, 24)
 #pragma GCC pop_options
 #endif

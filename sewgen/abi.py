@@ -115,13 +115,16 @@ HOOKS = {
                          ("const size_t *", "order"), ("const double *", "gv"), ("const double *", "loads"),
                          ("double *", "q"), ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"),
                          ("double *", "err"), ("double *", "frc"), ("int *", "status"),
-                         ("const unsigned char *", "want"), ("const double *", "trig")),
+                         ("const unsigned char *", "want"), ("const double *", "trig"),
+                         ("struct sg_columns *", "cols")),
               "the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not "
               "NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the ngroup groups of "
               "observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the "
               "caller reads the coordinates (want[ngroup]); trig (NULL: computed) the shaft angles' cos (n) then sin "
-              "(n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); NULL "
-              "without a closed form"),
+              "(n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); cols (NULL: "
+              "none; csrc/sg_runtime.h) columns the SIMD loop writes straight to their own arrays, setting "
+              "cols->written, where q, qd, qdd and obs then hold only the rows its scalar steps wrote (the scalar "
+              "loop ignores it); NULL without a closed form"),
 }
 HOOKS["sweep_simd"] = (HOOKS["sweep"][0], HOOKS["sweep"][1],
                        "the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL "

@@ -171,3 +171,33 @@ def test_the_simd_loop_computes_angles_only_where_they_are_read():
         assert np.array_equal(arr, both.outputs[key])
     lever = both.outputs["bodies.lever.angle"]
     assert np.isfinite(lever).all() and np.ptp(lever[0]) > 0.1  # the lever swings: a real angle, not a skipped 0
+
+
+def test_columns_stored_straight_take_a_scalar_lane_from_its_rows():
+    """A selection's columns are stored by the SIMD loop straight to their arrays (sg_columns); a lane it does not
+    vouch for is solved by the scalar step into rows and copied from them. A take-up crank 1e-8 inside its
+    assembly limit (found here by bisection) has one position near the toggle whose estimated error (1e-7) is
+    above the SIMD loop's acceptance (a quarter of 1e-8); 1e-12 inside, its triangle there is flatter than the SIMD
+    margin and the whole block is scalar. With singular="flag" those positions are kept, and the columns must equal
+    the full sweep's (rows, no direct columns) to the bit."""
+    tu = sewgen.mechanism("take_up")
+    phi = np.concatenate([sewgen.shaft_angles(1), [0.25, -3.0]])  # the last two: another order, a turn away
+    c0 = tu.defaults()["crank"]
+    lo, hi = 1.0, 3.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        try:
+            tu.solve(phi, params={"crank": c0 * mid}, singular="flag")
+            lo = mid
+        except sewgen.errors.PositionError:
+            hi = mid
+    cols = Columns(tu.description)
+    for inside in (1e-8, 1e-12):  # a lane refused for its error estimate; a block refused for a flat triangle
+        params = {"crank": c0 * lo * (1 - inside)}
+        full = tu.solve(phi, params=params, singular="flag")
+        assert full.error_estimate.max() > 0.25e-8 and full.singular.sum() >= 1
+        flat = np.hstack([full.q, full.qd, full.qdd, full.obs])
+        for outputs in (["coords", "points:thread_eye"], ["all"], ["bodies.lever.angle", "points.thread_eye.y_dd"]):
+            sel = tu.solve(phi, params=params, singular="flag", outputs=outputs)
+            for name, arr in sel.columns.items():
+                assert np.array_equal(arr, flat[:, cols.index[name]]), (inside, name)

@@ -47,7 +47,7 @@ def header() -> str:
     lines.append("/* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */")
     for kind, (ret, args, doc) in abi.KERNELS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
-    lines += ["", "struct sg_mechanism;",
+    lines += ["", "struct sg_mechanism;", "struct sg_columns;",
               "/* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */"]
     for kind, (ret, args, doc) in abi.HOOKS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
