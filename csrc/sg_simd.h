@@ -388,21 +388,30 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                                                                            : &vobs[j - 3 * nq])); \
         }                                                                                          \
         if (cols != NULL) cols->written = 1;                                                       \
+        const int ncol = cols != NULL ? cols->n : 0;                                               \
+        double *const *cdst = cols != NULL ? cols->dst : NULL;                                     \
+        /* the wanted groups in a list (the loop below visits these only), where there are few */ \
+        int wanted[SG_MAX_DIRECT], nwanted = 0;                                                    \
+        for (int g = 0; want != NULL && g < m->ngroup && nwanted <= SG_MAX_DIRECT; ++g)            \
+            if (want[g]) {                                                                         \
+                if (nwanted < SG_MAX_DIRECT) wanted[nwanted] = g;                                  \
+                ++nwanted;                                                                         \
+            }                                                                                      \
+        const int listed = nwanted <= SG_MAX_DIRECT;                                               \
         for (size_t k = 0; k < n; k += SG_W) {                                                     \
             const int lanes = n - k < SG_W ? (int)(n - k) : SG_W;                                  \
             const int contiguous = order == NULL && lanes == SG_W;                                 \
             size_t idx[SG_W];                                                                      \
             sg_vd ph, om, al;                                                                      \
-            for (int l = 0; l < SG_W; ++l) {                                                       \
-                const size_t kk = k + (size_t)(l < lanes ? l : lanes - 1);                         \
-                idx[l] = order ? order[kk] : kk;                                                   \
-            }                                                                                      \
             if (contiguous) { /* loads: no lane-by-lane stores read back */                        \
+                idx[0] = k, idx[1] = k + 1, idx[2] = k + 2, idx[3] = k + 3;                        \
                 ph = (sg_vd)_mm256_loadu_pd(phi + k);                                              \
                 om = (sg_vd)_mm256_loadu_pd(omega + k);                                            \
                 al = (sg_vd)_mm256_loadu_pd(alpha + k);                                            \
             } else {                                                                               \
                 for (int l = 0; l < SG_W; ++l) {                                                   \
+                    const size_t kk = k + (size_t)(l < lanes ? l : lanes - 1);                     \
+                    idx[l] = order ? order[kk] : kk;                                               \
                     ph[l] = phi[idx[l]];                                                           \
                     om[l] = omega[idx[l]];                                                         \
                     al[l] = alpha[idx[l]];                                                         \
@@ -451,8 +460,12 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                 ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);            \
             } else { /* the rates and the wanted groups: the motion twin's values to the bit */    \
                 ok = RATES_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);                   \
-                for (int g = 0; g < m->ngroup; ++g)                                                \
-                    if (want[g]) ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs); \
+                if (listed)                                                                        \
+                    for (int t = 0; t < nwanted; ++t)                                              \
+                        ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, wanted[t], vobs); \
+                else                                                                               \
+                    for (int g = 0; g < m->ngroup; ++g)                                            \
+                        if (want[g]) ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs); \
             }                                                                                      \
             const sg_vd vest = vcond * (eps + vcond * eps);                                        \
             ok &= vest <= accept;                                                                  \
@@ -466,10 +479,10 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
             }                                                                                      \
             if (cols != NULL) { /* the columns' four positions at once (a padded lane: not stored) */ \
                 if (contiguous)                                                                    \
-                    for (int j = 0; j < cols->n; ++j) _mm256_storeu_pd(cols->dst[j] + k, (__m256d)*csrc[j]); \
+                    for (int j = 0; j < ncol; ++j) _mm256_storeu_pd(cdst[j] + k, (__m256d)*csrc[j]); \
                 else                                                                               \
-                    for (int j = 0; j < cols->n; ++j)                                              \
-                        for (int l = 0; l < lanes; ++l) cols->dst[j][idx[l]] = (*csrc[j])[l];      \
+                    for (int j = 0; j < ncol; ++j)                                                 \
+                        for (int l = 0; l < lanes; ++l) cdst[j][idx[l]] = (*csrc[j])[l];           \
             } else { /* every lane's rows from registers (a padded lane repeats the last real one's \
                       * row); a lane the vector kernels do not vouch for is rewritten below by the \
                       * scalar motion and forces at its solved position */                         \
