@@ -764,7 +764,30 @@ static void continuous_columns(const sg_scratch *s, int ncol, const int *cols, i
         const int j = cols[c] + add;
         double *v = col_ptr(s, j, 0);
         const size_t step = col_step(s, j);
-        if (order == NULL && n > 0 && v[0] > -pi && v[0] <= pi && !(largest_step(v, step, n) > pi)) continue;
+        if (order == NULL && n > 0) {
+            double largest;
+#if defined(__SSE2__)
+            /* two row columns of one array (the same stride) in one pass: both steps in one instruction */
+            double *w = c + 1 < ncol ? col_ptr(s, cols[c + 1] + add, 0) : NULL;
+            if (w != NULL && step > 1 && col_step(s, cols[c + 1] + add) == step) {
+                const __m128d mag = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+                __m128d prev = _mm_set_pd(w[0], v[0]), m = _mm_setzero_pd();
+                for (size_t k = 1; k < n; ++k) {
+                    const __m128d x = _mm_set_pd(w[k * step], v[k * step]);
+                    m = _mm_max_pd(_mm_and_pd(_mm_sub_pd(x, prev), mag), m);
+                    prev = x;
+                }
+                double both[2];
+                _mm_storeu_pd(both, m);
+                if (!(v[0] > -pi && v[0] <= pi && !(both[0] > pi))) continuous_column(v, step, n, NULL);
+                if (!(w[0] > -pi && w[0] <= pi && !(both[1] > pi))) continuous_column(w, step, n, NULL);
+                ++c;
+                continue;
+            }
+#endif
+            largest = largest_step(v, step, n);
+            if (v[0] > -pi && v[0] <= pi && !(largest > pi)) continue;
+        }
         continuous_column(v, step, n, order);
     }
 }
