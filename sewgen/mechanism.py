@@ -33,6 +33,17 @@ from .units import UnitError, to_si
 
 _NONNEGATIVE = {"mass", "inertia"}
 _DEFAULT_MAX_ITER = 50
+_DESIGNS = []  # sewgen.designs once imported (it imports this module): solve(outputs=...)'s per-call path
+
+
+def _designs():
+    """The module sewgen.designs, imported at the first call that needs it, then held here: an import statement
+    in solve() cost 1.7 µs a call, as much as a third of the call on one angle."""
+    if not _DESIGNS:
+        from . import designs
+
+        _DESIGNS.append(designs)
+    return _DESIGNS[0]
 _SIZE_MAX = (1 << (8 * np.dtype(np.uintp).itemsize)) - 1  # sg_solve_lean's "not ascending" (size_t is uintp)
 #: kinetostatics()' defaults: gravity, its direction (−y, the catalog's "down"), the shaking moment's point.
 _GRAVITY, _DOWN, _ORIGIN = "9.80665 m/s**2", "-90 deg", (0.0, 0.0)
@@ -422,9 +433,7 @@ class Mechanism:
             if outputs is None:
                 motion = self._fast_solve(phi, speed, params)
             else:
-                from .designs import fast_selected
-
-                motion = fast_selected(self, phi, speed, params, outputs)
+                motion = _designs().fast_selected(self, phi, speed, params, outputs)
             if motion is not None:
                 return motion
         if outputs is not None:
