@@ -516,6 +516,8 @@ def table(rows: list[dict]) -> str:
         else:
             check = "-" if "agree" not in x else (f"ok {x['max_rel_diff']:.0e}" if x["agree"] else
                                                   f"MISMATCH {x['max_rel_diff']:.1e} ({x['worst']})")
+            if "sewgen_over_peer" in x:  # a peer: sewgen's rate on the same outputs over the peer's, same run
+                check += f"; sewgen {x['sewgen_over_peer']:.2f}x this"
         lines.append((r["mechanism"], r["kernel"], _si(r["positions_per_s"]),
                        _si(x.get("raw_c_positions_per_s")), _si(r["baseline_positions_per_s"]),
                        "-" if r["speedup"] is None else f"{r['speedup']:.0f}x", check))
@@ -909,6 +911,53 @@ def _peer_numpy_entry(cfg: Config) -> Result:
                               "target_sewgen_over_peer": 2.0}
 
 
+def _peer_numba_entry(cfg: Config) -> Result:
+    """take_up kinematics, all outputs: the closed form as one numba loop (sewgen.peers, checked against sewgen,
+    compiled by the warm-up call, then timed) against sewgen's solve() in the same run."""
+    from . import peers
+
+    m = sewgen.mechanism("take_up")
+    phi = cfg.sweep_angles()
+    omega = float(m.default_speed)
+    prm = peers.parameter_vector(m.defaults())
+    kernel = peers.numba_kernel()
+    out = np.empty((len(phi), len(peers.COLUMNS)))
+    kernel(phi, omega, 0.0, prm, out)
+    err = _peer_check(m, dict(zip(peers.COLUMNS, out.T)), phi)
+    t_peer = best_time(lambda: kernel(phi, omega, 0.0, prm, out), cfg.repeats, cfg.min_time)
+    t_all = best_time(lambda: m.solve(phi), cfg.repeats, cfg.min_time)
+    n = len(phi)
+    return n / t_peer, None, {"agree": err < 1e-12, "max_rel_diff": err, "worst": "-",
+                              "sewgen_solve_positions_per_s": n / t_all, "sewgen_over_peer": t_peer / t_all}
+
+
+def _peer_pylinkage_entry(cfg: Config) -> Result:
+    """take_up's three points (crank pin, rocker pin, thread eye: position, velocity, acceleration) over one
+    revolution by pylinkage's numba solver (sewgen.peers), checked against sewgen (relative to each column's
+    largest value), then timed against sewgen's solve(outputs=["points"]) — the same 18 columns — in the same
+    run. pylinkage sweeps equal steps of one revolution only, so both take n = --positions such steps."""
+    from . import peers
+
+    m = sewgen.mechanism("take_up")
+    n = cfg.positions
+    phi = 2 * np.pi * np.arange(n) / n
+    omega = float(m.default_speed)
+    ref = m.solve(phi)
+    first = ref.point("rocker_pin")
+    _, run = peers.pylinkage_take_up(m.defaults(), n, omega, (float(first.x[0]), float(first.y[0])))
+    pos, vel, acc = run()
+    err = 0.0
+    for j, name in enumerate(("crank_pin", "rocker_pin", "thread_eye")):
+        pt = ref.point(name)
+        for got, want in ((pos[:, j, 0], pt.x), (pos[:, j, 1], pt.y), (vel[:, j, 0], pt.vx), (vel[:, j, 1], pt.vy),
+                          (acc[:, j, 0], pt.ax), (acc[:, j, 1], pt.ay)):
+            err = max(err, float(np.abs(got - want).max() / max(np.abs(want).max(), 1e-12)))
+    t_peer = best_time(run, cfg.repeats, cfg.min_time)
+    t_sel = best_time(lambda: m.solve(phi, outputs=["points"]), cfg.repeats, cfg.min_time)
+    return n / t_peer, None, {"agree": err < 1e-9, "max_rel_diff": err, "worst": "-",
+                              "sewgen_selected_positions_per_s": n / t_sel, "sewgen_over_peer": t_peer / t_sel}
+
+
 def _designs_entry(cfg: Config) -> Result:
     """10⁵ take_up designs (the crank length varied) × 72 angles with the peak thread-eye acceleration per design,
     sweep_designs on every core and on one; the baseline: solve() per design (on 2000 of them) in the same run;
@@ -990,7 +1039,8 @@ def main(argv=None) -> int:
     ap.add_argument("--json", action="store_true", help="print a JSON list instead of the table")
     ap.add_argument("--peers", action="store_true",
                     help="also time the peers of take_up's kinematics (a NumPy closed form; numba, pylinkage "
-                         "when installed), each checked against sewgen first: kernel \"peer:<name>\"")
+                         "when installed: pip install -e '.[peers]'), each checked against sewgen first: kernel "
+                         "\"peer:<name>\"")
     args = ap.parse_args(argv)
     if args.positions < 1 or args.baseline_positions < 1 or args.repeats < 1:
         ap.error("--positions, --baseline-positions and --repeats must be positive")
@@ -1002,7 +1052,14 @@ def main(argv=None) -> int:
                  repeats=args.repeats, baseline_angles=args.baseline_angles, rtol=args.rtol,
                  study_designs=args.study_designs)
     if args.peers:
+        import importlib.util
+
         register_entry("take_up", "peer:numpy", _peer_numpy_entry)
+        for peer, entry in (("numba", _peer_numba_entry), ("pylinkage", _peer_pylinkage_entry)):
+            if importlib.util.find_spec(peer) is not None:
+                register_entry("take_up", f"peer:{peer}", entry)
+            else:
+                print(f"sewgen.bench: {peer} is not installed: no peer:{peer} row", file=sys.stderr)
     t0 = time.perf_counter()
     rows = run(cfg, args.mechanism)
     if args.json:
