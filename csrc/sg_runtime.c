@@ -136,6 +136,21 @@ static void keep_step_if_lower(const sg_mechanism *m, double *q, double *cq, con
  * equation's residual is below opt->tol times that equation's own loop size (inv_scale: the reciprocals of the
  * 'scales' kernel's sizes, refreshed by the caller). On success jac holds dPhi/dq at the solution and *resid
  * the largest relative residual. */
+/* Newton's LU of dPhi/dq: the mechanism's own (kernels 'lu_factor', 'lu_solve': nq a literal, the same operations
+ * in the same order, so the same bits) where it has them, else the runtime's for any n. */
+static inline int lu_factor(const sg_mechanism *m, double *a, int *piv)
+{
+    return m->lu_factor != NULL ? m->lu_factor(a, piv) : sg_lu_factor(m->nq, a, piv, NULL);
+}
+
+static inline void lu_solve(const sg_mechanism *m, const double *lu, const int *piv, double *b)
+{
+    if (m->lu_solve != NULL)
+        m->lu_solve(lu, piv, b);
+    else
+        sg_lu_solve(m->nq, lu, piv, b);
+}
+
 static int newton(const sg_mechanism *m, double *q, double *cq, const double *x, const double *cx,
                   const double *c, const sg_options *opt, const double *inv_scale, int min_iter, double *jac,
                   double *resid)
@@ -156,7 +171,7 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
             return SG_OK;
         }
         copy_doubles(lu, jac, nq * nq);
-        if (sg_lu_factor(nq, lu, piv, NULL) != SG_OK) {
+        if (lu_factor(m, lu, piv) != SG_OK) {
             if (norm <= 1.0) { /* converged already: the step asked for cannot be taken */
                 *resid = norm * opt->tol;
                 return SG_OK;
@@ -165,7 +180,7 @@ static int newton(const sg_mechanism *m, double *q, double *cq, const double *x,
         }
         if (it >= opt->max_iter) return SG_NO_CONVERGENCE;
         for (int i = 0; i < nq; ++i) dq[i] = -r[i];
-        sg_lu_solve(nq, lu, piv, dq);
+        lu_solve(m, lu, piv, dq);
         if (norm <= 1.0) { /* min_iter: a start within the tolerance gets one full step all the same, kept if it
                             * lowers the residual (a prediction within the tolerance is only that accurate; a
                             * step makes it as accurate as a solution Newton reached) */
@@ -204,9 +219,9 @@ static void polish(const sg_mechanism *m, double *q, double *cq, const double *x
     for (int i = 0; i < nq; ++i) w[i] = 1.0 / w[i];
     m->residual(q, cq, x, cx, c, r, jac);
     double norm = weighted_norm(nq, r, w);
-    if (sg_lu_factor(nq, jac, piv, NULL) != SG_OK) return;
+    if (lu_factor(m, jac, piv) != SG_OK) return;
     for (int i = 0; i < nq; ++i) dq[i] = -r[i];
-    sg_lu_solve(nq, jac, piv, dq);
+    lu_solve(m, jac, piv, dq);
     keep_step_if_lower(m, q, cq, dq, x, cx, c, w, &norm, NULL);
     *resid = norm;
     (void)opt;

@@ -46,6 +46,10 @@ typedef int (*sg_forces_fn)(const double *q, const double *cq, const double *x, 
 typedef void (*sg_force_matrix_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
 /* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
 typedef void (*sg_scales_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
+/* Newton's LU of dPhi/dq in place (sg_lu_factor with n = nq a literal: its loops unrolled whole, the same operations in the same order) */
+typedef int (*sg_lu_factor_fn)(double *a, int *piv);
+/* solve with a factor of kernel 'lu_factor' (sg_lu_solve with n = nq a literal), b overwritten */
+typedef void (*sg_lu_solve_fn)(const double *lu, const int *piv, double *b);
 /* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
 typedef void (*sg_blocks_fn)(const double *jac, double *out);
 /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
@@ -86,6 +90,8 @@ typedef struct sg_mechanism {
     sg_forces_fn forces;                 /* joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld */
     sg_force_matrix_fn force_matrix;     /* A (nf x nf, row-major) and b of A f = b, for inspection */
     sg_scales_fn scales;                 /* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
+    sg_lu_factor_fn lu_factor;           /* Newton's LU of dPhi/dq in place (sg_lu_factor with n = nq a literal: its loops unrolled whole, the same operations in the same order) */
+    sg_lu_solve_fn lu_solve;             /* solve with a factor of kernel 'lu_factor' (sg_lu_solve with n = nq a literal), b overwritten */
     sg_blocks_fn blocks;                 /* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
     sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
     sg_sweep_fn sweep;                   /* the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the ngroup groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the caller reads the coordinates (want[ngroup]); trig (NULL: computed) the shaft angles' cos (n) then sin (n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); cols (NULL: none; csrc/sg_runtime.h) columns the SIMD loop writes straight to their own arrays, setting cols->written, where q, qd, qdd and obs then hold only the rows its scalar steps wrote (the scalar loop ignores it); NULL without a closed form */

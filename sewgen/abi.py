@@ -97,6 +97,11 @@ KERNELS = {
                      "A (nf x nf, row-major) and b of A f = b, for inspection"),
     "scales": ("void", _Q + (("const double *", "c"), ("double *", "out")),
                "each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale"),
+    "lu_factor": ("int", (("double *", "a"), ("int *", "piv")),
+                  "Newton's LU of dPhi/dq in place (sg_lu_factor with n = nq a literal: its loops unrolled whole, "
+                  "the same operations in the same order)"),
+    "lu_solve": ("void", (("const double *", "lu"), ("const int *", "piv"), ("double *", "b")),
+                 "solve with a factor of kernel 'lu_factor' (sg_lu_solve with n = nq a literal), b overwritten"),
     "blocks": ("void", (("const double *", "jac"), ("double *", "out")),
                "the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign "
                "is that closing loop's assembly branch"),

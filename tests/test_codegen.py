@@ -205,8 +205,8 @@ def test_kernel_preamble_and_op_counts(path):
     assert name in first
     manifest = _manifest()[name]
     kernels = manifest["kernels"]
-    expected = {f"sg_{name}_{k}" for k in ("constants", "residual", "scales", "blocks", "motion", "rates", "observe",
-                                             "forces", "force_matrix", "anchors")}
+    expected = {f"sg_{name}_{k}" for k in ("constants", "residual", "lu_factor", "lu_solve", "scales", "blocks",
+                                             "motion", "rates", "observe", "forces", "force_matrix", "anchors")}
     if manifest["closed_form"]:
         expected.add(f"sg_{name}_closed")
     assert set(kernels) == expected

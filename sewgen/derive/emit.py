@@ -144,7 +144,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     groups = observable_groups(mech, kin)
     row_scales = branches.row_scales(kin)
     kernels = ([ks.closed(dyads)] if dyads is not None else []) + [
-        ks.residual(), ks.scales(row_scales), ks.blocks(blks), ks.motion(row_scales),
+        ks.residual(), *ks.lu(), ks.scales(row_scales), ks.blocks(blks), ks.motion(row_scales),
         ks.rates(row_scales), ks.observe(groups, row_scales), ks.forces(kst),
         ks.force_matrix(kst), ks.anchors(anchor_out)]
     vector_kernels = ks.vector_kernels(dyads, row_scales, kst, groups) if dyads is not None else []
