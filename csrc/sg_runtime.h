@@ -25,6 +25,14 @@
 /* Largest number of columns a SIMD sweep writes straight to their own arrays (more: rows, then copies). */
 #define SG_MAX_DIRECT 64
 
+/* Flat column j of one position (q, qd, qdd: nq each, then obs): a pointer into the arrays q, qd, qdd, obs of that
+ * position (doubles, or a SIMD block's lane vectors): the layout of sg_columns' col[] (sg_runtime.c's col_ptr
+ * reads the same layout out of the design sweeps' scratch, where qd and qdd may be absent). */
+#define SG_FLAT_COLUMN(j, nq, q, qd, qdd, obs)                                                     \
+    ((j) < (nq) ? (q) + (j)                                                                         \
+                : (j) < 2 * (nq) ? (qd) + ((j) - (nq))                                              \
+                                 : (j) < 3 * (nq) ? (qdd) + ((j) - 2 * (nq)) : (obs) + ((j) - 3 * (nq)))
+
 /* Columns a SIMD sweep writes straight to their own arrays (issue 14, item 3: sg_sweep_designs' selected outputs,
  * no row then copy): column k is the flat column col[k] (q, qd, qdd, then obs, as sg_runtime.c's sg_scratch), its
  * position i at dst[k][i]. The SIMD loop sets written to 1 when it takes them; the scalar loops leave it 0 and

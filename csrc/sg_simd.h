@@ -339,10 +339,7 @@ static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, 
 static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i, const double *qi,
                                         const double *qdi, const double *qddi, const double *oi)
 {
-    for (int k = 0; k < cols->n; ++k) {
-        const int j = cols->col[k];
-        cols->dst[k][i] = j < nq ? qi[j] : (j < 2 * nq ? qdi[j - nq] : (j < 3 * nq ? qddi[j - 2 * nq] : oi[j - 3 * nq]));
-    }
+    for (int k = 0; k < cols->n; ++k) cols->dst[k][i] = *SG_FLAT_COLUMN(cols->col[k], nq, qi, qdi, qddi, oi);
 }
 
 /* The SIMD closed-form sweep: blocks of SG_W positions in solving order (the last block padded with its last
@@ -382,22 +379,15 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
         sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1];    \
         const sg_vd *csrc[SG_MAX_DIRECT]; /* the vector each direct column is stored from */     \
         if (cols != NULL && (frc != NULL || cols->n < 1 || cols->n > SG_MAX_DIRECT)) cols = NULL; \
-        for (int k = 0; cols != NULL && k < cols->n; ++k) {                                        \
-            const int j = cols->col[k];                                                            \
-            csrc[k] = j < nq ? &vq[j] : (j < 2 * nq ? &vqd[j - nq] : (j < 3 * nq ? &vqdd[j - 2 * nq] \
-                                                                           : &vobs[j - 3 * nq])); \
-        }                                                                                          \
+        for (int k = 0; cols != NULL && k < cols->n; ++k)                                          \
+            csrc[k] = SG_FLAT_COLUMN(cols->col[k], nq, vq, vqd, vqdd, vobs);                       \
         if (cols != NULL) cols->written = 1;                                                       \
         const int ncol = cols != NULL ? cols->n : 0;                                               \
         double *const *cdst = cols != NULL ? cols->dst : NULL;                                     \
-        /* the wanted groups in a list (the loop below visits these only), where there are few */ \
-        int wanted[SG_MAX_DIRECT], nwanted = 0;                                                    \
-        for (int g = 0; want != NULL && g < m->ngroup && nwanted <= SG_MAX_DIRECT; ++g)            \
-            if (want[g]) {                                                                         \
-                if (nwanted < SG_MAX_DIRECT) wanted[nwanted] = g;                                  \
-                ++nwanted;                                                                         \
-            }                                                                                      \
-        const int listed = nwanted <= SG_MAX_DIRECT;                                               \
+        /* the wanted groups in a list, once a sweep (ngroup <= SG_MAX_GROUP wherever want is set) */ \
+        int wanted[SG_MAX_GROUP], nwanted = 0;                                                     \
+        for (int g = 0; want != NULL && g < m->ngroup; ++g)                                        \
+            if (want[g]) wanted[nwanted++] = g;                                                    \
         for (size_t k = 0; k < n; k += SG_W) {                                                     \
             const int lanes = n - k < SG_W ? (int)(n - k) : SG_W;                                  \
             const int contiguous = order == NULL && lanes == SG_W;                                 \
@@ -460,12 +450,8 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                 ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);            \
             } else { /* the rates and the wanted groups: the motion twin's values to the bit */    \
                 ok = RATES_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);                   \
-                if (listed)                                                                        \
-                    for (int t = 0; t < nwanted; ++t)                                              \
-                        ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, wanted[t], vobs); \
-                else                                                                               \
-                    for (int g = 0; g < m->ngroup; ++g)                                            \
-                        if (want[g]) ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs); \
+                for (int t = 0; t < nwanted; ++t)                                                  \
+                    ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, wanted[t], vobs);   \
             }                                                                                      \
             const sg_vd vest = vcond * (eps + vcond * eps);                                        \
             ok &= vest <= accept;                                                                  \
@@ -500,12 +486,11 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                 if (want == NULL) {                                                                \
                     sgv_store_rows(vobs, (NOBS), robs);                                            \
                 } else {                                                                           \
-                    for (int g = 0; g < m->ngroup; ++g) {                                          \
-                        if (!want[g]) continue;                                                    \
-                        const int g0 = m->group_start[g];                                          \
+                    for (int t = 0; t < nwanted; ++t) {                                            \
+                        const int g0 = m->group_start[wanted[t]];                                  \
                         double *rg[SG_W];                                                          \
                         for (int l = 0; l < SG_W; ++l) rg[l] = robs[l] + g0;                       \
-                        sgv_store_rows(vobs + g0, m->group_start[g + 1] - g0, rg);                 \
+                        sgv_store_rows(vobs + g0, m->group_start[wanted[t] + 1] - g0, rg);         \
                     }                                                                              \
                 }                                                                                  \
                 if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                \

@@ -944,7 +944,7 @@ def _peer_pylinkage_entry(cfg: Config) -> Result:
     omega = float(m.default_speed)
     ref = m.solve(phi)
     first = ref.point("rocker_pin")
-    _, run = peers.pylinkage_take_up(m.defaults(), n, omega, (float(first.x[0]), float(first.y[0])))
+    run = peers.pylinkage_take_up(m.defaults(), n, omega, (float(first.x[0]), float(first.y[0])))
     pos, vel, acc = run()
     err = 0.0
     for j, name in enumerate(("crank_pin", "rocker_pin", "thread_eye")):

@@ -107,9 +107,9 @@ def numba_kernel():
 def pylinkage_take_up(p: dict, n: int, omega: float, q_first: tuple):
     """The take_up four-bar in pylinkage (when installed; else None): a crank from the shaft phase, an RRR dyad
     for the rocker pin C started at sewgen's first C (q_first: its x, y; pylinkage keeps the branch nearest the
-    last position) and a fixed dyad for the thread eye E. Returns (linkage, run): run() sweeps one revolution in n
-    equal steps with pylinkage's numba solver and gives (positions, velocities, accelerations) of B, C and E,
-    each (n, 3, 2)."""
+    last position) and a fixed dyad for the thread eye E. Returns run: run() sweeps one revolution in n equal
+    steps with pylinkage's numba solver and gives (positions, velocities, accelerations) of B, C and E, each
+    (n, 3, 2)."""
     try:
         import pylinkage as pl
     except ImportError:
@@ -132,4 +132,4 @@ def pylinkage_take_up(p: dict, n: int, omega: float, q_first: tuple):
         pos, vel, acc = linkage.step_fast_with_kinematics(iterations=n)
         return pos[:, parts], vel[:, parts], acc[:, parts]
 
-    return linkage, run
+    return run

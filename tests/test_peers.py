@@ -77,7 +77,7 @@ def test_the_pylinkage_peer_gives_the_three_points_as_sewgen():
     phi = 2 * np.pi * np.arange(n) / n
     mo = m.solve(phi, SPEED)
     c = mo.point("rocker_pin")
-    _, run = peers.pylinkage_take_up(m.defaults(), n, SPEED, (float(c.x[0]), float(c.y[0])))
+    run = peers.pylinkage_take_up(m.defaults(), n, SPEED, (float(c.x[0]), float(c.y[0])))
     pos, vel, acc = run()
     for j, name in enumerate(("crank_pin", "rocker_pin", "thread_eye")):
         pt = mo.point(name)
