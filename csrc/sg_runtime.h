@@ -174,38 +174,12 @@ SG_INLINE int sg_factor_eq2_inl(double *a, const double *rs, double *cond)
     return fabs(det) > SG_PIVOT_RTOL * mm && isfinite(*cond) ? SG_OK : SG_SINGULAR;
 }
 
-/* LU of A scaled, R A C: R = diag(rs) given in natural units (sewgen's motion kernels: each row over its loop's
- * size, so that a loop near its toggle, whose rows all but vanish, stays near-singular), C = diag(cs) found here
- * (each column of R A to its largest entry 1: rad and m columns alike, the solution's components each to its
- * own scale); and a bound of the condition number of R A C in the inf norm (from the factor, below). The
- * runtime turns it into the estimated relative error of the rates (csrc/sg_runtime.c). Solve with
- * sg_solve_eq_inl. n = 2 is sg_factor_eq2_inl (piv and cs unused). */
-SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, double *cs, double *cond)
+/* The LU with partial pivoting of an equilibrated matrix (every column's largest entry about 1: pivots below
+ * SG_PIVOT_RTOL are singular; U's diagonal kept as its reciprocal) and *inorm, an upper bound of ||A^-1||_inf
+ * (below). sg_factor_eq_inl's factor after its scaling, and each diagonal block's of a mechanism whose rates
+ * solve Φ_q block by block (sewgen/derive/blockfactor.py). */
+SG_INLINE int sg_lu_bound_inl(int n, double *a, int *piv, double *inorm_out)
 {
-    if (n == 2) return sg_factor_eq2_inl(a, rs, cond);
-    *cond = INFINITY;
-    SG_UNROLL
-    for (int j = 0; j < n; ++j) {
-        double m = 0.0;
-        SG_UNROLL
-        for (int i = 0; i < n; ++i) {
-            a[i * n + j] *= rs[i];
-            const double v = fabs(a[i * n + j]);
-            if (!(v <= m)) m = v; /* NaN propagates */
-        }
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR; /* a coordinate no loop reads */
-        cs[j] = 1.0 / m;
-        SG_UNROLL
-        for (int i = 0; i < n; ++i) a[i * n + j] *= cs[j];
-    }
-    double anorm = 0.0;
-    SG_UNROLL
-    for (int i = 0; i < n; ++i) {
-        double s = 0.0;
-        SG_UNROLL
-        for (int j = 0; j < n; ++j) s += fabs(a[i * n + j]);
-        if (!(s <= anorm)) anorm = s; /* NaN propagates */
-    }
     SG_UNROLL
     for (int k = 0; k < n; ++k) { /* LU with partial pivoting: every column's largest entry is 1 already */
         int pr = k;
@@ -257,24 +231,52 @@ SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, dou
         y[i] = s * fabs(a[i * n + i]);
         if (!(y[i] <= inorm)) inorm = y[i];
     }
-    inorm *= lnorm;
+    *inorm_out = inorm * lnorm;
+    return SG_OK;
+}
+
+/* LU of A scaled, R A C: R = diag(rs) given in natural units (sewgen's motion kernels: each row over its loop's
+ * size, so that a loop near its toggle, whose rows all but vanish, stays near-singular), C = diag(cs) found here
+ * (each column of R A to its largest entry 1: rad and m columns alike, the solution's components each to its
+ * own scale); and a bound of the condition number of R A C in the inf norm (from the factor, below). The
+ * runtime turns it into the estimated relative error of the rates (csrc/sg_runtime.c). Solve with
+ * sg_solve_eq_inl. n = 2 is sg_factor_eq2_inl (piv and cs unused). */
+SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, double *cs, double *cond)
+{
+    if (n == 2) return sg_factor_eq2_inl(a, rs, cond);
+    *cond = INFINITY;
+    SG_UNROLL
+    for (int j = 0; j < n; ++j) {
+        double m = 0.0;
+        SG_UNROLL
+        for (int i = 0; i < n; ++i) {
+            a[i * n + j] *= rs[i];
+            const double v = fabs(a[i * n + j]);
+            if (!(v <= m)) m = v; /* NaN propagates */
+        }
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR; /* a coordinate no loop reads */
+        cs[j] = 1.0 / m;
+        SG_UNROLL
+        for (int i = 0; i < n; ++i) a[i * n + j] *= cs[j];
+    }
+    double anorm = 0.0;
+    SG_UNROLL
+    for (int i = 0; i < n; ++i) {
+        double s = 0.0;
+        SG_UNROLL
+        for (int j = 0; j < n; ++j) s += fabs(a[i * n + j]);
+        if (!(s <= anorm)) anorm = s; /* NaN propagates */
+    }
+    double inorm;
+    if (sg_lu_bound_inl(n, a, piv, &inorm) != SG_OK) return SG_SINGULAR;
     *cond = anorm * inorm;
     return isfinite(*cond) ? SG_OK : SG_SINGULAR;
 }
 
-/* Solve A x = b with a factor of sg_factor_eq_inl (b overwritten by x; U's diagonal holds reciprocals; for
- * n = 2, x = B^-1 (R b)). */
-SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const double *rs, const double *cs,
-                               double *b)
+/* b overwritten by A^-1 b with a factor of sg_lu_bound_inl (interchanges, L, then U by its reciprocal
+ * diagonal). */
+SG_INLINE void sg_lu_apply_inl(int n, const double *lu, const int *piv, double *b)
 {
-    if (n == 2) {
-        const double b0 = b[0] * rs[0], b1 = b[1] * rs[1];
-        b[0] = lu[0] * b0 + lu[1] * b1;
-        b[1] = lu[2] * b0 + lu[3] * b1;
-        return;
-    }
-    SG_UNROLL
-    for (int i = 0; i < n; ++i) b[i] *= rs[i];
     SG_UNROLL
     for (int k = 0; k < n; ++k)
         if (piv[k] != k) {
@@ -293,6 +295,22 @@ SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const do
         for (int j = k + 1; j < n; ++j) s -= lu[k * n + j] * b[j];
         b[k] = s * lu[k * n + k];
     }
+}
+
+/* Solve A x = b with a factor of sg_factor_eq_inl (b overwritten by x; U's diagonal holds reciprocals; for
+ * n = 2, x = B^-1 (R b)). */
+SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const double *rs, const double *cs,
+                               double *b)
+{
+    if (n == 2) {
+        const double b0 = b[0] * rs[0], b1 = b[1] * rs[1];
+        b[0] = lu[0] * b0 + lu[1] * b1;
+        b[1] = lu[2] * b0 + lu[3] * b1;
+        return;
+    }
+    SG_UNROLL
+    for (int i = 0; i < n; ++i) b[i] *= rs[i];
+    sg_lu_apply_inl(n, lu, piv, b);
     SG_UNROLL
     for (int j = 0; j < n; ++j) b[j] *= cs[j];
 }
@@ -302,14 +320,6 @@ SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const do
 static inline double sg_rounding_clamp(double value, double scale)
 {
     return value < 0.0 && value >= -1e-12 * scale ? 0.0 : value;
-}
-
-/* Squared Euclidean norm of a row of n entries. */
-static inline double sg_row_norm2(int n, const double *row)
-{
-    double s = 0.0;
-    for (int j = 0; j < n; ++j) s += row[j] * row[j];
-    return s;
 }
 
 /* Determinant of an n x n matrix (destroyed), 0 where the LU finds it singular. */

@@ -441,22 +441,22 @@ void sg_feed_blocks(const double *jac, double *out)
 {
     /* block 0: joints cam, Q */
     {
-        const double nr = sqrt(sg_row_norm2(7, jac + 0) * sg_row_norm2(7, jac + 7) * sg_row_norm2(7, jac + 14));
+        const double nr = sqrt((jac[0] * jac[0] + jac[3] * jac[3]) * (jac[7] * jac[7] + jac[10] * jac[10] + jac[11] * jac[11]) * (jac[14] * jac[14] + jac[17] * jac[17] + jac[18] * jac[18]));
         out[0] = nr > 0.0 ? (jac[3] * (jac[11] * jac[14] - jac[7] * jac[18]) - jac[4] * (jac[10] * jac[14] - jac[7] * jac[17]) + jac[0] * (jac[10] * jac[18] - jac[11] * jac[17])) / nr : 0.0;
     }
     /* block 1: joints C */
     {
-        const double nr = sqrt(sg_row_norm2(7, jac + 21) * sg_row_norm2(7, jac + 28));
+        const double nr = sqrt((jac[23] * jac[23] + jac[27] * jac[27]) * (jac[30] * jac[30] + jac[34] * jac[34]));
         out[1] = nr > 0.0 ? (jac[27] * jac[30] - jac[23] * jac[34]) / nr : 0.0;
     }
     /* block 2: joints D */
     {
-        const double nr = sqrt(sg_row_norm2(7, jac + 35));
+        const double nr = sqrt((jac[36] * jac[36] + jac[37] * jac[37]));
         out[2] = nr > 0.0 ? (jac[36]) / nr : 0.0;
     }
     /* block 3: joints L */
     {
-        const double nr = sqrt(sg_row_norm2(7, jac + 42));
+        const double nr = sqrt((jac[42] * jac[42] + jac[43] * jac[43] + jac[47] * jac[47]));
         out[3] = nr > 0.0 ? (jac[47]) / nr : 0.0;
     }
 }
@@ -588,7 +588,8 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t106 = c[102]*cq[4] + c[104]*cq[5];
     const double t107 = fabs(q[4]);
     double J[49], rs[7], cs[7];
-    int piv[7];
+    double F0[9]; int P0[3];
+    double F1[4]; int P1[2];
     J[0] = cq[6]*t0 + cq[7]*t1;
     J[1] = 0.0;
     J[2] = 0.0;
@@ -652,8 +653,183 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     rs[4] = c[106];
     rs[5] = c[107];
     rs[6] = c[108];
-    if (sg_factor_eq_inl(7, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
-    sg_solve_eq_inl(7, J, piv, rs, cs, qd);
+    *cond = INFINITY;
+    /* Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py) */
+    J[0] *= rs[0];
+    J[3] *= rs[0];
+    J[7] *= rs[1];
+    J[10] *= rs[1];
+    J[11] *= rs[1];
+    J[14] *= rs[2];
+    J[17] *= rs[2];
+    J[18] *= rs[2];
+    J[23] *= rs[3];
+    J[27] *= rs[3];
+    J[30] *= rs[4];
+    J[34] *= rs[4];
+    J[36] *= rs[5];
+    J[37] *= rs[5];
+    J[42] *= rs[6];
+    J[43] *= rs[6];
+    J[47] *= rs[6];
+    {
+        double m = 0.0, v;
+        v = fabs(J[0]); if (!(v <= m)) m = v;
+        v = fabs(J[7]); if (!(v <= m)) m = v;
+        v = fabs(J[14]); if (!(v <= m)) m = v;
+        v = fabs(J[42]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[0] = 1.0 / m;
+        J[0] *= cs[0];
+        J[7] *= cs[0];
+        J[14] *= cs[0];
+        J[42] *= cs[0];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[36]); if (!(v <= m)) m = v;
+        v = fabs(J[43]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[1] = 1.0 / m;
+        J[36] *= cs[1];
+        J[43] *= cs[1];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[23]); if (!(v <= m)) m = v;
+        v = fabs(J[30]); if (!(v <= m)) m = v;
+        v = fabs(J[37]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[2] = 1.0 / m;
+        J[23] *= cs[2];
+        J[30] *= cs[2];
+        J[37] *= cs[2];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[3]); if (!(v <= m)) m = v;
+        v = fabs(J[10]); if (!(v <= m)) m = v;
+        v = fabs(J[17]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[3] = 1.0 / m;
+        J[3] *= cs[3];
+        J[10] *= cs[3];
+        J[17] *= cs[3];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[11]); if (!(v <= m)) m = v;
+        v = fabs(J[18]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[4] = 1.0 / m;
+        J[11] *= cs[4];
+        J[18] *= cs[4];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[47]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[5] = 1.0 / m;
+        J[47] *= cs[5];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[27]); if (!(v <= m)) m = v;
+        v = fabs(J[34]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[6] = 1.0 / m;
+        J[27] *= cs[6];
+        J[34] *= cs[6];
+    }
+    double anorm = 0.0;
+    { const double s = fabs(J[0]) + fabs(J[3]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[7]) + fabs(J[10]) + fabs(J[11]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[14]) + fabs(J[17]) + fabs(J[18]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[23]) + fabs(J[27]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[30]) + fabs(J[34]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[36]) + fabs(J[37]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[42]) + fabs(J[43]) + fabs(J[47]); if (!(s <= anorm)) anorm = s; }
+    double bound0;
+    {
+        F0[0] = J[3];
+        F0[1] = 0.0;
+        F0[2] = J[0];
+        F0[3] = J[10];
+        F0[4] = J[11];
+        F0[5] = J[7];
+        F0[6] = J[17];
+        F0[7] = J[18];
+        F0[8] = J[14];
+        double inv;
+        if (sg_lu_bound_inl(3, F0, P0, &inv) != SG_OK) return SG_SINGULAR;
+        double u = 0.0;
+        bound0 = inv * (1.0 + u);
+    }
+    double bound1;
+    {
+        F1[0] = J[27];
+        F1[1] = J[23];
+        F1[2] = J[34];
+        F1[3] = J[30];
+        double inv;
+        if (sg_lu_bound_inl(2, F1, P1, &inv) != SG_OK) return SG_SINGULAR;
+        double u = 0.0;
+        bound1 = inv * (1.0 + u);
+    }
+    double bound2;
+    {
+        if (!(fabs(J[36]) > SG_PIVOT_RTOL)) return SG_SINGULAR;
+        J[36] = 1.0 / J[36];
+        const double inv = fabs(J[36]);
+        double u = 0.0;
+        { const double s = fabs(J[37]) * bound1; if (!(s <= u)) u = s; }
+        bound2 = inv * (1.0 + u);
+    }
+    double bound3;
+    {
+        if (!(fabs(J[47]) > SG_PIVOT_RTOL)) return SG_SINGULAR;
+        J[47] = 1.0 / J[47];
+        const double inv = fabs(J[47]);
+        double u = 0.0;
+        { const double s = fabs(J[42]) * bound0 + fabs(J[43]) * bound2; if (!(s <= u)) u = s; }
+        bound3 = inv * (1.0 + u);
+    }
+    double inorm = bound0;
+    if (!(bound1 <= inorm)) inorm = bound1;
+    if (!(bound2 <= inorm)) inorm = bound2;
+    if (!(bound3 <= inorm)) inorm = bound3;
+    *cond = anorm * inorm;
+    if (!isfinite(*cond)) return SG_SINGULAR;
+    {
+        double y[7];
+        {
+            double v[3];
+            v[0] = qd[0] * rs[0];
+            v[1] = qd[1] * rs[1];
+            v[2] = qd[2] * rs[2];
+            sg_lu_apply_inl(3, F0, P0, v);
+            y[3] = v[0];
+            y[4] = v[1];
+            y[0] = v[2];
+        }
+        {
+            double v[2];
+            v[0] = qd[3] * rs[3];
+            v[1] = qd[4] * rs[4];
+            sg_lu_apply_inl(2, F1, P1, v);
+            y[6] = v[0];
+            y[2] = v[1];
+        }
+        y[1] = (qd[5] * rs[5] - J[37] * y[2]) * J[36];
+        y[5] = (qd[6] * rs[6] - J[42] * y[0] - J[43] * y[1]) * J[47];
+        qd[0] = y[0] * cs[0];
+        qd[1] = y[1] * cs[1];
+        qd[2] = y[2] * cs[2];
+        qd[3] = y[3] * cs[3];
+        qd[4] = y[4] * cs[4];
+        qd[5] = y[5] * cs[5];
+        qd[6] = y[6] * cs[6];
+    }
     const double t46 = cx[3]*qd[4];
     const double t47 = t46*xd[1];
     const double t48 = ((qd[0])*(qd[0]));
@@ -678,7 +854,36 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     qdd[4] = c[15]*cq[13]*t54 + c[19]*cq[5]*t55 + t40*t56 + t42*xdd[0];
     qdd[5] = -qd[1]*(qd[1]*(-t20*t25 + t22*t23) + qd[2]*t60) - qd[2]*(qd[1]*t60 + qd[2]*(-t23*t59 + t58));
     qdd[6] = -qd[0]*(qd[0]*(cq[10]*t61 + cq[11]*t28) + qd[5]*t63) - qd[1]*(qd[1]*(cq[10]*t64 + cq[11]*t29) + qd[5]*t66) - qd[5]*(qd[0]*t63 + qd[1]*t66 + qd[5]*(c[30]*((cq[10])*(cq[10])) + c[30]*((cq[11])*(cq[11])) - cq[10]*t32 + cq[11]*t31));
-    sg_solve_eq_inl(7, J, piv, rs, cs, qdd);
+    {
+        double y[7];
+        {
+            double v[3];
+            v[0] = qdd[0] * rs[0];
+            v[1] = qdd[1] * rs[1];
+            v[2] = qdd[2] * rs[2];
+            sg_lu_apply_inl(3, F0, P0, v);
+            y[3] = v[0];
+            y[4] = v[1];
+            y[0] = v[2];
+        }
+        {
+            double v[2];
+            v[0] = qdd[3] * rs[3];
+            v[1] = qdd[4] * rs[4];
+            sg_lu_apply_inl(2, F1, P1, v);
+            y[6] = v[0];
+            y[2] = v[1];
+        }
+        y[1] = (qdd[5] * rs[5] - J[37] * y[2]) * J[36];
+        y[5] = (qdd[6] * rs[6] - J[42] * y[0] - J[43] * y[1]) * J[47];
+        qdd[0] = y[0] * cs[0];
+        qdd[1] = y[1] * cs[1];
+        qdd[2] = y[2] * cs[2];
+        qdd[3] = y[3] * cs[3];
+        qdd[4] = y[4] * cs[4];
+        qdd[5] = y[5] * cs[5];
+        qdd[6] = y[6] * cs[6];
+    }
     const double t74 = qdd[0]*t27 + t28*t48;
     const double t75 = qdd[0]*t62 + t27*t48;
     const double t81 = qdd[0]*t7 + t12*t48;
@@ -907,7 +1112,8 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
     const double t66 = cq[10]*t30 + cq[11]*t65;
     const double t107 = fabs(q[4]);
     double J[49], rs[7], cs[7];
-    int piv[7];
+    double F0[9]; int P0[3];
+    double F1[4]; int P1[2];
     J[0] = cq[6]*t0 + cq[7]*t1;
     J[1] = 0.0;
     J[2] = 0.0;
@@ -971,8 +1177,183 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
     rs[4] = c[106];
     rs[5] = c[107];
     rs[6] = c[108];
-    if (sg_factor_eq_inl(7, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
-    sg_solve_eq_inl(7, J, piv, rs, cs, qd);
+    *cond = INFINITY;
+    /* Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py) */
+    J[0] *= rs[0];
+    J[3] *= rs[0];
+    J[7] *= rs[1];
+    J[10] *= rs[1];
+    J[11] *= rs[1];
+    J[14] *= rs[2];
+    J[17] *= rs[2];
+    J[18] *= rs[2];
+    J[23] *= rs[3];
+    J[27] *= rs[3];
+    J[30] *= rs[4];
+    J[34] *= rs[4];
+    J[36] *= rs[5];
+    J[37] *= rs[5];
+    J[42] *= rs[6];
+    J[43] *= rs[6];
+    J[47] *= rs[6];
+    {
+        double m = 0.0, v;
+        v = fabs(J[0]); if (!(v <= m)) m = v;
+        v = fabs(J[7]); if (!(v <= m)) m = v;
+        v = fabs(J[14]); if (!(v <= m)) m = v;
+        v = fabs(J[42]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[0] = 1.0 / m;
+        J[0] *= cs[0];
+        J[7] *= cs[0];
+        J[14] *= cs[0];
+        J[42] *= cs[0];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[36]); if (!(v <= m)) m = v;
+        v = fabs(J[43]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[1] = 1.0 / m;
+        J[36] *= cs[1];
+        J[43] *= cs[1];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[23]); if (!(v <= m)) m = v;
+        v = fabs(J[30]); if (!(v <= m)) m = v;
+        v = fabs(J[37]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[2] = 1.0 / m;
+        J[23] *= cs[2];
+        J[30] *= cs[2];
+        J[37] *= cs[2];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[3]); if (!(v <= m)) m = v;
+        v = fabs(J[10]); if (!(v <= m)) m = v;
+        v = fabs(J[17]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[3] = 1.0 / m;
+        J[3] *= cs[3];
+        J[10] *= cs[3];
+        J[17] *= cs[3];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[11]); if (!(v <= m)) m = v;
+        v = fabs(J[18]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[4] = 1.0 / m;
+        J[11] *= cs[4];
+        J[18] *= cs[4];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[47]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[5] = 1.0 / m;
+        J[47] *= cs[5];
+    }
+    {
+        double m = 0.0, v;
+        v = fabs(J[27]); if (!(v <= m)) m = v;
+        v = fabs(J[34]); if (!(v <= m)) m = v;
+        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        cs[6] = 1.0 / m;
+        J[27] *= cs[6];
+        J[34] *= cs[6];
+    }
+    double anorm = 0.0;
+    { const double s = fabs(J[0]) + fabs(J[3]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[7]) + fabs(J[10]) + fabs(J[11]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[14]) + fabs(J[17]) + fabs(J[18]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[23]) + fabs(J[27]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[30]) + fabs(J[34]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[36]) + fabs(J[37]); if (!(s <= anorm)) anorm = s; }
+    { const double s = fabs(J[42]) + fabs(J[43]) + fabs(J[47]); if (!(s <= anorm)) anorm = s; }
+    double bound0;
+    {
+        F0[0] = J[3];
+        F0[1] = 0.0;
+        F0[2] = J[0];
+        F0[3] = J[10];
+        F0[4] = J[11];
+        F0[5] = J[7];
+        F0[6] = J[17];
+        F0[7] = J[18];
+        F0[8] = J[14];
+        double inv;
+        if (sg_lu_bound_inl(3, F0, P0, &inv) != SG_OK) return SG_SINGULAR;
+        double u = 0.0;
+        bound0 = inv * (1.0 + u);
+    }
+    double bound1;
+    {
+        F1[0] = J[27];
+        F1[1] = J[23];
+        F1[2] = J[34];
+        F1[3] = J[30];
+        double inv;
+        if (sg_lu_bound_inl(2, F1, P1, &inv) != SG_OK) return SG_SINGULAR;
+        double u = 0.0;
+        bound1 = inv * (1.0 + u);
+    }
+    double bound2;
+    {
+        if (!(fabs(J[36]) > SG_PIVOT_RTOL)) return SG_SINGULAR;
+        J[36] = 1.0 / J[36];
+        const double inv = fabs(J[36]);
+        double u = 0.0;
+        { const double s = fabs(J[37]) * bound1; if (!(s <= u)) u = s; }
+        bound2 = inv * (1.0 + u);
+    }
+    double bound3;
+    {
+        if (!(fabs(J[47]) > SG_PIVOT_RTOL)) return SG_SINGULAR;
+        J[47] = 1.0 / J[47];
+        const double inv = fabs(J[47]);
+        double u = 0.0;
+        { const double s = fabs(J[42]) * bound0 + fabs(J[43]) * bound2; if (!(s <= u)) u = s; }
+        bound3 = inv * (1.0 + u);
+    }
+    double inorm = bound0;
+    if (!(bound1 <= inorm)) inorm = bound1;
+    if (!(bound2 <= inorm)) inorm = bound2;
+    if (!(bound3 <= inorm)) inorm = bound3;
+    *cond = anorm * inorm;
+    if (!isfinite(*cond)) return SG_SINGULAR;
+    {
+        double y[7];
+        {
+            double v[3];
+            v[0] = qd[0] * rs[0];
+            v[1] = qd[1] * rs[1];
+            v[2] = qd[2] * rs[2];
+            sg_lu_apply_inl(3, F0, P0, v);
+            y[3] = v[0];
+            y[4] = v[1];
+            y[0] = v[2];
+        }
+        {
+            double v[2];
+            v[0] = qd[3] * rs[3];
+            v[1] = qd[4] * rs[4];
+            sg_lu_apply_inl(2, F1, P1, v);
+            y[6] = v[0];
+            y[2] = v[1];
+        }
+        y[1] = (qd[5] * rs[5] - J[37] * y[2]) * J[36];
+        y[5] = (qd[6] * rs[6] - J[42] * y[0] - J[43] * y[1]) * J[47];
+        qd[0] = y[0] * cs[0];
+        qd[1] = y[1] * cs[1];
+        qd[2] = y[2] * cs[2];
+        qd[3] = y[3] * cs[3];
+        qd[4] = y[4] * cs[4];
+        qd[5] = y[5] * cs[5];
+        qd[6] = y[6] * cs[6];
+    }
     const double t46 = cx[3]*qd[4];
     const double t47 = t46*xd[1];
     const double t48 = ((qd[0])*(qd[0]));
@@ -990,7 +1371,36 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
     qdd[4] = c[15]*cq[13]*t54 + c[19]*cq[5]*t55 + t40*t56 + t42*xdd[0];
     qdd[5] = -qd[1]*(qd[1]*(-t20*t25 + t22*t23) + qd[2]*t60) - qd[2]*(qd[1]*t60 + qd[2]*(-t23*t59 + t58));
     qdd[6] = -qd[0]*(qd[0]*(cq[10]*t61 + cq[11]*t28) + qd[5]*t63) - qd[1]*(qd[1]*(cq[10]*t64 + cq[11]*t29) + qd[5]*t66) - qd[5]*(qd[0]*t63 + qd[1]*t66 + qd[5]*(c[30]*((cq[10])*(cq[10])) + c[30]*((cq[11])*(cq[11])) - cq[10]*t32 + cq[11]*t31));
-    sg_solve_eq_inl(7, J, piv, rs, cs, qdd);
+    {
+        double y[7];
+        {
+            double v[3];
+            v[0] = qdd[0] * rs[0];
+            v[1] = qdd[1] * rs[1];
+            v[2] = qdd[2] * rs[2];
+            sg_lu_apply_inl(3, F0, P0, v);
+            y[3] = v[0];
+            y[4] = v[1];
+            y[0] = v[2];
+        }
+        {
+            double v[2];
+            v[0] = qdd[3] * rs[3];
+            v[1] = qdd[4] * rs[4];
+            sg_lu_apply_inl(2, F1, P1, v);
+            y[6] = v[0];
+            y[2] = v[1];
+        }
+        y[1] = (qdd[5] * rs[5] - J[37] * y[2]) * J[36];
+        y[5] = (qdd[6] * rs[6] - J[42] * y[0] - J[43] * y[1]) * J[47];
+        qdd[0] = y[0] * cs[0];
+        qdd[1] = y[1] * cs[1];
+        qdd[2] = y[2] * cs[2];
+        qdd[3] = y[3] * cs[3];
+        qdd[4] = y[4] * cs[4];
+        qdd[5] = y[5] * cs[5];
+        qdd[6] = y[6] * cs[6];
+    }
     if (!isfinite(((((q[0] + q[1]) + (q[2] + (q[3] + q[4]))) + ((q[5] + q[6]) + (qd[0] + (qd[1] + qd[2])))) + (((qd[3] + qd[4]) + (qd[5] + (qd[6] + qdd[0]))) + ((qdd[1] + (qdd[2] + qdd[3])) + (qdd[4] + (qdd[5] + qdd[6]))))))) return SG_NONFINITE;
     return SG_OK;
 }

@@ -234,12 +234,12 @@ void sg_hook_drive_blocks(const double *jac, double *out)
 {
     /* block 0: joints C */
     {
-        const double nr = sqrt(sg_row_norm2(4, jac + 0) * sg_row_norm2(4, jac + 4));
+        const double nr = sqrt((jac[0] * jac[0] + jac[2] * jac[2]) * (jac[4] * jac[4] + jac[6] * jac[6]));
         out[0] = nr > 0.0 ? (jac[2] * jac[4] - jac[0] * jac[6]) / nr : 0.0;
     }
     /* block 1: joints E */
     {
-        const double nr = sqrt(sg_row_norm2(4, jac + 8) * sg_row_norm2(4, jac + 12));
+        const double nr = sqrt((jac[8] * jac[8] + jac[9] * jac[9] + jac[11] * jac[11]) * (jac[12] * jac[12] + jac[13] * jac[13] + jac[15] * jac[15]));
         out[1] = nr > 0.0 ? (jac[11] * jac[13] - jac[9] * jac[15]) / nr : 0.0;
     }
 }

@@ -134,12 +134,12 @@ void sg_needle_bar_blocks(const double *jac, double *out)
 {
     /* block 0: joints C */
     {
-        const double nr = sqrt(sg_row_norm2(2, jac + 0));
+        const double nr = sqrt((jac[1] * jac[1]));
         out[0] = nr > 0.0 ? (jac[1]) / nr : 0.0;
     }
     /* block 1: joints C */
     {
-        const double nr = sqrt(sg_row_norm2(2, jac + 2));
+        const double nr = sqrt((jac[2] * jac[2] + jac[3] * jac[3]));
         out[1] = nr > 0.0 ? (jac[2]) / nr : 0.0;
     }
 }

@@ -258,12 +258,12 @@ void sg_overlock_feed_blocks(const double *jac, double *out)
 {
     /* block 0: joints B */
     {
-        const double nr = sqrt(sg_row_norm2(4, jac + 0) * sg_row_norm2(4, jac + 4));
+        const double nr = sqrt((jac[0] * jac[0] + jac[1] * jac[1]) * (jac[4] * jac[4] + jac[5] * jac[5]));
         out[0] = nr > 0.0 ? (jac[1] * jac[4] - jac[0] * jac[5]) / nr : 0.0;
     }
     /* block 1: joints F */
     {
-        const double nr = sqrt(sg_row_norm2(4, jac + 8) * sg_row_norm2(4, jac + 12));
+        const double nr = sqrt((jac[8] * jac[8] + jac[10] * jac[10] + jac[11] * jac[11]) * (jac[12] * jac[12] + jac[14] * jac[14] + jac[15] * jac[15]));
         out[1] = nr > 0.0 ? (jac[11] * jac[14] - jac[10] * jac[15]) / nr : 0.0;
     }
 }

@@ -234,12 +234,12 @@ void sg_overlock_loopers_planar_blocks(const double *jac, double *out)
 {
     /* block 0: joints rod */
     {
-        const double nr = sqrt(sg_row_norm2(3, jac + 0));
+        const double nr = sqrt((jac[0] * jac[0]));
         out[0] = nr > 0.0 ? (jac[0]) / nr : 0.0;
     }
     /* block 1: joints F */
     {
-        const double nr = sqrt(sg_row_norm2(3, jac + 3) * sg_row_norm2(3, jac + 6));
+        const double nr = sqrt((jac[3] * jac[3] + jac[4] * jac[4] + jac[5] * jac[5]) * (jac[6] * jac[6] + jac[7] * jac[7] + jac[8] * jac[8]));
         out[1] = nr > 0.0 ? (jac[5] * jac[7] - jac[4] * jac[8]) / nr : 0.0;
     }
 }

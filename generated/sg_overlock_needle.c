@@ -221,17 +221,17 @@ void sg_overlock_needle_blocks(const double *jac, double *out)
 {
     /* block 0: joints rod */
     {
-        const double nr = sqrt(sg_row_norm2(3, jac + 0));
+        const double nr = sqrt((jac[0] * jac[0]));
         out[0] = nr > 0.0 ? (jac[0]) / nr : 0.0;
     }
     /* block 1: joints N */
     {
-        const double nr = sqrt(sg_row_norm2(3, jac + 3));
+        const double nr = sqrt((jac[3] * jac[3] + jac[5] * jac[5]));
         out[1] = nr > 0.0 ? (jac[5]) / nr : 0.0;
     }
     /* block 2: joints N */
     {
-        const double nr = sqrt(sg_row_norm2(3, jac + 6));
+        const double nr = sqrt((jac[6] * jac[6] + jac[7] * jac[7] + jac[8] * jac[8]));
         out[2] = nr > 0.0 ? (jac[7]) / nr : 0.0;
     }
 }

@@ -161,7 +161,7 @@ void sg_take_up_blocks(const double *jac, double *out)
 {
     /* block 0: joints C */
     {
-        const double nr = sqrt(sg_row_norm2(2, jac + 0) * sg_row_norm2(2, jac + 2));
+        const double nr = sqrt((jac[0] * jac[0] + jac[1] * jac[1]) * (jac[2] * jac[2] + jac[3] * jac[3]));
         out[0] = nr > 0.0 ? (jac[1] * jac[2] - jac[0] * jac[3]) / nr : 0.0;
     }
 }

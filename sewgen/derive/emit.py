@@ -143,6 +143,8 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     blks = branches.blocks(kin)
     groups = observable_groups(mech, kin)
     row_scales = branches.row_scales(kin)
+    if dyads is None:  # no SIMD twin: the rates may factor Φ_q by its blocks
+        ks.solve_by_blocks(blks)
     kernels = ([ks.closed(dyads)] if dyads is not None else []) + [
         ks.residual(), *ks.lu(), ks.scales(row_scales), ks.blocks(blks), ks.motion(row_scales),
         ks.rates(row_scales), ks.observe(groups, row_scales), ks.forces(kst),

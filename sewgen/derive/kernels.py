@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from .. import abi
+from .blockfactor import BlockFactor
 from .cprint import KernelPrinter, NoVectorForm, VectorPrinter, ops, per_sweep
 from .dyads import Dyad
 from .joints import KINDS
@@ -119,6 +120,7 @@ class KernelSet:
         self.trig: dict = {}  # angle symbol -> (cos symbol, sin symbol)
         self._selection_lines = None
         self._memo: dict = {}  # CSE results a scalar kernel and its SIMD twin share
+        self._rate_blocks: list | None = None  # solve_by_blocks
         for i, (c, q) in enumerate(zip(kin.coords, kin.q)):
             if c.kind == "angle":
                 self.trig[q] = (sp.Symbol(f"cq_{2 * i}", real=True), sp.Symbol(f"cq_{2 * i + 1}", real=True))
@@ -228,7 +230,7 @@ class KernelSet:
         r_jac, r_vel = red[: n * n], red[n * n: n * n + n]
         r_gam, r_obs = red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:]
         body = self.selection_block() + fl.temps(staged[0]) + self._velocity_lines(fl, n, r_jac, r_vel, r_inv)
-        body += fl.temps(staged[1]) + self._acceleration_lines(fl, n, r_gam)
+        body += fl.temps(staged[1]) + self._acceleration_lines(fl, n, r_gam, r_jac)
         body += fl.temps(staged[2])
         body += [f"obs[{k}] = {fl.value(e)};" for k, e in enumerate(r_obs)]
         outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)] + [f"obs[{k}]" for k in range(len(r_obs))]
@@ -241,30 +243,44 @@ class KernelSet:
         return Kernel(name, VECTOR_SIGNATURES["motion"].format(f=name) if vector else self._signature("motion"),
                       body, ops(e for _, e in repl) + ops(red))
 
-    @staticmethod
-    def _velocity_lines(fl: _Flavour, n: int, r_jac, r_vel, r_inv) -> list[str]:
+    def solve_by_blocks(self, blocks: list) -> None:
+        """The scalar motion and rates kernels factor Φ_q by these diagonal blocks (derive.branches.blocks;
+        sewgen/derive/blockfactor.py) where its structure allows: for a mechanism with no SIMD twin, whose
+        rates need not match a vector factor's bits."""
+        self._rate_blocks = blocks
+
+    def _block_factor(self, n: int, r_jac) -> BlockFactor | None:
+        return BlockFactor.of(n, r_jac, self._rate_blocks) if self._rate_blocks else None
+
+    def _velocity_lines(self, fl: _Flavour, n: int, r_jac, r_vel, r_inv) -> list[str]:
         """The motion and rates kernels' LU of Φ_q — rows over their loop size (an angle row: 1 rad), columns
         equilibrated — with its condition number (the runtime's singular-position estimate), and q'."""
         vector = fl.vector
         if not n:
             return ["*cond = sgv_set1(1.0);", "sg_vm ok = sgv_true();"] if vector else ["*cond = 1.0;"]
-        body = [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];", f"{'sg_vm' if vector else 'int'} piv[{n}];"]
+        bf = None if vector else self._block_factor(n, r_jac)
+        body = [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];"]
+        body += bf.declarations() if bf else [f"{'sg_vm' if vector else 'int'} piv[{n}];"]
         body += [f"J[{k}] = {fl.value(e)};" for k, e in enumerate(r_jac)]
         body += [f"qd[{i}] = {fl.value(e)};" for i, e in enumerate(r_vel)]
         body += [f"rs[{i}] = {fl.value(e)};" for i, e in enumerate(r_inv)]
         if vector:
             return body + [f"sg_vm ok = sgv_factor_eq({n}, J, piv, rs, cs, cond);",
                            f"sgv_solve_eq({n}, J, piv, rs, cs, qd);"]
+        if bf:
+            return body + bf.factor_lines() + bf.solve_lines("qd")
         return body + [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
                        f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
 
-    @staticmethod
-    def _acceleration_lines(fl: _Flavour, n: int, r_gam) -> list[str]:
+    def _acceleration_lines(self, fl: _Flavour, n: int, r_gam, r_jac) -> list[str]:
         """q'' from γ with the same factor (after :meth:`_velocity_lines`)."""
         if not n:
             return []
-        return [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)] + [
-            f"{'sgv_solve_eq' if fl.vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
+        lines = [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)]
+        bf = None if fl.vector else self._block_factor(n, r_jac)
+        if bf:
+            return lines + bf.solve_lines("qdd")
+        return lines + [f"{'sgv_solve_eq' if fl.vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
 
     def _motion_parts(self, scales):
         """The motion kernel's CSE split as the kernels read it: (temporaries, Φ_q entries, −Φ_x x', γ, every
@@ -311,7 +327,7 @@ class KernelSet:
         late = [(t, e) for t, e in used if levels[t] >= 1]
         body = list(self.selection_block()) if _reads_ka(early + late, r_jac + r_vel + r_gam + r_inv) else []
         body += fl.temps(early) + self._velocity_lines(fl, n, r_jac, r_vel, r_inv)
-        body += fl.temps(late) + self._acceleration_lines(fl, n, r_gam)
+        body += fl.temps(late) + self._acceleration_lines(fl, n, r_gam, r_jac)
         if n:
             outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)]
             body += [f"ok &= sgv_isfinite({_balanced_sum(outputs)});" if vector
@@ -622,6 +638,13 @@ class KernelSet:
                 Kernel(f"{self.prefix}_lu_solve", self._signature("lu_solve"),
                        [f"sg_lu_solve_inl({n}, lu, piv, b);"], 2 * n * n)]
 
+    def _row_norm2(self, i: int) -> str:
+        """Φ_q's row i squared norm from the numeric jac, its structural zeros left out: the same value as the
+        sum over all n entries in order, to the bit (0 + a² is a², and a zero entry adds +0), unrolled."""
+        n = len(self.kin.q)
+        terms = [f"jac[{i * n + j}] * jac[{i * n + j}]" for j in range(n) if self.kin.jac_q[i, j] != 0]
+        return "(" + " + ".join(terms) + ")" if terms else "0.0"
+
     def blocks(self, blocks: list) -> Kernel:
         """The normalised determinant of every diagonal block of Φ_q (derive.branches) from the numeric Φ_q:
         det over the product of the block rows' norms in Φ_q; its sign is the block's assembly branch."""
@@ -632,7 +655,7 @@ class KernelSet:
             m = len(blk.rows)
             count += {1: 0, 2: 3, 3: 14}.get(m, 2 * m ** 3 // 3) + m * (2 * n + 1) + 2  # det, row norms, quotient
             el = [[f"jac[{i * n + j}]" for j in blk.cols] for i in blk.rows]
-            norms = "sqrt(" + " * ".join(f"sg_row_norm2({n}, jac + {i * n})" for i in blk.rows) + ")"
+            norms = "sqrt(" + " * ".join(self._row_norm2(i) for i in blk.rows) + ")"
             body.append(f"/* block {k}: joints {', '.join(blk.joints)} */")
             body.append("{")
             if m == 1:

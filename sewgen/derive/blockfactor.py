@@ -1,0 +1,135 @@
+"""The rates' equilibrated factor of Φ_q block by block, as C lines of the motion and rates kernels (issue 14).
+
+Φ_q is block lower triangular in the loops' solving order (:func:`sewgen.derive.branches.blocks`: each loop reads
+the coordinates of its own and of earlier loops). A mechanism that Newton solves (no closed form, so no SIMD
+twin whose bits its rates must match) factors each diagonal block alone and solves by forward block
+substitution, reading only Φ_q's structural non-zeros, where the runtime's dense factor (``sg_factor_eq_inl``)
+took all n × n entries: the JB1-3 feed's 7 × 7 (blocks 3, 2, 1, 1) is most of the machine's analysis.
+
+The scaling is the dense factor's (csrc/sg_runtime.h): E = R A C, rows by ``rs`` (each loop's size), each column
+to its largest entry 1. A 1 × 1 block is its reciprocal; a larger one the runtime's pivoted LU
+(``sg_lu_bound_inl``: pivots below SG_PIVOT_RTOL are singular, with its comparison-matrix bound of
+||D_k^-1||_inf). Since det E is the product of the blocks' determinants, a block singular to the tolerance is
+the position's singularity. The condition estimate stays an upper bound of ||E||_inf ||E^-1||_inf: for
+x = E^-1 b with ||b||_inf <= 1, block k's x_k = D_k^-1 (b_k - sum_{j<k} E_kj x_j), so by induction
+||x_k||_inf <= t_k = ||D_k^-1|| (1 + max_{r in block k} sum_c |E_rc| t_{block(c)}) (the bound of block forward
+substitution, e.g. Higham, *Accuracy and Stability of Numerical Algorithms*, §13.1), and ||E^-1||_inf <= max_k
+t_k. For a single block this is the dense factor's own bound.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class BlockFactor:
+    """Φ_q's structure (``nonzero[i][j]``: entry (i, j) is not identically 0) and its diagonal blocks in solving
+    order (``blocks``: (rows, cols) pairs, cols the coordinates each block solves for)."""
+
+    n: int
+    nonzero: tuple
+    blocks: tuple
+
+    @classmethod
+    def of(cls, n: int, jacobian: list, blocks: list) -> "BlockFactor | None":
+        """The block factor of Φ_q (``jacobian``: n × n entries, row-major, SymPy; ``blocks``: objects with
+        ``rows`` and ``cols``), or None where it would gain nothing or does not apply: a single block, or a row
+        that reads a coordinate of a later block (then the dense factor)."""
+        if n == 0 or len(blocks) < 2:
+            return None
+        nonzero = tuple(tuple(jacobian[i * n + j] != 0 for j in range(n)) for i in range(n))
+        block_of_col = {}
+        for k, b in enumerate(blocks):
+            for c in b.cols:
+                block_of_col[c] = k
+        pairs = tuple((tuple(b.rows), tuple(b.cols)) for b in blocks)
+        if sorted(block_of_col) != list(range(n)) or sorted(r for rows, _ in pairs for r in rows) != list(range(n)):
+            return None
+        for k, (rows, _cols) in enumerate(pairs):
+            for r in rows:
+                if any(nonzero[r][c] and block_of_col[c] > k for c in range(n)):
+                    return None
+        return cls(n, nonzero, pairs)
+
+    def _at(self, i: int, j: int) -> str:
+        return f"J[{i * self.n + j}]"
+
+    def _earlier(self, k: int) -> list[int]:
+        """The coordinates of the blocks before block k."""
+        return [c for _rows, cols in self.blocks[:k] for c in cols]
+
+    def factor_lines(self) -> list[str]:
+        """Scale J (rows by rs, columns into cs), factor each diagonal block, set *cond; return SG_SINGULAR
+        from the kernel where a column is empty or not finite, a block is singular or the bound is not finite."""
+        n, nz, at = self.n, self.nonzero, self._at
+        lines = ["*cond = INFINITY;", "/* Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py) */"]
+        lines += [f"{at(i, j)} *= rs[{i}];" for i in range(n) for j in range(n) if nz[i][j]]
+        for j in range(n):
+            col = [at(i, j) for i in range(n) if nz[i][j]]
+            if not col:
+                return lines + ["return SG_SINGULAR; /* a coordinate no loop reads */"]
+            lines += ["{", "    double m = 0.0, v;"]
+            for e in col:
+                lines.append(f"    v = fabs({e}); if (!(v <= m)) m = v;")
+            lines += ["    if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;", f"    cs[{j}] = 1.0 / m;"]
+            lines += [f"    {e} *= cs[{j}];" for e in col] + ["}"]
+        lines.append("double anorm = 0.0;")
+        for i in range(n):
+            terms = " + ".join(f"fabs({at(i, j)})" for j in range(n) if nz[i][j])
+            lines.append(f"{{ const double s = {terms}; if (!(s <= anorm)) anorm = s; }}")
+        block_of_col = {c: k for k, (_r, cols) in enumerate(self.blocks) for c in cols}
+        for k, (rows, cols) in enumerate(self.blocks):
+            s = len(rows)
+            lines.append(f"double bound{k};")
+            lines.append("{")
+            if s == 1:
+                d = at(rows[0], cols[0])
+                lines += [f"    if (!(fabs({d}) > SG_PIVOT_RTOL)) return SG_SINGULAR;", f"    {d} = 1.0 / {d};",
+                          f"    const double inv = fabs({d});"]
+            else:
+                lines += [f"    F{k}[{a * s + b}] = {at(r, c) if nz[r][c] else '0.0'};"
+                          for a, r in enumerate(rows) for b, c in enumerate(cols)]
+                lines += ["    double inv;", f"    if (sg_lu_bound_inl({s}, F{k}, P{k}, &inv) != SG_OK) return SG_SINGULAR;"]
+            lines.append("    double u = 0.0;")
+            for r in rows:
+                terms = [f"fabs({at(r, c)}) * bound{block_of_col[c]}" for c in self._earlier(k) if nz[r][c]]
+                if terms:
+                    lines.append(f"    {{ const double s = {' + '.join(terms)}; if (!(s <= u)) u = s; }}")
+            lines += [f"    bound{k} = inv * (1.0 + u);", "}"]
+        lines.append("double inorm = bound0;")
+        lines += [f"if (!(bound{k} <= inorm)) inorm = bound{k};" for k in range(1, len(self.blocks))]
+        return lines + ["*cond = anorm * inorm;", "if (!isfinite(*cond)) return SG_SINGULAR;"]
+
+    def declarations(self) -> list[str]:
+        """Each block's factor and interchanges (blocks of two or more rows)."""
+        return [f"double F{k}[{len(rows) ** 2}]; int P{k}[{len(rows)}];"
+                for k, (rows, _cols) in enumerate(self.blocks) if len(rows) > 1]
+
+    def solve_lines(self, b: str) -> list[str]:
+        """``b`` (indexed by closure row) overwritten by Φ_q^-1 b (indexed by coordinate) with the factor above:
+        y = E^-1 (R b) block after block, then b = C y."""
+        n, nz, at = self.n, self.nonzero, self._at
+        lines = ["{", f"    double y[{n}];"]
+        for k, (rows, cols) in enumerate(self.blocks):
+            earlier = self._earlier(k)
+            rhs = []
+            for r in rows:
+                terms = "".join(f" - {at(r, c)} * y[{c}]" for c in earlier if nz[r][c])
+                rhs.append(f"{b}[{r}] * rs[{r}]{terms}")
+            if len(rows) == 1:
+                lines.append(f"    y[{cols[0]}] = ({rhs[0]}) * {at(rows[0], cols[0])};")
+                continue
+            lines.append("    {")
+            lines.append(f"        double v[{len(rows)}];")
+            lines += [f"        v[{a}] = {e};" for a, e in enumerate(rhs)]
+            lines.append(f"        sg_lu_apply_inl({len(rows)}, F{k}, P{k}, v);")
+            lines += [f"        y[{c}] = v[{a}];" for a, c in enumerate(cols)]
+            lines.append("    }")
+        lines += [f"    {b}[{c}] = y[{c}] * cs[{c}];" for c in range(n)]
+        return lines + ["}"]
+
+    def ops(self) -> int:
+        """Floating-point operations of the factor and two solves (the kernel's op count)."""
+        nnz = sum(map(sum, self.nonzero))
+        dense = sum(2 * len(rows) ** 3 // 3 + 2 * len(rows) ** 2 for rows, _c in self.blocks)
+        return 5 * nnz + dense + 2 * (2 * nnz + 2 * self.n)
