@@ -67,20 +67,12 @@ typedef struct sg_columns {
 #define SG_NOINLINE
 #endif
 
-SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
+/* LU with partial pivoting in place, a pivot singular below SG_PIVOT_RTOL times its column's colmax[k] (the
+ * largest |entry| of column k of the whole matrix: a mechanism's block factor, sewgen/derive/blockfactor.py,
+ * factors a diagonal block against its columns in all of Φ_q). */
+SG_INLINE int sg_lu_factor_cm_inl(int n, double *a, int *piv, const double *colmax, double *det_sign)
 {
-    double colmax[SG_MAX_Q];
     double sign = 1.0;
-    SG_UNROLL
-    for (int j = 0; j < n; ++j) {
-        double cm = 0.0;
-        SG_UNROLL
-        for (int i = 0; i < n; ++i) {
-            const double v = fabs(a[i * n + j]);
-            if (v > cm) cm = v;
-        }
-        colmax[j] = cm;
-    }
     SG_UNROLL
     for (int k = 0; k < n; ++k) {
         int pr = k;
@@ -117,6 +109,22 @@ SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
     }
     if (det_sign) *det_sign = sign;
     return SG_OK;
+}
+
+SG_INLINE int sg_lu_factor_inl(int n, double *a, int *piv, double *det_sign)
+{
+    double colmax[SG_MAX_Q];
+    SG_UNROLL
+    for (int j = 0; j < n; ++j) {
+        double cm = 0.0;
+        SG_UNROLL
+        for (int i = 0; i < n; ++i) {
+            const double v = fabs(a[i * n + j]);
+            if (v > cm) cm = v;
+        }
+        colmax[j] = cm;
+    }
+    return sg_lu_factor_cm_inl(n, a, piv, colmax, det_sign);
 }
 
 /* The factor swaps whole rows (L's multipliers too, as LAPACK's dgetrf), so every interchange is applied

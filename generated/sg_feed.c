@@ -374,16 +374,118 @@ void sg_feed_residual(const double *q, const double *cq, const double *x, const 
     jac[48] = 0.0;
 }
 
-/* sg_feed_lu_factor -- Total ops: 228 */
+/* sg_feed_lu_factor -- Total ops: 117 */
 int sg_feed_lu_factor(double *a, int *piv)
 {
-    return sg_lu_factor_inl(7, a, piv, NULL);
+    double cm0 = 0.0;
+    { const double v = fabs(a[0]); if (v > cm0) cm0 = v; }
+    { const double v = fabs(a[7]); if (v > cm0) cm0 = v; }
+    { const double v = fabs(a[14]); if (v > cm0) cm0 = v; }
+    { const double v = fabs(a[42]); if (v > cm0) cm0 = v; }
+    double cm1 = 0.0;
+    { const double v = fabs(a[36]); if (v > cm1) cm1 = v; }
+    { const double v = fabs(a[43]); if (v > cm1) cm1 = v; }
+    double cm2 = 0.0;
+    { const double v = fabs(a[23]); if (v > cm2) cm2 = v; }
+    { const double v = fabs(a[30]); if (v > cm2) cm2 = v; }
+    { const double v = fabs(a[37]); if (v > cm2) cm2 = v; }
+    double cm3 = 0.0;
+    { const double v = fabs(a[3]); if (v > cm3) cm3 = v; }
+    { const double v = fabs(a[10]); if (v > cm3) cm3 = v; }
+    { const double v = fabs(a[17]); if (v > cm3) cm3 = v; }
+    double cm4 = 0.0;
+    { const double v = fabs(a[11]); if (v > cm4) cm4 = v; }
+    { const double v = fabs(a[18]); if (v > cm4) cm4 = v; }
+    double cm5 = 0.0;
+    { const double v = fabs(a[47]); if (v > cm5) cm5 = v; }
+    double cm6 = 0.0;
+    { const double v = fabs(a[27]); if (v > cm6) cm6 = v; }
+    { const double v = fabs(a[34]); if (v > cm6) cm6 = v; }
+    {
+        double M[9];
+        const double cm[3] = {cm3, cm4, cm0};
+        M[0] = a[3];
+        M[1] = 0.0;
+        M[2] = a[0];
+        M[3] = a[10];
+        M[4] = a[11];
+        M[5] = a[7];
+        M[6] = a[17];
+        M[7] = a[18];
+        M[8] = a[14];
+        if (sg_lu_factor_cm_inl(3, M, piv + 0, cm, NULL) != SG_OK) return SG_SINGULAR;
+        a[3] = M[0];
+        a[4] = M[1];
+        a[0] = M[2];
+        a[10] = M[3];
+        a[11] = M[4];
+        a[7] = M[5];
+        a[17] = M[6];
+        a[18] = M[7];
+        a[14] = M[8];
+    }
+    {
+        double M[4];
+        const double cm[2] = {cm6, cm2};
+        M[0] = a[27];
+        M[1] = a[23];
+        M[2] = a[34];
+        M[3] = a[30];
+        if (sg_lu_factor_cm_inl(2, M, piv + 3, cm, NULL) != SG_OK) return SG_SINGULAR;
+        a[27] = M[0];
+        a[23] = M[1];
+        a[34] = M[2];
+        a[30] = M[3];
+    }
+    if (!(fabs(a[36]) > SG_PIVOT_RTOL * cm1)) return SG_SINGULAR;
+    if (!(fabs(a[47]) > SG_PIVOT_RTOL * cm5)) return SG_SINGULAR;
+    return SG_OK;
 }
 
-/* sg_feed_lu_solve -- Total ops: 98 */
+/* sg_feed_lu_solve -- Total ops: 117 */
 void sg_feed_lu_solve(const double *lu, const int *piv, double *b)
 {
-    sg_lu_solve_inl(7, lu, piv, b);
+    double y[7];
+    {
+        double M[9], v[3];
+        M[0] = lu[3];
+        M[1] = lu[4];
+        M[2] = lu[0];
+        M[3] = lu[10];
+        M[4] = lu[11];
+        M[5] = lu[7];
+        M[6] = lu[17];
+        M[7] = lu[18];
+        M[8] = lu[14];
+        v[0] = b[0];
+        v[1] = b[1];
+        v[2] = b[2];
+        sg_lu_solve_inl(3, M, piv + 0, v);
+        y[3] = v[0];
+        y[4] = v[1];
+        y[0] = v[2];
+    }
+    {
+        double M[4], v[2];
+        M[0] = lu[27];
+        M[1] = lu[23];
+        M[2] = lu[34];
+        M[3] = lu[30];
+        v[0] = b[3];
+        v[1] = b[4];
+        sg_lu_solve_inl(2, M, piv + 3, v);
+        y[6] = v[0];
+        y[2] = v[1];
+    }
+    y[1] = (b[5] - lu[37] * y[2]) / lu[36];
+    y[5] = (b[6] - lu[42] * y[0] - lu[43] * y[1]) / lu[47];
+    b[0] = y[0];
+    b[1] = y[1];
+    b[2] = y[2];
+    b[3] = y[3];
+    b[4] = y[4];
+    b[5] = y[5];
+    b[6] = y[6];
 }
 
 /* sg_feed_scales -- Total ops: 18 */
@@ -2569,12 +2671,12 @@ const char *sg_feed_manifest(void)
         "5ea7: slot angle from horizontal (0: no feed; >0 forward; <0 reverse)\",\"kind\":\"held\",\"name"
         "\":\"regulator\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels\":{\"sg_feed_anchors"
         "\":{\"ops\":181},\"sg_feed_blocks\":{\"ops\":130},\"sg_feed_constants\":{\"ops\":175},\"sg_feed_"
-        "force_matrix\":{\"ops\":323},\"sg_feed_forces\":{\"ops\":797},\"sg_feed_lu_factor\":{\"ops\":228"
-        "},\"sg_feed_lu_solve\":{\"ops\":98},\"sg_feed_motion\":{\"ops\":608},\"sg_feed_observe\":{\"ops\""
-        ":460},\"sg_feed_rates\":{\"ops\":288},\"sg_feed_residual\":{\"ops\":134},\"sg_feed_scales\":{\"o"
-        "ps\":18}},\"loads\":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"name\":\"feed_dog\"},{\"body\""
-        ":\"feed_bar\",\"component\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\",\"component\":"
-        "\"fx\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"fork_top\""
+        "force_matrix\":{\"ops\":323},\"sg_feed_forces\":{\"ops\":797},\"sg_feed_lu_factor\":{\"ops\":117"
+        "},\"sg_feed_lu_solve\":{\"ops\":117},\"sg_feed_motion\":{\"ops\":608},\"sg_feed_observe\":{\"ops"
+        "\":460},\"sg_feed_rates\":{\"ops\":288},\"sg_feed_residual\":{\"ops\":134},\"sg_feed_scales\":{\""
+        "ops\":18}},\"loads\":[{\"body\":\"feed_bar\",\"component\":\"fx\",\"name\":\"feed_dog\"},{\"body"
+        "\":\"feed_bar\",\"component\":\"fy\",\"name\":\"feed_dog\"},{\"body\":\"feed_fork\",\"component\""
+        ":\"fx\",\"name\":\"fork_top\"},{\"body\":\"feed_fork\",\"component\":\"fy\",\"name\":\"fork_top\""
         "},{\"body\":\"feed_fork\",\"component\":\"fx\",\"name\":\"stitch_pin\"},{\"body\":\"feed_fork\","
         "\"component\":\"fy\",\"name\":\"stitch_pin\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fx\""
         ",\"name\":\"lift_roller\"},{\"body\":\"lift_rock_shaft\",\"component\":\"fy\",\"name\":\"lift_ro"

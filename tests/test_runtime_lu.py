@@ -114,12 +114,12 @@ def test_rates_factor_refuses_nan_and_unread_coordinate(lib):
         assert st == 2
 
 
-@pytest.mark.parametrize("name", ["feed", "hook_drive", "overlock_loopers", "take_up"])
+@pytest.mark.parametrize("name", ["hook_drive", "overlock_loopers", "take_up"])
 def test_a_mechanisms_own_newton_lu_equals_the_runtimes_to_the_bit(name):
     """Newton factors dΦ/dq with the mechanism's kernels 'lu_factor' and 'lu_solve' (nq a literal, the loops
     unrolled whole): the same pivots, factor, solution and singular verdicts as the runtime's sg_lu_factor /
-    sg_lu_solve for any n, bit for bit — on random matrices, on ones with zeros below the diagonal (the feed's
-    block-triangular Φ_q), and on singular and nearly singular ones."""
+    sg_lu_solve for any n, bit for bit — on random matrices, on ones with zeros below the diagonal, and on
+    singular and nearly singular ones. (The feed's factors Φ_q by its blocks: the test below.)"""
     m = sewgen.mechanism(name)
     ffi, lib = m.ffi, m.lib
     own_f, own_s = getattr(lib, f"sg_{name}_lu_factor"), getattr(lib, f"sg_{name}_lu_solve")
@@ -150,3 +150,50 @@ def test_a_mechanisms_own_newton_lu_equals_the_runtimes_to_the_bit(name):
             assert np.array_equal(x1, x2)
             np.testing.assert_allclose(a @ x1, b, atol=1e-8 * (1 + np.abs(a).sum(axis=1).max() * np.abs(x1).max()))
     assert verdicts == {0, 2}  # solved and singular cases both met
+
+
+def test_the_feeds_newton_lu_by_blocks_solves_its_structure():
+    """The feed's Newton factor works on Φ_q's diagonal blocks (sewgen/derive/blockfactor.py): on random matrices
+    with Φ_q's structure (its structural zeros, from the residual kernel at a solved position) the solution is
+    numpy's dense one (normwise); a block made singular, or a coupling-free block of zeros, is singular; a
+    block pivot small against its column in all of Φ_q is singular, as in the dense factor."""
+    m = sewgen.mechanism("feed")
+    ffi, lib = m.ffi, m.lib
+    n = len(m.coord_names)
+    mo = m.solve(np.radians([10.0, 100.0, 250.0]))
+    pattern = np.zeros((n, n), dtype=bool)
+    for q, ph in zip(mo.q, np.radians([10.0, 100.0, 250.0])):
+        pattern |= m.residual(q, ph)[1] != 0
+    ptr = lambda t, a: ffi.cast(t, ffi.from_buffer(a))  # noqa: E731
+    rng = np.random.default_rng(7)
+
+    def factor_solve(a, b):
+        lu, piv, x = a.copy(), np.zeros(n, dtype=np.intc), b.copy()
+        st = lib.sg_feed_lu_factor(ptr("double *", lu), ptr("int *", piv))
+        if st == 0:
+            lib.sg_feed_lu_solve(ptr("double *", lu), ptr("int *", piv), ptr("double *", x))
+        return st, x
+
+    for _ in range(50):
+        a = np.where(pattern, rng.normal(size=(n, n)) * np.exp(rng.uniform(-3, 3, size=n)), 0.0)
+        b = rng.normal(size=n)
+        st, x = factor_solve(a, b)
+        assert st == 0
+        ref = np.linalg.solve(a, b)
+        assert np.abs(x - ref).max() <= 1e-12 * np.linalg.cond(a, np.inf) * np.abs(ref).max()
+    a = np.where(pattern, rng.normal(size=(n, n)), 0.0)
+    blk = m.manifest["blocks"][0]  # the cam and the stitch block's guide (3 x 3): rank 2
+    r0, r1 = blk["rows"][0], blk["rows"][1]
+    a[r1, blk["coords"]] = 2.0 * a[r0, blk["coords"]]
+    assert factor_solve(a, rng.normal(size=n))[0] == 2
+    singles = [b for b in m.manifest["blocks"] if len(b["rows"]) == 1]
+    (r,), (c,) = singles[-1]["rows"], singles[-1]["coords"]
+    a = np.where(pattern, rng.normal(size=(n, n)), 0.0)
+    a[r, c] = 0.0  # a 1 x 1 block of zero
+    assert factor_solve(a, rng.normal(size=n))[0] == 2
+    (r,), (c,) = next((b["rows"], b["coords"]) for b in singles if pattern[:, b["coords"][0]].sum() > 1)
+    a = np.where(pattern, rng.normal(size=(n, n)), 0.0)
+    a[r, c] = 1e-13 * np.abs(a[:, c]).max()  # small against a later loop's entry in its column
+    assert factor_solve(a, rng.normal(size=n))[0] == 2
+    a[r, c] = 1e-9 * np.abs(a[:, c]).max()  # above the tolerance: solved
+    assert factor_solve(a, rng.normal(size=n))[0] == 0

@@ -128,6 +128,59 @@ class BlockFactor:
         lines += [f"    {b}[{c}] = y[{c}] * cs[{c}];" for c in range(n)]
         return lines + ["}"]
 
+    def _offsets(self) -> list[int]:
+        """Each block's first entry in the pivot vector."""
+        out, k = [], 0
+        for rows, _cols in self.blocks:
+            out.append(k)
+            k += len(rows)
+        return out
+
+    def newton_factor_lines(self) -> list[str]:
+        """Newton's factor (kernel 'lu_factor': a, piv) of the raw Φ_q: each diagonal block in place by the
+        runtime's pivoted LU, a pivot singular below SG_PIVOT_RTOL times the largest |entry| of its column in
+        all of Φ_q (the dense factor's test); the coupling entries stay as they are. Block k's interchanges at
+        piv[first row of k ...]."""
+        n, nz = self.n, self.nonzero
+        a = lambda i, j: f"a[{i * n + j}]"  # noqa: E731
+        lines = []
+        for j in range(n):
+            lines.append(f"double cm{j} = 0.0;")
+            lines += [f"{{ const double v = fabs({a(i, j)}); if (v > cm{j}) cm{j} = v; }}" for i in range(n) if nz[i][j]]
+        for (rows, cols), off in zip(self.blocks, self._offsets()):
+            s = len(rows)
+            if s == 1:
+                lines.append(f"if (!(fabs({a(rows[0], cols[0])}) > SG_PIVOT_RTOL * cm{cols[0]})) return SG_SINGULAR;")
+                continue
+            lines += ["{", f"    double M[{s * s}];", f"    const double cm[{s}] = {{{', '.join(f'cm{c}' for c in cols)}}};"]
+            lines += [f"    M[{p * s + q}] = {a(r, c) if nz[r][c] else '0.0'};"
+                      for p, r in enumerate(rows) for q, c in enumerate(cols)]
+            lines.append(f"    if (sg_lu_factor_cm_inl({s}, M, piv + {off}, cm, NULL) != SG_OK) return SG_SINGULAR;")
+            lines += [f"    {a(r, c)} = M[{p * s + q}];" for p, r in enumerate(rows) for q, c in enumerate(cols)]
+            lines.append("}")
+        return lines + ["return SG_OK;"]
+
+    def newton_solve_lines(self) -> list[str]:
+        """Newton's solve (kernel 'lu_solve': lu, piv, b) with the factor above: forward block substitution, b
+        (indexed by closure row) overwritten by the solution (indexed by coordinate)."""
+        n, nz = self.n, self.nonzero
+        lu = lambda i, j: f"lu[{i * n + j}]"  # noqa: E731
+        lines = [f"double y[{n}];"]
+        for k, ((rows, cols), off) in enumerate(zip(self.blocks, self._offsets())):
+            earlier = self._earlier(k)
+            rhs = [f"b[{r}]" + "".join(f" - {lu(r, c)} * y[{c}]" for c in earlier if nz[r][c]) for r in rows]
+            if len(rows) == 1:
+                lines.append(f"y[{cols[0]}] = ({rhs[0]}) / {lu(rows[0], cols[0])};")
+                continue
+            s = len(rows)
+            lines += ["{", f"    double M[{s * s}], v[{s}];"]
+            lines += [f"    M[{p * s + q}] = {lu(r, c)};" for p, r in enumerate(rows) for q, c in enumerate(cols)]
+            lines += [f"    v[{p}] = {e};" for p, e in enumerate(rhs)]
+            lines.append(f"    sg_lu_solve_inl({s}, M, piv + {off}, v);")
+            lines += [f"    y[{c}] = v[{p}];" for p, c in enumerate(cols)]
+            lines.append("}")
+        return lines + [f"b[{c}] = y[{c}];" for c in range(n)]
+
     def ops(self) -> int:
         """Floating-point operations of the factor and two solves (the kernel's op count)."""
         nnz = sum(map(sum, self.nonzero))

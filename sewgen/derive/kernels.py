@@ -631,8 +631,16 @@ class KernelSet:
     def lu(self) -> list[Kernel]:
         """Newton's factor and solve of Φ_q with nq a literal: the runtime's sg_lu_factor_inl / sg_lu_solve_inl
         (SG_UNROLL) unrolled whole for this mechanism, where the runtime's exported copies, for any n, ran ~2.3×
-        the instructions (the feed's 7 × 7: 2.6k against 1.1k)."""
+        the instructions (the feed's 7 × 7: 2.6k against 1.1k); by Φ_q's diagonal blocks where the rates are
+        (:meth:`solve_by_blocks`)."""
         n = len(self.kin.q)
+        jac = [self.kin.jac_q[i, j] for i in range(n) for j in range(n)]
+        bf = self._block_factor(n, jac)
+        if bf:  # Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py)
+            return [Kernel(f"{self.prefix}_lu_factor", self._signature("lu_factor"), bf.newton_factor_lines(),
+                           bf.ops() // 2),
+                    Kernel(f"{self.prefix}_lu_solve", self._signature("lu_solve"), bf.newton_solve_lines(),
+                           bf.ops() // 2)]
         return [Kernel(f"{self.prefix}_lu_factor", self._signature("lu_factor"),
                        [f"return sg_lu_factor_inl({n}, a, piv, NULL);"], 2 * n ** 3 // 3),
                 Kernel(f"{self.prefix}_lu_solve", self._signature("lu_solve"),
