@@ -75,6 +75,9 @@ static double weighted_norm(int n, const double *v, const double *w)
  * formulas with cos d, sin d from their Taylor series (|d| < 1e-2: the first omitted terms, d^10/10! and
  * d^9/9!, are below 1e-26 relative), so a step costs no libm call. Larger steps: sincos. */
 #define SG_SMALL_STEP 1e-2
+/* Below this the series give cos d = 1 and sin d = d exactly (their corrections, d^2/2 and d^2/6 relative, are
+ * under 2^-54, half an ulp of 1, up to |d| = 1.05e-8): the shift is c - s d, s + c d, the same bits. */
+#define SG_TINY_STEP 1e-9
 
 static void shift_trig(const sg_mechanism *m, const double *q, const double *cq, const double *d, double *q_out,
                        double *cq_out)
@@ -84,6 +87,10 @@ static void shift_trig(const sg_mechanism *m, const double *q, const double *cq,
         if (!m->coord_is_angle[i]) {
             cq_out[2 * i] = 1.0;
             cq_out[2 * i + 1] = 0.0;
+        } else if (fabs(d[i]) < SG_TINY_STEP) { /* Newton's last steps: cos d, sin d are 1, d to the bit */
+            const double h = d[i], c = cq[2 * i], s = cq[2 * i + 1];
+            cq_out[2 * i] = c - s * h;
+            cq_out[2 * i + 1] = s + c * h;
         } else if (fabs(d[i]) < SG_SMALL_STEP) {
             const double h = d[i], h2 = h * h;
             /* the series' divisions as products with their reciprocals (constants): within an ulp of the
@@ -132,10 +139,6 @@ static void keep_step_if_lower(const sg_mechanism *m, double *q, double *cq, con
     }
 }
 
-/* Damped Newton on Phi(q, x) = 0 from q (in place), with cq kept in step with q. Converged when every closure
- * equation's residual is below opt->tol times that equation's own loop size (inv_scale: the reciprocals of the
- * 'scales' kernel's sizes, refreshed by the caller). On success jac holds dPhi/dq at the solution and *resid
- * the largest relative residual. */
 /* Newton's LU of dPhi/dq: the mechanism's own (kernels 'lu_factor', 'lu_solve': nq a literal, the same operations
  * in the same order, so the same bits) where it has them, else the runtime's for any n. */
 static inline int lu_factor(const sg_mechanism *m, double *a, int *piv)
@@ -151,15 +154,18 @@ static inline void lu_solve(const sg_mechanism *m, const double *lu, const int *
         sg_lu_solve(m->nq, lu, piv, b);
 }
 
+/* Damped Newton on Phi(q, x) = 0 from q (in place), with cq kept in step with q. Converged when every closure
+ * equation's residual is below opt->tol times that equation's own loop size: w holds 1 / (size tol) per
+ * equation (the 'scales' kernel's sizes, refreshed by the caller). On success jac holds dPhi/dq at the solution
+ * and *resid the largest relative residual. */
 static int newton(const sg_mechanism *m, double *q, double *cq, const double *x, const double *cx,
-                  const double *c, const sg_options *opt, const double *inv_scale, int min_iter, double *jac,
+                  const double *c, const sg_options *opt, const double *w, int min_iter, double *jac,
                   double *resid)
 {
     const int nq = m->nq;
-    double r[SG_MAX_Q], w[SG_MAX_Q], lu[SG_MAX_Q * SG_MAX_Q];
+    double r[SG_MAX_Q], lu[SG_MAX_Q * SG_MAX_Q];
     double qt[SG_MAX_Q], cqt[2 * SG_MAX_Q], rt[SG_MAX_Q], dq[SG_MAX_Q], step[SG_MAX_Q];
     int piv[SG_MAX_Q];
-    for (int i = 0; i < nq; ++i) w[i] = inv_scale[i] / opt->tol; /* scaled residual: converged at <= 1 */
     m->residual(q, cq, x, cx, c, r, jac); /* cq: cos, sin of q, from the caller */
     double norm = weighted_norm(nq, r, w);
     for (int it = 0;; ++it) {
@@ -304,8 +310,8 @@ typedef struct {
     int has_ref;
     double ref[SG_MAX_Q];
     double lscale;             /* the largest loop size (m): what a travel's step is measured against */
-    double inv_scale[SG_MAX_Q]; /* 1 / each closure equation's loop size, for Newton's tolerance */
-    int scale_age;              /* solves since inv_scale was taken (loop sizes move with the travels only) */
+    double newton_w[SG_MAX_Q]; /* 1 / (each closure equation's loop size opt->tol): Newton's weights */
+    int scale_age;             /* solves since the loop sizes were taken (they move with the travels only) */
 } sg_walker;
 
 /* Largest shaft-angle step of the continuation (rad): longer steps between the requested angles are cut. */
@@ -356,12 +362,13 @@ static int solve_at(sg_walker *w, double ph, double *q, double *cq, int min_iter
     double jac[SG_MAX_Q * SG_MAX_Q], bv[SG_MAX_Q];
     set_input(w, ph);
     if (w->scale_age <= 0) {
-        m->scales(q, cq, w->x, w->cx, w->c, w->inv_scale);
-        for (int i = 0; i < m->nq; ++i) w->inv_scale[i] = 1.0 / w->inv_scale[i];
+        double size[SG_MAX_Q];
+        m->scales(q, cq, w->x, w->cx, w->c, size);
+        for (int i = 0; i < m->nq; ++i) w->newton_w[i] = (1.0 / size[i]) / w->opt->tol;
         w->scale_age = 16;
     }
     --w->scale_age;
-    const int st = newton(m, q, cq, w->x, w->cx, w->c, w->opt, w->inv_scale, min_iter, jac, resid);
+    const int st = newton(m, q, cq, w->x, w->cx, w->c, w->opt, w->newton_w, min_iter, jac, resid);
     if (st != SG_OK || m->nblock == 0) return st;
     m->blocks(jac, bv);
     if (!w->has_ref) {
