@@ -89,7 +89,8 @@ class BlockFactor:
             else:
                 lines += [f"    F{k}[{a * s + b}] = {at(r, c) if nz[r][c] else '0.0'};"
                           for a, r in enumerate(rows) for b, c in enumerate(cols)]
-                lines += ["    double inv;", f"    if (sg_lu_bound_inl({s}, F{k}, P{k}, &inv) != SG_OK) return SG_SINGULAR;"]
+                lines += ["    double inv;",
+                          f"    if (sg_lu_bound_inl({s}, F{k}, P{k}, &inv) != SG_OK) return SG_SINGULAR;"]
             lines.append("    double u = 0.0;")
             for r in rows:
                 terms = [f"fabs({at(r, c)}) * bound{block_of_col[c]}" for c in self._earlier(k) if nz[r][c]]
@@ -105,28 +106,34 @@ class BlockFactor:
         return [f"double F{k}[{len(rows) ** 2}]; int P{k}[{len(rows)}];"
                 for k, (rows, _cols) in enumerate(self.blocks) if len(rows) > 1]
 
+    def _substitution(self, a: str, b: str, row, single: str, block, result) -> list[str]:
+        """Forward block substitution over Φ_q's structure, the one loop of both solves: block after block, each
+        row's right side ``row(r)`` less ``a``'s coupling entries (the stored Φ_q) times the earlier blocks' y; a
+        1 × 1 block then applied by ``single`` ("*": its stored reciprocal, "/": its pivot), a larger one by the
+        lines ``block(k, rows, cols)`` gives (its declarations, the solve of v in place); b[c] = ``result(c)``."""
+        n, nz = self.n, self.nonzero
+        at = lambda i, j: f"{a}[{i * n + j}]"  # noqa: E731
+        lines = [f"double y[{n}];"]
+        for k, (rows, cols) in enumerate(self.blocks):
+            earlier = self._earlier(k)
+            rhs = [row(r) + "".join(f" - {at(r, c)} * y[{c}]" for c in earlier if nz[r][c]) for r in rows]
+            if len(rows) == 1:
+                lines.append(f"y[{cols[0]}] = ({rhs[0]}) {single} {at(rows[0], cols[0])};")
+                continue
+            setup, solve = block(k, rows, cols)
+            lines += ["{", *setup, *(f"    v[{p}] = {e};" for p, e in enumerate(rhs)), solve]
+            lines += [f"    y[{c}] = v[{p}];" for p, c in enumerate(cols)] + ["}"]
+        return lines + [f"{b}[{c}] = {result(c)};" for c in range(self.n)]
+
     def solve_lines(self, b: str) -> list[str]:
         """``b`` (indexed by closure row) overwritten by Φ_q^-1 b (indexed by coordinate) with the factor above:
         y = E^-1 (R b) block after block, then b = C y."""
-        n, nz, at = self.n, self.nonzero, self._at
-        lines = ["{", f"    double y[{n}];"]
-        for k, (rows, cols) in enumerate(self.blocks):
-            earlier = self._earlier(k)
-            rhs = []
-            for r in rows:
-                terms = "".join(f" - {at(r, c)} * y[{c}]" for c in earlier if nz[r][c])
-                rhs.append(f"{b}[{r}] * rs[{r}]{terms}")
-            if len(rows) == 1:
-                lines.append(f"    y[{cols[0]}] = ({rhs[0]}) * {at(rows[0], cols[0])};")
-                continue
-            lines.append("    {")
-            lines.append(f"        double v[{len(rows)}];")
-            lines += [f"        v[{a}] = {e};" for a, e in enumerate(rhs)]
-            lines.append(f"        sg_lu_apply_inl({len(rows)}, F{k}, P{k}, v);")
-            lines += [f"        y[{c}] = v[{a}];" for a, c in enumerate(cols)]
-            lines.append("    }")
-        lines += [f"    {b}[{c}] = y[{c}] * cs[{c}];" for c in range(n)]
-        return lines + ["}"]
+        lines = self._substitution(
+            "J", b, lambda r: f"{b}[{r}] * rs[{r}]", "*",
+            lambda k, rows, _cols: ([f"    double v[{len(rows)}];"],
+                                    f"    sg_lu_apply_inl({len(rows)}, F{k}, P{k}, v);"),
+            lambda c: f"y[{c}] * cs[{c}]")
+        return ["{"] + [f"    {line}" for line in lines] + ["}"]
 
     def _offsets(self) -> list[int]:
         """Each block's first entry in the pivot vector."""
@@ -146,13 +153,15 @@ class BlockFactor:
         lines = []
         for j in range(n):
             lines.append(f"double cm{j} = 0.0;")
-            lines += [f"{{ const double v = fabs({a(i, j)}); if (v > cm{j}) cm{j} = v; }}" for i in range(n) if nz[i][j]]
+            lines += [f"{{ const double v = fabs({a(i, j)}); if (v > cm{j}) cm{j} = v; }}"
+                      for i in range(n) if nz[i][j]]
         for (rows, cols), off in zip(self.blocks, self._offsets()):
             s = len(rows)
             if s == 1:
                 lines.append(f"if (!(fabs({a(rows[0], cols[0])}) > SG_PIVOT_RTOL * cm{cols[0]})) return SG_SINGULAR;")
                 continue
-            lines += ["{", f"    double M[{s * s}];", f"    const double cm[{s}] = {{{', '.join(f'cm{c}' for c in cols)}}};"]
+            columns = ", ".join(f"cm{c}" for c in cols)
+            lines += ["{", f"    double M[{s * s}];", f"    const double cm[{s}] = {{{columns}}};"]
             lines += [f"    M[{p * s + q}] = {a(r, c) if nz[r][c] else '0.0'};"
                       for p, r in enumerate(rows) for q, c in enumerate(cols)]
             lines.append(f"    if (sg_lu_factor_cm_inl({s}, M, piv + {off}, cm, NULL) != SG_OK) return SG_SINGULAR;")
@@ -163,23 +172,14 @@ class BlockFactor:
     def newton_solve_lines(self) -> list[str]:
         """Newton's solve (kernel 'lu_solve': lu, piv, b) with the factor above: forward block substitution, b
         (indexed by closure row) overwritten by the solution (indexed by coordinate)."""
-        n, nz = self.n, self.nonzero
-        lu = lambda i, j: f"lu[{i * n + j}]"  # noqa: E731
-        lines = [f"double y[{n}];"]
-        for k, ((rows, cols), off) in enumerate(zip(self.blocks, self._offsets())):
-            earlier = self._earlier(k)
-            rhs = [f"b[{r}]" + "".join(f" - {lu(r, c)} * y[{c}]" for c in earlier if nz[r][c]) for r in rows]
-            if len(rows) == 1:
-                lines.append(f"y[{cols[0]}] = ({rhs[0]}) / {lu(rows[0], cols[0])};")
-                continue
+        n, offsets = self.n, self._offsets()
+
+        def block(k, rows, cols):
             s = len(rows)
-            lines += ["{", f"    double M[{s * s}], v[{s}];"]
-            lines += [f"    M[{p * s + q}] = {lu(r, c)};" for p, r in enumerate(rows) for q, c in enumerate(cols)]
-            lines += [f"    v[{p}] = {e};" for p, e in enumerate(rhs)]
-            lines.append(f"    sg_lu_solve_inl({s}, M, piv + {off}, v);")
-            lines += [f"    y[{c}] = v[{p}];" for p, c in enumerate(cols)]
-            lines.append("}")
-        return lines + [f"b[{c}] = y[{c}];" for c in range(n)]
+            gather = [f"    M[{p * s + q}] = lu[{r * n + c}];" for p, r in enumerate(rows) for q, c in enumerate(cols)]
+            return [f"    double M[{s * s}], v[{s}];", *gather], f"    sg_lu_solve_inl({s}, M, piv + {offsets[k]}, v);"
+
+        return self._substitution("lu", "b", lambda r: f"b[{r}]", "/", block, lambda c: f"y[{c}]")
 
     def ops(self) -> int:
         """Floating-point operations of the factor and two solves (the kernel's op count)."""
