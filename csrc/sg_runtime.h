@@ -44,6 +44,20 @@ typedef struct sg_columns {
     int written;
 } sg_columns;
 
+/* Solved positions of a Newton sweep waiting for their rates, observables and forces, which the mechanism's SIMD
+ * finish (descriptor finish_simd, csrc/sg_simd.h SG_SIMD_FINISH_BODY) computes four at a time: per lane its
+ * position's index, coordinates and their cos, sin, inputs with theirs and their rates, Newton's last relative
+ * residual; est receives the rates' estimated relative error of each lane the finish vouches for. A block of
+ * fewer than SG_LANES positions repeats its last one in the lanes after count. */
+#define SG_LANES 4
+typedef struct sg_lanes {
+    int count;
+    size_t index[SG_LANES];
+    double q[SG_LANES][SG_MAX_Q], cq[SG_LANES][2 * SG_MAX_Q];
+    double x[SG_LANES][SG_MAX_Q], cx[SG_LANES][2 * SG_MAX_Q], xd[SG_LANES][SG_MAX_Q], xdd[SG_LANES][SG_MAX_Q];
+    double resid[SG_LANES], est[SG_LANES];
+} sg_lanes;
+
 /* LU with partial pivoting, in place, row-major n x n. Returns SG_SINGULAR when a pivot is below
  * 1e-11 of its column's largest original entry (column-scale invariant: columns may be rad or m).
  * Always inline, so that a kernel's call with a literal n unrolls; sg_lu_factor/sg_lu_solve are the exported
@@ -52,6 +66,9 @@ typedef struct sg_columns {
 #define SG_TWO_PI 6.283185307179586476925286766559
 /* Unit roundoff. */
 #define SG_EPS 1.1102230246251565e-16
+/* A relative loop residual below this is rounding of the residual's own terms (sizes taken with every cos and
+ * sin as 1): the position is then as exact as a closed form's. */
+#define SG_RESID_FLOOR (64.0 * SG_EPS)
 #if defined(__GNUC__)
 #define SG_INLINE static inline __attribute__((always_inline))
 /* A loop of the small dense solves unrolled: whole where n is a literal (the generated rates kernels). -O2 alone

@@ -194,6 +194,35 @@ SG_VINLINE sg_vm sgv_factor_eq2(sg_vd *a, const sg_vd *rs, sg_vd *cond)
     return (sgv_fabs(det) > SG_PIVOT_RTOL * mm) & sgv_isfinite(*cond);
 }
 
+/* sg_lu_bound_inl lane by lane: the LU of an equilibrated matrix (U's diagonal as its reciprocal) and the bound
+ * of ||A^-1||_inf; the mask is the lanes whose pivots are all above SG_PIVOT_RTOL. */
+SG_VINLINE sg_vm sgv_lu_bound(int n, sg_vd *a, sg_vm *piv, sg_vd *inorm_out)
+{
+    const sg_vd zero = sgv_set1(0.0);
+    sg_vm ok = sgv_true();
+    sg_vd best[SG_MAX_Q], y[SG_MAX_Q];
+    sgv_eliminate(n, a, piv, best, 1);
+    for (int k = 0; k < n; ++k) ok &= best[k] > sgv_set1(SG_PIVOT_RTOL);
+    sg_vd lnorm = zero, inorm = zero;
+    for (int i = 0; i < n; ++i) {
+        sg_vd s = sgv_set1(1.0);
+        for (int j = 0; j < i; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
+        y[i] = s;
+        lnorm = sgv_select(~(s <= lnorm), s, lnorm);
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        sg_vd s = sgv_set1(1.0);
+        for (int j = i + 1; j < n; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
+        y[i] = s * sgv_fabs(a[i * n + i]);
+        inorm = sgv_select(~(y[i] <= inorm), y[i], inorm);
+    }
+    *inorm_out = inorm * lnorm;
+    return ok;
+}
+
+/* sg_lu_apply_inl lane by lane: b overwritten by A^-1 b with a factor of sgv_lu_bound. */
+SG_VINLINE void sgv_lu_apply(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *b) { sgv_substitute(n, lu, piv, b, 1); }
+
 /* sg_factor_eq_inl lane by lane: the same scaling, pivoting and condition bound (n = 2: sgv_factor_eq2); the
  * mask is the lanes the scalar factor would accept. */
 SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_vd *cs, sg_vd *cond)
@@ -218,23 +247,9 @@ SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_
         for (int j = 0; j < n; ++j) s += sgv_fabs(a[i * n + j]);
         anorm = sgv_select(~(s <= anorm), s, anorm);
     }
-    sg_vd best[SG_MAX_Q], y[SG_MAX_Q];
-    sgv_eliminate(n, a, piv, best, 1);
-    for (int k = 0; k < n; ++k) ok &= best[k] > sgv_set1(SG_PIVOT_RTOL);
-    sg_vd lnorm = zero, inorm = zero;
-    for (int i = 0; i < n; ++i) {
-        sg_vd s = sgv_set1(1.0);
-        for (int j = 0; j < i; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
-        y[i] = s;
-        lnorm = sgv_select(~(s <= lnorm), s, lnorm);
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        sg_vd s = sgv_set1(1.0);
-        for (int j = i + 1; j < n; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
-        y[i] = s * sgv_fabs(a[i * n + i]);
-        inorm = sgv_select(~(y[i] <= inorm), y[i], inorm);
-    }
-    *cond = anorm * (inorm * lnorm);
+    sg_vd inorm;
+    ok &= sgv_lu_bound(n, a, piv, &inorm);
+    *cond = anorm * inorm;
     return ok & sgv_isfinite(*cond);
 }
 
@@ -524,6 +539,86 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
         }                                                                                          \
         return failures;                                                                           \
     }
+
+/* The SIMD loop of a mechanism Newton solves (no closed form): csrc/sg_runtime.c's sweep solves the positions one
+ * after another (each Newton start is predicted from the ones before) and hands them over four at a time in an
+ * sg_lanes; this finishes them with the vector kernels MOTION_V (NOBS observables; with want, RATES_V and the
+ * wanted groups' OBSERVE_V, whose rows alone are stored) and, for forces (frc not NULL), FORCES_V (NFO outputs,
+ * loads transposed in): the scalar kernels' operations lane by lane (Φ_q's block factor too), so the same values
+ * to the bit. Every lane's rows are written; the bit mask returned says which lanes it vouches for: the factor
+ * and every output finite, and the rates' estimated error at most a quarter of opt->singular_tol. The runtime
+ * runs its scalar step on the other lanes, which decides the singular ones. lanes NULL: whether it can finish
+ * this sweep's positions (FORCES_IN_SIMD: a force sweep without friction). */
+#define SG_SIMD_FINISH_BODY(MOTION_V, RATES_V, OBSERVE_V, FORCES_V, FORCES_IN_SIMD, NOBS, NFO)            \
+    {                                                                                              \
+        if (lanes == NULL) return frc == NULL || FORCES_IN_SIMD(c);                                \
+        const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo, nload = m->nload;          \
+        const double *rows[SG_W];                                                                  \
+        sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q]; \
+        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->q[l];                                     \
+        sgv_load_rows(rows, nq, vq);                                                               \
+        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->cq[l];                                    \
+        sgv_load_rows(rows, 2 * nq, vcq);                                                          \
+        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->x[l];                                     \
+        sgv_load_rows(rows, nx, vx);                                                               \
+        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->cx[l];                                    \
+        sgv_load_rows(rows, 2 * nx, vcx);                                                          \
+        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->xd[l];                                    \
+        sgv_load_rows(rows, nx, vxd);                                                              \
+        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->xdd[l];                                   \
+        sgv_load_rows(rows, nx, vxdd);                                                             \
+        sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1], vout[(NFO) + 1], vcond, vres;       \
+        sg_vm ok;                                                                                  \
+        if (want == NULL) {                                                                        \
+            ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);                \
+        } else { /* the rates and the wanted groups: the motion twin's values to the bit */        \
+            ok = RATES_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);                       \
+            for (int g = 0; g < m->ngroup; ++g)                                                    \
+                if (want[g]) ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs);  \
+        }                                                                                          \
+        for (int l = 0; l < SG_W; ++l) /* the scalar loop's error estimate, from Newton's residual */ \
+            vres[l] = lanes->resid[l] > SG_RESID_FLOOR ? lanes->resid[l] : SG_EPS;                 \
+        const sg_vd vest = vcond * (SG_EPS + vcond * vres);                                        \
+        ok &= vest <= sgv_set1(0.25 * opt->singular_tol);                                  \
+        double *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];                                  \
+        for (int l = 0; l < SG_W; ++l) {                                                           \
+            const size_t i = lanes->index[l];                                                      \
+            rqd[l] = qd + i * (size_t)nq;                                                          \
+            rqdd[l] = qdd + i * (size_t)nq;                                                        \
+            robs[l] = obs + i * (size_t)nobs;                                                      \
+            rfrc[l] = frc != NULL ? frc + i * (size_t)nfo : NULL;                                  \
+        }                                                                                          \
+        if (frc != NULL) {                                                                         \
+            sg_vd vld[SG_MAX_LOAD];                                                                \
+            if (loads != NULL) {                                                                   \
+                const double *rld[SG_W];                                                           \
+                for (int l = 0; l < SG_W; ++l) rld[l] = loads + lanes->index[l] * (size_t)nload;   \
+                sgv_load_rows(rld, nload, vld);                                                    \
+            } else {                                                                               \
+                for (int k = 0; k < nload; ++k) vld[k] = sgv_set1(0.0);                            \
+            }                                                                                      \
+            ok &= FORCES_V(vq, vcq, vx, vcx, vxd, c, vobs, gv, vld, vout);                         \
+            sgv_store_rows(vout, (NFO), rfrc);                                                     \
+        }                                                                                          \
+        sgv_store_rows(vqd, nq, rqd);                                                              \
+        sgv_store_rows(vqdd, nq, rqdd);                                                            \
+        if (want == NULL) {                                                                        \
+            sgv_store_rows(vobs, (NOBS), robs);                                                    \
+        } else {                                                                                   \
+            for (int g = 0; g < m->ngroup; ++g) {                                                  \
+                if (!want[g]) continue;                                                            \
+                const int g0 = m->group_start[g];                                                  \
+                double *rg[SG_W];                                                                  \
+                for (int l = 0; l < SG_W; ++l) rg[l] = robs[l] + g0;                               \
+                sgv_store_rows(vobs + g0, m->group_start[g + 1] - g0, rg);                         \
+            }                                                                                      \
+        }                                                                                          \
+        for (int l = 0; l < SG_W; ++l) lanes->est[l] = vest[l];                                    \
+        return _mm256_movemask_pd((__m256d)ok) & ((1 << lanes->count) - 1);                       \
+    }
+
+/* an sg_lanes block is one SIMD block */
+typedef char sg_lanes_are_one_block[SG_W == SG_LANES ? 1 : -1];
 
 #pragma GCC pop_options
 #endif /* SG_SIMD */

@@ -24,7 +24,7 @@ typedef struct sg_options {
     double singular_tol; /* largest estimated relative error of the velocities and accelerations; a position above it is SG_SINGULAR unless keep_singular */
     int keep_singular;   /* 1: positions above singular_tol keep their results (status SG_OK, err says why) */
     int generic;         /* 1: the generic sweep loop (kernels through the descriptor) even where the mechanism has an inlined one (tests: the two agree to the bit) */
-    int scalar;          /* 1: the scalar closed-form loop even where the mechanism has a SIMD one and the CPU runs it (tests: the two agree to rounding, with the same statuses) */
+    int scalar;          /* 1: the scalar loop even where the mechanism has a SIMD one and the CPU runs it (a closed form: four positions at a time; Newton: the solved positions' rates, observables and forces four at a time) (tests: the two agree to rounding, with the same statuses) */
 } sg_options;
 
 /* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */
@@ -57,11 +57,14 @@ typedef void (*sg_anchors_fn)(const double *q, const double *cq, const double *x
 
 struct sg_mechanism;
 struct sg_columns;
+struct sg_lanes;
 /* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */
 /* the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the ngroup groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the caller reads the coordinates (want[ngroup]); trig (NULL: computed) the shaft angles' cos (n) then sin (n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); cols (NULL: none; csrc/sg_runtime.h) columns the SIMD loop writes straight to their own arrays, setting cols->written, where q, qd, qdd and obs then hold only the rows its scalar steps wrote (the scalar loop ignores it); NULL without a closed form */
 typedef size_t (*sg_sweep_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols);
 /* the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
 typedef size_t (*sg_sweep_simd_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols);
+/* a Newton sweep's rates, observables and (frc not NULL) forces at up to four solved positions at once in AVX2 (csrc/sg_simd.h, SG_SIMD_FINISH_BODY): their rows written, the bit mask of the lanes it vouches for returned, each one's estimated error in lanes->est; lanes NULL: 1 where it can finish this sweep's positions (forces: without friction only), 0 where the scalar loop must; NULL with a closed form, without SIMD in the build or without a vector form */
+typedef int (*sg_finish_simd_fn)(const struct sg_mechanism *m, struct sg_lanes *lanes, const double *c, const sg_options *opt, const double *gv, const double *loads, double *qd, double *qdd, double *obs, double *frc, const unsigned char *want);
 
 /* One mechanism as the generated code describes it. */
 typedef struct sg_mechanism {
@@ -96,6 +99,7 @@ typedef struct sg_mechanism {
     sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
     sg_sweep_fn sweep;                   /* the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the ngroup groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the caller reads the coordinates (want[ngroup]); trig (NULL: computed) the shaft angles' cos (n) then sin (n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); cols (NULL: none; csrc/sg_runtime.h) columns the SIMD loop writes straight to their own arrays, setting cols->written, where q, qd, qdd and obs then hold only the rows its scalar steps wrote (the scalar loop ignores it); NULL without a closed form */
     sg_sweep_simd_fn sweep_simd;         /* the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
+    sg_finish_simd_fn finish_simd;       /* a Newton sweep's rates, observables and (frc not NULL) forces at up to four solved positions at once in AVX2 (csrc/sg_simd.h, SG_SIMD_FINISH_BODY): their rows written, the bit mask of the lanes it vouches for returned, each one's estimated error in lanes->est; lanes NULL: 1 where it can finish this sweep's positions (forces: without friction only), 0 where the scalar loop must; NULL with a closed form, without SIMD in the build or without a vector form */
 } sg_mechanism;
 
 /* LU with partial pivoting in place (row-major n x n); SG_SINGULAR below the pivot tolerance */

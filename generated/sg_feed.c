@@ -780,7 +780,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[7]); if (!(v <= m)) m = v;
         v = fabs(J[14]); if (!(v <= m)) m = v;
         v = fabs(J[42]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[0] = 1.0 / m;
         J[0] *= cs[0];
         J[7] *= cs[0];
@@ -791,7 +791,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         double m = 0.0, v;
         v = fabs(J[36]); if (!(v <= m)) m = v;
         v = fabs(J[43]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[1] = 1.0 / m;
         J[36] *= cs[1];
         J[43] *= cs[1];
@@ -801,7 +801,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[23]); if (!(v <= m)) m = v;
         v = fabs(J[30]); if (!(v <= m)) m = v;
         v = fabs(J[37]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[2] = 1.0 / m;
         J[23] *= cs[2];
         J[30] *= cs[2];
@@ -812,7 +812,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[3]); if (!(v <= m)) m = v;
         v = fabs(J[10]); if (!(v <= m)) m = v;
         v = fabs(J[17]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[3] = 1.0 / m;
         J[3] *= cs[3];
         J[10] *= cs[3];
@@ -822,7 +822,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         double m = 0.0, v;
         v = fabs(J[11]); if (!(v <= m)) m = v;
         v = fabs(J[18]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[4] = 1.0 / m;
         J[11] *= cs[4];
         J[18] *= cs[4];
@@ -830,7 +830,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     {
         double m = 0.0, v;
         v = fabs(J[47]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[5] = 1.0 / m;
         J[47] *= cs[5];
     }
@@ -838,7 +838,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         double m = 0.0, v;
         v = fabs(J[27]); if (!(v <= m)) m = v;
         v = fabs(J[34]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[6] = 1.0 / m;
         J[27] *= cs[6];
         J[34] *= cs[6];
@@ -1304,7 +1304,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[7]); if (!(v <= m)) m = v;
         v = fabs(J[14]); if (!(v <= m)) m = v;
         v = fabs(J[42]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[0] = 1.0 / m;
         J[0] *= cs[0];
         J[7] *= cs[0];
@@ -1315,7 +1315,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         double m = 0.0, v;
         v = fabs(J[36]); if (!(v <= m)) m = v;
         v = fabs(J[43]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[1] = 1.0 / m;
         J[36] *= cs[1];
         J[43] *= cs[1];
@@ -1325,7 +1325,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[23]); if (!(v <= m)) m = v;
         v = fabs(J[30]); if (!(v <= m)) m = v;
         v = fabs(J[37]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[2] = 1.0 / m;
         J[23] *= cs[2];
         J[30] *= cs[2];
@@ -1336,7 +1336,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[3]); if (!(v <= m)) m = v;
         v = fabs(J[10]); if (!(v <= m)) m = v;
         v = fabs(J[17]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[3] = 1.0 / m;
         J[3] *= cs[3];
         J[10] *= cs[3];
@@ -1346,7 +1346,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         double m = 0.0, v;
         v = fabs(J[11]); if (!(v <= m)) m = v;
         v = fabs(J[18]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[4] = 1.0 / m;
         J[11] *= cs[4];
         J[18] *= cs[4];
@@ -1354,7 +1354,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
     {
         double m = 0.0, v;
         v = fabs(J[47]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[5] = 1.0 / m;
         J[47] *= cs[5];
     }
@@ -1362,7 +1362,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         double m = 0.0, v;
         v = fabs(J[27]); if (!(v <= m)) m = v;
         v = fabs(J[34]); if (!(v <= m)) m = v;
-        if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;
+        if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[6] = 1.0 / m;
         J[27] *= cs[6];
         J[34] *= cs[6];
@@ -2455,6 +2455,1568 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[125] = t29 + 3.0*3.141592653589793;
 }
 
+/* The SIMD twins of the motion, rates, observe and forces kernels and the finish of four solved positions at a time
+ * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+#if SG_SIMD
+#pragma GCC push_options
+#pragma GCC target("avx2,fma")
+
+SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
+{
+    sg_vd ka[4];
+    {
+        /* cam cam: the arc whose normal sector holds e */
+        const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
+        ka[0] = sgv_set1(c[45]);
+        ka[1] = sgv_set1(c[44]);
+        ka[2] = sgv_set1(c[42]);
+        ka[3] = sgv_set1(5.0);
+        {
+            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(0.0), ka[3]);
+        }
+    }
+    const sg_vd t0 = c[9]*cq[0];
+    const sg_vd t1 = c[9]*cq[1];
+    const sg_vd t2 = c[11]*cq[7];
+    const sg_vd t3 = c[2]*cq[6] + t2;
+    const sg_vd t4 = c[1]*cq[6];
+    const sg_vd t5 = c[2]*cq[7] + t4;
+    const sg_vd t6 = c[1]*cq[7];
+    const sg_vd t7 = c[5]*cq[1];
+    const sg_vd t8 = c[3]*cx[1] + c[6]*cx[0];
+    const sg_vd t9 = c[3]*cx[0] + c[4]*cx[1];
+    const sg_vd t10 = ka[0]*t8 + ka[1]*t9;
+    const sg_vd t11 = c[7] + c[8]*cq[6] + t10 + t6 + t7;
+    const sg_vd t12 = c[5]*cq[0];
+    const sg_vd t13 = ka[0]*t9 - ka[1]*t8;
+    const sg_vd t14 = c[0] + t12 + t13 + t5;
+    const sg_vd t15 = c[37]*cq[7] + t6;
+    const sg_vd t16 = c[11]*cq[6];
+    const sg_vd t17 = c[10]*cq[6] + t16;
+    const sg_vd t18 = c[19]*cq[4];
+    const sg_vd t19 = c[15]*cq[12];
+    const sg_vd t20 = c[22]*cq[2] + c[23]*cq[3];
+    const sg_vd t21 = c[25]*cq[4] + c[28]*cq[5];
+    const sg_vd t22 = c[29] + t21;
+    const sg_vd t23 = c[22]*cq[3] + c[27]*cq[2];
+    const sg_vd t24 = c[24]*cq[4] + c[25]*cq[5];
+    const sg_vd t25 = c[26] + t24;
+    const sg_vd t26 = c[28]*cq[4] + c[40]*cq[5];
+    const sg_vd t27 = c[32]*cq[0];
+    const sg_vd t28 = c[34]*cq[1];
+    const sg_vd t29 = c[31]*cq[2];
+    const sg_vd t30 = c[31]*cq[3];
+    const sg_vd t31 = c[35]*cq[11] + c[36] + t28 + t29;
+    const sg_vd t32 = c[30]*cq[10] + c[33] + t27 + t30;
+    const sg_vd t33 = -t10;
+    const sg_vd t34 = -cq[6]*t13 + cq[7]*t33;
+    const sg_vd t35 = cx[3]*q[4];
+    const sg_vd t36 = -t35*xd[1];
+    const sg_vd t37 = cx[2]*q[4];
+    const sg_vd t38 = t37*xd[1];
+    const sg_vd t39 = c[17]*cx[1] + c[21]*cx[0];
+    const sg_vd t40 = c[16]*t39;
+    const sg_vd t41 = c[17]*cx[0] + c[18]*cx[1];
+    const sg_vd t42 = c[53]*t41;
+    const sg_vd t43 = cq[6]*t1 + cq[7]*t12;
+    const sg_vd t44 = cq[6]*t33;
+    const sg_vd t45 = cq[7]*t13 + t44;
+    const sg_vd t56 = ((xd[0])*(xd[0]));
+    const sg_vd t57 = c[16]*t41;
+    const sg_vd t58 = t20*t26;
+    const sg_vd t59 = c[24]*cq[5] + c[40]*cq[4];
+    const sg_vd t60 = -t21*t23 - t58;
+    const sg_vd t61 = c[34]*cq[0];
+    const sg_vd t62 = c[32]*cq[1];
+    const sg_vd t63 = cq[10]*t27 + cq[11]*t62;
+    const sg_vd t64 = c[54]*cq[3];
+    const sg_vd t65 = c[54]*cq[2];
+    const sg_vd t66 = cq[10]*t30 + cq[11]*t65;
+    const sg_vd t67 = c[56]*cq[10];
+    const sg_vd t68 = c[55] + t62;
+    const sg_vd t69 = c[57] + t61;
+    const sg_vd t71 = c[58]*cq[11];
+    const sg_vd t76 = c[55] + t0;
+    const sg_vd t77 = c[57] + t1;
+    const sg_vd t78 = t2 + t77;
+    const sg_vd t84 = c[64]*t9 + c[65]*t8;
+    const sg_vd t85 = c[65]*t9 + c[67]*t8;
+    const sg_vd t86 = c[69]*t41 + c[70]*t39;
+    const sg_vd t87 = c[70]*t41 + c[72]*t39;
+    const sg_vd t88 = c[74]*cx[2] + c[75]*cx[3];
+    const sg_vd t89 = c[75]*cx[2] + c[78]*cx[3];
+    const sg_vd t90 = ((xd[1])*(xd[1]));
+    const sg_vd t91 = c[79]*cq[6];
+    const sg_vd t92 = c[80]*cq[7];
+    const sg_vd t93 = c[81]*cx[2] + c[82]*cx[3] + t37;
+    const sg_vd t94 = c[82]*cx[2] + c[84]*cx[3] - t35;
+    const sg_vd t96 = c[85]*cq[0] + c[86]*cq[1];
+    const sg_vd t97 = c[86]*cq[0] + c[88]*cq[1];
+    const sg_vd t98 = c[89]*cq[10] + c[90]*cq[11];
+    const sg_vd t99 = c[90]*cq[10] + c[92]*cq[11];
+    const sg_vd t100 = c[93]*cq[2] + c[94]*cq[3];
+    const sg_vd t101 = c[94]*cq[2] + c[96]*cq[3];
+    const sg_vd t102 = c[97]*cq[12] + c[98]*cq[13];
+    const sg_vd t103 = c[100]*cq[13] + c[98]*cq[12];
+    const sg_vd t104 = c[53]*t39;
+    const sg_vd t105 = c[101]*cq[4] + c[102]*cq[5];
+    const sg_vd t106 = c[102]*cq[4] + c[104]*cq[5];
+    const sg_vd t107 = sgv_fabs(q[4]);
+    sg_vd J[49], rs[7], cs[7];
+    sg_vd F0[9]; sg_vm P0[3];
+    sg_vd F1[4]; sg_vm P1[2];
+    J[0] = cq[6]*t0 + cq[7]*t1;
+    J[1] = sgv_set1(0.0);
+    J[2] = sgv_set1(0.0);
+    J[3] = cq[6]*t14 - cq[6]*t5 + cq[7]*t11 + cq[7]*t3;
+    J[4] = sgv_set1(0.0);
+    J[5] = sgv_set1(0.0);
+    J[6] = sgv_set1(0.0);
+    J[7] = t7;
+    J[8] = sgv_set1(0.0);
+    J[9] = sgv_set1(0.0);
+    J[10] = t15;
+    J[11] = -cx[2];
+    J[12] = sgv_set1(0.0);
+    J[13] = sgv_set1(0.0);
+    J[14] = t0;
+    J[15] = sgv_set1(0.0);
+    J[16] = sgv_set1(0.0);
+    J[17] = t17;
+    J[18] = -cx[3];
+    J[19] = sgv_set1(0.0);
+    J[20] = sgv_set1(0.0);
+    J[21] = sgv_set1(0.0);
+    J[22] = sgv_set1(0.0);
+    J[23] = c[38]*cq[5];
+    J[24] = sgv_set1(0.0);
+    J[25] = sgv_set1(0.0);
+    J[26] = sgv_set1(0.0);
+    J[27] = c[39]*cq[13];
+    J[28] = sgv_set1(0.0);
+    J[29] = sgv_set1(0.0);
+    J[30] = t18;
+    J[31] = sgv_set1(0.0);
+    J[32] = sgv_set1(0.0);
+    J[33] = sgv_set1(0.0);
+    J[34] = t19;
+    J[35] = sgv_set1(0.0);
+    J[36] = -t20*t22 - t23*t25;
+    J[37] = t20*t21 - t23*t26;
+    J[38] = sgv_set1(0.0);
+    J[39] = sgv_set1(0.0);
+    J[40] = sgv_set1(0.0);
+    J[41] = sgv_set1(0.0);
+    J[42] = cq[10]*t28 + cq[11]*t27;
+    J[43] = cq[10]*t29 + cq[11]*t30;
+    J[44] = sgv_set1(0.0);
+    J[45] = sgv_set1(0.0);
+    J[46] = sgv_set1(0.0);
+    J[47] = -cq[10]*t31 - cq[11]*t32;
+    J[48] = sgv_set1(0.0);
+    qd[0] = -t34*xd[0];
+    qd[1] = t36;
+    qd[2] = t38;
+    qd[3] = t40*xd[0];
+    qd[4] = t42*xd[0];
+    qd[5] = sgv_set1(0.0);
+    qd[6] = sgv_set1(0.0);
+    rs[0] = (1.0/(c[46] + 2.0*sgv_fabs(ka[0]) + 2.0*sgv_fabs(ka[1]) + sgv_fabs(ka[2])));
+    rs[1] = (1.0/(c[47] + t107));
+    rs[2] = (1.0/(c[48] + t107));
+    rs[3] = sgv_set1(c[105]);
+    rs[4] = sgv_set1(c[106]);
+    rs[5] = sgv_set1(c[107]);
+    rs[6] = sgv_set1(c[108]);
+    sg_vm ok = sgv_true();
+    /* Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py) */
+    J[0] *= rs[0];
+    J[3] *= rs[0];
+    J[7] *= rs[1];
+    J[10] *= rs[1];
+    J[11] *= rs[1];
+    J[14] *= rs[2];
+    J[17] *= rs[2];
+    J[18] *= rs[2];
+    J[23] *= rs[3];
+    J[27] *= rs[3];
+    J[30] *= rs[4];
+    J[34] *= rs[4];
+    J[36] *= rs[5];
+    J[37] *= rs[5];
+    J[42] *= rs[6];
+    J[43] *= rs[6];
+    J[47] *= rs[6];
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[0]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[7]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[14]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[42]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[0] = 1.0 / m;
+        J[0] *= cs[0];
+        J[7] *= cs[0];
+        J[14] *= cs[0];
+        J[42] *= cs[0];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[36]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[43]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[1] = 1.0 / m;
+        J[36] *= cs[1];
+        J[43] *= cs[1];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[23]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[30]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[37]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[2] = 1.0 / m;
+        J[23] *= cs[2];
+        J[30] *= cs[2];
+        J[37] *= cs[2];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[3]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[10]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[17]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[3] = 1.0 / m;
+        J[3] *= cs[3];
+        J[10] *= cs[3];
+        J[17] *= cs[3];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[11]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[18]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[4] = 1.0 / m;
+        J[11] *= cs[4];
+        J[18] *= cs[4];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[47]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[5] = 1.0 / m;
+        J[47] *= cs[5];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[27]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[34]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[6] = 1.0 / m;
+        J[27] *= cs[6];
+        J[34] *= cs[6];
+    }
+    sg_vd anorm = sgv_set1(0.0);
+    { const sg_vd s = sgv_fabs(J[0]) + sgv_fabs(J[3]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[7]) + sgv_fabs(J[10]) + sgv_fabs(J[11]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[14]) + sgv_fabs(J[17]) + sgv_fabs(J[18]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[23]) + sgv_fabs(J[27]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[30]) + sgv_fabs(J[34]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[36]) + sgv_fabs(J[37]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[42]) + sgv_fabs(J[43]) + sgv_fabs(J[47]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    sg_vd bound0;
+    {
+        F0[0] = J[3];
+        F0[1] = sgv_set1(0.0);
+        F0[2] = J[0];
+        F0[3] = J[10];
+        F0[4] = J[11];
+        F0[5] = J[7];
+        F0[6] = J[17];
+        F0[7] = J[18];
+        F0[8] = J[14];
+        sg_vd inv;
+        ok &= sgv_lu_bound(3, F0, P0, &inv);
+        sg_vd u = sgv_set1(0.0);
+        bound0 = inv * (1.0 + u);
+    }
+    sg_vd bound1;
+    {
+        F1[0] = J[27];
+        F1[1] = J[23];
+        F1[2] = J[34];
+        F1[3] = J[30];
+        sg_vd inv;
+        ok &= sgv_lu_bound(2, F1, P1, &inv);
+        sg_vd u = sgv_set1(0.0);
+        bound1 = inv * (1.0 + u);
+    }
+    sg_vd bound2;
+    {
+        ok &= sgv_fabs(J[36]) > sgv_set1(SG_PIVOT_RTOL);
+        J[36] = 1.0 / J[36];
+        const sg_vd inv = sgv_fabs(J[36]);
+        sg_vd u = sgv_set1(0.0);
+        { const sg_vd s = sgv_fabs(J[37]) * bound1; u = sgv_select(~(s <= u), s, u); }
+        bound2 = inv * (1.0 + u);
+    }
+    sg_vd bound3;
+    {
+        ok &= sgv_fabs(J[47]) > sgv_set1(SG_PIVOT_RTOL);
+        J[47] = 1.0 / J[47];
+        const sg_vd inv = sgv_fabs(J[47]);
+        sg_vd u = sgv_set1(0.0);
+        { const sg_vd s = sgv_fabs(J[42]) * bound0 + sgv_fabs(J[43]) * bound2; u = sgv_select(~(s <= u), s, u); }
+        bound3 = inv * (1.0 + u);
+    }
+    sg_vd inorm = bound0;
+    inorm = sgv_select(~(bound1 <= inorm), bound1, inorm);
+    inorm = sgv_select(~(bound2 <= inorm), bound2, inorm);
+    inorm = sgv_select(~(bound3 <= inorm), bound3, inorm);
+    *cond = anorm * inorm;
+    ok &= sgv_isfinite(*cond);
+    {
+        sg_vd y[7];
+        {
+            sg_vd v[3];
+            v[0] = qd[0] * rs[0];
+            v[1] = qd[1] * rs[1];
+            v[2] = qd[2] * rs[2];
+            sgv_lu_apply(3, F0, P0, v);
+            y[3] = v[0];
+            y[4] = v[1];
+            y[0] = v[2];
+        }
+        {
+            sg_vd v[2];
+            v[0] = qd[3] * rs[3];
+            v[1] = qd[4] * rs[4];
+            sgv_lu_apply(2, F1, P1, v);
+            y[6] = v[0];
+            y[2] = v[1];
+        }
+        y[1] = (qd[5] * rs[5] - J[37] * y[2]) * J[36];
+        y[5] = (qd[6] * rs[6] - J[42] * y[0] - J[43] * y[1]) * J[47];
+        qd[0] = y[0] * cs[0];
+        qd[1] = y[1] * cs[1];
+        qd[2] = y[2] * cs[2];
+        qd[3] = y[3] * cs[3];
+        qd[4] = y[4] * cs[4];
+        qd[5] = y[5] * cs[5];
+        qd[6] = y[6] * cs[6];
+    }
+    const sg_vd t46 = cx[3]*qd[4];
+    const sg_vd t47 = t46*xd[1];
+    const sg_vd t48 = ((qd[0])*(qd[0]));
+    const sg_vd t49 = ((qd[3])*(qd[3]));
+    const sg_vd t50 = t49*(c[37]*cq[6] + t4);
+    const sg_vd t51 = cx[2]*qd[4];
+    const sg_vd t52 = t51*xd[1];
+    const sg_vd t53 = t15*t49;
+    const sg_vd t54 = ((qd[6])*(qd[6]));
+    const sg_vd t55 = ((qd[2])*(qd[2]));
+    const sg_vd t70 = qd[0]*t27;
+    const sg_vd t72 = qd[0]*t62;
+    const sg_vd t73 = ((qd[5])*(qd[5]));
+    const sg_vd t79 = qd[0]*t7;
+    const sg_vd t80 = qd[0]*t0;
+    const sg_vd t83 = ((qd[1])*(qd[1]));
+    const sg_vd t95 = t51 + t94*xd[1];
+    qdd[0] = -qd[0]*(qd[0]*(cq[6]*t7 + cq[7]*t0) + qd[3]*t43) - qd[3]*(qd[0]*t43 + qd[3]*(cq[6]*t11 + cq[6]*t3 - cq[7]*t14 + 2.0*cq[7]*t5 + cq[7]*(c[8]*cq[7] + t16)) + t45*xd[0]) - t34*xdd[0] - xd[0]*(qd[3]*t45 + xd[0]*(-cq[7]*t13 - t44));
+    qdd[1] = c[9]*cq[0]*t48 - t35*xdd[1] - t47 - t50 - xd[1]*(t38 + t46);
+    qdd[2] = t1*t48 + t37*xdd[1] + t52 - t53 - xd[1]*(-t36 - t51);
+    qdd[3] = t18*t55 + t19*t54 + t40*xdd[0] + t56*t57;
+    qdd[4] = c[15]*cq[13]*t54 + c[19]*cq[5]*t55 + t40*t56 + t42*xdd[0];
+    qdd[5] = -qd[1]*(qd[1]*(-t20*t25 + t22*t23) + qd[2]*t60) - qd[2]*(qd[1]*t60 + qd[2]*(-t23*t59 + t58));
+    qdd[6] = -qd[0]*(qd[0]*(cq[10]*t61 + cq[11]*t28) + qd[5]*t63) - qd[1]*(qd[1]*(cq[10]*t64 + cq[11]*t29) + qd[5]*t66) - qd[5]*(qd[0]*t63 + qd[1]*t66 + qd[5]*(c[30]*((cq[10])*(cq[10])) + c[30]*((cq[11])*(cq[11])) - cq[10]*t32 + cq[11]*t31));
+    {
+        sg_vd y[7];
+        {
+            sg_vd v[3];
+            v[0] = qdd[0] * rs[0];
+            v[1] = qdd[1] * rs[1];
+            v[2] = qdd[2] * rs[2];
+            sgv_lu_apply(3, F0, P0, v);
+            y[3] = v[0];
+            y[4] = v[1];
+            y[0] = v[2];
+        }
+        {
+            sg_vd v[2];
+            v[0] = qdd[3] * rs[3];
+            v[1] = qdd[4] * rs[4];
+            sgv_lu_apply(2, F1, P1, v);
+            y[6] = v[0];
+            y[2] = v[1];
+        }
+        y[1] = (qdd[5] * rs[5] - J[37] * y[2]) * J[36];
+        y[5] = (qdd[6] * rs[6] - J[42] * y[0] - J[43] * y[1]) * J[47];
+        qdd[0] = y[0] * cs[0];
+        qdd[1] = y[1] * cs[1];
+        qdd[2] = y[2] * cs[2];
+        qdd[3] = y[3] * cs[3];
+        qdd[4] = y[4] * cs[4];
+        qdd[5] = y[5] * cs[5];
+        qdd[6] = y[6] * cs[6];
+    }
+    const sg_vd t74 = qdd[0]*t27 + t28*t48;
+    const sg_vd t75 = qdd[0]*t62 + t27*t48;
+    const sg_vd t81 = qdd[0]*t7 + t12*t48;
+    const sg_vd t82 = qdd[0]*t0 + t48*t7;
+    obs[0] = t67 + t68;
+    obs[1] = c[56]*cq[11] + t69;
+    obs[2] = qd[5]*t71 + t70;
+    obs[3] = qd[5]*t67 + t72;
+    obs[4] = c[58]*cq[10]*t73 + qdd[5]*t71 + t74;
+    obs[5] = qdd[5]*t67 + t71*t73 + t75;
+    obs[6] = t16 + t76;
+    obs[7] = t78;
+    obs[8] = qd[3]*t6 + t79;
+    obs[9] = qd[3]*t16 + t80;
+    obs[10] = qdd[3]*t6 + t4*t49 + t81;
+    obs[11] = qdd[3]*t16 + t49*t6 + t82;
+    obs[12] = t17 + t76;
+    obs[13] = c[10]*cq[7] + t78;
+    obs[14] = qd[3]*t15 + t79;
+    obs[15] = qd[3]*t17 + t80;
+    obs[16] = qdd[3]*t15 + t50 + t81;
+    obs[17] = qdd[3]*t17 + t53 + t82;
+    obs[18] = c[59] + t29;
+    obs[19] = c[60] + t30;
+    obs[20] = qd[1]*t64;
+    obs[21] = qd[1]*t29;
+    obs[22] = qdd[1]*t64 + t65*t83;
+    obs[23] = qdd[1]*t29 + t64*t83;
+    obs[24] = c[61] + t21;
+    obs[25] = c[62] + t24;
+    obs[26] = qd[2]*t26;
+    obs[27] = qd[2]*t21;
+    obs[28] = qdd[2]*t26 + t55*t59;
+    obs[29] = qdd[2]*t21 + t26*t55;
+    obs[30] = c[63] + x[0];
+    obs[31] = xd[0];
+    obs[32] = xdd[0];
+    obs[33] = t84;
+    obs[34] = c[64]*t8 + c[66]*t9;
+    obs[35] = t85*xd[0];
+    obs[36] = t84*xd[0];
+    obs[37] = t56*(c[66]*t8 + c[67]*t9) + t85*xdd[0];
+    obs[38] = t56*t85 + t84*xdd[0];
+    obs[39] = c[68] + x[0];
+    obs[40] = xd[0];
+    obs[41] = xdd[0];
+    obs[42] = t86;
+    obs[43] = c[69]*t39 + c[71]*t41;
+    obs[44] = t87*xd[0];
+    obs[45] = t86*xd[0];
+    obs[46] = t56*(c[71]*t39 + c[72]*t41) + t87*xdd[0];
+    obs[47] = t56*t87 + t86*xdd[0];
+    obs[48] = x[1];
+    obs[49] = xd[1];
+    obs[50] = xdd[1];
+    obs[51] = c[73] + t88;
+    obs[52] = c[74]*cx[3] + c[76] + c[77]*cx[2];
+    obs[53] = t89*xd[1];
+    obs[54] = t88*xd[1];
+    obs[55] = t89*xdd[1] + t90*(c[77]*cx[3] + c[78]*cx[2]);
+    obs[56] = t88*xdd[1] + t89*t90;
+    obs[57] = q[3];
+    obs[58] = qd[3];
+    obs[59] = qdd[3];
+    obs[60] = t76 + t91;
+    obs[61] = c[79]*cq[7] + t77;
+    obs[62] = qd[3]*t92 + t79;
+    obs[63] = qd[3]*t91 + t80;
+    obs[64] = c[80]*cq[6]*t49 + qdd[3]*t92 + t81;
+    obs[65] = qdd[3]*t91 + t49*t92 + t82;
+    obs[66] = x[1];
+    obs[67] = xd[1];
+    obs[68] = xdd[1];
+    obs[69] = c[73] + t93;
+    obs[70] = c[76] + c[81]*cx[3] + c[83]*cx[2] + t35;
+    obs[71] = t95;
+    obs[72] = t46 + t93*xd[1];
+    obs[73] = cx[2]*qdd[4] - t47 + t94*xdd[1] + xd[1]*(-t46 + xd[1]*(c[83]*cx[3] + c[84]*cx[2] - t37));
+    obs[74] = cx[3]*qdd[4] + t52 + t93*xdd[1] + t95*xd[1];
+    obs[75] = q[0];
+    obs[76] = qd[0];
+    obs[77] = qdd[0];
+    obs[78] = c[55] + t96;
+    obs[79] = c[57] + c[85]*cq[1] + c[87]*cq[0];
+    obs[80] = qd[0]*t97;
+    obs[81] = qd[0]*t96;
+    obs[82] = qdd[0]*t97 + t48*(c[87]*cq[1] + c[88]*cq[0]);
+    obs[83] = qdd[0]*t96 + t48*t97;
+    obs[84] = q[5];
+    obs[85] = qd[5];
+    obs[86] = qdd[5];
+    obs[87] = t68 + t98;
+    obs[88] = c[89]*cq[11] + c[91]*cq[10] + t69;
+    obs[89] = qd[5]*t99 + t70;
+    obs[90] = qd[5]*t98 + t72;
+    obs[91] = qdd[5]*t99 + t73*(c[91]*cq[11] + c[92]*cq[10]) + t74;
+    obs[92] = qdd[5]*t98 + t73*t99 + t75;
+    obs[93] = q[1];
+    obs[94] = qd[1];
+    obs[95] = qdd[1];
+    obs[96] = c[59] + t100;
+    obs[97] = c[60] + c[93]*cq[3] + c[95]*cq[2];
+    obs[98] = qd[1]*t101;
+    obs[99] = qd[1]*t100;
+    obs[100] = qdd[1]*t101 + t83*(c[95]*cq[3] + c[96]*cq[2]);
+    obs[101] = qdd[1]*t100 + t101*t83;
+    obs[102] = q[6];
+    obs[103] = qd[6];
+    obs[104] = qdd[6];
+    obs[105] = t102 + t57;
+    obs[106] = c[97]*cq[13] + c[99]*cq[12] + t40;
+    obs[107] = qd[6]*t103 + t104*xd[0];
+    obs[108] = qd[6]*t102 + t57*xd[0];
+    obs[109] = qdd[6]*t103 + t104*xdd[0] + t42*t56 + t54*(c[100]*cq[12] + c[99]*cq[13]);
+    obs[110] = qdd[6]*t102 + t103*t54 + t104*t56 + t57*xdd[0];
+    obs[111] = q[2];
+    obs[112] = qd[2];
+    obs[113] = qdd[2];
+    obs[114] = c[61] + t105;
+    obs[115] = c[101]*cq[5] + c[103]*cq[4] + c[62];
+    obs[116] = qd[2]*t106;
+    obs[117] = qd[2]*t105;
+    obs[118] = qdd[2]*t106 + t55*(c[103]*cq[5] + c[104]*cq[4]);
+    obs[119] = qdd[2]*t105 + t106*t55;
+    obs[120] = ka[3];
+    ok &= sgv_isfinite((((((((q[0] + q[1]) + (q[2] + q[3])) + ((q[4] + q[5]) + (q[6] + qd[0]))) + (((qd[1] + qd[2]) + (qd[3] + qd[4])) + ((qd[5] + qd[6]) + (qdd[0] + (qdd[1] + qdd[2]))))) + ((((qdd[3] + qdd[4]) + (qdd[5] + qdd[6])) + ((obs[0] + obs[1]) + (obs[2] + (obs[3] + obs[4])))) + (((obs[5] + obs[6]) + (obs[7] + obs[8])) + ((obs[9] + obs[10]) + (obs[11] + (obs[12] + obs[13])))))) + (((((obs[14] + obs[15]) + (obs[16] + obs[17])) + ((obs[18] + obs[19]) + (obs[20] + (obs[21] + obs[22])))) + (((obs[23] + obs[24]) + (obs[25] + obs[26])) + ((obs[27] + obs[28]) + (obs[29] + (obs[30] + obs[31]))))) + ((((obs[32] + obs[33]) + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + (obs[39] + obs[40])))) + (((obs[41] + obs[42]) + (obs[43] + obs[44])) + ((obs[45] + obs[46]) + (obs[47] + (obs[48] + obs[49]))))))) + ((((((obs[50] + obs[51]) + (obs[52] + obs[53])) + ((obs[54] + obs[55]) + (obs[56] + obs[57]))) + (((obs[58] + obs[59]) + (obs[60] + obs[61])) + ((obs[62] + obs[63]) + (obs[64] + (obs[65] + obs[66]))))) + ((((obs[67] + obs[68]) + (obs[69] + obs[70])) + ((obs[71] + obs[72]) + (obs[73] + (obs[74] + obs[75])))) + (((obs[76] + obs[77]) + (obs[78] + obs[79])) + ((obs[80] + obs[81]) + (obs[82] + (obs[83] + obs[84])))))) + (((((obs[85] + obs[86]) + (obs[87] + obs[88])) + ((obs[89] + obs[90]) + (obs[91] + (obs[92] + obs[93])))) + (((obs[94] + obs[95]) + (obs[96] + obs[97])) + ((obs[98] + obs[99]) + (obs[100] + (obs[101] + obs[102]))))) + ((((obs[103] + obs[104]) + (obs[105] + obs[106])) + ((obs[107] + obs[108]) + (obs[109] + (obs[110] + obs[111])))) + (((obs[112] + obs[113]) + (obs[114] + obs[115])) + ((obs[116] + obs[117]) + (obs[118] + (obs[119] + obs[120])))))))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
+{
+    (void)x;
+    sg_vd ka[4];
+    {
+        /* cam cam: the arc whose normal sector holds e */
+        const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
+        ka[0] = sgv_set1(c[45]);
+        ka[1] = sgv_set1(c[44]);
+        ka[2] = sgv_set1(c[42]);
+        ka[3] = sgv_set1(5.0);
+        {
+            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(0.0), ka[3]);
+        }
+    }
+    const sg_vd t0 = c[9]*cq[0];
+    const sg_vd t1 = c[9]*cq[1];
+    const sg_vd t2 = c[11]*cq[7];
+    const sg_vd t3 = c[2]*cq[6] + t2;
+    const sg_vd t4 = c[1]*cq[6];
+    const sg_vd t5 = c[2]*cq[7] + t4;
+    const sg_vd t6 = c[1]*cq[7];
+    const sg_vd t7 = c[5]*cq[1];
+    const sg_vd t8 = c[3]*cx[1] + c[6]*cx[0];
+    const sg_vd t9 = c[3]*cx[0] + c[4]*cx[1];
+    const sg_vd t10 = ka[0]*t8 + ka[1]*t9;
+    const sg_vd t11 = c[7] + c[8]*cq[6] + t10 + t6 + t7;
+    const sg_vd t12 = c[5]*cq[0];
+    const sg_vd t13 = ka[0]*t9 - ka[1]*t8;
+    const sg_vd t14 = c[0] + t12 + t13 + t5;
+    const sg_vd t15 = c[37]*cq[7] + t6;
+    const sg_vd t16 = c[11]*cq[6];
+    const sg_vd t17 = c[10]*cq[6] + t16;
+    const sg_vd t18 = c[19]*cq[4];
+    const sg_vd t19 = c[15]*cq[12];
+    const sg_vd t20 = c[22]*cq[2] + c[23]*cq[3];
+    const sg_vd t21 = c[25]*cq[4] + c[28]*cq[5];
+    const sg_vd t22 = c[29] + t21;
+    const sg_vd t23 = c[22]*cq[3] + c[27]*cq[2];
+    const sg_vd t24 = c[24]*cq[4] + c[25]*cq[5];
+    const sg_vd t25 = c[26] + t24;
+    const sg_vd t26 = c[28]*cq[4] + c[40]*cq[5];
+    const sg_vd t27 = c[32]*cq[0];
+    const sg_vd t28 = c[34]*cq[1];
+    const sg_vd t29 = c[31]*cq[2];
+    const sg_vd t30 = c[31]*cq[3];
+    const sg_vd t31 = c[35]*cq[11] + c[36] + t28 + t29;
+    const sg_vd t32 = c[30]*cq[10] + c[33] + t27 + t30;
+    const sg_vd t33 = -t10;
+    const sg_vd t34 = -cq[6]*t13 + cq[7]*t33;
+    const sg_vd t35 = cx[3]*q[4];
+    const sg_vd t36 = -t35*xd[1];
+    const sg_vd t37 = cx[2]*q[4];
+    const sg_vd t38 = t37*xd[1];
+    const sg_vd t39 = c[17]*cx[1] + c[21]*cx[0];
+    const sg_vd t40 = c[16]*t39;
+    const sg_vd t41 = c[17]*cx[0] + c[18]*cx[1];
+    const sg_vd t42 = c[53]*t41;
+    const sg_vd t43 = cq[6]*t1 + cq[7]*t12;
+    const sg_vd t44 = cq[6]*t33;
+    const sg_vd t45 = cq[7]*t13 + t44;
+    const sg_vd t56 = ((xd[0])*(xd[0]));
+    const sg_vd t57 = c[16]*t41;
+    const sg_vd t58 = t20*t26;
+    const sg_vd t59 = c[24]*cq[5] + c[40]*cq[4];
+    const sg_vd t60 = -t21*t23 - t58;
+    const sg_vd t61 = c[34]*cq[0];
+    const sg_vd t62 = c[32]*cq[1];
+    const sg_vd t63 = cq[10]*t27 + cq[11]*t62;
+    const sg_vd t64 = c[54]*cq[3];
+    const sg_vd t65 = c[54]*cq[2];
+    const sg_vd t66 = cq[10]*t30 + cq[11]*t65;
+    const sg_vd t107 = sgv_fabs(q[4]);
+    sg_vd J[49], rs[7], cs[7];
+    sg_vd F0[9]; sg_vm P0[3];
+    sg_vd F1[4]; sg_vm P1[2];
+    J[0] = cq[6]*t0 + cq[7]*t1;
+    J[1] = sgv_set1(0.0);
+    J[2] = sgv_set1(0.0);
+    J[3] = cq[6]*t14 - cq[6]*t5 + cq[7]*t11 + cq[7]*t3;
+    J[4] = sgv_set1(0.0);
+    J[5] = sgv_set1(0.0);
+    J[6] = sgv_set1(0.0);
+    J[7] = t7;
+    J[8] = sgv_set1(0.0);
+    J[9] = sgv_set1(0.0);
+    J[10] = t15;
+    J[11] = -cx[2];
+    J[12] = sgv_set1(0.0);
+    J[13] = sgv_set1(0.0);
+    J[14] = t0;
+    J[15] = sgv_set1(0.0);
+    J[16] = sgv_set1(0.0);
+    J[17] = t17;
+    J[18] = -cx[3];
+    J[19] = sgv_set1(0.0);
+    J[20] = sgv_set1(0.0);
+    J[21] = sgv_set1(0.0);
+    J[22] = sgv_set1(0.0);
+    J[23] = c[38]*cq[5];
+    J[24] = sgv_set1(0.0);
+    J[25] = sgv_set1(0.0);
+    J[26] = sgv_set1(0.0);
+    J[27] = c[39]*cq[13];
+    J[28] = sgv_set1(0.0);
+    J[29] = sgv_set1(0.0);
+    J[30] = t18;
+    J[31] = sgv_set1(0.0);
+    J[32] = sgv_set1(0.0);
+    J[33] = sgv_set1(0.0);
+    J[34] = t19;
+    J[35] = sgv_set1(0.0);
+    J[36] = -t20*t22 - t23*t25;
+    J[37] = t20*t21 - t23*t26;
+    J[38] = sgv_set1(0.0);
+    J[39] = sgv_set1(0.0);
+    J[40] = sgv_set1(0.0);
+    J[41] = sgv_set1(0.0);
+    J[42] = cq[10]*t28 + cq[11]*t27;
+    J[43] = cq[10]*t29 + cq[11]*t30;
+    J[44] = sgv_set1(0.0);
+    J[45] = sgv_set1(0.0);
+    J[46] = sgv_set1(0.0);
+    J[47] = -cq[10]*t31 - cq[11]*t32;
+    J[48] = sgv_set1(0.0);
+    qd[0] = -t34*xd[0];
+    qd[1] = t36;
+    qd[2] = t38;
+    qd[3] = t40*xd[0];
+    qd[4] = t42*xd[0];
+    qd[5] = sgv_set1(0.0);
+    qd[6] = sgv_set1(0.0);
+    rs[0] = (1.0/(c[46] + 2.0*sgv_fabs(ka[0]) + 2.0*sgv_fabs(ka[1]) + sgv_fabs(ka[2])));
+    rs[1] = (1.0/(c[47] + t107));
+    rs[2] = (1.0/(c[48] + t107));
+    rs[3] = sgv_set1(c[105]);
+    rs[4] = sgv_set1(c[106]);
+    rs[5] = sgv_set1(c[107]);
+    rs[6] = sgv_set1(c[108]);
+    sg_vm ok = sgv_true();
+    /* Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py) */
+    J[0] *= rs[0];
+    J[3] *= rs[0];
+    J[7] *= rs[1];
+    J[10] *= rs[1];
+    J[11] *= rs[1];
+    J[14] *= rs[2];
+    J[17] *= rs[2];
+    J[18] *= rs[2];
+    J[23] *= rs[3];
+    J[27] *= rs[3];
+    J[30] *= rs[4];
+    J[34] *= rs[4];
+    J[36] *= rs[5];
+    J[37] *= rs[5];
+    J[42] *= rs[6];
+    J[43] *= rs[6];
+    J[47] *= rs[6];
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[0]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[7]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[14]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[42]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[0] = 1.0 / m;
+        J[0] *= cs[0];
+        J[7] *= cs[0];
+        J[14] *= cs[0];
+        J[42] *= cs[0];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[36]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[43]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[1] = 1.0 / m;
+        J[36] *= cs[1];
+        J[43] *= cs[1];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[23]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[30]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[37]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[2] = 1.0 / m;
+        J[23] *= cs[2];
+        J[30] *= cs[2];
+        J[37] *= cs[2];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[3]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[10]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[17]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[3] = 1.0 / m;
+        J[3] *= cs[3];
+        J[10] *= cs[3];
+        J[17] *= cs[3];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[11]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[18]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[4] = 1.0 / m;
+        J[11] *= cs[4];
+        J[18] *= cs[4];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[47]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[5] = 1.0 / m;
+        J[47] *= cs[5];
+    }
+    {
+        sg_vd m = sgv_set1(0.0), v;
+        v = sgv_fabs(J[27]); m = sgv_select(~(v <= m), v, m);
+        v = sgv_fabs(J[34]); m = sgv_select(~(v <= m), v, m);
+        ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
+        cs[6] = 1.0 / m;
+        J[27] *= cs[6];
+        J[34] *= cs[6];
+    }
+    sg_vd anorm = sgv_set1(0.0);
+    { const sg_vd s = sgv_fabs(J[0]) + sgv_fabs(J[3]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[7]) + sgv_fabs(J[10]) + sgv_fabs(J[11]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[14]) + sgv_fabs(J[17]) + sgv_fabs(J[18]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[23]) + sgv_fabs(J[27]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[30]) + sgv_fabs(J[34]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[36]) + sgv_fabs(J[37]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    { const sg_vd s = sgv_fabs(J[42]) + sgv_fabs(J[43]) + sgv_fabs(J[47]); anorm = sgv_select(~(s <= anorm), s, anorm); }
+    sg_vd bound0;
+    {
+        F0[0] = J[3];
+        F0[1] = sgv_set1(0.0);
+        F0[2] = J[0];
+        F0[3] = J[10];
+        F0[4] = J[11];
+        F0[5] = J[7];
+        F0[6] = J[17];
+        F0[7] = J[18];
+        F0[8] = J[14];
+        sg_vd inv;
+        ok &= sgv_lu_bound(3, F0, P0, &inv);
+        sg_vd u = sgv_set1(0.0);
+        bound0 = inv * (1.0 + u);
+    }
+    sg_vd bound1;
+    {
+        F1[0] = J[27];
+        F1[1] = J[23];
+        F1[2] = J[34];
+        F1[3] = J[30];
+        sg_vd inv;
+        ok &= sgv_lu_bound(2, F1, P1, &inv);
+        sg_vd u = sgv_set1(0.0);
+        bound1 = inv * (1.0 + u);
+    }
+    sg_vd bound2;
+    {
+        ok &= sgv_fabs(J[36]) > sgv_set1(SG_PIVOT_RTOL);
+        J[36] = 1.0 / J[36];
+        const sg_vd inv = sgv_fabs(J[36]);
+        sg_vd u = sgv_set1(0.0);
+        { const sg_vd s = sgv_fabs(J[37]) * bound1; u = sgv_select(~(s <= u), s, u); }
+        bound2 = inv * (1.0 + u);
+    }
+    sg_vd bound3;
+    {
+        ok &= sgv_fabs(J[47]) > sgv_set1(SG_PIVOT_RTOL);
+        J[47] = 1.0 / J[47];
+        const sg_vd inv = sgv_fabs(J[47]);
+        sg_vd u = sgv_set1(0.0);
+        { const sg_vd s = sgv_fabs(J[42]) * bound0 + sgv_fabs(J[43]) * bound2; u = sgv_select(~(s <= u), s, u); }
+        bound3 = inv * (1.0 + u);
+    }
+    sg_vd inorm = bound0;
+    inorm = sgv_select(~(bound1 <= inorm), bound1, inorm);
+    inorm = sgv_select(~(bound2 <= inorm), bound2, inorm);
+    inorm = sgv_select(~(bound3 <= inorm), bound3, inorm);
+    *cond = anorm * inorm;
+    ok &= sgv_isfinite(*cond);
+    {
+        sg_vd y[7];
+        {
+            sg_vd v[3];
+            v[0] = qd[0] * rs[0];
+            v[1] = qd[1] * rs[1];
+            v[2] = qd[2] * rs[2];
+            sgv_lu_apply(3, F0, P0, v);
+            y[3] = v[0];
+            y[4] = v[1];
+            y[0] = v[2];
+        }
+        {
+            sg_vd v[2];
+            v[0] = qd[3] * rs[3];
+            v[1] = qd[4] * rs[4];
+            sgv_lu_apply(2, F1, P1, v);
+            y[6] = v[0];
+            y[2] = v[1];
+        }
+        y[1] = (qd[5] * rs[5] - J[37] * y[2]) * J[36];
+        y[5] = (qd[6] * rs[6] - J[42] * y[0] - J[43] * y[1]) * J[47];
+        qd[0] = y[0] * cs[0];
+        qd[1] = y[1] * cs[1];
+        qd[2] = y[2] * cs[2];
+        qd[3] = y[3] * cs[3];
+        qd[4] = y[4] * cs[4];
+        qd[5] = y[5] * cs[5];
+        qd[6] = y[6] * cs[6];
+    }
+    const sg_vd t46 = cx[3]*qd[4];
+    const sg_vd t47 = t46*xd[1];
+    const sg_vd t48 = ((qd[0])*(qd[0]));
+    const sg_vd t49 = ((qd[3])*(qd[3]));
+    const sg_vd t50 = t49*(c[37]*cq[6] + t4);
+    const sg_vd t51 = cx[2]*qd[4];
+    const sg_vd t52 = t51*xd[1];
+    const sg_vd t53 = t15*t49;
+    const sg_vd t54 = ((qd[6])*(qd[6]));
+    const sg_vd t55 = ((qd[2])*(qd[2]));
+    qdd[0] = -qd[0]*(qd[0]*(cq[6]*t7 + cq[7]*t0) + qd[3]*t43) - qd[3]*(qd[0]*t43 + qd[3]*(cq[6]*t11 + cq[6]*t3 - cq[7]*t14 + 2.0*cq[7]*t5 + cq[7]*(c[8]*cq[7] + t16)) + t45*xd[0]) - t34*xdd[0] - xd[0]*(qd[3]*t45 + xd[0]*(-cq[7]*t13 - t44));
+    qdd[1] = c[9]*cq[0]*t48 - t35*xdd[1] - t47 - t50 - xd[1]*(t38 + t46);
+    qdd[2] = t1*t48 + t37*xdd[1] + t52 - t53 - xd[1]*(-t36 - t51);
+    qdd[3] = t18*t55 + t19*t54 + t40*xdd[0] + t56*t57;
+    qdd[4] = c[15]*cq[13]*t54 + c[19]*cq[5]*t55 + t40*t56 + t42*xdd[0];
+    qdd[5] = -qd[1]*(qd[1]*(-t20*t25 + t22*t23) + qd[2]*t60) - qd[2]*(qd[1]*t60 + qd[2]*(-t23*t59 + t58));
+    qdd[6] = -qd[0]*(qd[0]*(cq[10]*t61 + cq[11]*t28) + qd[5]*t63) - qd[1]*(qd[1]*(cq[10]*t64 + cq[11]*t29) + qd[5]*t66) - qd[5]*(qd[0]*t63 + qd[1]*t66 + qd[5]*(c[30]*((cq[10])*(cq[10])) + c[30]*((cq[11])*(cq[11])) - cq[10]*t32 + cq[11]*t31));
+    {
+        sg_vd y[7];
+        {
+            sg_vd v[3];
+            v[0] = qdd[0] * rs[0];
+            v[1] = qdd[1] * rs[1];
+            v[2] = qdd[2] * rs[2];
+            sgv_lu_apply(3, F0, P0, v);
+            y[3] = v[0];
+            y[4] = v[1];
+            y[0] = v[2];
+        }
+        {
+            sg_vd v[2];
+            v[0] = qdd[3] * rs[3];
+            v[1] = qdd[4] * rs[4];
+            sgv_lu_apply(2, F1, P1, v);
+            y[6] = v[0];
+            y[2] = v[1];
+        }
+        y[1] = (qdd[5] * rs[5] - J[37] * y[2]) * J[36];
+        y[5] = (qdd[6] * rs[6] - J[42] * y[0] - J[43] * y[1]) * J[47];
+        qdd[0] = y[0] * cs[0];
+        qdd[1] = y[1] * cs[1];
+        qdd[2] = y[2] * cs[2];
+        qdd[3] = y[3] * cs[3];
+        qdd[4] = y[4] * cs[4];
+        qdd[5] = y[5] * cs[5];
+        qdd[6] = y[6] * cs[6];
+    }
+    ok &= sgv_isfinite(((((q[0] + q[1]) + (q[2] + (q[3] + q[4]))) + ((q[5] + q[6]) + (qd[0] + (qd[1] + qd[2])))) + (((qd[3] + qd[4]) + (qd[5] + (qd[6] + qdd[0]))) + ((qdd[1] + (qdd[2] + qdd[3])) + (qdd[4] + (qdd[5] + qdd[6]))))));
+    return ok;
+}
+
+SG_VINLINE sg_vm sg_feed_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)
+{
+    switch (group) {
+    case 0: {
+        const sg_vd t27 = c[32]*cq[0];
+        const sg_vd t28 = c[34]*cq[1];
+        const sg_vd t48 = ((qd[0])*(qd[0]));
+        const sg_vd t61 = c[34]*cq[0];
+        const sg_vd t62 = c[32]*cq[1];
+        const sg_vd t67 = c[56]*cq[10];
+        const sg_vd t68 = c[55] + t62;
+        const sg_vd t69 = c[57] + t61;
+        const sg_vd t70 = qd[0]*t27;
+        const sg_vd t71 = c[58]*cq[11];
+        const sg_vd t72 = qd[0]*t62;
+        const sg_vd t73 = ((qd[5])*(qd[5]));
+        const sg_vd t74 = qdd[0]*t27 + t28*t48;
+        const sg_vd t75 = qdd[0]*t62 + t27*t48;
+        obs[0] = t67 + t68;
+        obs[1] = c[56]*cq[11] + t69;
+        obs[2] = qd[5]*t71 + t70;
+        obs[3] = qd[5]*t67 + t72;
+        obs[4] = c[58]*cq[10]*t73 + qdd[5]*t71 + t74;
+        obs[5] = qdd[5]*t67 + t71*t73 + t75;
+        return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
+    }
+    case 1: {
+        const sg_vd t0 = c[9]*cq[0];
+        const sg_vd t1 = c[9]*cq[1];
+        const sg_vd t2 = c[11]*cq[7];
+        const sg_vd t4 = c[1]*cq[6];
+        const sg_vd t6 = c[1]*cq[7];
+        const sg_vd t7 = c[5]*cq[1];
+        const sg_vd t12 = c[5]*cq[0];
+        const sg_vd t16 = c[11]*cq[6];
+        const sg_vd t48 = ((qd[0])*(qd[0]));
+        const sg_vd t49 = ((qd[3])*(qd[3]));
+        const sg_vd t76 = c[55] + t0;
+        const sg_vd t77 = c[57] + t1;
+        const sg_vd t78 = t2 + t77;
+        const sg_vd t79 = qd[0]*t7;
+        const sg_vd t80 = qd[0]*t0;
+        const sg_vd t81 = qdd[0]*t7 + t12*t48;
+        const sg_vd t82 = qdd[0]*t0 + t48*t7;
+        obs[6] = t16 + t76;
+        obs[7] = t78;
+        obs[8] = qd[3]*t6 + t79;
+        obs[9] = qd[3]*t16 + t80;
+        obs[10] = qdd[3]*t6 + t4*t49 + t81;
+        obs[11] = qdd[3]*t16 + t49*t6 + t82;
+        return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
+    }
+    case 2: {
+        const sg_vd t0 = c[9]*cq[0];
+        const sg_vd t1 = c[9]*cq[1];
+        const sg_vd t2 = c[11]*cq[7];
+        const sg_vd t4 = c[1]*cq[6];
+        const sg_vd t6 = c[1]*cq[7];
+        const sg_vd t7 = c[5]*cq[1];
+        const sg_vd t12 = c[5]*cq[0];
+        const sg_vd t15 = c[37]*cq[7] + t6;
+        const sg_vd t16 = c[11]*cq[6];
+        const sg_vd t17 = c[10]*cq[6] + t16;
+        const sg_vd t48 = ((qd[0])*(qd[0]));
+        const sg_vd t49 = ((qd[3])*(qd[3]));
+        const sg_vd t50 = t49*(c[37]*cq[6] + t4);
+        const sg_vd t53 = t15*t49;
+        const sg_vd t76 = c[55] + t0;
+        const sg_vd t77 = c[57] + t1;
+        const sg_vd t78 = t2 + t77;
+        const sg_vd t79 = qd[0]*t7;
+        const sg_vd t80 = qd[0]*t0;
+        const sg_vd t81 = qdd[0]*t7 + t12*t48;
+        const sg_vd t82 = qdd[0]*t0 + t48*t7;
+        obs[12] = t17 + t76;
+        obs[13] = c[10]*cq[7] + t78;
+        obs[14] = qd[3]*t15 + t79;
+        obs[15] = qd[3]*t17 + t80;
+        obs[16] = qdd[3]*t15 + t50 + t81;
+        obs[17] = qdd[3]*t17 + t53 + t82;
+        return sgv_isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))));
+    }
+    case 3: {
+        const sg_vd t29 = c[31]*cq[2];
+        const sg_vd t30 = c[31]*cq[3];
+        const sg_vd t64 = c[54]*cq[3];
+        const sg_vd t65 = c[54]*cq[2];
+        const sg_vd t83 = ((qd[1])*(qd[1]));
+        obs[18] = c[59] + t29;
+        obs[19] = c[60] + t30;
+        obs[20] = qd[1]*t64;
+        obs[21] = qd[1]*t29;
+        obs[22] = qdd[1]*t64 + t65*t83;
+        obs[23] = qdd[1]*t29 + t64*t83;
+        return sgv_isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23]))));
+    }
+    case 4: {
+        const sg_vd t21 = c[25]*cq[4] + c[28]*cq[5];
+        const sg_vd t24 = c[24]*cq[4] + c[25]*cq[5];
+        const sg_vd t26 = c[28]*cq[4] + c[40]*cq[5];
+        const sg_vd t55 = ((qd[2])*(qd[2]));
+        const sg_vd t59 = c[24]*cq[5] + c[40]*cq[4];
+        obs[24] = c[61] + t21;
+        obs[25] = c[62] + t24;
+        obs[26] = qd[2]*t26;
+        obs[27] = qd[2]*t21;
+        obs[28] = qdd[2]*t26 + t55*t59;
+        obs[29] = qdd[2]*t21 + t26*t55;
+        return sgv_isfinite(((obs[24] + (obs[25] + obs[26])) + (obs[27] + (obs[28] + obs[29]))));
+    }
+    case 5: {
+        const sg_vd t8 = c[3]*cx[1] + c[6]*cx[0];
+        const sg_vd t9 = c[3]*cx[0] + c[4]*cx[1];
+        const sg_vd t56 = ((xd[0])*(xd[0]));
+        const sg_vd t84 = c[64]*t9 + c[65]*t8;
+        const sg_vd t85 = c[65]*t9 + c[67]*t8;
+        obs[30] = c[63] + x[0];
+        obs[31] = xd[0];
+        obs[32] = xdd[0];
+        obs[33] = t84;
+        obs[34] = c[64]*t8 + c[66]*t9;
+        obs[35] = t85*xd[0];
+        obs[36] = t84*xd[0];
+        obs[37] = t56*(c[66]*t8 + c[67]*t9) + t85*xdd[0];
+        obs[38] = t56*t85 + t84*xdd[0];
+        return sgv_isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38])))));
+    }
+    case 6: {
+        const sg_vd t39 = c[17]*cx[1] + c[21]*cx[0];
+        const sg_vd t41 = c[17]*cx[0] + c[18]*cx[1];
+        const sg_vd t56 = ((xd[0])*(xd[0]));
+        const sg_vd t86 = c[69]*t41 + c[70]*t39;
+        const sg_vd t87 = c[70]*t41 + c[72]*t39;
+        obs[39] = c[68] + x[0];
+        obs[40] = xd[0];
+        obs[41] = xdd[0];
+        obs[42] = t86;
+        obs[43] = c[69]*t39 + c[71]*t41;
+        obs[44] = t87*xd[0];
+        obs[45] = t86*xd[0];
+        obs[46] = t56*(c[71]*t39 + c[72]*t41) + t87*xdd[0];
+        obs[47] = t56*t87 + t86*xdd[0];
+        return sgv_isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47])))));
+    }
+    case 7: {
+        const sg_vd t88 = c[74]*cx[2] + c[75]*cx[3];
+        const sg_vd t89 = c[75]*cx[2] + c[78]*cx[3];
+        const sg_vd t90 = ((xd[1])*(xd[1]));
+        obs[48] = x[1];
+        obs[49] = xd[1];
+        obs[50] = xdd[1];
+        obs[51] = c[73] + t88;
+        obs[52] = c[74]*cx[3] + c[76] + c[77]*cx[2];
+        obs[53] = t89*xd[1];
+        obs[54] = t88*xd[1];
+        obs[55] = t89*xdd[1] + t90*(c[77]*cx[3] + c[78]*cx[2]);
+        obs[56] = t88*xdd[1] + t89*t90;
+        return sgv_isfinite((((obs[48] + obs[49]) + (obs[50] + obs[51])) + ((obs[52] + obs[53]) + (obs[54] + (obs[55] + obs[56])))));
+    }
+    case 8: {
+        const sg_vd t0 = c[9]*cq[0];
+        const sg_vd t1 = c[9]*cq[1];
+        const sg_vd t7 = c[5]*cq[1];
+        const sg_vd t12 = c[5]*cq[0];
+        const sg_vd t48 = ((qd[0])*(qd[0]));
+        const sg_vd t49 = ((qd[3])*(qd[3]));
+        const sg_vd t76 = c[55] + t0;
+        const sg_vd t77 = c[57] + t1;
+        const sg_vd t79 = qd[0]*t7;
+        const sg_vd t80 = qd[0]*t0;
+        const sg_vd t81 = qdd[0]*t7 + t12*t48;
+        const sg_vd t82 = qdd[0]*t0 + t48*t7;
+        const sg_vd t91 = c[79]*cq[6];
+        const sg_vd t92 = c[80]*cq[7];
+        obs[57] = q[3];
+        obs[58] = qd[3];
+        obs[59] = qdd[3];
+        obs[60] = t76 + t91;
+        obs[61] = c[79]*cq[7] + t77;
+        obs[62] = qd[3]*t92 + t79;
+        obs[63] = qd[3]*t91 + t80;
+        obs[64] = c[80]*cq[6]*t49 + qdd[3]*t92 + t81;
+        obs[65] = qdd[3]*t91 + t49*t92 + t82;
+        return sgv_isfinite((((obs[57] + obs[58]) + (obs[59] + obs[60])) + ((obs[61] + obs[62]) + (obs[63] + (obs[64] + obs[65])))));
+    }
+    case 9: {
+        const sg_vd t35 = cx[3]*q[4];
+        const sg_vd t37 = cx[2]*q[4];
+        const sg_vd t46 = cx[3]*qd[4];
+        const sg_vd t47 = t46*xd[1];
+        const sg_vd t51 = cx[2]*qd[4];
+        const sg_vd t52 = t51*xd[1];
+        const sg_vd t93 = c[81]*cx[2] + c[82]*cx[3] + t37;
+        const sg_vd t94 = c[82]*cx[2] + c[84]*cx[3] - t35;
+        const sg_vd t95 = t51 + t94*xd[1];
+        obs[66] = x[1];
+        obs[67] = xd[1];
+        obs[68] = xdd[1];
+        obs[69] = c[73] + t93;
+        obs[70] = c[76] + c[81]*cx[3] + c[83]*cx[2] + t35;
+        obs[71] = t95;
+        obs[72] = t46 + t93*xd[1];
+        obs[73] = cx[2]*qdd[4] - t47 + t94*xdd[1] + xd[1]*(-t46 + xd[1]*(c[83]*cx[3] + c[84]*cx[2] - t37));
+        obs[74] = cx[3]*qdd[4] + t52 + t93*xdd[1] + t95*xd[1];
+        return sgv_isfinite((((obs[66] + obs[67]) + (obs[68] + obs[69])) + ((obs[70] + obs[71]) + (obs[72] + (obs[73] + obs[74])))));
+    }
+    case 10: {
+        const sg_vd t48 = ((qd[0])*(qd[0]));
+        const sg_vd t96 = c[85]*cq[0] + c[86]*cq[1];
+        const sg_vd t97 = c[86]*cq[0] + c[88]*cq[1];
+        obs[75] = q[0];
+        obs[76] = qd[0];
+        obs[77] = qdd[0];
+        obs[78] = c[55] + t96;
+        obs[79] = c[57] + c[85]*cq[1] + c[87]*cq[0];
+        obs[80] = qd[0]*t97;
+        obs[81] = qd[0]*t96;
+        obs[82] = qdd[0]*t97 + t48*(c[87]*cq[1] + c[88]*cq[0]);
+        obs[83] = qdd[0]*t96 + t48*t97;
+        return sgv_isfinite((((obs[75] + obs[76]) + (obs[77] + obs[78])) + ((obs[79] + obs[80]) + (obs[81] + (obs[82] + obs[83])))));
+    }
+    case 11: {
+        const sg_vd t27 = c[32]*cq[0];
+        const sg_vd t28 = c[34]*cq[1];
+        const sg_vd t48 = ((qd[0])*(qd[0]));
+        const sg_vd t61 = c[34]*cq[0];
+        const sg_vd t62 = c[32]*cq[1];
+        const sg_vd t68 = c[55] + t62;
+        const sg_vd t69 = c[57] + t61;
+        const sg_vd t70 = qd[0]*t27;
+        const sg_vd t72 = qd[0]*t62;
+        const sg_vd t73 = ((qd[5])*(qd[5]));
+        const sg_vd t74 = qdd[0]*t27 + t28*t48;
+        const sg_vd t75 = qdd[0]*t62 + t27*t48;
+        const sg_vd t98 = c[89]*cq[10] + c[90]*cq[11];
+        const sg_vd t99 = c[90]*cq[10] + c[92]*cq[11];
+        obs[84] = q[5];
+        obs[85] = qd[5];
+        obs[86] = qdd[5];
+        obs[87] = t68 + t98;
+        obs[88] = c[89]*cq[11] + c[91]*cq[10] + t69;
+        obs[89] = qd[5]*t99 + t70;
+        obs[90] = qd[5]*t98 + t72;
+        obs[91] = qdd[5]*t99 + t73*(c[91]*cq[11] + c[92]*cq[10]) + t74;
+        obs[92] = qdd[5]*t98 + t73*t99 + t75;
+        return sgv_isfinite((((obs[84] + obs[85]) + (obs[86] + obs[87])) + ((obs[88] + obs[89]) + (obs[90] + (obs[91] + obs[92])))));
+    }
+    case 12: {
+        const sg_vd t83 = ((qd[1])*(qd[1]));
+        const sg_vd t100 = c[93]*cq[2] + c[94]*cq[3];
+        const sg_vd t101 = c[94]*cq[2] + c[96]*cq[3];
+        obs[93] = q[1];
+        obs[94] = qd[1];
+        obs[95] = qdd[1];
+        obs[96] = c[59] + t100;
+        obs[97] = c[60] + c[93]*cq[3] + c[95]*cq[2];
+        obs[98] = qd[1]*t101;
+        obs[99] = qd[1]*t100;
+        obs[100] = qdd[1]*t101 + t83*(c[95]*cq[3] + c[96]*cq[2]);
+        obs[101] = qdd[1]*t100 + t101*t83;
+        return sgv_isfinite((((obs[93] + obs[94]) + (obs[95] + obs[96])) + ((obs[97] + obs[98]) + (obs[99] + (obs[100] + obs[101])))));
+    }
+    case 13: {
+        const sg_vd t39 = c[17]*cx[1] + c[21]*cx[0];
+        const sg_vd t40 = c[16]*t39;
+        const sg_vd t41 = c[17]*cx[0] + c[18]*cx[1];
+        const sg_vd t42 = c[53]*t41;
+        const sg_vd t54 = ((qd[6])*(qd[6]));
+        const sg_vd t56 = ((xd[0])*(xd[0]));
+        const sg_vd t57 = c[16]*t41;
+        const sg_vd t102 = c[97]*cq[12] + c[98]*cq[13];
+        const sg_vd t103 = c[100]*cq[13] + c[98]*cq[12];
+        const sg_vd t104 = c[53]*t39;
+        obs[102] = q[6];
+        obs[103] = qd[6];
+        obs[104] = qdd[6];
+        obs[105] = t102 + t57;
+        obs[106] = c[97]*cq[13] + c[99]*cq[12] + t40;
+        obs[107] = qd[6]*t103 + t104*xd[0];
+        obs[108] = qd[6]*t102 + t57*xd[0];
+        obs[109] = qdd[6]*t103 + t104*xdd[0] + t42*t56 + t54*(c[100]*cq[12] + c[99]*cq[13]);
+        obs[110] = qdd[6]*t102 + t103*t54 + t104*t56 + t57*xdd[0];
+        return sgv_isfinite((((obs[102] + obs[103]) + (obs[104] + obs[105])) + ((obs[106] + obs[107]) + (obs[108] + (obs[109] + obs[110])))));
+    }
+    case 14: {
+        const sg_vd t55 = ((qd[2])*(qd[2]));
+        const sg_vd t105 = c[101]*cq[4] + c[102]*cq[5];
+        const sg_vd t106 = c[102]*cq[4] + c[104]*cq[5];
+        obs[111] = q[2];
+        obs[112] = qd[2];
+        obs[113] = qdd[2];
+        obs[114] = c[61] + t105;
+        obs[115] = c[101]*cq[5] + c[103]*cq[4] + c[62];
+        obs[116] = qd[2]*t106;
+        obs[117] = qd[2]*t105;
+        obs[118] = qdd[2]*t106 + t55*(c[103]*cq[5] + c[104]*cq[4]);
+        obs[119] = qdd[2]*t105 + t106*t55;
+        return sgv_isfinite((((obs[111] + obs[112]) + (obs[113] + obs[114])) + ((obs[115] + obs[116]) + (obs[117] + (obs[118] + obs[119])))));
+    }
+    case 15: {
+        sg_vd ka[4];
+        {
+            /* cam cam: the arc whose normal sector holds e */
+            const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
+            ka[0] = sgv_set1(c[45]);
+            ka[1] = sgv_set1(c[44]);
+            ka[2] = sgv_set1(c[42]);
+            ka[3] = sgv_set1(5.0);
+            {
+                const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+                ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
+                ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+                ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+                ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
+            }
+            {
+                const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+                ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+                ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+                ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+                ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
+            }
+            {
+                const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+                ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+                ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+                ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+                ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
+            }
+            {
+                const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+                ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+                ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+                ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+                ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
+            }
+            {
+                const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+                ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+                ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+                ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+                ka[3] = sgv_select(in, sgv_set1(0.0), ka[3]);
+            }
+        }
+        obs[120] = ka[3];
+        return sgv_isfinite(obs[120]);
+    }
+    default:
+        return sgv_false();
+    }
+}
+
+SG_VINLINE sg_vm sg_feed_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
+{
+    (void)x;
+    sg_vd ka[4];
+    {
+        /* cam cam: the arc whose normal sector holds e */
+        const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
+        ka[0] = sgv_set1(c[45]);
+        ka[1] = sgv_set1(c[44]);
+        ka[2] = sgv_set1(c[42]);
+        ka[3] = sgv_set1(5.0);
+        {
+            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(0.0), ka[3]);
+        }
+    }
+    sg_vm ok = sgv_true();
+    const double fr[8] = {0.0};
+    const sg_vd t0 = cq[6]*cx[2];
+    const sg_vd t1 = cq[7]*cx[3];
+    const sg_vd t2 = c[9]*cq[0];
+    const sg_vd t3 = c[9]*cq[1];
+    const sg_vd t4 = c[3]*cx[1] + c[6]*cx[0];
+    const sg_vd t5 = c[3]*cx[0] + c[4]*cx[1];
+    const sg_vd t6 = c[5]*cq[1];
+    const sg_vd t7 = c[32]*cq[0];
+    const sg_vd t8 = c[34]*cq[1];
+    const sg_vd t9 = c[32]*cq[1];
+    const sg_vd t10 = c[22]*cq[2] + c[23]*cq[3];
+    const sg_vd t11 = c[22]*cq[3] + c[27]*cq[2];
+    const sg_vd t12 = c[31]*cq[2];
+    const sg_vd t13 = c[31]*cq[3];
+    const sg_vd t14 = c[24]*cq[4];
+    const sg_vd t15 = c[25]*cq[4];
+    const sg_vd t16 = c[25]*cq[5];
+    const sg_vd t17 = c[28]*cq[5];
+    const sg_vd t18 = cx[3]*fr[5];
+    const sg_vd t19 = -gv[1] + obs[74];
+    const sg_vd t20 = c[113]*t19 - t18;
+    const sg_vd t21 = cx[2]*fr[5];
+    const sg_vd t22 = -gv[0] + obs[73];
+    const sg_vd t23 = c[113]*t22 - t21;
+    const sg_vd t24 = c[113]*t19 + c[114]*(-gv[1] + obs[65]) - ld[3] - ld[5] - t18;
+    const sg_vd t25 = c[113]*t22 + c[114]*(-gv[0] + obs[64]) - ld[2] - ld[4] - t21;
+    const sg_vd t26 = -gv[0] + obs[82];
+    const sg_vd t27 = -gv[1] + obs[83];
+    const sg_vd t28 = cq[10]*fr[7];
+    const sg_vd t29 = c[117]*(-gv[0] + obs[91]) - ld[0] + t28;
+    const sg_vd t30 = cq[11]*fr[7];
+    const sg_vd t31 = c[117]*(-gv[1] + obs[92]) - ld[1] + t30;
+    const sg_vd t32 = c[91]*cq[10];
+    const sg_vd t33 = c[91]*cq[11];
+    const sg_vd t34 = c[92]*cq[10] + t33;
+    const sg_vd t35 = c[33] + c[90]*cq[10] + c[92]*cq[11] + t13 + t7;
+    const sg_vd t36 = c[36] + t12 + t34 + t8;
+    const sg_vd t37 = c[95]*cq[2];
+    const sg_vd t38 = c[95]*cq[3];
+    const sg_vd t39 = c[94]*cq[2] + c[96]*cq[3];
+    const sg_vd t40 = t13 + t39;
+    const sg_vd t41 = c[96]*cq[2] + t38;
+    const sg_vd t42 = t12 + t41;
+    const sg_vd t43 = fr[6]*t10;
+    const sg_vd t44 = c[125]*(-gv[0] + obs[100]) - ld[6] - t28 + t43;
+    const sg_vd t45 = fr[6]*t11;
+    const sg_vd t46 = c[125]*(-gv[1] + obs[101]) - ld[7] - t30 + t45;
+    const sg_vd t47 = t14 + t16;
+    const sg_vd t48 = c[26] + t39 + t47;
+    const sg_vd t49 = t15 + t17;
+    const sg_vd t50 = c[29] + t41 + t49;
+    const sg_vd t51 = -gv[0] + obs[109];
+    const sg_vd t52 = -gv[1] + obs[110];
+    const sg_vd t53 = c[132]*(-gv[0] + obs[118]) - ld[8] - t43;
+    const sg_vd t54 = c[103]*cq[5] + c[104]*cq[4];
+    const sg_vd t55 = c[132]*(-gv[1] + obs[119]) - ld[9] - t45;
+    const sg_vd t56 = c[102]*cq[4] + c[104]*cq[5] + t47;
+    const sg_vd t57 = t49 + t54;
+    const sg_vd t58 = c[65] + ka[1];
+    const sg_vd t59 = c[67] + ka[0];
+    const sg_vd t60 = c[17]*cx[1] + c[21]*cx[0];
+    const sg_vd t61 = c[17]*cx[0] + c[18]*cx[1];
+    const sg_vd t62 = c[75]*cx[2] + c[78]*cx[3] + cx[3]*q[4];
+    const sg_vd t63 = c[77]*cx[3] + c[78]*cx[2];
+    const sg_vd t64 = cx[2]*q[4] + t63;
+    const sg_vd t65 = c[82]*cx[2] + c[84]*cx[3];
+    const sg_vd t66 = c[83]*cx[3] + c[84]*cx[2];
+    const sg_vd t67 = -cx[3];
+    const sg_vd t69 = fr[0]*obs[76];
+    const sg_vd t70 = fr[4]*obs[94];
+    const sg_vd t71 = obs[58] - obs[76];
+    const sg_vd t72 = fr[1]*t71;
+    const sg_vd t73 = -obs[58] + obs[67];
+    const sg_vd t74 = fr[2]*t73;
+    const sg_vd t75 = -obs[76] + obs[85];
+    const sg_vd t76 = fr[3]*t75;
+    const sg_vd t77 = cx[2]*(obs[49]*t62 - obs[53] - obs[67]*t65 + obs[71]) + cx[3]*(-obs[49]*t64 - obs[54] + obs[67]*t66 + obs[72]);
+    const sg_vd t78 = fr[5]*t77;
+    const sg_vd t79 = -obs[99];
+    const sg_vd t80 = cq[10]*(obs[85]*t35 - obs[89] - obs[94]*t40 + obs[98]) + cq[11]*(-obs[85]*t36 - obs[90] + obs[94]*t42 - t79);
+    const sg_vd t81 = fr[7]*t80;
+    const sg_vd t82 = t10*(-obs[112]*t56 + obs[116] + obs[94]*t48 - obs[98]) + t11*(obs[112]*t57 + obs[117] - obs[94]*t50 + t79);
+    const sg_vd t83 = fr[6]*t82;
+    {
+        const sg_vd d = c[109]*cq[10] + c[110]*cq[11] + c[34]*cq[0]*cq[11] + c[54]*cq[10]*cq[2] + c[54]*cq[11]*cq[3] + c[55]*cq[10] + c[57]*cq[11] + cq[10]*t9;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(cq[10]*t8 + cq[11]*t7), sgv_fmax(sgv_fabs(c[109]*cq[10] + c[110]*cq[11] + c[34]*cq[0]*cq[11] + c[54]*cq[10]*cq[2] + c[54]*cq[11]*cq[3] + c[55]*cq[10] + c[57]*cq[11] + cq[10]*t9), sgv_fabs(cq[10]*t12 + cq[11]*t13)));
+        out[26] = (c[119]*obs[86] - fr[3] + fr[7]*(-cq[10]*t35 + cq[11]*t36) - ld[0]*(c[120]*cq[11] + t32) - ld[1]*(c[121]*cq[10] + t33) - ld[16] - t29*(c[89]*cq[11] + t32) - t31*t34)/d;
+    }
+    {
+        /* block of unknowns 6, 8 */
+        sg_vd M[4], r[2];
+        sg_vm piv[2];
+        M[0] = cx[2]*t2 + cx[3]*t3;
+        M[1] = c[5]*cq[0]*cq[6] + cq[7]*t6;
+        r[0] = c[116]*obs[77] + c[118]*t26*(c[85]*cq[1] + c[87]*cq[0]) + c[118]*t27*(c[87]*cq[1] + c[88]*cq[0]) - out[26]*(cq[10]*t8 + cq[11]*t7) - fr[0] + fr[1] + fr[3] - ld[15] + t2*t24 + t25*t6 + t29*t7 + t31*t9;
+        M[2] = c[10]*t0 + c[10]*t1 + c[11]*t0 + c[11]*t1;
+        M[3] = c[55]*cq[6] + c[57]*cq[7] - cq[6]*ka[0]*t5 + cq[6]*ka[1]*t4 + cq[6]*t2 - cq[7]*ka[0]*t4 - cq[7]*ka[1]*t5 + cq[7]*t3;
+        r[1] = c[111]*obs[59] + c[112]*cq[6]*t20 + c[112]*cq[7]*ld[4] + c[115]*cq[6]*ld[5] + c[115]*cq[7]*t23 + c[79]*cq[6]*t24 + c[79]*cq[7]*ld[2] + c[80]*cq[6]*ld[3] + c[80]*cq[7]*t25 - fr[1] + fr[2] - ld[13];
+        ok &= sgv_lu_factor(2, M, piv);
+        sgv_lu_solve(2, M, piv, r);
+        out[6] = r[0];
+        out[8] = r[1];
+    }
+    {
+        const sg_vd d = c[14]*t10 + c[20]*t11 + c[24]*cq[5]*t10 + c[28]*cq[4]*t11 + c[40]*cq[4]*t10 + c[40]*cq[5]*t11 + c[59]*t10 + c[60]*t11;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[14]*t10 + c[20]*t11 + c[24]*cq[5]*t10 + c[28]*cq[4]*t11 + c[40]*cq[4]*t10 + c[40]*cq[5]*t11 + c[59]*t10 + c[60]*t11), sgv_fabs(t10*t15 + t10*t17 + t11*t14 + t11*t16));
+        out[25] = (c[122]*obs[95] - out[26]*(cq[10]*t12 + cq[11]*t13) - fr[4] + fr[6]*(-t10*t48 + t11*t50) - fr[7]*(-cq[10]*t40 + cq[11]*t42) - ld[17] - ld[6]*(c[123]*cq[3] + t37) - ld[7]*(c[124]*cq[2] + t38) - t41*t46 - t44*(c[93]*cq[3] + t37))/d;
+    }
+    {
+        /* block of unknowns 23, 24 */
+        sg_vd M[4], r[2];
+        sg_vm piv[2];
+        M[0] = c[19]*cq[5];
+        M[1] = c[38]*cq[4];
+        r[0] = c[128]*obs[113] - out[25]*(t10*t15 + t10*t17 + t11*t14 + t11*t16) - fr[6]*(-t10*t56 + t11*t57) - ld[19] - ld[8]*(c[129]*cq[4] + c[130]*cq[5]) - ld[9]*(c[129]*cq[5] + c[131]*cq[4]) - t53*(c[101]*cq[5] + c[103]*cq[4]) - t54*t55;
+        M[2] = c[15]*cq[13];
+        M[3] = c[39]*cq[12];
+        r[1] = c[126]*obs[104] + c[127]*t51*(c[97]*cq[13] + c[99]*cq[12]) + c[127]*t52*(c[100]*cq[12] + c[99]*cq[13]) - ld[18];
+        ok &= sgv_lu_factor(2, M, piv);
+        sgv_lu_solve(2, M, piv, r);
+        out[23] = r[0];
+        out[24] = r[1];
+    }
+    out[12] = cq[6]*out[8] - cx[2]*out[6] + t24;
+    out[11] = -cq[7]*out[8] - out[6]*t67 + t25;
+    out[22] = -out[24] - out[25]*t10 + t55;
+    out[21] = -out[23] - out[25]*(c[144]*cq[3] + c[23]*cq[2]) + t53;
+    out[18] = -cq[10]*out[26] - out[25]*(c[144]*cq[2] + c[27]*cq[3]) + t46;
+    out[17] = cq[11]*out[26] - out[25]*t11 + t44;
+    out[16] = cq[10]*out[26] + t31;
+    out[15] = -cq[11]*out[26] + t29;
+    out[10] = c[143]*t27 + out[12] + out[16];
+    out[9] = c[143]*t26 + out[11] + out[15];
+    out[14] = -cx[2]*out[6] + t20;
+    out[13] = -out[6]*t67 + t23;
+    out[20] = c[142]*t52 + out[24];
+    out[19] = c[142]*t51 + out[23];
+    out[7] = c[141]*obs[68] - out[13]*(c[81]*cx[3] + c[83]*cx[2]) - out[14]*t66 - out[6]*(cx[2]*t66 + cx[3]*t65) - fr[2] - fr[5]*(-cx[2]*t65 + cx[3]*t66) - ld[14];
+    out[5] = c[140]*(-gv[1] + obs[56]) + cx[2]*out[6] + t18;
+    out[4] = c[140]*(-gv[0] + obs[55]) - cx[3]*out[6] + t21;
+    out[29] = c[139]*obs[50] - out[4]*(c[74]*cx[3] + c[77]*cx[2]) - out[5]*t63 - out[6]*(-cx[2]*t64 - cx[3]*t62) + out[7] + fr[5]*(-cx[2]*t62 + cx[3]*t64) - ld[12];
+    out[3] = c[138]*(-gv[1] + obs[47]) + out[20];
+    out[2] = c[138]*(-gv[0] + obs[46]) + out[19];
+    out[28] = c[135]*obs[41] - out[19]*(c[136]*t60 + c[70]*t61) - out[2]*(c[69]*t60 + c[71]*t61) - out[20]*(c[137]*t61 + c[70]*t60) - out[3]*(c[71]*t60 + c[72]*t61) - ld[11];
+    out[1] = c[134]*(-gv[1] + obs[38]) - cq[6]*out[8];
+    out[0] = c[134]*(-gv[0] + obs[37]) + cq[7]*out[8];
+    out[27] = c[133]*obs[32] - out[0]*(c[64]*t4 + c[66]*t5) - out[1]*(c[66]*t4 + c[67]*t5) - out[8]*(cq[6]*(-t4*t58 + t5*t59) + cq[7]*(t4*t59 + t5*t58)) - ld[10];
+    const sg_vd t68 = out[27] + out[28];
+    out[30] = t68;
+    out[31] = out[29];
+    out[32] = t68*xd[0];
+    out[33] = out[29]*xd[1];
+    out[34] = -cx[3]*out[6];
+    out[35] = cx[2]*out[6];
+    out[36] = cq[7]*out[8];
+    out[37] = -cq[6]*out[8];
+    out[38] = -out[25]*t11;
+    out[39] = out[25]*t10;
+    out[40] = -cq[11]*out[26];
+    out[41] = cq[10]*out[26];
+    out[42] = out[0] + out[17] + out[2] + out[21] + out[4] + out[9];
+    out[43] = out[1] + out[10] + out[18] + out[22] + out[3] + out[5];
+    out[44] = c[110]*out[17] + c[145]*out[4] + c[20]*out[21] + c[55]*out[10] + c[59]*out[18] + c[61]*out[22] + c[7]*out[9] + c[73]*out[5] + out[29] + fr[0] + fr[4] + t68;
+    out[45] = c[146]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[147]*((obs[31])*(obs[31])) + c[148]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[149]*((obs[40])*(obs[40])) + c[150]*(((obs[53])*(obs[53])) + ((obs[54])*(obs[54]))) + c[151]*((obs[49])*(obs[49])) + c[152]*(((obs[62])*(obs[62])) + ((obs[63])*(obs[63]))) + c[153]*((obs[58])*(obs[58])) + c[154]*(((obs[71])*(obs[71])) + ((obs[72])*(obs[72]))) + c[155]*((obs[67])*(obs[67])) + c[156]*(((obs[80])*(obs[80])) + ((obs[81])*(obs[81]))) + c[157]*((obs[76])*(obs[76])) + c[158]*(((obs[89])*(obs[89])) + ((obs[90])*(obs[90]))) + c[159]*((obs[85])*(obs[85])) + c[160]*(((obs[98])*(obs[98])) + ((obs[99])*(obs[99]))) + c[161]*((obs[94])*(obs[94])) + c[162]*(((obs[107])*(obs[107])) + ((obs[108])*(obs[108]))) + c[163]*((obs[103])*(obs[103])) + c[164]*(((obs[116])*(obs[116])) + ((obs[117])*(obs[117]))) + c[165]*((obs[112])*(obs[112]));
+    out[46] = c[118]*(gv[0]*obs[78] + gv[1]*obs[79]) + c[127]*(gv[0]*obs[105] + gv[1]*obs[106]) + c[166]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[167]*(gv[0]*obs[42] + gv[1]*obs[43]) + c[168]*(gv[0]*obs[51] + gv[1]*obs[52]) + c[169]*(gv[0]*obs[60] + gv[1]*obs[61]) + c[170]*(gv[0]*obs[69] + gv[1]*obs[70]) + c[171]*(gv[0]*obs[87] + gv[1]*obs[88]) + c[172]*(gv[0]*obs[96] + gv[1]*obs[97]) + c[173]*(gv[0]*obs[114] + gv[1]*obs[115]);
+    out[47] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[31] + ld[11]*obs[40] + ld[12]*obs[49] + ld[13]*obs[58] + ld[14]*obs[67] + ld[15]*obs[76] + ld[16]*obs[85] + ld[17]*obs[94] + ld[18]*obs[103] + ld[19]*obs[112] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[26] + ld[9]*obs[27] + t69 + t70 + t72 + t74 + t76 + t78 + t81 + t83;
+    out[48] = sgv_set1(0.0);
+    out[49] = sgv_set1(fr[0]);
+    out[50] = -t69;
+    out[51] = sgv_set1(fr[1]);
+    out[52] = -t72;
+    out[53] = sgv_set1(fr[2]);
+    out[54] = -t74;
+    out[55] = sgv_set1(fr[3]);
+    out[56] = -t76;
+    out[57] = sgv_set1(fr[4]);
+    out[58] = -t70;
+    out[59] = sgv_set1(fr[5]);
+    out[60] = -t78;
+    out[61] = sgv_set1(fr[6]);
+    out[62] = -t83;
+    out[63] = sgv_set1(fr[7]);
+    out[64] = -t81;
+    ok &= sgv_isfinite(((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + out[7]))) + (((out[8] + out[9]) + (out[10] + out[11])) + ((out[12] + out[13]) + (out[14] + out[15])))) + ((((out[16] + out[17]) + (out[18] + out[19])) + ((out[20] + out[21]) + (out[22] + out[23]))) + (((out[24] + out[25]) + (out[26] + out[27])) + ((out[28] + out[29]) + (out[30] + out[31]))))) + (((((out[32] + out[33]) + (out[34] + out[35])) + ((out[36] + out[37]) + (out[38] + out[39]))) + (((out[40] + out[41]) + (out[42] + out[43])) + ((out[44] + out[45]) + (out[46] + out[47])))) + ((((out[48] + out[49]) + (out[50] + out[51])) + ((out[52] + out[53]) + (out[54] + out[55]))) + (((out[56] + out[57]) + (out[58] + out[59])) + ((out[60] + out[61]) + (out[62] + (out[63] + out[64]))))))));
+    return ok;
+}
+
+SG_VINLINE int sg_feed_forces_in_simd(const double *c)
+{
+    return c[182] == 0.0 && c[183] == 0.0 && c[184] == 0.0 && c[185] == 0.0 && c[186] == 0.0 && c[187] == 0.0 && c[188] == 0.0 && c[189] == 0.0;
+}
+
+static SG_FLATTEN int sg_feed_finish_simd(const struct sg_mechanism *m, struct sg_lanes *lanes, const double *c, const sg_options *opt, const double *gv, const double *loads, double *qd, double *qdd, double *obs, double *frc, const unsigned char *want)
+SG_SIMD_FINISH_BODY(sg_feed_motion_v, sg_feed_rates_v, sg_feed_observe_v, sg_feed_forces_v, sg_feed_forces_in_simd, 121, 65)
+#pragma GCC pop_options
+#endif
+
 static const unsigned char sg_feed_coord_is_angle[7] = { 1, 1, 1, 1, 0, 1, 1 };
 static const int sg_feed_group_start[17] = { 0, 6, 12, 18, 24, 30, 39, 48, 57, 66, 75, 84, 93, 102, 111, 120, 121 };
 static const unsigned char sg_feed_group_always[16] = { 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
@@ -2492,6 +4054,7 @@ static const sg_mechanism sg_feed_descriptor = {
     .anchors = sg_feed_anchors,
     .sweep = 0,
     .sweep_simd = 0,
+    .finish_simd = SG_SIMD_HOOK(sg_feed_finish_simd),
 };
 
 const sg_mechanism *sg_feed(void)

@@ -57,8 +57,9 @@ OPTIONS = (
     ("int", "keep_singular", "1: positions above singular_tol keep their results (status SG_OK, err says why)"),
     ("int", "generic", "1: the generic sweep loop (kernels through the descriptor) even where the mechanism has "
                        "an inlined one (tests: the two agree to the bit)"),
-    ("int", "scalar", "1: the scalar closed-form loop even where the mechanism has a SIMD one and the CPU runs it "
-                      "(tests: the two agree to rounding, with the same statuses)"),
+    ("int", "scalar", "1: the scalar loop even where the mechanism has a SIMD one and the CPU runs it (a closed "
+                      "form: four positions at a time; Newton: the solved positions' rates, observables and forces "
+                      "four at a time) (tests: the two agree to rounding, with the same statuses)"),
 )
 
 # Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx their
@@ -134,6 +135,17 @@ HOOKS = {
 HOOKS["sweep_simd"] = (HOOKS["sweep"][0], HOOKS["sweep"][1],
                        "the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL "
                        "where the build has no SIMD or the mechanism's kernels have no vector form")
+
+HOOKS["finish_simd"] = ("int", (("const struct sg_mechanism *", "m"), ("struct sg_lanes *", "lanes"),
+                                 ("const double *", "c"), ("const sg_options *", "opt"), ("const double *", "gv"),
+                                 ("const double *", "loads"), ("double *", "qd"), ("double *", "qdd"),
+                                 ("double *", "obs"), ("double *", "frc"), ("const unsigned char *", "want")),
+                         "a Newton sweep's rates, observables and (frc not NULL) forces at up to four solved "
+                         "positions at once in AVX2 (csrc/sg_simd.h, SG_SIMD_FINISH_BODY): their rows written, the "
+                         "bit mask of the lanes it vouches for returned, each one's estimated error in lanes->est; "
+                         "lanes NULL: 1 where it can finish this sweep's positions (forces: without friction only), "
+                         "0 where the scalar loop must; NULL with a closed form, without SIMD in the build or "
+                         "without a vector form")
 
 #: Fields of ``sg_mechanism``, the descriptor every generated file fills (C type, name, meaning); the sizes'
 #: names are the manifest's "sizes" keys, the kernels' are :data:`KERNELS` kinds.

@@ -47,7 +47,7 @@ def header() -> str:
     lines.append("/* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */")
     for kind, (ret, args, doc) in abi.KERNELS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
-    lines += ["", "struct sg_mechanism;", "struct sg_columns;",
+    lines += ["", "struct sg_mechanism;", "struct sg_columns;", "struct sg_lanes;",
               "/* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */"]
     for kind, (ret, args, doc) in abi.HOOKS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
@@ -78,6 +78,8 @@ def descriptor_initializer(prefix: str, sizes: dict, has: dict) -> list[str]:
             value = f"{prefix}_{name}" if has.get(name) else "0"
         elif name == "sweep_simd":  # where the closed form has vector kernels, and the build SIMD (sg_simd.h)
             value = f"SG_SIMD_HOOK({prefix}_{name})" if has.get("closed_v") else "0"
+        elif name == "finish_simd":  # Newton (no closed form) with vector kernels, and the build SIMD
+            value = f"SG_SIMD_HOOK({prefix}_{name})" if has.get("motion_v") and not has.get("closed") else "0"
         elif name in abi.HOOKS:  # the inlined sweep: instantiated where the mechanism has a closed form
             value = f"{prefix}_{name}" if has.get("closed") else "0"
         else:

@@ -60,60 +60,78 @@ class BlockFactor:
         """The coordinates of the blocks before block k."""
         return [c for _rows, cols in self.blocks[:k] for c in cols]
 
-    def factor_lines(self) -> list[str]:
+    def factor_lines(self, vector: bool = False) -> list[str]:
         """Scale J (rows by rs, columns into cs), factor each diagonal block, set *cond; return SG_SINGULAR
-        from the kernel where a column is empty or not finite, a block is singular or the bound is not finite."""
+        from the kernel where a column is empty or not finite, a block is singular or the bound is not finite.
+        ``vector``: the SIMD twin's lines (csrc/sg_simd.h), the same operations lane by lane, so the same values
+        to the bit; a lane that fails a test is cleared from the mask ``ok`` instead."""
         n, nz, at = self.n, self.nonzero, self._at
-        lines = ["*cond = INFINITY;", "/* Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py) */"]
+        real, fabs = ("sg_vd", "sgv_fabs") if vector else ("double", "fabs")
+        zero = "sgv_set1(0.0)" if vector else "0.0"
+
+        def fail_unless(test: str) -> str:
+            return f"ok &= {test};" if vector else f"if (!({test})) return SG_SINGULAR;"
+
+        def keep_max(m: str, v: str) -> str:  # m = v where v > m or v is NaN (NaN propagates)
+            return f"{m} = sgv_select(~({v} <= {m}), {v}, {m});" if vector else f"if (!({v} <= {m})) {m} = {v};"
+
+        lines = ["sg_vm ok = sgv_true();" if vector else "*cond = INFINITY;",
+                 "/* Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py) */"]
         lines += [f"{at(i, j)} *= rs[{i}];" for i in range(n) for j in range(n) if nz[i][j]]
         for j in range(n):
             col = [at(i, j) for i in range(n) if nz[i][j]]  # never empty (of)
-            lines += ["{", "    double m = 0.0, v;"]
+            lines += ["{", f"    {real} m = {zero}, v;"]
             for e in col:
-                lines.append(f"    v = fabs({e}); if (!(v <= m)) m = v;")
-            lines += ["    if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR;", f"    cs[{j}] = 1.0 / m;"]
+                lines.append(f"    v = {fabs}({e}); {keep_max('m', 'v')}")
+            test = ("(m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY))" if vector
+                    else "m > 0.0 && m < INFINITY")
+            lines += [f"    {fail_unless(test)}", f"    cs[{j}] = 1.0 / m;"]
             lines += [f"    {e} *= cs[{j}];" for e in col] + ["}"]
-        lines.append("double anorm = 0.0;")
+        lines.append(f"{real} anorm = {zero};")
         for i in range(n):
-            terms = " + ".join(f"fabs({at(i, j)})" for j in range(n) if nz[i][j])
-            lines.append(f"{{ const double s = {terms}; if (!(s <= anorm)) anorm = s; }}")
+            terms = " + ".join(f"{fabs}({at(i, j)})" for j in range(n) if nz[i][j])
+            lines.append(f"{{ const {real} s = {terms}; {keep_max('anorm', 's')} }}")
         block_of_col = {c: k for k, (_r, cols) in enumerate(self.blocks) for c in cols}
         for k, (rows, cols) in enumerate(self.blocks):
             s = len(rows)
-            lines.append(f"double bound{k};")
+            lines.append(f"{real} bound{k};")
             lines.append("{")
             if s == 1:
                 d = at(rows[0], cols[0])
-                lines += [f"    if (!(fabs({d}) > SG_PIVOT_RTOL)) return SG_SINGULAR;", f"    {d} = 1.0 / {d};",
-                          f"    const double inv = fabs({d});"]
+                pivot = f"{fabs}({d}) > " + ("sgv_set1(SG_PIVOT_RTOL)" if vector else "SG_PIVOT_RTOL")
+                lines += [f"    {fail_unless(pivot)}", f"    {d} = 1.0 / {d};", f"    const {real} inv = {fabs}({d});"]
             else:
-                lines += [f"    F{k}[{a * s + b}] = {at(r, c) if nz[r][c] else '0.0'};"
+                lines += [f"    F{k}[{a * s + b}] = {at(r, c) if nz[r][c] else zero};"
                           for a, r in enumerate(rows) for b, c in enumerate(cols)]
-                lines += ["    double inv;",
-                          f"    if (sg_lu_bound_inl({s}, F{k}, P{k}, &inv) != SG_OK) return SG_SINGULAR;"]
-            lines.append("    double u = 0.0;")
+                lines.append(f"    {real} inv;")
+                lines.append(f"    ok &= sgv_lu_bound({s}, F{k}, P{k}, &inv);" if vector else
+                             f"    if (sg_lu_bound_inl({s}, F{k}, P{k}, &inv) != SG_OK) return SG_SINGULAR;")
+            lines.append(f"    {real} u = {zero};")
             for r in rows:
-                terms = [f"fabs({at(r, c)}) * bound{block_of_col[c]}" for c in self._earlier(k) if nz[r][c]]
+                terms = [f"{fabs}({at(r, c)}) * bound{block_of_col[c]}" for c in self._earlier(k) if nz[r][c]]
                 if terms:
-                    lines.append(f"    {{ const double s = {' + '.join(terms)}; if (!(s <= u)) u = s; }}")
+                    lines.append(f"    {{ const {real} s = {' + '.join(terms)}; {keep_max('u', 's')} }}")
             lines += [f"    bound{k} = inv * (1.0 + u);", "}"]
-        lines.append("double inorm = bound0;")
-        lines += [f"if (!(bound{k} <= inorm)) inorm = bound{k};" for k in range(1, len(self.blocks))]
+        lines.append(f"{real} inorm = bound0;")
+        lines += [keep_max("inorm", f"bound{k}") for k in range(1, len(self.blocks))]
+        if vector:
+            return lines + ["*cond = anorm * inorm;", "ok &= sgv_isfinite(*cond);"]
         return lines + ["*cond = anorm * inorm;", "if (!isfinite(*cond)) return SG_SINGULAR;"]
 
-    def declarations(self) -> list[str]:
+    def declarations(self, vector: bool = False) -> list[str]:
         """Each block's factor and interchanges (blocks of two or more rows)."""
-        return [f"double F{k}[{len(rows) ** 2}]; int P{k}[{len(rows)}];"
+        real, index = ("sg_vd", "sg_vm") if vector else ("double", "int")
+        return [f"{real} F{k}[{len(rows) ** 2}]; {index} P{k}[{len(rows)}];"
                 for k, (rows, _cols) in enumerate(self.blocks) if len(rows) > 1]
 
-    def _substitution(self, a: str, b: str, row, single: str, block, result) -> list[str]:
+    def _substitution(self, a: str, b: str, row, single: str, block, result, real: str = "double") -> list[str]:
         """Forward block substitution over Φ_q's structure, the one loop of both solves: block after block, each
         row's right side ``row(r)`` less ``a``'s coupling entries (the stored Φ_q) times the earlier blocks' y; a
         1 × 1 block then applied by ``single`` ("*": its stored reciprocal, "/": its pivot), a larger one by the
         lines ``block(k, rows, cols)`` gives (its declarations, the solve of v in place); b[c] = ``result(c)``."""
         n, nz = self.n, self.nonzero
         at = lambda i, j: f"{a}[{i * n + j}]"  # noqa: E731
-        lines = [f"double y[{n}];"]
+        lines = [f"{real} y[{n}];"]
         for k, (rows, cols) in enumerate(self.blocks):
             earlier = self._earlier(k)
             rhs = [row(r) + "".join(f" - {at(r, c)} * y[{c}]" for c in earlier if nz[r][c]) for r in rows]
@@ -125,14 +143,15 @@ class BlockFactor:
             lines += [f"    y[{c}] = v[{p}];" for p, c in enumerate(cols)] + ["}"]
         return lines + [f"{b}[{c}] = {result(c)};" for c in range(self.n)]
 
-    def solve_lines(self, b: str) -> list[str]:
+    def solve_lines(self, b: str, vector: bool = False) -> list[str]:
         """``b`` (indexed by closure row) overwritten by Φ_q^-1 b (indexed by coordinate) with the factor above:
-        y = E^-1 (R b) block after block, then b = C y."""
+        y = E^-1 (R b) block after block, then b = C y (``vector``: the SIMD twin's, lane by lane)."""
+        real, apply = ("sg_vd", "sgv_lu_apply") if vector else ("double", "sg_lu_apply_inl")
         lines = self._substitution(
             "J", b, lambda r: f"{b}[{r}] * rs[{r}]", "*",
-            lambda k, rows, _cols: ([f"    double v[{len(rows)}];"],
-                                    f"    sg_lu_apply_inl({len(rows)}, F{k}, P{k}, v);"),
-            lambda c: f"y[{c}] * cs[{c}]")
+            lambda k, rows, _cols: ([f"    {real} v[{len(rows)}];"],
+                                    f"    {apply}({len(rows)}, F{k}, P{k}, v);"),
+            lambda c: f"y[{c}] * cs[{c}]", real)
         return ["{"] + [f"    {line}" for line in lines] + ["}"]
 
     def _offsets(self) -> list[int]:

@@ -149,7 +149,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
         ks.residual(), *ks.lu(), ks.scales(row_scales), ks.blocks(blks), ks.motion(row_scales),
         ks.rates(row_scales), ks.observe(groups, row_scales), ks.forces(kst),
         ks.force_matrix(kst), ks.anchors(anchor_out)]
-    vector_kernels = ks.vector_kernels(dyads, row_scales, kst, groups) if dyads is not None else []
+    vector_kernels = ks.vector_kernels(dyads, row_scales, kst, groups)
     kernels.insert(0, ks.constants_kernel())  # last to build: it evaluates what the others hoisted
     sizes = {"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
              "nbranch": len(dyads or []), "nc": len(ks.constants), "nf": len(kst.f),
@@ -170,7 +170,8 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
         vector_kernels=vector_kernels, nobs=len(kin.observables), nfo=len(kst.f) + len(kst.outputs),
         forces_v=(f"{prefix}_forces_v" if any(k.name == f"{prefix}_forces_v" for k in vector_kernels)
                   else "sgv_no_forces"),
-        simd_sweep=abi.kernel_hook("sweep_simd", f"{prefix}_sweep_simd") if vector_kernels else None,
+        simd_sweep=abi.kernel_hook("sweep_simd", f"{prefix}_sweep_simd") if vector_kernels and dyads is not None else None,
+        simd_finish=abi.kernel_hook("finish_simd", f"{prefix}_finish_simd") if vector_kernels and dyads is None else None,
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
         group_start=groups, group_always=ks.observe_always(groups, row_scales),
         group_angles=ks.angle_readers(groups, row_scales),

@@ -142,8 +142,9 @@ class JointKind:
     def prepare(self, kin, joints: list) -> None:
         """Called once per mechanism with every joint of this kind, before the loops close."""
 
-    def selection_c(self, kin, printer, prepare) -> list[str]:
-        """C lines that choose what this kind's joints need at run time, at the top of every kernel."""
+    def selection_c(self, kin, flavour, prepare) -> list[str]:
+        """C lines that choose what this kind's joints need at run time, at the top of every kernel (``flavour``:
+        scalar C or the SIMD twin's lanes, derive.kernels._Flavour)."""
         return []
 
 
@@ -328,28 +329,41 @@ class Cam(_NormalForce):
                                  "arc_center", joint.name))
         return out
 
-    def selection_c(self, kin, printer, prepare):
+    def selection_c(self, kin, flavour, prepare):
         """ka[3j..3j+2] = the active arc's centre and radius, ka[3·ncam + j] = its index: the arc whose normal
-        sector holds the face normal's direction e (cam frame)."""
-        cams, pr = kin.cams, printer
+        sector holds the face normal's direction e (cam frame), the first such arc in declaration order.
+        ``flavour`` (derive.kernels._Flavour) prints scalar C, an if-chain, or the SIMD twin's lanes: the last
+        arc in every lane, then each earlier arc selected over it where its sector holds that lane's e, so the
+        first arc that holds it wins as in the chain (the same tests on the same values: the same arc)."""
+        cams, pr = kin.cams, flavour.printer
         if not cams:
             return []
-        lines = [f"double ka[{4 * len(cams)}];"]
+        lines = [f"{flavour.real} ka[{4 * len(cams)}];"]
         for j, cam in enumerate(cams):
-            e0, e1 = (pr.doprint(e) for e in prepare(cam.normal))
+            e0, e1 = (flavour.value(e) for e in prepare(cam.normal))
             block = [f"/* cam {cam.joint.name}: the arc whose normal sector holds e */",
-                     f"const double e0 = {e0}, e1 = {e1};"]
+                     f"const {flavour.real} e0 = {e0}, e1 = {e1};"]
             arcs = cam.joint.arcs
+            picks = []
             for k, arc in enumerate(arcs):
                 ca, sa, cb, sb, u, v, r = (pr.doprint(e) for e in prepare(
                     [sp.cos(arc.normal_from), sp.sin(arc.normal_from), sp.cos(arc.normal_to), sp.sin(arc.normal_to),
                      arc.center_u, arc.center_v, arc.radius]))
-                test = f"({ca})*e1 - ({sa})*e0 >= 0.0 && e0*({sb}) - e1*({cb}) > 0.0"
-                block.append("if (" + test + ") {" if k == 0 else
-                             ("} else if (" + test + ") {" if k < len(arcs) - 1 else "} else {"))
-                block += [f"    ka[{3 * j}] = {u};", f"    ka[{3 * j + 1}] = {v};", f"    ka[{3 * j + 2}] = {r};",
-                          f"    ka[{3 * len(cams) + j}] = {k}.0;"]
-            block.append("}")
+                values = [(3 * j, u), (3 * j + 1, v), (3 * j + 2, r), (3 * len(cams) + j, f"{k}.0")]
+                picks.append(((f"({ca})*e1 - ({sa})*e0", f"e0*({sb}) - e1*({cb})"), values))
+            if flavour.vector:
+                block += [f"ka[{i}] = sgv_set1({val});" for i, val in picks[-1][1]]
+                for (a, b), values in reversed(picks[:-1]):
+                    block += ["{", f"    const sg_vm in = ({a} >= sgv_set1(0.0)) & ({b} > sgv_set1(0.0));"]
+                    block += [f"    ka[{i}] = sgv_select(in, sgv_set1({val}), ka[{i}]);" for i, val in values]
+                    block.append("}")
+            else:
+                for k, ((a, b), values) in enumerate(picks):
+                    test = f"{a} >= 0.0 && {b} > 0.0"
+                    block.append("if (" + test + ") {" if k == 0 else
+                                 ("} else if (" + test + ") {" if k < len(arcs) - 1 else "} else {"))
+                    block += [f"    ka[{i}] = {val};" for i, val in values]
+                block.append("}")
             lines += ["{"] + ["    " + line for line in block] + ["}"]
         return lines
 

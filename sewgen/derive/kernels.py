@@ -118,7 +118,7 @@ class KernelSet:
         self.params = set(kin.p)
         self.constants: dict = {}  # expression -> symbol c_k, in first-seen order
         self.trig: dict = {}  # angle symbol -> (cos symbol, sin symbol)
-        self._selection_lines = None
+        self._selection_lines: dict = {}  # flavour (vector?) -> selection_block's lines
         self._memo: dict = {}  # CSE results a scalar kernel and its SIMD twin share
         self._rate_blocks: list | None = None  # solve_by_blocks
         for i, (c, q) in enumerate(zip(kin.coords, kin.q)):
@@ -181,14 +181,15 @@ class KernelSet:
     def prepare(self, exprs) -> list:
         return [self._hoist(self._expand_trig(sp.sympify(e))) for e in exprs]
 
-    def selection_block(self) -> list[str]:
+    def selection_block(self, vector: bool = False) -> list[str]:
         """What the joints choose at run time before any kernel reads them (a cam's active arc, ka[]: see
-        derive.joints.Cam.selection_c), in kind order. The same lines open every kernel that reads ka; they are
-        built once."""
-        if self._selection_lines is None:
-            self._selection_lines = [line for kind in KINDS.values()
-                               for line in kind.selection_c(self.kin, self.printer, self.prepare)]
-        return self._selection_lines
+        derive.joints.Cam.selection_c), in kind order; ``vector``: lane by lane, for the SIMD twins. The same
+        lines open every kernel that reads ka; they are built once a flavour."""
+        if vector not in self._selection_lines:
+            fl = VECTOR if vector else SCALAR
+            self._selection_lines[vector] = [line for kind in KINDS.values()
+                                             for line in kind.selection_c(self.kin, fl, self.prepare)]
+        return self._selection_lines[vector]
 
     # -- kernels ---------------------------------------------------------------------------------------
     def residual(self) -> Kernel:
@@ -217,8 +218,6 @@ class KernelSet:
         ``vector``: the SIMD twin (csrc/sg_simd.h) from the same expressions; it computes every lane and returns
         the mask of lanes whose factor and outputs are good (raises NoVectorForm where it cannot be printed)."""
         n = len(self.kin.q)
-        if vector and self.selection_block():
-            raise NoVectorForm("a cam's active arc is chosen per position")
         fl = VECTOR if vector else SCALAR
         repl, red = self._motion_cse(scales)
         r_inv = red[len(red) - n:] if n else []
@@ -229,7 +228,7 @@ class KernelSet:
         staged = [[(t, e) for t, e in repl if levels[t] == k] for k in range(3)]
         r_jac, r_vel = red[: n * n], red[n * n: n * n + n]
         r_gam, r_obs = red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:]
-        body = self.selection_block() + fl.temps(staged[0]) + self._velocity_lines(fl, n, r_jac, r_vel, r_inv)
+        body = self.selection_block(vector) + fl.temps(staged[0]) + self._velocity_lines(fl, n, r_jac, r_vel, r_inv)
         body += fl.temps(staged[1]) + self._acceleration_lines(fl, n, r_gam, r_jac)
         body += fl.temps(staged[2])
         body += [f"obs[{k}] = {fl.value(e)};" for k, e in enumerate(r_obs)]
@@ -244,9 +243,10 @@ class KernelSet:
                       body, ops(e for _, e in repl) + ops(red))
 
     def solve_by_blocks(self, blocks: list) -> None:
-        """The scalar motion and rates kernels factor Φ_q by these diagonal blocks (derive.branches.blocks;
-        sewgen/derive/blockfactor.py) where its structure allows: for a mechanism with no SIMD twin, whose
-        rates need not match a vector factor's bits."""
+        """The motion and rates kernels and their SIMD twins factor Φ_q by these diagonal blocks
+        (derive.branches.blocks; sewgen/derive/blockfactor.py) where its structure allows: for a mechanism Newton
+        solves, whose twins finish its solved positions (csrc/sg_simd.h SG_SIMD_FINISH_BODY) with the same
+        factor, lane by lane."""
         self._rate_blocks = blocks
 
     def _block_factor(self, n: int, r_jac) -> BlockFactor | None:
@@ -258,17 +258,17 @@ class KernelSet:
         vector = fl.vector
         if not n:
             return ["*cond = sgv_set1(1.0);", "sg_vm ok = sgv_true();"] if vector else ["*cond = 1.0;"]
-        bf = None if vector else self._block_factor(n, r_jac)
+        bf = self._block_factor(n, r_jac)
         body = [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];"]
-        body += bf.declarations() if bf else [f"{'sg_vm' if vector else 'int'} piv[{n}];"]
+        body += bf.declarations(vector) if bf else [f"{'sg_vm' if vector else 'int'} piv[{n}];"]
         body += [f"J[{k}] = {fl.value(e)};" for k, e in enumerate(r_jac)]
         body += [f"qd[{i}] = {fl.value(e)};" for i, e in enumerate(r_vel)]
         body += [f"rs[{i}] = {fl.value(e)};" for i, e in enumerate(r_inv)]
+        if bf:
+            return body + bf.factor_lines(vector) + bf.solve_lines("qd", vector)
         if vector:
             return body + [f"sg_vm ok = sgv_factor_eq({n}, J, piv, rs, cs, cond);",
                            f"sgv_solve_eq({n}, J, piv, rs, cs, qd);"]
-        if bf:
-            return body + bf.factor_lines() + bf.solve_lines("qd")
         return body + [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
                        f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
 
@@ -277,9 +277,9 @@ class KernelSet:
         if not n:
             return []
         lines = [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)]
-        bf = None if fl.vector else self._block_factor(n, r_jac)
+        bf = self._block_factor(n, r_jac)
         if bf:
-            return lines + bf.solve_lines("qdd")
+            return lines + bf.solve_lines("qdd", fl.vector)
         return lines + [f"{'sgv_solve_eq' if fl.vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
 
     def _motion_parts(self, scales):
@@ -315,8 +315,6 @@ class KernelSet:
         ``vector``: the SIMD twin, equal to the bit to the motion kernel's SIMD twin; it returns the mask of
         lanes whose factor and rates are good (the selection of a cam's arc has no vector form)."""
         n = len(self.kin.q)
-        if vector and self.selection_block():
-            raise NoVectorForm("a cam's active arc is chosen per position")
         fl = VECTOR if vector else SCALAR
         repl, r_jac, r_vel, r_gam, _r_obs, r_inv = self._motion_parts(scales)
         used = self._needed(repl, r_jac + r_vel + r_gam + r_inv)
@@ -325,7 +323,7 @@ class KernelSet:
             levels[t] = max((_stage(s, levels) for s in e.free_symbols), default=0)
         early = [(t, e) for t, e in used if levels[t] == 0]
         late = [(t, e) for t, e in used if levels[t] >= 1]
-        body = list(self.selection_block()) if _reads_ka(early + late, r_jac + r_vel + r_gam + r_inv) else []
+        body = list(self.selection_block(vector)) if _reads_ka(early + late, r_jac + r_vel + r_gam + r_inv) else []
         body += fl.temps(early) + self._velocity_lines(fl, n, r_jac, r_vel, r_inv)
         body += fl.temps(late) + self._acceleration_lines(fl, n, r_gam, r_jac)
         if n:
@@ -344,8 +342,6 @@ class KernelSet:
         the temporaries its observables read, as the joint motion kernel does (the same values to the bit), and
         tests its own outputs for a non-finite value. ``vector``: the SIMD twin (the motion twin's values to the
         bit), returning the mask of lanes whose group is finite."""
-        if vector and self.selection_block():
-            raise NoVectorForm("a cam's active arc is chosen per position")
         fl = VECTOR if vector else SCALAR
         repl, *_rest, r_obs, _r_inv = self._motion_parts(scales)
         body = ["switch (group) {"]
@@ -354,7 +350,7 @@ class KernelSet:
             exprs = r_obs[a:b]
             used = self._needed(repl, exprs)
             total += ops(e for _, e in used) + ops(exprs)
-            case = (list(self.selection_block()) if _reads_ka(used, exprs) else []) + fl.temps(used)
+            case = (list(self.selection_block(vector)) if _reads_ka(used, exprs) else []) + fl.temps(used)
             case += [f"obs[{k}] = {fl.value(e)};" for k, e in zip(range(a, b), exprs)]
             outs = [f"obs[{k}]" for k in range(a, b)]
             if vector:
@@ -422,8 +418,6 @@ class KernelSet:
         twin (csrc/sg_simd.h), the frictionless solve only (the SIMD loop runs it only where every friction
         coefficient is 0: :meth:`forces_in_simd`), returning the mask of lanes whose blocks and outputs are
         good."""
-        if vector and self.selection_block():
-            raise NoVectorForm("a cam's active arc is chosen per position")
         fl = VECTOR if vector else SCALAR
         pr, f = fl.printer, kst.f
         schur = sorted(kst.schur)
@@ -471,7 +465,7 @@ class KernelSet:
                 body = [f"double fr[{nfr}] = {{0.0}};", "for (int it = 0; ; ++it) {"] + ["    " + x for x in loop] + ["}"]
             else:
                 body = solve + finish
-        body = self.selection_block() + body
+        body = self.selection_block(vector) + body
         body = _unused(body, *_VECTOR_FORCE_ARGS) + body
         name = f"{self.prefix}_forces" + ("_v" if vector else "")
         return Kernel(name, VECTOR_SIGNATURES["forces"].format(f=name) if vector else self._signature("forces"),
@@ -603,14 +597,16 @@ class KernelSet:
         return Kernel(name, VECTOR_SIGNATURES["closed"].format(f=name) if vector else self._signature("closed"),
                       body, total)
 
-    def vector_kernels(self, dyads: list[Dyad], scales, kst: Kinetostatics, groups: list) -> list[Kernel]:
-        """The SIMD twins of the closed, motion, rates, observe and forces kernels and the forces' run-time test,
-        or none where the kinematics have no vector form (where only the forces have none, the test says no: the
-        SIMD loop then runs a force sweep scalar, and the template passes csrc/sg_simd.h's sgv_no_forces for the
-        twin)."""
+    def vector_kernels(self, dyads: list[Dyad] | None, scales, kst: Kinetostatics, groups: list) -> list[Kernel]:
+        """The SIMD twins of the closed (where ``dyads`` is not None), motion, rates, observe and forces kernels and
+        the forces' run-time test, or none where the kinematics have no vector form (where only the forces have
+        none, the test says no: the SIMD loop then runs a force sweep scalar, and the template passes
+        csrc/sg_simd.h's sgv_no_forces for the twin). A mechanism Newton solves gets the twins without the closed
+        form: its SIMD loop finishes four solved positions at a time (csrc/sg_simd.h SG_SIMD_FINISH_BODY)."""
         try:
-            kernels = [self.closed(dyads, vector=True), self.motion(scales, vector=True),
-                       self.rates(scales, vector=True), self.observe(groups, scales, vector=True)]
+            kernels = ([self.closed(dyads, vector=True)] if dyads is not None else []) + [
+                self.motion(scales, vector=True), self.rates(scales, vector=True),
+                self.observe(groups, scales, vector=True)]
         except NoVectorForm:
             return []
         try:
