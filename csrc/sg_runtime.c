@@ -74,6 +74,9 @@ static double weighted_norm(int n, const double *v, const double *w)
 /* Below this the series give cos d = 1 and sin d = d exactly (their corrections, d^2/2 and d^2/6 relative, are
  * under 2^-54, half an ulp of 1, up to |d| = 1.05e-8): the shift is c - s d, s + c d, the same bits. */
 #define SG_TINY_STEP 1e-9
+/* Below this the series' first omitted terms, d^7/7! in sin d and d^6/6! in cos d, are below 2e-22 and 1.4e-21
+ * relative: three terms each. */
+#define SG_SHORT_STEP 1e-3
 
 static void shift_trig(const sg_mechanism *m, const double *q, const double *cq, const double *d, double *q_out,
                        double *cq_out)
@@ -87,6 +90,13 @@ static void shift_trig(const sg_mechanism *m, const double *q, const double *cq,
             const double h = d[i], c = cq[2 * i], s = cq[2 * i + 1];
             cq_out[2 * i] = c - s * h;
             cq_out[2 * i + 1] = s + c * h;
+        } else if (fabs(d[i]) < SG_SHORT_STEP) { /* the predictor's steps at fine sweeps: three terms each */
+            const double h = d[i], h2 = h * h;
+            const double sd = h * (1.0 - h2 * (1.0 / 6.0) * (1.0 - h2 * (1.0 / 20.0)));
+            const double cd = 1.0 - h2 * 0.5 * (1.0 - h2 * (1.0 / 12.0));
+            const double c = cq[2 * i], s = cq[2 * i + 1];
+            cq_out[2 * i] = c * cd - s * sd;
+            cq_out[2 * i + 1] = s * cd + c * sd;
         } else if (fabs(d[i]) < SG_SMALL_STEP) {
             const double h = d[i], h2 = h * h;
             /* the series' divisions as products with their reciprocals (constants): within an ulp of the
@@ -232,6 +242,26 @@ static void polish(const sg_mechanism *m, double *q, double *cq, const double *x
 /* The most earlier states the continuation keeps (the Lagrange predictor reads up to all of them). */
 #define SG_HISTORY 5
 
+/* The five-state Lagrange extrapolation (predict's usual case) in straight lines: the weights
+ * w_a = prod_{b != a} (t - x_b) / (x_a - x_b) from the ten differences of the angles x and the numerators as
+ * prefix and suffix products; 0 (nothing written) where two of the angles are equal. */
+static int predict5(int nq, const double *x, double *const *hq, double t, double *out)
+{
+    const double d01 = x[0] - x[1], d02 = x[0] - x[2], d03 = x[0] - x[3], d04 = x[0] - x[4];
+    const double d12 = x[1] - x[2], d13 = x[1] - x[3], d14 = x[1] - x[4];
+    const double d23 = x[2] - x[3], d24 = x[2] - x[4], d34 = x[3] - x[4];
+    const double den0 = d01 * d02 * d03 * d04, den1 = -d01 * d12 * d13 * d14, den2 = d02 * d12 * d23 * d24;
+    const double den3 = -d03 * d13 * d23 * d34, den4 = d04 * d14 * d24 * d34;
+    if (!(den0 != 0.0 && den1 != 0.0 && den2 != 0.0 && den3 != 0.0 && den4 != 0.0)) return 0;
+    const double e0 = t - x[0], e1 = t - x[1], e2 = t - x[2], e3 = t - x[3], e4 = t - x[4];
+    const double p01 = e0 * e1, p012 = p01 * e2, s34 = e3 * e4, s234 = e2 * s34;
+    const double w0 = e1 * s234 / den0, w1 = e0 * s234 / den1, w2 = p01 * s34 / den2, w3 = p012 * e4 / den3,
+                 w4 = p012 * e3 / den4;
+    const double *q0 = hq[0], *q1 = hq[1], *q2 = hq[2], *q3 = hq[3], *q4 = hq[4];
+    for (int i = 0; i < nq; ++i) out[i] = (w0 * q0[i] + w1 * q1[i]) + (w2 * q2[i] + w3 * q3[i]) + w4 * q4[i];
+    return 1;
+}
+
 /* Lagrange extrapolation in the shaft angle from nh earlier states (newest first, at most SG_HISTORY): of degree
  * four from five (the continuation's step), quadratic from three (after a failed step). The positions alone, no
  * rates: the rates, observables and forces of solved positions can come later, four at a time (csrc/sg_simd.h
@@ -241,6 +271,7 @@ static void polish(const sg_mechanism *m, double *q, double *cq, const double *x
  * at 72 (5.8e-8): Newton's first step takes the first two to rounding, a second step the last. */
 static void predict(int nq, int nh, const double *hphi, double *const *hq, double phi_new, double *out)
 {
+    if (nh == 5 && predict5(nq, hphi, hq, phi_new, out)) return;
     double w[SG_HISTORY] = {1.0};
     int used = nh;
     for (; used > 1; --used) { /* repeated angles: fall back to a lower order */
@@ -810,9 +841,37 @@ static double largest_step(const double *v, size_t step, size_t n)
     return m2 > m0 ? m2 : m0;
 }
 
+/* The largest step of each of the ncol columns v[c] (the same stride, rows of one array) over n positions, NaN
+ * steps skipped as largest_step skips them: four columns a pass over the rows, their values of a row read
+ * together (SSE2: two columns an instruction; maxpd is the same ternary), where a column at a time walked the
+ * rows (kB apart) once per column. */
+#define SG_ROW_SCAN 32
+static void largest_steps(double *const *v, int ncol, size_t step, size_t n, double *largest)
+{
+    int c = 0;
+#if defined(__SSE2__)
+    const __m128d mag = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+    for (; c + 4 <= ncol; c += 4) {
+        const double *a = v[c], *b = v[c + 1], *e = v[c + 2], *f = v[c + 3];
+        __m128d p0 = _mm_set_pd(b[0], a[0]), p1 = _mm_set_pd(f[0], e[0]);
+        __m128d m0 = _mm_setzero_pd(), m1 = _mm_setzero_pd();
+        for (size_t k = 1, at = step; k < n; ++k, at += step) {
+            const __m128d x0 = _mm_set_pd(b[at], a[at]), x1 = _mm_set_pd(f[at], e[at]);
+            m0 = _mm_max_pd(_mm_and_pd(_mm_sub_pd(x0, p0), mag), m0);
+            m1 = _mm_max_pd(_mm_and_pd(_mm_sub_pd(x1, p1), mag), m1);
+            p0 = x0, p1 = x1;
+        }
+        _mm_storeu_pd(largest + c, m0);
+        _mm_storeu_pd(largest + c + 2, m1);
+    }
+#endif
+    for (; c < ncol; ++c) largest[c] = largest_step(v[c], step, n);
+}
+
 /* continuous_column on columns cols[0..ncol) (offset by add). In position order each column is first scanned
- * for a reason to change it (a start outside (−π, π] or a step over π: largest_step), and only such a column is
- * made continuous; a solving order other than the positions' takes continuous_column's own test. */
+ * for a reason to change it (a start outside (−π, π] or a step over π: largest_step, or largest_steps for up to
+ * SG_ROW_SCAN columns of one array's rows at once), and only such a column is made continuous; a solving order
+ * other than the positions' takes continuous_column's own test. */
 static void continuous_columns(const sg_scratch *s, int ncol, const int *cols, int add, size_t n,
                                const size_t *order)
 {
@@ -822,28 +881,22 @@ static void continuous_columns(const sg_scratch *s, int ncol, const int *cols, i
         double *v = col_ptr(s, j, 0);
         const size_t step = col_step(s, j);
         if (order == NULL && n > 0) {
-            double largest;
-#if defined(__SSE2__)
-            /* two row columns of one array (the same stride) in one pass: both steps in one instruction */
-            double *w = c + 1 < ncol ? col_ptr(s, cols[c + 1] + add, 0) : NULL;
-            if (w != NULL && step > 1 && col_step(s, cols[c + 1] + add) == step) {
-                const __m128d mag = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
-                __m128d prev = _mm_set_pd(w[0], v[0]), m = _mm_setzero_pd();
-                for (size_t k = 1; k < n; ++k) {
-                    const __m128d x = _mm_set_pd(w[k * step], v[k * step]);
-                    m = _mm_max_pd(_mm_and_pd(_mm_sub_pd(x, prev), mag), m);
-                    prev = x;
+            if (step > 1) { /* this and the next row columns of the same array: one pass over their rows */
+                double *run[SG_ROW_SCAN], largest[SG_ROW_SCAN];
+                int count = 0;
+                while (c + count < ncol && count < SG_ROW_SCAN) {
+                    const int jj = cols[c + count] + add;
+                    if (col_step(s, jj) != step || (jj < 3 * s->nq) != (j < 3 * s->nq)) break;
+                    run[count++] = col_ptr(s, jj, 0);
                 }
-                double both[2];
-                _mm_storeu_pd(both, m);
-                if (!(v[0] > -pi && v[0] <= pi && !(both[0] > pi))) continuous_column(v, step, n, NULL);
-                if (!(w[0] > -pi && w[0] <= pi && !(both[1] > pi))) continuous_column(w, step, n, NULL);
-                ++c;
+                largest_steps(run, count, step, n, largest);
+                for (int r = 0; r < count; ++r)
+                    if (!(run[r][0] > -pi && run[r][0] <= pi && !(largest[r] > pi)))
+                        continuous_column(run[r], step, n, NULL);
+                c += count - 1;
                 continue;
             }
-#endif
-            largest = largest_step(v, step, n);
-            if (v[0] > -pi && v[0] <= pi && !(largest > pi)) continue;
+            if (v[0] > -pi && v[0] <= pi && !(largest_step(v, step, n) > pi)) continue;
         }
         continuous_column(v, step, n, order);
     }
@@ -1089,6 +1142,9 @@ void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int 
  * position, velocity and acceleration (3 x n x 2). Every sum runs in the order listed, from zero; the planned
  * and the general analysis both call this, so they agree to the bit. Returns 1 where front, rear and torque
  * are finite everywhere, else 0. */
+/* Positions ahead that sg_shaft asks the cache for the columns it reads (each a row of a group's block apart). */
+#define SG_SHAFT_AHEAD 8
+
 int sg_shaft(size_t n, const double *phi, const double *omega, const double *alpha, const double *src, int nf,
              const size_t *f_off, const size_t *f_step, const double *f_sign, const double *f_arm, int nt,
              const size_t *t_off, const size_t *t_step, const double *belt, double belt_arm, int ncore,
@@ -1099,6 +1155,12 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
     int finite = 1;
     for (size_t i = 0; i < n; ++i) {
         double tx = 0.0, ty = 0.0, mx = 0.0, my = 0.0; /* Sum F, Sum arm F */
+#if defined(__GNUC__)
+        if (i + SG_SHAFT_AHEAD < n) { /* each column's value a few positions ahead: rows apart (kB strides) */
+            for (int j = 0; j < nf; ++j) __builtin_prefetch(src + f_off[2 * j] + (i + SG_SHAFT_AHEAD) * f_step[j]);
+            for (int k = 0; k < nt; ++k) __builtin_prefetch(src + t_off[k] + (i + SG_SHAFT_AHEAD) * t_step[k]);
+        }
+#endif
         for (int j = 0; j < nf; ++j) {
             const double fx = src[f_off[2 * j] + i * f_step[j]] * f_sign[j];
             const double fy = src[f_off[2 * j + 1] + i * f_step[j]] * f_sign[j];
@@ -1127,7 +1189,9 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
         rear[2 * i] = rx, rear[2 * i + 1] = ry;
         front[2 * i] = -rx - tx, front[2 * i + 1] = -ry - ty;
         const double w = omega[i], sign = w > 0.0 ? 1.0 : w < 0.0 ? -1.0 : w;
-        const double fr = mu_r * sign * (hypot(front[2 * i], front[2 * i + 1]) + hypot(rx, ry));
+        /* no bearing friction (the default): 0 with the sign the product would have, the bearings' magnitudes not
+         * needed (a non-finite one fails the position through its components below all the same) */
+        const double fr = mu_r == 0.0 ? 0.0 * sign : mu_r * sign * (hypot(front[2 * i], front[2 * i + 1]) + hypot(rx, ry));
         double t = 0.0;
         for (int k = 0; k < nt; ++k) t += src[t_off[k] + i * t_step[k]];
         t = t + core_torque + fr;
