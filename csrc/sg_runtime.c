@@ -773,16 +773,19 @@ static inline double py_mod(double a, double b)
 
 /* sewgen.mechanism.continuous_angles on one angle column of one design's sweep (every position solved): no 2π
  * jumps along the solving order, the first position in (−π, π]; whole turns only, as np.unwrap does them. */
-static void continuous_column(double *v, size_t step, size_t n, const size_t *order)
+static void continuous_column(double *v, size_t step, size_t n, const size_t *order, int known)
 {
     if (n == 0) return;
     const double pi = 3.14159265358979323846;
 #define SG_AT(k) v[(order ? order[k] : (k)) * step] /* the k-th position in solving order */
     const double first = SG_AT(0);
-    int need = !(first > -pi && first <= pi);
+    int need = known || !(first > -pi && first <= pi);
     for (size_t k = 1; k < n && !need; ++k) need = fabs(SG_AT(k) - SG_AT(k - 1)) > pi;
     if (!need) return;
+    /* one pass: each value's correction, then the start's shift (the same two roundings as two passes) */
+    const double shift = SG_TWO_PI * ceil((first - pi) / SG_TWO_PI);
     double corr = 0.0, prev = first;
+    SG_AT(0) = first - shift;
     for (size_t k = 1; k < n; ++k) {
         const double raw = SG_AT(k), dd = raw - prev;
         if (!(fabs(dd) < pi)) { /* a jump (np.unwrap's correction; the modulo only where it is used) */
@@ -791,10 +794,8 @@ static void continuous_column(double *v, size_t step, size_t n, const size_t *or
             corr += ddmod - dd;
         }
         prev = raw;
-        SG_AT(k) = raw + corr;
+        SG_AT(k) = (raw + corr) - shift;
     }
-    const double shift = SG_TWO_PI * ceil((first - pi) / SG_TWO_PI);
-    for (size_t k = 0; k < n; ++k) SG_AT(k) -= shift;
 #undef SG_AT
 }
 
@@ -851,8 +852,10 @@ static void largest_steps(double *const *v, int ncol, size_t step, size_t n, dou
     int c = 0;
 #if defined(__SSE2__)
     const __m128d mag = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
-    for (; c + 4 <= ncol; c += 4) {
-        const double *a = v[c], *b = v[c + 1], *e = v[c + 2], *f = v[c + 3];
+    for (; c < ncol; c += 4) { /* a last pass of fewer than four repeats its last column */
+        const int last = ncol - 1;
+        const double *a = v[c], *b = v[c + 1 <= last ? c + 1 : last], *e = v[c + 2 <= last ? c + 2 : last];
+        const double *f = v[c + 3 <= last ? c + 3 : last];
         __m128d p0 = _mm_set_pd(b[0], a[0]), p1 = _mm_set_pd(f[0], e[0]);
         __m128d m0 = _mm_setzero_pd(), m1 = _mm_setzero_pd();
         for (size_t k = 1, at = step; k < n; ++k, at += step) {
@@ -861,8 +864,10 @@ static void largest_steps(double *const *v, int ncol, size_t step, size_t n, dou
             m1 = _mm_max_pd(_mm_and_pd(_mm_sub_pd(x1, p1), mag), m1);
             p0 = x0, p1 = x1;
         }
-        _mm_storeu_pd(largest + c, m0);
-        _mm_storeu_pd(largest + c + 2, m1);
+        double four[4];
+        _mm_storeu_pd(four, m0);
+        _mm_storeu_pd(four + 2, m1);
+        for (int k = 0; k < 4 && c + k < ncol; ++k) largest[c + k] = four[k];
     }
 #endif
     for (; c < ncol; ++c) largest[c] = largest_step(v[c], step, n);
@@ -892,13 +897,13 @@ static void continuous_columns(const sg_scratch *s, int ncol, const int *cols, i
                 largest_steps(run, count, step, n, largest);
                 for (int r = 0; r < count; ++r)
                     if (!(run[r][0] > -pi && run[r][0] <= pi && !(largest[r] > pi)))
-                        continuous_column(run[r], step, n, NULL);
+                        continuous_column(run[r], step, n, NULL, 1);
                 c += count - 1;
                 continue;
             }
             if (v[0] > -pi && v[0] <= pi && !(largest_step(v, step, n) > pi)) continue;
         }
-        continuous_column(v, step, n, order);
+        continuous_column(v, step, n, order, order == NULL && n > 0); /* in position order: known to need it */
     }
 }
 
