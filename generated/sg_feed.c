@@ -414,15 +414,15 @@ int sg_feed_lu_factor(double *a, int *piv)
         M[7] = a[18];
         M[8] = a[14];
         if (sg_lu_factor_cm_inl(3, M, piv + 0, cm, NULL) != SG_OK) return SG_SINGULAR;
-        a[3] = M[0];
+        a[3] = 1.0 / M[0];
         a[4] = M[1];
         a[0] = M[2];
         a[10] = M[3];
-        a[11] = M[4];
+        a[11] = 1.0 / M[4];
         a[7] = M[5];
         a[17] = M[6];
         a[18] = M[7];
-        a[14] = M[8];
+        a[14] = 1.0 / M[8];
     }
     {
         double M[4];
@@ -432,13 +432,15 @@ int sg_feed_lu_factor(double *a, int *piv)
         M[2] = a[34];
         M[3] = a[30];
         if (sg_lu_factor_cm_inl(2, M, piv + 3, cm, NULL) != SG_OK) return SG_SINGULAR;
-        a[27] = M[0];
+        a[27] = 1.0 / M[0];
         a[23] = M[1];
         a[34] = M[2];
-        a[30] = M[3];
+        a[30] = 1.0 / M[3];
     }
     if (!(fabs(a[36]) > SG_PIVOT_RTOL * cm1)) return SG_SINGULAR;
+    a[36] = 1.0 / a[36];
     if (!(fabs(a[47]) > SG_PIVOT_RTOL * cm5)) return SG_SINGULAR;
+    a[47] = 1.0 / a[47];
     return SG_OK;
 }
 
@@ -460,7 +462,7 @@ void sg_feed_lu_solve(const double *lu, const int *piv, double *b)
         v[0] = b[0];
         v[1] = b[1];
         v[2] = b[2];
-        sg_lu_solve_inl(3, M, piv + 0, v);
+        sg_lu_apply_inl(3, M, piv + 0, v);
         y[3] = v[0];
         y[4] = v[1];
         y[0] = v[2];
@@ -473,12 +475,12 @@ void sg_feed_lu_solve(const double *lu, const int *piv, double *b)
         M[3] = lu[30];
         v[0] = b[3];
         v[1] = b[4];
-        sg_lu_solve_inl(2, M, piv + 3, v);
+        sg_lu_apply_inl(2, M, piv + 3, v);
         y[6] = v[0];
         y[2] = v[1];
     }
-    y[1] = (b[5] - lu[37] * y[2]) / lu[36];
-    y[5] = (b[6] - lu[42] * y[0] - lu[43] * y[1]) / lu[47];
+    y[1] = (b[5] - lu[37] * y[2]) * lu[36];
+    y[5] = (b[6] - lu[42] * y[0] - lu[43] * y[1]) * lu[47];
     b[0] = y[0];
     b[1] = y[1];
     b[2] = y[2];

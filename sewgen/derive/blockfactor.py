@@ -166,7 +166,8 @@ class BlockFactor:
         """Newton's factor (kernel 'lu_factor': a, piv) of the raw Φ_q: each diagonal block in place by the
         runtime's pivoted LU, a pivot singular below SG_PIVOT_RTOL times the largest |entry| of its column in
         all of Φ_q (the dense factor's test); the coupling entries stay as they are. Block k's interchanges at
-        piv[first row of k ...]."""
+        piv[first row of k ...]. Each pivot is stored as its reciprocal (sg_lu_apply_inl's form), which the
+        factor has computed anyway: the solve multiplies, no division on Newton's path."""
         n, nz = self.n, self.nonzero
         a = lambda i, j: f"a[{i * n + j}]"  # noqa: E731
         lines = []
@@ -177,14 +178,16 @@ class BlockFactor:
         for (rows, cols), off in zip(self.blocks, self._offsets()):
             s = len(rows)
             if s == 1:
-                lines.append(f"if (!(fabs({a(rows[0], cols[0])}) > SG_PIVOT_RTOL * cm{cols[0]})) return SG_SINGULAR;")
+                d = a(rows[0], cols[0])
+                lines += [f"if (!(fabs({d}) > SG_PIVOT_RTOL * cm{cols[0]})) return SG_SINGULAR;", f"{d} = 1.0 / {d};"]
                 continue
             columns = ", ".join(f"cm{c}" for c in cols)
             lines += ["{", f"    double M[{s * s}];", f"    const double cm[{s}] = {{{columns}}};"]
             lines += [f"    M[{p * s + q}] = {a(r, c) if nz[r][c] else '0.0'};"
                       for p, r in enumerate(rows) for q, c in enumerate(cols)]
             lines.append(f"    if (sg_lu_factor_cm_inl({s}, M, piv + {off}, cm, NULL) != SG_OK) return SG_SINGULAR;")
-            lines += [f"    {a(r, c)} = M[{p * s + q}];" for p, r in enumerate(rows) for q, c in enumerate(cols)]
+            lines += [f"    {a(r, c)} = M[{p * s + q}];" if p != q else f"    {a(r, c)} = 1.0 / M[{p * s + q}];"
+                      for p, r in enumerate(rows) for q, c in enumerate(cols)]
             lines.append("}")
         return lines + ["return SG_OK;"]
 
@@ -196,9 +199,9 @@ class BlockFactor:
         def block(k, rows, cols):
             s = len(rows)
             gather = [f"    M[{p * s + q}] = lu[{r * n + c}];" for p, r in enumerate(rows) for q, c in enumerate(cols)]
-            return [f"    double M[{s * s}], v[{s}];", *gather], f"    sg_lu_solve_inl({s}, M, piv + {offsets[k]}, v);"
+            return [f"    double M[{s * s}], v[{s}];", *gather], f"    sg_lu_apply_inl({s}, M, piv + {offsets[k]}, v);"
 
-        return self._substitution("lu", "b", lambda r: f"b[{r}]", "/", block, lambda c: f"y[{c}]")
+        return self._substitution("lu", "b", lambda r: f"b[{r}]", "*", block, lambda c: f"y[{c}]")
 
     def ops(self) -> int:
         """Floating-point operations of the factor and two solves (the kernel's op count)."""
