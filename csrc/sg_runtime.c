@@ -1,4 +1,5 @@
-/* sewgen C runtime: LU, damped Newton with a quadratic predictor, and the sweep driver. */
+/* sewgen C runtime: LU, damped Newton with a Lagrange predictor, and the sweep driver (a Newton sweep's rates,
+ * observables and forces four positions at a time where the mechanism has a SIMD finish: csrc/sg_simd.h). */
 /* SSE2 (every x86-64) for the continuity scan, before sg_runtime.h: its SIMD part includes the same header under
  * the AVX2 target, which would make these intrinsics AVX2-only here. */
 #if defined(__SSE2__)
