@@ -335,6 +335,23 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
     }
 }
 
+/* A block's observables (NOBS vectors) to its lanes' rows: all of them (nwanted < 0), else only the groups listed
+ * in wanted (a selective sweep: the rest of the rows stay as they are). */
+SG_VINLINE void sgv_store_observables(const sg_mechanism *m, const int *wanted, int nwanted, const sg_vd *vobs,
+                                      int nobs, double *const robs[SG_W])
+{
+    if (nwanted < 0) {
+        sgv_store_rows(vobs, nobs, robs);
+        return;
+    }
+    for (int t = 0; t < nwanted; ++t) {
+        const int g0 = m->group_start[wanted[t]];
+        double *rg[SG_W];
+        for (int l = 0; l < SG_W; ++l) rg[l] = robs[l] + g0;
+        sgv_store_rows(vobs + g0, m->group_start[wanted[t] + 1] - g0, rg);
+    }
+}
+
 /* cos, sin of n angles as the SIMD loop computes them (each lane on its own: the values do not depend on the
  * block): cos to out[0..n), sin to out[n..2n); a last partial block padded with its last angle. */
 static __attribute__((unused)) void sgv_trig_table(size_t n, const double *phi, double *out)
@@ -498,16 +515,7 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                 sgv_store_rows(vq, nq, rq);                                                        \
                 sgv_store_rows(vqd, nq, rqd);                                                      \
                 sgv_store_rows(vqdd, nq, rqdd);                                                    \
-                if (want == NULL) {                                                                \
-                    sgv_store_rows(vobs, (NOBS), robs);                                            \
-                } else {                                                                           \
-                    for (int t = 0; t < nwanted; ++t) {                                            \
-                        const int g0 = m->group_start[wanted[t]];                                  \
-                        double *rg[SG_W];                                                          \
-                        for (int l = 0; l < SG_W; ++l) rg[l] = robs[l] + g0;                       \
-                        sgv_store_rows(vobs + g0, m->group_start[wanted[t] + 1] - g0, rg);         \
-                    }                                                                              \
-                }                                                                                  \
+                sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, (NOBS), robs); \
                 if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                \
             }                                                                                      \
             if (contiguous && sgv_all(ok)) { /* the usual block: four statuses at once */          \
@@ -569,12 +577,16 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
         sgv_load_rows(rows, nx, vxdd);                                                             \
         sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1], vout[(NFO) + 1], vcond, vres;       \
         sg_vm ok;                                                                                  \
+        int wanted[SG_MAX_GROUP], nwanted = 0;                                                     \
         if (want == NULL) {                                                                        \
             ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);                \
         } else { /* the rates and the wanted groups: the motion twin's values to the bit */        \
             ok = RATES_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);                       \
             for (int g = 0; g < m->ngroup; ++g)                                                    \
-                if (want[g]) ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs);  \
+                if (want[g]) {                                                                     \
+                    wanted[nwanted++] = g;                                                         \
+                    ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs);           \
+                }                                                                                  \
         }                                                                                          \
         for (int l = 0; l < SG_W; ++l) /* the scalar loop's error estimate, from Newton's residual */ \
             vres[l] = lanes->resid[l] > SG_RESID_FLOOR ? lanes->resid[l] : SG_EPS;                 \
@@ -602,17 +614,7 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
         }                                                                                          \
         sgv_store_rows(vqd, nq, rqd);                                                              \
         sgv_store_rows(vqdd, nq, rqdd);                                                            \
-        if (want == NULL) {                                                                        \
-            sgv_store_rows(vobs, (NOBS), robs);                                                    \
-        } else {                                                                                   \
-            for (int g = 0; g < m->ngroup; ++g) {                                                  \
-                if (!want[g]) continue;                                                            \
-                const int g0 = m->group_start[g];                                                  \
-                double *rg[SG_W];                                                                  \
-                for (int l = 0; l < SG_W; ++l) rg[l] = robs[l] + g0;                               \
-                sgv_store_rows(vobs + g0, m->group_start[g + 1] - g0, rg);                         \
-            }                                                                                      \
-        }                                                                                          \
+        sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, (NOBS), robs);         \
         for (int l = 0; l < SG_W; ++l) lanes->est[l] = vest[l];                                    \
         return _mm256_movemask_pd((__m256d)ok) & ((1 << lanes->count) - 1);                       \
     }

@@ -16,6 +16,7 @@ import pytest
 
 import sewgen
 from test_designs import varying_loads
+from test_simd import _run_both  # (SIMD sweep, scalar sweep) of the same arguments, run
 
 RNG = np.random.default_rng(21)
 #: a revolution at 0.1°, a few unsorted and repeated angles, a last block of three (3600 + 13 + 2 = 3615 = 4k + 3)
@@ -29,17 +30,6 @@ def feed():
     if mech.simd_width == 1:
         pytest.skip("feed: no SIMD finish on this build or CPU (Mechanism.simd_width == 1)")
     return mech
-
-
-def _run_both(mech, phi, nan_at=(), **kw):
-    runs = []
-    for loop in ("auto", "scalar"):
-        s = mech.prepare(phi, **kw).use_loop(loop)
-        for i in nan_at:
-            s.phi[i] = np.nan
-        s.run()
-        runs.append(s)
-    return runs
 
 
 def _same(a, b, label, fields=FIELDS):
