@@ -452,6 +452,13 @@ static inline int motion_at(const sg_mechanism *m, const unsigned char *want, co
     return st;
 }
 
+/* The rates' estimated relative error at a position: the solve's own (eps cond) plus what the position's error
+ * (Newton's last relative residual, resid cond) does to the Jacobian, amplified again. */
+static inline double rates_error(double cond, double resid)
+{
+    return cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
+}
+
 /* The rates, observables and (fi not NULL) forces at a solved position (qi, cq: its coordinates, their cos, sin;
  * resid: Newton's last relative residual), and the rates' estimated relative error in *est: the scalar loop's step
  * after Newton, and the deferred loop's for a lane the SIMD finish does not vouch for. A position whose estimate
@@ -471,14 +478,13 @@ static int finish_position(sg_walker *w, const unsigned char *want, const double
     int st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
     if (st == SG_SINGULAR) {
         *est = INFINITY; /* the velocity solve itself is singular */
-    } else if (st == SG_OK) { /* the rates' relative error: the solve's own (eps cond) plus what the position's
-                               * error (resid cond) does to the Jacobian, amplified again */
-        *est = cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
+    } else if (st == SG_OK) {
+        *est = rates_error(cond, resid);
         if (!(*est <= opt->singular_tol) && resid > SG_RESID_FLOOR) { /* Newton's last residual */
             polish(m, qi, cq, x, cx, c, opt, &resid);
             st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
             if (st == SG_SINGULAR) *est = INFINITY;
-            else *est = cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
+            else *est = rates_error(cond, resid);
         }
         if (st == SG_OK && !(*est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;
     }
@@ -502,6 +508,21 @@ static size_t settle(const sg_mechanism *m, size_t i, int st, double est, double
     return 1;
 }
 
+/* Lane l of L: position i solved at q (cq its cos, sin) with inputs x, cx, rates xd, xdd and Newton's last
+ * relative residual. */
+static inline void put_lane(const sg_mechanism *m, sg_lanes *L, int l, size_t i, const double *q, const double *cq,
+                     const double *x, const double *cx, const double *xd, const double *xdd, double resid)
+{
+    L->index[l] = i;
+    copy_doubles(L->q[l], q, m->nq);
+    copy_doubles(L->cq[l], cq, 2 * m->nq);
+    copy_doubles(L->x[l], x, m->nx);
+    copy_doubles(L->cx[l], cx, 2 * m->nx);
+    copy_doubles(L->xd[l], xd, m->nx);
+    copy_doubles(L->xdd[l], xdd, m->nx);
+    L->resid[l] = resid;
+}
+
 /* The deferred loop's block of solved positions (L->count of them) through the SIMD finish, then the scalar step
  * for every lane it does not vouch for. Returns the failures; L is empty after. */
 static size_t finish_lanes(sg_walker *w, sg_lanes *L, const unsigned char *want, const double *gv,
@@ -509,18 +530,9 @@ static size_t finish_lanes(sg_walker *w, sg_lanes *L, const unsigned char *want,
                            double *obs, double *err, double *frc, int *status)
 {
     const sg_mechanism *m = w->m;
-    const int nq = m->nq, nx = m->nx;
-    for (int l = L->count; l < SG_LANES; ++l) { /* a short block: its last position again */
-        const int k = L->count - 1;
-        L->index[l] = L->index[k];
-        copy_doubles(L->q[l], L->q[k], nq);
-        copy_doubles(L->cq[l], L->cq[k], 2 * nq);
-        copy_doubles(L->x[l], L->x[k], nx);
-        copy_doubles(L->cx[l], L->cx[k], 2 * nx);
-        copy_doubles(L->xd[l], L->xd[k], nx);
-        copy_doubles(L->xdd[l], L->xdd[k], nx);
-        L->resid[l] = L->resid[k];
-    }
+    const int nq = m->nq, k = L->count - 1;
+    for (int l = L->count; l < SG_LANES; ++l) /* a short block: its last position again */
+        put_lane(m, L, l, L->index[k], L->q[k], L->cq[k], L->x[k], L->cx[k], L->xd[k], L->xdd[k], L->resid[k]);
     const int done = m->finish_simd(m, L, w->c, w->opt, gv, loads, qd, qdd, obs, frc, want);
     size_t failures = 0;
     for (int l = 0; l < L->count; ++l) {
@@ -673,18 +685,9 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
             prev_failed = st != SG_OK;
         }
         if (st == SG_OK && deferred) { /* the rates, observables and forces later, in a block of four */
-            sg_lanes *L = &lanes;
-            const int l = L->count++;
-            L->index[l] = i;
-            copy_doubles(L->q[l], qi, nq);
-            copy_doubles(L->cq[l], cq, 2 * nq);
-            copy_doubles(L->x[l], x, nx);
-            copy_doubles(L->cx[l], cx, 2 * nx);
-            copy_doubles(L->xd[l], xd, nx);
-            copy_doubles(L->xdd[l], xdd, nx);
-            L->resid[l] = resid;
-            if (L->count == SG_LANES)
-                failures += finish_lanes(&w, L, want, gv, loads, no_loads, q, qd, qdd, obs, err, frc, status);
+            put_lane(m, &lanes, lanes.count++, i, qi, cq, x, cx, xd, xdd, resid);
+            if (lanes.count == SG_LANES)
+                failures += finish_lanes(&w, &lanes, want, gv, loads, no_loads, q, qd, qdd, obs, err, frc, status);
             continue;
         }
         double est = 0.0;

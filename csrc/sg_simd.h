@@ -335,6 +335,14 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
     }
 }
 
+/* count vectors of lanes from an sg_lanes field: lane l's row starts stride doubles after lane l - 1's. */
+SG_VINLINE void sgv_load_lanes(const double *first, size_t stride, int count, sg_vd *v)
+{
+    const double *rows[SG_W];
+    for (int l = 0; l < SG_W; ++l) rows[l] = first + (size_t)l * stride;
+    sgv_load_rows(rows, count, v);
+}
+
 /* A block's observables (NOBS vectors) to its lanes' rows: all of them (nwanted < 0), else only the groups listed
  * in wanted (a selective sweep: the rest of the rows stay as they are). */
 SG_VINLINE void sgv_store_observables(const sg_mechanism *m, const int *wanted, int nwanted, const sg_vd *vobs,
@@ -561,20 +569,13 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
     {                                                                                              \
         if (lanes == NULL) return frc == NULL || FORCES_IN_SIMD(c);                                \
         const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo, nload = m->nload;          \
-        const double *rows[SG_W];                                                                  \
         sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q]; \
-        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->q[l];                                     \
-        sgv_load_rows(rows, nq, vq);                                                               \
-        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->cq[l];                                    \
-        sgv_load_rows(rows, 2 * nq, vcq);                                                          \
-        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->x[l];                                     \
-        sgv_load_rows(rows, nx, vx);                                                               \
-        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->cx[l];                                    \
-        sgv_load_rows(rows, 2 * nx, vcx);                                                          \
-        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->xd[l];                                    \
-        sgv_load_rows(rows, nx, vxd);                                                              \
-        for (int l = 0; l < SG_W; ++l) rows[l] = lanes->xdd[l];                                   \
-        sgv_load_rows(rows, nx, vxdd);                                                             \
+        sgv_load_lanes(lanes->q[0], SG_MAX_Q, nq, vq);                                             \
+        sgv_load_lanes(lanes->cq[0], 2 * SG_MAX_Q, 2 * nq, vcq);                                   \
+        sgv_load_lanes(lanes->x[0], SG_MAX_Q, nx, vx);                                             \
+        sgv_load_lanes(lanes->cx[0], 2 * SG_MAX_Q, 2 * nx, vcx);                                   \
+        sgv_load_lanes(lanes->xd[0], SG_MAX_Q, nx, vxd);                                           \
+        sgv_load_lanes(lanes->xdd[0], SG_MAX_Q, nx, vxdd);                                         \
         sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1], vout[(NFO) + 1], vcond, vres;       \
         sg_vm ok;                                                                                  \
         int wanted[SG_MAX_GROUP], nwanted = 0;                                                     \
@@ -591,7 +592,7 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
         for (int l = 0; l < SG_W; ++l) /* the scalar loop's error estimate, from Newton's residual */ \
             vres[l] = lanes->resid[l] > SG_RESID_FLOOR ? lanes->resid[l] : SG_EPS;                 \
         const sg_vd vest = vcond * (SG_EPS + vcond * vres);                                        \
-        ok &= vest <= sgv_set1(0.25 * opt->singular_tol);                                  \
+        ok &= vest <= sgv_set1(0.25 * opt->singular_tol);                                          \
         double *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];                                  \
         for (int l = 0; l < SG_W; ++l) {                                                           \
             const size_t i = lanes->index[l];                                                      \

@@ -1,10 +1,12 @@
-"""The rates' equilibrated factor of Φ_q block by block, as C lines of the motion and rates kernels (issue 14).
+"""Φ_q factored block by block, as C lines of the motion and rates kernels, their SIMD twins and Newton's LU
+(issue 14).
 
 Φ_q is block lower triangular in the loops' solving order (:func:`sewgen.derive.branches.blocks`: each loop reads
-the coordinates of its own and of earlier loops). A mechanism that Newton solves (no closed form, so no SIMD
-twin whose bits its rates must match) factors each diagonal block alone and solves by forward block
-substitution, reading only Φ_q's structural non-zeros, where the runtime's dense factor (``sg_factor_eq_inl``)
-took all n × n entries: the JB1-3 feed's 7 × 7 (blocks 3, 2, 1, 1) is most of the machine's analysis.
+the coordinates of its own and of earlier loops). A mechanism that Newton solves (no closed form) factors each
+diagonal block alone and solves by forward block substitution, reading only Φ_q's structural non-zeros, where
+the runtime's dense factor (``sg_factor_eq_inl``) took all n × n entries: the JB1-3 feed's 7 × 7 (blocks 3, 2,
+1, 1) is most of the machine's analysis. The SIMD twins print the same lines lane by lane (``vector=True``),
+so they give the scalar kernels' values to the bit.
 
 The scaling is the dense factor's (csrc/sg_runtime.h): E = R A C, rows by ``rs`` (each loop's size), each column
 to its largest entry 1. A 1 × 1 block is its reciprocal; a larger one the runtime's pivoted LU
@@ -19,6 +21,11 @@ t_k. For a single block this is the dense factor's own bound.
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+
+def _block_of_col(pairs) -> dict:
+    """Each coordinate's block (its index in ``pairs``, (rows, cols) pairs in solving order)."""
+    return {c: k for k, (_rows, cols) in enumerate(pairs) for c in cols}
 
 
 @dataclass(frozen=True)
@@ -40,11 +47,8 @@ class BlockFactor:
         nonzero = tuple(tuple(jacobian[i * n + j] != 0 for j in range(n)) for i in range(n))
         if not all(any(row[j] for row in nonzero) for j in range(n)):
             return None  # a coordinate no loop reads: structurally singular (the dense factor says so per position)
-        block_of_col = {}
-        for k, b in enumerate(blocks):
-            for c in b.cols:
-                block_of_col[c] = k
         pairs = tuple((tuple(b.rows), tuple(b.cols)) for b in blocks)
+        block_of_col = _block_of_col(pairs)
         if sorted(block_of_col) != list(range(n)) or sorted(r for rows, _ in pairs for r in rows) != list(range(n)):
             return None
         for k, (rows, _cols) in enumerate(pairs):
@@ -91,7 +95,7 @@ class BlockFactor:
         for i in range(n):
             terms = " + ".join(f"{fabs}({at(i, j)})" for j in range(n) if nz[i][j])
             lines.append(f"{{ const {real} s = {terms}; {keep_max('anorm', 's')} }}")
-        block_of_col = {c: k for k, (_r, cols) in enumerate(self.blocks) for c in cols}
+        block_of_col = _block_of_col(self.blocks)
         for k, (rows, cols) in enumerate(self.blocks):
             s = len(rows)
             lines.append(f"{real} bound{k};")
@@ -124,11 +128,11 @@ class BlockFactor:
         return [f"{real} F{k}[{len(rows) ** 2}]; {index} P{k}[{len(rows)}];"
                 for k, (rows, _cols) in enumerate(self.blocks) if len(rows) > 1]
 
-    def _substitution(self, a: str, b: str, row, single: str, block, result, real: str = "double") -> list[str]:
+    def _substitution(self, a: str, b: str, row, block, result, real: str = "double") -> list[str]:
         """Forward block substitution over Φ_q's structure, the one loop of both solves: block after block, each
         row's right side ``row(r)`` less ``a``'s coupling entries (the stored Φ_q) times the earlier blocks' y; a
-        1 × 1 block then applied by ``single`` ("*": its stored reciprocal, "/": its pivot), a larger one by the
-        lines ``block(k, rows, cols)`` gives (its declarations, the solve of v in place); b[c] = ``result(c)``."""
+        1 × 1 block then times its stored reciprocal, a larger one by the lines ``block(k, rows, cols)`` gives
+        (its declarations, the solve of v in place); b[c] = ``result(c)``."""
         n, nz = self.n, self.nonzero
         at = lambda i, j: f"{a}[{i * n + j}]"  # noqa: E731
         lines = [f"{real} y[{n}];"]
@@ -136,7 +140,7 @@ class BlockFactor:
             earlier = self._earlier(k)
             rhs = [row(r) + "".join(f" - {at(r, c)} * y[{c}]" for c in earlier if nz[r][c]) for r in rows]
             if len(rows) == 1:
-                lines.append(f"y[{cols[0]}] = ({rhs[0]}) {single} {at(rows[0], cols[0])};")
+                lines.append(f"y[{cols[0]}] = ({rhs[0]}) * {at(rows[0], cols[0])};")
                 continue
             setup, solve = block(k, rows, cols)
             lines += ["{", *setup, *(f"    v[{p}] = {e};" for p, e in enumerate(rhs)), solve]
@@ -148,7 +152,7 @@ class BlockFactor:
         y = E^-1 (R b) block after block, then b = C y (``vector``: the SIMD twin's, lane by lane)."""
         real, apply = ("sg_vd", "sgv_lu_apply") if vector else ("double", "sg_lu_apply_inl")
         lines = self._substitution(
-            "J", b, lambda r: f"{b}[{r}] * rs[{r}]", "*",
+            "J", b, lambda r: f"{b}[{r}] * rs[{r}]",
             lambda k, rows, _cols: ([f"    {real} v[{len(rows)}];"],
                                     f"    {apply}({len(rows)}, F{k}, P{k}, v);"),
             lambda c: f"y[{c}] * cs[{c}]", real)
@@ -201,7 +205,7 @@ class BlockFactor:
             gather = [f"    M[{p * s + q}] = lu[{r * n + c}];" for p, r in enumerate(rows) for q, c in enumerate(cols)]
             return [f"    double M[{s * s}], v[{s}];", *gather], f"    sg_lu_apply_inl({s}, M, piv + {offsets[k]}, v);"
 
-        return self._substitution("lu", "b", lambda r: f"b[{r}]", "*", block, lambda c: f"y[{c}]")
+        return self._substitution("lu", "b", lambda r: f"b[{r}]", block, lambda c: f"y[{c}]")
 
     def ops(self) -> int:
         """Floating-point operations of the factor and two solves (the kernel's op count)."""

@@ -143,7 +143,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     blks = branches.blocks(kin)
     groups = observable_groups(mech, kin)
     row_scales = branches.row_scales(kin)
-    if dyads is None:  # no SIMD twin: the rates may factor Φ_q by its blocks
+    if dyads is None:  # Newton: the rates, their SIMD twins and Newton's LU factor Φ_q by its blocks
         ks.solve_by_blocks(blks)
     kernels = ([ks.closed(dyads)] if dyads is not None else []) + [
         ks.residual(), *ks.lu(), ks.scales(row_scales), ks.blocks(blks), ks.motion(row_scales),
@@ -170,8 +170,10 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
         vector_kernels=vector_kernels, nobs=len(kin.observables), nfo=len(kst.f) + len(kst.outputs),
         forces_v=(f"{prefix}_forces_v" if any(k.name == f"{prefix}_forces_v" for k in vector_kernels)
                   else "sgv_no_forces"),
-        simd_sweep=abi.kernel_hook("sweep_simd", f"{prefix}_sweep_simd") if vector_kernels and dyads is not None else None,
-        simd_finish=abi.kernel_hook("finish_simd", f"{prefix}_finish_simd") if vector_kernels and dyads is None else None,
+        simd_sweep=(abi.kernel_hook("sweep_simd", f"{prefix}_sweep_simd")
+                    if vector_kernels and dyads is not None else None),
+        simd_finish=(abi.kernel_hook("finish_simd", f"{prefix}_finish_simd")
+                     if vector_kernels and dyads is None else None),
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
         group_start=groups, group_always=ks.observe_always(groups, row_scales),
         group_angles=ks.angle_readers(groups, row_scales),

@@ -120,7 +120,7 @@ class KernelSet:
         self.trig: dict = {}  # angle symbol -> (cos symbol, sin symbol)
         self._selection_lines: dict = {}  # flavour (vector?) -> selection_block's lines
         self._memo: dict = {}  # CSE results a scalar kernel and its SIMD twin share
-        self._rate_blocks: list | None = None  # solve_by_blocks
+        self._block_factor: BlockFactor | None = None  # solve_by_blocks
         for i, (c, q) in enumerate(zip(kin.coords, kin.q)):
             if c.kind == "angle":
                 self.trig[q] = (sp.Symbol(f"cq_{2 * i}", real=True), sp.Symbol(f"cq_{2 * i + 1}", real=True))
@@ -229,7 +229,7 @@ class KernelSet:
         r_jac, r_vel = red[: n * n], red[n * n: n * n + n]
         r_gam, r_obs = red[n * n + n: n * n + 2 * n], red[n * n + 2 * n:]
         body = self.selection_block(vector) + fl.temps(staged[0]) + self._velocity_lines(fl, n, r_jac, r_vel, r_inv)
-        body += fl.temps(staged[1]) + self._acceleration_lines(fl, n, r_gam, r_jac)
+        body += fl.temps(staged[1]) + self._acceleration_lines(fl, n, r_gam)
         body += fl.temps(staged[2])
         body += [f"obs[{k}] = {fl.value(e)};" for k, e in enumerate(r_obs)]
         outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)] + [f"obs[{k}]" for k in range(len(r_obs))]
@@ -246,11 +246,9 @@ class KernelSet:
         """The motion and rates kernels and their SIMD twins factor Φ_q by these diagonal blocks
         (derive.branches.blocks; sewgen/derive/blockfactor.py) where its structure allows: for a mechanism Newton
         solves, whose twins finish its solved positions (csrc/sg_simd.h SG_SIMD_FINISH_BODY) with the same
-        factor, lane by lane."""
-        self._rate_blocks = blocks
-
-    def _block_factor(self, n: int, r_jac) -> BlockFactor | None:
-        return BlockFactor.of(n, r_jac, self._rate_blocks) if self._rate_blocks else None
+        factor, lane by lane. Φ_q's structure is taken once, here."""
+        n = len(self.kin.q)
+        self._block_factor = BlockFactor.of(n, [self.kin.jac_q[i, j] for i in range(n) for j in range(n)], blocks)
 
     def _velocity_lines(self, fl: _Flavour, n: int, r_jac, r_vel, r_inv) -> list[str]:
         """The motion and rates kernels' LU of Φ_q — rows over their loop size (an angle row: 1 rad), columns
@@ -258,7 +256,7 @@ class KernelSet:
         vector = fl.vector
         if not n:
             return ["*cond = sgv_set1(1.0);", "sg_vm ok = sgv_true();"] if vector else ["*cond = 1.0;"]
-        bf = self._block_factor(n, r_jac)
+        bf = self._block_factor
         body = [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];"]
         body += bf.declarations(vector) if bf else [f"{'sg_vm' if vector else 'int'} piv[{n}];"]
         body += [f"J[{k}] = {fl.value(e)};" for k, e in enumerate(r_jac)]
@@ -272,12 +270,12 @@ class KernelSet:
         return body + [f"if (sg_factor_eq_inl({n}, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;",
                        f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
 
-    def _acceleration_lines(self, fl: _Flavour, n: int, r_gam, r_jac) -> list[str]:
+    def _acceleration_lines(self, fl: _Flavour, n: int, r_gam) -> list[str]:
         """q'' from γ with the same factor (after :meth:`_velocity_lines`)."""
         if not n:
             return []
         lines = [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)]
-        bf = self._block_factor(n, r_jac)
+        bf = self._block_factor
         if bf:
             return lines + bf.solve_lines("qdd", fl.vector)
         return lines + [f"{'sgv_solve_eq' if fl.vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
@@ -313,7 +311,7 @@ class KernelSet:
         and LU as :meth:`motion`, those the observables alone read left out: q', q'', cond equal the motion
         kernel's to the bit, and the status too but for a non-finite observable (``observe`` tests those).
         ``vector``: the SIMD twin, equal to the bit to the motion kernel's SIMD twin; it returns the mask of
-        lanes whose factor and rates are good (the selection of a cam's arc has no vector form)."""
+        lanes whose factor and rates are good."""
         n = len(self.kin.q)
         fl = VECTOR if vector else SCALAR
         repl, r_jac, r_vel, r_gam, _r_obs, r_inv = self._motion_parts(scales)
@@ -325,7 +323,7 @@ class KernelSet:
         late = [(t, e) for t, e in used if levels[t] >= 1]
         body = list(self.selection_block(vector)) if _reads_ka(early + late, r_jac + r_vel + r_gam + r_inv) else []
         body += fl.temps(early) + self._velocity_lines(fl, n, r_jac, r_vel, r_inv)
-        body += fl.temps(late) + self._acceleration_lines(fl, n, r_gam, r_jac)
+        body += fl.temps(late) + self._acceleration_lines(fl, n, r_gam)
         if n:
             outputs = [f"{a}[{i}]" for a in ("q", "qd", "qdd") for i in range(n)]
             body += [f"ok &= sgv_isfinite({_balanced_sum(outputs)});" if vector
@@ -630,8 +628,7 @@ class KernelSet:
         the instructions (the feed's 7 × 7: 2.6k against 1.1k); by Φ_q's diagonal blocks where the rates are
         (:meth:`solve_by_blocks`)."""
         n = len(self.kin.q)
-        jac = [self.kin.jac_q[i, j] for i in range(n) for j in range(n)]
-        bf = self._block_factor(n, jac)
+        bf = self._block_factor
         if bf:  # Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py)
             return [Kernel(f"{self.prefix}_lu_factor", self._signature("lu_factor"), bf.newton_factor_lines(),
                            bf.ops() // 2),
