@@ -29,8 +29,13 @@ int sg_simd_width(const sg_mechanism *m)
 {
 #if SG_SIMD
     if (m != NULL && m->sweep_simd == NULL && m->finish_simd == NULL) return 1;
-    /* libgcc's CPU model, read: a few loads, no state of ours */
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") ? SG_W : 1;
+    /* libgcc's CPU model, read: a few loads, no state of ours; the instruction set the SIMD code is built for */
+    int cpu = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#if SG_W == 8
+    cpu = cpu && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+          __builtin_cpu_supports("avx512dq");
+#endif
+    return cpu ? SG_W : 1;
 #else
     (void)m;
     return 1;

@@ -45,11 +45,16 @@ typedef struct sg_columns {
 } sg_columns;
 
 /* Solved positions of a Newton sweep waiting for their rates, observables and forces, which the mechanism's SIMD
- * finish (descriptor finish_simd, csrc/sg_simd.h SG_SIMD_FINISH_BODY) computes four at a time: per lane its
- * position's index, coordinates and their cos, sin, inputs with theirs and their rates, Newton's last relative
+ * finish (descriptor finish_simd, csrc/sg_simd.h SG_SIMD_FINISH_BODY) computes SG_LANES at a time: per lane
+ * its position's index, coordinates and their cos, sin, inputs with theirs and their rates, Newton's last relative
  * residual; est receives the rates' estimated relative error of each lane the finish vouches for. A block of
- * fewer than SG_LANES positions repeats its last one in the lanes after count. */
+ * fewer than SG_LANES positions repeats its last one in the lanes after count. SG_LANES: the SIMD vector's lanes,
+ * 8 where the module is built for AVX-512 (SG_SIMD_LEVEL 512, sewgen/build.py), else 4 (AVX2). */
+#if defined(SG_SIMD_LEVEL) && SG_SIMD_LEVEL == 512
+#define SG_LANES 8
+#else
 #define SG_LANES 4
+#endif
 typedef struct sg_lanes {
     int count;
     size_t index[SG_LANES];

@@ -32,44 +32,97 @@
 #define SG_SIMD_HOOK(fn) 0
 #endif
 
-#if SG_SIMD
-#pragma GCC push_options
-#pragma GCC target("avx2,fma")
-#include <immintrin.h>
+/* The instruction set of the SIMD code (SG_SIMD_LEVEL, chosen by sewgen/build.py: AVX-512 where the building CPU
+ * has it, else AVX2), switched on for it alone by SG_SIMD_BEGIN ... SG_SIMD_END. */
+#define SG_PRAGMA(x) _Pragma(#x)
+#if SG_LANES == 8
+#define SG_SIMD_BEGIN SG_PRAGMA(GCC push_options) SG_PRAGMA(GCC target("avx2,fma,avx512f,avx512vl,avx512dq"))
+#else
+#define SG_SIMD_BEGIN SG_PRAGMA(GCC push_options) SG_PRAGMA(GCC target("avx2,fma"))
+#endif
+#define SG_SIMD_END SG_PRAGMA(GCC pop_options)
 
-/* Lanes per vector, the vector of doubles and a lane mask (all bits set: true). */
-#define SG_W 4
-typedef double sg_vd __attribute__((vector_size(32)));
-typedef long long sg_vm __attribute__((vector_size(32)));
+#if SG_SIMD
+SG_SIMD_BEGIN
+#include <immintrin.h>
+#include <string.h>
+
+/* Lanes per vector (SG_LANES, csrc/sg_runtime.h): 8 in an AVX-512 register, else 4 in an AVX2 one. The vector of
+ * doubles, a lane mask (all bits set: true), and the same vector as AVX2 registers of four lanes (SG_H of them:
+ * the transposes between rows and lanes work on those). */
+#define SG_W SG_LANES
+#define SG_H (SG_W / 4)
+typedef double sg_vd __attribute__((vector_size(8 * SG_W)));
+typedef long long sg_vm __attribute__((vector_size(8 * SG_W)));
+typedef union {
+    sg_vd v;
+    __m256d h[SG_H];
+} sg_vhalves;
+#if SG_W == 8
+#define SG_SPLAT(a) a, a, a, a, a, a, a, a
+#define SG_SHIFT_IN_MASK {8, 0, 1, 2, 3, 4, 5, 6}
+#else
+#define SG_SPLAT(a) a, a, a, a
+#define SG_SHIFT_IN_MASK {4, 0, 1, 2}
+#endif
 
 /* A triangle whose height squared is below this fraction of its sides' squares goes to the scalar loop. */
 #define SG_SIMD_MARGIN 1e-10
 
 #define SG_VINLINE static inline __attribute__((always_inline))
 
-/* glibc's vector math (libmvec, x86_64 ABI "d": AVX2, 4 doubles). */
+/* glibc's vector math (libmvec): x86_64 ABI "e" (AVX-512, 8 doubles) or "d" (AVX2, 4 doubles). */
+#if SG_W == 8
+__m512d _ZGVeN8v_sin(__m512d x);
+__m512d _ZGVeN8v_cos(__m512d x);
+__m512d _ZGVeN8vv_atan2(__m512d y, __m512d x);
+#define SGV_SIN(a) (sg_vd) _ZGVeN8v_sin((__m512d)(a))
+#define SGV_COS(a) (sg_vd) _ZGVeN8v_cos((__m512d)(a))
+#define SGV_ATAN2(y, x) (sg_vd) _ZGVeN8vv_atan2((__m512d)(y), (__m512d)(x))
+#define SGV_SQRT(a) (sg_vd) _mm512_sqrt_pd((__m512d)(a))
+#define SGV_BITS(m) (int)_mm512_movepi64_mask((__m512i)(m))
+#else
 __m256d _ZGVdN4v_sin(__m256d x);
 __m256d _ZGVdN4v_cos(__m256d x);
 __m256d _ZGVdN4vv_atan2(__m256d y, __m256d x);
+#define SGV_SIN(a) (sg_vd) _ZGVdN4v_sin((__m256d)(a))
+#define SGV_COS(a) (sg_vd) _ZGVdN4v_cos((__m256d)(a))
+#define SGV_ATAN2(y, x) (sg_vd) _ZGVdN4vv_atan2((__m256d)(y), (__m256d)(x))
+#define SGV_SQRT(a) (sg_vd) _mm256_sqrt_pd((__m256d)(a))
+#define SGV_BITS(m) _mm256_movemask_pd((__m256d)(m))
+#endif
 
-SG_VINLINE sg_vd sgv_set1(double a) { return (sg_vd){a, a, a, a}; }
-SG_VINLINE sg_vm sgv_true(void) { return (sg_vm){-1, -1, -1, -1}; }
-SG_VINLINE sg_vm sgv_false(void) { return (sg_vm){0, 0, 0, 0}; }
+SG_VINLINE sg_vd sgv_set1(double a) { return (sg_vd){SG_SPLAT(a)}; }
+SG_VINLINE sg_vm sgv_iset1(long long a) { return (sg_vm){SG_SPLAT(a)}; }
+SG_VINLINE sg_vm sgv_true(void) { return sgv_iset1(-1); }
+SG_VINLINE sg_vm sgv_false(void) { return sgv_iset1(0); }
 SG_VINLINE sg_vd sgv_select(sg_vm m, sg_vd a, sg_vd b) { return (sg_vd)(((sg_vm)a & m) | ((sg_vm)b & ~m)); }
-SG_VINLINE int sgv_all(sg_vm m) { return _mm256_movemask_pd((__m256d)m) == 0xF; }
-SG_VINLINE sg_vm sgv_isfinite(sg_vd a) { return (a - a) == sgv_set1(0.0); } /* inf - inf, NaN: NaN */
-SG_VINLINE sg_vd sgv_sqrt(sg_vd a) { return (sg_vd)_mm256_sqrt_pd((__m256d)a); }
-SG_VINLINE sg_vd sgv_fabs(sg_vd a)
+/* the lanes of a mask as bits, lane l in bit l */
+SG_VINLINE int sgv_bits(sg_vm m) { return SGV_BITS(m); }
+SG_VINLINE int sgv_all(sg_vm m) { return sgv_bits(m) == (1 << SG_W) - 1; }
+SG_VINLINE int sgv_none(sg_vm m) { return sgv_bits(m) == 0; }
+/* {first, v[0], ..., v[SG_W - 2]}: each lane's predecessor, first before lane 0 */
+SG_VINLINE sg_vd sgv_shift_in(double first, sg_vd v)
 {
-    const long long mag = 0x7fffffffffffffffLL;
-    return (sg_vd)((sg_vm)a & (sg_vm){mag, mag, mag, mag});
+    return __builtin_shuffle(v, sgv_set1(first), (sg_vm)SG_SHIFT_IN_MASK);
 }
+/* SG_W doubles from p (unaligned), and to p */
+SG_VINLINE sg_vd sgv_loadu(const double *p)
+{
+    sg_vd v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+SG_VINLINE void sgv_storeu(double *p, sg_vd v) { memcpy(p, &v, sizeof v); }
+SG_VINLINE sg_vm sgv_isfinite(sg_vd a) { return (a - a) == sgv_set1(0.0); } /* inf - inf, NaN: NaN */
+SG_VINLINE sg_vd sgv_sqrt(sg_vd a) { return SGV_SQRT(a); }
+SG_VINLINE sg_vd sgv_fabs(sg_vd a) { return (sg_vd)((sg_vm)a & sgv_iset1(0x7fffffffffffffffLL)); }
 SG_VINLINE sg_vd sgv_fmax(sg_vd a, sg_vd b) { return sgv_select(a > b, a, b); }
-SG_VINLINE sg_vd sgv_atan2(sg_vd y, sg_vd x) { return (sg_vd)_ZGVdN4vv_atan2((__m256d)y, (__m256d)x); }
+SG_VINLINE sg_vd sgv_atan2(sg_vd y, sg_vd x) { return SGV_ATAN2(y, x); }
 SG_VINLINE void sgv_sincos(sg_vd a, sg_vd *c, sg_vd *s)
 {
-    *c = (sg_vd)_ZGVdN4v_cos((__m256d)a);
-    *s = (sg_vd)_ZGVdN4v_sin((__m256d)a);
+    *c = SGV_COS(a);
+    *s = SGV_SIN(a);
 }
 
 /* The forces twin of a mechanism whose forces have no vector form: never called (its sg_<m>_forces_in_simd says
@@ -129,18 +182,18 @@ SG_VINLINE sg_vm sgv_dyad_rpr(const sg_vd D[2], const sg_vd w0[2], const sg_vd u
 SG_VINLINE void sgv_eliminate(int n, sg_vd *a, sg_vm *piv, sg_vd *best, int reciprocal)
 {
     for (int k = 0; k < n; ++k) {
-        sg_vm pr = (sg_vm){k, k, k, k};
+        sg_vm pr = sgv_iset1(k);
         sg_vd bk = sgv_fabs(a[k * n + k]);
         for (int i = k + 1; i < n; ++i) {
             const sg_vd v = sgv_fabs(a[i * n + k]);
             const sg_vm gt = v > bk;
             bk = sgv_select(gt, v, bk);
-            pr = (pr & ~gt) | ((sg_vm){i, i, i, i} & gt);
+            pr = (pr & ~gt) | (sgv_iset1(i) & gt);
         }
         piv[k] = pr;
         best[k] = bk;
         for (int i = k + 1; i < n; ++i) {
-            const sg_vm sw = pr == (sg_vm){i, i, i, i};
+            const sg_vm sw = pr == sgv_iset1(i);
             for (int j = 0; j < n; ++j) {
                 const sg_vd t = a[k * n + j];
                 a[k * n + j] = sgv_select(sw, a[i * n + j], t);
@@ -162,7 +215,7 @@ SG_VINLINE void sgv_substitute(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *
 {
     for (int k = 0; k < n; ++k)
         for (int i = k + 1; i < n; ++i) {
-            const sg_vm sw = piv[k] == (sg_vm){i, i, i, i};
+            const sg_vm sw = piv[k] == sgv_iset1(i);
             const sg_vd t = b[k];
             b[k] = sgv_select(sw, b[i], t);
             b[i] = sgv_select(sw, t, b[i]);
@@ -285,53 +338,62 @@ SG_VINLINE sg_vm sgv_lu_factor(int n, sg_vd *a, sg_vm *piv)
 /* sg_lu_solve_inl lane by lane. */
 SG_VINLINE void sgv_lu_solve(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *b) { sgv_substitute(n, lu, piv, b, 0); }
 
-/* count vectors of lanes from rows of SG_W positions: v[j][l] = src[l][j] (sgv_store_rows' inverse). */
+/* count vectors of lanes from rows of SG_W positions: v[j][l] = src[l][j] (sgv_store_rows' inverse); each AVX2
+ * register of four lanes from its four rows, four columns at a time transposed in registers. */
 SG_VINLINE void sgv_load_rows(const double *const src[SG_W], int count, sg_vd *v)
 {
     int j = 0;
-    for (; j + 4 <= count; j += 4) {
-        const __m256d r0 = _mm256_loadu_pd(src[0] + j), r1 = _mm256_loadu_pd(src[1] + j);
-        const __m256d r2 = _mm256_loadu_pd(src[2] + j), r3 = _mm256_loadu_pd(src[3] + j);
-        const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
-        const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
-        v[j] = (sg_vd)_mm256_permute2f128_pd(t0, t2, 0x20);
-        v[j + 1] = (sg_vd)_mm256_permute2f128_pd(t1, t3, 0x20);
-        v[j + 2] = (sg_vd)_mm256_permute2f128_pd(t0, t2, 0x31);
-        v[j + 3] = (sg_vd)_mm256_permute2f128_pd(t1, t3, 0x31);
-    }
+    for (; j + 4 <= count; j += 4)
+        for (int h = 0; h < SG_H; ++h) {
+            const double *const *row = src + 4 * h;
+            const __m256d r0 = _mm256_loadu_pd(row[0] + j), r1 = _mm256_loadu_pd(row[1] + j);
+            const __m256d r2 = _mm256_loadu_pd(row[2] + j), r3 = _mm256_loadu_pd(row[3] + j);
+            const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+            const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+            ((sg_vhalves *)&v[j])->h[h] = _mm256_permute2f128_pd(t0, t2, 0x20);
+            ((sg_vhalves *)&v[j + 1])->h[h] = _mm256_permute2f128_pd(t1, t3, 0x20);
+            ((sg_vhalves *)&v[j + 2])->h[h] = _mm256_permute2f128_pd(t0, t2, 0x31);
+            ((sg_vhalves *)&v[j + 3])->h[h] = _mm256_permute2f128_pd(t1, t3, 0x31);
+        }
     for (; j < count; ++j)
         for (int l = 0; l < SG_W; ++l) v[j][l] = src[l][j];
 }
 
-/* Rows of SG_W positions from count vectors of lanes: dst[l][j] = v[j][l], four columns at a time transposed in
- * registers (two unpacks and two lane permutes per four) and stored as one 32-byte row piece per lane. */
+/* Rows of SG_W positions from count vectors of lanes: dst[l][j] = v[j][l]; per AVX2 register of four lanes, four
+ * columns at a time transposed in registers (two unpacks and two lane permutes per four) and stored as one
+ * 32-byte row piece per lane. */
 SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W])
 {
-    int j = 0;
-    for (; j + 4 <= count; j += 4) {
-        const __m256d r0 = (__m256d)v[j], r1 = (__m256d)v[j + 1], r2 = (__m256d)v[j + 2], r3 = (__m256d)v[j + 3];
-        const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
-        const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
-        _mm256_storeu_pd(dst[0] + j, _mm256_permute2f128_pd(t0, t2, 0x20));
-        _mm256_storeu_pd(dst[1] + j, _mm256_permute2f128_pd(t1, t3, 0x20));
-        _mm256_storeu_pd(dst[2] + j, _mm256_permute2f128_pd(t0, t2, 0x31));
-        _mm256_storeu_pd(dst[3] + j, _mm256_permute2f128_pd(t1, t3, 0x31));
-    }
-    if (j + 2 <= count) { /* two columns: one 16-byte piece a lane */
-        const __m256d lo = _mm256_unpacklo_pd((__m256d)v[j], (__m256d)v[j + 1]);
-        const __m256d hi = _mm256_unpackhi_pd((__m256d)v[j], (__m256d)v[j + 1]);
-        _mm_storeu_pd(dst[0] + j, _mm256_castpd256_pd128(lo));
-        _mm_storeu_pd(dst[1] + j, _mm256_castpd256_pd128(hi));
-        _mm_storeu_pd(dst[2] + j, _mm256_extractf128_pd(lo, 1));
-        _mm_storeu_pd(dst[3] + j, _mm256_extractf128_pd(hi, 1));
-        j += 2;
-    }
-    if (j < count) { /* the last column */
-        const __m128d a = _mm256_castpd256_pd128((__m256d)v[j]), b = _mm256_extractf128_pd((__m256d)v[j], 1);
-        _mm_storel_pd(dst[0] + j, a);
-        _mm_storeh_pd(dst[1] + j, a);
-        _mm_storel_pd(dst[2] + j, b);
-        _mm_storeh_pd(dst[3] + j, b);
+    for (int h = 0; h < SG_H; ++h) {
+        double *const *row = dst + 4 * h;
+        int j = 0;
+        for (; j + 4 <= count; j += 4) {
+            const __m256d r0 = ((const sg_vhalves *)&v[j])->h[h], r1 = ((const sg_vhalves *)&v[j + 1])->h[h];
+            const __m256d r2 = ((const sg_vhalves *)&v[j + 2])->h[h], r3 = ((const sg_vhalves *)&v[j + 3])->h[h];
+            const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+            const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+            _mm256_storeu_pd(row[0] + j, _mm256_permute2f128_pd(t0, t2, 0x20));
+            _mm256_storeu_pd(row[1] + j, _mm256_permute2f128_pd(t1, t3, 0x20));
+            _mm256_storeu_pd(row[2] + j, _mm256_permute2f128_pd(t0, t2, 0x31));
+            _mm256_storeu_pd(row[3] + j, _mm256_permute2f128_pd(t1, t3, 0x31));
+        }
+        if (j + 2 <= count) { /* two columns: one 16-byte piece a lane */
+            const __m256d r0 = ((const sg_vhalves *)&v[j])->h[h], r1 = ((const sg_vhalves *)&v[j + 1])->h[h];
+            const __m256d lo = _mm256_unpacklo_pd(r0, r1), hi = _mm256_unpackhi_pd(r0, r1);
+            _mm_storeu_pd(row[0] + j, _mm256_castpd256_pd128(lo));
+            _mm_storeu_pd(row[1] + j, _mm256_castpd256_pd128(hi));
+            _mm_storeu_pd(row[2] + j, _mm256_extractf128_pd(lo, 1));
+            _mm_storeu_pd(row[3] + j, _mm256_extractf128_pd(hi, 1));
+            j += 2;
+        }
+        if (j < count) { /* the last column */
+            const __m256d r = ((const sg_vhalves *)&v[j])->h[h];
+            const __m128d a = _mm256_castpd256_pd128(r), b = _mm256_extractf128_pd(r, 1);
+            _mm_storel_pd(row[0] + j, a);
+            _mm_storeh_pd(row[1] + j, a);
+            _mm_storel_pd(row[2] + j, b);
+            _mm_storeh_pd(row[3] + j, b);
+        }
     }
 }
 
@@ -416,6 +478,13 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
          * (want[ngroup]), a wanted group or the rates that read an angle itself (group_angles) */ \
         int angles = want == NULL || want[m->ngroup] || m->group_angles[m->ngroup];               \
         for (int g = 0; g < m->ngroup && !angles; ++g) angles = want[g] && m->group_angles[g];     \
+        /* the angle coordinates the loop unwraps (none where it skips the angles: their values are never read, \
+         * and a lane the scalar step solves unwraps against the last one it solved, or zero) */  \
+        int angle_q[SG_MAX_Q], nangle = 0;                                                         \
+        for (int j = 0; j < nq; ++j) {                                                             \
+            last[j] = 0.0;                                                                         \
+            if (angles && m->coord_is_angle[j]) angle_q[nangle++] = j;                             \
+        }                                                                                          \
         sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1];    \
         const sg_vd *csrc[SG_MAX_DIRECT]; /* the vector each direct column is stored from */     \
         if (cols != NULL && (frc != NULL || cols->n < 1 || cols->n > SG_MAX_DIRECT)) cols = NULL; \
@@ -434,10 +503,10 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
             size_t idx[SG_W];                                                                      \
             sg_vd ph, om, al;                                                                      \
             if (contiguous) { /* loads: no lane-by-lane stores read back */                        \
-                idx[0] = k, idx[1] = k + 1, idx[2] = k + 2, idx[3] = k + 3;                        \
-                ph = (sg_vd)_mm256_loadu_pd(phi + k);                                              \
-                om = (sg_vd)_mm256_loadu_pd(omega + k);                                            \
-                al = (sg_vd)_mm256_loadu_pd(alpha + k);                                            \
+                for (int l = 0; l < SG_W; ++l) idx[l] = k + (size_t)l;                             \
+                ph = sgv_loadu(phi + k);                                                           \
+                om = sgv_loadu(omega + k);                                                         \
+                al = sgv_loadu(alpha + k);                                                         \
             } else {                                                                               \
                 for (int l = 0; l < SG_W; ++l) {                                                   \
                     const size_t kk = k + (size_t)(l < lanes ? l : lanes - 1);                     \
@@ -453,8 +522,8 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                 vxd[0] = om;                                                                       \
                 vxdd[0] = al;                                                                      \
                 if (trig != NULL && contiguous) { /* sg_sweep_designs' table */                    \
-                    vcx[0] = (sg_vd)_mm256_loadu_pd(trig + k);                                     \
-                    vcx[1] = (sg_vd)_mm256_loadu_pd(trig + n + k);                                 \
+                    vcx[0] = sgv_loadu(trig + k);                                                  \
+                    vcx[1] = sgv_loadu(trig + n + k);                                              \
                 } else {                                                                           \
                     sgv_sincos(ph, &vcx[0], &vcx[1]);                                              \
                 }                                                                                  \
@@ -470,17 +539,16 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                 }                                                                                  \
                 continue;                                                                          \
             }                                                                                      \
-            for (int j = 0; j < nq; ++j) { /* no lane a half turn from the one before: none moves */ \
-                if (angles && m->coord_is_angle[j]) {                                              \
-                    const sg_vd v = vq[j];                                                         \
-                    const sg_vd prev = {have_last ? last[j] : v[0], v[0], v[1], v[2]};             \
-                    if (!sgv_all(~(sgv_fabs((prev - v) * (1.0 / two_pi)) > sgv_set1(0.5))))        \
-                        for (int l = have_last ? 0 : 1; l < SG_W; ++l) {                           \
-                            const double ref = l > 0 ? vq[j][l - 1] : last[j];                     \
-                            const double turns = (ref - vq[j][l]) * (1.0 / two_pi);                \
-                            if (fabs(turns) > 0.5) vq[j][l] += two_pi * nearbyint(turns);          \
-                        }                                                                          \
-                }                                                                                  \
+            for (int a = 0; a < nangle; ++a) { /* no lane a half turn from the one before: none moves */ \
+                const int j = angle_q[a];                                                          \
+                const sg_vd v = vq[j];                                                             \
+                const sg_vd prev = sgv_shift_in(have_last ? last[j] : v[0], v);                    \
+                if (!sgv_none(sgv_fabs((prev - v) * (1.0 / two_pi)) > sgv_set1(0.5)))             \
+                    for (int l = have_last ? 0 : 1; l < SG_W; ++l) {                               \
+                        const double ref = l > 0 ? vq[j][l - 1] : last[j];                         \
+                        const double turns = (ref - vq[j][l]) * (1.0 / two_pi);                    \
+                        if (fabs(turns) > 0.5) vq[j][l] += two_pi * nearbyint(turns);              \
+                    }                                                                              \
                 last[j] = vq[j][SG_W - 1];                                                         \
             }                                                                                      \
             have_last = 1;                                                                         \
@@ -505,7 +573,7 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
             }                                                                                      \
             if (cols != NULL) { /* the columns' four positions at once (a padded lane: not stored) */ \
                 if (contiguous)                                                                    \
-                    for (int j = 0; j < ncol; ++j) _mm256_storeu_pd(cdst[j] + k, (__m256d)*csrc[j]); \
+                    for (int j = 0; j < ncol; ++j) sgv_storeu(cdst[j] + k, *csrc[j]);            \
                 else                                                                               \
                     for (int j = 0; j < ncol; ++j)                                                 \
                         for (int l = 0; l < lanes; ++l) cdst[j][idx[l]] = (*csrc[j])[l];           \
@@ -527,8 +595,8 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                 if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                \
             }                                                                                      \
             if (contiguous && sgv_all(ok)) { /* the usual block: four statuses at once */          \
-                status[k] = status[k + 1] = status[k + 2] = status[k + 3] = SG_OK;                 \
-                if (err) _mm256_storeu_pd(err + k, (__m256d)vest);                                 \
+                for (int l = 0; l < SG_W; ++l) status[k + (size_t)l] = SG_OK;                      \
+                if (err) sgv_storeu(err + k, vest);                                                \
                 continue;                                                                          \
             }                                                                                      \
             for (int l = 0; l < lanes; ++l) {                                                      \
@@ -617,13 +685,10 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
         sgv_store_rows(vqdd, nq, rqdd);                                                            \
         sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, (NOBS), robs);         \
         for (int l = 0; l < SG_W; ++l) lanes->est[l] = vest[l];                                    \
-        return _mm256_movemask_pd((__m256d)ok) & ((1 << lanes->count) - 1);                       \
+        return sgv_bits(ok) & ((1 << lanes->count) - 1);                       \
     }
 
-/* an sg_lanes block is one SIMD block */
-typedef char sg_lanes_are_one_block[SG_W == SG_LANES ? 1 : -1];
-
-#pragma GCC pop_options
+SG_SIMD_END
 #endif /* SG_SIMD */
 
 #endif

@@ -2457,11 +2457,10 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
     out[125] = t29 + 3.0*3.141592653589793;
 }
 
-/* The SIMD twins of the motion, rates, observe and forces kernels and the finish of four solved positions at a time
- * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the motion, rates, observe and forces kernels and the finish of SG_LANES solved positions at a
+ * time (csrc/sg_simd.h): compiled for AVX-512 or AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
-#pragma GCC push_options
-#pragma GCC target("avx2,fma")
+SG_SIMD_BEGIN
 
 SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
 {
@@ -4016,7 +4015,7 @@ SG_VINLINE int sg_feed_forces_in_simd(const double *c)
 
 static SG_FLATTEN int sg_feed_finish_simd(const struct sg_mechanism *m, struct sg_lanes *lanes, const double *c, const sg_options *opt, const double *gv, const double *loads, double *qd, double *qdd, double *obs, double *frc, const unsigned char *want)
 SG_SIMD_FINISH_BODY(sg_feed_motion_v, sg_feed_rates_v, sg_feed_observe_v, sg_feed_forces_v, sg_feed_forces_in_simd, 121, 65)
-#pragma GCC pop_options
+SG_SIMD_END
 #endif
 
 static const unsigned char sg_feed_coord_is_angle[7] = { 1, 1, 1, 1, 0, 1, 1 };

@@ -544,11 +544,10 @@ void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, c
 static SG_FLATTEN SG_NOINLINE size_t sg_needle_bar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
 SG_CLOSED_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_rates, sg_needle_bar_observe, sg_needle_bar_forces)
 
-/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
- * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep SG_LANES positions at a
+ * time (csrc/sg_simd.h): compiled for AVX-512 or AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
-#pragma GCC push_options
-#pragma GCC target("avx2,fma")
+SG_SIMD_BEGIN
 
 SG_VINLINE sg_vm sg_needle_bar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
 {
@@ -865,7 +864,7 @@ SG_VINLINE int sg_needle_bar_forces_in_simd(const double *c)
 
 static SG_FLATTEN size_t sg_needle_bar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
 SG_SIMD_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_sweep, sg_needle_bar_closed_v, sg_needle_bar_motion_v, sg_needle_bar_rates_v, sg_needle_bar_observe_v, sg_needle_bar_forces_v, sg_needle_bar_forces_in_simd, 51, 26)
-#pragma GCC pop_options
+SG_SIMD_END
 #endif
 
 static const unsigned char sg_needle_bar_coord_is_angle[2] = { 0, 1 };

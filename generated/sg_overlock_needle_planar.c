@@ -685,11 +685,10 @@ void sg_overlock_needle_planar_anchors(const double *q, const double *cq, const 
 static SG_FLATTEN SG_NOINLINE size_t sg_overlock_needle_planar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
 SG_CLOSED_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_planar_closed, sg_overlock_needle_planar_motion, sg_overlock_needle_planar_rates, sg_overlock_needle_planar_observe, sg_overlock_needle_planar_forces)
 
-/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep four positions at a time
- * (csrc/sg_simd.h): compiled for AVX2 where the build has SIMD, called only where the CPU has it. */
+/* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep SG_LANES positions at a
+ * time (csrc/sg_simd.h): compiled for AVX-512 or AVX2 where the build has SIMD, called only where the CPU has it. */
 #if SG_SIMD
-#pragma GCC push_options
-#pragma GCC target("avx2,fma")
+SG_SIMD_BEGIN
 
 SG_VINLINE sg_vm sg_overlock_needle_planar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
 {
@@ -1061,7 +1060,7 @@ SG_VINLINE int sg_overlock_needle_planar_forces_in_simd(const double *c)
 
 static SG_FLATTEN size_t sg_overlock_needle_planar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
 SG_SIMD_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_planar_sweep, sg_overlock_needle_planar_closed_v, sg_overlock_needle_planar_motion_v, sg_overlock_needle_planar_rates_v, sg_overlock_needle_planar_observe_v, sg_overlock_needle_planar_forces_v, sg_overlock_needle_planar_forces_in_simd, 54, 26)
-#pragma GCC pop_options
+SG_SIMD_END
 #endif
 
 static const unsigned char sg_overlock_needle_planar_coord_is_angle[3] = { 1, 0, 1 };

@@ -22,24 +22,50 @@ CFLAGS = ["-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-Wno-unused-paramet
 RUNTIME_FILES = ("sg_runtime.c", "sg_runtime.h", "sg_simd.h")
 
 
+#: SEWGEN_SIMD values: the SIMD level a build compiles (csrc/sg_simd.h), "1" (the default) the building CPU's best.
+SIMD_LEVELS = {"0": None, "avx2": 256, "avx512": 512}
+
+#: CPU flags (/proc/cpuinfo) the AVX-512 level needs: its vectors, 256-bit forms and 64-bit integer masks.
+AVX512_FLAGS = ("avx512f", "avx512vl", "avx512dq")
+
+
 def simd_flags() -> tuple[list[str], list[str]]:
     """(compile flags, libraries) of the SIMD loops (csrc/sg_simd.h): glibc's vector math library on x86-64
-    Linux, where the SIMD code is compiled for AVX2 and chosen at run time by the CPU's features; nothing
-    elsewhere (the scalar loops only). SEWGEN_SIMD=0 in the environment builds without it."""
-    return _simd_flags(os.environ.get("SEWGEN_SIMD", "1") != "0")
+    Linux, where the SIMD code is compiled for AVX-512 (8 positions a vector) if the building CPU has it, else for
+    AVX2 (4), and run only where the running CPU has that level (``sg_simd_width``; elsewhere the scalar loops);
+    nothing on other platforms. SEWGEN_SIMD in the environment: ``0`` builds without SIMD, ``avx2`` or ``avx512``
+    that level whatever the building CPU has (a module built for AVX-512 runs its scalar loops on a CPU without
+    it)."""
+    return _simd_flags(os.environ.get("SEWGEN_SIMD", "1").strip().lower())
+
+
+def _cpu_flags() -> set[str]:
+    """The building CPU's feature flags (Linux /proc/cpuinfo); empty where it cannot be read."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
+            for line in f:
+                if line.startswith("flags"):
+                    return set(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    return set()
 
 
 @functools.lru_cache(maxsize=None)
-def _simd_flags(wanted: bool) -> tuple[list[str], list[str]]:
-    """simd_flags(), the library looked up once a process (find_library runs ldconfig)."""
+def _simd_flags(choice: str) -> tuple[list[str], list[str]]:
+    """simd_flags() of one SEWGEN_SIMD value, the library looked up once a process (find_library runs ldconfig)."""
     import ctypes.util
     import platform
     import sys
 
-    if wanted and sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64") and \
-            ctypes.util.find_library("mvec"):
-        return ["-DSG_HAVE_MVEC"], ["mvec"]
-    return [], []
+    if choice not in SIMD_LEVELS and choice != "1":
+        raise ValueError(f"SEWGEN_SIMD={choice!r}: expected one of 0, 1, avx2, avx512")
+    if choice == "0" or not (sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64")
+                             and ctypes.util.find_library("mvec")):
+        return [], []
+    if choice == "1":
+        choice = "avx512" if all(f in _cpu_flags() for f in AVX512_FLAGS) else "avx2"
+    return ["-DSG_HAVE_MVEC", f"-DSG_SIMD_LEVEL={SIMD_LEVELS[choice]}"], ["mvec"]
 
 
 def compile_flags(extra: list[str] | None = None) -> list[str]:

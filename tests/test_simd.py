@@ -15,12 +15,13 @@ import numpy as np
 import pytest
 
 import sewgen
+from sewgen.build import compile_flags
 from sewgen.errors import ParameterError
 from sewgen.loader import catalog_names
 
 ROOT = Path(__file__).resolve().parents[1]
 RNG = np.random.default_rng(14)
-#: a revolution at 0.1° (900 blocks of four), a few unsorted and repeated angles, a block tail of three
+#: a revolution at 0.1° (900 blocks of four, 450 of eight), a few unsorted and repeated angles, a short block tail
 PHI = np.concatenate([np.linspace(0.0, 2 * np.pi, 3600, endpoint=False), RNG.uniform(-7, 7, 13), [1.0, 1.0]])
 
 SIMD_CLOSED = [n for n in catalog_names() if sewgen.mechanism(n).closed_form]
@@ -147,6 +148,26 @@ def test_most_positions_take_the_vector_path():
     again = tu.prepare(PHI).use_loop("auto")
     again.run()
     np.testing.assert_array_equal(again.obs, a.obs)  # deterministic
+
+
+def test_the_other_simd_level(monkeypatch):
+    """A module is built for one SIMD level, the building CPU's best (sewgen/build.py: AVX-512 with 8 lanes, else
+    AVX2 with 4); where that is AVX-512, a user mechanism built for AVX2 (SEWGEN_SIMD=avx2) runs four lanes and
+    agrees with the scalar loop as well, failing positions included, so both levels' code is tested here."""
+    if "-DSG_SIMD_LEVEL=512" not in compile_flags():
+        pytest.skip("this build's SIMD level is AVX2 (or none): the tests above ran it")
+    monkeypatch.setenv("SEWGEN_SIMD", "avx2")
+    assert "-DSG_SIMD_LEVEL=256" in compile_flags()
+    mech = sewgen.load(ROOT / "examples" / "my_mechanism.py")
+    assert mech.simd_width == 4
+    a, b, sens = _both(mech, PHI, nan_at=(7,))
+    _agree(a, b, sens, mech.name + " avx2")
+    a, b, sens = _both(mech, PHI, params={"crank": mech.defaults()["crank"] * 2.5}, singular="flag")
+    _agree(a, b, sens, mech.name + " avx2 long crank")
+    assert (b.status != 0).any() and (b.status == 0).any()
+    monkeypatch.setenv("SEWGEN_SIMD", "avx-9000")
+    with pytest.raises(ValueError, match="SEWGEN_SIMD='avx-9000'"):
+        compile_flags()
 
 
 def test_a_user_mechanism_in_simd():

@@ -2,10 +2,10 @@
 scalar loop.
 
 The runtime solves the positions one after another in both loops (the same predictor from the five newest states,
-the same Newton), then the SIMD loop hands them over four at a time to the vector twins of the motion, rates,
+the same Newton), then the SIMD loop hands them over SG_LANES at a time (8 with AVX-512, else 4) to the vector twins of the motion, rates,
 observe and forces kernels, which repeat the scalar kernels' operations lane by lane (the cam's arc chosen by lane
 masks, Φ_q factored by its diagonal blocks in vectors): every value must equal the scalar loop's to the bit, and
-every status too, with NaN inputs in the middle of a block, unsorted and repeated angles, a last block of three,
+every status too, with NaN inputs in the middle of a block, unsorted and repeated angles, a short last block,
 designs that stop assembling at some angles, singular positions kept or refused, loads, a few outputs selected.
 A wrong lane, a wrong arc or a wrong pivot shows as a difference.
 """
@@ -15,11 +15,12 @@ import numpy as np
 import pytest
 
 import sewgen
+from sewgen.build import compile_flags
 from test_designs import varying_loads
 from test_simd import _run_both  # (SIMD sweep, scalar sweep) of the same arguments, run
 
 RNG = np.random.default_rng(21)
-#: a revolution at 0.1°, a few unsorted and repeated angles, a last block of three (3600 + 13 + 2 = 3615 = 4k + 3)
+#: a revolution at 0.1°, a few unsorted and repeated angles, a short last block (3615 = 4k + 3 = 8k' + 7)
 PHI = np.concatenate([np.linspace(0.0, 2 * np.pi, 3600, endpoint=False), RNG.uniform(-7, 7, 13), [1.0, 1.0]])
 FIELDS = ("q", "qd", "qdd", "obs", "err", "status")
 
@@ -38,7 +39,9 @@ def _same(a, b, label, fields=FIELDS):
 
 
 def test_a_newton_mechanism_has_the_simd_finish(feed):
-    assert feed.simd_width == 4
+    level = [f for f in compile_flags() if f.startswith("-DSG_SIMD_LEVEL=")]
+    assert feed.simd_width == {"-DSG_SIMD_LEVEL=512": 8, "-DSG_SIMD_LEVEL=256": 4}[level[0]]  # the build's lanes
+    assert feed.simd_width == sewgen.mechanism("take_up").simd_width  # the closed-form loops' too
     assert not feed.closed_form
 
 
