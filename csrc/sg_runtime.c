@@ -1,7 +1,7 @@
 /* sewgen C runtime: LU, damped Newton with a Lagrange predictor, and the sweep driver (a Newton sweep's rates,
- * observables and forces four positions at a time where the mechanism has a SIMD finish: csrc/sg_simd.h). */
+ * observables and forces SG_LANES positions at a time where the mechanism has a SIMD finish: csrc/sg_simd.h). */
 /* SSE2 (every x86-64) for the continuity scan, before sg_runtime.h: its SIMD part includes the same header under
- * the AVX2 target, which would make these intrinsics AVX2-only here. */
+ * the SIMD target (AVX2 or AVX-512), which would make these intrinsics need it here. */
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -270,7 +270,7 @@ static int predict5(int nq, const double *x, double *const *hq, double t, double
 
 /* Lagrange extrapolation in the shaft angle from nh earlier states (newest first, at most SG_HISTORY): of degree
  * four from five (the continuation's step), quadratic from three (after a failed step). The positions alone, no
- * rates: the rates, observables and forces of solved positions can come later, four at a time (csrc/sg_simd.h
+ * rates: the rates, observables and forces of solved positions can come later, SG_LANES at a time (csrc/sg_simd.h
  * SG_SIMD_FINISH_BODY), and the scalar loop solves the same positions to the bit. Measured on the JB1-3 feed's
  * coordinates, the five states' prediction is off by 3.7e-13 at 3600 positions a turn (median; the quintic
  * Hermite predictor from the two newest states' rates, which it replaced: 8.1e-13), 3.8e-9 at 360 (2.8e-12), 5e-5
@@ -578,7 +578,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     }
     const int use_closed = m->closed != NULL && !opt->newton_only;
     if (use_closed && m->sweep != NULL && !opt->generic) { /* the inlined loop: the same, faster */
-        if (!opt->scalar && sg_simd_width(m) > 1) /* four positions at a time */
+        if (!opt->scalar && sg_simd_width(m) > 1) /* SG_LANES positions at a time */
             return m->sweep_simd(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs,
                                  err, frc, status, want, trig, cols);
         return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs, err, frc,
@@ -599,7 +599,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         xd[k] = 0.0;
         xdd[k] = 0.0;
     }
-    /* Newton's positions now, their rates, observables and forces four at a time by the SIMD finish */
+    /* Newton's positions now, their rates, observables and forces SG_LANES at a time by the SIMD finish */
     const int deferred = !use_closed && m->finish_simd != NULL && !opt->scalar && sg_simd_width(m) > 1 &&
                          m->finish_simd(m, NULL, c, opt, gv, loads, qd, qdd, obs, frc, want);
     sg_lanes lanes;
@@ -689,7 +689,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
             }
             prev_failed = st != SG_OK;
         }
-        if (st == SG_OK && deferred) { /* the rates, observables and forces later, in a block of four */
+        if (st == SG_OK && deferred) { /* the rates, observables and forces later, in a block of SG_LANES */
             put_lane(m, &lanes, lanes.count++, i, qi, cq, x, cx, xd, xdd, resid);
             if (lanes.count == SG_LANES)
                 failures += finish_lanes(&w, &lanes, want, gv, loads, no_loads, q, qd, qdd, obs, err, frc, status);

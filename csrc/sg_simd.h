@@ -1,10 +1,14 @@
-/* sewgen C runtime, SIMD part (issue 14, item 2): four shaft positions at once in AVX2 registers.
+/* sewgen C runtime, SIMD part (issue 14, item 2): SG_LANES shaft positions at once, 8 in AVX-512 registers or 4 in
+ * AVX2 ones.
  *
  * Built where the compiler is GCC-compatible on x86-64 and the C library has glibc's vector math library
- * (libmvec: SG_HAVE_MVEC, set by sewgen/build.py); everything here is compiled for AVX2 + FMA (a pragma, not a
- * module flag), so the module still loads on any x86-64, and csrc/sg_runtime.c calls the SIMD loop only where
- * the CPU has both (sg_simd_width). No -ffast-math: GCC vector extensions with the ISO C default of no FMA
- * contraction, NaN tests kept.
+ * (libmvec: SG_HAVE_MVEC, set by sewgen/build.py, with SG_SIMD_LEVEL: 512 where the building CPU has AVX-512 F,
+ * VL and DQ, else 256); everything here is compiled for that level (a pragma, SG_SIMD_BEGIN, not a module flag),
+ * so the module still loads on any x86-64, and csrc/sg_runtime.c calls the SIMD loop only where the CPU has the
+ * level (sg_simd_width). Eight lanes on an AVX-512 CPU rather than four: half the instructions a position (the
+ * loop was issue-bound), 32 vector registers (fewer spills) and one libmvec call for eight angles; measured on
+ * the take-up selection 33 → 45 M positions/s, the JB1-3 machine at 3600 positions 2.8 → 2.5 ms (BENCHMARKS.md).
+ * No -ffast-math: GCC vector extensions with the ISO C default of no FMA contraction, NaN tests kept.
  *
  * A generated file with a closed form instantiates SG_SIMD_SWEEP_BODY with vector twins of its closed, motion
  * and forces kernels (sewgen/derive/kernels.py), which compute every lane whatever happens and return a lane
@@ -25,7 +29,7 @@
 #define SG_SIMD 0
 #endif
 
-/* The descriptor's sweep_simd: the function where SIMD is built, NULL elsewhere. */
+/* The descriptor's sweep_simd and finish_simd: the function where SIMD is built, NULL elsewhere. */
 #if SG_SIMD
 #define SG_SIMD_HOOK(fn) fn
 #else
@@ -453,9 +457,9 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
  * fallbacks call the descriptor's own kernels (m->closed, m->motion, ...: the same code, so the same values to
  * the bit) rather than inlining a third copy of them: they run only for lanes the vector kernels refuse, and the
  * copies doubled the file's compile time, under the sanitizers above all. Angle coordinates are unwrapped
- * lane after lane against the last solution, as the scalar loop does (tested four lanes at once: where no lane
+ * lane after lane against the last solution, as the scalar loop does (tested a vector at once: where no lane
  * is over half a turn from the one before, the scalar loop changes none). A kinematic sweep given cols
- * (sg_columns, at most SG_MAX_DIRECT) stores those columns' vectors straight to their arrays, four contiguous
+ * (sg_columns, at most SG_MAX_DIRECT) stores those columns' vectors straight to their arrays, SG_W contiguous
  * positions at a time, and no row: a lane the scalar step solves gets its rows, then its columns from them. */
 #define SG_SIMD_SWEEP_BODY(CONSTANTS, SCALAR_SWEEP, CLOSED_V, MOTION_V, RATES_V, OBSERVE_V, FORCES_V,        \
                            FORCES_IN_SIMD, NOBS, NFO)                                              \
@@ -571,7 +575,7 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                 }                                                                                  \
                 ok &= FORCES_V(vq, vcq, vx, vcx, vxd, c, vobs, gv, vld, vout);                     \
             }                                                                                      \
-            if (cols != NULL) { /* the columns' four positions at once (a padded lane: not stored) */ \
+            if (cols != NULL) { /* the columns' SG_W positions at once (a padded lane: not stored) */ \
                 if (contiguous)                                                                    \
                     for (int j = 0; j < ncol; ++j) sgv_storeu(cdst[j] + k, *csrc[j]);            \
                 else                                                                               \
@@ -594,7 +598,7 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
                 sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, (NOBS), robs); \
                 if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                \
             }                                                                                      \
-            if (contiguous && sgv_all(ok)) { /* the usual block: four statuses at once */          \
+            if (contiguous && sgv_all(ok)) { /* the usual block: all its statuses at once */       \
                 for (int l = 0; l < SG_W; ++l) status[k + (size_t)l] = SG_OK;                      \
                 if (err) sgv_storeu(err + k, vest);                                                \
                 continue;                                                                          \
@@ -625,7 +629,7 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
     }
 
 /* The SIMD loop of a mechanism Newton solves (no closed form): csrc/sg_runtime.c's sweep solves the positions one
- * after another (each Newton start is predicted from the ones before) and hands them over four at a time in an
+ * after another (each Newton start is predicted from the ones before) and hands them over SG_W at a time in an
  * sg_lanes; this finishes them with the vector kernels MOTION_V (NOBS observables; with want, RATES_V and the
  * wanted groups' OBSERVE_V, whose rows alone are stored) and, for forces (frc not NULL), FORCES_V (NFO outputs,
  * loads transposed in): the scalar kernels' operations lane by lane (Φ_q's block factor too), so the same values

@@ -58,8 +58,8 @@ OPTIONS = (
     ("int", "generic", "1: the generic sweep loop (kernels through the descriptor) even where the mechanism has "
                        "an inlined one (tests: the two agree to the bit)"),
     ("int", "scalar", "1: the scalar loop even where the mechanism has a SIMD one and the CPU runs it (a closed "
-                      "form: four positions at a time; Newton: the solved positions' rates, observables and forces "
-                      "four at a time) (tests: the two agree to rounding, with the same statuses)"),
+                      "form: SG_LANES positions at a time; Newton: the solved positions' rates, observables and "
+                      "forces SG_LANES at a time) (tests: the two agree to rounding, with the same statuses)"),
 )
 
 # Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx their
@@ -133,15 +133,16 @@ HOOKS = {
               "loop ignores it); NULL without a closed form"),
 }
 HOOKS["sweep_simd"] = (HOOKS["sweep"][0], HOOKS["sweep"][1],
-                       "the same sweep four positions at a time in AVX2 (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY); NULL "
+                       "the same sweep SG_LANES positions at a time (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY: 8 in AVX-512 "
+                       "or 4 in AVX2, the build's level); NULL "
                        "where the build has no SIMD or the mechanism's kernels have no vector form")
 
 HOOKS["finish_simd"] = ("int", (("const struct sg_mechanism *", "m"), ("struct sg_lanes *", "lanes"),
                                  ("const double *", "c"), ("const sg_options *", "opt"), ("const double *", "gv"),
                                  ("const double *", "loads"), ("double *", "qd"), ("double *", "qdd"),
                                  ("double *", "obs"), ("double *", "frc"), ("const unsigned char *", "want")),
-                         "a Newton sweep's rates, observables and (frc not NULL) forces at up to four solved "
-                         "positions at once in AVX2 (csrc/sg_simd.h, SG_SIMD_FINISH_BODY): their rows written, the "
+                         "a Newton sweep's rates, observables and (frc not NULL) forces at up to SG_LANES solved "
+                         "positions at once (csrc/sg_simd.h, SG_SIMD_FINISH_BODY): their rows written, the "
                          "bit mask of the lanes it vouches for returned, each one's estimated error in lanes->est; "
                          "lanes NULL: 1 where it can finish this sweep's positions (forces: without friction only), "
                          "0 where the scalar loop must; NULL with a closed form, without SIMD in the build or "
@@ -245,9 +246,10 @@ EXPORTS = {
                          "n*(3nq+nobs+3) doubles, work_status n ints (one design's sweep). Returns the number of "
                          "failed designs"),
     "sg_simd_width": ("int", (("const sg_mechanism *", "m"),),
-                      "positions per block of m's closed-form sweeps (kinematics, kinetostatics) on this CPU: 4 where m has a SIMD "
-                      "loop (the module built with SIMD, the kernels with a vector form) and the CPU has AVX2 and "
-                      "FMA, else 1 (the scalar loop); m NULL: what this module and CPU offer any mechanism"),
+                      "positions per block of m's SIMD sweeps (kinematics, kinetostatics; a Newton sweep's finish) "
+                      "on this CPU: SG_LANES where m has a SIMD loop (the module built with SIMD, the kernels with a "
+                      "vector form) and the CPU has the build's level (8: AVX-512 F, VL, DQ; 4: AVX2 and FMA), "
+                      "else 1 (the scalar loop); m NULL: what this module and CPU offer any mechanism"),
     "sg_sorted": ("int", (("size_t", "n"), ("const double *", "phi")),
                   "1 where every phi[i] >= phi[i-1] (a NaN breaks it), else 0: whether a sweep of these shaft "
                   "angles needs a solving order"),

@@ -151,9 +151,11 @@ class Mechanism:
 
     @property
     def simd_width(self) -> int:
-        """Shaft positions per block of this mechanism's closed-form sweeps here: 4 where they run in AVX2
-        (csrc/sg_simd.h: the module built with glibc's vector math, the CPU with AVX2 and FMA), 1 where the
-        scalar loop runs. Results agree to rounding either way (:meth:`Sweep.use_loop`)."""
+        """Shaft positions per SIMD block of this mechanism's sweeps here (csrc/sg_simd.h; a Newton sweep's
+        rates, observables and forces): 8 where the module is built for AVX-512 and the CPU has it (F, VL, DQ),
+        4 where it is built for AVX2 and the CPU has AVX2 and FMA (sewgen/build.py picks the building CPU's
+        best; ``SEWGEN_SIMD=avx2`` at build time forces AVX2), 1 where the scalar loop runs. Results agree to
+        rounding either way (:meth:`Sweep.use_loop`)."""
         return int(self.lib.sg_simd_width(self._descriptor))
 
     @property
@@ -731,7 +733,7 @@ class Sweep:
              "generic": {"scalar": 0, "generic": 1}}
 
     def use_loop(self, loop: str) -> "Sweep":
-        """Which closed-form loop runs (kinematics and kinetostatics): ``"auto"`` (the default: four positions
+        """Which closed-form loop runs (kinematics and kinetostatics): ``"auto"`` (the default: 8 or 4 positions
         at a time in SIMD where the module and the CPU have it, :attr:`Mechanism.simd_width`), ``"scalar"`` (the
         scalar inlined loop, which does not depend on the CPU's vector units) or ``"generic"`` (the runtime's
         loop through the descriptor's kernels). The three agree to rounding with the same statuses (tests).

@@ -600,7 +600,7 @@ class KernelSet:
         the forces' run-time test, or none where the kinematics have no vector form (where only the forces have
         none, the test says no: the SIMD loop then runs a force sweep scalar, and the template passes
         csrc/sg_simd.h's sgv_no_forces for the twin). A mechanism Newton solves gets the twins without the closed
-        form: its SIMD loop finishes four solved positions at a time (csrc/sg_simd.h SG_SIMD_FINISH_BODY)."""
+        form: its SIMD loop finishes SG_LANES solved positions at a time (csrc/sg_simd.h SG_SIMD_FINISH_BODY)."""
         try:
             kernels = ([self.closed(dyads, vector=True)] if dyads is not None else []) + [
                 self.motion(scales, vector=True), self.rates(scales, vector=True),
