@@ -518,6 +518,10 @@ def table(rows: list[dict]) -> str:
                                                   f"MISMATCH {x['max_rel_diff']:.1e} ({x['worst']})")
             if "sewgen_over_peer" in x:  # a peer: sewgen's rate on the same outputs over the peer's, same run
                 check += f"; sewgen {x['sewgen_over_peer']:.2f}x this"
+            if "target_selected_positions_per_s" in x:  # issue 14: coordinates and one point, the target rate
+                sel, want = x["sewgen_selected_positions_per_s"], x["target_selected_positions_per_s"]
+                check += (f"; coords + thread eye {_si(sel)}/s ({'ok' if sel >= want else 'MISSES'} "
+                          f">= {_si(want)})")
         lines.append((r["mechanism"], r["kernel"], _si(r["positions_per_s"]),
                        _si(x.get("raw_c_positions_per_s")), _si(r["baseline_positions_per_s"]),
                        "-" if r["speedup"] is None else f"{r['speedup']:.0f}x", check))
@@ -908,6 +912,7 @@ def _peer_numpy_entry(cfg: Config) -> Result:
                               "sewgen_solve_positions_per_s": n / t_all,
                               "sewgen_over_peer": t_peer / t_all,
                               "sewgen_selected_positions_per_s": n / t_sel,
+                              "target_selected_positions_per_s": 40e6,
                               "target_sewgen_over_peer": 2.0}
 
 

@@ -1,7 +1,8 @@
 """cffi builders: the catalog module at install time, user mechanisms at run time (DESIGN.md §4).
 
-``setup.py`` names ``sewgen/build.py:catalog_ffi`` in ``cffi_modules``; setuptools runs this file on its
-own, so it imports nothing from the sewgen package. Flags: -O2 -std=c99 and warnings as errors, never
+``setup.py`` names ``catalog_modules()``'s builders (``sewgen/build.py:catalog_ffi``, and
+``catalog_ffi_avx512`` for the AVX-512 module) in ``cffi_modules``; setuptools runs this file on its own, so it
+imports nothing from the sewgen package. Flags: -O2 -std=c99 and warnings as errors, never
 -ffast-math (it would delete the NaN guards); SEWGEN_CFLAGS adds flags (the sanitizer build of CI).
 """
 from __future__ import annotations
@@ -22,21 +23,29 @@ CFLAGS = ["-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-Wno-unused-paramet
 RUNTIME_FILES = ("sg_runtime.c", "sg_runtime.h", "sg_simd.h")
 
 
-#: SEWGEN_SIMD values: the SIMD level a build compiles (csrc/sg_simd.h), "1" (the default) the building CPU's best.
+#: SEWGEN_SIMD values: the SIMD level a build compiles (csrc/sg_simd.h); "1" (the default): a user build for the
+#: building CPU's best level, the catalog for both (below).
 SIMD_LEVELS = {"0": None, "avx2": 256, "avx512": 512}
 
 #: CPU flags (/proc/cpuinfo) the AVX-512 level needs: its vectors, 256-bit forms and 64-bit integer masks.
 AVX512_FLAGS = ("avx512f", "avx512vl", "avx512dq")
 
 
-def simd_flags() -> tuple[list[str], list[str]]:
-    """(compile flags, libraries) of the SIMD loops (csrc/sg_simd.h): glibc's vector math library on x86-64
-    Linux, where the SIMD code is compiled for AVX-512 (8 positions a vector) if the building CPU has it, else for
-    AVX2 (4), and run only where the running CPU has that level (``sg_simd_width``; elsewhere the scalar loops);
-    nothing on other platforms. SEWGEN_SIMD in the environment: ``0`` builds without SIMD, ``avx2`` or ``avx512``
-    that level whatever the building CPU has (a module built for AVX-512 runs its scalar loops on a CPU without
-    it)."""
-    return _simd_flags(os.environ.get("SEWGEN_SIMD", "1").strip().lower())
+def simd_choice() -> str:
+    """The environment's SEWGEN_SIMD (``1`` where unset), checked."""
+    choice = os.environ.get("SEWGEN_SIMD", "1").strip().lower()
+    if choice not in SIMD_LEVELS and choice != "1":
+        raise ValueError(f"SEWGEN_SIMD={choice!r}: expected one of 0, 1, avx2, avx512")
+    return choice
+
+
+def simd_flags(choice: str | None = None) -> tuple[list[str], list[str]]:
+    """(compile flags, libraries) of the SIMD loops (csrc/sg_simd.h) at level ``choice`` (a SEWGEN_SIMD value;
+    default the environment's): glibc's vector math library on x86-64 Linux, the SIMD code compiled for AVX-512
+    (8 positions a vector) or AVX2 (4) and run only where the running CPU has that level (``sg_simd_width``;
+    elsewhere the scalar loops); nothing on other platforms or for ``0``. ``1``: AVX-512 where the building CPU
+    has it (a user's mechanism is built where it runs), else AVX2."""
+    return _simd_flags(simd_choice() if choice is None else choice)
 
 
 def _cpu_flags() -> set[str]:
@@ -58,8 +67,6 @@ def _simd_flags(choice: str) -> tuple[list[str], list[str]]:
     import platform
     import sys
 
-    if choice not in SIMD_LEVELS and choice != "1":
-        raise ValueError(f"SEWGEN_SIMD={choice!r}: expected one of 0, 1, avx2, avx512")
     if choice == "0" or not (sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64")
                              and ctypes.util.find_library("mvec")):
         return [], []
@@ -68,9 +75,10 @@ def _simd_flags(choice: str) -> tuple[list[str], list[str]]:
     return ["-DSG_HAVE_MVEC", f"-DSG_SIMD_LEVEL={SIMD_LEVELS[choice]}"], ["mvec"]
 
 
-def compile_flags(extra: list[str] | None = None) -> list[str]:
-    """Every flag a module is compiled with: CFLAGS, the SIMD ones, ``extra``, then SEWGEN_CFLAGS."""
-    return CFLAGS + simd_flags()[0] + (extra or []) + shlex.split(os.environ.get("SEWGEN_CFLAGS", ""))
+def compile_flags(extra: list[str] | None = None, simd: str | None = None) -> list[str]:
+    """Every flag a module is compiled with: CFLAGS, the SIMD ones (level ``simd``, default SEWGEN_SIMD's),
+    ``extra``, then SEWGEN_CFLAGS."""
+    return CFLAGS + simd_flags(simd)[0] + (extra or []) + shlex.split(os.environ.get("SEWGEN_CFLAGS", ""))
 
 
 def runtime_dir() -> Path:
@@ -82,8 +90,11 @@ def runtime_dir() -> Path:
 
 
 def make_ffi(module: str, kernel_dir: Path, mechanisms: list[str], extra_cflags: list[str] | None = None,
-             relative_to: Path | None = None) -> cffi.FFI:
-    """An out-of-line API-mode FFI for the runtime plus the generated kernels of ``mechanisms``."""
+             relative_to: Path | None = None, simd: str | None = None, one_unit: bool = False) -> cffi.FFI:
+    """An out-of-line API-mode FFI for the runtime plus the generated kernels of ``mechanisms``, SIMD at level
+    ``simd`` (a SEWGEN_SIMD value; default the environment's). ``one_unit``: the runtime and the kernels included
+    into the module's own C file rather than compiled as sources of their own, so a second module built from the
+    same files in the same build (the catalog's AVX-512 one) shares no object file with the first."""
     rt = runtime_dir()
     ffi = cffi.FFI()
     ffi.cdef((kernel_dir / "sg_abi.cdef").read_text())  # the runtime's API, generated from sewgen/abi.py
@@ -93,11 +104,15 @@ def make_ffi(module: str, kernel_dir: Path, mechanisms: list[str], extra_cflags:
     if relative_to is not None:  # setuptools wants paths relative to setup.py
         sources = [s.relative_to(relative_to) for s in sources]
         incs = [i.relative_to(relative_to) for i in incs]
-    flags = compile_flags(extra_cflags)
-    ffi.set_source(module, '#include "sg_kernels.h"\n',
+    flags = compile_flags(extra_cflags, simd)
+    preamble = '#include "sg_kernels.h"\n'
+    if one_unit:  # the runtime first: its SSE2 header before the SIMD part's (csrc/sg_runtime.c)
+        preamble = "".join(f'#include "{Path(s).name}"\n' for s in sources) + preamble
+        sources = []
+    ffi.set_source(module, preamble,
                    sources=[str(s) for s in sources], include_dirs=[str(i) for i in incs],
                    extra_compile_args=flags, extra_link_args=[f for f in flags if f.startswith("-fsanitize")],
-                   libraries=["m"] + simd_flags()[1])
+                   libraries=["m"] + simd_flags(simd)[1])
     return ffi
 
 
@@ -110,11 +125,38 @@ def _catalog_names() -> list[str]:
     return list(json.loads((GENERATED / "manifest.json").read_text()))
 
 
-def _catalog_ffi() -> cffi.FFI:
-    return make_ffi("sewgen._kernels", GENERATED, _catalog_names(), relative_to=HERE.parent)
+def catalog_levels() -> tuple[str, ...]:
+    """The SIMD levels the catalog is built for, one module each: with SIMD (SEWGEN_SIMD ``1``, the default, or
+    ``avx512``) ``sewgen._kernels`` for AVX2 and ``sewgen._kernels_avx512`` for AVX-512, whatever the building CPU
+    has, and the loader imports the second where the running CPU has AVX-512 (sewgen/loader.py); ``avx2``: the
+    first alone; ``0`` or no SIMD on this platform: the first, without SIMD."""
+    choice = simd_choice()
+    if choice == "0" or not simd_flags("avx2")[0]:
+        return ("0",)
+    return ("avx2",) if choice == "avx2" else ("avx2", "avx512")
 
 
-catalog_ffi = _catalog_ffi() if (GENERATED / "manifest.json").is_file() else None
+def _catalog_ffi(level: str) -> cffi.FFI:
+    module = "sewgen._kernels_avx512" if level == "avx512" else "sewgen._kernels"
+    return make_ffi(module, GENERATED, _catalog_names(), relative_to=HERE.parent, simd=level,
+                    one_unit=level == "avx512")
+
+
+def catalog_ffi() -> cffi.FFI:
+    """setup.py's first catalog module, sewgen._kernels (AVX2, or no SIMD)."""
+    return _catalog_ffi(catalog_levels()[0])
+
+
+def catalog_ffi_avx512() -> cffi.FFI:
+    """setup.py's second catalog module, sewgen._kernels_avx512 (where catalog_levels() has it)."""
+    return _catalog_ffi("avx512")
+
+
+def catalog_modules() -> list[str]:
+    """setup.py's cffi_modules: one builder per catalog level."""
+    return ["sewgen/build.py:catalog_ffi"] + (["sewgen/build.py:catalog_ffi_avx512"]
+                                              if "avx512" in catalog_levels() else [])
+
 
 SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=undefined", "-fno-omit-frame-pointer", "-g",
             "-DSG_DEBUG"]

@@ -51,7 +51,9 @@ _CATALOG = None
 
 
 def catalog_module():
-    """The compiled catalog (sewgen._kernels), or the build named by SEWGEN_KERNELS (CI's sanitizer run)."""
+    """The compiled catalog: sewgen._kernels_avx512 where it is built and this CPU has AVX-512 (its SIMD loops run:
+    ``sg_simd_width``), else sewgen._kernels (sewgen/build.py catalog_levels); or the build named by
+    SEWGEN_KERNELS (CI's sanitizer run)."""
     global _CATALOG
     if _CATALOG is None:
         alt = os.environ.get("SEWGEN_KERNELS")
@@ -59,11 +61,18 @@ def catalog_module():
             _CATALOG = _import_path("sewgen._kernels", Path(alt))
         else:
             try:
-                from . import _kernels
-            except ImportError as exc:
-                raise BuildError("the compiled catalog sewgen._kernels is missing: install with `pip install .`"
-                                 f" ({exc})") from None
-            _CATALOG = _kernels
+                from . import _kernels_avx512 as wide
+            except ImportError:
+                wide = None
+            if wide is not None and wide.lib.sg_simd_width(wide.ffi.NULL) > 1:
+                _CATALOG = wide
+            else:
+                try:
+                    from . import _kernels
+                except ImportError as exc:
+                    raise BuildError("the compiled catalog sewgen._kernels is missing: install with `pip install .`"
+                                     f" ({exc})") from None
+                _CATALOG = _kernels
     return _CATALOG
 
 

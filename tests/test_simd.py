@@ -9,6 +9,7 @@ accurate than that (near a toggle, where both paths' rounding is amplified alike
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,8 @@ import pytest
 import sewgen
 from sewgen.build import compile_flags
 from sewgen.errors import ParameterError
-from sewgen.loader import catalog_names
+from sewgen.loader import catalog_module, catalog_names
+from sewgen.mechanism import Mechanism
 
 ROOT = Path(__file__).resolve().parents[1]
 RNG = np.random.default_rng(14)
@@ -148,6 +150,48 @@ def test_most_positions_take_the_vector_path():
     again = tu.prepare(PHI).use_loop("auto")
     again.run()
     np.testing.assert_array_equal(again.obs, a.obs)  # deterministic
+
+
+def _avx2_catalog():
+    """The catalog's AVX2 module where the loader runs its AVX-512 one (sewgen/build.py catalog_levels), else
+    skip: the tests above ran the AVX2 level already (or this build or CPU has only one level)."""
+    try:
+        import sewgen._kernels_avx512 as wide
+    except ImportError:
+        pytest.skip("no AVX-512 catalog module in this build")
+    import sewgen._kernels as narrow
+
+    if wide.lib.sg_simd_width(wide.ffi.NULL) == 1 or narrow.lib.sg_simd_width(narrow.ffi.NULL) == 1:
+        pytest.skip("this CPU runs one SIMD level only")
+    if not os.environ.get("SEWGEN_KERNELS"):  # (CI's sanitized run loads its own build)
+        assert catalog_module() is wide
+    assert (narrow.lib.sg_simd_width(narrow.ffi.NULL), wide.lib.sg_simd_width(wide.ffi.NULL)) == (4, 8)
+    return narrow
+
+
+@pytest.mark.parametrize("name", SIMD_CLOSED)
+def test_the_avx2_catalog_agrees_with_the_scalar_loop(name):
+    """The catalog is built for AVX2 and for AVX-512, and an AVX-512 CPU runs the second: here the first's SIMD
+    loops are held to the scalar loop as the test above holds the loaded module's, failing positions included."""
+    narrow = _avx2_catalog()
+    mech = Mechanism(narrow.ffi, narrow.lib, name)
+    assert mech.simd_width == 4
+    for kw in ({}, {"singular": "flag", "forces": True}):
+        a, b, sens = _both(mech, PHI, nan_at=(5, 1802), **kw)
+        _agree(a, b, sens, f"{name} avx2 {kw}")
+        assert (b.status[[5, 1802]] == 4).all()
+
+
+def test_the_avx2_newton_finish_equals_the_scalar_loop():
+    """The AVX2 module's SIMD finish of the JB1-3 feed (four lanes, the short last block of three) equals its
+    scalar loop to the bit, kinematics and forces, as tests/test_simd_newton.py holds the loaded module's."""
+    narrow = _avx2_catalog()
+    feed = Mechanism(narrow.ffi, narrow.lib, "feed")
+    assert feed.simd_width == 4
+    for kw in ({}, {"forces": True, "singular": "flag"}):
+        a, b = _run_both(feed, PHI, nan_at=(5, 1802), **kw)
+        for k in ("q", "qd", "qdd", "obs", "err", "status") + (("frc",) if kw else ()):
+            np.testing.assert_array_equal(getattr(a, k), getattr(b, k), err_msg=f"feed avx2 {kw}: {k}")
 
 
 def test_the_other_simd_level(monkeypatch):
