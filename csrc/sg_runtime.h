@@ -49,7 +49,7 @@ typedef struct sg_columns {
  * its position's index, coordinates and their cos, sin, inputs with theirs and their rates, Newton's last relative
  * residual; est receives the rates' estimated relative error of each lane the finish vouches for. A block of
  * fewer than SG_LANES positions repeats its last one in the lanes after count. SG_LANES: the SIMD vector's lanes,
- * 8 where the module is built for AVX-512 (SG_SIMD_LEVEL 512, sewgen/build.py), else 4 (AVX2). */
+ * 8 in a module built for AVX-512 (SG_SIMD_LEVEL 512, sewgen/build.py), else 4 (AVX2). */
 #if defined(SG_SIMD_LEVEL) && SG_SIMD_LEVEL == 512
 #define SG_LANES 8
 #else

@@ -2,12 +2,12 @@
  * AVX2 ones.
  *
  * Built where the compiler is GCC-compatible on x86-64 and the C library has glibc's vector math library
- * (libmvec: SG_HAVE_MVEC, set by sewgen/build.py, with SG_SIMD_LEVEL: 512 where the building CPU has AVX-512 F,
- * VL and DQ, else 256); everything here is compiled for that level (a pragma, SG_SIMD_BEGIN, not a module flag),
- * so the module still loads on any x86-64, and csrc/sg_runtime.c calls the SIMD loop only where the CPU has the
- * level (sg_simd_width). Eight lanes on an AVX-512 CPU rather than four: half the instructions a position (the
+ * (libmvec: SG_HAVE_MVEC, set by sewgen/build.py, with SG_SIMD_LEVEL 512 for AVX-512 F, VL and DQ or 256 for
+ * AVX2: the catalog is built once for each, a user's mechanism for the CPU it runs on); everything here is
+ * compiled for that level (a pragma, SG_SIMD_BEGIN, not a module flag), so the module still loads on any x86-64,
+ * and csrc/sg_runtime.c calls the SIMD loop only where the CPU has the level (sg_simd_width). Eight lanes on an AVX-512 CPU rather than four: half the instructions a position (the
  * loop was issue-bound), 32 vector registers (fewer spills) and one libmvec call for eight angles; measured on
- * the take-up selection 33 → 45 M positions/s, the JB1-3 machine at 3600 positions 2.8 → 2.5 ms (BENCHMARKS.md).
+ * the take-up selection 33 → 44 M positions/s, take_up kinematics 22 → 28 M/s (BENCHMARKS.md, 2026-11-27).
  * No -ffast-math: GCC vector extensions with the ISO C default of no FMA contraction, NaN tests kept.
  *
  * A generated file with a closed form instantiates SG_SIMD_SWEEP_BODY with vector twins of its closed, motion
@@ -36,8 +36,8 @@
 #define SG_SIMD_HOOK(fn) 0
 #endif
 
-/* The instruction set of the SIMD code (SG_SIMD_LEVEL, chosen by sewgen/build.py: AVX-512 where the building CPU
- * has it, else AVX2), switched on for it alone by SG_SIMD_BEGIN ... SG_SIMD_END. */
+/* The instruction set of the SIMD code (SG_SIMD_LEVEL, set by sewgen/build.py: AVX-512 or AVX2), switched on for
+ * it alone by SG_SIMD_BEGIN ... SG_SIMD_END. */
 #define SG_PRAGMA(x) _Pragma(#x)
 #if SG_LANES == 8
 #define SG_SIMD_BEGIN SG_PRAGMA(GCC push_options) SG_PRAGMA(GCC target("avx2,fma,avx512f,avx512vl,avx512dq"))

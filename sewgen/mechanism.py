@@ -152,10 +152,11 @@ class Mechanism:
     @property
     def simd_width(self) -> int:
         """Shaft positions per SIMD block of this mechanism's sweeps here (csrc/sg_simd.h; a Newton sweep's
-        rates, observables and forces): 8 where the module is built for AVX-512 and the CPU has it (F, VL, DQ),
-        4 where it is built for AVX2 and the CPU has AVX2 and FMA (sewgen/build.py picks the building CPU's
-        best; ``SEWGEN_SIMD=avx2`` at build time forces AVX2), 1 where the scalar loop runs. Results agree to
-        rounding either way (:meth:`Sweep.use_loop`)."""
+        rates, observables and forces): 8 where its module is built for AVX-512 and the CPU has it (F, VL, DQ),
+        4 where it is built for AVX2 and the CPU has AVX2 and FMA, 1 where the scalar loop runs. The catalog is
+        built for both and the loader takes the AVX-512 module where the CPU runs it; a user's mechanism is built
+        for the running CPU's best (sewgen/build.py; ``SEWGEN_SIMD=avx2`` at build time: AVX2 only). Results
+        agree to rounding either way (:meth:`Sweep.use_loop`)."""
         return int(self.lib.sg_simd_width(self._descriptor))
 
     @property

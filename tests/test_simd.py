@@ -195,9 +195,10 @@ def test_the_avx2_newton_finish_equals_the_scalar_loop():
 
 
 def test_the_other_simd_level(monkeypatch):
-    """A module is built for one SIMD level, the building CPU's best (sewgen/build.py: AVX-512 with 8 lanes, else
-    AVX2 with 4); where that is AVX-512, a user mechanism built for AVX2 (SEWGEN_SIMD=avx2) runs four lanes and
-    agrees with the scalar loop as well, failing positions included, so both levels' code is tested here."""
+    """A user's mechanism is built for one SIMD level, the building CPU's best (sewgen/build.py: AVX-512 with 8
+    lanes, else AVX2 with 4); where that is AVX-512, the same mechanism built for AVX2 (SEWGEN_SIMD=avx2, its own
+    cache entry) runs four lanes and agrees with the scalar loop too, failing positions included; a bad
+    SEWGEN_SIMD is a clear error."""
     if "-DSG_SIMD_LEVEL=512" not in compile_flags():
         pytest.skip("this build's SIMD level is AVX2 (or none): the tests above ran it")
     monkeypatch.setenv("SEWGEN_SIMD", "avx2")
