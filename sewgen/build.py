@@ -163,7 +163,9 @@ SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=undefined", "
 
 
 def build_catalog(outdir: Path, extra_cflags: list[str] | None = None) -> Path:
-    """Compile the catalog module into ``outdir`` (a checkout only); returns the shared object's path."""
+    """Compile the catalog as one module, ``sewgen._kernels``, into ``outdir`` (a checkout only; CI's sanitized
+    build, loaded through SEWGEN_KERNELS) at the environment's SIMD level (SEWGEN_SIMD; by default the building
+    CPU's best, as a user build); returns the shared object's path."""
     outdir.mkdir(parents=True, exist_ok=True)
     ffi = make_ffi("sewgen._kernels", GENERATED, _catalog_names(), extra_cflags)
     return Path(ffi.compile(tmpdir=str(outdir)))
