@@ -5,9 +5,10 @@
  * (libmvec: SG_HAVE_MVEC, set by sewgen/build.py, with SG_SIMD_LEVEL 512 for AVX-512 F, VL and DQ or 256 for
  * AVX2: the catalog is built once for each, a user's mechanism for the CPU it runs on); everything here is
  * compiled for that level (a pragma, SG_SIMD_BEGIN, not a module flag), so the module still loads on any x86-64,
- * and csrc/sg_runtime.c calls the SIMD loop only where the CPU has the level (sg_simd_width). Eight lanes on an AVX-512 CPU rather than four: half the instructions a position (the
- * loop was issue-bound), 32 vector registers (fewer spills) and one libmvec call for eight angles; measured on
- * the take-up selection 33 → 44 M positions/s, take_up kinematics 22 → 28 M/s (BENCHMARKS.md, 2026-11-27).
+ * and csrc/sg_runtime.c calls the SIMD loop only where the CPU has the level (sg_simd_width). Eight lanes on an
+ * AVX-512 CPU rather than four: half the instructions a position (the loop was issue-bound), 32 vector registers
+ * (fewer spills) and one libmvec call for eight angles; measured on the take-up selection 33 → 44 M positions/s,
+ * take_up kinematics 22 → 28 M/s (BENCHMARKS.md, 2026-11-27).
  * No -ffast-math: GCC vector extensions with the ISO C default of no FMA contraction, NaN tests kept.
  *
  * A generated file with a closed form instantiates SG_SIMD_SWEEP_BODY with vector twins of its closed, motion
@@ -15,10 +16,10 @@
  * mask of what they vouch for. The loop takes a block's vector results only where they are clearly good: the
  * inputs finite, every dyad closing with a margin (SG_SIMD_MARGIN: the scalar loop decides triangles that only
  * just close or fail), the rates' estimated error at most a quarter of opt->singular_tol, every force block
- * above its pivot tolerance and every output finite. Anything else goes through the scalar step of csrc/sg_runtime.h, so statuses, first failing angles
- * and the singular decision are always the scalar loop's; the values of vector lanes agree with the scalar
- * loop's to rounding (libmvec's sin, cos, atan2 are within 4 ulp), and a given input gives the same result on
- * a given machine every time.
+ * above its pivot tolerance and every output finite. Anything else goes through the scalar step of
+ * csrc/sg_runtime.h, so statuses, first failing angles and the singular decision are always the scalar loop's;
+ * the values of vector lanes agree with the scalar loop's to rounding (libmvec's sin, cos, atan2 are within
+ * 4 ulp), and a given input gives the same result on a given machine every time.
  */
 #ifndef SG_SIMD_H
 #define SG_SIMD_H
@@ -36,8 +37,9 @@
 #define SG_SIMD_HOOK(fn) 0
 #endif
 
+#if SG_SIMD
 /* The instruction set of the SIMD code (SG_SIMD_LEVEL, set by sewgen/build.py: AVX-512 or AVX2), switched on for
- * it alone by SG_SIMD_BEGIN ... SG_SIMD_END. */
+ * it alone by SG_SIMD_BEGIN ... SG_SIMD_END (here and around a generated file's vector twins). */
 #define SG_PRAGMA(x) _Pragma(#x)
 #if SG_LANES == 8
 #define SG_SIMD_BEGIN SG_PRAGMA(GCC push_options) SG_PRAGMA(GCC target("avx2,fma,avx512f,avx512vl,avx512dq"))
@@ -46,7 +48,6 @@
 #endif
 #define SG_SIMD_END SG_PRAGMA(GCC pop_options)
 
-#if SG_SIMD
 SG_SIMD_BEGIN
 #include <immintrin.h>
 #include <string.h>
@@ -75,34 +76,42 @@ typedef union {
 
 #define SG_VINLINE static inline __attribute__((always_inline))
 
-/* glibc's vector math (libmvec): x86_64 ABI "e" (AVX-512, 8 doubles) or "d" (AVX2, 4 doubles). */
+/* glibc's vector math (libmvec: x86_64 ABI "e", AVX-512, 8 doubles; "d", AVX2, 4 doubles), the square root and
+ * the lanes of a mask as bits (lane l in bit l), at the module's level. */
 #if SG_W == 8
 __m512d _ZGVeN8v_sin(__m512d x);
 __m512d _ZGVeN8v_cos(__m512d x);
 __m512d _ZGVeN8vv_atan2(__m512d y, __m512d x);
-#define SGV_SIN(a) (sg_vd) _ZGVeN8v_sin((__m512d)(a))
-#define SGV_COS(a) (sg_vd) _ZGVeN8v_cos((__m512d)(a))
-#define SGV_ATAN2(y, x) (sg_vd) _ZGVeN8vv_atan2((__m512d)(y), (__m512d)(x))
-#define SGV_SQRT(a) (sg_vd) _mm512_sqrt_pd((__m512d)(a))
-#define SGV_BITS(m) (int)_mm512_movepi64_mask((__m512i)(m))
+SG_VINLINE sg_vd sgv_atan2(sg_vd y, sg_vd x) { return (sg_vd)_ZGVeN8vv_atan2((__m512d)y, (__m512d)x); }
+SG_VINLINE void sgv_sincos(sg_vd a, sg_vd *c, sg_vd *s)
+{
+    *c = (sg_vd)_ZGVeN8v_cos((__m512d)a);
+    *s = (sg_vd)_ZGVeN8v_sin((__m512d)a);
+}
+SG_VINLINE sg_vd sgv_sqrt(sg_vd a) { return (sg_vd)_mm512_sqrt_pd((__m512d)a); }
+SG_VINLINE int sgv_bits(sg_vm m) { return (int)_mm512_movepi64_mask((__m512i)m); }
 #else
 __m256d _ZGVdN4v_sin(__m256d x);
 __m256d _ZGVdN4v_cos(__m256d x);
 __m256d _ZGVdN4vv_atan2(__m256d y, __m256d x);
-#define SGV_SIN(a) (sg_vd) _ZGVdN4v_sin((__m256d)(a))
-#define SGV_COS(a) (sg_vd) _ZGVdN4v_cos((__m256d)(a))
-#define SGV_ATAN2(y, x) (sg_vd) _ZGVdN4vv_atan2((__m256d)(y), (__m256d)(x))
-#define SGV_SQRT(a) (sg_vd) _mm256_sqrt_pd((__m256d)(a))
-#define SGV_BITS(m) _mm256_movemask_pd((__m256d)(m))
+SG_VINLINE sg_vd sgv_atan2(sg_vd y, sg_vd x) { return (sg_vd)_ZGVdN4vv_atan2((__m256d)y, (__m256d)x); }
+SG_VINLINE void sgv_sincos(sg_vd a, sg_vd *c, sg_vd *s)
+{
+    *c = (sg_vd)_ZGVdN4v_cos((__m256d)a);
+    *s = (sg_vd)_ZGVdN4v_sin((__m256d)a);
+}
+SG_VINLINE sg_vd sgv_sqrt(sg_vd a) { return (sg_vd)_mm256_sqrt_pd((__m256d)a); }
+SG_VINLINE int sgv_bits(sg_vm m) { return _mm256_movemask_pd((__m256d)m); }
 #endif
+/* AVX2 register h (four lanes) of a vector, read and written (the row transposes) */
+SG_VINLINE __m256d sgv_half(const sg_vd *v, int h) { return ((const sg_vhalves *)v)->h[h]; }
+SG_VINLINE void sgv_set_half(sg_vd *v, int h, __m256d x) { ((sg_vhalves *)v)->h[h] = x; }
 
 SG_VINLINE sg_vd sgv_set1(double a) { return (sg_vd){SG_SPLAT(a)}; }
 SG_VINLINE sg_vm sgv_iset1(long long a) { return (sg_vm){SG_SPLAT(a)}; }
 SG_VINLINE sg_vm sgv_true(void) { return sgv_iset1(-1); }
 SG_VINLINE sg_vm sgv_false(void) { return sgv_iset1(0); }
 SG_VINLINE sg_vd sgv_select(sg_vm m, sg_vd a, sg_vd b) { return (sg_vd)(((sg_vm)a & m) | ((sg_vm)b & ~m)); }
-/* the lanes of a mask as bits, lane l in bit l */
-SG_VINLINE int sgv_bits(sg_vm m) { return SGV_BITS(m); }
 SG_VINLINE int sgv_all(sg_vm m) { return sgv_bits(m) == (1 << SG_W) - 1; }
 SG_VINLINE int sgv_none(sg_vm m) { return sgv_bits(m) == 0; }
 /* {first, v[0], ..., v[SG_W - 2]}: each lane's predecessor, first before lane 0 */
@@ -119,15 +128,8 @@ SG_VINLINE sg_vd sgv_loadu(const double *p)
 }
 SG_VINLINE void sgv_storeu(double *p, sg_vd v) { memcpy(p, &v, sizeof v); }
 SG_VINLINE sg_vm sgv_isfinite(sg_vd a) { return (a - a) == sgv_set1(0.0); } /* inf - inf, NaN: NaN */
-SG_VINLINE sg_vd sgv_sqrt(sg_vd a) { return SGV_SQRT(a); }
 SG_VINLINE sg_vd sgv_fabs(sg_vd a) { return (sg_vd)((sg_vm)a & sgv_iset1(0x7fffffffffffffffLL)); }
 SG_VINLINE sg_vd sgv_fmax(sg_vd a, sg_vd b) { return sgv_select(a > b, a, b); }
-SG_VINLINE sg_vd sgv_atan2(sg_vd y, sg_vd x) { return SGV_ATAN2(y, x); }
-SG_VINLINE void sgv_sincos(sg_vd a, sg_vd *c, sg_vd *s)
-{
-    *c = SGV_COS(a);
-    *s = SGV_SIN(a);
-}
 
 /* The forces twin of a mechanism whose forces have no vector form: never called (its sg_<m>_forces_in_simd says
  * no, and a force sweep then runs scalar), there to fill SG_SIMD_SWEEP_BODY's argument. */
@@ -354,10 +356,10 @@ SG_VINLINE void sgv_load_rows(const double *const src[SG_W], int count, sg_vd *v
             const __m256d r2 = _mm256_loadu_pd(row[2] + j), r3 = _mm256_loadu_pd(row[3] + j);
             const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
             const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
-            ((sg_vhalves *)&v[j])->h[h] = _mm256_permute2f128_pd(t0, t2, 0x20);
-            ((sg_vhalves *)&v[j + 1])->h[h] = _mm256_permute2f128_pd(t1, t3, 0x20);
-            ((sg_vhalves *)&v[j + 2])->h[h] = _mm256_permute2f128_pd(t0, t2, 0x31);
-            ((sg_vhalves *)&v[j + 3])->h[h] = _mm256_permute2f128_pd(t1, t3, 0x31);
+            sgv_set_half(&v[j], h, _mm256_permute2f128_pd(t0, t2, 0x20));
+            sgv_set_half(&v[j + 1], h, _mm256_permute2f128_pd(t1, t3, 0x20));
+            sgv_set_half(&v[j + 2], h, _mm256_permute2f128_pd(t0, t2, 0x31));
+            sgv_set_half(&v[j + 3], h, _mm256_permute2f128_pd(t1, t3, 0x31));
         }
     for (; j < count; ++j)
         for (int l = 0; l < SG_W; ++l) v[j][l] = src[l][j];
@@ -372,8 +374,8 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
         double *const *row = dst + 4 * h;
         int j = 0;
         for (; j + 4 <= count; j += 4) {
-            const __m256d r0 = ((const sg_vhalves *)&v[j])->h[h], r1 = ((const sg_vhalves *)&v[j + 1])->h[h];
-            const __m256d r2 = ((const sg_vhalves *)&v[j + 2])->h[h], r3 = ((const sg_vhalves *)&v[j + 3])->h[h];
+            const __m256d r0 = sgv_half(&v[j], h), r1 = sgv_half(&v[j + 1], h);
+            const __m256d r2 = sgv_half(&v[j + 2], h), r3 = sgv_half(&v[j + 3], h);
             const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
             const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
             _mm256_storeu_pd(row[0] + j, _mm256_permute2f128_pd(t0, t2, 0x20));
@@ -382,7 +384,7 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
             _mm256_storeu_pd(row[3] + j, _mm256_permute2f128_pd(t1, t3, 0x31));
         }
         if (j + 2 <= count) { /* two columns: one 16-byte piece a lane */
-            const __m256d r0 = ((const sg_vhalves *)&v[j])->h[h], r1 = ((const sg_vhalves *)&v[j + 1])->h[h];
+            const __m256d r0 = sgv_half(&v[j], h), r1 = sgv_half(&v[j + 1], h);
             const __m256d lo = _mm256_unpacklo_pd(r0, r1), hi = _mm256_unpackhi_pd(r0, r1);
             _mm_storeu_pd(row[0] + j, _mm256_castpd256_pd128(lo));
             _mm_storeu_pd(row[1] + j, _mm256_castpd256_pd128(hi));
@@ -391,7 +393,7 @@ SG_VINLINE void sgv_store_rows(const sg_vd *v, int count, double *const dst[SG_W
             j += 2;
         }
         if (j < count) { /* the last column */
-            const __m256d r = ((const sg_vhalves *)&v[j])->h[h];
+            const __m256d r = sgv_half(&v[j], h);
             const __m128d a = _mm256_castpd256_pd128(r), b = _mm256_extractf128_pd(r, 1);
             _mm_storel_pd(row[0] + j, a);
             _mm_storeh_pd(row[1] + j, a);
@@ -689,7 +691,7 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
         sgv_store_rows(vqdd, nq, rqdd);                                                            \
         sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, (NOBS), robs);         \
         for (int l = 0; l < SG_W; ++l) lanes->est[l] = vest[l];                                    \
-        return sgv_bits(ok) & ((1 << lanes->count) - 1);                       \
+        return sgv_bits(ok) & ((1 << lanes->count) - 1);                                          \
     }
 
 SG_SIMD_END

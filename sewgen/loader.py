@@ -50,29 +50,32 @@ def _import_path(module: str, path: Path):
 _CATALOG = None
 
 
+def _runnable_avx512():
+    """sewgen._kernels_avx512 where it is built and this CPU runs its SIMD loops (``sg_simd_width``), else None."""
+    try:
+        from . import _kernels_avx512 as wide
+    except ImportError:
+        return None
+    return wide if wide.lib.sg_simd_width(wide.ffi.NULL) > 1 else None
+
+
 def catalog_module():
-    """The compiled catalog: sewgen._kernels_avx512 where it is built and this CPU has AVX-512 (its SIMD loops run:
-    ``sg_simd_width``), else sewgen._kernels (sewgen/build.py catalog_levels); or the build named by
-    SEWGEN_KERNELS (CI's sanitizer run)."""
+    """The compiled catalog: sewgen._kernels_avx512 where it is built and this CPU has AVX-512, else
+    sewgen._kernels (sewgen/build.py catalog_levels); or the build named by SEWGEN_KERNELS (CI's sanitizer run)."""
     global _CATALOG
     if _CATALOG is None:
         alt = os.environ.get("SEWGEN_KERNELS")
         if alt:
             _CATALOG = _import_path("sewgen._kernels", Path(alt))
         else:
+            _CATALOG = _runnable_avx512()
+        if _CATALOG is None:
             try:
-                from . import _kernels_avx512 as wide
-            except ImportError:
-                wide = None
-            if wide is not None and wide.lib.sg_simd_width(wide.ffi.NULL) > 1:
-                _CATALOG = wide
-            else:
-                try:
-                    from . import _kernels
-                except ImportError as exc:
-                    raise BuildError("the compiled catalog sewgen._kernels is missing: install with `pip install .`"
-                                     f" ({exc})") from None
-                _CATALOG = _kernels
+                from . import _kernels
+            except ImportError as exc:
+                raise BuildError("the compiled catalog sewgen._kernels is missing: install with `pip install .`"
+                                 f" ({exc})") from None
+            _CATALOG = _kernels
     return _CATALOG
 
 

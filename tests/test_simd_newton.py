@@ -2,11 +2,12 @@
 scalar loop.
 
 The runtime solves the positions one after another in both loops (the same predictor from the five newest states,
-the same Newton), then the SIMD loop hands them over SG_LANES at a time (8 with AVX-512, else 4) to the vector twins of the motion, rates,
-observe and forces kernels, which repeat the scalar kernels' operations lane by lane (the cam's arc chosen by lane
-masks, Φ_q factored by its diagonal blocks in vectors): every value must equal the scalar loop's to the bit, and
-every status too, with NaN inputs in the middle of a block, unsorted and repeated angles, a short last block,
-designs that stop assembling at some angles, singular positions kept or refused, loads, a few outputs selected.
+the same Newton), then the SIMD loop hands them over SG_LANES at a time (8 with AVX-512, else 4) to the vector
+twins of the motion, rates, observe and forces kernels, which repeat the scalar kernels' operations lane by lane
+(the cam's arc chosen by lane masks, Φ_q factored by its diagonal blocks in vectors): every value must equal the
+scalar loop's to the bit, and every status too, with NaN inputs in the middle of a block, unsorted and repeated
+angles, a short last block, designs that stop assembling at some angles, singular positions kept or refused,
+loads, a few outputs selected.
 A wrong lane, a wrong arc or a wrong pivot shows as a difference.
 """
 from __future__ import annotations
