@@ -18,11 +18,16 @@
 #define SG_ASSERT(cond) ((void)0)
 #endif
 
-/* memcpy of n doubles; nothing for n = 0 (a mechanism without loops passes empty, possibly NULL, arrays, and
- * memcpy with a NULL pointer is undefined even for zero bytes). */
+/* n doubles from src to dst (not overlapping); nothing for n = 0 (a mechanism without loops passes empty, possibly
+ * NULL, arrays). The rows copied here are a few doubles (a position's coordinates, a lane's inputs), many times a
+ * position: two at a time in registers, inline, where memcpy of a run-time size was a library call each. */
 static inline void copy_doubles(double *dst, const double *src, int n)
 {
-    if (n > 0) memcpy(dst, src, sizeof(double) * (size_t)n);
+    int i = 0;
+#if defined(__SSE2__)
+    for (; i + 2 <= n; i += 2) _mm_storeu_pd(dst + i, _mm_loadu_pd(src + i));
+#endif
+    for (; i < n; ++i) dst[i] = src[i];
 }
 
 int sg_simd_width(const sg_mechanism *m)
@@ -74,16 +79,8 @@ static double weighted_norm(int n, const double *v, const double *w)
 }
 
 /* cos and sin of q + d from those of q, for the small steps of Newton and of the predictor: the addition
- * formulas with cos d, sin d from their Taylor series (|d| < 1e-2: the first omitted terms, d^10/10! and
- * d^9/9!, are below 1e-26 relative), so a step costs no libm call. Larger steps: sincos. */
-#define SG_SMALL_STEP 1e-2
-/* Below this the series give cos d = 1 and sin d = d exactly (their corrections, d^2/2 and d^2/6 relative, are
- * under 2^-54, half an ulp of 1, up to |d| = 1.05e-8): the shift is c - s d, s + c d, the same bits. */
-#define SG_TINY_STEP 1e-9
-/* Below this the series' first omitted terms, d^7/7! in sin d and d^6/6! in cos d, are below 2e-22 and 1.4e-21
- * relative: three terms each. */
-#define SG_SHORT_STEP 1e-3
-
+ * formulas with cos d, sin d from their Taylor series (csrc/sg_runtime.h, SG_TINY_STEP ...), so a step costs no
+ * libm call. Larger steps: sincos. csrc/sg_simd.h's sgv_shift_trig is this lane by lane. */
 static void shift_trig(const sg_mechanism *m, const double *q, const double *cq, const double *d, double *q_out,
                        double *cq_out)
 {
@@ -98,18 +95,13 @@ static void shift_trig(const sg_mechanism *m, const double *q, const double *cq,
             cq_out[2 * i + 1] = s + c * h;
         } else if (fabs(d[i]) < SG_SHORT_STEP) { /* the predictor's steps at fine sweeps: three terms each */
             const double h = d[i], h2 = h * h;
-            const double sd = h * (1.0 - h2 * (1.0 / 6.0) * (1.0 - h2 * (1.0 / 20.0)));
-            const double cd = 1.0 - h2 * 0.5 * (1.0 - h2 * (1.0 / 12.0));
+            const double sd = SG_SIN_SHORT(h, h2), cd = SG_COS_SHORT(h2);
             const double c = cq[2 * i], s = cq[2 * i + 1];
             cq_out[2 * i] = c * cd - s * sd;
             cq_out[2 * i + 1] = s * cd + c * sd;
         } else if (fabs(d[i]) < SG_SMALL_STEP) {
             const double h = d[i], h2 = h * h;
-            /* the series' divisions as products with their reciprocals (constants): within an ulp of the
-             * quotients, in a correction already below 1e-4 of the result, and no division on Newton's path */
-            const double sd = h * (1.0 - h2 * (1.0 / 6.0) * (1.0 - h2 * (1.0 / 20.0) * (1.0 - h2 * (1.0 / 42.0))));
-            const double cd = 1.0 - h2 * 0.5 * (1.0 - h2 * (1.0 / 12.0) * (1.0 - h2 * (1.0 / 30.0) *
-                                                                           (1.0 - h2 * (1.0 / 56.0))));
+            const double sd = SG_SIN_SMALL(h, h2), cd = SG_COS_SMALL(h2);
             const double c = cq[2 * i], s = cq[2 * i + 1];
             cq_out[2 * i] = c * cd - s * sd;
             cq_out[2 * i + 1] = s * cd + c * sd;
@@ -439,6 +431,95 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
     }
 }
 
+/* The largest shaft-angle span from the newest state to the last position of a block (rad): the quartic
+ * predictor's error grows as the fifth power of the distance (measured on the JB1-3 feed at 3600 positions a
+ * turn, 0.1° apart: 3.7e-13 one step ahead, ~3e-10 eight steps ahead), and one Newton step takes the latter to
+ * rounding as it takes the former. */
+#define SG_BLOCK_SPAN 0.1
+
+/* Up to SG_BLOCK positions from solving index k on, each predicted (the quartic) from the same history and solved
+ * by Newton on its own (the SIMD Newton where simd and the mechanism has one, the scalar newton() for every lane
+ * it leaves, the same values either way): the positions of one direction, finite inputs and no farther than
+ * SG_BLOCK_SPAN from the newest state. Each is then checked as advance() checks a step (assembled, on the
+ * history's branch, no farther from its prediction than a step may correct); the ones before the first that
+ * fails join the history in order. Returns their count, their solutions in b; 0 where fewer than two positions
+ * make a block or the first fails: the caller's step-by-step continuation then takes position k, and it takes
+ * the position that failed (b->count tells whether one did). The loops' weights are refreshed at a block's
+ * first position when they are due. */
+static int solve_block(sg_walker *w, sg_block *b, size_t k, size_t n, const size_t *order, const double *phi,
+                       const double *omega, const double *alpha, int simd)
+{
+    const sg_mechanism *m = w->m;
+    const int nq = m->nq, nx = m->nx;
+    b->count = 0;
+    if (w->nh < SG_HISTORY || (m->nblock > 0 && !w->has_ref) || !(w->hphi[0] != w->hphi[1])) return 0;
+    const double dir = w->hphi[0] > w->hphi[1] ? 1.0 : -1.0;
+    double qp[SG_BLOCK][SG_MAX_Q], prev = w->hphi[0];
+    int count = 0;
+    for (; count < SG_BLOCK && k + (size_t)count < n; ++count) {
+        const size_t i = order ? order[k + count] : k + count;
+        const double ph = phi[i];
+        if (!isfinite(ph + omega[i] + alpha[i]) || !((ph - prev) * dir > 0.0) ||
+            !(fabs(ph - w->hphi[0]) <= SG_BLOCK_SPAN))
+            break;
+        double d[SG_MAX_Q];
+        predict(nq, SG_HISTORY, w->hphi, w->hq, ph, qp[count]);
+        for (int j = 0; j < nq; ++j) d[j] = qp[count][j] - w->hq[0][j];
+        if (!small_change(w, d)) break;
+        shift_trig(m, w->hq[0], w->hcq, d, b->q[count], b->cq[count]);
+        b->x[count][0] = ph;
+        sg_sincos_inl(ph, &b->cx[count][0], &b->cx[count][1]);
+        for (int j = 1; j < nx; ++j) {
+            b->x[count][j] = w->x[j];
+            b->cx[count][2 * j] = w->cx[2 * j];
+            b->cx[count][2 * j + 1] = w->cx[2 * j + 1];
+        }
+        prev = ph;
+    }
+    if (count < 2) return 0;
+    b->count = count;
+    if (w->scale_age <= 0) { /* solve_at's refresh, at the block's first start */
+        double size[SG_MAX_Q];
+        m->scales(b->q[0], b->cq[0], b->x[0], b->cx[0], w->c, size);
+        for (int j = 0; j < nq; ++j) w->newton_w[j] = (1.0 / size[j]) / w->opt->tol;
+        w->scale_age = 16;
+    }
+    w->scale_age -= count;
+    int solved = 0;
+    if (simd && m->newton_simd != NULL) {
+        for (int l = count; l < SG_BLOCK; ++l) { /* a short block: its last position again in the spare lanes */
+            copy_doubles(b->q[l], b->q[count - 1], nq);
+            copy_doubles(b->cq[l], b->cq[count - 1], 2 * nq);
+            copy_doubles(b->x[l], b->x[count - 1], nx);
+            copy_doubles(b->cx[l], b->cx[count - 1], 2 * nx);
+        }
+        for (int f = 0; f < count; f += SG_LANES) solved |= m->newton_simd(m, b, f, w->c, w->opt, w->newton_w) << f;
+    }
+    for (int l = 0; l < count; ++l) {
+        if (solved >> l & 1) continue;
+        double jac[SG_MAX_Q * SG_MAX_Q];
+        b->status[l] = newton(m, b->q[l], b->cq[l], b->x[l], b->cx[l], w->c, w->opt, w->newton_w, 1, jac,
+                              &b->resid[l]);
+        if (b->status[l] == SG_OK && m->nblock > 0) m->blocks(jac, b->bv[l]);
+    }
+    int got = 0;
+    for (; got < count && b->status[got] == SG_OK; ++got) {
+        int jump = 0;
+        for (int j = 0; j < m->nblock; ++j)
+            jump |= b->bv[got][j] * w->ref[j] < 0.0 && fabs(b->bv[got][j]) > SG_BLOCK_ZERO;
+        double d[SG_MAX_Q];
+        for (int j = 0; j < nq; ++j) d[j] = b->q[got][j] - qp[got][j];
+        if (jump || !small_change(w, d)) break;
+    }
+    for (int l = 0; l < got; ++l) push(w, b->x[l][0], b->q[l], b->cq[l]);
+    if (got > 0) { /* the walker's input: the last accepted position's */
+        w->x[0] = b->x[got - 1][0];
+        w->cx[0] = b->cx[got - 1][0];
+        w->cx[1] = b->cx[got - 1][1];
+    }
+    return got;
+}
+
 /* The rates and observables at a solved position: the joint motion kernel where every observable is wanted (want
  * NULL), else the rates kernel and the wanted groups of observables (kernel 'observe': want's first ngroup
  * flags; want[ngroup], whether the coordinates are read, matters to the SIMD loop only), which compute the same
@@ -628,7 +709,40 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     }
     size_t failures = 0;
     int prev_failed = 0;
+    const int simd_newton = !opt->scalar && sg_simd_width(m) > 1;
+    size_t step_at = n; /* a position a block failed at: the step-by-step continuation takes it */
+    sg_block blk;
     for (size_t k = 0; k < n; ++k) {
+        if (!use_closed && !prev_failed && k != step_at) { /* SG_BLOCK positions from one history */
+            const int got = solve_block(&w, &blk, k, n, order, phi, omega, alpha, simd_newton);
+            for (int l = 0; l < got; ++l) {
+                const size_t i = order ? order[k + l] : k + l;
+                double *qi = q + i * (size_t)nq;
+                copy_doubles(qi, blk.q[l], nq);
+                x[0] = blk.x[l][0], cx[0] = blk.cx[l][0], cx[1] = blk.cx[l][1];
+                xd[0] = omega[i];
+                xdd[0] = alpha[i];
+                if (deferred) {
+                    put_lane(m, &lanes, lanes.count++, i, qi, blk.cq[l], x, cx, xd, xdd, blk.resid[l]);
+                    if (lanes.count == SG_LANES)
+                        failures += finish_lanes(&w, &lanes, want, gv, loads, no_loads, q, qd, qdd, obs, err, frc,
+                                                 status);
+                    continue;
+                }
+                double est = 0.0;
+                const int st = finish_position(&w, want, x, cx, xd, xdd, gv,
+                                               loads ? loads + i * (size_t)m->nload : no_loads, qi, blk.cq[l],
+                                               blk.resid[l], qd + i * (size_t)nq,
+                                               qdd + i * (size_t)nq, obs + i * (size_t)nobs,
+                                               frc ? frc + i * (size_t)nfo : NULL, &est);
+                failures += settle(m, i, st, est, q, qd, qdd, obs, err, frc, status);
+            }
+            if (got > 0) {
+                if (got < blk.count) step_at = k + (size_t)got;
+                k += (size_t)got - 1;
+                continue;
+            }
+        }
         const size_t i = order ? order[k] : k;
         SG_ASSERT(i < n);
         double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq;

@@ -63,6 +63,37 @@ typedef struct sg_lanes {
     double resid[SG_LANES], est[SG_LANES];
 } sg_lanes;
 
+/* Positions the Newton continuation predicts from one history and solves independently (csrc/sg_runtime.c,
+ * solve_block): SG_BLOCK of them in every loop and at every SIMD level, so that the scalar and the SIMD loops
+ * (descriptor newton_simd, csrc/sg_simd.h SG_SIMD_NEWTON_BODY, SG_LANES lanes a call) solve the same positions
+ * from the same starts. Per lane its Newton start (coordinates and their cos, sin; overwritten by the solution)
+ * and inputs with theirs; after the solve Newton's last relative residual, the loops' orientation determinants
+ * (kernel 'blocks') and the status. SG_BLOCK is a multiple of SG_LANES. */
+#define SG_BLOCK 8
+typedef struct sg_block {
+    int count;
+    double q[SG_BLOCK][SG_MAX_Q], cq[SG_BLOCK][2 * SG_MAX_Q], x[SG_BLOCK][SG_MAX_Q], cx[SG_BLOCK][2 * SG_MAX_Q];
+    double resid[SG_BLOCK], bv[SG_BLOCK][SG_MAX_Q];
+    int status[SG_BLOCK];
+} sg_block;
+
+/* cos and sin of a step d of an angle coordinate for shift_trig (csrc/sg_runtime.c) and its SIMD twin
+ * (sgv_shift_trig): below SG_TINY_STEP cos d = 1 and sin d = d exactly (their corrections, d^2/2 and d^2/6
+ * relative, are under 2^-54, half an ulp of 1, up to |d| = 1.05e-8); below SG_SHORT_STEP three terms of each
+ * Taylor series (the first omitted, d^7/7! and d^6/6!, below 2e-22 and 1.4e-21 relative); below SG_SMALL_STEP
+ * four (d^10/10! and d^9/9! below 1e-26); larger steps take sincos. The series' divisions are products with
+ * their reciprocals (constants): within an ulp of the quotients, in a correction already below 1e-4 of the
+ * result. The expressions are written once here for double and sg_vd operands alike (h: the step, h2 = h h), so
+ * the two loops compute the same values. */
+#define SG_TINY_STEP 1e-9
+#define SG_SHORT_STEP 1e-3
+#define SG_SMALL_STEP 1e-2
+#define SG_SIN_SHORT(h, h2) ((h) * (1.0 - (h2) * (1.0 / 6.0) * (1.0 - (h2) * (1.0 / 20.0))))
+#define SG_COS_SHORT(h2) (1.0 - (h2) * 0.5 * (1.0 - (h2) * (1.0 / 12.0)))
+#define SG_SIN_SMALL(h, h2) ((h) * (1.0 - (h2) * (1.0 / 6.0) * (1.0 - (h2) * (1.0 / 20.0) * (1.0 - (h2) * (1.0 / 42.0)))))
+#define SG_COS_SMALL(h2) \
+    (1.0 - (h2) * 0.5 * (1.0 - (h2) * (1.0 / 12.0) * (1.0 - (h2) * (1.0 / 30.0) * (1.0 - (h2) * (1.0 / 56.0)))))
+
 /* LU with partial pivoting, in place, row-major n x n. Returns SG_SINGULAR when a pivot is below
  * 1e-11 of its column's largest original entry (column-scale invariant: columns may be rad or m).
  * Always inline, so that a kernel's call with a literal n unrolls; sg_lu_factor/sg_lu_solve are the exported

@@ -326,19 +326,27 @@ SG_VINLINE void sgv_solve_eq(int n, const sg_vd *lu, const sg_vm *piv, const sg_
     for (int j = 0; j < n; ++j) b[j] *= cs[j];
 }
 
+/* sg_lu_factor_cm_inl lane by lane: the pivot test against colmax, each column's largest |entry| (of all of Φ_q
+ * for a block of it: Newton's block factor, sewgen/derive/blockfactor.py); the mask of the lanes it accepts. */
+SG_VINLINE sg_vm sgv_lu_factor_cm(int n, sg_vd *a, sg_vm *piv, const sg_vd *colmax)
+{
+    sg_vd best[SG_MAX_Q];
+    sgv_eliminate(n, a, piv, best, 0);
+    sg_vm ok = sgv_true();
+    for (int k = 0; k < n; ++k) ok &= best[k] > SG_PIVOT_RTOL * colmax[k];
+    return ok;
+}
+
 /* sg_lu_factor_inl lane by lane (the pivot test against each column's largest original entry). */
 SG_VINLINE sg_vm sgv_lu_factor(int n, sg_vd *a, sg_vm *piv)
 {
-    sg_vd colmax[SG_MAX_Q], best[SG_MAX_Q];
+    sg_vd colmax[SG_MAX_Q];
     for (int j = 0; j < n; ++j) {
         sg_vd cm = sgv_set1(0.0);
         for (int i = 0; i < n; ++i) cm = sgv_fmax(sgv_fabs(a[i * n + j]), cm);
         colmax[j] = cm;
     }
-    sgv_eliminate(n, a, piv, best, 0);
-    sg_vm ok = sgv_true();
-    for (int k = 0; k < n; ++k) ok &= best[k] > SG_PIVOT_RTOL * colmax[k];
-    return ok;
+    return sgv_lu_factor_cm(n, a, piv, colmax);
 }
 
 /* sg_lu_solve_inl lane by lane. */
@@ -692,6 +700,107 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
         sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, (NOBS), robs);         \
         for (int l = 0; l < SG_W; ++l) lanes->est[l] = vest[l];                                    \
         return sgv_bits(ok) & ((1 << lanes->count) - 1);                                          \
+    }
+
+/* max_i |v_i| w_i lane by lane, NaN propagating (csrc/sg_runtime.c weighted_norm). */
+SG_VINLINE sg_vd sgv_weighted_norm(int n, const sg_vd *v, const double *w)
+{
+    sg_vd m = sgv_set1(0.0);
+    for (int i = 0; i < n; ++i) {
+        const sg_vd a = sgv_fabs(v[i]) * w[i];
+        m = sgv_select(~(a <= m), a, m);
+    }
+    return m;
+}
+
+/* csrc/sg_runtime.c's shift_trig lane by lane: q + d and its cos, sin by the same series (csrc/sg_runtime.h),
+ * each lane's chosen by its own |d|; a lane with a larger step (or a NaN) takes libm's sincos, as there. */
+SG_VINLINE void sgv_shift_trig(const sg_mechanism *m, const sg_vd *q, const sg_vd *cq, const sg_vd *d, int n,
+                               sg_vd *q_out, sg_vd *cq_out)
+{
+    for (int i = 0; i < n; ++i) {
+        q_out[i] = q[i] + d[i];
+        if (!m->coord_is_angle[i]) {
+            cq_out[2 * i] = sgv_set1(1.0);
+            cq_out[2 * i + 1] = sgv_set1(0.0);
+            continue;
+        }
+        const sg_vd h = d[i], h2 = h * h, c = cq[2 * i], s = cq[2 * i + 1], ad = sgv_fabs(h);
+        const sg_vm tiny = ad < sgv_set1(SG_TINY_STEP), small = ad < sgv_set1(SG_SMALL_STEP);
+        const sg_vm short_ = ad < sgv_set1(SG_SHORT_STEP);
+        const sg_vd sd3 = SG_SIN_SHORT(h, h2), cd3 = SG_COS_SHORT(h2);
+        const sg_vd sd4 = SG_SIN_SMALL(h, h2), cd4 = SG_COS_SMALL(h2);
+        sg_vd co = sgv_select(short_, c * cd3 - s * sd3, c * cd4 - s * sd4);
+        sg_vd so = sgv_select(short_, s * cd3 + c * sd3, s * cd4 + c * sd4);
+        co = sgv_select(tiny, c - s * h, co);
+        so = sgv_select(tiny, s + c * h, so);
+        if (!sgv_all(small))
+            for (int l = 0; l < SG_W; ++l)
+                if (!small[l]) sg_sincos_inl(q_out[i][l], &co[l], &so[l]);
+        cq_out[2 * i] = co;
+        cq_out[2 * i + 1] = so;
+    }
+}
+
+/* Newton at SG_W positions of a block at once (csrc/sg_runtime.c solve_block: lanes first .. first + SG_W - 1 of
+ * b, each from its own start, weights w): the scalar newton()'s first iteration lane by lane with the vector
+ * kernels RESIDUAL_V, LU_FACTOR_V and LU_SOLVE_V (nq = NQ), the same operations, so the same values to the bit.
+ * Its usual course at a continuation's prediction is one full step: kept if it lowers the residual where the
+ * start is within the tolerance (min_iter), else accepted if it lowers the residual into the tolerance. A lane
+ * that takes that course gets its solution, Newton's relative residual, its loops' orientation determinants
+ * (kernel 'blocks', from the Φ_q it ends with) and SG_OK in b; the returned bit mask names those lanes. Any other
+ * (a damped step, more iterations, a singular factor, a non-finite residual) is left as it was, for the scalar
+ * newton() to solve from the same start. */
+#define SG_SIMD_NEWTON_BODY(RESIDUAL_V, LU_FACTOR_V, LU_SOLVE_V, NQ)                                \
+    {                                                                                              \
+        const int nx = m->nx;                                                                      \
+        sg_vd vq[NQ], vcq[2 * (NQ)], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q];                              \
+        sgv_load_lanes(b->q[first], SG_MAX_Q, (NQ), vq);                                           \
+        sgv_load_lanes(b->cq[first], 2 * SG_MAX_Q, 2 * (NQ), vcq);                                 \
+        sgv_load_lanes(b->x[first], SG_MAX_Q, nx, vx);                                             \
+        sgv_load_lanes(b->cx[first], 2 * SG_MAX_Q, 2 * nx, vcx);                                   \
+        sg_vd r[NQ], jac[(NQ) * (NQ)], lu[(NQ) * (NQ)], dq[NQ], tq[NQ], tcq[2 * (NQ)], rt[NQ];     \
+        sg_vd jt[(NQ) * (NQ)];                                                                     \
+        sg_vm piv[NQ];                                                                             \
+        RESIDUAL_V(vq, vcq, vx, vcx, c, r, jac);                                                   \
+        const sg_vd one = sgv_set1(1.0), tol = sgv_set1(opt->tol);                                 \
+        const sg_vd norm = sgv_weighted_norm((NQ), r, w);                                          \
+        const sg_vm within = norm <= one;                                                          \
+        const sg_vm exact = within & (norm * tol <= sgv_set1(SG_RESID_FLOOR)); /* no step taken */ \
+        for (int k = 0; k < (NQ) * (NQ); ++k) lu[k] = jac[k];                                      \
+        const sg_vm factored = LU_FACTOR_V(lu, piv);                                               \
+        for (int k = 0; k < (NQ); ++k) dq[k] = -r[k];                                              \
+        LU_SOLVE_V(lu, piv, dq);                                                                   \
+        sgv_shift_trig(m, vq, vcq, dq, (NQ), tq, tcq);                                             \
+        RESIDUAL_V(tq, tcq, vx, vcx, c, rt, jt);                                                   \
+        const sg_vd nt = sgv_weighted_norm((NQ), rt, w);                                           \
+        const sg_vm lower = nt < norm, take = ~exact & lower;                                      \
+        const sg_vm ok = exact | (sgv_isfinite(norm) & factored & (within | (lower & (nt <= one)))); \
+        const int lanes = b->count - first < SG_W ? b->count - first : SG_W;                       \
+        const int mask = sgv_bits(ok) & ((1 << lanes) - 1);                                        \
+        if (mask == 0) return 0;                                                                   \
+        for (int k = 0; k < (NQ); ++k) vq[k] = sgv_select(take, tq[k], vq[k]);                     \
+        for (int k = 0; k < 2 * (NQ); ++k) vcq[k] = sgv_select(take, tcq[k], vcq[k]);              \
+        const sg_vd resid = sgv_select(take, nt, norm) * tol;                                      \
+        double rq[SG_W][NQ], rcq[SG_W][2 * (NQ)], rjac[SG_W][(NQ) * (NQ)];                         \
+        double *pq[SG_W], *pcq[SG_W], *pjac[SG_W];                                                 \
+        for (int l = 0; l < SG_W; ++l) pq[l] = rq[l], pcq[l] = rcq[l], pjac[l] = rjac[l];          \
+        sgv_store_rows(vq, (NQ), pq);                                                              \
+        sgv_store_rows(vcq, 2 * (NQ), pcq);                                                        \
+        if (m->nblock > 0) {                                                                       \
+            for (int k = 0; k < (NQ) * (NQ); ++k) jac[k] = sgv_select(take, jt[k], jac[k]);        \
+            sgv_store_rows(jac, (NQ) * (NQ), pjac);                                                \
+        }                                                                                          \
+        for (int l = 0; l < lanes; ++l) {                                                          \
+            if (!(mask >> l & 1)) continue;                                                        \
+            const int at = first + l;                                                              \
+            memcpy(b->q[at], rq[l], sizeof rq[l]);                                                 \
+            memcpy(b->cq[at], rcq[l], sizeof rcq[l]);                                              \
+            b->resid[at] = resid[l];                                                               \
+            b->status[at] = SG_OK;                                                                 \
+            if (m->nblock > 0) m->blocks(rjac[l], b->bv[at]);                                      \
+        }                                                                                          \
+        return mask;                                                                               \
     }
 
 SG_SIMD_END

@@ -3772,6 +3772,250 @@ SG_VINLINE sg_vm sg_feed_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd 
     }
 }
 
+SG_VINLINE void sg_feed_residual_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const double *c, sg_vd *r, sg_vd *jac)
+{
+    (void)x;
+    sg_vd ka[4];
+    {
+        /* cam cam: the arc whose normal sector holds e */
+        const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
+        ka[0] = sgv_set1(c[45]);
+        ka[1] = sgv_set1(c[44]);
+        ka[2] = sgv_set1(c[42]);
+        ka[3] = sgv_set1(5.0);
+        {
+            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
+        }
+        {
+            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
+            ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
+            ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
+            ka[3] = sgv_select(in, sgv_set1(0.0), ka[3]);
+        }
+    }
+    const sg_vd t0 = c[1]*cq[7];
+    const sg_vd t1 = c[5]*cq[1];
+    const sg_vd t2 = c[3]*cx[1] + c[6]*cx[0];
+    const sg_vd t3 = c[3]*cx[0] + c[4]*cx[1];
+    const sg_vd t4 = c[7] + c[8]*cq[6] + ka[0]*t2 + ka[1]*t3 + t0 + t1;
+    const sg_vd t5 = c[1]*cq[6] + c[2]*cq[7];
+    const sg_vd t6 = c[0] + c[5]*cq[0] + ka[0]*t3 - ka[1]*t2 + t5;
+    const sg_vd t7 = c[9]*cq[0];
+    const sg_vd t8 = c[10]*cq[6] + c[11]*cq[6];
+    const sg_vd t9 = c[11]*cq[7];
+    const sg_vd t10 = c[9]*cq[1];
+    const sg_vd t11 = c[15]*cq[12];
+    const sg_vd t12 = c[19]*cq[4];
+    const sg_vd t13 = c[22]*cq[2] + c[23]*cq[3];
+    const sg_vd t14 = c[24]*cq[4] + c[25]*cq[5] + c[26];
+    const sg_vd t15 = c[22]*cq[3] + c[27]*cq[2];
+    const sg_vd t16 = c[25]*cq[4] + c[28]*cq[5];
+    const sg_vd t17 = c[29] + t16;
+    const sg_vd t18 = c[31]*cq[3];
+    const sg_vd t19 = c[32]*cq[0];
+    const sg_vd t20 = c[30]*cq[10] + c[33] + t18 + t19;
+    const sg_vd t21 = c[31]*cq[2];
+    const sg_vd t22 = c[34]*cq[1];
+    const sg_vd t23 = c[35]*cq[11] + c[36] + t21 + t22;
+    r[0] = -cq[6]*t4 + cq[7]*t6 + ka[2];
+    r[1] = c[12] - cx[2]*q[4] + t7 + t8;
+    r[2] = c[10]*cq[7] + c[13] - cx[3]*q[4] + t10 + t9;
+    r[3] = c[14] + c[16]*(c[17]*cx[0] + c[18]*cx[1]) + t11 + t12;
+    r[4] = c[15]*cq[13] + c[16]*(c[17]*cx[1] + c[21]*cx[0]) + c[19]*cq[5] + c[20];
+    r[5] = t13*t14 - t15*t17;
+    r[6] = cq[10]*t20 - cq[11]*t23;
+    jac[0] = cq[6]*t7 + cq[7]*t10;
+    jac[1] = sgv_set1(0.0);
+    jac[2] = sgv_set1(0.0);
+    jac[3] = -cq[6]*t5 + cq[6]*t6 + cq[7]*t4 + cq[7]*(c[2]*cq[6] + t9);
+    jac[4] = sgv_set1(0.0);
+    jac[5] = sgv_set1(0.0);
+    jac[6] = sgv_set1(0.0);
+    jac[7] = t1;
+    jac[8] = sgv_set1(0.0);
+    jac[9] = sgv_set1(0.0);
+    jac[10] = c[37]*cq[7] + t0;
+    jac[11] = -cx[2];
+    jac[12] = sgv_set1(0.0);
+    jac[13] = sgv_set1(0.0);
+    jac[14] = t7;
+    jac[15] = sgv_set1(0.0);
+    jac[16] = sgv_set1(0.0);
+    jac[17] = t8;
+    jac[18] = -cx[3];
+    jac[19] = sgv_set1(0.0);
+    jac[20] = sgv_set1(0.0);
+    jac[21] = sgv_set1(0.0);
+    jac[22] = sgv_set1(0.0);
+    jac[23] = c[38]*cq[5];
+    jac[24] = sgv_set1(0.0);
+    jac[25] = sgv_set1(0.0);
+    jac[26] = sgv_set1(0.0);
+    jac[27] = c[39]*cq[13];
+    jac[28] = sgv_set1(0.0);
+    jac[29] = sgv_set1(0.0);
+    jac[30] = t12;
+    jac[31] = sgv_set1(0.0);
+    jac[32] = sgv_set1(0.0);
+    jac[33] = sgv_set1(0.0);
+    jac[34] = t11;
+    jac[35] = sgv_set1(0.0);
+    jac[36] = -t13*t17 - t14*t15;
+    jac[37] = t13*t16 - t15*(c[28]*cq[4] + c[40]*cq[5]);
+    jac[38] = sgv_set1(0.0);
+    jac[39] = sgv_set1(0.0);
+    jac[40] = sgv_set1(0.0);
+    jac[41] = sgv_set1(0.0);
+    jac[42] = cq[10]*t22 + cq[11]*t19;
+    jac[43] = cq[10]*t21 + cq[11]*t18;
+    jac[44] = sgv_set1(0.0);
+    jac[45] = sgv_set1(0.0);
+    jac[46] = sgv_set1(0.0);
+    jac[47] = -cq[10]*t23 - cq[11]*t20;
+    jac[48] = sgv_set1(0.0);
+}
+
+SG_VINLINE sg_vm sg_feed_lu_factor_v(sg_vd *a, sg_vm *piv)
+{
+    sg_vm ok = sgv_true();
+    sg_vd cm0 = sgv_set1(0.0);
+    { const sg_vd v = sgv_fabs(a[0]); cm0 = sgv_select(v > cm0, v, cm0); }
+    { const sg_vd v = sgv_fabs(a[7]); cm0 = sgv_select(v > cm0, v, cm0); }
+    { const sg_vd v = sgv_fabs(a[14]); cm0 = sgv_select(v > cm0, v, cm0); }
+    { const sg_vd v = sgv_fabs(a[42]); cm0 = sgv_select(v > cm0, v, cm0); }
+    sg_vd cm1 = sgv_set1(0.0);
+    { const sg_vd v = sgv_fabs(a[36]); cm1 = sgv_select(v > cm1, v, cm1); }
+    { const sg_vd v = sgv_fabs(a[43]); cm1 = sgv_select(v > cm1, v, cm1); }
+    sg_vd cm2 = sgv_set1(0.0);
+    { const sg_vd v = sgv_fabs(a[23]); cm2 = sgv_select(v > cm2, v, cm2); }
+    { const sg_vd v = sgv_fabs(a[30]); cm2 = sgv_select(v > cm2, v, cm2); }
+    { const sg_vd v = sgv_fabs(a[37]); cm2 = sgv_select(v > cm2, v, cm2); }
+    sg_vd cm3 = sgv_set1(0.0);
+    { const sg_vd v = sgv_fabs(a[3]); cm3 = sgv_select(v > cm3, v, cm3); }
+    { const sg_vd v = sgv_fabs(a[10]); cm3 = sgv_select(v > cm3, v, cm3); }
+    { const sg_vd v = sgv_fabs(a[17]); cm3 = sgv_select(v > cm3, v, cm3); }
+    sg_vd cm4 = sgv_set1(0.0);
+    { const sg_vd v = sgv_fabs(a[11]); cm4 = sgv_select(v > cm4, v, cm4); }
+    { const sg_vd v = sgv_fabs(a[18]); cm4 = sgv_select(v > cm4, v, cm4); }
+    sg_vd cm5 = sgv_set1(0.0);
+    { const sg_vd v = sgv_fabs(a[47]); cm5 = sgv_select(v > cm5, v, cm5); }
+    sg_vd cm6 = sgv_set1(0.0);
+    { const sg_vd v = sgv_fabs(a[27]); cm6 = sgv_select(v > cm6, v, cm6); }
+    { const sg_vd v = sgv_fabs(a[34]); cm6 = sgv_select(v > cm6, v, cm6); }
+    {
+        sg_vd M[9];
+        const sg_vd cm[3] = {cm3, cm4, cm0};
+        M[0] = a[3];
+        M[1] = sgv_set1(0.0);
+        M[2] = a[0];
+        M[3] = a[10];
+        M[4] = a[11];
+        M[5] = a[7];
+        M[6] = a[17];
+        M[7] = a[18];
+        M[8] = a[14];
+        ok &= sgv_lu_factor_cm(3, M, piv + 0, cm);
+        a[3] = 1.0 / M[0];
+        a[4] = M[1];
+        a[0] = M[2];
+        a[10] = M[3];
+        a[11] = 1.0 / M[4];
+        a[7] = M[5];
+        a[17] = M[6];
+        a[18] = M[7];
+        a[14] = 1.0 / M[8];
+    }
+    {
+        sg_vd M[4];
+        const sg_vd cm[2] = {cm6, cm2};
+        M[0] = a[27];
+        M[1] = a[23];
+        M[2] = a[34];
+        M[3] = a[30];
+        ok &= sgv_lu_factor_cm(2, M, piv + 3, cm);
+        a[27] = 1.0 / M[0];
+        a[23] = M[1];
+        a[34] = M[2];
+        a[30] = 1.0 / M[3];
+    }
+    ok &= sgv_fabs(a[36]) > SG_PIVOT_RTOL * cm1;
+    a[36] = 1.0 / a[36];
+    ok &= sgv_fabs(a[47]) > SG_PIVOT_RTOL * cm5;
+    a[47] = 1.0 / a[47];
+    return ok;
+}
+
+SG_VINLINE void sg_feed_lu_solve_v(const sg_vd *lu, const sg_vm *piv, sg_vd *b)
+{
+    sg_vd y[7];
+    {
+        sg_vd M[9], v[3];
+        M[0] = lu[3];
+        M[1] = lu[4];
+        M[2] = lu[0];
+        M[3] = lu[10];
+        M[4] = lu[11];
+        M[5] = lu[7];
+        M[6] = lu[17];
+        M[7] = lu[18];
+        M[8] = lu[14];
+        v[0] = b[0];
+        v[1] = b[1];
+        v[2] = b[2];
+        sgv_lu_apply(3, M, piv + 0, v);
+        y[3] = v[0];
+        y[4] = v[1];
+        y[0] = v[2];
+    }
+    {
+        sg_vd M[4], v[2];
+        M[0] = lu[27];
+        M[1] = lu[23];
+        M[2] = lu[34];
+        M[3] = lu[30];
+        v[0] = b[3];
+        v[1] = b[4];
+        sgv_lu_apply(2, M, piv + 3, v);
+        y[6] = v[0];
+        y[2] = v[1];
+    }
+    y[1] = (b[5] - lu[37] * y[2]) * lu[36];
+    y[5] = (b[6] - lu[42] * y[0] - lu[43] * y[1]) * lu[47];
+    b[0] = y[0];
+    b[1] = y[1];
+    b[2] = y[2];
+    b[3] = y[3];
+    b[4] = y[4];
+    b[5] = y[5];
+    b[6] = y[6];
+}
+
 SG_VINLINE sg_vm sg_feed_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)x;
@@ -4015,6 +4259,9 @@ SG_VINLINE int sg_feed_forces_in_simd(const double *c)
 
 static SG_FLATTEN int sg_feed_finish_simd(const struct sg_mechanism *m, struct sg_lanes *lanes, const double *c, const sg_options *opt, const double *gv, const double *loads, double *qd, double *qdd, double *obs, double *frc, const unsigned char *want)
 SG_SIMD_FINISH_BODY(sg_feed_motion_v, sg_feed_rates_v, sg_feed_observe_v, sg_feed_forces_v, sg_feed_forces_in_simd, 121, 65)
+
+static SG_FLATTEN int sg_feed_newton_simd(const struct sg_mechanism *m, struct sg_block *b, int first, const double *c, const sg_options *opt, const double *w)
+SG_SIMD_NEWTON_BODY(sg_feed_residual_v, sg_feed_lu_factor_v, sg_feed_lu_solve_v, 7)
 SG_SIMD_END
 #endif
 
@@ -4056,6 +4303,7 @@ static const sg_mechanism sg_feed_descriptor = {
     .sweep = 0,
     .sweep_simd = 0,
     .finish_simd = SG_SIMD_HOOK(sg_feed_finish_simd),
+    .newton_simd = SG_SIMD_HOOK(sg_feed_newton_simd),
 };
 
 const sg_mechanism *sg_feed(void)

@@ -1498,6 +1498,7 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .sweep = sg_hook_drive_sweep,
     .sweep_simd = SG_SIMD_HOOK(sg_hook_drive_sweep_simd),
     .finish_simd = 0,
+    .newton_simd = 0,
 };
 
 const sg_mechanism *sg_hook_drive(void)

@@ -905,6 +905,7 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .sweep = sg_needle_bar_sweep,
     .sweep_simd = SG_SIMD_HOOK(sg_needle_bar_sweep_simd),
     .finish_simd = 0,
+    .newton_simd = 0,
 };
 
 const sg_mechanism *sg_needle_bar(void)

@@ -1811,6 +1811,7 @@ static const sg_mechanism sg_overlock_feed_descriptor = {
     .sweep = sg_overlock_feed_sweep,
     .sweep_simd = SG_SIMD_HOOK(sg_overlock_feed_sweep_simd),
     .finish_simd = 0,
+    .newton_simd = 0,
 };
 
 const sg_mechanism *sg_overlock_feed(void)

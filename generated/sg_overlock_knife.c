@@ -781,6 +781,7 @@ static const sg_mechanism sg_overlock_knife_descriptor = {
     .sweep = sg_overlock_knife_sweep,
     .sweep_simd = SG_SIMD_HOOK(sg_overlock_knife_sweep_simd),
     .finish_simd = 0,
+    .newton_simd = 0,
 };
 
 const sg_mechanism *sg_overlock_knife(void)

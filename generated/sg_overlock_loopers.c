@@ -1087,6 +1087,7 @@ static const sg_mechanism sg_overlock_loopers_descriptor = {
     .sweep = sg_overlock_loopers_sweep,
     .sweep_simd = SG_SIMD_HOOK(sg_overlock_loopers_sweep_simd),
     .finish_simd = 0,
+    .newton_simd = 0,
 };
 
 const sg_mechanism *sg_overlock_loopers(void)

@@ -1091,6 +1091,7 @@ static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
     .sweep = sg_overlock_loopers_planar_sweep,
     .sweep_simd = SG_SIMD_HOOK(sg_overlock_loopers_planar_sweep_simd),
     .finish_simd = 0,
+    .newton_simd = 0,
 };
 
 const sg_mechanism *sg_overlock_loopers_planar(void)

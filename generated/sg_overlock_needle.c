@@ -1093,6 +1093,7 @@ static const sg_mechanism sg_overlock_needle_descriptor = {
     .sweep = sg_overlock_needle_sweep,
     .sweep_simd = SG_SIMD_HOOK(sg_overlock_needle_sweep_simd),
     .finish_simd = 0,
+    .newton_simd = 0,
 };
 
 const sg_mechanism *sg_overlock_needle(void)

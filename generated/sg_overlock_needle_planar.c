@@ -1101,6 +1101,7 @@ static const sg_mechanism sg_overlock_needle_planar_descriptor = {
     .sweep = sg_overlock_needle_planar_sweep,
     .sweep_simd = SG_SIMD_HOOK(sg_overlock_needle_planar_sweep_simd),
     .finish_simd = 0,
+    .newton_simd = 0,
 };
 
 const sg_mechanism *sg_overlock_needle_planar(void)

@@ -984,6 +984,7 @@ static const sg_mechanism sg_take_up_descriptor = {
     .sweep = sg_take_up_sweep,
     .sweep_simd = SG_SIMD_HOOK(sg_take_up_sweep_simd),
     .finish_simd = 0,
+    .newton_simd = 0,
 };
 
 const sg_mechanism *sg_take_up(void)

@@ -47,7 +47,7 @@ def header() -> str:
     lines.append("/* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */")
     for kind, (ret, args, doc) in abi.KERNELS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
-    lines += ["", "struct sg_mechanism;", "struct sg_columns;", "struct sg_lanes;",
+    lines += ["", "struct sg_mechanism;", "struct sg_columns;", "struct sg_lanes;", "struct sg_block;",
               "/* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */"]
     for kind, (ret, args, doc) in abi.HOOKS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
@@ -80,6 +80,8 @@ def descriptor_initializer(prefix: str, sizes: dict, has: dict) -> list[str]:
             value = f"SG_SIMD_HOOK({prefix}_{name})" if has.get("closed_v") else "0"
         elif name == "finish_simd":  # Newton (no closed form) with vector kernels, and the build SIMD
             value = f"SG_SIMD_HOOK({prefix}_{name})" if has.get("motion_v") and not has.get("closed") else "0"
+        elif name == "newton_simd":  # Newton with the residual's and LU's vector twins, and the build SIMD
+            value = f"SG_SIMD_HOOK({prefix}_{name})" if has.get("residual_v") else "0"
         elif name in abi.HOOKS:  # the inlined sweep: instantiated where the mechanism has a closed form
             value = f"{prefix}_{name}" if has.get("closed") else "0"
         else:

@@ -166,46 +166,54 @@ class BlockFactor:
             k += len(rows)
         return out
 
-    def newton_factor_lines(self) -> list[str]:
+    def newton_factor_lines(self, vector: bool = False) -> list[str]:
         """Newton's factor (kernel 'lu_factor': a, piv) of the raw Φ_q: each diagonal block in place by the
         runtime's pivoted LU, a pivot singular below SG_PIVOT_RTOL times the largest |entry| of its column in
         all of Φ_q (the dense factor's test); the coupling entries stay as they are. Block k's interchanges at
         piv[first row of k ...]. Each pivot is stored as its reciprocal (sg_lu_apply_inl's form), which the
-        factor has computed anyway: the solve multiplies, no division on Newton's path."""
+        factor has computed anyway: the solve multiplies, no division on Newton's path. ``vector``: the SIMD
+        twin (SG_SIMD_NEWTON_BODY's), the same operations lane by lane; it returns the mask of the lanes the
+        scalar factor accepts."""
         n, nz = self.n, self.nonzero
         a = lambda i, j: f"a[{i * n + j}]"  # noqa: E731
-        lines = []
+        real, fabs = ("sg_vd", "sgv_fabs") if vector else ("double", "fabs")
+        lines = ["sg_vm ok = sgv_true();"] if vector else []
         for j in range(n):
-            lines.append(f"double cm{j} = 0.0;")
-            lines += [f"{{ const double v = fabs({a(i, j)}); if (v > cm{j}) cm{j} = v; }}"
-                      for i in range(n) if nz[i][j]]
+            lines.append(f"{real} cm{j} = {'sgv_set1(0.0)' if vector else '0.0'};")
+            keep = (f"cm{j} = sgv_select(v > cm{j}, v, cm{j});" if vector else f"if (v > cm{j}) cm{j} = v;")
+            lines += [f"{{ const {real} v = {fabs}({a(i, j)}); {keep} }}" for i in range(n) if nz[i][j]]
         for (rows, cols), off in zip(self.blocks, self._offsets()):
             s = len(rows)
             if s == 1:
                 d = a(rows[0], cols[0])
-                lines += [f"if (!(fabs({d}) > SG_PIVOT_RTOL * cm{cols[0]})) return SG_SINGULAR;", f"{d} = 1.0 / {d};"]
+                test = f"{fabs}({d}) > SG_PIVOT_RTOL * cm{cols[0]}"
+                lines += [f"ok &= {test};" if vector else f"if (!({test})) return SG_SINGULAR;", f"{d} = 1.0 / {d};"]
                 continue
             columns = ", ".join(f"cm{c}" for c in cols)
-            lines += ["{", f"    double M[{s * s}];", f"    const double cm[{s}] = {{{columns}}};"]
-            lines += [f"    M[{p * s + q}] = {a(r, c) if nz[r][c] else '0.0'};"
+            zero = "sgv_set1(0.0)" if vector else "0.0"
+            lines += ["{", f"    {real} M[{s * s}];", f"    const {real} cm[{s}] = {{{columns}}};"]
+            lines += [f"    M[{p * s + q}] = {a(r, c) if nz[r][c] else zero};"
                       for p, r in enumerate(rows) for q, c in enumerate(cols)]
-            lines.append(f"    if (sg_lu_factor_cm_inl({s}, M, piv + {off}, cm, NULL) != SG_OK) return SG_SINGULAR;")
+            lines.append(f"    ok &= sgv_lu_factor_cm({s}, M, piv + {off}, cm);" if vector else
+                         f"    if (sg_lu_factor_cm_inl({s}, M, piv + {off}, cm, NULL) != SG_OK) return SG_SINGULAR;")
             lines += [f"    {a(r, c)} = M[{p * s + q}];" if p != q else f"    {a(r, c)} = 1.0 / M[{p * s + q}];"
                       for p, r in enumerate(rows) for q, c in enumerate(cols)]
             lines.append("}")
-        return lines + ["return SG_OK;"]
+        return lines + ["return ok;" if vector else "return SG_OK;"]
 
-    def newton_solve_lines(self) -> list[str]:
+    def newton_solve_lines(self, vector: bool = False) -> list[str]:
         """Newton's solve (kernel 'lu_solve': lu, piv, b) with the factor above: forward block substitution, b
-        (indexed by closure row) overwritten by the solution (indexed by coordinate)."""
+        (indexed by closure row) overwritten by the solution (indexed by coordinate). ``vector``: the SIMD
+        twin's lines."""
         n, offsets = self.n, self._offsets()
+        real, apply = ("sg_vd", "sgv_lu_apply") if vector else ("double", "sg_lu_apply_inl")
 
         def block(k, rows, cols):
             s = len(rows)
             gather = [f"    M[{p * s + q}] = lu[{r * n + c}];" for p, r in enumerate(rows) for q, c in enumerate(cols)]
-            return [f"    double M[{s * s}], v[{s}];", *gather], f"    sg_lu_apply_inl({s}, M, piv + {offsets[k]}, v);"
+            return [f"    {real} M[{s * s}], v[{s}];", *gather], f"    {apply}({s}, M, piv + {offsets[k]}, v);"
 
-        return self._substitution("lu", "b", lambda r: f"b[{r}]", block, lambda c: f"y[{c}]")
+        return self._substitution("lu", "b", lambda r: f"b[{r}]", block, lambda c: f"y[{c}]", real)
 
     def ops(self) -> int:
         """Floating-point operations of the factor and two solves (the kernel's op count)."""

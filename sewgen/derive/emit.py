@@ -174,6 +174,9 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
                     if vector_kernels and dyads is not None else None),
         simd_finish=(abi.kernel_hook("finish_simd", f"{prefix}_finish_simd")
                      if vector_kernels and dyads is None else None),
+        simd_newton=(abi.kernel_hook("newton_simd", f"{prefix}_newton_simd")
+                     if any(k.name == f"{prefix}_residual_v" for k in vector_kernels) else None),
+        nq=len(kin.q),
         angle_flags=[1 if c.kind == "angle" else 0 for c in kin.coords],
         group_start=groups, group_always=ks.observe_always(groups, row_scales),
         group_angles=ks.angle_readers(groups, row_scales),

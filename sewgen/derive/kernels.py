@@ -88,6 +88,10 @@ VECTOR_SIGNATURES = {
              "const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)",
     "observe": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
                "const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group, sg_vd *obs)",
+    "residual": "void {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const double *c, "
+                "sg_vd *r, sg_vd *jac)",
+    "lu_factor": "sg_vm {f}(sg_vd *a, sg_vm *piv)",
+    "lu_solve": "void {f}(const sg_vd *lu, const sg_vm *piv, sg_vd *b)",
 }
 
 
@@ -96,6 +100,10 @@ def _unused(body, *names):
     text = "\n".join(body)
     return [f"(void){n};" for n in names if not re.search(rf"\b{n}\b", text)]
 
+
+#: The most coordinates a mechanism's SIMD Newton (csrc/sg_simd.h SG_SIMD_NEWTON_BODY) is generated for: its
+#: Φ_q vectors live on the stack, three times (nq² × 64 bytes each).
+NEWTON_SIMD_MAX_Q = 16
 
 #: Coulomb friction's fixed point: relative change of the friction loads that ends it, and the most iterations.
 FRICTION_RTOL = 1e-13
@@ -192,16 +200,24 @@ class KernelSet:
         return self._selection_lines[vector]
 
     # -- kernels ---------------------------------------------------------------------------------------
-    def residual(self) -> Kernel:
-        kin, pr, n = self.kin, self.printer, len(self.kin.q)
-        exprs = self.prepare(list(kin.closure) + [kin.jac_q[i, j] for i in range(n) for j in range(n)])
-        repl, red = _cse(exprs)
-        body = self.selection_block() + SCALAR.temps(repl)
-        body += [f"r[{i}] = {pr.doprint(e)};" for i, e in enumerate(red[:n])]
-        body += [f"jac[{k}] = {pr.doprint(e)};" for k, e in enumerate(red[n:])]
+    def residual(self, vector: bool = False) -> Kernel:
+        """Φ(q, x) and Φ_q at a position: Newton's kernel. ``vector``: the SIMD twin (the SIMD Newton of a block of
+        positions, csrc/sg_simd.h SG_SIMD_NEWTON_BODY) from the same CSE, the same values lane by lane, to the
+        bit; a residual whose twin would not be exact (libmvec's atan2) has none (:class:`NoVectorForm`)."""
+        kin, n = self.kin, len(self.kin.q)
+        fl = VECTOR if vector else SCALAR
+        if "residual" not in self._memo:
+            self._memo["residual"] = _cse(self.prepare(list(kin.closure) +
+                                                       [kin.jac_q[i, j] for i in range(n) for j in range(n)]))
+        repl, red = self._memo["residual"]
+        body = self.selection_block(vector) + fl.temps(repl)
+        body += [f"r[{i}] = {fl.value(e)};" for i, e in enumerate(red[:n])]
+        body += [f"jac[{k}] = {fl.value(e)};" for k, e in enumerate(red[n:])]
+        if vector and any("sgv_atan2" in line for line in body):
+            raise NoVectorForm("the residual's atan2 has no exact vector form")
         body = _unused(body, "q", "cq", "x", "cx", "c") + body
-        return Kernel(f"{self.prefix}_residual",
-                      self._signature("residual"),
+        name = f"{self.prefix}_residual" + ("_v" if vector else "")
+        return Kernel(name, VECTOR_SIGNATURES["residual"].format(f=name) if vector else self._signature("residual"),
                       body, ops(e for _, e in repl) + ops(red))
 
     def anchors(self, exprs: list) -> Kernel:
@@ -607,6 +623,11 @@ class KernelSet:
                 self.observe(groups, scales, vector=True)]
         except NoVectorForm:
             return []
+        if dyads is None and len(self.kin.q) <= NEWTON_SIMD_MAX_Q:  # Newton's residual and LU: the SIMD Newton
+            try:
+                kernels += [self.residual(vector=True), *self.lu(vector=True)]
+            except NoVectorForm:
+                pass
         try:
             kernels.append(self.forces(kst, vector=True))
         except NoVectorForm:
@@ -622,22 +643,24 @@ class KernelSet:
         return Kernel(f"{self.prefix}_scales", self._signature("scales"), body,
                       ops(e for _, e in repl) + ops(red) + len(red))  # a copy of a hoisted size counts
 
-    def lu(self) -> list[Kernel]:
+    def lu(self, vector: bool = False) -> list[Kernel]:
         """Newton's factor and solve of Φ_q with nq a literal: the runtime's sg_lu_factor_inl / sg_lu_solve_inl
         (SG_UNROLL) unrolled whole for this mechanism, where the runtime's exported copies, for any n, ran ~2.3×
         the instructions (the feed's 7 × 7: 2.6k against 1.1k); by Φ_q's diagonal blocks where the rates are
-        (:meth:`solve_by_blocks`)."""
+        (:meth:`solve_by_blocks`). ``vector``: their SIMD twins (csrc/sg_simd.h SG_SIMD_NEWTON_BODY), the same
+        operations lane by lane; the factor returns the mask of the lanes it accepts."""
         n = len(self.kin.q)
         bf = self._block_factor
+        names = [f"{self.prefix}_{kind}" + ("_v" if vector else "") for kind in ("lu_factor", "lu_solve")]
+        sigs = ([VECTOR_SIGNATURES[kind].format(f=name) for kind, name in zip(("lu_factor", "lu_solve"), names)]
+                if vector else [self._signature("lu_factor"), self._signature("lu_solve")])
         if bf:  # Φ_q by its diagonal blocks (sewgen/derive/blockfactor.py)
-            return [Kernel(f"{self.prefix}_lu_factor", self._signature("lu_factor"), bf.newton_factor_lines(),
-                           bf.ops() // 2),
-                    Kernel(f"{self.prefix}_lu_solve", self._signature("lu_solve"), bf.newton_solve_lines(),
-                           bf.ops() // 2)]
-        return [Kernel(f"{self.prefix}_lu_factor", self._signature("lu_factor"),
-                       [f"return sg_lu_factor_inl({n}, a, piv, NULL);"], 2 * n ** 3 // 3),
-                Kernel(f"{self.prefix}_lu_solve", self._signature("lu_solve"),
-                       [f"sg_lu_solve_inl({n}, lu, piv, b);"], 2 * n * n)]
+            return [Kernel(names[0], sigs[0], bf.newton_factor_lines(vector), bf.ops() // 2),
+                    Kernel(names[1], sigs[1], bf.newton_solve_lines(vector), bf.ops() // 2)]
+        factor, solve = ("sgv_lu_factor", "sgv_lu_solve") if vector else ("sg_lu_factor_inl", "sg_lu_solve_inl")
+        return [Kernel(names[0], sigs[0], [f"return {factor}({n}, a, piv{'' if vector else ', NULL'});"],
+                       2 * n ** 3 // 3),
+                Kernel(names[1], sigs[1], [f"{solve}({n}, lu, piv, b);"], 2 * n * n)]
 
     def _row_norm2(self, i: int) -> str:
         """Φ_q's row i squared norm from the numeric jac, its structural zeros left out: the same value as the
