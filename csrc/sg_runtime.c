@@ -456,25 +456,29 @@ static int solve_block(sg_walker *w, sg_block *b, size_t k, size_t n, const size
     const double dir = w->hphi[0] > w->hphi[1] ? 1.0 : -1.0;
     double qp[SG_BLOCK][SG_MAX_Q], prev = w->hphi[0];
     int count = 0;
-    for (; count < SG_BLOCK && k + (size_t)count < n; ++count) {
+    for (; count < SG_BLOCK && k + (size_t)count < n; ++count) { /* the block's positions */
         const size_t i = order ? order[k + count] : k + count;
         const double ph = phi[i];
         if (!isfinite(ph + omega[i] + alpha[i]) || !((ph - prev) * dir > 0.0) ||
             !(fabs(ph - w->hphi[0]) <= SG_BLOCK_SPAN))
             break;
+        b->x[count][0] = prev = ph;
+    }
+    if (count < 2) return 0; /* coarse steps: the step-by-step continuation (no prediction made twice) */
+    const int positions = count;
+    for (count = 0; count < positions; ++count) { /* their starts, up to the first too far from the last state */
+        const double ph = b->x[count][0];
         double d[SG_MAX_Q];
         predict(nq, SG_HISTORY, w->hphi, w->hq, ph, qp[count]);
         for (int j = 0; j < nq; ++j) d[j] = qp[count][j] - w->hq[0][j];
         if (!small_change(w, d)) break;
         shift_trig(m, w->hq[0], w->hcq, d, b->q[count], b->cq[count]);
-        b->x[count][0] = ph;
         sg_sincos_inl(ph, &b->cx[count][0], &b->cx[count][1]);
         for (int j = 1; j < nx; ++j) {
             b->x[count][j] = w->x[j];
             b->cx[count][2 * j] = w->cx[2 * j];
             b->cx[count][2 * j + 1] = w->cx[2 * j + 1];
         }
-        prev = ph;
     }
     if (count < 2) return 0;
     b->count = count;
