@@ -237,26 +237,15 @@ static void polish(const sg_mechanism *m, double *q, double *cq, const double *x
     (void)opt;
 }
 
-/* The most earlier states the continuation keeps (the Lagrange predictor reads up to all of them). */
-#define SG_HISTORY 5
-
-/* The five-state Lagrange extrapolation (predict's usual case) in straight lines: the weights
- * w_a = prod_{b != a} (t - x_b) / (x_a - x_b) from the ten differences of the angles x and the numerators as
- * prefix and suffix products; 0 (nothing written) where two of the angles are equal. */
+/* The five-state Lagrange extrapolation (predict's usual case) in straight lines (csrc/sg_runtime.h
+ * SG_LAGRANGE5_*); 0 (nothing written) where two of the angles are equal. */
 static int predict5(int nq, const double *x, double *const *hq, double t, double *out)
 {
-    const double d01 = x[0] - x[1], d02 = x[0] - x[2], d03 = x[0] - x[3], d04 = x[0] - x[4];
-    const double d12 = x[1] - x[2], d13 = x[1] - x[3], d14 = x[1] - x[4];
-    const double d23 = x[2] - x[3], d24 = x[2] - x[4], d34 = x[3] - x[4];
-    const double den0 = d01 * d02 * d03 * d04, den1 = -d01 * d12 * d13 * d14, den2 = d02 * d12 * d23 * d24;
-    const double den3 = -d03 * d13 * d23 * d34, den4 = d04 * d14 * d24 * d34;
-    if (!(den0 != 0.0 && den1 != 0.0 && den2 != 0.0 && den3 != 0.0 && den4 != 0.0)) return 0;
-    const double e0 = t - x[0], e1 = t - x[1], e2 = t - x[2], e3 = t - x[3], e4 = t - x[4];
-    const double p01 = e0 * e1, p012 = p01 * e2, s34 = e3 * e4, s234 = e2 * s34;
-    const double w0 = e1 * s234 / den0, w1 = e0 * s234 / den1, w2 = p01 * s34 / den2, w3 = p012 * e4 / den3,
-                 w4 = p012 * e3 / den4;
-    const double *q0 = hq[0], *q1 = hq[1], *q2 = hq[2], *q3 = hq[3], *q4 = hq[4];
-    for (int i = 0; i < nq; ++i) out[i] = (w0 * q0[i] + w1 * q1[i]) + (w2 * q2[i] + w3 * q3[i]) + w4 * q4[i];
+    double den[SG_HISTORY], w[SG_HISTORY];
+    SG_LAGRANGE5_DEN(x, den);
+    if (!(den[0] != 0.0 && den[1] != 0.0 && den[2] != 0.0 && den[3] != 0.0 && den[4] != 0.0)) return 0;
+    SG_LAGRANGE5_WEIGHTS(double, t, x, den, w);
+    for (int i = 0; i < nq; ++i) out[i] = SG_LAGRANGE5_VALUE(w, hq, i);
     return 1;
 }
 
@@ -438,14 +427,14 @@ static int advance(sg_walker *w, double phi_t, double *q, double *cq, double *re
 #define SG_BLOCK_SPAN 0.1
 
 /* Up to SG_BLOCK positions from solving index k on, each predicted (the quartic) from the same history and solved
- * by Newton on its own (the SIMD Newton where simd and the mechanism has one, the scalar newton() for every lane
- * it leaves, the same values either way): the positions of one direction, finite inputs and no farther than
- * SG_BLOCK_SPAN from the newest state. Each is then checked as advance() checks a step (assembled, on the
- * history's branch, no farther from its prediction than a step may correct); the ones before the first that
- * fails join the history in order. Returns their count, their solutions in b; 0 where fewer than two positions
- * make a block or the first fails: the caller's step-by-step continuation then takes position k, and it takes
- * the position that failed (b->count tells whether one did). The loops' weights are refreshed at a block's
- * first position when they are due. */
+ * by Newton on its own: the positions of one direction, finite inputs and no farther than SG_BLOCK_SPAN from the
+ * newest state. Each is checked as advance() checks a step (a prediction and a correction no larger than a step
+ * may make, assembled, on the history's branch); the ones before the first that fails join the history in order.
+ * Where simd and the mechanism has the SIMD Newton, that predicts, solves and checks SG_LANES lanes at a time, and
+ * whatever lane it leaves takes the scalar course here (the same values either way). Returns the count of
+ * accepted positions, their solutions in b; 0 where fewer than two positions make a block or the first fails:
+ * the caller's step-by-step continuation then takes position k, and it takes the position that failed (b->count
+ * tells whether one did). The loops' weights are refreshed at the newest state when they are due. */
 static int solve_block(sg_walker *w, sg_block *b, size_t k, size_t n, const size_t *order, const double *phi,
                        const double *omega, const double *alpha, int simd)
 {
@@ -454,7 +443,7 @@ static int solve_block(sg_walker *w, sg_block *b, size_t k, size_t n, const size
     b->count = 0;
     if (w->nh < SG_HISTORY || (m->nblock > 0 && !w->has_ref) || !(w->hphi[0] != w->hphi[1])) return 0;
     const double dir = w->hphi[0] > w->hphi[1] ? 1.0 : -1.0;
-    double qp[SG_BLOCK][SG_MAX_Q], prev = w->hphi[0];
+    double prev = w->hphi[0];
     int count = 0;
     for (; count < SG_BLOCK && k + (size_t)count < n; ++count) { /* the block's positions */
         const size_t i = order ? order[k + count] : k + count;
@@ -464,56 +453,52 @@ static int solve_block(sg_walker *w, sg_block *b, size_t k, size_t n, const size
             break;
         b->x[count][0] = prev = ph;
     }
-    if (count < 2) return 0; /* coarse steps: the step-by-step continuation (no prediction made twice) */
-    const int positions = count;
-    for (count = 0; count < positions; ++count) { /* their starts, up to the first too far from the last state */
-        const double ph = b->x[count][0];
-        double d[SG_MAX_Q];
-        predict(nq, SG_HISTORY, w->hphi, w->hq, ph, qp[count]);
-        for (int j = 0; j < nq; ++j) d[j] = qp[count][j] - w->hq[0][j];
-        if (!small_change(w, d)) break;
-        shift_trig(m, w->hq[0], w->hcq, d, b->q[count], b->cq[count]);
-        sg_sincos_inl(ph, &b->cx[count][0], &b->cx[count][1]);
+    if (count < 2) return 0; /* coarse steps: the step-by-step continuation */
+    b->count = count;
+    for (int l = 0; l < SG_BLOCK; ++l) { /* inputs (a short block's spare lanes: its last position's) */
+        if (l >= count) b->x[l][0] = b->x[count - 1][0];
+        sg_sincos_inl(b->x[l][0], &b->cx[l][0], &b->cx[l][1]);
         for (int j = 1; j < nx; ++j) {
-            b->x[count][j] = w->x[j];
-            b->cx[count][2 * j] = w->cx[2 * j];
-            b->cx[count][2 * j + 1] = w->cx[2 * j + 1];
+            b->x[l][j] = w->x[j];
+            b->cx[l][2 * j] = w->cx[2 * j];
+            b->cx[l][2 * j + 1] = w->cx[2 * j + 1];
         }
     }
-    if (count < 2) return 0;
-    b->count = count;
-    if (w->scale_age <= 0) { /* solve_at's refresh, at the block's first start */
+    if (w->scale_age <= 0) { /* solve_at's refresh, at the newest state (w->x: its inputs) */
         double size[SG_MAX_Q];
-        m->scales(b->q[0], b->cq[0], b->x[0], b->cx[0], w->c, size);
+        m->scales(w->hq[0], w->hcq, w->x, w->cx, w->c, size);
         for (int j = 0; j < nq; ++j) w->newton_w[j] = (1.0 / size[j]) / w->opt->tol;
         w->scale_age = 16;
     }
     w->scale_age -= count;
     int solved = 0;
     if (simd && m->newton_simd != NULL) {
-        for (int l = count; l < SG_BLOCK; ++l) { /* a short block: its last position again in the spare lanes */
-            copy_doubles(b->q[l], b->q[count - 1], nq);
-            copy_doubles(b->cq[l], b->cq[count - 1], 2 * nq);
-            copy_doubles(b->x[l], b->x[count - 1], nx);
-            copy_doubles(b->cx[l], b->cx[count - 1], 2 * nx);
-        }
+        for (int h = 0; h < SG_HISTORY; ++h) b->hphi[h] = w->hphi[h], b->hq[h] = w->hq[h];
+        SG_LAGRANGE5_DEN(b->hphi, b->den);
+        b->hcq = w->hcq;
+        for (int j = 0; j < nq; ++j) b->lim[j] = m->coord_is_angle[j] ? SG_DQ_MAX : SG_DQ_MAX * w->lscale;
         for (int f = 0; f < count; f += SG_LANES) solved |= m->newton_simd(m, b, f, w->c, w->opt, w->newton_w) << f;
     }
-    for (int l = 0; l < count; ++l) {
-        if (solved >> l & 1) continue;
-        double jac[SG_MAX_Q * SG_MAX_Q];
-        b->status[l] = newton(m, b->q[l], b->cq[l], b->x[l], b->cx[l], w->c, w->opt, w->newton_w, 1, jac,
-                              &b->resid[l]);
-        if (b->status[l] == SG_OK && m->nblock > 0) m->blocks(jac, b->bv[l]);
-    }
     int got = 0;
-    for (; got < count && b->status[got] == SG_OK; ++got) {
+    for (; got < count; ++got) {
+        const int l = got;
+        if (!(solved >> l & 1)) { /* the scalar course: predict, step, Newton, check */
+            double qp[SG_MAX_Q], d[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q];
+            predict(nq, SG_HISTORY, w->hphi, w->hq, b->x[l][0], qp);
+            for (int j = 0; j < nq; ++j) d[j] = qp[j] - w->hq[0][j];
+            if (!small_change(w, d)) break;
+            shift_trig(m, w->hq[0], w->hcq, d, b->q[l], b->cq[l]);
+            if (newton(m, b->q[l], b->cq[l], b->x[l], b->cx[l], w->c, w->opt, w->newton_w, 1, jac, &b->resid[l]) !=
+                SG_OK)
+                break;
+            for (int j = 0; j < nq; ++j) d[j] = b->q[l][j] - qp[j];
+            if (!small_change(w, d)) break;
+            if (m->nblock > 0) m->blocks(jac, b->bv[l]);
+        }
         int jump = 0;
         for (int j = 0; j < m->nblock; ++j)
-            jump |= b->bv[got][j] * w->ref[j] < 0.0 && fabs(b->bv[got][j]) > SG_BLOCK_ZERO;
-        double d[SG_MAX_Q];
-        for (int j = 0; j < nq; ++j) d[j] = b->q[got][j] - qp[got][j];
-        if (jump || !small_change(w, d)) break;
+            jump |= b->bv[l][j] * w->ref[j] < 0.0 && fabs(b->bv[l][j]) > SG_BLOCK_ZERO;
+        if (jump) break;
     }
     for (int l = 0; l < got; ++l) push(w, b->x[l][0], b->q[l], b->cq[l]);
     if (got > 0) { /* the walker's input: the last accepted position's */

@@ -70,12 +70,40 @@ typedef struct sg_lanes {
  * and inputs with theirs; after the solve Newton's last relative residual, the loops' orientation determinants
  * (kernel 'blocks') and the status. SG_BLOCK is a multiple of SG_LANES. */
 #define SG_BLOCK 8
+/* The most earlier states the continuation keeps (the Lagrange predictor reads up to all of them). */
+#define SG_HISTORY 5
 typedef struct sg_block {
     int count;
     double q[SG_BLOCK][SG_MAX_Q], cq[SG_BLOCK][2 * SG_MAX_Q], x[SG_BLOCK][SG_MAX_Q], cx[SG_BLOCK][2 * SG_MAX_Q];
     double resid[SG_BLOCK], bv[SG_BLOCK][SG_MAX_Q];
     int status[SG_BLOCK];
+    /* what the starts are predicted from: the history's angles and states (newest first), the newest state's
+     * cos, sin, the five-state predictor's denominators (SG_LAGRANGE5_DEN) and each coordinate's largest change
+     * a prediction or a correction may make (SG_DQ_MAX; a travel's times the loops' size) */
+    double hphi[SG_HISTORY], den[SG_HISTORY], lim[SG_MAX_Q];
+    const double *hq[SG_HISTORY], *hcq;
 } sg_block;
+
+/* The five-state Lagrange extrapolation, the continuation's predictor (csrc/sg_runtime.c predict5, and its SIMD
+ * twin in SG_SIMD_NEWTON_BODY), written once for both: the weights w_a = prod_{b != a} (t - x_b) / (x_a - x_b)
+ * from the ten differences of the angles x (den: the five denominators, zero where two angles are equal) and the
+ * numerators as prefix and suffix products, t a double or an sg_vd. */
+#define SG_LAGRANGE5_DEN(x, den)                                                                    \
+    do {                                                                                           \
+        const double d01 = x[0] - x[1], d02 = x[0] - x[2], d03 = x[0] - x[3], d04 = x[0] - x[4];   \
+        const double d12 = x[1] - x[2], d13 = x[1] - x[3], d14 = x[1] - x[4];                      \
+        const double d23 = x[2] - x[3], d24 = x[2] - x[4], d34 = x[3] - x[4];                      \
+        den[0] = d01 * d02 * d03 * d04, den[1] = -d01 * d12 * d13 * d14, den[2] = d02 * d12 * d23 * d24; \
+        den[3] = -d03 * d13 * d23 * d34, den[4] = d04 * d14 * d24 * d34;                           \
+    } while (0)
+#define SG_LAGRANGE5_WEIGHTS(T, t, x, den, w)                                                      \
+    do {                                                                                           \
+        const T e0 = t - x[0], e1 = t - x[1], e2 = t - x[2], e3 = t - x[3], e4 = t - x[4];          \
+        const T p01 = e0 * e1, p012 = p01 * e2, s34 = e3 * e4, s234 = e2 * s34;                    \
+        w[0] = e1 * s234 / den[0], w[1] = e0 * s234 / den[1], w[2] = p01 * s34 / den[2];           \
+        w[3] = p012 * e4 / den[3], w[4] = p012 * e3 / den[4];                                      \
+    } while (0)
+#define SG_LAGRANGE5_VALUE(w, q, i) ((w[0] * q[0][i] + w[1] * q[1][i]) + (w[2] * q[2][i] + w[3] * q[3][i]) + w[4] * q[4][i])
 
 /* cos and sin of a step d of an angle coordinate for shift_trig (csrc/sg_runtime.c) and its SIMD twin
  * (sgv_shift_trig): below SG_TINY_STEP cos d = 1 and sin d = d exactly (their corrections, d^2/2 and d^2/6

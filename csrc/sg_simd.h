@@ -743,23 +743,37 @@ SG_VINLINE void sgv_shift_trig(const sg_mechanism *m, const sg_vd *q, const sg_v
 }
 
 /* Newton at SG_W positions of a block at once (csrc/sg_runtime.c solve_block: lanes first .. first + SG_W - 1 of
- * b, each from its own start, weights w): the scalar newton()'s first iteration lane by lane with the vector
- * kernels RESIDUAL_V, LU_FACTOR_V and LU_SOLVE_V (nq = NQ), the same operations, so the same values to the bit.
- * Its usual course at a continuation's prediction is one full step: kept if it lowers the residual where the
- * start is within the tolerance (min_iter), else accepted if it lowers the residual into the tolerance. A lane
- * that takes that course gets its solution, Newton's relative residual, its loops' orientation determinants
- * (kernel 'blocks', from the Φ_q it ends with) and SG_OK in b; the returned bit mask names those lanes. Any other
- * (a damped step, more iterations, a singular factor, a non-finite residual) is left as it was, for the scalar
- * newton() to solve from the same start. */
+ * b; weights w): the scalar course lane by lane, the same operations, so the same values to the bit. Each lane's
+ * start is the five-state prediction from b's history (SG_LAGRANGE5_*) and the step to it from the newest state
+ * (sgv_shift_trig), a change no larger than b->lim allows; then the scalar newton()'s usual course at such a
+ * prediction with the vector kernels RESIDUAL_V, LU_FACTOR_V and LU_SOLVE_V (nq = NQ), one full step: kept if it
+ * lowers the residual where the start is within the tolerance (min_iter), else accepted if it lowers the residual
+ * into the tolerance; and the correction no larger than b->lim either. A lane that takes that course gets its
+ * solution, Newton's relative residual, its loops' orientation determinants (kernel 'blocks', from the Φ_q it
+ * ends with) and SG_OK in b; the returned bit mask names those lanes. Any other lane (a damped step, more
+ * iterations, a singular factor, a non-finite residual, too large a change, equal angles in the history) is left
+ * to the scalar course. */
 #define SG_SIMD_NEWTON_BODY(RESIDUAL_V, LU_FACTOR_V, LU_SOLVE_V, NQ)                                \
     {                                                                                              \
         const int nx = m->nx;                                                                      \
-        sg_vd vq[NQ], vcq[2 * (NQ)], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q];                              \
-        sgv_load_lanes(b->q[first], SG_MAX_Q, (NQ), vq);                                           \
-        sgv_load_lanes(b->cq[first], 2 * SG_MAX_Q, 2 * (NQ), vcq);                                 \
+        const double *den = b->den, *const *hq = b->hq;                                            \
+        if (!(den[0] != 0.0 && den[1] != 0.0 && den[2] != 0.0 && den[3] != 0.0 && den[4] != 0.0)) \
+            return 0; /* equal angles in the history: predict()'s lower orders, scalar */          \
+        sg_vd vq[NQ], vcq[2 * (NQ)], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vqp[NQ], h0[NQ], hc[2 * (NQ)]; \
         sgv_load_lanes(b->x[first], SG_MAX_Q, nx, vx);                                             \
         sgv_load_lanes(b->cx[first], 2 * SG_MAX_Q, 2 * nx, vcx);                                   \
-        sg_vd r[NQ], jac[(NQ) * (NQ)], lu[(NQ) * (NQ)], dq[NQ], tq[NQ], tcq[2 * (NQ)], rt[NQ];     \
+        sg_vd wt[SG_HISTORY], dq[NQ];                                                              \
+        SG_LAGRANGE5_WEIGHTS(sg_vd, vx[0], b->hphi, den, wt);                                      \
+        sg_vm ok = sgv_true();                                                                     \
+        for (int i = 0; i < (NQ); ++i) {                                                           \
+            vqp[i] = SG_LAGRANGE5_VALUE(wt, hq, i);                                                \
+            h0[i] = sgv_set1(hq[0][i]);                                                            \
+            dq[i] = vqp[i] - hq[0][i];                                                             \
+            ok &= sgv_fabs(dq[i]) <= sgv_set1(b->lim[i]);                                          \
+        }                                                                                          \
+        for (int i = 0; i < 2 * (NQ); ++i) hc[i] = sgv_set1(b->hcq[i]);                            \
+        sgv_shift_trig(m, h0, hc, dq, (NQ), vq, vcq);                                              \
+        sg_vd r[NQ], jac[(NQ) * (NQ)], lu[(NQ) * (NQ)], tq[NQ], tcq[2 * (NQ)], rt[NQ];             \
         sg_vd jt[(NQ) * (NQ)];                                                                     \
         sg_vm piv[NQ];                                                                             \
         RESIDUAL_V(vq, vcq, vx, vcx, c, r, jac);                                                   \
@@ -775,11 +789,14 @@ SG_VINLINE void sgv_shift_trig(const sg_mechanism *m, const sg_vd *q, const sg_v
         RESIDUAL_V(tq, tcq, vx, vcx, c, rt, jt);                                                   \
         const sg_vd nt = sgv_weighted_norm((NQ), rt, w);                                           \
         const sg_vm lower = nt < norm, take = ~exact & lower;                                      \
-        const sg_vm ok = exact | (sgv_isfinite(norm) & factored & (within | (lower & (nt <= one)))); \
+        ok &= exact | (sgv_isfinite(norm) & factored & (within | (lower & (nt <= one))));          \
+        for (int k = 0; k < (NQ); ++k) {                                                           \
+            vq[k] = sgv_select(take, tq[k], vq[k]);                                                \
+            ok &= sgv_fabs(vq[k] - vqp[k]) <= sgv_set1(b->lim[k]);                                 \
+        }                                                                                          \
         const int lanes = b->count - first < SG_W ? b->count - first : SG_W;                       \
         const int mask = sgv_bits(ok) & ((1 << lanes) - 1);                                        \
         if (mask == 0) return 0;                                                                   \
-        for (int k = 0; k < (NQ); ++k) vq[k] = sgv_select(take, tq[k], vq[k]);                     \
         for (int k = 0; k < 2 * (NQ); ++k) vcq[k] = sgv_select(take, tcq[k], vcq[k]);              \
         const sg_vd resid = sgv_select(take, nt, norm) * tol;                                      \
         double rq[SG_W][NQ], rcq[SG_W][2 * (NQ)], rjac[SG_W][(NQ) * (NQ)];                         \
