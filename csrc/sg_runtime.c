@@ -500,7 +500,8 @@ static int solve_block(sg_walker *w, sg_block *b, size_t k, size_t n, const size
             jump |= b->bv[l][j] * w->ref[j] < 0.0 && fabs(b->bv[l][j]) > SG_BLOCK_ZERO;
         if (jump) break;
     }
-    for (int l = 0; l < got; ++l) push(w, b->x[l][0], b->q[l], b->cq[l]);
+    for (int l = got > SG_HISTORY ? got - SG_HISTORY : 0; l < got; ++l) /* the history keeps the newest five */
+        push(w, b->x[l][0], b->q[l], b->cq[l]);
     if (got > 0) { /* the walker's input: the last accepted position's */
         w->x[0] = b->x[got - 1][0];
         w->cx[0] = b->cx[got - 1][0];

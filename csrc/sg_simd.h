@@ -753,7 +753,7 @@ SG_VINLINE void sgv_shift_trig(const sg_mechanism *m, const sg_vd *q, const sg_v
  * ends with) and SG_OK in b; the returned bit mask names those lanes. Any other lane (a damped step, more
  * iterations, a singular factor, a non-finite residual, too large a change, equal angles in the history) is left
  * to the scalar course. */
-#define SG_SIMD_NEWTON_BODY(RESIDUAL_V, LU_FACTOR_V, LU_SOLVE_V, NQ)                                \
+#define SG_SIMD_NEWTON_BODY(RESIDUAL_V, LU_FACTOR_V, LU_SOLVE_V, BLOCKS_V, NQ)                      \
     {                                                                                              \
         const int nx = m->nx;                                                                      \
         const double *den = b->den, *const *hq = b->hq;                                            \
@@ -799,24 +799,23 @@ SG_VINLINE void sgv_shift_trig(const sg_mechanism *m, const sg_vd *q, const sg_v
         if (mask == 0) return 0;                                                                   \
         for (int k = 0; k < 2 * (NQ); ++k) vcq[k] = sgv_select(take, tcq[k], vcq[k]);              \
         const sg_vd resid = sgv_select(take, nt, norm) * tol;                                      \
-        double rq[SG_W][NQ], rcq[SG_W][2 * (NQ)], rjac[SG_W][(NQ) * (NQ)];                         \
-        double *pq[SG_W], *pcq[SG_W], *pjac[SG_W];                                                 \
-        for (int l = 0; l < SG_W; ++l) pq[l] = rq[l], pcq[l] = rcq[l], pjac[l] = rjac[l];          \
+        const int nblock = m->nblock;                                                              \
+        sg_vd vbv[SG_MAX_Q];                                                                       \
+        if (nblock > 0) { /* the loops' signs from the Φ_q the lane ends with */                  \
+            for (int k = 0; k < (NQ) * (NQ); ++k) jac[k] = sgv_select(take, jt[k], jac[k]);        \
+            BLOCKS_V(jac, vbv);                                                                    \
+        }                                                                                          \
+        double *pq[SG_W], *pcq[SG_W], *pbv[SG_W];                                                  \
+        for (int l = 0; l < SG_W; ++l) { /* straight to the rows of b's lanes (a spare lane's too) */ \
+            pq[l] = b->q[first + l];                                                               \
+            pcq[l] = b->cq[first + l];                                                             \
+            pbv[l] = b->bv[first + l];                                                             \
+            b->status[first + l] = mask >> l & 1 ? SG_OK : SG_NO_CONVERGENCE;                      \
+            b->resid[first + l] = resid[l];                                                        \
+        }                                                                                          \
         sgv_store_rows(vq, (NQ), pq);                                                              \
         sgv_store_rows(vcq, 2 * (NQ), pcq);                                                        \
-        if (m->nblock > 0) {                                                                       \
-            for (int k = 0; k < (NQ) * (NQ); ++k) jac[k] = sgv_select(take, jt[k], jac[k]);        \
-            sgv_store_rows(jac, (NQ) * (NQ), pjac);                                                \
-        }                                                                                          \
-        for (int l = 0; l < lanes; ++l) {                                                          \
-            if (!(mask >> l & 1)) continue;                                                        \
-            const int at = first + l;                                                              \
-            memcpy(b->q[at], rq[l], sizeof rq[l]);                                                 \
-            memcpy(b->cq[at], rcq[l], sizeof rcq[l]);                                              \
-            b->resid[at] = resid[l];                                                               \
-            b->status[at] = SG_OK;                                                                 \
-            if (m->nblock > 0) m->blocks(rjac[l], b->bv[at]);                                      \
-        }                                                                                          \
+        if (nblock > 0) sgv_store_rows(vbv, nblock, pbv);                                          \
         return mask;                                                                               \
     }
 

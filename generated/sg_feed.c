@@ -4016,6 +4016,30 @@ SG_VINLINE void sg_feed_lu_solve_v(const sg_vd *lu, const sg_vm *piv, sg_vd *b)
     b[6] = y[6];
 }
 
+SG_VINLINE void sg_feed_blocks_v(const sg_vd *jac, sg_vd *out)
+{
+    /* block 0: joints cam, Q */
+    {
+        const sg_vd nr = sgv_sqrt((jac[0] * jac[0] + jac[3] * jac[3]) * (jac[7] * jac[7] + jac[10] * jac[10] + jac[11] * jac[11]) * (jac[14] * jac[14] + jac[17] * jac[17] + jac[18] * jac[18]));
+        out[0] = sgv_select(nr > sgv_set1(0.0), (jac[3] * (jac[11] * jac[14] - jac[7] * jac[18]) - jac[4] * (jac[10] * jac[14] - jac[7] * jac[17]) + jac[0] * (jac[10] * jac[18] - jac[11] * jac[17])) / nr, sgv_set1(0.0));
+    }
+    /* block 1: joints C */
+    {
+        const sg_vd nr = sgv_sqrt((jac[23] * jac[23] + jac[27] * jac[27]) * (jac[30] * jac[30] + jac[34] * jac[34]));
+        out[1] = sgv_select(nr > sgv_set1(0.0), (jac[27] * jac[30] - jac[23] * jac[34]) / nr, sgv_set1(0.0));
+    }
+    /* block 2: joints D */
+    {
+        const sg_vd nr = sgv_sqrt((jac[36] * jac[36] + jac[37] * jac[37]));
+        out[2] = sgv_select(nr > sgv_set1(0.0), (jac[36]) / nr, sgv_set1(0.0));
+    }
+    /* block 3: joints L */
+    {
+        const sg_vd nr = sgv_sqrt((jac[42] * jac[42] + jac[43] * jac[43] + jac[47] * jac[47]));
+        out[3] = sgv_select(nr > sgv_set1(0.0), (jac[47]) / nr, sgv_set1(0.0));
+    }
+}
+
 SG_VINLINE sg_vm sg_feed_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
     (void)x;
@@ -4261,7 +4285,7 @@ static SG_FLATTEN int sg_feed_finish_simd(const struct sg_mechanism *m, struct s
 SG_SIMD_FINISH_BODY(sg_feed_motion_v, sg_feed_rates_v, sg_feed_observe_v, sg_feed_forces_v, sg_feed_forces_in_simd, 121, 65)
 
 static SG_FLATTEN int sg_feed_newton_simd(const struct sg_mechanism *m, struct sg_block *b, int first, const double *c, const sg_options *opt, const double *w)
-SG_SIMD_NEWTON_BODY(sg_feed_residual_v, sg_feed_lu_factor_v, sg_feed_lu_solve_v, 7)
+SG_SIMD_NEWTON_BODY(sg_feed_residual_v, sg_feed_lu_factor_v, sg_feed_lu_solve_v, sg_feed_blocks_v, 7)
 SG_SIMD_END
 #endif
 

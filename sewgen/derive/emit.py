@@ -149,7 +149,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
         ks.residual(), *ks.lu(), ks.scales(row_scales), ks.blocks(blks), ks.motion(row_scales),
         ks.rates(row_scales), ks.observe(groups, row_scales), ks.forces(kst),
         ks.force_matrix(kst), ks.anchors(anchor_out)]
-    vector_kernels = ks.vector_kernels(dyads, row_scales, kst, groups)
+    vector_kernels = ks.vector_kernels(dyads, row_scales, kst, groups, blks)
     kernels.insert(0, ks.constants_kernel())  # last to build: it evaluates what the others hoisted
     sizes = {"nq": len(kin.q), "nx": len(kin.x), "np": len(kin.p), "nobs": len(kin.observables),
              "nbranch": len(dyads or []), "nc": len(ks.constants), "nf": len(kst.f),

@@ -92,6 +92,7 @@ VECTOR_SIGNATURES = {
                 "sg_vd *r, sg_vd *jac)",
     "lu_factor": "sg_vm {f}(sg_vd *a, sg_vm *piv)",
     "lu_solve": "void {f}(const sg_vd *lu, const sg_vm *piv, sg_vd *b)",
+    "blocks": "void {f}(const sg_vd *jac, sg_vd *out)",
 }
 
 
@@ -611,7 +612,8 @@ class KernelSet:
         return Kernel(name, VECTOR_SIGNATURES["closed"].format(f=name) if vector else self._signature("closed"),
                       body, total)
 
-    def vector_kernels(self, dyads: list[Dyad] | None, scales, kst: Kinetostatics, groups: list) -> list[Kernel]:
+    def vector_kernels(self, dyads: list[Dyad] | None, scales, kst: Kinetostatics, groups: list,
+                       blocks: list) -> list[Kernel]:
         """The SIMD twins of the closed (where ``dyads`` is not None), motion, rates, observe and forces kernels and
         the forces' run-time test, or none where the kinematics have no vector form (where only the forces have
         none, the test says no: the SIMD loop then runs a force sweep scalar, and the template passes
@@ -625,7 +627,7 @@ class KernelSet:
             return []
         if dyads is None and len(self.kin.q) <= NEWTON_SIMD_MAX_Q:  # Newton's residual and LU: the SIMD Newton
             try:
-                kernels += [self.residual(vector=True), *self.lu(vector=True)]
+                kernels += [self.residual(vector=True), *self.lu(vector=True), self.blocks(blocks, vector=True)]
             except NoVectorForm:
                 pass
         try:
@@ -669,17 +671,30 @@ class KernelSet:
         terms = [f"jac[{i * n + j}] * jac[{i * n + j}]" for j in range(n) if self.kin.jac_q[i, j] != 0]
         return "(" + " + ".join(terms) + ")" if terms else "0.0"
 
-    def blocks(self, blocks: list) -> Kernel:
+    def blocks(self, blocks: list, vector: bool = False) -> Kernel:
         """The normalised determinant of every diagonal block of Φ_q (derive.branches) from the numeric Φ_q:
-        det over the product of the block rows' norms in Φ_q; its sign is the block's assembly branch."""
+        det over the product of the block rows' norms in Φ_q; its sign is the block's assembly branch.
+        ``vector``: the SIMD twin (SG_SIMD_NEWTON_BODY's), the same operations lane by lane where every block has
+        at most three rows (its determinant in closed form), else the scalar kernel lane after lane."""
         n = len(self.kin.q)
+        name = f"{self.prefix}_blocks" + ("_v" if vector else "")
+        sig = VECTOR_SIGNATURES["blocks"].format(f=name) if vector else self._signature("blocks")
+        if vector and any(len(blk.rows) > 3 for blk in blocks):
+            body = [f"double rj[SG_W][{n * n}], ro[SG_W][{len(blocks)}], *pj[SG_W];",
+                    "for (int l = 0; l < SG_W; ++l) pj[l] = rj[l];",
+                    f"sgv_store_rows(jac, {n * n}, pj);",
+                    f"for (int l = 0; l < SG_W; ++l) {self.prefix}_blocks(rj[l], ro[l]);",
+                    f"for (int k = 0; k < {len(blocks)}; ++k)",
+                    "    for (int l = 0; l < SG_W; ++l) out[k][l] = ro[l][k];"]
+            return Kernel(name, sig, body, 0)
+        real, sqrt = ("sg_vd", "sgv_sqrt") if vector else ("double", "sqrt")
         body = []
         count = 0
         for k, blk in enumerate(blocks):
             m = len(blk.rows)
             count += {1: 0, 2: 3, 3: 14}.get(m, 2 * m ** 3 // 3) + m * (2 * n + 1) + 2  # det, row norms, quotient
             el = [[f"jac[{i * n + j}]" for j in blk.cols] for i in blk.rows]
-            norms = "sqrt(" + " * ".join(self._row_norm2(i) for i in blk.rows) + ")"
+            norms = f"{sqrt}(" + " * ".join(self._row_norm2(i) for i in blk.rows) + ")"
             body.append(f"/* block {k}: joints {', '.join(blk.joints)} */")
             body.append("{")
             if m == 1:
@@ -695,9 +710,12 @@ class KernelSet:
                 body += [f"    M[{a * m + b}] = {el[a][b]};" for a in range(m) for b in range(m)]
                 body += [f"    const double d = sg_det_inl({m}, M, piv);"]
                 det = "d"
-            body += [f"    const double nr = {norms};", f"    out[{k}] = nr > 0.0 ? ({det}) / nr : 0.0;", "}"]
+            body.append(f"    const {real} nr = {norms};")
+            body.append(f"    out[{k}] = sgv_select(nr > sgv_set1(0.0), ({det}) / nr, sgv_set1(0.0));" if vector else
+                        f"    out[{k}] = nr > 0.0 ? ({det}) / nr : 0.0;")
+            body.append("}")
         body = _unused(body, "jac", "out") + body
-        return Kernel(f"{self.prefix}_blocks", self._signature("blocks"), body, count)
+        return Kernel(name, sig, body, count)
 
     def constants_kernel(self) -> Kernel:
         """Call last: it evaluates every constant the other kernels hoisted. A square root of a parameter sum
