@@ -252,7 +252,8 @@ static int predict5(int nq, const double *x, double *const *hq, double t, double
 /* Lagrange extrapolation in the shaft angle from nh earlier states (newest first, at most SG_HISTORY): of degree
  * four from five (the continuation's step), quadratic from three (after a failed step). The positions alone, no
  * rates: the rates, observables and forces of solved positions can come later, SG_LANES at a time (csrc/sg_simd.h
- * SG_SIMD_FINISH_BODY), and the scalar loop solves the same positions to the bit. Measured on the JB1-3 feed's
+ * SG_SIMD_FINISH_BODY), and the scalar loop solves the same positions to the bit; a block's positions are all
+ * predicted from the same five states (solve_block). Measured on the JB1-3 feed's
  * coordinates, the five states' prediction is off by 3.7e-13 at 3600 positions a turn (median; the quintic
  * Hermite predictor from the two newest states' rates, which it replaced: 8.1e-13), 3.8e-9 at 360 (2.8e-12), 5e-5
  * at 72 (5.8e-8): Newton's first step takes the first two to rounding, a second step the last. */

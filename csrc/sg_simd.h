@@ -638,9 +638,9 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
         return failures;                                                                           \
     }
 
-/* The SIMD loop of a mechanism Newton solves (no closed form): csrc/sg_runtime.c's sweep solves the positions one
- * after another (each Newton start is predicted from the ones before) and hands them over SG_W at a time in an
- * sg_lanes; this finishes them with the vector kernels MOTION_V (NOBS observables; with want, RATES_V and the
+/* The SIMD loop of a mechanism Newton solves (no closed form): csrc/sg_runtime.c's sweep solves the positions (in
+ * blocks predicted from one history, SG_SIMD_NEWTON_BODY, or step by step) and hands them over SG_W at a time in
+ * an sg_lanes; this finishes them with the vector kernels MOTION_V (NOBS observables; with want, RATES_V and the
  * wanted groups' OBSERVE_V, whose rows alone are stored) and, for forces (frc not NULL), FORCES_V (NFO outputs,
  * loads transposed in): the scalar kernels' operations lane by lane (Φ_q's block factor too), so the same values
  * to the bit. Every lane's rows are written; the bit mask returned says which lanes it vouches for: the factor

@@ -2458,7 +2458,9 @@ void sg_feed_anchors(const double *q, const double *cq, const double *x, const d
 }
 
 /* The SIMD twins of the motion, rates, observe and forces kernels and the finish of SG_LANES solved positions at a
- * time (csrc/sg_simd.h): compiled for AVX-512 or AVX2 where the build has SIMD, called only where the CPU has it. */
+ * time, and of Newton's residual, LU and loops' determinants with the SIMD Newton of SG_LANES
+ * positions of a block (csrc/sg_simd.h): compiled for AVX-512 or AVX2 where the build has SIMD, called
+ * only where the CPU has it. */
 #if SG_SIMD
 SG_SIMD_BEGIN
 
