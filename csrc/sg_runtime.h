@@ -66,9 +66,9 @@ typedef struct sg_lanes {
 /* Positions the Newton continuation predicts from one history and solves independently (csrc/sg_runtime.c,
  * solve_block): SG_BLOCK of them in every loop and at every SIMD level, so that the scalar and the SIMD loops
  * (descriptor newton_simd, csrc/sg_simd.h SG_SIMD_NEWTON_BODY, SG_LANES lanes a call) solve the same positions
- * from the same starts. Per lane its Newton start (coordinates and their cos, sin; overwritten by the solution)
- * and inputs with theirs; after the solve Newton's last relative residual, the loops' orientation determinants
- * (kernel 'blocks') and the status. SG_BLOCK is a multiple of SG_LANES. */
+ * from the same starts. Per lane its inputs with their cos, sin, and after the solve its coordinates with
+ * theirs, Newton's last relative residual and the loops' orientation determinants (kernel 'blocks'). SG_BLOCK is a
+ * multiple of SG_LANES. */
 #define SG_BLOCK 8
 /* The most earlier states the continuation keeps (the Lagrange predictor reads up to all of them). */
 #define SG_HISTORY 5
@@ -76,7 +76,6 @@ typedef struct sg_block {
     int count;
     double q[SG_BLOCK][SG_MAX_Q], cq[SG_BLOCK][2 * SG_MAX_Q], x[SG_BLOCK][SG_MAX_Q], cx[SG_BLOCK][2 * SG_MAX_Q];
     double resid[SG_BLOCK], bv[SG_BLOCK][SG_MAX_Q];
-    int status[SG_BLOCK];
     /* what the starts are predicted from: the history's angles and states (newest first), the newest state's
      * cos, sin, the five-state predictor's denominators (SG_LAGRANGE5_DEN) and each coordinate's largest change
      * a prediction or a correction may make (SG_DQ_MAX; a travel's times the loops' size) */

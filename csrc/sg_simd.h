@@ -749,8 +749,8 @@ SG_VINLINE void sgv_shift_trig(const sg_mechanism *m, const sg_vd *q, const sg_v
  * prediction with the vector kernels RESIDUAL_V, LU_FACTOR_V and LU_SOLVE_V (nq = NQ), one full step: kept if it
  * lowers the residual where the start is within the tolerance (min_iter), else accepted if it lowers the residual
  * into the tolerance; and the correction no larger than b->lim either. A lane that takes that course gets its
- * solution, Newton's relative residual, its loops' orientation determinants (kernel 'blocks', from the Φ_q it
- * ends with) and SG_OK in b; the returned bit mask names those lanes. Any other lane (a damped step, more
+ * solution, Newton's relative residual and its loops' orientation determinants (kernel 'blocks', from the Φ_q it
+ * ends with) in b; the returned bit mask names those lanes. Any other lane (a damped step, more
  * iterations, a singular factor, a non-finite residual, too large a change, equal angles in the history) is left
  * to the scalar course. */
 #define SG_SIMD_NEWTON_BODY(RESIDUAL_V, LU_FACTOR_V, LU_SOLVE_V, BLOCKS_V, NQ)                      \
@@ -810,7 +810,6 @@ SG_VINLINE void sgv_shift_trig(const sg_mechanism *m, const sg_vd *q, const sg_v
             pq[l] = b->q[first + l];                                                               \
             pcq[l] = b->cq[first + l];                                                             \
             pbv[l] = b->bv[first + l];                                                             \
-            b->status[first + l] = mask >> l & 1 ? SG_OK : SG_NO_CONVERGENCE;                      \
             b->resid[first + l] = resid[l];                                                        \
         }                                                                                          \
         sgv_store_rows(vq, (NQ), pq);                                                              \

@@ -151,10 +151,11 @@ HOOKS["finish_simd"] = ("int", (("const struct sg_mechanism *", "m"), ("struct s
 HOOKS["newton_simd"] = ("int", (("const struct sg_mechanism *", "m"), ("struct sg_block *", "b"), ("int", "first"),
                                  ("const double *", "c"), ("const sg_options *", "opt"), ("const double *", "w")),
                          "Newton at SG_LANES positions of a block at once (csrc/sg_simd.h, SG_SIMD_NEWTON_BODY): "
-                         "lanes first.. of b from their starts, weights w (kernel 'scales'); the bit mask of the lanes "
-                         "it solved the scalar Newton's way, each with its solution, residual and loops' signs "
-                         "(kernel 'blocks') written to b; NULL with a closed form, without SIMD in the build or "
-                         "without an exact vector form of the residual")
+                         "lanes first.. of b, each started from its prediction from b's history, weights w (kernel "
+                         "'scales'); the bit mask of the lanes it solved the scalar course's way, each with its "
+                         "solution, residual and loops' signs (kernel 'blocks') written to b; NULL with a closed "
+                         "form, without SIMD in the build, over 16 coordinates or without an exact vector form of "
+                         "the residual")
 
 #: Fields of ``sg_mechanism``, the descriptor every generated file fills (C type, name, meaning); the sizes'
 #: names are the manifest's "sizes" keys, the kernels' are :data:`KERNELS` kinds.
