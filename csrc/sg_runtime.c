@@ -1258,11 +1258,14 @@ void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int 
  * alpha, r x m (a - g) of its masses and the bearings' Coulomb friction mu_r sign(omega) (|front| + |rear|) (the
  * friction circle: it does not enter the radial balance).
  * out: front (n x 2), rear (n x 2), torque (n), the bearings' friction torque (n), then per core mass its
- * position, velocity and acceleration (3 x n x 2). Every sum runs in the order listed, from zero; the planned
- * and the general analysis both call this, so they agree to the bit. Returns 1 where front, rear and torque
+ * position, velocity and acceleration (3 x n x 2). Every sum runs in the order listed, from zero; cos and sin of
+ * the shaft angle are libmvec's where the module's SIMD runs (sgv_trig_table, SG_SHAFT_CHUNK angles at a time),
+ * else libm's; the planned and the general analysis both call this, so they agree to the bit. Returns 1 where front, rear and torque
  * are finite everywhere, else 0. */
 /* Positions ahead that sg_shaft asks the cache for the columns it reads (each a row of a group's block apart). */
 #define SG_SHAFT_AHEAD 8
+/* Shaft angles whose cos, sin sg_shaft takes at once from the vector math (where the module's SIMD runs). */
+#define SG_SHAFT_CHUNK 256
 
 int sg_shaft(size_t n, const double *phi, const double *omega, const double *alpha, const double *src, int nf,
              const size_t *f_off, const size_t *f_step, const double *f_sign, const double *f_arm, int nt,
@@ -1272,6 +1275,13 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
     double *front = out, *rear = out + 2 * n, *torque = out + 4 * n, *fric = out + 5 * n, *kin = out + 6 * n;
     const double gx = gravity[0], gy = gravity[1];
     int finite = 1;
+    double trig[2 * SG_SHAFT_CHUNK]; /* cos, then sin, of the chunk's angles */
+    size_t chunk_at = 0, chunk_len = 0;
+#if SG_SIMD
+    const int vector_trig = sg_simd_width(NULL) > 1;
+#else
+    const int vector_trig = 0;
+#endif
     for (size_t i = 0; i < n; ++i) {
         double tx = 0.0, ty = 0.0, mx = 0.0, my = 0.0; /* Sum F, Sum arm F */
 #if defined(__GNUC__)
@@ -1289,7 +1299,19 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
         tx += belt[0], ty += belt[1];
         mx += belt_arm * belt[0], my += belt_arm * belt[1];
         double c, s, core_torque = inertia * alpha[i];
-        sg_sincos_inl(phi[i], &c, &s);
+        if (vector_trig) {
+#if SG_SIMD
+            if (i >= chunk_at + chunk_len) {
+                chunk_at = i;
+                chunk_len = n - i < SG_SHAFT_CHUNK ? n - i : SG_SHAFT_CHUNK;
+                sgv_trig_table(chunk_len, phi + i, trig);
+            }
+#endif
+            c = trig[i - chunk_at];
+            s = trig[chunk_len + (i - chunk_at)];
+        } else {
+            sg_sincos_inl(phi[i], &c, &s);
+        }
         for (int k = 0; k < ncore; ++k) {
             const double *cm = core + 5 * k;
             const double mass = cm[0], r = cm[1], cb = cm[2], sb = cm[3], arm = cm[4];
