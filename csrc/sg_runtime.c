@@ -1260,8 +1260,8 @@ void sg_make_continuous(size_t n, int nq, int nobs, double *q, double *obs, int 
  * out: front (n x 2), rear (n x 2), torque (n), the bearings' friction torque (n), then per core mass its
  * position, velocity and acceleration (3 x n x 2). Every sum runs in the order listed, from zero; cos and sin of
  * the shaft angle are libmvec's where the module's SIMD runs (sgv_trig_table, SG_SHAFT_CHUNK angles at a time),
- * else libm's; the planned and the general analysis both call this, so they agree to the bit. Returns 1 where front, rear and torque
- * are finite everywhere, else 0. */
+ * else libm's; the planned and the general analysis both call this, so they agree to the bit. Returns 1 where
+ * front, rear and torque are finite everywhere, else 0. */
 /* Positions ahead that sg_shaft asks the cache for the columns it reads (each a row of a group's block apart). */
 #define SG_SHAFT_AHEAD 8
 /* Shaft angles whose cos, sin sg_shaft takes at once from the vector math (where the module's SIMD runs). */
