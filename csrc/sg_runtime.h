@@ -102,7 +102,8 @@ typedef struct sg_block {
         w[0] = e1 * s234 / den[0], w[1] = e0 * s234 / den[1], w[2] = p01 * s34 / den[2];           \
         w[3] = p012 * e4 / den[3], w[4] = p012 * e3 / den[4];                                      \
     } while (0)
-#define SG_LAGRANGE5_VALUE(w, q, i) ((w[0] * q[0][i] + w[1] * q[1][i]) + (w[2] * q[2][i] + w[3] * q[3][i]) + w[4] * q[4][i])
+#define SG_LAGRANGE5_VALUE(w, q, i) \
+    ((w[0] * q[0][i] + w[1] * q[1][i]) + (w[2] * q[2][i] + w[3] * q[3][i]) + w[4] * q[4][i])
 
 /* cos and sin of a step d of an angle coordinate for shift_trig (csrc/sg_runtime.c) and its SIMD twin
  * (sgv_shift_trig): below SG_TINY_STEP cos d = 1 and sin d = d exactly (their corrections, d^2/2 and d^2/6
@@ -117,7 +118,8 @@ typedef struct sg_block {
 #define SG_SMALL_STEP 1e-2
 #define SG_SIN_SHORT(h, h2) ((h) * (1.0 - (h2) * (1.0 / 6.0) * (1.0 - (h2) * (1.0 / 20.0))))
 #define SG_COS_SHORT(h2) (1.0 - (h2) * 0.5 * (1.0 - (h2) * (1.0 / 12.0)))
-#define SG_SIN_SMALL(h, h2) ((h) * (1.0 - (h2) * (1.0 / 6.0) * (1.0 - (h2) * (1.0 / 20.0) * (1.0 - (h2) * (1.0 / 42.0)))))
+#define SG_SIN_SMALL(h, h2) \
+    ((h) * (1.0 - (h2) * (1.0 / 6.0) * (1.0 - (h2) * (1.0 / 20.0) * (1.0 - (h2) * (1.0 / 42.0)))))
 #define SG_COS_SMALL(h2) \
     (1.0 - (h2) * 0.5 * (1.0 - (h2) * (1.0 / 12.0) * (1.0 - (h2) * (1.0 / 30.0) * (1.0 - (h2) * (1.0 / 56.0)))))
 
