@@ -338,13 +338,15 @@ static void push(sg_walker *w, double ph, const double *q, const double *cq)
 }
 
 /* |d| within SG_DQ_MAX for every coordinate (travels against the loop size). */
+static inline double change_limit(const sg_walker *w, int k)
+{
+    return w->m->coord_is_angle[k] ? SG_DQ_MAX : SG_DQ_MAX * w->lscale;
+}
+
 static int small_change(const sg_walker *w, const double *d)
 {
-    const sg_mechanism *m = w->m;
-    for (int k = 0; k < m->nq; ++k) {
-        const double lim = m->coord_is_angle[k] ? SG_DQ_MAX : SG_DQ_MAX * w->lscale;
-        if (!(fabs(d[k]) <= lim)) return 0;
-    }
+    for (int k = 0; k < w->m->nq; ++k)
+        if (!(fabs(d[k]) <= change_limit(w, k))) return 0;
     return 1;
 }
 
@@ -475,9 +477,8 @@ static int solve_block(sg_walker *w, sg_block *b, size_t k, size_t n, const size
     int solved = 0;
     if (simd && m->newton_simd != NULL) {
         for (int h = 0; h < SG_HISTORY; ++h) b->hphi[h] = w->hphi[h], b->hq[h] = w->hq[h];
-        SG_LAGRANGE5_DEN(b->hphi, b->den);
         b->hcq = w->hcq;
-        for (int j = 0; j < nq; ++j) b->lim[j] = m->coord_is_angle[j] ? SG_DQ_MAX : SG_DQ_MAX * w->lscale;
+        for (int j = 0; j < nq; ++j) b->lim[j] = change_limit(w, j);
         for (int f = 0; f < count; f += SG_LANES) solved |= m->newton_simd(m, b, f, w->c, w->opt, w->newton_w) << f;
     }
     int got = 0;
@@ -703,50 +704,35 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     const int simd_newton = !opt->scalar && sg_simd_width(m) > 1;
     size_t step_at = n; /* a position a block failed at: the step-by-step continuation takes it */
     sg_block blk;
+    int block_got = 0, block_next = 0; /* the block's accepted positions, and the next one the loop takes */
     for (size_t k = 0; k < n; ++k) {
-        if (!use_closed && !prev_failed && k != step_at) { /* SG_BLOCK positions from one history */
-            const int got = solve_block(&w, &blk, k, n, order, phi, omega, alpha, simd_newton);
-            for (int l = 0; l < got; ++l) {
-                const size_t i = order ? order[k + l] : k + l;
-                double *qi = q + i * (size_t)nq;
-                copy_doubles(qi, blk.q[l], nq);
-                x[0] = blk.x[l][0], cx[0] = blk.cx[l][0], cx[1] = blk.cx[l][1];
-                xd[0] = omega[i];
-                xdd[0] = alpha[i];
-                if (deferred) {
-                    put_lane(m, &lanes, lanes.count++, i, qi, blk.cq[l], x, cx, xd, xdd, blk.resid[l]);
-                    if (lanes.count == SG_LANES)
-                        failures += finish_lanes(&w, &lanes, want, gv, loads, no_loads, q, qd, qdd, obs, err, frc,
-                                                 status);
-                    continue;
-                }
-                double est = 0.0;
-                const int st = finish_position(&w, want, x, cx, xd, xdd, gv,
-                                               loads ? loads + i * (size_t)m->nload : no_loads, qi, blk.cq[l],
-                                               blk.resid[l], qd + i * (size_t)nq,
-                                               qdd + i * (size_t)nq, obs + i * (size_t)nobs,
-                                               frc ? frc + i * (size_t)nfo : NULL, &est);
-                failures += settle(m, i, st, est, q, qd, qdd, obs, err, frc, status);
-            }
-            if (got > 0) {
-                if (got < blk.count) step_at = k + (size_t)got;
-                k += (size_t)got - 1;
-                continue;
-            }
+        if (block_next == block_got && !use_closed && !prev_failed && k != step_at) { /* SG_BLOCK from one history */
+            block_got = solve_block(&w, &blk, k, n, order, phi, omega, alpha, simd_newton);
+            block_next = 0;
+            if (block_got < blk.count) step_at = k + (size_t)block_got;
         }
         const size_t i = order ? order[k] : k;
         SG_ASSERT(i < n);
         double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq;
         double *oi = obs + i * (size_t)nobs;
-        double cq[2 * SG_MAX_Q];
+        double cq_own[2 * SG_MAX_Q], *cq = cq_own;
         double resid = SG_EPS; /* the position's relative accuracy: rounding for the closed form */
         int st = SG_OK;
         const double ph = phi[i];
         xd[0] = omega[i];
         xdd[0] = alpha[i];
-        if (!isfinite(ph + omega[i] + alpha[i])) st = SG_NAN_INPUT;
-        set_input(&w, ph);
-        if (st == SG_OK && use_closed) {
+        const int from_block = block_next < block_got;
+        if (from_block) { /* solved in the block (its inputs finite; the history already holds it) */
+            const int l = block_next++;
+            copy_doubles(qi, blk.q[l], nq);
+            cq = blk.cq[l];
+            resid = blk.resid[l];
+            x[0] = blk.x[l][0], cx[0] = blk.cx[l][0], cx[1] = blk.cx[l][1];
+        } else {
+            if (!isfinite(ph + omega[i] + alpha[i])) st = SG_NAN_INPUT;
+            set_input(&w, ph);
+        }
+        if (!from_block && st == SG_OK && use_closed) {
             st = m->closed(x, cx, c, branch, qi, cq);
             if (st == SG_OK && w.nh > 0) { /* keep angles continuous: unwrap against the last solution */
                 for (int j = 0; j < nq; ++j)
@@ -756,7 +742,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
                     }
             }
             if (st == SG_OK) push(&w, ph, qi, cq);
-        } else if (st == SG_OK) {
+        } else if (!from_block && st == SG_OK) {
             if (w.nh > 0 && !prev_failed) {
                 st = advance(&w, ph, qi, cq, &resid);
             } else { /* first position, or after a failure: the closed form where it assembles, else the last
@@ -1275,12 +1261,10 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
     double *front = out, *rear = out + 2 * n, *torque = out + 4 * n, *fric = out + 5 * n, *kin = out + 6 * n;
     const double gx = gravity[0], gy = gravity[1];
     int finite = 1;
+#if SG_SIMD
     double trig[2 * SG_SHAFT_CHUNK]; /* cos, then sin, of the chunk's angles */
     size_t chunk_at = 0, chunk_len = 0;
-#if SG_SIMD
     const int vector_trig = sg_simd_width(NULL) > 1;
-#else
-    const int vector_trig = 0;
 #endif
     for (size_t i = 0; i < n; ++i) {
         double tx = 0.0, ty = 0.0, mx = 0.0, my = 0.0; /* Sum F, Sum arm F */
@@ -1299,19 +1283,18 @@ int sg_shaft(size_t n, const double *phi, const double *omega, const double *alp
         tx += belt[0], ty += belt[1];
         mx += belt_arm * belt[0], my += belt_arm * belt[1];
         double c, s, core_torque = inertia * alpha[i];
-        if (vector_trig) {
 #if SG_SIMD
+        if (vector_trig) {
             if (i >= chunk_at + chunk_len) {
                 chunk_at = i;
                 chunk_len = n - i < SG_SHAFT_CHUNK ? n - i : SG_SHAFT_CHUNK;
                 sgv_trig_table(chunk_len, phi + i, trig);
             }
-#endif
             c = trig[i - chunk_at];
             s = trig[chunk_len + (i - chunk_at)];
-        } else {
+        } else
+#endif
             sg_sincos_inl(phi[i], &c, &s);
-        }
         for (int k = 0; k < ncore; ++k) {
             const double *cm = core + 5 * k;
             const double mass = cm[0], r = cm[1], cb = cm[2], sb = cm[3], arm = cm[4];

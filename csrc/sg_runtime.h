@@ -76,10 +76,10 @@ typedef struct sg_block {
     int count;
     double q[SG_BLOCK][SG_MAX_Q], cq[SG_BLOCK][2 * SG_MAX_Q], x[SG_BLOCK][SG_MAX_Q], cx[SG_BLOCK][2 * SG_MAX_Q];
     double resid[SG_BLOCK], bv[SG_BLOCK][SG_MAX_Q];
-    /* what the starts are predicted from: the history's angles and states (newest first), the newest state's
-     * cos, sin, the five-state predictor's denominators (SG_LAGRANGE5_DEN) and each coordinate's largest change
-     * a prediction or a correction may make (SG_DQ_MAX; a travel's times the loops' size) */
-    double hphi[SG_HISTORY], den[SG_HISTORY], lim[SG_MAX_Q];
+    /* what the SIMD Newton predicts the starts from: the history's angles and states (newest first), the newest
+     * state's cos, sin, and each coordinate's largest change a prediction or a correction may make (SG_DQ_MAX; a
+     * travel's times the loops' size) */
+    double hphi[SG_HISTORY], lim[SG_MAX_Q];
     const double *hq[SG_HISTORY], *hcq;
 } sg_block;
 

@@ -756,7 +756,9 @@ SG_VINLINE void sgv_shift_trig(const sg_mechanism *m, const sg_vd *q, const sg_v
 #define SG_SIMD_NEWTON_BODY(RESIDUAL_V, LU_FACTOR_V, LU_SOLVE_V, BLOCKS_V, NQ)                      \
     {                                                                                              \
         const int nx = m->nx;                                                                      \
-        const double *den = b->den, *const *hq = b->hq;                                            \
+        const double *const *hq = b->hq;                                                           \
+        double den[SG_HISTORY];                                                                    \
+        SG_LAGRANGE5_DEN(b->hphi, den);                                                            \
         if (!(den[0] != 0.0 && den[1] != 0.0 && den[2] != 0.0 && den[3] != 0.0 && den[4] != 0.0)) \
             return 0; /* equal angles in the history: predict()'s lower orders, scalar */          \
         sg_vd vq[NQ], vcq[2 * (NQ)], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vqp[NQ], h0[NQ], hc[2 * (NQ)]; \

@@ -36,6 +36,13 @@ def feed():
     return mech
 
 
+def _arc_column(feed):
+    """The observable column of the feed cam's active arc (its number)."""
+    arc = [k for k, o in enumerate(feed.manifest["observables"]) if o["name"].endswith(".arc")]
+    assert len(arc) == 1
+    return arc[0]
+
+
 def _same(a, b, label, fields=FIELDS):
     for k in fields:
         np.testing.assert_array_equal(getattr(a, k), getattr(b, k), err_msg=f"{label}: {k}")
@@ -54,8 +61,7 @@ def test_kinematics_equal_the_scalar_loop_to_the_bit(feed, kw):
     assert (b.status[[5, 1802]] == 4).all()  # the NaN inputs reached C
     assert (b.status == 0).sum() == len(PHI) - 2
     # the cam's arc changes along the turn: every lane mask of the selection was exercised
-    arc = [k for k, o in enumerate(feed.manifest["observables"]) if o["name"].endswith(".arc")]
-    assert arc and len(np.unique(b.obs[:3600, arc[0]])) == 6
+    assert len(np.unique(b.obs[:3600, _arc_column(feed)])) == 6
 
 
 @pytest.mark.parametrize("param, factor", [("feed_arm_p", 0.5), ("hook_crank", 1.5), ("rock_front_arm", 0.5)])
@@ -129,7 +135,7 @@ def test_blocks_agree_with_the_step_by_step_continuation(feed):
     b.run()
     assert (a.status == 0).all() and (b.status == 0).all()
     # where a sample falls on a switch of the cam's arcs (q'' jumps there) the two may take either side of it
-    arc = [k for k, o in enumerate(feed.manifest["observables"]) if o["name"].endswith(".arc")][0]
+    arc = _arc_column(feed)
     same_arc = a.obs[::50, arc] == b.obs[:, arc]
     assert same_arc.sum() >= 66
     for k in ("q", "qd", "qdd", "obs", "frc"):
