@@ -1,7 +1,7 @@
 """Builds the compiled catalog (cffi out-of-line API mode) at install time, one module per SIMD level
-(sewgen/build.py catalog_modules); metadata is in pyproject.toml."""
+(sewgen/engine/build.py catalog_modules); metadata is in pyproject.toml."""
 import runpy
 
 from setuptools import setup
 
-setup(cffi_modules=runpy.run_path("sewgen/build.py")["catalog_modules"]())
+setup(cffi_modules=runpy.run_path("sewgen/engine/build.py")["catalog_modules"]())

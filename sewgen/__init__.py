@@ -7,12 +7,12 @@
 """
 import threading
 
-from .errors import (AssemblyError, BranchJumpError, BuildError, ConvergenceError, InputError, ParameterError,
-                     PositionError, SewgenError, SingularPositionError)
-from .forces import ForceAnalysis, JointReaction, RunSettings
-from .loads import Load
-from .mechanism import Mechanism, Reference, Sweep, shaft_angles
-from .results import Motion
+from sewgen.errors import (AssemblyError, BranchJumpError, BuildError, ConvergenceError, InputError, ParameterError,
+    PositionError, SewgenError, SingularPositionError)
+from sewgen.engine.forces import ForceAnalysis, JointReaction, RunSettings
+from sewgen.engine.loads import Load
+from sewgen.engine.mechanism import Mechanism, Reference, Sweep, shaft_angles
+from sewgen.engine.results import Motion
 
 __all__ = ["AssemblyError", "BranchJumpError", "BuildError", "ConvergenceError", "ForceAnalysis", "InputError",
            "JointReaction", "Load", "Mechanism", "Motion", "ParameterError", "PositionError", "Reference",
@@ -53,14 +53,14 @@ _cache_lock = threading.Lock()  # one Mechanism per catalog name, even when thre
 
 def catalog() -> list[str]:
     """Names of the built-in mechanisms."""
-    from .loader import catalog_names
+    from sewgen.engine.loader import catalog_names
 
     return catalog_names()
 
 
 def mechanism(name: str) -> Mechanism:
     """A built-in mechanism by name (see :func:`catalog`)."""
-    from .loader import catalog_module, catalog_names
+    from sewgen.engine.loader import catalog_module, catalog_names
 
     mech = _cache.get(name)
     if mech is None:
@@ -78,6 +78,6 @@ def mechanism(name: str) -> Mechanism:
 def load(source, *, closed_form: bool = True, cache_dir=None) -> Mechanism:
     """A mechanism declared outside the catalog: a derive.Mechanism, a function returning one, or a .py file
     with ``declare()``. Derived and compiled on first use, then loaded from the cache."""
-    from .loader import load_user
+    from sewgen.engine.loader import load_user
 
     return load_user(source, closed_form=closed_form, cache_dir=cache_dir)

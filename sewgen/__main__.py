@@ -1,6 +1,6 @@
 """``python -m sewgen ...``: the same as the ``sewgen`` command."""
 import sys
 
-from .cli import main
+from sewgen.cli.main import main
 
 sys.exit(main())

@@ -9,7 +9,7 @@ generated kernel file) and ``sg_abi.cdef`` (read by cffi); the generated kernels
 """
 from __future__ import annotations
 
-from . import errors
+from sewgen import errors
 
 
 #: (C enumerator, code, error class or None, meaning), in code order.
@@ -245,7 +245,7 @@ EXPORTS = {
                          "SG_BAD_DESIGN), first_bad/last_bad[d] (positions, -1 for none), nbad[d] (positions "
                          "failing with that status; nbad, last_bad may be NULL). Flat columns of a position: q, "
                          "qd, qdd (nq each), obs (nobs); the first ncheck constants must be finite; angle_cols are "
-                         "made continuous as sewgen.mechanism.continuous_angles does. sel (nsel columns) writes "
+                         "made continuous as sewgen.engine.mechanism.continuous_angles does. sel (nsel columns) writes "
                          "out[k*out_stride + d*n + i] (NaN for a failed design); red (nred x 3: kind 0 min, "
                          "1 max, 2 absmax, 3 rms, 4 mean; column; second column for the norm of two, or -1) "
                          "writes red_val/red_idx[k*red_stride + d] (the extremum's first position in the "
@@ -279,13 +279,13 @@ EXPORTS = {
     "sg_place_loads": ("void", (("size_t", "n"), ("const double *", "phi"), ("int", "nload"), ("int", "nl"),
                                 ("const double *", "win"), ("const int *", "ncol"), ("const int *", "col"),
                                 ("const double *", "val"), ("double *", "out"), ("unsigned char *", "mask")),
-                       "sewgen.loads.place_loads in C, to the bit: the (n x nload) load slots of nl loads (each "
+                       "sewgen.engine.loads.place_loads in C, to the bit: the (n x nload) load slots of nl loads (each "
                        "ncol[l] slots col, val; on where win[2l] (its window's start) is NaN or (phi - start) mod "
                        "2 pi <= win[2l+1]) and their (nl x n) on-masks"),
     "sg_make_continuous": ("void", (("size_t", "n"), ("int", "nq"), ("int", "nobs"), ("double *", "q"),
                                     ("double *", "obs"), ("int", "nqa"), ("const int *", "qcols"), ("int", "noa"),
                                     ("const int *", "ocols"), ("const size_t *", "order")),
-                           "sewgen.mechanism.continuous_angles in C, to the bit: the angle columns qcols of q "
+                           "sewgen.engine.mechanism.continuous_angles in C, to the bit: the angle columns qcols of q "
                            "(n x nq) and ocols of obs (n x nobs) without 2 pi jumps along the order (NULL: as "
                            "given), the first position in (-pi, pi]"),
 }

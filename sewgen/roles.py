@@ -41,7 +41,7 @@ HOOK_SHAFT = "hook_shaft"        #: the lower (hook / shuttle) shaft
 FEED_BAR = "feed_bar"            #: the feed bar carrying the feed dog
 FEED_CAM = "feed_cam"            #: the feed cam on the upper shaft
 
-#: The roles a crank-slider needle drive plays for seed 002's counterweight (sewgen.balance).
+#: The roles a crank-slider needle drive plays for seed 002's counterweight (sewgen.machine.balance).
 NEEDLE_DRIVE = (NEEDLE_CRANK, NEEDLE_ROD, NEEDLE_BAR, NEEDLE_CRANK_RADIUS, NEEDLE_ROD_LENGTH, NEEDLE_BAR_OFFSET)
 
 #: Every role above, for documentation and ``sewgen params``.

@@ -17,7 +17,7 @@ import threading
 
 import numpy as np
 
-from .errors import UnitError  # errors is a leaf too; re-exported here, where quantities are read
+from sewgen.errors import UnitError  # errors is a leaf too; re-exported here, where quantities are read
 
 #: Physical kinds a parameter can have, with the SI unit its value is stored in.
 SI_UNITS = {

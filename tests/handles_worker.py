@@ -31,7 +31,7 @@ def main(command: str, arg: str) -> None:
     if command == "load":
         mech = sewgen.load(arg)
     elif command == "files":
-        from sewgen.loader import _load_built, cache_root
+        from sewgen.engine.loader import _load_built, cache_root
 
         prebuilt = os.environ.get("HANDLES_PREBUILT")
         if prebuilt:  # the compiler replaced by a copy of a module built once, with a random delay: the race
@@ -56,11 +56,11 @@ def main(command: str, arg: str) -> None:
 
 
 def fake_compiler(prebuilt: str) -> None:
-    """sewgen.build.make_ffi replaced in this process: 'compiling' copies the module ``prebuilt``."""
+    """sewgen.engine.build.make_ffi replaced in this process: 'compiling' copies the module ``prebuilt``."""
     import random
     import shutil
 
-    import sewgen.build
+    import sewgen.engine.build
 
     class Compiled:
         def compile(self, tmpdir):
@@ -73,7 +73,7 @@ def fake_compiler(prebuilt: str) -> None:
             shutil.copymode(prebuilt, dest)
             return dest
 
-    sewgen.build.make_ffi = lambda *args, **kwargs: Compiled()
+    sewgen.engine.build.make_ffi = lambda *args, **kwargs: Compiled()
 
 
 if __name__ == "__main__":

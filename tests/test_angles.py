@@ -11,6 +11,8 @@ import pytest
 import sewgen
 from sewgen.derive.model import Mechanism
 
+pytestmark = [pytest.mark.derive, pytest.mark.c]
+
 
 def drag_link():
     m = Mechanism("drag_link", "a double-crank four-bar: frame 10 mm, cranks 30 and 33 mm, coupler 35 mm")
@@ -25,8 +27,8 @@ def drag_link():
 
 
 @pytest.mark.parametrize("newton", [False, True])
-def test_angles_are_continuous_and_start_in_the_principal_range(tmp_path_factory, newton):
-    mech = sewgen.load(drag_link, cache_dir=tmp_path_factory.mktemp("angles"))
+def test_angles_are_continuous_and_start_in_the_principal_range(cache, newton):
+    mech = sewgen.load(drag_link, cache_dir=cache)
     phi = np.radians(np.arange(0, 720, 5.0))
     motion = mech.solve(phi, speed=10.0, newton=newton)
     for body in ("crank", "coupler", "follower"):

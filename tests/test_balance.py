@@ -1,6 +1,6 @@
-"""Needle-bar partial balancing (sewgen.balance, `sewgen balance needle-bar`) against closed forms and seed 002.
+"""Needle-bar partial balancing (sewgen.machine.balance, `sewgen balance needle-bar`) against closed forms and seed 002.
 
-References written here independently of sewgen/balance.py: the textbook crank-slider acceleration (two-term
+References written here independently of sewgen/machine/balance.py: the textbook crank-slider acceleration (two-term
 series and exact), the partial-balancing residual |F|² = (m_C·a_S − K·m_C·r·ω²·cos φ)² + (K·m_C·r·ω²·sin φ)²,
 sector centroid/mass formulas and seed 002's printed numbers (912.8, 461.685, 506.797 before; K = 0.593,
 501.2, 380.504 after; 6000 r/min; l_AB = 16.7 mm).
@@ -17,8 +17,10 @@ import pytest
 from scipy.optimize import brentq
 
 import sewgen
-from sewgen import balance as bal
-from sewgen.cli import main
+from sewgen.machine import balance as bal
+from sewgen.cli.main import main
+
+pytestmark = [pytest.mark.c, pytest.mark.cli, pytest.mark.plots]
 
 RPM = 2 * math.pi / 60
 THETA = np.radians(np.arange(0.0, 360.0, 2.5))  # sewgen shaft angles
@@ -384,6 +386,6 @@ def test_cli_missing_and_bad_file(tmp_path, capsys):
 
 def test_cli_exit_status_in_a_process():
     """The installed command: non-zero status, nothing on stdout, the option named on stderr."""
-    proc = subprocess.run([sys.executable, "-m", "sewgen.cli", *BRIEF, "--rod", "15mm", "--json"],
+    proc = subprocess.run([sys.executable, "-m", "sewgen.cli.main", *BRIEF, "--rod", "15mm", "--json"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode != 0 and proc.stdout == "" and "--rod" in proc.stderr

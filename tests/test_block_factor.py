@@ -13,7 +13,9 @@ import pytest
 
 import sewgen
 from sewgen.derive.blockfactor import BlockFactor
-from sewgen.mechanism import _cos_sin_pairs
+from sewgen.engine.mechanism import _cos_sin_pairs
+
+pytestmark = [pytest.mark.derive, pytest.mark.c]
 
 FEED_CASES = [{}, {"regulator": "-30 deg"}, {"regulator": "5 deg"}]
 

@@ -30,17 +30,14 @@ import pytest
 
 import sewgen
 
+pytestmark = [pytest.mark.c, pytest.mark.cli, pytest.mark.plots, pytest.mark.derive]
+
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 MODEL = (ROOT / "sewgen" / "models" / "jb1-3.toml").read_text(encoding="utf-8")
 
 
 # -- running the command -----------------------------------------------------------------------------------------
-
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("cli_cache")
-
 
 def sewgen_run(args, cwd, cache, timeout=600, env=None):
     """``sewgen ARGS`` as a user runs it (python -m sewgen), in ``cwd`` with its own build cache."""
@@ -506,7 +503,7 @@ def test_a_user_model_file_is_named_relative(tmp_path, cache):
 
 def test_regulator_angle_takes_a_quantity_and_refuses_a_stitch_out_of_range():
     from sewgen.errors import ParameterError
-    from sewgen.feed import regulator_angle
+    from sewgen.machine.feed import regulator_angle
 
     feed = sewgen.mechanism(next(n for n in sewgen.catalog() if sewgen.mechanism(n).description.has_role(
         "stitch_regulator")))
@@ -519,7 +516,7 @@ def test_regulator_angle_takes_a_quantity_and_refuses_a_stitch_out_of_range():
 
 
 def test_main_in_process_returns_2_for_a_mistake(capsys):
-    from sewgen.cli import main
+    from sewgen.cli.main import main
 
     assert main(["kinematics", "take_up", "--step", "5"]) == 2
     out, err = capsys.readouterr()

@@ -3,6 +3,7 @@ with no user names in the C namespace.
 """
 from __future__ import annotations
 
+import io
 import json
 import os
 import re
@@ -13,6 +14,10 @@ from pathlib import Path
 
 import pytest
 
+from sewgen.derive.__main__ import check
+
+pytestmark = [pytest.mark.derive]
+
 ROOT = Path(__file__).resolve().parent.parent
 GENERATED = ROOT / "generated"
 CSRC = ROOT / "csrc"
@@ -20,13 +25,6 @@ GCC = shutil.which("gcc")
 NM = shutil.which("nm")
 CFLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror"]
 TEXT_SUFFIXES = {".c", ".h", ".cdef", ".json"}
-
-
-def _derive(*args, env_extra=None, cwd=ROOT, timeout=300):
-    env = dict(os.environ)
-    env.update(env_extra or {})
-    return subprocess.run([sys.executable, "-m", "derive", *args], cwd=cwd, env=env, capture_output=True,
-                          text=True, timeout=timeout)
 
 
 def _committed_generated() -> list[Path]:
@@ -56,66 +54,68 @@ def _copy_committed(dest: Path) -> Path:
     return dest
 
 
-# -- up to date ------------------------------------------------------------------------------------------------
+# -- up to date and deterministic: the catalog is derived twice in this file, once per hash seed -----------------
 
-def test_check_passes_on_the_repository():
-    """`python -m derive --check` in the repository root, as a developer or CI runs it."""
-    res = _derive("--check")
+@pytest.fixture(scope="module")
+def derivations(tmp_path_factory):
+    """Two derivations of the catalog at once, in processes with PYTHONHASHSEED 0 and 12345: the first is
+    `python -m derive --check` on a copy of the committed files (as a developer or CI runs it), the second
+    writes its files into a folder of its own. Returns (the check's result, the second's files by name)."""
+    checked = _copy_committed(tmp_path_factory.mktemp("committed") / "generated")
+    written = tmp_path_factory.mktemp("seed_12345") / "generated"
+    env = dict(os.environ)
+    procs = [subprocess.Popen([sys.executable, "-m", "derive", *args], cwd=ROOT, text=True,
+                              env=dict(env, PYTHONHASHSEED=seed), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+             for seed, args in (("0", ("--check", "--out", str(checked))), ("12345", ("--out", str(written))))]
+    results = []
+    for proc in procs:
+        out, err = proc.communicate(timeout=300)
+        results.append(subprocess.CompletedProcess(proc.args, proc.returncode, out, err))
+    assert results[1].returncode == 0, results[1].stderr[-3000:]
+    return results[0], {p.name: p.read_text() for p in written.iterdir() if p.is_file()}
+
+
+def test_check_passes_on_the_committed_generated_files(derivations):
+    """Only the version-controlled files of generated/ (no build artifacts), checked with --check --out."""
+    res, _ = derivations
     assert res.returncode == 0, f"stdout:\n{res.stdout[-3000:]}\nstderr:\n{res.stderr[-3000:]}"
     assert "current" in res.stdout
 
 
-def test_check_passes_on_the_committed_generated_files(tmp_path):
-    """Only the version-controlled files of generated/ (no build artifacts), checked with --out."""
-    out = _copy_committed(tmp_path / "generated")
-    assert {p.name for p in out.iterdir()} >= {"manifest.json", "sg_kernels.h", "sg_kernels.cdef"}
-    res = _derive("--check", "--out", str(out))
-    assert res.returncode == 0, f"stdout:\n{res.stdout[-3000:]}\nstderr:\n{res.stderr[-3000:]}"
+def test_output_is_independent_of_hash_seed(derivations):
+    """The PYTHONHASHSEED=12345 derivation is the committed files byte for byte, as the PYTHONHASHSEED=0 one is
+    (the check above)."""
+    _, files = derivations
+    assert {"manifest.json", "sg_kernels.h", "sg_kernels.cdef", "sg_needle_bar.c", "sg_take_up.c",
+            "sg_hook_drive.c"} <= set(files)
+    committed = {p.name: p.read_text() for p in _committed_generated()}
+    assert set(committed) == set(files)
+    assert [n for n in sorted(files) if files[n] != committed[n]] == []
 
 
-def test_check_fails_on_stale_or_missing_files(tmp_path):
+def test_check_fails_on_stale_or_missing_files(derivations, tmp_path):
+    _, files = derivations
     out = _copy_committed(tmp_path / "generated")
     target = out / "sg_needle_bar.c"
     target.write_text(target.read_text(encoding="utf-8").replace("Total ops", "Total opz", 1), encoding="utf-8")
     (out / "sg_take_up.c").unlink()
-    res = _derive("--check", "--out", str(out))
-    assert res.returncode == 1
-    assert "sg_needle_bar.c" in res.stdout and "Total opz" in res.stdout
-    assert "sg_take_up.c" in res.stdout
-    assert "stale" in res.stderr
+    report = io.StringIO()
+    assert check(files, out, report) is False
+    assert "sg_needle_bar.c" in report.getvalue() and "Total opz" in report.getvalue()
+    assert "sg_take_up.c" in report.getvalue()
 
 
-def test_check_reports_foreign_files_without_crashing(tmp_path):
-    """A build artifact (an object file of an in-place build, an editor backup) in the output folder: --check
-    may call the folder stale, but must say so, not die with a traceback."""
+def test_check_reports_foreign_files_without_crashing(derivations, tmp_path):
+    """A build artifact (an object file of an in-place build) in the output folder is not derive's business;
+    an unreadable file it would write is reported as a difference, not a traceback."""
+    _, files = derivations
     out = _copy_committed(tmp_path / "generated")
     (out / "sg_needle_bar.o").write_bytes(b"\x7fELF\x02\x01\x01\x00" + bytes(range(256)))
-    res = _derive("--check", "--out", str(out))
-    assert "Traceback" not in res.stderr, res.stderr[-3000:]
-    assert res.returncode in (0, 1)
-    if res.returncode == 1:
-        assert "sg_needle_bar.o" in res.stdout + res.stderr
-
-
-# -- deterministic -------------------------------------------------------------------------------------------------
-
-def test_output_is_independent_of_hash_seed(tmp_path):
-    outs = {}
-    for seed in ("0", "12345"):
-        out = tmp_path / f"seed_{seed}"
-        res = _derive("--out", str(out), env_extra={"PYTHONHASHSEED": seed})
-        assert res.returncode == 0, res.stderr[-3000:]
-        outs[seed] = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
-    a, b = outs["0"], outs["12345"]
-    assert set(a) == set(b)
-    assert {"manifest.json", "sg_kernels.h", "sg_kernels.cdef", "sg_needle_bar.c", "sg_take_up.c",
-            "sg_hook_drive.c"} <= set(a)
-    differing = [name for name in sorted(a) if a[name] != b[name]]
-    assert not differing, f"files differ between PYTHONHASHSEED=0 and 12345: {differing}"
-    # and byte-identical to what is committed
-    committed = {p.name: p.read_bytes() for p in _committed_generated()}
-    assert set(committed) == set(a)
-    assert [n for n in sorted(a) if a[n] != committed[n]] == []
+    assert check(files, out, io.StringIO()) is True
+    (out / "sg_take_up.c").write_bytes(b"\xff\xfe not utf-8")
+    report = io.StringIO()
+    assert check(files, out, report) is False
+    assert "sg_take_up.c" in report.getvalue()
 
 
 # -- compiles cleanly ------------------------------------------------------------------------------------------------

@@ -15,9 +15,11 @@ import numpy as np
 import pytest
 
 import sewgen
-from sewgen.designs import Columns
+from sewgen.engine.designs import Columns
 from sewgen.errors import ParameterError
-from sewgen.loader import catalog_names
+from sewgen.engine.loader import catalog_names
+
+pytestmark = [pytest.mark.c, pytest.mark.derive]
 
 ROOT = Path(__file__).resolve().parents[1]
 PHI = sewgen.shaft_angles(7.5)
@@ -302,7 +304,7 @@ def test_the_lean_selected_path_equals_the_general_one_to_the_bit(name):
 def test_the_lean_solve_path_equals_the_general_one_to_the_bit(name):
     """solve()'s per-call fast path (one buffer, cached parameter vectors, the angles made continuous in C)
     against prepare() + the C call + continuous_angles in Python: the same arrays, bit for bit."""
-    from sewgen.mechanism import continuous_angles
+    from sewgen.engine.mechanism import continuous_angles
 
     m = sewgen.mechanism(name)
     rng = np.random.default_rng(5)
@@ -352,7 +354,7 @@ def test_a_lean_motion_reads_pickles_and_copies_as_any_other():
     phi = np.linspace(6.0, -1.0, 40)[::-2]  # strided, and ascending only after the reversal
     ref = m.prepare(phi)
     ref.bind()()
-    from sewgen.mechanism import continuous_angles
+    from sewgen.engine.mechanism import continuous_angles
 
     continuous_angles(m.description, ref.q, ref.obs, ref.order)
     for look in ("pickle", "qdd", "error_estimate", "len"):
@@ -406,7 +408,7 @@ def _paths_agree(mech, phi, **kw):
 def varying_loads(mech):
     """A force at the first point over part of the turn and a torque on the first moving body: loads that change
     from position to position (the kinetostatic loops read a row of them per position)."""
-    from sewgen.loads import Load
+    from sewgen.engine.loads import Load
 
     body = mech.description.bodies[0].name  # the description lists moving bodies only
     return [Load(mech.point_names[0], fx=3.0, fy=-2.0, window=(1.0, 2.5)), Load(body, torque=0.4)]

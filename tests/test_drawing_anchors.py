@@ -15,6 +15,8 @@ import sewgen
 from sewgen.derive import DeclarationError
 from sewgen.derive.model import Mechanism as Declaration
 
+pytestmark = [pytest.mark.c, pytest.mark.derive]
+
 PHI = np.radians(np.arange(0.0, 360.0, 15.0))
 
 

@@ -11,6 +11,8 @@ import pytest
 
 import sewgen
 
+pytestmark = [pytest.mark.c]
+
 PHI = sewgen.shaft_angles(5)  # 0°, 5°, ..., 355°
 
 # A needle bar whose link is too short: the crank pin B = r (cos θ, sin θ) must reach the guide x = e with a

@@ -1,14 +1,16 @@
-"""The feed-dog trajectory indices (seed 001 §五.3, sewgen.feed_indices) against an independent computation from a
+"""The feed-dog trajectory indices (seed 001 §五.3, sewgen.machine.feed_indices) against an independent computation from a
 dense trajectory: 0.01° samples, linear interpolation of the crossings, trapezoids for the integrals."""
 import math
 
 import numpy as np
 import pytest
 
-from sewgen.feed_indices import TOOTH_DEPTH, feed_indices, group_arrays
-from sewgen.machine import load_machine
+from sewgen.machine.feed_indices import TOOTH_DEPTH, feed_indices, group_arrays
+from sewgen.machine.assembly import load_machine
 from sewgen.roles import FEED_DOG, THROAT_PLATE
-from sewgen.timing import timing
+from sewgen.machine.timing import timing
+
+pytestmark = [pytest.mark.c]
 
 
 @pytest.fixture(scope="module")
@@ -138,7 +140,7 @@ def test_a_dog_that_never_sinks_is_named_and_the_others_unaffected(jb):
 
 
 def test_summary_has_the_indices(jb, tmp_path):
-    from sewgen.report import summary
+    from sewgen.report.outputs import summary
 
     m, tm = jb
     entry = summary(m.analyze(), None, tm)["groups"][_group(m).name][FEED_DOG]["indices"]
@@ -150,9 +152,9 @@ def test_summary_has_the_indices(jb, tmp_path):
 @pytest.mark.parametrize("step, rel", [(5.0, 1.5e-3), (1.0, 2e-5)])
 def test_the_arc_jumps_against_each_switch_solved_at_its_own_angle(jb, step, rel):
     """feed_indices.arc_jumps extrapolates each side's acceleration to where the sides' velocities meet; the
-    reference brackets every switch and solves both sides at it (sewgen.cams.arc_switches, summary.json's)."""
-    from sewgen.cams import arc_switches
-    from sewgen.feed_indices import arc_jumps
+    reference brackets every switch and solves both sides at it (sewgen.machine.cams.arc_switches, summary.json's)."""
+    from sewgen.machine.cams import arc_switches
+    from sewgen.machine.feed_indices import arc_jumps
 
     m, _ = jb
     g = _group(m)

@@ -18,7 +18,9 @@ import sewgen
 from sewgen.derive import DeclarationError
 from sewgen.errors import UnitError
 from sewgen.derive.model import Mechanism
-from sewgen.machine import load_machine
+from sewgen.machine.assembly import load_machine
+
+pytestmark = [pytest.mark.c, pytest.mark.derive]
 
 MM = 1e-3
 R, G = 20 * MM, np.array([60 * MM, 10 * MM])  # crank radius, spring anchor on the frame
@@ -53,11 +55,6 @@ FOUR_BAR = textwrap.dedent('''
         m.point("spring_end", coupler.at("25 mm", "10 mm"))
         return m
 ''')
-
-
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("elements_cache")
 
 
 @pytest.fixture(scope="module")

@@ -7,11 +7,13 @@ import numpy as np
 import pytest
 
 import sewgen
-from sewgen.machine import load_machine
+from sewgen.machine.assembly import load_machine
+
+pytestmark = [pytest.mark.c]
 
 
 def test_import_sewgen_does_not_import_pandas():
-    code = "import sewgen, sewgen.cli, sewgen.study, sys; print('pandas' in sys.modules, 'dask' in sys.modules)"
+    code = "import sewgen, sewgen.cli.main, sewgen.study, sys; print('pandas' in sys.modules, 'dask' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["False", "False"]
 

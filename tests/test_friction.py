@@ -13,7 +13,9 @@ import pytest
 import sewgen
 from sewgen.derive import DeclarationError
 from sewgen.derive.model import Mechanism
-from sewgen.loads import Load
+from sewgen.engine.loads import Load
+
+pytestmark = [pytest.mark.c, pytest.mark.derive]
 
 R, L, P, MU, W = 0.012, 0.045, 30.0, 0.15, 50.0
 
@@ -34,11 +36,6 @@ def crank_slider(masses: bool):
             m.friction(c, "0.1", "2 mm")
         return m
     return declare
-
-
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("friction")
 
 
 def test_slider_friction_against_the_hand_solution(cache):

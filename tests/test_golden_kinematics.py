@@ -15,6 +15,8 @@ import pytest
 import sewgen
 from sewgen.derive.model import Mechanism as Declaration
 
+pytestmark = [pytest.mark.c, pytest.mark.derive]
+
 MM = 1e-3
 RPM = 2.0 * math.pi / 60.0
 
@@ -312,8 +314,8 @@ def declare_beer_johnston_abde() -> Declaration:
 
 
 @pytest.fixture(scope="session")
-def beer_johnston(tmp_path_factory):
-    return sewgen.load(declare_beer_johnston_abde, cache_dir=tmp_path_factory.mktemp("sewgen_user_cache"))
+def beer_johnston(cache):
+    return sewgen.load(declare_beer_johnston_abde, cache_dir=cache)
 
 
 @pytest.mark.parametrize("newton", [False, True], ids=["closed_form", "newton"])

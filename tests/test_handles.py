@@ -24,8 +24,10 @@ import numpy as np
 import pytest
 
 import sewgen
-from sewgen.loader import resolve
-from sewgen.machine import load_machine
+from sewgen.engine.loader import resolve
+from sewgen.machine.assembly import load_machine
+
+pytestmark = [pytest.mark.c, pytest.mark.derive, pytest.mark.cli, pytest.mark.slow]
 
 HERE = Path(__file__).resolve().parent
 WORKER = HERE / "handles_worker.py"
@@ -247,7 +249,7 @@ def test_out_reuses_the_given_result_and_nothing_else():
 
 
 def test_prepared_sweep_is_the_solve_call():
-    """sewgen.bench times Sweep.bind(): the same arrays solve() passes, the same results."""
+    """bench times Sweep.bind(): the same arrays solve() passes, the same results."""
     fb = sewgen.mechanism("hook_drive")
     sweep = fb.prepare(PHI, forces=True)
     call = sweep.bind()
@@ -323,7 +325,7 @@ def test_a_corrupted_cached_module_is_rebuilt(declaration, tmp_path):
 
 def test_a_module_that_will_not_import_is_a_build_error(user, declaration, monkeypatch):
     """Rebuilt once, then reported with the mechanism and the path (here every import is made to fail)."""
-    import sewgen.loader as loader
+    import sewgen.engine.loader as loader
 
     calls = []
 
@@ -342,7 +344,7 @@ def _race(cache: str, spec: str, prebuilt: str, barrier, queue) -> None:
     """One process of a race (forked: sewgen is already imported): load the generated files of ``spec`` through
     the cache ``cache`` when every process of the trial is ready, solve, report to ``queue``."""
     from handles_worker import PHI as angles, fake_compiler
-    from sewgen.loader import _load_built
+    from sewgen.engine.loader import _load_built
 
     try:
         if prebuilt:
@@ -365,13 +367,13 @@ def test_processes_loading_one_new_mechanism_at_once_all_succeed(declaration, tm
     (handles_worker.fake_compiler) -- the race under test is the cache's: its lock, temporary folder, rename and
     marker. (Two interpreters compiling for real at once: test_two_processes_build_one_new_mechanism_at_once.)"""
     from sewgen.derive import generate, render_files
-    from sewgen.loader import _declaration
+    from sewgen.engine.loader import _declaration
 
     spec = tmp_path / "files.json"
     spec.write_text(json.dumps({"name": "handles_four_bar",
                                 "files": render_files([generate(_declaration(declaration))])}))
     import handles_worker  # noqa: F401  (imported before the forks: each child starts ready)
-    import sewgen.build  # noqa: F401
+    import sewgen.engine.build
 
     ctx = multiprocessing.get_context("fork")
     prebuilt = ""

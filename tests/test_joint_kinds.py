@@ -14,6 +14,8 @@ from sewgen.derive.kinematics import Kinematics
 from sewgen.derive.kinetostatics import Kinetostatics
 from sewgen.derive.model import Mechanism
 
+pytestmark = [pytest.mark.derive]
+
 DERIVE = Path(joints.__file__).parent
 
 

@@ -20,6 +20,8 @@ import sewgen
 from sewgen.derive.catalog import declare
 from sewgen.derive.kinematics import Kinematics
 
+pytestmark = [pytest.mark.c, pytest.mark.derive]
+
 CATALOG = ("needle_bar", "take_up", "hook_drive")
 
 # non-default parameters for the checks that should not only run at the defaults (all still assemble)

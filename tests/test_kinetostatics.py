@@ -18,8 +18,10 @@ import pytest
 
 import sewgen
 from sewgen.derive.model import Mechanism as Declaration
-from sewgen.loads import Load
-from sewgen.results import Motion
+from sewgen.engine.loads import Load
+from sewgen.engine.results import Motion
+
+pytestmark = [pytest.mark.c, pytest.mark.derive]
 
 G = 9.80665
 W0 = 120.0  # rad/s
@@ -88,8 +90,7 @@ CASES = {
 
 
 @pytest.fixture(scope="session")
-def user(tmp_path_factory):
-    cache = tmp_path_factory.mktemp("sewgen_cache_kt")
+def user(cache):
     return {"kt_four_bar": sewgen.load(declare_four_bar, cache_dir=cache),
             "kt_slider": sewgen.load(declare_slider, cache_dir=cache)}
 

@@ -20,8 +20,10 @@ import pytest
 
 import sewgen
 from sewgen.errors import ParameterError
-from sewgen.feed import regulator_angle
-from sewgen.machine import Group, Machine, Shaft, ShaftMass, load_machine
+from sewgen.machine.feed import regulator_angle
+from sewgen.machine.assembly import Group, Machine, Shaft, ShaftMass, load_machine
+
+pytestmark = [pytest.mark.c]
 
 MM = 1e-3
 TWO_PI = 2.0 * math.pi
@@ -487,11 +489,11 @@ def test_regulator_direction_and_range(settings, feed, plate_y):
 
 @pytest.mark.parametrize("stitch", [4.0, -3.0, 0.1, 4.5])
 def test_regulator_angle_agrees_with_an_independent_brent_solve(feed, stitch):
-    """sewgen.feed solves the regulator without SciPy (a bracketing secant, for the analysis' start-up time):
+    """sewgen.machine.feed solves the regulator without SciPy (a bracketing secant, for the analysis' start-up time):
     the same root as SciPy's Brent method to 1e-12 rad, and the stitch it gives is the one asked for."""
     from scipy.optimize import brentq
 
-    from sewgen.feed import stitch_length
+    from sewgen.machine.feed import stitch_length
 
     got = regulator_angle(feed, stitch * MM)
     ref = brentq(lambda a: stitch_length(feed, a).travel - stitch * MM, -math.radians(45), math.radians(45),

@@ -15,9 +15,11 @@ import sys
 import numpy as np
 import pytest
 
-from sewgen import machine_balance as mb
-from sewgen.machine import load_machine
-from sewgen.modelfile import MODELS_DIR
+from sewgen.machine import machine_balance as mb
+from sewgen.machine.assembly import load_machine
+from sewgen.machine.modelfile import MODELS_DIR
+
+pytestmark = [pytest.mark.c, pytest.mark.cli]
 
 LONE = '''
 [machine]

@@ -17,9 +17,11 @@ import numpy as np
 import pytest
 
 
-from sewgen.machine import load_machine
-from sewgen.modelfile import ModelFileError, resolve
-from sewgen.report import summary
+from sewgen.machine.assembly import load_machine
+from sewgen.machine.modelfile import ModelFileError, resolve
+from sewgen.report.outputs import summary
+
+pytestmark = [pytest.mark.c]
 
 COMMENTED = re.compile(r'^# ("[\w.]+\.friction"|bearing_friction|journal_radius) = ', re.M)
 

@@ -1,4 +1,4 @@
-"""Machine.analyze through its call plan (sewgen.machine_plan): the same numbers as an assembly written here from
+"""Machine.analyze through its call plan (sewgen.machine.plan): the same numbers as an assembly written here from
 each group's own Mechanism.kinetostatics, a plan that follows every change made to the machine in place, and
 results that never share memory with an earlier analysis."""
 from __future__ import annotations
@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 
 from sewgen.errors import InputError
-from sewgen.machine import load_machine
+from sewgen.machine.assembly import load_machine
+
+pytestmark = [pytest.mark.c]
 
 
 def _group_sweeps(m, phi, speed, accel):

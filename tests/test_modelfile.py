@@ -1,8 +1,8 @@
-"""Machine model files (sewgen.machine.load_machine, sewgen.modelfile): the built-in JB1-3, round trips, errors.
+"""Machine model files (sewgen.machine.load_machine, sewgen.machine.modelfile): the built-in JB1-3, round trips, errors.
 
 The reference numbers are the model file's own text converted by hand (1000 rpm = 1000 · 2π/60 rad/s, 82° =
 82 π/180 rad, ...). Every bad input must raise ModelFileError naming the file, the dotted key and the unit
-expected (DESIGN.md §5; sewgen/modelfile.py's docstring).
+expected (DESIGN.md §5; sewgen/machine/modelfile.py's docstring).
 """
 from __future__ import annotations
 
@@ -14,10 +14,12 @@ import tomllib
 import numpy as np
 import pytest
 
-from sewgen.feed import regulator_angle
-from sewgen.loads import Load
-from sewgen.machine import load_machine
-from sewgen.modelfile import MODELS_DIR, ModelFileError
+from sewgen.machine.feed import regulator_angle
+from sewgen.engine.loads import Load
+from sewgen.machine.assembly import load_machine
+from sewgen.machine.modelfile import MODELS_DIR, ModelFileError
+
+pytestmark = [pytest.mark.c]
 
 MM = 1e-3
 BUILTIN = MODELS_DIR / "jb1-3.toml"
@@ -373,7 +375,7 @@ def test_a_table_where_a_quantity_belongs(tmp_path):
 
 def test_a_results_folder_named_like_a_builtin_model_does_not_shadow_it(tmp_path, monkeypatch):
     """`sewgen analyze jb1-3` writes ./jb1-3/; run again in the same folder, it must still find the model."""
-    from sewgen.modelfile import MODELS_DIR, resolve
+    from sewgen.machine.modelfile import MODELS_DIR, resolve
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "jb1-3").mkdir()
@@ -436,7 +438,7 @@ def test_a_file_that_is_not_utf8(tmp_path):
 
 
 def test_a_folder_is_not_a_model(tmp_path, monkeypatch):
-    from sewgen.modelfile import resolve
+    from sewgen.machine.modelfile import resolve
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "mine.toml").mkdir()
@@ -468,7 +470,7 @@ def test_a_stitch_the_regulator_cannot_reach_names_the_key(tmp_path):
 
 
 def test_non_finite_results_are_a_typed_error_and_never_written(tmp_path):
-    from sewgen.report import NonFiniteOutputError, write_report
+    from sewgen.report.outputs import NonFiniteOutputError, write_report
 
     path = write(tmp_path, edit('mass = "20 g"', 'mass = "1e307 kg"'))
     with np.errstate(all="ignore"), pytest.raises(NonFiniteOutputError) as exc:
@@ -478,7 +480,7 @@ def test_non_finite_results_are_a_typed_error_and_never_written(tmp_path):
 
 
 def test_a_report_is_written_whole_or_not_at_all(tmp_path, jb, monkeypatch):
-    from sewgen import report
+    from sewgen.report import outputs as report
 
     a = jb.analyze()
     files = report.write_report(a, tmp_path / "r")
@@ -497,7 +499,7 @@ def test_a_report_is_written_whole_or_not_at_all(tmp_path, jb, monkeypatch):
 
 
 def test_summary_is_clean_json(jb):
-    from sewgen.report import summary
+    from sewgen.report.outputs import summary
 
     s = summary(jb.analyze())
     text = json.dumps(s, allow_nan=False)
@@ -509,7 +511,7 @@ def test_summary_is_clean_json(jb):
 
 def test_a_summary_at_rest(jb):
     """A static analysis (speed 0) is an analysis: the feed's travel from central differences, no NaN."""
-    from sewgen.report import summary
+    from sewgen.report.outputs import summary
 
     s = summary(jb.analyze(speed=0.0))
     assert s["speed_rpm"] == 0.0

@@ -14,6 +14,8 @@ import pytest
 
 import sewgen
 
+pytestmark = [pytest.mark.c]
+
 MM = 1e-3
 R1, L2, D, CD, L3, L4, GF, L5, THETA, L6 = (1.6 * MM, 45 * MM, np.array([45 * MM, 16 * MM]), 18 * MM, 24 * MM,
                                             45 * MM, 10 * MM, 1.2 * MM, 0.0, 40 * MM)

@@ -8,6 +8,8 @@ import pytest
 
 import sewgen
 
+pytestmark = [pytest.mark.c]
+
 MM = 1e-3
 R, ROD, P, ARM, KNIFE, LOWER = 1.25 * MM, 40 * MM, np.array([-20 * MM, 40 * MM]), 20 * MM, 65 * MM, 36.5 * MM
 

@@ -18,6 +18,8 @@ import pytest
 
 import sewgen
 
+pytestmark = [pytest.mark.c]
+
 MM = 1e-3
 R, H_A, ROD, L3 = 6 * MM, 45 * MM, 45 * MM, 16 * MM
 L7, GAMMA = 60 * MM, np.radians(100)

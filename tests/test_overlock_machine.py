@@ -14,9 +14,11 @@ import pytest
 
 import sewgen
 from sewgen.errors import ParameterError
-from sewgen.feed import regulator_angle, stitch_length
-from sewgen.machine import load_machine
-from sewgen.timing import timing
+from sewgen.machine.feed import regulator_angle, stitch_length
+from sewgen.machine.assembly import load_machine
+from sewgen.machine.timing import timing
+
+pytestmark = [pytest.mark.c]
 
 MM = 1e-3
 
@@ -232,7 +234,7 @@ def test_groups_along_the_shaft(machine, analysis):
 
 
 def test_along_group_needs_its_origin(tmp_path):
-    from sewgen.machine import ModelFileError
+    from sewgen.machine.assembly import ModelFileError
 
     text = (load_machine("51-a").source and open(load_machine("51-a").source, encoding="utf-8").read())
     bad = text.replace('origin = ["0 mm", "60 mm", "-28 mm"]', "", 1)
@@ -249,7 +251,7 @@ def test_along_group_needs_its_origin(tmp_path):
 
 
 def test_summary_reports_knife_and_timing(analysis):
-    from sewgen import report
+    from sewgen.report import outputs as report
 
     s = report.summary(analysis)
     knife = s["groups"]["knife"]["knife_edge"]
@@ -260,10 +262,10 @@ def test_summary_reports_knife_and_timing(analysis):
 
 @pytest.mark.parametrize("accel", [0.0, 500.0])
 def test_shaking_moments_of_groups_along_the_shaft(accel):
-    """The shaking moments from the parts' inertia (sewgen.shaking, body by body in the machine frame) equal the
+    """The shaking moments from the parts' inertia (sewgen.machine.shaking, body by body in the machine frame) equal the
     machine's from the groups' frame reactions (MachineAnalysis.shaking_moments, the groups along the shaft placed
     by their origin), opposite in sign (on the frame / on the parts); without gravity, whose moment differs."""
-    from sewgen import shaking
+    from sewgen.machine import shaking
 
     m = load_machine("51-a")
     m.gravity = np.zeros(2)

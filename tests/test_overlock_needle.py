@@ -17,6 +17,8 @@ import pytest
 
 import sewgen
 
+pytestmark = [pytest.mark.c]
+
 MM = 1e-3
 R, H_A, ROD, L3, L4, L5, A = 7.4 * MM, 60 * MM, 60 * MM, 16 * MM, 28 * MM, 40 * MM, 28 * MM
 

@@ -1,5 +1,5 @@
 """The benchmark's peers (issue 14, item 6) compute what sewgen computes: the closed-form loop a numba user writes
-(sewgen.peers.take_up_kernel, run here as plain Python, and compiled where numba is installed), the NumPy closed
+(peers.take_up_kernel, run here as plain Python, and compiled where numba is installed), the NumPy closed
 form of the bench, and pylinkage's components where pylinkage is installed — every output against sewgen's
 solve() over more than a turn, at another crank length, speed and a shaft acceleration."""
 from __future__ import annotations
@@ -8,9 +8,11 @@ import numpy as np
 import pytest
 
 import sewgen
-from sewgen import peers
-from sewgen.bench import take_up_numpy
-from sewgen.designs import Columns
+import peers
+from bench import take_up_numpy
+from sewgen.engine.designs import Columns
+
+pytestmark = [pytest.mark.c]
 
 PHI = np.linspace(-1.0, 8.0, 181)  # more than a turn: sewgen's angles continuous, the peers' within ±π
 SPEED, ACCEL = 140.0, 35.0

@@ -1,4 +1,4 @@
-"""The loads' slots at the shaft angles (sewgen.loads.place_loads, one C call: sg_place_loads) against the
+"""The loads' slots at the shaft angles (sewgen.engine.loads.place_loads, one C call: sg_place_loads) against the
 definition written here with numpy: each load's SI value added to its slots wherever its window holds the angle,
 (φ − start) mod 2π ≤ span + 1e-9 with the ends inclusive and windows wrapping through 360°, always on without a
 window or with a whole turn. Equal to the bit, masks included."""
@@ -11,7 +11,9 @@ import pytest
 
 import sewgen
 from sewgen import Load
-from sewgen.loads import load_layout, place_loads, window_mask
+from sewgen.engine.loads import load_layout, place_loads, window_mask
+
+pytestmark = [pytest.mark.c]
 
 
 def _by_numpy(layout, phi, nload):

@@ -1,4 +1,4 @@
-"""sewgen.plots: every file written and readable, what is drawn is the analysis, and the drawing comes from the
+"""sewgen.report.plots: every file written and readable, what is drawn is the analysis, and the drawing comes from the
 mechanism's description (anchors and roles), so a user's mechanism and machine get the same pictures.
 
 On the built-in JB1-3: the files, the GIF's frames, the needle-eye path, rigid bodies, revolute anchors that
@@ -19,11 +19,13 @@ import pytest
 from PIL import Image
 
 import sewgen
-from sewgen import plots
-from sewgen.feed import has_feed
-from sewgen.machine import Group, Machine, MachineAnalysis, Shaft, ShaftMass, load_machine
-from sewgen.plots import animation
+from sewgen.report import plots
+from sewgen.machine.feed import has_feed
+from sewgen.machine.assembly import Group, Machine, MachineAnalysis, Shaft, ShaftMass, load_machine
+from sewgen.report.plots import animation
 from sewgen.roles import FEED_DOG, HOOK_POINT, NEEDLE_EYE
+
+pytestmark = [pytest.mark.c, pytest.mark.plots, pytest.mark.derive]
 
 ROOT = Path(__file__).resolve().parent.parent
 TOL = 1e-9  # mm: anchors that a solved loop makes coincide
@@ -238,8 +240,8 @@ def declare_offset_slider():
 
 
 @pytest.fixture(scope="module")
-def user_mech(tmp_path_factory):
-    return sewgen.load(declare_offset_slider, cache_dir=tmp_path_factory.mktemp("plots_cache"))
+def user_mech(cache):
+    return sewgen.load(declare_offset_slider, cache_dir=cache)
 
 
 def test_user_mechanism_drawn_from_its_description(user_mech):
@@ -285,15 +287,14 @@ def test_user_machine_gets_every_picture(user_mech, tmp_path):
 # -- nothing in the plots names the catalog ----------------------------------------------------------------------
 
 #: Catalog mechanisms and parts the pictures once found by name. Identifiers that are no English word must not
-#: appear at all; "feed" and "regulator" (words of the prose, and of sewgen.feed.regulator_angle) must not
+#: appear at all; "feed" and "regulator" (words of the prose, and of sewgen.machine.feed.regulator_angle) must not
 #: appear as names in a string: "feed", 'regulator', "x.regulator", "regulator.angle".
 NAMES = ("needle_bar", "take_up", "hook_drive", "plate_y", "lower_shaft")
 WORDS = ("feed", "regulator")
 
 
 def test_plots_name_no_catalog_mechanism_or_part():
-    sources = [p for p in sorted((ROOT / "sewgen").glob("plots*")) if p.suffix == ".py"]
-    sources += sorted((ROOT / "sewgen").glob("plots/*.py"))
+    sources = sorted((ROOT / "sewgen" / "report" / "plots").glob("*.py"))
     assert sources
     for path in sources:
         text = path.read_text()
@@ -323,7 +324,7 @@ def _jobs(folder, n, fail_in_child=(), fail_always=()):
 @pytest.mark.skipif(not plots.can_fork(), reason="needs fork and two CPUs")
 @pytest.mark.parametrize("fail_in_child", [(), (-1,), (5, 4), tuple(range(-1, 6))])
 def test_shared_jobs_run_each_job_once_even_when_the_child_fails(tmp_path, fail_in_child):
-    from sewgen.plots.background import run_shared
+    from sewgen.report.plots.background import run_shared
 
     jobs, first, log = _jobs(tmp_path, 6, fail_in_child)
     started, written = [], []
@@ -336,7 +337,7 @@ def test_shared_jobs_run_each_job_once_even_when_the_child_fails(tmp_path, fail_
 
 @pytest.mark.skipif(not plots.can_fork(), reason="needs fork and two CPUs")
 def test_shared_jobs_raise_the_failure_here(tmp_path):
-    from sewgen.plots.background import run_shared
+    from sewgen.report.plots.background import run_shared
 
     jobs, first, _ = _jobs(tmp_path, 4, fail_always=(3,))
     with pytest.raises(ValueError, match="job 3"):
@@ -351,7 +352,7 @@ def test_a_started_run_works_while_the_caller_does_and_cancels_cleanly(tmp_path)
     import multiprocessing
     import time
 
-    from sewgen.plots.background import start_shared
+    from sewgen.report.plots.background import start_shared
 
     jobs, first, log = _jobs(tmp_path, 5)
     run = start_shared(jobs, first, parallel=True)
@@ -378,7 +379,7 @@ def test_figures_are_scheduled_costliest_at_both_ends(analysis):
     end and the smallest meet in the middle."""
     import math
 
-    from sewgen.plots import _big_ends_first
+    from sewgen.report.plots import _big_ends_first
 
     order = _big_ends_first(plots.figures_for(analysis), analysis)
     assert sorted(n for n, _ in order) == sorted(n for n, _ in plots.figures_for(analysis))
@@ -407,11 +408,11 @@ def _ink_box(canvas_cls, text_kw):
                                 dict(s="gyp 10³ deg/s²", fontsize=12, color="tab:red", alpha=0.5),
                                 dict(s=" 1    9.95°  feed dog rises", fontsize=7, family="monospace")])
 def test_cached_text_lands_where_matplotlib_draws_it(kw):
-    """sewgen.plots.canvas draws plain text from whole-string bitmaps (speed); its ink covers the box
+    """sewgen.report.plots.canvas draws plain text from whole-string bitmaps (speed); its ink covers the box
     matplotlib's own renderer inks, to a pixel, at 0° and 90°."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from sewgen.plots.canvas import TextCacheCanvas
+    from sewgen.report.plots.canvas import TextCacheCanvas
 
     kw = dict(kw)
     s = kw.pop("s")
@@ -427,7 +428,7 @@ def test_cached_text_falls_back_on_matplotlib_where_its_internals_differ(monkeyp
     AttributeError) still gets every string drawn, by matplotlib itself, exactly where it draws it."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from sewgen.plots import canvas
+    from sewgen.report.plots import canvas
 
     def missing(self, s, prop, antialiased):
         raise AttributeError("'RendererAgg' object has no attribute '_prepare_font'")
@@ -443,7 +444,7 @@ def test_cached_text_falls_back_on_matplotlib_where_its_internals_differ(monkeyp
 @pytest.mark.skipif(not plots.can_fork(), reason="needs fork and two CPUs")
 def test_shared_runs_call_after_in_each_process_the_child_first(tmp_path):
     """``after`` (the text cache's save) runs once in the child, once its share is done, and then once here."""
-    from sewgen.plots.background import run_shared
+    from sewgen.report.plots.background import run_shared
 
     jobs, first, _ = _jobs(tmp_path, 4)
     log = tmp_path / "after"
@@ -464,7 +465,7 @@ def test_text_cache_is_kept_on_disk_between_runs(tmp_path, monkeypatch):
     where matplotlib draws it. A damaged file is an empty cache, not an error."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from sewgen.plots import canvas
+    from sewgen.report.plots import canvas
 
     monkeypatch.setenv("SEWGEN_CACHE", str(tmp_path))
     monkeypatch.setattr(canvas, "_bitmaps", {})
@@ -507,7 +508,7 @@ def test_text_cache_on_disk_stays_within_its_size(tmp_path, monkeypatch):
     file starts again from the strings of the process that saves."""
     import pickle
 
-    from sewgen.plots import canvas
+    from sewgen.report.plots import canvas
 
     monkeypatch.setenv("SEWGEN_CACHE", str(tmp_path))
     monkeypatch.setattr(canvas, "CACHE_SIZE", 6)

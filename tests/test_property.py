@@ -16,6 +16,8 @@ from hypothesis import strategies as st
 import sewgen
 from sewgen.derive.model import Mechanism as Declaration
 
+pytestmark = [pytest.mark.c, pytest.mark.derive]
+
 PHI = sewgen.shaft_angles(5)
 MM = 1e-3
 RESIDUAL_MAX = 1e-13  # m
@@ -43,11 +45,6 @@ def declare_four_bar():
     m.point("crank_pin", crank.at(r, 0), "B")
     m.point("coupler_pin", rocker.at(l3, 0), "C")
     return m
-
-
-@pytest.fixture(scope="session")
-def cache_dir(tmp_path_factory):
-    return tmp_path_factory.mktemp("sewgen_cache_property")
 
 
 @pytest.fixture(scope="session")

@@ -1,14 +1,14 @@
 """The adversarial suite at a CI size (issue 11): random designs of every catalog mechanism and of user
 four-bars, crank-sliders and Stephenson six-bars, each swept at random shaft angles (a dense revolution, a few
 coarse angles, a shuffled or repeated set), speed and shaft acceleration, on a random branch, by the closed
-form and by Newton, against independent closed forms (sewgen.fuzz: plain complex-number geometry, dyad by
+form and by Newton, against independent closed forms (fuzz: plain complex-number geometry, dyad by
 dyad, velocities and accelerations from each dyad's 2 × 2 system; the feed by its own continued solution).
 
 Every case is a result that matches the reference on the requested branch (1e-9 of each quantity's scale, or
 what the run's error estimate admits) or a typed error — never a silent flip, never NaN, never an untyped
 exception, and never a PositionError where the reference continues the requested branch with every triangle's
 margin above 1e-3. Hypothesis draws the designs' seeds (derandomized: CI runs the same examples every time);
-``python -m sewgen.fuzz --designs N`` runs the same cases at campaign size.
+``python tools/fuzz.py --designs N`` runs the same cases at campaign size.
 """
 from __future__ import annotations
 
@@ -17,16 +17,13 @@ import pytest
 from hypothesis import HealthCheck, example, given, note, settings
 from hypothesis import strategies as st
 
-from sewgen import fuzz
+import fuzz
+
+pytestmark = [pytest.mark.c, pytest.mark.derive, pytest.mark.slow]
 
 SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
                 derandomize=True)
 SEEDS = st.integers(min_value=0, max_value=2 ** 63 - 1)
-
-
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("adversarial_cache")
 
 
 @pytest.fixture(scope="module")

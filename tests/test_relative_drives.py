@@ -14,7 +14,9 @@ import pytest
 import sewgen
 from sewgen.derive import DeclarationError
 from sewgen.derive.model import Mechanism
-from sewgen.loads import Load
+from sewgen.engine.loads import Load
+
+pytestmark = [pytest.mark.c, pytest.mark.derive]
 
 MM = 1e-3
 L1, L2, PHASE = 40 * MM, 25 * MM, np.radians(30)
@@ -37,11 +39,6 @@ def held_arm():
     fore = m.held("fore", upper.at("40 mm", 0), "-50 deg", "elbow angle")
     m.point("tip", fore.at("25 mm", 0))
     return m
-
-
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("relative_cache")
 
 
 def _e(a):

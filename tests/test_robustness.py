@@ -13,15 +13,17 @@ import numpy as np
 import pytest
 
 import sewgen
-from sewgen import fuzz
+import fuzz
+
+pytestmark = [pytest.mark.c, pytest.mark.derive]
 
 PHI = sewgen.shaft_angles(5)
 MM = 1e-3
 
 
 @pytest.fixture(scope="module")
-def four_bar(tmp_path_factory):
-    return sewgen.load(fuzz.declare_four_bar, cache_dir=tmp_path_factory.mktemp("robust_cache"))
+def four_bar(cache):
+    return sewgen.load(fuzz.declare_four_bar, cache_dir=cache)
 
 
 def _same_motion(a, b, rtol=1e-9):
@@ -48,7 +50,7 @@ def test_feed_at_scattered_angles_is_the_dense_sweep():
     rows = [int(a) for a in angles]
     np.testing.assert_allclose(few.point("feed_dog").y, dense.point("feed_dog").y[rows], rtol=0, atol=1e-12)
     # was: feed bar 104° off at 352°. Angles agree up to whole turns: each sweep's angles are continuous along
-    # itself and start in (−180°, 180°] (sewgen.mechanism.continuous_angles), a sparse one unwraps differently
+    # itself and start in (−180°, 180°] (sewgen.engine.mechanism.continuous_angles), a sparse one unwraps differently
     diff = few.q - dense.q[rows]
     angle = np.array([c.unit == "rad" for c in fd.description.coords])
     diff[:, angle] = (diff[:, angle] + np.pi) % (2 * np.pi) - np.pi

@@ -19,6 +19,8 @@ import sewgen
 from sewgen.derive import DeclarationError
 from sewgen.derive.model import Mechanism
 
+pytestmark = [pytest.mark.c, pytest.mark.derive]
+
 MM = 1e-3
 A = np.array([50, 20, -30]) * MM  # crank axis point
 R, RHO, L = 8 * MM, 30 * MM, 60 * MM  # crank radius, rocker arm, rod
@@ -65,11 +67,6 @@ def rocker_angle(phi, direction, delta1):
 
 
 CASES = [((1, 0, 0), 1), ((1, 0, 0), -1), ((1, 0.3, 0.4), 1)]
-
-
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("rssr_cache")
 
 
 @pytest.mark.parametrize("direction, branch", CASES)

@@ -5,6 +5,8 @@ import pytest
 
 import sewgen
 
+pytestmark = [pytest.mark.c, pytest.mark.derive]
+
 
 @pytest.fixture(scope="module")
 def lib():

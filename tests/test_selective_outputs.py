@@ -14,8 +14,10 @@ import pytest
 import sympy as sp
 
 import sewgen
-from sewgen.designs import Columns
-from sewgen.loader import catalog_names
+from sewgen.engine.designs import Columns
+from sewgen.engine.loader import catalog_names
+
+pytestmark = [pytest.mark.c]
 
 ROOT = Path(__file__).resolve().parents[1]
 PHI = sewgen.shaft_angles(7.5)

@@ -16,10 +16,12 @@ import numpy as np
 import pytest
 
 import sewgen
-from sewgen.build import compile_flags
+from sewgen.engine.build import compile_flags
 from sewgen.errors import ParameterError
-from sewgen.loader import catalog_module, catalog_names
-from sewgen.mechanism import Mechanism
+from sewgen.engine.loader import catalog_module, catalog_names
+from sewgen.engine.mechanism import Mechanism
+
+pytestmark = [pytest.mark.c, pytest.mark.derive]
 
 ROOT = Path(__file__).resolve().parents[1]
 RNG = np.random.default_rng(14)
@@ -153,7 +155,7 @@ def test_most_positions_take_the_vector_path():
 
 
 def _avx2_catalog():
-    """The catalog's AVX2 module where the loader runs its AVX-512 one (sewgen/build.py catalog_levels), else
+    """The catalog's AVX2 module where the loader runs its AVX-512 one (sewgen/engine/build.py catalog_levels), else
     skip: the tests above ran the AVX2 level already (or this build or CPU has only one level)."""
     if os.environ.get("SEWGEN_KERNELS"):  # CI's sanitized run: its catalog is one build of its own, named
         pytest.skip("SEWGEN_KERNELS names this run's catalog (sewgen._kernels is that build)")
@@ -196,7 +198,7 @@ def test_the_avx2_newton_finish_equals_the_scalar_loop():
 
 
 def test_the_other_simd_level(monkeypatch):
-    """A user's mechanism is built for one SIMD level, the building CPU's best (sewgen/build.py: AVX-512 with 8
+    """A user's mechanism is built for one SIMD level, the building CPU's best (sewgen/engine/build.py: AVX-512 with 8
     lanes, else AVX2 with 4); where that is AVX-512, the same mechanism built for AVX2 (SEWGEN_SIMD=avx2, its own
     cache entry) runs four lanes and agrees with the scalar loop too, failing positions included; a bad
     SEWGEN_SIMD is a clear error."""

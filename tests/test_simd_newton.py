@@ -22,6 +22,8 @@ import sewgen
 from test_designs import varying_loads
 from test_simd import _run_both  # (SIMD sweep, scalar sweep) of the same arguments, run
 
+pytestmark = [pytest.mark.c]
+
 RNG = np.random.default_rng(21)
 #: a revolution at 0.1°, a few unsorted and repeated angles, a short last block (3615 = 4k + 3 = 8k' + 7)
 PHI = np.concatenate([np.linspace(0.0, 2 * np.pi, 3600, endpoint=False), RNG.uniform(-7, 7, 13), [1.0, 1.0]])

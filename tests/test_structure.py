@@ -18,7 +18,9 @@ import pytest
 import sewgen
 from sewgen import abi
 from sewgen.errors import AssemblyError, InputError, ParameterError, PositionError, SewgenError, UnitError
-from sewgen.modelfile import ModelFileError
+from sewgen.machine.modelfile import ModelFileError
+
+pytestmark = [pytest.mark.c]
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -39,7 +41,7 @@ def test_import_and_a_catalog_sweep_load_no_derivation_and_no_scipy():
 def test_a_machine_analysis_loads_no_derivation():
     code = ("import sys\n"
             "from sewgen.machine import load_machine\n"
-            "from sewgen.report import summary\n"
+            "from sewgen.report.outputs import summary\n"
             "a = load_machine('jb1-3').analyze()\n"
             "summary(a)\n"
             "print(sorted(k for k in ('sympy', 'jinja2', 'sewgen.derive') if k in sys.modules))\n")
@@ -49,9 +51,9 @@ def test_a_machine_analysis_loads_no_derivation():
 
 def test_analyze_without_plots_loads_no_scipy(tmp_path):
     """``sewgen analyze jb1-3 --no-plots``: the stitch regulator's solve and the dog's plate crossings need no
-    SciPy (its import cost 0.4–0.7 s of the command; sewgen.feed)."""
+    SciPy (its import cost 0.4–0.7 s of the command; sewgen.machine.feed)."""
     code = ("import sys\n"
-            "from sewgen.cli import main\n"
+            "from sewgen.cli.main import main\n"
             f"assert main(['analyze', 'jb1-3', '--out', {str(tmp_path / 'out')!r}, '--no-plots']) == 0\n"
             "print(sorted(k for k in ('scipy', 'sympy', 'jinja2', 'matplotlib') if k in sys.modules),\n"
             "      file=sys.stderr)\n")
@@ -79,7 +81,7 @@ def test_errors_carry_their_fields():
 
 
 def test_model_file_errors_name_file_and_key(tmp_path):
-    from sewgen.machine import load_machine
+    from sewgen.machine.assembly import load_machine
 
     text = (ROOT / "sewgen" / "models" / "jb1-3.toml").read_text().replace('rod = "50 mm"', 'rod = "50 g"')
     path = tmp_path / "m.toml"

@@ -7,12 +7,14 @@ import pandas as pd
 import pytest
 
 import sewgen
-from sewgen.cli import main
+from sewgen.cli.main import main
 from sewgen.errors import ParameterError
-from sewgen.machine import load_machine
+from sewgen.machine.assembly import load_machine
 from sewgen.roles import FEED_DOG
 from sewgen.study import (MachineDesigns, StudyOptions, influence, parse_key, run_designs, sweep_group_designs,
                           tolerance)
+
+pytestmark = [pytest.mark.c, pytest.mark.plots]
 
 PHI = sewgen.shaft_angles(10)
 
@@ -240,8 +242,8 @@ def test_study_influence_command_writes_tables_with_units(tmp_path, capsys):
 
 def test_study_tolerance_command_with_exact_jumps(tmp_path, capsys):
     """--exact-jumps: the feed's acceleration jump of the nominal design is summary.json's exact one."""
-    from sewgen import feed_indices as fi
-    from sewgen.cams import arc_switches
+    from sewgen.machine import feed_indices as fi
+    from sewgen.machine.cams import arc_switches
 
     out = tmp_path / "tol"
     rc = main(["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.lift_arm=±0.0mm", "--samples", "2",
@@ -278,8 +280,8 @@ def test_study_mistakes_exit_2_with_one_line_and_nothing_on_stdout(tmp_path, cap
 def test_a_study_reading_only_the_feed_sweeps_only_its_observables_bit_for_bit(jb):
     """A feed-only study without loads sweeps just the observables it reads: the same values as the whole
     sweep, bit for bit; with exact_jumps the jump is summary.json's (each switch solved at its own angle)."""
-    from sewgen import feed_indices as fi
-    from sewgen.cams import arc_switches
+    from sewgen.machine import feed_indices as fi
+    from sewgen.machine.cams import arc_switches
 
     feed = next(g for g in jb.groups if g.name == "feed")
     mech = feed.mechanism

@@ -1,6 +1,6 @@
-"""Stitch formation (sewgen.timing, sewgen.thread, sewgen.shaking) on the built-in JB1-3.
+"""Stitch formation (sewgen.machine.timing, sewgen.machine.thread, sewgen.machine.shaking) on the built-in JB1-3.
 
-The references are computed here without sewgen.timing: event angles by bisection on the raw trajectories
+The references are computed here without sewgen.machine.timing: event angles by bisection on the raw trajectories
 (closed forms of the needle drive, or the compiled mechanisms solved at single shaft angles), the thread path's
 length in closed form, the dynamic shaking force as −Σ m a_G over the parts' kinematics, the transmission
 angle from the rod and rock-shaft angles.
@@ -19,11 +19,13 @@ import numpy as np
 import pytest
 
 import sewgen
-from sewgen import shaking
-from sewgen.machine import Group, Machine, Shaft, ShaftMass, load_machine
-from sewgen.modelfile import MODELS_DIR, ModelFileError
-from sewgen.thread import Guide, ThreadPath, eye_motion, guide_positions, path_length
-from sewgen.timing import timing
+from sewgen.machine import shaking
+from sewgen.machine.assembly import Group, Machine, Shaft, ShaftMass, load_machine
+from sewgen.machine.modelfile import MODELS_DIR, ModelFileError
+from sewgen.machine.thread import Guide, ThreadPath, eye_motion, guide_positions, path_length
+from sewgen.machine.timing import timing
+
+pytestmark = [pytest.mark.c]
 
 ROOT = Path(__file__).resolve().parent.parent
 MM = 1e-3
@@ -306,7 +308,7 @@ def test_shaking_force_on_the_frame_without_the_weight(jb):
 
 # -- outputs -------------------------------------------------------------------------------------------------------
 def test_summary_json_and_timing_files(jb, tmp_path):
-    from sewgen.report import write_report
+    from sewgen.report.outputs import write_report
 
     a = jb.analyze()
     files = write_report(a, tmp_path)

@@ -17,7 +17,9 @@ import sympy as sp
 import sewgen
 from sewgen.derive.model import DeclarationError, Mechanism
 from sewgen.errors import ParameterError
-from sewgen.loads import Load
+from sewgen.engine.loads import Load
+
+pytestmark = [pytest.mark.c, pytest.mark.derive]
 
 L = 0.04  # m
 FY = -25.0  # N on the piston
@@ -39,8 +41,8 @@ def adjustable_crank() -> Mechanism:
 
 
 @pytest.fixture(scope="module")
-def mech(tmp_path_factory):
-    return sewgen.load(adjustable_crank(), cache_dir=tmp_path_factory.mktemp("travel"))
+def mech(cache):
+    return sewgen.load(adjustable_crank(), cache_dir=cache)
 
 
 def y_of(phi, r):

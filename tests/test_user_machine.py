@@ -27,6 +27,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+pytestmark = [pytest.mark.c, pytest.mark.derive, pytest.mark.cli, pytest.mark.plots]
+
 MM = 1e-3
 
 DECLARATION = textwrap.dedent('''

@@ -19,6 +19,8 @@ import sewgen
 from sewgen.derive import DeclarationError
 from sewgen.derive.model import Mechanism as Declaration
 
+pytestmark = [pytest.mark.c, pytest.mark.derive]
+
 # Declared once as source text so the very same declaration can be loaded as a function and from a file.
 SIX_BAR_SOURCE = textwrap.dedent('''
     from sewgen.derive.model import Mechanism

@@ -25,6 +25,26 @@ def catalog_files() -> dict[str, str]:
     return render_files([generate(declare(name)) for name in CATALOG])
 
 
+def check(files: dict[str, str], out: Path, stdout=None) -> bool:
+    """Whether the folder ``out`` holds exactly ``files`` (a derivation's, by name); a unified diff of every
+    difference goes to ``stdout`` (default sys.stdout). Files derive does not write (object files of an
+    in-place build) are not compared."""
+    stdout = stdout or sys.stdout
+    current = True
+    present = _derived_files(out)
+    for name in sorted(set(files) | present):
+        try:
+            old = (out / name).read_text() if name in present else ""
+        except (OSError, UnicodeDecodeError) as exc:
+            old = f"<unreadable: {exc}>\n"
+        new = files.get(name, "")
+        if old != new:
+            current = False
+            stdout.writelines(difflib.unified_diff(
+                old.splitlines(True), new.splitlines(True), f"generated/{name}", f"derived/{name}"))
+    return current
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m sewgen.derive", description=__doc__)
     ap.add_argument("--check", action="store_true", help="compare with generated/ instead of writing")
@@ -34,16 +54,7 @@ def main(argv=None) -> int:
     files = catalog_files()
     out: Path = args.out
     if args.check:
-        stale = False
-        present = _derived_files(out)
-        for name in sorted(set(files) | present):
-            old = (out / name).read_text() if name in present else ""
-            new = files.get(name, "")
-            if old != new:
-                stale = True
-                sys.stdout.writelines(difflib.unified_diff(
-                    old.splitlines(True), new.splitlines(True), f"generated/{name}", f"derived/{name}"))
-        if stale:
+        if not check(files, out):
             print("generated/ is stale: run `python -m derive`", file=sys.stderr)
             return 1
         print(f"generated/ is current ({len(files)} files, {time.perf_counter() - t0:.1f} s)")

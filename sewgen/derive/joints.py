@@ -18,7 +18,7 @@ A kind gives
 Adding a kind means one class here, an entry in :data:`KINDS` and a declaring method in :mod:`.model`.
 The "drive" kind is a reaction only (the driving or holding torque of a driven body), never declared.
 
-Sign conventions (kept in the manifest and sewgen.forces): a reaction is the force on the joint's body ``b``
+Sign conventions (kept in the manifest and sewgen.engine.forces): a reaction is the force on the joint's body ``b``
 from its body ``a``; a pin's in frame axes; a slide's or contact's along n = the guide (face) direction
 turned +90°.
 """

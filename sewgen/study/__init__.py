@@ -7,10 +7,10 @@ tolerance Monte Carlo, in-process or on Dask. pandas is imported on first use.
     >>> r = influence(jb, ["groups.needle_bar.params.crank"], "-10%..+10%", 5)
     >>> r.sensitivity("groups.needle_bar.params.crank", "needle_stroke [mm]")   # 2.0 (crank-slider)
 """
-from .designs import GroupSweep, design_matrix, sweep_group_designs
-from .evaluate import StudyOptions, evaluate_chunk, quantity_columns
-from .machine_designs import DesignKey, MachineDesigns, parse_key
-from .run import InfluenceResult, StudyError, ToleranceResult, influence, run_designs, tolerance
+from sewgen.study.designs import GroupSweep, design_matrix, sweep_group_designs
+from sewgen.study.evaluate import StudyOptions, evaluate_chunk, quantity_columns
+from sewgen.study.machine_designs import DesignKey, MachineDesigns, parse_key
+from sewgen.study.run import InfluenceResult, StudyError, ToleranceResult, influence, run_designs, tolerance
 
 __all__ = ["DesignKey", "GroupSweep", "InfluenceResult", "MachineDesigns", "StudyError", "StudyOptions",
            "ToleranceResult", "design_matrix", "evaluate_chunk", "influence", "parse_key", "quantity_columns",

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, ParameterError, SewgenError
+from sewgen.errors import InputError, ParameterError, SewgenError
 
 
 def design_matrix(mech, designs, base: dict | None = None) -> np.ndarray:
@@ -84,7 +84,7 @@ class GroupSweep:
 
     def motion(self, k: int):
         """Design ``k`` as a :class:`sewgen.Motion`."""
-        from ..results import Motion
+        from sewgen.engine.results import Motion
 
         if self.kept is not None:
             raise ValueError("a sweep of some observables only has no Motion: sweep with every output")
@@ -94,13 +94,13 @@ class GroupSweep:
 
     def analysis(self, k: int):
         """Design ``k`` as a :class:`sewgen.ForceAnalysis` (a kinetostatic sweep)."""
-        from ..forces import ForceAnalysis
+        from sewgen.engine.forces import ForceAnalysis
 
         return ForceAnalysis(self.mechanism, self.motion(k), self.frc[k], self.settings[k])
 
     def to_dataframe(self):
         """One row per design: its parameters (SI, by name), ``status`` and ``error``."""
-        from ..frames import pandas
+        from sewgen.engine.frames import pandas
 
         df = pandas().DataFrame(self.params, columns=self.mechanism.param_names)
         df["status"], df["error"] = self.status, self.error
@@ -152,7 +152,7 @@ def _omega(mech, speed) -> float:
     """The sweep's constant shaft speed (rad/s): ``speed`` (a number or "1000 rpm"), or the mechanism's default."""
     w = mech.default_speed if speed is None else speed
     if isinstance(w, str):
-        from ..units import to_si
+        from sewgen.units import to_si
 
         w = to_si(w, "speed", "speed")
     return float(w)
@@ -167,7 +167,7 @@ def _batched(mech, P, phi, omega: float, held, branch, threads=None, observables
     if observables is None:
         outputs = ["all"]
     else:
-        from ..designs import _columns
+        from sewgen.engine.designs import _columns
 
         names = _columns(mech).names
         observables = tuple(int(k) for k in observables)

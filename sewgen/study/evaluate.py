@@ -3,8 +3,8 @@ amount, the timing rules and the machine's peak loads, as one row of a pandas Da
 
 Each group's designs are swept in one call of the seam (:func:`sewgen.study.designs.sweep_group_designs`);
 the groups a design set does not vary are swept once (the nominal machine) and broadcast. Everything after the
-sweep is computed on (designs × angles) arrays — the feed-dog indices (sewgen.feed_indices), the needle
-stroke — except what needs the whole machine per design: the stitch timing (sewgen.timing, on the study's own
+sweep is computed on (designs × angles) arrays — the feed-dog indices (sewgen.machine.feed_indices), the needle
+stroke — except what needs the whole machine per design: the stitch timing (sewgen.machine.timing, on the study's own
 sweep; only when a group other than the feed varies: otherwise the nominal timing holds, and the two feed rules
 are re-checked from each design's rise lag and sink lead) and the peak loads (sewgen.machine.MachineAnalysis).
 A design set with a key other than a mechanism parameter reloads the model per design (the loader's checks).
@@ -18,11 +18,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import feed_indices as fi
-from ..errors import SewgenError
-from ..roles import FEED_DOG, NEEDLE_POINT, THROAT_PLATE
-from .designs import sweep_group_designs
-from .machine_designs import MachineDesigns, with_params
+from sewgen.machine import feed_indices as fi
+from sewgen.errors import SewgenError
+from sewgen.roles import FEED_DOG, NEEDLE_POINT, THROAT_PLATE
+from sewgen.study.designs import sweep_group_designs
+from sewgen.study.machine_designs import MachineDesigns, with_params
 
 TWO_PI = 2.0 * math.pi
 
@@ -43,8 +43,8 @@ class StudyOptions:
     the kinetostatics and the machine's peak loads per design; ``tooth_depth`` (m) for the effective travel;
     ``threads``: threads of each batched sweep (None: every core; a Dask worker runs with 1, its cluster being
     the parallelism). The results do not depend on it. ``exact_jumps``: each design's cam-arc acceleration
-    jumps by sewgen.cams.arc_switches (the switch bracketed and solved at its own angle, as summary.json; 5–30
-    ms a design) instead of extrapolated from the sweep (sewgen.feed_indices.arc_jumps, O(h³))."""
+    jumps by sewgen.machine.cams.arc_switches (the switch bracketed and solved at its own angle, as summary.json; 5–30
+    ms a design) instead of extrapolated from the sweep (sewgen.machine.feed_indices.arc_jumps, O(h³))."""
 
     step_deg: float = 1.0
     speed: float | None = None
@@ -126,10 +126,10 @@ def _needle_stroke(g, sweep, w, h):
 
 def _exact_jumps(g, sweep, status, error, estimate):
     """Per design of ``sweep`` (feed group ``g``): the largest |horizontal acceleration jump| of the feed dog at
-    a cam-arc switch, each switch bracketed and solved at its own shaft angle (sewgen.cams.arc_switches, as
+    a cam-arc switch, each switch bracketed and solved at its own shaft angle (sewgen.machine.cams.arc_switches, as
     summary.json's); ``estimate`` where a design failed (its value is NaN then anyway). A switch that cannot be
     solved fails its design (``status``/``error`` updated), the others unaffected."""
-    from ..cams import arc_switches
+    from sewgen.machine.cams import arc_switches
 
     mech = g.mechanism
     dog = mech.description.role(FEED_DOG).name
@@ -161,7 +161,7 @@ def _timing_values(tm, machine):
 
 
 def _peaks(a):
-    from .. import shaking
+    from sewgen.machine import shaking
 
     f, r = a.bearing("front"), a.bearing("rear")
     return {LOADS[0]: float(np.hypot(f[:, 0], f[:, 1]).max()), LOADS[1]: float(np.hypot(r[:, 0], r[:, 1]).max()),
@@ -187,8 +187,8 @@ def _baseline(machine, options):
 
 def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=False):
     """Columns (name -> (D,) array or list) for designs that change mechanism parameters only."""
-    from ..machine import MachineAnalysis
-    from ..timing import timing
+    from sewgen.machine.assembly import MachineAnalysis
+    from sewgen.machine.timing import timing
 
     phi = options.phi()
     h = float(phi[1] - phi[0])
@@ -323,7 +323,7 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
     out = {"status": status, "error": error, "cols": cols}
     if nominal:
         if status[0] != "ok":
-            from ..errors import ParameterError
+            from sewgen.errors import ParameterError
 
             raise ParameterError(machine.name, "nominal design", error[0])
         out["sweeps"] = sweeps
@@ -343,7 +343,7 @@ def evaluate_chunk(machine, keys, values, options: StudyOptions):
     """One chunk of designs (``keys``: DesignKey list, ``values`` (D, k) SI) -> a DataFrame: the keys in their
     display units, ``status``, ``error`` and every quantity (:func:`quantity_columns`). A top-level function:
     it runs on a Dask worker as it runs here."""
-    from ..frames import pandas
+    from sewgen.engine.frames import pandas
 
     pd = pandas()
     designs = MachineDesigns(machine, keys, values)

@@ -22,8 +22,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import ParameterError, SewgenError
-from ..units import SI_UNITS, UnitError, to_si
+from sewgen.errors import ParameterError, SewgenError
+from sewgen.units import SI_UNITS, UnitError, to_si
 
 #: kind -> (display unit, factor from SI)
 DISPLAY = {"length": ("mm", 1e3), "angle": ("deg", 180.0 / math.pi), "mass": ("g", 1e3)}
@@ -62,7 +62,7 @@ class DesignKey:
 
 
 def _schema_kind(parts: list[str]) -> str | None:
-    from ..machine import GROUP, LOAD, MACHINE, SHAFT, SHAFT_MASS
+    from sewgen.machine.assembly import GROUP, LOAD, MACHINE, SHAFT, SHAFT_MASS
 
     head = parts[0]
     if head == "machine" and len(parts) == 2 and parts[1] in MACHINE:
@@ -84,7 +84,7 @@ def _schema_kind(parts: list[str]) -> str | None:
         if len(parts) == 4 and parts[2].startswith("loads[") and parts[3] in LOAD:
             return LOAD[parts[3]].kind
     if head == "stitch" and len(parts) == 2:
-        from ..timing import STITCH
+        from sewgen.machine.timing import STITCH
 
         return STITCH.get(parts[1], (None,))[0]
     if head == "stitch" and len(parts) == 3 and parts[1].startswith("rules["):
@@ -160,7 +160,7 @@ def parse_key(machine, key: str, doc: dict | None = None) -> DesignKey:
 
 def model_doc(machine) -> dict:
     """The machine's model file as parsed TOML."""
-    from ..modelfile import load_toml
+    from sewgen.machine.modelfile import load_toml
 
     if not machine.source:
         raise ParameterError(machine.name, "model file", "the machine was not loaded from a model file")
@@ -245,7 +245,7 @@ class MachineDesigns:
         """Design ``i`` as a Machine (a SewgenError if the loader refuses it)."""
         m = self.machine
         if self.model_keys:
-            from ..machine import load_machine
+            from sewgen.machine.assembly import load_machine
 
             if self._doc is None:
                 self._doc = model_doc(m)
@@ -261,7 +261,7 @@ class MachineDesigns:
 
     def table(self):
         """The designs as a DataFrame, one column per key in its display unit (``<key> [mm]``)."""
-        from ..frames import pandas
+        from sewgen.engine.frames import pandas
 
         return pandas().DataFrame({k.column: self.values[:, j] * k.factor for j, k in enumerate(self.keys)})
 

@@ -17,9 +17,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import SewgenError
-from .evaluate import FAILED, FAILURES, StudyOptions, evaluate_chunk, quantity_columns
-from .machine_designs import DesignKey, MachineDesigns, parse_keys
+from sewgen.errors import SewgenError
+from sewgen.study.evaluate import FAILED, FAILURES, StudyOptions, evaluate_chunk, quantity_columns
+from sewgen.study.machine_designs import DesignKey, MachineDesigns, parse_keys
 
 #: designs per chunk (one batched evaluation call each): parameter-only designs / designs that reload the model
 CHUNK = 1000  # the batched sweep amortises its calls and threads over a chunk (100: 1.4x slower, 5000: slower again)
@@ -122,7 +122,7 @@ def design_columns(machine, table) -> tuple[list, np.ndarray]:
         factor = 1.0
         if m and m["unit"].strip():
             try:
-                from ..units import to_si
+                from sewgen.units import to_si
 
                 factor = to_si(f"1 {m['unit'].strip()}", key.kind, str(name))
             except SewgenError as exc:
@@ -168,7 +168,7 @@ def evaluate_pieces(machine, keys, values, options):
     """A Dask task's designs evaluated in pieces of :data:`CHUNK` (:func:`evaluate_chunk` each, the results
     joined): a task is larger than a chunk (fewer tasks, less scheduler work), but the chunk's arrays are the
     size that keeps a core's caches warm. Each design is evaluated as it would be alone: the same table."""
-    from ..frames import pandas
+    from sewgen.engine.frames import pandas
 
     if len(values) <= CHUNK:
         return evaluate_chunk(machine, keys, values, options)
@@ -182,7 +182,7 @@ def run_designs(machine, keys, values=None, options: StudyOptions | None = None,
     a design table (a DataFrame or mapping whose columns are keys, SI or with a unit: ``"<key> [mm]"``) and no
     ``values``. Returns a DataFrame with the keys (display units), ``status``, ``error`` and every quantity, one
     row per design in the table's order."""
-    from ..frames import pandas
+    from sewgen.engine.frames import pandas
 
     pd = pandas()
     options = options or StudyOptions()
@@ -304,7 +304,7 @@ class InfluenceResult:
 def influence(machine, params, ranges, steps: int = 11, options: StudyOptions | None = None, **run):
     """Seed 001 §六: each key of ``params`` moved alone over its range (``ranges``: one per key, or one for
     all) in ``steps`` equal steps, the others at nominal; plus the nominal ± δ for the sensitivities."""
-    from ..frames import pandas
+    from sewgen.engine.frames import pandas
 
     pd = pandas()
     options = options or StudyOptions()
@@ -442,7 +442,7 @@ def tolerance(machine, tolerances: dict, samples: int = 1000, seed: int | None =
 
 
 def statistics(res: ToleranceResult, quantities):
-    from ..frames import pandas
+    from sewgen.engine.frames import pandas
 
     pd = pandas()
     ok = res.table[res.table["status"] == "ok"]

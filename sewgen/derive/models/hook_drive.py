@@ -8,7 +8,7 @@ shaft axis, x horizontal, y up. The lower-shaft slot passes through its axis (lo
 
 The shuttle's point 摆梭尖 (point ``hook_point``) is a point of the lower-shaft body at ``hook_radius`` from its
 axis and ``hook_angle`` from the slot: the lower shaft's axis is under the needle (x = 0), so the hook point
-crosses the needle's centre line at the top of its circle, moving across it (sewgen.timing measures the
+crosses the needle's centre line at the top of its circle, moving across it (sewgen.machine.timing measures the
 needle's rise from its bottom dead centre and the hook point's height above the needle eye there).
 
 Dimensions are estimates sized to the household machine (seed 000's tables are not in the text); the

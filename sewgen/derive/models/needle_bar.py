@@ -9,7 +9,7 @@ Dimensions: crank 16.7 mm is seed 002's industrial crank (its stroke 33.4 mm is 
 industrial and household machines). The link length, offset, masses and inertias are estimates (the
 seeds' tables of them are not in the text we have).
 
-The needle itself (stitch formation, sewgen.timing): the eye (point ``needle_eye``, the eye's centre), the
+The needle itself (stitch formation, sewgen.machine.timing): the eye (point ``needle_eye``, the eye's centre), the
 point below it (point ``needle_point``: it enters and leaves the cloth), the eye's length (its top is where
 the hook point's height is measured from) and the scarf above the eye (the hollow the hook point passes
 through). A household 130/705 H (15x1) needle of size 80–90 is assumed: eye about 1.2 mm long, its centre

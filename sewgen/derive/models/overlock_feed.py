@@ -26,7 +26,7 @@ throw turned half a turn); the effective eccentric's phase moves by β/2 with th
 the regulator's limit ±45° the throw is 2e sin 22.5° = 1.91 mm: a rack travel of about 5 mm.
 
 The throat plate (role ``throat_plate``, ``plate_y``) is 1 mm below the teeth's highest point: the stitch is the
-teeth's travel above it (sewgen.feed).
+teeth's travel above it (sewgen.machine.feed).
 """
 from sewgen.derive.model import Mechanism
 

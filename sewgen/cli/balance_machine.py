@@ -1,0 +1,171 @@
+"""``sewgen balance machine MODEL``: whole-machine balancing by seed 000's three methods (sewgen.machine.machine_balance).
+
+Writes into ``--out`` the before/after evaluation (balance.json, bearings.csv, speeds.csv), the bearing-load
+hodographs and the shaking hodograph before and after (balance.png), and with ``--write-model`` the model file
+with the counterweights added (analysable as it is: ``sewgen analyze balanced.toml``).
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from sewgen.errors import SewgenError
+from sewgen.units import UnitError, to_si
+
+SPEEDS_HELP = "speeds to evaluate at, e.g. \"600 rpm,900 rpm,1200 rpm,1500 rpm\" (default: 60 %%, 100 %%, 150 %% of rated)"
+
+
+def add_arguments(p) -> None:
+    """The machine-balancing options (the ``balance`` command's target ``machine``)."""
+    g = p.add_argument_group("balance machine MODEL (seed 000 part 2: whole-machine balancing)")
+    g.add_argument("--method", choices=["separate", "harmonic", "bearings"], default="bearings",
+                   help="separate: each group by itself (seed 002's objective); harmonic: cancel the first order "
+                   "of the shaking force and moments; bearings: minimise the bearing loads (default)")
+    g.add_argument("--objective", choices=["peak", "rms"], default="peak", help="bearings: peak or RMS (default peak)")
+    g.add_argument("--shaking-weight", default="0", metavar="W",
+                   help="bearings: add W × the shaking force's peak (or RMS) to the objective (default 0)")
+    g.add_argument("--first-order", choices=["forward", "x", "y"], default="forward",
+                   help="harmonic: cancel the forward-rotating first order (default), or the first order along x or "
+                   "y completely (primary balance along a line of stroke)")
+    g.add_argument("--out", metavar="DIR", help="write balance.json, bearings.csv, speeds.csv and balance.png here")
+    g.add_argument("--write-model", metavar="FILE", help="write the model file with the counterweights added")
+    g.add_argument("--speeds", metavar="LIST", help=SPEEDS_HELP)
+
+
+def _fail(message: str):
+    print(f"sewgen balance machine: {message}", file=sys.stderr)
+    raise SystemExit(2)
+
+
+def _speeds(text, rated: float) -> list[float]:
+    """rpm values from "600 rpm,900 rpm" (each with its unit), or 60/100/150 % of the rated speed."""
+    if not text:
+        rpm = rated * 60 / (2 * math.pi)
+        return [round(0.6 * rpm), round(rpm), round(1.5 * rpm)]
+    out = []
+    for item in text.split(","):
+        try:
+            w = to_si(item.strip(), "speed", "--speeds")
+        except UnitError as exc:
+            _fail(str(exc))
+        if not w > 0:
+            _fail(f"--speeds: {item.strip()!r} must be positive")
+        out.append(w * 60 / (2 * math.pi))
+    return out
+
+
+def run(args) -> int:
+    from sewgen.machine import machine_balance as mb
+    from sewgen.machine.assembly import load_machine
+
+    if not args.model:
+        _fail("name the model file: sewgen balance machine MODEL")
+    try:
+        weight = float(args.shaking_weight)
+    except ValueError:
+        _fail(f"--shaking-weight: a number, got {args.shaking_weight!r}")
+    if not (math.isfinite(weight) and weight >= 0):
+        _fail(f"--shaking-weight: must be a number >= 0, got {args.shaking_weight!r}")
+    for option, value in (("--out", args.out), ("--write-model", args.write_model)):
+        if value and Path(value).exists() and (Path(value).is_dir() != (option == "--out")):
+            _fail(f"{option}: {value} is {'a folder' if Path(value).is_dir() else 'a file'}")
+    try:
+        machine = load_machine(args.model)
+        speeds = _speeds(args.speeds, machine.speed)
+        report = mb.balance(machine, args.method, args.objective, weight, speeds_rpm=speeds,
+                            first_order=args.first_order)
+    except SewgenError as exc:
+        _fail(str(exc))
+    result = report.as_dict()
+    result["model"] = str(args.model)
+    if args.write_model:
+        text = mb.model_text(Path(machine.source).read_text(encoding="utf-8"), report.solution.counterweights)
+        Path(args.write_model).write_text(text, encoding="utf-8")
+        result["written_model"] = str(args.write_model)
+    if args.out:
+        _write(Path(args.out), report, result)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        _print(result)
+    return 0
+
+
+def _print(r: dict) -> None:
+    head = f"{r['method']}" + (f" ({r['objective']})" if r["objective"] else "")
+    print(f"balance by {head}: solver {r['solver']['status']}"
+          + (f", gap {abs(r['solver']['gap']):.1e}" if r["solver"]["gap"] is not None else ""))
+    for c in r["counterweights"]:
+        print(f"  {c['name']}: m·r {c['mr'] * 1e6:.0f} g·mm at {math.degrees(c['angle']):.1f}° from the crank, "
+              f"{c['mass'] * 1e3:.1f} g at {c['radius'] * 1e3:.1f} mm, z {c['z'] * 1e3:.1f} mm")
+    rows = [("front bearing peak [N]", "bearing_front_peak"), ("rear bearing peak [N]", "bearing_rear_peak"),
+            ("front bearing RMS [N]", "bearing_front_rms"), ("rear bearing RMS [N]", "bearing_rear_rms"),
+            ("shaking force peak, weight removed [N]", "shaking_force_peak"),
+            ("shaking moment x peak [N*m]", "shaking_moment_x_peak"),
+            ("shaking moment y peak [N*m]", "shaking_moment_y_peak"),
+            ("driving torque peak [N*m]", "torque_peak")]
+    print(f"  {'':42s} {'before':>10s} {'after':>10s}")
+    for label, key in rows:
+        print(f"  {label:42s} {r['before'][key]:10.3f} {r['after'][key]:10.3f}")
+    for name, key in (("shaking force orders 1-3 [N]", "shaking_force_orders"),):
+        b = ", ".join(f"{v:.2f}" for v in r["before"][key])
+        a = ", ".join(f"{v:.2f}" for v in r["after"][key])
+        print(f"  {name}: {b} -> {a}")
+
+
+def _write(folder: Path, report, result: dict) -> None:
+    from sewgen.engine.results import write_csv
+
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "balance.json").write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
+    cols = {"phi [deg]": np.degrees(report.before.phi)}
+    for tag, a in (("before", report.before), ("after", report.after)):
+        for which in ("front", "rear"):
+            load = a.bearing(which)
+            cols[f"{which}_{tag}.fx [N]"], cols[f"{which}_{tag}.fy [N]"] = load[:, 0], load[:, 1]
+            cols[f"{which}_{tag}.magnitude [N]"] = np.hypot(*load.T)
+    write_csv(folder / "bearings.csv", cols)
+    keys = ("bearing_front_peak", "bearing_rear_peak", "bearing_front_rms", "bearing_rear_rms", "shaking_force_peak")
+    speed_cols = {"speed [rpm]": np.array([s["rpm"] for s in result["speeds"]], dtype=float)}
+    for tag in ("before", "after"):
+        for k in keys:
+            speed_cols[f"{k}_{tag} [N]"] = np.array([s[tag][k] for s in result["speeds"]])
+    write_csv(folder / "speeds.csv", speed_cols)
+    _plot(folder / "balance.png", report)
+
+
+def _plot(path: Path, report) -> None:
+    """Hodographs of the front and rear bearing loads and of the dynamic shaking force, before and after."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(15, 5.4))
+    for ax, (title, get) in zip(axes, (
+            ("front bearing load (shaft on frame)", lambda a: a.bearing("front")),
+            ("rear bearing load (shaft on frame)", lambda a: a.bearing("rear")),
+            ("shaking force on the base, weight removed", lambda a: a.shaking_force - a.shaking_force.mean(axis=0)))):
+        for tag, a, style in (("before", report.before, dict(color="0.55", ls="--")),
+                              ("after", report.after, dict(color="C3"))):
+            v = get(a)
+            v = np.vstack([v, v[:1]])
+            ax.plot(v[:, 0], v[:, 1], label=f"{tag}: peak {np.hypot(*v.T).max():.1f} N", lw=1.6, **style)
+        ax.plot([0], [0], marker="+", color="k", ms=10)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel("x (N)")
+        ax.set_ylabel("y (N)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper right")
+    name = report.before.machine.name
+    method = report.method + (f", {report.objective}" if report.objective else "")
+    fig.suptitle(f"{name}: balancing by {method} — load vectors over one revolution "
+                 f"at {report.before.machine.speed * 60 / (2 * math.pi):.0f} rpm", fontsize=12)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

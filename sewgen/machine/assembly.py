@@ -1,0 +1,789 @@
+"""A whole machine: mechanism groups on one upper shaft, the shaft as a 3D body on two bearings (seed 000).
+
+Seed 000 splits the JB machine into four groups driven by the upper shaft 上轴组件 1 — needle bar, take-up,
+hook drive, feed (§一(一)) — analyses each as a plane mechanism (§二(三)) and the upper shaft in space
+(§二(二)1(6), §四): the crank-pin forces of every group act on the shaft at their axial positions, with the
+shaft's own unbalance and counterweights; the front and rear bearings 上轴前/后支承 carry them, the belt
+pulley supplies the torque.
+
+Here each group is a compiled mechanism swept at φ + phase (φ the machine's shaft angle, needle top at 90°).
+The shaft assembly is the shaft with every driven body of every group rigidly on it: a crank's own mass is in
+its group, so what the shaft core takes from crank i is the force its pivot puts on the "frame",
+``frame_force(<crank>.pivot)``, at the crank's axial position z_i, and the group's driving torque. The core's
+own masses (its unbalance, counterweights) are point masses (m, r, angle, z). With bearing A at z_A and B at
+z_B, per frame axis c ∈ {x, y} (d'Alembert; the plane forces have no axial component):
+
+    R_B,c = −[Σ_i (z_i − z_A) F_i,c + Σ_k (z_k − z_A) m_k (g_c − a_k,c) + (z_P − z_A) P_c] / (z_B − z_A)
+    R_A,c = −R_B,c − Σ_i F_i,c − Σ_k m_k (g_c − a_k,c) − P_c
+
+with P the belt's pull on the pulley at z_P (T1 + T2 along the belt: constant, it does no work).
+
+R = frame on shaft; the bearing loads on the frame are −R. Driving torque at the pulley = Σ group shaft
+torques + I_core·α + Σ_k (r_k × m_k (a_k − g))_z. The frame's reactions on the moving parts (drives counted as
+frame, as for a group) are the groups' plus the core's; the machine's shaking force and moment on its base
+leave out the process loads (thread, presser foot, cloth), whose reactions stay inside the machine.
+"""
+from __future__ import annotations
+
+import copy
+import math
+import re
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from sewgen import mechanism as catalog_mechanism
+from sewgen.errors import BuildError, ParameterError, SewgenError
+from sewgen.machine.feed import regulator_angle
+from sewgen.engine.loads import Load, load_matrix
+from sewgen.machine.plan import ShaftCall, gravity_polar, plan_of, scalar
+from sewgen.machine.modelfile import Field, ModelFileError, Reader, declaration_problem, load_toml, resolve
+from sewgen.roles import STITCH_REGULATOR
+from sewgen.units import UnitError, steps_per_turn, to_si
+
+#: Names a group may not take: its table would overwrite the machine's (machine.csv, summary.json).
+RESERVED_GROUP_NAMES = ("machine", "summary")
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+@dataclass
+class Group:
+    """One mechanism group on the upper shaft."""
+
+    name: str
+    mechanism: object  # sewgen.Mechanism
+    phase: float  # rad: group shaft angle = machine shaft angle + phase
+    axial: dict  # driven body -> z on the upper shaft (m)
+    params: dict  # SI overrides
+    held: dict  # SI held inputs (after converting a stitch length)
+    branch: dict
+    loads: list  # windows in the machine's shaft angle (seed 000: "relative to the upper-shaft angle")
+    stitch: float | None = None  # m, feed groups: the stitch the regulator was set for
+    plane: float | None = None  # z of the group's plane (m); None: the mean z of its driven bodies
+    frame: str = "across"  # "across": the group's plane is across the shaft (its x, y = the machine's x, y);
+    #                       "along": its plane contains the shaft (its x = the machine's z, y = y, z = −x)
+    origin: tuple = (0.0, 0.0, 0.0)  # "along": the group's origin in the machine frame (m)
+
+    @property
+    def along(self) -> bool:
+        return self.frame == "along"
+
+    def to_machine(self, x, y):
+        """(X, Y, Z) in the machine frame of the point (x, y) of the group's plane (arrays or numbers, m)."""
+        if not self.along:
+            return x, y, self.z + 0.0 * np.asarray(x)
+        ox, oy, oz = self.origin
+        return ox + 0.0 * np.asarray(x), oy + y, oz + x
+
+    def force_to_machine(self, fx, fy, fz=0.0):
+        """A force (or any vector) of the group's frame in the machine frame: (X, Y, Z) components."""
+        if not self.along:
+            return fx, fy, fz
+        return -fz, fy, fx
+
+    @property
+    def z(self) -> float:
+        """z of the plane the group's forces act in (m): ``plane`` if the model gives it, else the mean axial
+        position of its driven bodies (seed 000 analyses each group as a plane mechanism, §二(三))."""
+        if self.along:
+            return float(self.origin[0])  # its plane is x = origin x (its own z = 0)
+        return self.plane if self.plane is not None else float(np.mean(list(self.axial.values())))
+
+    @property
+    def sweep_loads(self) -> list:
+        """The loads with their windows moved into the group's own shaft angle (machine angle + phase)."""
+        return [replace(ld, window=None if ld.window is None else tuple(w + self.phase for w in ld.window))
+                for ld in self.loads]
+
+
+@dataclass(frozen=True)
+class ShaftMass:
+    """A point mass on the upper shaft: m (kg) at radius r (m), angle (rad, from the shaft angle φ), axial z (m)."""
+
+    name: str
+    mass: float
+    radius: float
+    angle: float
+    z: float
+
+
+class MovingBody(NamedTuple):
+    """A moving body of a group in an analysis: its mass and inertia (SI, the run's values), its motion, and
+    whether an input turns it (a crank; a spatial crank of a group along the shaft turns about the shaft)."""
+
+    group: "Group"
+    name: str
+    mass: float
+    inertia: float
+    motion: object  # sewgen.engine.results.BodyMotion
+    driven: bool
+
+
+@dataclass
+class Shaft:
+    front: float  # z of the front bearing A (m)
+    rear: float  # z of the rear bearing B (m)
+    inertia: float  # of the core about its axis (kg m²)
+    masses: list = field(default_factory=list)  # ShaftMass: the core's mass, unbalance, counterweights
+    pulley: float = 0.0  # z of the pulley (m), where the drive torque enters
+    belt: tuple = (0.0, 0.0)  # the belt's pull on the pulley (N, frame x, y): T1 + T2 along the belt
+    friction: float = 0.0  # Coulomb coefficient of the two bearings (0: ideal, the seeds' assumption)
+    journal_radius: float = 0.0  # m, the journals' radius: the friction moment's arm
+
+
+@dataclass
+class Machine:
+    name: str
+    doc: str
+    speed: float  # rad/s
+    step: float  # rad
+    gravity: np.ndarray  # (gx, gy), m/s²
+    groups: list
+    shaft: Shaft
+    source: str = ""
+    stitch: object = None  # sewgen.machine.timing.Stitch: cloth, loop lift and release, timing rules ([stitch])
+    thread: object = None  # sewgen.machine.thread.ThreadPath: the needle thread's guides ([thread])
+
+    def shaft_angles(self, step: float | None = None) -> np.ndarray:
+        """One revolution every ``step`` (rad; default the model's): a step must divide 360° into 4 to
+        :data:`sewgen.units.MAX_POSITIONS` equal steps (it is never rounded to one that does)."""
+        h = self.step if step is None else step
+        n, problem = steps_per_turn(h)
+        if n is None:
+            raise ParameterError(self.name, "step", problem)
+        return (2 * math.pi / n) * np.arange(n)
+
+    def analyze(self, phi=None, speed=None, accel=0.0, progress=None) -> "MachineAnalysis":
+        """Kinematics, kinetostatics and the upper-shaft bearings at machine shaft angles ``phi`` (rad).
+
+        A group that cannot be solved raises its typed error (AssemblyError, SingularPositionError, ...) with
+        the model file (``file``) and the group's key (``key``, e.g. ``groups.take_up``) added to its fields and
+        its message.
+
+        Repeated analyses of one machine reuse its call plan (:mod:`sewgen.machine.plan`: everything that
+        depends on the machine alone, converted once, rebuilt when the machine is changed in place); every
+        analysis returns new arrays."""
+        fast = self._planned_analysis(phi, speed, accel, progress)
+        if fast is not None:
+            return fast
+        phi = self.shaft_angles() if phi is None else np.asarray(phi, dtype=float)
+        w = self.speed if speed is None else speed
+        if isinstance(w, str):
+            try:
+                w = to_si(w, "speed", "speed")
+            except UnitError as exc:
+                raise ParameterError(self.name, "speed", exc.problem) from None
+        g_mag, g_dir = gravity_polar(self.gravity)
+        out = {}
+        for k, g in enumerate(self.groups):
+            if progress:
+                progress(f"{g.name}: {len(phi)} positions", k, len(self.groups))
+            try:
+                out[g.name] = g.mechanism.kinetostatics(
+                    phi + g.phase, speed=w, accel=accel, loads=g.sweep_loads, gravity=g_mag, gravity_direction=g_dir,
+                    params=g.params or None, held=g.held or None, branch=g.branch or None)
+            except SewgenError as exc:
+                raise located(exc, self.source, f"groups.{g.name}") from None
+        analysis = MachineAnalysis(self, phi, out)
+        analysis.run = {"speed": w, "accel": accel}
+        return analysis
+
+    def _planned_analysis(self, phi, speed, accel, progress):
+        """analyze() through the machine's call plan, or None where the general path must run (per-position or
+        string speeds, a non-finite or non-1-D phi, a position that fails: that path raises the typed error)."""
+        if phi is None:
+            phi = self.shaft_angles()
+        elif type(phi) is not np.ndarray or phi.dtype != np.float64 or phi.ndim != 1:
+            return None
+        if not phi.shape[0] or not np.isfinite(phi).all():
+            return None
+        w, al = scalar(self.speed if speed is None else speed), scalar(accel)
+        if w is None or al is None:
+            return None
+        try:
+            plan = plan_of(self)
+        except (SewgenError, KeyError):  # the general path raises it, located
+            return None
+        phi = phi.copy()  # the analysis owns its angles
+        out = plan.run(phi, w, al, progress)
+        if out is None:
+            return None
+        groups, shaft = out
+        analysis = MachineAnalysis(self, phi, groups, shaft)
+        analysis.run = {"speed": self.speed if speed is None else speed, "accel": accel}
+        return analysis
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_plan", None)  # compiled pointers: made again where it is used
+        return state
+
+    def kinematics(self, phi, speed=None) -> dict:
+        """Group name -> Motion at machine shaft angles ``phi`` (rad), constant ``speed`` (sewgen.machine.timing)."""
+        w = self.speed if speed is None else speed
+        return {g.name: g.mechanism.solve(np.asarray(phi, dtype=float) + g.phase, speed=w, params=g.params or None,
+                                          held=g.held or None, branch=g.branch or None) for g in self.groups}
+
+
+class MachineAnalysis:
+    """Every group's results and the machine-level ones, indexed by the machine's shaft angle."""
+
+    def __init__(self, machine: Machine, phi: np.ndarray, groups: dict, shaft=None):
+        self.machine, self.phi, self.groups = machine, phi, groups
+        first = next(iter(groups.values()))
+        self.omega, self.alpha = first.motion.omega, first.motion.alpha
+        self.run = {"speed": self.omega, "accel": self.alpha}  # what analyze() was given
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported as a typed error
+            self._shaft(shaft)
+
+    def refined(self, step: float = math.radians(1.0)) -> "MachineAnalysis":
+        """The same analysis (speed, acceleration) every ``step`` (rad) over one revolution, when this one is a
+        whole revolution in coarser steps; else this one. Curves are drawn from it (a 5° polyline looks
+        jagged), while tables keep the step that was asked for."""
+        phi = self.phi
+        n = len(phi)
+        whole = n > 2 and np.allclose(np.diff(phi), 2 * math.pi / n) and abs(phi[0]) < 1e-12
+        if not whole or 2 * math.pi / n <= step * (1 + 1e-9):
+            return self
+        run = self.run
+        speed, accel = run["speed"], run["accel"]
+        if np.ndim(speed) or np.ndim(accel):  # per-position speeds cannot be resampled
+            return self
+        return self.machine.analyze(self.machine.shaft_angles(step), speed=speed, accel=accel)
+
+    def crank_loads(self):
+        """(name, z, (n, 2) force on the shaft core) for every driven body on the shaft. A group whose plane
+        contains the shaft (``frame = "along"``: its cranks are spatial cranks turning about its x axis) puts its
+        pivot's in-plane force (x: along the shaft, a thrust the radial bearings do not take; y) and the
+        out-of-plane force of the rods on its cranks (seed 003's ball-jointed rods, ``<rod>.fz``) on the shaft."""
+        return [load for g in self.machine.groups for load in self._crank_loads(g)]
+
+    def _crank_loads(self, g):
+        fa = self.groups[g.name]
+        out = []
+        for body, z in g.axial.items():
+            fx, fy = _xy(fa.frame_force(f"{body}.pivot"))
+            if g.along:
+                fz = -sum((fa.output(f"{r.name}.fz") for r in g.mechanism.description.force_joints
+                           if r.kind == "rod" and r.a == body), np.zeros(len(self.phi)))
+                fx, fy, _ = g.force_to_machine(fx, fy, fz)
+            out.append((f"{g.name}.{body}", z, np.column_stack([fx, fy])))
+        return out
+
+    def _group_force(self, g, force):
+        """A group's (n, 2) in-plane force in the machine's x, y (an "along" group's x is axial: dropped)."""
+        if not g.along:
+            return force
+        x, y, _ = g.force_to_machine(force[:, 0], force[:, 1])
+        return np.column_stack([np.zeros(len(y)) + x, y])
+
+    def _group_moment_z(self, g, force, moment):
+        """The z moment about the machine's origin of a group's force (n, 2) and its moment about the group's
+        origin (n,), both in the group's frame."""
+        if not g.along:
+            return moment
+        return g.origin[0] * force[:, 1]  # its own moment is about −x
+
+    def _along_moments(self, g):
+        """((n,) moment about its own z axis through its origin, (n,) about the machine's z) of the frame's
+        reactions on the parts of a group along the shaft, its process loads internal, from the kinematics:
+        Σ m (x (a_y − g_y) − y (a_x − g_x)) + I α over its bodies (its spatial cranks' I α is about the machine's
+        z). The group's own balance cannot give them: its spatial cranks have no moment row about its z, their
+        bearings carry that moment (and its rocker bearings the one about the machine's z)."""
+        gx, gy = 0.0, float(self.machine.gravity[1])  # gravity in the group's plane (the machine's x is its −z)
+        own, about_z = np.zeros(len(self.phi)), np.zeros(len(self.phi))
+        for b in self.moving_bodies(g):
+            c, spin = b.motion.com, b.inertia * b.motion.alpha
+            own = own + b.mass * (c.x * (c.ay - gy) - c.y * (c.ax - gx))
+            if b.driven:
+                about_z = about_z + spin
+            else:
+                own = own + spin
+        return own, about_z
+
+    def _shaft(self, shaft=None):
+        """The bearings' forces on the shaft (``front``, ``rear``), the driving ``torque``, the bearings' friction
+        torque and the core masses' motion (``core``: (mass, position, velocity, acceleration) each), by
+        d'Alembert in one C call (csrc/sg_runtime.c: sg_shaft). ``shaft``: its results from the machine's plan,
+        else the cranks' forces and the groups' shaft torques are gathered here (crank_loads: any machine)."""
+        if shaft is None:
+            call = ShaftCall(self.machine)
+            n = len(self.phi)
+            loads = self.crank_loads()
+            torques = [fa.torque("shaft") for fa in self.groups.values()]
+            src = np.concatenate([np.ravel(F) for _, _, F in loads] + [np.ravel(t) for t in torques], dtype=float)
+            forces, tq = call.layout([(2 * n * j, 2 * n * j + 1) for j in range(len(loads))], [2] * len(loads),
+                                     [1.0] * len(loads), [z - call.front for _, z, _ in loads],
+                                     [2 * n * len(loads) + n * k for k in range(len(torques))], [1] * len(torques))
+            rates = [np.ascontiguousarray(np.broadcast_to(np.asarray(v, dtype=float), (n,)))
+                     for v in (self.omega, self.alpha)]
+            shaft = call.run(np.ascontiguousarray(self.phi, dtype=float), *rates, src, forces, tq)
+        self.front, self.rear, self.torque, self.bearing_friction, self.core, finite = shaft
+        if finite:
+            return
+        for what, values in (("shaft.front_bearing", self.front), ("shaft.rear_bearing", self.rear),
+                             ("shaft", self.torque)):
+            if not np.isfinite(values).all():
+                from sewgen.report.outputs import NonFiniteOutputError
+
+                raise NonFiniteOutputError(f"{what}: the {'driving torque' if what == 'shaft' else 'bearing load'}",
+                                           values[~np.isfinite(values)].flat[0], self.machine.source or None)
+
+    # -- tables ----------------------------------------------------------------------------------------------
+    def to_dataframe(self, group: str | None = None):
+        """The machine's table (bearings, torques, shaking force and moments, powers; the report's machine.csv)
+        as a pandas DataFrame indexed by the machine's shaft angle ``phi [deg]``; with ``group``, that group's
+        kinematics and forces (its <group>.csv)."""
+        from sewgen.engine.frames import dataframe
+        from sewgen.report.outputs import group_table, machine_table
+
+        if group is not None:
+            if group not in self.groups:
+                raise KeyError(f"{self.machine.name} has no group {group!r}; groups: {', '.join(self.groups)}")
+            cols = group_table(self.groups[group], self.phi)
+        else:
+            cols = machine_table(self)
+        return dataframe({k: v for k, v in cols.items() if k != "phi [deg]"}, np.degrees(self.phi))
+
+    def to_xarray(self):
+        """The machine's table as an xarray Dataset over ``phi`` (deg) (xarray is optional)."""
+        from sewgen.engine.frames import dataset
+        from sewgen.report.outputs import machine_table
+
+        return dataset({k: v for k, v in machine_table(self).items() if k != "phi [deg]"}, np.degrees(self.phi),
+                       {"machine": self.machine.name})
+
+    def __repr__(self) -> str:
+        from sewgen.engine.frames import angle_span, speed_text
+
+        return (f"<MachineAnalysis of {self.machine.name}: {angle_span(self.phi)} at {speed_text(self.omega)}; "
+                f"groups {', '.join(self.groups)}>")
+
+    # -- results ---------------------------------------------------------------------------------------------
+    def bearing(self, which: str) -> np.ndarray:
+        """(n, 2) load the shaft puts on the frame at bearing "front" or "rear" (N)."""
+        if which not in ("front", "rear"):
+            raise KeyError(f"bearings are 'front' and 'rear', not {which!r}")
+        return -(self.front if which == "front" else self.rear)
+
+    @property
+    def drive_power(self) -> np.ndarray:
+        return self.torque * self.omega
+
+    @property
+    def frame_reaction(self) -> np.ndarray:
+        """(n, 2) frame on all moving parts = Σ m a_G − Σ m g − Σ loads − belt pull, the shaft core included (N):
+        the sum of every group's frame-joint reactions (the shaft's pivots excepted) and of the bearings'
+        (seed 000's base-support reactions 机座支承反力)."""
+        gv = self.machine.gravity
+        out = sum(self._group_force(g, self.groups[g.name].shaking_force) for g in self.machine.groups)
+        for sm, _pos, _vel, acc in self.core:
+            out = out + sm.mass * (acc - gv[None, :])
+        return out - np.asarray(self.machine.shaft.belt, dtype=float)[None, :]
+
+    def frame_moment(self, about=(0.0, 0.0)) -> np.ndarray:
+        """In-plane moment of the frame's reactions (the drive included) about ``about`` (m) (N m)."""
+        ox, oy = about
+        gv = self.machine.gravity
+        out = self.machine.shaft.inertia * self.alpha
+        for g in self.machine.groups:
+            fa = self.groups[g.name]
+            sf = fa.shaking_force
+            own = fa.shaking_moment + fa.moment_about[0] * sf[:, 1] - fa.moment_about[1] * sf[:, 0]
+            out = out + self._group_moment_z(g, sf, own)
+            if g.along:  # its cranks turn about the machine's z
+                out = out + self._along_moments(g)[1]
+        for sm, pos, _vel, acc in self.core:
+            f = sm.mass * (acc - gv[None, :])
+            out = out + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
+        sf = self.frame_reaction
+        return out - (ox * sf[:, 1] - oy * sf[:, 0])
+
+    def _group_loads(self, g: Group):
+        """(n, 2) resultant of one group's external loads and their moment about the origin (n,)."""
+        force, moment = np.zeros((len(self.phi), 2)), np.zeros(len(self.phi))
+        fa = self.groups[g.name]
+        ld = fa.run_settings.loads
+        if ld is None:
+            return force, moment
+        for slot in g.mechanism.description.loads:
+            k = slot.index
+            if slot.component == "torque":
+                moment += ld[:, k]
+                continue
+            pt = fa.motion.point(slot.name)
+            if slot.component == "fx":
+                force[:, 0] += ld[:, k]
+                moment -= pt.y * ld[:, k]
+            else:
+                force[:, 1] += ld[:, k]
+                moment += pt.x * ld[:, k]
+        return force, moment
+
+    def _process_loads(self):
+        """(n, 2) resultant of the external loads of every group and their moment about the origin (n,)."""
+        force, moment = np.zeros((len(self.phi), 2)), np.zeros(len(self.phi))
+        for g in self.machine.groups:
+            f, m = self._group_loads(g)
+            force, moment = force + self._group_force(g, f), moment + self._group_moment_z(g, f, m)
+        return force, moment
+
+    @property
+    def shaking_force(self) -> np.ndarray:
+        """(n, 2) the machine's shaking force on its base: Σ m a_G − Σ m g over every moving part (N). The process
+        loads (thread pull, presser foot, feed resistance) react on the machine's own frame, so they cancel
+        here; :attr:`frame_reaction` keeps them. The constant belt pull is left out too (the base carries it
+        besides, as it carries the frame's own weight)."""
+        return self.frame_reaction + self._process_loads()[0] + np.asarray(self.machine.shaft.belt)[None, :]
+
+    def shaking_moment(self, about=(0.0, 0.0)) -> np.ndarray:
+        """The machine's in-plane shaking moment on its base about ``about`` (m): Σ [(r_G − O) × m(a_G − g) + Iα]
+        with the drive counted as frame and the process loads internal (N m)."""
+        force, moment = self._process_loads()
+        force = force + np.asarray(self.machine.shaft.belt)[None, :]  # the belt pulls on the shaft axis
+        ox, oy = about
+        return self.frame_moment(about) + moment - (ox * force[:, 1] - oy * force[:, 0])
+
+    def shaking_moments(self, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """(n, 3) the machine's shaking moment on its base about the point ``about`` (x, y, z; m), about the x,
+        y and z axes (N m). Each group's shaking force (process loads internal) acts in its plane z = ``Group.z``
+        and each core mass at its own z, so the groups' axial offsets rock the base about x and y (seed 000
+        §二(二)1(6) treats the upper shaft in space for this reason): M = Σ (r − O) × F with F = (Fx, Fy, 0),
+        i.e. Mx = −Σ (z − z_O) Fy, My = Σ (z − z_O) Fx; Mz is :meth:`shaking_moment`."""
+        ox, oy, oz = about
+        gv = self.machine.gravity
+        out = np.zeros((len(self.phi), 3))
+        out[:, 2] = self.shaking_moment((ox, oy))
+        for g in self.machine.groups:
+            fa = self.groups[g.name]
+            lf, lm = self._group_loads(g)
+            force = fa.shaking_force + lf
+            if g.along:  # F = (0, fy, fx) at the group's origin with its own moment M about −x: (o − O) × F − M x
+                own = self._along_moments(g)[0]
+                dx, dy, dz = g.origin[0] - ox, g.origin[1] - oy, g.origin[2] - oz
+                out[:, 0] += dy * force[:, 0] - dz * force[:, 1] - own
+                out[:, 1] -= dx * force[:, 0]
+                continue
+            out[:, 0] -= (g.z - oz) * force[:, 1]
+            out[:, 1] += (g.z - oz) * force[:, 0]
+        for sm, _pos, _vel, acc in self.core:
+            force = sm.mass * (acc - gv[None, :])
+            out[:, 0] -= (sm.z - oz) * force[:, 1]
+            out[:, 1] += (sm.z - oz) * force[:, 0]
+        return out
+
+    def moving_bodies(self, group: Group | None = None):
+        """A :class:`MovingBody` for every moving body of every group (or of ``group``), with the run's parameter
+        values; a mass or inertia declared as an expression (not a parameter) is a ParameterError naming it."""
+        for g in self.machine.groups if group is None else [group]:
+            fa = self.groups[g.name]
+            values = dict(zip(g.mechanism.param_names, fa.run_settings.params))
+            driven = {b.name for b in g.mechanism.description.driven_bodies}
+            for body in g.mechanism.description.bodies:
+                if body.mass is None or body.inertia is None:
+                    raise ParameterError(g.mechanism.name, f"{body.name}.mass", "the machine's energy and shaking "
+                                         "need mass and inertia as parameters, not expressions")
+                yield MovingBody(g, body.name, values[body.mass], values[body.inertia], fa.motion.body(body.name),
+                                 body.name in driven)
+
+    def energy_rate(self) -> np.ndarray:
+        """d/dt(kinetic + potential energy) of every moving part, from the kinematics alone, plus the rate at which
+        the springs store energy (W)."""
+        gv = self.machine.gravity
+        rate = self.machine.shaft.inertia * self.omega * self.alpha
+        for b in self.moving_bodies():
+            com, bm = b.motion.com, b.motion
+            rate = rate + b.mass * (com.vx * com.ax + com.vy * com.ay - gv[0] * com.vx - gv[1] * com.vy)
+            rate = rate + b.inertia * bm.omega * bm.alpha
+        for fa in self.groups.values():
+            rate = rate + fa.elastic_power  # the springs' stored energy
+        for sm, _pos, vel, acc in self.core:
+            rate = rate + sm.mass * np.sum(vel * (acc - gv[None, :]), axis=1)
+        return rate
+
+    @property
+    def load_power(self) -> np.ndarray:
+        """Power of the process loads, dampers and friction (W): the groups' and the shaft bearings' friction."""
+        return sum(fa.load_power for fa in self.groups.values()) - self.bearing_friction * self.omega
+
+    @property
+    def friction_power(self) -> np.ndarray:
+        """Power dissipated by Coulomb friction (W, ≥ 0): every group's joints and the upper shaft's bearings."""
+        return sum(fa.friction_power for fa in self.groups.values()) + self.bearing_friction * self.omega
+
+    def no_load_torque(self) -> float:
+        """Mean driving torque over a turn with the process loads (thread, presser foot, cloth) taken off: at
+        constant speed the inertia and gravity terms average out, so it is the torque the joints' and bearings'
+        friction costs — seed 000's "no-load driving torque at rated speed" (空载驱动力矩, at the analysis'
+        speed). Zero without friction. Needs an analysis of a whole turn at constant speed."""
+        m = self.machine
+        if not any(g.loads for g in m.groups):
+            return float(np.mean(self.torque))
+        unloaded = replace(m, groups=[replace(g, loads=[]) for g in m.groups])
+        return float(np.mean(unloaded.analyze(self.phi, speed=self.run["speed"], accel=self.run["accel"]).torque))
+
+    @property
+    def power_balance_residual(self) -> float:
+        """max |P_drive + P_loads − dE/dt| over the sweep, relative to the largest |P_drive|, |dE/dt|."""
+        rate = self.energy_rate()
+        res = self.drive_power + self.load_power - rate
+        scale = max(np.abs(self.drive_power).max(), np.abs(rate).max(), 1e-300)
+        return float(np.abs(res).max() / scale)
+
+
+def _xy(r) -> tuple:
+    return (r.fx, r.fy)
+
+
+# -- model files -----------------------------------------------------------------------------------------------
+
+MACHINE = {
+    "name": Field("text", doc="the machine's name"),
+    "description": Field("text", False),
+    "speed": Field("speed", doc="upper-shaft speed, e.g. \"1000 rpm\"", sign="positive"),
+    "step": Field("angle", doc="shaft-angle step, e.g. \"5 deg\" (72 positions)", sign="positive"),
+    "gravity": Field("acceleration", False),
+    "gravity_direction": Field("angle", False),
+}
+SHAFT = {
+    "front_bearing": Field("length", doc="z of the front bearing"),
+    "rear_bearing": Field("length", doc="z of the rear bearing"),
+    "pulley": Field("length", False),
+    "inertia": Field("inertia", doc="moment of inertia of the shaft core about its axis", sign="nonnegative"),
+    "mass": Field("mass", doc="mass of the shaft core", sign="nonnegative"),
+    "mass_z": Field("length", doc="z of the core's centre of mass"),
+    "masses": Field("list", False),
+    "counterweights": Field("list", False, "planes where `sewgen balance machine` may put counterweights"),
+    "belt_pull": Field("force", False, "the belt's radial pull on the pulley, T1 + T2", sign="nonnegative"),
+    "belt_direction": Field("angle", False, "direction of the belt pull in the frame (from +x)"),
+    "bearing_friction": Field("dimensionless", False, "Coulomb friction coefficient of the front and rear "
+                              "bearings (default 0: ideal)", sign="nonnegative"),
+    "journal_radius": Field("length", False, "radius of the shaft's journals in the bearings (friction arm)",
+                            sign="nonnegative"),
+}
+SHAFT_MASS = {
+    "name": Field("text"),
+    "mass": Field("mass", sign="nonnegative"),
+    "radius": Field("length", sign="nonnegative"),
+    "angle": Field("angle"),
+    "z": Field("length"),
+}
+GROUP = {
+    "mechanism": Field("text", doc="a catalog mechanism's name, or the path of a declaration file (.py with a "
+                               "declare()), relative to the model file"),
+    "description": Field("text", False),
+    "phase": Field("angle", doc="group shaft angle minus machine shaft angle"),
+    "axial": Field("table", doc="z on the upper shaft of every driven body, e.g. { crank = \"-20 mm\" }"),
+    "params": Field("table", False),
+    "held": Field("table", False),
+    "stitch": Field("length", False, "stitch length the stitch regulator is set for (feed groups)"),
+    "plane": Field("length", False, "z of the group's plane on the machine (default: mean z of its driven bodies)"),
+    "frame": Field("text", False, "\"across\" (default: the group's plane is across the shaft) or \"along\" (its "
+                   "plane contains the shaft: its x along the shaft, y up; its cranks are spatial cranks about x)"),
+    "origin": Field("list", False, "\"along\" groups: the group's origin in the machine frame, [x, y, z] lengths"),
+    "branch": Field("table", False),
+    "loads": Field("list", False),
+}
+LOAD = {
+    "at": Field("text"),
+    "fx": Field("force", False),
+    "fy": Field("force", False),
+    "torque": Field("torque", False),
+    "from": Field("angle", False),
+    "to": Field("angle", False),
+    "name": Field("text", False),
+}
+
+
+def load_machine(name_or_path, doc: dict | None = None) -> Machine:
+    """A machine from a model file (or a built-in model such as "jb1-3"), checked and converted to SI. ``doc``:
+    the file's parsed TOML, changed (a design study's variant, sewgen.study.machine_designs); relative paths in
+    it still resolve beside the file."""
+    path = resolve(name_or_path)
+    rd = Reader(path)
+    doc = rd.table(load_toml(path) if doc is None else doc, "")
+    rd.check_keys(doc, "", {"machine": Field("table"), "shaft": Field("table"), "groups": Field("table"),
+                            "stitch": Field("table", False), "thread": Field("table", False)})
+    mach = rd.read(rd.table(doc["machine"], "machine"), "machine", MACHINE)
+    _check_name(rd, mach["name"])
+    shaft_doc = rd.read(rd.table(doc["shaft"], "shaft"), "shaft", SHAFT)
+    masses = [ShaftMass("core", shaft_doc["mass"], 0.0, 0.0, shaft_doc["mass_z"])]
+    for i, item in enumerate(shaft_doc.get("masses", [])):
+        key = f"shaft.masses[{i}]"
+        sm = rd.read(rd.table(item, key), key, SHAFT_MASS)
+        masses.append(ShaftMass(sm["name"], sm["mass"], sm["radius"], sm["angle"], sm["z"]))
+    pull, pull_dir = shaft_doc.get("belt_pull", 0.0), shaft_doc.get("belt_direction", -math.pi / 2)
+    shaft = Shaft(shaft_doc["front_bearing"], shaft_doc["rear_bearing"], shaft_doc["inertia"], masses,
+                  shaft_doc.get("pulley", shaft_doc["rear_bearing"]),
+                  (pull * math.cos(pull_dir), pull * math.sin(pull_dir)),
+                  shaft_doc.get("bearing_friction", 0.0), shaft_doc.get("journal_radius", 0.0))
+    if shaft.friction and not shaft.journal_radius:
+        rd.fail("shaft.journal_radius", "bearing friction needs the journals' radius (its arm), e.g. \"6 mm\"")
+    if not shaft.rear > shaft.front:
+        rd.fail("shaft.rear_bearing", "must lie behind the front bearing (larger z)")
+    groups = []
+    for name, g in rd.table(doc["groups"], "groups").items():
+        _check_group_name(rd, name)
+        try:
+            groups.append(_group(rd, name, rd.table(g, f"groups.{name}")))
+        except ModelFileError:
+            raise
+        except SewgenError as exc:  # the group's geometry: cannot assemble at the stitch's setting, ...
+            raise located(exc, path, f"groups.{name}") from None
+    if not groups:
+        rd.fail("groups", "a machine needs at least one group")
+    g_mag = mach.get("gravity", 9.80665)
+    g_dir = mach.get("gravity_direction", -math.pi / 2)
+    gv = np.array([g_mag * math.cos(g_dir), g_mag * math.sin(g_dir)])
+    gv[np.abs(gv) < 1e-15 * max(g_mag, 1e-300)] = 0.0
+    m = Machine(mach["name"], mach.get("description", ""), mach["speed"], mach["step"], gv, groups, shaft, str(path))
+    if "stitch" in doc:  # stitch formation and thread control (sewgen.machine.timing, sewgen.machine.thread)
+        from sewgen.machine.timing import read_stitch
+
+        m.stitch = read_stitch(rd, doc["stitch"])
+    if "thread" in doc:
+        from sewgen.machine.thread import read_thread
+
+        m.thread = read_thread(rd, doc["thread"])
+    try:
+        m.shaft_angles()
+    except ParameterError as exc:
+        rd.fail("machine.step", exc.problem + " (an angle in deg or rad)")
+    return m
+
+
+def _check_name(rd: Reader, name: str) -> None:
+    """The machine's name is the default output folder: a plain name, never a path."""
+    bad = ("/" in name or "\\" in name or ".." in name or not name.strip() or name != name.strip()
+           or name.startswith(".") or any(ord(c) < 32 or ord(c) == 127 for c in name))
+    if bad:
+        rd.fail("machine.name", f"must be a plain name (it names the default output folder): no /, \\, .., "
+                                f"leading dot, control characters or surrounding spaces; got {name!r}")
+
+
+def _check_group_name(rd: Reader, name: str) -> None:
+    """A group's name names its table (``<group>.csv``) and its entries in summary.json."""
+    if not _IDENTIFIER.fullmatch(name):
+        rd.fail(f"groups.{name}", "a group name must be an identifier (letters, digits and _, not starting with a "
+                                  "digit)")
+    if name in RESERVED_GROUP_NAMES:
+        rd.fail(f"groups.{name}", f"{name!r} is reserved (the machine's own outputs: "
+                                  f"{', '.join(RESERVED_GROUP_NAMES)}); rename the group")
+
+
+def located(exc: SewgenError, path, key: str) -> SewgenError:
+    """``exc`` (same type, same fields) with the model file and key added: its message starts "file: key: "."""
+    if not path:
+        return exc
+    out = copy.copy(exc)
+    out.args = (f"{path}: {key}: {exc}",) + tuple(exc.args[1:])
+    out.file, out.key = str(path), key
+    return out
+
+
+def _group(rd: Reader, name: str, data: dict) -> Group:
+    key = f"groups.{name}"
+    g = rd.read(data, key, GROUP)
+    mech = _group_mechanism(rd, f"{key}.mechanism", g["mechanism"])
+    desc = mech.description
+    kinds = {p.name: p.kind for p in desc.params}
+    params = {}
+    for pname, value in g.get("params", {}).items():
+        if pname not in kinds:
+            rd.fail(f"{key}.params.{pname}", f"{mech.name} has no such parameter; it has: {', '.join(kinds)}")
+        params[pname] = rd.quantity(value, kinds[pname], f"{key}.params.{pname}")
+    try:
+        mech.param_vector(params)
+    except ParameterError as exc:
+        rd.fail(f"{key}.params.{exc.parameter}", exc.problem)
+    held = {}
+    for hname, value in g.get("held", {}).items():
+        if hname not in mech.held_names:
+            rd.fail(f"{key}.held.{hname}", f"{mech.name} has no such held input; it has: "
+                    f"{', '.join(mech.held_names) or 'none'}")
+        held[hname] = rd.quantity(value, "angle", f"{key}.held.{hname}")
+    branch = {}
+    for bname, value in g.get("branch", {}).items():
+        if bname not in mech.branch_names or value not in (1, -1) or isinstance(value, bool):
+            rd.fail(f"{key}.branch.{bname}", f"must be a branch joint of {mech.name} "
+                    f"({', '.join(mech.branch_names) or 'none'}) set to 1 or -1")
+        branch[bname] = value
+    driven = [b.name for b in desc.driven_bodies]
+    axial = {}
+    for bname, value in g["axial"].items():
+        if bname not in driven:
+            rd.fail(f"{key}.axial.{bname}", f"not a body the shaft drives; {mech.name}'s are: {', '.join(driven)}")
+        axial[bname] = rd.quantity(value, "length", f"{key}.axial.{bname}")
+    for bname in driven:
+        if bname not in axial:
+            rd.fail(f"{key}.axial.{bname}", "missing (z of this driven body on the upper shaft: a length in m, "
+                                            "e.g. \"20 mm\")")
+    loads = []
+    for i, item in enumerate(g.get("loads", [])):
+        lk = f"{key}.loads[{i}]"
+        ld = rd.read(rd.table(item, lk), lk, LOAD)
+        if ("from" in ld) != ("to" in ld):
+            rd.fail(lk, "give both 'from' and 'to' for a window, or neither")
+        loads.append(Load(ld["at"], ld.get("fx", 0.0), ld.get("fy", 0.0), ld.get("torque", 0.0),
+                          (ld["from"], ld["to"]) if "from" in ld else None, ld.get("name", "")))
+    frame = g.get("frame", "across")
+    if frame not in ("across", "along"):
+        rd.fail(f"{key}.frame", f"must be \"across\" or \"along\", got {frame!r}")
+    if ("origin" in g) != (frame == "along"):
+        rd.fail(f"{key}.origin", "give the origin (the group's origin in the machine frame, [x, y, z]) for a group "
+                                 "with frame = \"along\", and only there")
+    origin = (0.0, 0.0, 0.0)
+    if "origin" in g:
+        if not isinstance(g["origin"], list) or len(g["origin"]) != 3:
+            rd.fail(f"{key}.origin", "must be three lengths [x, y, z]")
+        origin = tuple(rd.quantity(v, "length", f"{key}.origin[{i}]") for i, v in enumerate(g["origin"]))
+    if frame == "along" and "plane" in g:
+        rd.fail(f"{key}.plane", "an \"along\" group's plane is x = origin x: give the origin, not the plane")
+    group = Group(name, mech, g["phase"], axial, params, held, branch, loads, g.get("stitch"), g.get("plane"),
+                  frame, origin)
+    if group.stitch is not None:
+        regulator = desc.role_name(STITCH_REGULATOR)
+        if regulator is None:
+            rd.fail(f"{key}.stitch", f"{mech.name} has no held input with the role {STITCH_REGULATOR!r}")
+        if regulator in held:
+            rd.fail(f"{key}.stitch", f"give the stitch length or held.{regulator}, not both")
+        try:
+            group.held[regulator] = regulator_angle(mech, group.stitch, params=params or None)
+        except ParameterError as exc:
+            rd.fail(f"{key}.stitch", exc.problem)
+    try:  # every load names a point or body of the mechanism
+        load_matrix(mech, loads, np.zeros(1))
+    except ParameterError as exc:
+        rd.fail(f"{key}.loads", f"{exc.parameter}: {exc.problem}")
+    return group
+
+
+def _group_mechanism(rd: Reader, key: str, text: str):
+    """A group's mechanism: a catalog name, or a declaration file (.py with ``declare()``) relative to the model
+    file, derived and compiled on first use and then loaded from the cache (:func:`sewgen.load`)."""
+    from sewgen import catalog, load
+
+    if text in catalog():
+        return catalog_mechanism(text)
+    path = Path(text).expanduser()
+    if not path.is_absolute():
+        path = rd.path.parent / path
+    if path.suffix != ".py":
+        rd.fail(key, f"{text!r} is neither a catalog mechanism ({', '.join(catalog())}) nor a declaration file "
+                     "(.py with a declare() function)")
+    if not path.is_file():
+        rd.fail(key, f"no declaration file {path}")
+    try:
+        return load(path)
+    except BuildError as exc:
+        rd.fail(key, exc.problem)
+    except Exception as exc:  # a syntax error in the declaration, or its declare() raised
+        problem = declaration_problem(exc, path)
+        if problem is None:
+            raise
+        rd.fail(key, problem)
+
+
+__all__ = ["Group", "Machine", "MachineAnalysis", "ModelFileError", "Shaft", "ShaftMass", "load_machine"]

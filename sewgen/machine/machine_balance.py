@@ -1,0 +1,418 @@
+"""Whole-machine balancing: seed 000 part 2's three methods on the upper shaft's counterweight planes.
+
+Seed 000 part 1 §四 optimises the two upper-shaft bearing reactions; its part 2 compares three balancing methods
+(only its table of contents survives: 一 the first method, 二 the whole machine's balancing theory, 三 a numerical
+optimisation with the two bearing reactions as the objective, 四 an evaluation of the effect). Here:
+
+* **separate** (method 1, seed 002 generalised): each group balanced by itself by a counterweight on its own
+  plane, minimising w₁·max|F| + w₂·mean|F| of that group's dynamic shaking force (seed 002's objective; its
+  weights 0.1, 0.9 by default) — the rotating masses are balanced fully and the reciprocating ones by the
+  factor the optimum chooses;
+* **harmonic** (method 2): the machine's shaking force and its moments about x and y as harmonic orders of
+  φ; the counterweights cancel the forward-rotating first order of both (a counterweight turning with the shaft
+  makes nothing else; the backward-rotating first order of a reciprocating mass needs a counter-rotating shaft
+  and is reported as residual);
+* **bearings** (method 3): minimise the peak (or the RMS) over a revolution of the front and rear bearing loads,
+  optionally plus a weight times the shaking force, over the counterweights' m·r vectors within their bounds.
+
+Every quantity the methods look at is affine in the counterweights' m·r vectors u_k (a point mass m at radius r
+and angle α from the crank direction φ puts m r ω² e(φ + α) on the shaft at its z): the influence of each u_k is
+taken from the machine analysis itself (a test mass at α = 0 and at α = 180° differenced: its weight cancels),
+so the linear model and :meth:`MachineAnalysis.bearing` agree exactly. The peak problem is a second-order-cone
+program and the RMS one a constrained least-squares problem: both are solved exactly with CVXPY (Clarabel),
+whose primal and dual objectives give the optimality gap. The optimum leaves out the counterweights' own weight
+(constant, a fraction of a newton); the "after" figures come from analysing the balanced machine, weight
+included — the very numbers ``sewgen analyze`` gives for the written model file.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from sewgen.errors import SewgenError
+from sewgen.machine.assembly import Machine, MachineAnalysis, ShaftMass
+from sewgen.machine.modelfile import Field, Reader, load_toml
+
+METHODS = ("separate", "harmonic", "bearings")
+OBJECTIVES = ("peak", "rms")
+DEFAULT_WEIGHTS = (0.1, 0.9)  # seed 002: w1·max|F| + w2·mean|F|
+
+PLANE = {
+    "name": Field("text", doc="the counterweight's name"),
+    "z": Field("length", doc="axial position on the upper shaft"),
+    "radius": Field("length", doc="radius of the counterweight's centre of mass"),
+    "max_mass": Field("mass", doc="the most mass the space there allows"),
+    "group": Field("text", False, "the group this plane balances by itself (method separate)"),
+}
+
+
+class BalancingError(SewgenError, ValueError):
+    """A balancing problem that cannot be set up or solved (names the machine and what is wrong)."""
+
+
+@dataclass(frozen=True)
+class Plane:
+    """Where a counterweight may go: axial ``z`` (m), its centre of mass at ``radius`` (m), at most ``max_mass``
+    (kg) — so |m·r| ≤ max_mass · radius; ``group`` ties the plane to a group for method 1."""
+
+    name: str
+    z: float
+    radius: float
+    max_mass: float
+    group: str | None = None
+
+    @property
+    def max_mr(self) -> float:
+        return self.max_mass * self.radius
+
+
+@dataclass(frozen=True)
+class Counterweight:
+    """A counterweight chosen on a plane: m·r (kg·m) at ``angle`` (rad, from the crank direction φ)."""
+
+    plane: Plane
+    mr: float
+    angle: float
+
+    @property
+    def mass(self) -> float:
+        return self.mr / self.plane.radius
+
+    def shaft_mass(self) -> ShaftMass:
+        return ShaftMass(self.plane.name, self.mass, self.plane.radius, self.angle % (2 * math.pi), self.plane.z)
+
+    def as_dict(self) -> dict:
+        return {"name": self.plane.name, "z": self.plane.z, "mr": self.mr, "angle": self.angle % (2 * math.pi),
+                "mass": self.mass, "radius": self.plane.radius}
+
+
+def planes_of(machine: Machine) -> list[Plane]:
+    """The counterweight planes of a machine's model file (``[[shaft.counterweights]]``)."""
+    rd = Reader(machine.source)
+    doc = load_toml(machine.source)
+    items = doc.get("shaft", {}).get("counterweights", [])
+    if not isinstance(items, list):
+        rd.fail("shaft.counterweights", "must be an array of tables ([[shaft.counterweights]])")
+    out = []
+    groups = {g.name for g in machine.groups}
+    for i, item in enumerate(items):
+        key = f"shaft.counterweights[{i}]"
+        p = rd.read(rd.table(item, key), key, PLANE)
+        if not p["radius"] > 0 or not p["max_mass"] >= 0:
+            rd.fail(key, "radius must be positive and max_mass not negative")
+        if p.get("group") is not None and p["group"] not in groups:
+            rd.fail(f"{key}.group", f"no group {p['group']!r}; groups: {', '.join(sorted(groups))}")
+        out.append(Plane(p["name"], p["z"], p["radius"], p["max_mass"], p.get("group")))
+    if len({p.name for p in out}) != len(out):
+        rd.fail("shaft.counterweights", "counterweight names must differ")
+    return out
+
+
+# -- the machine with counterweights, and what they change --------------------------------------------------------
+
+def with_counterweights(machine: Machine, counterweights) -> Machine:
+    """A copy of ``machine`` with the counterweights added to the shaft's point masses."""
+    shaft = replace(machine.shaft, masses=list(machine.shaft.masses) + [c.shaft_mass() for c in counterweights])
+    return replace(machine, shaft=shaft)
+
+
+def reanalyse(base: MachineAnalysis, counterweights) -> MachineAnalysis:
+    """The machine analysis with the counterweights added, reusing the group sweeps (they do not change)."""
+    return MachineAnalysis(with_counterweights(base.machine, counterweights), base.phi, base.groups)
+
+
+def _quantities(a: MachineAnalysis) -> dict:
+    """The (n, 2) quantities the methods shape: bearing loads, shaking force, shaking moments (x, y) about the
+    front bearing's point on the axis."""
+    z0 = a.machine.shaft.front
+    moments = a.shaking_moments((0.0, 0.0, z0))
+    return {"front": a.bearing("front"), "rear": a.bearing("rear"), "force": a.shaking_force,
+            "moment": moments[:, :2]}
+
+
+@dataclass
+class LinearModel:
+    """Every quantity q(u) = q0 + Σ_k G_k u_k, u_k = m·r of plane k as a vector (kg·m) in the crank frame."""
+
+    planes: list
+    base: dict  # name -> (n, 2)
+    gain: dict  # name -> (n, 2, 2K): columns (u_0x, u_0y, u_1x, ...)
+
+    def at(self, u: np.ndarray) -> dict:
+        return {k: self.base[k] + self.gain[k] @ u for k in self.base}
+
+
+def linear_model(base: MachineAnalysis, planes: list[Plane]) -> LinearModel:
+    """The exact affine model of :func:`_quantities` in the counterweights (from the analysis: see the module)."""
+    if not planes:
+        raise BalancingError(f"{base.machine.name}: the model file has no [[shaft.counterweights]] planes")
+    q0 = _quantities(base)
+    gain = {k: np.zeros(v.shape + (2 * len(planes),)) for k, v in q0.items()}
+    test = 1e-3  # kg·m of the test mass: any size gives the same columns (affine)
+    for k, plane in enumerate(planes):
+        for j, angle in enumerate((0.0, math.pi / 2)):
+            plus = _quantities(reanalyse(base, [Counterweight(plane, test, angle)]))
+            minus = _quantities(reanalyse(base, [Counterweight(plane, test, angle + math.pi)]))
+            for name in q0:
+                gain[name][:, :, 2 * k + j] = (plus[name] - minus[name]) / (2 * test)
+    return LinearModel(planes, q0, gain)
+
+
+def counterweights_of(planes, u, clip: bool = False) -> list[Counterweight]:
+    """The counterweights of the m·r vectors ``u`` (2 per plane); ``clip``: brought inside the planes' bounds
+    (an interior-point solve ends within its tolerance, ~1e-5, of an active bound, on either side)."""
+    u = np.asarray(u, dtype=float).reshape(-1, 2)
+    out = []
+    for p, v in zip(planes, u):
+        mr = float(math.hypot(*v))
+        out.append(Counterweight(p, min(mr, p.max_mr) if clip else mr, float(math.atan2(v[1], v[0]))))
+    return out
+
+
+# -- the three methods ---------------------------------------------------------------------------------------------
+
+@dataclass
+class Solution:
+    counterweights: list
+    objective: float | None
+    gap: float | None  # primal − dual objective of the convex solve (None where no solver ran)
+    status: str
+
+
+def _solve(problem, machine: str):
+    import cvxpy as cp
+
+    try:
+        problem.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError as exc:
+        raise BalancingError(f"{machine}: the convex solver failed ({exc})") from None
+    if problem.status not in ("optimal", "optimal_inaccurate"):
+        raise BalancingError(f"{machine}: the balancing problem is {problem.status}")
+    return float(problem.value), _gap(problem), problem.status
+
+
+def _gap(problem) -> float | None:
+    """Primal minus dual objective of the conic problem Clarabel solves (the optimality certificate): CVXPY keeps
+    Clarabel's dual objective to itself, so the same conic data are solved once more directly."""
+    import cvxpy as cp
+
+    try:
+        data, chain, _inverse = problem.get_problem_data(cp.CLARABEL)
+        raw = chain.solve_via_data(problem, data, False, False, {})
+        return float(raw.obj_val - raw.obj_val_dual)
+    except Exception:  # CVXPY's internals moved: no certificate rather than no answer
+        return None
+
+
+def _bounds(cp, u, planes):
+    return [cp.norm(u[2 * k:2 * k + 2]) <= p.max_mr for k, p in enumerate(planes)]
+
+
+def bearings(model: LinearModel, objective: str = "peak", shaking_weight: float = 0.0, machine: str = "") -> Solution:
+    """Method 3: min over u of max_i max(|R_A,i|, |R_B,i|) (peak) or √(mean_i (|R_A,i|² + |R_B,i|²)) (rms), plus
+    ``shaking_weight`` × the same measure of the dynamic shaking force, with |u_k| ≤ max_mr_k."""
+    import cvxpy as cp
+
+    if objective not in OBJECTIVES:
+        raise BalancingError(f"{machine}: objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
+    u = cp.Variable(2 * len(model.planes))
+    terms = ["front", "rear"] + (["force"] if shaking_weight else [])
+    rows = {}
+    for k in terms:
+        g, b = model.gain[k], model.base[k]
+        if k == "force":
+            b = b - b.mean(axis=0)  # the dynamic part: the static weight is not balanced by counterweights
+        rows[k] = (np.concatenate([g[:, 0, :], g[:, 1, :]]), np.concatenate([b[:, 0], b[:, 1]]))
+    n = len(next(iter(model.base.values())))
+
+    def vec(k):
+        a, c = rows[k]
+        return a @ u + c  # x components then y components
+
+    if objective == "peak":
+        t = cp.Variable()
+        cons = _bounds(cp, u, model.planes)
+        for k in ("front", "rear"):
+            v = vec(k)
+            cons.append(cp.norm(cp.vstack([v[:n], v[n:]]), axis=0) <= t)
+        cost = t
+        if shaking_weight:
+            s = cp.Variable()
+            v = vec("force")
+            cons.append(cp.norm(cp.vstack([v[:n], v[n:]]), axis=0) <= s)
+            cost = t + shaking_weight * s
+    else:
+        cost = cp.norm(cp.hstack([vec("front"), vec("rear")])) / math.sqrt(n)
+        if shaking_weight:
+            cost = cost + shaking_weight * cp.norm(vec("force")) / math.sqrt(n)
+        cons = _bounds(cp, u, model.planes)
+    value, gap, status = _solve(cp.Problem(cp.Minimize(cost), cons), machine)
+    return Solution(counterweights_of(model.planes, u.value, clip=True), value, gap, status)
+
+
+FIRST_ORDER = ("forward", "x", "y")
+
+
+def harmonic(model: LinearModel, moment_length: float | None = None, machine: str = "",
+             first_order: str = "forward") -> Solution:
+    """Method 2: the first harmonic order of the shaking force and of its moments about x and y (about the front
+    bearing's point), with the moments weighed against the force over ``moment_length`` (default 1 m).
+
+    ``first_order="forward"``: cancel the forward-rotating first order (in complex form F_x + i F_y = Σ c_n e^{inφ}
+    a counterweight turning with the shaft changes only c₁): what rotating masses can cancel, the backward part
+    (half a reciprocating mass's first order) stays. ``"x"`` or ``"y"``: cancel the first order along that frame
+    axis completely — the textbook primary balance along a vertical (y) or horizontal (x) line of stroke — which
+    moves as much into the other axis. With two planes at different z the solution is unique; with more, the
+    least m·r (least squares)."""
+    if first_order not in FIRST_ORDER:
+        raise BalancingError(f"{machine}: first order must be one of {', '.join(FIRST_ORDER)}, got {first_order!r}")
+    n = len(model.base["force"])
+    span = moment_length or 1.0
+    kernel = np.exp(-1j * 2 * np.pi * np.arange(n) / n) / n
+
+    def coefficient(values):  # first-order Fourier coefficient along the sweep (axis 0)
+        return np.tensordot(kernel, values, axes=(0, 0))
+
+    rows, rhs = [], []
+    for name, scale in (("force", 1.0), ("moment", 1.0 / span)):
+        g, b = model.gain[name] * scale, model.base[name] * scale  # (n, 2, 2K), (n, 2)
+        if first_order == "forward":
+            cg, cb = coefficient(g[:, 0] + 1j * g[:, 1]), coefficient(b[:, 0] + 1j * b[:, 1])
+        else:  # the axis of the force; the moment about the perpendicular axis goes with it
+            axis = {"force": "xy".index(first_order), "moment": "yx".index(first_order)}[name]
+            cg, cb = coefficient(g[:, axis]), coefficient(b[:, axis])
+        rows += [cg.real, cg.imag]
+        rhs += [-cb.real, -cb.imag]
+    a, b = np.array(rows), np.array(rhs)
+    u, *_ = np.linalg.lstsq(a, b, rcond=None)
+    cws = counterweights_of(model.planes, u)
+    over = [c.plane.name for c in cws if c.mr > c.plane.max_mr * (1 + 1e-12)]
+    if over:
+        need = ", ".join(f"{c.plane.name}: {c.mr * 1e6:.0f} > {c.plane.max_mr * 1e6:.0f} g·mm" for c in cws
+                         if c.plane.name in over)
+        raise BalancingError(f"{machine}: harmonic balance needs more m·r than its planes allow ({need})")
+    return Solution(cws, float(np.linalg.norm(a @ u - b)), None, f"solved (least squares, first order {first_order})")
+
+
+def separate(base: MachineAnalysis, planes: list[Plane], weights=DEFAULT_WEIGHTS, machine: str = "") -> Solution:
+    """Method 1 (seed 002 for each group): the plane tied to a group (``group = ...``) gets the counterweight that
+    minimises w₁·max|F_g + ω²-term| + w₂·mean|…| of that group's dynamic shaking force by itself."""
+    import cvxpy as cp
+
+    w1, w2 = weights
+    out, total, gaps = [], 0.0, []
+    tied = [p for p in planes if p.group]
+    if not tied:
+        raise BalancingError(f"{machine}: method separate needs planes tied to groups (group = \"...\")")
+    for plane in tied:
+        force = base.groups[plane.group].shaking_force
+        force = force - force.mean(axis=0)
+        model = linear_model(_lone(base, plane.group), [plane])
+        g = model.gain["force"]
+        u = cp.Variable(2)
+        v = [g[:, 0, :] @ u + force[:, 0], g[:, 1, :] @ u + force[:, 1]]
+        mag = cp.norm(cp.vstack(v), axis=0)
+        cost = w1 * cp.max(mag) + w2 * cp.sum(mag) / len(force)
+        value, gap, _ = _solve(cp.Problem(cp.Minimize(cost), [cp.norm(u) <= plane.max_mr]), machine)
+        out += counterweights_of([plane], u.value, clip=True)
+        total += value
+        gaps.append(gap)
+    return Solution(out, total, None if None in gaps else float(sum(gaps)), "optimal")
+
+
+def _lone(base: MachineAnalysis, group: str) -> MachineAnalysis:
+    """The machine reduced to one group (its shaft core kept) for that group's own balance."""
+    m = base.machine
+    lone = replace(m, groups=[g for g in m.groups if g.name == group])
+    return MachineAnalysis(lone, base.phi, {group: base.groups[group]})
+
+
+# -- the evaluation (seed 000 part 2 §四) -----------------------------------------------------------------------
+
+def orders(values: np.ndarray, k: int = 3) -> list[float]:
+    """Amplitudes of harmonic orders 1..k of an (n, 2) vector quantity over a revolution: the peak of each order's
+    ellipse, |c_n| + |c_−n| of x + i y."""
+    n = len(values)
+    z = values[:, 0] + 1j * values[:, 1]
+    c = np.fft.fft(z) / n
+    return [float(abs(c[j]) + abs(c[-j])) for j in range(1, k + 1)]
+
+
+def metrics(a: MachineAnalysis) -> dict:
+    """Peak and RMS of both bearing loads, the dynamic shaking force (static weight removed) and its orders, the
+    three shaking moments (about the front bearing's point on the axis), the driving torque (SI)."""
+    q = _quantities(a)
+    mag = {k: np.hypot(*q[k].T) for k in ("front", "rear")}
+    force = q["force"] - q["force"].mean(axis=0)
+    fmag = np.hypot(*force.T)
+    moments = a.shaking_moments((0.0, 0.0, a.machine.shaft.front))
+    return {
+        "bearing_front_peak": float(mag["front"].max()), "bearing_rear_peak": float(mag["rear"].max()),
+        "bearing_front_rms": float(np.sqrt(np.mean(mag["front"] ** 2))),
+        "bearing_rear_rms": float(np.sqrt(np.mean(mag["rear"] ** 2))),
+        "shaking_force_peak": float(fmag.max()), "shaking_force_rms": float(np.sqrt(np.mean(fmag**2))),
+        "static_weight": [float(v) for v in q["force"].mean(axis=0)],
+        "shaking_moment_x_peak": float(np.abs(moments[:, 0]).max()),
+        "shaking_moment_y_peak": float(np.abs(moments[:, 1]).max()),
+        "shaking_moment_z_peak": float(np.abs(moments[:, 2] - moments[:, 2].mean()).max()),
+        "torque_peak": float(np.abs(a.torque).max()), "torque_rms": float(np.sqrt(np.mean(a.torque**2))),
+        "shaking_force_orders": orders(force), "shaking_moment_xy_orders": orders(moments[:, :2]),
+    }
+
+
+@dataclass
+class BalanceReport:
+    method: str
+    objective: str | None
+    solution: Solution
+    before: MachineAnalysis
+    after: MachineAnalysis
+    speeds: list  # (rpm, before metrics, after metrics)
+
+    def as_dict(self) -> dict:
+        """In SI: method, objective, before, after, counterweights, the solve's objective and gap, speeds."""
+        return {"method": self.method, "objective": self.objective,
+                "before": metrics(self.before), "after": metrics(self.after),
+                "counterweights": [c.as_dict() for c in self.solution.counterweights],
+                "solver": {"status": self.solution.status, "objective": self.solution.objective,
+                           "gap": self.solution.gap},
+                "speeds": [{"rpm": rpm, "before": b, "after": a} for rpm, b, a in self.speeds],
+                "units": {"force": "N", "moment": "N*m", "torque": "N*m", "mr": "kg*m", "mass": "kg",
+                          "length": "m", "angle": "rad (from the crank direction φ)"}}
+
+
+def balance(machine: Machine, method: str, objective: str = "peak", shaking_weight: float = 0.0,
+            weights=DEFAULT_WEIGHTS, speeds_rpm=(), planes: list[Plane] | None = None,
+            first_order: str = "forward") -> BalanceReport:
+    """Balance ``machine`` by ``method`` (:data:`METHODS`) on its counterweight planes; evaluate before and after
+    at its speed and at each of ``speeds_rpm``."""
+    if method not in METHODS:
+        raise BalancingError(f"{machine.name}: method must be one of {', '.join(METHODS)}, got {method!r}")
+    planes = planes_of(machine) if planes is None else planes
+    before = machine.analyze()
+    if method == "separate":
+        sol = separate(before, planes, weights, machine.name)
+    else:
+        model = linear_model(before, planes)
+        sol = (harmonic(model, machine.shaft.rear - machine.shaft.front, machine.name, first_order)
+               if method == "harmonic"
+               else bearings(model, objective, shaking_weight, machine.name))
+    after = reanalyse(before, sol.counterweights)
+    balanced = with_counterweights(machine, sol.counterweights)
+    rows = []
+    for rpm in speeds_rpm:
+        w = rpm * 2 * math.pi / 60
+        rows.append((rpm, metrics(machine.analyze(speed=w)), metrics(balanced.analyze(speed=w))))
+    return BalanceReport(method, objective if method == "bearings" else None, sol, before, after, rows)
+
+
+def model_text(source_text: str, counterweights) -> str:
+    """The model file's text with the counterweights appended as shaft point masses (analysable as it is)."""
+    lines = [source_text.rstrip("\n"), "", "# counterweights chosen by sewgen balance machine"]
+    for c in counterweights:
+        lines += ["[[shaft.masses]]", f'name = "{c.plane.name}"', f'mass = "{c.mass * 1e3:.15g} g"',
+                  f'radius = "{c.plane.radius * 1e3:.15g} mm"',
+                  f'angle = "{math.degrees(c.angle % (2 * math.pi)):.15g} deg"', f'z = "{c.plane.z * 1e3:.15g} mm"', ""]
+    return "\n".join(lines)

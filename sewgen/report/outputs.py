@@ -1,0 +1,394 @@
+"""The analysis report of a machine: CSV tables per group and for the machine, and summary.json.
+
+summary.json holds, for every quantity a designer checks (bearing loads, driving torque, shaking force, the
+shaking moment about the x, y and z axes, every joint reaction), the peak and the RMS over the revolution with
+the shaft angles where they occur; the whole machine's relative power-balance residual
+(``power_balance_residual_relative``); the feed setting (stitch, regulator angle, dog travel and height above
+the plate) and the cam arc switches with the acceleration jump each implies; for a machine with a ``[stitch]``
+table, its stitch-formation timing (events, rule checks, thread control: sewgen.machine.timing, written out as
+timing.txt too); the units of every entry and the sign conventions (``units``, ``conventions``). Numbers are
+rounded to 12 significant digits (float noise such as 999.9999999999999 rpm or 255.00000000000003° is not a
+result), and a non-finite number is never written: it raises :class:`NonFiniteOutputError` naming the entry.
+
+Every force says on which body it acts: the bearing loads and the shaking force and moments act on the frame
+(``acts_on``; the shaking ones are dynamic, −Σ m a_G, with the moving parts' weight reported apart, sewgen.machine.shaking);
+``frame_on_parts`` is the frame's reaction on the moving parts; a joint's reaction is on its second body from
+its first (group tables).
+
+A report is written into a temporary folder beside the target and moved into place only when complete
+(:func:`staged_folder`): a run that fails leaves no half-written tables behind.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from sewgen.machine.cams import arc_switches
+from sewgen.errors import SewgenError
+from sewgen.machine.feed import dog_travel, has_feed, plate_height
+from sewgen.machine import shaking
+from sewgen.roles import FEED_DOG, KNIFE_EDGE, LOWER_KNIFE_EDGE, STITCH_REGULATOR
+from sewgen.machine.parts import role_param
+from sewgen.units import DisplayUnits
+
+#: What the numbers of summary.json mean: frame, angles, signs (the same words as the README's "Units and
+#: conventions").
+CONVENTIONS = {
+    "frame": "x horizontal across the upper shaft (+ = the feed direction), y up, origin on the upper-shaft axis; "
+             "z along the upper shaft from the front bearing towards the hand wheel; a group with frame = \"along\" "
+             "(its plane contains the shaft) has its own x along z and its points placed by its origin; the "
+             "group tables (<group>.csv) stay in each group's own plane",
+    "shaft_angle": "φ, the machine's upper-shaft angle in degrees, 0 ≤ φ < 360, increasing counter-clockwise in the "
+                   "x-y plane (from +x towards +y); the model's zero has the needle at its top at φ = 90°; a "
+                   "group's own angle is φ + phase_deg; *_at_deg and *_deg entries are shaft angles",
+    "bearings": "magnitude of the load the upper shaft puts on the frame at each bearing",
+    "drive_torque": "torque the pulley puts on the upper shaft about +z, positive in the sense of rotation; "
+                    "it includes the Coulomb friction the model file switches on (joints' <joint>.friction, "
+                    "shaft.bearing_friction); none by default (ideal joints, the seeds' assumption)",
+    "friction": "power dissipated by Coulomb friction (≥ 0); no_load_torque: the mean driving torque over a turn "
+                "at the analysis' speed with the process loads off (seed 000's no-load driving torque)",
+    "joints": "magnitude of a joint's reaction: the force on the joint's second body from its first",
+    "shaking_force": "magnitude of the force the moving parts put on the frame by their inertia, −Σ m·a_G: "
+                     "dynamic, the parts' static weight apart (weight_of_moving_parts); process loads (thread, "
+                     "presser foot, cloth) react inside the machine and are left out",
+    "shaking_moment": "of the same inertia forces on the frame, about the z axis through the origin; "
+                      "shaking_moments_about_origin: about the x, y and z axes",
+    "power_balance_residual_relative": "max over the revolution of |P_drive + P_loads − dE/dt| divided by the "
+                                       "largest |P_drive| or |dE/dt| (E: kinetic + potential energy): 0 for an "
+                                       "exact analysis",
+}
+#: Units of summary.json's entries (every statistic also carries its own "unit").
+UNITS = {"angles": "deg", "speed_rpm": "rpm (revolutions per minute)", "forces": "N", "torques": "N*m",
+         "moments": "N*m", "powers": "W", "lengths": "mm (keys ending in _mm)",
+         "power_balance_residual_relative": "1 (a ratio)"}
+#: Significant digits kept in summary.json.
+DIGITS = 12
+
+
+class NonFiniteOutputError(SewgenError, ValueError):
+    """A result that came out infinite or NaN (an absurd mass or speed in a model file overflows): never written.
+    ``key`` names the entry or column, ``file`` the model file."""
+
+    def __init__(self, key: str, value, file: str | None = None):
+        problem = f"{key} came out {value} (not finite): check the model's masses, inertias and speed"
+        super().__init__(f"{file}: {problem}" if file else problem, problem=problem, key=key, file=file)
+
+
+def _deg(phi) -> np.ndarray:
+    return np.degrees(phi) % 360.0
+
+
+def _clean(value, key: str = "summary", file: str | None = None):
+    """``value`` (nested dicts, lists, numbers) with every float rounded to :data:`DIGITS` significant digits and
+    -0.0 made 0.0; a non-finite number raises :class:`NonFiniteOutputError` naming its key."""
+    if isinstance(value, dict):
+        return {k: _clean(v, f"{key}.{k}", file) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v, f"{key}[{i}]", file) for i, v in enumerate(value)]
+    if isinstance(value, (bool, np.bool_)) or value is None or isinstance(value, str):
+        return value
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    v = float(value)
+    if not math.isfinite(v):
+        raise NonFiniteOutputError(key, v, file)
+    v = float(f"{v:.{DIGITS}g}")
+    if v == 0.0:
+        return 0.0
+    if "deg" in key.rsplit(".", 1)[-1] and abs(v - 360.0) < 1e-9:  # an angle in [0, 360)
+        return 0.0
+    return v
+
+
+def _check_columns(cols: dict, table: str, file: str | None) -> dict:
+    for name, values in cols.items():
+        arr = np.asarray(values)
+        if arr.dtype.kind == "f" and not np.isfinite(arr).all():
+            bad = arr[~np.isfinite(arr)][0]
+            raise NonFiniteOutputError(f"{table}: {name}", bad, file)
+    return cols
+
+
+def machine_table(a) -> dict:
+    """Machine-level columns: bearings, torques, shaking force and moment, powers (SI; ``phi`` in deg)."""
+    cols = {"phi [deg]": _deg(a.phi)}
+    for which in ("front", "rear"):
+        b = a.bearing(which)
+        cols[f"bearing_{which}_on_frame.fx [N]"], cols[f"bearing_{which}_on_frame.fy [N]"] = b[:, 0], b[:, 1]
+        cols[f"bearing_{which}_on_frame.magnitude [N]"] = np.hypot(b[:, 0], b[:, 1])
+    cols["drive_torque [N*m]"] = a.torque
+    for name, fa in a.groups.items():
+        cols[f"{name}.torque [N*m]"] = fa.torque("shaft")
+    if np.any(a.friction_power):  # columns only where the model switches friction on
+        cols["bearings.friction_torque [N*m]"] = a.bearing_friction
+        cols["friction_power [W]"] = a.friction_power
+    sf = shaking.shaking_force(a)  # dynamic, on the frame; the weight apart (summary.json)
+    cols["shaking_on_frame.fx [N]"], cols["shaking_on_frame.fy [N]"] = sf[:, 0], sf[:, 1]
+    cols["shaking_on_frame.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
+    moments = shaking.shaking_moments(a)
+    for k, axis in enumerate("xyz"):
+        cols[f"shaking_on_frame.moment_{axis} [N*m]"] = moments[:, k]
+    fr = a.frame_reaction
+    cols["frame_on_parts.fx [N]"], cols["frame_on_parts.fy [N]"] = fr[:, 0], fr[:, 1]
+    cols["drive_power [W]"] = a.drive_power
+    cols["load_power [W]"] = a.load_power
+    cols["energy_rate [W]"] = a.energy_rate()
+    return cols
+
+
+def group_table(fa, phi) -> dict:
+    """Kinematics and forces of one group, one row per machine shaft angle ``phi`` (SI; angles of φ in deg)."""
+    cols = {"phi [deg]": _deg(phi), "group_phi [deg]": _deg(fa.phi)}
+    cols.update({k: v for k, v in fa.motion.table().items() if not k.startswith("phi ")})
+    cols.update({k: v for k, v in fa.table().items() if not k.startswith("phi ")})
+    return cols
+
+
+def _rms(values: np.ndarray) -> float:
+    """RMS without overflow: large values are scaled before squaring."""
+    scale = float(np.max(np.abs(values))) if len(values) else 0.0
+    if not math.isfinite(scale) or scale == 0.0:
+        return scale
+    return scale * float(np.sqrt(np.mean(np.square(values / scale))))
+
+
+def _stat(values: np.ndarray, phi: np.ndarray, unit: str) -> dict:
+    i, j = int(np.argmax(values)), int(np.argmin(values))
+    return {"unit": unit, "max": float(values[i]), "max_at_deg": float(_deg(phi[i])), "min": float(values[j]),
+            "min_at_deg": float(_deg(phi[j])), "rms": _rms(values)}
+
+
+def model_path(source: str, start=None) -> str:
+    """The model file as summary.json names it: ``<sewgen>/models/NAME.toml`` for a built-in model, else the
+    path relative to ``start`` (default: the working directory)."""
+    from sewgen.machine.modelfile import is_builtin
+
+    if not source:
+        return ""
+    if is_builtin(source):
+        return f"<sewgen>/models/{Path(source).name}"
+    try:
+        return Path(os.path.relpath(Path(source).resolve(), Path(start or os.getcwd()).resolve())).as_posix()
+    except ValueError:  # another drive (Windows)
+        return Path(source).as_posix()
+
+
+def summary(a, switches: dict | None = None, timing=None) -> dict:
+    """Peaks, RMS and where they occur; the power-balance residual; feed setting; cam arc switches; the
+    stitch-formation timing; units and conventions. Numbers rounded to :data:`DIGITS` significant digits; a
+    non-finite one raises :class:`NonFiniteOutputError`."""
+    phi, m = a.phi, a.machine
+    weight, moments = shaking.weight(a), shaking.shaking_moments(a)
+    out = {
+        "machine": m.name,
+        "model_file": model_path(m.source),
+        "speed_rpm": float(a.omega[0] * 60 / (2 * math.pi)),
+        "positions": int(len(phi)),
+        "step_deg": 360.0 / len(phi),
+        "power_balance_residual_relative": a.power_balance_residual,
+        "bearings": {w: dict(_stat(np.hypot(*a.bearing(w).T), phi, "N"), acts_on="frame") for w in ("front", "rear")},
+        "drive_torque": _stat(a.torque, phi, "N*m"),
+        "drive_power": _stat(a.drive_power, phi, "W"),
+        "friction": friction_summary(a),
+        "shaking_force": dict(_stat(np.hypot(*shaking.shaking_force(a).T), phi, "N"), acts_on="frame",
+                              what="-sum(m a_G): dynamic, the weight apart"),
+        "weight_of_moving_parts": {"unit": "N", "acts_on": "frame", "fx": float(weight[0]), "fy": float(weight[1]),
+                                   "magnitude": float(np.hypot(*weight))},
+        "shaking_moment": dict(_stat(moments[:, 2], phi, "N*m"), acts_on="frame"),
+        "shaking_moments_about_origin": {axis: dict(_stat(v, phi, "N*m"), acts_on="frame")
+                                         for axis, v in zip("xyz", moments.T)},
+        "groups": {},
+    }
+    if m.stitch is not None:
+        timing = timing or timing_of(a)
+    from sewgen.machine.feed_indices import machine_indices
+
+    indices = machine_indices(m, timing, switches=switches)  # seed 001 §五.3, on the timing sweep
+    for g in m.groups:
+        fa = a.groups[g.name]
+        entry = {"mechanism": g.mechanism.name, "phase_deg": math.degrees(g.phase),
+                 "torque": _stat(fa.torque("shaft"), phi, "N*m"),
+                 "joints": {n: _stat(fa.reaction(n).magnitude, phi, "N") for n in fa.reaction_names}}
+        regulator = g.mechanism.description.role_name(STITCH_REGULATOR)
+        if regulator is not None:
+            inp = g.mechanism.description.input(regulator)
+            setting = g.held.get(regulator, inp.default)
+            if inp.quantity == "angle":
+                entry["regulator_deg"] = math.degrees(setting)
+                entry["holding_torque"] = _stat(fa.torque(regulator), phi, inp.effort_unit)
+            else:  # a regulator set by a travel
+                entry["regulator_mm"] = setting * 1e3
+                entry["holding_force"] = _stat(fa.torque(regulator), phi, inp.effort_unit)
+        if g.stitch is not None:
+            entry["stitch_mm"] = g.stitch * 1e3
+        if has_feed(g.mechanism):
+            t = dog_travel(fa.motion, plate_height(g.mechanism, g.params or None))
+            entry[FEED_DOG] = {"travel_above_plate_mm": t.travel * 1e3, "height_above_plate_mm": t.height * 1e3,
+                               "rises_at_deg": float(_deg(t.rise - g.phase)),
+                               "sinks_at_deg": float(_deg(t.sink - g.phase))}
+        if g.name in indices:
+            entry.setdefault(FEED_DOG, {})["indices"] = indices[g.name]
+        d = g.mechanism.description
+        if d.has_role(KNIFE_EDGE) and d.has_role(LOWER_KNIFE_EDGE):  # overlock knife: stroke and cutting overlap
+            ky = fa.motion.point(d.role_name(KNIFE_EDGE)).y
+            lower = role_param(g, LOWER_KNIFE_EDGE)
+            k = int(np.argmin(ky))
+            entry[KNIFE_EDGE] = {"stroke_mm": float(np.ptp(ky)) * 1e3, "overlap_mm": (lower - float(ky[k])) * 1e3,
+                                 "lowest_at_deg": float(_deg(phi[k]))}
+        if switches and switches.get(g.name):
+            entry["cam_arc_switches"] = [dict(s.as_dict(), angle_deg=float(_deg(s.angle - g.phase)))
+                                         for s in switches[g.name]]
+        out["groups"][g.name] = entry
+    if m.stitch is not None:  # stitch-formation timing and thread control (sewgen.machine.timing)
+        out["timing"] = timing.as_dict()
+    out["units"] = UNITS
+    out["conventions"] = CONVENTIONS
+    return _clean(out, "summary", m.source or None)
+
+
+def friction_summary(a) -> dict:
+    """Whether friction is on, its dissipated power, the mean driving torque and the no-load torque."""
+    power = a.friction_power
+    on = bool(np.any(power != 0.0))
+    return {"on": on, "power": dict(_stat(power, a.phi, "W"), mean=float(np.mean(power))),
+            "mean_drive_torque": {"value": float(np.mean(a.torque)), "unit": "N*m"},
+            "no_load_torque": {"value": a.no_load_torque() if on else 0.0, "unit": "N*m",
+                               "speed_rpm": float(np.mean(a.omega) * 60 / (2 * math.pi))}}
+
+
+def timing_of(a):
+    """The stitch-formation timing (sewgen.machine.timing.Timing) of analysis ``a``'s machine at the analysis' speed."""
+    from sewgen.machine.timing import timing
+
+    return timing(a.machine, speed=float(a.omega[0]) or None)  # at rest: the events are positions; eye speeds
+    # at the model's speed
+
+
+def cam_switches(a) -> dict:
+    """Arc switches of every group with a cam, at the analysis' speed."""
+    out = {}
+    for g in a.machine.groups:
+        fa = a.groups[g.name]
+        if any(name.endswith(".arc") for name, _ in g.mechanism.description.observables):
+            out[g.name] = arc_switches(g.mechanism, fa.motion, params=g.params or None, held=g.held or None)
+    return out
+
+
+def write_csv(path, cols: dict) -> Path:
+    """Columns (name -> array, equal lengths) as a CSV file with a header row, written to a temporary file beside
+    ``path`` and renamed into place; returns ``path``."""
+    from sewgen.engine.results import write_csv as _write
+
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    os.close(fd)
+    try:
+        _write(tmp, cols)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_tables(a, folder, progress=None, units: DisplayUnits | None = None) -> list[Path]:
+    """machine.csv, <group>.csv for every group and summary.json into ``folder`` (which must exist), the tables
+    in ``units`` (default SI; headers name the unit of every column). Everything is computed and checked
+    before the first file is written."""
+    folder = Path(folder)
+    units = units or DisplayUnits()
+    if progress:
+        progress("tables", 0, 1)
+    source = a.machine.source or None
+    tables = {"machine.csv": _check_columns(units.table(machine_table(a)), "machine.csv", source)}
+    for name, fa in a.groups.items():
+        tables[f"{name}.csv"] = _check_columns(units.table(group_table(fa, a.phi)), f"{name}.csv", source)
+    tm = timing_of(a) if a.machine.stitch is not None else None
+    text = json.dumps(summary(a, cam_switches(a), tm), indent=2, ensure_ascii=False, allow_nan=False)
+    paths = [write_csv(folder / name, cols) for name, cols in tables.items()]
+    if tm is not None:
+        (folder / "timing.txt").write_text(tm.table() + "\n", encoding="utf-8")
+        paths.append(folder / "timing.txt")
+    (folder / "summary.json").write_text(text + "\n", encoding="utf-8")  # last: the report is complete
+    paths.append(folder / "summary.json")
+    return paths
+
+
+def check_output_folder(folder, option: str = "--out") -> Path:
+    """``folder`` usable as an output folder: an existing folder, or a new one whose parent exists. Raises
+    :class:`OutputPathError` naming ``option`` otherwise (before any work is done)."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise OutputPathError(option, f"{folder} exists and is not a folder")
+    parent = folder.absolute().parent
+    if not folder.exists() and not parent.is_dir():
+        raise OutputPathError(option, f"cannot make {folder}: no folder {parent}")
+    if not os.access(folder if folder.exists() else parent, os.W_OK):
+        raise OutputPathError(option, f"cannot write into {folder if folder.exists() else parent}: permission denied")
+    return folder
+
+
+class OutputPathError(SewgenError, ValueError):
+    """An output file or folder that cannot be written (``parameter``: the option or argument naming it)."""
+
+    def __init__(self, option: str, problem: str):
+        super().__init__(f"{option}: {problem}" if option else problem, problem=problem, parameter=option)
+
+
+@contextlib.contextmanager
+def staged_folder(folder, option: str = "--out"):
+    """Write a folder's files into a temporary folder; move them into place only when the block ends without an
+    error. A new folder is staged beside it and renamed in one step; an existing folder (``--out .``, a mount
+    point) is staged in a hidden folder inside it, and each file is renamed over the old one, summary.json last.
+    On an error the temporary folder is removed and ``folder`` is left as it was. Yields the temporary folder."""
+    folder = check_output_folder(folder, option)
+    existed = folder.is_dir()
+    home = folder if existed else folder.absolute().parent
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=f".{folder.absolute().name or 'out'}.", suffix=".part", dir=home))
+    except OSError as exc:
+        raise OutputPathError(option, f"cannot write into {home}: {exc.strerror or exc}") from None
+    try:
+        yield tmp
+        os.chmod(tmp, 0o777 & ~_umask())
+        if not existed:
+            try:
+                os.rename(tmp, folder)
+                return
+            except OSError:  # made meanwhile: move the files one by one
+                folder.mkdir(exist_ok=True)
+        names = sorted(p.name for p in tmp.iterdir())
+        names.sort(key=lambda n: n == "summary.json")  # summary.json last: its presence marks a complete run
+        for name in names:
+            target = folder / name
+            if target.is_dir():
+                raise OutputPathError(option, f"cannot replace {target}: it is a folder")
+            os.replace(tmp / name, target)
+    except OSError as exc:
+        raise OutputPathError(option, f"cannot write {folder}: {exc.strerror or exc}") from None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_report(a, folder, progress=None, units: DisplayUnits | None = None) -> list[Path]:
+    """machine.csv, <group>.csv for every group and summary.json into ``folder``, moved into place only when all
+    are written (:func:`staged_folder`). Returns the paths in ``folder``."""
+    folder = Path(folder)
+    with staged_folder(folder, "folder") as tmp:
+        written = write_tables(a, tmp, progress, units)
+    return [folder / p.name for p in written]
