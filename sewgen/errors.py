@@ -113,3 +113,12 @@ class BranchJumpError(PositionError):
 
 class NonFiniteResultError(PositionError):
     what = "a result came out non-finite"
+
+
+class NonFiniteOutputError(SewgenError, ValueError):
+    """A result that came out infinite or NaN (an absurd mass or speed in a model file overflows): never written.
+    ``key`` names the entry or column, ``file`` the model file."""
+
+    def __init__(self, key: str, value, file: str | None = None):
+        problem = f"{key} came out {value} (not finite): check the model's masses, inertias and speed"
+        super().__init__(f"{file}: {problem}" if file else problem, problem=problem, key=key, file=file)

@@ -45,7 +45,7 @@ def power_form(p0, p1, d0, d1, h):
     return p0, hd0, 3.0 * dp - 2.0 * hd0 - hd1, hd0 + hd1 - 2.0 * dp
 
 
-def _bracketed_root(c0, c1, c2, c3, lo_negative, max_iter: int = 60):
+def bracketed_root(c0, c1, c2, c3, lo_negative, max_iter: int = 60):
     """The root s ∈ [0, 1] of c₀ + c₁s + c₂s² + c₃s³ (arrays) between s = 0, where the polynomial is negative
     if ``lo_negative`` (else ≥ 0), and s = 1, where it has the other sign: Newton from the secant's guess,
     each step kept inside the shrinking bracket (bisection otherwise), until a step moves by less than 1e-15
@@ -84,7 +84,7 @@ def piece_root(p0, p1, d0, d1, h):
     """The offset t ∈ [0, h] where the Hermite piece (p0 at t = 0, p1 at t = h; p0 < 0 ≤ p1 or p1 < 0 ≤ p0)
     crosses zero (arrays)."""
     c0, c1, c2, c3 = power_form(np.asarray(p0, float), p1, d0, d1, h)
-    return h * _bracketed_root(c0, c1, c2, c3, np.asarray(p0) < 0.0)
+    return h * bracketed_root(c0, c1, c2, c3, np.asarray(p0) < 0.0)
 
 
 def _next(a):
@@ -104,7 +104,7 @@ def crossings(z, dz, h, iters: int = 60):
     p0, p1, d0, d1 = z[rows, cols], z[rows, j], dz[rows, cols], dz[rows, j]
     c0, c1, c2, c3 = power_form(p0, p1, d0, d1, h)
     lo_neg = p0 < 0.0
-    t = h * _bracketed_root(c0, c1, c2, c3, lo_neg, iters)
+    t = h * bracketed_root(c0, c1, c2, c3, lo_neg, iters)
     return rows, cols, t, np.where(lo_neg, 1, -1)
 
 
@@ -130,7 +130,7 @@ def maximum(y, dy, h, iters: int = 60):
     t = np.where(left, h, 0.0)
     m = np.flatnonzero(ok)
     _, c1, c2, c3 = power_form(p0[m], p1[m], d0[m], d1[m], h)
-    t[m] = h * _bracketed_root(-c1, -2.0 * c2, -3.0 * c3, np.zeros_like(c3), np.ones(len(m), bool), iters)
+    t[m] = h * bracketed_root(-c1, -2.0 * c2, -3.0 * c3, np.zeros_like(c3), np.ones(len(m), bool), iters)
     return np.maximum(hermite(p0, p1, d0, d1, h, t), y[rows, k]), i, t
 
 

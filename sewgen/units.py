@@ -242,7 +242,7 @@ _COLUMN_UNITS = {
     "N*m": ((("torque", 1),), 0), "kg": ((("mass", 1),), 0), "kg*m**2": ((("mass", 1), ("length", 2)), 0),
     "kg*m": ((("mass", 1), ("length", 1)), 0),
 }
-_HEADER = re.compile(r"^(?P<name>.*) \[(?P<unit>[^\]]*)\]$")
+HEADER = re.compile(r"^(?P<name>.*) \[(?P<unit>[^\]]*)\]$")
 
 
 class DisplayUnits:
@@ -310,7 +310,7 @@ class DisplayUnits:
             return cols
         out = {}
         for header, values in cols.items():
-            m = _HEADER.match(header)
+            m = HEADER.match(header)
             if m is None:
                 out[header] = values
                 continue

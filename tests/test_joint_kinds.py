@@ -68,7 +68,7 @@ def test_a_kind_registered_in_one_place_flows_through_the_derivation(monkeypatch
     for kind in ("slot", "groove"):
         kin = Kinematics(_slider_crank_in_a_slot(kind))
         kst = Kinetostatics(kin)
-        anchor_list, _ = drawing.anchors(kin)
+        anchor_list, _ = drawing.anchors(kin, joints.kind_of)
         derived[kind] = (kin.closure, kst.A, kst.b, [e for _, _, e in kst.outputs], [a.xy for a in anchor_list],
                          [r.kind for r in kst.reactions])
     slot, groove = derived["slot"], derived["groove"]

@@ -3,7 +3,7 @@
 Read from the source with ``ast`` (nothing is imported): every ``import`` of a sewgen module, at module top
 or inside a function, counts; those under ``if TYPE_CHECKING:`` do not (they never run).
 
-    leaves   units, errors, abi, roles, hermite        (import only each other)
+    leaves   units, errors, abi, roles, hermite, version   (import only each other)
     derive   the SymPy derivation
     engine   description, build, loader, mechanism, designs, results, forces, loads, frames
     machine  assembly, plan, modelfile, tables, shaking, feed, cams, timing, thread, balance, ...
@@ -20,7 +20,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "sewgen"
-LEAVES = {"sewgen.units", "sewgen.errors", "sewgen.abi", "sewgen.roles", "sewgen.hermite"}
+LEAVES = {"sewgen.units", "sewgen.errors", "sewgen.abi", "sewgen.roles", "sewgen.hermite", "sewgen.version"}
 LAYERS = ("leaves", "derive", "engine", "machine", "study", "report", "cli", "facade")
 
 
@@ -84,12 +84,16 @@ def edges() -> list[tuple[str, str, int, list[str]]]:
     """(importer, imported module, line, names) with ``from pkg import submodule`` resolved to the submodule."""
     known = modules()
     out = []
+
+    def module(dotted):  # a source module, or a compiled one (sewgen._kernels, built at install time)
+        return dotted in known or dotted.startswith("sewgen._kernels")
+
     for me, path in known.items():
         for mod, names, line in imports(path):
-            subs = [f"{mod}.{n}" for n in names if f"{mod}.{n}" in known]
+            subs = [f"{mod}.{n}" for n in names if module(f"{mod}.{n}")]
             if subs:
                 out.extend((me, s, line, []) for s in subs)
-                rest = [n for n in names if f"{mod}.{n}" not in known]
+                rest = [n for n in names if not module(f"{mod}.{n}")]
                 if rest:
                     out.append((me, mod, line, rest))
             else:

@@ -470,7 +470,8 @@ def test_a_stitch_the_regulator_cannot_reach_names_the_key(tmp_path):
 
 
 def test_non_finite_results_are_a_typed_error_and_never_written(tmp_path):
-    from sewgen.report.outputs import NonFiniteOutputError, write_report
+    from sewgen.errors import NonFiniteOutputError
+    from sewgen.report.outputs import write_report
 
     path = write(tmp_path, edit('mass = "20 g"', 'mass = "1e307 kg"'))
     with np.errstate(all="ignore"), pytest.raises(NonFiniteOutputError) as exc:

@@ -22,7 +22,9 @@ import numpy as np
 
 from sewgen.cli import balance as balance_cli
 from sewgen.cli.common import USAGE, Console, UsageError, quantity
+from sewgen.engine.loader import catalog, load, mechanism
 from sewgen.errors import SewgenError
+from sewgen.version import version
 from sewgen.machine.modelfile import declaration_problem
 from sewgen.units import DisplayUnits, UnitError, steps_per_turn, to_si
 
@@ -40,9 +42,7 @@ class _Version(argparse.Action):
         super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
 
     def __call__(self, parser, namespace, values, option_string=None):
-        from sewgen import __version__
-
-        print(f"sewgen {__version__}")
+        print(f"sewgen {version()}")
         parser.exit()
 
 
@@ -57,7 +57,6 @@ def _units(args) -> DisplayUnits:
 
 def catalog_name(text: str) -> str:
     """The catalog's spelling of a mechanism name: "take-up" and "take_up" both give "take_up"."""
-    from sewgen import catalog
 
     names = catalog()
     for cand in (text, text.replace("-", "_")):
@@ -71,7 +70,6 @@ def catalog_name(text: str) -> str:
 def _user_file(text: str):
     """A user's declaration file (--file), loaded; a missing file, a syntax error or an exception inside its
     ``declare()`` is one line naming the file and the line."""
-    from sewgen import load
 
     path = Path(text)
     if path.is_dir():
@@ -92,7 +90,6 @@ def _user_file(text: str):
 
 
 def _mechanism(args):
-    from sewgen import catalog, mechanism
 
     if args.file and args.name:
         raise UsageError("--file", f"give a catalog mechanism ({args.name}) or --file, not both")
@@ -191,7 +188,6 @@ def _rms(v: np.ndarray) -> float:
 # -- commands --------------------------------------------------------------------------------------------------
 
 def cmd_list(args, con: Console) -> int:
-    from sewgen import catalog, mechanism
 
     for name in catalog():
         m = mechanism(name)

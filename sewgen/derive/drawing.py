@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import sympy as sp
 
-from .model import Attachment, Line
+from .vocabulary import Attachment, Line
 
 if TYPE_CHECKING:  # the joint kinds import this module, and kinematics imports the joint kinds
     from .kinematics import Kinematics
@@ -52,10 +52,10 @@ def guide_anchors(kin: Kinematics, line: Line, joint: str) -> list[Anchor]:
     return [origin, Anchor(f"{joint}.direction", line.body.name, "guide_direction", joint, (sp.cos(th), sp.sin(th)))]
 
 
-def anchors(kin: Kinematics) -> tuple[list[Anchor], list[ArcAnchor]]:
+def anchors(kin: Kinematics, kind_of) -> tuple[list[Anchor], list[ArcAnchor]]:
     """Every anchor of the mechanism (the joints its bodies imply, every declared joint — each kind's own
-    anchors, :meth:`derive.joints.JointKind.anchors` — named points, centres of mass) and every cam arc."""
-    from .joints import kind_of  # the joint kinds draw themselves with this module's helpers
+    anchors, :meth:`derive.joints.JointKind.anchors`, found by ``kind_of``: the joint kinds draw themselves with
+    this module's helpers — named points, centres of mass) and every cam arc."""
 
     mech = kin.mech
     out: list[Anchor] = []

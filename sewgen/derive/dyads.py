@@ -21,7 +21,7 @@ import sympy as sp
 
 from .joints import kind_of
 from .kinematics import Kinematics, rot
-from .model import Attachment, Body, Joint
+from .vocabulary import Attachment, Body, Joint
 
 
 @dataclass

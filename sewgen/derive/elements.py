@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .joints import KINDS, Revolute
-from .model import Attachment, Body, DeclarationError, Joint
+from .vocabulary import Attachment, Body, DeclarationError, Joint
 
 
 @dataclass(eq=False)

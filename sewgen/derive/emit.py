@@ -15,6 +15,7 @@ import jinja2
 from .. import abi
 from . import abi_header, branches, drawing
 from .elements import ELEMENTS
+from .joints import kind_of
 from .dyads import split_into_dyads
 from .kernels import KernelSet
 from .kinematics import Kinematics
@@ -138,7 +139,7 @@ def generate(mech: Mechanism, closed_form: bool = True) -> Generated:
     prefix = f"sg_{mech.name}"
     ks = KernelSet(prefix, kin)
     kst = Kinetostatics(kin)
-    anchor_list, arc_list = drawing.anchors(kin)
+    anchor_list, arc_list = drawing.anchors(kin, kind_of)
     anchor_out = drawing.outputs(anchor_list, arc_list)
     blks = branches.blocks(kin)
     groups = observable_groups(mech, kin)

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .drawing import Anchor, at_anchor, guide_anchors
-from .model import Arc, Attachment, Body, DeclarationError, Joint, Line, SpatialPoint
+from .vocabulary import Arc, Attachment, Body, DeclarationError, Joint, Line, SpatialPoint
 
 
 @dataclass

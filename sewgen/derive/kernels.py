@@ -31,7 +31,7 @@ from .dyads import Dyad
 from .joints import KINDS
 from .kinematics import Kinematics
 from .kinetostatics import Kinetostatics
-from .model import DeclarationError
+from .vocabulary import DeclarationError
 
 #: csrc/sg_runtime.h SG_MAX_Q: the largest LU the runtime's stack arrays hold.
 MAX_BLOCK = 48

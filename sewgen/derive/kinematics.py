@@ -12,11 +12,15 @@ inputs. Points and bodies get position, velocity and acceleration by the chain r
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import sympy as sp
 
 from .joints import KINDS, CamContact, kind_of
-from .model import Attachment, Body, DeclarationError, Mechanism, SpatialPoint
+from .vocabulary import Attachment, Body, DeclarationError, SpatialPoint
+
+if TYPE_CHECKING:
+    from .model import Mechanism
 
 
 def rot(theta, u, v):

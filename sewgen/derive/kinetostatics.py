@@ -35,7 +35,7 @@ import sympy as sp
 from .elements import ELEMENTS
 from .joints import Reaction, kind_of
 from .kinematics import Kinematics, rot
-from .model import Attachment, Body, DeclarationError
+from .vocabulary import Attachment, Body, DeclarationError
 
 
 class Kinetostatics:

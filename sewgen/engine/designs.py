@@ -32,7 +32,7 @@ import numpy as np
 
 from sewgen import abi
 from sewgen.errors import InputError, ParameterError
-from sewgen.engine.mechanism import _ptr, _si
+from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, pointer, si
 from sewgen.engine.results import Selection
 from sewgen.units import UnitError, to_si
 
@@ -273,13 +273,13 @@ def _column_values(mech: str, name: str, value, kind: str, unit: str | None):
     name carried one: one factor for the column), a quantity string (all designs), an array of quantity
     strings (each distinct text read once), or a pint Quantity (one factor for the column)."""
     def factor(u: str) -> float:
-        return _si(mech, f"1 {u}", kind, name)
+        return si(mech, f"1 {u}", kind, name)
 
     if hasattr(value, "magnitude") and hasattr(value, "units"):  # a pint Quantity
         return np.asarray(value.magnitude, dtype=np.float64) * factor(f"{value.units:~}" if str(value.units)
                                                                        else "")
     if isinstance(value, str):
-        return np.float64(_si(mech, value, kind, name))
+        return np.float64(si(mech, value, kind, name))
     arr = np.asarray(value.to_numpy() if hasattr(value, "to_numpy") else value)
     if arr.dtype.kind in "OUS":  # quantity strings (or numbers among them)
         flat = arr.ravel()
@@ -398,15 +398,13 @@ def _per_design(mech, what: str, given, names: list[str], defaults: list, nd: in
 
 def _check_columns(mech, p: np.ndarray, held: np.ndarray) -> dict:
     """Per-design checks, column by column (vectorised): design -> the ParameterError a single solve raises."""
-    from sewgen.engine.mechanism import _NONNEGATIVE
-
     problems: dict = {}
     for spec in mech.description.params:
         col = p[:, spec.index]
         bad = ~np.isfinite(col)
         if spec.positive:
             bad |= ~(col > 0)
-        if spec.kind in _NONNEGATIVE:
+        if spec.kind in NONNEGATIVE:
             bad |= col < 0
         for d in np.flatnonzero(bad):
             d = int(d)
@@ -440,15 +438,13 @@ def _work(n: int, width: int) -> tuple:
 def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, reduce=None, held=None, branch=None,
                   threads=None, degrees=False, newton=False, max_iter=None, chunk=None, loop="auto") -> DesignSweep:
     """:meth:`sewgen.Mechanism.sweep_designs` (its documentation)."""
-    from sewgen.engine.mechanism import _DEFAULT_MAX_ITER
-
     name = mech.name
     desc = mech.description
     sizes = desc.sizes
     nq, nobs, npar = sizes["nq"], sizes["nobs"], sizes["np"]
     # the shaft angles, speed and acceleration: as prepare() checks them (one sweep's worth, shared)
     base = mech.prepare(phi, speed, accel, degrees=degrees, newton=newton,
-                        max_iter=_DEFAULT_MAX_ITER if max_iter is None else max_iter).use_loop(loop)
+                        max_iter=DEFAULT_MAX_ITER if max_iter is None else max_iter).use_loop(loop)
     n = base.n
     nd, given = _table(mech, designs)
     p = np.empty((nd, npar))
@@ -458,7 +454,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
     h = _per_design(mech, "held", held, mech.held_names, [i.default for i in desc.held_inputs], nd, "held")
     b = _per_design(mech, "branch", branch, mech.branch_names, [x.default for x in desc.branches], nd, "sign")
     problems = _check_columns(mech, p, h)
-    cols = _columns(mech)
+    cols = output_columns(mech)
     if outputs is None:
         outputs = [] if reduce is not None else ["all"]
     sel = cols.select(name, outputs)
@@ -481,7 +477,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
     ncheck = len(mech.manifest.get("constants") or [])
     ffi, lib = mech.ffi, mech.lib
     width = 3 * nq + nobs
-    ptr = partial(_ptr, ffi)
+    ptr = partial(pointer, ffi)
 
     shared = (ptr("double *", base.phi), ptr("double *", base.omega), ptr("double *", base.alpha))
     guess, opt = ptr("double *", base.guess), base.options
@@ -529,7 +525,7 @@ _COLUMNS: dict = {}
 _COLUMNS_LOCK = threading.Lock()
 
 
-def _columns(mech) -> Columns:
+def output_columns(mech) -> Columns:
     key = mech.reference.digest
     cols = _COLUMNS.get(key)
     if cols is None:
@@ -563,11 +559,11 @@ def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
     except TypeError:
         return None
     if plan is None:
-        cols = _columns(mech)
+        cols = output_columns(mech)
         sel = np.array(cols.select(mech.name, outputs), dtype=np.intc)  # a bad name raises here, as below
         angle = cols.angles_among(list(sel))
         names = [cols.names[c] for c in sel]
-        plan = (len(sel), _ptr(mech.ffi, "int *", sel), len(angle), _ptr(mech.ffi, "int *", angle), names,
+        plan = (len(sel), pointer(mech.ffi, "int *", sel), len(angle), pointer(mech.ffi, "int *", angle), names,
                 len(cols.names), sel, angle)
         if len(mech._selections) >= 64:
             mech._selections.clear()
@@ -607,7 +603,7 @@ def solve_selected(mech, outputs, sweep_args: dict, out=None):
     :class:`~sewgen.engine.results.Selection`); the same values as the full sweep's columns, bit for bit. A failing
     position raises the error :meth:`~sewgen.Mechanism.solve` raises (the full sweep is rerun to diagnose it)."""
     base = mech.prepare(**sweep_args)
-    cols = _columns(mech)
+    cols = output_columns(mech)
     sel = cols.select(mech.name, outputs)
     n = base.n
     block = getattr(out, "block", out)
@@ -621,7 +617,7 @@ def solve_selected(mech, outputs, sweep_args: dict, out=None):
     ffi, lib = mech.ffi, mech.lib
     width = len(cols.names)
     work, work_st = _work(n, width)
-    ptr = partial(_ptr, ffi)
+    ptr = partial(pointer, ffi)
 
     ncheck = 0  # prepare() checked the parameters and their derived dimensions
     angle_c = cols.angles_among(sel)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sewgen.units import _HEADER  # "<name> [unit]"
+from sewgen.units import HEADER  # "<name> [unit]"
 
 
 def pandas():
@@ -31,7 +31,7 @@ def dataset(cols: dict, phi_deg, attrs: dict | None = None):
         raise ImportError("to_xarray() needs xarray: pip install xarray") from None
     data = {}
     for k, v in cols.items():
-        m = _HEADER.match(k)
+        m = HEADER.match(k)
         name, unit = (m["name"], m["unit"]) if m else (k, "")
         if name in ("phi",):
             continue

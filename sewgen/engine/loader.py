@@ -18,6 +18,7 @@ sources the reference carries when the entry is gone.
 from __future__ import annotations
 
 import contextlib
+import threading
 import hashlib
 import importlib.util
 import json
@@ -29,7 +30,7 @@ import zlib
 from pathlib import Path
 
 from sewgen.errors import BuildError
-from sewgen.engine.mechanism import Mechanism, Reference
+from sewgen.engine.mechanism import RESOLVERS, Mechanism, Reference
 
 try:
     import fcntl
@@ -300,6 +301,38 @@ def _load_built(root: Path, name: str, files: dict, declaration: str = "") -> Me
     return mech
 
 
+# -- the API: the catalog by name, a mechanism of the user's -----------------------------------------------
+
+_MECHANISMS: dict = {}
+_MECHANISMS_LOCK = threading.Lock()  # one Mechanism per catalog name, even when threads ask at once
+
+
+def catalog() -> list[str]:
+    """Names of the built-in mechanisms."""
+    return catalog_names()
+
+
+def mechanism(name: str) -> Mechanism:
+    """A built-in mechanism by name (see :func:`catalog`)."""
+    mech = _MECHANISMS.get(name)
+    if mech is None:
+        with _MECHANISMS_LOCK:
+            if name not in _MECHANISMS:
+                names = catalog_names()
+                if name not in names:
+                    raise KeyError(f"no built-in mechanism {name!r}; the catalog has: {', '.join(names)}")
+                mod = catalog_module()
+                _MECHANISMS[name] = Mechanism(mod.ffi, mod.lib, name)
+            mech = _MECHANISMS[name]
+    return mech
+
+
+def load(source, *, closed_form: bool = True, cache_dir=None) -> Mechanism:
+    """A mechanism declared outside the catalog: a derive.Mechanism, a function returning one, or a .py file
+    with ``declare()``. Derived and compiled on first use, then loaded from the cache."""
+    return load_user(source, closed_form=closed_form, cache_dir=cache_dir)
+
+
 # -- references (unpickling) ------------------------------------------------------------------------------------
 
 
@@ -311,8 +344,6 @@ def resolve(ref: Reference) -> Mechanism:
     manifest must be the one the reference was made from: :class:`~sewgen.errors.BuildError` if not.
     """
     if ref.kind == "catalog":
-        from sewgen import mechanism
-
         try:
             mech = mechanism(ref.name)
         except KeyError:
@@ -335,3 +366,6 @@ def resolve(ref: Reference) -> Mechanism:
     if ref.kind != "catalog":
         _RESOLVED[(ref.key, ref.digest)] = mech
     return mech
+
+
+RESOLVERS.append(resolve)

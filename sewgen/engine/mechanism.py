@@ -24,6 +24,8 @@ from types import MappingProxyType
 import numpy as np
 
 from sewgen import abi
+from sewgen.engine import designs as many_designs
+from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, mapping, pointer, si, vector
 from sewgen.engine.description import describe
 from sewgen.errors import AssemblyError, InputError, ParameterError, SingularPositionError
 from sewgen.engine.forces import ForceAnalysis, RunSettings
@@ -31,19 +33,6 @@ from sewgen.engine.loads import Load, load_matrix
 from sewgen.engine.results import Motion
 from sewgen.units import UnitError, to_si
 
-_NONNEGATIVE = {"mass", "inertia"}
-_DEFAULT_MAX_ITER = 50
-_DESIGNS = []  # sewgen.engine.designs once imported (it imports this module): solve(outputs=...)'s per-call path
-
-
-def _designs():
-    """The module sewgen.engine.designs, imported at the first call that needs it, then held here: an import statement
-    in solve() cost 1.7 µs a call, as much as a third of the call on one angle."""
-    if not _DESIGNS:
-        from sewgen.engine import designs
-
-        _DESIGNS.append(designs)
-    return _DESIGNS[0]
 _SIZE_MAX = (1 << (8 * np.dtype(np.uintp).itemsize)) - 1  # sg_solve_lean's "not ascending" (size_t is uintp)
 #: kinetostatics()' defaults: gravity, its direction (−y, the catalog's "down"), the shaking moment's point.
 _GRAVITY, _DOWN, _ORIGIN = "9.80665 m/s**2", "-90 deg", (0.0, 0.0)
@@ -78,6 +67,16 @@ class Reference:
     sources: bytes = dataclasses.field(default=b"", repr=False)
 
 
+#: Who finds the Mechanism a :class:`Reference` names: :func:`sewgen.engine.loader.resolve`, registered when the
+#: loader is imported (``import sewgen`` imports it, and unpickling imports the package before this module).
+RESOLVERS: list = []
+
+
+def resolve_reference(ref: Reference) -> Mechanism:
+    """The Mechanism ``ref`` names, in this process (what unpickling a Mechanism calls)."""
+    return RESOLVERS[-1](ref)
+
+
 class Mechanism:
     """One mechanism of a compiled module (the catalog's or a user's). Immutable and safe to share between
     threads; pickles by reference (see the module docstring)."""
@@ -102,14 +101,14 @@ class Mechanism:
             ffi=ffi, lib=lib, name=name, description=desc, _manifest=manifest,
             _descriptor=getattr(lib, f"sg_{name}")(), build_info=MappingProxyType(dict(build_info or {})),
             reference=dataclasses.replace(ref, digest=digest), _defaults=MappingProxyType(defaults),
-            _default_options=MappingProxyType({(newton, keep): self._new_options(ffi, _DEFAULT_MAX_ITER, newton, keep)
+            _default_options=MappingProxyType({(newton, keep): self._new_options(ffi, DEFAULT_MAX_ITER, newton, keep)
                                                for newton in (False, True) for keep in (False, True)}))
         qa, oa = desc.angle_columns
         angle = (np.array(qa, dtype=np.intc), np.array(oa, dtype=np.intc))
-        fields["_angle"] = (angle, len(qa), _ptr(ffi, "int *", angle[0]), len(oa), _ptr(ffi, "int *", angle[1]))
+        fields["_angle"] = (angle, len(qa), pointer(ffi, "int *", angle[0]), len(oa), pointer(ffi, "int *", angle[1]))
         # C pointers of the read-only defaults, and the converted parameter vectors of recent params= dicts: the
         # per-call cost of solve() (issue 14, item 5). Caches, not state: a hit gives what a miss computes.
-        fields["_fast"] = {k: _ptr(ffi, "int *" if k == "branch" else "double *", defaults[k])
+        fields["_fast"] = {k: pointer(ffi, "int *" if k == "branch" else "double *", defaults[k])
                            for k in ("p", "held", "branch", "guess")}
         sizes = desc.sizes
         fields["_fast"]["lean"] = (sizes["nq"], sizes["nobs"], sizes["nfo"], 4 + 3 * sizes["nq"] + sizes["nobs"],
@@ -126,9 +125,7 @@ class Mechanism:
         raise AttributeError(f"sewgen.Mechanism is immutable (cannot set {key!r})")
 
     def __reduce__(self):
-        from sewgen.engine.loader import resolve
-
-        return resolve, (self.reference,)
+        return resolve_reference, (self.reference,)
 
     def __repr__(self) -> str:
         d = self.description
@@ -199,7 +196,7 @@ class Mechanism:
     def param_vector(self, params: dict | None = None) -> np.ndarray:
         """Defaults overridden by ``params`` (SI numbers or quantity strings), checked, as a C-ready vector."""
         values = self.defaults()
-        given = _mapping(self.name, "params", params)
+        given = mapping(self.name, "params", params)
         for key, val in given.items():
             if key not in values:
                 raise ParameterError(self.name, key, f"unknown; parameters are: {', '.join(values)}")
@@ -229,10 +226,10 @@ class Mechanism:
     def _check_params(desc, values: dict) -> np.ndarray:
         out = np.empty(len(desc.params))
         for spec in desc.params:
-            v = _si(desc.name, values[spec.name], spec.kind, spec.name)
+            v = si(desc.name, values[spec.name], spec.kind, spec.name)
             if spec.positive and not v > 0:
                 raise ParameterError(desc.name, spec.name, f"must be positive, got {v!r} {spec.unit}")
-            if spec.kind in _NONNEGATIVE and v < 0:
+            if spec.kind in NONNEGATIVE and v < 0:
                 raise ParameterError(desc.name, spec.name, f"must not be negative, got {v!r} {spec.unit}")
             out[spec.index] = v
         return out
@@ -241,7 +238,7 @@ class Mechanism:
         """``kind``: the units kind of every entry, "sign", or a list of kinds, one per name."""
         vals = dict(zip(names, defaults))
         arg = {"held input": "held", "branch joint": "branch"}.get(what, what)
-        for key, v in _mapping(self.name, arg, given).items():
+        for key, v in mapping(self.name, arg, given).items():
             if key not in vals:
                 known = ", ".join(names) or "none"
                 raise ParameterError(self.name, key, f"is not a {what}; {what}s are: {known}")
@@ -255,7 +252,7 @@ class Mechanism:
                     raise ParameterError(self.name, key, f"branch must be +1 or -1, got {v!r}")
                 out.append(int(v))
             else:
-                out.append(_si(self.name, v, kind, key))
+                out.append(si(self.name, v, kind, key))
         return out
 
     def held_vector(self, held: dict | None = None) -> np.ndarray:
@@ -275,11 +272,11 @@ class Mechanism:
     def _guess_vector(self, guess: dict) -> np.ndarray:
         """Newton's start per coordinate (rad or m, or quantity strings): the declaration's unless overridden."""
         names = self.coord_names
-        guess = _mapping(self.name, "guess", guess)
+        guess = mapping(self.name, "guess", guess)
         unknown = sorted(set(guess) - set(names))
         if unknown:
             raise ParameterError(self.name, unknown[0], f"is not a coordinate; coordinates are: {', '.join(names)}")
-        return np.array([_si(self.name, guess.get(c.name, c.guess), c.kind, c.name) for c in self.description.coords],
+        return np.array([si(self.name, guess.get(c.name, c.guess), c.kind, c.name) for c in self.description.coords],
                         dtype=np.float64)
 
     def _series(self, what: str, value, n: int, kind: str) -> np.ndarray:
@@ -318,7 +315,7 @@ class Mechanism:
     # -- sweeps --------------------------------------------------------------------------------------------
     def prepare(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
                 branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
-                newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, forces: bool = False, loads=(),
+                newton: bool = False, max_iter: int = DEFAULT_MAX_ITER, forces: bool = False, loads=(),
                 gravity=_GRAVITY, gravity_direction=_DOWN, moment_about=_ORIGIN, out=None,
                 singular: str = "raise") -> "Sweep":
         """Every argument of a sweep checked and converted into a :class:`Sweep`: the arrays the C runtime
@@ -355,7 +352,7 @@ class Mechanism:
         else:
             p = self.param_vector(params)
             p.flags.writeable = False  # it becomes part of the result's run settings
-        if max_iter == _DEFAULT_MAX_ITER:
+        if max_iter == DEFAULT_MAX_ITER:
             opt = self._default_options[(bool(newton), keep)]
         else:
             opt = self._new_options(self.ffi, max_iter, bool(newton), keep)
@@ -368,14 +365,14 @@ class Mechanism:
         settings = None
         if forces:
             arrays["frc"] = (n, sizes["nfo"])
-            g = _si(self.name, gravity, "acceleration", "gravity")
-            g_dir = _si(self.name, gravity_direction, "angle", "gravity_direction")
+            g = si(self.name, gravity, "acceleration", "gravity")
+            g_dir = si(self.name, gravity_direction, "angle", "gravity_direction")
             gx, gy = g * math.cos(g_dir), g * math.sin(g_dir)
             tiny = 1e-15 * abs(g)  # -90 deg is exactly -y, not (6e-16, -g)
             gv = _readonly(np.array([0.0 if abs(gx) < tiny else gx, 0.0 if abs(gy) < tiny else gy]))
             if not (isinstance(moment_about, (tuple, list)) and len(moment_about) == 2):
                 raise ParameterError(self.name, "moment_about", f"must be a point (x, y), got {moment_about!r}")
-            about = tuple(_si(self.name, v, "length", "moment_about") for v in moment_about)
+            about = tuple(si(self.name, v, "length", "moment_about") for v in moment_about)
             if isinstance(loads, (Load, str, bytes, Mapping)) or not isinstance(loads, (list, tuple)):
                 raise ParameterError(self.name, "loads", f"must be a list or tuple of sewgen.Load, got "
                                                          f"{type(loads).__name__} (a single load: loads=[load])")
@@ -398,7 +395,7 @@ class Mechanism:
 
     def solve(self, phi, speed=None, accel=0.0, *, params: dict | None = None, held: dict | None = None,
               branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
-              newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER, out=None, singular: str = "raise",
+              newton: bool = False, max_iter: int = DEFAULT_MAX_ITER, out=None, singular: str = "raise",
               outputs=None) -> Motion:
         """Positions, velocities and accelerations of every coordinate, point and body at shaft angles ``phi``.
 
@@ -430,19 +427,17 @@ class Mechanism:
         of the same columns and length.
         """
         if (held is None and branch is None and guess is None and out is None
-                and degrees is False and newton is False and max_iter == _DEFAULT_MAX_ITER and singular == "raise"
+                and degrees is False and newton is False and max_iter == DEFAULT_MAX_ITER and singular == "raise"
                 and type(phi) is np.ndarray and (speed is None or type(speed) in (float, int))
                 and type(accel) in (float, int) and accel == 0):
             if outputs is None:
                 motion = self._fast_solve(phi, speed, params)
             else:
-                motion = _designs().fast_selected(self, phi, speed, params, outputs)
+                motion = many_designs.fast_selected(self, phi, speed, params, outputs)
             if motion is not None:
                 return motion
         if outputs is not None:
-            from sewgen.engine.designs import solve_selected
-
-            return solve_selected(self, outputs, dict(phi=phi, speed=speed, accel=accel, params=params, held=held,
+            return many_designs.solve_selected(self, outputs, dict(phi=phi, speed=speed, accel=accel, params=params, held=held,
                                                       branch=branch, guess=guess, degrees=degrees, newton=newton,
                                                       max_iter=max_iter, singular=singular), out)
         sweep = self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
@@ -466,7 +461,7 @@ class Mechanism:
         if hit is None:
             p = self.param_vector(params)  # every check, the typed errors
             p.flags.writeable = False
-            hit = (p, _ptr(self.ffi, "double *", p))
+            hit = (p, pointer(self.ffi, "double *", p))
             if len(self._pcache) >= 256:
                 self._pcache.clear()
             self._pcache[key] = hit
@@ -515,7 +510,7 @@ class Mechanism:
         got = self._fast.get("forces")
         if got is None:
             base = self.prepare(np.zeros(1), forces=True).settings
-            got = self._fast["forces"] = (base, _ptr(self.ffi, "double *", base.gravity), {})
+            got = self._fast["forces"] = (base, pointer(self.ffi, "double *", base.gravity), {})
         base, gravity_p, by_params = got
         settings = by_params.get(id(p))
         if settings is None:
@@ -530,13 +525,13 @@ class Mechanism:
         if not (nqa or noa) or not n:
             return
         ffi = self.ffi
-        self.lib.sg_make_continuous(n, q.shape[1], obs.shape[1], _ptr(ffi, "double *", q), _ptr(ffi, "double *", obs),
-                                    nqa, qa_p, noa, oa_p, ffi.NULL if order is None else _ptr(ffi, "size_t *", order))
+        self.lib.sg_make_continuous(n, q.shape[1], obs.shape[1], pointer(ffi, "double *", q), pointer(ffi, "double *", obs),
+                                    nqa, qa_p, noa, oa_p, ffi.NULL if order is None else pointer(ffi, "size_t *", order))
 
     def kinetostatics(self, phi, speed=None, accel=0.0, *, loads=(), gravity=_GRAVITY,
                       gravity_direction=_DOWN, moment_about=_ORIGIN, params: dict | None = None,
                       held: dict | None = None, branch: dict | None = None, guess: dict | None = None,
-                      degrees: bool = False, newton: bool = False, max_iter: int = _DEFAULT_MAX_ITER,
+                      degrees: bool = False, newton: bool = False, max_iter: int = DEFAULT_MAX_ITER,
                       out=None, singular: str = "raise") -> ForceAnalysis:
         """Kinematics and every force at shaft angles ``phi``, in one C call (seed 000 §二(三)).
 
@@ -549,7 +544,7 @@ class Mechanism:
         raises :class:`~sewgen.errors.SingularPositionError` naming the shaft angle.
         """
         if (held is None and branch is None and guess is None and out is None and degrees is False
-                and newton is False and max_iter == _DEFAULT_MAX_ITER and singular == "raise"
+                and newton is False and max_iter == DEFAULT_MAX_ITER and singular == "raise"
                 and moment_about is _ORIGIN and type(loads) in (tuple, list) and not loads
                 and type(gravity) is str and gravity == _GRAVITY
                 and type(gravity_direction) is str and gravity_direction == _DOWN
@@ -568,7 +563,7 @@ class Mechanism:
 
     def sweep_designs(self, designs, phi, speed=None, *, outputs=None, reduce=None, held=None, branch=None,
                       threads=None, accel=0.0, degrees: bool = False, newton: bool = False,
-                      max_iter: int = _DEFAULT_MAX_ITER, chunk: int | None = None, loop: str = "auto"):
+                      max_iter: int = DEFAULT_MAX_ITER, chunk: int | None = None, loop: str = "auto"):
         """Many designs over the same shaft angles, each swept as :meth:`solve` sweeps it (its own continuation,
         tolerance and per-position status), in C calls over chunks of designs on ``threads`` threads (default:
         every core; the GIL is released). Returns a :class:`sewgen.engine.designs.DesignSweep`.
@@ -592,22 +587,20 @@ class Mechanism:
         gets its status, first failing angle and error message; the others are unaffected. Bad arguments (an
         unknown column, a wrong length, an unknown output) raise a :class:`~sewgen.errors.ParameterError`
         naming them."""
-        from sewgen.engine.designs import sweep_designs
-
-        return sweep_designs(self, designs, phi, speed, accel, outputs=outputs, reduce=reduce, held=held,
+        return many_designs.sweep_designs(self, designs, phi, speed, accel, outputs=outputs, reduce=reduce, held=held,
                              branch=branch, threads=threads, degrees=degrees, newton=newton, max_iter=max_iter,
                              chunk=chunk, loop=loop)
 
     # -- single-position kernels (checks and inspection) -----------------------------------------------------
     def _ptr(self, ctype: str, arr: np.ndarray):
-        return _ptr(self.ffi, ctype, arr)
+        return pointer(self.ffi, ctype, arr)
 
     def constants(self, params: dict | None = None) -> np.ndarray:
         """The parameter-only constants the kernels read (sg_<name>_constants)."""
         return self._constants(self.param_vector(params))
 
     def _constants(self, p: np.ndarray) -> np.ndarray:
-        p = _vector(self.name, "params", p, len(self.description.params))
+        p = vector(self.name, "params", p, len(self.description.params))
         c = np.zeros(max(self.description.sizes["nc"], 1))
         getattr(self.lib, f"sg_{self.name}_constants")(self._ptr("double *", np.ascontiguousarray(p, dtype=float)),
                                                          self._ptr("double *", c))
@@ -672,9 +665,9 @@ class Mechanism:
         q = np.ascontiguousarray(motion.q[index], dtype=np.float64)
         x = np.concatenate([[float(motion.phi[index])], hv]).astype(np.float64)
         obs = np.ascontiguousarray(motion.obs[index], dtype=np.float64)
-        gv = _vector(self.name, "gravity", gravity, 2)
+        gv = vector(self.name, "gravity", gravity, 2)
         nload = sizes["nload"]
-        ld = np.zeros(max(nload, 1)) if load_row is None else _vector(self.name, "load_row", load_row, nload)
+        ld = np.zeros(max(nload, 1)) if load_row is None else vector(self.name, "load_row", load_row, nload)
         if q.shape != (sizes["nq"],) or obs.shape != (sizes["nobs"],):
             raise InputError(self.name, "the motion's arrays do not have this mechanism's sizes")
         A, b = np.zeros((nf, nf)), np.zeros(nf)
@@ -689,11 +682,11 @@ class Mechanism:
         """A run's parameter and held-input vectors: by name (dicts over the defaults) or C-ready arrays of the
         right length."""
         if isinstance(params, np.ndarray):
-            p = _vector(self.name, "params", params, len(self.description.params))
+            p = vector(self.name, "params", params, len(self.description.params))
         else:
             p = self.param_vector(params)
         if isinstance(held, np.ndarray):
-            hv = _vector(self.name, "held", held, len(self.description.held_inputs))
+            hv = vector(self.name, "held", held, len(self.description.held_inputs))
         else:
             hv = self.held_vector(held)
         return p, hv
@@ -748,7 +741,7 @@ class Sweep:
     def bind(self):
         """The C call of this sweep as a function of no arguments; it returns how many positions failed."""
         m, ffi = self.mechanism, self.mechanism.ffi
-        d = (lambda ctype, arr: _ptr(ffi, ctype, arr))
+        d = (lambda ctype, arr: pointer(ffi, ctype, arr))
         order = ffi.NULL if self.order is None else d("size_t *", self.order)
         head = (m._descriptor, self.n, d("double *", self.phi), d("double *", self.omega), d("double *", self.alpha),
                 d("double *", self.held), d("double *", self.params), d("int *", self.branch),
@@ -960,36 +953,6 @@ def _change_point(sweep: Sweep, i: int) -> str:
     return ""
 
 
-def _vector(mechanism: str, what: str, value, n: int) -> np.ndarray:
-    """``value`` as a C-ready float64 vector of exactly ``n`` finite entries (C reads n, whatever it is given)."""
-    try:
-        arr = np.ascontiguousarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ParameterError(mechanism, what, f"must be {n} numbers, got {value!r}") from None
-    if arr.shape != (n,):
-        raise ParameterError(mechanism, what, f"must have {n} entries, got shape {arr.shape}")
-    if not np.isfinite(arr).all():
-        raise ParameterError(mechanism, what, "must be finite")
-    return arr
-
-
-def _mapping(mechanism: str, what: str, value) -> Mapping:
-    """A by-name argument (params, held, branch, guess): a mapping, or None for none."""
-    if value is None:
-        return {}
-    if not isinstance(value, Mapping):
-        raise ParameterError(mechanism, what, f"must be a dict of names to values, got {type(value).__name__}")
-    return value
-
-
-def _si(mechanism: str, value, kind: str, name: str) -> float:
-    """to_si with its error retyped as a ParameterError naming the mechanism and ``name``."""
-    try:
-        return to_si(value, kind, name)
-    except UnitError as exc:
-        raise ParameterError(mechanism, name, exc.problem) from None
-
-
 def _length_scale(desc, p) -> float:
     lengths = [abs(p[s.index]) for s in desc.params if s.kind == "length"]
     return max(lengths + [1e-3])
@@ -998,12 +961,6 @@ def _length_scale(desc, p) -> float:
 def _readonly(arr: np.ndarray) -> np.ndarray:
     arr.flags.writeable = False
     return arr
-
-
-def _ptr(ffi, ctype: str, arr: np.ndarray):
-    """``arr`` as a C array argument ("double *" -> double[]). The typed from_buffer keeps ``arr`` alive for as
-    long as the cdata lives (a cast pointer would not: a temporary array could be freed before the call)."""
-    return ffi.from_buffer(ctype.replace(" *", "[]"), arr) if arr.size else ffi.NULL
 
 
 def _out_arrays(out) -> dict:

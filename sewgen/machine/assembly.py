@@ -34,8 +34,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from sewgen import mechanism as catalog_mechanism
-from sewgen.errors import BuildError, ParameterError, SewgenError
+from sewgen.engine.loader import catalog, load
+from sewgen.engine.loader import mechanism as catalog_mechanism
+from sewgen.errors import BuildError, NonFiniteOutputError, ParameterError, SewgenError
+from sewgen.machine.tables import group_table, machine_table
 from sewgen.machine.feed import regulator_angle
 from sewgen.engine.loads import Load, load_matrix
 from sewgen.machine.plan import ShaftCall, gravity_polar, plan_of, scalar
@@ -326,8 +328,6 @@ class MachineAnalysis:
         for what, values in (("shaft.front_bearing", self.front), ("shaft.rear_bearing", self.rear),
                              ("shaft", self.torque)):
             if not np.isfinite(values).all():
-                from sewgen.report.outputs import NonFiniteOutputError
-
                 raise NonFiniteOutputError(f"{what}: the {'driving torque' if what == 'shaft' else 'bearing load'}",
                                            values[~np.isfinite(values)].flat[0], self.machine.source or None)
 
@@ -337,7 +337,6 @@ class MachineAnalysis:
         as a pandas DataFrame indexed by the machine's shaft angle ``phi [deg]``; with ``group``, that group's
         kinematics and forces (its <group>.csv)."""
         from sewgen.engine.frames import dataframe
-        from sewgen.report.outputs import group_table, machine_table
 
         if group is not None:
             if group not in self.groups:
@@ -350,8 +349,6 @@ class MachineAnalysis:
     def to_xarray(self):
         """The machine's table as an xarray Dataset over ``phi`` (deg) (xarray is optional)."""
         from sewgen.engine.frames import dataset
-        from sewgen.report.outputs import machine_table
-
         return dataset({k: v for k, v in machine_table(self).items() if k != "phi [deg]"}, np.degrees(self.phi),
                        {"machine": self.machine.name})
 
@@ -763,7 +760,6 @@ def _group(rd: Reader, name: str, data: dict) -> Group:
 def _group_mechanism(rd: Reader, key: str, text: str):
     """A group's mechanism: a catalog name, or a declaration file (.py with ``declare()``) relative to the model
     file, derived and compiled on first use and then loaded from the cache (:func:`sewgen.load`)."""
-    from sewgen import catalog, load
 
     if text in catalog():
         return catalog_mechanism(text)

@@ -30,7 +30,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from sewgen import roles
-from sewgen.errors import SewgenError
+from sewgen.engine.loader import catalog, mechanism
+from sewgen.errors import RoleError, SewgenError
 
 SERIES = ("two-term", "exact")
 DEFAULT_WEIGHTS = (0.1, 0.9)  # §3: w1 ≤ 0.2, w2 ≥ 0.8; the paper computes with 0.1, 0.9
@@ -292,9 +293,6 @@ class NeedleDrive:
 
 def needle_drive(mech=None) -> NeedleDrive:
     """``mech`` (default: the catalog mechanism that plays the needle-drive roles) as a :class:`NeedleDrive`."""
-    from sewgen import catalog, mechanism
-    from sewgen.errors import RoleError
-
     if mech is None:
         found = [mechanism(n) for n in catalog()
                  if all(mechanism(n).description.has_role(r) for r in roles.NEEDLE_DRIVE)]

@@ -32,7 +32,7 @@ class ArcSwitch:
                                       for k, v in self.jumps.items()}}
 
 
-def _arc_columns(mech) -> dict:
+def arc_columns(mech) -> dict:
     return {name[:-len(".arc")]: k for k, (name, _) in enumerate(mech.description.observables)
             if name.endswith(".arc")}
 
@@ -43,7 +43,7 @@ def arc_switches(mech, motion, *, params=None, held=None, tol: float = 1e-10, si
     ``params`` and ``held`` must be the sweep's. The switch angle is bracketed to ``tol`` rad; the one-sided
     accelerations are taken ``side`` rad either side of it (their difference is the jump to O(side)).
     """
-    cols = _arc_columns(mech)
+    cols = arc_columns(mech)
     if not cols:
         return []
     out = []

@@ -70,7 +70,10 @@ def column(name: str) -> str:
 
 
 # the cubic Hermite pieces (one implementation, sewgen.hermite): re-exported for the callers of this module
-from sewgen.hermite import (_bracketed_root, at, crossings, hermite, hermite_slope, maximum, power_form)  # noqa: E402,F401
+from sewgen.hermite import (at, bracketed_root, crossings, hermite, hermite_slope, maximum, power_form)  # noqa: E402,F401
+from sewgen.machine.cams import arc_columns  # noqa: E402
+from sewgen.machine.feed import plate_height  # noqa: E402
+from sewgen.roles import FEED_BAR, FEED_DOG, THROAT_PLATE  # noqa: E402
 
 
 def _next(a):
@@ -164,7 +167,7 @@ def arc_jumps(arc, v, a, h):
     t = np.where(np.abs(f0) <= np.abs(f1), 0.0, h)
     b = np.flatnonzero((f0 < 0.0) != (f1 < 0.0))
     if len(b):
-        t[b] = h * _bracketed_root(c0[b], c1[b], c2[b], c3[b], f0[b] < 0.0)
+        t[b] = h * bracketed_root(c0[b], c1[b], c2[b], c3[b], f0[b] < 0.0)
     left = al + jl * t + kl * t * t / 2
     right = ar_ + jr * (t - h) + kr * (t - h) ** 2 / 2
     return rows, i, right - left
@@ -300,14 +303,11 @@ def feed_observables(mech) -> tuple:
     """The indices, among ``mech``'s observables, of the dog's x, y, vx, vy, ax, the dog body's angle (its
     declared u axis; None without one) and the first cam contact's arc (None without a cam). Parts by role:
     the ``feed_dog`` point and its body (``feed_bar`` role if declared)."""
-    from sewgen.machine.cams import _arc_columns
-    from sewgen.roles import FEED_BAR, FEED_DOG
-
     desc = mech.description
     pt = desc.role(FEED_DOG)
     body = desc.role(FEED_BAR).name if desc.has_role(FEED_BAR) else pt.body
     tilt = desc.body(body).offset if body and desc.has("body", body) else None
-    arcs = _arc_columns(mech)
+    arcs = arc_columns(mech)
     arc = next(iter(arcs.values())) if arcs else None
     return tuple(pt.offset + k for k in range(5)) + (tilt, arc)
 
@@ -347,9 +347,6 @@ def machine_indices(machine, tm=None, step_deg: float = 0.25, switches: dict | N
     throat plate (by role), on the timing sweep ``tm`` (sewgen.machine.timing.Timing; else a sweep of ``step_deg`` at
     the machine's speed). The needle events come from the timing (the machine's needle point and cloth);
     ``switches`` (group -> sewgen.machine.cams.ArcSwitch list) gives the exact acceleration jumps."""
-    from sewgen.machine.feed import plate_height
-    from sewgen.roles import FEED_DOG, THROAT_PLATE
-
     out = {}
     groups = [g for g in machine.groups
               if g.mechanism.description.has_role(FEED_DOG) and g.mechanism.description.has_role(THROAT_PLATE)]

@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from sewgen.machine.cams import arc_switches
-from sewgen.errors import SewgenError
+from sewgen.errors import NonFiniteOutputError, SewgenError
+from sewgen.machine.tables import angle_deg, group_table, machine_table
 from sewgen.machine.feed import dog_travel, has_feed, plate_height
 from sewgen.machine import shaking
 from sewgen.roles import FEED_DOG, KNIFE_EDGE, LOWER_KNIFE_EDGE, STITCH_REGULATOR
@@ -72,19 +73,6 @@ UNITS = {"angles": "deg", "speed_rpm": "rpm (revolutions per minute)", "forces":
 DIGITS = 12
 
 
-class NonFiniteOutputError(SewgenError, ValueError):
-    """A result that came out infinite or NaN (an absurd mass or speed in a model file overflows): never written.
-    ``key`` names the entry or column, ``file`` the model file."""
-
-    def __init__(self, key: str, value, file: str | None = None):
-        problem = f"{key} came out {value} (not finite): check the model's masses, inertias and speed"
-        super().__init__(f"{file}: {problem}" if file else problem, problem=problem, key=key, file=file)
-
-
-def _deg(phi) -> np.ndarray:
-    return np.degrees(phi) % 360.0
-
-
 def _clean(value, key: str = "summary", file: str | None = None):
     """``value`` (nested dicts, lists, numbers) with every float rounded to :data:`DIGITS` significant digits and
     -0.0 made 0.0; a non-finite number raises :class:`NonFiniteOutputError` naming its key."""
@@ -116,41 +104,6 @@ def _check_columns(cols: dict, table: str, file: str | None) -> dict:
     return cols
 
 
-def machine_table(a) -> dict:
-    """Machine-level columns: bearings, torques, shaking force and moment, powers (SI; ``phi`` in deg)."""
-    cols = {"phi [deg]": _deg(a.phi)}
-    for which in ("front", "rear"):
-        b = a.bearing(which)
-        cols[f"bearing_{which}_on_frame.fx [N]"], cols[f"bearing_{which}_on_frame.fy [N]"] = b[:, 0], b[:, 1]
-        cols[f"bearing_{which}_on_frame.magnitude [N]"] = np.hypot(b[:, 0], b[:, 1])
-    cols["drive_torque [N*m]"] = a.torque
-    for name, fa in a.groups.items():
-        cols[f"{name}.torque [N*m]"] = fa.torque("shaft")
-    if np.any(a.friction_power):  # columns only where the model switches friction on
-        cols["bearings.friction_torque [N*m]"] = a.bearing_friction
-        cols["friction_power [W]"] = a.friction_power
-    sf = shaking.shaking_force(a)  # dynamic, on the frame; the weight apart (summary.json)
-    cols["shaking_on_frame.fx [N]"], cols["shaking_on_frame.fy [N]"] = sf[:, 0], sf[:, 1]
-    cols["shaking_on_frame.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
-    moments = shaking.shaking_moments(a)
-    for k, axis in enumerate("xyz"):
-        cols[f"shaking_on_frame.moment_{axis} [N*m]"] = moments[:, k]
-    fr = a.frame_reaction
-    cols["frame_on_parts.fx [N]"], cols["frame_on_parts.fy [N]"] = fr[:, 0], fr[:, 1]
-    cols["drive_power [W]"] = a.drive_power
-    cols["load_power [W]"] = a.load_power
-    cols["energy_rate [W]"] = a.energy_rate()
-    return cols
-
-
-def group_table(fa, phi) -> dict:
-    """Kinematics and forces of one group, one row per machine shaft angle ``phi`` (SI; angles of φ in deg)."""
-    cols = {"phi [deg]": _deg(phi), "group_phi [deg]": _deg(fa.phi)}
-    cols.update({k: v for k, v in fa.motion.table().items() if not k.startswith("phi ")})
-    cols.update({k: v for k, v in fa.table().items() if not k.startswith("phi ")})
-    return cols
-
-
 def _rms(values: np.ndarray) -> float:
     """RMS without overflow: large values are scaled before squaring."""
     scale = float(np.max(np.abs(values))) if len(values) else 0.0
@@ -161,8 +114,8 @@ def _rms(values: np.ndarray) -> float:
 
 def _stat(values: np.ndarray, phi: np.ndarray, unit: str) -> dict:
     i, j = int(np.argmax(values)), int(np.argmin(values))
-    return {"unit": unit, "max": float(values[i]), "max_at_deg": float(_deg(phi[i])), "min": float(values[j]),
-            "min_at_deg": float(_deg(phi[j])), "rms": _rms(values)}
+    return {"unit": unit, "max": float(values[i]), "max_at_deg": float(angle_deg(phi[i])), "min": float(values[j]),
+            "min_at_deg": float(angle_deg(phi[j])), "rms": _rms(values)}
 
 
 def model_path(source: str, start=None) -> str:
@@ -231,8 +184,8 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
         if has_feed(g.mechanism):
             t = dog_travel(fa.motion, plate_height(g.mechanism, g.params or None))
             entry[FEED_DOG] = {"travel_above_plate_mm": t.travel * 1e3, "height_above_plate_mm": t.height * 1e3,
-                               "rises_at_deg": float(_deg(t.rise - g.phase)),
-                               "sinks_at_deg": float(_deg(t.sink - g.phase))}
+                               "rises_at_deg": float(angle_deg(t.rise - g.phase)),
+                               "sinks_at_deg": float(angle_deg(t.sink - g.phase))}
         if g.name in indices:
             entry.setdefault(FEED_DOG, {})["indices"] = indices[g.name]
         d = g.mechanism.description
@@ -241,9 +194,9 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
             lower = role_param(g, LOWER_KNIFE_EDGE)
             k = int(np.argmin(ky))
             entry[KNIFE_EDGE] = {"stroke_mm": float(np.ptp(ky)) * 1e3, "overlap_mm": (lower - float(ky[k])) * 1e3,
-                                 "lowest_at_deg": float(_deg(phi[k]))}
+                                 "lowest_at_deg": float(angle_deg(phi[k]))}
         if switches and switches.get(g.name):
-            entry["cam_arc_switches"] = [dict(s.as_dict(), angle_deg=float(_deg(s.angle - g.phase)))
+            entry["cam_arc_switches"] = [dict(s.as_dict(), angle_deg=float(angle_deg(s.angle - g.phase)))
                                          for s in switches[g.name]]
         out["groups"][g.name] = entry
     if m.stitch is not None:  # stitch-formation timing and thread control (sewgen.machine.timing)

@@ -167,9 +167,9 @@ def _batched(mech, P, phi, omega: float, held, branch, threads=None, observables
     if observables is None:
         outputs = ["all"]
     else:
-        from sewgen.engine.designs import _columns
+        from sewgen.engine.designs import output_columns
 
-        names = _columns(mech).names
+        names = output_columns(mech).names
         observables = tuple(int(k) for k in observables)
         outputs = [names[3 * nq + k] for k in observables]
     res = mech.sweep_designs(P, phi, omega, held=held, branch=branch, outputs=outputs, threads=threads)

@@ -1,0 +1,54 @@
+"""The engine's arguments: checked, converted to SI and handed to C (every entry point reads them so).
+
+``pointer`` is how an array reaches C; ``si``, ``vector`` and ``mapping`` check a user's value and name the
+mechanism and the parameter when it is wrong.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from sewgen.errors import ParameterError
+from sewgen.units import UnitError, to_si
+
+#: Parameter kinds that must not be negative.
+NONNEGATIVE = {"mass", "inertia"}
+#: Newton iterations per position unless the caller says otherwise.
+DEFAULT_MAX_ITER = 50
+
+
+def pointer(ffi, ctype: str, arr: np.ndarray):
+    """``arr`` as a C array argument ("double *" -> double[]). The typed from_buffer keeps ``arr`` alive for as
+    long as the cdata lives (a cast pointer would not: a temporary array could be freed before the call)."""
+    return ffi.from_buffer(ctype.replace(" *", "[]"), arr) if arr.size else ffi.NULL
+
+
+def vector(mechanism: str, what: str, value, n: int) -> np.ndarray:
+    """``value`` as a C-ready float64 vector of exactly ``n`` finite entries (C reads n, whatever it is given)."""
+    try:
+        arr = np.ascontiguousarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(mechanism, what, f"must be {n} numbers, got {value!r}") from None
+    if arr.shape != (n,):
+        raise ParameterError(mechanism, what, f"must have {n} entries, got shape {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise ParameterError(mechanism, what, "must be finite")
+    return arr
+
+
+def mapping(mechanism: str, what: str, value) -> Mapping:
+    """A by-name argument (params, held, branch, guess): a mapping, or None for none."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise ParameterError(mechanism, what, f"must be a dict of names to values, got {type(value).__name__}")
+    return value
+
+
+def si(mechanism: str, value, kind: str, name: str) -> float:
+    """to_si with its error retyped as a ParameterError naming the mechanism and ``name``."""
+    try:
+        return to_si(value, kind, name)
+    except UnitError as exc:
+        raise ParameterError(mechanism, name, exc.problem) from None
