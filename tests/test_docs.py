@@ -21,7 +21,7 @@ def test_the_site_builds_strictly(tmp_path):
     res = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stdout + res.stderr
-    assert "WARNING" not in res.stderr, res.stderr
+    assert not re.search(r"^WARNING\s+-", res.stderr, re.M), res.stderr  # mkdocs' own log lines (strict fails on them)
     for page in ("index.html", "tutorial/first-machine/index.html", "reference/machine/index.html"):
         assert (tmp_path / "site" / page).stat().st_size > 1000, page
     # mkdocstrings rendered the API from the docstrings
