@@ -1,8 +1,9 @@
 """The command line's contract with a new user (issue 10, and items 6–7 of issue 11).
 
 * The README's quick start works twice in one folder, and then the built-in name still finds the built-in model.
-* Every ``sewgen ...`` command line of the README's code blocks runs (extracted from README.md, not copied here);
-  so do its Python examples; the numbers the README quotes for the balancing command are the ones it prints.
+* Every ``sewgen ...`` command line of the code blocks of README.md and docs/**/*.md runs (extracted from them,
+  not copied here); so does every ```python block; the numbers the docs quote for the balancing command are the
+  ones it prints. ```text, ```toml and other blocks are illustrations: they are not run.
 * Every user mistake — a bare number, a unit-less or garbled quantity, an impossible step, an output path that
   cannot be written, a broken declaration or model file — exits 2 with exactly one line on stderr naming the
   culprit, nothing on stdout and no traceback.
@@ -34,6 +35,7 @@ pytestmark = [pytest.mark.c, pytest.mark.cli, pytest.mark.plots, pytest.mark.der
 
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text(encoding="utf-8")
+DOCS = [README] + [p.read_text(encoding="utf-8") for p in sorted((ROOT / "docs").rglob("*.md"))]
 MODEL = (ROOT / "sewgen" / "models" / "jb1-3.toml").read_text(encoding="utf-8")
 
 
@@ -69,14 +71,19 @@ def refused(res, *culprits):
     return line
 
 
-# -- the README ----------------------------------------------------------------------------------------------------
+# -- the README and the docs ---------------------------------------------------------------------------------------
 
-def _blocks(lang: str | None = None) -> list[str]:
-    """The fenced code blocks of README.md (of language ``lang``, or every one)."""
+SHELL = ("", "bash", "sh", "shell", "console")  # blocks whose ``sewgen ...`` lines run; ```text etc. illustrate
+
+
+def _blocks(lang: str | tuple | None = None) -> list[str]:
+    """The fenced code blocks of README.md, then of docs/**/*.md (of language ``lang`` or one of a tuple of them,
+    or every one)."""
     out = []
-    for m in re.finditer(r"^```([A-Za-z]*)\n(.*?)^```", README, re.S | re.M):
-        if lang is None or m.group(1) == lang:
-            out.append(m.group(2))
+    for text in DOCS:
+        for m in re.finditer(r"^```([A-Za-z]*)\n(.*?)^```", text, re.S | re.M):
+            if lang is None or m.group(1) == lang or (isinstance(lang, tuple) and m.group(1) in lang):
+                out.append(m.group(2))
     return out
 
 
@@ -93,9 +100,12 @@ def _commands(block: str) -> list[list[str]]:
     return out
 
 
-QUICK_START = _blocks("bash")[0]
+QUICK_START = _blocks("bash")[0]  # README's first bash block
 QUICK = _commands(QUICK_START)
-COMMANDS = [argv for block in _blocks() for argv in _commands(block) if argv not in QUICK]
+COMMANDS = []  # each command once, in the order the README and then the docs show it
+for _argv in (argv for block in _blocks(SHELL) for argv in _commands(block)):
+    if _argv not in QUICK and _argv not in COMMANDS:
+        COMMANDS.append(_argv)
 
 
 def test_the_readme_has_two_quick_start_commands_and_command_examples():
@@ -190,13 +200,13 @@ def test_every_readme_python_example_runs(k, readme_folder, cache):
     code = _blocks("python")[k]
     res = subprocess.run([sys.executable, "-c", code], cwd=readme_folder, capture_output=True, text=True,
                          env=dict(os.environ, SEWGEN_CACHE=str(cache)), timeout=600)
-    assert res.returncode == 0, f"README python block {k}:\n{code}\n{res.stderr}"
+    assert res.returncode == 0, f"python block {k} of README.md and docs/:\n{code}\n{res.stderr}"
 
 
 def test_the_readme_quotes_what_the_balance_command_prints(readme_folder, cache):
     m = re.search(r"the second command above prints K = ([0-9.]+), ([0-9.]+) N\s+peak and objective ([0-9.]+)",
-                  README)
-    assert m, "the README's balancing numbers"
+                  "\n".join(DOCS))
+    assert m, "the docs' balancing numbers (docs/how-to/balancing.md)"
     argv = [a for a in COMMANDS if a[:1] == ["balance"] and "--plot" in a][0]
     out = ok(sewgen_run(argv, readme_folder, cache)).stdout
     K, F1, obj = m.groups()
