@@ -13,6 +13,7 @@ import math
 import re
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +21,7 @@ import pytest
 
 import sewgen
 from sewgen.machine import shaking
+from sewgen.machine import timing as timing_module
 from sewgen.machine.assembly import Group, Machine, Shaft, ShaftMass, load_machine
 from sewgen.machine.modelfile import MODELS_DIR, ModelFileError
 from sewgen.machine.thread import Guide, ThreadPath, eye_motion, guide_positions, path_length
@@ -353,3 +355,81 @@ def test_model_file_stitch_errors_name_the_key(tmp_path):
         with pytest.raises(ModelFileError) as exc:
             load_machine(p)
         assert exc.value.key == key, (exc.value.key, str(exc.value))
+
+
+# -- the rules: one class each, found through the registry -------------------------------------------------------
+UNIT = {"length": "mm", "angle": "deg"}  # a rule's kind (its min/max) -> the unit its checks show
+
+
+def test_every_registered_rule_is_a_class_of_its_own():
+    rules = timing_module.RULES
+    assert len(rules) == 18
+    for name, rule in rules.items():
+        cls = type(rule)
+        assert isinstance(rule, timing_module.TimingRule) and rule.name == name, name
+        assert cls.measure is not timing_module.TimingRule.measure, f"{name}: measured nowhere"
+        assert "__doc__" in vars(cls) and cls.__doc__.strip(), f"{name}: no docstring of its own (its source)"
+        assert UNIT.get(rule.kind) == rule.unit and rule.text, name
+        assert sum(type(r) is cls for r in rules.values()) == 1, f"{name}: its class registered twice"
+    # the module's table of rules names the same rules, in the same order
+    documented = re.findall(r"^``(\w+)``\s+(length|angle)\s", timing_module.__doc__, re.M)
+    assert documented == [(n, r.kind) for n, r in rules.items()]
+
+
+@pytest.mark.parametrize("path", sorted(MODELS_DIR.glob("*.toml")), ids=lambda p: p.stem)
+def test_every_model_files_rule_is_registered(path):
+    doc = tomllib.loads(path.read_text())
+    names = [r["rule"] for r in doc.get("stitch", {}).get("rules", [])]
+    assert names and set(names) <= set(timing_module.RULES), set(names) - set(timing_module.RULES)
+    st = load_machine(path).stitch
+    assert [r.kind for r in st.rules] == names
+
+
+class NeedleHalfTurn(timing_module.TimingRule):
+    """A rule for the test: the needle's fall, top dead centre to bottom dead centre (half a turn for a
+    crank-driven needle bar)."""
+
+    name = "needle_half_turn"
+    kind, unit = "angle", "deg"
+    text = "needle falls over half a turn"
+    needs = ("tdc", "bdc")
+    lacks = "the machine needs a needle_point"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return timing_module.Measured((v["bdc"] - v["tdc"]) % (2 * math.pi), "the needle falls from its top to "
+                                      "its bottom dead centre over")
+
+
+def test_a_rule_registered_only_in_the_registry_is_read_and_checked(tmp_path, monkeypatch):
+    """A rule class registered in RULES and nowhere else is read from a model file and checked in its place
+    among the machine's rules; unregistered, the same file names it an unknown rule."""
+    text = (MODELS_DIR / "jb1-3.toml").read_text()
+    anchor = '[[stitch.rules]]\nrule = "take_up_rise"\n'
+    assert text.count(anchor) == 1
+    p = tmp_path / "half_turn.toml"
+    p.write_text(text.replace(anchor, '[[stitch.rules]]\nrule = "needle_half_turn"\nmin = "175 deg"\n'
+                                      'max = "3.2 rad"\nsource = "the test"\n' + anchor))
+    with monkeypatch.context() as mp:
+        mp.setitem(timing_module.RULES, NeedleHalfTurn.name, NeedleHalfTurn())
+        m = load_machine(p)
+        tm = timing(m)
+        names = [c.rule for c in tm.checks]
+        assert names[names.index("needle_half_turn") + 1] == "take_up_rise" and len(names) == 13
+        c = tm.check("needle_half_turn")
+        ref = math.degrees((tm.values["bdc"] - tm.values["tdc"]) % (2 * math.pi))
+        assert c.value == pytest.approx(ref, abs=1e-9) and 170.0 < c.value < 190.0
+        assert (c.lo, c.hi, c.unit, c.ok, c.source) == (175.0, pytest.approx(math.degrees(3.2)), "deg", True,
+                                                       "the test")
+        assert c.message.startswith("needle_half_turn: the needle falls from its top to its bottom dead centre "
+                                    f"over: {c.value:.3f} deg, within 175 – ")
+        assert "13 of 13 rules pass" in tm.table() and tm.as_dict()["checks"][names.index(c.rule)]["ok"] is True
+        # a machine without the values it needs: it cannot be checked, and says what is missing
+        bare = timing_module.RULES["needle_half_turn"].check(m.stitch.rules[names.index(c.rule)],
+                                                            dataclasses.replace(tm, values={}), m.stitch, m, None)
+        assert not bare.ok and bare.message == "needle_half_turn: cannot be checked: the machine needs a needle_point"
+    assert "needle_half_turn" not in timing_module.RULES
+    with pytest.raises(ModelFileError) as exc:
+        load_machine(p)
+    where = f"stitch.rules[{names.index('needle_half_turn')}].rule"
+    assert exc.value.key == where and "unknown rule" in str(exc.value)

@@ -18,7 +18,9 @@ interpolant of its values and exact shaft-angle derivatives (v/ω, a/ω² from t
 speed; sewgen.hermite), and a crossing or an extreme is found on it to the last bit. Angles are the machine's shaft angle φ (needle top at
 90° on the JB1-3), in [0°, 360°).
 
-Rules (``rule`` in the model file; ``min``/``max`` with units; ``source`` names the manual, text or seed):
+Rules (``rule`` in the model file; ``min``/``max`` with units; ``source`` names the manual, text or seed), each a
+:class:`TimingRule` class in the rules section below, registered in :data:`RULES` by its decorator (a new rule
+is its class there and its row here):
 
 =====================================  ========  ================================================================
 ``hook_at_needle_rise``                length    the needle's rise from its bottom dead centre when the hook point
@@ -67,6 +69,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -82,32 +85,436 @@ from sewgen.roles import (FEED_DOG, HOOK_POINT, LOWER_LOOPER_TIP, NEEDLE_EYE, NE
 TWO_PI = 2.0 * math.pi
 STEP_DEG = 0.25  # the timing sweep's step (1440 positions a turn)
 
-#: rule -> (kind of its value, unit shown, text)
-RULES = {
-    "hook_at_needle_rise": ("length", "mm", "needle rise from BDC when the hook point reaches the needle"),
-    "hook_above_eye": ("length", "mm", "hook point above the needle eye's top at the needle"),
-    "hook_in_scarf": ("length", "mm", "hook point within the needle's scarf"),
-    "shuttle_start_at_bdc": ("angle", "deg", "shuttle starts its forward stroke at the needle's BDC"),
-    "loop_released_before_reversal": ("angle", "deg", "shuttle turns past the loop release before it reverses"),
-    "dog_sinks_before_needle_enters": ("angle", "deg", "feed dog below the plate before the needle enters"),
-    "dog_rises_after_needle_leaves": ("angle", "deg", "feed dog above the plate after the needle leaves"),
-    "take_up_rises_after_release": ("angle", "deg", "take-up gives thread until the loop is cast off"),
-    "stitch_set_before_needle_enters": ("angle", "deg", "take-up sets the stitch before the needle enters"),
-    "take_up_rise": ("angle", "deg", "take-up rises fast"),
-    "take_up_rises_over": ("angle", "deg", "take-up rising over the stitch-setting window"),
-    "thread_slack": ("length", "mm", "thread slack while the hook carries the loop"),
-    "lower_looper_at_needle_rise": ("length", "mm", "needle rise from BDC when the lower looper reaches the needle"),
-    "lower_looper_above_eye": ("length", "mm", "lower looper tip above the needle eye's top at the needle"),
-    "lower_looper_passes_level": ("length", "mm", "needle height at the lower looper's return minus forward pass"),
-    "upper_takes_lower_thread": ("length", "mm", "lower looper beyond the needle as the upper looper passes it"),
-    "needle_in_upper_triangle": ("length", "mm", "upper looper beyond the needle as the needle enters"),
-    "upper_above_material": ("length", "mm", "upper looper tip above the material as the needle enters"),
-}
-_SCALE = {"length": 1e3, "angle": 180.0 / math.pi}  # SI -> the unit shown
-
 
 class TimingError(SewgenError):
     """A machine whose timing cannot be worked out (a part that never crosses where it must)."""
+
+
+# -- the rules ---------------------------------------------------------------------------------------------------
+
+_SCALE = {"length": 1e3, "angle": 180.0 / math.pi}  # SI -> the unit shown
+
+#: rule name -> the rule (a TimingRule), in the order of the table above; a class decorated with @_rule is one
+RULES: dict = {}
+
+
+class Measured(NamedTuple):
+    """A rule's value (SI) and how it was measured: the message's middle, naming the angles it was read at."""
+
+    value: float
+    how: str
+
+
+class TimingRule:
+    """One kind of timing rule, measured on a machine's :class:`Timing`. ``name`` is the model file's ``rule``,
+    ``kind`` the kind of its value (a key of ``_SCALE``: its ``min``/``max`` are read in it), ``unit`` the unit
+    shown, ``text`` what it measures. ``needs`` names the :attr:`Timing.values` it reads and ``lacks`` what a
+    machine without one of them lacks; ``window`` rules take ``from``/``to``; ``own_limits`` rules need no
+    ``min``/``max`` in the file (:meth:`limits` gives them).
+
+    A rule measures (:meth:`measure`); :meth:`check` does the rest, the same for every rule."""
+
+    name = ""
+    kind = "length"
+    unit = "mm"
+    text = ""
+    needs: tuple = ()
+    lacks = ""
+    window = False
+    own_limits = False
+
+    def measure(self, rule: Rule, tm: Timing, st: Stitch, machine, ge) -> Measured | str:
+        """The value and how it was measured, or why it cannot be (what the machine lacks, a str). ``rule`` is the
+        model file's entry, ``st`` the machine's stitch, ``ge`` the needle eye's group (None without one)."""
+        raise NotImplementedError(self.name)
+
+    def limits(self, rule: Rule, st: Stitch, ge) -> tuple:
+        """(lower, upper) limits in SI, None where open: the model file's."""
+        return rule.lo, rule.hi
+
+    def check(self, rule: Rule, tm: Timing, st: Stitch, machine, ge) -> Check:
+        """The rule measured on ``tm`` against its limits: value and limits in the unit shown, pass or fail."""
+        scale = _SCALE[self.kind]
+
+        def shown(x):  # SI back to the unit shown, without the conversion's last-digit noise
+            return None if x is None else float(f"{x * scale:.12g}")
+
+        got = self.lacks if any(tm.values.get(k) is None for k in self.needs) else \
+            self.measure(rule, tm, st, machine, ge)
+        if isinstance(got, str):
+            return Check(rule.kind, math.nan, shown(rule.lo), shown(rule.hi), self.unit, False,
+                         f"{rule.kind}: cannot be checked: {got}", rule.source)
+        lo, hi = (shown(x) for x in self.limits(rule, st, ge))
+        val = float(got.value * scale)
+        ok = bool((lo is None or val >= lo - 1e-9) and (hi is None or val <= hi + 1e-9))
+        limit = Check(rule.kind, val, lo, hi, self.unit, ok, "", rule.source).limit
+        msg = f"{rule.kind}: {got.how}: {val:.3f} {self.unit}, {'within' if ok else 'outside'} {limit}"
+        return Check(rule.kind, val, lo, hi, self.unit, ok, msg, rule.source)
+
+
+def _rule(cls):
+    """Class decorator: registers one instance of the rule class ``cls`` in :data:`RULES` under its name."""
+    if cls.name in RULES:
+        raise ValueError(f"timing rule {cls.name!r} registered twice")
+    RULES[cls.name] = cls()
+    return cls
+
+
+def _deg(a) -> str:
+    return f"{math.degrees(a) % 360.0:.2f}°"
+
+
+class _AngleRule(TimingRule):
+    """A rule whose value is a shaft angle (deg shown)."""
+
+    kind = "angle"
+    unit = "deg"
+
+
+class _TakerAtNeedle(TimingRule):
+    """A loop taker (``role``: the hook point, a looper's tip) meeting the needle's centre line at event ``event``
+    of the sweep (its forward pass); ``taker`` names it in the message."""
+
+    role = ""
+    event = ""
+    taker = ""
+
+    @property
+    def needs(self):
+        return (self.event, "bdc")
+
+    def measure(self, rule, tm, st, machine, ge):
+        return self.measured(*_taker_at_needle(tm, machine, ge, tm.values, self.event, self.role), tm.values, ge)
+
+    def measured(self, a, rise, height, v, ge) -> Measured | str:
+        """The rule's value from the taker's angle ``a`` at the needle, the needle's rise from BDC then and the
+        taker's height above the needle eye's top then (None without a needle eye)."""
+        raise NotImplementedError(self.name)
+
+
+class _NeedleRiseAtTaker(_TakerAtNeedle):
+    """The needle's rise from its bottom dead centre when the taker reaches the needle's centre line."""
+
+    def measured(self, a, rise, height, v, ge):
+        return Measured(rise, f"{self.taker} reaches the needle's centre line at φ = {_deg(a)}, when the needle has "
+                              f"risen this far from its bottom dead centre (φ = {_deg(v['bdc'])})")
+
+
+class _TakerAboveEye(_TakerAtNeedle):
+    """The taker's height above the top of the needle eye when it reaches the needle's centre line; ``at`` and
+    ``who`` name it in the message."""
+
+    at = ""
+    who = ""
+
+    def measured(self, a, rise, height, v, ge):
+        if height is None:
+            return "the machine needs a needle_eye"
+        return Measured(height, f"at φ = {_deg(a)} ({self.at}) {self.who} is this far above the top of the needle "
+                                f"eye")
+
+
+@_rule
+class HookAtNeedleRise(_NeedleRiseAtTaker):
+    """Service manuals: the hook point at the needle's centre line when the needle bar has risen about 2 mm from
+    its bottom dead centre (JUKI LU-2210N-7, TL-2010Q, LH-4128; DOMAIN-NOTES)."""
+
+    name = "hook_at_needle_rise"
+    text = "needle rise from BDC when the hook point reaches the needle"
+    role, event, taker = HOOK_POINT, "hook_fwd", "the hook point"
+    lacks = "the machine needs a needle_point and a hook_point"
+
+
+@_rule
+class HookAboveEye(_TakerAboveEye):
+    """Service manuals: the hook point about 1-2.5 mm above the top of the needle eye as it reaches the needle
+    (typical adjustment; DOMAIN-NOTES)."""
+
+    name = "hook_above_eye"
+    text = "hook point above the needle eye's top at the needle"
+    role, event, at, who = HOOK_POINT, "hook_fwd", "hook point at the needle", "the hook point"
+    lacks = "the machine needs a needle_point and a hook_point"
+
+
+@_rule
+class HookInScarf(_TakerAtNeedle):
+    """The hook point passes the needle in its scarf: its height above the needle eye's top between 0 and the
+    needle's ``needle_scarf`` (the limits are the needle's, none in the model file)."""
+
+    name = "hook_in_scarf"
+    text = "hook point within the needle's scarf"
+    role, event = HOOK_POINT, "hook_fwd"
+    lacks = "the machine needs a needle_point and a hook_point"
+    own_limits = True
+
+    def measured(self, a, rise, height, v, ge):
+        if height is None:
+            return "the machine needs a needle_eye"
+        if not ge.mechanism.description.has_role(NEEDLE_SCARF):
+            return "the needle declares no needle_scarf"
+        return Measured(height, f"at φ = {_deg(a)} the hook point passes this far above the needle eye's top, in "
+                                f"the needle's {role_param(ge, NEEDLE_SCARF) * 1e3:g} mm scarf")
+
+    def limits(self, rule, st, ge):
+        return 0.0, role_param(ge, NEEDLE_SCARF)
+
+
+@_rule
+class ShuttleStartAtBdc(_AngleRule):
+    """The household oscillating shuttle starts its forward stroke from its end position with the needle at its
+    lowest point and meets the needle as it rises (repair guides; DOMAIN-NOTES): the reversal before the forward
+    pass minus the needle's bottom dead centre."""
+
+    name = "shuttle_start_at_bdc"
+    text = "shuttle starts its forward stroke at the needle's BDC"
+    needs = ("shuttle_start", "bdc")
+    lacks = "the machine needs a needle_point and a hook_point on a shuttle"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(_wrap(v["shuttle_start"] - v["bdc"]),
+                        f"the shuttle starts its forward stroke at φ = {_deg(v['shuttle_start'])}, the needle is at "
+                        f"its bottom dead centre at φ = {_deg(v['bdc'])}")
+
+
+@_rule
+class LoopReleasedBeforeReversal(_AngleRule):
+    """The shuttle carries the loop round the bobbin case to its cast-off (``stitch.loop_release`` past the
+    needle) before it turns back: its turn from the needle to its next reversal, at least the loop release when
+    the file gives no ``min``."""
+
+    name = "loop_released_before_reversal"
+    text = "shuttle turns past the loop release before it reverses"
+    needs = ("hook_turn", "hook_fwd", "shuttle_back")
+    lacks = "the machine needs a needle_point and a hook_point on a shuttle"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(v["hook_turn"], f"the shuttle turns this far from the needle (φ = {_deg(v['hook_fwd'])}) to "
+                                        f"its reversal (φ = {_deg(v['shuttle_back'])}); the loop is cast off "
+                                        f"{math.degrees(st.loop_release):g}° past the needle")
+
+    def limits(self, rule, st, ge):
+        return (st.loop_release if rule.lo is None else rule.lo), rule.hi
+
+
+@_rule
+class DogSinksBeforeNeedleEnters(_AngleRule):
+    """Repair guides: the feed dog sinks below the throat plate about when the needle point reaches the cloth
+    (DOMAIN-NOTES; seed 001's sink lead): the needle entering the cloth minus the dog sinking."""
+
+    name = "dog_sinks_before_needle_enters"
+    text = "feed dog below the plate before the needle enters"
+    needs = ("needle_in_cloth", "dog_down")
+    lacks = "the machine needs a needle_point, a feed_dog and a throat_plate"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(_wrap(v["needle_in_cloth"] - v["dog_down"]),
+                        f"the feed dog sinks below the plate at φ = {_deg(v['dog_down'])}, the needle point enters "
+                        f"the cloth at φ = {_deg(v['needle_in_cloth'])}")
+
+
+@_rule
+class DogRisesAfterNeedleLeaves(_AngleRule):
+    """Repair guides: the feed dog rises above the plate after the needle has left the cloth (DOMAIN-NOTES;
+    seed 001's rise lag): the dog rising minus the needle point leaving the cloth."""
+
+    name = "dog_rises_after_needle_leaves"
+    text = "feed dog above the plate after the needle leaves"
+    needs = ("needle_out_cloth", "dog_up")
+    lacks = "the machine needs a needle_point, a feed_dog and a throat_plate"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(_wrap(v["dog_up"] - v["needle_out_cloth"]),
+                        f"the needle point leaves the cloth at φ = {_deg(v['needle_out_cloth'])}, the feed dog "
+                        f"rises above the plate at φ = {_deg(v['dog_up'])}")
+
+
+@_rule
+class TakeUpRisesAfterRelease(_AngleRule):
+    """The link take-up descends, giving thread, while the loop is enlarged and cast off, and rises after it is
+    released (Singer US 462 398; lockstitch texts): the take-up's lowest point minus the loop's cast-off."""
+
+    name = "take_up_rises_after_release"
+    text = "take-up gives thread until the loop is cast off"
+    needs = ("take_up_bottom", "release")
+    lacks = "the machine needs a thread_eye, a needle_point and a hook_point"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(_wrap(v["take_up_bottom"] - v["release"]),
+                        f"the loop is cast off at φ = {_deg(v['release'])}, the take-up is lowest (starts to rise) "
+                        f"at φ = {_deg(v['take_up_bottom'])}")
+
+
+@_rule
+class StitchSetBeforeNeedleEnters(_AngleRule):
+    """The take-up sets the stitch before the needle comes down again (lockstitch texts; seed 001 times the
+    needle against the take-up's top): the needle point entering the cloth minus the take-up's top."""
+
+    name = "stitch_set_before_needle_enters"
+    text = "take-up sets the stitch before the needle enters"
+    needs = ("take_up_top", "needle_in_cloth")
+    lacks = "the machine needs a thread_eye, a needle_point and a throat_plate"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(_wrap(v["needle_in_cloth"] - v["take_up_top"]),
+                        f"the take-up is at its top (stitch set) at φ = {_deg(v['take_up_top'])}, the needle point "
+                        f"enters the cloth at φ = {_deg(v['needle_in_cloth'])}")
+
+
+@_rule
+class TakeUpRise(_AngleRule):
+    """The link take-up descends slowly over about three quarters of a turn and rises fast over about a quarter
+    (Singer US 462 398; DOMAIN-NOTES): its rise, bottom to top (a span, not wrapped)."""
+
+    name = "take_up_rise"
+    text = "take-up rises fast"
+    needs = ("take_up_top", "take_up_bottom")
+    lacks = "the machine needs a thread_eye"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured((v["take_up_top"] - v["take_up_bottom"]) % TWO_PI,
+                        f"the take-up rises from φ = {_deg(v['take_up_bottom'])} to φ = {_deg(v['take_up_top'])}")
+
+
+@_rule
+class TakeUpRisesOver(_AngleRule):
+    """The take-up rises over the whole stitch-setting window (``from``, ``to`` in the model file): how far its
+    rise overlaps the window on both sides, min(from − bottom, top − to)."""
+
+    name = "take_up_rises_over"
+    text = "take-up rising over the stitch-setting window"
+    needs = ("take_up_top", "take_up_bottom")
+    lacks = "the machine needs a thread_eye"
+    window = True
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        f, t = rule.window
+        b, top = v["take_up_bottom"], v["take_up_top"]
+        span = (top - b) % TWO_PI
+        m1 = (f - b) % TWO_PI
+        m2 = span - ((t - b) % TWO_PI)
+        return Measured(min(m1 if m1 <= span else m1 - TWO_PI, m2),
+                        f"the take-up rises from φ = {_deg(b)} to φ = {_deg(top)}; the window is "
+                        f"φ = {_deg(f)} – {_deg(t)}")
+
+
+@_rule
+class ThreadSlack(TimingRule):
+    """The take-up supplies the thread each stitch needs, and the loop must not pull thread through the tension
+    while the hook carries it (seed 004): the least slack S − D + T then (sewgen.machine.thread)."""
+
+    name = "thread_slack"
+    text = "thread slack while the hook carries the loop"
+
+    def measure(self, rule, tm, st, machine, ge):
+        th = tm.thread
+        if th is None:
+            return "the machine declares no thread path ([[thread.guides]])"
+        return Measured(th.min_slack, f"the least slack S − D + T while the hook carries the loop "
+                                      f"(φ = {_deg(th.window[0])} – {_deg(th.window[1])}) is at "
+                                      f"φ = {_deg(th.min_slack_at)}")
+
+
+@_rule
+class LowerLooperAtNeedleRise(_NeedleRiseAtTaker):
+    """Overlock: the lower looper's tip takes the needle loop from behind the needle as the needle rises from its
+    bottom dead centre (JUKI MO-104D engineer's manual, 'loop lift'; Janome MyLock 213D service manual)."""
+
+    name = "lower_looper_at_needle_rise"
+    text = "needle rise from BDC when the lower looper reaches the needle"
+    role, event, taker = LOWER_LOOPER_TIP, "lower_fwd", "the lower looper's tip"
+    lacks = "the machine needs a needle_point and a lower_looper_tip"
+
+
+@_rule
+class LowerLooperAboveEye(_TakerAboveEye):
+    """Overlock: the lower looper's tip passes just above the needle eye's top, as a hook's point does
+    (DOMAIN-NOTES; JUKI LU-2210N-7)."""
+
+    name = "lower_looper_above_eye"
+    text = "lower looper tip above the needle eye's top at the needle"
+    role, event, at, who = LOWER_LOOPER_TIP, "lower_fwd", "lower looper tip at the needle", "the tip"
+    lacks = "the machine needs a needle_point and a lower_looper_tip"
+
+
+@_rule
+class LowerLooperPassesLevel(TimingRule):
+    """Overlock: the lower looper's blade point meets the needle at one height going and coming back (JUKI
+    MO-104D engineer's manual): the needle's height at the return pass minus at the forward pass."""
+
+    name = "lower_looper_passes_level"
+    text = "needle height at the lower looper's return minus forward pass"
+    needs = ("lower_ret", "lower_fwd")
+    lacks = "the lower looper must pass the needle forward and back"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(v["needle_at_lower_ret"] - v["needle_at_lower_fwd"],
+                        f"the lower looper's tip passes the needle forward at φ = {_deg(v['lower_fwd'])} and back "
+                        f"at φ = {_deg(v['lower_ret'])}; the needle's height then differs by")
+
+
+@_rule
+class UpperTakesLowerThread(TimingRule):
+    """Overlock (ISO 4915 stitch types 504/505): the rising upper looper passes behind the lower looper, between
+    its blade and its thread, while the lower looper stands beyond the needle: how far the lower looper's tip
+    stands beyond the needle's line (the way it went) when the upper looper's tip rises past its height."""
+
+    name = "upper_takes_lower_thread"
+    text = "lower looper beyond the needle as the upper looper passes it"
+    needs = ("upper_meets_lower",)
+    lacks = "the machine needs an upper_looper_tip that rises past the lower_looper_tip"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(v["lower_beyond_at_meet"],
+                        f"the upper looper's tip rises past the lower looper's at φ = {_deg(v['upper_meets_lower'])} "
+                        f"(the lower looper at its far end at φ = {_deg(v['lower_far'])}); the lower tip is this far "
+                        f"beyond the needle")
+
+
+@_rule
+class NeedleInUpperTriangle(TimingRule):
+    """Overlock (ISO 4915 stitch types 504/505): the needle, coming down, enters the triangle of the upper
+    looper's thread, held beyond the needle over the material's edge: how far the upper looper's tip stands
+    beyond the needle's line (the way it went) when the needle point enters the material."""
+
+    name = "needle_in_upper_triangle"
+    text = "upper looper beyond the needle as the needle enters"
+    needs = ("needle_at_upper", "upper_top")
+    lacks = "the machine needs an upper_looper_tip, a needle_point and a throat_plate"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(v["upper_beyond_at_needle"],
+                        f"the needle point enters the material at φ = {_deg(v['needle_at_upper'])} (the upper looper "
+                        f"at its top at φ = {_deg(v['upper_top'])}, its tip "
+                        f"{v['upper_above_cloth_at_needle'] * 1e3:.2f} mm above the material then); the tip is this "
+                        f"far beyond the needle")
+
+
+@_rule
+class UpperAboveMaterial(TimingRule):
+    """Overlock (ISO 4915 stitch types 504/505): the upper looper holds its thread above the material when the
+    needle enters it: its tip's height above the material then."""
+
+    name = "upper_above_material"
+    text = "upper looper tip above the material as the needle enters"
+    needs = ("needle_at_upper", "upper_top")
+    lacks = "the machine needs an upper_looper_tip, a needle_point and a throat_plate"
+
+    def measure(self, rule, tm, st, machine, ge):
+        v = tm.values
+        return Measured(v["upper_above_cloth_at_needle"],
+                        f"the needle point enters the material at φ = {_deg(v['needle_at_upper'])}; the upper "
+                        f"looper's tip (at its top at φ = {_deg(v['upper_top'])}) is this far above the material")
 
 
 # -- model-file sections ---------------------------------------------------------------------------------------
@@ -142,12 +549,13 @@ STITCH = {  # modelfile.Field schemas, built on first use (modelfile imports pin
     "loop_release": ("angle", False, "shuttle turn past the needle at which the loop is cast off"),
     "rules": ("list", False, "the timing rules, [[stitch.rules]]"),
 }
+_WINDOWED = ", ".join(n for n, r in RULES.items() if r.window)  # the rules with a window
 RULE = {
     "rule": ("text", True, f"one of: {', '.join(RULES)}"),
     "min": ("", False, "lower limit"),
     "max": ("", False, "upper limit"),
-    "from": ("angle", False, "window start (take_up_rises_over)"),
-    "to": ("angle", False, "window end (take_up_rises_over)"),
+    "from": ("angle", False, f"window start ({_WINDOWED})"),
+    "to": ("angle", False, f"window end ({_WINDOWED})"),
     "source": ("text", True, "where the rule comes from (manual, textbook, seed)"),
 }
 
@@ -163,12 +571,13 @@ def read_stitch(rd, data: dict) -> Stitch:
         kind = item.get("rule")
         if kind not in RULES:
             rd.fail(f"{key}.rule", f"unknown rule {kind!r}; rules: {', '.join(RULES)}")
-        unit_kind = RULES[kind][0]
+        kr = RULES[kind]
+        unit_kind = kr.kind
         schema = {k: Field(unit_kind if k in ("min", "max") else t, req, doc) for k, (t, req, doc) in RULE.items()}
         r = rd.read(item, key, schema)
-        if ("from" in r) != ("to" in r) or (kind == "take_up_rises_over") != ("from" in r):
-            rd.fail(key, "give 'from' and 'to' (a window of shaft angles) for take_up_rises_over, and only there")
-        if kind != "hook_in_scarf" and "min" not in r and "max" not in r:
+        if ("from" in r) != ("to" in r) or kr.window != ("from" in r):
+            rd.fail(key, f"give 'from' and 'to' (a window of shaft angles) for {_WINDOWED}, and only there")
+        if not kr.own_limits and "min" not in r and "max" not in r:
             rd.fail(key, f"give 'min' or 'max' (a {unit_kind} with its unit)")
         rules.append(Rule(kind, r.get("min"), r.get("max"), r["source"],
                           (r["from"], r["to"]) if "from" in r else None))
@@ -512,7 +921,7 @@ def timing(machine, speed: float | None = None, step_deg: float = STEP_DEG, moti
     if thread_cfg is not None and needle is not None:
 
         tm.thread = thread_control(machine, motions, tm, thread_cfg, st)
-    tm.checks = [_check(r, tm, st, machine, ge) for r in st.rules]
+    tm.checks = [RULES[r.kind].check(r, tm, st, machine, ge) for r in st.rules]
     return tm
 
 
@@ -589,154 +998,7 @@ def _loopers(machine, phi, w, motions, needle, gl, lpt, gu, upt, values, ev, pha
             values["upper_above_cloth_at_needle"] = up.y.at(enter) - values["cloth_top"]
 
 
-# -- rules -------------------------------------------------------------------------------------------------------
-
-def _deg(a) -> str:
-    return f"{math.degrees(a) % 360.0:.2f}°"
-
-
-def _check(rule: Rule, tm: Timing, st: Stitch, machine, ge) -> Check:
-    kind, unit, text = RULES[rule.kind]
-    v = tm.values
-    scale = _SCALE[kind]
-    lo, hi = rule.lo, rule.hi
-
-    def missing(*keys):
-        return [k for k in keys if v.get(k) is None]
-
-    def shown(x):  # SI back to the unit shown, without the conversion's last-digit noise
-        return None if x is None else float(f"{x * scale:.12g}")
-
-    def out(value, how):
-        lo_s, hi_s = shown(lo), shown(hi)
-        val = float(value * scale)
-        ok = bool((lo_s is None or val >= lo_s - 1e-9) and (hi_s is None or val <= hi_s + 1e-9))
-        c = Check(rule.kind, val, lo_s, hi_s, unit, ok, "", rule.source)
-        verdict = "within" if ok else "outside"
-        msg = f"{rule.kind}: {how}: {val:.3f} {unit}, {verdict} {c.limit}"
-        return Check(rule.kind, val, lo_s, hi_s, unit, ok, msg, rule.source)
-
-    def lacking(what):
-        return Check(rule.kind, math.nan, shown(lo), shown(hi), unit, False, f"{rule.kind}: cannot be checked: {what}",
-                     rule.source)
-
-    k = rule.kind
-    if k in ("hook_at_needle_rise", "hook_above_eye", "hook_in_scarf"):
-        if missing("hook_fwd", "bdc"):
-            return lacking("the machine needs a needle_point and a hook_point")
-        a, rise, height = _taker_at_needle(tm, machine, ge, v, "hook_fwd", HOOK_POINT)
-        if k == "hook_at_needle_rise":
-            return out(rise, f"the hook point reaches the needle's centre line at φ = {_deg(a)}, when the "
-                             f"needle has risen this far from its bottom dead centre (φ = {_deg(v['bdc'])})")
-        if height is None:
-            return lacking("the machine needs a needle_eye")
-        if k == "hook_in_scarf":
-            if not ge.mechanism.description.has_role(NEEDLE_SCARF):
-                return lacking("the needle declares no needle_scarf")
-            lo, hi = 0.0, role_param(ge, NEEDLE_SCARF)
-            return out(height, f"at φ = {_deg(a)} the hook point passes this far above the needle eye's top, "
-                               f"in the needle's {hi * 1e3:g} mm scarf")
-        return out(height, f"at φ = {_deg(a)} (hook point at the needle) the hook point is this far above the "
-                           f"top of the needle eye")
-    if k == "shuttle_start_at_bdc":
-        if missing("shuttle_start", "bdc"):
-            return lacking("the machine needs a needle_point and a hook_point on a shuttle")
-        d = _wrap(v["shuttle_start"] - v["bdc"])
-        return out(d, f"the shuttle starts its forward stroke at φ = {_deg(v['shuttle_start'])}, the needle is "
-                      f"at its bottom dead centre at φ = {_deg(v['bdc'])}")
-    if k == "loop_released_before_reversal":
-        if missing("hook_turn", "hook_fwd", "shuttle_back"):
-            return lacking("the machine needs a needle_point and a hook_point on a shuttle")
-        lo = st.loop_release if lo is None else lo
-        return out(v["hook_turn"], f"the shuttle turns this far from the needle (φ = {_deg(v['hook_fwd'])}) to "
-                                   f"its reversal (φ = {_deg(v['shuttle_back'])}); the loop is cast off "
-                                   f"{math.degrees(st.loop_release):g}° past the needle")
-    if k == "dog_sinks_before_needle_enters":
-        if missing("needle_in_cloth", "dog_down"):
-            return lacking("the machine needs a needle_point, a feed_dog and a throat_plate")
-        return out(_wrap(v["needle_in_cloth"] - v["dog_down"]),
-                   f"the feed dog sinks below the plate at φ = {_deg(v['dog_down'])}, the needle point enters the "
-                   f"cloth at φ = {_deg(v['needle_in_cloth'])}")
-    if k == "dog_rises_after_needle_leaves":
-        if missing("needle_out_cloth", "dog_up"):
-            return lacking("the machine needs a needle_point, a feed_dog and a throat_plate")
-        return out(_wrap(v["dog_up"] - v["needle_out_cloth"]),
-                   f"the needle point leaves the cloth at φ = {_deg(v['needle_out_cloth'])}, the feed dog rises "
-                   f"above the plate at φ = {_deg(v['dog_up'])}")
-    if k == "take_up_rises_after_release":
-        if missing("take_up_bottom", "release"):
-            return lacking("the machine needs a thread_eye, a needle_point and a hook_point")
-        return out(_wrap(v["take_up_bottom"] - v["release"]),
-                   f"the loop is cast off at φ = {_deg(v['release'])}, the take-up is lowest (starts to rise) at "
-                   f"φ = {_deg(v['take_up_bottom'])}")
-    if k == "stitch_set_before_needle_enters":
-        if missing("take_up_top", "needle_in_cloth"):
-            return lacking("the machine needs a thread_eye, a needle_point and a throat_plate")
-        return out(_wrap(v["needle_in_cloth"] - v["take_up_top"]),
-                   f"the take-up is at its top (stitch set) at φ = {_deg(v['take_up_top'])}, the needle point "
-                   f"enters the cloth at φ = {_deg(v['needle_in_cloth'])}")
-    if k == "take_up_rise":
-        if missing("take_up_top", "take_up_bottom"):
-            return lacking("the machine needs a thread_eye")
-        return out((v["take_up_top"] - v["take_up_bottom"]) % TWO_PI,
-                   f"the take-up rises from φ = {_deg(v['take_up_bottom'])} to φ = {_deg(v['take_up_top'])}")
-    if k == "take_up_rises_over":
-        if missing("take_up_top", "take_up_bottom"):
-            return lacking("the machine needs a thread_eye")
-        f, t = rule.window
-        b, top = v["take_up_bottom"], v["take_up_top"]
-        span = (top - b) % TWO_PI
-        m1 = (f - b) % TWO_PI
-        m2 = span - ((t - b) % TWO_PI)
-        margin = min(m1 if m1 <= span else m1 - TWO_PI, m2)
-        return out(margin, f"the take-up rises from φ = {_deg(b)} to φ = {_deg(top)}; the window is "
-                           f"φ = {_deg(f)} – {_deg(t)}")
-    if k in ("lower_looper_at_needle_rise", "lower_looper_above_eye"):
-        if missing("lower_fwd", "bdc"):
-            return lacking("the machine needs a needle_point and a lower_looper_tip")
-        a, rise, height = _taker_at_needle(tm, machine, ge, v, "lower_fwd", LOWER_LOOPER_TIP)
-        if k == "lower_looper_at_needle_rise":
-            return out(rise, f"the lower looper's tip reaches the needle's centre line at φ = {_deg(a)}, when "
-                             f"the needle has risen this far from its bottom dead centre (φ = {_deg(v['bdc'])})")
-        if height is None:
-            return lacking("the machine needs a needle_eye")
-        return out(height, f"at φ = {_deg(a)} (lower looper tip at the needle) the tip is this far above "
-                           f"the top of the needle eye")
-    if k == "lower_looper_passes_level":
-        if missing("lower_ret", "lower_fwd"):
-            return lacking("the lower looper must pass the needle forward and back")
-        return out(v["needle_at_lower_ret"] - v["needle_at_lower_fwd"],
-                   f"the lower looper's tip passes the needle forward at φ = {_deg(v['lower_fwd'])} and back at "
-                   f"φ = {_deg(v['lower_ret'])}; the needle's height then differs by")
-    if k == "upper_takes_lower_thread":
-        if missing("upper_meets_lower"):
-            return lacking("the machine needs an upper_looper_tip that rises past the lower_looper_tip")
-        return out(v["lower_beyond_at_meet"], f"the upper looper's tip rises past the lower looper's at "
-                                              f"φ = {_deg(v['upper_meets_lower'])} (the lower looper at its far end at "
-                                              f"φ = {_deg(v['lower_far'])}); the lower tip is this far beyond the needle")
-    if k == "upper_above_material":
-        if missing("needle_at_upper", "upper_top"):
-            return lacking("the machine needs an upper_looper_tip, a needle_point and a throat_plate")
-        return out(v["upper_above_cloth_at_needle"], f"the needle point enters the material at "
-                                                     f"φ = {_deg(v['needle_at_upper'])}; the upper looper's tip "
-                                                     f"(at its top at φ = {_deg(v['upper_top'])}) is this far above "
-                                                     f"the material")
-    if k == "needle_in_upper_triangle":
-        if missing("needle_at_upper", "upper_top"):
-            return lacking("the machine needs an upper_looper_tip, a needle_point and a throat_plate")
-        return out(v["upper_beyond_at_needle"], f"the needle point enters the material at "
-                                                f"φ = {_deg(v['needle_at_upper'])} (the upper looper at its top at "
-                                                f"φ = {_deg(v['upper_top'])}, its tip "
-                                                f"{v['upper_above_cloth_at_needle'] * 1e3:.2f} mm above the material "
-                                                f"then); the tip is this far beyond the needle")
-    if k == "thread_slack":
-        th = tm.thread
-        if th is None:
-            return lacking("the machine declares no thread path ([[thread.guides]])")
-        return out(th.min_slack, f"the least slack S − D + T while the hook carries the loop "
-                                 f"(φ = {_deg(th.window[0])} – {_deg(th.window[1])}) is at φ = {_deg(th.min_slack_at)}")
-    raise AssertionError(k)
-
+# -- the taker at the needle ------------------------------------------------------------------------------------
 
 def _taker_at_needle(tm: Timing, machine, ge, v: dict, event: str, taker_role: str):
     """Where a loop taker (hook point, looper tip: ``taker_role``) meets the needle's centre line, at event
@@ -760,4 +1022,5 @@ def _interp_point(tm: Timing, g, name, angle):
     return p.x.at(angle), p.y.at(angle)
 
 
-__all__ = ["Check", "Event", "Phase", "RULES", "Rule", "Stitch", "Timing", "TimingError", "read_stitch", "timing"]
+__all__ = ["Check", "Event", "Measured", "Phase", "RULES", "Rule", "Stitch", "Timing", "TimingError", "TimingRule",
+           "read_stitch", "timing"]
