@@ -14,16 +14,7 @@
  * functions are generated from sewgen/abi.py (one source for C and Python). */
 #include "sg_abi.h"
 
-/* Largest number of coordinates (also the largest LU: force blocks included) and of hoisted constants a
- * mechanism may have (stack work arrays). */
-#define SG_MAX_Q 48
-#define SG_MAX_C 2048
-/* Largest number of groups of observables a sweep computes selectively (more: the joint motion kernel). */
-#define SG_MAX_GROUP 4096
-/* Largest number of load slots per position. */
-#define SG_MAX_LOAD 512
-/* Largest number of columns a SIMD sweep writes straight to their own arrays (more: rows, then copies). */
-#define SG_MAX_DIRECT 64
+/* SG_MAX_Q, SG_MAX_C, SG_MAX_GROUP, SG_MAX_LOAD, SG_MAX_DIRECT, SG_BLOCK, SG_HISTORY: sg_abi.h (sewgen.abi.LIMITS). */
 
 /* Flat column j of one position (q, qd, qdd: nq each, then obs): a pointer into the arrays q, qd, qdd, obs of that
  * position (doubles, or a SIMD block's lane vectors): the layout of sg_columns' col[] (sg_runtime.c's col_ptr
@@ -68,10 +59,7 @@ typedef struct sg_lanes {
  * (descriptor newton_simd, csrc/sg_simd.h SG_SIMD_NEWTON_BODY, SG_LANES lanes a call) solve the same positions
  * from the same starts. Per lane its inputs with their cos, sin, and after the solve its coordinates with
  * theirs, Newton's last relative residual and the loops' orientation determinants (kernel 'blocks'). SG_BLOCK is a
- * multiple of SG_LANES. */
-#define SG_BLOCK 8
-/* The most earlier states the continuation keeps (the Lagrange predictor reads up to all of them). */
-#define SG_HISTORY 5
+ * multiple of SG_LANES; SG_HISTORY earlier states feed the predictor (both in sg_abi.h). */
 typedef struct sg_block {
     int count;
     double q[SG_BLOCK][SG_MAX_Q], cq[SG_BLOCK][2 * SG_MAX_Q], x[SG_BLOCK][SG_MAX_Q], cx[SG_BLOCK][2 * SG_MAX_Q];

@@ -17,6 +17,31 @@ enum sg_status {
     SG_BAD_DESIGN = 8 /* batched designs: a design's parameter or held input is not finite or out of range, a branch sign is not +1 or -1, or a dimension derived from its parameters is not real; the design is skipped (Python names the parameter) */
 };
 
+/* The runtime's fixed sizes (sewgen.abi.LIMITS). */
+/* largest number of coordinates, and largest LU (force blocks included), of a mechanism */
+#define SG_MAX_Q 48
+/* largest number of constants a mechanism's kernels hoist out of its parameters */
+#define SG_MAX_C 2048
+/* largest number of groups of observables a sweep computes selectively (more: the joint motion kernel) */
+#define SG_MAX_GROUP 4096
+/* largest number of load slots per position */
+#define SG_MAX_LOAD 512
+/* largest number of columns a SIMD sweep writes straight to their own arrays (more: rows, then copies) */
+#define SG_MAX_DIRECT 64
+/* positions a Newton sweep predicts from one history and solves as a block, in every loop and at every SIMD level (the scalar and the SIMD loops give the same values) */
+#define SG_BLOCK 8
+/* solved states a Newton sweep's predictor extrapolates from (a Lagrange polynomial of degree 4 at most) */
+#define SG_HISTORY 5
+
+/* Per-design reductions of sg_sweep_designs (sewgen.abi.REDUCTIONS). */
+enum sg_reduction {
+    SG_RED_MIN = 0,
+    SG_RED_MAX = 1,
+    SG_RED_ABSMAX = 2,
+    SG_RED_RMS = 3,
+    SG_RED_MEAN = 4
+};
+
 typedef struct sg_options {
     double tol;          /* relative loop residual tolerance: Newton stops when every closure equation's residual is below tol times that equation's own loop size (kernel 'scales') */
     int max_iter;        /* Newton iterations per position */

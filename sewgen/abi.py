@@ -46,6 +46,27 @@ def status_name(code: int) -> str:
     return _NAMES.get(code, f"unknown status {code}")
 
 
+#: The runtime's fixed sizes (C name, value, meaning): its stack work arrays are this large, so the derivation
+#: refuses a mechanism past them and Python reads them from here.
+LIMITS = (
+    ("SG_MAX_Q", 48, "largest number of coordinates, and largest LU (force blocks included), of a mechanism"),
+    ("SG_MAX_C", 2048, "largest number of constants a mechanism's kernels hoist out of its parameters"),
+    ("SG_MAX_GROUP", 4096, "largest number of groups of observables a sweep computes selectively (more: the "
+                           "joint motion kernel)"),
+    ("SG_MAX_LOAD", 512, "largest number of load slots per position"),
+    ("SG_MAX_DIRECT", 64, "largest number of columns a SIMD sweep writes straight to their own arrays (more: "
+                          "rows, then copies)"),
+    ("SG_BLOCK", 8, "positions a Newton sweep predicts from one history and solves as a block, in every loop and "
+                    "at every SIMD level (the scalar and the SIMD loops give the same values)"),
+    ("SG_HISTORY", 5, "solved states a Newton sweep's predictor extrapolates from (a Lagrange polynomial of "
+                      "degree 4 at most)"),
+)
+LIMIT = {name: value for name, value, _ in LIMITS}
+
+#: Per-design reductions of sg_sweep_designs, in the C numbering (enum sg_reduction): (C name, Python name).
+REDUCTIONS = (("SG_RED_MIN", "min"), ("SG_RED_MAX", "max"), ("SG_RED_ABSMAX", "absmax"), ("SG_RED_RMS", "rms"),
+              ("SG_RED_MEAN", "mean"))
+
 #: Fields of ``sg_options`` (C type, name, meaning).
 OPTIONS = (
     ("double", "tol", "relative loop residual tolerance: Newton stops when every closure equation's residual is "

@@ -42,6 +42,11 @@ def header() -> str:
     for k, (name, code, _, doc) in enumerate(abi.STATUS):
         comma = "," if k < len(abi.STATUS) - 1 else ""
         lines.append(f"    {name} = {code}{comma} {_comment(doc)}")
+    lines += ["};", "", "/* The runtime's fixed sizes (sewgen.abi.LIMITS). */"]
+    for name, value, doc in abi.LIMITS:
+        lines += [_comment(doc), f"#define {name} {value}"]
+    lines += ["", "/* Per-design reductions of sg_sweep_designs (sewgen.abi.REDUCTIONS). */", "enum sg_reduction {"]
+    lines += [f"    {name} = {k}{',' if k < len(abi.REDUCTIONS) - 1 else ''}" for k, (name, _) in enumerate(abi.REDUCTIONS)]
     lines += ["};", ""]
     lines += _struct("sg_options", abi.OPTIONS) + [""]
     lines.append("/* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */")

@@ -33,8 +33,8 @@ from .kinematics import Kinematics
 from .kinetostatics import Kinetostatics
 from .vocabulary import DeclarationError
 
-#: csrc/sg_runtime.h SG_MAX_Q: the largest LU the runtime's stack arrays hold.
-MAX_BLOCK = 48
+#: The largest LU the runtime's stack arrays hold (sewgen.abi.LIMITS SG_MAX_Q).
+MAX_BLOCK = abi.LIMIT["SG_MAX_Q"]
 
 
 @dataclass
@@ -533,7 +533,7 @@ class KernelSet:
         k = len(cols)
         if k > MAX_BLOCK:
             raise DeclarationError(f"{self.kin.mech.name}: a force block of {k} unknowns ({label}) is larger "
-                                   f"than the runtime's {MAX_BLOCK} (csrc/sg_runtime.h SG_MAX_Q)")
+                                   f"than the runtime's {MAX_BLOCK} (SG_MAX_Q)")
         lines = [f"/* block of unknowns {label} */", f"{fl.real} M[{k * k}], r[{k}];",
                  f"{'sg_vm' if fl.vector else 'int'} piv[{k}];"]
         zero = "sgv_set1(0.0)" if fl.vector else "0.0"

@@ -36,8 +36,8 @@ from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, pointer, si
 from sewgen.engine.results import Selection
 from sewgen.units import UnitError, to_si
 
-#: Reduction kinds, in the C runtime's numbering (csrc/sg_runtime.c SG_RED_*).
-REDUCTIONS = ("min", "max", "absmax", "rms", "mean")
+#: Reduction kinds, in the C runtime's numbering (sewgen.abi.REDUCTIONS).
+REDUCTIONS = tuple(name for _, name in abi.REDUCTIONS)
 _EXTREMA = ("min", "max", "absmax")
 _BAD_DESIGN = next(code for name, code, _, _ in abi.STATUS if name == "SG_BAD_DESIGN")
 _UNIT_SUFFIX = re.compile(r"^(.*\S)\s*\[([^\]]+)\]$")
