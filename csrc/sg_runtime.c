@@ -797,31 +797,16 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     return failures;
 }
 
-/* Sweep a mechanism over n shaft angles in one call: positions, velocities, accelerations and every
- * observable. phi/omega/alpha have n entries; held has nx-1; q_guess (nq) starts Newton where no closed
- * form exists. The positions are solved in the order 'order' (NULL: as given) and written to their own rows.
- * Outputs are row-major (n x nq, n x nobs); err (NULL or n) gets each position's estimated relative error of
- * the rates; status has n entries. Returns the number of positions whose status is not SG_OK (or n with
- * every status SG_BAD_ARGUMENT on bad sizes). */
-size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
-                const double *alpha, const double *held, const double *p, const int *branch,
-                const double *q_guess, const sg_options *opt, const size_t *order, double *q, double *qd,
-                double *qdd, double *obs, double *err, int *status)
+/* Sweep a mechanism over r->n shaft angles in one call: positions, velocities, accelerations, every observable
+ * and, where r->gv is given, every force output (sg_abi.h sg_request says what each field holds). The positions
+ * are solved in the order r->order (NULL: as given) and written to their own rows. Returns the number of
+ * positions whose status is not SG_OK (or n with every status SG_BAD_ARGUMENT on bad sizes). A singular force
+ * matrix gives SG_SINGULAR at that position. */
+size_t sg_sweep(const sg_mechanism *m, const sg_request *r)
 {
-    return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, NULL, NULL, q, qd, qdd, obs, err,
-                 NULL, status, NULL, NULL, NULL);
-}
-
-/* sg_sweep plus kinetostatics in the same pass: gv is gravity (2), loads is n x nload (NULL: no loads),
- * frc receives n x nfo force outputs. A singular force matrix gives SG_SINGULAR at that position. */
-size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
-                       const double *alpha, const double *held, const double *p, const int *branch,
-                       const double *q_guess, const sg_options *opt, const size_t *order, const double *gv,
-                       const double *loads, double *q, double *qd, double *qdd, double *obs, double *err,
-                       double *frc, int *status)
-{
-    return sweep(m, n, phi, omega, alpha, held, p, branch, q_guess, opt, order, gv, loads, q, qd, qdd, obs, err,
-                 frc, status, NULL, NULL, NULL);
+    return sweep(m, r->n, r->phi, r->omega, r->alpha, r->held, r->p, r->branch, r->q_guess, r->opt, r->order, r->gv,
+                 r->gv != NULL ? r->loads : NULL, r->q, r->qd, r->qdd, r->obs, r->err, r->gv != NULL ? r->frc : NULL,
+                 r->status, NULL, NULL, NULL);
 }
 
 /* Batched designs (issue 14) -------------------------------------------------------------------------------
@@ -1058,14 +1043,19 @@ static double reduce_column(const sg_scratch *s, size_t n, int kind, int a, int 
     return n ? acc : NAN;
 }
 
-size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double *phi, const double *omega,
-                        const double *alpha, const double *held, const double *p, const int *branch,
-                        const double *q_guess, const sg_options *opt, const size_t *order, int ncheck,
-                        int nangle, const int *angle_cols, int nsel, const int *sel, double *out,
-                        size_t out_stride, int nred, const int *red, double *red_val, long long *red_idx,
-                        size_t red_stride, double *work, int *work_status, int *status, long long *first_bad,
-                        long long *nbad, long long *last_bad)
+size_t sg_sweep_designs(const sg_mechanism *m, const sg_request *r)
 {
+    const size_t nd = r->nd, n = r->n;
+    const double *phi = r->phi, *omega = r->omega, *alpha = r->alpha, *held = r->held, *p = r->p;
+    const double *q_guess = r->q_guess;
+    const int *branch = r->branch, *angle_cols = r->angle_cols, *sel = r->sel, *red = r->red;
+    const sg_options *opt = r->opt;
+    const size_t *order = r->order;
+    const int ncheck = r->ncheck, nangle = r->nangle, nsel = r->nsel, nred = r->nred;
+    double *out = r->out, *red_val = r->red_val, *work = r->work;
+    const size_t out_stride = r->out_stride, red_stride = r->red_stride;
+    long long *red_idx = r->red_idx, *first_bad = r->first_bad, *nbad = r->nbad, *last_bad = r->last_bad;
+    int *work_status = r->work_status, *status = r->design_status;
     const int nq = m->nq, nobs = m->nobs, nx = m->nx, npar = m->np, nb = m->nbranch;
     const int width = 3 * nq + nobs;
     SG_ASSERT(phi && omega && alpha && p && q_guess && opt && work && work_status && status && first_bad);
@@ -1187,36 +1177,34 @@ int sg_sorted(size_t n, const double *phi)
     return 1;
 }
 
-/* solve()'s and kinetostatics()' lean path in one call (issue 14, item 5: the Python of a call on the defaults is
- * one buffer and this): blk (n (4 + 3 nq + nobs) doubles, n nfo more with forces) gets the angles phi, the speed,
+/* solve()'s and kinetostatics()' lean path in one call (the Python of a call on the defaults is one buffer and
+ * this): blk (n (4 + 3 nq + nobs) doubles, n nfo more with forces) gets the angles phi, the speed,
  * zero acceleration, the rates' error estimate, then q, qd, qdd (n x nq), obs (n x nobs) and, where gv (gravity,
- * 2) is not NULL, the forces without loads (n x nfo, sg_sweep_forces); the positions are swept in the order
+ * 2) is not NULL, the forces without loads (n x nfo); the positions are swept in the order
  * 'order' (NULL: phi must be ascending, else SIZE_MAX is returned with nothing written, and the caller sorts)
  * and, where none fails, the angle columns made continuous. status NULL: the n statuses go to blk's tail, after
  * those doubles (blk then holds ceil(n/2) more). Returns the count of failed positions. */
-size_t sg_solve_lean(const sg_mechanism *m, size_t n, const double *phi, double speed, const double *held,
-                     const double *p, const int *branch, const double *q_guess, const sg_options *opt,
-                     const size_t *order, int nqa, const int *qcols, int noa, const int *ocols, const double *gv,
-                     double *blk, int *status)
+size_t sg_solve_lean(const sg_mechanism *m, const sg_request *r)
 {
-    if (order == NULL && !sg_sorted(n, phi)) return SIZE_MAX;
+    const size_t n = r->n;
+    if (r->order == NULL && !sg_sorted(n, r->phi)) return SIZE_MAX;
     const size_t nn = n * (size_t)m->nq;
+    double *blk = r->blk;
     double *ph = blk, *om = blk + n, *al = blk + 2 * n, *err = blk + 3 * n, *q = blk + 4 * n;
     double *qd = q + nn, *qdd = qd + nn, *obs = qdd + nn, *frc = obs + n * (size_t)m->nobs;
-    if (status == NULL) status = (int *)(gv != NULL ? frc + n * (size_t)m->nfo : frc);
+    int *status = r->status;
+    if (status == NULL) status = (int *)(r->gv != NULL ? frc + n * (size_t)m->nfo : frc);
     for (size_t i = 0; i < n; ++i) {
-        ph[i] = phi[i];
-        om[i] = speed;
+        ph[i] = r->phi[i];
+        om[i] = r->speed;
         al[i] = 0.0;
     }
-    size_t failed;
-    if (gv != NULL)
-        failed = sg_sweep_forces(m, n, ph, om, al, held, p, branch, q_guess, opt, order, gv, NULL, q, qd, qdd, obs,
-                                 err, frc, status);
-    else
-        failed = sg_sweep(m, n, ph, om, al, held, p, branch, q_guess, opt, order, q, qd, qdd, obs, err, status);
-    if (failed == 0 && (nqa > 0 || noa > 0))
-        sg_make_continuous(n, m->nq, m->nobs, q, obs, nqa, qcols, noa, ocols, order);
+    sg_request s = *r;
+    s.phi = ph, s.omega = om, s.alpha = al, s.loads = NULL;
+    s.q = q, s.qd = qd, s.qdd = qdd, s.obs = obs, s.err = err, s.frc = r->gv != NULL ? frc : NULL, s.status = status;
+    const size_t failed = sg_sweep(m, &s);
+    if (failed == 0 && (r->nqa > 0 || r->noa > 0))
+        sg_make_continuous(n, m->nq, m->nobs, q, obs, r->nqa, r->qcols, r->noa, r->ocols, r->order);
     return failed;
 }
 

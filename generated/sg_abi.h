@@ -52,6 +52,54 @@ typedef struct sg_options {
     int scalar;          /* 1: the scalar loop even where the mechanism has a SIMD one and the CPU runs it (a closed form: SG_LANES positions at a time; Newton: the solved positions' rates, observables and forces SG_LANES at a time) (tests: the two agree to rounding, with the same statuses) */
 } sg_options;
 
+/* One sweep's arrays and settings (sewgen.abi.REQUEST): what the sweeping entry points read. */
+typedef struct sg_request {
+    size_t n;              /* shaft positions */
+    const double *phi;     /* shaft angles (n), rad */
+    const double *omega;   /* shaft speed at each position (n), rad/s */
+    const double *alpha;   /* shaft acceleration at each position (n), rad/s^2 */
+    double speed;          /* sg_solve_lean: the one shaft speed (omega and alpha are written into blk) */
+    const double *held;    /* held inputs (nx - 1; sg_sweep_designs: nd rows) */
+    const double *p;       /* parameters (np; sg_sweep_designs: nd rows) */
+    const int *branch;     /* branch signs (nbranch; sg_sweep_designs: nd rows) */
+    const double *q_guess; /* Newton's start where no closed form exists (nq) */
+    const sg_options *opt; /* the options */
+    const size_t *order;   /* the order the positions are solved in (a permutation sorting phi), or NULL: as given (sg_solve_lean: phi must then ascend) */
+    const double *gv;      /* gravity (2) for the forces; NULL: kinematics only */
+    const double *loads;   /* load slots (n x nload), or NULL */
+    double *q;             /* out: coordinates (n x nq) */
+    double *qd;            /* out: their velocities (n x nq) */
+    double *qdd;           /* out: their accelerations (n x nq) */
+    double *obs;           /* out: observables (n x nobs) */
+    double *err;           /* out: each position's estimated relative error of the rates (n), or NULL */
+    double *frc;           /* out: force outputs (n x nfo) where gv is given */
+    int *status;           /* out: each position's status (n); sg_solve_lean: NULL puts them at blk's tail */
+    int nqa;               /* sg_solve_lean: how many angle coordinates to make continuous */
+    const int *qcols;      /* sg_solve_lean: their columns of q */
+    int noa;               /* sg_solve_lean: how many angle observables to make continuous */
+    const int *ocols;      /* sg_solve_lean: their columns of obs */
+    double *blk;           /* sg_solve_lean: one block for phi, omega, alpha, err, q, qd, qdd, obs (n rows each), then frc where gv is given */
+    size_t nd;             /* sg_sweep_designs: designs */
+    int ncheck;            /* sg_sweep_designs: the first ncheck constants must be finite */
+    int nangle;            /* sg_sweep_designs: how many flat columns are angles made continuous */
+    const int *angle_cols; /* sg_sweep_designs: those columns */
+    int nsel;              /* sg_sweep_designs: how many flat columns are kept */
+    const int *sel;        /* sg_sweep_designs: those columns */
+    double *out;           /* sg_sweep_designs: out[k*out_stride + d*n + i], NaN for a failed design */
+    size_t out_stride;     /* sg_sweep_designs: the stride of out between selected columns */
+    int nred;              /* sg_sweep_designs: how many reductions */
+    const int *red;        /* sg_sweep_designs: nred x 3: kind (enum sg_reduction), column, second column for the norm of two or -1 */
+    double *red_val;       /* sg_sweep_designs: red_val[k*red_stride + d], NaN for a failed design */
+    long long *red_idx;    /* sg_sweep_designs: the extremum's first position in the caller's order (-1 for rms, mean, a failed design) */
+    size_t red_stride;     /* sg_sweep_designs: the stride of red_val and red_idx */
+    double *work;          /* sg_sweep_designs: scratch of one design's sweep, n*(3nq+nobs+3) doubles */
+    int *work_status;      /* sg_sweep_designs: scratch statuses (n) */
+    int *design_status;    /* sg_sweep_designs: in: nonzero skips the design; out: the status of its first failing position, or SG_BAD_DESIGN (nd) */
+    long long *first_bad;  /* sg_sweep_designs: each design's first failing position, -1 for none (nd) */
+    long long *nbad;       /* sg_sweep_designs: positions failing with that status (nd), or NULL */
+    long long *last_bad;   /* sg_sweep_designs: the last of them (nd), or NULL */
+} sg_request;
+
 /* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */
 /* every parameter-only subexpression, once per sweep */
 typedef void (*sg_constants_fn)(const double *p, double *c);
@@ -139,14 +187,12 @@ void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
 int sg_factor_eq(int n, double *a, int *piv, const double *rs, double *cs, double *cond);
 /* solve with a factor of sg_factor_eq, b overwritten */
 void sg_solve_eq(int n, const double *lu, const int *piv, const double *rs, const double *cs, double *b);
-/* solve()'s and kinetostatics()' lean path in one call: phi copied into blk, then the speed, zero acceleration, err, q, qd, qdd, obs and (gv not NULL) frc without loads (n rows each; status NULL: the statuses after them), the sweep and sg_make_continuous; SIZE_MAX and nothing done where order is NULL and phi not ascending */
-size_t sg_solve_lean(const sg_mechanism *m, size_t n, const double *phi, double speed, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, int nqa, const int *qcols, int noa, const int *ocols, const double *gv, double *blk, int *status);
-/* a mechanism over n shaft angles in one call: positions, velocities, accelerations, observables; solved in the order 'order' (a permutation of 0..n-1 that sorts phi; NULL: as given), written in the caller's order; err (n, or NULL) the estimated relative error of the rates; returns the number of positions whose status is not SG_OK */
-size_t sg_sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, double *q, double *qd, double *qdd, double *obs, double *err, int *status);
-/* sg_sweep plus kinetostatics in the same pass (gv gravity, loads n x nload or NULL, frc n x nfo) */
-size_t sg_sweep_forces(const sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status);
-/* nd designs over the same n shaft angles, each its own sg_sweep (its own continuation, held inputs nd x (nx-1), parameters nd x np, branch signs nd x nbranch): status[d] (in: nonzero skips the design; out: the status of its first failing position, or SG_BAD_DESIGN), first_bad/last_bad[d] (positions, -1 for none), nbad[d] (positions failing with that status; nbad, last_bad may be NULL). Flat columns of a position: q, qd, qdd (nq each), obs (nobs); the first ncheck constants must be finite; angle_cols are made continuous as sewgen.engine.mechanism.continuous_angles does. sel (nsel columns) writes out[k*out_stride + d*n + i] (NaN for a failed design); red (nred x 3: kind 0 min, 1 max, 2 absmax, 3 rms, 4 mean; column; second column for the norm of two, or -1) writes red_val/red_idx[k*red_stride + d] (the extremum's first position in the caller's order, -1 for rms, mean; NaN and -1 for a failed design). Every loop computes only the groups of observables sel and red read (kernels 'rates', 'observe'; the same values and statuses as the joint kernel's). work: n*(3nq+nobs+3) doubles, work_status n ints (one design's sweep). Returns the number of failed designs */
-size_t sg_sweep_designs(const sg_mechanism *m, size_t nd, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const double *q_guess, const sg_options *opt, const size_t *order, int ncheck, int nangle, const int *angle_cols, int nsel, const int *sel, double *out, size_t out_stride, int nred, const int *red, double *red_val, long long *red_idx, size_t red_stride, double *work, int *work_status, int *status, long long *first_bad, long long *nbad, long long *last_bad);
+/* solve()'s and kinetostatics()' lean path in one call: phi copied into blk, then the speed, zero acceleration, err, q, qd, qdd, obs and (gv not NULL) frc without loads (n rows each; status NULL: the statuses after them), the sweep and sg_make_continuous; SIZE_MAX and nothing done where order is NULL and phi not ascending. Reads n, phi, speed, held, p, branch, q_guess, opt, order, gv, nqa, qcols, noa, ocols, blk, status */
+size_t sg_solve_lean(const sg_mechanism *m, const sg_request *r);
+/* a mechanism over n shaft angles in one call: positions, velocities, accelerations, observables and, where gv is given, every force output (loads may be NULL); solved in the order 'order' (a permutation of 0..n-1 that sorts phi; NULL: as given), written in the caller's order; err (n, or NULL) the estimated relative error of the rates; returns the number of positions whose status is not SG_OK */
+size_t sg_sweep(const sg_mechanism *m, const sg_request *r);
+/* nd designs over the same n shaft angles, each its own sg_sweep (its own continuation, held inputs nd x (nx-1), parameters nd x np, branch signs nd x nbranch). Flat columns of a position: q, qd, qdd (nq each), obs (nobs); angle_cols are made continuous as sewgen.engine.mechanism.continuous_angles does; sel and red as sg_request says. Every loop computes only the groups of observables sel and red read (kernels 'rates', 'observe'; the same values and statuses as the joint kernel's). Returns the number of failed designs */
+size_t sg_sweep_designs(const sg_mechanism *m, const sg_request *r);
 /* positions per block of m's SIMD sweeps (kinematics, kinetostatics; a Newton sweep's finish) on this CPU: SG_LANES where m has a SIMD loop (the module built with SIMD, the kernels with a vector form) and the CPU has the build's level (8: AVX-512 F, VL, DQ; 4: AVX2 and FMA), else 1 (the scalar loop); m NULL: what this module and CPU offer any mechanism */
 int sg_simd_width(const sg_mechanism *m);
 /* 1 where every phi[i] >= phi[i-1] (a NaN breaks it), else 0: whether a sweep of these shaft angles needs a solving order */

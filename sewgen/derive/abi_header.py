@@ -49,6 +49,8 @@ def header() -> str:
     lines += [f"    {name} = {k}{',' if k < len(abi.REDUCTIONS) - 1 else ''}" for k, (name, _) in enumerate(abi.REDUCTIONS)]
     lines += ["};", ""]
     lines += _struct("sg_options", abi.OPTIONS) + [""]
+    lines += ["/* One sweep's arrays and settings (sewgen.abi.REQUEST): what the sweeping entry points read. */"]
+    lines += _struct("sg_request", abi.REQUEST) + [""]
     lines.append("/* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */")
     for kind, (ret, args, doc) in abi.KERNELS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
@@ -66,6 +68,7 @@ def cdef() -> str:
     """The text of ``sg_abi.cdef``: what cffi needs to call the runtime (the descriptor stays opaque)."""
     lines = [_PREAMBLE.rstrip(), "typedef struct sg_mechanism sg_mechanism;", ""]
     lines += [line.split(" /* ")[0].rstrip() for line in _struct("sg_options", abi.OPTIONS)] + [""]
+    lines += [line.split(" /* ")[0].rstrip() for line in _struct("sg_request", abi.REQUEST)] + [""]
     lines += [line for line in _exports() if not line.startswith("/*")]
     return "\n".join(lines) + "\n"
 

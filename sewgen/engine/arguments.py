@@ -9,6 +9,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from sewgen import abi
 from sewgen.errors import ParameterError
 from sewgen.units import UnitError, to_si
 
@@ -52,3 +53,21 @@ def si(mechanism: str, value, kind: str, name: str) -> float:
         return to_si(value, kind, name)
     except UnitError as exc:
         raise ParameterError(mechanism, name, exc.problem) from None
+
+
+#: Each sg_request field's C type (sewgen.abi.REQUEST), for the arrays handed to it.
+_REQUEST_TYPES = {name: ctype.replace("const ", "") for ctype, name, _ in abi.REQUEST}
+
+
+def request(ffi, **fields):
+    """One ``sg_request`` (:data:`sewgen.abi.REQUEST`) with ``fields``: numpy arrays (C-contiguous, of the field's
+    type), cffi pointers or numbers; the others 0 (NULL). Returns (the struct, the buffers its pointers point
+    into): keep both for as long as C may read the struct (the struct itself holds no reference)."""
+    keep = []
+    init = {}
+    for name, value in fields.items():
+        if isinstance(value, np.ndarray):
+            value = pointer(ffi, _REQUEST_TYPES[name], value)
+            keep.append(value)
+        init[name] = value
+    return ffi.new("sg_request *", init), keep

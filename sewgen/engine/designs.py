@@ -32,7 +32,7 @@ import numpy as np
 
 from sewgen import abi
 from sewgen.errors import InputError, ParameterError
-from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, pointer, si
+from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, pointer, request, si
 from sewgen.engine.results import Selection
 from sewgen.units import UnitError, to_si
 
@@ -496,12 +496,15 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
     def run(span):
         d0, d1 = span
         work = _work(n, width)
-        lib.sg_sweep_designs(mech._descriptor, d1 - d0, n, *shared, offset("h", d0 * (len(desc.inputs) - 1)),
-                             offset("p", d0 * npar), offset("b", d0 * len(desc.branches)), guess, opt, order,
-                             ncheck, len(angle_c), angle_p, len(sel), sel_p, offset("out", d0 * n), nd * n,
-                             len(reds), red_p, offset("rv", d0), offset("ri", d0), nd,
-                             ffi.from_buffer("double[]", work[0]), ffi.from_buffer("int[]", work[1]),
-                             offset("st", d0), offset("first", d0), offset("nbad", d0), offset("last", d0))
+        req, keep = request(
+            ffi, n=n, phi=shared[0], omega=shared[1], alpha=shared[2], held=offset("h", d0 * (len(desc.inputs) - 1)),
+            p=offset("p", d0 * npar), branch=offset("b", d0 * len(desc.branches)), q_guess=guess, opt=opt,
+            order=order, nd=d1 - d0, ncheck=ncheck, nangle=len(angle_c), angle_cols=angle_p, nsel=len(sel),
+            sel=sel_p, out=offset("out", d0 * n), out_stride=nd * n, nred=len(reds), red=red_p,
+            red_val=offset("rv", d0), red_idx=offset("ri", d0), red_stride=nd, work=work[0], work_status=work[1],
+            design_status=offset("st", d0), first_bad=offset("first", d0), nbad=offset("nbad", d0),
+            last_bad=offset("last", d0))
+        lib.sg_sweep_designs(mech._descriptor, req)
 
     if chunk is None:
         chunk = max(1, min(4096, -(-nd // (8 * threads))))
@@ -590,9 +593,11 @@ def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
     block = np.empty((nsel, n))
     status, status_p, first_p, work_p, work_st_p = _one_design(ffi, n, width)
     status[0] = 0
-    lib.sg_sweep_designs(desc, 1, n, base, base + n, base + 2 * n, held, got[1], branch, guess, opt, order_p, 0,
-                         nangle, angle_p, nsel, sel_p, ffi.from_buffer("double[]", block), n, 0, ffi.NULL,
-                         ffi.NULL, ffi.NULL, 0, work_p, work_st_p, status_p, first_p, ffi.NULL, ffi.NULL)
+    req, keep = request(ffi, n=n, phi=base, omega=base + n, alpha=base + 2 * n, held=held, p=got[1], branch=branch,
+                        q_guess=guess, opt=opt, order=order_p, nd=1, nangle=nangle, angle_cols=angle_p, nsel=nsel,
+                        sel=sel_p, out=block, out_stride=n, work=work_p, work_status=work_st_p,
+                        design_status=status_p, first_bad=first_p)
+    lib.sg_sweep_designs(desc, req)
     if status[0] != 0:
         return None
     return Selection(mech, phi_v, omega, alpha, block, names)
@@ -617,17 +622,15 @@ def solve_selected(mech, outputs, sweep_args: dict, out=None):
     ffi, lib = mech.ffi, mech.lib
     width = len(cols.names)
     work, work_st = _work(n, width)
-    ptr = partial(pointer, ffi)
 
     ncheck = 0  # prepare() checked the parameters and their derived dimensions
     angle_c = cols.angles_among(sel)
-    lib.sg_sweep_designs(mech._descriptor, 1, n, ptr("double *", base.phi), ptr("double *", base.omega),
-                         ptr("double *", base.alpha), ptr("double *", base.held), ptr("double *", base.params),
-                         ptr("int *", base.branch), ptr("double *", base.guess), base.options,
-                         ffi.NULL if base.order is None else ptr("size_t *", base.order), ncheck,
-                         len(angle_c), ptr("int *", angle_c), len(sel), ptr("int *", sel_c),
-                         ptr("double *", block), n, 0, ffi.NULL, ffi.NULL, ffi.NULL, 0, ptr("double *", work),
-                         ptr("int *", work_st), ptr("int *", status), ptr("long long *", first), ffi.NULL, ffi.NULL)
+    req, keep = request(ffi, n=n, phi=base.phi, omega=base.omega, alpha=base.alpha, held=base.held, p=base.params,
+                        branch=base.branch, q_guess=base.guess, opt=base.options,
+                        order=ffi.NULL if base.order is None else base.order, nd=1, ncheck=ncheck,
+                        nangle=len(angle_c), angle_cols=angle_c, nsel=len(sel), sel=sel_c, out=block, out_stride=n,
+                        work=work, work_status=work_st, design_status=status, first_bad=first)
+    lib.sg_sweep_designs(mech._descriptor, req)
     if status[0] != 0:  # the full sweep names the failure with its diagnosis
         base.run()
         base.check()

@@ -17,6 +17,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -25,7 +26,7 @@ import numpy as np
 
 from sewgen import abi
 from sewgen.engine import designs as many_designs
-from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, mapping, pointer, si, vector
+from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, mapping, pointer, request, si, vector
 from sewgen.engine.description import describe
 from sewgen.errors import AssemblyError, InputError, ParameterError, SingularPositionError
 from sewgen.engine.forces import ForceAnalysis, RunSettings
@@ -115,6 +116,7 @@ class Mechanism:
                                    lib.sg_solve_lean, fields["_descriptor"], fields["_fast"]["held"],
                                    fields["_fast"]["branch"], fields["_fast"]["guess"],
                                    fields["_default_options"][(False, False)], *fields["_angle"][1:])
+        fields["_lean_requests"] = threading.local()  # one sg_request per thread, refilled by each lean call
         fields["_pcache"] = {}
         fields["_selections"] = {}  # solve(outputs=...)'s parsed selections (sewgen.engine.designs.fast_selected)
         for key, value in fields.items():
@@ -489,12 +491,16 @@ class Mechanism:
         settings, gv_p = self._lean_forces(got[0]) if forces else (None, ffi.NULL)
         blk = np.empty((w + nfo if forces else w) * n + (n + 1) // 2)  # the statuses (C int) at the tail
         phi_p, blk_p = ffi.from_buffer("double[]", phi), ffi.from_buffer("double[]", blk)
-        failed = solve_lean(desc, n, phi_p, spd, held, got[1], branch, guess, opt, ffi.NULL, nqa, qa, noa, oa, gv_p,
-                            blk_p, ffi.NULL)
+        req = getattr(self._lean_requests, "r", None)
+        if req is None:  # what every lean call of this mechanism shares, set once per thread
+            req = self._lean_requests.r = ffi.new("sg_request *", dict(
+                held=held, branch=branch, q_guess=guess, opt=opt, nqa=nqa, qcols=qa, noa=noa, ocols=oa))
+        req.n, req.phi, req.speed, req.p, req.gv, req.blk, req.order = n, phi_p, spd, got[1], gv_p, blk_p, ffi.NULL
+        failed = solve_lean(desc, req)
         if failed == _SIZE_MAX:  # not ascending: solved in sorted order, returned in the caller's
             order = np.argsort(phi, kind="stable").astype(np.uintp)
-            failed = solve_lean(desc, n, phi_p, spd, held, got[1], branch, guess, opt,
-                                ffi.from_buffer("size_t[]", order), nqa, qa, noa, oa, gv_p, blk_p, ffi.NULL)
+            order_p = req.order = ffi.from_buffer("size_t[]", order)  # order_p keeps the buffer for the call
+            failed = solve_lean(desc, req)
         if failed:
             return None
         motion = Motion.of_block(self, blk, n, nq, nobs, SINGULAR_TOL)
@@ -738,27 +744,28 @@ class Sweep:
         self.options = self.mechanism.ffi.new("sg_options *", {**fields, **self.LOOPS[loop]})
         return self
 
-    def bind(self):
-        """The C call of this sweep as a function of no arguments; it returns how many positions failed."""
-        m, ffi = self.mechanism, self.mechanism.ffi
-        d = (lambda ctype, arr: pointer(ffi, ctype, arr))
-        order = ffi.NULL if self.order is None else d("size_t *", self.order)
-        head = (m._descriptor, self.n, d("double *", self.phi), d("double *", self.omega), d("double *", self.alpha),
-                d("double *", self.held), d("double *", self.params), d("int *", self.branch),
-                d("double *", self.guess), self.options, order)
-        tail = (d("double *", self.q), d("double *", self.qd), d("double *", self.qdd), d("double *", self.obs),
-                d("double *", self.err))
+    def request(self):
+        """This sweep as the one ``sg_request`` C reads (:data:`sewgen.abi.REQUEST`), with the buffers its pointers
+        point into (keep both while C may read it)."""
+        fields = dict(n=self.n, phi=self.phi, omega=self.omega, alpha=self.alpha, held=self.held, p=self.params,
+                      branch=self.branch, q_guess=self.guess, opt=self.options, q=self.q, qd=self.qd, qdd=self.qdd,
+                      obs=self.obs, err=self.err, status=self.status)
+        if self.order is not None:
+            fields["order"] = self.order
         if self.forces:
-            s = self.settings
-            loads = ffi.NULL if s.loads is None else d("double *", s.loads)
-            args = head + (d("double *", s.gravity), loads) + tail + (d("double *", self.frc),
-                                                                      d("int *", self.status))
-            fn = m.lib.sg_sweep_forces
-        else:
-            args, fn = head + tail + (d("int *", self.status),), m.lib.sg_sweep
+            fields.update(gv=self.settings.gravity, frc=self.frc)
+            if self.settings.loads is not None:
+                fields["loads"] = self.settings.loads
+        return request(self.mechanism.ffi, **fields)
 
-        def call() -> int:
-            return fn(*args)
+    def bind(self):
+        """The C call of this sweep as a function of no arguments (its request made once); it returns how many
+        positions failed."""
+        req, keep = self.request()
+        fn, desc = self.mechanism.lib.sg_sweep, self.mechanism._descriptor
+
+        def call(_keep=keep) -> int:
+            return fn(desc, req)
 
         return call
 

@@ -81,11 +81,12 @@ class GroupCall:
         self.nload = sizes["nload"] if loads else 0
         self.torque_column = mech.description.output_column("shaft.torque")  # ForceAnalysis.torque("shaft")
         self.width = 4 + 3 * self.nq + self.nobs + self.nfo + self.nload  # doubles per position in the block
-        ffi, d = mech.ffi, mech._ptr
+        ffi = mech.ffi
         self.keep = (probe.params, probe.held, probe.branch, probe.guess, s.gravity)  # alive with the pointers
-        self.call = (mech.lib.sg_sweep_forces, mech._descriptor, d("double *", probe.held),
-                     d("double *", probe.params), d("int *", probe.branch), d("double *", probe.guess),
-                     probe.options, d("double *", s.gravity), ffi)
+        # the group's sg_request: what every run shares, set once; run() fills in the positions' arrays
+        req, keep = probe.request()
+        self.keep = (self.keep, keep)
+        self.call = (mech.lib.sg_sweep, mech._descriptor, req, ffi)
         _angle, nqa, qa_p, noa, oa_p = mech._angle
         self.angle = (nqa, qa_p, noa, oa_p) if (nqa or noa) else None
 
@@ -103,7 +104,7 @@ class GroupCall:
         ph[2 * n:] = accel
         o2 = o + 4 * n + 3 * nn  # obs
         o3 = o2 + n * nobs  # frc
-        fn, desc, held_p, p_p, branch_p, guess_p, opt, gv_p, ffi = self.call
+        fn, desc, template, ffi = self.call
         head = base + o
         loads_p, settings = ffi.NULL, self.fixed
         if self.loads is not None:
@@ -118,8 +119,11 @@ class GroupCall:
             order = np.argsort(ph[:n], kind="stable").astype(np.uintp)
             order_p = ffi.from_buffer("size_t[]", order)
         qp = head + 4 * n
-        if fn(desc, n, head, head + n, head + 2 * n, held_p, p_p, branch_p, guess_p, opt, order_p, gv_p, loads_p,
-              qp, qp + nn, qp + 2 * nn, base + o2, head + 3 * n, base + o3, status):
+        req = ffi.new("sg_request *", template[0])  # a copy: one plan may run in several threads at once
+        req.n, req.phi, req.omega, req.alpha, req.order, req.loads = n, head, head + n, head + 2 * n, order_p, loads_p
+        req.q, req.qd, req.qdd, req.obs, req.err, req.frc = qp, qp + nn, qp + 2 * nn, base + o2, head + 3 * n, base + o3
+        req.status = status
+        if fn(desc, req):
             return None
         if self.angle is not None:
             nqa, qa_p, noa, oa_p = self.angle
