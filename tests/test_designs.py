@@ -178,7 +178,7 @@ def test_input_forms_convert_once_per_column_and_agree():
     si = {"crank": mm / 1000}
     ref = tu.sweep_designs(si, PHI, outputs="points:thread_eye")
     forms = [{"crank [mm]": mm}, {"crank": [f"{v} mm" for v in mm]}, {"crank": np.array([f"{v} mm" for v in mm])},
-             np.tile(tu._defaults["p"], (3, 1))]
+             np.tile(tu.default_vectors["p"], (3, 1))]
     forms[-1][:, tu.param_names.index("crank")] = mm / 1000
     pint = pytest.importorskip("pint")
     forms.append({"crank": pint.UnitRegistry().Quantity(mm, "mm")})

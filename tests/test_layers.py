@@ -170,3 +170,36 @@ def test_no_private_name_is_read_across_modules():
                 if isinstance(base, ast.Name) and base.id == "sewgen":
                     bad.append(f"{me}:{node.lineno} reads sewgen.{'.'.join(reversed(dotted))}.{node.attr}")
     assert bad == []
+
+
+#: Private attributes of other libraries that sewgen uses on purpose: SymPy's printer dispatch (a printer
+#: subclass's documented extension point) and pint's unit container of a quantity's root units.
+FOREIGN_PRIVATE = {"_print", "_units"}
+
+
+def test_no_private_attribute_of_another_module_is_read():
+    """``obj._x`` where ``_x`` is defined nowhere in the reading module (not as a function, class, assignment,
+    argument or attribute of its own): another module's private attribute (a Mechanism's ``_fast``, say)."""
+    bad = []
+    for me, path in modules().items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        own = set()
+        for n in ast.walk(tree):
+            if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                own.add(n.name)
+            elif isinstance(n, ast.Attribute) and isinstance(n.ctx, ast.Store):
+                own.add(n.attr)
+            elif isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store):
+                own.add(n.id)
+            elif isinstance(n, ast.arg):
+                own.add(n.arg)
+            elif isinstance(n, ast.keyword) and n.arg:
+                own.add(n.arg)
+            elif isinstance(n, ast.Constant) and isinstance(n.value, str):
+                own.add(n.value)  # __slots__, object.__setattr__(self, "_x", ...), fields dicts
+        for n in ast.walk(tree):
+            if (isinstance(n, ast.Attribute) and isinstance(n.ctx, ast.Load) and n.attr.startswith("_")
+                    and not n.attr.startswith("__") and n.attr not in own and n.attr not in FOREIGN_PRIVATE
+                    and not (isinstance(n.value, ast.Name) and n.value.id in ("self", "cls"))):
+                bad.append(f"{path.relative_to(ROOT)}:{n.lineno} reads {ast.unparse(n)}")
+    assert bad == []

@@ -310,7 +310,7 @@ class Mechanism:
         ``length``. A two-force member (massless: lump its mass on the crank and the rocker). Its reaction is
         its tension. ``branch`` picks the rocker's assembly (seed 003 eq. 1's δ₁) when the rod closes a dyad."""
         values = {"length": self._mass_prop(name, "length", "length", length, f"length of rod {name}"),
-                  "z": b.body._expr(z, "length") if isinstance(b, Attachment) else sp.S.Zero}
+                  "z": b.body.expr(z, "length") if isinstance(b, Attachment) else sp.S.Zero}
         return self._joint("rod", name, crank_pin, b, branch=branch, values=values)
 
     def friction(self, joint, coefficient="0", pin_radius="0 mm") -> None:

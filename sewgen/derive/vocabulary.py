@@ -101,19 +101,21 @@ class Body:
         if self.axis is not None:
             raise DeclarationError(f"{self.mech.name}: {self.name!r} turns about an axis in space: its points are "
                                    f"{self.name}.pin(radius, along), not .at(u, v)")
-        return Attachment(self, self._expr(u, "length"), self._expr(v, "length"))
+        return Attachment(self, self.expr(u, "length"), self.expr(v, "length"))
 
     def pin(self, radius, along="0 mm") -> SpatialPoint:
         """A spatial crank's point at ``radius`` from its axis, ``along`` the axis from its axis point."""
         if self.axis is None:
             raise DeclarationError(f"{self.mech.name}: {self.name!r} is a planar body: its points are .at(u, v)")
-        return SpatialPoint(self, self._expr(radius, "length"), self._expr(along, "length"))
+        return SpatialPoint(self, self.expr(radius, "length"), self.expr(along, "length"))
 
     def line(self, at=(0, 0), angle=0) -> Line:
         """The line through (u, v) of this body's frame at ``angle`` (rad, a symbol or "30 deg")."""
-        return Line(self, self._expr(at[0], "length"), self._expr(at[1], "length"), self._expr(angle, "angle"))
+        return Line(self, self.expr(at[0], "length"), self.expr(at[1], "length"), self.expr(angle, "angle"))
 
-    def _expr(self, value, kind: str) -> sp.Expr:
+    def expr(self, value, kind: str) -> sp.Expr:
+        """A ``kind`` (length, angle) of this body's declaration as a SymPy expression: an SI number, a quantity
+        string (\"16.7 mm\") or a parameter's symbol."""
         if isinstance(value, str):
             try:
                 return sp.Float(to_si(value, kind, f"{self.mech.name}.{self.name}"))

@@ -223,7 +223,7 @@ class DesignSweep:
             return self._problems[design]
         if code == _BAD_DESIGN:
             try:
-                mech._check_constants(self.params[design])
+                mech.check_constants(self.params[design])
             except ParameterError as exc:
                 return exc
             return ParameterError(mech.name, "params", "a parameter, held input or branch sign is out of range")
@@ -448,7 +448,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
     n = base.n
     nd, given = _table(mech, designs)
     p = np.empty((nd, npar))
-    p[:] = mech._defaults["p"]
+    p[:] = mech.default_vectors["p"]
     for key, v in given.items():
         p[:, desc.param(key).index] = v
     h = _per_design(mech, "held", held, mech.held_names, [i.default for i in desc.held_inputs], nd, "held")
@@ -504,7 +504,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
             red_val=offset("rv", d0), red_idx=offset("ri", d0), red_stride=nd, work=work[0], work_status=work[1],
             design_status=offset("st", d0), first_bad=offset("first", d0), nbad=offset("nbad", d0),
             last_bad=offset("last", d0))
-        lib.sg_sweep_designs(mech._descriptor, req)
+        lib.sg_sweep_designs(mech.in_c.descriptor, req)
 
     if chunk is None:
         chunk = max(1, min(4096, -(-nd // (8 * threads))))
@@ -550,6 +550,11 @@ def _one_design(ffi, n: int, width: int) -> tuple:
     return one[2:7]
 
 
+#: solve(outputs=...)'s parsed selections, by (mechanism digest, outputs): a cache, not state (a hit gives what a
+#: miss computes).
+_SELECTIONS: dict = {}
+
+
 def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
     """solve(phi, outputs=...) on the defaults but ``params`` (solve()'s lean path, as ``Mechanism._fast_solve``):
     the selection parsed once per ``outputs`` and cached, the angles copied into one buffer, one C call. None
@@ -558,7 +563,7 @@ def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
         return None
     try:
         key = tuple(outputs) if isinstance(outputs, (list, tuple)) else (outputs,)
-        plan = mech._selections.get(key)
+        plan = _SELECTIONS.get((mech.reference.digest, key))
     except TypeError:
         return None
     if plan is None:
@@ -568,18 +573,19 @@ def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
         names = [cols.names[c] for c in sel]
         plan = (len(sel), pointer(mech.ffi, "int *", sel), len(angle), pointer(mech.ffi, "int *", angle), names,
                 len(cols.names), sel, angle)
-        if len(mech._selections) >= 64:
-            mech._selections.clear()
-        mech._selections[key] = plan
+        if len(_SELECTIONS) >= 256:
+            _SELECTIONS.clear()
+        _SELECTIONS[(mech.reference.digest, key)] = plan
     nsel, sel_p, nangle, angle_p, names, width = plan[:6]
     spd = mech.description.default_speed if speed is None else float(speed)
     if not math.isfinite(spd):
         return None
-    got = mech._fast_params(params)
+    got = mech.params_in_c(params)
     if got is None:
         return None
     n = phi.shape[0]
-    desc, held, branch, guess, opt = mech._fast["lean"][5:10]
+    c = mech.in_c
+    desc, held, branch, guess, opt = c.descriptor, c.held, c.branch, c.guess, c.options
     ffi, lib = mech.ffi, mech.lib
     inputs = np.empty(3 * n)
     phi_v, omega, alpha = inputs[:n], inputs[n:2 * n], inputs[2 * n:]
@@ -630,7 +636,7 @@ def solve_selected(mech, outputs, sweep_args: dict, out=None):
                         order=ffi.NULL if base.order is None else base.order, nd=1, ncheck=ncheck,
                         nangle=len(angle_c), angle_cols=angle_c, nsel=len(sel), sel=sel_c, out=block, out_stride=n,
                         work=work, work_status=work_st, design_status=status, first_bad=first)
-    lib.sg_sweep_designs(mech._descriptor, req)
+    lib.sg_sweep_designs(mech.in_c.descriptor, req)
     if status[0] != 0:  # the full sweep names the failure with its diagnosis
         base.run()
         base.check()

@@ -78,6 +78,25 @@ def resolve_reference(ref: Reference) -> Mechanism:
     return RESOLVERS[-1](ref)
 
 
+@dataclass(frozen=True)
+class CDefaults:
+    """What every call of one mechanism into C shares, made once when it loads: its descriptor, the C pointers of
+    its default parameter, held-input, branch and guess vectors and of its default options (closed form where
+    there is one, singular positions refused), and the angle columns a sweep makes continuous (counts and C
+    pointers). The engine's design sweeps and the machine plan read these instead of converting again."""
+
+    descriptor: object
+    params: object
+    held: object
+    branch: object
+    guess: object
+    options: object
+    nqa: int
+    qcols: object
+    noa: int
+    ocols: object
+
+
 class Mechanism:
     """One mechanism of a compiled module (the catalog's or a user's). Immutable and safe to share between
     threads; pickles by reference (see the module docstring)."""
@@ -101,12 +120,16 @@ class Mechanism:
         fields = dict(
             ffi=ffi, lib=lib, name=name, description=desc, _manifest=manifest,
             _descriptor=getattr(lib, f"sg_{name}")(), build_info=MappingProxyType(dict(build_info or {})),
-            reference=dataclasses.replace(ref, digest=digest), _defaults=MappingProxyType(defaults),
+            reference=dataclasses.replace(ref, digest=digest), default_vectors=MappingProxyType(defaults),
             _default_options=MappingProxyType({(newton, keep): self._new_options(ffi, DEFAULT_MAX_ITER, newton, keep)
                                                for newton in (False, True) for keep in (False, True)}))
         qa, oa = desc.angle_columns
         angle = (np.array(qa, dtype=np.intc), np.array(oa, dtype=np.intc))
         fields["_angle"] = (angle, len(qa), pointer(ffi, "int *", angle[0]), len(oa), pointer(ffi, "int *", angle[1]))
+        fields["in_c"] = CDefaults(fields["_descriptor"], pointer(ffi, "double *", defaults["p"]),
+                                   pointer(ffi, "double *", defaults["held"]), pointer(ffi, "int *", defaults["branch"]),
+                                   pointer(ffi, "double *", defaults["guess"]), fields["_default_options"][(False, False)],
+                                   *fields["_angle"][1:])
         # C pointers of the read-only defaults, and the converted parameter vectors of recent params= dicts: the
         # per-call cost of solve() (issue 14, item 5). Caches, not state: a hit gives what a miss computes.
         fields["_fast"] = {k: pointer(ffi, "int *" if k == "branch" else "double *", defaults[k])
@@ -118,10 +141,9 @@ class Mechanism:
                                    fields["_default_options"][(False, False)], *fields["_angle"][1:])
         fields["_lean_requests"] = threading.local()  # one sg_request per thread, refilled by each lean call
         fields["_pcache"] = {}
-        fields["_selections"] = {}  # solve(outputs=...)'s parsed selections (sewgen.engine.designs.fast_selected)
         for key, value in fields.items():
             object.__setattr__(self, key, value)
-        self._check_constants(p)  # a declaration whose defaults give no real dimension
+        self.check_constants(p)  # a declaration whose defaults give no real dimension
 
     def __setattr__(self, key, value):
         raise AttributeError(f"sewgen.Mechanism is immutable (cannot set {key!r})")
@@ -204,10 +226,10 @@ class Mechanism:
                 raise ParameterError(self.name, key, f"unknown; parameters are: {', '.join(values)}")
             values[key] = val
         p = self._check_params(self.description, values)
-        self._check_constants(p, given)
+        self.check_constants(p, given)
         return p
 
-    def _check_constants(self, p: np.ndarray, given=()) -> None:
+    def check_constants(self, p: np.ndarray, given=()) -> None:
         """Every dimension derived from the parameters (the hoisted constants: a triangle's height from its sides,
         ...) must be real: a non-finite one is a ParameterError naming the parameters it is made of (those the
         caller gave first)."""
@@ -261,7 +283,7 @@ class Mechanism:
         """Held inputs (rad, or m for a travel; numbers or quantity strings by name) over their defaults, as a
         C-ready vector."""
         if held is None:
-            return self._defaults["held"].copy()
+            return self.default_vectors["held"].copy()
         inputs = self.description.held_inputs
         return np.array(self._named_vector("held input", self.held_names, [i.default for i in inputs], held,
                                            [i.quantity for i in inputs]), dtype=np.float64)
@@ -346,10 +368,10 @@ class Mechanism:
         if singular not in _SINGULAR_MODES:
             raise ParameterError(self.name, "singular", f"must be 'raise' or 'flag', got {singular!r}")
         keep = singular == "flag"
-        dflt = self._defaults
+        dflt = self.default_vectors
         if params is None:
             p = dflt["p"]
-        elif (hit := self._fast_params(params)) is not None:  # converted and checked once per distinct dict
+        elif (hit := self.params_in_c(params)) is not None:  # converted and checked once per distinct dict
             p = hit[0]
         else:
             p = self.param_vector(params)
@@ -448,11 +470,11 @@ class Mechanism:
         sweep.check()
         return sweep.motion()
 
-    def _fast_params(self, params):
+    def params_in_c(self, params):
         """(vector, C pointer) of a params= dict, converted and checked once and then cached by its items (with
         their types: 1 and True are different keys); None where the items are not hashable."""
         if params is None:
-            return self._defaults["p"], self._fast["p"]
+            return self.default_vectors["p"], self._fast["p"]
         if type(params) is not dict:
             return None
         try:
@@ -481,7 +503,7 @@ class Mechanism:
         spd = self.description.default_speed if speed is None else float(speed)  # solve(): a float or an int
         if not math.isfinite(spd):
             return None
-        got = self._fast_params(params)
+        got = self.params_in_c(params)
         if got is None:
             return None
         nq, nobs, nfo, w, solve_lean, desc, held, branch, guess, opt, nqa, qa, noa, oa = self._fast["lean"]

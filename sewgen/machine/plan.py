@@ -86,9 +86,9 @@ class GroupCall:
         # the group's sg_request: what every run shares, set once; run() fills in the positions' arrays
         req, keep = probe.request()
         self.keep = (self.keep, keep)
-        self.call = (mech.lib.sg_sweep, mech._descriptor, req, ffi)
-        _angle, nqa, qa_p, noa, oa_p = mech._angle
-        self.angle = (nqa, qa_p, noa, oa_p) if (nqa or noa) else None
+        self.call = (mech.lib.sg_sweep, mech.in_c.descriptor, req, ffi)
+        c = mech.in_c
+        self.angle = (c.nqa, c.qcols, c.noa, c.ocols) if (c.nqa or c.noa) else None
 
     def run(self, phi, w: float, accel: float, blk, base, o: int, status, sort: bool):
         """The group's ForceAnalysis at machine shaft angles ``phi`` (``sort``: they do not ascend) in its region
