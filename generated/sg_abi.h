@@ -113,7 +113,7 @@ typedef int (*sg_motion_fn)(const double *q, const double *cq, const double *x, 
 typedef int (*sg_rates_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
 /* one group of observables (a point's, a body's, a cam's arc: obs[group_start[group]] up to obs[group_start[group + 1]]) from a position and its rates, equal to the bit to the motion kernel's; SG_NONFINITE where one of them is not finite */
 typedef int (*sg_observe_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs);
-/* joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld */
+/* joint reactions, driving torques, frame on parts, energies: reads obs, gravity gv[2], loads ld */
 typedef int (*sg_forces_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out);
 /* A (nf x nf, row-major) and b of A f = b, for inspection */
 typedef void (*sg_force_matrix_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b);
@@ -152,7 +152,7 @@ typedef struct sg_mechanism {
     int nobs;                            /* observables per position (points, bodies), see the manifest */
     int nbranch;                         /* closed-form dyads, each with an assembly sign */
     int nf;                              /* force unknowns: reactions and driving torques */
-    int nfo;                             /* force outputs per position: nf, then torques, powers, shaking, energies (manifest) */
+    int nfo;                             /* force outputs per position: nf, then torques, powers, frame on parts, energies (manifest) */
     int nload;                           /* load slots per position: fx, fy per point of a moving body, torque per moving body */
     int nblock;                          /* diagonal blocks of dPhi/dq (closing loops), each with an orientation sign */
     const unsigned char *coord_is_angle; /* 1 for an angle coordinate, 0 for a travel */
@@ -166,7 +166,7 @@ typedef struct sg_mechanism {
     sg_motion_fn motion;                 /* velocities, accelerations and observables at a solved position; cond: the condition number (inf norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated */
     sg_rates_fn rates;                   /* the motion kernel without its observables: velocities, accelerations and cond, equal to the bit (a sweep that keeps a few outputs adds only their groups, kernel 'observe') */
     sg_observe_fn observe;               /* one group of observables (a point's, a body's, a cam's arc: obs[group_start[group]] up to obs[group_start[group + 1]]) from a position and its rates, equal to the bit to the motion kernel's; SG_NONFINITE where one of them is not finite */
-    sg_forces_fn forces;                 /* joint reactions, driving torques, shaking force, energies: reads obs, gravity gv[2], loads ld */
+    sg_forces_fn forces;                 /* joint reactions, driving torques, frame on parts, energies: reads obs, gravity gv[2], loads ld */
     sg_force_matrix_fn force_matrix;     /* A (nf x nf, row-major) and b of A f = b, for inspection */
     sg_scales_fn scales;                 /* each closure equation's own loop size (m; 1 for an angle equation): Newton's per-equation scale */
     sg_lu_factor_fn lu_factor;           /* Newton's LU of dPhi/dq in place (sg_lu_factor with n = nq a literal: its loops unrolled whole, the same operations in the same order) */

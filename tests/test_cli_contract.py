@@ -145,7 +145,8 @@ def test_summary_numbers_are_clean_and_say_what_they_mean(quick_start):
     assert "power_balance_residual" not in s and 0 <= s["power_balance_residual_relative"] < 1e-9
     assert "relative" in s["conventions"]["power_balance_residual_relative"] or \
         "divided" in s["conventions"]["power_balance_residual_relative"]
-    for key in ("frame", "shaft_angle", "bearings", "drive_torque", "joints", "shaking_force"):
+    for key in ("frame", "shaft_angle", "bearings", "drive_torque", "joints", "shaking_force_on_frame",
+                "shaking_moments_on_frame", "frame_force_on_parts"):
         assert s["conventions"][key], key
     assert "friction" in s["conventions"]["drive_torque"]
     assert s["units"]["angles"] == "deg"

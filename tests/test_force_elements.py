@@ -1,7 +1,7 @@
 """Force elements inside the compiled kinetostatics (issue 12, item 1): springs, dampers, torsion springs.
 
 Independent references written here: a sprung and damped crank's driving torque by virtual work and its spring
-and damper forces from the closed form of the length; zero shaking force for massless parts (what the frame puts
+and damper forces from the closed form of the length; a zero frame force on massless parts (what the frame puts
 on the parts through the pivot and through the grounded spring cancels); a four-bar with masses, gravity and a
 coupler-to-ground spring closing its power balance with the spring's energy (spectral derivative of the
 energies); a torsion spring at a rocker's pivot against virtual work; the machine-level power balance through a
@@ -91,8 +91,8 @@ def test_spring_and_damper_forces_and_the_driving_torque_by_virtual_work(crank):
     np.testing.assert_allclose(fa.load_power, -C * rate**2, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(fa.elastic_power, spring * rate, rtol=1e-12, atol=1e-14)
     # massless parts, no gravity: the frame's pivot force and its spring-and-damper pull cancel
-    assert np.abs(fa.shaking_force).max() < 1e-12
-    assert np.abs(fa.shaking_moment).max() < 1e-14
+    assert np.abs(fa.frame_force_on_parts).max() < 1e-12
+    assert np.abs(fa.frame_moment_on_parts).max() < 1e-14
     # the pivot carries what the elements pull: on the crank from the frame = −(F_s + F_d)·(G − P)/L
     e = -d / length[:, None]
     piv = fa.reaction("crank.pivot")

@@ -1,10 +1,10 @@
 """Kinetostatics (Mechanism.kinetostatics, ForceAnalysis, force_matrix, Load) against independent references.
 
 Written here without sewgen's force code: the energy rate Σ m v_G·a_G + I ω α − m g·v_G from the kinematic
-results (power balance, also against a finite difference of the energy); Newton–Euler sums for the shaking
-force and moment; the needle-bar crank-slider's closed form (slider, rod, crank in turn, from analytic slider
-kinematics; point masses and a distributed rod); virtual work at rest (shaft and held inputs); a Lagrange-
-multiplier formulation on absolute coordinates for the take-up four-bar; a change-point parallelogram for the
+results (power balance, also against a finite difference of the energy); Newton–Euler sums for the frame's
+force and moment on the parts; the needle-bar crank-slider's closed form (slider, rod, crank in turn, from
+analytic slider kinematics; point masses and a distributed rod); virtual work at rest (shaft and held inputs); a
+Lagrange-multiplier formulation on absolute coordinates for the take-up four-bar; a change-point parallelogram for the
 singular force matrix; load windows and the seed 000 thread force (2.94 N over 135°–155°); A f = b against numpy.
 Besides the catalog, two user mechanisms: a four-bar whose frame pivot names the frame second, and a crank-slider
 driven backwards (sense −1, phase) on the guide of a held body.
@@ -213,10 +213,11 @@ def test_power_against_finite_difference_of_energy(mech):
     assert_close(fa.input_power(), w * dE, 1e-5, what="power vs finite difference")
 
 
-# -- 2. shaking force and moment ------------------------------------------------------------------------------
+# -- 2. the frame's force and moment on the parts -------------------------------------------------------------
 
-def test_shaking_force_and_moment(mech):
-    """Shaking force = Σ m(a_G − g) − Σ F; moment about O = Σ (r_G−O)×m(a_G−g) + Iα − Σ load moments about O."""
+def test_frame_force_and_moment_on_parts(mech):
+    """Frame's force on the parts = Σ m(a_G − g) − Σ F; its moment about O = Σ (r_G−O)×m(a_G−g) + Iα − Σ load
+    moments about O."""
     params, loads = CASES[mech.name]
     w, al = speeds(PHI, True)
     gv, O = gravity(-120.0), np.array([0.013, -0.021])
@@ -231,9 +232,9 @@ def test_shaking_force_and_moment(mech):
         force -= F
         moment -= T + (0.0 if at is None else cross(at - O[:, None], F))
     scale = float(np.max(np.abs(force)))
-    assert_close(fa.shaking_force, force.T, 1e-10, scale, "shaking force")
-    assert_close(fa.shaking_moment, moment, 1e-10, what="shaking moment")
-    # the frame's reactions, joint by joint, are the shaking force with the sign turned
+    assert_close(fa.frame_force_on_parts, force.T, 1e-10, scale, "frame force on parts")
+    assert_close(fa.frame_moment_on_parts, moment, 1e-10, what="frame moment on parts")
+    # the forces on the frame, joint by joint, sum to the frame's force on the parts with the sign turned
     on_frame = sum(np.array([fa.frame_force(j).fx, fa.frame_force(j).fy]) for j in fa.frame_joint_names)
     assert_close(-on_frame, force, 1e-10, scale, "Σ frame forces")
 
@@ -449,7 +450,7 @@ def test_force_matrix_rank_drops_at_the_toggle(four_bar):
 @pytest.mark.parametrize("window", [("350 deg", "20 deg"), ("135 deg", "155 deg"), ("0 deg", "360 deg"), None],
                          ids=["wrapping", "seed_000", "full_turn", "always"])
 def test_load_window_inclusive_and_wrapping(window):
-    """A load changes the shaking force by −F exactly where the window (ends included, wrapping) says."""
+    """A load changes the frame's force on the parts by −F exactly where the window (ends included, wrapping) says."""
     tu = sewgen.mechanism("take_up")
     deg = np.arange(0.0, 360.0, 1.0)
     base = tu.kinetostatics(np.radians(deg))
@@ -457,13 +458,13 @@ def test_load_window_inclusive_and_wrapping(window):
     on = in_window(deg, window)
     if window == ("350 deg", "20 deg"):
         assert on[[350, 359, 0, 20]].all() and not on[[349, 21]].any()
-    diff = fa.shaking_force - base.shaking_force
-    assert_close(diff, -np.array([0.4 * on, -2.94 * on]).T, 1e-12, 3.0, "shaking force change")
+    diff = fa.frame_force_on_parts - base.frame_force_on_parts
+    assert_close(diff, -np.array([0.4 * on, -2.94 * on]).T, 1e-12, 3.0, "frame force on parts change")
     # radians give the same window
     if window is not None:
         rad = tuple(math.radians(float(w.split()[0])) for w in window)
         same = tu.kinetostatics(np.radians(deg), loads=[Load("thread_eye", fx=0.4, fy=-2.94, window=rad)])
-        np.testing.assert_allclose(same.shaking_force, fa.shaking_force, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(same.frame_force_on_parts, fa.frame_force_on_parts, rtol=0, atol=1e-12)
 
 
 def test_seed_thread_force_changes_torque_by_its_virtual_power():

@@ -1,12 +1,13 @@
 """The JB1-3 household machine, whole (sewgen.machine): power, bearings, torque, shaking, feed.
 
 Every reference is computed here without sewgen's machine-level code (MachineAnalysis._shaft, energy_rate,
-shaking_force) and without its force code: energy rates from the kinematic results and the group parameter
-vectors; the upper shaft's core point masses written out (m at radius r, angle φ + β, rotating with the
-shaft); the shaft's bearing reactions from a 4 × 4 static balance solved with numpy; a hand-worked machine
-(one needle-bar group at rest) by the lever rule and the crank-slider's statics; the driving torque at rest
-by virtual work (finite differences of positions); the shaking force from Newton's law over every moving
-part and, separately, from the frame's reactions; the stitch length from a fine sweep of the feed dog.
+the shaking force and moments on the frame) and without its force code: energy rates from the kinematic
+results and the group parameter vectors; the upper shaft's core point masses written out (m at radius r,
+angle φ + β, rotating with the shaft); the shaft's bearing reactions from a 4 × 4 static balance solved with
+numpy; a hand-worked machine (one needle-bar group at rest) by the lever rule and the crank-slider's statics;
+the driving torque at rest by virtual work (finite differences of positions); the shaking force and the
+weight on the frame from Newton's law over every moving part and, separately, from the frame's force on the
+parts; the stitch length from a fine sweep of the feed dog.
 
 Frame: x horizontal (feed direction +), y up, z along the upper shaft from the front bearing; SI units.
 """
@@ -20,6 +21,7 @@ import pytest
 
 import sewgen
 from sewgen.errors import ParameterError
+from sewgen.machine import shaking
 from sewgen.machine.feed import regulator_angle
 from sewgen.machine.assembly import Group, Machine, Shaft, ShaftMass, load_machine
 
@@ -283,7 +285,10 @@ def test_bearings_by_the_lever_rule_at_rest():
     # counterweight opposite: τ = cos φ [W_bar r (1 − r sin φ / √(l² − r² cos² φ)) + W_crank c − W_cw r_cw]
     tau = np.cos(phi) * (0.5 * r * (1 - r * np.sin(phi) / root) + 0.3 * 0.002 - 0.1 * 0.010)
     assert_close(a.torque, tau, 1e-12, "holding torque")
-    assert_close(a.shaking_force, np.tile([0.0, 2.9], (len(phi), 1)), 1e-12, "frame holds the weight")
+    assert np.abs(a.shaking_force_on_frame).max() == 0.0  # at rest: no inertia
+    assert_close(a.weight_on_frame[None, :], np.array([[0.0, -2.9]]), 1e-12, "weight on the frame")
+    held = a.frame_force_on_parts + a.process_loads_on_parts()[0] + np.asarray(a.machine.shaft.belt)
+    assert_close(held, np.tile([0.0, 2.9], (len(phi), 1)), 1e-12, "frame holds the weight")
 
 
 # -- 3. driving torque ----------------------------------------------------------------------------------------
@@ -316,7 +321,7 @@ def test_torque_at_rest_by_virtual_work(jb):
     assert_close(tau, dv, 1e-7, "torque at rest vs dV/dphi")  # central difference: ~1e-9 here
 
 
-# -- 4. shaking force -------------------------------------------------------------------------------------------
+# -- 4. shaking force on the frame, weight on the frame, the frame's force on the parts -----------------------
 def test_shaking_force_is_newtons_law_over_every_moving_part(run):
     g = run.machine.gravity
     total = np.zeros((len(run.phi), 2))
@@ -325,14 +330,14 @@ def test_shaking_force_is_newtons_law_over_every_moving_part(run):
     for sm in run.machine.shaft.masses:
         _, _, acc = core_kinematics(run.phi, run.omega, run.alpha, sm)
         total += sm.mass * (acc - g[None, :])
-    assert_close(run.shaking_force, total, 1e-12, "shaking force on the base (process loads internal)")
+    assert_close(-(run.shaking_force_on_frame + run.weight_on_frame), total, 1e-12, "inertia, weight on frame")
     for _pt, _bd, fx, fy, _tz in applied_loads(run):
         total -= np.column_stack([fx, fy])
     total -= np.asarray(run.machine.shaft.belt)[None, :]
-    assert_close(run.frame_reaction, total, 1e-12, "frame on the moving parts")
+    assert_close(run.frame_force_on_parts, total, 1e-12, "frame on the moving parts")
 
 
-def test_frame_reaction_is_what_the_frame_supplies(run):
+def test_frame_force_on_parts_is_what_the_frame_supplies(run):
     """Frame on the moving parts = −(what every non-shaft frame joint puts on the frame) − (bearing loads)."""
     total = -run.bearing("front") - run.bearing("rear")
     joints = 0
@@ -345,12 +350,12 @@ def test_frame_reaction_is_what_the_frame_supplies(run):
             total = total - np.column_stack([f.fx, f.fy])
             joints += 1
     assert joints == 8  # needle-bar guide; take-up D; hook O4, O11; feed regulator, O_feed, O_lift, O4 (B's copy)
-    assert_close(run.frame_reaction, total, 1e-11, "frame reaction vs frame joints")
+    assert_close(run.frame_force_on_parts, total, 1e-11, "frame force on the parts vs frame joints")
 
 
 def test_shaking_moment_about_a_point(run):
-    """Shaking moment on the base = Σ [r_G × m(a_G − g) + I α]; the frame's reactions' moment also takes away
-    the moments of the loads."""
+    """Shaking and weight moments on the frame = −Σ [r_G × m(a_G − g) + I α], from the kinematics and from the
+    kernels' frame reactions; the moment of the frame's force on the parts also takes away the loads'."""
     o = np.array([0.013, -0.041])
     g = run.machine.gravity
     total = run.machine.shaft.inertia * run.alpha
@@ -364,21 +369,24 @@ def test_shaking_moment_about_a_point(run):
     for sm in run.machine.shaft.masses:
         pos, _, acc = core_kinematics(run.phi, run.omega, run.alpha, sm)
         total = total + cross(pos, sm.mass * (acc - g[None, :]))
-    assert_close(run.shaking_moment(about=tuple(o)), total, 1e-11, "shaking moment on the base")
+    on_frame = run.shaking_moments_on_frame((*o, 0.0)) + shaking.weight_moments_on_frame(run, (*o, 0.0))
+    assert_close(-on_frame[:, 2], total, 1e-11, "inertia and weight moment on the frame (kinematics)")
+    kernels = run.inertia_and_weight_moments_on_frame((*o, 0.0))
+    assert_close(-kernels[:, 2], total, 1e-11, "inertia and weight moment on the frame (frame reactions)")
     for pt, bd, fx, fy, tz in applied_loads(run):
         if pt is not None:
             total = total - cross(np.column_stack([pt.x, pt.y]), np.column_stack([fx, fy]))
         total = total - tz
     belt = np.tile(np.asarray(run.machine.shaft.belt, dtype=float), (len(run.phi), 1))
     total = total - cross(np.zeros_like(belt), belt)  # the belt pulls on the shaft axis
-    assert_close(run.frame_moment(about=tuple(o)), total, 1e-11, "moment of the frame's reactions")
+    assert_close(run.frame_moment_on_parts(about=tuple(o)), total, 1e-11, "moment of the frame's force on parts")
 
 
 def test_shaking_moments_about_three_axes(run):
-    """The base's shaking moment about x and y: every group's moving parts act in the group's plane z (its
-    driven bodies' mean z in the JB1-3 model) and each core mass at its own z; M = Σ (r − O) × m(a_G − g) with
-    forces in the x–y plane, so Mx = −Σ (z − z_O) Fy and My = Σ (z − z_O) Fx. The z component is the in-plane
-    moment."""
+    """The moments on the frame about x and y: every group's moving parts act in the group's plane z (its
+    driven bodies' mean z in the JB1-3 model) and each core mass at its own z; −M = Σ (r − O) × m(a_G − g) with
+    forces in the x–y plane, so −Mx = −Σ (z − z_O) Fy and −My = Σ (z − z_O) Fx; the inertia part alone
+    (the shaking moments on the frame) leaves out g."""
     o = np.array([0.013, -0.041, 0.052])
     g = run.machine.gravity
     mx, my = np.zeros(len(run.phi)), np.zeros(len(run.phi))
@@ -393,24 +401,27 @@ def test_shaking_moments_about_three_axes(run):
         f = sm.mass * (acc - g[None, :])
         mx -= (sm.z - o[2]) * f[:, 1]
         my += (sm.z - o[2]) * f[:, 0]
-    got = run.shaking_moments(about=tuple(o))
+    got = -run.inertia_and_weight_moments_on_frame(about=tuple(o))
     assert got.shape == (len(run.phi), 3)
     assert np.abs(mx).max() > 0.1 and np.abs(my).max() > 0.1  # N·m: the groups' offsets do rock the base
-    assert_close(got[:, 0], mx, 1e-11, "shaking moment about x")
-    assert_close(got[:, 1], my, 1e-11, "shaking moment about y")
-    assert_close(got[:, 2], run.shaking_moment(about=tuple(o[:2])), 1e-14, "about z: the in-plane moment")
+    assert_close(got[:, 0], mx, 1e-11, "inertia and weight moment about x")
+    assert_close(got[:, 1], my, 1e-11, "inertia and weight moment about y")
+    weight = shaking.weight_moments_on_frame(run, tuple(o))
+    shake = run.shaking_moments_on_frame(tuple(o))
+    assert_close(-(shake + weight)[:, 0], mx, 1e-11, "shaking + weight moment about x")
+    assert_close(-(shake + weight)[:, 1], my, 1e-11, "shaking + weight moment about y")
 
 
 # -- load windows: the seed's angles are the machine's ------------------------------------------------------------
 def test_load_windows_are_machine_shaft_angles(jb):
     """Seed 000 §二(二)1(1): the thread pull 2.94 N acts over 135°–155° 'relative to the upper-shaft angle'
     (相对于上轴转角), i.e. the machine's φ (needle top at 90°), as the model file's comment says. The take-up
-    group runs at φ + 82°; its window must stay at machine φ = 135°–155°. The change in the machine's shaking
-    force when the load is removed shows where it acts."""
+    group runs at φ + 82°; its window must stay at machine φ = 135°–155°. The change in the frame's force on
+    the parts when the load is removed shows where it acts."""
     phi = np.radians(np.arange(0.0, 360.0, 1.0))
     quiet = dataclasses.replace(jb, groups=[dataclasses.replace(g, loads=[]) if g.name == "take_up" else g
                                             for g in jb.groups])
-    diff = jb.analyze(phi).frame_reaction - quiet.analyze(phi).frame_reaction  # = −(thread pull) where on
+    diff = jb.analyze(phi).frame_force_on_parts - quiet.analyze(phi).frame_force_on_parts  # −(thread pull) where on
     on_deg = np.flatnonzero(np.abs(diff[:, 1]) > 1.0)
     assert_close(diff[on_deg, 1], np.full(len(on_deg), 2.94), 1e-12, "thread pull")
     assert on_deg.tolist() == list(range(135, 156)), (

@@ -262,16 +262,22 @@ def test_summary_reports_knife_and_timing(analysis):
 
 @pytest.mark.parametrize("accel", [0.0, 500.0])
 def test_shaking_moments_of_groups_along_the_shaft(accel):
-    """The shaking moments from the parts' inertia (sewgen.machine.shaking, body by body in the machine frame) equal the
-    machine's from the groups' frame reactions (MachineAnalysis.shaking_moments, the groups along the shaft placed
-    by their origin), opposite in sign (on the frame / on the parts); without gravity, whose moment differs."""
+    """The shaking and weight moments on the frame from the parts' kinematics (sewgen.machine.shaking, body by
+    body in the machine frame) equal the ones from the groups' frame reactions with the process loads put back
+    (MachineAnalysis.inertia_and_weight_moments_on_frame, the groups along the shaft placed by their origin), with
+    gravity on and off."""
     from sewgen.machine import shaking
 
     m = load_machine("51-a")
-    m.gravity = np.zeros(2)
-    a = m.analyze(accel=accel)
     about = (0.01, 0.02, 0.03)
-    on_frame, on_parts = shaking.shaking_moments(a, about), a.shaking_moments(about)
-    np.testing.assert_allclose(on_frame, -on_parts, atol=1e-12 * np.abs(on_frame).max())
-    assert np.abs(on_frame[:, 0]).max() > 1.0  # the needle's and loopers' forces rock the base about x
-    np.testing.assert_allclose(shaking.shaking_force(a), -a.shaking_force, atol=1e-12 * np.abs(a.shaking_force).max())
+    for gravity in (np.zeros(2), np.array(m.gravity, dtype=float)):
+        m.gravity = gravity
+        a = m.analyze(accel=accel)
+        kinematics = a.shaking_moments_on_frame(about) + shaking.weight_moments_on_frame(a, about)
+        reactions = a.inertia_and_weight_moments_on_frame(about)
+        np.testing.assert_allclose(kinematics, reactions, atol=1e-12 * np.abs(kinematics).max())
+        assert np.abs(a.shaking_moments_on_frame(about)[:, 0]).max() > 1.0  # the needle and loopers rock it
+        loads, _ = a.process_loads_on_parts()
+        force = a.shaking_force_on_frame + a.weight_on_frame
+        np.testing.assert_allclose(force, -(a.frame_force_on_parts + loads + np.asarray(m.shaft.belt)),
+                                   atol=1e-12 * np.abs(force).max())

@@ -79,7 +79,7 @@ def test_actuator_torques_of_a_relative_drive_by_virtual_work(cache):
     np.testing.assert_allclose(fa.torque("shaft"), -(dtip @ F), atol=1e-13)  # T ω + F·v = 0
     np.testing.assert_allclose(fa.torque("shaft"), shoulder + 2 * at_elbow, atol=1e-13)
     # the elbow actuator is inside the machine: the frame feels the shoulder only, and it balances the load
-    np.testing.assert_allclose(fa.shaking_force, np.tile(-F, (len(phi), 1)), atol=1e-13)
+    np.testing.assert_allclose(fa.frame_force_on_parts, np.tile(-F, (len(phi), 1)), atol=1e-13)
 
 
 def test_a_held_relative_input_holds_the_elbow(cache):

@@ -283,7 +283,7 @@ def test_the_feed_keeps_its_stitch_and_dog_height(jb, tm):
     assert "cloth moved 4.00 mm" in tm.event("feed ends").note
 
 
-# -- shaking force: on the frame, dynamic, the weight apart ----------------------------------------------------
+# -- shaking force on the frame (inertia only), weight on the frame, the frame's force on the parts ------------
 def test_shaking_force_on_the_frame_without_the_weight(jb):
     a = jb.analyze()
     total, mass = np.zeros((len(a.phi), 2)), 0.0
@@ -298,14 +298,34 @@ def test_shaking_force_on_the_frame_without_the_weight(jb):
         th = a.phi + sm.angle
         total += sm.mass * sm.radius * a.omega[:, None] ** 2 * np.column_stack([np.cos(th), np.sin(th)])
         mass += sm.mass
-    np.testing.assert_allclose(shaking.shaking_force(a), total, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(shaking.weight(a), [0.0, -9.80665 * mass], rtol=1e-14)
-    # with the weight put back it is the frame's force on the parts turned round (process loads internal)
-    np.testing.assert_allclose(shaking.shaking_force(a) + shaking.weight(a), -a.shaking_force, rtol=0, atol=1e-12)
-    assert abs(shaking.shaking_force(a).mean(axis=0)).max() < 0.05  # dynamic: no static part left
-    m_on_parts = a.shaking_moments()
-    m_frame = shaking.shaking_moments(a)
-    assert np.abs(m_frame.mean(axis=0)).max() < 0.05 < np.abs(m_on_parts.mean(axis=0)).max()
+    np.testing.assert_allclose(shaking.shaking_force_on_frame(a), total, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.shaking_force_on_frame, total, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(shaking.weight_on_frame(a), [0.0, -9.80665 * mass], rtol=1e-14)
+    assert abs(a.shaking_force_on_frame.mean(axis=0)).max() < 0.05  # inertia only: no static part left
+
+
+def test_shaking_and_weight_on_frame_are_the_frames_force_on_the_parts_turned_round(jb):
+    """At every angle, from the kinematics (left) and from the compiled kernels' frame reactions (right):
+    shaking force on the frame + weight on the frame = −(frame's force on the parts + process loads + belt pull),
+    and the same for the moments about a point off every axis."""
+    a = jb.analyze()
+    loads, load_mz = a.process_loads_on_parts()
+    assert np.abs(loads).max() > 1.0  # the process loads are on: the check is not empty
+    belt = np.asarray(jb.shaft.belt, dtype=float)
+    left = a.shaking_force_on_frame + a.weight_on_frame
+    right = -(a.frame_force_on_parts + loads + belt)
+    np.testing.assert_allclose(left, right, rtol=0, atol=1e-10 * np.abs(right).max())
+    about = (0.013, -0.021, 0.05)
+    moments = a.shaking_moments_on_frame(about) + shaking.weight_moments_on_frame(a, about)
+    scale = np.abs(moments).max()
+    np.testing.assert_allclose(moments, a.inertia_and_weight_moments_on_frame(about), rtol=0, atol=1e-10 * scale)
+    ox, oy, _ = about
+    force = loads + belt
+    mz = -(a.frame_moment_on_parts((ox, oy)) + load_mz - (ox * force[:, 1] - oy * force[:, 0]))
+    np.testing.assert_allclose(moments[:, 2], mz, rtol=0, atol=1e-10 * scale)
+    # inertia only: the moments of the inertia forces average out over a turn; the weight's do not
+    assert np.abs(a.shaking_moments_on_frame().mean(axis=0)).max() < 0.05
+    assert np.abs(shaking.weight_moments_on_frame(a).mean(axis=0)).max() > 0.05
 
 
 # -- outputs -------------------------------------------------------------------------------------------------------
@@ -319,13 +339,52 @@ def test_summary_json_and_timing_files(jb, tmp_path):
     assert {"name", "angle_deg"} <= set(t["events"][0]) and len(t["events"]) == 18
     assert all({"rule", "value", "limit", "unit", "ok"} <= set(c) for c in t["checks"]) and all(
         c["ok"] for c in t["checks"])
-    assert s["shaking_force"]["acts_on"] == "frame" and s["weight_of_moving_parts"]["acts_on"] == "frame"
+    assert s["shaking_force_on_frame"]["acts_on"] == "frame" and s["weight_on_frame"]["acts_on"] == "frame"
     assert s["bearings"]["rear"]["acts_on"] == "frame"
-    assert s["shaking_force"]["max"] < np.hypot(*a.shaking_force.T).max()  # the weight left out
+    assert s["shaking_force_on_frame"]["max"] == pytest.approx(np.hypot(*a.shaking_force_on_frame.T).max(), rel=1e-11)
     assert (tmp_path / "timing.txt") in files and "12 of 12 rules pass" in (tmp_path / "timing.txt").read_text()
     header = (tmp_path / "machine.csv").read_text().splitlines()[0]
-    assert "shaking_on_frame.fx [N]" in header and "bearing_rear_on_frame.fx [N]" in header
-    assert "frame_on_parts.fx [N]" in header
+    assert "bearing_rear_on_frame.fx [N]" in header
+
+
+def test_csv_and_summary_name_what_acts_on_what(jb, tmp_path):
+    """machine.csv, a group's csv and summary.json carry the names of sewgen.machine.shaking's convention and
+    none of the old ones."""
+    from sewgen.report.outputs import CONVENTIONS, write_report
+
+    a = jb.analyze()
+    write_report(a, tmp_path)
+    header = (tmp_path / "machine.csv").read_text().splitlines()[0].split(",")
+    new = {f"shaking_force_on_frame.{c} [N]" for c in ("fx", "fy", "magnitude")}
+    new |= {f"shaking_moments_on_frame.{c} [N*m]" for c in "xyz"}
+    new |= {"frame_force_on_parts.fx [N]", "frame_force_on_parts.fy [N]"}
+    assert new <= set(header)
+    assert not [h for h in header if h.startswith(("shaking_on_frame", "frame_on_parts", "shaking."))]
+    group = (tmp_path / f"{jb.groups[0].name}.csv").read_text().splitlines()[0].split(",")
+    assert {"frame_force_on_parts.fx [N]", "frame_force_on_parts.fy [N]", "frame_moment_on_parts [N*m]"} <= set(group)
+    assert not [h for h in group if h.startswith("shaking")]
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert {"shaking_force_on_frame", "shaking_moments_on_frame", "weight_on_frame"} <= set(s)
+    assert set(s["shaking_moments_on_frame"]) == {"x", "y", "z"}
+    old = {"shaking_force", "shaking_moment", "shaking_moments_about_origin", "weight_of_moving_parts"}
+    assert not old & set(s) and not old & set(s["conventions"]) and not old & set(CONVENTIONS)
+    assert {"shaking_force_on_frame", "shaking_moments_on_frame", "frame_force_on_parts"} <= set(s["conventions"])
+
+
+def test_old_names_warn_and_keep_their_values(jb):
+    a = jb.analyze()
+    fa = a.groups[jb.groups[0].name]
+    with pytest.warns(DeprecationWarning, match="frame_force_on_parts"):
+        np.testing.assert_array_equal(a.frame_reaction, a.frame_force_on_parts)
+    with pytest.warns(DeprecationWarning, match="shaking_force_on_frame"):
+        old = a.shaking_force
+    np.testing.assert_allclose(old, -(a.shaking_force_on_frame + a.weight_on_frame), atol=1e-9)
+    with pytest.warns(DeprecationWarning, match="shaking_moments_on_frame"):
+        np.testing.assert_array_equal(a.shaking_moments(), -a.inertia_and_weight_moments_on_frame())
+    with pytest.warns(DeprecationWarning, match="frame_force_on_parts"):
+        np.testing.assert_array_equal(fa.shaking_force, fa.frame_force_on_parts)
+    with pytest.warns(DeprecationWarning, match="shaking_force_on_frame"):
+        np.testing.assert_array_equal(shaking.shaking_force(a), a.shaking_force_on_frame)
 
 
 def test_the_timing_command(tmp_path):

@@ -14,8 +14,8 @@ observable. Its results are checked against the compiled sweep at the same angle
 like with like. The "derive" line times derive.emit.generate for the whole catalog, in-process.
 
 The "kinetostatics" kernel times ``Mechanism.kinetostatics`` (kinematics plus every force: joint reactions,
-driving torques, shaking force and moment, energies and powers; default gravity, no loads) over the same
-sweep, and the same call through ``sg_sweep_forces`` alone (raw C). Its baseline is the kinematics baseline
+driving torques, the frame's force and moment on the parts, energies and powers; default gravity, no loads) over
+the same sweep, and the same call through ``sg_sweep_forces`` alone (raw C). Its baseline is the kinematics baseline
 above plus, per position, the force balance A f = b of derive.kinetostatics solved by numpy.linalg.solve.
 A and b are lambdified as derive writes them, with the placeholder symbols of the kinematic observables,
 and are fed the observables the kinematics baseline has just evaluated at that position: that is how the

@@ -1,8 +1,9 @@
 """``sewgen balance machine MODEL``: whole-machine balancing by seed 000's three methods (sewgen.machine.machine_balance).
 
 Writes into ``--out`` the before/after evaluation (balance.json, bearings.csv, speeds.csv), the bearing-load
-hodographs and the shaking hodograph before and after (balance.png), and with ``--write-model`` the model file
-with the counterweights added (analysable as it is: ``sewgen analyze balanced.toml``).
+hodographs and the hodograph of the shaking force on the frame before and after (balance.png), and with
+``--write-model`` the model file with the counterweights added (analysable as it is: ``sewgen analyze
+balanced.toml``).
 """
 from __future__ import annotations
 
@@ -24,10 +25,11 @@ def add_arguments(p) -> None:
     g = p.add_argument_group("balance machine MODEL (seed 000 part 2: whole-machine balancing)")
     g.add_argument("--method", choices=["separate", "harmonic", "bearings"], default="bearings",
                    help="separate: each group by itself (seed 002's objective); harmonic: cancel the first order "
-                   "of the shaking force and moments; bearings: minimise the bearing loads (default)")
+                   "of the shaking force and moments on the frame; bearings: minimise the bearing loads (default)")
     g.add_argument("--objective", choices=["peak", "rms"], default="peak", help="bearings: peak or RMS (default peak)")
     g.add_argument("--shaking-weight", default="0", metavar="W",
-                   help="bearings: add W × the shaking force's peak (or RMS) to the objective (default 0)")
+                   help="bearings: add W × the peak (or RMS) of the shaking force on the frame to the objective "
+                        "(default 0)")
     g.add_argument("--first-order", choices=["forward", "x", "y"], default="forward",
                    help="harmonic: cancel the forward-rotating first order (default), or the first order along x or "
                    "y completely (primary balance along a line of stroke)")
@@ -104,14 +106,14 @@ def _print(r: dict) -> None:
               f"{c['mass'] * 1e3:.1f} g at {c['radius'] * 1e3:.1f} mm, z {c['z'] * 1e3:.1f} mm")
     rows = [("front bearing peak [N]", "bearing_front_peak"), ("rear bearing peak [N]", "bearing_rear_peak"),
             ("front bearing RMS [N]", "bearing_front_rms"), ("rear bearing RMS [N]", "bearing_rear_rms"),
-            ("shaking force peak, weight removed [N]", "shaking_force_peak"),
-            ("shaking moment x peak [N*m]", "shaking_moment_x_peak"),
-            ("shaking moment y peak [N*m]", "shaking_moment_y_peak"),
+            ("shaking force on frame peak [N]", "shaking_force_on_frame_peak"),
+            ("shaking moment on frame x peak [N*m]", "shaking_moment_on_frame_x_peak"),
+            ("shaking moment on frame y peak [N*m]", "shaking_moment_on_frame_y_peak"),
             ("driving torque peak [N*m]", "torque_peak")]
     print(f"  {'':42s} {'before':>10s} {'after':>10s}")
     for label, key in rows:
         print(f"  {label:42s} {r['before'][key]:10.3f} {r['after'][key]:10.3f}")
-    for name, key in (("shaking force orders 1-3 [N]", "shaking_force_orders"),):
+    for name, key in (("shaking force on frame orders 1-3 [N]", "shaking_force_on_frame_orders"),):
         b = ", ".join(f"{v:.2f}" for v in r["before"][key])
         a = ", ".join(f"{v:.2f}" for v in r["after"][key])
         print(f"  {name}: {b} -> {a}")
@@ -129,7 +131,8 @@ def _write(folder: Path, report, result: dict) -> None:
             cols[f"{which}_{tag}.fx [N]"], cols[f"{which}_{tag}.fy [N]"] = load[:, 0], load[:, 1]
             cols[f"{which}_{tag}.magnitude [N]"] = np.hypot(*load.T)
     write_csv(folder / "bearings.csv", cols)
-    keys = ("bearing_front_peak", "bearing_rear_peak", "bearing_front_rms", "bearing_rear_rms", "shaking_force_peak")
+    keys = ("bearing_front_peak", "bearing_rear_peak", "bearing_front_rms", "bearing_rear_rms",
+            "shaking_force_on_frame_peak")
     speed_cols = {"speed [rpm]": np.array([s["rpm"] for s in result["speeds"]], dtype=float)}
     for tag in ("before", "after"):
         for k in keys:
@@ -139,7 +142,7 @@ def _write(folder: Path, report, result: dict) -> None:
 
 
 def _plot(path: Path, report) -> None:
-    """Hodographs of the front and rear bearing loads and of the dynamic shaking force, before and after."""
+    """Hodographs of the front and rear bearing loads and of the shaking force on the frame, before and after."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -149,7 +152,7 @@ def _plot(path: Path, report) -> None:
     for ax, (title, get) in zip(axes, (
             ("front bearing load (shaft on frame)", lambda a: a.bearing("front")),
             ("rear bearing load (shaft on frame)", lambda a: a.bearing("rear")),
-            ("shaking force on the base, weight removed", lambda a: a.shaking_force - a.shaking_force.mean(axis=0)))):
+            ("shaking force on the frame, −Σ m a_G", lambda a: a.shaking_force_on_frame))):
         for tag, a, style in (("before", report.before, dict(color="0.55", ls="--")),
                               ("after", report.after, dict(color="C3"))):
             v = get(a)

@@ -313,10 +313,10 @@ def cmd_forces(args, con: Console) -> int:
         tau, _ = units.convert(fa.torque(name), "N*m")
         lines.append(f"torque {name:15s} min {_extreme(tau, phi, np.argmin)}  max {_extreme(tau, phi, np.argmax)}"
                      f"  RMS {_rms(tau):.6g} {T}")
-    shake, _ = units.convert(np.hypot(*fa.shaking_force.T), "N")
-    lines.append(f"{f'shaking force ({F})':22s} {_extreme(shake, phi, np.argmax)} {_rms(shake):12.6g}")
-    moment, _ = units.convert(np.abs(fa.shaking_moment), "N*m")
-    lines.append(f"{f'shaking moment ({T})':22s} {_extreme(moment, phi, np.argmax)} {_rms(moment):12.6g}")
+    on_parts, _ = units.convert(np.hypot(*fa.frame_force_on_parts.T), "N")
+    lines.append(f"{f'frame on parts ({F})':22s} {_extreme(on_parts, phi, np.argmax)} {_rms(on_parts):12.6g}")
+    moment, _ = units.convert(np.abs(fa.frame_moment_on_parts), "N*m")
+    lines.append(f"{f'frame moment ({T})':22s} {_extreme(moment, phi, np.argmax)} {_rms(moment):12.6g}")
     if csv:
         lines.append(f"wrote {csv}")
     for line in lines:
@@ -372,7 +372,7 @@ def cmd_analyze(args, con: Console) -> int:
             f"drive torque {summary['drive_torque']['min']:.4g} .. {summary['drive_torque']['max']:.4g} N*m "
             f"(RMS {summary['drive_torque']['rms']:.4g}, {_friction_words(summary['friction'])}); bearings front "
             f"{summary['bearings']['front']['max']:.4g} N, rear {summary['bearings']['rear']['max']:.4g} N peak; "
-            f"shaking force {summary['shaking_force']['max']:.4g} N peak")
+            f"shaking force on the frame {summary['shaking_force_on_frame']['max']:.4g} N peak")
     for f in files:
         con.say(f"wrote {out / Path(f).name}")
     return 0
@@ -426,7 +426,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(fn=cmd_list)
     for name, fn, text in (("params", cmd_params, "a mechanism's parameters"),
                            ("kinematics", cmd_kinematics, "positions, velocities, accelerations over a revolution"),
-                           ("forces", cmd_forces, "joint reactions, driving torque, shaking force over a revolution")):
+                           ("forces", cmd_forces,
+                            "joint reactions, driving torque, the frame's force on the parts over a revolution")):
         p = sub.add_parser(name, help=text, description=text[:1].upper() + text[1:] + ".")
         p.add_argument("name", nargs="?", help="a catalog mechanism (sewgen list; take_up or take-up), or give --file")
         p.add_argument("--file", help="a mechanism of your own: a .py file with declare()")

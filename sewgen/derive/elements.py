@@ -16,8 +16,8 @@ Conventions (stated in the manifest and the README):
   potential energy, and its rate the output ``elastic_power``; a damper's power on the mechanism
   (−c·(dL/dt)² ≤ 0) is part of ``load_power``, so the power balance drive + loads = d(E_kin + E_pot)/dt still
   closes;
-* an element anchored to the frame acts on the moving parts *from the frame*: its force is part of the shaking
-  force and moment (the resultant of what the frame puts on the parts), like a grounded joint's reaction.
+* an element anchored to the frame acts on the moving parts *from the frame*: its force is part of the frame's
+  force and moment on the parts (``frame_force_on_parts``), like a grounded joint's reaction.
 """
 from __future__ import annotations
 

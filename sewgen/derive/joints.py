@@ -7,7 +7,7 @@ A kind gives
   scalar equations for a pin, the normal distance for a slide) — :meth:`JointKind.closure`;
 * its **reaction unknowns** and the **force rows** they enter (seed 000 §二(三): per moving body, force x,
   force y, moment about G) — :attr:`JointKind.columns`, :meth:`JointKind.reaction`, :meth:`JointKind.rows`;
-  the force it puts on the frame (the shaking force, seed 000 §二(四)) and the outputs it adds
+  the force it puts on the body (the frame's force on the parts, seed 000 §二(四)) and the outputs it adds
   — :meth:`JointKind.on_body`, :meth:`JointKind.outputs`;
 * its part in the **closed-form dyads** (seed 001 §三: a pin is the R of RRR, RRP, RPR; a slider's guide the P)
   — :attr:`JointKind.dyad_letter`, and whether a free link hangs from it in the spanning tree;

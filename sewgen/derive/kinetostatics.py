@@ -197,7 +197,7 @@ class Kinetostatics:
         for r in self.reactions:  # what each kind adds (a normal force in frame components)
             c = col[r.name]
             out += r.joint_kind.outputs(self, r, self.f[c:c + len(r.columns)])
-        fx = fy = mz = sp.S.Zero  # the frame's reactions on the moving parts
+        fx = fy = mz = sp.S.Zero  # the frame's force on the moving parts (drives counted as frame)
         for r in self.reactions:
             if not r.grounded:
                 continue
@@ -225,7 +225,8 @@ class Kinetostatics:
                     fx += ap.fx
                     fy += ap.fy
                     mz += px * ap.fy - py * ap.fx + ap.torque
-        out += [("shaking.fx", "N", fx), ("shaking.fy", "N", fy), ("shaking.moment", "N*m", mz)]
+        out += [("frame_force_on_parts.fx", "N", fx), ("frame_force_on_parts.fy", "N", fy),
+                ("frame_moment_on_parts", "N*m", mz)]
         ke = pe = sp.S.Zero
         gx, gy = self.gravity
         for body in self.moving:

@@ -1,15 +1,18 @@
-"""Named results of a kinetostatic sweep: joint reactions, driving torques, shaking force and moment, energy.
+"""Named results of a kinetostatic sweep: joint reactions, driving torques, the frame's force on the parts, energy.
 
 Conventions (derive/kinetostatics.py): a revolute's reaction is the force on the joint's second body (b) from
 its first (a), in the frame's x, y axes; a prismatic's is the normal force along the guide's normal (guide
 direction turned +90°) and the couple, both on the slider side. Driven bodies are pinned to the frame at
-``<body>.pivot``; a slider's own guide is ``<slider>.guide``. Shaking force and moment are the resultant of
-the frame's reactions on the moving parts — Σ m·a_G − Σ m·g − Σ loads — with the drives counted as part of
-the frame (seed 000 analyses the machine's shaking through these base reactions); the force the mechanism
-puts on the frame is their negative, per joint in :meth:`ForceAnalysis.frame_force`.
+``<body>.pivot``; a slider's own guide is ``<slider>.guide``. :attr:`ForceAnalysis.frame_force_on_parts` and
+:attr:`ForceAnalysis.frame_moment_on_parts` are the resultant of the frame's reactions on the moving parts —
+Σ m·a_G − Σ m·g − Σ loads — with the drives counted as part of the frame (seed 000 analyses the machine's
+shaking through these base reactions); the force the mechanism puts on the frame is their negative, per joint
+in :meth:`ForceAnalysis.frame_force`. A machine's shaking force on the frame (inertia only) is
+:mod:`sewgen.machine.shaking`'s.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,9 +26,9 @@ class RunSettings:
 
     ``params`` (np,) SI parameter vector; ``held`` held inputs (rad); ``branch`` assembly signs; ``gravity`` the
     vector (gx, gy) in m/s²; ``loads`` the (n, nload) load-slot array of :func:`sewgen.engine.loads.load_matrix` or None
-    without loads; ``moment_about`` the point (x, y; m) of the shaking moment; ``placed`` the loads with their
-    slots and windows, (load, [(slot, value)], mask) each. Analyses that need a run's parameters or loads (the
-    machine's energy check, its process loads) read them here.
+    without loads; ``moment_about`` the point (x, y; m) of the frame's moment on the parts; ``placed`` the loads
+    with their slots and windows, (load, [(slot, value)], mask) each. Analyses that need a run's parameters or
+    loads (the machine's energy check, its process loads) read them here.
     """
 
     params: np.ndarray
@@ -80,7 +83,7 @@ class ForceAnalysis:
 
     @property
     def moment_about(self) -> tuple:
-        """The point (x, y; m) :attr:`shaking_moment` is taken about."""
+        """The point (x, y; m) :attr:`frame_moment_on_parts` is taken about."""
         return self.run_settings.moment_about
 
     @property
@@ -156,15 +159,32 @@ class ForceAnalysis:
         return self._out(f"{input_name}.power")
 
     @property
+    def frame_force_on_parts(self) -> np.ndarray:
+        """(n, 2) the frame's force on the moving parts, the resultant of its reactions = Σ m a_G − Σ m g − Σ loads
+        (N), the drives counted as frame."""
+        return np.column_stack([self._out("frame_force_on_parts.fx"), self._out("frame_force_on_parts.fy")])
+
+    @property
+    def frame_moment_on_parts(self) -> np.ndarray:
+        """(n,) the moment of the frame's force on the moving parts (drives included) about ``moment_about``
+        (N·m)."""
+        ox, oy = self.moment_about
+        fx, fy = self._out("frame_force_on_parts.fx"), self._out("frame_force_on_parts.fy")
+        return self._out("frame_moment_on_parts") - (ox * fy - oy * fx)
+
+    @property
     def shaking_force(self) -> np.ndarray:
-        """(n, 2): resultant of the frame's reactions on the moving parts = Σ m a_G − Σ m g − Σ loads (N)."""
-        return np.column_stack([self._out("shaking.fx"), self._out("shaking.fy")])
+        """Deprecated name of :attr:`frame_force_on_parts` (the frame's force on the parts, not a shaking force)."""
+        warnings.warn("ForceAnalysis.shaking_force is deprecated; use frame_force_on_parts", DeprecationWarning,
+                      stacklevel=2)
+        return self.frame_force_on_parts
 
     @property
     def shaking_moment(self) -> np.ndarray:
-        """Moment of the frame's reactions (drives included) about ``moment_about`` (N·m)."""
-        ox, oy = self.moment_about
-        return self._out("shaking.moment") - (ox * self._out("shaking.fy") - oy * self._out("shaking.fx"))
+        """Deprecated name of :attr:`frame_moment_on_parts`."""
+        warnings.warn("ForceAnalysis.shaking_moment is deprecated; use frame_moment_on_parts", DeprecationWarning,
+                      stacklevel=2)
+        return self.frame_moment_on_parts
 
     @property
     def kinetic_energy(self) -> np.ndarray:
@@ -253,9 +273,9 @@ class ForceAnalysis:
             cols[f"{inp.name}.{'torque' if inp.quantity == 'angle' else 'force'} [{inp.effort_unit}]"] = \
                 self.torque(inp.name)
             cols[f"{inp.name}.power [W]"] = self.input_power(inp.name)
-        sf = self.shaking_force
-        cols["shaking.fx [N]"], cols["shaking.fy [N]"] = sf[:, 0], sf[:, 1]
-        cols["shaking.moment [N*m]"] = self.shaking_moment
+        sf = self.frame_force_on_parts
+        cols["frame_force_on_parts.fx [N]"], cols["frame_force_on_parts.fy [N]"] = sf[:, 0], sf[:, 1]
+        cols["frame_moment_on_parts [N*m]"] = self.frame_moment_on_parts
         cols["kinetic_energy [J]"] = self.kinetic_energy
         cols["potential_energy [J]"] = self.potential_energy
         cols["load_power [W]"] = self.load_power

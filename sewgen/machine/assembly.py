@@ -19,15 +19,17 @@ z_B, per frame axis c ∈ {x, y} (d'Alembert; the plane forces have no axial com
 with P the belt's pull on the pulley at z_P (T1 + T2 along the belt: constant, it does no work).
 
 R = frame on shaft; the bearing loads on the frame are −R. Driving torque at the pulley = Σ group shaft
-torques + I_core·α + Σ_k (r_k × m_k (a_k − g))_z. The frame's reactions on the moving parts (drives counted as
-frame, as for a group) are the groups' plus the core's; the machine's shaking force and moment on its base
-leave out the process loads (thread, presser foot, cloth), whose reactions stay inside the machine.
+torques + I_core·α + Σ_k (r_k × m_k (a_k − g))_z. The frame's force on the moving parts (drives counted as
+frame, as for a group) is the groups' plus the core's. The shaking force and moments on the frame (inertia
+only), the parts' weight on the frame and the frame's force on the parts follow the sign convention stated once
+in :mod:`sewgen.machine.shaking`.
 """
 from __future__ import annotations
 
 import copy
 import math
 import re
+import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import NamedTuple
@@ -37,6 +39,7 @@ import numpy as np
 from sewgen.engine.loader import catalog, load
 from sewgen.engine.loader import mechanism as catalog_mechanism
 from sewgen.errors import BuildError, NonFiniteOutputError, ParameterError, SewgenError
+from sewgen.machine import shaking
 from sewgen.machine.tables import group_table, machine_table
 from sewgen.machine.feed import regulator_angle
 from sewgen.engine.loads import Load, load_matrix
@@ -48,6 +51,10 @@ from sewgen.units import UnitError, steps_per_turn, to_si
 #: Names a group may not take: its table would overwrite the machine's (machine.csv, summary.json).
 RESERVED_GROUP_NAMES = ("machine", "summary")
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _deprecated(old: str, new: str) -> None:
+    warnings.warn(f"MachineAnalysis.{old} is deprecated; use {new}", DeprecationWarning, stacklevel=3)
 
 
 @dataclass
@@ -370,32 +377,33 @@ class MachineAnalysis:
         return self.torque * self.omega
 
     @property
-    def frame_reaction(self) -> np.ndarray:
-        """(n, 2) frame on all moving parts = Σ m a_G − Σ m g − Σ loads − belt pull, the shaft core included (N):
-        the sum of every group's frame-joint reactions (the shaft's pivots excepted) and of the bearings'
-        (seed 000's base-support reactions 机座支承反力)."""
+    def frame_force_on_parts(self) -> np.ndarray:
+        """(n, 2) the frame's force on all moving parts, R = Σ m a_G − Σ m g − Σ loads − belt pull, the shaft core
+        included (N; :mod:`sewgen.machine.shaking`): the sum of every group's frame-joint reactions (the shaft's
+        pivots excepted) and of the bearings' (seed 000's base-support reactions 机座支承反力)."""
         gv = self.machine.gravity
-        out = sum(self._group_force(g, self.groups[g.name].shaking_force) for g in self.machine.groups)
+        out = sum(self._group_force(g, self.groups[g.name].frame_force_on_parts) for g in self.machine.groups)
         for sm, _pos, _vel, acc in self.core:
             out = out + sm.mass * (acc - gv[None, :])
         return out - np.asarray(self.machine.shaft.belt, dtype=float)[None, :]
 
-    def frame_moment(self, about=(0.0, 0.0)) -> np.ndarray:
-        """In-plane moment of the frame's reactions (the drive included) about ``about`` (m) (N m)."""
+    def frame_moment_on_parts(self, about=(0.0, 0.0)) -> np.ndarray:
+        """(n,) the moment about z through ``about`` (x, y; m) of the frame's force on the moving parts, the drive
+        counted as frame (N m)."""
         ox, oy = about
         gv = self.machine.gravity
         out = self.machine.shaft.inertia * self.alpha
         for g in self.machine.groups:
             fa = self.groups[g.name]
-            sf = fa.shaking_force
-            own = fa.shaking_moment + fa.moment_about[0] * sf[:, 1] - fa.moment_about[1] * sf[:, 0]
+            sf = fa.frame_force_on_parts
+            own = fa.frame_moment_on_parts + fa.moment_about[0] * sf[:, 1] - fa.moment_about[1] * sf[:, 0]
             out = out + self._group_moment_z(g, sf, own)
             if g.along:  # its cranks turn about the machine's z
                 out = out + self._along_moments(g)[1]
         for sm, pos, _vel, acc in self.core:
             f = sm.mass * (acc - gv[None, :])
             out = out + pos[:, 0] * f[:, 1] - pos[:, 1] * f[:, 0]
-        sf = self.frame_reaction
+        sf = self.frame_force_on_parts
         return out - (ox * sf[:, 1] - oy * sf[:, 0])
 
     def _group_loads(self, g: Group):
@@ -419,8 +427,9 @@ class MachineAnalysis:
                 moment += pt.x * ld[:, k]
         return force, moment
 
-    def _process_loads(self):
-        """(n, 2) resultant of the external loads of every group and their moment about the origin (n,)."""
+    def process_loads_on_parts(self):
+        """((n, 2), (n,)) the resultant of the process loads (every group's external loads: thread, presser foot,
+        cloth) on the moving parts and its moment about z through the origin (N, N m); the belt's pull apart."""
         force, moment = np.zeros((len(self.phi), 2)), np.zeros(len(self.phi))
         for g in self.machine.groups:
             f, m = self._group_loads(g)
@@ -428,35 +437,39 @@ class MachineAnalysis:
         return force, moment
 
     @property
-    def shaking_force(self) -> np.ndarray:
-        """(n, 2) the machine's shaking force on its base: Σ m a_G − Σ m g over every moving part (N). The process
-        loads (thread pull, presser foot, feed resistance) react on the machine's own frame, so they cancel
-        here; :attr:`frame_reaction` keeps them. The constant belt pull is left out too (the base carries it
-        besides, as it carries the frame's own weight)."""
-        return self.frame_reaction + self._process_loads()[0] + np.asarray(self.machine.shaft.belt)[None, :]
+    def shaking_force_on_frame(self) -> np.ndarray:
+        """(n, 2) the shaking force on the frame, −Σ m a_G (N): inertia only
+        (:func:`sewgen.machine.shaking.shaking_force_on_frame`)."""
+        return shaking.shaking_force_on_frame(self)
 
-    def shaking_moment(self, about=(0.0, 0.0)) -> np.ndarray:
-        """The machine's in-plane shaking moment on its base about ``about`` (m): Σ [(r_G − O) × m(a_G − g) + Iα]
-        with the drive counted as frame and the process loads internal (N m)."""
-        force, moment = self._process_loads()
-        force = force + np.asarray(self.machine.shaft.belt)[None, :]  # the belt pulls on the shaft axis
-        ox, oy = about
-        return self.frame_moment(about) + moment - (ox * force[:, 1] - oy * force[:, 0])
+    def shaking_moments_on_frame(self, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """(n, 3) the shaking moments on the frame about the point ``about`` (x, y, z; m), about the x, y and z
+        axes (N m): inertia only (:func:`sewgen.machine.shaking.shaking_moments_on_frame`)."""
+        return shaking.shaking_moments_on_frame(self, about)
 
-    def shaking_moments(self, about=(0.0, 0.0, 0.0)) -> np.ndarray:
-        """(n, 3) the machine's shaking moment on its base about the point ``about`` (x, y, z; m), about the x,
-        y and z axes (N m). Each group's shaking force (process loads internal) acts in its plane z = ``Group.z``
-        and each core mass at its own z, so the groups' axial offsets rock the base about x and y (seed 000
-        §二(二)1(6) treats the upper shaft in space for this reason): M = Σ (r − O) × F with F = (Fx, Fy, 0),
-        i.e. Mx = −Σ (z − z_O) Fy, My = Σ (z − z_O) Fx; Mz is :meth:`shaking_moment`."""
+    @property
+    def weight_on_frame(self) -> np.ndarray:
+        """(2,) the moving parts' weight on the frame, Σ m g (N) (:func:`sewgen.machine.shaking.weight_on_frame`)."""
+        return shaking.weight_on_frame(self)
+
+    def inertia_and_weight_moments_on_frame(self, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """(n, 3) the shaking moments plus the weight's moments on the frame about ``about`` (x, y, z; m), about
+        the x, y and z axes (N m), from the frame's force on the parts with the process loads and the belt pull
+        put back (the compiled kernels' reactions): −Σ [(r_G − O) × m (a_G − g) + I α]. It equals
+        :meth:`shaking_moments_on_frame` + :func:`sewgen.machine.shaking.weight_moments_on_frame` from the
+        kinematics, which the tests check. Each group's force acts in its plane z = ``Group.z`` and each core mass
+        at its own z, so the groups' axial offsets rock the base about x and y (seed 000 §二(二)1(6) treats the
+        upper shaft in space for this reason)."""
         ox, oy, oz = about
         gv = self.machine.gravity
         out = np.zeros((len(self.phi), 3))
-        out[:, 2] = self.shaking_moment((ox, oy))
+        force, moment = self.process_loads_on_parts()
+        force = force + np.asarray(self.machine.shaft.belt)[None, :]  # the belt pulls on the shaft axis
+        out[:, 2] = self.frame_moment_on_parts((ox, oy)) + moment - (ox * force[:, 1] - oy * force[:, 0])
         for g in self.machine.groups:
             fa = self.groups[g.name]
-            lf, lm = self._group_loads(g)
-            force = fa.shaking_force + lf
+            lf, _lm = self._group_loads(g)
+            force = fa.frame_force_on_parts + lf
             if g.along:  # F = (0, fy, fx) at the group's origin with its own moment M about −x: (o − O) × F − M x
                 own = self._along_moments(g)[0]
                 dx, dy, dz = g.origin[0] - ox, g.origin[1] - oy, g.origin[2] - oz
@@ -469,7 +482,36 @@ class MachineAnalysis:
             force = sm.mass * (acc - gv[None, :])
             out[:, 0] -= (sm.z - oz) * force[:, 1]
             out[:, 1] += (sm.z - oz) * force[:, 0]
-        return out
+        return -out
+
+    # -- deprecated names (one release) ----------------------------------------------------------------------
+    @property
+    def frame_reaction(self) -> np.ndarray:
+        """Deprecated name of :attr:`frame_force_on_parts`."""
+        _deprecated("frame_reaction", "frame_force_on_parts")
+        return self.frame_force_on_parts
+
+    def frame_moment(self, about=(0.0, 0.0)) -> np.ndarray:
+        """Deprecated name of :meth:`frame_moment_on_parts`."""
+        _deprecated("frame_moment", "frame_moment_on_parts")
+        return self.frame_moment_on_parts(about)
+
+    @property
+    def shaking_force(self) -> np.ndarray:
+        """Deprecated: Σ m a_G − Σ m g, the frame's force on the parts with the process loads and the belt pull
+        put back, i.e. −(:attr:`shaking_force_on_frame` + :attr:`weight_on_frame`); not a shaking force."""
+        _deprecated("shaking_force", "shaking_force_on_frame (inertia only, on the frame) or frame_force_on_parts")
+        return self.frame_force_on_parts + self.process_loads_on_parts()[0] + np.asarray(self.machine.shaft.belt)
+
+    def shaking_moment(self, about=(0.0, 0.0)) -> np.ndarray:
+        """Deprecated: −(the z column of :meth:`inertia_and_weight_moments_on_frame`), about ``about`` (x, y)."""
+        _deprecated("shaking_moment", "shaking_moments_on_frame")
+        return -self.inertia_and_weight_moments_on_frame((about[0], about[1], 0.0))[:, 2]
+
+    def shaking_moments(self, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Deprecated: −:meth:`inertia_and_weight_moments_on_frame` (the weight included, on the parts)."""
+        _deprecated("shaking_moments", "shaking_moments_on_frame")
+        return -self.inertia_and_weight_moments_on_frame(about)
 
     def moving_bodies(self, group: Group | None = None):
         """A :class:`MovingBody` for every moving body of every group (or of ``group``), with the run's parameter

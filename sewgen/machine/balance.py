@@ -18,8 +18,8 @@ bar on the vertical line x = offset below the shaft (joint C branch −1), trave
 C2, eq. (5) positive toward A) is φ = θ + 90°: the paper's slider acceleration along S is sewgen's
 ``needle_bar.travel`` acceleration. :func:`paper_phi` and :func:`shaft_angle` convert.
 
-Forces are inertia forces F = −Σ m·a (N) in sewgen's frame (x right, y up): the force the moving parts put
-into the frame, i.e. minus the shaking force Σ m·a_G of DESIGN.md §6. The speed is constant.
+Forces are inertia forces F = −Σ m·a (N) in sewgen's frame (x right, y up): the shaking force on the frame,
+inertia only (the convention of sewgen.machine.shaking), which the balancing minimises. The speed is constant.
 """
 from __future__ import annotations
 

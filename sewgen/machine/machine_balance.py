@@ -5,15 +5,19 @@ Seed 000 part 1 §四 optimises the two upper-shaft bearing reactions; its part 
 optimisation with the two bearing reactions as the objective, 四 an evaluation of the effect). Here:
 
 * **separate** (method 1, seed 002 generalised): each group balanced by itself by a counterweight on its own
-  plane, minimising w₁·max|F| + w₂·mean|F| of that group's dynamic shaking force (seed 002's objective; its
+  plane, minimising w₁·max|F| + w₂·mean|F| of that group's shaking force on the frame (seed 002's objective; its
   weights 0.1, 0.9 by default) — the rotating masses are balanced fully and the reciprocating ones by the
   factor the optimum chooses;
-* **harmonic** (method 2): the machine's shaking force and its moments about x and y as harmonic orders of
+* **harmonic** (method 2): the machine's shaking force and moments on the frame about x and y as harmonic orders of
   φ; the counterweights cancel the forward-rotating first order of both (a counterweight turning with the shaft
   makes nothing else; the backward-rotating first order of a reciprocating mass needs a counter-rotating shaft
   and is reported as residual);
 * **bearings** (method 3): minimise the peak (or the RMS) over a revolution of the front and rear bearing loads,
-  optionally plus a weight times the shaking force, over the counterweights' m·r vectors within their bounds.
+  optionally plus a weight times the shaking force on the frame, over the counterweights' m·r vectors within
+  their bounds.
+
+The shaking force and moments are the ones on the frame, inertia only (−Σ m a_G; sewgen.machine.shaking states
+the convention): the moving parts' weight is constant and no counterweight turning with the shaft changes it.
 
 Every quantity the methods look at is affine in the counterweights' m·r vectors u_k (a point mass m at radius r
 and angle α from the crank direction φ puts m r ω² e(φ + α) on the shaft at its z): the influence of each u_k is
@@ -32,6 +36,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from sewgen.errors import SewgenError
+from sewgen.machine import shaking
 from sewgen.machine.assembly import Machine, MachineAnalysis, ShaftMass
 from sewgen.machine.modelfile import Field, Reader, load_toml
 
@@ -124,11 +129,11 @@ def reanalyse(base: MachineAnalysis, counterweights) -> MachineAnalysis:
 
 
 def _quantities(a: MachineAnalysis) -> dict:
-    """The (n, 2) quantities the methods shape: bearing loads, shaking force, shaking moments (x, y) about the
-    front bearing's point on the axis."""
+    """The (n, 2) quantities the methods shape: bearing loads on the frame, the shaking force on the frame, the
+    shaking moments on the frame (about x, y) about the front bearing's point on the axis."""
     z0 = a.machine.shaft.front
-    moments = a.shaking_moments((0.0, 0.0, z0))
-    return {"front": a.bearing("front"), "rear": a.bearing("rear"), "force": a.shaking_force,
+    moments = a.shaking_moments_on_frame((0.0, 0.0, z0))
+    return {"front": a.bearing("front"), "rear": a.bearing("rear"), "force": a.shaking_force_on_frame,
             "moment": moments[:, :2]}
 
 
@@ -212,7 +217,7 @@ def _bounds(cp, u, planes):
 
 def bearings(model: LinearModel, objective: str = "peak", shaking_weight: float = 0.0, machine: str = "") -> Solution:
     """Method 3: min over u of max_i max(|R_A,i|, |R_B,i|) (peak) or √(mean_i (|R_A,i|² + |R_B,i|²)) (rms), plus
-    ``shaking_weight`` × the same measure of the dynamic shaking force, with |u_k| ≤ max_mr_k."""
+    ``shaking_weight`` × the same measure of the shaking force on the frame, with |u_k| ≤ max_mr_k."""
     import cvxpy as cp
 
     if objective not in OBJECTIVES:
@@ -222,8 +227,6 @@ def bearings(model: LinearModel, objective: str = "peak", shaking_weight: float 
     rows = {}
     for k in terms:
         g, b = model.gain[k], model.base[k]
-        if k == "force":
-            b = b - b.mean(axis=0)  # the dynamic part: the static weight is not balanced by counterweights
         rows[k] = (np.concatenate([g[:, 0, :], g[:, 1, :]]), np.concatenate([b[:, 0], b[:, 1]]))
     n = len(next(iter(model.base.values())))
 
@@ -257,7 +260,7 @@ FIRST_ORDER = ("forward", "x", "y")
 
 def harmonic(model: LinearModel, moment_length: float | None = None, machine: str = "",
              first_order: str = "forward") -> Solution:
-    """Method 2: the first harmonic order of the shaking force and of its moments about x and y (about the front
+    """Method 2: the first harmonic order of the shaking force and moments on the frame about x and y (about the front
     bearing's point), with the moments weighed against the force over ``moment_length`` (default 1 m).
 
     ``first_order="forward"``: cancel the forward-rotating first order (in complex form F_x + i F_y = Σ c_n e^{inφ}
@@ -298,7 +301,8 @@ def harmonic(model: LinearModel, moment_length: float | None = None, machine: st
 
 def separate(base: MachineAnalysis, planes: list[Plane], weights=DEFAULT_WEIGHTS, machine: str = "") -> Solution:
     """Method 1 (seed 002 for each group): the plane tied to a group (``group = ...``) gets the counterweight that
-    minimises w₁·max|F_g + ω²-term| + w₂·mean|…| of that group's dynamic shaking force by itself."""
+    minimises w₁·max|F_g + ω²-term| + w₂·mean|…| of that group's shaking force on the frame by itself (its own
+    moving parts' inertia, in the machine frame)."""
     import cvxpy as cp
 
     w1, w2 = weights
@@ -307,8 +311,8 @@ def separate(base: MachineAnalysis, planes: list[Plane], weights=DEFAULT_WEIGHTS
     if not tied:
         raise BalancingError(f"{machine}: method separate needs planes tied to groups (group = \"...\")")
     for plane in tied:
-        force = base.groups[plane.group].shaking_force
-        force = force - force.mean(axis=0)
+        group = next(g for g in base.machine.groups if g.name == plane.group)
+        force = shaking.shaking_force_on_frame(base, group)
         model = linear_model(_lone(base, plane.group), [plane])
         g = model.gain["force"]
         u = cp.Variable(2)
@@ -341,24 +345,26 @@ def orders(values: np.ndarray, k: int = 3) -> list[float]:
 
 
 def metrics(a: MachineAnalysis) -> dict:
-    """Peak and RMS of both bearing loads, the dynamic shaking force (static weight removed) and its orders, the
-    three shaking moments (about the front bearing's point on the axis), the driving torque (SI)."""
+    """Peak and RMS of both bearing loads, of the shaking force on the frame and its orders, the peaks of the three
+    shaking moments on the frame (about the front bearing's point on the axis), the moving parts' weight on the
+    frame, the driving torque (SI)."""
     q = _quantities(a)
     mag = {k: np.hypot(*q[k].T) for k in ("front", "rear")}
-    force = q["force"] - q["force"].mean(axis=0)
+    force = q["force"]
     fmag = np.hypot(*force.T)
-    moments = a.shaking_moments((0.0, 0.0, a.machine.shaft.front))
+    moments = a.shaking_moments_on_frame((0.0, 0.0, a.machine.shaft.front))
     return {
         "bearing_front_peak": float(mag["front"].max()), "bearing_rear_peak": float(mag["rear"].max()),
         "bearing_front_rms": float(np.sqrt(np.mean(mag["front"] ** 2))),
         "bearing_rear_rms": float(np.sqrt(np.mean(mag["rear"] ** 2))),
-        "shaking_force_peak": float(fmag.max()), "shaking_force_rms": float(np.sqrt(np.mean(fmag**2))),
-        "static_weight": [float(v) for v in q["force"].mean(axis=0)],
-        "shaking_moment_x_peak": float(np.abs(moments[:, 0]).max()),
-        "shaking_moment_y_peak": float(np.abs(moments[:, 1]).max()),
-        "shaking_moment_z_peak": float(np.abs(moments[:, 2] - moments[:, 2].mean()).max()),
+        "shaking_force_on_frame_peak": float(fmag.max()),
+        "shaking_force_on_frame_rms": float(np.sqrt(np.mean(fmag**2))),
+        "weight_on_frame": [float(v) for v in a.weight_on_frame],
+        "shaking_moment_on_frame_x_peak": float(np.abs(moments[:, 0]).max()),
+        "shaking_moment_on_frame_y_peak": float(np.abs(moments[:, 1]).max()),
+        "shaking_moment_on_frame_z_peak": float(np.abs(moments[:, 2]).max()),
         "torque_peak": float(np.abs(a.torque).max()), "torque_rms": float(np.sqrt(np.mean(a.torque**2))),
-        "shaking_force_orders": orders(force), "shaking_moment_xy_orders": orders(moments[:, :2]),
+        "shaking_force_on_frame_orders": orders(force), "shaking_moments_on_frame_xy_orders": orders(moments[:, :2]),
     }
 
 

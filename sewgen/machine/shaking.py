@@ -1,17 +1,29 @@
-"""The machine's shaking force and moments as the moving parts put them on the frame, without their weight.
+"""The shaking force and moments on the frame, the moving parts' weight on the frame: the sign convention.
 
-:class:`sewgen.machine.MachineAnalysis` keeps the frame's reactions *on the parts*: ``shaking_force`` is
-Σ m a_G − Σ m g (process loads internal), so it holds the parts' static weight — the frame holding them up —
-besides the inertia forces. What shakes the base is the inertia alone, acting *on the frame*:
+Every force here says what acts on what. Over every moving part (each group's bodies, placed in the machine
+frame — a group across the shaft in its plane z = ``Group.z`` — and the upper shaft's core masses):
 
-    F = −Σ m a_G,        M = −Σ [(r_G − O) × m a_G + I_G α]   (the drive torque counted as frame),
+* the **shaking force and moments on the frame**, the moving parts' inertia alone, acting on the frame:
 
-summed over every moving part of every group (each group's parts in its plane z, for the moments about x and
-y) and the upper shaft's core masses. The weight of the moving parts, W = Σ m g, is constant and acts on the
-frame besides (its moment about O moves with the centres of mass); :func:`weight` gives it apart. Then
-F + W = −(the frame's force on the parts with the process loads put back), which the tests check.
+      F_shake = −Σ m a_G,        M_shake = −Σ [(r_G − O) × m a_G + I_G α]   (the drive torque counted as frame);
+
+* the **moving parts' weight on the frame**, W = Σ m g (constant), and its moment Σ (r_G − O) × m g (it moves
+  with the centres of mass);
+* the **frame's force on the moving parts**, R = Σ m a_G − Σ m g − Σ loads − belt pull (drives counted as
+  frame): what the frame's joints and bearings put on the parts (:attr:`MachineAnalysis.frame_force_on_parts`,
+  for one group :attr:`ForceAnalysis.frame_force_on_parts`). The process loads (thread, presser foot, cloth)
+  and the belt's pull react inside the machine, so
+
+      F_shake + W = −(R + Σ loads + belt pull),
+
+  which the tests check at every angle (the left side from the kinematics here, the right from the compiled
+  kernels' frame reactions).
+
+The functions below take a :class:`sewgen.machine.MachineAnalysis`; its properties of the same names call them.
 """
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
@@ -21,8 +33,8 @@ def moving_mass(a) -> float:
     return sum(b.mass for b in a.moving_bodies()) + sum(sm.mass for sm in a.machine.shaft.masses)
 
 
-def weight(a) -> np.ndarray:
-    """(2,) the moving parts' weight, the force it puts on the frame (N): Σ m g, constant."""
+def weight_on_frame(a) -> np.ndarray:
+    """(2,) the moving parts' weight on the frame, W = Σ m g (N), constant."""
     return moving_mass(a) * np.asarray(a.machine.gravity, dtype=float)
 
 
@@ -39,24 +51,26 @@ def _placed(b):
     return pos, acc, axis
 
 
-def shaking_force(a) -> np.ndarray:
-    """(n, 2) the dynamic shaking force on the frame, −Σ m a_G over every moving part (N); no weight. The parts
-    of a group along the shaft move partly along it (z): that component is not in the plane x–y."""
+def shaking_force_on_frame(a, group=None) -> np.ndarray:
+    """(n, 2) the shaking force on the frame, F_shake = −Σ m a_G (N; the module's convention): inertia only, no
+    weight. With ``group`` (a :class:`sewgen.machine.Group`), that group's moving parts alone (no shaft core).
+    The parts of a group along the shaft move partly along it (z): that component is not in the plane x–y."""
     out = np.zeros((len(a.phi), 2))
-    for b in a.moving_bodies():
+    for b in a.moving_bodies(group):
         _pos, acc, _axis = _placed(b)
         out[:, 0] -= b.mass * acc[0]
         out[:, 1] -= b.mass * acc[1]
-    for sm, _pos, _vel, acc in a.core:
-        out -= sm.mass * acc
+    if group is None:
+        for sm, _pos, _vel, acc in a.core:
+            out -= sm.mass * acc
     return out
 
 
-def shaking_moments(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
-    """(n, 3) the dynamic shaking moment on the frame about the point ``about`` (x, y, z; m), about the x, y and
-    z axes (N m): −Σ (r − O) × m a_G − Σ I α (each about its body's axis: z for a group across the shaft, −x
-    for one along it), the shaft core's included; each group's parts placed in the machine frame (a group across
-    the shaft in its plane z = ``Group.z``), each core mass at its own z; no weight."""
+def shaking_moments_on_frame(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """(n, 3) the shaking moments on the frame about the point ``about`` (x, y, z; m), about the x, y and z axes
+    (N m): M_shake = −Σ (r − O) × m a_G − Σ I α (the module's convention; each I α about its body's axis: z for a
+    group across the shaft, −x for one along it), the shaft core's included, each core mass at its own z; inertia
+    only, no weight."""
     ox, oy, oz = about
     out = np.zeros((len(a.phi), 3))
     out[:, 2] -= a.machine.shaft.inertia * a.alpha
@@ -75,4 +89,47 @@ def shaking_moments(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
     return out
 
 
-__all__ = ["moving_mass", "shaking_force", "shaking_moments", "weight"]
+def weight_moments_on_frame(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """(n, 3) the moments of the moving parts' weight on the frame about the point ``about`` (x, y, z; m), about
+    the x, y and z axes (N m): Σ (r_G − O) × m g (the module's convention), the shaft core's masses included."""
+    ox, oy, oz = about
+    gx, gy = (float(v) for v in a.machine.gravity)
+    out = np.zeros((len(a.phi), 3))
+    for b in a.moving_bodies():
+        (x, y, z), _acc, _axis = _placed(b)
+        fx, fy = b.mass * gx, b.mass * gy
+        out[:, 0] -= (z - oz) * fy
+        out[:, 1] += (z - oz) * fx
+        out[:, 2] += (x - ox) * fy - (y - oy) * fx
+    for sm, pos, _vel, _acc in a.core:
+        fx, fy = sm.mass * gx, sm.mass * gy
+        out[:, 0] -= (sm.z - oz) * fy
+        out[:, 1] += (sm.z - oz) * fx
+        out[:, 2] += (pos[:, 0] - ox) * fy - (pos[:, 1] - oy) * fx
+    return out
+
+
+def _deprecated(old: str, new: str) -> None:
+    warnings.warn(f"sewgen.machine.shaking.{old} is deprecated; use {new}", DeprecationWarning, stacklevel=3)
+
+
+def shaking_force(a) -> np.ndarray:
+    """Deprecated name of :func:`shaking_force_on_frame`."""
+    _deprecated("shaking_force", "shaking_force_on_frame")
+    return shaking_force_on_frame(a)
+
+
+def shaking_moments(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Deprecated name of :func:`shaking_moments_on_frame`."""
+    _deprecated("shaking_moments", "shaking_moments_on_frame")
+    return shaking_moments_on_frame(a, about)
+
+
+def weight(a) -> np.ndarray:
+    """Deprecated name of :func:`weight_on_frame`."""
+    _deprecated("weight", "weight_on_frame")
+    return weight_on_frame(a)
+
+
+__all__ = ["moving_mass", "shaking_force_on_frame", "shaking_moments_on_frame", "weight_moments_on_frame",
+           "weight_on_frame"]

@@ -13,7 +13,8 @@ def angle_deg(phi) -> np.ndarray:
 
 
 def machine_table(a) -> dict:
-    """Machine-level columns: bearings, torques, shaking force and moment, powers (SI; ``phi`` in deg)."""
+    """Machine-level columns: bearing loads on the frame, torques, the shaking force and moments on the frame, the
+    frame's force on the parts (sewgen.machine.shaking's convention), powers (SI; ``phi`` in deg)."""
     cols = {"phi [deg]": angle_deg(a.phi)}
     for which in ("front", "rear"):
         b = a.bearing(which)
@@ -25,14 +26,14 @@ def machine_table(a) -> dict:
     if np.any(a.friction_power):  # columns only where the model switches friction on
         cols["bearings.friction_torque [N*m]"] = a.bearing_friction
         cols["friction_power [W]"] = a.friction_power
-    sf = shaking.shaking_force(a)  # dynamic, on the frame; the weight apart (summary.json)
-    cols["shaking_on_frame.fx [N]"], cols["shaking_on_frame.fy [N]"] = sf[:, 0], sf[:, 1]
-    cols["shaking_on_frame.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
-    moments = shaking.shaking_moments(a)
+    sf = shaking.shaking_force_on_frame(a)  # inertia only; the weight on the frame is in summary.json
+    cols["shaking_force_on_frame.fx [N]"], cols["shaking_force_on_frame.fy [N]"] = sf[:, 0], sf[:, 1]
+    cols["shaking_force_on_frame.magnitude [N]"] = np.hypot(sf[:, 0], sf[:, 1])
+    moments = shaking.shaking_moments_on_frame(a)
     for k, axis in enumerate("xyz"):
-        cols[f"shaking_on_frame.moment_{axis} [N*m]"] = moments[:, k]
-    fr = a.frame_reaction
-    cols["frame_on_parts.fx [N]"], cols["frame_on_parts.fy [N]"] = fr[:, 0], fr[:, 1]
+        cols[f"shaking_moments_on_frame.{axis} [N*m]"] = moments[:, k]
+    fr = a.frame_force_on_parts
+    cols["frame_force_on_parts.fx [N]"], cols["frame_force_on_parts.fy [N]"] = fr[:, 0], fr[:, 1]
     cols["drive_power [W]"] = a.drive_power
     cols["load_power [W]"] = a.load_power
     cols["energy_rate [W]"] = a.energy_rate()

@@ -1,7 +1,7 @@
 """The analysis report of a machine: CSV tables per group and for the machine, and summary.json.
 
-summary.json holds, for every quantity a designer checks (bearing loads, driving torque, shaking force, the
-shaking moment about the x, y and z axes, every joint reaction), the peak and the RMS over the revolution with
+summary.json holds, for every quantity a designer checks (bearing loads, driving torque, the shaking force on the
+frame and its moments about the x, y and z axes, every joint reaction), the peak and the RMS over the revolution with
 the shaft angles where they occur; the whole machine's relative power-balance residual
 (``power_balance_residual_relative``); the feed setting (stitch, regulator angle, dog travel and height above
 the plate) and the cam arc switches with the acceleration jump each implies; for a machine with a ``[stitch]``
@@ -10,10 +10,10 @@ timing.txt too); the units of every entry and the sign conventions (``units``, `
 rounded to 12 significant digits (float noise such as 999.9999999999999 rpm or 255.00000000000003° is not a
 result), and a non-finite number is never written: it raises :class:`NonFiniteOutputError` naming the entry.
 
-Every force says on which body it acts: the bearing loads and the shaking force and moments act on the frame
-(``acts_on``; the shaking ones are dynamic, −Σ m a_G, with the moving parts' weight reported apart, sewgen.machine.shaking);
-``frame_on_parts`` is the frame's reaction on the moving parts; a joint's reaction is on its second body from
-its first (group tables).
+Every force says on which body it acts, in its name and in ``acts_on``: the bearing loads, the shaking force and
+moments (inertia only, −Σ m a_G) and the moving parts' weight act on the frame (``*_on_frame``); machine.csv's
+``frame_force_on_parts`` is the frame's force on the moving parts (the sign convention: sewgen.machine.shaking);
+a joint's reaction is on its second body from its first (group tables).
 
 A report is written into a temporary folder beside the target and moved into place only when complete
 (:func:`staged_folder`): a run that fails leaves no half-written tables behind.
@@ -56,11 +56,14 @@ CONVENTIONS = {
     "friction": "power dissipated by Coulomb friction (≥ 0); no_load_torque: the mean driving torque over a turn "
                 "at the analysis' speed with the process loads off (seed 000's no-load driving torque)",
     "joints": "magnitude of a joint's reaction: the force on the joint's second body from its first",
-    "shaking_force": "magnitude of the force the moving parts put on the frame by their inertia, −Σ m·a_G: "
-                     "dynamic, the parts' static weight apart (weight_of_moving_parts); process loads (thread, "
-                     "presser foot, cloth) react inside the machine and are left out",
-    "shaking_moment": "of the same inertia forces on the frame, about the z axis through the origin; "
-                      "shaking_moments_about_origin: about the x, y and z axes",
+    "shaking_force_on_frame": "magnitude of the force the moving parts put on the frame by their inertia, "
+                              "−Σ m·a_G: inertia only, the parts' weight apart (weight_on_frame, Σ m·g); process "
+                              "loads (thread, presser foot, cloth) react inside the machine and are left out",
+    "shaking_moments_on_frame": "of the same inertia forces on the frame, −Σ [(r_G − O) × m·a_G + I·α], about the "
+                                "x, y and z axes through the origin",
+    "frame_force_on_parts": "machine.csv: the frame's force on the moving parts through its joints and bearings, "
+                            "Σ m·a_G − Σ m·g − Σ loads − belt pull; shaking_force_on_frame + weight_on_frame = "
+                            "−(frame_force_on_parts + Σ loads + belt pull)",
     "power_balance_residual_relative": "max over the revolution of |P_drive + P_loads − dE/dt| divided by the "
                                        "largest |P_drive| or |dE/dt| (E: kinetic + potential energy): 0 for an "
                                        "exact analysis",
@@ -138,7 +141,7 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
     stitch-formation timing; units and conventions. Numbers rounded to :data:`DIGITS` significant digits; a
     non-finite one raises :class:`NonFiniteOutputError`."""
     phi, m = a.phi, a.machine
-    weight, moments = shaking.weight(a), shaking.shaking_moments(a)
+    weight, moments = shaking.weight_on_frame(a), shaking.shaking_moments_on_frame(a)
     out = {
         "machine": m.name,
         "model_file": model_path(m.source),
@@ -150,13 +153,12 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
         "drive_torque": _stat(a.torque, phi, "N*m"),
         "drive_power": _stat(a.drive_power, phi, "W"),
         "friction": friction_summary(a),
-        "shaking_force": dict(_stat(np.hypot(*shaking.shaking_force(a).T), phi, "N"), acts_on="frame",
-                              what="-sum(m a_G): dynamic, the weight apart"),
-        "weight_of_moving_parts": {"unit": "N", "acts_on": "frame", "fx": float(weight[0]), "fy": float(weight[1]),
-                                   "magnitude": float(np.hypot(*weight))},
-        "shaking_moment": dict(_stat(moments[:, 2], phi, "N*m"), acts_on="frame"),
-        "shaking_moments_about_origin": {axis: dict(_stat(v, phi, "N*m"), acts_on="frame")
-                                         for axis, v in zip("xyz", moments.T)},
+        "shaking_force_on_frame": dict(_stat(np.hypot(*shaking.shaking_force_on_frame(a).T), phi, "N"),
+                                       acts_on="frame", what="-sum(m a_G): inertia only, the weight apart"),
+        "weight_on_frame": {"unit": "N", "acts_on": "frame", "fx": float(weight[0]), "fy": float(weight[1]),
+                            "magnitude": float(np.hypot(*weight))},
+        "shaking_moments_on_frame": {axis: dict(_stat(v, phi, "N*m"), acts_on="frame", about="origin")
+                                     for axis, v in zip("xyz", moments.T)},
         "groups": {},
     }
     if m.stitch is not None:

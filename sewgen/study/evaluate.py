@@ -32,7 +32,8 @@ HOOK_MARGIN = "hook_timing_margin [mm]"
 TAKE_UP = "take_up_amount [mm]"
 FAILURES = "timing_failures"
 FAILED = "failed_rules"
-LOADS = ("front_bearing_peak [N]", "rear_bearing_peak [N]", "drive_torque_peak [N*m]", "shaking_force_peak [N]")
+LOADS = ("front_bearing_peak [N]", "rear_bearing_peak [N]", "drive_torque_peak [N*m]",
+         "shaking_force_on_frame_peak [N]")
 #: rules re-checked per design from the feed-dog indices when only feed groups vary
 FEED_RULES = {"dog_sinks_before_needle_enters": "sink_lead", "dog_rises_after_needle_leaves": "rise_lag"}
 
@@ -161,12 +162,10 @@ def _timing_values(tm, machine):
 
 
 def _peaks(a):
-    from sewgen.machine import shaking
-
     f, r = a.bearing("front"), a.bearing("rear")
     return {LOADS[0]: float(np.hypot(f[:, 0], f[:, 1]).max()), LOADS[1]: float(np.hypot(r[:, 0], r[:, 1]).max()),
             LOADS[2]: float(np.abs(a.torque).max()),
-            LOADS[3]: float(np.hypot(*shaking.shaking_force(a).T).max())}
+            LOADS[3]: float(np.hypot(*a.shaking_force_on_frame.T).max())}
 
 
 _BASELINES: dict = {}

@@ -146,19 +146,17 @@ def draw_torque(fig, a):
 # -- shaking force and moments ---------------------------------------------------------------------------------
 
 def draw_shaking(fig, a):
-    """The shaking force and moments the moving parts put on the frame: dynamic (−Σ m a_G, process loads
-    internal), the moving parts' weight apart (sewgen.machine.shaking)."""
+    """The shaking force and moments on the frame: the moving parts' inertia alone (−Σ m a_G, process loads
+    internal), their weight on the frame apart (the convention of sewgen.machine.shaking)."""
     from matplotlib.gridspec import GridSpec
-
-    from sewgen.machine import shaking
 
     W, H = fig.get_size_inches()
     gs = GridSpec(2, 2, figure=fig, left=0.8 / W, right=1 - 0.3 / W, top=1 - 0.75 / H, bottom=1.25 / H,
                   wspace=0.28, hspace=0.55, width_ratios=(1, 1.25))
     ax1 = fig.add_subplot(gs[:, 0])
     ax2, ax3 = fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[1, 1])
-    f = shaking.shaking_force(a)
-    wgt = shaking.weight(a)
+    f = a.shaking_force_on_frame
+    wgt = a.weight_on_frame
     ax1.plot(closed(a, f[:, 0]), closed(a, f[:, 1]), color="tab:purple", lw=1.5,
              label="shaking force on the frame, −Σ m a_G")
     angle_labels(ax1, a, f[:, 0], f[:, 1])
@@ -170,17 +168,17 @@ def draw_shaking(fig, a):
              label=f"peak {np.hypot(*f[k]):.3g} N at φ = {np.degrees(a.phi[k]) % 360:.0f}°")
     ax1.annotate("", xy=tuple(wgt), xytext=(0, 0), arrowprops=dict(arrowstyle="-|>", color="0.35", lw=1.6))
     ax1.plot([], [], color="0.35", lw=1.6,
-             label=f"weight of the moving parts on the frame: {np.hypot(*wgt):.2f} N, static, acts besides")
+             label=f"weight on the frame, Σ m g: {np.hypot(*wgt):.2f} N, static, acts besides")
     ax1.set_aspect("equal", adjustable="datalim")
     ax1.margins(0.12)
     angle_labels(ax1, a, f[:, 0], f[:, 1])
     ax1.set_autoscale_on(False)
     ax1.grid(alpha=0.3)
     ax1.set(xlabel="Fx (N)", ylabel="Fy (N)")
-    ax1.set_title("shaking force on the frame (dynamic; process loads internal)", y=1.0)
+    ax1.set_title("shaking force on the frame, −Σ m a_G (inertia only)", y=1.0)
     ax1.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2)
 
-    moments = shaking.shaking_moments(a)
+    moments = a.shaking_moments_on_frame()
     d = deg(a)
     for ax, cols, text in ((ax2, (2,), "about the upper-shaft axis z"),
                            (ax3, (0, 1), "about x and y: the base rocks (groups at their axial positions)")):
@@ -198,5 +196,5 @@ def draw_shaking(fig, a):
         ax.set_ylabel("moment (N·m)")
         ax.set_title(f"shaking moment on the frame {text}", fontsize=9.5, y=1.0)
         ax.legend(fontsize=7, loc="best", framealpha=0.85)
-    suptitle(fig, title(a, "shaking force and moments on the frame, dynamic (−Σ m a_G; the weight apart), about "
-                           "the frame origin; labels: shaft angle φ"))
+    suptitle(fig, title(a, "shaking force and moments on the frame (inertia only, −Σ m a_G; the weight on the frame "
+                           "apart), about the frame origin; labels: shaft angle φ"))
