@@ -26,7 +26,7 @@ from sewgen.engine.loader import catalog, load, mechanism
 from sewgen.errors import SewgenError
 from sewgen.version import version
 from sewgen.machine.modelfile import declaration_problem
-from sewgen.units import DisplayUnits, UnitError, steps_per_turn, to_si
+from sewgen.units import DisplayUnits, UnitError, steps_per_turn
 
 class _Parser(argparse.ArgumentParser):
     """argparse with its usage errors on one line (no usage block), exit status 2."""

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from ..units import SI_UNITS, UnitError, to_si, unit_of
+from ..units import SI_UNITS, to_si, unit_of
 from .elements import ELEMENTS, ForceElement
 from .joints import KINDS
 from .vocabulary import (NAME, Arc, Attachment, Axis, Body, DeclarationError, Input, Joint, Line,  # noqa: F401

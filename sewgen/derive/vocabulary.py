@@ -6,10 +6,14 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import sympy as sp
 
-from ..units import SI_UNITS, UnitError, to_si, unit_of
+if TYPE_CHECKING:
+    from .model import Mechanism
+
+from ..units import SI_UNITS, UnitError, to_si
 
 #: A declared name: lower_snake_case.
 NAME = re.compile(r"^[a-z][a-z0-9_]*$")

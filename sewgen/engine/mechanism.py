@@ -521,7 +521,8 @@ class Mechanism:
         failed = solve_lean(desc, req)
         if failed == _SIZE_MAX:  # not ascending: solved in sorted order, returned in the caller's
             order = np.argsort(phi, kind="stable").astype(np.uintp)
-            order_p = req.order = ffi.from_buffer("size_t[]", order)  # order_p keeps the buffer for the call
+            order_p = ffi.from_buffer("size_t[]", order)  # held here while C reads it
+            req.order = order_p
             failed = solve_lean(desc, req)
         if failed:
             return None

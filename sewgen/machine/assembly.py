@@ -28,9 +28,8 @@ from __future__ import annotations
 
 import copy
 import math
-import re
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import NamedTuple
 
@@ -42,15 +41,13 @@ from sewgen.errors import BuildError, NonFiniteOutputError, ParameterError, Sewg
 from sewgen.machine import shaking
 from sewgen.machine.tables import group_table, machine_table
 from sewgen.machine.feed import regulator_angle
-from sewgen.engine.loads import Load, load_matrix
+from sewgen.engine.loads import load_matrix
 from sewgen.machine.plan import ShaftCall, gravity_polar, plan_of, scalar
-from sewgen.machine.modelfile import Field, ModelFileError, Reader, declaration_problem, load_toml, resolve
+from sewgen.machine.modelfile import (Declared, GroupSpec, Model, ModelFileError, Shaft, ShaftMass,
+    declaration_problem, read_model, read_settings, resolve)
+from sewgen.machine.timing import RULES
 from sewgen.roles import STITCH_REGULATOR
 from sewgen.units import UnitError, steps_per_turn, to_si
-
-#: Names a group may not take: its table would overwrite the machine's (machine.csv, summary.json).
-RESERVED_GROUP_NAMES = ("machine", "summary")
-_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 def _deprecated(old: str, new: str) -> None:
@@ -107,17 +104,6 @@ class Group:
                 for ld in self.loads]
 
 
-@dataclass(frozen=True)
-class ShaftMass:
-    """A point mass on the upper shaft: m (kg) at radius r (m), angle (rad, from the shaft angle φ), axial z (m)."""
-
-    name: str
-    mass: float
-    radius: float
-    angle: float
-    z: float
-
-
 class MovingBody(NamedTuple):
     """A moving body of a group in an analysis: its mass and inertia (SI, the run's values), its motion, and
     whether an input turns it (a crank; a spatial crank of a group along the shaft turns about the shaft)."""
@@ -131,18 +117,6 @@ class MovingBody(NamedTuple):
 
 
 @dataclass
-class Shaft:
-    front: float  # z of the front bearing A (m)
-    rear: float  # z of the rear bearing B (m)
-    inertia: float  # of the core about its axis (kg m²)
-    masses: list = field(default_factory=list)  # ShaftMass: the core's mass, unbalance, counterweights
-    pulley: float = 0.0  # z of the pulley (m), where the drive torque enters
-    belt: tuple = (0.0, 0.0)  # the belt's pull on the pulley (N, frame x, y): T1 + T2 along the belt
-    friction: float = 0.0  # Coulomb coefficient of the two bearings (0: ideal, the seeds' assumption)
-    journal_radius: float = 0.0  # m, the journals' radius: the friction moment's arm
-
-
-@dataclass
 class Machine:
     name: str
     doc: str
@@ -152,8 +126,8 @@ class Machine:
     groups: list
     shaft: Shaft
     source: str = ""
-    stitch: object = None  # sewgen.machine.timing.Stitch: cloth, loop lift and release, timing rules ([stitch])
-    thread: object = None  # sewgen.machine.thread.ThreadPath: the needle thread's guides ([thread])
+    stitch: object = None  # sewgen.machine.modelfile.Stitch: cloth, loop lift and release, timing rules ([stitch])
+    thread: object = None  # sewgen.machine.modelfile.ThreadPath: the needle thread's guides ([thread])
 
     def shaft_angles(self, step: float | None = None) -> np.ndarray:
         """One revolution every ``step`` (rad; default the model's): a step must divide 360° into 4 to
@@ -576,140 +550,29 @@ def _xy(r) -> tuple:
     return (r.fx, r.fy)
 
 
-# -- model files -----------------------------------------------------------------------------------------------
-
-MACHINE = {
-    "name": Field("text", doc="the machine's name"),
-    "description": Field("text", False),
-    "speed": Field("speed", doc="upper-shaft speed, e.g. \"1000 rpm\"", sign="positive"),
-    "step": Field("angle", doc="shaft-angle step, e.g. \"5 deg\" (72 positions)", sign="positive"),
-    "gravity": Field("acceleration", False),
-    "gravity_direction": Field("angle", False),
-}
-SHAFT = {
-    "front_bearing": Field("length", doc="z of the front bearing"),
-    "rear_bearing": Field("length", doc="z of the rear bearing"),
-    "pulley": Field("length", False),
-    "inertia": Field("inertia", doc="moment of inertia of the shaft core about its axis", sign="nonnegative"),
-    "mass": Field("mass", doc="mass of the shaft core", sign="nonnegative"),
-    "mass_z": Field("length", doc="z of the core's centre of mass"),
-    "masses": Field("list", False),
-    "counterweights": Field("list", False, "planes where `sewgen balance machine` may put counterweights"),
-    "belt_pull": Field("force", False, "the belt's radial pull on the pulley, T1 + T2", sign="nonnegative"),
-    "belt_direction": Field("angle", False, "direction of the belt pull in the frame (from +x)"),
-    "bearing_friction": Field("dimensionless", False, "Coulomb friction coefficient of the front and rear "
-                              "bearings (default 0: ideal)", sign="nonnegative"),
-    "journal_radius": Field("length", False, "radius of the shaft's journals in the bearings (friction arm)",
-                            sign="nonnegative"),
-}
-SHAFT_MASS = {
-    "name": Field("text"),
-    "mass": Field("mass", sign="nonnegative"),
-    "radius": Field("length", sign="nonnegative"),
-    "angle": Field("angle"),
-    "z": Field("length"),
-}
-GROUP = {
-    "mechanism": Field("text", doc="a catalog mechanism's name, or the path of a declaration file (.py with a "
-                               "declare()), relative to the model file"),
-    "description": Field("text", False),
-    "phase": Field("angle", doc="group shaft angle minus machine shaft angle"),
-    "axial": Field("table", doc="z on the upper shaft of every driven body, e.g. { crank = \"-20 mm\" }"),
-    "params": Field("table", False),
-    "held": Field("table", False),
-    "stitch": Field("length", False, "stitch length the stitch regulator is set for (feed groups)"),
-    "plane": Field("length", False, "z of the group's plane on the machine (default: mean z of its driven bodies)"),
-    "frame": Field("text", False, "\"across\" (default: the group's plane is across the shaft) or \"along\" (its "
-                   "plane contains the shaft: its x along the shaft, y up; its cranks are spatial cranks about x)"),
-    "origin": Field("list", False, "\"along\" groups: the group's origin in the machine frame, [x, y, z] lengths"),
-    "branch": Field("table", False),
-    "loads": Field("list", False),
-}
-LOAD = {
-    "at": Field("text"),
-    "fx": Field("force", False),
-    "fy": Field("force", False),
-    "torque": Field("torque", False),
-    "from": Field("angle", False),
-    "to": Field("angle", False),
-    "name": Field("text", False),
-}
-
+# -- model files ---------------------------------------------------------------------------------------------
 
 def load_machine(name_or_path, doc: dict | None = None) -> Machine:
     """A machine from a model file (or a built-in model such as "jb1-3"), checked and converted to SI. ``doc``:
     the file's parsed TOML, changed (a design study's variant, sewgen.study.machine_designs); relative paths in
-    it still resolve beside the file."""
-    path = resolve(name_or_path)
-    rd = Reader(path)
-    doc = rd.table(load_toml(path) if doc is None else doc, "")
-    rd.check_keys(doc, "", {"machine": Field("table"), "shaft": Field("table"), "groups": Field("table"),
-                            "stitch": Field("table", False), "thread": Field("table", False)})
-    mach = rd.read(rd.table(doc["machine"], "machine"), "machine", MACHINE)
-    _check_name(rd, mach["name"])
-    shaft_doc = rd.read(rd.table(doc["shaft"], "shaft"), "shaft", SHAFT)
-    masses = [ShaftMass("core", shaft_doc["mass"], 0.0, 0.0, shaft_doc["mass_z"])]
-    for i, item in enumerate(shaft_doc.get("masses", [])):
-        key = f"shaft.masses[{i}]"
-        sm = rd.read(rd.table(item, key), key, SHAFT_MASS)
-        masses.append(ShaftMass(sm["name"], sm["mass"], sm["radius"], sm["angle"], sm["z"]))
-    pull, pull_dir = shaft_doc.get("belt_pull", 0.0), shaft_doc.get("belt_direction", -math.pi / 2)
-    shaft = Shaft(shaft_doc["front_bearing"], shaft_doc["rear_bearing"], shaft_doc["inertia"], masses,
-                  shaft_doc.get("pulley", shaft_doc["rear_bearing"]),
-                  (pull * math.cos(pull_dir), pull * math.sin(pull_dir)),
-                  shaft_doc.get("bearing_friction", 0.0), shaft_doc.get("journal_radius", 0.0))
-    if shaft.friction and not shaft.journal_radius:
-        rd.fail("shaft.journal_radius", "bearing friction needs the journals' radius (its arm), e.g. \"6 mm\"")
-    if not shaft.rear > shaft.front:
-        rd.fail("shaft.rear_bearing", "must lie behind the front bearing (larger z)")
+    it still resolve beside the file.
+
+    The file is read by :func:`sewgen.machine.modelfile.read_model` (every table, its schema in
+    sewgen.machine.modelfile.schema); here each group's mechanism is loaded, its tables are read against what
+    it declares, and what only the compiled mechanism can check is checked: its parameter values, the stitch
+    regulator's setting, the points and bodies its loads act on. So a problem the file alone shows is reported
+    before any mechanism is loaded (a declaration file compiled)."""
+    model = read_model(resolve(name_or_path), doc, rules=RULES)
     groups = []
-    for name, g in rd.table(doc["groups"], "groups").items():
-        _check_group_name(rd, name)
+    for spec in model.groups:
         try:
-            groups.append(_group(rd, name, rd.table(g, f"groups.{name}")))
+            groups.append(_group(model, spec))
         except ModelFileError:
             raise
         except SewgenError as exc:  # the group's geometry: cannot assemble at the stitch's setting, ...
-            raise located(exc, path, f"groups.{name}") from None
-    if not groups:
-        rd.fail("groups", "a machine needs at least one group")
-    g_mag = mach.get("gravity", 9.80665)
-    g_dir = mach.get("gravity_direction", -math.pi / 2)
-    gv = np.array([g_mag * math.cos(g_dir), g_mag * math.sin(g_dir)])
-    gv[np.abs(gv) < 1e-15 * max(g_mag, 1e-300)] = 0.0
-    m = Machine(mach["name"], mach.get("description", ""), mach["speed"], mach["step"], gv, groups, shaft, str(path))
-    if "stitch" in doc:  # stitch formation and thread control (sewgen.machine.timing, sewgen.machine.thread)
-        from sewgen.machine.timing import read_stitch
-
-        m.stitch = read_stitch(rd, doc["stitch"])
-    if "thread" in doc:
-        from sewgen.machine.thread import read_thread
-
-        m.thread = read_thread(rd, doc["thread"])
-    try:
-        m.shaft_angles()
-    except ParameterError as exc:
-        rd.fail("machine.step", exc.problem + " (an angle in deg or rad)")
-    return m
-
-
-def _check_name(rd: Reader, name: str) -> None:
-    """The machine's name is the default output folder: a plain name, never a path."""
-    bad = ("/" in name or "\\" in name or ".." in name or not name.strip() or name != name.strip()
-           or name.startswith(".") or any(ord(c) < 32 or ord(c) == 127 for c in name))
-    if bad:
-        rd.fail("machine.name", f"must be a plain name (it names the default output folder): no /, \\, .., "
-                                f"leading dot, control characters or surrounding spaces; got {name!r}")
-
-
-def _check_group_name(rd: Reader, name: str) -> None:
-    """A group's name names its table (``<group>.csv``) and its entries in summary.json."""
-    if not _IDENTIFIER.fullmatch(name):
-        rd.fail(f"groups.{name}", "a group name must be an identifier (letters, digits and _, not starting with a "
-                                  "digit)")
-    if name in RESERVED_GROUP_NAMES:
-        rd.fail(f"groups.{name}", f"{name!r} is reserved (the machine's own outputs: "
-                                  f"{', '.join(RESERVED_GROUP_NAMES)}); rename the group")
+            raise located(exc, model.path, spec.key) from None
+    return Machine(model.name, model.description, model.speed, model.step, model.gravity, groups, model.shaft,
+                   str(model.path), model.stitch, model.thread)
 
 
 def located(exc: SewgenError, path, key: str) -> SewgenError:
@@ -722,106 +585,63 @@ def located(exc: SewgenError, path, key: str) -> SewgenError:
     return out
 
 
-def _group(rd: Reader, name: str, data: dict) -> Group:
-    key = f"groups.{name}"
-    g = rd.read(data, key, GROUP)
-    mech = _group_mechanism(rd, f"{key}.mechanism", g["mechanism"])
+def _group(model: Model, spec: GroupSpec) -> Group:
+    """A group of the model file: its mechanism loaded, its tables read against the mechanism's declaration, its
+    parameter values, stitch regulator and loads checked by the compiled mechanism."""
+    key = spec.key
+    mech = _group_mechanism(model.path, f"{key}.mechanism", spec.mechanism)
     desc = mech.description
-    kinds = {p.name: p.kind for p in desc.params}
-    params = {}
-    for pname, value in g.get("params", {}).items():
-        if pname not in kinds:
-            rd.fail(f"{key}.params.{pname}", f"{mech.name} has no such parameter; it has: {', '.join(kinds)}")
-        params[pname] = rd.quantity(value, kinds[pname], f"{key}.params.{pname}")
+    declared = Declared(mech.name, {p.name: p.kind for p in desc.params}, tuple(mech.held_names),
+                        tuple(mech.branch_names), tuple(b.name for b in desc.driven_bodies))
+    settings = read_settings(model.path, spec, declared)
+    params, held = settings.params, settings.held
     try:
         mech.param_vector(params)
     except ParameterError as exc:
-        rd.fail(f"{key}.params.{exc.parameter}", exc.problem)
-    held = {}
-    for hname, value in g.get("held", {}).items():
-        if hname not in mech.held_names:
-            rd.fail(f"{key}.held.{hname}", f"{mech.name} has no such held input; it has: "
-                    f"{', '.join(mech.held_names) or 'none'}")
-        held[hname] = rd.quantity(value, "angle", f"{key}.held.{hname}")
-    branch = {}
-    for bname, value in g.get("branch", {}).items():
-        if bname not in mech.branch_names or value not in (1, -1) or isinstance(value, bool):
-            rd.fail(f"{key}.branch.{bname}", f"must be a branch joint of {mech.name} "
-                    f"({', '.join(mech.branch_names) or 'none'}) set to 1 or -1")
-        branch[bname] = value
-    driven = [b.name for b in desc.driven_bodies]
-    axial = {}
-    for bname, value in g["axial"].items():
-        if bname not in driven:
-            rd.fail(f"{key}.axial.{bname}", f"not a body the shaft drives; {mech.name}'s are: {', '.join(driven)}")
-        axial[bname] = rd.quantity(value, "length", f"{key}.axial.{bname}")
-    for bname in driven:
-        if bname not in axial:
-            rd.fail(f"{key}.axial.{bname}", "missing (z of this driven body on the upper shaft: a length in m, "
-                                            "e.g. \"20 mm\")")
-    loads = []
-    for i, item in enumerate(g.get("loads", [])):
-        lk = f"{key}.loads[{i}]"
-        ld = rd.read(rd.table(item, lk), lk, LOAD)
-        if ("from" in ld) != ("to" in ld):
-            rd.fail(lk, "give both 'from' and 'to' for a window, or neither")
-        loads.append(Load(ld["at"], ld.get("fx", 0.0), ld.get("fy", 0.0), ld.get("torque", 0.0),
-                          (ld["from"], ld["to"]) if "from" in ld else None, ld.get("name", "")))
-    frame = g.get("frame", "across")
-    if frame not in ("across", "along"):
-        rd.fail(f"{key}.frame", f"must be \"across\" or \"along\", got {frame!r}")
-    if ("origin" in g) != (frame == "along"):
-        rd.fail(f"{key}.origin", "give the origin (the group's origin in the machine frame, [x, y, z]) for a group "
-                                 "with frame = \"along\", and only there")
-    origin = (0.0, 0.0, 0.0)
-    if "origin" in g:
-        if not isinstance(g["origin"], list) or len(g["origin"]) != 3:
-            rd.fail(f"{key}.origin", "must be three lengths [x, y, z]")
-        origin = tuple(rd.quantity(v, "length", f"{key}.origin[{i}]") for i, v in enumerate(g["origin"]))
-    if frame == "along" and "plane" in g:
-        rd.fail(f"{key}.plane", "an \"along\" group's plane is x = origin x: give the origin, not the plane")
-    group = Group(name, mech, g["phase"], axial, params, held, branch, loads, g.get("stitch"), g.get("plane"),
-                  frame, origin)
+        raise ModelFileError(model.path, f"{key}.params.{exc.parameter}", exc.problem) from None
+    loads = list(spec.loads)
+    group = Group(spec.name, mech, spec.phase, settings.axial, params, held, settings.branch, loads, spec.stitch,
+                  spec.plane, spec.frame, spec.origin)
     if group.stitch is not None:
         regulator = desc.role_name(STITCH_REGULATOR)
         if regulator is None:
-            rd.fail(f"{key}.stitch", f"{mech.name} has no held input with the role {STITCH_REGULATOR!r}")
+            raise ModelFileError(model.path, f"{key}.stitch",
+                                 f"{mech.name} has no held input with the role {STITCH_REGULATOR!r}")
         if regulator in held:
-            rd.fail(f"{key}.stitch", f"give the stitch length or held.{regulator}, not both")
+            raise ModelFileError(model.path, f"{key}.stitch", f"give the stitch length or held.{regulator}, not both")
         try:
             group.held[regulator] = regulator_angle(mech, group.stitch, params=params or None)
         except ParameterError as exc:
-            rd.fail(f"{key}.stitch", exc.problem)
+            raise ModelFileError(model.path, f"{key}.stitch", exc.problem) from None
     try:  # every load names a point or body of the mechanism
         load_matrix(mech, loads, np.zeros(1))
     except ParameterError as exc:
-        rd.fail(f"{key}.loads", f"{exc.parameter}: {exc.problem}")
+        raise ModelFileError(model.path, f"{key}.loads", f"{exc.parameter}: {exc.problem}") from None
     return group
 
 
-def _group_mechanism(rd: Reader, key: str, text: str):
+def _group_mechanism(model_path: Path, key: str, text: str):
     """A group's mechanism: a catalog name, or a declaration file (.py with ``declare()``) relative to the model
     file, derived and compiled on first use and then loaded from the cache (:func:`sewgen.load`)."""
-
     if text in catalog():
         return catalog_mechanism(text)
     path = Path(text).expanduser()
     if not path.is_absolute():
-        path = rd.path.parent / path
+        path = model_path.parent / path
     if path.suffix != ".py":
-        rd.fail(key, f"{text!r} is neither a catalog mechanism ({', '.join(catalog())}) nor a declaration file "
-                     "(.py with a declare() function)")
+        raise ModelFileError(model_path, key, f"{text!r} is neither a catalog mechanism ({', '.join(catalog())}) "
+                                              "nor a declaration file (.py with a declare() function)")
     if not path.is_file():
-        rd.fail(key, f"no declaration file {path}")
+        raise ModelFileError(model_path, key, f"no declaration file {path}")
     try:
         return load(path)
     except BuildError as exc:
-        rd.fail(key, exc.problem)
+        raise ModelFileError(model_path, key, exc.problem) from None
     except Exception as exc:  # a syntax error in the declaration, or its declare() raised
         problem = declaration_problem(exc, path)
         if problem is None:
             raise
-        rd.fail(key, problem)
+        raise ModelFileError(model_path, key, problem) from None
 
 
 __all__ = ["Group", "Machine", "MachineAnalysis", "ModelFileError", "Shaft", "ShaftMass", "load_machine"]

@@ -38,39 +38,15 @@ import numpy as np
 from sewgen.errors import SewgenError
 from sewgen.machine import shaking
 from sewgen.machine.assembly import Machine, MachineAnalysis, ShaftMass
-from sewgen.machine.modelfile import Field, Reader, load_toml
+from sewgen.machine.modelfile import Plane, read_counterweights
 
 METHODS = ("separate", "harmonic", "bearings")
 OBJECTIVES = ("peak", "rms")
 DEFAULT_WEIGHTS = (0.1, 0.9)  # seed 002: w1·max|F| + w2·mean|F|
 
-PLANE = {
-    "name": Field("text", doc="the counterweight's name"),
-    "z": Field("length", doc="axial position on the upper shaft"),
-    "radius": Field("length", doc="radius of the counterweight's centre of mass"),
-    "max_mass": Field("mass", doc="the most mass the space there allows"),
-    "group": Field("text", False, "the group this plane balances by itself (method separate)"),
-}
-
 
 class BalancingError(SewgenError, ValueError):
     """A balancing problem that cannot be set up or solved (names the machine and what is wrong)."""
-
-
-@dataclass(frozen=True)
-class Plane:
-    """Where a counterweight may go: axial ``z`` (m), its centre of mass at ``radius`` (m), at most ``max_mass``
-    (kg) — so |m·r| ≤ max_mass · radius; ``group`` ties the plane to a group for method 1."""
-
-    name: str
-    z: float
-    radius: float
-    max_mass: float
-    group: str | None = None
-
-    @property
-    def max_mr(self) -> float:
-        return self.max_mass * self.radius
 
 
 @dataclass(frozen=True)
@@ -95,24 +71,7 @@ class Counterweight:
 
 def planes_of(machine: Machine) -> list[Plane]:
     """The counterweight planes of a machine's model file (``[[shaft.counterweights]]``)."""
-    rd = Reader(machine.source)
-    doc = load_toml(machine.source)
-    items = doc.get("shaft", {}).get("counterweights", [])
-    if not isinstance(items, list):
-        rd.fail("shaft.counterweights", "must be an array of tables ([[shaft.counterweights]])")
-    out = []
-    groups = {g.name for g in machine.groups}
-    for i, item in enumerate(items):
-        key = f"shaft.counterweights[{i}]"
-        p = rd.read(rd.table(item, key), key, PLANE)
-        if not p["radius"] > 0 or not p["max_mass"] >= 0:
-            rd.fail(key, "radius must be positive and max_mass not negative")
-        if p.get("group") is not None and p["group"] not in groups:
-            rd.fail(f"{key}.group", f"no group {p['group']!r}; groups: {', '.join(sorted(groups))}")
-        out.append(Plane(p["name"], p["z"], p["radius"], p["max_mass"], p.get("group")))
-    if len({p.name for p in out}) != len(out):
-        rd.fail("shaft.counterweights", "counterweight names must differ")
-    return out
+    return read_counterweights(machine.source, [g.name for g in machine.groups])
 
 
 # -- the machine with counterweights, and what they change --------------------------------------------------------

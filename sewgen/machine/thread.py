@@ -43,63 +43,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from sewgen.hermite import Series
-from sewgen.machine.modelfile import Field
+from sewgen.machine.modelfile import Guide, ThreadPath
 from sewgen.machine.parts import role_group
 from sewgen.roles import FEED_DOG, HOOK_POINT, NEEDLE_EYE, THREAD_EYE
 
 TWO_PI = 2.0 * math.pi
-
-
-@dataclass(frozen=True)
-class Guide:
-    """A point of the thread path: on the frame (``at``, m) or a moving point (``point``: a role or
-    "group.point") with an ``offset`` (m) along its body's own axes."""
-
-    name: str
-    at: tuple | None = None
-    point: str | None = None
-    offset: tuple = (0.0, 0.0)
-
-
-@dataclass(frozen=True)
-class ThreadPath:
-    guides: tuple
-
-
-GUIDE = {  # modelfile schema: (kind, required, doc)
-    "name": ("text", True, "what the guide is (tension discs, take-up eye, ...)"),
-    "at": ("list", False, "a point on the frame: [\"x\", \"y\"] with units"),
-    "point": ("text", False, "a moving point: a role (\"thread_eye\") or \"group.point\""),
-    "offset": ("list", False, "[\"u\", \"v\"] along the moving point's body axes"),
-}
-
-
-def read_thread(rd, data: dict) -> ThreadPath:
-    """The ``[thread]`` table of a model file: ``[[thread.guides]]`` from the tension discs to the needle eye."""
-    t = rd.read(rd.table(data, "thread"), "thread", {"guides": Field("list", True, "the thread path, "
-                                                                                     "[[thread.guides]]")})
-    guides = []
-    for i, item in enumerate(t["guides"]):
-        key = f"thread.guides[{i}]"
-        g = rd.read(rd.table(item, key), key, {k: Field(kind, req, doc) for k, (kind, req, doc) in GUIDE.items()})
-        if ("at" in g) == ("point" in g):
-            rd.fail(key, "give 'at' (a point on the frame) or 'point' (a moving point), one of them")
-
-        def pair(name):
-            v = g[name]
-            if not isinstance(v, list) or len(v) != 2:
-                rd.fail(f"{key}.{name}", "must be two lengths with units, e.g. [\"-20 mm\", \"35 mm\"]")
-            return tuple(rd.quantity(x, "length", f"{key}.{name}[{k}]") for k, x in enumerate(v))
-
-        if "at" in g:
-            if "offset" in g:
-                rd.fail(f"{key}.offset", "an offset belongs to a moving point")
-            guides.append(Guide(g["name"], at=pair("at")))
-        else:
-            guides.append(Guide(g["name"], point=g["point"], offset=pair("offset") if "offset" in g else (0.0, 0.0)))
-    if len(guides) < 2:
-        rd.fail("thread.guides", "a thread path needs at least two guides")
-    return ThreadPath(tuple(guides))
 
 
 def _find(machine, ref: str):
@@ -295,5 +243,5 @@ def thread_control(machine, motions: dict, tm, path: ThreadPath, stitch) -> Thre
                          float(drawn[order[-1]]), pts)
 
 
-__all__ = ["Guide", "ThreadControl", "ThreadPath", "eye_motion", "guide_positions", "path_length", "read_thread",
+__all__ = ["Guide", "ThreadControl", "ThreadPath", "eye_motion", "guide_positions", "path_length",
            "thread_control"]

@@ -75,7 +75,7 @@ import numpy as np
 
 from sewgen.errors import SewgenError
 from sewgen.machine.feed import plate_height
-from sewgen.machine.modelfile import Field
+from sewgen.machine.modelfile import Rule, Stitch
 from sewgen.machine.parts import role_group, role_param
 from sewgen.machine.thread import thread_control
 from sewgen.hermite import Series  # the one cubic Hermite implementation (crossings, values between samples)
@@ -517,74 +517,6 @@ class UpperAboveMaterial(TimingRule):
                         f"looper's tip (at its top at φ = {_deg(v['upper_top'])}) is this far above the material")
 
 
-# -- model-file sections ---------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Rule:
-    """One timing rule of a machine: ``kind`` (a key of :data:`RULES`), limits in SI (None: open), its source,
-    and a window (rad, ``take_up_rises_over``)."""
-
-    kind: str
-    lo: float | None = None
-    hi: float | None = None
-    source: str = ""
-    window: tuple | None = None
-
-
-@dataclass(frozen=True)
-class Stitch:
-    """What stitch formation needs beyond the mechanisms: the cloth's thickness on the plate (m), the loop
-    lift (the needle's rise from BDC at which the loop stands, m), how far the shuttle carries the loop past
-    the needle before casting it off (rad), and the machine's rules."""
-
-    cloth: float = 0.0015
-    loop_lift: float = 0.002
-    loop_release: float = math.pi
-    rules: tuple = ()
-
-
-STITCH = {  # modelfile.Field schemas, built on first use (modelfile imports pint lazily)
-    "cloth": ("length", False, "cloth thickness on the throat plate"),
-    "loop_lift": ("length", False, "the needle's rise from BDC at which the loop forms"),
-    "loop_release": ("angle", False, "shuttle turn past the needle at which the loop is cast off"),
-    "rules": ("list", False, "the timing rules, [[stitch.rules]]"),
-}
-_WINDOWED = ", ".join(n for n, r in RULES.items() if r.window)  # the rules with a window
-RULE = {
-    "rule": ("text", True, f"one of: {', '.join(RULES)}"),
-    "min": ("", False, "lower limit"),
-    "max": ("", False, "upper limit"),
-    "from": ("angle", False, f"window start ({_WINDOWED})"),
-    "to": ("angle", False, f"window end ({_WINDOWED})"),
-    "source": ("text", True, "where the rule comes from (manual, textbook, seed)"),
-}
-
-
-def read_stitch(rd, data: dict) -> Stitch:
-    """The ``[stitch]`` table of a model file, checked and in SI (``rd`` a modelfile.Reader)."""
-    schema = {k: Field(kind, req, doc) for k, (kind, req, doc) in STITCH.items()}
-    s = rd.read(rd.table(data, "stitch"), "stitch", schema)
-    rules = []
-    for i, item in enumerate(s.get("rules", [])):
-        key = f"stitch.rules[{i}]"
-        item = rd.table(item, key)
-        kind = item.get("rule")
-        if kind not in RULES:
-            rd.fail(f"{key}.rule", f"unknown rule {kind!r}; rules: {', '.join(RULES)}")
-        kr = RULES[kind]
-        unit_kind = kr.kind
-        schema = {k: Field(unit_kind if k in ("min", "max") else t, req, doc) for k, (t, req, doc) in RULE.items()}
-        r = rd.read(item, key, schema)
-        if ("from" in r) != ("to" in r) or kr.window != ("from" in r):
-            rd.fail(key, f"give 'from' and 'to' (a window of shaft angles) for {_WINDOWED}, and only there")
-        if not kr.own_limits and "min" not in r and "max" not in r:
-            rd.fail(key, f"give 'min' or 'max' (a {unit_kind} with its unit)")
-        rules.append(Rule(kind, r.get("min"), r.get("max"), r["source"],
-                          (r["from"], r["to"]) if "from" in r else None))
-    return Stitch(s.get("cloth", Stitch.cloth), s.get("loop_lift", Stitch.loop_lift),
-                  s.get("loop_release", Stitch.loop_release), tuple(rules))
-
-
 # -- results ---------------------------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -1023,4 +955,4 @@ def _interp_point(tm: Timing, g, name, angle):
 
 
 __all__ = ["Check", "Event", "Measured", "Phase", "RULES", "Rule", "Stitch", "Timing", "TimingError", "TimingRule",
-           "read_stitch", "timing"]
+           "timing"]

@@ -23,6 +23,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from sewgen.errors import ParameterError, SewgenError
+from sewgen.machine.modelfile import load_toml
+from sewgen.machine.modelfile.schema import COUNTERWEIGHT, GROUP, LOAD, MACHINE, SHAFT, SHAFT_MASS, STITCH
 from sewgen.units import SI_UNITS, UnitError, to_si
 
 #: kind -> (display unit, factor from SI)
@@ -62,18 +64,18 @@ class DesignKey:
 
 
 def _schema_kind(parts: list[str]) -> str | None:
-    from sewgen.machine.assembly import GROUP, LOAD, MACHINE, SHAFT, SHAFT_MASS
-
+    """The kind of the value at a model-file key (its schema's, sewgen.machine.modelfile.schema), or None where
+    the schema does not say (a rule's limits: the rule's own kind, found from the value)."""
     head = parts[0]
     if head == "machine" and len(parts) == 2 and parts[1] in MACHINE:
         return MACHINE[parts[1]].kind
     if head == "shaft":
         if len(parts) == 2 and parts[1] in SHAFT:
             return SHAFT[parts[1]].kind
-        if len(parts) == 3 and parts[1].startswith(("masses[", "counterweights[")):
-            if parts[2] in SHAFT_MASS:
-                return SHAFT_MASS[parts[2]].kind
-            return {"radius": "length", "max_mass": "mass"}.get(parts[2])
+        if len(parts) == 3 and parts[1].startswith("masses[") and parts[2] in SHAFT_MASS:
+            return SHAFT_MASS[parts[2]].kind
+        if len(parts) == 3 and parts[1].startswith("counterweights[") and parts[2] in COUNTERWEIGHT:
+            return COUNTERWEIGHT[parts[2]].kind
     if head == "groups" and len(parts) >= 3:
         if len(parts) == 3 and parts[2] in GROUP:
             return GROUP[parts[2]].kind
@@ -83,10 +85,8 @@ def _schema_kind(parts: list[str]) -> str | None:
             return "length"
         if len(parts) == 4 and parts[2].startswith("loads[") and parts[3] in LOAD:
             return LOAD[parts[3]].kind
-    if head == "stitch" and len(parts) == 2:
-        from sewgen.machine.timing import STITCH
-
-        return STITCH.get(parts[1], (None,))[0]
+    if head == "stitch" and len(parts) == 2 and parts[1] in STITCH:
+        return STITCH[parts[1]].kind
     if head == "stitch" and len(parts) == 3 and parts[1].startswith("rules["):
         return None  # min/max: the rule's own kind, found from the value
     return None
@@ -160,8 +160,6 @@ def parse_key(machine, key: str, doc: dict | None = None) -> DesignKey:
 
 def model_doc(machine) -> dict:
     """The machine's model file as parsed TOML."""
-    from sewgen.machine.modelfile import load_toml
-
     if not machine.source:
         raise ParameterError(machine.name, "model file", "the machine was not loaded from a model file")
     return load_toml(machine.source)

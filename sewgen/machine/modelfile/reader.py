@@ -1,23 +1,22 @@
-"""Machine model files: TOML with explicit units, checked against a schema (DESIGN.md §5).
+"""The model file's reader: TOML parsed, walked against a schema table (:mod:`.schema`), quantities to SI.
 
 Every quantity is a string with its unit ("16.7 mm", "105 g", "1000 rpm"); a bare number is refused for
 anything that has a unit. An unknown key, a missing key or a unit of the wrong kind raises
 :class:`ModelFileError` naming the file, the key (dotted, e.g. ``groups.feed.params.cam_side``) and the unit
-expected. Group parameters, held inputs, branches and load points are checked against the mechanism's own
-manifest, so a model file can set anything a mechanism declares and nothing else. A file that is not UTF-8 text
-or not TOML is a ModelFileError too, naming the file (and the line).
+expected. A file that is not UTF-8 text or not TOML is a ModelFileError too, naming the file (and the line).
 """
 from __future__ import annotations
 
 import tomllib
+import traceback
 from dataclasses import dataclass
 from pathlib import Path
 
 from sewgen.errors import SewgenError
 from sewgen.units import EXAMPLES, SI_UNITS, UnitError, to_si
 
-#: Built-in machine models, shipped beside this module.
-MODELS_DIR = Path(__file__).resolve().parents[1] / "models"
+#: Built-in machine models: sewgen/models (this file is sewgen/machine/modelfile/reader.py).
+MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
 
 
 class ModelFileError(SewgenError, ValueError):
@@ -32,6 +31,9 @@ class ModelFileError(SewgenError, ValueError):
 
 @dataclass(frozen=True)
 class Field:
+    """One key of a schema table: its kind, whether the file must give it, what it means (``doc``: shown in the
+    "missing" message of a required key) and, for a quantity, its sign."""
+
     kind: str  # a units kind, "text", "int", "table" or "list"
     required: bool = True
     doc: str = ""
@@ -168,8 +170,6 @@ def declaration_problem(exc: BaseException, path) -> str | None:
     """What a user's declaration file did wrong, as ``file:line: problem`` — a syntax error (or bytes that are
     not UTF-8), or an exception raised from the file's own code — or None when ``exc`` did not come from that
     file (then it is sewgen's, and keeps its traceback)."""
-    import traceback
-
     path = Path(path)
     if isinstance(exc, SyntaxError):
         where = f"{exc.filename or path}:{exc.lineno}" if exc.lineno else str(exc.filename or path)
