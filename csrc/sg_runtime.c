@@ -809,7 +809,7 @@ size_t sg_sweep(const sg_mechanism *m, const sg_request *r)
                  r->status, NULL, NULL, NULL);
 }
 
-/* Batched designs (issue 14) -------------------------------------------------------------------------------
+/* Batched designs ------------------------------------------------------------------------------------------
  * Flat columns of one position: q (nq), qd (nq), qdd (nq), then obs (nobs); column j of position i lives at
  * col_base(j)[i * width(j) + offset(j)] in the scratch sweep arrays. */
 typedef struct {

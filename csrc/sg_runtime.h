@@ -24,7 +24,7 @@
                 : (j) < 2 * (nq) ? (qd) + ((j) - (nq))                                              \
                                  : (j) < 3 * (nq) ? (qdd) + ((j) - 2 * (nq)) : (obs) + ((j) - 3 * (nq)))
 
-/* Columns a SIMD sweep writes straight to their own arrays (issue 14, item 3: sg_sweep_designs' selected outputs,
+/* Columns a SIMD sweep writes straight to their own arrays (sg_sweep_designs' selected outputs,
  * no row then copy): column k is the flat column col[k] (q, qd, qdd, then obs, as sg_runtime.c's sg_scratch), its
  * position i at dst[k][i]. The SIMD loop sets written to 1 when it takes them; the scalar loops leave it 0 and
  * write rows only. */
@@ -125,8 +125,8 @@ typedef struct sg_block {
 #if defined(__GNUC__)
 #define SG_INLINE static inline __attribute__((always_inline))
 /* A loop of the small dense solves unrolled: whole where n is a literal (the generated rates kernels). -O2 alone
- * kept the loops; without their counters and hard-to-predict branches the feed's sweep takes 15-20 % less time
- * for the same instruction count (BENCHMARKS.md). */
+ * kept the loops; without their counters and hard-to-predict branches the feed's sweep takes less time for the
+ * same instruction count. */
 #define SG_UNROLL _Pragma("GCC unroll 8")
 #define SG_FLATTEN __attribute__((flatten)) /* every call in the function's body inlined */
 #define SG_NOINLINE __attribute__((noinline))
@@ -222,7 +222,7 @@ SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *
     }
 }
 
-/* The 2 x 2 case of sg_factor_eq_inl in closed form (issue 14, item 1: one dyad's loop, the commonest): a
+/* The 2 x 2 case of sg_factor_eq_inl in closed form (one dyad's loop, the commonest case): a
  * (row-major) is overwritten by the inverse of B = R A, B^-1 = adj(B) / det B, so that the solve is a product.
  * With E = B C the equilibrated matrix (C = diag(1/m0, 1/m1), m_j the largest |entry| of B's column j):
  *   - the singular test is sg_factor_eq_inl's second pivot, |det E| = |det B| / (m0 m1) > SG_PIVOT_RTOL (its
@@ -477,7 +477,7 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
 #endif
 }
 
-/* The closed-form sweep with one mechanism's kernels called directly (issue 14, item 1): the body of
+/* The closed-form sweep with one mechanism's kernels called directly: the body of
  * sg_<m>_sweep, which each generated file with a closed form instantiates with its own constants, closed, motion,
  * rates, observe and forces kernels (a macro, so that the calls are direct and the file's flatten attribute inlines them: no
  * function pointers per position); the runtime's sweep calls it for a closed-form sweep unless opt->generic.

@@ -1,4 +1,4 @@
-/* sewgen C runtime, SIMD part (issue 14, item 2): SG_LANES shaft positions at once, 8 in AVX-512 registers or 4 in
+/* sewgen C runtime, SIMD part: SG_LANES shaft positions at once, 8 in AVX-512 registers or 4 in
  * AVX2 ones.
  *
  * Built where the compiler is GCC-compatible on x86-64 and the C library has glibc's vector math library
@@ -7,8 +7,7 @@
  * compiled for that level (a pragma, SG_SIMD_BEGIN, not a module flag), so the module still loads on any x86-64,
  * and csrc/sg_runtime.c calls the SIMD loop only where the CPU has the level (sg_simd_width). Eight lanes on an
  * AVX-512 CPU rather than four: half the instructions a position (the loop was issue-bound), 32 vector registers
- * (fewer spills) and one libmvec call for eight angles; measured on the take-up selection 33 → 44 M positions/s,
- * take_up kinematics 22 → 28 M/s (BENCHMARKS.md, 2026-11-27).
+ * (fewer spills) and one libmvec call for eight angles.
  * No -ffast-math: GCC vector extensions with the ISO C default of no FMA contraction, NaN tests kept.
  *
  * A generated file with a closed form instantiates SG_SIMD_SWEEP_BODY with vector twins of its closed, motion

@@ -1,4 +1,4 @@
-"""Every angle result is continuous over a sweep and starts in (−π, π] (issue 12, item 5).
+"""Every angle result is continuous over a sweep and starts in (−π, π].
 
 A drag-link four-bar (the shortest link is the frame: both cranks turn fully) makes the follower's closed-form
 angle (an atan2) pass ±180° every turn; over two turns it must come out as one continuous curve that gains 4π,

@@ -1,4 +1,4 @@
-"""The command line's contract with a new user (issue 10, and items 6–7 of issue 11).
+"""The command line's contract with a new user: docs that run, strict quantity strings, model files.
 
 * The README's quick start works twice in one folder, and then the built-in name still finds the built-in model.
 * Every ``sewgen ...`` command line of the code blocks of README.md and docs/**/*.md runs (extracted from them,
@@ -343,7 +343,7 @@ BAD = [
     (["forces", "needle_bar", "--load", "nowhere fy=-3N"], ["nowhere"]),
     (["kinematics", "take_up", "--units", "rpm"], ["--units", "rpm"]),
     (["kinematics", "take_up", "--units", "mm,mm"], ["--units"]),
-    # strict quantity strings (issue 11, item 6)
+    # strict quantity strings
     (["kinematics", "take_up", "--param", "crank=1,5 mm"], ["--param crank", "1,5 mm"]),
     (["kinematics", "take_up", "--param", "crank=16,7 mm"], ["--param crank", "16,7 mm"]),
     (["kinematics", "take_up", "--param", "crank=mm"], ["--param crank", '"mm"']),
@@ -428,7 +428,7 @@ def test_a_syntax_error_in_a_declaration_names_file_and_line(tmp_path, cache):
     refused(sewgen_run(["kinematics", "--file", "latin1.py"], tmp_path, cache), "latin1.py")
 
 
-# -- model files (issue 11, item 7) --------------------------------------------------------------------------------
+# -- model files ---------------------------------------------------------------------------------------------------
 
 def _edit(old: str, new: str, text: str = MODEL) -> str:
     assert text.count(old) == 1, old

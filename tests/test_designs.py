@@ -1,4 +1,4 @@
-"""Batched designs (issue 14, item 4): ``Mechanism.sweep_designs`` against one ``solve`` sweep per design.
+"""Batched designs: ``Mechanism.sweep_designs`` against one ``solve`` sweep per design.
 
 The reference for every design is the engine's single sweep (``prepare`` + ``run``: the same arrays ``solve``
 returns, or the status of every position where it would raise); the reductions are checked against NumPy on

@@ -1,4 +1,4 @@
-"""Force elements inside the compiled kinetostatics (issue 12, item 1): springs, dampers, torsion springs.
+"""Force elements inside the compiled kinetostatics: springs, dampers, torsion springs.
 
 Independent references written here: a sprung and damped crank's driving torque by virtual work and its spring
 and damper forces from the closed form of the length; a zero frame force on massless parts (what the frame puts

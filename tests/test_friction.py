@@ -1,4 +1,4 @@
-"""Coulomb friction solved with the kinetostatics (issue 12, item 4).
+"""Coulomb friction solved with the kinetostatics.
 
 References written here: a massless crank-slider with friction only at its guide and a load on the slider,
 solved by hand (the rod a two-force member: S = P / (e_x + μ·sign(P)·|e_y|·sign(v)), N = S·e_y, T = −B × S·e);

@@ -1,4 +1,4 @@
-"""Handles (issue 9, items 2 and 6): Mechanism, Motion, ForceAnalysis, Machine and MachineAnalysis pickle and
+"""Handles: Mechanism, Motion, ForceAnalysis, Machine and MachineAnalysis pickle and
 cross processes bit for bit; one Mechanism is swept from many threads at once; ``out=`` reuses a result's
 arrays and nothing else; the user-mechanism cache survives two processes building at once and a corrupted
 shared object.
@@ -360,7 +360,7 @@ def _race(cache: str, spec: str, prebuilt: str, barrier, queue) -> None:
 
 
 def test_processes_loading_one_new_mechanism_at_once_all_succeed(declaration, tmp_path):
-    """Issue 11 item 1: two and four processes load the same new user mechanism at once, 20 trials each, every
+    """Two and four processes load the same new user mechanism at once, 20 trials each, every
     trial in an empty cache: every process succeeds (no crash, no error), one entry is built, all load the same
     module and agree bit for bit. Affordable in CI: the derivation is done once here, the processes are forked
     from this one (no interpreter start) and start loading together (a barrier); the first trial compiles for

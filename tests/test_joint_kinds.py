@@ -1,4 +1,4 @@
-"""One place per joint kind (issue 9, item 8): every joint kind's closure equations, reaction unknowns, force
+"""One place per joint kind: every joint kind's closure equations, reaction unknowns, force
 rows, dyad part and drawing live in its class in sewgen.derive.joints; the rest of the derivation asks the
 registry. A kind registered there and nowhere else must flow through kinematics, kinetostatics and drawing."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Whole-machine balancing (issue 16): seed 000 part 2's three methods on counterweight planes of the upper shaft.
+"""Whole-machine balancing: seed 000 part 2's three methods on counterweight planes of the upper shaft.
 
 Independent references: seed 002's optimum through `sewgen balance needle-bar` (method 1 on a lone crank-slider);
 the textbook primary balance of a crank-slider and its second order m_C r ω² (λ + λ³/4 + 15λ⁵/128) (method 2); a

@@ -1,4 +1,4 @@
-"""Coulomb friction in a whole machine (issue 12, item 4): the catalog's joints and the upper shaft's bearings.
+"""Coulomb friction in a whole machine: the catalog's joints and the upper shaft's bearings.
 
 References written here: the bearing friction torque as the friction circle μ·r·(|R_A| + |R_B|) from the
 bearing loads the analysis reports; the no-load torque against the mean friction power of the unloaded

@@ -382,7 +382,7 @@ def test_a_results_folder_named_like_a_builtin_model_does_not_shadow_it(tmp_path
     assert resolve("jb1-3") == MODELS_DIR / "jb1-3.toml"
 
 
-# -- names, signs, encodings, geometry (issue 11, item 7) ----------------------------------------------------------
+# -- names, signs, encodings, geometry -----------------------------------------------------------------------------
 
 @pytest.mark.parametrize("old, new, key, must", [
     ("[groups.needle_bar]", "[groups.machine]", "groups.machine", ["reserved"]),

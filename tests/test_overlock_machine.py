@@ -169,7 +169,7 @@ def test_regulator_sets_the_stitch(machine):
 # -- planar equivalents -----------------------------------------------------------------------------------------
 
 #: Largest difference planar − spatial over a turn, relative to the spatial motion's range, by mechanism and
-#: quantity (measured on the catalog's dimensions and on the 51-A's loopers; README "planar equivalents").
+#: quantity (measured on the catalog's dimensions and on the 51-A's loopers; docs/explanation/seeds.md, seed 003).
 PLANAR_CATALOG = {("overlock_needle", "rocker"): 0.0066, ("overlock_needle", "needle_eye"): 0.0065,
                   ("overlock_loopers", "rocker"): 0.0056, ("overlock_loopers", "upper_looper_tip"): 0.0058,
                   ("overlock_loopers", "lower_looper_tip"): 0.0087}

@@ -1,4 +1,4 @@
-"""The benchmark's peers (issue 14, item 6) compute what sewgen computes: the closed-form loop a numba user writes
+"""The benchmark's peers compute what sewgen computes: the closed-form loop a numba user writes
 (peers.take_up_kernel, run here as plain Python, and compiled where numba is installed), the NumPy closed
 form of the bench, and pylinkage's components where pylinkage is installed — every output against sewgen's
 solve() over more than a turn, at another crank length, speed and a shaft acceleration."""

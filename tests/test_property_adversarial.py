@@ -1,4 +1,4 @@
-"""The adversarial suite at a CI size (issue 11): random designs of every catalog mechanism and of user
+"""The adversarial suite at a CI size: random designs of every catalog mechanism and of user
 four-bars, crank-sliders and Stephenson six-bars, each swept at random shaft angles (a dense revolution, a few
 coarse angles, a shuffled or repeated set), speed and shaft acceleration, on a random branch, by the closed
 form and by Newton, against independent closed forms (fuzz: plain complex-number geometry, dyad by

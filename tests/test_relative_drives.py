@@ -1,4 +1,4 @@
-"""Relative drives and speed ratios (issue 12, item 2): a driven or held body may turn about a pin on a moving
+"""Relative drives and speed ratios: a driven or held body may turn about a pin on a moving
 body, relative to it; a shaft-driven body may turn at a ratio of the shaft speed.
 
 The references are written here: a two-link arm whose forearm is driven at the elbow (θ2 = θ1 + 2φ + 30°)

@@ -1,4 +1,4 @@
-"""Issue 11 (trustworthy on any input): each defect the adversarial campaign found, as a regression test.
+"""Trustworthy on any input: each defect the adversarial campaign found, as a regression test.
 
 Branch identity on the Newton path (two dyads flipping together, coarse and unsorted angles), honest singular
 positions (an error estimate, change points named), per-loop Newton tolerance, array sizes checked before C
@@ -32,7 +32,7 @@ def _same_motion(a, b, rtol=1e-9):
         assert np.all(np.abs(x - y) <= rtol * scale)
 
 
-# -- item 2: branch identity ---------------------------------------------------------------------------------
+# -- branch identity -----------------------------------------------------------------------------------------
 
 def test_hook_drive_newton_in_60_degree_steps_keeps_its_branch():
     hd = sewgen.mechanism("hook_drive")
@@ -94,7 +94,7 @@ def test_newton_follows_the_declared_branch_where_the_closed_form_starts_elsewhe
                      four_bar.solve(ok, params=p, branch={"C": sigma}))
 
 
-# -- item 4: singular positions ------------------------------------------------------------------------------
+# -- singular positions --------------------------------------------------------------------------------------
 
 def test_near_dead_centre_needle_bar_is_singular_with_its_estimate():
     nb = sewgen.mechanism("needle_bar")
@@ -134,7 +134,7 @@ def test_dead_centre_of_a_crank_that_cannot_turn(four_bar):
         assert "dead centre" in str(exc.value)
 
 
-# -- item 5: Newton's tolerance from each loop's own size ----------------------------------------------------
+# -- Newton's tolerance from each loop's own size ------------------------------------------------------------
 
 @pytest.mark.parametrize("scale", [1e-3, 1e-6, 1e-9])
 def test_newton_is_as_exact_as_the_closed_form_on_tiny_loops(four_bar, scale):
@@ -145,7 +145,7 @@ def test_newton_is_as_exact_as_the_closed_form_on_tiny_loops(four_bar, scale):
     assert np.max(np.abs(newton.obs - closed.obs) / np.maximum(np.abs(closed.obs).max(axis=0), 1e-300)) < 1e-11
 
 
-# -- item 3: sizes checked before C reads them ---------------------------------------------------------------
+# -- sizes checked before C reads them -----------------------------------------------------------------------
 
 def test_force_matrix_checks_every_size():
     fd, nb = sewgen.mechanism("feed"), sewgen.mechanism("needle_bar")
@@ -171,7 +171,7 @@ def test_force_matrix_checks_every_size():
         fd.residual(np.zeros(2), 0.0)
 
 
-# -- item 8: API ---------------------------------------------------------------------------------------------
+# -- API -----------------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("kwargs, error, parameter", [
     (dict(max_iter=10 ** 12), sewgen.ParameterError, "max_iter"),
@@ -222,10 +222,10 @@ def test_take_up_thread_eye_triangle():
     assert e.value.parameter == "lever_be, lever_ce"
 
 
-# -- item 9: the intended assembly does not exist --------------------------------------------------------------
+# -- the intended assembly does not exist ----------------------------------------------------------------------
 
 def test_feed_design_with_only_another_assembly_mode_says_so():
-    """A feed design (found by a random search on the JB1-3 feed of issue 13) reports 'cannot assemble' from
+    """A feed design (found by a random search on the JB1-3 feed) reports 'cannot assemble' from
     140° on while an assembly exists there: the feed rock shaft turned over (another assembly mode). The error
     says so and where; started there, it solves."""
     fd = sewgen.mechanism("feed")

@@ -1,4 +1,4 @@
-"""The spatial crank–rocker (RSSR) of seed 003 (issue 12, item 3): a crank on an axis in space drives, through a
+"""The spatial crank–rocker (RSSR) of seed 003: a crank on an axis in space drives, through a
 rod with ball joints at both ends, a rocker pinned in the mechanism's plane.
 
 Independent references written here: the rocker angle by seed 003 eq. 1,

@@ -1,4 +1,4 @@
-"""Observables computed only when asked (issue 14, item 3): a design sweep or ``solve(outputs=...)`` that keeps a
+"""Observables computed only when asked: a design sweep or ``solve(outputs=...)`` that keeps a
 few columns runs the ``rates`` kernel (q', q'', the condition estimate) and the ``observe`` groups its columns
 need, instead of the joint ``motion`` kernel, in every loop (generic, inlined scalar, SIMD). The selected columns must equal
 the full sweep's exactly, with the same statuses and failing angles, on every catalog mechanism and on a user

@@ -1,4 +1,4 @@
-"""The SIMD closed-form loop (issue 14, item 2; csrc/sg_simd.h) against the scalar loop.
+"""The SIMD closed-form loop (csrc/sg_simd.h) against the scalar loop.
 
 Both loops run the same sweep through ``Sweep.use_loop``: every catalog mechanism with a closed form and a user
 mechanism (examples/my_mechanism.py), with unsorted and repeated angles, NaN inputs in the middle of a block,

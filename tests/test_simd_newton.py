@@ -1,4 +1,4 @@
-"""The SIMD Newton and SIMD finish of a mechanism Newton solves (issue 14, item 2; csrc/sg_simd.h
+"""The SIMD Newton and SIMD finish of a mechanism Newton solves (csrc/sg_simd.h
 SG_SIMD_NEWTON_BODY and SG_SIMD_FINISH_BODY) against the scalar loop.
 
 Both loops solve fine sweeps in blocks of eight positions predicted from the same five newest states (csrc/

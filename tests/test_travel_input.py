@@ -1,4 +1,4 @@
-"""A held travel input (issue 12, item 2: the relative travel of a prismatic as an input).
+"""A held travel input (the relative travel of a prismatic as an input).
 
 The mechanism: a crank whose radius is set by a block held at travel r along the crank's arm (an adjustable
 eccentric, as a stitch regulator sets a feed stroke), a rod of length L to a piston on the vertical through

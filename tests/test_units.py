@@ -1,4 +1,4 @@
-"""sewgen.units: strict quantity strings (issue 11, item 6), sweeps of one revolution, display units."""
+"""sewgen.units: strict quantity strings, sweeps of one revolution, display units."""
 from __future__ import annotations
 
 import math

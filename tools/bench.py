@@ -323,7 +323,7 @@ def kinematics(name: str, cfg: Config) -> Result:
     t_overhead = best_time(lambda: m.solve(phi[:1]), cfg.repeats, cfg.min_time)
     one, params = phi[:1], {m.param_names[0]: m.defaults()[m.param_names[0]]}
     t_overhead_params = best_time(lambda: m.solve(one, params=params), cfg.repeats, cfg.min_time)
-    zero = np.zeros(1)  # an array accel: the general path (prepare, run, check), what every call took before
+    zero = np.zeros(1)  # an array accel: the general path (prepare, run, check), which the lean path skips
     t_general = best_time(lambda: m.solve(one, accel=zero), cfg.repeats, cfg.min_time)
     raw, sw = raw_sweep(m, phi)
     t_raw = best_time(raw, cfg.repeats, cfg.min_time)
@@ -518,7 +518,7 @@ def table(rows: list[dict]) -> str:
                                                   f"MISMATCH {x['max_rel_diff']:.1e} ({x['worst']})")
             if "sewgen_over_peer" in x:  # a peer: sewgen's rate on the same outputs over the peer's, same run
                 check += f"; sewgen {x['sewgen_over_peer']:.2f}x this"
-            if "target_selected_positions_per_s" in x:  # issue 14: coordinates and one point, the target rate
+            if "target_selected_positions_per_s" in x:  # coordinates and one point, against the target rate
                 sel, want = x["sewgen_selected_positions_per_s"], x["target_selected_positions_per_s"]
                 check += (f"; coords + thread eye {_si(sel)}/s ({'ok' if sel >= want else 'MISSES'} "
                           f">= {_si(want)})")
@@ -548,8 +548,8 @@ def _machine_entry(positions: int, target_ms: float):
     return run
 
 
-register_entry("jb1-3", "machine@72", _machine_entry(72, 0.3))  # issue 14: < 0.3 ms
-register_entry("jb1-3", "machine@3600", _machine_entry(3600, 3.0))  # issue 14: < 3 ms
+register_entry("jb1-3", "machine@72", _machine_entry(72, 0.3))  # the target: < 0.3 ms
+register_entry("jb1-3", "machine@3600", _machine_entry(3600, 3.0))  # the target: < 3 ms
 
 
 def _wall_entry(args: list[str], target_ms: float, repeats: int | None = None):
@@ -573,7 +573,7 @@ def _wall_entry(args: list[str], target_ms: float, repeats: int | None = None):
 
 def _four_bar(spring: bool):
     """A crank-rocker with masses (a user mechanism, compiled once into the cache), with or without a spring from
-    its coupler to the frame: the force-element row of issue 12."""
+    its coupler to the frame: the force-element rows of the benchmark."""
     from sewgen.derive.model import Mechanism
 
     def declare():
@@ -819,7 +819,7 @@ register_entry("cli", "timing", _wall_entry(["-m", "sewgen", "timing", "jb1-3"],
 
 
 
-# -- peers (issue 14, item 6) and batched designs -------------------------------------------------------------
+# -- peers and batched designs --------------------------------------------------------------------------------
 
 
 def take_up_numpy(phi, omega, alpha, p: dict) -> dict:
@@ -999,8 +999,8 @@ register_entry("take_up", "designs", _designs_entry)
 
 def _feed_designs_entry(cfg: Config) -> Result:
     """5000 JB1-3 feed designs (every parameter scaled by 1 + 1e-4 noise) × 72 angles (5°), a Newton mechanism,
-    keeping the feed dog's x and y only (issue 14, item 3: the rates kernel and the feed dog's group of
-    observables, not the joint motion kernel), on one thread; the baseline: the same designs with every column
+    keeping the feed dog's x and y only (so the rates kernel and the feed dog's group of
+    observables run, not the joint motion kernel), on one thread; the baseline: the same designs with every column
     (the joint kernel) in the same run, checked equal to the bit on the kept columns."""
     m = sewgen.mechanism("feed")
     phi = sewgen.shaft_angles(5)

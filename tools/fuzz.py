@@ -298,7 +298,7 @@ def feed_positions(p, held, phi, start):
         _, P, thf, Q, m_fork = g(beta, thc)
         h = 1e-6
         slope = (g(beta + h, thc)[0] - g(beta - h, thc)[0]) / (2 * h) / p["feed_arm_p"]
-        # the lift (seed 001's chain, issue 13): hook crank B, big rod B-C, rock shaft O4-C (a triangle); the lift
+        # the lift (seed 001's chain): hook crank B, big rod B-C, rock shaft O4-C (a triangle); the lift
         # cam D on the rock shaft runs in the lift crank's fork, a line through O_lift at lift_fork_angle from its
         # roller arm O_lift-L
         B = p["hook_crank"] * np.exp(1j * (ph + p["hook_crank.phase"]))

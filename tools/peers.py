@@ -1,4 +1,4 @@
-"""Peers of the benchmark (issue 14, item 6): the take_up four-bar as other tools compute it, each checked against
+"""Peers of the benchmark: the take_up four-bar as other tools compute it, each checked against
 sewgen before ``python tools/bench.py --peers`` times it.
 
 * :func:`take_up_kernel` — the closed form a numba user writes: one loop over the shaft angles filling every

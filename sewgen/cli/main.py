@@ -355,7 +355,7 @@ def cmd_analyze(args, con: Console) -> int:
             if args.process_ends:
                 # what is alive now (the modules, matplotlib's among them, and the analysis) lives until the
                 # process ends with this command, so the collector skips it from here on — in the collections
-                # that drawing triggers (in both processes) and in the one at exit (0.3-0.4 s on JB1-3 before).
+                # that drawing triggers (in both processes) and in the one at exit.
                 # Not when called in-process (main(argv)): garbage waiting for a collection would stay for good.
                 gc.freeze()
             plots = start_all(analysis, tmp, progress=con.progress, gif=not args.no_gif, curves=analysis.refined())

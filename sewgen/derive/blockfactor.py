@@ -1,5 +1,4 @@
-"""Φ_q factored block by block, as C lines of the motion and rates kernels, their SIMD twins and Newton's LU
-(issue 14).
+"""Φ_q factored block by block, as C lines of the motion and rates kernels, their SIMD twins and Newton's LU.
 
 Φ_q is block lower triangular in the loops' solving order (:func:`sewgen.derive.branches.blocks`: each loop reads
 the coordinates of its own and of earlier loops). A mechanism that Newton solves (no closed form) factors each

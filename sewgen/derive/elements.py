@@ -1,12 +1,12 @@
 """Force elements: springs, dampers and torsion springs, computed inside the compiled kinetostatics from the
-positions and velocities of the points they join (issue 12, item 1).
+positions and velocities of the points they join.
 
 An element is not a constraint: it adds no unknown and no closure equation. It puts known forces on the bodies
 it joins — into b of A f = b (seed 000 §二(三): the external forces on each body's right-hand side) — and adds
 its own results (force, length, energy or power). One class per element kind, as :mod:`derive.joints` does for
 joints; :data:`ELEMENTS` is the registry.
 
-Conventions (stated in the manifest and the README):
+Conventions (stated in the manifest and in docs/explanation/conventions.md):
 
 * a **spring** or **damper** between point ``a`` and point ``b``: its force is a *tension* (positive when it
   pulls the points together); spring F = preload + k·(L − L0), damper F = c·dL/dt;

@@ -123,7 +123,7 @@ class JointKind:
     def anchors(self, kin, joint: Joint) -> list[Anchor]:
         return []
 
-    # -- Coulomb friction (issue 12, item 4) ----------------------------------------------------------------
+    # -- Coulomb friction -----------------------------------------------------------------------------------
     has_friction = False
     friction_unit = ""
 

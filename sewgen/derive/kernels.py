@@ -323,7 +323,7 @@ class KernelSet:
         return [(t, e) for t, e in repl if t in need]
 
     def rates(self, scales: list | None = None, vector: bool = False) -> Kernel:
-        """q', q'' and the condition estimate of the motion kernel without its observables (issue 14, item 3: a
+        """q', q'' and the condition estimate of the motion kernel without its observables (so that a
         sweep that keeps a few outputs computes only their groups, kernel ``observe``). The same temporaries
         and LU as :meth:`motion`, those the observables alone read left out: q', q'', cond equal the motion
         kernel's to the bit, and the status too but for a non-finite observable (``observe`` tests those).

@@ -1,4 +1,4 @@
-"""Many designs of one mechanism over the same shaft angles in one C call per chunk (issue 14, item 4).
+"""Many designs of one mechanism over the same shaft angles in one C call per chunk.
 
 :meth:`sewgen.Mechanism.sweep_designs` is the entry: a table of designs (rows) by parameters (columns) is
 converted to SI once per column, checked column-wise (a design out of range is skipped, named, and the others

@@ -131,7 +131,7 @@ class Mechanism:
                                    pointer(ffi, "double *", defaults["guess"]), fields["_default_options"][(False, False)],
                                    *fields["_angle"][1:])
         # C pointers of the read-only defaults, and the converted parameter vectors of recent params= dicts: the
-        # per-call cost of solve() (issue 14, item 5). Caches, not state: a hit gives what a miss computes.
+        # per-call cost of solve(). Caches, not state: a hit gives what a miss computes.
         fields["_fast"] = {k: pointer(ffi, "int *" if k == "branch" else "double *", defaults[k])
                            for k in ("p", "held", "branch", "guess")}
         sizes = desc.sizes
@@ -435,7 +435,7 @@ class Mechanism:
         returned in the caller's order. A position whose velocities and accelerations would carry an estimated
         relative error above 1e-8 (near a toggle, dead centre or change point) raises
         :class:`~sewgen.errors.SingularPositionError`; ``singular="flag"`` keeps it instead, with
-        ``Motion.error_estimate`` and ``Motion.singular`` saying which (README "Robustness").
+        ``Motion.error_estimate`` and ``Motion.singular`` saying which (docs/explanation/runtime.md, "Robustness").
 
         ``out``: a previous result (:class:`Motion` or :class:`ForceAnalysis`) or a dict of arrays (``q``, ``qd``,
         ``qdd``, ``obs``) to write into instead of fresh arrays — in a loop of equal sweeps this spares the
@@ -831,7 +831,7 @@ class Sweep:
 
 def continuous_angles(desc, q: np.ndarray, obs: np.ndarray, order=None) -> None:
     """Every angle result (angle coordinates, body angles) continuous along the sweep, in place: no 2π jumps
-    (a closed-form dyad's atan2 wraps at ±180°), the first position in (−π, π] (issue 12, item 5). Along the
+    (a closed-form dyad's atan2 wraps at ±180°), the first position in (−π, π]. Along the
     shaft angles in sorted order (``order``, the permutation the sweep was solved in; None: as given). Only
     angles change, by whole turns, so every sine and cosine — and every result computed from them — stays the
     same; sweeps that start elsewhere or sample sparsely may differ from each other by whole turns."""

@@ -65,7 +65,7 @@ class Motion:
     def of_block(cls, mechanism, blk: np.ndarray, n: int, nq: int, nobs: int, singular_tol: float) -> "Motion":
         """A Motion over one buffer in sg_solve_lean's layout (csrc/sg_runtime.c: phi, omega, alpha, the error
         estimate, then q, qd, qdd and obs by rows), its arrays made as views at the first look at any of them:
-        a solve() whose result is read in part, or not at once, does not pay for eight views (issue 14, item 5)."""
+        a solve() whose result is read in part, or not at once, does not pay for eight views."""
         self = object.__new__(cls)
         self.__dict__.update(mechanism=mechanism, singular_tol=singular_tol, _lean=(blk, n, nq, nobs))
         return self

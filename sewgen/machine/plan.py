@@ -1,6 +1,6 @@
 """The call plan of a machine analysis: what :meth:`sewgen.machine.Machine.analyze` needs that depends on the
-machine alone, made once per machine state, and the lean per-call path that uses it (issue 14: the JB1-3
-machine at 72 positions in < 0.3 ms).
+machine alone, made once per machine state, and the lean per-call path that uses it (so that a small analysis,
+the JB1-3 machine at 72 positions, pays no conversion or check twice).
 
 A plan holds, per group, the C-ready vectors of its run (SI parameters, held inputs, branches, gravity, Newton
 options: harvested from one :meth:`Mechanism.prepare` of the group, so every conversion and check is the

@@ -39,8 +39,8 @@ from sewgen.roles import FEED_DOG, KNIFE_EDGE, LOWER_KNIFE_EDGE, STITCH_REGULATO
 from sewgen.machine.parts import role_param
 from sewgen.units import DisplayUnits
 
-#: What the numbers of summary.json mean: frame, angles, signs (the same words as the README's "Units and
-#: conventions").
+#: What the numbers of summary.json mean: frame, angles, signs (the same words as
+#: docs/explanation/conventions.md).
 CONVENTIONS = {
     "frame": "x horizontal across the upper shaft (+ = the feed direction), y up, origin on the upper-shaft axis; "
              "z along the upper shaft from the front bearing towards the hand wheel; a group with frame = \"along\" "

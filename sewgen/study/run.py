@@ -99,7 +99,7 @@ def dask_client(spec):
 
         # Dask's nanny starts workers with MALLOC_TRIM_THRESHOLD_=65536, which turns glibc's adaptive mmap
         # threshold off: every NumPy temporary above 128 KiB is then mapped and unmapped afresh (twice the page
-        # faults, 20-40 % more CPU for a study's chunk; BENCHMARKS.md). A study's workers run without it.
+        # faults, and markedly more CPU for a study's chunk). A study's workers run without it.
         with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
         return Client(cluster), True
@@ -243,7 +243,7 @@ def run_designs(machine, keys, values=None, options: StudyOptions | None = None,
 
 # -- influence ------------------------------------------------------------------------------------------------
 
-#: The finite-difference scheme of the sensitivities (README "Design studies").
+#: The finite-difference scheme of the sensitivities (docs/how-to/design-studies.md, "Influence").
 FD_SCHEME = "central difference (f(x+δ) − f(x−δ)) / 2δ at the nominal, δ = 1e-4 × |nominal| (1e-4 × the range if the nominal is 0)"
 FD_RELATIVE = 1e-4
 
