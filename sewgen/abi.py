@@ -200,7 +200,7 @@ HOOKS = {
                          ("const unsigned char *", "want"), ("const double *", "trig"),
                          ("struct sg_columns *", "cols")),
               "the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not "
-              "NULL) kinetostatics as sg_sweep_forces; want (NULL: every observable) flags the ngroup groups of "
+              "NULL) kinetostatics as sg_sweep with gravity; want (NULL: every observable) flags the ngroup groups of "
               "observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the "
               "caller reads the coordinates (want[ngroup]); trig (NULL: computed) the shaft angles' cos (n) then sin "
               "(n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); cols (NULL: "

@@ -15,7 +15,7 @@ like with like. The "derive" line times derive.emit.generate for the whole catal
 
 The "kinetostatics" kernel times ``Mechanism.kinetostatics`` (kinematics plus every force: joint reactions,
 driving torques, the frame's force and moment on the parts, energies and powers; default gravity, no loads) over
-the same sweep, and the same call through ``sg_sweep_forces`` alone (raw C). Its baseline is the kinematics baseline
+the same sweep, and the same call through ``sg_sweep`` alone (raw C, forces on). Its baseline is the kinematics baseline
 above plus, per position, the force balance A f = b of derive.kinetostatics solved by numpy.linalg.solve.
 A and b are lambdified as derive writes them, with the placeholder symbols of the kinematic observables,
 and are fed the observables the kinematics baseline has just evaluated at that position: that is how the
@@ -367,7 +367,7 @@ GRAVITY = (0.0, -9.80665)
 
 @register_kernel("kinetostatics")
 def kinetostatics(name: str, cfg: Config) -> Result:
-    """kinetostatics() over the sweep; raw sg_sweep_forces; kinematics + A f = b baseline on a subset, checked."""
+    """kinetostatics() over the sweep; raw sg_sweep with forces; kinematics + A f = b baseline on a subset, checked."""
     m = sewgen.mechanism(name)
     phi = cfg.sweep_angles()
     n = len(phi)
@@ -382,7 +382,7 @@ def kinetostatics(name: str, cfg: Config) -> Result:
     continuous_angles(m.description, sw.q, sw.obs, sw.order)  # what kinetostatics() adds after the C call
     if np.any(sw.status) or not all(np.array_equal(a, b) for a, b in (
             (sw.q, mo.q), (sw.qd, mo.qd), (sw.qdd, mo.qdd), (sw.obs, mo.obs), (sw.frc, fa.frc))):
-        raise RuntimeError(f"{name}: the raw sg_sweep_forces call disagrees with kinetostatics()")
+        raise RuntimeError(f"{name}: the raw sg_sweep call (forces) disagrees with kinetostatics()")
 
     rows = cfg.baseline_rows()
     bl = Baseline(name, forces=True)
