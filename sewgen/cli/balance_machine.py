@@ -16,6 +16,7 @@ import numpy as np
 
 from sewgen.errors import SewgenError
 from sewgen.units import UnitError, to_si
+from sewgen.engine.results import write_csv
 
 SPEEDS_HELP = "speeds to evaluate at, e.g. \"600 rpm,900 rpm,1200 rpm,1500 rpm\" (default: 60 %%, 100 %%, 150 %% of rated)"
 
@@ -120,8 +121,6 @@ def _print(r: dict) -> None:
 
 
 def _write(folder: Path, report, result: dict) -> None:
-    from sewgen.engine.results import write_csv
-
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "balance.json").write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
     cols = {"phi [deg]": np.degrees(report.before.phi)}

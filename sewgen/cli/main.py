@@ -27,6 +27,7 @@ from sewgen.errors import SewgenError
 from sewgen.version import version
 from sewgen.machine.modelfile import declaration_problem
 from sewgen.units import DisplayUnits, UnitError, steps_per_turn
+from sewgen.engine.loads import Load
 
 class _Parser(argparse.ArgumentParser):
     """argparse with its usage errors on one line (no usage block), exit status 2."""
@@ -254,8 +255,6 @@ def cmd_kinematics(args, con: Console) -> int:
 
 def _load(text: str, m):
     """ "AT fx=.. fy=.. torque=.. from=.. to=.." -> Load (quantities with units)."""
-    from sewgen.engine.loads import Load
-
     fields = text.split()
     if not fields or "=" in fields[0]:
         raise UsageError("--load", f'"{text}": expected AT fx=.. fy=.. torque=.. from=.. to=.., e.g. '

@@ -38,6 +38,10 @@ from sewgen.machine import shaking
 from sewgen.roles import FEED_DOG, KNIFE_EDGE, LOWER_KNIFE_EDGE, STITCH_REGULATOR
 from sewgen.machine.parts import role_param
 from sewgen.units import DisplayUnits
+from sewgen.machine.modelfile import is_builtin
+from sewgen.machine.feed_indices import machine_indices
+from sewgen.machine.timing import timing
+from sewgen.engine.results import write_csv as _write
 
 #: What the numbers of summary.json mean: frame, angles, signs (the same words as
 #: docs/explanation/conventions.md).
@@ -124,8 +128,6 @@ def _stat(values: np.ndarray, phi: np.ndarray, unit: str) -> dict:
 def model_path(source: str, start=None) -> str:
     """The model file as summary.json names it: ``<sewgen>/models/NAME.toml`` for a built-in model, else the
     path relative to ``start`` (default: the working directory)."""
-    from sewgen.machine.modelfile import is_builtin
-
     if not source:
         return ""
     if is_builtin(source):
@@ -163,8 +165,6 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
     }
     if m.stitch is not None:
         timing = timing or timing_of(a)
-    from sewgen.machine.feed_indices import machine_indices
-
     indices = machine_indices(m, timing, switches=switches)  # seed 001 §五.3, on the timing sweep
     for g in m.groups:
         fa = a.groups[g.name]
@@ -220,8 +220,6 @@ def friction_summary(a) -> dict:
 
 def timing_of(a):
     """The stitch-formation timing (sewgen.machine.timing.Timing) of analysis ``a``'s machine at the analysis' speed."""
-    from sewgen.machine.timing import timing
-
     return timing(a.machine, speed=float(a.omega[0]) or None)  # at rest: the events are positions; eye speeds
     # at the model's speed
 
@@ -239,8 +237,6 @@ def cam_switches(a) -> dict:
 def write_csv(path, cols: dict) -> Path:
     """Columns (name -> array, equal lengths) as a CSV file with a header row, written to a temporary file beside
     ``path`` and renamed into place; returns ``path``."""
-    from sewgen.engine.results import write_csv as _write
-
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
     os.close(fd)

@@ -18,6 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from sewgen.errors import InputError, ParameterError, SewgenError
+from sewgen.engine.results import Motion
+from sewgen.engine.forces import ForceAnalysis
+from sewgen.units import to_si
+from sewgen.engine.designs import output_columns
 
 
 def design_matrix(mech, designs, base: dict | None = None) -> np.ndarray:
@@ -84,8 +88,6 @@ class GroupSweep:
 
     def motion(self, k: int):
         """Design ``k`` as a :class:`sewgen.Motion`."""
-        from sewgen.engine.results import Motion
-
         if self.kept is not None:
             raise ValueError("a sweep of some observables only has no Motion: sweep with every output")
         n = len(self.phi)
@@ -94,8 +96,6 @@ class GroupSweep:
 
     def analysis(self, k: int):
         """Design ``k`` as a :class:`sewgen.ForceAnalysis` (a kinetostatic sweep)."""
-        from sewgen.engine.forces import ForceAnalysis
-
         return ForceAnalysis(self.mechanism, self.motion(k), self.frc[k], self.settings[k])
 
     def to_dataframe(self):
@@ -152,8 +152,6 @@ def _omega(mech, speed) -> float:
     """The sweep's constant shaft speed (rad/s): ``speed`` (a number or "1000 rpm"), or the mechanism's default."""
     w = mech.default_speed if speed is None else speed
     if isinstance(w, str):
-        from sewgen.units import to_si
-
         w = to_si(w, "speed", "speed")
     return float(w)
 
@@ -167,8 +165,6 @@ def _batched(mech, P, phi, omega: float, held, branch, threads=None, observables
     if observables is None:
         outputs = ["all"]
     else:
-        from sewgen.engine.designs import output_columns
-
         names = output_columns(mech).names
         observables = tuple(int(k) for k in observables)
         outputs = [names[3 * nq + k] for k in observables]

@@ -23,6 +23,10 @@ from sewgen.errors import SewgenError
 from sewgen.roles import FEED_DOG, NEEDLE_POINT, THROAT_PLATE
 from sewgen.study.designs import sweep_group_designs
 from sewgen.study.machine_designs import MachineDesigns, with_params
+from sewgen.machine.cams import arc_switches
+from sewgen.machine.assembly import MachineAnalysis
+from sewgen.machine.timing import timing
+from sewgen.errors import ParameterError
 
 TWO_PI = 2.0 * math.pi
 
@@ -130,8 +134,6 @@ def _exact_jumps(g, sweep, status, error, estimate):
     a cam-arc switch, each switch bracketed and solved at its own shaft angle (sewgen.machine.cams.arc_switches, as
     summary.json's); ``estimate`` where a design failed (its value is NaN then anyway). A switch that cannot be
     solved fails its design (``status``/``error`` updated), the others unaffected."""
-    from sewgen.machine.cams import arc_switches
-
     mech = g.mechanism
     dog = mech.description.role(FEED_DOG).name
     out = np.array(estimate, dtype=float)
@@ -186,9 +188,6 @@ def _baseline(machine, options):
 
 def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=False):
     """Columns (name -> (D,) array or list) for designs that change mechanism parameters only."""
-    from sewgen.machine.assembly import MachineAnalysis
-    from sewgen.machine.timing import timing
-
     phi = options.phi()
     h = float(phi[1] - phi[0])
     w = _speed(machine, options)
@@ -322,8 +321,6 @@ def _evaluate_fast(machine, designs: MachineDesigns, options, base, nominal=Fals
     out = {"status": status, "error": error, "cols": cols}
     if nominal:
         if status[0] != "ok":
-            from sewgen.errors import ParameterError
-
             raise ParameterError(machine.name, "nominal design", error[0])
         out["sweeps"] = sweeps
         out["timing"] = {c: cols[c][0] for c in (HOOK_RISE, HOOK_MARGIN, TAKE_UP, FAILURES, FAILED)

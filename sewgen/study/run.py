@@ -20,6 +20,7 @@ import numpy as np
 from sewgen.errors import SewgenError
 from sewgen.study.evaluate import FAILED, FAILURES, StudyOptions, evaluate_chunk, quantity_columns
 from sewgen.study.machine_designs import DesignKey, MachineDesigns, parse_keys
+from sewgen.units import to_si
 
 #: designs per chunk (one batched evaluation call each): parameter-only designs / designs that reload the model
 CHUNK = 1000  # the batched sweep amortises its calls and threads over a chunk (100: 1.4x slower, 5000: slower again)
@@ -122,8 +123,6 @@ def design_columns(machine, table) -> tuple[list, np.ndarray]:
         factor = 1.0
         if m and m["unit"].strip():
             try:
-                from sewgen.units import to_si
-
                 factor = to_si(f"1 {m['unit'].strip()}", key.kind, str(name))
             except SewgenError as exc:
                 raise StudyError(str(name), exc.problem) from None

@@ -30,6 +30,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag
 from matplotlib.font_manager import findfont
+from sewgen.engine.loader import cache_root
+from sewgen.engine.loader import locked
 
 #: Rendered strings kept (a figure set uses a few hundred distinct ones).
 CACHE_SIZE = 4096
@@ -140,8 +142,6 @@ def _cache_file() -> Path | None:
     import matplotlib
     from matplotlib import ft2font, rcParams
 
-    from sewgen.engine.loader import cache_root
-
     setup = repr((matplotlib.__version__, ft2font.__freetype_version__, getattr(ft2font, "__libraqm_version__", ""),
                   rcParams["text.hinting"], rcParams["text.hinting_factor"], rcParams["text.antialiased"],
                   rcParams["font.family"], rcParams["font.sans-serif"], rcParams["font.monospace"]))
@@ -188,8 +188,6 @@ def save() -> None:
     if (len(_bitmaps), len(_extents)) == _loaded:
         return
     try:
-        from sewgen.engine.loader import locked
-
         path = _cache_file()
         if path is None:
             return

@@ -14,6 +14,9 @@ import numpy as np
 
 from sewgen.roles import FEED_DOG, HOOK_POINT, LOWER_LOOPER_TIP, NEEDLE_EYE, NEEDLE_POINT, THREAD_EYE, UPPER_LOOPER_TIP
 from sewgen.report.plots.common import new_figure, suptitle
+from sewgen.machine.timing import timing
+from sewgen.report.plots.common import DPI
+from sewgen.report.plots.thread import draw_thread_timing, thread_size
 
 ROWS = ("needle", "shuttle", "lower looper", "upper looper", "take-up", "feed dog")
 #: row -> (dark, light, inner) colours
@@ -139,17 +142,12 @@ def _label(ax, p, y, color, size, per_deg):
 
 def draw_cycle(fig, a):
     """The stitch-formation cycle diagram of analysis ``a``'s machine (its timing at the analysis' speed)."""
-    from sewgen.machine.timing import timing
-
     return draw_cycle_timing(fig, timing(a.machine, speed=float(a.omega[0])))
 
 
 def write_timing_plots(tm, folder) -> list:
     """cycle_diagram.png and, with a thread path, thread_control.png of ``tm`` into ``folder``; returns the paths."""
     from pathlib import Path
-
-    from sewgen.report.plots.common import DPI
-    from sewgen.report.plots.thread import draw_thread_timing, thread_size
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)

@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from sewgen.report.plots.common import place, suptitle
+from sewgen.machine.timing import timing
 
 MM = 1e3
 
@@ -88,6 +89,4 @@ def draw_thread_timing(fig, tm):
 
 def draw_thread(fig, a):
     """Thread control of analysis ``a``'s machine (its timing at the analysis' speed)."""
-    from sewgen.machine.timing import timing
-
     draw_thread_timing(fig, timing(a.machine, speed=float(a.omega[0])))
