@@ -17,6 +17,7 @@ from sewgen.errors import SewgenError
 from sewgen.machine.modelfile import ModelFileError, load_toml
 from sewgen.units import MAX_POSITIONS, UnitError, to_si
 
+
 class _Balance:
     """sewgen.machine.balance, imported on first use: it brings SciPy, which no other command should wait for."""
 

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from sewgen.engine.results import write_csv
 from sewgen.errors import SewgenError
 from sewgen.units import UnitError, to_si
-from sewgen.engine.results import write_csv
 
 SPEEDS_HELP = "speeds to evaluate at, e.g. \"600 rpm,900 rpm,1200 rpm,1500 rpm\" (default: 60 %%, 100 %%, 150 %% of rated)"
 

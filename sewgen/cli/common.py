@@ -2,10 +2,18 @@
 command-line quantities (a value with its unit, in SI)."""
 from __future__ import annotations
 
+import difflib
+import math
 import sys
+from pathlib import Path
 
+import numpy as np
+
+from sewgen.engine.loader import catalog, load, mechanism
 from sewgen.errors import SewgenError
-from sewgen.units import UnitError, to_si
+from sewgen.machine.modelfile import declaration_problem
+from sewgen.report.outputs import write_csv
+from sewgen.units import DisplayUnits, UnitError, steps_per_turn, to_si
 
 #: Exit status of a user mistake (a bad option, file or value), as argparse uses for usage errors.
 USAGE = 2
@@ -58,3 +66,140 @@ def quantity(text: str | None, kind: str, option: str, sign: str = ""):
     if sign == "positive" and not value > 0:
         raise UsageError(option, f'must be positive, got "{text}"')
     return value
+
+
+# -- arguments of several commands -------------------------------------------------------------------------------------------------
+
+def display_units(args) -> DisplayUnits:
+    try:
+        return DisplayUnits.parse(getattr(args, "units", None), "--units")
+    except UnitError as exc:
+        raise UsageError("--units", exc.problem) from None
+
+
+def catalog_name(text: str) -> str:
+    """The catalog's spelling of a mechanism name: "take-up" and "take_up" both give "take_up"."""
+
+    names = catalog()
+    for cand in (text, text.replace("-", "_")):
+        if cand in names:
+            return cand
+    close = difflib.get_close_matches(text.replace("-", "_"), names, n=1)
+    hint = f" (did you mean {close[0]}?)" if close else ""
+    raise UsageError("", f"no built-in mechanism {text}{hint}; the catalog has: {', '.join(names)}")
+
+
+def user_file(text: str):
+    """A user's declaration file (--file), loaded; a missing file, a syntax error or an exception inside its
+    ``declare()`` is one line naming the file and the line."""
+
+    path = Path(text)
+    if path.is_dir():
+        raise UsageError("--file", f"{path} is a folder, not a declaration file (.py with a declare())")
+    if not path.is_file():
+        raise UsageError("--file", f"no such file {path}")
+    if path.suffix != ".py":
+        raise UsageError("--file", f"{path} is not a Python file (.py with a declare())")
+    try:
+        return load(path)
+    except SewgenError:
+        raise
+    except Exception as exc:  # SyntaxError (a file that is not UTF-8 too), or raised by the file's declare()
+        problem = declaration_problem(exc, path)
+        if problem is None:  # not raised through the user's file: a bug of sewgen, with its traceback
+            raise
+        raise UsageError("--file", problem) from None
+
+
+def mechanism_of(args):
+
+    if args.file and args.name:
+        raise UsageError("--file", f"give a catalog mechanism ({args.name}) or --file, not both")
+    if args.file:
+        return user_file(args.file)
+    if not args.name:
+        raise UsageError("", f"name a mechanism: one of {', '.join(catalog())} (sewgen list), or --file "
+                             "my_mechanism.py")
+    return mechanism(catalog_name(args.name))
+
+
+def pairs(items: list[str] | None, option: str, example: str) -> list[tuple[str, str]]:
+    out = []
+    for item in items or []:
+        key, sep, val = item.partition("=")
+        if not sep or not key.strip() or not val.strip():
+            raise UsageError(option, f'"{item}" must be NAME=VALUE, e.g. {example}')
+        out.append((key.strip(), val.strip()))
+    return out
+
+
+def params_of(m, items) -> dict:
+    """--param NAME=VALUE pairs, each VALUE a quantity of the parameter's kind (SI dict)."""
+    specs = {p.name: p for p in m.description.params}
+    out = {}
+    for key, val in pairs(items, "--param", 'crank="16.7 mm"'):
+        if key not in specs:
+            raise UsageError("--param", f"{m.name} has no parameter {key}; its parameters: {', '.join(specs)}")
+        out[key] = quantity(val, specs[key].kind, f"--param {key}")
+    return out
+
+
+def branches_of(m, items) -> dict:
+    out = {}
+    for key, val in pairs(items, "--branch", "C=-1"):
+        if key not in m.branch_names:
+            raise UsageError("--branch", f"{m.name} has no branch joint {key}; its branch joints: "
+                                         f"{', '.join(m.branch_names) or 'none'}")
+        if val not in ("1", "+1", "-1"):
+            raise UsageError("--branch", f"{key}={val}: a branch is +1 or -1")
+        out[key] = int(val)
+    return out
+
+
+def sweep_of(args) -> tuple[np.ndarray, float, float]:
+    """(shaft angles, step in deg, start in deg) from --step and --start: the step must divide 360°."""
+    step = quantity(args.step, "angle", "--step")
+    n, problem = steps_per_turn(step)
+    if n is None:
+        raise UsageError("--step", problem)
+    start = quantity(args.start, "angle", "--start")
+    return start + (2 * math.pi / n) * np.arange(n), 360.0 / n, math.degrees(start)
+
+
+def speed_of(args, default: float, whose: str) -> tuple[float | None, str]:
+    """(speed given or None, the words stating the speed used)."""
+    speed = quantity(args.speed, "speed", "--speed", "positive")
+    used = default if speed is None else speed
+    words = f"{used * 30 / math.pi:.6g} rpm"
+    return speed, words + ("" if speed is not None else f" ({whose} default; --speed to change)")
+
+
+def check_file(text: str | None, option: str) -> Path | None:
+    """An output file's path, checked before any work: not a folder, in an existing folder."""
+    if text is None:
+        return None
+    path = Path(text)
+    if not text.strip():
+        raise UsageError(option, "an empty file name")
+    if path.is_dir():
+        raise UsageError(option, f"{path} is a folder: give a file name, e.g. {path / 'results.csv'}")
+    parent = path.absolute().parent
+    if not parent.is_dir():
+        raise UsageError(option, f"cannot write {path}: no folder {parent}")
+    return path
+
+
+def write_table(path: Path, cols: dict, option: str) -> None:
+    try:
+        write_csv(path, cols)
+    except OSError as exc:
+        raise UsageError(option, f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def extreme(values: np.ndarray, phi: np.ndarray, fn) -> str:
+    i = int(fn(values))
+    return f"{values[i]:12.6g} @ {math.degrees(phi[i]) % 360.0:6.1f}°"
+
+
+def rms(v: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(v))))

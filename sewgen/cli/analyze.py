@@ -1,0 +1,72 @@
+"""``sewgen analyze``: a whole machine from its model file, written whole into an output folder (tables,
+summary.json, timing.txt, plots, the GIF)."""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from sewgen.cli.common import Console, UsageError, display_units, quantity
+from sewgen.machine.assembly import load_machine
+from sewgen.report.outputs import check_output_folder, staged_folder, write_tables
+from sewgen.units import steps_per_turn
+
+
+def cmd_analyze(args, con: Console) -> int:
+    units = display_units(args)
+    step = quantity(args.step, "angle", "--step")
+    if step is not None and steps_per_turn(step)[0] is None:
+        raise UsageError("--step", steps_per_turn(step)[1])
+    speed = quantity(args.speed, "speed", "--speed", "positive")
+    if args.out is not None and not args.out.strip():
+        raise UsageError("--out", "an empty folder name")
+    machine = load_machine(args.model)
+    out = check_output_folder(Path(args.out) if args.out is not None else Path(machine.name.lower()), "--out")
+    phi = machine.shaft_angles(step)
+    w = machine.speed if speed is None else speed
+    head = (f"{machine.name}: {len(phi)} positions every {360 / len(phi):g}° at {w * 30 / math.pi:.6g} rpm"
+            + (" (the model's speed; --speed to change)" if speed is None else ""))
+    con.note(f"{head} -> {out}/")
+    with np.errstate(all="ignore"):  # non-finite results are refused by name, not warned about
+        analysis = machine.analyze(phi, speed=speed, progress=con.progress)
+    with np.errstate(all="ignore"), staged_folder(out, "--out") as tmp:
+        plots = None
+        if not args.no_plots:  # the plotting child is forked first: it draws while the tables are written here
+            import gc
+
+            from sewgen.report.plots import import_drawing, start_all
+
+            import_drawing()
+            if args.process_ends:
+                # what is alive now (the modules, matplotlib's among them, and the analysis) lives until the
+                # process ends with this command, so the collector skips it from here on — in the collections
+                # that drawing triggers (in both processes) and in the one at exit.
+                # Not when called in-process (main(argv)): garbage waiting for a collection would stay for good.
+                gc.freeze()
+            plots = start_all(analysis, tmp, progress=con.progress, gif=not args.no_gif, curves=analysis.refined())
+        try:
+            files = write_tables(analysis, tmp, progress=con.progress, units=units)
+            if plots is not None:
+                files += plots.finish()
+        finally:
+            if plots is not None:
+                plots.cancel()
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    con.say(head)
+    con.say(f"power balance residual (relative) {summary['power_balance_residual_relative']:.3g}; "
+            f"drive torque {summary['drive_torque']['min']:.4g} .. {summary['drive_torque']['max']:.4g} N*m "
+            f"(RMS {summary['drive_torque']['rms']:.4g}, {_friction_words(summary['friction'])}); bearings front "
+            f"{summary['bearings']['front']['max']:.4g} N, rear {summary['bearings']['rear']['max']:.4g} N peak; "
+            f"shaking force on the frame {summary['shaking_force_on_frame']['max']:.4g} N peak")
+    for f in files:
+        con.say(f"wrote {out / Path(f).name}")
+    return 0
+
+
+def _friction_words(friction: dict) -> str:
+    if not friction["on"]:
+        return "friction left out"
+    return (f"friction {friction['power']['mean']:.4g} W mean, no-load torque "
+            f"{friction['no_load_torque']['value']:.4g} N*m")
