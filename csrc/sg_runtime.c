@@ -1006,7 +1006,6 @@ static void copy_column(const double *v, size_t step, size_t n, double *dst)
 /* One reduction of one design over its n positions: kind (SG_RED_*), column a, and b >= 0 for the norm
  * sqrt(a² + b²) of two columns (a point's speed or acceleration). *idx: the first position of the extremum
  * (min, max, absmax) in the caller's order, -1 for the others. */
-
 static double reduce_column(const sg_scratch *s, size_t n, int kind, int a, int b, long long *idx)
 {
     double acc = kind == SG_RED_MIN ? INFINITY : (kind == SG_RED_MAX ? -INFINITY : 0.0);

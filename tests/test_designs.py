@@ -17,7 +17,7 @@ import pytest
 import sewgen
 from sewgen.engine.designs import Columns
 from sewgen.errors import ParameterError
-from sewgen.engine.loader import catalog_names
+from sewgen.engine.loader import catalog
 
 pytestmark = [pytest.mark.c, pytest.mark.derive]
 
@@ -89,7 +89,7 @@ def _compare(mech, res, table, phi, held_rows=None, branch_rows=None, newton=Fal
     return failing_in_middle
 
 
-@pytest.mark.parametrize("name", catalog_names())
+@pytest.mark.parametrize("name", catalog())
 def test_every_catalog_mechanism_batched_equals_single_sweeps(name):
     mech = sewgen.mechanism(name)
     table = _vary(mech)
@@ -250,7 +250,7 @@ def test_threads_do_not_change_results():
     assert np.array_equal(a["points.thread_eye.a:max"], b["points.thread_eye.a:max"], equal_nan=True)
 
 
-@pytest.mark.parametrize("name", catalog_names())
+@pytest.mark.parametrize("name", catalog())
 def test_selected_outputs_equal_the_full_sweeps_columns_exactly(name):
     mech = sewgen.mechanism(name)
     cols = Columns(mech.description)
@@ -283,7 +283,7 @@ def test_selected_outputs_raise_as_solve_does():
         tu.solve(PHI, outputs=["nothing"])
 
 
-@pytest.mark.parametrize("name", catalog_names())
+@pytest.mark.parametrize("name", catalog())
 def test_the_lean_selected_path_equals_the_general_one_to_the_bit(name):
     """solve(outputs=...)'s per-call path (cached selection, the thread's scratch) against the general one
     (held={} takes it): the same columns, bit for bit, in sorted, unsorted and shifted angles, with params=."""
@@ -300,7 +300,7 @@ def test_the_lean_selected_path_equals_the_general_one_to_the_bit(name):
                 assert np.array_equal(a.omega, b.omega) and np.array_equal(a.alpha, b.alpha)
 
 
-@pytest.mark.parametrize("name", catalog_names())
+@pytest.mark.parametrize("name", catalog())
 def test_the_lean_solve_path_equals_the_general_one_to_the_bit(name):
     """solve()'s per-call fast path (one buffer, cached parameter vectors, the angles made continuous in C)
     against prepare() + the C call + continuous_angles in Python: the same arrays, bit for bit."""
@@ -321,7 +321,7 @@ def test_the_lean_solve_path_equals_the_general_one_to_the_bit(name):
         m.solve(np.array([0.1, np.nan, 0.3]))
 
 
-@pytest.mark.parametrize("name", catalog_names())
+@pytest.mark.parametrize("name", catalog())
 def test_the_lean_kinetostatics_path_equals_the_general_one_to_the_bit(name):
     """kinetostatics() on the defaults (no loads, default gravity and moment point) takes solve()'s one-call lean
     path with forces: every array and the run settings equal the general path's (held={} forces it) bit for bit,
@@ -414,7 +414,7 @@ def varying_loads(mech):
     return [Load(mech.point_names[0], fx=3.0, fy=-2.0, window=(1.0, 2.5)), Load(body, torque=0.4)]
 
 
-@pytest.mark.parametrize("name", catalog_names())
+@pytest.mark.parametrize("name", catalog())
 def test_the_inlined_sweep_equals_the_generic_loop_to_the_bit(name):
     """sg_<m>_sweep (the kernels inlined into one closed-form loop) against the runtime's generic loop (kernels
     through the descriptor, opt->generic): every output, error estimate and status, with failing positions, a
@@ -462,7 +462,7 @@ def test_a_design_sweep_pickles_and_may_be_empty():
     assert list(pickle.loads(pickle.dumps(sel)).keys()) == list(sel.keys())
 
 
-@pytest.mark.parametrize("name", [n for n in catalog_names() if sewgen.mechanism(n).manifest.get("closed_form")])
+@pytest.mark.parametrize("name", [n for n in catalog() if sewgen.mechanism(n).manifest.get("closed_form")])
 def test_a_batch_equals_its_designs_solved_alone_to_the_bit(name):
     """A batch of designs takes the shaft angles' cos and sin from one table for every design (the SIMD loop's
     own vector math, computed once): each design's columns equal its own solve() bit for bit."""

@@ -1,5 +1,5 @@
-"""The feed-dog trajectory indices (seed 001 §五.3, sewgen.machine.feed_indices) against an independent computation from a
-dense trajectory: 0.01° samples, linear interpolation of the crossings, trapezoids for the integrals."""
+"""The feed-dog trajectory indices (seed 001 §五.3, sewgen.machine.feed_indices) against an independent computation from
+a dense trajectory: 0.01° samples, linear interpolation of the crossings, trapezoids for the integrals."""
 import math
 
 import numpy as np

@@ -15,7 +15,7 @@ import sympy as sp
 
 import sewgen
 from sewgen.engine.designs import Columns
-from sewgen.engine.loader import catalog_names
+from sewgen.engine.loader import catalog
 
 pytestmark = [pytest.mark.c]
 
@@ -66,12 +66,12 @@ def _check_mechanism(mech, newton, loop="auto"):
         assert set(part.outputs) <= set(cols.names)
 
 
-@pytest.mark.parametrize("name", catalog_names())
+@pytest.mark.parametrize("name", catalog())
 def test_selected_groups_equal_the_joint_kernel_to_the_bit(name):
     _check_mechanism(sewgen.mechanism(name), newton=True)
 
 
-CLOSED = [n for n in catalog_names() if sewgen.mechanism(n).manifest.get("closed_form")]
+CLOSED = [n for n in catalog() if sewgen.mechanism(n).manifest.get("closed_form")]
 
 
 @pytest.mark.parametrize("loop", ["auto", "scalar"])

@@ -18,7 +18,7 @@ import pytest
 import sewgen
 from sewgen.engine.build import compile_flags
 from sewgen.errors import ParameterError
-from sewgen.engine.loader import catalog_module, catalog_names
+from sewgen.engine.loader import catalog, catalog_module
 from sewgen.engine.mechanism import Mechanism
 
 pytestmark = [pytest.mark.c, pytest.mark.derive]
@@ -28,7 +28,7 @@ RNG = np.random.default_rng(14)
 #: a revolution at 0.1° (900 blocks of four, 450 of eight), a few unsorted and repeated angles, a short block tail
 PHI = np.concatenate([np.linspace(0.0, 2 * np.pi, 3600, endpoint=False), RNG.uniform(-7, 7, 13), [1.0, 1.0]])
 
-SIMD_CLOSED = [n for n in catalog_names() if sewgen.mechanism(n).closed_form]
+SIMD_CLOSED = [n for n in catalog() if sewgen.mechanism(n).closed_form]
 
 
 def _run_both(mech, phi, nan_at=(), **kw):

@@ -1,4 +1,5 @@
-"""``sewgen balance machine MODEL``: whole-machine balancing by seed 000's three methods (sewgen.machine.machine_balance).
+"""``sewgen balance machine MODEL``: whole-machine balancing by seed 000's three methods
+(sewgen.machine.machine_balance).
 
 Writes into ``--out`` the before/after evaluation (balance.json, bearings.csv, speeds.csv), the bearing-load
 hodographs and the hodograph of the shaking force on the frame before and after (balance.png), and with

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 
 from sewgen.engine.loader import catalog, load, mechanism
+from sewgen.engine.results import write_csv
 from sewgen.errors import SewgenError
 from sewgen.machine.modelfile import declaration_problem
-from sewgen.report.outputs import write_csv
 from sewgen.units import DisplayUnits, UnitError, steps_per_turn, to_si
 
 #: Exit status of a user mistake (a bad option, file or value), as argparse uses for usage errors.
@@ -68,7 +68,7 @@ def quantity(text: str | None, kind: str, option: str, sign: str = ""):
     return value
 
 
-# -- arguments of several commands -------------------------------------------------------------------------------------------------
+# -- arguments of several commands ---------------------------------------------------------------------------
 
 def display_units(args) -> DisplayUnits:
     try:

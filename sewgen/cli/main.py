@@ -11,14 +11,12 @@ otherwise (``--units mm,deg``); every header names its unit.
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import sys
 
 from sewgen.cli import balance as balance_cli
-from sewgen.cli.analyze import cmd_analyze
 from sewgen.cli.common import USAGE, Console
-from sewgen.cli.mechanism import cmd_forces, cmd_kinematics, cmd_list, cmd_params
-from sewgen.cli.timing import cmd_timing
 from sewgen.errors import SewgenError
 from sewgen.version import version
 
@@ -52,6 +50,15 @@ def _common(p) -> None:
     p.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help=QUIET_HELP)
 
 
+def _command(module: str, function: str):
+    """The command ``function`` of ``sewgen.cli.<module>``, imported when it runs: ``sewgen list`` loads no
+    machine layer, and ``--help`` or a usage mistake none of the commands."""
+    def run(args, con: Console) -> int:
+        return getattr(importlib.import_module(f"sewgen.cli.{module}"), function)(args, con)
+
+    return run
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(prog="sewgen", description="Sewing-machine mechanism analysis. Quantities carry their units "
                  '("5 deg", "1000 rpm", "16.7 mm"); results are SI unless --units says otherwise.')
@@ -60,17 +67,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
     p = sub.add_parser("list", help="the built-in mechanisms")
     _common(p)
-    p.set_defaults(fn=cmd_list)
-    for name, fn, text in (("params", cmd_params, "a mechanism's parameters"),
-                           ("kinematics", cmd_kinematics, "positions, velocities, accelerations over a revolution"),
-                           ("forces", cmd_forces,
-                            "joint reactions, driving torque, the frame's force on the parts over a revolution")):
+    p.set_defaults(fn=_command("mechanism", "cmd_list"))
+    for name, text in (("params", "a mechanism's parameters"),
+                       ("kinematics", "positions, velocities, accelerations over a revolution"),
+                       ("forces", "joint reactions, driving torque, the frame's force on the parts over a revolution")):
         p = sub.add_parser(name, help=text, description=text[:1].upper() + text[1:] + ".")
         p.add_argument("name", nargs="?", help="a catalog mechanism (sewgen list; take_up or take-up), or give --file")
         p.add_argument("--file", help="a mechanism of your own: a .py file with declare()")
         p.add_argument("--units", help=UNITS_HELP)
         _common(p)
-        p.set_defaults(fn=fn)
+        p.set_defaults(fn=_command("mechanism", f"cmd_{name}"))
         if name in ("kinematics", "forces"):
             p.add_argument("--speed", help='shaft speed, e.g. "1000 rpm" (default: the mechanism\'s, stated in '
                                            "the output)")
@@ -101,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-plots", action="store_true", help="tables and summary.json only")
     p.add_argument("--no-gif", action="store_true", help="no animation")
     _common(p)
-    p.set_defaults(fn=cmd_analyze)
+    p.set_defaults(fn=_command("analyze", "cmd_analyze"))
     from sewgen.cli import study as study_cli
 
     study_cli.add_parser(sub, _common)
@@ -111,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="the events and checks as JSON (summary.json's timing)")
     p.add_argument("--plots", metavar="DIR", help="also write the cycle diagram and the thread curves into DIR")
     _common(p)
-    p.set_defaults(fn=cmd_timing)
+    p.set_defaults(fn=_command("timing", "cmd_timing"))
     return ap
 
 

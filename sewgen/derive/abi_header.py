@@ -46,7 +46,8 @@ def header() -> str:
     for name, value, doc in abi.LIMITS:
         lines += [_comment(doc), f"#define {name} {value}"]
     lines += ["", "/* Per-design reductions of sg_sweep_designs (sewgen.abi.REDUCTIONS). */", "enum sg_reduction {"]
-    lines += [f"    {name} = {k}{',' if k < len(abi.REDUCTIONS) - 1 else ''}" for k, (name, _) in enumerate(abi.REDUCTIONS)]
+    lines += [f"    {name} = {k}," for k, (name, _) in enumerate(abi.REDUCTIONS)]
+    lines[-1] = lines[-1].rstrip(",")
     lines += ["};", ""]
     lines += _struct("sg_options", abi.OPTIONS) + [""]
     lines += ["/* One sweep's arrays and settings (sewgen.abi.REQUEST): what the sweeping entry points read. */"]

@@ -23,9 +23,8 @@ import math
 import os
 import re
 import threading
-from functools import partial
 from collections.abc import Mapping
-from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 from functools import cached_property
 
 import numpy as np
@@ -513,6 +512,9 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
         for s in spans:
             run(s)
     else:
+        # imported here: concurrent.futures (and the logging it loads) would cost every `import sewgen` 4 ms
+        from concurrent.futures import ThreadPoolExecutor
+
         with ThreadPoolExecutor(max_workers=threads) as pool:
             list(pool.map(run, spans))
     outs = {cols.names[c]: out[k] for k, c in enumerate(sel)}

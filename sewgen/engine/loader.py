@@ -18,7 +18,6 @@ sources the reference carries when the entry is gone.
 from __future__ import annotations
 
 import contextlib
-import threading
 import hashlib
 import importlib.util
 import json
@@ -26,11 +25,12 @@ import os
 import runpy
 import shutil
 import tempfile
+import threading
 import zlib
 from pathlib import Path
 
-from sewgen.errors import BuildError
 from sewgen.engine.mechanism import RESOLVERS, Mechanism, Reference
+from sewgen.errors import BuildError
 
 try:
     import fcntl
@@ -62,7 +62,8 @@ def _runnable_avx512():
 
 def catalog_module():
     """The compiled catalog: sewgen._kernels_avx512 where it is built and this CPU has AVX-512, else
-    sewgen._kernels (sewgen/engine/build.py catalog_levels); or the build named by SEWGEN_KERNELS (CI's sanitizer run)."""
+    sewgen._kernels (sewgen/engine/build.py catalog_levels); or the build named by SEWGEN_KERNELS (CI's sanitizer
+    run)."""
     global _CATALOG
     if _CATALOG is None:
         alt = os.environ.get("SEWGEN_KERNELS")
@@ -80,7 +81,8 @@ def catalog_module():
     return _CATALOG
 
 
-def catalog_names() -> list[str]:
+def catalog() -> list[str]:
+    """Names of the built-in mechanisms."""
     mod = catalog_module()
     return [n[3:-9] for n in dir(mod.lib) if n.startswith("sg_") and n.endswith("_manifest")]
 
@@ -109,8 +111,10 @@ def _declaration(source):
     return decl
 
 
-def load_user(source, *, closed_form: bool = True, cache_dir: Path | None = None) -> Mechanism:
-    """Derive, compile (once) and load a mechanism declared outside the catalog.
+def load(source, *, closed_form: bool = True, cache_dir: Path | None = None) -> Mechanism:
+    """A mechanism declared outside the catalog: a derive.Mechanism, a function returning one, or a .py file with
+    ``declare()``, derived and compiled on first use, then loaded from the cache (``cache_dir``, default
+    :func:`cache_root`).
 
     A declaration *file* already built is loaded without deriving anything (no SymPy): the cache keeps an index
     from the file's text (with the derivation's and the runtime's sources, the flags and ``closed_form``) to
@@ -307,30 +311,19 @@ _MECHANISMS: dict = {}
 _MECHANISMS_LOCK = threading.Lock()  # one Mechanism per catalog name, even when threads ask at once
 
 
-def catalog() -> list[str]:
-    """Names of the built-in mechanisms."""
-    return catalog_names()
-
-
 def mechanism(name: str) -> Mechanism:
     """A built-in mechanism by name (see :func:`catalog`)."""
     mech = _MECHANISMS.get(name)
     if mech is None:
         with _MECHANISMS_LOCK:
             if name not in _MECHANISMS:
-                names = catalog_names()
+                names = catalog()
                 if name not in names:
                     raise KeyError(f"no built-in mechanism {name!r}; the catalog has: {', '.join(names)}")
                 mod = catalog_module()
                 _MECHANISMS[name] = Mechanism(mod.ffi, mod.lib, name)
             mech = _MECHANISMS[name]
     return mech
-
-
-def load(source, *, closed_form: bool = True, cache_dir=None) -> Mechanism:
-    """A mechanism declared outside the catalog: a derive.Mechanism, a function returning one, or a .py file
-    with ``declare()``. Derived and compiled on first use, then loaded from the cache."""
-    return load_user(source, closed_form=closed_form, cache_dir=cache_dir)
 
 
 # -- references (unpickling) ------------------------------------------------------------------------------------

@@ -119,27 +119,20 @@ class Mechanism:
             arr.flags.writeable = False
         fields = dict(
             ffi=ffi, lib=lib, name=name, description=desc, _manifest=manifest,
-            _descriptor=getattr(lib, f"sg_{name}")(), build_info=MappingProxyType(dict(build_info or {})),
+            build_info=MappingProxyType(dict(build_info or {})),
             reference=dataclasses.replace(ref, digest=digest), default_vectors=MappingProxyType(defaults),
             _default_options=MappingProxyType({(newton, keep): self._new_options(ffi, DEFAULT_MAX_ITER, newton, keep)
                                                for newton in (False, True) for keep in (False, True)}))
-        qa, oa = desc.angle_columns
-        angle = (np.array(qa, dtype=np.intc), np.array(oa, dtype=np.intc))
-        fields["_angle"] = (angle, len(qa), pointer(ffi, "int *", angle[0]), len(oa), pointer(ffi, "int *", angle[1]))
-        fields["in_c"] = CDefaults(fields["_descriptor"], pointer(ffi, "double *", defaults["p"]),
-                                   pointer(ffi, "double *", defaults["held"]), pointer(ffi, "int *", defaults["branch"]),
-                                   pointer(ffi, "double *", defaults["guess"]), fields["_default_options"][(False, False)],
-                                   *fields["_angle"][1:])
-        # C pointers of the read-only defaults, and the converted parameter vectors of recent params= dicts: the
-        # per-call cost of solve(). Caches, not state: a hit gives what a miss computes.
-        fields["_fast"] = {k: pointer(ffi, "int *" if k == "branch" else "double *", defaults[k])
-                           for k in ("p", "held", "branch", "guess")}
-        sizes = desc.sizes
-        fields["_fast"]["lean"] = (sizes["nq"], sizes["nobs"], sizes["nfo"], 4 + 3 * sizes["nq"] + sizes["nobs"],
-                                   lib.sg_solve_lean, fields["_descriptor"], fields["_fast"]["held"],
-                                   fields["_fast"]["branch"], fields["_fast"]["guess"],
-                                   fields["_default_options"][(False, False)], *fields["_angle"][1:])
-        fields["_lean_requests"] = threading.local()  # one sg_request per thread, refilled by each lean call
+        qa, oa = (np.array(cols, dtype=np.intc) for cols in desc.angle_columns)
+        vec = {k: pointer(ffi, "int *" if k == "branch" else "double *", v) for k, v in defaults.items()}
+        fields["in_c"] = CDefaults(getattr(lib, f"sg_{name}")(), vec["p"], vec["held"], vec["branch"], vec["guess"],
+                                   fields["_default_options"][(False, False)], len(qa), pointer(ffi, "int *", qa),
+                                   len(oa), pointer(ffi, "int *", oa))
+        # The per-call cost of solve(): one sg_request per thread for the lean path, the converted parameter
+        # vectors of recent params= dicts, kinetostatics()' default settings. Caches, not state: a hit gives what a
+        # miss computes.
+        fields["_lean_requests"] = threading.local()
+        fields["_lean_forces_base"] = []
         fields["_pcache"] = {}
         for key, value in fields.items():
             object.__setattr__(self, key, value)
@@ -178,7 +171,7 @@ class Mechanism:
         built for both and the loader takes the AVX-512 module where the CPU runs it; a user's mechanism is built
         for the running CPU's best (sewgen/engine/build.py; ``SEWGEN_SIMD=avx2`` at build time: AVX2 only). Results
         agree to rounding either way (:meth:`Sweep.use_loop`)."""
-        return int(self.lib.sg_simd_width(self._descriptor))
+        return int(self.lib.sg_simd_width(self.in_c.descriptor))
 
     @property
     def default_speed(self) -> float:
@@ -446,8 +439,8 @@ class Mechanism:
 
         ``outputs``: only these results, each a contiguous array (a :class:`~sewgen.engine.results.Selection`, by column
         name): ``"coords"``, ``"points"``, ``"bodies"``, ``"points:<name>"``, ``"bodies:<name>"``,
-        ``"coords:<name>"`` or single columns such as ``"points.thread_eye.y_dd"`` (names: :mod:`sewgen.engine.designs`);
-        the values are those of the full sweep's columns, bit for bit. ``out`` may then be a previous Selection
+        ``"coords:<name>"`` or single columns such as ``"points.thread_eye.y_dd"`` (names:
+        :mod:`sewgen.engine.designs`); the values are those of the full sweep's columns, bit for bit. ``out`` may then be a previous Selection
         of the same columns and length.
         """
         if (held is None and branch is None and guess is None and out is None
@@ -461,9 +454,9 @@ class Mechanism:
             if motion is not None:
                 return motion
         if outputs is not None:
-            return many_designs.solve_selected(self, outputs, dict(phi=phi, speed=speed, accel=accel, params=params, held=held,
-                                                      branch=branch, guess=guess, degrees=degrees, newton=newton,
-                                                      max_iter=max_iter, singular=singular), out)
+            args = dict(phi=phi, speed=speed, accel=accel, params=params, held=held, branch=branch, guess=guess,
+                        degrees=degrees, newton=newton, max_iter=max_iter, singular=singular)
+            return many_designs.solve_selected(self, outputs, args, out)
         sweep = self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
                              degrees=degrees, newton=newton, max_iter=max_iter, out=out, singular=singular)
         sweep.run()
@@ -474,7 +467,7 @@ class Mechanism:
         """(vector, C pointer) of a params= dict, converted and checked once and then cached by its items (with
         their types: 1 and True are different keys); None where the items are not hashable."""
         if params is None:
-            return self.default_vectors["p"], self._fast["p"]
+            return self.default_vectors["p"], self.in_c.params
         if type(params) is not dict:
             return None
         try:
@@ -506,7 +499,9 @@ class Mechanism:
         got = self.params_in_c(params)
         if got is None:
             return None
-        nq, nobs, nfo, w, solve_lean, desc, held, branch, guess, opt, nqa, qa, noa, oa = self._fast["lean"]
+        sizes, c = self.description.sizes, self.in_c
+        nq, nobs, nfo = sizes["nq"], sizes["nobs"], sizes["nfo"]
+        w = 4 + 3 * nq + nobs  # doubles per position of the block before frc (sg_solve_lean)
         if not phi.flags.c_contiguous:
             phi = np.ascontiguousarray(phi)
         ffi = self.ffi
@@ -516,14 +511,16 @@ class Mechanism:
         req = getattr(self._lean_requests, "r", None)
         if req is None:  # what every lean call of this mechanism shares, set once per thread
             req = self._lean_requests.r = ffi.new("sg_request *", dict(
-                held=held, branch=branch, q_guess=guess, opt=opt, nqa=nqa, qcols=qa, noa=noa, ocols=oa))
+                held=c.held, branch=c.branch, q_guess=c.guess, opt=c.options, nqa=c.nqa, qcols=c.qcols, noa=c.noa,
+                ocols=c.ocols))
         req.n, req.phi, req.speed, req.p, req.gv, req.blk, req.order = n, phi_p, spd, got[1], gv_p, blk_p, ffi.NULL
-        failed = solve_lean(desc, req)
+        solve_lean = self.lib.sg_solve_lean
+        failed = solve_lean(c.descriptor, req)
         if failed == _SIZE_MAX:  # not ascending: solved in sorted order, returned in the caller's
             order = np.argsort(phi, kind="stable").astype(np.uintp)
             order_p = ffi.from_buffer("size_t[]", order)  # held here while C reads it
             req.order = order_p
-            failed = solve_lean(desc, req)
+            failed = solve_lean(c.descriptor, req)
         if failed:
             return None
         motion = Motion.of_block(self, blk, n, nq, nobs, SINGULAR_TOL)
@@ -536,11 +533,10 @@ class Mechanism:
         """(RunSettings of a kinetostatics() on the defaults but the parameter vector ``p``, C pointer of its
         gravity vector): the default gravity and moment point converted once, by prepare() itself; the settings
         cached by the vector's identity (each keeps its vector alive, so an id is never reused while cached)."""
-        got = self._fast.get("forces")
-        if got is None:
+        if not self._lean_forces_base:
             base = self.prepare(np.zeros(1), forces=True).settings
-            got = self._fast["forces"] = (base, pointer(self.ffi, "double *", base.gravity), {})
-        base, gravity_p, by_params = got
+            self._lean_forces_base.append((base, pointer(self.ffi, "double *", base.gravity), {}))
+        base, gravity_p, by_params = self._lean_forces_base[0]
         settings = by_params.get(id(p))
         if settings is None:
             if len(by_params) >= 256:
@@ -550,12 +546,13 @@ class Mechanism:
 
     def _continuous(self, n: int, q: np.ndarray, obs: np.ndarray, order) -> None:
         """continuous_angles(self.description, q, obs, order), in C."""
-        angle, nqa, qa_p, noa, oa_p = self._angle
-        if not (nqa or noa) or not n:
+        c = self.in_c
+        if not (c.nqa or c.noa) or not n:
             return
         ffi = self.ffi
-        self.lib.sg_make_continuous(n, q.shape[1], obs.shape[1], pointer(ffi, "double *", q), pointer(ffi, "double *", obs),
-                                    nqa, qa_p, noa, oa_p, ffi.NULL if order is None else pointer(ffi, "size_t *", order))
+        self.lib.sg_make_continuous(n, q.shape[1], obs.shape[1], pointer(ffi, "double *", q),
+                                    pointer(ffi, "double *", obs), c.nqa, c.qcols, c.noa, c.ocols,
+                                    ffi.NULL if order is None else pointer(ffi, "size_t *", order))
 
     def kinetostatics(self, phi, speed=None, accel=0.0, *, loads=(), gravity=_GRAVITY,
                       gravity_direction=_DOWN, moment_about=_ORIGIN, params: dict | None = None,
@@ -785,7 +782,7 @@ class Sweep:
         """The C call of this sweep as a function of no arguments (its request made once); it returns how many
         positions failed."""
         req, keep = self.request()
-        fn, desc = self.mechanism.lib.sg_sweep, self.mechanism._descriptor
+        fn, desc = self.mechanism.lib.sg_sweep, self.mechanism.in_c.descriptor
 
         def call(_keep=keep) -> int:
             return fn(desc, req)

@@ -6,6 +6,14 @@ typed data), ``tables`` (the machine's and a group's columns), ``shaking`` (the 
 the frame: the sign convention), ``feed``, ``feed_indices``, ``cams``, ``timing``, ``thread``, ``balance``
 (seed 002's needle bar) and ``machine_balance`` (seed 000's three methods).
 """
-from sewgen.machine.assembly import Machine, MachineAnalysis, load_machine
-
 __all__ = ["Machine", "MachineAnalysis", "load_machine"]
+
+
+def __getattr__(name: str):
+    """``sewgen.machine.load_machine``, ``Machine``, ``MachineAnalysis``: the assembly's, imported on first use,
+    so that a module of this package (the model-file reader, say) loads without the whole machine layer."""
+    if name in __all__:
+        from sewgen.machine import assembly
+
+        return getattr(assembly, name)
+    raise AttributeError(f"module 'sewgen.machine' has no attribute {name!r}")

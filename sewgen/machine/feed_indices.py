@@ -37,6 +37,11 @@ import math
 
 import numpy as np
 
+from sewgen.hermite import at, bracketed_root, crossings, hermite, maximum, power_form  # the one cubic Hermite
+from sewgen.machine.cams import arc_columns
+from sewgen.machine.feed import plate_height
+from sewgen.roles import FEED_BAR, FEED_DOG, THROAT_PLATE
+
 TWO_PI = 2.0 * math.pi
 #: Tooth depth of a feed dog (m): the teeth bite the cloth only above it (DOMAIN-NOTES: ≈ 0.8 mm).
 TOOTH_DEPTH = 0.8e-3
@@ -68,12 +73,6 @@ def column(name: str) -> str:
     unit = INDICES[name][0]
     return f"feed_{name} [{unit}]" if unit else f"feed_{name}"
 
-
-# the cubic Hermite pieces (one implementation, sewgen.hermite): re-exported for the callers of this module
-from sewgen.hermite import (at, bracketed_root, crossings, hermite, hermite_slope, maximum, power_form)  # noqa: E402,F401
-from sewgen.machine.cams import arc_columns  # noqa: E402
-from sewgen.machine.feed import plate_height  # noqa: E402
-from sewgen.roles import FEED_BAR, FEED_DOG, THROAT_PLATE  # noqa: E402
 
 
 def _next(a):

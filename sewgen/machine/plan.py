@@ -81,13 +81,11 @@ class GroupCall:
         self.nload = sizes["nload"] if loads else 0
         self.torque_column = mech.description.output_column("shaft.torque")  # ForceAnalysis.torque("shaft")
         self.width = 4 + 3 * self.nq + self.nobs + self.nfo + self.nload  # doubles per position in the block
-        ffi = mech.ffi
-        self.keep = (probe.params, probe.held, probe.branch, probe.guess, s.gravity)  # alive with the pointers
-        # the group's sg_request: what every run shares, set once; run() fills in the positions' arrays
-        req, keep = probe.request()
-        self.keep = (self.keep, keep)
-        self.call = (mech.lib.sg_sweep, mech.in_c.descriptor, req, ffi)
+        # the group's sg_request: what every run shares, set once (self.keep: the buffers its pointers point
+        # into); run() copies it and fills in the positions' arrays
+        req, self.keep = probe.request()
         c = mech.in_c
+        self.call = (mech.lib.sg_sweep, c.descriptor, req, mech.ffi)
         self.angle = (c.nqa, c.qcols, c.noa, c.ocols) if (c.nqa or c.noa) else None
 
     def run(self, phi, w: float, accel: float, blk, base, o: int, status, sort: bool):

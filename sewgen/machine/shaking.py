@@ -66,46 +66,44 @@ def shaking_force_on_frame(a, group=None) -> np.ndarray:
     return out
 
 
+def _add_moment(out, r, f, about) -> None:
+    """out (n, 3) += (r − O) × f: the moment about the point ``about`` (x, y, z) of a force f = (fx, fy, fz)
+    acting at r = (x, y, z) (each an array of n or a number)."""
+    dx, dy, dz = (r[k] - about[k] for k in range(3))
+    fx, fy, fz = f
+    out[:, 0] += dy * fz - dz * fy
+    out[:, 1] += dz * fx - dx * fz
+    out[:, 2] += dx * fy - dy * fx
+
+
 def shaking_moments_on_frame(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
     """(n, 3) the shaking moments on the frame about the point ``about`` (x, y, z; m), about the x, y and z axes
     (N m): M_shake = −Σ (r − O) × m a_G − Σ I α (the module's convention; each I α about its body's axis: z for a
     group across the shaft, −x for one along it), the shaft core's included, each core mass at its own z; inertia
     only, no weight."""
-    ox, oy, oz = about
     out = np.zeros((len(a.phi), 3))
     out[:, 2] -= a.machine.shaft.inertia * a.alpha
     for b in a.moving_bodies():
-        (x, y, z), (ax, ay, az), axis = _placed(b)
-        fx, fy, fz = -b.mass * ax, -b.mass * ay, -b.mass * az
+        pos, (ax, ay, az), axis = _placed(b)
+        _add_moment(out, pos, (-b.mass * ax, -b.mass * ay, -b.mass * az), about)
         spin = b.inertia * b.motion.alpha
-        out[:, 0] += (y - oy) * fz - (z - oz) * fy - spin * axis[0]
-        out[:, 1] += (z - oz) * fx - (x - ox) * fz - spin * axis[1]
-        out[:, 2] += (x - ox) * fy - (y - oy) * fx - spin * axis[2]
+        for k in range(3):
+            out[:, k] -= spin * axis[k]
     for sm, pos, _vel, acc in a.core:
-        fx, fy = -sm.mass * acc[:, 0], -sm.mass * acc[:, 1]
-        out[:, 0] -= (sm.z - oz) * fy
-        out[:, 1] += (sm.z - oz) * fx
-        out[:, 2] += (pos[:, 0] - ox) * fy - (pos[:, 1] - oy) * fx
+        _add_moment(out, (pos[:, 0], pos[:, 1], sm.z), (-sm.mass * acc[:, 0], -sm.mass * acc[:, 1], 0.0), about)
     return out
 
 
 def weight_moments_on_frame(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
     """(n, 3) the moments of the moving parts' weight on the frame about the point ``about`` (x, y, z; m), about
     the x, y and z axes (N m): Σ (r_G − O) × m g (the module's convention), the shaft core's masses included."""
-    ox, oy, oz = about
     gx, gy = (float(v) for v in a.machine.gravity)
     out = np.zeros((len(a.phi), 3))
     for b in a.moving_bodies():
-        (x, y, z), _acc, _axis = _placed(b)
-        fx, fy = b.mass * gx, b.mass * gy
-        out[:, 0] -= (z - oz) * fy
-        out[:, 1] += (z - oz) * fx
-        out[:, 2] += (x - ox) * fy - (y - oy) * fx
+        pos, _acc, _axis = _placed(b)
+        _add_moment(out, pos, (b.mass * gx, b.mass * gy, 0.0), about)
     for sm, pos, _vel, _acc in a.core:
-        fx, fy = sm.mass * gx, sm.mass * gy
-        out[:, 0] -= (sm.z - oz) * fy
-        out[:, 1] += (sm.z - oz) * fx
-        out[:, 2] += (pos[:, 0] - ox) * fy - (pos[:, 1] - oy) * fx
+        _add_moment(out, (pos[:, 0], pos[:, 1], sm.z), (sm.mass * gx, sm.mass * gy, 0.0), about)
     return out
 
 

@@ -30,18 +30,18 @@ from pathlib import Path
 
 import numpy as np
 
-from sewgen.machine.cams import arc_switches
+from sewgen.engine.results import umask, write_csv
 from sewgen.errors import NonFiniteOutputError, SewgenError
-from sewgen.machine.tables import angle_deg, group_table, machine_table
-from sewgen.machine.feed import dog_travel, has_feed, plate_height
 from sewgen.machine import shaking
-from sewgen.roles import FEED_DOG, KNIFE_EDGE, LOWER_KNIFE_EDGE, STITCH_REGULATOR
-from sewgen.machine.parts import role_param
-from sewgen.units import DisplayUnits
-from sewgen.machine.modelfile import is_builtin
+from sewgen.machine.cams import arc_switches
+from sewgen.machine.feed import dog_travel, has_feed, plate_height
 from sewgen.machine.feed_indices import machine_indices
+from sewgen.machine.modelfile import is_builtin
+from sewgen.machine.parts import role_param
+from sewgen.machine.tables import angle_deg, group_table, machine_table
 from sewgen.machine.timing import timing
-from sewgen.engine.results import write_csv as _write
+from sewgen.roles import FEED_DOG, KNIFE_EDGE, LOWER_KNIFE_EDGE, STITCH_REGULATOR
+from sewgen.units import DisplayUnits
 
 #: What the numbers of summary.json mean: frame, angles, signs (the same words as
 #: docs/explanation/conventions.md).
@@ -234,29 +234,6 @@ def cam_switches(a) -> dict:
     return out
 
 
-def write_csv(path, cols: dict) -> Path:
-    """Columns (name -> array, equal lengths) as a CSV file with a header row, written to a temporary file beside
-    ``path`` and renamed into place; returns ``path``."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    os.close(fd)
-    try:
-        _write(tmp, cols)
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    return path
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 def write_tables(a, folder, progress=None, units: DisplayUnits | None = None) -> list[Path]:
     """machine.csv, <group>.csv for every group and summary.json into ``folder`` (which must exist), the tables
     in ``units`` (default SI; headers name the unit of every column). Everything is computed and checked
@@ -316,7 +293,7 @@ def staged_folder(folder, option: str = "--out"):
         raise OutputPathError(option, f"cannot write into {home}: {exc.strerror or exc}") from None
     try:
         yield tmp
-        os.chmod(tmp, 0o777 & ~_umask())
+        os.chmod(tmp, 0o777 & ~umask())
         if not existed:
             try:
                 os.rename(tmp, folder)

@@ -18,15 +18,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sewgen.errors import ParameterError, SewgenError
+from sewgen.hermite import maximum
 from sewgen.machine import feed_indices as fi
-from sewgen.errors import SewgenError
+from sewgen.machine.assembly import MachineAnalysis
+from sewgen.machine.cams import arc_switches
+from sewgen.machine.timing import timing
 from sewgen.roles import FEED_DOG, NEEDLE_POINT, THROAT_PLATE
 from sewgen.study.designs import sweep_group_designs
 from sewgen.study.machine_designs import MachineDesigns, with_params
-from sewgen.machine.cams import arc_switches
-from sewgen.machine.assembly import MachineAnalysis
-from sewgen.machine.timing import timing
-from sewgen.errors import ParameterError
 
 TWO_PI = 2.0 * math.pi
 
@@ -124,8 +124,8 @@ def _kept_observables(machine, g) -> tuple:
 def _needle_stroke(g, sweep, w, h):
     iy, ivy = _needle_observables(g)
     y, dy = sweep.observable(iy), sweep.observable(ivy) / w
-    hi, _, _ = fi.maximum(y, dy, h)
-    lo, _, _ = fi.maximum(-y, -dy, h)
+    hi, _, _ = maximum(y, dy, h)
+    lo, _, _ = maximum(-y, -dy, h)
     return hi + lo
 
 

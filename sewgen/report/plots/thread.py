@@ -1,5 +1,5 @@
-"""Thread control curves (sewgen.machine.thread): the take-up's supply S = L_max − L, the stitch's demand D and the slack
-S − D against the shaft angle, the demand's parts, where the hook carries the loop; and the take-up eye's speed
+"""Thread control curves (sewgen.machine.thread): the take-up's supply S = L_max − L, the stitch's demand D and the
+slack S − D against the shaft angle, the demand's parts, where the hook carries the loop; and the take-up eye's speed
 and acceleration (seed 004's figure-3 quantities)."""
 from __future__ import annotations
 
