@@ -238,13 +238,12 @@ static void polish(const sg_mechanism *m, double *q, double *cq, const double *x
 }
 
 /* The five-state Lagrange extrapolation (predict's usual case) in straight lines (csrc/sg_runtime.h
- * SG_LAGRANGE5_*); 0 (nothing written) where two of the angles are equal. */
+ * sg_lagrange5_*); 0 (nothing written) where two of the angles are equal. */
 static int predict5(int nq, const double *x, double *const *hq, double t, double *out)
 {
     double den[SG_HISTORY], w[SG_HISTORY];
-    SG_LAGRANGE5_DEN(x, den);
-    if (!(den[0] != 0.0 && den[1] != 0.0 && den[2] != 0.0 && den[3] != 0.0 && den[4] != 0.0)) return 0;
-    SG_LAGRANGE5_WEIGHTS(double, t, x, den, w);
+    if (!sg_lagrange5_den(x, den)) return 0;
+    sg_lagrange5_weights(t, x, den, w);
     for (int i = 0; i < nq; ++i) out[i] = SG_LAGRANGE5_VALUE(w, hq, i);
     return 1;
 }
@@ -252,7 +251,7 @@ static int predict5(int nq, const double *x, double *const *hq, double t, double
 /* Lagrange extrapolation in the shaft angle from nh earlier states (newest first, at most SG_HISTORY): of degree
  * four from five (the continuation's step), quadratic from three (after a failed step). The positions alone, no
  * rates: the rates, observables and forces of solved positions can come later, SG_LANES at a time (csrc/sg_simd.h
- * SG_SIMD_FINISH_BODY), and the scalar loop solves the same positions to the bit; a block's positions are all
+ * sgv_finish), and the scalar loop solves the same positions to the bit; a block's positions are all
  * predicted from the same five states (solve_block). Measured on the JB1-3 feed's
  * coordinates, the five states' prediction is off by 3.7e-13 at 3600 positions a turn (median; the quintic
  * Hermite predictor from the two newest states' rates, which it replaced: 8.1e-13), 3.8e-9 at 360 (2.8e-12), 5e-5
@@ -629,16 +628,22 @@ static size_t finish_lanes(sg_walker *w, sg_lanes *L, const unsigned char *want,
     return failures;
 }
 
-/* The sweep: kinematics at every position, then (frc != NULL) the forces from the same solution. want (NULL:
- * every observable) flags the groups of observables to compute (a kinematic sweep that keeps a few outputs:
- * sg_sweep_designs), in every loop. */
-static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const double *omega,
-                    const double *alpha, const double *held, const double *p, const int *branch,
-                    const double *q_guess, const sg_options *opt, const size_t *order, const double *gv,
-                    const double *loads, double *q, double *qd, double *qdd, double *obs, double *err,
-                    double *frc, int *status, const unsigned char *want, const double *trig,
-                    sg_columns *cols)
+/* The sweep of the request r: kinematics at every position, then (r->frc not NULL) the forces from the same
+ * solution. r->want (NULL: every observable) flags the groups of observables to compute (a kinematic sweep that
+ * keeps a few outputs: sg_sweep_designs), in every loop. A closed form goes to the closed-form loops (csrc/sg_runtime.h
+ * sg_closed_sweep: the mechanism's own with its kernels inlined, or, opt->generic, the same loop through the
+ * descriptor's kernels; csrc/sg_simd.h sgv_closed_sweep SG_LANES positions at a time); this function's own loop is
+ * Newton's continuation. */
+static size_t sweep(const sg_mechanism *m, const sg_request *r)
 {
+    const size_t n = r->n, *order = r->order;
+    const double *phi = r->phi, *omega = r->omega, *alpha = r->alpha, *held = r->held, *p = r->p;
+    const double *q_guess = r->q_guess, *gv = r->gv, *loads = r->loads;
+    const int *branch = r->branch;
+    const sg_options *opt = r->opt;
+    double *q = r->q, *qd = r->qd, *qdd = r->qdd, *obs = r->obs, *err = r->err, *frc = r->frc;
+    int *status = r->status;
+    const unsigned char *want = r->want;
     const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo;
     double no_loads[SG_MAX_LOAD]; /* zeroed below for a force sweep without loads only: 4 kB a call otherwise */
     SG_ASSERT(phi && omega && alpha && p && branch && q_guess && opt && q && qd && qdd && obs && status);
@@ -649,13 +654,10 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         for (size_t i = 0; i < n; ++i) status[i] = SG_BAD_ARGUMENT;
         return n;
     }
-    const int use_closed = m->closed != NULL && !opt->newton_only;
-    if (use_closed && m->sweep != NULL && !opt->generic) { /* the inlined loop: the same, faster */
-        if (!opt->scalar && sg_simd_width(m) > 1) /* SG_LANES positions at a time */
-            return m->sweep_simd(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs,
-                                 err, frc, status, want, trig, cols);
-        return m->sweep(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, obs, err, frc,
-                        status, want, NULL, NULL); /* the scalar loop's own sin, cos; rows only */
+    if (m->closed != NULL && !opt->newton_only) { /* the closed-form loops */
+        if (opt->generic || m->sweep == NULL) return sg_closed_sweep(m, r, sg_descriptor_kernels(m));
+        if (!opt->scalar && sg_simd_width(m) > 1) return m->sweep_simd(m, r); /* SG_LANES positions at a time */
+        return m->sweep(m, r);
     }
     if (frc != NULL && loads == NULL)
         for (int k = 0; k < m->nload; ++k) no_loads[k] = 0.0;
@@ -673,7 +675,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         xdd[k] = 0.0;
     }
     /* Newton's positions now, their rates, observables and forces SG_LANES at a time by the SIMD finish */
-    const int deferred = !use_closed && m->finish_simd != NULL && !opt->scalar && sg_simd_width(m) > 1 &&
+    const int deferred = m->finish_simd != NULL && !opt->scalar && sg_simd_width(m) > 1 &&
                          m->finish_simd(m, NULL, c, opt, gv, loads, qd, qdd, obs, frc, want);
     sg_lanes lanes;
     lanes.count = 0;
@@ -681,7 +683,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     w.m = m, w.opt = opt, w.c = c, w.x = x, w.cx = cx, w.nh = 0, w.has_ref = 0, w.lscale = 0.0, w.scale_age = 0;
     for (int k = 0; k < SG_HISTORY; ++k) w.hq[k] = w.store[k];
     x[0] = NAN; /* no angle's cos, sin yet */
-    if (!use_closed && m->closed != NULL && m->nblock > 0) {
+    if (m->closed != NULL && m->nblock > 0) {
         /* Newton on a mechanism with a closed form: the loops' orientation signs are those of the declared
          * branch, taken from the closed form at the first position (in solving order) where it assembles */
         for (size_t k = 0; k < n && !w.has_ref; ++k) {
@@ -706,7 +708,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
     sg_block blk;
     int block_got = 0, block_next = 0; /* the block's accepted positions, and the next one the loop takes */
     for (size_t k = 0; k < n; ++k) {
-        if (block_next == block_got && !use_closed && !prev_failed && k != step_at) { /* SG_BLOCK from one history */
+        if (block_next == block_got && !prev_failed && k != step_at) { /* SG_BLOCK from one history */
             block_got = solve_block(&w, &blk, k, n, order, phi, omega, alpha, simd_newton);
             block_next = 0;
             if (block_got < blk.count) step_at = k + (size_t)block_got;
@@ -716,7 +718,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
         double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq;
         double *oi = obs + i * (size_t)nobs;
         double cq_own[2 * SG_MAX_Q], *cq = cq_own;
-        double resid = SG_EPS; /* the position's relative accuracy: rounding for the closed form */
+        double resid = SG_EPS; /* the position's relative accuracy (Newton's last relative residual) */
         int st = SG_OK;
         const double ph = phi[i];
         xd[0] = omega[i];
@@ -732,17 +734,7 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
             if (!isfinite(ph + omega[i] + alpha[i])) st = SG_NAN_INPUT;
             set_input(&w, ph);
         }
-        if (!from_block && st == SG_OK && use_closed) {
-            st = m->closed(x, cx, c, branch, qi, cq);
-            if (st == SG_OK && w.nh > 0) { /* keep angles continuous: unwrap against the last solution */
-                for (int j = 0; j < nq; ++j)
-                    if (m->coord_is_angle[j]) {
-                        const double turns = (w.hq[0][j] - qi[j]) * (1.0 / SG_TWO_PI);
-                        if (fabs(turns) > 0.5) qi[j] += SG_TWO_PI * nearbyint(turns);
-                    }
-            }
-            if (st == SG_OK) push(&w, ph, qi, cq);
-        } else if (!from_block && st == SG_OK) {
+        if (!from_block && st == SG_OK) {
             if (w.nh > 0 && !prev_failed) {
                 st = advance(&w, ph, qi, cq, &resid);
             } else { /* first position, or after a failure: the closed form where it assembles, else the last
@@ -804,9 +796,10 @@ static size_t sweep(const sg_mechanism *m, size_t n, const double *phi, const do
  * matrix gives SG_SINGULAR at that position. */
 size_t sg_sweep(const sg_mechanism *m, const sg_request *r)
 {
-    return sweep(m, r->n, r->phi, r->omega, r->alpha, r->held, r->p, r->branch, r->q_guess, r->opt, r->order, r->gv,
-                 r->gv != NULL ? r->loads : NULL, r->q, r->qd, r->qdd, r->obs, r->err, r->gv != NULL ? r->frc : NULL,
-                 r->status, NULL, NULL, NULL);
+    sg_request s = *r; /* the runtime's own fields (want, trig, cols) are not the caller's to set */
+    if (s.gv == NULL) s.loads = NULL, s.frc = NULL;
+    s.want = NULL, s.trig = NULL, s.cols = NULL;
+    return sweep(m, &s);
 }
 
 /* Batched designs ------------------------------------------------------------------------------------------
@@ -1045,10 +1038,8 @@ static double reduce_column(const sg_scratch *s, size_t n, int kind, int a, int 
 size_t sg_sweep_designs(const sg_mechanism *m, const sg_request *r)
 {
     const size_t nd = r->nd, n = r->n;
-    const double *phi = r->phi, *omega = r->omega, *alpha = r->alpha, *held = r->held, *p = r->p;
-    const double *q_guess = r->q_guess;
+    const double *held = r->held, *p = r->p;
     const int *branch = r->branch, *angle_cols = r->angle_cols, *sel = r->sel, *red = r->red;
-    const sg_options *opt = r->opt;
     const size_t *order = r->order;
     const int ncheck = r->ncheck, nangle = r->nangle, nsel = r->nsel, nred = r->nred;
     double *out = r->out, *red_val = r->red_val, *work = r->work;
@@ -1057,7 +1048,7 @@ size_t sg_sweep_designs(const sg_mechanism *m, const sg_request *r)
     int *work_status = r->work_status, *status = r->design_status;
     const int nq = m->nq, nobs = m->nobs, nx = m->nx, npar = m->np, nb = m->nbranch;
     const int width = 3 * nq + nobs;
-    SG_ASSERT(phi && omega && alpha && p && q_guess && opt && work && work_status && status && first_bad);
+    SG_ASSERT(r->phi && r->omega && r->alpha && p && r->q_guess && r->opt && work && work_status && status && first_bad);
     SG_ASSERT(nb == 0 || branch);
     SG_ASSERT(nx == 1 || held);
     SG_ASSERT(nsel == 0 || (sel && out));
@@ -1095,9 +1086,10 @@ size_t sg_sweep_designs(const sg_mechanism *m, const sg_request *r)
     /* the shaft angles' cos, sin as the SIMD loop computes them, once for every design (the last 2n of work) */
     const double *trig = NULL;
 #if SG_SIMD
+    const sg_options *opt = r->opt;
     if (!bad_args && nd > 1 && m->closed != NULL && m->sweep_simd != NULL && !opt->newton_only && !opt->generic &&
         !opt->scalar && sg_simd_width(m) > 1) {
-        sgv_trig_table(n, phi, work + n * (size_t)(width + 1));
+        sgv_trig_table(n, r->phi, work + n * (size_t)(width + 1));
         trig = work + n * (size_t)(width + 1);
     }
 #endif
@@ -1107,6 +1099,10 @@ size_t sg_sweep_designs(const sg_mechanism *m, const sg_request *r)
     int use_direct = !bad_args && nsel > 0 && nsel <= SG_MAX_DIRECT && nred == 0;
     for (int k = 0; k < nsel && use_direct; ++k) /* a column selected twice: rows (made continuous once) */
         for (int j = 0; j < k && use_direct; ++j) use_direct = sel[j] != sel[k];
+    sg_request one = *r; /* one design's sweep: the scratch rows, kinematics only */
+    one.gv = NULL, one.loads = NULL, one.frc = NULL;
+    one.q = s.q, one.qd = s.qd, one.qdd = s.qdd, one.obs = s.obs, one.err = err, one.status = work_status;
+    one.want = want, one.trig = trig, one.cols = use_direct ? &direct : NULL;
     size_t failed = 0;
     for (size_t d = 0; d < nd; ++d) {
         const double *pd = p + d * (size_t)npar;
@@ -1132,8 +1128,8 @@ size_t sg_sweep_designs(const sg_mechanism *m, const sg_request *r)
         if (st == SG_OK) {
             for (int k = 0; use_direct && k < nsel; ++k) dst[k] = out + (size_t)k * out_stride + d * n;
             direct.written = 0;
-            sweep(m, n, phi, omega, alpha, hd, pd, bd, q_guess, opt, order, NULL, NULL, s.q, s.qd, s.qdd, s.obs, err,
-                  NULL, work_status, want, trig, use_direct ? &direct : NULL);
+            one.held = hd, one.p = pd, one.branch = bd;
+            sweep(m, &one);
             if (direct.written) s.direct = &direct;
             for (size_t i = 0; i < n; ++i)
                 if (work_status[i] != SG_OK) {

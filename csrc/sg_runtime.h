@@ -36,7 +36,7 @@ typedef struct sg_columns {
 } sg_columns;
 
 /* Solved positions of a Newton sweep waiting for their rates, observables and forces, which the mechanism's SIMD
- * finish (descriptor finish_simd, csrc/sg_simd.h SG_SIMD_FINISH_BODY) computes SG_LANES at a time: per lane
+ * finish (descriptor finish_simd, csrc/sg_simd.h sgv_finish) computes SG_LANES at a time: per lane
  * its position's index, coordinates and their cos, sin, inputs with theirs and their rates, Newton's last relative
  * residual; est receives the rates' estimated relative error of each lane the finish vouches for. A block of
  * fewer than SG_LANES positions repeats its last one in the lanes after count. SG_LANES: the SIMD vector's lanes,
@@ -56,7 +56,7 @@ typedef struct sg_lanes {
 
 /* Positions the Newton continuation predicts from one history and solves independently (csrc/sg_runtime.c,
  * solve_block): SG_BLOCK of them in every loop and at every SIMD level, so that the scalar and the SIMD loops
- * (descriptor newton_simd, csrc/sg_simd.h SG_SIMD_NEWTON_BODY, SG_LANES lanes a call) solve the same positions
+ * (descriptor newton_simd, csrc/sg_simd.h sgv_newton, SG_LANES lanes a call) solve the same positions
  * from the same starts. Per lane its inputs with their cos, sin, and after the solve its coordinates with
  * theirs, Newton's last relative residual and the loops' orientation determinants (kernel 'blocks'). SG_BLOCK is a
  * multiple of SG_LANES; SG_HISTORY earlier states feed the predictor (both in sg_abi.h). */
@@ -70,28 +70,6 @@ typedef struct sg_block {
     double hphi[SG_HISTORY], lim[SG_MAX_Q];
     const double *hq[SG_HISTORY], *hcq;
 } sg_block;
-
-/* The five-state Lagrange extrapolation, the continuation's predictor (csrc/sg_runtime.c predict5, and its SIMD
- * twin in SG_SIMD_NEWTON_BODY), written once for both: the weights w_a = prod_{b != a} (t - x_b) / (x_a - x_b)
- * from the ten differences of the angles x (den: the five denominators, zero where two angles are equal) and the
- * numerators as prefix and suffix products, t a double or an sg_vd. */
-#define SG_LAGRANGE5_DEN(x, den)                                                                    \
-    do {                                                                                           \
-        const double d01 = x[0] - x[1], d02 = x[0] - x[2], d03 = x[0] - x[3], d04 = x[0] - x[4];   \
-        const double d12 = x[1] - x[2], d13 = x[1] - x[3], d14 = x[1] - x[4];                      \
-        const double d23 = x[2] - x[3], d24 = x[2] - x[4], d34 = x[3] - x[4];                      \
-        den[0] = d01 * d02 * d03 * d04, den[1] = -d01 * d12 * d13 * d14, den[2] = d02 * d12 * d23 * d24; \
-        den[3] = -d03 * d13 * d23 * d34, den[4] = d04 * d14 * d24 * d34;                           \
-    } while (0)
-#define SG_LAGRANGE5_WEIGHTS(T, t, x, den, w)                                                      \
-    do {                                                                                           \
-        const T e0 = t - x[0], e1 = t - x[1], e2 = t - x[2], e3 = t - x[3], e4 = t - x[4];          \
-        const T p01 = e0 * e1, p012 = p01 * e2, s34 = e3 * e4, s234 = e2 * s34;                    \
-        w[0] = e1 * s234 / den[0], w[1] = e0 * s234 / den[1], w[2] = p01 * s34 / den[2];           \
-        w[3] = p012 * e4 / den[3], w[4] = p012 * e3 / den[4];                                      \
-    } while (0)
-#define SG_LAGRANGE5_VALUE(w, q, i) \
-    ((w[0] * q[0][i] + w[1] * q[1][i]) + (w[2] * q[2][i] + w[3] * q[3][i]) + w[4] * q[4][i])
 
 /* cos and sin of a step d of an angle coordinate for shift_trig (csrc/sg_runtime.c) and its SIMD twin
  * (sgv_shift_trig): below SG_TINY_STEP cos d = 1 and sin d = d exactly (their corrections, d^2/2 and d^2/6
@@ -136,6 +114,30 @@ typedef struct sg_block {
 #define SG_FLATTEN
 #define SG_NOINLINE
 #endif
+
+/* The five-state Lagrange extrapolation, the continuation's predictor (csrc/sg_runtime.c predict5, and its SIMD
+ * twin sgv_newton): the weights w_a = prod_{b != a} (t - x_b) / (x_a - x_b) from the ten differences of the angles
+ * x (den: the five denominators; 0 where two angles are equal) and the numerators as prefix and suffix products;
+ * the scalar and the vector weights (csrc/sg_simd.h sgv_lagrange5_weights) the same operations in the same order. */
+SG_INLINE int sg_lagrange5_den(const double *x, double *den)
+{
+    const double d01 = x[0] - x[1], d02 = x[0] - x[2], d03 = x[0] - x[3], d04 = x[0] - x[4];
+    const double d12 = x[1] - x[2], d13 = x[1] - x[3], d14 = x[1] - x[4];
+    const double d23 = x[2] - x[3], d24 = x[2] - x[4], d34 = x[3] - x[4];
+    den[0] = d01 * d02 * d03 * d04, den[1] = -d01 * d12 * d13 * d14, den[2] = d02 * d12 * d23 * d24;
+    den[3] = -d03 * d13 * d23 * d34, den[4] = d04 * d14 * d24 * d34;
+    return den[0] != 0.0 && den[1] != 0.0 && den[2] != 0.0 && den[3] != 0.0 && den[4] != 0.0;
+}
+SG_INLINE void sg_lagrange5_weights(double t, const double *x, const double *den, double *w)
+{
+    const double e0 = t - x[0], e1 = t - x[1], e2 = t - x[2], e3 = t - x[3], e4 = t - x[4];
+    const double p01 = e0 * e1, p012 = p01 * e2, s34 = e3 * e4, s234 = e2 * s34;
+    w[0] = e1 * s234 / den[0], w[1] = e0 * s234 / den[1], w[2] = p01 * s34 / den[2];
+    w[3] = p012 * e4 / den[3], w[4] = p012 * e3 / den[4];
+}
+/* The extrapolated value of coordinate i from the weights w and the states q (newest first): double or sg_vd. */
+#define SG_LAGRANGE5_VALUE(w, q, i) \
+    ((w[0] * q[0][i] + w[1] * q[1][i]) + (w[2] * q[2][i] + w[3] * q[3][i]) + w[4] * q[4][i])
 
 /* LU with partial pivoting in place, a pivot singular below SG_PIVOT_RTOL times its column's colmax[k] (the
  * largest |entry| of column k of the whole matrix: a mechanism's block factor, sewgen/derive/blockfactor.py,
@@ -477,116 +479,169 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
 #endif
 }
 
-/* The closed-form sweep with one mechanism's kernels called directly: the body of
- * sg_<m>_sweep, which each generated file with a closed form instantiates with its own constants, closed, motion,
- * rates, observe and forces kernels (a macro, so that the calls are direct and the file's flatten attribute inlines them: no
- * function pointers per position); the runtime's sweep calls it for a closed-form sweep unless opt->generic.
- * The same operations as the generic loop (csrc/sg_runtime.c, sweep) in the same order, so the two agree to the
- * bit: closed form, unwrap against the last solution, motion, the rates' error estimate (the closed form's
- * position is exact to rounding: resid = eps, never polished), singular check, forces (frc != NULL), status.
- * want (not NULL: a kinematic sweep that keeps a few outputs) flags the groups of observables to compute: the
- * rates kernel and the wanted groups' observe kernel then stand for the motion kernel, as in the generic loop.
- * The arguments are sewgen.abi.HOOKS["sweep"]'s. Parts shared with the SIMD loop (csrc/sg_simd.h):
- * SG_CLOSED_SETUP declares the loop's state, SG_CLOSED_STEP solves position I, SG_CLOSED_FINISH the motion,
- * forces and status of position i from its solved coordinates (st, qi, qdi, qddi, oi, cq in scope). */
-#define SG_CLOSED_SETUP(CONSTANTS)                                                                 \
-    const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo, nload = m->nload;              \
-    const double eps = SG_EPS, two_pi = SG_TWO_PI;                                                 \
-    double c[SG_MAX_C];                                                                            \
-    CONSTANTS(p, c);                                                                               \
-    double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q], last[SG_MAX_Q];             \
-    for (int k = 1; k < nx; ++k) {                                                                 \
-        x[k] = held[k - 1];                                                                        \
-        cx[2 * k] = cos(x[k]);                                                                     \
-        cx[2 * k + 1] = sin(x[k]);                                                                 \
-        xd[k] = 0.0;                                                                               \
-        xdd[k] = 0.0;                                                                              \
-    }                                                                                              \
-    x[0] = NAN; /* no angle's cos, sin yet (set at the first position) */                          \
-    cx[0] = 1.0;                                                                                   \
-    cx[1] = 0.0;                                                                                   \
-    double no_loads[SG_MAX_LOAD];                                                                  \
-    if (frc != NULL && loads == NULL)                                                              \
-        for (int k = 0; k < nload; ++k) no_loads[k] = 0.0;                                         \
-    int have_last = 0;                                                                             \
-    size_t failures = 0;                                                                           \
-    if (frc != NULL) want = NULL; /* forces read every observable */                              \
-    for (int k = 0; k < m->nc && want != NULL; ++k)                                                \
-        if (!isfinite(c[k])) want = NULL; /* as the generic loop: then every observable */        \
-    if (want != NULL && (m->ngroup < 1 || m->ngroup > SG_MAX_GROUP)) want = NULL;
+/* The closed-form sweep, written once for every caller: a generated file with a closed form instantiates it with
+ * its own kernels (sg_<m>_sweep calls sg_closed_sweep with its constants, closed, motion, rates, observe and forces
+ * kernels: constant arguments of an always-inline function, so that the file's flatten attribute inlines them, no
+ * call through a pointer per position), and the runtime's sweep calls it with the descriptor's kernels where
+ * opt->generic asks for the calls through the descriptor (tests: the same code, so the same values to the bit).
+ * K: the kernels (sg_closed_kernels). Per position: closed form, unwrap against the last solution, motion, the rates' error estimate (the closed form's
+ * position is exact to rounding: resid = eps, never polished), singular check, forces (r->frc), status. r->want
+ * (not NULL: a kinematic sweep that keeps a few outputs) flags the groups of observables to compute: the rates
+ * kernel and the wanted groups' observe kernel then stand for the motion kernel. The SIMD loop (csrc/sg_simd.h)
+ * shares the state (sg_closed_loop, set up by sg_closed_setup), the step of one position (sg_closed_step) and the
+ * finish of a solved one (sg_closed_finish). */
+typedef struct sg_closed_loop {
+    const sg_mechanism *m;
+    const sg_options *opt;
+    const double *phi, *omega, *alpha, *gv, *loads;
+    const int *branch;
+    double *q, *qd, *qdd, *obs, *err, *frc;
+    int *status;
+    const unsigned char *want; /* NULL: every observable */
+    int nq, nx, nobs, nfo, nload;
+    int have_last;             /* last holds the last solved coordinates */
+    size_t failures;
+    double c[SG_MAX_C];
+    double x[SG_MAX_Q], cx[2 * SG_MAX_Q], xd[SG_MAX_Q], xdd[SG_MAX_Q], last[SG_MAX_Q];
+    double no_loads[SG_MAX_LOAD]; /* zero loads for a force sweep without any (zeroed only then) */
+} sg_closed_loop;
 
-#define SG_CLOSED_FINISH(MOTION, RATES, OBSERVE, FORCES)                                            \
-    {                                                                                              \
-        double cond = 1.0, est = 0.0;                                                              \
-        if (st == SG_OK) {                                                                         \
-            if (want == NULL) {                                                                    \
-                st = MOTION(qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);                      \
-            } else { /* the rates and the wanted groups only: the same values to the bit */        \
-                st = RATES(qi, cq, x, cx, xd, xdd, c, qdi, qddi, &cond);                           \
-                for (int g = 0; g < m->ngroup && st == SG_OK; ++g)                                 \
-                    if (want[g]) st = OBSERVE(qi, cq, x, cx, xd, xdd, c, qdi, qddi, g, oi);        \
-            }                                                                                      \
-            if (st == SG_SINGULAR) {                                                               \
-                est = INFINITY;                                                                    \
-            } else if (st == SG_OK) {                                                              \
-                est = cond * (eps + cond * eps);                                                   \
-                if (!(est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;          \
-            }                                                                                      \
-        }                                                                                          \
-        if (st == SG_OK && frc != NULL)                                                            \
-            st = FORCES(qi, cq, x, cx, xd, c, oi, gv, loads ? loads + i * (size_t)nload : no_loads, \
-                        frc + i * (size_t)nfo);                                                    \
-        status[i] = st;                                                                            \
-        if (err) err[i] = st == SG_OK || st == SG_SINGULAR ? est : 0.0;                            \
-        if (st != SG_OK) {                                                                         \
-            ++failures;                                                                            \
-            for (int j = 0; j < nq; ++j) qi[j] = qdi[j] = qddi[j] = 0.0;                           \
-            for (int j = 0; j < nobs; ++j) oi[j] = 0.0;                                            \
-            if (frc != NULL)                                                                       \
-                for (int j = 0; j < nfo; ++j) frc[i * (size_t)nfo + j] = 0.0;                      \
-        }                                                                                          \
-    }
+/* The scalar kernels a closed-form loop calls: a generated file's own (constant arguments of the always-inline loop,
+ * inlined by its flatten attribute) or the descriptor's (sg_descriptor_kernels: calls through pointers). */
+typedef struct sg_closed_kernels {
+    sg_constants_fn constants;
+    sg_closed_fn closed;
+    sg_motion_fn motion;
+    sg_rates_fn rates;
+    sg_observe_fn observe;
+    sg_forces_fn forces;
+} sg_closed_kernels;
 
-#define SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, I)                                  \
-    {                                                                                              \
-        const size_t i = (I);                                                                      \
-        double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq; \
-        double *oi = obs + i * (size_t)nobs;                                                       \
-        double cq[2 * SG_MAX_Q];                                                                   \
-        int st = SG_OK;                                                                            \
-        const double ph = phi[i];                                                                  \
-        xd[0] = omega[i];                                                                          \
-        xdd[0] = alpha[i];                                                                         \
-        if (!isfinite(ph + omega[i] + alpha[i])) st = SG_NAN_INPUT;                                \
-        if (x[0] != ph) {                                                                          \
-            x[0] = ph;                                                                             \
-            sg_sincos_inl(ph, &cx[0], &cx[1]);                                                     \
-        }                                                                                          \
-        if (st == SG_OK) {                                                                         \
-            st = CLOSED(x, cx, c, branch, qi, cq);                                                 \
-            if (st == SG_OK && have_last) {                                                        \
-                for (int j = 0; j < nq; ++j)                                                       \
-                    if (m->coord_is_angle[j]) {                                                    \
-                        const double turns = (last[j] - qi[j]) * (1.0 / two_pi);                   \
-                        if (fabs(turns) > 0.5) qi[j] += two_pi * nearbyint(turns);                 \
-                    }                                                                              \
-            }                                                                                      \
-            if (st == SG_OK) {                                                                     \
-                for (int j = 0; j < nq; ++j) last[j] = qi[j];                                      \
-                have_last = 1;                                                                     \
-            }                                                                                      \
-        }                                                                                          \
-        SG_CLOSED_FINISH(MOTION, RATES, OBSERVE, FORCES)                                           \
-    }
+SG_INLINE sg_closed_kernels sg_descriptor_kernels(const sg_mechanism *m)
+{
+    const sg_closed_kernels k = {m->constants, m->closed, m->motion, m->rates, m->observe, m->forces};
+    return k;
+}
 
-#define SG_CLOSED_SWEEP_BODY(CONSTANTS, CLOSED, MOTION, RATES, OBSERVE, FORCES)                    \
-    {                                                                                              \
-        (void)trig, (void)cols; /* the SIMD loop's cos, sin: this loop computes its own; rows only */ \
-        SG_CLOSED_SETUP(CONSTANTS)                                                                 \
-        for (size_t k = 0; k < n; ++k)                                                             \
-            SG_CLOSED_STEP(CLOSED, MOTION, RATES, OBSERVE, FORCES, order ? order[k] : k)           \
-        return failures;                                                                           \
+/* The loop's state for the request r: the constants (kernel constants), the held inputs with their cos, sin, the
+ * wanted groups (none where forces read every observable or a constant is not finite: then every one). */
+SG_INLINE void sg_closed_setup(sg_closed_loop *L, const sg_mechanism *m, const sg_request *r,
+                               sg_constants_fn constants)
+{
+    L->m = m, L->opt = r->opt, L->phi = r->phi, L->omega = r->omega, L->alpha = r->alpha, L->gv = r->gv;
+    L->loads = r->loads, L->branch = r->branch, L->q = r->q, L->qd = r->qd, L->qdd = r->qdd, L->obs = r->obs;
+    L->err = r->err, L->frc = r->frc, L->status = r->status, L->want = r->want;
+    L->nq = m->nq, L->nx = m->nx, L->nobs = m->nobs, L->nfo = m->nfo, L->nload = m->nload;
+    L->have_last = 0, L->failures = 0;
+    constants(r->p, L->c);
+    for (int k = 1; k < L->nx; ++k) {
+        L->x[k] = r->held[k - 1];
+        L->cx[2 * k] = cos(L->x[k]);
+        L->cx[2 * k + 1] = sin(L->x[k]);
+        L->xd[k] = 0.0;
+        L->xdd[k] = 0.0;
     }
+    L->x[0] = NAN; /* no angle's cos, sin yet (set at the first position) */
+    L->cx[0] = 1.0;
+    L->cx[1] = 0.0;
+    if (L->frc != NULL && L->loads == NULL)
+        for (int k = 0; k < L->nload; ++k) L->no_loads[k] = 0.0;
+    if (L->frc != NULL) L->want = NULL; /* forces read every observable */
+    for (int k = 0; k < m->nc && L->want != NULL; ++k)
+        if (!isfinite(L->c[k])) L->want = NULL; /* an observable of a constant alone may be all that fails */
+    if (L->want != NULL && (m->ngroup < 1 || m->ngroup > SG_MAX_GROUP)) L->want = NULL;
+}
+
+/* Position i's status st and error estimate est recorded; a failed position's rows zeroed. */
+SG_INLINE void sg_closed_settle(sg_closed_loop *L, size_t i, int st, double est)
+{
+    const int nq = L->nq, nobs = L->nobs, nfo = L->nfo;
+    L->status[i] = st;
+    if (L->err) L->err[i] = st == SG_OK || st == SG_SINGULAR ? est : 0.0;
+    if (st == SG_OK) return;
+    ++L->failures;
+    double *qi = L->q + i * (size_t)nq, *qdi = L->qd + i * (size_t)nq, *qddi = L->qdd + i * (size_t)nq;
+    double *oi = L->obs + i * (size_t)nobs;
+    for (int j = 0; j < nq; ++j) qi[j] = qdi[j] = qddi[j] = 0.0;
+    for (int j = 0; j < nobs; ++j) oi[j] = 0.0;
+    if (L->frc != NULL)
+        for (int j = 0; j < nfo; ++j) L->frc[i * (size_t)nfo + j] = 0.0;
+}
+
+/* Position i from its solved coordinates (its row of q; cq their cos, sin): motion (or the rates and the wanted
+ * groups: the same values to the bit), the rates' error estimate and the singular check, forces, then
+ * sg_closed_settle. The inputs x, cx, xd, xdd are L's, set for position i. */
+SG_INLINE void sg_closed_finish(sg_closed_loop *L, size_t i, const double *cq, const sg_closed_kernels K)
+{
+    const int nq = L->nq, nobs = L->nobs;
+    const double *qi = L->q + i * (size_t)nq;
+    double *qdi = L->qd + i * (size_t)nq, *qddi = L->qdd + i * (size_t)nq, *oi = L->obs + i * (size_t)nobs;
+    double cond = 1.0, est = 0.0;
+    int st;
+    if (L->want == NULL) {
+        st = K.motion(qi, cq, L->x, L->cx, L->xd, L->xdd, L->c, qdi, qddi, oi, &cond);
+    } else {
+        st = K.rates(qi, cq, L->x, L->cx, L->xd, L->xdd, L->c, qdi, qddi, &cond);
+        for (int g = 0; g < L->m->ngroup && st == SG_OK; ++g)
+            if (L->want[g]) st = K.observe(qi, cq, L->x, L->cx, L->xd, L->xdd, L->c, qdi, qddi, g, oi);
+    }
+    if (st == SG_SINGULAR) {
+        est = INFINITY;
+    } else if (st == SG_OK) {
+        est = cond * (SG_EPS + cond * SG_EPS);
+        if (!(est <= L->opt->singular_tol) && !L->opt->keep_singular) st = SG_SINGULAR;
+    }
+    if (st == SG_OK && L->frc != NULL)
+        st = K.forces(qi, cq, L->x, L->cx, L->xd, L->c, oi, L->gv,
+                      L->loads ? L->loads + i * (size_t)L->nload : L->no_loads, L->frc + i * (size_t)L->nfo);
+    sg_closed_settle(L, i, st, est);
+}
+
+/* Position i solved in closed form and finished: its inputs set (cos, sin of the shaft angle only where it
+ * changed), the dyad chain, each angle coordinate unwrapped against the last solution, then sg_closed_finish (a
+ * position that does not assemble: sg_closed_settle with its status). */
+SG_INLINE void sg_closed_step(sg_closed_loop *L, size_t i, const sg_closed_kernels K)
+{
+    const int nq = L->nq;
+    double *qi = L->q + i * (size_t)nq;
+    double cq[2 * SG_MAX_Q];
+    const double ph = L->phi[i];
+    L->xd[0] = L->omega[i];
+    L->xdd[0] = L->alpha[i];
+    if (L->x[0] != ph) {
+        L->x[0] = ph;
+        sg_sincos_inl(ph, &L->cx[0], &L->cx[1]);
+    }
+    if (!isfinite(ph + L->omega[i] + L->alpha[i])) {
+        sg_closed_settle(L, i, SG_NAN_INPUT, 0.0);
+        return;
+    }
+    const int st = K.closed(L->x, L->cx, L->c, L->branch, qi, cq);
+    if (st != SG_OK) {
+        sg_closed_settle(L, i, st, 0.0);
+        return;
+    }
+    if (L->have_last)
+        for (int j = 0; j < nq; ++j)
+            if (L->m->coord_is_angle[j]) {
+                const double turns = (L->last[j] - qi[j]) * (1.0 / SG_TWO_PI);
+                if (fabs(turns) > 0.5) qi[j] += SG_TWO_PI * nearbyint(turns);
+            }
+    for (int j = 0; j < nq; ++j) L->last[j] = qi[j];
+    L->have_last = 1;
+    sg_closed_finish(L, i, cq, K);
+}
+
+/* The closed-form sweep of the request r with the kernels given (r->trig and r->cols are the SIMD loop's: this
+ * loop computes its own cos, sin and writes rows only). Returns the positions that failed. */
+SG_INLINE size_t sg_closed_sweep(const sg_mechanism *m, const sg_request *r, const sg_closed_kernels K)
+{
+    sg_closed_loop L;
+    sg_closed_setup(&L, m, r, K.constants);
+    const size_t n = r->n, *order = r->order;
+    for (size_t k = 0; k < n; ++k) sg_closed_step(&L, order ? order[k] : k, K);
+    return L.failures;
+}
 
 /* The SIMD variant of the loop and its vector helpers (where the build has them). */
 #include "sg_simd.h"

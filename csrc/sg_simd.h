@@ -10,7 +10,7 @@
  * (fewer spills) and one libmvec call for eight angles.
  * No -ffast-math: GCC vector extensions with the ISO C default of no FMA contraction, NaN tests kept.
  *
- * A generated file with a closed form instantiates SG_SIMD_SWEEP_BODY with vector twins of its closed, motion
+ * A generated file with a closed form passes sgv_closed_sweep the vector twins of its closed, motion
  * and forces kernels (sewgen/derive/kernels.py), which compute every lane whatever happens and return a lane
  * mask of what they vouch for. The loop takes a block's vector results only where they are clearly good: the
  * inputs finite, every dyad closing with a margin (SG_SIMD_MARGIN: the scalar loop decides triangles that only
@@ -131,7 +131,7 @@ SG_VINLINE sg_vd sgv_fabs(sg_vd a) { return (sg_vd)((sg_vm)a & sgv_iset1(0x7ffff
 SG_VINLINE sg_vd sgv_fmax(sg_vd a, sg_vd b) { return sgv_select(a > b, a, b); }
 
 /* The forces twin of a mechanism whose forces have no vector form: never called (its sg_<m>_forces_in_simd says
- * no, and a force sweep then runs scalar), there to fill SG_SIMD_SWEEP_BODY's argument. */
+ * no, and a force sweep then runs scalar), there to fill the sgv_kernels of a file without them. */
 SG_VINLINE sg_vm sgv_no_forces(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd,
                                const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out)
 {
@@ -457,249 +457,298 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
     for (int k = 0; k < cols->n; ++k) cols->dst[k][i] = *SG_FLAT_COLUMN(cols->col[k], nq, qi, qdi, qddi, oi);
 }
 
+/* The SIMD twins' types (the signatures sewgen/derive/kernels.py VECTOR_SIGNATURES gives them; the compiler checks
+ * the two agree where a generated file passes its twins to the loops below). */
+typedef sg_vm (*sgv_closed_fn)(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles,
+                               sg_vd *q, sg_vd *cq);
+typedef sg_vm (*sgv_motion_fn)(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd,
+                               const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond);
+typedef sg_vm (*sgv_rates_fn)(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd,
+                              const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond);
+typedef sg_vm (*sgv_observe_fn)(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd,
+                                const sg_vd *xdd, const double *c, const sg_vd *qd, const sg_vd *qdd, int group,
+                                sg_vd *obs);
+typedef sg_vm (*sgv_forces_fn)(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd,
+                               const double *c, const sg_vd *obs, const double *gv, const sg_vd *ld, sg_vd *out);
+typedef void (*sgv_residual_fn)(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const double *c,
+                                sg_vd *r, sg_vd *jac);
+typedef sg_vm (*sgv_lu_factor_fn)(sg_vd *a, sg_vm *piv);
+typedef void (*sgv_lu_solve_fn)(const sg_vd *lu, const sg_vm *piv, sg_vd *b);
+typedef void (*sgv_blocks_fn)(const sg_vd *jac, sg_vd *out);
+typedef int (*sgv_forces_in_simd_fn)(const double *c);
+
+/* A mechanism's vector twins, as one generated file passes them to the loops below (constant arguments of
+ * always-inline functions: its flatten attribute inlines every one). nobs and nfo: its observables and force
+ * outputs (literals: the vectors' arrays on the stack are sized by them). */
+typedef struct sgv_kernels {
+    sgv_closed_fn closed;
+    sgv_motion_fn motion;
+    sgv_rates_fn rates;
+    sgv_observe_fn observe;
+    sgv_forces_fn forces;
+    sgv_forces_in_simd_fn forces_in_simd;
+    int nobs, nfo;
+} sgv_kernels;
+
+/* A mechanism's vector twins for the SIMD Newton (constant arguments, inlined; nq a literal: the Jacobian's vectors
+ * on the stack are sized by it). */
+typedef struct sgv_newton_kernels {
+    sgv_residual_fn residual;
+    sgv_lu_factor_fn lu_factor;
+    sgv_lu_solve_fn lu_solve;
+    sgv_blocks_fn blocks;
+    int nq;
+} sgv_newton_kernels;
+
 /* The SIMD closed-form sweep: blocks of SG_W positions in solving order (the last block padded with its last
- * position), the vector kernels CLOSED_V, MOTION_V (NOBS observables; with want, RATES_V and the wanted groups'
- * OBSERVE_V, whose rows alone are stored) and, for forces (frc not NULL), FORCES_V
- * (NFO outputs, loads transposed in), and the scalar step of csrc/sg_runtime.h for every block or lane the
- * vector kernels do not vouch for (see the top of this file). A force sweep the vector forces cannot do
- * (FORCES_IN_SIMD: friction on, or no vector form) runs the scalar loop SCALAR_SWEEP whole. The scalar
- * fallbacks call the descriptor's own kernels (m->closed, m->motion, ...: the same code, so the same values to
- * the bit) rather than inlining a third copy of them: they run only for lanes the vector kernels refuse, and the
- * copies doubled the file's compile time, under the sanitizers above all. Angle coordinates are unwrapped
- * lane after lane against the last solution, as the scalar loop does (tested a vector at once: where no lane
- * is over half a turn from the one before, the scalar loop changes none). A kinematic sweep given cols
- * (sg_columns, at most SG_MAX_DIRECT) stores those columns' vectors straight to their arrays, SG_W contiguous
- * positions at a time, and no row: a lane the scalar step solves gets its rows, then its columns from them. */
-#define SG_SIMD_SWEEP_BODY(CONSTANTS, SCALAR_SWEEP, CLOSED_V, MOTION_V, RATES_V, OBSERVE_V, FORCES_V,        \
-                           FORCES_IN_SIMD, NOBS, NFO)                                              \
-    {                                                                                              \
-        SG_CLOSED_SETUP(CONSTANTS)                                                                 \
-        if (frc != NULL && !FORCES_IN_SIMD(c))                                                     \
-            return SCALAR_SWEEP(m, n, phi, omega, alpha, held, p, branch, opt, order, gv, loads, q, qd, qdd, \
-                                obs, err, frc, status, want, trig, NULL);                          \
-        sg_vd vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q], vld[SG_MAX_LOAD];    \
-        for (int k = 1; k < nx; ++k) {                                                             \
-            vx[k] = sgv_set1(x[k]);                                                                \
-            vcx[2 * k] = sgv_set1(cx[2 * k]);                                                      \
-            vcx[2 * k + 1] = sgv_set1(cx[2 * k + 1]);                                              \
-            vxd[k] = vxdd[k] = sgv_set1(0.0);                                                      \
-        }                                                                                          \
-        if (frc != NULL && loads == NULL)                                                          \
-            for (int k = 0; k < nload; ++k) vld[k] = sgv_set1(0.0);                                \
-        const sg_vd accept = sgv_set1(0.25 * opt->singular_tol);                                   \
-        /* the angles (the dyads' atan2) where anything reads them: every output, the caller's coordinates \
-         * (want[ngroup]), a wanted group or the rates that read an angle itself (group_angles) */ \
-        int angles = want == NULL || want[m->ngroup] || m->group_angles[m->ngroup];               \
-        for (int g = 0; g < m->ngroup && !angles; ++g) angles = want[g] && m->group_angles[g];     \
-        /* the angle coordinates the loop unwraps (none where it skips the angles: their values are never read, \
-         * and a lane the scalar step solves unwraps against the last one it solved, or zero) */  \
-        int angle_q[SG_MAX_Q], nangle = 0;                                                         \
-        for (int j = 0; j < nq; ++j) {                                                             \
-            last[j] = 0.0;                                                                         \
-            if (angles && m->coord_is_angle[j]) angle_q[nangle++] = j;                             \
-        }                                                                                          \
-        sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1];    \
-        const sg_vd *csrc[SG_MAX_DIRECT]; /* the vector each direct column is stored from */     \
-        if (cols != NULL && (frc != NULL || cols->n < 1 || cols->n > SG_MAX_DIRECT)) cols = NULL; \
-        for (int k = 0; cols != NULL && k < cols->n; ++k)                                          \
-            csrc[k] = SG_FLAT_COLUMN(cols->col[k], nq, vq, vqd, vqdd, vobs);                       \
-        if (cols != NULL) cols->written = 1;                                                       \
-        const int ncol = cols != NULL ? cols->n : 0;                                               \
-        double *const *cdst = cols != NULL ? cols->dst : NULL;                                     \
-        /* the wanted groups in a list, once a sweep (ngroup <= SG_MAX_GROUP wherever want is set) */ \
-        int wanted[SG_MAX_GROUP], nwanted = 0;                                                     \
-        for (int g = 0; want != NULL && g < m->ngroup; ++g)                                        \
-            if (want[g]) wanted[nwanted++] = g;                                                    \
-        for (size_t k = 0; k < n; k += SG_W) {                                                     \
-            const int lanes = n - k < SG_W ? (int)(n - k) : SG_W;                                  \
-            const int contiguous = order == NULL && lanes == SG_W;                                 \
-            size_t idx[SG_W];                                                                      \
-            sg_vd ph, om, al;                                                                      \
-            if (contiguous) { /* loads: no lane-by-lane stores read back */                        \
-                for (int l = 0; l < SG_W; ++l) idx[l] = k + (size_t)l;                             \
-                ph = sgv_loadu(phi + k);                                                           \
-                om = sgv_loadu(omega + k);                                                         \
-                al = sgv_loadu(alpha + k);                                                         \
-            } else {                                                                               \
-                for (int l = 0; l < SG_W; ++l) {                                                   \
-                    const size_t kk = k + (size_t)(l < lanes ? l : lanes - 1);                     \
-                    idx[l] = order ? order[kk] : kk;                                               \
-                    ph[l] = phi[idx[l]];                                                           \
-                    om[l] = omega[idx[l]];                                                         \
-                    al[l] = alpha[idx[l]];                                                         \
-                }                                                                                  \
-            }                                                                                      \
-            int vector_block = sgv_all(sgv_isfinite(ph + om + al));                                \
-            if (vector_block) {                                                                    \
-                vx[0] = ph;                                                                        \
-                vxd[0] = om;                                                                       \
-                vxdd[0] = al;                                                                      \
-                if (trig != NULL && contiguous) { /* sg_sweep_designs' table */                    \
-                    vcx[0] = sgv_loadu(trig + k);                                                  \
-                    vcx[1] = sgv_loadu(trig + n + k);                                              \
-                } else {                                                                           \
-                    sgv_sincos(ph, &vcx[0], &vcx[1]);                                              \
-                }                                                                                  \
-                vector_block = sgv_all(CLOSED_V(vx, vcx, c, branch, angles, vq, vcq));             \
-            }                                                                                      \
-            if (!vector_block) {                                                                   \
-                for (int l = 0; l < lanes; ++l) {                                                  \
-                    SG_CLOSED_STEP(m->closed, m->motion, m->rates, m->observe, m->forces, idx[l])  \
-                    if (cols != NULL)                                                              \
-                        sg_columns_from_rows(cols, nq, idx[l], q + idx[l] * (size_t)nq,            \
-                                             qd + idx[l] * (size_t)nq, qdd + idx[l] * (size_t)nq,  \
-                                             obs + idx[l] * (size_t)nobs);                         \
-                }                                                                                  \
-                continue;                                                                          \
-            }                                                                                      \
-            for (int a = 0; a < nangle; ++a) { /* no lane a half turn from the one before: none moves */ \
-                const int j = angle_q[a];                                                          \
-                const sg_vd v = vq[j];                                                             \
-                const sg_vd prev = sgv_shift_in(have_last ? last[j] : v[0], v);                    \
-                if (!sgv_none(sgv_fabs((prev - v) * (1.0 / two_pi)) > sgv_set1(0.5)))             \
-                    for (int l = have_last ? 0 : 1; l < SG_W; ++l) {                               \
-                        const double ref = l > 0 ? vq[j][l - 1] : last[j];                         \
-                        const double turns = (ref - vq[j][l]) * (1.0 / two_pi);                    \
-                        if (fabs(turns) > 0.5) vq[j][l] += two_pi * nearbyint(turns);              \
-                    }                                                                              \
-                last[j] = vq[j][SG_W - 1];                                                         \
-            }                                                                                      \
-            have_last = 1;                                                                         \
-            sg_vd vout[(NFO) + 1], vcond;                                                          \
-            sg_vm ok;                                                                              \
-            if (want == NULL) {                                                                    \
-                ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);            \
-            } else { /* the rates and the wanted groups: the motion twin's values to the bit */    \
-                ok = RATES_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);                   \
-                for (int t = 0; t < nwanted; ++t)                                                  \
-                    ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, wanted[t], vobs);   \
-            }                                                                                      \
-            const sg_vd vest = vcond * (eps + vcond * eps);                                        \
-            ok &= vest <= accept;                                                                  \
-            if (frc != NULL) {                                                                     \
-                if (loads != NULL) {                                                               \
-                    const double *rld[SG_W];                                                       \
-                    for (int l = 0; l < SG_W; ++l) rld[l] = loads + idx[l] * (size_t)nload;        \
-                    sgv_load_rows(rld, nload, vld);                                                \
-                }                                                                                  \
-                ok &= FORCES_V(vq, vcq, vx, vcx, vxd, c, vobs, gv, vld, vout);                     \
-            }                                                                                      \
-            if (cols != NULL) { /* the columns' SG_W positions at once (a padded lane: not stored) */ \
-                if (contiguous)                                                                    \
-                    for (int j = 0; j < ncol; ++j) sgv_storeu(cdst[j] + k, *csrc[j]);            \
-                else                                                                               \
-                    for (int j = 0; j < ncol; ++j)                                                 \
-                        for (int l = 0; l < lanes; ++l) cdst[j][idx[l]] = (*csrc[j])[l];           \
-            } else { /* every lane's rows from registers (a padded lane repeats the last real one's \
-                      * row); a lane the vector kernels do not vouch for is rewritten below by the \
-                      * scalar motion and forces at its solved position */                         \
-                double *rq[SG_W], *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];               \
-                for (int l = 0; l < SG_W; ++l) {                                                   \
-                    rq[l] = q + idx[l] * (size_t)nq;                                               \
-                    rqd[l] = qd + idx[l] * (size_t)nq;                                             \
-                    rqdd[l] = qdd + idx[l] * (size_t)nq;                                           \
-                    robs[l] = obs + idx[l] * (size_t)nobs;                                         \
-                    rfrc[l] = frc != NULL ? frc + idx[l] * (size_t)nfo : NULL;                     \
-                }                                                                                  \
-                sgv_store_rows(vq, nq, rq);                                                        \
-                sgv_store_rows(vqd, nq, rqd);                                                      \
-                sgv_store_rows(vqdd, nq, rqdd);                                                    \
-                sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, (NOBS), robs); \
-                if (frc != NULL) sgv_store_rows(vout, (NFO), rfrc);                                \
-            }                                                                                      \
-            if (contiguous && sgv_all(ok)) { /* the usual block: all its statuses at once */       \
-                for (int l = 0; l < SG_W; ++l) status[k + (size_t)l] = SG_OK;                      \
-                if (err) sgv_storeu(err + k, vest);                                                \
-                continue;                                                                          \
-            }                                                                                      \
-            for (int l = 0; l < lanes; ++l) {                                                      \
-                const size_t i = idx[l];                                                           \
-                if (ok[l]) {                                                                       \
-                    status[i] = SG_OK;                                                             \
-                    if (err) err[i] = vest[l];                                                     \
-                    continue;                                                                      \
-                }                                                                                  \
-                double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq; \
-                double *oi = obs + i * (size_t)nobs;                                               \
-                double cq[2 * SG_MAX_Q];                                                           \
-                for (int j = 0; j < nq; ++j) qi[j] = vq[j][l]; /* the lane's solved coordinates */ \
-                for (int j = 0; j < 2 * nq; ++j) cq[j] = vcq[j][l];                                \
-                x[0] = ph[l];                                                                      \
-                cx[0] = vcx[0][l];                                                                 \
-                cx[1] = vcx[1][l];                                                                 \
-                xd[0] = om[l];                                                                     \
-                xdd[0] = al[l];                                                                    \
-                int st = SG_OK;                                                                    \
-                SG_CLOSED_FINISH(m->motion, m->rates, m->observe, m->forces)                      \
-                if (cols != NULL) sg_columns_from_rows(cols, nq, i, qi, qdi, qddi, oi);            \
-            }                                                                                      \
-        }                                                                                          \
-        return failures;                                                                           \
+ * position), the vector kernels of K (closed; motion, or with r->want the rates and the wanted groups' observe,
+ * whose rows alone are stored; for forces, r->frc, forces with the loads transposed in), and the scalar step of
+ * csrc/sg_runtime.h (sg_closed_step, sg_closed_finish) for every block or lane the vector kernels do not vouch for
+ * (see the top of this file). A force sweep the vector forces cannot do (K's forces_in_simd: friction on, or no
+ * vector form) runs the scalar loop scalar_sweep whole. The scalar fallbacks call the descriptor's own kernels
+ * (m->closed, m->motion, ...: the same code, so the same values to the bit) rather than inlining a third copy of
+ * them: they run only for lanes the vector kernels refuse, and the copies doubled the file's compile time, under
+ * the sanitizers above all. Angle coordinates are unwrapped lane after lane against the last solution, as the
+ * scalar loop does (tested a vector at once: where no lane is over half a turn from the one before, the scalar
+ * loop changes none). A kinematic sweep given r->cols (sg_columns, at most SG_MAX_DIRECT) stores those columns'
+ * vectors straight to their arrays, SG_W contiguous positions at a time, and no row: a lane the scalar step
+ * solves gets its rows, then its columns from them. */
+SG_VINLINE size_t sgv_closed_sweep(const sg_mechanism *m, const sg_request *r, sg_constants_fn constants,
+                                   sg_sweep_fn scalar_sweep, const sgv_kernels K)
+{
+    const sg_closed_kernels D = sg_descriptor_kernels(m); /* the scalar step's: calls through the descriptor */
+    sg_closed_loop L;
+    sg_closed_setup(&L, m, r, constants);
+    const double *c = L.c;
+    if (L.frc != NULL && !K.forces_in_simd(c)) return scalar_sweep(m, r);
+    const int nq = L.nq, nx = L.nx, nobs = L.nobs, nload = L.nload;
+    const size_t n = r->n, *order = r->order;
+    const double *phi = L.phi, *omega = L.omega, *alpha = L.alpha, *loads = L.loads, *gv = L.gv, *trig = r->trig;
+    const unsigned char *want = L.want;
+    double *q = L.q, *qd = L.qd, *qdd = L.qdd, *obs = L.obs, *err = L.err, *frc = L.frc;
+    int *status = L.status;
+    sg_columns *cols = r->cols;
+    sg_vd vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q], vld[SG_MAX_LOAD];
+    for (int k = 1; k < nx; ++k) {
+        vx[k] = sgv_set1(L.x[k]);
+        vcx[2 * k] = sgv_set1(L.cx[2 * k]);
+        vcx[2 * k + 1] = sgv_set1(L.cx[2 * k + 1]);
+        vxd[k] = vxdd[k] = sgv_set1(0.0);
     }
+    if (frc != NULL && loads == NULL)
+        for (int k = 0; k < nload; ++k) vld[k] = sgv_set1(0.0);
+    const sg_vd accept = sgv_set1(0.25 * L.opt->singular_tol);
+    /* the angles (the dyads' atan2) where anything reads them: every output, the caller's coordinates
+     * (want[ngroup]), a wanted group or the rates that read an angle itself (group_angles) */
+    int angles = want == NULL || want[m->ngroup] || m->group_angles[m->ngroup];
+    for (int g = 0; g < m->ngroup && !angles; ++g) angles = want[g] && m->group_angles[g];
+    /* the angle coordinates the loop unwraps (none where it skips the angles: their values are never read, and a
+     * lane the scalar step solves unwraps against the last one it solved, or zero) */
+    int angle_q[SG_MAX_Q], nangle = 0;
+    for (int j = 0; j < nq; ++j) {
+        L.last[j] = 0.0;
+        if (angles && m->coord_is_angle[j]) angle_q[nangle++] = j;
+    }
+    sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[K.nobs + 1];
+    const sg_vd *csrc[SG_MAX_DIRECT]; /* the vector each direct column is stored from */
+    if (cols != NULL && (frc != NULL || cols->n < 1 || cols->n > SG_MAX_DIRECT)) cols = NULL;
+    for (int k = 0; cols != NULL && k < cols->n; ++k) csrc[k] = SG_FLAT_COLUMN(cols->col[k], nq, vq, vqd, vqdd, vobs);
+    if (cols != NULL) cols->written = 1;
+    const int ncol = cols != NULL ? cols->n : 0;
+    double *const *cdst = cols != NULL ? cols->dst : NULL;
+    /* the wanted groups in a list, once a sweep (ngroup <= SG_MAX_GROUP wherever want is set) */
+    int wanted[SG_MAX_GROUP], nwanted = 0;
+    for (int g = 0; want != NULL && g < m->ngroup; ++g)
+        if (want[g]) wanted[nwanted++] = g;
+    for (size_t k = 0; k < n; k += SG_W) {
+        const int lanes = n - k < SG_W ? (int)(n - k) : SG_W;
+        const int contiguous = order == NULL && lanes == SG_W;
+        size_t idx[SG_W];
+        sg_vd ph, om, al;
+        if (contiguous) { /* loads: no lane-by-lane stores read back */
+            for (int l = 0; l < SG_W; ++l) idx[l] = k + (size_t)l;
+            ph = sgv_loadu(phi + k);
+            om = sgv_loadu(omega + k);
+            al = sgv_loadu(alpha + k);
+        } else {
+            for (int l = 0; l < SG_W; ++l) {
+                const size_t kk = k + (size_t)(l < lanes ? l : lanes - 1);
+                idx[l] = order ? order[kk] : kk;
+                ph[l] = phi[idx[l]];
+                om[l] = omega[idx[l]];
+                al[l] = alpha[idx[l]];
+            }
+        }
+        int vector_block = sgv_all(sgv_isfinite(ph + om + al));
+        if (vector_block) {
+            vx[0] = ph;
+            vxd[0] = om;
+            vxdd[0] = al;
+            if (trig != NULL && contiguous) { /* sg_sweep_designs' table */
+                vcx[0] = sgv_loadu(trig + k);
+                vcx[1] = sgv_loadu(trig + n + k);
+            } else {
+                sgv_sincos(ph, &vcx[0], &vcx[1]);
+            }
+            vector_block = sgv_all(K.closed(vx, vcx, c, L.branch, angles, vq, vcq));
+        }
+        if (!vector_block) {
+            for (int l = 0; l < lanes; ++l) {
+                const size_t i = idx[l];
+                sg_closed_step(&L, i, D);
+                if (cols != NULL)
+                    sg_columns_from_rows(cols, nq, i, q + i * (size_t)nq, qd + i * (size_t)nq, qdd + i * (size_t)nq,
+                                         obs + i * (size_t)nobs);
+            }
+            continue;
+        }
+        for (int a = 0; a < nangle; ++a) { /* no lane a half turn from the one before: none moves */
+            const int j = angle_q[a];
+            const sg_vd v = vq[j];
+            const sg_vd prev = sgv_shift_in(L.have_last ? L.last[j] : v[0], v);
+            if (!sgv_none(sgv_fabs((prev - v) * (1.0 / SG_TWO_PI)) > sgv_set1(0.5)))
+                for (int l = L.have_last ? 0 : 1; l < SG_W; ++l) {
+                    const double ref = l > 0 ? vq[j][l - 1] : L.last[j];
+                    const double turns = (ref - vq[j][l]) * (1.0 / SG_TWO_PI);
+                    if (fabs(turns) > 0.5) vq[j][l] += SG_TWO_PI * nearbyint(turns);
+                }
+            L.last[j] = vq[j][SG_W - 1];
+        }
+        L.have_last = 1;
+        sg_vd vout[K.nfo + 1], vcond;
+        sg_vm ok;
+        if (want == NULL) {
+            ok = K.motion(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);
+        } else { /* the rates and the wanted groups: the motion twin's values to the bit */
+            ok = K.rates(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);
+            for (int t = 0; t < nwanted; ++t) ok &= K.observe(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, wanted[t], vobs);
+        }
+        const sg_vd vest = vcond * (SG_EPS + vcond * SG_EPS);
+        ok &= vest <= accept;
+        if (frc != NULL) {
+            if (loads != NULL) {
+                const double *rld[SG_W];
+                for (int l = 0; l < SG_W; ++l) rld[l] = loads + idx[l] * (size_t)nload;
+                sgv_load_rows(rld, nload, vld);
+            }
+            ok &= K.forces(vq, vcq, vx, vcx, vxd, c, vobs, gv, vld, vout);
+        }
+        if (cols != NULL) { /* the columns' SG_W positions at once (a padded lane: not stored) */
+            if (contiguous)
+                for (int j = 0; j < ncol; ++j) sgv_storeu(cdst[j] + k, *csrc[j]);
+            else
+                for (int j = 0; j < ncol; ++j)
+                    for (int l = 0; l < lanes; ++l) cdst[j][idx[l]] = (*csrc[j])[l];
+        } else { /* every lane's rows from registers (a padded lane repeats the last real one's row); a lane the
+                  * vector kernels do not vouch for is rewritten below by the scalar motion and forces at its
+                  * solved position */
+            double *rq[SG_W], *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];
+            for (int l = 0; l < SG_W; ++l) {
+                rq[l] = q + idx[l] * (size_t)nq;
+                rqd[l] = qd + idx[l] * (size_t)nq;
+                rqdd[l] = qdd + idx[l] * (size_t)nq;
+                robs[l] = obs + idx[l] * (size_t)nobs;
+                rfrc[l] = frc != NULL ? frc + idx[l] * (size_t)L.nfo : NULL;
+            }
+            sgv_store_rows(vq, nq, rq);
+            sgv_store_rows(vqd, nq, rqd);
+            sgv_store_rows(vqdd, nq, rqdd);
+            sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, K.nobs, robs);
+            if (frc != NULL) sgv_store_rows(vout, K.nfo, rfrc);
+        }
+        if (contiguous && sgv_all(ok)) { /* the usual block: all its statuses at once */
+            for (int l = 0; l < SG_W; ++l) status[k + (size_t)l] = SG_OK;
+            if (err) sgv_storeu(err + k, vest);
+            continue;
+        }
+        for (int l = 0; l < lanes; ++l) {
+            const size_t i = idx[l];
+            if (ok[l]) {
+                status[i] = SG_OK;
+                if (err) err[i] = vest[l];
+                continue;
+            }
+            double *qi = q + i * (size_t)nq, cq[2 * SG_MAX_Q];
+            for (int j = 0; j < nq; ++j) qi[j] = vq[j][l]; /* the lane's solved coordinates */
+            for (int j = 0; j < 2 * nq; ++j) cq[j] = vcq[j][l];
+            L.x[0] = ph[l];
+            L.cx[0] = vcx[0][l];
+            L.cx[1] = vcx[1][l];
+            L.xd[0] = om[l];
+            L.xdd[0] = al[l];
+            sg_closed_finish(&L, i, cq, D);
+            if (cols != NULL) sg_columns_from_rows(cols, nq, i, qi, qd + i * (size_t)nq, qdd + i * (size_t)nq,
+                                                   obs + i * (size_t)nobs);
+        }
+    }
+    return L.failures;
+}
 
 /* The SIMD loop of a mechanism Newton solves (no closed form): csrc/sg_runtime.c's sweep solves the positions (in
- * blocks predicted from one history, SG_SIMD_NEWTON_BODY, or step by step) and hands them over SG_W at a time in
- * an sg_lanes; this finishes them with the vector kernels MOTION_V (NOBS observables; with want, RATES_V and the
- * wanted groups' OBSERVE_V, whose rows alone are stored) and, for forces (frc not NULL), FORCES_V (NFO outputs,
- * loads transposed in): the scalar kernels' operations lane by lane (Φ_q's block factor too), so the same values
- * to the bit. Every lane's rows are written; the bit mask returned says which lanes it vouches for: the factor
- * and every output finite, and the rates' estimated error at most a quarter of opt->singular_tol. The runtime
- * runs its scalar step on the other lanes, which decides the singular ones. lanes NULL: whether it can finish
- * this sweep's positions (FORCES_IN_SIMD: a force sweep without friction). */
-#define SG_SIMD_FINISH_BODY(MOTION_V, RATES_V, OBSERVE_V, FORCES_V, FORCES_IN_SIMD, NOBS, NFO)            \
-    {                                                                                              \
-        if (lanes == NULL) return frc == NULL || FORCES_IN_SIMD(c);                                \
-        const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo, nload = m->nload;          \
-        sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q]; \
-        sgv_load_lanes(lanes->q[0], SG_MAX_Q, nq, vq);                                             \
-        sgv_load_lanes(lanes->cq[0], 2 * SG_MAX_Q, 2 * nq, vcq);                                   \
-        sgv_load_lanes(lanes->x[0], SG_MAX_Q, nx, vx);                                             \
-        sgv_load_lanes(lanes->cx[0], 2 * SG_MAX_Q, 2 * nx, vcx);                                   \
-        sgv_load_lanes(lanes->xd[0], SG_MAX_Q, nx, vxd);                                           \
-        sgv_load_lanes(lanes->xdd[0], SG_MAX_Q, nx, vxdd);                                         \
-        sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[(NOBS) + 1], vout[(NFO) + 1], vcond, vres;       \
-        sg_vm ok;                                                                                  \
-        int wanted[SG_MAX_GROUP], nwanted = 0;                                                     \
-        if (want == NULL) {                                                                        \
-            ok = MOTION_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);                \
-        } else { /* the rates and the wanted groups: the motion twin's values to the bit */        \
-            ok = RATES_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);                       \
-            for (int g = 0; g < m->ngroup; ++g)                                                    \
-                if (want[g]) {                                                                     \
-                    wanted[nwanted++] = g;                                                         \
-                    ok &= OBSERVE_V(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs);           \
-                }                                                                                  \
-        }                                                                                          \
-        for (int l = 0; l < SG_W; ++l) /* the scalar loop's error estimate, from Newton's residual */ \
-            vres[l] = lanes->resid[l] > SG_RESID_FLOOR ? lanes->resid[l] : SG_EPS;                 \
-        const sg_vd vest = vcond * (SG_EPS + vcond * vres);                                        \
-        ok &= vest <= sgv_set1(0.25 * opt->singular_tol);                                          \
-        double *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];                                  \
-        for (int l = 0; l < SG_W; ++l) {                                                           \
-            const size_t i = lanes->index[l];                                                      \
-            rqd[l] = qd + i * (size_t)nq;                                                          \
-            rqdd[l] = qdd + i * (size_t)nq;                                                        \
-            robs[l] = obs + i * (size_t)nobs;                                                      \
-            rfrc[l] = frc != NULL ? frc + i * (size_t)nfo : NULL;                                  \
-        }                                                                                          \
-        if (frc != NULL) {                                                                         \
-            sg_vd vld[SG_MAX_LOAD];                                                                \
-            if (loads != NULL) {                                                                   \
-                const double *rld[SG_W];                                                           \
-                for (int l = 0; l < SG_W; ++l) rld[l] = loads + lanes->index[l] * (size_t)nload;   \
-                sgv_load_rows(rld, nload, vld);                                                    \
-            } else {                                                                               \
-                for (int k = 0; k < nload; ++k) vld[k] = sgv_set1(0.0);                            \
-            }                                                                                      \
-            ok &= FORCES_V(vq, vcq, vx, vcx, vxd, c, vobs, gv, vld, vout);                         \
-            sgv_store_rows(vout, (NFO), rfrc);                                                     \
-        }                                                                                          \
-        sgv_store_rows(vqd, nq, rqd);                                                              \
-        sgv_store_rows(vqdd, nq, rqdd);                                                            \
-        sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, (NOBS), robs);         \
-        for (int l = 0; l < SG_W; ++l) lanes->est[l] = vest[l];                                    \
-        return sgv_bits(ok) & ((1 << lanes->count) - 1);                                          \
+ * blocks predicted from one history, sgv_newton, or step by step) and hands them over SG_W at a time in an sg_lanes;
+ * this finishes them with the vector kernels of K (motion, K.nobs observables; with want, the rates and the wanted
+ * groups' observe, whose rows alone are stored) and, for forces (frc not NULL), K.forces (K.nfo outputs, loads
+ * transposed in): the scalar kernels' operations lane by lane (Φ_q's block factor too), so the same values to the
+ * bit. Every lane's rows are written; the bit mask returned says which lanes it vouches for: the factor and every
+ * output finite, and the rates' estimated error at most a quarter of opt->singular_tol. The runtime runs its scalar
+ * step on the other lanes, which decides the singular ones. lanes NULL: whether it can finish this sweep's
+ * positions (K.forces_in_simd: a force sweep without friction). */
+SG_VINLINE int sgv_finish(const sg_mechanism *m, sg_lanes *lanes, const double *c, const sg_options *opt,
+                          const double *gv, const double *loads, double *qd, double *qdd, double *obs, double *frc,
+                          const unsigned char *want, const sgv_kernels K)
+{
+    if (lanes == NULL) return frc == NULL || K.forces_in_simd(c);
+    const int nq = m->nq, nx = m->nx, nobs = m->nobs, nfo = m->nfo, nload = m->nload;
+    sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vxd[SG_MAX_Q], vxdd[SG_MAX_Q];
+    sgv_load_lanes(lanes->q[0], SG_MAX_Q, nq, vq);
+    sgv_load_lanes(lanes->cq[0], 2 * SG_MAX_Q, 2 * nq, vcq);
+    sgv_load_lanes(lanes->x[0], SG_MAX_Q, nx, vx);
+    sgv_load_lanes(lanes->cx[0], 2 * SG_MAX_Q, 2 * nx, vcx);
+    sgv_load_lanes(lanes->xd[0], SG_MAX_Q, nx, vxd);
+    sgv_load_lanes(lanes->xdd[0], SG_MAX_Q, nx, vxdd);
+    sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[K.nobs + 1], vout[K.nfo + 1], vcond, vres;
+    sg_vm ok;
+    int wanted[SG_MAX_GROUP], nwanted = 0;
+    if (want == NULL) {
+        ok = K.motion(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);
+    } else { /* the rates and the wanted groups: the motion twin's values to the bit */
+        ok = K.rates(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);
+        for (int g = 0; g < m->ngroup; ++g)
+            if (want[g]) {
+                wanted[nwanted++] = g;
+                ok &= K.observe(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs);
+            }
     }
+    for (int l = 0; l < SG_W; ++l) /* the scalar loop's error estimate, from Newton's residual */
+        vres[l] = lanes->resid[l] > SG_RESID_FLOOR ? lanes->resid[l] : SG_EPS;
+    const sg_vd vest = vcond * (SG_EPS + vcond * vres);
+    ok &= vest <= sgv_set1(0.25 * opt->singular_tol);
+    double *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];
+    for (int l = 0; l < SG_W; ++l) {
+        const size_t i = lanes->index[l];
+        rqd[l] = qd + i * (size_t)nq;
+        rqdd[l] = qdd + i * (size_t)nq;
+        robs[l] = obs + i * (size_t)nobs;
+        rfrc[l] = frc != NULL ? frc + i * (size_t)nfo : NULL;
+    }
+    if (frc != NULL) {
+        sg_vd vld[SG_MAX_LOAD];
+        if (loads != NULL) {
+            const double *rld[SG_W];
+            for (int l = 0; l < SG_W; ++l) rld[l] = loads + lanes->index[l] * (size_t)nload;
+            sgv_load_rows(rld, nload, vld);
+        } else {
+            for (int k = 0; k < nload; ++k) vld[k] = sgv_set1(0.0);
+        }
+        ok &= K.forces(vq, vcq, vx, vcx, vxd, c, vobs, gv, vld, vout);
+        sgv_store_rows(vout, K.nfo, rfrc);
+    }
+    sgv_store_rows(vqd, nq, rqd);
+    sgv_store_rows(vqdd, nq, rqdd);
+    sgv_store_observables(m, wanted, want == NULL ? -1 : nwanted, vobs, K.nobs, robs);
+    for (int l = 0; l < SG_W; ++l) lanes->est[l] = vest[l];
+    return sgv_bits(ok) & ((1 << lanes->count) - 1);
+}
 
 /* max_i |v_i| w_i lane by lane, NaN propagating (csrc/sg_runtime.c weighted_norm). */
 SG_VINLINE sg_vd sgv_weighted_norm(int n, const sg_vd *v, const double *w)
@@ -741,83 +790,91 @@ SG_VINLINE void sgv_shift_trig(const sg_mechanism *m, const sg_vd *q, const sg_v
     }
 }
 
+/* csrc/sg_runtime.h's sg_lagrange5_weights at SG_W shaft angles t: the same operations lane by lane. */
+SG_VINLINE void sgv_lagrange5_weights(sg_vd t, const double *x, const double *den, sg_vd *w)
+{
+    const sg_vd e0 = t - x[0], e1 = t - x[1], e2 = t - x[2], e3 = t - x[3], e4 = t - x[4];
+    const sg_vd p01 = e0 * e1, p012 = p01 * e2, s34 = e3 * e4, s234 = e2 * s34;
+    w[0] = e1 * s234 / den[0], w[1] = e0 * s234 / den[1], w[2] = p01 * s34 / den[2];
+    w[3] = p012 * e4 / den[3], w[4] = p012 * e3 / den[4];
+}
+
 /* Newton at SG_W positions of a block at once (csrc/sg_runtime.c solve_block: lanes first .. first + SG_W - 1 of
  * b; weights w): the scalar course lane by lane, the same operations, so the same values to the bit. Each lane's
- * start is the five-state prediction from b's history (SG_LAGRANGE5_*) and the step to it from the newest state
+ * start is the five-state prediction from b's history (sg_lagrange5_den, sgv_lagrange5_weights) and the step to it from the newest state
  * (sgv_shift_trig), a change no larger than b->lim allows; then the scalar newton()'s usual course at such a
- * prediction with the vector kernels RESIDUAL_V, LU_FACTOR_V and LU_SOLVE_V (nq = NQ), one full step: kept if it
+ * prediction with the vector kernels of N (residual, lu_factor, lu_solve; nq = N.nq), one full step: kept if it
  * lowers the residual where the start is within the tolerance (min_iter), else accepted if it lowers the residual
  * into the tolerance; and the correction no larger than b->lim either. A lane that takes that course gets its
  * solution, Newton's relative residual and its loops' orientation determinants (kernel 'blocks', from the Φ_q it
  * ends with) in b; the returned bit mask names those lanes. Any other lane (a damped step, more
  * iterations, a singular factor, a non-finite residual, too large a change, equal angles in the history) is left
  * to the scalar course. */
-#define SG_SIMD_NEWTON_BODY(RESIDUAL_V, LU_FACTOR_V, LU_SOLVE_V, BLOCKS_V, NQ)                      \
-    {                                                                                              \
-        const int nx = m->nx;                                                                      \
-        const double *const *hq = b->hq;                                                           \
-        double den[SG_HISTORY];                                                                    \
-        SG_LAGRANGE5_DEN(b->hphi, den);                                                            \
-        if (!(den[0] != 0.0 && den[1] != 0.0 && den[2] != 0.0 && den[3] != 0.0 && den[4] != 0.0)) \
-            return 0; /* equal angles in the history: predict()'s lower orders, scalar */          \
-        sg_vd vq[NQ], vcq[2 * (NQ)], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vqp[NQ], h0[NQ], hc[2 * (NQ)]; \
-        sgv_load_lanes(b->x[first], SG_MAX_Q, nx, vx);                                             \
-        sgv_load_lanes(b->cx[first], 2 * SG_MAX_Q, 2 * nx, vcx);                                   \
-        sg_vd wt[SG_HISTORY], dq[NQ];                                                              \
-        SG_LAGRANGE5_WEIGHTS(sg_vd, vx[0], b->hphi, den, wt);                                      \
-        sg_vm ok = sgv_true();                                                                     \
-        for (int i = 0; i < (NQ); ++i) {                                                           \
-            vqp[i] = SG_LAGRANGE5_VALUE(wt, hq, i);                                                \
-            h0[i] = sgv_set1(hq[0][i]);                                                            \
-            dq[i] = vqp[i] - hq[0][i];                                                             \
-            ok &= sgv_fabs(dq[i]) <= sgv_set1(b->lim[i]);                                          \
-        }                                                                                          \
-        for (int i = 0; i < 2 * (NQ); ++i) hc[i] = sgv_set1(b->hcq[i]);                            \
-        sgv_shift_trig(m, h0, hc, dq, (NQ), vq, vcq);                                              \
-        sg_vd r[NQ], jac[(NQ) * (NQ)], lu[(NQ) * (NQ)], tq[NQ], tcq[2 * (NQ)], rt[NQ];             \
-        sg_vd jt[(NQ) * (NQ)];                                                                     \
-        sg_vm piv[NQ];                                                                             \
-        RESIDUAL_V(vq, vcq, vx, vcx, c, r, jac);                                                   \
-        const sg_vd one = sgv_set1(1.0), tol = sgv_set1(opt->tol);                                 \
-        const sg_vd norm = sgv_weighted_norm((NQ), r, w);                                          \
-        const sg_vm within = norm <= one;                                                          \
-        const sg_vm exact = within & (norm * tol <= sgv_set1(SG_RESID_FLOOR)); /* no step taken */ \
-        for (int k = 0; k < (NQ) * (NQ); ++k) lu[k] = jac[k];                                      \
-        const sg_vm factored = LU_FACTOR_V(lu, piv);                                               \
-        for (int k = 0; k < (NQ); ++k) dq[k] = -r[k];                                              \
-        LU_SOLVE_V(lu, piv, dq);                                                                   \
-        sgv_shift_trig(m, vq, vcq, dq, (NQ), tq, tcq);                                             \
-        RESIDUAL_V(tq, tcq, vx, vcx, c, rt, jt);                                                   \
-        const sg_vd nt = sgv_weighted_norm((NQ), rt, w);                                           \
-        const sg_vm lower = nt < norm, take = ~exact & lower;                                      \
-        ok &= exact | (sgv_isfinite(norm) & factored & (within | (lower & (nt <= one))));          \
-        for (int k = 0; k < (NQ); ++k) {                                                           \
-            vq[k] = sgv_select(take, tq[k], vq[k]);                                                \
-            ok &= sgv_fabs(vq[k] - vqp[k]) <= sgv_set1(b->lim[k]);                                 \
-        }                                                                                          \
-        const int lanes = b->count - first < SG_W ? b->count - first : SG_W;                       \
-        const int mask = sgv_bits(ok) & ((1 << lanes) - 1);                                        \
-        if (mask == 0) return 0;                                                                   \
-        for (int k = 0; k < 2 * (NQ); ++k) vcq[k] = sgv_select(take, tcq[k], vcq[k]);              \
-        const sg_vd resid = sgv_select(take, nt, norm) * tol;                                      \
-        const int nblock = m->nblock;                                                              \
-        sg_vd vbv[SG_MAX_Q];                                                                       \
-        if (nblock > 0) { /* the loops' signs from the Φ_q the lane ends with */                  \
-            for (int k = 0; k < (NQ) * (NQ); ++k) jac[k] = sgv_select(take, jt[k], jac[k]);        \
-            BLOCKS_V(jac, vbv);                                                                    \
-        }                                                                                          \
-        double *pq[SG_W], *pcq[SG_W], *pbv[SG_W];                                                  \
-        for (int l = 0; l < SG_W; ++l) { /* straight to the rows of b's lanes (a spare lane's too) */ \
-            pq[l] = b->q[first + l];                                                               \
-            pcq[l] = b->cq[first + l];                                                             \
-            pbv[l] = b->bv[first + l];                                                             \
-            b->resid[first + l] = resid[l];                                                        \
-        }                                                                                          \
-        sgv_store_rows(vq, (NQ), pq);                                                              \
-        sgv_store_rows(vcq, 2 * (NQ), pcq);                                                        \
-        if (nblock > 0) sgv_store_rows(vbv, nblock, pbv);                                          \
-        return mask;                                                                               \
+SG_VINLINE int sgv_newton(const sg_mechanism *m, sg_block *b, int first, const double *c, const sg_options *opt,
+                          const double *w, const sgv_newton_kernels N)
+{
+    const int nx = m->nx, nq = N.nq;
+    const double *const *hq = b->hq;
+    double den[SG_HISTORY];
+    if (!sg_lagrange5_den(b->hphi, den)) return 0; /* equal angles in the history: predict()'s lower orders, scalar */
+    sg_vd vq[nq], vcq[2 * nq], vx[SG_MAX_Q], vcx[2 * SG_MAX_Q], vqp[nq], h0[nq], hc[2 * nq];
+    sgv_load_lanes(b->x[first], SG_MAX_Q, nx, vx);
+    sgv_load_lanes(b->cx[first], 2 * SG_MAX_Q, 2 * nx, vcx);
+    sg_vd wt[SG_HISTORY], dq[nq];
+    sgv_lagrange5_weights(vx[0], b->hphi, den, wt);
+    sg_vm ok = sgv_true();
+    for (int i = 0; i < nq; ++i) {
+        vqp[i] = SG_LAGRANGE5_VALUE(wt, hq, i);
+        h0[i] = sgv_set1(hq[0][i]);
+        dq[i] = vqp[i] - hq[0][i];
+        ok &= sgv_fabs(dq[i]) <= sgv_set1(b->lim[i]);
     }
+    for (int i = 0; i < 2 * nq; ++i) hc[i] = sgv_set1(b->hcq[i]);
+    sgv_shift_trig(m, h0, hc, dq, nq, vq, vcq);
+    sg_vd r[nq], jac[nq * nq], lu[nq * nq], tq[nq], tcq[2 * nq], rt[nq];
+    sg_vd jt[nq * nq];
+    sg_vm piv[nq];
+    N.residual(vq, vcq, vx, vcx, c, r, jac);
+    const sg_vd one = sgv_set1(1.0), tol = sgv_set1(opt->tol);
+    const sg_vd norm = sgv_weighted_norm(nq, r, w);
+    const sg_vm within = norm <= one;
+    const sg_vm exact = within & (norm * tol <= sgv_set1(SG_RESID_FLOOR)); /* no step taken */
+    for (int k = 0; k < nq * nq; ++k) lu[k] = jac[k];
+    const sg_vm factored = N.lu_factor(lu, piv);
+    for (int k = 0; k < nq; ++k) dq[k] = -r[k];
+    N.lu_solve(lu, piv, dq);
+    sgv_shift_trig(m, vq, vcq, dq, nq, tq, tcq);
+    N.residual(tq, tcq, vx, vcx, c, rt, jt);
+    const sg_vd nt = sgv_weighted_norm(nq, rt, w);
+    const sg_vm lower = nt < norm, take = ~exact & lower;
+    ok &= exact | (sgv_isfinite(norm) & factored & (within | (lower & (nt <= one))));
+    for (int k = 0; k < nq; ++k) {
+        vq[k] = sgv_select(take, tq[k], vq[k]);
+        ok &= sgv_fabs(vq[k] - vqp[k]) <= sgv_set1(b->lim[k]);
+    }
+    const int lanes = b->count - first < SG_W ? b->count - first : SG_W;
+    const int mask = sgv_bits(ok) & ((1 << lanes) - 1);
+    if (mask == 0) return 0;
+    for (int k = 0; k < 2 * nq; ++k) vcq[k] = sgv_select(take, tcq[k], vcq[k]);
+    const sg_vd resid = sgv_select(take, nt, norm) * tol;
+    const int nblock = m->nblock;
+    sg_vd vbv[SG_MAX_Q];
+    if (nblock > 0) { /* the loops' signs from the Φ_q the lane ends with */
+        for (int k = 0; k < nq * nq; ++k) jac[k] = sgv_select(take, jt[k], jac[k]);
+        N.blocks(jac, vbv);
+    }
+    double *pq[SG_W], *pcq[SG_W], *pbv[SG_W];
+    for (int l = 0; l < SG_W; ++l) { /* straight to the rows of b's lanes (a spare lane's too) */
+        pq[l] = b->q[first + l];
+        pcq[l] = b->cq[first + l];
+        pbv[l] = b->bv[first + l];
+        b->resid[first + l] = resid[l];
+    }
+    sgv_store_rows(vq, nq, pq);
+    sgv_store_rows(vcq, 2 * nq, pcq);
+    if (nblock > 0) sgv_store_rows(vbv, nblock, pbv);
+    return mask;
+}
 
 SG_SIMD_END
 #endif /* SG_SIMD */

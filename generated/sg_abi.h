@@ -52,52 +52,60 @@ typedef struct sg_options {
     int scalar;          /* 1: the scalar loop even where the mechanism has a SIMD one and the CPU runs it (a closed form: SG_LANES positions at a time; Newton: the solved positions' rates, observables and forces SG_LANES at a time) (tests: the two agree to rounding, with the same statuses) */
 } sg_options;
 
+struct sg_mechanism;
+struct sg_columns;
+struct sg_lanes;
+struct sg_block;
+
 /* One sweep's arrays and settings (sewgen.abi.REQUEST): what the sweeping entry points read. */
 typedef struct sg_request {
-    size_t n;              /* shaft positions */
-    const double *phi;     /* shaft angles (n), rad */
-    const double *omega;   /* shaft speed at each position (n), rad/s */
-    const double *alpha;   /* shaft acceleration at each position (n), rad/s^2 */
-    double speed;          /* sg_solve_lean: the one shaft speed (omega and alpha are written into blk) */
-    const double *held;    /* held inputs (nx - 1; sg_sweep_designs: nd rows) */
-    const double *p;       /* parameters (np; sg_sweep_designs: nd rows) */
-    const int *branch;     /* branch signs (nbranch; sg_sweep_designs: nd rows) */
-    const double *q_guess; /* Newton's start where no closed form exists (nq) */
-    const sg_options *opt; /* the options */
-    const size_t *order;   /* the order the positions are solved in (a permutation sorting phi), or NULL: as given (sg_solve_lean: phi must then ascend) */
-    const double *gv;      /* gravity (2) for the forces; NULL: kinematics only */
-    const double *loads;   /* load slots (n x nload), or NULL */
-    double *q;             /* out: coordinates (n x nq) */
-    double *qd;            /* out: their velocities (n x nq) */
-    double *qdd;           /* out: their accelerations (n x nq) */
-    double *obs;           /* out: observables (n x nobs) */
-    double *err;           /* out: each position's estimated relative error of the rates (n), or NULL */
-    double *frc;           /* out: force outputs (n x nfo) where gv is given */
-    int *status;           /* out: each position's status (n); sg_solve_lean: NULL puts them at blk's tail */
-    int nqa;               /* sg_solve_lean: how many angle coordinates to make continuous */
-    const int *qcols;      /* sg_solve_lean: their columns of q */
-    int noa;               /* sg_solve_lean: how many angle observables to make continuous */
-    const int *ocols;      /* sg_solve_lean: their columns of obs */
-    double *blk;           /* sg_solve_lean: one block for phi, omega, alpha, err, q, qd, qdd, obs (n rows each), then frc where gv is given */
-    size_t nd;             /* sg_sweep_designs: designs */
-    int ncheck;            /* sg_sweep_designs: the first ncheck constants must be finite */
-    int nangle;            /* sg_sweep_designs: how many flat columns are angles made continuous */
-    const int *angle_cols; /* sg_sweep_designs: those columns */
-    int nsel;              /* sg_sweep_designs: how many flat columns are kept */
-    const int *sel;        /* sg_sweep_designs: those columns */
-    double *out;           /* sg_sweep_designs: out[k*out_stride + d*n + i], NaN for a failed design */
-    size_t out_stride;     /* sg_sweep_designs: the stride of out between selected columns */
-    int nred;              /* sg_sweep_designs: how many reductions */
-    const int *red;        /* sg_sweep_designs: nred x 3: kind (enum sg_reduction), column, second column for the norm of two or -1 */
-    double *red_val;       /* sg_sweep_designs: red_val[k*red_stride + d], NaN for a failed design */
-    long long *red_idx;    /* sg_sweep_designs: the extremum's first position in the caller's order (-1 for rms, mean, a failed design) */
-    size_t red_stride;     /* sg_sweep_designs: the stride of red_val and red_idx */
-    double *work;          /* sg_sweep_designs: scratch of one design's sweep, n*(3nq+nobs+3) doubles */
-    int *work_status;      /* sg_sweep_designs: scratch statuses (n) */
-    int *design_status;    /* sg_sweep_designs: in: nonzero skips the design; out: the status of its first failing position, or SG_BAD_DESIGN (nd) */
-    long long *first_bad;  /* sg_sweep_designs: each design's first failing position, -1 for none (nd) */
-    long long *nbad;       /* sg_sweep_designs: positions failing with that status (nd), or NULL */
-    long long *last_bad;   /* sg_sweep_designs: the last of them (nd), or NULL */
+    size_t n;                  /* shaft positions */
+    const double *phi;         /* shaft angles (n), rad */
+    const double *omega;       /* shaft speed at each position (n), rad/s */
+    const double *alpha;       /* shaft acceleration at each position (n), rad/s^2 */
+    double speed;              /* sg_solve_lean: the one shaft speed (omega and alpha are written into blk) */
+    const double *held;        /* held inputs (nx - 1; sg_sweep_designs: nd rows) */
+    const double *p;           /* parameters (np; sg_sweep_designs: nd rows) */
+    const int *branch;         /* branch signs (nbranch; sg_sweep_designs: nd rows) */
+    const double *q_guess;     /* Newton's start where no closed form exists (nq) */
+    const sg_options *opt;     /* the options */
+    const size_t *order;       /* the order the positions are solved in (a permutation sorting phi), or NULL: as given (sg_solve_lean: phi must then ascend) */
+    const double *gv;          /* gravity (2) for the forces; NULL: kinematics only */
+    const double *loads;       /* load slots (n x nload), or NULL */
+    double *q;                 /* out: coordinates (n x nq) */
+    double *qd;                /* out: their velocities (n x nq) */
+    double *qdd;               /* out: their accelerations (n x nq) */
+    double *obs;               /* out: observables (n x nobs) */
+    double *err;               /* out: each position's estimated relative error of the rates (n), or NULL */
+    double *frc;               /* out: force outputs (n x nfo) where gv is given */
+    int *status;               /* out: each position's status (n); sg_solve_lean: NULL puts them at blk's tail */
+    int nqa;                   /* sg_solve_lean: how many angle coordinates to make continuous */
+    const int *qcols;          /* sg_solve_lean: their columns of q */
+    int noa;                   /* sg_solve_lean: how many angle observables to make continuous */
+    const int *ocols;          /* sg_solve_lean: their columns of obs */
+    double *blk;               /* sg_solve_lean: one block for phi, omega, alpha, err, q, qd, qdd, obs (n rows each), then frc where gv is given */
+    size_t nd;                 /* sg_sweep_designs: designs */
+    int ncheck;                /* sg_sweep_designs: the first ncheck constants must be finite */
+    int nangle;                /* sg_sweep_designs: how many flat columns are angles made continuous */
+    const int *angle_cols;     /* sg_sweep_designs: those columns */
+    int nsel;                  /* sg_sweep_designs: how many flat columns are kept */
+    const int *sel;            /* sg_sweep_designs: those columns */
+    double *out;               /* sg_sweep_designs: out[k*out_stride + d*n + i], NaN for a failed design */
+    size_t out_stride;         /* sg_sweep_designs: the stride of out between selected columns */
+    int nred;                  /* sg_sweep_designs: how many reductions */
+    const int *red;            /* sg_sweep_designs: nred x 3: kind (enum sg_reduction), column, second column for the norm of two or -1 */
+    double *red_val;           /* sg_sweep_designs: red_val[k*red_stride + d], NaN for a failed design */
+    long long *red_idx;        /* sg_sweep_designs: the extremum's first position in the caller's order (-1 for rms, mean, a failed design) */
+    size_t red_stride;         /* sg_sweep_designs: the stride of red_val and red_idx */
+    double *work;              /* sg_sweep_designs: scratch of one design's sweep, n*(3nq+nobs+3) doubles */
+    int *work_status;          /* sg_sweep_designs: scratch statuses (n) */
+    int *design_status;        /* sg_sweep_designs: in: nonzero skips the design; out: the status of its first failing position, or SG_BAD_DESIGN (nd) */
+    long long *first_bad;      /* sg_sweep_designs: each design's first failing position, -1 for none (nd) */
+    long long *nbad;           /* sg_sweep_designs: positions failing with that status (nd), or NULL */
+    long long *last_bad;       /* sg_sweep_designs: the last of them (nd), or NULL */
+    const unsigned char *want; /* the runtime's own (sg_sweep_designs' selected outputs; NULL: every observable): the ngroup groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the caller reads the coordinates (want[ngroup]) */
+    const double *trig;        /* the runtime's own (NULL: computed): the shaft angles' cos (n) then sin (n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design) */
+    struct sg_columns *cols;   /* the runtime's own (NULL: none; csrc/sg_runtime.h): columns the SIMD loop writes straight to their own arrays, setting cols->written, where q, qd, qdd and obs then hold only the rows its scalar steps wrote */
 } sg_request;
 
 /* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */
@@ -128,18 +136,14 @@ typedef void (*sg_blocks_fn)(const double *jac, double *out);
 /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
 typedef void (*sg_anchors_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out);
 
-struct sg_mechanism;
-struct sg_columns;
-struct sg_lanes;
-struct sg_block;
 /* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */
-/* the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not NULL) kinetostatics as sg_sweep with gravity; want (NULL: every observable) flags the ngroup groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the caller reads the coordinates (want[ngroup]); trig (NULL: computed) the shaft angles' cos (n) then sin (n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); cols (NULL: none; csrc/sg_runtime.h) columns the SIMD loop writes straight to their own arrays, setting cols->written, where q, qd, qdd and obs then hold only the rows its scalar steps wrote (the scalar loop ignores it); NULL without a closed form */
-typedef size_t (*sg_sweep_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols);
-/* the same sweep SG_LANES positions at a time (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY: 8 in AVX-512 or 4 in AVX2, the build's level); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
-typedef size_t (*sg_sweep_simd_fn)(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols);
-/* a Newton sweep's rates, observables and (frc not NULL) forces at up to SG_LANES solved positions at once (csrc/sg_simd.h, SG_SIMD_FINISH_BODY): their rows written, the bit mask of the lanes it vouches for returned, each one's estimated error in lanes->est; lanes NULL: 1 where it can finish this sweep's positions (forces: without friction only), 0 where the scalar loop must; NULL with a closed form, without SIMD in the build or without a vector form */
+/* the closed-form sweep of the request r with the file's kernels inlined (csrc/sg_runtime.h sg_closed_sweep), kinematics and (r->frc not NULL) kinetostatics as sg_sweep; r->want, r->trig and r->cols as sg_request says (this loop computes its own cos, sin and writes rows only); NULL without a closed form */
+typedef size_t (*sg_sweep_fn)(const struct sg_mechanism *m, const sg_request *r);
+/* the same sweep SG_LANES positions at a time (csrc/sg_simd.h sgv_closed_sweep: 8 in AVX-512 or 4 in AVX2, the build's level); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
+typedef size_t (*sg_sweep_simd_fn)(const struct sg_mechanism *m, const sg_request *r);
+/* a Newton sweep's rates, observables and (frc not NULL) forces at up to SG_LANES solved positions at once (csrc/sg_simd.h sgv_finish): their rows written, the bit mask of the lanes it vouches for returned, each one's estimated error in lanes->est; lanes NULL: 1 where it can finish this sweep's positions (forces: without friction only), 0 where the scalar loop must; NULL with a closed form, without SIMD in the build or without a vector form */
 typedef int (*sg_finish_simd_fn)(const struct sg_mechanism *m, struct sg_lanes *lanes, const double *c, const sg_options *opt, const double *gv, const double *loads, double *qd, double *qdd, double *obs, double *frc, const unsigned char *want);
-/* Newton at SG_LANES positions of a block at once (csrc/sg_simd.h, SG_SIMD_NEWTON_BODY): lanes first.. of b, each started from its prediction from b's history, weights w (kernel 'scales'); the bit mask of the lanes it solved the scalar course's way, each with its solution, residual and loops' signs (kernel 'blocks') written to b; NULL with a closed form, without SIMD in the build, over 16 coordinates or without an exact vector form of the residual */
+/* Newton at SG_LANES positions of a block at once (csrc/sg_simd.h sgv_newton): lanes first.. of b, each started from its prediction from b's history, weights w (kernel 'scales'); the bit mask of the lanes it solved the scalar course's way, each with its solution, residual and loops' signs (kernel 'blocks') written to b; NULL with a closed form, without SIMD in the build, over 16 coordinates or without an exact vector form of the residual */
 typedef int (*sg_newton_simd_fn)(const struct sg_mechanism *m, struct sg_block *b, int first, const double *c, const sg_options *opt, const double *w);
 
 /* One mechanism as the generated code describes it. */
@@ -173,10 +177,10 @@ typedef struct sg_mechanism {
     sg_lu_solve_fn lu_solve;             /* solve with a factor of kernel 'lu_factor' (sg_lu_solve with n = nq a literal), b overwritten */
     sg_blocks_fn blocks;                 /* the normalised determinant of each diagonal block of dPhi/dq (sewgen.derive.branches): its sign is that closing loop's assembly branch */
     sg_anchors_fn anchors;               /* world x, y of every drawing anchor (manifest "anchors"), then the cam arcs' radius and world normal sector (manifest "arcs"): nanchor_out values, for pictures of any mechanism */
-    sg_sweep_fn sweep;                   /* the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not NULL) kinetostatics as sg_sweep with gravity; want (NULL: every observable) flags the ngroup groups of observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the caller reads the coordinates (want[ngroup]); trig (NULL: computed) the shaft angles' cos (n) then sin (n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); cols (NULL: none; csrc/sg_runtime.h) columns the SIMD loop writes straight to their own arrays, setting cols->written, where q, qd, qdd and obs then hold only the rows its scalar steps wrote (the scalar loop ignores it); NULL without a closed form */
-    sg_sweep_simd_fn sweep_simd;         /* the same sweep SG_LANES positions at a time (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY: 8 in AVX-512 or 4 in AVX2, the build's level); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
-    sg_finish_simd_fn finish_simd;       /* a Newton sweep's rates, observables and (frc not NULL) forces at up to SG_LANES solved positions at once (csrc/sg_simd.h, SG_SIMD_FINISH_BODY): their rows written, the bit mask of the lanes it vouches for returned, each one's estimated error in lanes->est; lanes NULL: 1 where it can finish this sweep's positions (forces: without friction only), 0 where the scalar loop must; NULL with a closed form, without SIMD in the build or without a vector form */
-    sg_newton_simd_fn newton_simd;       /* Newton at SG_LANES positions of a block at once (csrc/sg_simd.h, SG_SIMD_NEWTON_BODY): lanes first.. of b, each started from its prediction from b's history, weights w (kernel 'scales'); the bit mask of the lanes it solved the scalar course's way, each with its solution, residual and loops' signs (kernel 'blocks') written to b; NULL with a closed form, without SIMD in the build, over 16 coordinates or without an exact vector form of the residual */
+    sg_sweep_fn sweep;                   /* the closed-form sweep of the request r with the file's kernels inlined (csrc/sg_runtime.h sg_closed_sweep), kinematics and (r->frc not NULL) kinetostatics as sg_sweep; r->want, r->trig and r->cols as sg_request says (this loop computes its own cos, sin and writes rows only); NULL without a closed form */
+    sg_sweep_simd_fn sweep_simd;         /* the same sweep SG_LANES positions at a time (csrc/sg_simd.h sgv_closed_sweep: 8 in AVX-512 or 4 in AVX2, the build's level); NULL where the build has no SIMD or the mechanism's kernels have no vector form */
+    sg_finish_simd_fn finish_simd;       /* a Newton sweep's rates, observables and (frc not NULL) forces at up to SG_LANES solved positions at once (csrc/sg_simd.h sgv_finish): their rows written, the bit mask of the lanes it vouches for returned, each one's estimated error in lanes->est; lanes NULL: 1 where it can finish this sweep's positions (forces: without friction only), 0 where the scalar loop must; NULL with a closed form, without SIMD in the build or without a vector form */
+    sg_newton_simd_fn newton_simd;       /* Newton at SG_LANES positions of a block at once (csrc/sg_simd.h sgv_newton): lanes first.. of b, each started from its prediction from b's history, weights w (kernel 'scales'); the bit mask of the lanes it solved the scalar course's way, each with its solution, residual and loops' signs (kernel 'blocks') written to b; NULL with a closed form, without SIMD in the build, over 16 coordinates or without an exact vector form of the residual */
 } sg_mechanism;
 
 /* LU with partial pivoting in place (row-major n x n); SG_SINGULAR below the pivot tolerance */

@@ -4284,10 +4284,18 @@ SG_VINLINE int sg_feed_forces_in_simd(const double *c)
 }
 
 static SG_FLATTEN int sg_feed_finish_simd(const struct sg_mechanism *m, struct sg_lanes *lanes, const double *c, const sg_options *opt, const double *gv, const double *loads, double *qd, double *qdd, double *obs, double *frc, const unsigned char *want)
-SG_SIMD_FINISH_BODY(sg_feed_motion_v, sg_feed_rates_v, sg_feed_observe_v, sg_feed_forces_v, sg_feed_forces_in_simd, 121, 65)
+{
+    const sgv_kernels k = { 0, sg_feed_motion_v, sg_feed_rates_v, sg_feed_observe_v, sg_feed_forces_v,
+                           sg_feed_forces_in_simd, 121, 65 };
+    return sgv_finish(m, lanes, c, opt, gv, loads, qd, qdd, obs, frc, want, k);
+}
 
 static SG_FLATTEN int sg_feed_newton_simd(const struct sg_mechanism *m, struct sg_block *b, int first, const double *c, const sg_options *opt, const double *w)
-SG_SIMD_NEWTON_BODY(sg_feed_residual_v, sg_feed_lu_factor_v, sg_feed_lu_solve_v, sg_feed_blocks_v, 7)
+{
+    const sgv_newton_kernels k = { sg_feed_residual_v, sg_feed_lu_factor_v, sg_feed_lu_solve_v,
+                                  sg_feed_blocks_v, 7 };
+    return sgv_newton(m, b, first, c, opt, w, k);
+}
 SG_SIMD_END
 #endif
 

@@ -907,10 +907,14 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[47] = c[46]*cq[3] + c[48]*cq[2] + t1;
 }
 
-/* sg_hook_drive_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY); never
- * inlined itself (the SIMD sweep calls it for the force sweeps it cannot do) */
-static SG_FLATTEN SG_NOINLINE size_t sg_hook_drive_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
-SG_CLOSED_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion, sg_hook_drive_rates, sg_hook_drive_observe, sg_hook_drive_forces)
+/* sg_hook_drive_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
+ * (the SIMD sweep calls it for the force sweeps it cannot do) */
+static SG_FLATTEN SG_NOINLINE size_t sg_hook_drive_sweep(const struct sg_mechanism *m, const sg_request *r)
+{
+    const sg_closed_kernels k = { sg_hook_drive_constants, sg_hook_drive_closed, sg_hook_drive_motion, sg_hook_drive_rates,
+                                 sg_hook_drive_observe, sg_hook_drive_forces };
+    return sg_closed_sweep(m, r, k);
+}
 
 /* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep SG_LANES positions at a
  * time (csrc/sg_simd.h): compiled for AVX-512 or AVX2 where the build has SIMD, called only where the CPU has it. */
@@ -1455,8 +1459,12 @@ SG_VINLINE int sg_hook_drive_forces_in_simd(const double *c)
     return c[93] == 0.0 && c[94] == 0.0 && c[95] == 0.0 && c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0;
 }
 
-static SG_FLATTEN size_t sg_hook_drive_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
-SG_SIMD_SWEEP_BODY(sg_hook_drive_constants, sg_hook_drive_sweep, sg_hook_drive_closed_v, sg_hook_drive_motion_v, sg_hook_drive_rates_v, sg_hook_drive_observe_v, sg_hook_drive_forces_v, sg_hook_drive_forces_in_simd, 69, 38)
+static SG_FLATTEN size_t sg_hook_drive_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
+{
+    const sgv_kernels k = { sg_hook_drive_closed_v, sg_hook_drive_motion_v, sg_hook_drive_rates_v, sg_hook_drive_observe_v,
+                           sg_hook_drive_forces_v, sg_hook_drive_forces_in_simd, 69, 38 };
+    return sgv_closed_sweep(m, r, sg_hook_drive_constants, sg_hook_drive_sweep, k);
+}
 SG_SIMD_END
 #endif
 

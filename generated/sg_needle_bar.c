@@ -539,10 +539,14 @@ void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, c
     out[31] = c[22] + q[0];
 }
 
-/* sg_needle_bar_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY); never
- * inlined itself (the SIMD sweep calls it for the force sweeps it cannot do) */
-static SG_FLATTEN SG_NOINLINE size_t sg_needle_bar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
-SG_CLOSED_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_rates, sg_needle_bar_observe, sg_needle_bar_forces)
+/* sg_needle_bar_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
+ * (the SIMD sweep calls it for the force sweeps it cannot do) */
+static SG_FLATTEN SG_NOINLINE size_t sg_needle_bar_sweep(const struct sg_mechanism *m, const sg_request *r)
+{
+    const sg_closed_kernels k = { sg_needle_bar_constants, sg_needle_bar_closed, sg_needle_bar_motion, sg_needle_bar_rates,
+                                 sg_needle_bar_observe, sg_needle_bar_forces };
+    return sg_closed_sweep(m, r, k);
+}
 
 /* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep SG_LANES positions at a
  * time (csrc/sg_simd.h): compiled for AVX-512 or AVX2 where the build has SIMD, called only where the CPU has it. */
@@ -862,8 +866,12 @@ SG_VINLINE int sg_needle_bar_forces_in_simd(const double *c)
     return c[50] == 0.0 && c[51] == 0.0 && c[52] == 0.0;
 }
 
-static SG_FLATTEN size_t sg_needle_bar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
-SG_SIMD_SWEEP_BODY(sg_needle_bar_constants, sg_needle_bar_sweep, sg_needle_bar_closed_v, sg_needle_bar_motion_v, sg_needle_bar_rates_v, sg_needle_bar_observe_v, sg_needle_bar_forces_v, sg_needle_bar_forces_in_simd, 51, 26)
+static SG_FLATTEN size_t sg_needle_bar_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
+{
+    const sgv_kernels k = { sg_needle_bar_closed_v, sg_needle_bar_motion_v, sg_needle_bar_rates_v, sg_needle_bar_observe_v,
+                           sg_needle_bar_forces_v, sg_needle_bar_forces_in_simd, 51, 26 };
+    return sgv_closed_sweep(m, r, sg_needle_bar_constants, sg_needle_bar_sweep, k);
+}
 SG_SIMD_END
 #endif
 

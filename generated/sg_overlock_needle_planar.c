@@ -680,10 +680,14 @@ void sg_overlock_needle_planar_anchors(const double *q, const double *cq, const 
     out[39] = c[49] + q[1];
 }
 
-/* sg_overlock_needle_planar_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY); never
- * inlined itself (the SIMD sweep calls it for the force sweeps it cannot do) */
-static SG_FLATTEN SG_NOINLINE size_t sg_overlock_needle_planar_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
-SG_CLOSED_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_planar_closed, sg_overlock_needle_planar_motion, sg_overlock_needle_planar_rates, sg_overlock_needle_planar_observe, sg_overlock_needle_planar_forces)
+/* sg_overlock_needle_planar_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
+ * (the SIMD sweep calls it for the force sweeps it cannot do) */
+static SG_FLATTEN SG_NOINLINE size_t sg_overlock_needle_planar_sweep(const struct sg_mechanism *m, const sg_request *r)
+{
+    const sg_closed_kernels k = { sg_overlock_needle_planar_constants, sg_overlock_needle_planar_closed, sg_overlock_needle_planar_motion, sg_overlock_needle_planar_rates,
+                                 sg_overlock_needle_planar_observe, sg_overlock_needle_planar_forces };
+    return sg_closed_sweep(m, r, k);
+}
 
 /* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep SG_LANES positions at a
  * time (csrc/sg_simd.h): compiled for AVX-512 or AVX2 where the build has SIMD, called only where the CPU has it. */
@@ -1058,8 +1062,12 @@ SG_VINLINE int sg_overlock_needle_planar_forces_in_simd(const double *c)
     return 1;
 }
 
-static SG_FLATTEN size_t sg_overlock_needle_planar_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
-SG_SIMD_SWEEP_BODY(sg_overlock_needle_planar_constants, sg_overlock_needle_planar_sweep, sg_overlock_needle_planar_closed_v, sg_overlock_needle_planar_motion_v, sg_overlock_needle_planar_rates_v, sg_overlock_needle_planar_observe_v, sg_overlock_needle_planar_forces_v, sg_overlock_needle_planar_forces_in_simd, 54, 26)
+static SG_FLATTEN size_t sg_overlock_needle_planar_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
+{
+    const sgv_kernels k = { sg_overlock_needle_planar_closed_v, sg_overlock_needle_planar_motion_v, sg_overlock_needle_planar_rates_v, sg_overlock_needle_planar_observe_v,
+                           sg_overlock_needle_planar_forces_v, sg_overlock_needle_planar_forces_in_simd, 54, 26 };
+    return sgv_closed_sweep(m, r, sg_overlock_needle_planar_constants, sg_overlock_needle_planar_sweep, k);
+}
 SG_SIMD_END
 #endif
 

@@ -589,10 +589,14 @@ void sg_take_up_anchors(const double *q, const double *cq, const double *x, cons
     out[27] = c[30]*cq[1] + c[5];
 }
 
-/* sg_take_up_sweep: the closed-form sweep with the kernels above inlined (SG_CLOSED_SWEEP_BODY); never
- * inlined itself (the SIMD sweep calls it for the force sweeps it cannot do) */
-static SG_FLATTEN SG_NOINLINE size_t sg_take_up_sweep(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
-SG_CLOSED_SWEEP_BODY(sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_rates, sg_take_up_observe, sg_take_up_forces)
+/* sg_take_up_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
+ * (the SIMD sweep calls it for the force sweeps it cannot do) */
+static SG_FLATTEN SG_NOINLINE size_t sg_take_up_sweep(const struct sg_mechanism *m, const sg_request *r)
+{
+    const sg_closed_kernels k = { sg_take_up_constants, sg_take_up_closed, sg_take_up_motion, sg_take_up_rates,
+                                 sg_take_up_observe, sg_take_up_forces };
+    return sg_closed_sweep(m, r, k);
+}
 
 /* The SIMD twins of the closed, motion, rates, observe and forces kernels and the sweep SG_LANES positions at a
  * time (csrc/sg_simd.h): compiled for AVX-512 or AVX2 where the build has SIMD, called only where the CPU has it. */
@@ -941,8 +945,12 @@ SG_VINLINE int sg_take_up_forces_in_simd(const double *c)
     return c[57] == 0.0 && c[58] == 0.0 && c[59] == 0.0;
 }
 
-static SG_FLATTEN size_t sg_take_up_sweep_simd(const struct sg_mechanism *m, size_t n, const double *phi, const double *omega, const double *alpha, const double *held, const double *p, const int *branch, const sg_options *opt, const size_t *order, const double *gv, const double *loads, double *q, double *qd, double *qdd, double *obs, double *err, double *frc, int *status, const unsigned char *want, const double *trig, struct sg_columns *cols)
-SG_SIMD_SWEEP_BODY(sg_take_up_constants, sg_take_up_sweep, sg_take_up_closed_v, sg_take_up_motion_v, sg_take_up_rates_v, sg_take_up_observe_v, sg_take_up_forces_v, sg_take_up_forces_in_simd, 45, 24)
+static SG_FLATTEN size_t sg_take_up_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
+{
+    const sgv_kernels k = { sg_take_up_closed_v, sg_take_up_motion_v, sg_take_up_rates_v, sg_take_up_observe_v,
+                           sg_take_up_forces_v, sg_take_up_forces_in_simd, 45, 24 };
+    return sgv_closed_sweep(m, r, sg_take_up_constants, sg_take_up_sweep, k);
+}
 SG_SIMD_END
 #endif
 

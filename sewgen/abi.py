@@ -136,6 +136,15 @@ REQUEST = (
     ("long long *", "first_bad", "sg_sweep_designs: each design's first failing position, -1 for none (nd)"),
     ("long long *", "nbad", "sg_sweep_designs: positions failing with that status (nd), or NULL"),
     ("long long *", "last_bad", "sg_sweep_designs: the last of them (nd), or NULL"),
+    ("const unsigned char *", "want", "the runtime's own (sg_sweep_designs' selected outputs; NULL: every "
+                                      "observable): the ngroup groups of observables a kinematic sweep computes "
+                                      "(kernels 'rates' and 'observe'), then whether the caller reads the "
+                                      "coordinates (want[ngroup])"),
+    ("const double *", "trig", "the runtime's own (NULL: computed): the shaft angles' cos (n) then sin (n) as the "
+                               "SIMD loop's vector math gives them (sg_sweep_designs: once for every design)"),
+    ("struct sg_columns *", "cols", "the runtime's own (NULL: none; csrc/sg_runtime.h): columns the SIMD loop "
+                                    "writes straight to their own arrays, setting cols->written, where q, qd, qdd "
+                                    "and obs then hold only the rows its scalar steps wrote"),
 )
 
 # Kernel arguments: q coordinates; cq[2i], cq[2i+1] = cos, sin of angle coordinate i; x inputs and cx their
@@ -191,25 +200,14 @@ KERNELS = {
 #: (return type, arguments, meaning); the descriptor holds ``sg_<kind>_fn`` pointers to the file's static
 #: ``sg_<m>_<kind>`` (NULL where the mechanism has none).
 HOOKS = {
-    "sweep": ("size_t", (("const struct sg_mechanism *", "m"), ("size_t", "n"), ("const double *", "phi"),
-                         ("const double *", "omega"), ("const double *", "alpha"), ("const double *", "held"),
-                         ("const double *", "p"), ("const int *", "branch"), ("const sg_options *", "opt"),
-                         ("const size_t *", "order"), ("const double *", "gv"), ("const double *", "loads"),
-                         ("double *", "q"), ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"),
-                         ("double *", "err"), ("double *", "frc"), ("int *", "status"),
-                         ("const unsigned char *", "want"), ("const double *", "trig"),
-                         ("struct sg_columns *", "cols")),
-              "the closed-form sweep with the kernels inlined (SG_CLOSED_SWEEP_BODY), kinematics and (frc not "
-              "NULL) kinetostatics as sg_sweep with gravity; want (NULL: every observable) flags the ngroup groups of "
-              "observables a kinematic sweep computes (kernels 'rates' and 'observe'), then whether the "
-              "caller reads the coordinates (want[ngroup]); trig (NULL: computed) the shaft angles' cos (n) then sin "
-              "(n) as the SIMD loop's vector math gives them (sg_sweep_designs: once for every design); cols (NULL: "
-              "none; csrc/sg_runtime.h) columns the SIMD loop writes straight to their own arrays, setting "
-              "cols->written, where q, qd, qdd and obs then hold only the rows its scalar steps wrote (the scalar "
-              "loop ignores it); NULL without a closed form"),
+    "sweep": ("size_t", (("const struct sg_mechanism *", "m"), ("const sg_request *", "r")),
+              "the closed-form sweep of the request r with the file's kernels inlined (csrc/sg_runtime.h "
+              "sg_closed_sweep), kinematics and (r->frc not NULL) kinetostatics as sg_sweep; r->want, r->trig and "
+              "r->cols as sg_request says (this loop computes its own cos, sin and writes rows only); NULL without "
+              "a closed form"),
 }
 HOOKS["sweep_simd"] = (HOOKS["sweep"][0], HOOKS["sweep"][1],
-                       "the same sweep SG_LANES positions at a time (csrc/sg_simd.h, SG_SIMD_SWEEP_BODY: 8 in AVX-512 "
+                       "the same sweep SG_LANES positions at a time (csrc/sg_simd.h sgv_closed_sweep: 8 in AVX-512 "
                        "or 4 in AVX2, the build's level); NULL "
                        "where the build has no SIMD or the mechanism's kernels have no vector form")
 
@@ -218,7 +216,7 @@ HOOKS["finish_simd"] = ("int", (("const struct sg_mechanism *", "m"), ("struct s
                                  ("const double *", "loads"), ("double *", "qd"), ("double *", "qdd"),
                                  ("double *", "obs"), ("double *", "frc"), ("const unsigned char *", "want")),
                          "a Newton sweep's rates, observables and (frc not NULL) forces at up to SG_LANES solved "
-                         "positions at once (csrc/sg_simd.h, SG_SIMD_FINISH_BODY): their rows written, the "
+                         "positions at once (csrc/sg_simd.h sgv_finish): their rows written, the "
                          "bit mask of the lanes it vouches for returned, each one's estimated error in lanes->est; "
                          "lanes NULL: 1 where it can finish this sweep's positions (forces: without friction only), "
                          "0 where the scalar loop must; NULL with a closed form, without SIMD in the build or "
@@ -226,7 +224,7 @@ HOOKS["finish_simd"] = ("int", (("const struct sg_mechanism *", "m"), ("struct s
 
 HOOKS["newton_simd"] = ("int", (("const struct sg_mechanism *", "m"), ("struct sg_block *", "b"), ("int", "first"),
                                  ("const double *", "c"), ("const sg_options *", "opt"), ("const double *", "w")),
-                         "Newton at SG_LANES positions of a block at once (csrc/sg_simd.h, SG_SIMD_NEWTON_BODY): "
+                         "Newton at SG_LANES positions of a block at once (csrc/sg_simd.h sgv_newton): "
                          "lanes first.. of b, each started from its prediction from b's history, weights w (kernel "
                          "'scales'); the bit mask of the lanes it solved the scalar course's way, each with its "
                          "solution, residual and loops' signs (kernel 'blocks') written to b; NULL with a closed "

@@ -50,13 +50,13 @@ def header() -> str:
     lines[-1] = lines[-1].rstrip(",")
     lines += ["};", ""]
     lines += _struct("sg_options", abi.OPTIONS) + [""]
+    lines += ["struct sg_mechanism;", "struct sg_columns;", "struct sg_lanes;", "struct sg_block;", ""]
     lines += ["/* One sweep's arrays and settings (sewgen.abi.REQUEST): what the sweeping entry points read. */"]
     lines += _struct("sg_request", abi.REQUEST) + [""]
     lines.append("/* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */")
     for kind, (ret, args, doc) in abi.KERNELS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
-    lines += ["", "struct sg_mechanism;", "struct sg_columns;", "struct sg_lanes;", "struct sg_block;",
-              "/* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */"]
+    lines += ["", "/* Sweep loops a generated file instantiates with its kernels inlined (sewgen.abi.HOOKS). */"]
     for kind, (ret, args, doc) in abi.HOOKS.items():
         lines += [_comment(doc), f"typedef {ret} (*sg_{kind}_fn)({abi.c_args(args)});"]
     lines += ["", "/* One mechanism as the generated code describes it. */"]
@@ -67,7 +67,7 @@ def header() -> str:
 
 def cdef() -> str:
     """The text of ``sg_abi.cdef``: what cffi needs to call the runtime (the descriptor stays opaque)."""
-    lines = [_PREAMBLE.rstrip(), "typedef struct sg_mechanism sg_mechanism;", ""]
+    lines = [_PREAMBLE.rstrip(), "typedef struct sg_mechanism sg_mechanism;", "struct sg_columns;", ""]
     lines += [line.split(" /* ")[0].rstrip() for line in _struct("sg_options", abi.OPTIONS)] + [""]
     lines += [line.split(" /* ")[0].rstrip() for line in _struct("sg_request", abi.REQUEST)] + [""]
     lines += [line for line in _exports() if not line.startswith("/*")]

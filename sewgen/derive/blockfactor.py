@@ -171,7 +171,7 @@ class BlockFactor:
         all of Φ_q (the dense factor's test); the coupling entries stay as they are. Block k's interchanges at
         piv[first row of k ...]. Each pivot is stored as its reciprocal (sg_lu_apply_inl's form), which the
         factor has computed anyway: the solve multiplies, no division on Newton's path. ``vector``: the SIMD
-        twin (SG_SIMD_NEWTON_BODY's), the same operations lane by lane; it returns the mask of the lanes the
+        twin (sgv_newton's), the same operations lane by lane; it returns the mask of the lanes the
         scalar factor accepts."""
         n, nz = self.n, self.nonzero
         a = lambda i, j: f"a[{i * n + j}]"  # noqa: E731

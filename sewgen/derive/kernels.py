@@ -76,7 +76,8 @@ class _Flavour:
 SCALAR, VECTOR = _Flavour(False), _Flavour(True)
 _VECTOR_FORCE_ARGS = ("q", "cq", "x", "cx", "xd", "c", "obs", "gv", "ld", "out")
 
-#: The SIMD twins' signatures (static in each generated file; called only by its SG_SIMD_SWEEP_BODY).
+#: The SIMD twins' signatures (static in each generated file; passed to the loops of csrc/sg_simd.h, whose
+#: sgv_<kind>_fn types are these).
 VECTOR_SIGNATURES = {
     "closed": "sg_vm {f}(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, "
               "sg_vd *cq)",
@@ -102,7 +103,7 @@ def _unused(body, *names):
     return [f"(void){n};" for n in names if not re.search(rf"\b{n}\b", text)]
 
 
-#: The most coordinates a mechanism's SIMD Newton (csrc/sg_simd.h SG_SIMD_NEWTON_BODY) is generated for: its
+#: The most coordinates a mechanism's SIMD Newton (csrc/sg_simd.h sgv_newton) is generated for: its
 #: Φ_q vectors live on the stack, three times (nq² × 64 bytes each).
 NEWTON_SIMD_MAX_Q = 16
 
@@ -203,7 +204,7 @@ class KernelSet:
     # -- kernels ---------------------------------------------------------------------------------------
     def residual(self, vector: bool = False) -> Kernel:
         """Φ(q, x) and Φ_q at a position: Newton's kernel. ``vector``: the SIMD twin (the SIMD Newton of a block of
-        positions, csrc/sg_simd.h SG_SIMD_NEWTON_BODY) from the same CSE, the same values lane by lane, to the
+        positions, csrc/sg_simd.h sgv_newton) from the same CSE, the same values lane by lane, to the
         bit; a residual whose twin would not be exact (libmvec's atan2) has none (:class:`NoVectorForm`)."""
         kin, n = self.kin, len(self.kin.q)
         fl = VECTOR if vector else SCALAR
@@ -262,7 +263,7 @@ class KernelSet:
     def solve_by_blocks(self, blocks: list) -> None:
         """The motion and rates kernels and their SIMD twins factor Φ_q by these diagonal blocks
         (derive.branches.blocks; sewgen/derive/blockfactor.py) where its structure allows: for a mechanism Newton
-        solves, whose twins finish its solved positions (csrc/sg_simd.h SG_SIMD_FINISH_BODY) with the same
+        solves, whose twins finish its solved positions (csrc/sg_simd.h sgv_finish) with the same
         factor, lane by lane. Φ_q's structure is taken once, here."""
         n = len(self.kin.q)
         self._block_factor = BlockFactor.of(n, [self.kin.jac_q[i, j] for i in range(n) for j in range(n)], blocks)
@@ -618,7 +619,7 @@ class KernelSet:
         the forces' run-time test, or none where the kinematics have no vector form (where only the forces have
         none, the test says no: the SIMD loop then runs a force sweep scalar, and the template passes
         csrc/sg_simd.h's sgv_no_forces for the twin). A mechanism Newton solves gets the twins without the closed
-        form: its SIMD loop finishes SG_LANES solved positions at a time (csrc/sg_simd.h SG_SIMD_FINISH_BODY)."""
+        form: its SIMD loop finishes SG_LANES solved positions at a time (csrc/sg_simd.h sgv_finish)."""
         try:
             kernels = ([self.closed(dyads, vector=True)] if dyads is not None else []) + [
                 self.motion(scales, vector=True), self.rates(scales, vector=True),
@@ -649,7 +650,7 @@ class KernelSet:
         """Newton's factor and solve of Φ_q with nq a literal: the runtime's sg_lu_factor_inl / sg_lu_solve_inl
         (SG_UNROLL) unrolled whole for this mechanism, where the runtime's exported copies, for any n, ran ~2.3×
         the instructions (the feed's 7 × 7: 2.6k against 1.1k); by Φ_q's diagonal blocks where the rates are
-        (:meth:`solve_by_blocks`). ``vector``: their SIMD twins (csrc/sg_simd.h SG_SIMD_NEWTON_BODY), the same
+        (:meth:`solve_by_blocks`). ``vector``: their SIMD twins (csrc/sg_simd.h sgv_newton), the same
         operations lane by lane; the factor returns the mask of the lanes it accepts."""
         n = len(self.kin.q)
         bf = self._block_factor
@@ -674,7 +675,7 @@ class KernelSet:
     def blocks(self, blocks: list, vector: bool = False) -> Kernel:
         """The normalised determinant of every diagonal block of Φ_q (derive.branches) from the numeric Φ_q:
         det over the product of the block rows' norms in Φ_q; its sign is the block's assembly branch.
-        ``vector``: the SIMD twin (SG_SIMD_NEWTON_BODY's), the same operations lane by lane where every block has
+        ``vector``: the SIMD twin (sgv_newton's), the same operations lane by lane where every block has
         at most three rows (its determinant in closed form), else the scalar kernel lane after lane."""
         n = len(self.kin.q)
         name = f"{self.prefix}_blocks" + ("_v" if vector else "")
