@@ -76,8 +76,8 @@ OPTIONS = (
     ("double", "singular_tol", "largest estimated relative error of the velocities and accelerations; a position "
                                "above it is SG_SINGULAR unless keep_singular"),
     ("int", "keep_singular", "1: positions above singular_tol keep their results (status SG_OK, err says why)"),
-    ("int", "generic", "1: the generic sweep loop (kernels through the descriptor) even where the mechanism has "
-                       "an inlined one (tests: the two agree to the bit)"),
+    ("int", "generic", "1: the closed-form loop with the kernels called through the descriptor (csrc/sg_runtime.h "
+                       "sg_closed_sweep) rather than the mechanism's inlined copy (tests: the two agree to the bit)"),
     ("int", "scalar", "1: the scalar loop even where the mechanism has a SIMD one and the CPU runs it (a closed "
                       "form: SG_LANES positions at a time; Newton: the solved positions' rates, observables and "
                       "forces SG_LANES at a time) (tests: the two agree to rounding, with the same statuses)"),

@@ -443,7 +443,7 @@ def sweep_designs(mech, designs, phi, speed=None, accel=0.0, *, outputs=None, re
     nq, nobs, npar = sizes["nq"], sizes["nobs"], sizes["np"]
     # the shaft angles, speed and acceleration: as prepare() checks them (one sweep's worth, shared)
     base = mech.prepare(phi, speed, accel, degrees=degrees, newton=newton,
-                        max_iter=DEFAULT_MAX_ITER if max_iter is None else max_iter).use_loop(loop)
+                        max_iter=DEFAULT_MAX_ITER if max_iter is None else max_iter, layout="arrays").use_loop(loop)
     n = base.n
     nd, given = _table(mech, designs)
     p = np.empty((nd, npar))
@@ -557,90 +557,93 @@ def _one_design(ffi, n: int, width: int) -> tuple:
 _SELECTIONS: dict = {}
 
 
-def fast_selected(mech, phi: np.ndarray, speed, params, outputs):
-    """solve(phi, outputs=...) on the defaults but ``params`` (solve()'s lean path, as ``Mechanism._fast_solve``):
-    the selection parsed once per ``outputs`` and cached, the angles copied into one buffer, one C call. None
-    where anything needs :func:`solve_selected` (which also raises every failure with its diagnosis)."""
-    if phi.ndim != 1 or phi.dtype != np.float64 or not phi.shape[0]:
-        return None
+def _selection(mech, outputs) -> tuple:
+    """(count, C pointer of the flat columns, count, C pointer of the angle columns among them, their names, the
+    flat columns' count, the columns, the angle columns) of ``outputs``, parsed once per (mechanism, outputs)
+    where ``outputs`` is hashable; a bad name raises its ParameterError."""
     try:
-        key = tuple(outputs) if isinstance(outputs, (list, tuple)) else (outputs,)
-        plan = _SELECTIONS.get((mech.reference.digest, key))
+        key = (mech.reference.digest, tuple(outputs) if isinstance(outputs, (list, tuple)) else (outputs,))
+        plan = _SELECTIONS.get(key)
     except TypeError:
-        return None
+        key, plan = None, None
     if plan is None:
         cols = output_columns(mech)
-        sel = np.array(cols.select(mech.name, outputs), dtype=np.intc)  # a bad name raises here, as below
-        angle = cols.angles_among(list(sel))
-        names = [cols.names[c] for c in sel]
-        plan = (len(sel), pointer(mech.ffi, "int *", sel), len(angle), pointer(mech.ffi, "int *", angle), names,
-                len(cols.names), sel, angle)
-        if len(_SELECTIONS) >= 256:
-            _SELECTIONS.clear()
-        _SELECTIONS[(mech.reference.digest, key)] = plan
-    nsel, sel_p, nangle, angle_p, names, width = plan[:6]
-    spd = mech.description.default_speed if speed is None else float(speed)
-    if not math.isfinite(spd):
-        return None
-    got = mech.params_in_c(params)
-    if got is None:
-        return None
-    n = phi.shape[0]
-    c = mech.in_c
-    desc, held, branch, guess, opt = c.descriptor, c.held, c.branch, c.guess, c.options
-    ffi, lib = mech.ffi, mech.lib
-    inputs = np.empty(3 * n)
-    phi_v, omega, alpha = inputs[:n], inputs[n:2 * n], inputs[2 * n:]
-    phi_v[:] = phi
-    omega.fill(spd)
-    alpha.fill(0.0)
-    base = ffi.from_buffer("double[]", inputs)
-    order_p = ffi.NULL
-    if n > 1 and not lib.sg_sorted(n, base):
-        order_p = ffi.from_buffer("size_t[]", np.argsort(phi_v, kind="stable").astype(np.uintp))
-    block = np.empty((nsel, n))
-    status, status_p, first_p, work_p, work_st_p = _one_design(ffi, n, width)
-    status[0] = 0
-    req, keep = request(ffi, n=n, phi=base, omega=base + n, alpha=base + 2 * n, held=held, p=got[1], branch=branch,
-                        q_guess=guess, opt=opt, order=order_p, nd=1, nangle=nangle, angle_cols=angle_p, nsel=nsel,
-                        sel=sel_p, out=block, out_stride=n, work=work_p, work_status=work_st_p,
-                        design_status=status_p, first_bad=first_p)
-    lib.sg_sweep_designs(desc, req)
-    if status[0] != 0:
-        return None
-    return Selection(mech, phi_v, omega, alpha, block, names)
+        sel = np.array(cols.select(mech.name, outputs), dtype=np.intc)
+        angle = np.array(cols.angles_among(list(sel)), dtype=np.intc)
+        plan = (len(sel), pointer(mech.ffi, "int *", sel), len(angle), pointer(mech.ffi, "int *", angle),
+                [cols.names[c] for c in sel], len(cols.names), sel, angle)
+        if key is not None:
+            if len(_SELECTIONS) >= 256:
+                _SELECTIONS.clear()
+            _SELECTIONS[key] = plan
+    return plan
 
 
-def solve_selected(mech, outputs, sweep_args: dict, out=None):
-    """``Mechanism.solve(..., outputs=...)``: one sweep writing only the selected columns, each contiguous (a
-    :class:`~sewgen.engine.results.Selection`); the same values as the full sweep's columns, bit for bit. A failing
-    position raises the error :meth:`~sewgen.Mechanism.solve` raises (the full sweep is rerun to diagnose it)."""
-    base = mech.prepare(**sweep_args)
-    cols = output_columns(mech)
-    sel = cols.select(mech.name, outputs)
-    n = base.n
-    block = getattr(out, "block", out)
-    if not (isinstance(block, np.ndarray) and block.shape == (len(sel), n) and block.dtype == np.float64
-            and block.flags.c_contiguous and block.flags.writeable
-            and not any(np.may_share_memory(block, x) for x in (base.phi, base.omega, base.alpha))):
-        block = np.empty((len(sel), n))
-    status = np.zeros(1, dtype=np.intc)
-    first = np.full(1, -1, dtype=np.int64)
-    sel_c = np.array(sel, dtype=np.intc)
-    ffi, lib = mech.ffi, mech.lib
-    width = len(cols.names)
-    work, work_st = _work(n, width)
+class SelectedSweep:
+    """``Mechanism.solve(..., outputs=...)`` prepared (:meth:`~sewgen.Mechanism.prepare` with ``outputs``): one
+    sweep writing only the selected columns, each contiguous, into ``block`` (a
+    :class:`~sewgen.engine.results.Selection` is the result); the same values as the full sweep's columns, bit
+    for bit. ``base`` is the prepared full sweep of the same arguments (its checked inputs; a lean one's angles
+    and speed are laid out here), which also diagnoses a failure: :meth:`check` runs it and raises its error."""
 
-    ncheck = 0  # prepare() checked the parameters and their derived dimensions
-    angle_c = cols.angles_among(sel)
-    req, keep = request(ffi, n=n, phi=base.phi, omega=base.omega, alpha=base.alpha, held=base.held, p=base.params,
-                        branch=base.branch, q_guess=base.guess, opt=base.options,
-                        order=ffi.NULL if base.order is None else base.order, nd=1, ncheck=ncheck,
-                        nangle=len(angle_c), angle_cols=angle_c, nsel=len(sel), sel=sel_c, out=block, out_stride=n,
-                        work=work, work_status=work_st, design_status=status, first_bad=first)
-    lib.sg_sweep_designs(mech.in_c.descriptor, req)
-    if status[0] != 0:  # the full sweep names the failure with its diagnosis
-        base.run()
-        base.check()
-        raise InputError(mech.name, f"runtime refused the sweep ({abi.status_name(int(status[0]))})")
-    return Selection(mech, base.phi, base.omega, base.alpha, block, [cols.names[c] for c in sel])
+    def __init__(self, mech, base, outputs, out=None):
+        self.mechanism, self.base, self.n = mech, base, base.n
+        self.plan = _selection(mech, outputs)
+        n, nsel = base.n, self.plan[0]
+        block = getattr(out, "block", out)
+        inputs = () if base.one_block else (base.phi, base.omega, base.alpha)  # a lean base's: laid out in run()
+        if not (isinstance(block, np.ndarray) and block.shape == (nsel, n) and block.dtype == np.float64
+                and block.flags.c_contiguous and block.flags.writeable
+                and not any(np.may_share_memory(block, x) for x in inputs)):
+            block = np.empty((nsel, n))
+        self.block = block
+        self.failed = 0
+        self.inputs = None
+
+    def run(self) -> int:
+        """One C call (sg_sweep_designs with one design); returns 1 where the sweep failed, else 0."""
+        mech, base, n = self.mechanism, self.base, self.n
+        nsel, sel_p, nangle, angle_p, _names, width = self.plan[:6]
+        ffi, lib, c = mech.ffi, mech.lib, mech.in_c
+        if base.one_block:  # the angles, the one speed, no acceleration: one buffer
+            inputs = np.empty(3 * n)
+            phi_v, omega, alpha = inputs[:n], inputs[n:2 * n], inputs[2 * n:]
+            phi_v[:] = base.phi
+            omega.fill(base.speed)
+            alpha.fill(0.0)
+            phi_p = ffi.from_buffer("double[]", inputs)
+            omega_p, alpha_p = phi_p + n, phi_p + 2 * n
+            order_p = ffi.NULL
+            if n > 1 and not lib.sg_sorted(n, phi_p):
+                order_p = ffi.from_buffer("size_t[]", np.argsort(phi_v, kind="stable").astype(np.uintp))
+            held, branch, guess, p = c.held, c.branch, c.guess, base.params_c
+        else:
+            phi_v, omega, alpha = base.phi, base.omega, base.alpha
+            phi_p, omega_p, alpha_p = phi_v, omega, alpha
+            order_p = ffi.NULL if base.order is None else base.order
+            held, branch, guess, p = base.held, base.branch, base.guess, base.params
+        status, status_p, first_p, work_p, work_st_p = _one_design(ffi, n, width)
+        status[0] = 0
+        req, keep = request(ffi, n=n, phi=phi_p, omega=omega_p, alpha=alpha_p, held=held, p=p, branch=branch,
+                            q_guess=guess, opt=base.options, order=order_p, nd=1, nangle=nangle,
+                            angle_cols=angle_p, nsel=nsel, sel=sel_p, out=self.block, out_stride=n, work=work_p,
+                            work_status=work_st_p, design_status=status_p, first_bad=first_p)
+        lib.sg_sweep_designs(c.descriptor, req)
+        self.inputs = (phi_v, omega, alpha)
+        self.failed = int(status[0])
+        return int(self.failed != 0)
+
+    def check(self) -> None:
+        """Raise the error :meth:`~sewgen.Mechanism.solve` raises where the sweep failed: the full sweep of the
+        same arguments names the failure with its diagnosis."""
+        if not self.failed:
+            return
+        self.base.run()
+        self.base.check()
+        raise InputError(self.mechanism.name, f"runtime refused the sweep ({abi.status_name(self.failed)})")
+
+    def result(self) -> Selection:
+        """Run, check, and the :class:`~sewgen.engine.results.Selection` of the selected columns."""
+        self.run()
+        self.check()
+        return Selection(self.mechanism, *self.inputs, self.block, self.plan[4])

@@ -131,6 +131,9 @@ class Mechanism:
         # The per-call cost of solve(): one sg_request per thread for the lean path, the converted parameter
         # vectors of recent params= dicts, kinetostatics()' default settings. Caches, not state: a hit gives what a
         # miss computes.
+        sizes = desc.sizes
+        w = 4 + 3 * sizes["nq"] + sizes["nobs"]  # doubles a position of sg_solve_lean's block: kinematics, forces
+        fields["lean_widths"] = (w, w + sizes["nfo"])
         fields["_lean_requests"] = threading.local()
         fields["_lean_forces_base"] = []
         fields["_pcache"] = {}
@@ -334,12 +337,48 @@ class Mechanism:
                 branch: dict | None = None, guess: dict | None = None, degrees: bool = False,
                 newton: bool = False, max_iter: int = DEFAULT_MAX_ITER, forces: bool = False, loads=(),
                 gravity=_GRAVITY, gravity_direction=_DOWN, moment_about=_ORIGIN, out=None,
-                singular: str = "raise") -> "Sweep":
-        """Every argument of a sweep checked and converted into a :class:`Sweep`: the arrays the C runtime
-        reads and writes, ready to run. :meth:`solve` and :meth:`kinetostatics` are ``prepare`` + ``run`` +
-        result; call it yourself to time or repeat the bare C call on exactly those arrays (bench).
-        ``forces=True`` prepares the kinetostatic sweep (``loads``, ``gravity``, ``gravity_direction``,
-        ``moment_about`` as in :meth:`kinetostatics`). ``out`` as in :meth:`solve`."""
+                singular: str = "raise", outputs=None, layout: str = "auto") -> "Sweep":
+        """Every argument of a sweep checked and converted into a prepared call: the one place the engine checks
+        a sweep's arguments. :meth:`solve` and :meth:`kinetostatics` are ``prepare(...).result()``; call it
+        yourself to time or repeat the bare C call (:meth:`Sweep.bind`, the benchmark) or to read the arrays C
+        wrote. ``forces=True`` prepares the kinetostatic sweep (``loads``, ``gravity``, ``gravity_direction``,
+        ``moment_about`` as in :meth:`kinetostatics`); ``outputs`` the sweep of a few columns
+        (a :class:`~sewgen.engine.designs.SelectedSweep`, as :meth:`solve`'s ``outputs``); ``out`` as in
+        :meth:`solve`.
+
+        A sweep on the declaration's defaults but ``params`` (a 1-D float64 ``phi``, one number for ``speed``,
+        no acceleration, the default gravity and no loads) is a :class:`LeanSweep`: every array in one buffer
+        and one C call that fills the inputs, sweeps and makes the angles continuous; any other a
+        :class:`Sweep` of separate arrays. Both run, check and give their results the same way. ``layout="arrays"``
+        asks for separate arrays whatever the arguments (a caller that hands :meth:`Sweep.request` to sg_sweep
+        itself: the machine plan)."""
+        if layout not in ("auto", "arrays"):
+            raise ParameterError(self.name, "layout", f"is {layout!r}; use 'auto' or 'arrays'")
+        lean = (layout == "auto" and held is None and branch is None and guess is None and out is None and degrees is False
+                and newton is False and max_iter == DEFAULT_MAX_ITER and singular == "raise"
+                and type(phi) is np.ndarray and (speed is None or type(speed) in (float, int))
+                and type(accel) in (float, int) and accel == 0
+                and (forces is False or (moment_about is _ORIGIN and type(loads) in (tuple, list) and not loads
+                                         and type(gravity) is str and gravity == _GRAVITY
+                                         and type(gravity_direction) is str and gravity_direction == _DOWN)))
+        base = LeanSweep.of(self, phi, speed, params, forces is True) if lean else None
+        if base is None:
+            base = self._prepare_arrays(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
+                                        degrees=degrees, newton=newton, max_iter=max_iter, forces=forces,
+                                        loads=loads, gravity=gravity, gravity_direction=gravity_direction,
+                                        moment_about=moment_about, out=None if outputs is not None else out,
+                                        singular=singular)
+        if outputs is None:
+            return base
+        if forces:
+            raise ParameterError(self.name, "outputs", "selects kinematic outputs: not with forces=True")
+        return many_designs.SelectedSweep(self, base, outputs, out)
+
+    def _prepare_arrays(self, phi, speed=None, accel=0.0, *, params=None, held=None, branch=None, guess=None,
+                        degrees=False, newton=False, max_iter=DEFAULT_MAX_ITER, forces=False, loads=(),
+                        gravity=_GRAVITY, gravity_direction=_DOWN, moment_about=_ORIGIN, out=None,
+                        singular="raise") -> "Sweep":
+        """:meth:`prepare` of any arguments: every check and conversion, separate arrays (a :class:`Sweep`)."""
         phi_arr = np.asarray(phi)
         if phi_arr.ndim == 0:
             phi_arr = phi_arr.reshape(1)
@@ -443,25 +482,9 @@ class Mechanism:
         :mod:`sewgen.engine.designs`); the values are those of the full sweep's columns, bit for bit. ``out`` may then be a previous Selection
         of the same columns and length.
         """
-        if (held is None and branch is None and guess is None and out is None
-                and degrees is False and newton is False and max_iter == DEFAULT_MAX_ITER and singular == "raise"
-                and type(phi) is np.ndarray and (speed is None or type(speed) in (float, int))
-                and type(accel) in (float, int) and accel == 0):
-            if outputs is None:
-                motion = self._fast_solve(phi, speed, params)
-            else:
-                motion = many_designs.fast_selected(self, phi, speed, params, outputs)
-            if motion is not None:
-                return motion
-        if outputs is not None:
-            args = dict(phi=phi, speed=speed, accel=accel, params=params, held=held, branch=branch, guess=guess,
-                        degrees=degrees, newton=newton, max_iter=max_iter, singular=singular)
-            return many_designs.solve_selected(self, outputs, args, out)
-        sweep = self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
-                             degrees=degrees, newton=newton, max_iter=max_iter, out=out, singular=singular)
-        sweep.run()
-        sweep.check()
-        return sweep.motion()
+        return self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
+                            degrees=degrees, newton=newton, max_iter=max_iter, out=out, singular=singular,
+                            outputs=outputs).result()
 
     def params_in_c(self, params):
         """(vector, C pointer) of a params= dict, converted and checked once and then cached by its items (with
@@ -484,57 +507,12 @@ class Mechanism:
             self._pcache[key] = hit
         return hit
 
-    def _fast_solve(self, phi: np.ndarray, speed, params, forces: bool = False):
-        """solve() (or, ``forces``, kinetostatics() without loads, with the default gravity and moment point) of a
-        1-D float64 phi with the default held inputs, branches, guesses and options and zero shaft acceleration:
-        one buffer for every array and one C call (sg_solve_lean: the inputs filled in, the sweep, the angles made
-        continuous). None where anything needs the general path (which also reports every failure with its
-        diagnosis)."""
-        if phi.ndim != 1 or phi.dtype != np.float64 or not phi.shape[0]:
-            return None
-        n = phi.shape[0]  # a non-finite angle: SG_NAN_INPUT from C, and the general path names it
-        spd = self.description.default_speed if speed is None else float(speed)  # solve(): a float or an int
-        if not math.isfinite(spd):
-            return None
-        got = self.params_in_c(params)
-        if got is None:
-            return None
-        sizes, c = self.description.sizes, self.in_c
-        nq, nobs, nfo = sizes["nq"], sizes["nobs"], sizes["nfo"]
-        w = 4 + 3 * nq + nobs  # doubles per position of the block before frc (sg_solve_lean)
-        if not phi.flags.c_contiguous:
-            phi = np.ascontiguousarray(phi)
-        ffi = self.ffi
-        settings, gv_p = self._lean_forces(got[0]) if forces else (None, ffi.NULL)
-        blk = np.empty((w + nfo if forces else w) * n + (n + 1) // 2)  # the statuses (C int) at the tail
-        phi_p, blk_p = ffi.from_buffer("double[]", phi), ffi.from_buffer("double[]", blk)
-        req = getattr(self._lean_requests, "r", None)
-        if req is None:  # what every lean call of this mechanism shares, set once per thread
-            req = self._lean_requests.r = ffi.new("sg_request *", dict(
-                held=c.held, branch=c.branch, q_guess=c.guess, opt=c.options, nqa=c.nqa, qcols=c.qcols, noa=c.noa,
-                ocols=c.ocols))
-        req.n, req.phi, req.speed, req.p, req.gv, req.blk, req.order = n, phi_p, spd, got[1], gv_p, blk_p, ffi.NULL
-        solve_lean = self.lib.sg_solve_lean
-        failed = solve_lean(c.descriptor, req)
-        if failed == _SIZE_MAX:  # not ascending: solved in sorted order, returned in the caller's
-            order = np.argsort(phi, kind="stable").astype(np.uintp)
-            order_p = ffi.from_buffer("size_t[]", order)  # held here while C reads it
-            req.order = order_p
-            failed = solve_lean(c.descriptor, req)
-        if failed:
-            return None
-        motion = Motion.of_block(self, blk, n, nq, nobs, SINGULAR_TOL)
-        if not forces:
-            return motion
-        o = w * n
-        return ForceAnalysis(self, motion, blk[o:o + n * nfo].reshape(n, nfo), settings)
-
     def _lean_forces(self, p):
         """(RunSettings of a kinetostatics() on the defaults but the parameter vector ``p``, C pointer of its
         gravity vector): the default gravity and moment point converted once, by prepare() itself; the settings
         cached by the vector's identity (each keeps its vector alive, so an id is never reused while cached)."""
         if not self._lean_forces_base:
-            base = self.prepare(np.zeros(1), forces=True).settings
+            base = self._prepare_arrays(np.zeros(1), forces=True).settings
             self._lean_forces_base.append((base, pointer(self.ffi, "double *", base.gravity), {}))
         base, gravity_p, by_params = self._lean_forces_base[0]
         settings = by_params.get(id(p))
@@ -569,23 +547,10 @@ class Mechanism:
         (a previous :class:`ForceAnalysis` gives all five arrays). A singular force matrix (a toggle position)
         raises :class:`~sewgen.errors.SingularPositionError` naming the shaft angle.
         """
-        if (held is None and branch is None and guess is None and out is None and degrees is False
-                and newton is False and max_iter == DEFAULT_MAX_ITER and singular == "raise"
-                and moment_about is _ORIGIN and type(loads) in (tuple, list) and not loads
-                and type(gravity) is str and gravity == _GRAVITY
-                and type(gravity_direction) is str and gravity_direction == _DOWN
-                and type(phi) is np.ndarray and (speed is None or type(speed) in (float, int))
-                and type(accel) in (float, int) and accel == 0):
-            analysis = self._fast_solve(phi, speed, params, forces=True)
-            if analysis is not None:
-                return analysis
-        sweep = self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
-                             degrees=degrees, newton=newton, max_iter=max_iter, forces=True, loads=loads,
-                             gravity=gravity, gravity_direction=gravity_direction, moment_about=moment_about,
-                             out=out, singular=singular)
-        sweep.run()
-        sweep.check()
-        return sweep.analysis()
+        return self.prepare(phi, speed, accel, params=params, held=held, branch=branch, guess=guess,
+                            degrees=degrees, newton=newton, max_iter=max_iter, forces=True, loads=loads,
+                            gravity=gravity, gravity_direction=gravity_direction, moment_about=moment_about,
+                            out=out, singular=singular).result()
 
     def sweep_designs(self, designs, phi, speed=None, *, outputs=None, reduce=None, held=None, branch=None,
                       threads=None, accel=0.0, degrees: bool = False, newton: bool = False,
@@ -730,6 +695,9 @@ class Sweep:
     ``order`` (None when the angles are already non-decreasing) is the permutation C solves the positions in.
     """
 
+    #: False: separate arrays (a :class:`LeanSweep` is the one-block layout).
+    one_block = False
+
     def __init__(self, mechanism: Mechanism, n, phi, omega, alpha, params, held, branch, guess, options,
                  outputs: dict, status, settings: RunSettings | None, order=None, err=None, keep_singular=False):
         self.mechanism, self.n = mechanism, n
@@ -748,15 +716,16 @@ class Sweep:
     def forces(self) -> bool:
         return self.settings is not None
 
-    #: Closed-form loops :meth:`use_loop` chooses between (csrc/sg_runtime.c, sweep): the options it sets.
+    #: Closed-form loops :meth:`use_loop` chooses between (csrc/sg_runtime.c sweep): the options it sets.
     LOOPS = {"auto": {"scalar": 0, "generic": 0}, "scalar": {"scalar": 1, "generic": 0},
              "generic": {"scalar": 0, "generic": 1}}
 
     def use_loop(self, loop: str) -> "Sweep":
         """Which closed-form loop runs (kinematics and kinetostatics): ``"auto"`` (the default: 8 or 4 positions
         at a time in SIMD where the module and the CPU have it, :attr:`Mechanism.simd_width`), ``"scalar"`` (the
-        scalar inlined loop, which does not depend on the CPU's vector units) or ``"generic"`` (the runtime's
-        loop through the descriptor's kernels). The three agree to rounding with the same statuses (tests).
+        scalar inlined loop, which does not depend on the CPU's vector units) or ``"generic"`` (the same scalar
+        loop, csrc/sg_runtime.h sg_closed_sweep, with the kernels called through the descriptor: equal to the
+        inlined one to the bit). SIMD and scalar agree to rounding with the same statuses (tests).
         Every other option stays as it was (the fields of :data:`sewgen.abi.OPTIONS`)."""
         if loop not in self.LOOPS:
             raise ParameterError(self.mechanism.name, "loop", f"is {loop!r}; use one of {', '.join(self.LOOPS)}")
@@ -824,6 +793,184 @@ class Sweep:
         if not self.forces:
             raise ValueError("this sweep was prepared without forces (prepare(..., forces=True))")
         return ForceAnalysis(self.mechanism, self.motion(), self.frc, self.settings)
+
+    def result(self):
+        """Run, check, and the result: a :class:`ForceAnalysis` of a force sweep, else a :class:`Motion` (what
+        :meth:`Mechanism.solve` and :meth:`Mechanism.kinetostatics` return)."""
+        self.run()
+        self.check()
+        return self.analysis() if self.forces else self.motion()
+
+
+#: The arrays of a :class:`LeanSweep` that are views of its block (made at the first look after a run).
+_LEAN_VIEWS = frozenset(("omega", "alpha", "err", "q", "qd", "qdd", "obs", "frc", "status"))
+
+
+class LeanSweep(Sweep):
+    """A :class:`Sweep` on the declaration's defaults but the parameters (made by :meth:`Mechanism.prepare` where
+    the arguments allow it): one buffer ``blk`` in sg_solve_lean's layout (csrc/sg_runtime.c: phi, omega, alpha,
+    the error estimate, q, qd, qdd, obs by rows, then frc, then the statuses) and one C call that fills the
+    inputs, sweeps (in sorted order where the angles do not ascend) and makes the angles continuous. Its arrays
+    (``q``, ``status``, …) are views of the block of the last run, made at the first look; a run writes a new
+    block (a bound call, :meth:`bind`, the same one), so earlier results stay as they were. A failed run is
+    diagnosed by the general sweep of the same arguments (:meth:`check`). ``speed``: the one shaft speed (rad/s);
+    ``params_c``: the C pointer of ``params``. The per-call cost of a short :meth:`Mechanism.solve` is this
+    class's: it sets only what a run reads, the rest (defaults, views) is made at the first look."""
+
+    one_block = True
+
+    def __init__(self, mechanism: Mechanism, phi: np.ndarray, speed: float, params, params_c, settings, gravity_c,
+                 user_params, width: int):
+        self.__dict__ = {"mechanism": mechanism, "n": phi.shape[0], "phi_in": phi, "speed": speed, "params": params,
+                         "params_c": params_c, "settings": settings, "gravity_c": gravity_c,
+                         "user_params": user_params, "width": width, "blk": None, "failed": 0}
+
+    @classmethod
+    def of(cls, mechanism: Mechanism, phi: np.ndarray, speed, params, forces: bool) -> "LeanSweep | None":
+        """The lean sweep of these arguments, None where they need the general one (a ``phi`` not 1-D float64 or
+        empty, a speed not finite, parameters whose dict cannot be cached): :meth:`Mechanism.prepare` then makes a
+        :class:`Sweep`, which checks them and names what is wrong. The angles are read when the sweep runs (its
+        ``phi``, at the first look, is its own copy of them, which a run then reads)."""
+        if phi.ndim != 1 or phi.dtype != np.float64 or not phi.shape[0]:
+            return None  # a non-finite angle: SG_NAN_INPUT from C, diagnosed by the general sweep
+        spd = mechanism.description.default_speed if speed is None else float(speed)
+        if not math.isfinite(spd):
+            return None
+        got = mechanism.params_in_c(params)
+        if got is None:
+            return None
+        widths = mechanism.lean_widths
+        if not phi.flags.c_contiguous:
+            phi = np.ascontiguousarray(phi)
+        if not forces:
+            return cls(mechanism, phi, spd, got[0], got[1], None, mechanism.ffi.NULL, params, widths[0])
+        settings, gravity_c = mechanism._lean_forces(got[0])
+        return cls(mechanism, phi, spd, got[0], got[1], settings, gravity_c, params, widths[1])
+
+    def __getattr__(self, name):
+        """The block's arrays (after a run) and the defaults this sweep runs with, at the first look."""
+        d = self.__dict__
+        if name in _LEAN_VIEWS and d.get("blk") is not None:
+            self._views()
+            return d[name]
+        if name == "phi" and "phi_in" in d:  # before a run: the sweep's own copy, which the run reads
+            d["phi"] = d["phi_in"] = np.array(d["phi_in"], order="C")
+            return d["phi"]
+        if name in _LEAN_DEFAULTS and "mechanism" in d:
+            m = d["mechanism"]
+            value = m.in_c.options if name == "options" else _LEAN_DEFAULTS[name](m)
+            d[name] = value
+            return value
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    def _views(self) -> None:
+        """The block's arrays as attributes (views of the last run's block)."""
+        m, n, blk = self.mechanism, self.n, self.blk
+        sizes = m.description.sizes
+        nq, nobs, nfo = sizes["nq"], sizes["nobs"], sizes["nfo"]
+        o = 4 * n + 3 * n * nq
+        rows, rates = blk[:4 * n].reshape(4, n), blk[4 * n:o].reshape(3, n, nq)
+        tail = o + n * nobs
+        frc = blk[tail:tail + n * nfo].reshape(n, nfo) if self.forces else None
+        if self.forces:
+            tail += n * nfo
+        self.__dict__.update(phi=rows[0], omega=rows[1], alpha=rows[2], err=rows[3], q=rates[0], qd=rates[1],
+                             qdd=rates[2], obs=blk[o:o + n * nobs].reshape(n, nobs), frc=frc,
+                             status=blk[tail:].view(np.intc)[:n])
+
+    def _call(self, order) -> tuple:
+        """(sg_solve_lean, descriptor, request, what its pointers point into) on a new block (the last run's views
+        dropped), solving in ``order`` (None: as given)."""
+        d = self.__dict__
+        m, n = d["mechanism"], d["n"]
+        ffi, c = m.ffi, m.in_c
+        if "q" in d:  # the last run's views
+            for name in _LEAN_VIEWS:
+                d.pop(name, None)
+            d["phi"] = d["phi_in"]  # the sweep's angles until the block holds them
+        blk = d["blk"] = np.empty(d["width"] * n + (n + 1) // 2)  # the statuses (C int) at the tail
+        d["order"] = order
+        req = getattr(m._lean_requests, "r", None)
+        if req is None:  # what every lean call of this mechanism shares, set once per thread
+            req = m._lean_requests.r = ffi.new("sg_request *", dict(
+                held=c.held, branch=c.branch, q_guess=c.guess, nqa=c.nqa, qcols=c.qcols, noa=c.noa, ocols=c.ocols))
+        phi_p, blk_p = ffi.from_buffer("double[]", d["phi_in"]), ffi.from_buffer("double[]", blk)
+        order_p = ffi.NULL if order is None else ffi.from_buffer("size_t[]", order)
+        req.n, req.phi, req.speed, req.p, req.gv, req.blk = n, phi_p, d["speed"], d["params_c"], d["gravity_c"], blk_p
+        req.opt, req.order = d["options"] if "options" in d else c.options, order_p
+        return m.lib.sg_solve_lean, c.descriptor, req, (phi_p, blk_p, order_p)
+
+    def request(self):
+        """This sweep as the ``sg_request`` sg_solve_lean reads (the mechanism's per-thread one, set for this sweep
+        and a new block), with the buffers its pointers point into."""
+        return self._call(self.__dict__.get("order"))[2:]
+
+    def bind(self):
+        """The C call of this sweep on one block (made here) as a function of no arguments; it returns how many
+        positions failed. The angles are sorted first where they do not ascend."""
+        phi = self.phi_in
+        order = None
+        if self.n > 1 and not (phi[1:] >= phi[:-1]).all():
+            order = np.argsort(phi, kind="stable").astype(np.uintp)
+        fn, desc, req, keep = self._call(order)
+
+        def call(_keep=keep) -> int:
+            return fn(desc, req)
+
+        return call
+
+    def run(self) -> int:
+        """Run the sweep in C (the GIL released) on a new block; returns the number of failed positions."""
+        fn, desc, req, keep = self._call(None)
+        failed = fn(desc, req)
+        if failed == _SIZE_MAX:  # not ascending: solved in sorted order, returned in the caller's
+            fn, desc, req, keep = self._call(np.argsort(self.phi_in, kind="stable").astype(np.uintp))
+            failed = fn(desc, req)
+        self.__dict__["failed"] = failed
+        return failed
+
+    def check(self) -> None:
+        """Raise the typed error of the first failing position: the general sweep of the same arguments names it
+        with its diagnosis (a non-finite angle, the failing shaft angle, …)."""
+        if not self.failed:
+            return
+        m = self.mechanism
+        full = m._prepare_arrays(self.phi_in, self.speed, params=self.user_params, forces=self.forces)
+        full.run()
+        full.check()
+        raise InputError(m.name, f"runtime refused the sweep ({abi.status_name(int(self.status[self.status != 0][0]))})")
+
+    def motion(self) -> Motion:
+        sizes = self.mechanism.description.sizes
+        return Motion.of_block(self.mechanism, self.blk, self.n, sizes["nq"], sizes["nobs"], SINGULAR_TOL)
+
+    def analysis(self) -> ForceAnalysis:
+        if not self.forces:
+            raise ValueError("this sweep was prepared without forces (prepare(..., forces=True))")
+        n, sizes = self.n, self.mechanism.description.sizes
+        o = (4 + 3 * sizes["nq"] + sizes["nobs"]) * n
+        return ForceAnalysis(self.mechanism, self.motion(), self.blk[o:o + n * sizes["nfo"]].reshape(n, sizes["nfo"]),
+                             self.settings)
+
+    def result(self):
+        fn, desc, req, keep = self._call(None)
+        failed = fn(desc, req)
+        if failed:  # unsorted angles (run() solves them sorted), or a failure (check() names it)
+            if failed == _SIZE_MAX:
+                failed = self.run()
+            else:
+                self.__dict__["failed"] = failed
+            self.check()
+        if self.settings is not None:
+            return self.analysis()
+        m, blk = self.mechanism, self.blk
+        return Motion.of_block(m, blk, self.n, m.description.sizes["nq"], m.description.sizes["nobs"], SINGULAR_TOL)
+
+
+#: What a :class:`LeanSweep` runs with but sets only at the first look: the mechanism's defaults.
+_LEAN_DEFAULTS = {"held": lambda m: m.default_vectors["held"], "branch": lambda m: m.default_vectors["branch"],
+                  "guess": lambda m: m.default_vectors["guess"], "options": None, "order": lambda m: None,
+                  "keep_singular": lambda m: False}
 
 
 def continuous_angles(desc, q: np.ndarray, obs: np.ndarray, order=None) -> None:

@@ -68,7 +68,7 @@ class GroupCall:
         # One prepare() of the group: the engine's own conversions and checks of params, held, branch, gravity
         probe = mech.prepare(np.zeros(1), None, 0.0, params=g.params or None, held=g.held or None,
                              branch=g.branch or None, forces=True, loads=loads, gravity=g_mag,
-                             gravity_direction=g_dir)
+                             gravity_direction=g_dir, layout="arrays")
         s = probe.settings
         for arr in (probe.params, probe.held, probe.branch, s.gravity):
             arr.flags.writeable = False  # shared by every result of this plan, like the mechanism's defaults
