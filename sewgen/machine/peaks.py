@@ -211,16 +211,21 @@ def _scalar(value):
     return float(arr[0]) if len(arr) and np.all(arr == arr[0]) else None
 
 
+def mechanism_signature(mech, obs, angles, loads=()) -> np.ndarray:
+    """(n, c) at ``angles`` (rad) of one mechanism: every cam contact's active arc (from its observables ``obs``,
+    (n, nobs)) and every load window's state (on, off) — what changes at a discontinuity of its accelerations and
+    forces."""
+    cols = [obs[:, k] for k in arc_columns(mech).values()]
+    cols += [window_mask(np.asarray(angles, dtype=float), ld.window).astype(float) for ld in loads
+             if ld.window is not None]
+    return np.column_stack(cols) if cols else np.zeros((len(angles), 0))
+
+
 def signature(a) -> np.ndarray:
-    """(n, c) at the analysis' angles: every cam contact's active arc and every load window's state (on, off)
-    of every group — what changes at a discontinuity of the machine's accelerations and forces."""
-    cols = []
-    for g in a.machine.groups:
-        fa = a.groups[g.name]
-        cols += [fa.motion.obs[:, k] for k in arc_columns(g.mechanism).values()]
-        cols += [window_mask(np.asarray(a.phi, dtype=float), ld.window).astype(float)
-                 for ld in g.loads if ld.window is not None]
-    return np.column_stack(cols) if cols else np.zeros((len(a.phi), 0))
+    """(n, c) at the machine analysis' angles: :func:`mechanism_signature` of every group (its load windows in the
+    machine's angle), side by side."""
+    parts = [mechanism_signature(g.mechanism, a.groups[g.name].motion.obs, a.phi, g.loads) for g in a.machine.groups]
+    return np.column_stack(parts) if parts else np.zeros((len(a.phi), 0))
 
 
 def analysis_at(a, angles):
@@ -233,27 +238,31 @@ def analysis_at(a, angles):
         return a.machine.analyze(np.ascontiguousarray(angles, dtype=float), speed=speed, accel=accel)
 
 
+def extremes_of(result, phi, quantities: dict, solve, signature_of=None, senses=SENSES) -> dict:
+    """name -> sense -> :class:`Extreme` of every quantity of ``quantities`` (name -> function of a result giving
+    its (n,) values) over ``result``, a sweep at the shaft angles ``phi``: ``solve(angles)`` gives the same kind of
+    result at other angles (None: it cannot), ``signature_of(result, angles)`` its switches (:func:`refine`)."""
+    values = {k: f(result) for k, f in quantities.items()}
+
+    def evaluate(angles):
+        r = solve(angles)
+        if r is None:
+            return None
+        with np.errstate(all="ignore"):
+            return {k: f(r) for k, f in quantities.items()}, (None if signature_of is None
+                                                               else signature_of(r, angles))
+
+    with np.errstate(all="ignore"):
+        return refine(phi, values, evaluate, None if signature_of is None else signature_of(result, phi), senses)
+
+
 def extremes(a, quantities: dict, senses=SENSES) -> dict:
     """name -> sense -> :class:`Extreme` of every quantity of ``quantities`` (name -> function of a
     :class:`sewgen.machine.MachineAnalysis` giving its (n,) values) over the machine analysis ``a``, each refined
     between the samples by solving ``a``'s machine again at its speed and acceleration (module docstring)."""
-    values = {k: f(a) for k, f in quantities.items()}
-
-    def evaluate(angles):
-        b = analysis_at(a, angles)
-        if b is None:
-            return None
-        with np.errstate(all="ignore"):
-            return {k: f(b) for k, f in quantities.items()}, signature(b)
-
-    with np.errstate(all="ignore"):
-        return refine(a.phi, values, evaluate, signature(a), senses)
+    return extremes_of(a, a.phi, quantities, lambda angles: analysis_at(a, angles), lambda b, _angles: signature(b),
+                       senses)
 
 
-def peak(a, quantity) -> Extreme:
-    """The refined largest value of one quantity (a function of the analysis, as :func:`extremes`)."""
-    return extremes(a, {"q": quantity}, ("max",))["q"]["max"]
-
-
-__all__ = ["ANGLE_TOL", "AT_SWITCH", "Extreme", "REFINED", "SAMPLED", "analysis_at", "extremes", "peak", "refine",
-           "signature"]
+__all__ = ["ANGLE_TOL", "AT_SWITCH", "Extreme", "REFINED", "SAMPLED", "analysis_at", "extremes", "extremes_of",
+           "mechanism_signature", "refine", "signature"]
