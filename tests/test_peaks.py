@@ -105,6 +105,16 @@ def test_every_stated_extreme_of_the_summary_is_the_fine_sweep_s(jb, jb_fine):
         assert stat["min"] == pytest.approx(values.min(), abs=5e-3 * scale), path
 
 
+def test_an_analysis_at_per_position_speeds_states_its_extremes_are_the_samples(jb):
+    """A speed that varies per position cannot be carried to other angles: the summary says its extremes are the
+    sampled ones instead of presenting them as the machine's."""
+    phi = jb.shaft_angles()
+    w = jb.speed * (1.0 + 0.05 * np.sin(phi))
+    a = jb.analyze(phi, speed=w, accel=jb.speed**2 * 0.05 * np.cos(phi))
+    rear = summary(a)["bearings"]["rear"]
+    assert rear["max_how"] == "sampled" and rear["max"] == pytest.approx(np.hypot(*a.bearing("rear").T).max(), rel=1e-11)
+
+
 def test_the_figures_label_the_summary_s_peaks(jb):
     matplotlib = pytest.importorskip("matplotlib")
     from sewgen.report.plots import draw_bearings_polar, new_figure
