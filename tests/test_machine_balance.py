@@ -238,7 +238,8 @@ def test_the_reported_before_and_after_are_a_fine_re_analysis(method, tmp_path):
                 "bearing_rear_rms": _rms(rear), "shaking_force_on_frame_peak": force.max(),
                 "shaking_force_on_frame_rms": _rms(force), "torque_peak": np.abs(a.torque).max(),
                 "torque_rms": _rms(a.torque)}
-        fine.update({f"shaking_moment_on_frame_{axis}_peak": np.abs(moments[:, k]).max() for k, axis in enumerate("xyz")})
+        fine.update({f"shaking_moment_on_frame_{axis}_peak": np.abs(moments[:, k]).max()
+                     for k, axis in enumerate("xyz")})
         for key, value in fine.items():
             assert reported[tag][key] == pytest.approx(value, rel=5e-3), (tag, key)
         worst[tag] = max(front.max(), rear.max())

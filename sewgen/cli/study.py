@@ -240,8 +240,9 @@ def add_parser(sub, common) -> None:
                    help="a model-file key, groups.GROUP.params.NAME, groups.GROUP.phase, shaft.rear_bearing …; "
                         "KEY,KEY2,... moves KEY2... by the same offset (repeatable)")
     q.add_argument("--range", action="append", metavar="LO..HI",
-                   help='"-10%%..+10%%" of the nominal (default) or "15 mm..18 mm"; an angle takes an absolute range '
-                        '(default: the nominal ± 10 deg), a percentage of it is refused; one for all or one per --param')
+                   help='"-10%%..+10%%" of the nominal (default) or "15 mm..18 mm"; an angle takes an absolute '
+                        'range (default: the nominal ± 10 deg), a percentage of it is refused; one for all or one '
+                        'per --param')
     q.add_argument("--steps", type=int, default=11, help="values per parameter (default 11)")
     q.add_argument("--no-loads", action="store_true", help="leave out the kinetostatics and the peak loads")
     q.set_defaults(fn=cmd_influence)

@@ -199,8 +199,9 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
     position (m), velocity and horizontal acceleration at constant speed ``omega`` (rad/s, > 0); ``plate`` (D,)
     or scalar: the plate's height. ``needle_in``/``needle_out`` (D,) or scalar: the machine angles where the
     needle point enters and leaves the cloth (NaN or None: those indices are NaN); ``tilt`` (D, N): the dog
-    body's angle (rad; reported as its :func:`inclination`); ``arc`` (D, N): a cam contact's active arc. Returns index -> (D,) array in SI (angles in
-    rad, ``rise_at``/``sink_at`` in [0, 2π)) and ``error`` -> a list of None or the design's problem."""
+    body's angle (rad; reported as its :func:`inclination`); ``arc`` (D, N): a cam contact's active arc. Returns
+    index -> (D,) array in SI (angles in rad, ``rise_at``/``sink_at`` in [0, 2π)) and ``error`` -> a list of None
+    or the design's problem."""
     phi = np.asarray(phi, float)
     x, y, vx, vy, ax = (np.atleast_2d(np.asarray(a, float)) for a in (x, y, vx, vy, ax))
     d, n = y.shape

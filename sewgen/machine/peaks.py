@@ -6,8 +6,9 @@ between two samples, and the largest sample can miss it by much (JB1-3's rear be
 by solving it again, not by interpolating the samples:
 
 1. **candidates**: every sampled local extreme within :data:`BAND` of the sampled range from the sampled
-   extreme (at most :data:`MAX_CANDIDATES`, the largest), each bracketed by its two neighbouring samples (round
-   the turn for a whole revolution; at a sweep's end by its one neighbour);
+   extreme (at most :data:`MAX_CANDIDATES`, the largest), and every sample next to a switch (below) whose
+   neighbourhood reaches that band, each bracketed by its two neighbouring samples (round the turn for a whole
+   revolution; at a sweep's end by its one neighbour);
 2. **zoom**: every bracket of every quantity at once — one machine analysis a round — gets :data:`POINTS` equally
    spaced angles inside; the best of the bracket's known points (its ends, the best so far and the new ones) and
    its two neighbours become the next bracket, which shrinks by (POINTS + 1)/2 a round until it is narrower than
@@ -44,6 +45,7 @@ POINTS = 8
 BAND = 0.5
 #: ... the largest MAX_CANDIDATES of them.
 MAX_CANDIDATES = 8
+#: A bound on the rounds (a bracket of a whole turn needs 9 to reach ANGLE_TOL).
 MAX_ROUNDS = 40
 #: A quantity whose values at the final bracket's ends differ by more than JUMP × its sampled range, a switch
 #: between them, jumps (or turns) there: its extreme is at the switch. A smooth extreme differs by
@@ -133,7 +135,7 @@ def refine(phi, values: dict, evaluate, signature=None, senses=SENSES, tol: floa
                 else:
                     il, ir = max(i - 1, 0), min(i + 1, n - 1)
                     a0, a1 = phi[il], phi[ir]
-                ib = max((il, i, ir), key=lambda k: s[k])  # the best sample of the bracket
+                ib = max((il, i, ir), key=lambda m: s[m])  # the best sample of the bracket
                 q.append(j), sign.append(sg), lo.append(a0), hi.append(a1), vlo.append(s[il]), vhi.append(s[ir])
                 slo.append(sig[il]), shi.append(sig[ir]), bv.append(s[ib]), sb.append(sig[ib])
                 ba.append(a0 if ib == il and ib != i else a1 if ib == ir and ib != i else phi[i])

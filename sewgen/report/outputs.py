@@ -141,9 +141,8 @@ class _Stats:
     def __init__(self, a):
         self.a, self.quantities, self.units, self.ext = a, {}, {}, None
 
-    def add(self, key: str, quantity, unit: str) -> str:
+    def add(self, key: str, quantity, unit: str) -> None:
         self.quantities[key], self.units[key] = quantity, unit
-        return key
 
     def __call__(self, key: str) -> dict:
         if self.ext is None:
