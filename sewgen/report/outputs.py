@@ -185,7 +185,7 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
             st.add(f"{g.name}.joints.{n}", lambda b, g=g.name, n=n: b.groups[g].reaction(n).magnitude, "N")
         regulator = g.mechanism.description.role_name(STITCH_REGULATOR)
         if regulator is not None:
-            st.add(f"{g.name}.regulator", lambda b, g=g.name, r=regulator: b.groups[g].torque(r),
+            st.add(f"{g.name}.holding", lambda b, g=g.name, r=regulator: b.groups[g].torque(r),
                    g.mechanism.description.input(regulator).effort_unit)
     out = {
         "machine": m.name,
@@ -220,10 +220,10 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
             setting = g.held.get(regulator, inp.default)
             if inp.quantity == "angle":
                 entry["regulator_deg"] = math.degrees(setting)
-                entry["holding_torque"] = st(f"{g.name}.regulator")
+                entry["holding_torque"] = st(f"{g.name}.holding")
             else:  # a regulator set by a travel
                 entry["regulator_mm"] = setting * 1e3
-                entry["holding_force"] = st(f"{g.name}.regulator")
+                entry["holding_force"] = st(f"{g.name}.holding")
         if g.stitch is not None:
             entry["stitch_mm"] = g.stitch * 1e3
         if has_feed(g.mechanism):
