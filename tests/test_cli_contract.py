@@ -161,10 +161,11 @@ def test_summary_numbers_are_clean_and_say_what_they_mean(quick_start):
         else:
             yield key, node
 
-    angles = [v for k, v in walk(s) if k in ("max_at_deg", "min_at_deg")]  # grid angles (a crossing is not)
-    assert len(angles) > 50
-    for v in angles:  # grid angles of a 5° sweep, exactly
-        assert v == round(v / 5) * 5 and 0 <= v < 360, v
+    angles = [v for k, v in walk(s) if k in ("max_at_deg", "min_at_deg")]  # refined between the samples
+    assert len(angles) > 50 and any(v % 5 != 0 for v in angles)
+    for v in angles:  # to 0.01°, in [0, 360)
+        assert v == round(v, 2) and 0 <= v < 360, v
+    assert {v for k, v in walk(s) if k in ("max_how", "min_how")} <= {"refined", "at a switch"}
     for k, v in walk(s):
         if isinstance(v, float):
             assert math.isfinite(v) and float(f"{v:.12g}") == v, (k, v)

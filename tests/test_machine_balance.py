@@ -132,8 +132,10 @@ def test_method_3_rms_is_a_least_squares_solve(tmp_path):
     path = jb_with_planes(tmp_path)
     machine = load_machine(path)
     report = mb.balance(machine, "bearings", "rms")
-    # independent: columns from machines re-read with a test mass (at α and α + 180°: the weight cancels)
-    base = _bearing_rows(machine.analyze())
+    # independent: columns from machines re-read with a test mass (at α and α + 180°: the weight cancels), every 1°
+    # (the balancing's documented step, finer than the model's 5°)
+    phi = machine.shaft_angles(math.radians(1.0))
+    base = _bearing_rows(machine.analyze(phi))
     cols = []
     for name, z in (("front", "-30 mm"), ("rear", "190 mm")):
         for angle in (0, 90):
@@ -142,7 +144,7 @@ def test_method_3_rms_is_a_least_squares_solve(tmp_path):
                 mass = f'\n[[shaft.masses]]\nname = "t"\nmass = "10 g"\nradius = "10 mm"\nangle = "{a} deg"\nz = "{z}"\n'
                 p = tmp_path / f"t_{name}_{a}.toml"
                 p.write_text(path.read_text() + mass)
-                rows.append(_bearing_rows(load_machine(p).analyze()))
+                rows.append(_bearing_rows(load_machine(p).analyze(phi)))
             cols.append((rows[0] - rows[1]) / 2 / 1e-4)  # per kg·m of m·r
     u, *_ = np.linalg.lstsq(np.column_stack(cols), -base, rcond=None)
     got = np.array([[c.mr * math.cos(c.angle), c.mr * math.sin(c.angle)] for c in report.solution.counterweights])
@@ -188,11 +190,12 @@ def test_the_cli_writes_a_model_that_analyses_to_the_reported_loads(tmp_path):
               "shaking_force_on_frame_peak"):
         assert k in report["after"] and k in report["before"]
     assert [s["rpm"] for s in report["speeds"]] == pytest.approx([600, 1500])
-    analysed = load_machine(tmp_path / "balanced.toml").analyze()
+    balanced = load_machine(tmp_path / "balanced.toml")
+    analysed = balanced.analyze(balanced.shaft_angles(math.radians(0.05)))  # the peaks lie between 5° samples
     assert np.hypot(*analysed.bearing("front").T).max() == pytest.approx(report["after"]["bearing_front_peak"],
-                                                                          rel=1e-12)
+                                                                          rel=1e-4)
     assert np.hypot(*analysed.bearing("rear").T).max() == pytest.approx(report["after"]["bearing_rear_peak"],
-                                                                         rel=1e-12)
+                                                                         rel=1e-4)
     for name in ("balance.json", "bearings.csv", "speeds.csv", "balance.png"):
         assert (tmp_path / "bal" / name).stat().st_size > 200
 
@@ -209,6 +212,39 @@ def test_the_built_in_jb1_3_balances_by_every_method():
             after, before = report["after"], report["before"]
             assert after["shaking_force_on_frame_peak"] < 0.8 * before["shaking_force_on_frame_peak"], method
         assert all(c["mass"] <= 0.060 + 1e-9 for c in report["counterweights"])
+
+
+def _rms(v):
+    return float(np.sqrt(np.mean(np.square(v))))
+
+
+@pytest.mark.parametrize("method", mb.METHODS)
+def test_the_reported_before_and_after_are_a_fine_re_analysis(method, tmp_path):
+    """Every measure balancing reports, before and after, is the machine's own: a 0.1° analysis written here of
+    the model and of the model file with the chosen counterweights gives it to 0.5 % (at the model's 5° the rear
+    bearing's peak read 182 N for 190 N, and method 3's "improvement" was one of the samples only)."""
+    machine = load_machine("jb1-3")
+    report = mb.balance(machine, method)
+    text = mb.model_text((MODELS_DIR / "jb1-3.toml").read_text(encoding="utf-8"), report.solution.counterweights)
+    (tmp_path / "balanced.toml").write_text(text, encoding="utf-8")
+    reported = report.as_dict()
+    worst = {}
+    for tag, m in (("before", machine), ("after", load_machine(tmp_path / "balanced.toml"))):
+        a = m.analyze(m.shaft_angles(math.radians(0.1)))
+        front, rear = np.hypot(*a.bearing("front").T), np.hypot(*a.bearing("rear").T)
+        force = np.hypot(*a.shaking_force_on_frame.T)
+        moments = a.shaking_moments_on_frame((0.0, 0.0, m.shaft.front))
+        fine = {"bearing_front_peak": front.max(), "bearing_rear_peak": rear.max(), "bearing_front_rms": _rms(front),
+                "bearing_rear_rms": _rms(rear), "shaking_force_on_frame_peak": force.max(),
+                "shaking_force_on_frame_rms": _rms(force), "torque_peak": np.abs(a.torque).max(),
+                "torque_rms": _rms(a.torque)}
+        fine.update({f"shaking_moment_on_frame_{axis}_peak": np.abs(moments[:, k]).max()
+                     for k, axis in enumerate("xyz")})
+        for key, value in fine.items():
+            assert reported[tag][key] == pytest.approx(value, rel=5e-3), (tag, key)
+        worst[tag] = max(front.max(), rear.max())
+    if method == "bearings":  # the larger bearing peak, which method 3 minimises, really falls
+        assert worst["after"] < worst["before"] - 1.0
 
 
 def test_bad_balancing_input_is_one_line_and_exit_2(tmp_path):

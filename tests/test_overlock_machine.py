@@ -260,6 +260,23 @@ def test_summary_reports_knife_and_timing(analysis):
     assert all(c["ok"] for c in s["timing"]["checks"])
 
 
+def test_the_rack_tilt_is_its_inclination_to_the_horizontal(machine, analysis):
+    """The 51-A rack points back along −x (its angle near 180°): its tilt while feeding is its line's inclination,
+    about −1° (falling toward the feed direction), not 178.5°–179.4°. Independent: the slope of the line through
+    its two teeth F and G, from a 0.05° sweep, over the angles where tooth F stands above the plate."""
+    from sewgen.report import outputs as report
+
+    tilt = report.summary(analysis)["groups"]["feed"]["feed_dog"]["indices"]
+    g = next(g for g in machine.groups if g.name == "feed")
+    plate = dict(zip(g.mechanism.param_names, g.mechanism.param_vector(g.params or None)))["plate_y"]
+    mo = machine.kinematics(np.radians(np.arange(0.0, 360.0, 0.05)))["feed"]
+    f, t = mo.point("tooth_f"), mo.point("tooth_g")
+    slope = np.degrees(np.arctan((f.y - t.y) / (f.x - t.x)))[f.y > plate]
+    assert -2.0 < slope.min() < slope.max() < 0.0
+    assert tilt["tilt_min_deg"] == pytest.approx(slope.min(), abs=0.01)
+    assert tilt["tilt_max_deg"] == pytest.approx(slope.max(), abs=0.01)
+
+
 @pytest.mark.parametrize("accel", [0.0, 500.0])
 def test_shaking_moments_of_groups_along_the_shaft(accel):
     """The shaking and weight moments on the frame from the parts' kinematics (sewgen.machine.shaking, body by

@@ -224,6 +224,59 @@ def test_a_study_on_a_running_scheduler_by_its_address(jb):
             dask_client(bad)
 
 
+# -- angles ---------------------------------------------------------------------------------------------------------
+
+def test_an_angle_moves_over_an_absolute_range_never_a_percentage_of_it(jb):
+    """10 % of the hook drive's −2° phase is 0.2°: meaningless. An angle's range is absolute, by default its
+    nominal ± 10°; a percentage of an angle (a range or a tolerance) is refused, naming the key."""
+    from sewgen.study.run import StudyError
+
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    with pytest.raises(StudyError, match="percentage of an angle") as err:
+        influence(jb, ["groups.hook_drive.phase"], "-10%..+10%", 3, opts)
+    assert err.value.parameter == "--range" and "groups.hook_drive.phase" in str(err.value)
+    with pytest.raises(StudyError, match="percentage of an angle"):
+        tolerance(jb, {"groups.hook_drive.phase": "±1%"}, 2, options=opts)
+    r = influence(jb, ["groups.hook_drive.phase"], None, 3, opts)
+    ranged = r.table[r.table["varied"] == "groups.hook_drive.phase"]["groups.hook_drive.phase [deg]"]
+    assert sorted(ranged) == pytest.approx([-12.0, -2.0, 8.0])
+    assert r.ranges == ["-12 deg..8 deg"]
+
+
+@pytest.fixture(scope="module")
+def feed_rising_at_0():
+    """JB1-3 with its feed group's phase set so that the dog rises 0.0002° after φ = 0 (its events move by
+    −phase: the group turns at φ + phase)."""
+    from sewgen.machine.modelfile import MODELS_DIR, load_toml
+
+    r = run_designs(load_machine("jb1-3"), ["groups.feed.phase"], [[0.0]], StudyOptions(step_deg=5.0, loads=False))
+    rise0 = float(r["feed_rise_at [deg]"][0])
+    doc = load_toml(MODELS_DIR / "jb1-3.toml")
+    phase = rise0 - 0.0002
+    doc["groups"]["feed"]["phase"] = f"{phase!r} deg"
+    return load_machine(MODELS_DIR / "jb1-3.toml", doc), phase
+
+
+def test_an_angle_across_0_deg_is_continuous_in_sensitivities_curves_and_percentiles(feed_rising_at_0):
+    """The rise angle moves by −1° per degree of the feed's phase (closed form): its sensitivity is −1 though its
+    value wraps from 359.999° to 0.001° between the two difference points, the influence curve is the line of slope
+    −1, and a tolerance's spread of it is the phase's spread, not a turn."""
+    machine, phase = feed_rising_at_0
+    opts = StudyOptions(step_deg=5.0, loads=False)
+    rise = "feed_rise_at [deg]"
+    r = influence(machine, ["groups.feed.phase"], [f"{phase - 4} deg..{phase + 4} deg"], 5, opts)
+    assert r.sensitivity("groups.feed.phase", rise) == pytest.approx(-1.0, abs=1e-6)
+    x, y = r.curve("groups.feed.phase", rise)
+    assert (r.table[rise] > 350).any() and (r.table[rise] < 10).any()  # the table keeps [0°, 360°)
+    assert y == pytest.approx(0.0002 - (x - phase), abs=1e-4)  # the rise found between 5° samples
+    t = tolerance(machine, {"groups.feed.phase": "±2 deg"}, 24, seed=3, distribution="uniform", options=opts)
+    st = t.stats.set_index("quantity")
+    shift = t.table["groups.feed.phase [deg]"].to_numpy() - phase
+    assert st.loc[rise, "spread"] == pytest.approx(np.ptp(shift), abs=1e-4)
+    assert st.loc[rise, "std"] == pytest.approx(np.std(shift), abs=1e-4)
+    assert st.loc[rise, "min"] == pytest.approx(0.0002 - shift.max(), abs=1e-4)
+
+
 # -- the command --------------------------------------------------------------------------------------------------
 
 def test_study_influence_command_writes_tables_with_units(tmp_path, capsys):
@@ -266,6 +319,9 @@ def test_study_tolerance_command_with_exact_jumps(tmp_path, capsys):
     (["study", "influence", "jb1-3", "--param", "groups.feed.params.nope"], "groups.feed.params.nope"),
     (["study", "influence", "jb1-3", "--param", "groups.feed.params.feed_arm_r", "--range", "5%"], "--range"),
     (["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.feed_arm_r=±0.02 deg"], "--tolerance"),
+    (["study", "influence", "jb1-3", "--param", "groups.hook_drive.phase", "--range", "-10%..+10%"],
+     "percentage of an angle"),
+    (["study", "tolerance", "jb1-3", "--tolerance", "groups.hook_drive.phase=±1%"], "percentage of an angle"),
     (["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.feed_arm_r=±0.02mm", "--dask", "nowhere"],
      "--dask"),
 ])

@@ -55,14 +55,30 @@ def cmd_analyze(args, con: Console) -> int:
                 plots.cancel()
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     con.say(head)
+    torque, bearings = summary["drive_torque"], summary["bearings"]
     con.say(f"power balance residual (relative) {summary['power_balance_residual_relative']:.3g}; "
-            f"drive torque {summary['drive_torque']['min']:.4g} .. {summary['drive_torque']['max']:.4g} N*m "
-            f"(RMS {summary['drive_torque']['rms']:.4g}, {_friction_words(summary['friction'])}); bearings front "
-            f"{summary['bearings']['front']['max']:.4g} N, rear {summary['bearings']['rear']['max']:.4g} N peak; "
-            f"shaking force on the frame {summary['shaking_force_on_frame']['max']:.4g} N peak")
+            f"drive torque {_at(torque, 'min')} .. {_at(torque, 'max')} (RMS {torque['rms']:.4g} N*m, "
+            f"{_friction_words(summary['friction'])}); bearings' peaks front {_at(bearings['front'], 'max')}, "
+            f"rear {_at(bearings['rear'], 'max')}; shaking force on the frame peak "
+            f"{_at(summary['shaking_force_on_frame'], 'max')} ({_how_words(summary)})")
     for f in files:
         con.say(f"wrote {out / Path(f).name}")
     return 0
+
+
+def _at(stat: dict, sense: str) -> str:
+    """"190.1 N at φ = 192.12°" from a summary.json statistic; a peak at a switch or sampled says so."""
+    how = stat[f"{sense}_how"]
+    note = "" if how == "refined" else f" ({how})"
+    return f"{stat[sense]:.4g} {stat['unit']} at φ = {stat[f'{sense}_at_deg']:.2f}°{note}"
+
+
+def _how_words(summary: dict) -> str:
+    hows = {s[f"{k}_how"] for s in (summary["drive_torque"], summary["bearings"]["front"],
+                                     summary["bearings"]["rear"], summary["shaking_force_on_frame"])
+            for k in ("max", "min")}
+    return ("extremes sampled: the analysis cannot be solved between its positions" if hows == {"sampled"}
+            else "extremes refined between the positions")
 
 
 def _friction_words(friction: dict) -> str:

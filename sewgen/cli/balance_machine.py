@@ -112,13 +112,22 @@ def _print(r: dict) -> None:
             ("shaking moment on frame x peak [N*m]", "shaking_moment_on_frame_x_peak"),
             ("shaking moment on frame y peak [N*m]", "shaking_moment_on_frame_y_peak"),
             ("driving torque peak [N*m]", "torque_peak")]
-    print(f"  {'':42s} {'before':>10s} {'after':>10s}")
+    print(f"  {'':42s} {'before':>10s} {'after':>10s}   (every {r['before']['step_deg']:g}°; peaks refined between "
+          "the positions, at φ before -> after)")
     for label, key in rows:
-        print(f"  {label:42s} {r['before'][key]:10.3f} {r['after'][key]:10.3f}")
+        line = f"  {label:42s} {r['before'][key]:10.3f} {r['after'][key]:10.3f}"
+        if key in r["before"]["peak_at_deg"]:
+            line += f"   {_at(r['before'], key)} -> {_at(r['after'], key)}"
+        print(line)
     for name, key in (("shaking force on frame orders 1-3 [N]", "shaking_force_on_frame_orders"),):
         b = ", ".join(f"{v:.2f}" for v in r["before"][key])
         a = ", ".join(f"{v:.2f}" for v in r["after"][key])
         print(f"  {name}: {b} -> {a}")
+
+
+def _at(m: dict, key: str) -> str:
+    how = m["peak_how"][key]
+    return f"{m['peak_at_deg'][key]:.2f}°" + ("" if how == "refined" else f" ({how})")
 
 
 def _write(folder: Path, report, result: dict) -> None:
@@ -138,26 +147,29 @@ def _write(folder: Path, report, result: dict) -> None:
         for k in keys:
             speed_cols[f"{k}_{tag} [N]"] = np.array([s[tag][k] for s in result["speeds"]])
     write_csv(folder / "speeds.csv", speed_cols)
-    _plot(folder / "balance.png", report)
+    _plot(folder / "balance.png", report, result)
 
 
-def _plot(path: Path, report) -> None:
-    """Hodographs of the front and rear bearing loads and of the shaking force on the frame, before and after."""
+def _plot(path: Path, report, result: dict) -> None:
+    """Hodographs of the front and rear bearing loads and of the shaking force on the frame, before and after; the
+    peaks the legends state are the report's (refined between the samples)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 3, figsize=(15, 5.4))
-    for ax, (title, get) in zip(axes, (
-            ("front bearing load (shaft on frame)", lambda a: a.bearing("front")),
-            ("rear bearing load (shaft on frame)", lambda a: a.bearing("rear")),
-            ("shaking force on the frame, −Σ m a_G", lambda a: a.shaking_force_on_frame))):
+    for ax, (title, get, key) in zip(axes, (
+            ("front bearing load (shaft on frame)", lambda a: a.bearing("front"), "bearing_front_peak"),
+            ("rear bearing load (shaft on frame)", lambda a: a.bearing("rear"), "bearing_rear_peak"),
+            ("shaking force on the frame, −Σ m a_G", lambda a: a.shaking_force_on_frame,
+             "shaking_force_on_frame_peak"))):
         for tag, a, style in (("before", report.before, dict(color="0.55", ls="--")),
                               ("after", report.after, dict(color="C3"))):
             v = get(a)
             v = np.vstack([v, v[:1]])
-            ax.plot(v[:, 0], v[:, 1], label=f"{tag}: peak {np.hypot(*v.T).max():.1f} N", lw=1.6, **style)
+            ax.plot(v[:, 0], v[:, 1], label=f"{tag}: peak {result[tag][key]:.1f} N at φ = "
+                    f"{result[tag]['peak_at_deg'][key]:.1f}°", lw=1.6, **style)
         ax.plot([0], [0], marker="+", color="k", ms=10)
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_title(title, fontsize=10)

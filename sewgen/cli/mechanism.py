@@ -12,7 +12,6 @@ from sewgen.cli.common import (
     branches_of,
     check_file,
     display_units,
-    extreme,
     mechanism_of,
     params_of,
     quantity,
@@ -23,6 +22,22 @@ from sewgen.cli.common import (
 )
 from sewgen.engine.loader import catalog, mechanism
 from sewgen.engine.loads import Load
+from sewgen.machine.peaks import REFINED, extremes_of, mechanism_signature
+
+REFINED_NOTE = "peaks and extremes refined between the positions (the mechanism solved again around each)"
+
+
+def _extreme(ext, units, unit: str) -> str:
+    """"     190.055 @ 192.12°" (an extreme found at a switch or on the samples only says so: * / ~)."""
+    (value,), _ = units.convert(np.array([ext.value]), unit)
+    mark = " " if ext.how == REFINED else ("*" if ext.how == "at a switch" else "~")
+    return f"{value:12.6g} @ {ext.deg:6.2f}°{mark}"
+
+
+def _note(found: dict) -> str:
+    hows = {e.how for senses in found.values() for e in senses.values()}
+    return REFINED_NOTE + ("; * at a cam-arc switch or a load window's edge (the one-sided value)"
+                           if "at a switch" in hows else "") + ("; ~ sampled" if "sampled" in hows else "")
 
 
 def cmd_list(args, con: Console) -> int:
@@ -62,27 +77,36 @@ def cmd_kinematics(args, con: Console) -> int:
     phi, step, start = sweep_of(args)
     m = mechanism_of(args)
     speed, speed_words = speed_of(args, m.default_speed, "the mechanism's")
-    motion = m.solve(phi, speed=speed, params=params_of(m, args.param), branch=branches_of(m, args.branch),
-                     newton=args.newton)
+    settings = dict(speed=speed, params=params_of(m, args.param), branch=branches_of(m, args.branch),
+                    newton=args.newton)
+    motion = m.solve(phi, **settings)
     if csv:
         write_table(csv, units.table(motion.table()), "--csv")
+    quantities = {}
+    for name in motion.point_names:
+        quantities[f"v.{name}"] = lambda r, name=name: np.hypot(r.point(name).vx, r.point(name).vy)
+        quantities[f"a.{name}"] = lambda r, name=name: np.hypot(r.point(name).ax, r.point(name).ay)
+    for name in motion.coord_names:
+        quantities[f"q.{name}"] = lambda r, name=name: r.coord(name).value
+    found = extremes_of(motion, phi, quantities, lambda angles: m.solve(angles, **settings),
+                        lambda r, angles: mechanism_signature(m, r.obs, angles))
     L, V, A = (units.of(u)[0] for u in ("m", "m/s", "m/s^2"))
-    lines = [f"{m.name}: {len(phi)} positions every {step:g}° from {start:g}°, speed {speed_words}",
+    lines = [f"{m.name}: {len(phi)} positions every {step:g}° from {start:g}°, speed {speed_words}; {_note(found)}",
              f"{'point':16s} {f'x range ({L})':>22s} {f'y range ({L})':>22s} {f'peak |v| ({V})':>26s} "
              f"{f'peak |a| ({A})':>26s}"]
     for name in motion.point_names:
         pt = motion.point(name)
         x, _ = units.convert(pt.x, "m")
         y, _ = units.convert(pt.y, "m")
-        v, _ = units.convert(np.hypot(pt.vx, pt.vy), "m/s")
-        a, _ = units.convert(np.hypot(pt.ax, pt.ay), "m/s^2")
         lines.append(f"{name:16s} {x.min():10.5g} {x.max():10.5g}  {y.min():10.5g} {y.max():10.5g} "
-                     f"{extreme(v, phi, np.argmax)} {extreme(a, phi, np.argmax)}")
+                     f"{_extreme(found[f'v.{name}']['max'], units, 'm/s')} "
+                     f"{_extreme(found[f'a.{name}']['max'], units, 'm/s^2')}")
     for name in motion.coord_names:
         c = motion.coord(name)
-        value, unit = units.convert(c.value, c.unit)
-        lines.append(f"{name:24s} [{unit}] min {extreme(value, phi, np.argmin)}  "
-                     f"max {extreme(value, phi, np.argmax)}")
+        _, unit = units.convert(c.value[:1], c.unit)
+        ext = found[f"q.{name}"]
+        lines.append(f"{name:24s} [{unit}] min {_extreme(ext['min'], units, c.unit)}  "
+                     f"max {_extreme(ext['max'], units, c.unit)}")
     if csv:
         lines.append(f"wrote {csv}")
     for line in lines:
@@ -131,28 +155,38 @@ def cmd_forces(args, con: Console) -> int:
     speed, speed_words = speed_of(args, m.default_speed, "the mechanism's")
     params = params_of(m, args.param)
     loads = [_load(t, m) for t in args.load or []]
-    fa = m.kinetostatics(phi, speed=speed, params=params or None, branch=branches_of(m, args.branch),
-                         newton=args.newton, loads=loads, gravity=gravity)
+    settings = dict(speed=speed, params=params or None, branch=branches_of(m, args.branch), newton=args.newton,
+                    loads=loads, gravity=gravity)
+    fa = m.kinetostatics(phi, **settings)
     if _all_masses_zero(m, params):
         con.warn(f"{m.name}: every body's mass is zero, so there are no inertia or gravity forces: the reactions "
                  "come from the loads alone (give masses with --param BODY.mass=\"35 g\")")
     if csv:
         write_table(csv, units.table(fa.table()), "--csv")
+    inputs = [i.name for i in m.description.inputs]
+    quantities = {f"joint.{n}": (lambda r, n=n: r.reaction(n).magnitude) for n in fa.reaction_names}
+    quantities.update({f"torque.{n}": (lambda r, n=n: r.torque(n)) for n in inputs})
+    quantities["on_parts"] = lambda r: np.hypot(*r.frame_force_on_parts.T)
+    quantities["moment"] = lambda r: np.abs(r.frame_moment_on_parts)
+    found = extremes_of(fa, phi, quantities, lambda angles: m.kinetostatics(angles, **settings),
+                        lambda r, angles: mechanism_signature(m, r.motion.obs, angles, loads))
     F, T = units.of("N")[0], units.of("N*m")[0]
     lines = [f"{m.name}: {len(phi)} positions every {step:g}° from {start:g}°, speed {speed_words}, gravity "
-             f"{gravity:g} m/s^2 along -y",
-             f"{'joint':22s} {f'peak |F| ({F}) @ φ':>26s} {f'RMS |F| ({F})':>12s}"]
+             f"{gravity:g} m/s^2 along -y; {_note(found)}",
+             f"{'joint':22s} {f'peak |F| ({F}) @ φ':>27s} {f'RMS |F| ({F})':>12s}"]
     for name in fa.reaction_names:
         mag, _ = units.convert(fa.reaction(name).magnitude, "N")
-        lines.append(f"{name:22s} {extreme(mag, phi, np.argmax)} {rms(mag):12.6g}")
-    for name in [i.name for i in m.description.inputs]:
+        lines.append(f"{name:22s} {_extreme(found[f'joint.{name}']['max'], units, 'N')} {rms(mag):12.6g}")
+    for name in inputs:
         tau, _ = units.convert(fa.torque(name), "N*m")
-        lines.append(f"torque {name:15s} min {extreme(tau, phi, np.argmin)}  max {extreme(tau, phi, np.argmax)}"
-                     f"  RMS {rms(tau):.6g} {T}")
+        ext = found[f"torque.{name}"]
+        lines.append(f"torque {name:15s} min {_extreme(ext['min'], units, 'N*m')}  "
+                     f"max {_extreme(ext['max'], units, 'N*m')}  RMS {rms(tau):.6g} {T}")
     on_parts, _ = units.convert(np.hypot(*fa.frame_force_on_parts.T), "N")
-    lines.append(f"{f'frame on parts ({F})':22s} {extreme(on_parts, phi, np.argmax)} {rms(on_parts):12.6g}")
+    lines.append(f"{f'frame on parts ({F})':22s} {_extreme(found['on_parts']['max'], units, 'N')} "
+                 f"{rms(on_parts):12.6g}")
     moment, _ = units.convert(np.abs(fa.frame_moment_on_parts), "N*m")
-    lines.append(f"{f'frame moment ({T})':22s} {extreme(moment, phi, np.argmax)} {rms(moment):12.6g}")
+    lines.append(f"{f'frame moment ({T})':22s} {_extreme(found['moment']['max'], units, 'N*m')} {rms(moment):12.6g}")
     if csv:
         lines.append(f"wrote {csv}")
     for line in lines:

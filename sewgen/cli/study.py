@@ -47,19 +47,19 @@ def _grid(n):
 
 
 def influence_plots(res, folder) -> list[Path]:
-    """One PNG per varied key: every numeric quantity against the key's value, the nominal marked."""
+    """One PNG per varied key: every numeric quantity against the key's value, the nominal marked; an angle
+    continuous across 0°/360° (InfluenceResult.curve)."""
     from sewgen.report.plots.common import new_figure
 
     out = []
     t = res.table
     quantities = [c for c in t.columns[t.columns.get_loc("error") + 1:] if t[c].dtype != object]
     for k in res.keys:
-        rows = t[t["varied"] == k.key].sort_values(k.column)
         nr, nc = _grid(len(quantities))
         fig = new_figure((3.2 * nc, 2.4 * nr))
         axes = fig.subplots(nr, nc, squeeze=False)
         for ax, q in zip(axes.flat, quantities):
-            ax.plot(rows[k.column], rows[q], "o-", ms=3)
+            ax.plot(*res.curve(k.key, q), "o-", ms=3)
             ax.axvline(k.nominal * k.factor, color="0.6", lw=0.8, ls="--")
             ax.set_title(q, fontsize=8)
             ax.tick_params(labelsize=7)
@@ -76,8 +76,10 @@ def influence_plots(res, folder) -> list[Path]:
 
 
 def tolerance_plots(res, folder) -> list[Path]:
-    """histograms.png: a histogram per numeric quantity, the nominal marked."""
+    """histograms.png: a histogram per numeric quantity, the nominal marked; an angle (``res.periods``) within half
+    its period of the nominal (sewgen.study.evaluate.around), as the percentiles take it."""
     from sewgen.report.plots.common import new_figure
+    from sewgen.study.evaluate import around
 
     ok = res.table[res.table["status"] == "ok"]
     stats = res.stats
@@ -88,6 +90,8 @@ def tolerance_plots(res, folder) -> list[Path]:
     for ax, q in zip(axes.flat, quantities):
         v = ok[q].to_numpy(dtype=float)
         v = v[np.isfinite(v)]
+        if q in res.periods:
+            v = around(v, float(res.nominal[q]), res.periods[q])
         ax.set_title(q, fontsize=8)
         ax.tick_params(labelsize=7)
         if len(v) and np.ptp(v) > 0:
@@ -125,7 +129,7 @@ def cmd_influence(args, con: Console) -> int:
     if not args.param:
         raise UsageError("--param", "name at least one model-file key, e.g. groups.GROUP.params.NAME")
     machine = load_machine(args.model)
-    res = influence(machine, args.param, args.range or ["-10%..+10%"], args.steps, options,
+    res = influence(machine, args.param, args.range, args.steps, options,
                     chunk_size=_chunk(args), dask=args.dask, progress=con.show_progress)
     with staged_folder(out, "--out") as tmp:
         files = [tmp / "influence.csv", tmp / "sensitivities.csv"]
@@ -137,7 +141,7 @@ def cmd_influence(args, con: Console) -> int:
         files.append(_write_json(tmp / "study.json", {
             "study": "influence", "machine": machine.name, "model_file": model_path(machine.source),
             "parameters": [{"key": k.key, "unit": k.unit, "nominal": k.nominal * k.factor} for k in res.keys],
-            "ranges": args.range or ["-10%..+10%"], "steps": args.steps, "sensitivity_scheme": FD_SCHEME,
+            "ranges": res.ranges, "steps": args.steps, "sensitivity_scheme": FD_SCHEME,
             "step_deg": options.step_deg, "exact_jumps": options.exact_jumps, "speed_rad_s": options.speed or machine.speed,
             "designs": int(len(res.table)), "failed_designs": int(len(bad))}))
     con.say(f"{machine.name}: influence of {', '.join(k.key for k in res.keys)}: {len(res.table)} designs, "
@@ -236,7 +240,9 @@ def add_parser(sub, common) -> None:
                    help="a model-file key, groups.GROUP.params.NAME, groups.GROUP.phase, shaft.rear_bearing …; "
                         "KEY,KEY2,... moves KEY2... by the same offset (repeatable)")
     q.add_argument("--range", action="append", metavar="LO..HI",
-                   help='"-10%%..+10%%" of the nominal (default) or "15 mm..18 mm"; one for all or one per --param')
+                   help='"-10%%..+10%%" of the nominal (default) or "15 mm..18 mm"; an angle takes an absolute '
+                        'range (default: the nominal ± 10 deg), a percentage of it is refused; one for all or one '
+                        'per --param')
     q.add_argument("--steps", type=int, default=11, help="values per parameter (default 11)")
     q.add_argument("--no-loads", action="store_true", help="leave out the kinetostatics and the peak loads")
     q.set_defaults(fn=cmd_influence)

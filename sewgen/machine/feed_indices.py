@@ -16,7 +16,7 @@ plate the tip's height above the plate, x its horizontal position (+ forward), �
 ``speed_uniformity``       max |vx| / mean |vx| over φ_r..φ_s (mean = ∫|vx| dt / duration)               –
 ``peak_accel``             max |ax| over φ_r..φ_s                                                        m/s²
 ``accel_jump``             the largest jump of ax where a cam contact changes arc (whole turn)           m/s²
-``tilt_min``/``tilt_max``  the dog body's angle over φ_r..φ_s (+: its front raised)                      deg
+``tilt_min``/``tilt_max``  the dog body's inclination over φ_r..φ_s, in (−90°, 90°] (+: rising to +x)     deg
 =========================  ===========================================================================  ======
 
 Every crossing and extreme is found on the cubic Hermite interpolant of the samples and their exact shaft-angle
@@ -58,11 +58,16 @@ INDICES = {
     "speed_uniformity": ("", 1.0, "peak / mean horizontal speed while feeding"),
     "peak_accel": ("m/s^2", 1.0, "peak horizontal acceleration while feeding"),
     "accel_jump": ("m/s^2", 1.0, "largest horizontal-acceleration jump at a cam-arc switch"),
-    "tilt_min": ("deg", 180.0 / math.pi, "least dog tilt while feeding"),
-    "tilt_max": ("deg", 180.0 / math.pi, "greatest dog tilt while feeding"),
+    "tilt_min": ("deg", 180.0 / math.pi, "least dog tilt while feeding (+: rising toward the feed direction)"),
+    "tilt_max": ("deg", 180.0 / math.pi, "greatest dog tilt while feeding (+: rising toward the feed direction)"),
     "rise_at": ("deg", 180.0 / math.pi, "shaft angle where the dog rises above the plate"),
     "sink_at": ("deg", 180.0 / math.pi, "shaft angle where the dog sinks below the plate"),
 }
+
+#: The angle indices and their period (rad): an angle is known only modulo it, so a study's values are compared
+#: and drawn continuous across it (rise and sink angles, lags and leads a turn; a tilt, an inclination, half one).
+PERIODS = {"rise_lag": TWO_PI, "sink_lead": TWO_PI, "rise_at": TWO_PI, "sink_at": TWO_PI, "tilt_min": math.pi,
+           "tilt_max": math.pi}
 
 _GAUSS_X = np.array([-math.sqrt(0.6), 0.0, math.sqrt(0.6)])
 _GAUSS_W = np.array([5.0, 8.0, 5.0]) / 9.0
@@ -177,6 +182,13 @@ def wrap(a):
     return np.pi - (np.pi - np.asarray(a)) % TWO_PI
 
 
+def inclination(a):
+    """A body's angle (its u axis from +x) as the inclination of its line to the horizontal, in (−π/2, π/2]:
+    positive where the line rises toward +x (the feed direction), whichever way the body's u axis points (the
+    51-A's rack points back along −x: its angle 179° is the inclination −1°)."""
+    return 0.5 * np.pi - (0.5 * np.pi - np.asarray(a)) % np.pi
+
+
 # -- the indices ------------------------------------------------------------------------------------------------
 
 def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_out=None,
@@ -187,8 +199,9 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
     position (m), velocity and horizontal acceleration at constant speed ``omega`` (rad/s, > 0); ``plate`` (D,)
     or scalar: the plate's height. ``needle_in``/``needle_out`` (D,) or scalar: the machine angles where the
     needle point enters and leaves the cloth (NaN or None: those indices are NaN); ``tilt`` (D, N): the dog
-    body's angle (rad); ``arc`` (D, N): a cam contact's active arc. Returns index -> (D,) array in SI (angles in
-    rad, ``rise_at``/``sink_at`` in [0, 2π)) and ``error`` -> a list of None or the design's problem."""
+    body's angle (rad; reported as its :func:`inclination`); ``arc`` (D, N): a cam contact's active arc. Returns
+    index -> (D,) array in SI (angles in rad, ``rise_at``/``sink_at`` in [0, 2π)) and ``error`` -> a list of None
+    or the design's problem."""
     phi = np.asarray(phi, float)
     x, y, vx, vy, ax = (np.atleast_2d(np.asarray(a, float)) for a in (x, y, vx, vy, ax))
     d, n = y.shape
@@ -286,12 +299,12 @@ def feed_indices(phi, x, y, vx, vy, ax, omega, plate, *, needle_in=None, needle_
         out["accel_jump"] = np.where(good, jump, np.nan)
 
     if tilt is not None:
-        tilt = wrap(np.atleast_2d(np.asarray(tilt, float)))
+        tilt = inclination(np.atleast_2d(np.asarray(tilt, float)))
         lo = np.where(inside, tilt, np.inf).min(axis=1)
         hi = np.where(inside, tilt, -np.inf).max(axis=1)
         for rr, cc, tt in ends:
             jj = (cc + 1) % n
-            val = tilt[rr, cc] + wrap(tilt[rr, jj] - tilt[rr, cc]) * tt / h
+            val = tilt[rr, cc] + inclination(tilt[rr, jj] - tilt[rr, cc]) * tt / h
             lo[rr], hi[rr] = np.minimum(lo[rr], val), np.maximum(hi[rr], val)
         out["tilt_min"], out["tilt_max"] = np.where(good, lo, np.nan), np.where(good, hi, np.nan)
     out["error"] = errors

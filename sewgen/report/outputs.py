@@ -38,6 +38,7 @@ from sewgen.machine.feed import dog_travel, has_feed, plate_height
 from sewgen.machine.feed_indices import machine_indices
 from sewgen.machine.modelfile import is_builtin
 from sewgen.machine.parts import role_param
+from sewgen.machine.peaks import ANGLE_TOL, extremes
 from sewgen.machine.tables import angle_deg, group_table, machine_table
 from sewgen.machine.timing import timing
 from sewgen.roles import FEED_DOG, KNIFE_EDGE, LOWER_KNIFE_EDGE, STITCH_REGULATOR
@@ -68,6 +69,12 @@ CONVENTIONS = {
     "frame_force_on_parts": "machine.csv: the frame's force on the moving parts through its joints and bearings, "
                             "Σ m·a_G − Σ m·g − Σ loads − belt pull; shaking_force_on_frame + weight_on_frame = "
                             "−(frame_force_on_parts + Σ loads + belt pull)",
+    "extremes": f"max, min and their *_at_deg are the machine's own values between the samples, not the "
+                f"largest sample: every sampled local extreme near the largest is bracketed by its neighbours and "
+                f"the machine solved again inside until the bracket is narrower than {math.degrees(ANGLE_TOL):g}°; "
+                f"*_at_deg to 0.01°; *_how: \"refined\", \"at a switch\" (the one-sided limit at a cam-arc switch "
+                f"or a load window's edge, where the forces jump) or \"sampled\" (an analysis that cannot be solved "
+                f"again at other angles); rms: over the samples",
     "power_balance_residual_relative": "max over the revolution of |P_drive + P_loads − dE/dt| divided by the "
                                        "largest |P_drive| or |dE/dt| (E: kinetic + potential energy): 0 for an "
                                        "exact analysis",
@@ -119,10 +126,28 @@ def _rms(values: np.ndarray) -> float:
     return scale * float(np.sqrt(np.mean(np.square(values / scale))))
 
 
-def _stat(values: np.ndarray, phi: np.ndarray, unit: str) -> dict:
-    i, j = int(np.argmax(values)), int(np.argmin(values))
-    return {"unit": unit, "max": float(values[i]), "max_at_deg": float(angle_deg(phi[i])), "min": float(values[j]),
-            "min_at_deg": float(angle_deg(phi[j])), "rms": _rms(values)}
+def _stat(values: np.ndarray, ext: dict, unit: str) -> dict:
+    """Largest and least value with their shaft angles and how they were found (``ext``: sense -> Extreme,
+    sewgen.machine.peaks), and the RMS over the samples."""
+    hi, lo = ext["max"], ext["min"]
+    return {"unit": unit, "max": hi.value, "max_at_deg": hi.deg, "max_how": hi.how, "min": lo.value,
+            "min_at_deg": lo.deg, "min_how": lo.how, "rms": _rms(values)}
+
+
+class _Stats:
+    """The quantities summary.json states, gathered first (key -> function of an analysis, unit), their extremes
+    refined together in one search (sewgen.machine.peaks.extremes), then read back by key."""
+
+    def __init__(self, a):
+        self.a, self.quantities, self.units, self.ext = a, {}, {}, None
+
+    def add(self, key: str, quantity, unit: str) -> None:
+        self.quantities[key], self.units[key] = quantity, unit
+
+    def __call__(self, key: str) -> dict:
+        if self.ext is None:
+            self.ext = extremes(self.a, self.quantities)
+        return _stat(np.asarray(self.quantities[key](self.a), dtype=float), self.ext[key], self.units[key])
 
 
 def model_path(source: str, start=None) -> str:
@@ -140,10 +165,28 @@ def model_path(source: str, start=None) -> str:
 
 def summary(a, switches: dict | None = None, timing=None) -> dict:
     """Peaks, RMS and where they occur; the power-balance residual; feed setting; cam arc switches; the
-    stitch-formation timing; units and conventions. Numbers rounded to :data:`DIGITS` significant digits; a
+    stitch-formation timing; units and conventions. Every peak is the machine's own value refined between the
+    samples (sewgen.machine.peaks; ``*_how`` says how). Numbers rounded to :data:`DIGITS` significant digits; a
     non-finite one raises :class:`NonFiniteOutputError`."""
     phi, m = a.phi, a.machine
-    weight, moments = shaking.weight_on_frame(a), shaking.shaking_moments_on_frame(a)
+    weight = shaking.weight_on_frame(a)
+    st = _Stats(a)
+    for w in ("front", "rear"):
+        st.add(f"bearings.{w}", lambda b, w=w: np.hypot(*b.bearing(w).T), "N")
+    st.add("drive_torque", lambda b: b.torque, "N*m")
+    st.add("drive_power", lambda b: b.drive_power, "W")
+    st.add("friction.power", lambda b: b.friction_power, "W")
+    st.add("shaking_force_on_frame", lambda b: np.hypot(*shaking.shaking_force_on_frame(b).T), "N")
+    for k, axis in enumerate("xyz"):
+        st.add(f"shaking_moments_on_frame.{axis}", lambda b, k=k: shaking.shaking_moments_on_frame(b)[:, k], "N*m")
+    for g in m.groups:
+        st.add(f"{g.name}.torque", lambda b, g=g.name: b.groups[g].torque("shaft"), "N*m")
+        for n in a.groups[g.name].reaction_names:
+            st.add(f"{g.name}.joints.{n}", lambda b, g=g.name, n=n: b.groups[g].reaction(n).magnitude, "N")
+        regulator = g.mechanism.description.role_name(STITCH_REGULATOR)
+        if regulator is not None:
+            st.add(f"{g.name}.holding", lambda b, g=g.name, r=regulator: b.groups[g].torque(r),
+                   g.mechanism.description.input(regulator).effort_unit)
     out = {
         "machine": m.name,
         "model_file": model_path(m.source),
@@ -151,16 +194,16 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
         "positions": int(len(phi)),
         "step_deg": 360.0 / len(phi),
         "power_balance_residual_relative": a.power_balance_residual,
-        "bearings": {w: dict(_stat(np.hypot(*a.bearing(w).T), phi, "N"), acts_on="frame") for w in ("front", "rear")},
-        "drive_torque": _stat(a.torque, phi, "N*m"),
-        "drive_power": _stat(a.drive_power, phi, "W"),
-        "friction": friction_summary(a),
-        "shaking_force_on_frame": dict(_stat(np.hypot(*shaking.shaking_force_on_frame(a).T), phi, "N"),
-                                       acts_on="frame", what="-sum(m a_G): inertia only, the weight apart"),
+        "bearings": {w: dict(st(f"bearings.{w}"), acts_on="frame") for w in ("front", "rear")},
+        "drive_torque": st("drive_torque"),
+        "drive_power": st("drive_power"),
+        "friction": friction_summary(a, st("friction.power")),
+        "shaking_force_on_frame": dict(st("shaking_force_on_frame"), acts_on="frame",
+                                       what="-sum(m a_G): inertia only, the weight apart"),
         "weight_on_frame": {"unit": "N", "acts_on": "frame", "fx": float(weight[0]), "fy": float(weight[1]),
                             "magnitude": float(np.hypot(*weight))},
-        "shaking_moments_on_frame": {axis: dict(_stat(v, phi, "N*m"), acts_on="frame", about="origin")
-                                     for axis, v in zip("xyz", moments.T)},
+        "shaking_moments_on_frame": {axis: dict(st(f"shaking_moments_on_frame.{axis}"), acts_on="frame",
+                                                about="origin") for axis in "xyz"},
         "groups": {},
     }
     if m.stitch is not None:
@@ -169,18 +212,18 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
     for g in m.groups:
         fa = a.groups[g.name]
         entry = {"mechanism": g.mechanism.name, "phase_deg": math.degrees(g.phase),
-                 "torque": _stat(fa.torque("shaft"), phi, "N*m"),
-                 "joints": {n: _stat(fa.reaction(n).magnitude, phi, "N") for n in fa.reaction_names}}
+                 "torque": st(f"{g.name}.torque"),
+                 "joints": {n: st(f"{g.name}.joints.{n}") for n in fa.reaction_names}}
         regulator = g.mechanism.description.role_name(STITCH_REGULATOR)
         if regulator is not None:
             inp = g.mechanism.description.input(regulator)
             setting = g.held.get(regulator, inp.default)
             if inp.quantity == "angle":
                 entry["regulator_deg"] = math.degrees(setting)
-                entry["holding_torque"] = _stat(fa.torque(regulator), phi, inp.effort_unit)
+                entry["holding_torque"] = st(f"{g.name}.holding")
             else:  # a regulator set by a travel
                 entry["regulator_mm"] = setting * 1e3
-                entry["holding_force"] = _stat(fa.torque(regulator), phi, inp.effort_unit)
+                entry["holding_force"] = st(f"{g.name}.holding")
         if g.stitch is not None:
             entry["stitch_mm"] = g.stitch * 1e3
         if has_feed(g.mechanism):
@@ -208,11 +251,12 @@ def summary(a, switches: dict | None = None, timing=None) -> dict:
     return _clean(out, "summary", m.source or None)
 
 
-def friction_summary(a) -> dict:
-    """Whether friction is on, its dissipated power, the mean driving torque and the no-load torque."""
+def friction_summary(a, power_stat: dict) -> dict:
+    """Whether friction is on, its dissipated power (``power_stat``: its statistics, :func:`_stat`), the mean
+    driving torque and the no-load torque."""
     power = a.friction_power
     on = bool(np.any(power != 0.0))
-    return {"on": on, "power": dict(_stat(power, a.phi, "W"), mean=float(np.mean(power))),
+    return {"on": on, "power": dict(power_stat, mean=float(np.mean(power))),
             "mean_drive_torque": {"value": float(np.mean(a.torque)), "unit": "N*m"},
             "no_load_torque": {"value": a.no_load_torque() if on else 0.0, "unit": "N*m",
                                "speed_rpm": float(np.mean(a.omega) * 60 / (2 * math.pi))}}

@@ -6,7 +6,8 @@ the groups a design set does not vary are swept once (the nominal machine) and b
 sweep is computed on (designs × angles) arrays — the feed-dog indices (sewgen.machine.feed_indices), the needle
 stroke — except what needs the whole machine per design: the stitch timing (sewgen.machine.timing, on the study's own
 sweep; only when a group other than the feed varies: otherwise the nominal timing holds, and the two feed rules
-are re-checked from each design's rise lag and sink lead) and the peak loads (sewgen.machine.MachineAnalysis).
+are re-checked from each design's rise lag and sink lead) and the peak loads (sewgen.machine.MachineAnalysis; each
+refined between the samples by solving the design's machine again around it, sewgen.machine.peaks).
 A design set with a key other than a mechanism parameter reloads the model per design (the loader's checks).
 """
 from __future__ import annotations
@@ -23,6 +24,7 @@ from sewgen.hermite import maximum
 from sewgen.machine import feed_indices as fi
 from sewgen.machine.assembly import MachineAnalysis
 from sewgen.machine.cams import arc_switches
+from sewgen.machine.peaks import extremes
 from sewgen.machine.timing import timing
 from sewgen.roles import FEED_DOG, NEEDLE_POINT, THROAT_PLATE
 from sewgen.study.designs import sweep_group_designs
@@ -90,6 +92,39 @@ def quantity_columns(machine, options: StudyOptions) -> list[str]:
     if options.loads:
         cols += list(LOADS)
     return cols
+
+
+def angle_periods(machine, options: StudyOptions) -> dict:
+    """Column -> period (in the column's unit, deg) of every quantity column that is an angle known only modulo a
+    period (sewgen.machine.feed_indices.PERIODS): a study compares such values continuously across the period
+    (:func:`around`)."""
+    out = {}
+    fg = feed_groups(machine)
+    for g in fg:
+        pre = "" if len(fg) == 1 else f"{g.name}."
+        out.update({pre + fi.column(k): period * fi.INDICES[k][1] for k, period in fi.PERIODS.items()})
+    return {c: p for c, p in out.items() if c in quantity_columns(machine, options)}
+
+
+def around(values, centre, period: float):
+    """Angles ``values`` moved by whole periods to within half a period of ``centre`` (−period/2 ≤ v − centre <
+    period/2): 359.9° about 10° is −0.1°."""
+    v = np.asarray(values, dtype=float)
+    return centre + (v - centre + 0.5 * period) % period - 0.5 * period
+
+
+def continuous(values, centre, period: float) -> np.ndarray:
+    """A sequence of angles (an influence sweep's, in order) made continuous: unwrapped across the period
+    wherever consecutive finite values jump by more than half of it, then moved by whole periods so the value
+    nearest ``centre`` (the nominal) lies within half a period of it (NaNs stay)."""
+    v = np.asarray(values, dtype=float).copy()
+    ok = np.flatnonzero(np.isfinite(v))
+    if not len(ok):
+        return v
+    u = np.unwrap(v[ok], period=period)
+    i = int(np.argmin(np.abs(around(u, centre, period) - centre))) if math.isfinite(centre) else 0
+    v[ok] = u + (float(around(u[i], centre, period)) - u[i] if math.isfinite(centre) else 0.0)
+    return v
 
 
 def _speed(machine, options):
@@ -163,11 +198,15 @@ def _timing_values(tm, machine):
     return out
 
 
+#: the peak loads: column -> the quantity (a function of a machine analysis) whose largest value it is
+PEAK_LOADS = {LOADS[0]: lambda a: np.hypot(*a.bearing("front").T), LOADS[1]: lambda a: np.hypot(*a.bearing("rear").T),
+              LOADS[2]: lambda a: np.abs(a.torque), LOADS[3]: lambda a: np.hypot(*a.shaking_force_on_frame.T)}
+
+
 def _peaks(a):
-    f, r = a.bearing("front"), a.bearing("rear")
-    return {LOADS[0]: float(np.hypot(f[:, 0], f[:, 1]).max()), LOADS[1]: float(np.hypot(r[:, 0], r[:, 1]).max()),
-            LOADS[2]: float(np.abs(a.torque).max()),
-            LOADS[3]: float(np.hypot(*a.shaking_force_on_frame.T).max())}
+    """The design's peak loads, each refined between the sweep's samples (sewgen.machine.peaks: its machine solved
+    again around each sampled peak), as summary.json's."""
+    return {c: e["max"].value for c, e in extremes(a, PEAK_LOADS, ("max",)).items()}
 
 
 _BASELINES: dict = {}

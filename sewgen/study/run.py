@@ -18,7 +18,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from sewgen.errors import SewgenError
-from sewgen.study.evaluate import FAILED, FAILURES, StudyOptions, evaluate_chunk, quantity_columns
+from sewgen.study.evaluate import (FAILED, FAILURES, StudyOptions, angle_periods, around, continuous, evaluate_chunk,
+                                   quantity_columns)
 from sewgen.study.machine_designs import DesignKey, MachineDesigns, parse_keys
 from sewgen.units import to_si
 
@@ -247,14 +248,38 @@ FD_SCHEME = "central difference (f(x+δ) − f(x−δ)) / 2δ at the nominal, δ
 FD_RELATIVE = 1e-4
 
 
+#: The default range of an influence study: ±10 % of the nominal, or for an angle (a phase, a regulator setting)
+#: the nominal ± :data:`ANGLE_SPAN_DEG`: a percentage of an angle means nothing (10 % of a −2° phase is 0.2°, of a
+#: 40° setting 4°), and of a full turn (36°) it would move a timing far past any adjustment.
+DEFAULT_RANGE = "-10%..+10%"
+ANGLE_SPAN_DEG = 10.0
+
+
+def default_range(key: DesignKey) -> str:
+    """The range an influence study moves ``key`` over when none is given (:data:`DEFAULT_RANGE`)."""
+    if key.kind != "angle":
+        return DEFAULT_RANGE
+    nominal = math.degrees(key.nominal)
+    return f"{nominal - ANGLE_SPAN_DEG:.12g} deg..{nominal + ANGLE_SPAN_DEG:.12g} deg"
+
+
+def _no_percent_of_angle(key: DesignKey, text: str, option: str, example: str) -> None:
+    if key.kind == "angle":
+        raise StudyError(option, f'{key.key}: "{text}" is a percentage of an angle, which means nothing (of a '
+                                 f"{math.degrees(key.nominal):.6g}° nominal); give the angle with its unit, e.g. "
+                                 f'"{example}"')
+
+
 def parse_range(key: DesignKey, text: str, option: str = "--range") -> tuple[float, float]:
-    """"-10%..+10%" (relative to the nominal) or "15 mm..18 mm" (absolute) -> (lo, hi) in SI."""
+    """"-10%..+10%" (relative to the nominal) or "15 mm..18 mm" (absolute) -> (lo, hi) in SI. An angle takes an
+    absolute range only ("-12 deg..8 deg"): a percentage of it is refused (:data:`DEFAULT_RANGE`)."""
     lo_t, sep, hi_t = str(text).partition("..")
     if not sep or not lo_t.strip() or not hi_t.strip():
         raise StudyError(option, f'"{text}" must be LO..HI, e.g. "-10%..+10%" or "15 mm..18 mm"')
     ends = []
     for t in (lo_t.strip(), hi_t.strip()):
         if t.endswith("%"):
+            _no_percent_of_angle(key, text, option, default_range(key))
             try:
                 frac = float(t[:-1]) / 100.0
             except ValueError:
@@ -276,7 +301,9 @@ def parse_range(key: DesignKey, text: str, option: str = "--range") -> tuple[flo
 @dataclass
 class InfluenceResult:
     """``table``: one row per design (the column ``varied`` names the key moved; the others at nominal);
-    ``sensitivities``: one row per (key, quantity) with d quantity / d key in display units, by :data:`FD_SCHEME`."""
+    ``sensitivities``: one row per (key, quantity) with d quantity / d key in display units, by :data:`FD_SCHEME`;
+    ``periods``: column -> period (deg) of the quantities that are angles (drawn continuous across it);
+    ``ranges``: the range each key was moved over, as given or its default (:func:`default_range`)."""
 
     machine: str
     keys: list
@@ -284,6 +311,21 @@ class InfluenceResult:
     sensitivities: object
     nominal: object
     scheme: str = FD_SCHEME
+    periods: dict = field(default_factory=dict)
+    ranges: list = field(default_factory=list)
+
+    def curve(self, key: str, quantity: str) -> tuple:
+        """(values of ``key``, of ``quantity``) over the designs that varied ``key``, in the key's order, in the
+        table's units; an angle (:attr:`periods`) continuous across its period (:func:`continuous`), as the
+        influence plots draw it."""
+        k = next((k for k in self.keys if k.key == key), None)
+        if k is None:
+            raise KeyError(f"{key!r} was not varied; varied: {', '.join(k.key for k in self.keys)}")
+        rows = self.table[self.table["varied"] == key].sort_values(k.column)
+        y = rows[quantity].to_numpy(dtype=float)
+        if quantity in self.periods:
+            y = continuous(y, float(self.nominal[quantity]), self.periods[quantity])
+        return rows[k.column].to_numpy(dtype=float), y
 
     def sensitivity(self, key: str, quantity: str) -> float:
         s = self.sensitivities
@@ -300,14 +342,17 @@ class InfluenceResult:
                 f"{', '.join(k.key for k in self.keys)}; sensitivities by {self.scheme.split(' at')[0]}>")
 
 
-def influence(machine, params, ranges, steps: int = 11, options: StudyOptions | None = None, **run):
+def influence(machine, params, ranges=None, steps: int = 11, options: StudyOptions | None = None, **run):
     """Seed 001 §六: each key of ``params`` moved alone over its range (``ranges``: one per key, or one for
-    all) in ``steps`` equal steps, the others at nominal; plus the nominal ± δ for the sensitivities."""
+    all; None: each key's :func:`default_range`) in ``steps`` equal steps, the others at nominal; plus the
+    nominal ± δ for the sensitivities."""
     from sewgen.engine.frames import pandas
 
     pd = pandas()
     options = options or StudyOptions()
     keys, followers = linked_keys(machine, params)
+    if not ranges:
+        ranges = [default_range(k) for k in keys]
     if isinstance(ranges, str):
         ranges = [ranges]
     if len(ranges) == 1:
@@ -340,6 +385,7 @@ def influence(machine, params, ranges, steps: int = 11, options: StudyOptions | 
     df.insert(0, "varied", varied)
     df.insert(1, "role", role)
     quantities = [c for c in quantity_columns(machine, options) if c != FAILED]
+    periods = angle_periods(machine, options)
     sens = []
     for j, k in enumerate(keys):
         plus = df[(df["varied"] == k.key) & (df["role"] == "fd+")].iloc[0]
@@ -347,28 +393,34 @@ def influence(machine, params, ranges, steps: int = 11, options: StudyOptions | 
         step = 2 * deltas[j] * k.factor
         for q in quantities:
             try:
-                value = (float(plus[q]) - float(minus[q])) / step
+                hi, lo = float(plus[q]), float(minus[q])
             except (TypeError, ValueError):
-                value = math.nan
+                hi = lo = math.nan
+            if q in periods:  # an angle: its change, not the wrap of its value (359.9° after 0.1°)
+                hi = float(around(hi, lo, periods[q]))
+            value = (hi - lo) / step
             qunit = q[q.rfind("[") + 1:-1] if q.endswith("]") else "1"
             sens.append({"parameter": k.key, "quantity": q,
                          "sensitivity": value, "unit": f"{qunit}/{k.unit or '1'}",
                          "step": deltas[j] * k.factor, "step_unit": k.unit})
     table = df[df["role"] != "fd+"]
     table = table[table["role"] != "fd-"].reset_index(drop=True)
-    return InfluenceResult(machine.name, keys, table, pd.DataFrame(sens), df.iloc[0])
+    return InfluenceResult(machine.name, keys, table, pd.DataFrame(sens), df.iloc[0], periods=periods,
+                           ranges=list(ranges))
 
 
 # -- tolerance ------------------------------------------------------------------------------------------------
 
 def parse_tolerance(key: DesignKey, text: str, option: str = "--tolerance") -> float:
-    """"±0.02mm", "+-0.02 mm", "0.02 mm", "±1%" -> the half-width in SI (≥ 0)."""
+    """"±0.02mm", "+-0.02 mm", "0.02 mm", "±1%" -> the half-width in SI (≥ 0). An angle's tolerance is an angle
+    ("±0.5 deg"): a percentage of it is refused, as in :func:`parse_range`."""
     t = str(text).strip()
     for pre in ("±", "+-", "+/-"):
         if t.startswith(pre):
             t = t[len(pre):].strip()
             break
     if t.endswith("%"):
+        _no_percent_of_angle(key, text, option, "±0.5 deg")
         try:
             return abs(key.nominal) * float(t[:-1]) / 100.0
         except ValueError:
@@ -396,6 +448,7 @@ class ToleranceResult:
     table: object
     nominal: object
     stats: object = field(default=None)
+    periods: dict = field(default_factory=dict)  # column -> period (deg) of the angle quantities
 
     @property
     def failures(self):
@@ -435,12 +488,16 @@ def tolerance(machine, tolerances: dict, samples: int = 1000, seed: int | None =
     values = nominal[None, :] + u * tol[None, :]
     df = run_designs(machine, *_expand(keys, followers, np.vstack([nominal[None, :], values])), options, **run)
     nom, table = df.iloc[0], df.iloc[1:].reset_index(drop=True)
-    res = ToleranceResult(machine.name, keys, list(tol), distribution, seed, table, nom)
+    res = ToleranceResult(machine.name, keys, list(tol), distribution, seed, table, nom,
+                          periods=angle_periods(machine, options))
     res.stats = statistics(res, quantity_columns(machine, options))
     return res
 
 
 def statistics(res: ToleranceResult, quantities):
+    """Per quantity: the nominal, mean, std, min, max, spread and :data:`PERCENTILES` of the designs that could be
+    evaluated; an angle (``res.periods``) taken within half its period of the nominal (:func:`around`), so a
+    spread across 0°/360° is the spread, not a turn."""
     from sewgen.engine.frames import pandas
 
     pd = pandas()
@@ -451,8 +508,10 @@ def statistics(res: ToleranceResult, quantities):
             continue
         v = ok[q].to_numpy(dtype=float)
         v = v[np.isfinite(v)]
-        row = {"quantity": q, "nominal": float(res.nominal[q]) if res.nominal[q] is not None else math.nan,
-               "samples": int(len(v))}
+        nominal = float(res.nominal[q]) if res.nominal[q] is not None else math.nan
+        if q in res.periods and math.isfinite(nominal):
+            v = around(v, nominal, res.periods[q])
+        row = {"quantity": q, "nominal": nominal, "samples": int(len(v))}
         if len(v):
             dv = v - v[0]  # shift-invariant: identical samples give exactly 0
             row.update(mean=float(v[0] + dv.mean()), std=float(dv.std()), min=float(v.min()), max=float(v.max()),

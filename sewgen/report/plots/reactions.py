@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from sewgen.machine.peaks import analysis_at, extremes
 from sewgen.report.plots.common import angle_axis, angle_labels, closed, color, deg, place, shade_loads, suptitle, title
 
 MAIN_JOINTS = 3  # joints per group in the joint-reaction figure: the most loaded ones
@@ -28,15 +29,26 @@ def _rings(top: float) -> np.ndarray:
     return step * np.arange(1, k + 1)
 
 
-def _polar(ax, a, fx, fy, c, text, step=90.0):
-    """Hodograph of a force as a polar diagram: the force vector's tip (fx, fy), so its direction is the polar
-    angle and its magnitude (N) the radius, on equal-aspect axes with a drawn polar grid (rings with their
-    magnitudes, spokes every 45° with their directions); shaft-angle labels on the curve."""
+def _peak_of(a, quantity, sense="max"):
+    """(Extreme, the analysis at its angle or None) of ``quantity`` (a function of an analysis): the peak
+    refined between the samples as summary.json's (sewgen.machine.peaks), so figure and summary agree."""
+    ext = extremes(a, {"q": quantity}, (sense,))["q"][sense]
+    return ext, analysis_at(a, np.array([ext.angle]))
+
+
+def _polar(ax, a, vector, c, text, step=90.0):
+    """Hodograph of a force as a polar diagram: the force vector's tip (``vector(analysis)``: (n, 2)), so its
+    direction is the polar angle and its magnitude (N) the radius, on equal-aspect axes with a drawn polar grid
+    (rings with their magnitudes, spokes every 45° with their directions); shaft-angle labels on the curve; the
+    peak refined between the samples, marked."""
     from matplotlib.collections import LineCollection
 
+    f = vector(a)
+    fx, fy = f[:, 0], f[:, 1]
     mag = np.hypot(fx, fy)
-    k = int(np.argmax(mag))
-    rings = _rings(mag.max())
+    ext, there = _peak_of(a, lambda b: np.hypot(*vector(b).T))
+    tip = vector(there)[0] if there is not None else f[int(np.argmax(mag))]
+    rings = _rings(max(mag.max(), ext.value))
     R = rings[-1]
     t = np.linspace(0, 2 * np.pi, 121)
     grid = [np.column_stack([r * np.cos(t), r * np.sin(t)]) for r in rings]
@@ -56,8 +68,8 @@ def _polar(ax, a, fx, fy, c, text, step=90.0):
                 bbox=dict(fc="w", ec="none", pad=0.5, alpha=0.8))
     ax.plot(closed(a, fx), closed(a, fy), color=c, lw=1.5)
     ax.plot([0], [0], "k+", ms=6)
-    ax.plot([fx[k]], [fy[k]], "o", ms=6, mfc="none", mec="k")
-    ax.set_title(f"{text}\npeak {mag[k]:.3g} N at φ = {math.degrees(a.phi[k]) % 360:.0f}°, "
+    ax.plot([tip[0]], [tip[1]], "o", ms=6, mfc="none", mec="k")
+    ax.set_title(f"{text}\npeak {ext.value:.3g} N at φ = {ext.deg:.1f}°, "
                  f"mean {mag.mean():.3g} N", fontsize=8.5, y=1.0, pad=4)
     ax.set(xlim=(-1.2 * R, 1.2 * R), ylim=(-1.2 * R, 1.2 * R))
     ax.set_aspect("equal", adjustable="box")
@@ -69,10 +81,15 @@ def _polar(ax, a, fx, fy, c, text, step=90.0):
 def draw_bearings_polar(fig, a):
     axes = place(fig, 1, 2, left=0.4, right=0.4, top=1.1, bottom=0.2, wspace=0.8)[0]
     for ax, which, c in zip(axes, ("front", "rear"), ("k", "0.35")):
-        f = a.bearing(which)
-        _polar(ax, a, f[:, 0], f[:, 1], c, f"{which} upper-shaft bearing: load on the frame", step=45.0)
+        _polar(ax, a, lambda b, which=which: b.bearing(which), c, f"{which} upper-shaft bearing: load on the frame",
+               step=45.0)
     suptitle(fig, title(a, "upper-shaft bearing loads (polar: direction of the force, magnitude in N; labels: "
                            "shaft angle φ)"), size=11)
+
+
+def _reaction(a, group: str, joint: str) -> np.ndarray:
+    r = a.groups[group].reaction(joint)
+    return np.column_stack([r.fx, r.fy])
 
 
 def main_joints(fa, k: int = MAIN_JOINTS) -> list:
@@ -95,8 +112,9 @@ def draw_joint_reactions_polar(fig, a):
             if cc >= len(names):
                 axes[r, cc].set_visible(False)
                 continue
-            f, j = fa.reaction(names[cc]), d.reaction(names[cc])
-            _polar(axes[r, cc], a, f.fx, f.fy, color(a, g), f"{g.name} {names[cc]}: on {j.b} (from {j.a})")
+            j = d.reaction(names[cc])
+            _polar(axes[r, cc], a, lambda b, g=g.name, n=names[cc]: _reaction(b, g, n), color(a, g),
+                   f"{g.name} {names[cc]}: on {j.b} (from {j.a})")
     suptitle(fig, title(a, "the three most loaded joints of each group, the force on the part named (polar: "
                            "direction, magnitude in N; labels: shaft angle φ)"), size=11)
 
@@ -129,10 +147,10 @@ def draw_torque(fig, a):
     ax.axhline(0, color="0.5", lw=0.6)
     angle_axis(ax)
     ax.set_ylabel("driving torque on the shaft (N·m)")
-    kmin, kmax = int(np.argmin(t)), int(np.argmax(t))
-    ax.set_title(f"total: mean {t.mean():.4f} N·m, RMS {rms:.4f} N·m, max {t[kmax]:.3f} N·m at φ = "
-                 f"{np.degrees(a.phi[kmax]) % 360:.0f}°, min {t[kmin]:.3f} N·m at φ = "
-                 f"{np.degrees(a.phi[kmin]) % 360:.0f}°", fontsize=9, y=1.0)
+    ext = extremes(a, {"t": lambda b: b.torque})["t"]
+    hi, lo = ext["max"], ext["min"]
+    ax.set_title(f"total: mean {t.mean():.4f} N·m, RMS {rms:.4f} N·m, max {hi.value:.3f} N·m at φ = "
+                 f"{hi.deg:.1f}°, min {lo.value:.3f} N·m at φ = {lo.deg:.1f}°", fontsize=9, y=1.0)
     fig.legend(*ax.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8,
                bbox_to_anchor=(0.5, 0.04 / fig.get_size_inches()[1]))
     note = (f"with Coulomb friction: {np.mean(a.friction_power):.3g} W dissipated on average" if friction
@@ -163,9 +181,9 @@ def draw_shaking(fig, a):
     ax1.plot([0], [0], "k+", ms=10, label="origin (no force)")
     m = f.mean(axis=0)
     ax1.plot(*m, "kx", ms=7, label=f"mean ({m[0]:.2f}, {m[1]:.2f}) N")
-    k = int(np.argmax(np.hypot(*f.T)))
-    ax1.plot(*f[k], "o", ms=7, mfc="none", mec="k",
-             label=f"peak {np.hypot(*f[k]):.3g} N at φ = {np.degrees(a.phi[k]) % 360:.0f}°")
+    ext, there = _peak_of(a, lambda b: np.hypot(*b.shaking_force_on_frame.T))
+    tip = there.shaking_force_on_frame[0] if there is not None else f[int(np.argmax(np.hypot(*f.T)))]
+    ax1.plot(*tip, "o", ms=7, mfc="none", mec="k", label=f"peak {ext.value:.3g} N at φ = {ext.deg:.1f}°")
     ax1.annotate("", xy=tuple(wgt), xytext=(0, 0), arrowprops=dict(arrowstyle="-|>", color="0.35", lw=1.6))
     ax1.plot([], [], color="0.35", lw=1.6,
              label=f"weight on the frame, Σ m g: {np.hypot(*wgt):.2f} N, static, acts besides")
@@ -186,11 +204,12 @@ def draw_shaking(fig, a):
         for c, style in zip(cols, ("-", "--")):
             mo = moments[:, c]
             axis = "xyz"[c]
+            ext, there = _peak_of(a, lambda b, c=c: np.abs(b.shaking_moments_on_frame()[:, c]))
             kk = int(np.argmax(np.abs(mo)))
+            at = there.shaking_moments_on_frame()[0, c] if there is not None else mo[kk]
             ax.plot(d, closed(a, mo), color=("tab:purple", "tab:cyan", "0.15")[c], lw=1.5, ls=style,
-                    label=f"M{axis}: peak |M| {abs(mo[kk]):.3f} N·m at φ = {np.degrees(a.phi[kk]) % 360:.0f}°, "
-                          f"mean {mo.mean():+.3f}")
-            ax.plot(np.degrees(a.phi[kk]) % 360, mo[kk], "o", mfc="none", mec="k")
+                    label=f"M{axis}: peak |M| {ext.value:.3f} N·m at φ = {ext.deg:.1f}°, mean {mo.mean():+.3f}")
+            ax.plot(ext.deg, at, "o", mfc="none", mec="k")
         ax.axhline(0, color="0.5", lw=0.6)
         angle_axis(ax, label=ax is ax3)
         ax.set_ylabel("moment (N·m)")
