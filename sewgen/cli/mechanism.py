@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from sewgen.cli.common import (
+    STDOUT,
     Console,
     UsageError,
     branches_of,
@@ -83,11 +84,18 @@ def cmd_kinematics(args, con: Console) -> int:
         value, unit = units.convert(c.value, c.unit)
         lines.append(f"{name:24s} [{unit}] min {extreme(value, phi, np.argmin)}  "
                      f"max {extreme(value, phi, np.argmax)}")
+    _report(lines, csv, con)
+    return 0
+
+
+def _report(lines: list, csv, con: Console) -> None:
+    """The text report, unless the table went to standard output (``--csv -``: the table alone there)."""
+    if csv == STDOUT:
+        return
     if csv:
         lines.append(f"wrote {csv}")
     for line in lines:
         con.say(line)
-    return 0
 
 
 def _load(text: str, m):
@@ -153,8 +161,5 @@ def cmd_forces(args, con: Console) -> int:
     lines.append(f"{f'frame on parts ({F})':22s} {extreme(on_parts, phi, np.argmax)} {rms(on_parts):12.6g}")
     moment, _ = units.convert(np.abs(fa.frame_moment_on_parts), "N*m")
     lines.append(f"{f'frame moment ({T})':22s} {extreme(moment, phi, np.argmax)} {rms(moment):12.6g}")
-    if csv:
-        lines.append(f"wrote {csv}")
-    for line in lines:
-        con.say(line)
+    _report(lines, csv, con)
     return 0
