@@ -100,7 +100,9 @@ COUNTERWEIGHT = {
 #: "along" groups; ``loads`` is ``[[groups.<name>.loads]]`` (:data:`LOAD`).
 GROUP = {
     "mechanism": Field("text", doc="a catalog mechanism's name, or the path of a declaration file (.py with a "
-                               "declare()), relative to the model file"),
+                               "declare()), relative to the model file: Python code that loading the model "
+                               "runs, so only in the model file's folder or below unless allowed "
+                               "(--allow-outside-code)"),
     "description": Field("text", False, "what the group is"),
     "phase": Field("angle", doc="group shaft angle minus machine shaft angle"),
     "axial": Field("table", doc="z on the upper shaft of every driven body, e.g. { crank = \"-20 mm\" }"),
