@@ -21,11 +21,12 @@ def cmd_analyze(args, con: Console) -> int:
     if step is not None and steps_per_turn(step)[0] is None:
         raise UsageError("--step", steps_per_turn(step)[1])
     speed = quantity(args.speed, "speed", "--speed", "positive")
-    if args.out is not None:
+    if args.out is not None:  # before the model is loaded (a declaration file compiled)
         check_folder(args.out, "--out")
     machine = load_machine(args.model, allow_outside_code=args.allow_outside_code)
     out = Path(args.out) if args.out is not None else Path(machine.name.lower())
-    check_folder(out, "--out")
+    if args.out is None:
+        check_folder(out, "--out")
     phi = machine.shaft_angles(step)
     w = machine.speed if speed is None else speed
     head = (f"{machine.name}: {len(phi)} positions every {360 / len(phi):g}° at {w * 30 / math.pi:.6g} rpm"
