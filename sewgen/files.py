@@ -290,14 +290,9 @@ def staged_folder(folder, option: str | None = None):
                 from None
         names = sorted(p.name for p in tmp.iterdir() if p.is_file() and not p.name.startswith("."))
         names.sort(key=lambda n: n == "summary.json")  # summary.json last: its presence marks a complete run
+        # (every file is on the disk already: replacing() flushed each before renaming it into the folder)
         write_text(tmp / MANIFEST, json.dumps({"files": names}, indent=1) + "\n")
         names.append(MANIFEST)
-        for name in names[:-1]:  # every file on the disk before any becomes visible
-            fd = os.open(tmp / name, os.O_RDONLY)
-            try:
-                os.fsync(fd)
-            finally:
-                os.close(fd)
         if not existed:
             os.chmod(tmp, 0o777 & ~umask())
             try:
