@@ -122,3 +122,13 @@ class NonFiniteOutputError(SewgenError, ValueError):
     def __init__(self, key: str, value, file: str | None = None):
         problem = f"{key} came out {value} (not finite): check the model's masses, inertias and speed"
         super().__init__(f"{file}: {problem}" if file else problem, problem=problem, key=key, file=file)
+
+
+class OutputPathError(SewgenError, ValueError):
+    """An output file or folder that cannot be written (sewgen.files): ``file`` is the path, ``parameter`` the
+    command-line option or argument that named it (None from the API), ``problem`` what is wrong — not a folder,
+    not a regular file, inside sewgen's installed package, a full or read-only disk, a name too long."""
+
+    def __init__(self, option: str, problem: str, file: str | None = None):
+        super().__init__(f"{option}: {problem}" if option else problem, problem=problem, parameter=option or None,
+                         file=file)

@@ -119,26 +119,31 @@ def test_the_readme_has_two_quick_start_commands_and_command_examples():
 
 @pytest.fixture(scope="module")
 def quick_start(tmp_path_factory, cache):
-    """The quick start's command twice in one fresh folder, then plain ``sewgen analyze jb1-3`` there."""
+    """The quick start's command twice in one fresh folder, then plain ``sewgen analyze jb1-3 --no-plots``
+    there: (folder, the runs, {file: size} of ./jb1-3 after the second run)."""
     folder = tmp_path_factory.mktemp("quick_start")
     runs = [ok(sewgen_run(QUICK[0], folder, cache)) for _ in range(2)]
+    second = {p.name: p.stat().st_size for p in (folder / "jb1-3").iterdir()}
     runs.append(ok(sewgen_run(["analyze", "jb1-3", "--no-plots", "--quiet"], folder, cache)))
-    return folder, runs
+    return folder, runs, second
 
 
 def test_quick_start_works_twice_in_one_folder(quick_start):
-    folder, runs = quick_start
-    out = folder / "jb1-3"
+    folder, runs, second = quick_start
     for name in ("machine.csv", "summary.json", "trajectories.png", "motion.png", "machine.gif"):
-        assert (out / name).stat().st_size > 1000, name
+        assert second[name] > 1000, name
     assert "1000 rpm" in runs[0].stdout and "wrote jb1-3/summary.json" in runs[0].stdout
+    assert "timing: 12 of 12 rules pass" in runs[0].stdout  # the verdict, exit status 0
     assert runs[1].stdout == runs[0].stdout
     assert runs[2].stdout == ""  # --quiet
     assert sorted(p.name for p in folder.iterdir()) == ["jb1-3"]  # nothing half-written left beside it
+    # the third run (no plots) replaced the second's set: its tables, no picture of the run before
+    wrote = {name for name in second if not name.endswith((".png", ".gif"))}
+    assert {p.name for p in (folder / "jb1-3").iterdir()} == wrote
 
 
 def test_summary_numbers_are_clean_and_say_what_they_mean(quick_start):
-    folder, _ = quick_start
+    folder, _, _ = quick_start
     s = json.loads((folder / "jb1-3" / "summary.json").read_text(encoding="utf-8"))
     assert s["speed_rpm"] == 1000.0 and s["positions"] == 72 and s["step_deg"] == 5.0
     assert s["model_file"] == "<sewgen>/models/jb1-3.toml"
@@ -173,7 +178,7 @@ def test_summary_numbers_are_clean_and_say_what_they_mean(quick_start):
 
 
 def test_analyze_states_the_speed_and_the_relative_residual(quick_start):
-    _, runs = quick_start
+    _, runs, _ = quick_start
     head = runs[0].stdout.splitlines()[0]
     assert head.startswith("JB1-3: 72 positions every 5° at 1000 rpm")
     assert "residual (relative)" in runs[0].stdout and "friction left out" in runs[0].stdout
@@ -373,6 +378,18 @@ BAD = [
     (BALANCE + ["--plot", "x.txt"], ["--plot", ".txt"]),
     (BALANCE + ["--plot", "a_folder"], ["--plot", "a_folder", "folder"]),
     (BALANCE + ["--plot", "no/such/folder/nb.png"], ["--plot", "no/such/folder"]),
+    (BALANCE + ["--plot", "-"], ["--plot", "standard output"]),
+    (["analyze", "jb1-3", "--out", "-", "--no-plots"], ["--out", "standard output"]),
+    # names the file system cannot take (ENAMETOOLONG), and a folder that is not there
+    (["kinematics", "take_up", "--csv", "c" * 300 + ".csv"], ["--csv", "File name too long"]),
+    (["analyze", "jb1-3", "--out", "o" * 300, "--no-plots"], ["--out", "File name too long"]),
+    (["analyze", "m" * 300, "--no-plots"], ["m" * 300, "too long"]),
+    (["analyze", "m" * 300 + ".toml", "--no-plots"], ["too long"]),
+    (["kinematics", "--file", "d" * 300 + ".py"], ["--file", "too long"]),
+    (["balance", "machine", "jb1-3", "--write-model", "nodir/b.toml"], ["--write-model", "nodir"]),
+    (["balance", "machine", "jb1-3", "--write-model", "w" * 300 + ".toml"], ["--write-model", "too long"]),
+    (["study", "tolerance", "jb1-3", "--tolerance", "groups.needle_bar.params.rod=±0.02mm", "--samples", "2",
+      "--seed", "-1", "--out", "st", "--no-plots"], ["--seed", "-1"]),
 ]
 if Path("/proc").is_dir() and sys.platform.startswith("linux"):
     BAD.append((["kinematics", "take_up", "--csv", "/proc/x.csv"], ["--csv", "/proc/x.csv"]))
@@ -459,6 +476,10 @@ BAD_MODELS = [
     ("huge_mass", _edit('mass = "20 g"', 'mass = "1e307 kg"'), ["not finite"]),
     ("cannot_assemble", _edit('rod = "50 mm"', 'rod = "10 mm"'), ["groups.needle_bar"]),
     ("step", _edit('step = "5 deg"', 'step = "7 deg"'), ["machine.step", "7"]),
+    ("nested", MODEL + "\nnested = " + "[" * 2000 + "]" * 2000 + "\n", ["nested too deeply"]),
+    ("guide_point", _edit('point = "thread_eye"', 'point = "nowhere"'), ["thread.guides[1].point", "nowhere"]),
+    ("group_Machine", _edit("[groups.needle_bar]", "[groups.Machine]").replace("groups.needle_bar.", "groups.Machine."),
+     ["groups.Machine", "reserved"]),
 ]
 
 
@@ -540,3 +561,68 @@ def test_a_broken_group_declaration_names_model_key_file_and_line(tmp_path, cach
     (tmp_path / "m.toml").write_text(_edit('mechanism = "needle_bar"', 'mechanism = "mine.py"'), encoding="utf-8")
     refused(sewgen_run(["analyze", "m.toml", "--no-plots"], tmp_path, cache), "m.toml",
             "groups.needle_bar.mechanism", "mine.py:1", "syntax error")
+
+
+# -- exit statuses: a mistake 2, a machine failing its rules 3, a bug of sewgen 1 ----------------------------------
+
+def test_a_bug_of_sewgen_is_a_traceback_and_exit_1_never_a_users_one_line(monkeypatch, capsys):
+    """Only sewgen's typed errors are a user's mistake: a KeyError inside sewgen (a bug) keeps its traceback."""
+    from sewgen.cli import mechanism as cli_mechanism
+    from sewgen.cli.main import main
+
+    def buggy(args, con):
+        return {}["nowhere"]
+
+    monkeypatch.setattr(cli_mechanism, "cmd_list", buggy)
+    assert main(["list"]) == 1
+    out, err = capsys.readouterr()
+    assert out == "" and "Traceback" in err and "KeyError: 'nowhere'" in err and "in buggy" in err
+    assert err.splitlines()[-1].startswith("sewgen: internal error") and "report" in err.splitlines()[-1]
+
+
+def test_debug_shows_where_a_mistake_was_raised(capsys):
+    from sewgen.cli.main import main
+
+    assert main(["--debug", "kinematics", "take_up", "--step", "5"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and "Traceback" in err and "UsageError" in err
+    assert err.splitlines()[-1].startswith("sewgen: --step: ")
+    assert main(["kinematics", "take_up", "--step", "5", "--debug"]) == 2
+    assert "Traceback" in capsys.readouterr().err
+
+
+def test_analyze_says_its_verdict_and_exits_3_when_a_rule_fails(tmp_path, cache):
+    """The hook drive turned 40° late (the hook meets the needle far from the 1.8-2.5 mm rise its rule asks):
+    the analysis is written, stdout counts the rules that pass, stderr names each failing one, exit status 3."""
+    (tmp_path / "late.toml").write_text(_edit('phase = "-2 deg"', 'phase = "38 deg"'), encoding="utf-8")
+    res = sewgen_run(["analyze", "late.toml", "--no-plots", "--out", "late"], tmp_path, cache)
+    assert res.returncode == 3 and "Traceback" not in res.stderr, res.stderr
+    summary = json.loads((tmp_path / "late" / "summary.json").read_text(encoding="utf-8"))
+    failed = [c for c in summary["timing"]["checks"] if not c["ok"]]
+    assert failed and "hook_at_needle_rise" in [c["rule"] for c in failed]
+    hook = next(c for c in failed if c["rule"] == "hook_at_needle_rise")
+    assert not 1.8 <= hook["value"] <= 2.5
+    n = len(summary["timing"]["checks"])
+    assert f"timing: {n - len(failed)} of {n} rules pass; failing: " in res.stdout
+    warnings = [ln for ln in res.stderr.splitlines() if ln.startswith("sewgen: warning: JB1-3 fails the timing rule")]
+    assert len(warnings) == len(failed) and "hook_at_needle_rise" in res.stderr
+
+
+def test_a_rule_whose_parts_are_missing_names_them(tmp_path, cache):
+    """JB1-3 without its feed group: the dog rules and the stitch-setting rule cannot be checked — they fail, each
+    naming the roles no group plays (feed_dog, throat_plate) and the machine's groups; no NaN anywhere."""
+    start = MODEL.index("[groups.feed]")
+    end = MODEL.index("[[shaft.counterweights]]")
+    text = MODEL[:start] + MODEL[end:]
+    (tmp_path / "nofeed.toml").write_text(text, encoding="utf-8")
+    res = sewgen_run(["analyze", "nofeed.toml", "--no-plots", "--out", "nofeed"], tmp_path, cache)
+    assert res.returncode == 3, res.stderr
+    checks = {c["rule"]: c for c in json.loads((tmp_path / "nofeed" / "summary.json").read_text())["timing"]["checks"]}
+    for rule, roles in (("dog_sinks_before_needle_enters", "feed_dog, throat_plate"),
+                        ("dog_rises_after_needle_leaves", "feed_dog, throat_plate"),
+                        ("stitch_set_before_needle_enters", "throat_plate")):
+        assert checks[rule]["ok"] is False and checks[rule]["value"] is None
+        assert f"no group has a part with the role{'s' if ',' in roles else ''} {roles} (groups: needle_bar, " \
+               f"take_up, hook_drive)" in checks[rule]["message"]
+    assert sum(not c["ok"] for c in checks.values()) == 3
+    assert "nan" not in res.stderr.lower() and "timing: 9 of 12 rules pass" in res.stdout

@@ -3,7 +3,7 @@
 Read from the source with ``ast`` (nothing is imported): every ``import`` of a sewgen module, at module top
 or inside a function, counts; those under ``if TYPE_CHECKING:`` do not (they never run).
 
-    leaves   units, errors, abi, roles, hermite, version   (import only each other)
+    leaves   units, errors, files, abi, roles, hermite, version   (import only each other)
     derive   the SymPy derivation
     engine   description, build, loader, mechanism, designs, results, forces, loads, frames
     machine  assembly, plan, modelfile, tables, shaking, feed, cams, timing, thread, balance, ...
@@ -20,7 +20,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "sewgen"
-LEAVES = {"sewgen.units", "sewgen.errors", "sewgen.abi", "sewgen.roles", "sewgen.hermite", "sewgen.version"}
+LEAVES = {"sewgen.units", "sewgen.errors", "sewgen.files", "sewgen.abi", "sewgen.roles", "sewgen.hermite",
+          "sewgen.version"}
 LAYERS = ("leaves", "derive", "engine", "machine", "study", "report", "cli", "facade")
 
 

@@ -356,6 +356,36 @@ def test_invalid_toml(tmp_path):
     assert f"line {line}" in msg  # the speed line
 
 
+def test_group_names_that_differ_only_in_case_are_refused(tmp_path):
+    """Group names name the tables (<group>.csv): two that differ only in case would be one file on a
+    case-insensitive file system (Windows, macOS), and a reserved name in another case is the machine's own."""
+    doc = tomllib.loads(TEXT)
+    doc["groups"]["Needle_Bar"] = doc["groups"]["needle_bar"]
+    msg = check(tmp_path, dump_toml(doc), "groups.Needle_Bar", ["groups.needle_bar", "Needle_Bar.csv", "case"])
+    assert "needle_bar.csv" in msg
+    check(tmp_path, edit("[groups.take_up]", "[groups.SUMMARY]").replace("groups.take_up.", "groups.SUMMARY."),
+          "groups.SUMMARY", ["reserved"])
+
+
+def test_nesting_too_deep_to_read_is_a_model_file_error(tmp_path):
+    for nested in ("[" * 5000 + "]" * 5000, "{a = " * 5000 + "1" + "}" * 5000):
+        path = write(tmp_path, TEXT + f"\ndeep = {nested}\n", "deep.toml")
+        with pytest.raises(ModelFileError) as exc:
+            load_machine(path)
+        assert exc.value.path == str(path) and "nested too deeply" in exc.value.problem
+
+
+def test_a_name_too_long_for_the_file_system_is_a_model_file_error(tmp_path):
+    for name in ("m" * 300, "m" * 300 + ".toml", str(tmp_path / ("m" * 300 + ".toml"))):
+        with pytest.raises(ModelFileError) as exc:
+            load_machine(name)
+        assert "File name too long" in exc.value.problem
+
+
+def test_a_thread_guide_at_no_point_names_its_key(tmp_path):
+    check(tmp_path, edit('point = "thread_eye"', 'point = "nowhere"'), "thread.guides[1].point", ["nowhere"])
+
+
 def test_missing_file(tmp_path):
     path = tmp_path / "nowhere.toml"
     with pytest.raises(ModelFileError) as exc:
@@ -481,19 +511,20 @@ def test_non_finite_results_are_a_typed_error_and_never_written(tmp_path):
 
 
 def test_a_report_is_written_whole_or_not_at_all(tmp_path, jb, monkeypatch):
+    from sewgen.errors import OutputPathError
     from sewgen.report import outputs as report
 
     a = jb.analyze()
     files = report.write_report(a, tmp_path / "r")
     assert [f.name for f in files][-1] == "summary.json" and all(f.is_file() for f in files)
-    before = {f.name: f.read_bytes() for f in files}
+    before = {f.name: f.read_bytes() for f in (tmp_path / "r").iterdir()}
 
     def broken(a_, folder, progress=None, units=None):
         (folder / "machine.csv").write_text("half")
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(report, "write_tables", broken)
-    with pytest.raises(report.OutputPathError):
+    with pytest.raises(OutputPathError):
         report.write_report(a, tmp_path / "r")
     assert {f.name: f.read_bytes() for f in (tmp_path / "r").iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r"]

@@ -324,6 +324,8 @@ def test_study_tolerance_command_with_exact_jumps(tmp_path, capsys):
     (["study", "tolerance", "jb1-3", "--tolerance", "groups.hook_drive.phase=±1%"], "percentage of an angle"),
     (["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.feed_arm_r=±0.02mm", "--dask", "nowhere"],
      "--dask"),
+    (["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.feed_arm_r=±0.02mm", "--seed", "-1"],
+     "--seed"),
 ])
 def test_study_mistakes_exit_2_with_one_line_and_nothing_on_stdout(tmp_path, capsys, argv, word):
     rc = main(argv + ["--out", str(tmp_path / "x"), "--samples" if argv[1] == "tolerance" else "--steps", "2"])
@@ -331,6 +333,34 @@ def test_study_mistakes_exit_2_with_one_line_and_nothing_on_stdout(tmp_path, cap
     assert rc == 2 and cap.out == ""
     assert word in cap.err and len(cap.err.strip().splitlines()) == 1
     assert not (tmp_path / "x").exists()
+
+
+def test_a_negative_seed_is_a_typed_error_naming_it(jb):
+    from sewgen.study.run import StudyError
+
+    with pytest.raises(StudyError) as exc:
+        tolerance(jb, {"groups.feed.params.feed_arm_r": "±0.02 mm"}, 2, seed=-1)
+    assert exc.value.parameter == "--seed" and "-1" in exc.value.problem
+
+
+def test_a_histogram_of_samples_one_rounding_apart_states_the_one_value(tmp_path):
+    """Samples that differ by float rounding only — here one ulp of 16.7 — leave no room for bins (numpy cannot
+    cut 3.6e-15 into five finite bins above 16.7: "Too many bins"); the panel states the value instead, and the
+    histograms of the quantities that do spread are drawn as before."""
+    from types import SimpleNamespace
+
+    from sewgen.cli.study import tolerance_plots
+
+    noisy = np.where(np.arange(100) % 2 == 0, 16.7, np.nextafter(16.7, 17.0))
+    assert np.ptp(noisy) == np.spacing(16.7) > 0
+    with pytest.raises(ValueError, match="Too many bins"):
+        np.histogram(noisy, bins=5)
+    quantities = ["needle_stroke [mm]", "take_up_amount [mm]"]
+    table = pd.DataFrame({"status": ["ok"] * 100, quantities[0]: noisy, quantities[1]: np.linspace(90.0, 92.0, 100)})
+    res = SimpleNamespace(table=table, stats=pd.DataFrame({"quantity": quantities}), machine="JB1-3",
+                          nominal=pd.Series({quantities[0]: 16.7, quantities[1]: 91.0}), distribution="normal")
+    (path,) = tolerance_plots(res, tmp_path)
+    assert path == tmp_path / "histograms.png" and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_a_study_reading_only_the_feed_sweeps_only_its_observables_bit_for_bit(jb):

@@ -228,3 +228,49 @@ def test_a_built_declaration_loads_without_the_derivation(analysed):
                          timeout=600)
     assert res.returncode == 0, res.stderr
     assert res.stdout.split()[0] == "False" and "sympy" in res.stdout
+
+
+# -- a model file is code: only its own folder's declaration files run --------------------------------------------
+
+RUNS = textwrap.dedent('''
+    from pathlib import Path
+
+    Path(__file__).resolve().with_name("ran.txt").write_text("the declaration ran")
+
+
+    def declare():
+        raise RuntimeError("declared")
+''')
+
+
+@pytest.mark.parametrize("where", ["parent", "absolute", "home", "link"])
+def test_a_model_file_runs_no_code_outside_its_folder_unless_allowed(where, tmp_path, monkeypatch, capsys):
+    """A declaration file named by a group runs when the machine is loaded: one outside the model file's folder
+    (``..``, an absolute path, ``~``, a link out of the folder) is refused before any of its code runs, naming the
+    key and the option that allows it; with the option it runs (here its declare() raises, named by file and
+    line)."""
+    from sewgen.cli.main import main
+    from sewgen.machine import load_machine
+    from sewgen.machine.modelfile import ModelFileError
+
+    (tmp_path / "code.py").write_text(RUNS)
+    (tmp_path / "models").mkdir()
+    monkeypatch.setenv("HOME", str(tmp_path))
+    if where == "link":
+        os.symlink(tmp_path / "code.py", tmp_path / "models" / "link.py")
+    text = {"parent": "../code.py", "absolute": str(tmp_path / "code.py"), "home": "~/code.py", "link": "link.py"}
+    model = tmp_path / "models" / "m.toml"
+    model.write_text(MODEL.replace('mechanism = "stephenson_needle.py"', f'mechanism = "{text[where]}"'))
+    with pytest.raises(ModelFileError) as exc:
+        load_machine(model)
+    assert exc.value.key == "groups.needle.mechanism" and "--allow-outside-code" in exc.value.problem
+    assert not (tmp_path / "ran.txt").exists()
+    monkeypatch.chdir(tmp_path)
+    assert main(["analyze", "models/m.toml", "--no-plots"]) == 2
+    err = capsys.readouterr().err
+    assert "groups.needle.mechanism" in err and "outside the model file's folder" in err
+    assert not (tmp_path / "ran.txt").exists()
+    assert main(["analyze", "models/m.toml", "--no-plots", "--allow-outside-code"]) == 2
+    err = capsys.readouterr().err
+    assert ".py:8: RuntimeError: declared" in err and len(err.splitlines()) == 1
+    assert (tmp_path / "ran.txt").read_text() == "the declaration ran"

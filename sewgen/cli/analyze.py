@@ -1,5 +1,5 @@
 """``sewgen analyze``: a whole machine from its model file, written whole into an output folder (tables,
-summary.json, timing.txt, plots, the GIF)."""
+summary.json, timing.txt, plots, the GIF), and its verdict on the timing rules (exit status 3 where one fails)."""
 from __future__ import annotations
 
 import json
@@ -8,9 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from sewgen.cli.common import Console, UsageError, display_units, quantity
+from sewgen.cli.common import RULES_FAIL, Console, UsageError, display_units, quantity
+from sewgen.files import check_folder, staged_folder
 from sewgen.machine.assembly import load_machine
-from sewgen.report.outputs import check_output_folder, staged_folder, write_tables
+from sewgen.report.outputs import write_tables
 from sewgen.units import steps_per_turn
 
 
@@ -20,10 +21,12 @@ def cmd_analyze(args, con: Console) -> int:
     if step is not None and steps_per_turn(step)[0] is None:
         raise UsageError("--step", steps_per_turn(step)[1])
     speed = quantity(args.speed, "speed", "--speed", "positive")
-    if args.out is not None and not args.out.strip():
-        raise UsageError("--out", "an empty folder name")
-    machine = load_machine(args.model)
-    out = check_output_folder(Path(args.out) if args.out is not None else Path(machine.name.lower()), "--out")
+    if args.out is not None:  # before the model is loaded (a declaration file compiled)
+        check_folder(args.out, "--out")
+    machine = load_machine(args.model, allow_outside_code=args.allow_outside_code)
+    out = Path(args.out) if args.out is not None else Path(machine.name.lower())
+    if args.out is None:
+        check_folder(out, "--out")
     phi = machine.shaft_angles(step)
     w = machine.speed if speed is None else speed
     head = (f"{machine.name}: {len(phi)} positions every {360 / len(phi):g}° at {w * 30 / math.pi:.6g} rpm"
@@ -63,7 +66,21 @@ def cmd_analyze(args, con: Console) -> int:
             f"{_at(summary['shaking_force_on_frame'], 'max')} ({_how_words(summary)})")
     for f in files:
         con.say(f"wrote {out / Path(f).name}")
-    return 0
+    return verdict(machine.name, summary.get("timing"), con)
+
+
+def verdict(name: str, timing: dict | None, con: Console) -> int:
+    """The machine's verdict on its timing rules (summary.json's ``timing``): how many pass on stdout, each
+    failing rule with its message on stderr; the exit status (:data:`RULES_FAIL` where one fails)."""
+    if not timing or not timing["checks"]:
+        return 0
+    checks = timing["checks"]
+    failed = [c for c in checks if not c["ok"]]
+    con.say(f"timing: {len(checks) - len(failed)} of {len(checks)} rules pass"
+            + (f"; failing: {', '.join(c['rule'] for c in failed)} (timing.txt)" if failed else ""))
+    for c in failed:
+        con.warn(f"{name} fails the timing rule {c['message']}")
+    return RULES_FAIL if failed else 0
 
 
 def _at(stat: dict, sense: str) -> str:

@@ -13,7 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
+from sewgen.cli.common import Console
 from sewgen.errors import SewgenError
+from sewgen.files import check_file
 from sewgen.machine.modelfile import ModelFileError, load_toml
 from sewgen.units import MAX_POSITIONS, UnitError, to_si
 
@@ -117,18 +119,17 @@ def target_name(text: str) -> str:
 
 
 def _plot_path(text: str | None, drive: str) -> Path:
-    """--plot's file, checked before any work: a picture format, in an existing folder, not a folder."""
+    """--plot's file, checked before any work: a picture format, a regular file or none yet in an existing folder
+    (sewgen.files.check_file)."""
     path = Path(text if text is not None else f"{drive}_balance.png")
     if text is not None and not text.strip():
         _fail("--plot: an empty file name")
-    if path.is_dir():
-        _fail(f"--plot: {path} is a folder: give a file name, e.g. {path / (drive + '_balance.png')}")
+    check_file(path, "--plot")  # a folder, a FIFO, "-", inside sewgen: refused as named
     if path.suffix == "":
         path = path.with_name(path.name + ".png")
     if path.suffix.lower() not in PLOT_FORMATS:
         _fail(f"--plot: {path}: cannot write a {path.suffix} picture; use {', '.join(PLOT_FORMATS)}")
-    if not path.absolute().parent.is_dir():
-        _fail(f"--plot: cannot write {path}: no folder {path.absolute().parent}")
+    check_file(path, "--plot")
     return path
 
 
@@ -223,6 +224,8 @@ def plot(path, model, res, curve, series, n=720):
     """F(φ) before and after, and F1, F2, objective over K (the paper's figs. 3 and 4), to a PNG."""
     from matplotlib.figure import Figure
 
+    from sewgen.report.plots.common import save
+
     phi = np.append(bal.revolution(n), 2 * math.pi)
     fig = Figure(figsize=(11, 4.2), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
@@ -245,7 +248,7 @@ def plot(path, model, res, curve, series, n=720):
     fig.suptitle(f"needle bar: crank {model.crank * 1e3:g} mm, rod {model.rod * 1e3:g} mm, "
                  f"{model.speed * 30 / math.pi:g} rpm, m_B {res.mass_B * 1e3:.4g} g, m_C {res.mass_C * 1e3:.4g} g, "
                  f"{series}")
-    fig.savefig(path, dpi=110)
+    save(fig, path, "--plot", dpi=110)
 
 
 def _table(model, res, series, sector, plot_path) -> str:
@@ -277,7 +280,7 @@ def cmd_balance(args, con=None) -> int:
         from sewgen.cli.balance_machine import run
 
         args.model = args.machine_model
-        return run(args)
+        return run(args, con if con is not None else Console())
     drive = target_name(args.target)
     if args.machine_model:
         _fail(f"balance {args.target}: takes no model file argument ({args.machine_model!r}); use --model FILE")
@@ -297,7 +300,7 @@ def cmd_balance(args, con=None) -> int:
             plot(plot_path, model, res, curve, series)
         except ImportError:
             _fail("--plot needs matplotlib (pip install matplotlib), or give --no-plot")
-        except (OSError, ValueError) as exc:
-            _fail(f"--plot: cannot write {plot_path}: {getattr(exc, 'strerror', None) or exc}")
+        except ValueError as exc:  # (a disk's error is an OutputPathError, naming --plot and the file)
+            _fail(f"--plot: cannot write {plot_path}: {exc}")
     say(_table(model, res, series, sector, plot_path))
     return 0

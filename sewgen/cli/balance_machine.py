@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 
+from sewgen.cli.common import Console, UsageError, outside_code_option
 from sewgen.engine.results import write_csv
-from sewgen.errors import SewgenError
+from sewgen.files import check_file, check_folder, staged_folder, write_text
 from sewgen.units import UnitError, to_si
 
 SPEEDS_HELP = "speeds to evaluate at, e.g. \"600 rpm,900 rpm,1200 rpm,1500 rpm\" (default: 60 %%, 100 %%, 150 %% of rated)"
@@ -35,14 +35,12 @@ def add_arguments(p) -> None:
     g.add_argument("--first-order", choices=["forward", "x", "y"], default="forward",
                    help="harmonic: cancel the forward-rotating first order (default), or the first order along x or "
                    "y completely (primary balance along a line of stroke)")
-    g.add_argument("--out", metavar="DIR", help="write balance.json, bearings.csv, speeds.csv and balance.png here")
-    g.add_argument("--write-model", metavar="FILE", help="write the model file with the counterweights added")
+    g.add_argument("--out", metavar="DIR", help="write balance.json, bearings.csv, speeds.csv and balance.png here "
+                                                "(written whole, replacing the run that wrote DIR before)")
+    g.add_argument("--write-model", metavar="FILE", help="write the model file with the counterweights added "
+                                                         "(written whole; it may be the model file itself)")
     g.add_argument("--speeds", metavar="LIST", help=SPEEDS_HELP)
-
-
-def _fail(message: str):
-    print(f"sewgen balance machine: {message}", file=sys.stderr)
-    raise SystemExit(2)
+    outside_code_option(g)
 
 
 def _speeds(text, rated: float) -> list[float]:
@@ -55,74 +53,75 @@ def _speeds(text, rated: float) -> list[float]:
         try:
             w = to_si(item.strip(), "speed", "--speeds")
         except UnitError as exc:
-            _fail(str(exc))
+            raise UsageError("--speeds", exc.problem) from None
         if not w > 0:
-            _fail(f"--speeds: {item.strip()!r} must be positive")
+            raise UsageError("--speeds", f"{item.strip()!r} must be positive")
         out.append(w * 60 / (2 * math.pi))
     return out
 
 
-def run(args) -> int:
+def run(args, con: Console) -> int:
     from sewgen.machine import machine_balance as mb
     from sewgen.machine.assembly import load_machine
 
     if not args.model:
-        _fail("name the model file: sewgen balance machine MODEL")
+        raise UsageError("", "name the model file: sewgen balance machine MODEL")
     try:
         weight = float(args.shaking_weight)
     except ValueError:
-        _fail(f"--shaking-weight: a number, got {args.shaking_weight!r}")
+        raise UsageError("--shaking-weight", f"a number, got {args.shaking_weight!r}") from None
     if not (math.isfinite(weight) and weight >= 0):
-        _fail(f"--shaking-weight: must be a number >= 0, got {args.shaking_weight!r}")
-    for option, value in (("--out", args.out), ("--write-model", args.write_model)):
-        if value and Path(value).exists() and (Path(value).is_dir() != (option == "--out")):
-            _fail(f"{option}: {value} is {'a folder' if Path(value).is_dir() else 'a file'}")
-    try:
-        machine = load_machine(args.model)
-        speeds = _speeds(args.speeds, machine.speed)
-        report = mb.balance(machine, args.method, args.objective, weight, speeds_rpm=speeds,
-                            first_order=args.first_order)
-    except SewgenError as exc:
-        _fail(str(exc))
+        raise UsageError("--shaking-weight", f"must be a number >= 0, got {args.shaking_weight!r}")
+    if args.out:
+        check_folder(args.out, "--out")
+    if args.write_model:
+        check_file(args.write_model, "--write-model")
+    machine = load_machine(args.model, allow_outside_code=args.allow_outside_code)
+    speeds = _speeds(args.speeds, machine.speed)
+    report = mb.balance(machine, args.method, args.objective, weight, speeds_rpm=speeds,
+                        first_order=args.first_order)
     result = report.as_dict()
     result["model"] = str(args.model)
+    text = None
     if args.write_model:
-        text = mb.model_text(Path(machine.source).read_text(encoding="utf-8"), report.solution.counterweights)
-        Path(args.write_model).write_text(text, encoding="utf-8")
+        text = mb.model_text(Path(machine.source).read_text(encoding="utf-8"), report.solution.counterweights,
+                             machine.source)
         result["written_model"] = str(args.write_model)
-    if args.out:
+    if args.out:  # the folder first, the model file last: a model file written means every output was
         _write(Path(args.out), report, result)
+    if text is not None:
+        write_text(args.write_model, text, "--write-model")
     if args.json:
-        print(json.dumps(result, indent=2))
+        con.say(json.dumps(result, indent=2))
     else:
-        _print(result)
+        _print(result, con)
     return 0
 
 
-def _print(r: dict) -> None:
+def _print(r: dict, con: Console) -> None:
     head = f"{r['method']}" + (f" ({r['objective']})" if r["objective"] else "")
-    print(f"balance by {head}: solver {r['solver']['status']}"
-          + (f", gap {abs(r['solver']['gap']):.1e}" if r["solver"]["gap"] is not None else ""))
+    con.say(f"balance by {head}: solver {r['solver']['status']}"
+            + (f", gap {abs(r['solver']['gap']):.1e}" if r["solver"]["gap"] is not None else ""))
     for c in r["counterweights"]:
-        print(f"  {c['name']}: m·r {c['mr'] * 1e6:.0f} g·mm at {math.degrees(c['angle']):.1f}° from the crank, "
-              f"{c['mass'] * 1e3:.1f} g at {c['radius'] * 1e3:.1f} mm, z {c['z'] * 1e3:.1f} mm")
+        con.say(f"  {c['name']}: m·r {c['mr'] * 1e6:.0f} g·mm at {math.degrees(c['angle']):.1f}° from the crank, "
+                f"{c['mass'] * 1e3:.1f} g at {c['radius'] * 1e3:.1f} mm, z {c['z'] * 1e3:.1f} mm")
     rows = [("front bearing peak [N]", "bearing_front_peak"), ("rear bearing peak [N]", "bearing_rear_peak"),
             ("front bearing RMS [N]", "bearing_front_rms"), ("rear bearing RMS [N]", "bearing_rear_rms"),
             ("shaking force on frame peak [N]", "shaking_force_on_frame_peak"),
             ("shaking moment on frame x peak [N*m]", "shaking_moment_on_frame_x_peak"),
             ("shaking moment on frame y peak [N*m]", "shaking_moment_on_frame_y_peak"),
             ("driving torque peak [N*m]", "torque_peak")]
-    print(f"  {'':42s} {'before':>10s} {'after':>10s}   (every {r['before']['step_deg']:g}°; peaks refined between "
-          "the positions, at φ before -> after)")
+    con.say(f"  {'':42s} {'before':>10s} {'after':>10s}   (every {r['before']['step_deg']:g}°; peaks refined "
+            "between the positions, at φ before -> after)")
     for label, key in rows:
         line = f"  {label:42s} {r['before'][key]:10.3f} {r['after'][key]:10.3f}"
         if key in r["before"]["peak_at_deg"]:
             line += f"   {_at(r['before'], key)} -> {_at(r['after'], key)}"
-        print(line)
+        con.say(line)
     for name, key in (("shaking force on frame orders 1-3 [N]", "shaking_force_on_frame_orders"),):
         b = ", ".join(f"{v:.2f}" for v in r["before"][key])
         a = ", ".join(f"{v:.2f}" for v in r["after"][key])
-        print(f"  {name}: {b} -> {a}")
+        con.say(f"  {name}: {b} -> {a}")
 
 
 def _at(m: dict, key: str) -> str:
@@ -131,8 +130,14 @@ def _at(m: dict, key: str) -> str:
 
 
 def _write(folder: Path, report, result: dict) -> None:
-    folder.mkdir(parents=True, exist_ok=True)
-    (folder / "balance.json").write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
+    """balance.json, bearings.csv, speeds.csv and balance.png into ``folder``, written whole
+    (sewgen.files.staged_folder)."""
+    with staged_folder(folder, "--out") as tmp:
+        _write_files(tmp, report, result)
+
+
+def _write_files(folder: Path, report, result: dict) -> None:
+    write_text(folder / "balance.json", json.dumps(result, indent=2) + "\n")
     cols = {"phi [deg]": np.degrees(report.before.phi)}
     for tag, a in (("before", report.before), ("after", report.after)):
         for which in ("front", "rear"):
@@ -158,6 +163,8 @@ def _plot(path: Path, report, result: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from sewgen.report.plots.common import save
+
     fig, axes = plt.subplots(1, 3, figsize=(15, 5.4))
     for ax, (title, get, key) in zip(axes, (
             ("front bearing load (shaft on frame)", lambda a: a.bearing("front"), "bearing_front_peak"),
@@ -182,5 +189,7 @@ def _plot(path: Path, report, result: dict) -> None:
     fig.suptitle(f"{name}: balancing by {method} — load vectors over one revolution "
                  f"at {report.before.machine.speed * 60 / (2 * math.pi):.0f} rpm", fontsize=12)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        save(fig, path, dpi=110)
+    finally:
+        plt.close(fig)

@@ -2,6 +2,7 @@
 command-line quantities (a value with its unit, in SI)."""
 from __future__ import annotations
 
+import csv
 import difflib
 import math
 import sys
@@ -9,14 +10,20 @@ from pathlib import Path
 
 import numpy as np
 
+from sewgen.files import check_file as checked_file
 from sewgen.engine.loader import catalog, load, mechanism
 from sewgen.engine.results import write_csv
 from sewgen.errors import SewgenError
 from sewgen.machine.modelfile import declaration_problem
 from sewgen.units import DisplayUnits, UnitError, steps_per_turn, to_si
 
-#: Exit status of a user mistake (a bad option, file or value), as argparse uses for usage errors.
+#: Exit status of a user mistake (a bad option, file or value: a typed error of sewgen.errors), as argparse uses
+#: for usage errors.
 USAGE = 2
+#: Exit status of a command that did its work on a machine that fails a timing rule (``analyze``, ``timing``).
+RULES_FAIL = 3
+#: Exit status of a bug of sewgen (an exception that is not a typed error): its traceback is printed.
+BUG = 1
 
 
 class UsageError(SewgenError, ValueError):
@@ -70,6 +77,14 @@ def quantity(text: str | None, kind: str, option: str, sign: str = ""):
 
 # -- arguments of several commands ---------------------------------------------------------------------------
 
+def outside_code_option(p) -> None:
+    """``--allow-outside-code`` of the commands that load a machine's model file."""
+    p.add_argument("--allow-outside-code", action="store_true",
+                   help="let the model file's groups name declaration files (mechanism = \"....py\": Python code "
+                        "that loading the model runs) outside the model file's folder; without it only files in "
+                        "that folder or below are run")
+
+
 def display_units(args) -> DisplayUnits:
     try:
         return DisplayUnits.parse(getattr(args, "units", None), "--units")
@@ -94,9 +109,13 @@ def user_file(text: str):
     ``declare()`` is one line naming the file and the line."""
 
     path = Path(text)
-    if path.is_dir():
+    try:
+        folder, found = path.is_dir(), path.is_file()
+    except OSError as exc:  # a name too long for the file system, a loop of links
+        raise UsageError("--file", f"cannot read {path}: {exc.strerror or exc}") from None
+    if folder:
         raise UsageError("--file", f"{path} is a folder, not a declaration file (.py with a declare())")
-    if not path.is_file():
+    if not found:
         raise UsageError("--file", f"no such file {path}")
     if path.suffix != ".py":
         raise UsageError("--file", f"{path} is not a Python file (.py with a declare())")
@@ -174,26 +193,29 @@ def speed_of(args, default: float, whose: str) -> tuple[float | None, str]:
     return speed, words + ("" if speed is not None else f" ({whose} default; --speed to change)")
 
 
-def check_file(text: str | None, option: str) -> Path | None:
-    """An output file's path, checked before any work: not a folder, in an existing folder."""
-    if text is None:
-        return None
-    path = Path(text)
-    if not text.strip():
-        raise UsageError(option, "an empty file name")
-    if path.is_dir():
-        raise UsageError(option, f"{path} is a folder: give a file name, e.g. {path / 'results.csv'}")
-    parent = path.absolute().parent
-    if not parent.is_dir():
-        raise UsageError(option, f"cannot write {path}: no folder {parent}")
-    return path
+#: ``--csv -``: the table goes to standard output, alone (the command's text report is then not printed).
+STDOUT = "-"
 
 
-def write_table(path: Path, cols: dict, option: str) -> None:
-    try:
-        write_csv(path, cols)
-    except OSError as exc:
-        raise UsageError(option, f"cannot write {path}: {exc.strerror or exc}") from None
+def check_file(text: str | None, option: str) -> Path | str | None:
+    """An output table's target, checked before any work: None (not given), :data:`STDOUT` for "-", else the
+    file (sewgen.files.check_file: a regular file or none yet, in an existing folder, outside sewgen's package)."""
+    if text is None or text == STDOUT:
+        return text
+    checked_file(text, option)
+    return Path(text)
+
+
+def write_table(target: Path | str, cols: dict, option: str) -> None:
+    """``cols`` as CSV to ``target``: a file, written whole (sewgen.engine.results.write_csv), or standard output
+    (:data:`STDOUT`)."""
+    if target == STDOUT:
+        w = csv.writer(sys.stdout, lineterminator="\n")
+        w.writerow(cols)
+        w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
+        sys.stdout.flush()
+    else:
+        write_csv(target, cols, option)
 
 
 def extreme(values: np.ndarray, phi: np.ndarray, fn) -> str:

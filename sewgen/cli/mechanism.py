@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from sewgen.cli.common import (
+    STDOUT,
     Console,
     UsageError,
     branches_of,
@@ -107,11 +108,18 @@ def cmd_kinematics(args, con: Console) -> int:
         ext = found[f"q.{name}"]
         lines.append(f"{name:24s} [{unit}] min {_extreme(ext['min'], units, c.unit)}  "
                      f"max {_extreme(ext['max'], units, c.unit)}")
+    _report(lines, csv, con)
+    return 0
+
+
+def _report(lines: list, csv, con: Console) -> None:
+    """The text report, unless the table went to standard output (``--csv -``: the table alone there)."""
+    if csv == STDOUT:
+        return
     if csv:
         lines.append(f"wrote {csv}")
     for line in lines:
         con.say(line)
-    return 0
 
 
 def _load(text: str, m):
@@ -187,8 +195,5 @@ def cmd_forces(args, con: Console) -> int:
                  f"{rms(on_parts):12.6g}")
     moment, _ = units.convert(np.abs(fa.frame_moment_on_parts), "N*m")
     lines.append(f"{f'frame moment ({T})':22s} {_extreme(found['moment']['max'], units, 'N*m')} {rms(moment):12.6g}")
-    if csv:
-        lines.append(f"wrote {csv}")
-    for line in lines:
-        con.say(line)
+    _report(lines, csv, con)
     return 0

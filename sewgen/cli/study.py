@@ -1,6 +1,6 @@
 """``sewgen study influence`` and ``sewgen study tolerance``: design studies of a machine (seed 001 §六).
 
-The output folder is written whole or not at all (sewgen.report.outputs.staged_folder): CSV tables whose headers name
+The output folder is written whole or not at all (sewgen.files.staged_folder): CSV tables whose headers name
 their units, PNG plots, and study.json (the settings, the finite-difference scheme, the counts). Progress goes
 to stderr as a bar when it is a terminal; a mistake (a key the model lacks, a bad range or tolerance, an
 unreachable scheduler) is one line on stderr, exit status 2 and nothing on stdout.
@@ -14,8 +14,13 @@ from pathlib import Path
 
 import numpy as np
 
-from sewgen.cli.common import Console, UsageError, quantity
+from sewgen.cli.common import Console, UsageError, outside_code_option, quantity
+from sewgen.files import check_folder, replacing, staged_folder, write_text
 from sewgen.units import steps_per_turn
+
+#: Relative spread below which a quantity's samples count as one value (float rounding between designs, as
+#: summary.json's 12 significant digits): its histogram is a line of text, not bins narrower than the rounding.
+NOISE = 1e-12
 
 
 def _options(args, loads: bool):
@@ -49,7 +54,7 @@ def _grid(n):
 def influence_plots(res, folder) -> list[Path]:
     """One PNG per varied key: every numeric quantity against the key's value, the nominal marked; an angle
     continuous across 0°/360° (InfluenceResult.curve)."""
-    from sewgen.report.plots.common import new_figure
+    from sewgen.report.plots.common import new_figure, save
 
     out = []
     t = res.table
@@ -69,16 +74,15 @@ def influence_plots(res, folder) -> list[Path]:
             ax.set_visible(False)
         fig.suptitle(f"{res.machine}: influence of {k.key} (others at nominal)", fontsize=10)
         fig.subplots_adjust(hspace=0.7, wspace=0.35, left=0.06, right=0.98, top=0.93, bottom=0.06)
-        path = Path(folder) / f"influence_{_safe(k.key)}.png"
-        fig.savefig(path, pil_kwargs={"compress_level": 1})
-        out.append(path)
+        out.append(save(fig, Path(folder) / f"influence_{_safe(k.key)}.png"))
     return out
 
 
 def tolerance_plots(res, folder) -> list[Path]:
     """histograms.png: a histogram per numeric quantity, the nominal marked; an angle (``res.periods``) within half
-    its period of the nominal (sewgen.study.evaluate.around), as the percentiles take it."""
-    from sewgen.report.plots.common import new_figure
+    its period of the nominal (sewgen.study.evaluate.around), as the percentiles take it; a quantity whose samples
+    differ by no more than float rounding (:data:`NOISE`) is stated as one value instead."""
+    from sewgen.report.plots.common import new_figure, save
     from sewgen.study.evaluate import around
 
     ok = res.table[res.table["status"] == "ok"]
@@ -94,13 +98,13 @@ def tolerance_plots(res, folder) -> list[Path]:
             v = around(v, float(res.nominal[q]), res.periods[q])
         ax.set_title(q, fontsize=8)
         ax.tick_params(labelsize=7)
-        if len(v) and np.ptp(v) > 0:
+        if len(v) and np.ptp(v) > NOISE * np.max(np.abs(v)):
             ax.hist(v, bins=min(50, max(5, len(v) // 20)), color="tab:blue", alpha=0.8)
             ax.axvline(float(res.nominal[q]), color="k", lw=0.8, ls="--")
             ax.ticklabel_format(axis="x", useOffset=False)
             ax.locator_params(axis="x", nbins=4)  # long values: few ticks, no overlap
-        else:  # no spread: say so instead of an empty histogram
-            ax.text(0.5, 0.5, f"every sample: {v[0]:.6g}" if len(v) else "no finite value", ha="center",
+        else:  # no spread beyond rounding: say so instead of an empty histogram
+            ax.text(0.5, 0.5, f"every sample: {np.median(v):.6g}" if len(v) else "no finite value", ha="center",
                     va="center", fontsize=9, transform=ax.transAxes)
             ax.set_xticks([])
             ax.set_yticks([])
@@ -108,33 +112,36 @@ def tolerance_plots(res, folder) -> list[Path]:
         ax.set_visible(False)
     fig.suptitle(f"{res.machine}: {len(res.table)} samples ({res.distribution}); dashed: nominal", fontsize=10)
     fig.subplots_adjust(hspace=0.6, wspace=0.35, left=0.06, right=0.98, top=0.93, bottom=0.05)
-    path = Path(folder) / "histograms.png"
-    fig.savefig(path, pil_kwargs={"compress_level": 1})
-    return [path]
+    return [save(fig, Path(folder) / "histograms.png")]
 
 
 def _write_json(path, data):
-    Path(path).write_text(json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False, default=str) + "\n",
-                          encoding="utf-8")
+    return write_text(path, json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False, default=str) + "\n")
+
+
+def _write_csv(frame, path, **kw) -> Path:
+    """A pandas table as the CSV file ``path``, written whole (sewgen.files.replacing)."""
+    with replacing(path, text=True, newline="") as fh:
+        frame.to_csv(fh, **kw)
     return Path(path)
 
 
 def cmd_influence(args, con: Console) -> int:
     from sewgen.machine.assembly import load_machine
-    from sewgen.report.outputs import check_output_folder, model_path, staged_folder
+    from sewgen.report.outputs import model_path
     from sewgen.study.run import FD_SCHEME, influence
 
     options = _options(args, loads=not args.no_loads)
-    out = check_output_folder(Path(args.out), "--out")
+    check_folder(args.out, "--out")
+    out = Path(args.out)
     if not args.param:
         raise UsageError("--param", "name at least one model-file key, e.g. groups.GROUP.params.NAME")
-    machine = load_machine(args.model)
+    machine = load_machine(args.model, allow_outside_code=args.allow_outside_code)
     res = influence(machine, args.param, args.range, args.steps, options,
                     chunk_size=_chunk(args), dask=args.dask, progress=con.show_progress)
     with staged_folder(out, "--out") as tmp:
-        files = [tmp / "influence.csv", tmp / "sensitivities.csv"]
-        res.table.to_csv(files[0], index=False)
-        res.sensitivities.to_csv(files[1], index=False)
+        files = [_write_csv(res.table, tmp / "influence.csv", index=False),
+                 _write_csv(res.sensitivities, tmp / "sensitivities.csv", index=False)]
         if not args.no_plots:
             files += influence_plots(res, tmp)
         bad = res.table[res.table["status"] != "ok"]
@@ -174,23 +181,23 @@ def _tolerances(items) -> dict:
 
 def cmd_tolerance(args, con: Console) -> int:
     from sewgen.machine.assembly import load_machine
-    from sewgen.report.outputs import check_output_folder, model_path, staged_folder
+    from sewgen.report.outputs import model_path
     from sewgen.study.run import PERCENTILES, tolerance
 
     options = _options(args, loads=args.loads)
-    out = check_output_folder(Path(args.out), "--out")
+    check_folder(args.out, "--out")
+    out = Path(args.out)
     tols = _tolerances(args.tolerance)
     if args.samples < 1:
         raise UsageError("--samples", f"must be at least 1, got {args.samples}")
-    machine = load_machine(args.model)
+    machine = load_machine(args.model, allow_outside_code=args.allow_outside_code)
     res = tolerance(machine, tols, args.samples, args.seed, args.distribution, options, chunk_size=_chunk(args),
                     dask=args.dask, progress=con.show_progress)
     fails = res.failures
     with staged_folder(out, "--out") as tmp:
-        files = [tmp / "samples.csv", tmp / "percentiles.csv", tmp / "failures.csv"]
-        res.table.to_csv(files[0], index_label="sample")
-        res.stats.to_csv(files[1], index=False)
-        fails.to_csv(files[2], index_label="sample")
+        files = [_write_csv(res.table, tmp / "samples.csv", index_label="sample"),
+                 _write_csv(res.stats, tmp / "percentiles.csv", index=False),
+                 _write_csv(fails, tmp / "failures.csv", index_label="sample")]
         if not args.no_plots:
             files += tolerance_plots(res, tmp)
         files.append(_write_json(tmp / "study.json", {
@@ -226,6 +233,7 @@ def _study_common(p, common):
     p.add_argument("--exact-jumps", action="store_true",
                    help="the cam-arc acceleration jumps solved at each design's own switch angles (as summary.json; "
                         "5-30 ms a design) instead of extrapolated from the sweep's samples")
+    outside_code_option(p)
     common(p)
 
 
@@ -251,7 +259,7 @@ def add_parser(sub, common) -> None:
     t.add_argument("--tolerance", action="append", metavar="KEY=±TOL",
                    help="e.g. groups.GROUP.params.NAME=±0.02mm or ...=±1%% (repeatable)")
     t.add_argument("--samples", type=int, default=1000, help="Monte Carlo samples (default 1000)")
-    t.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    t.add_argument("--seed", type=int, default=0, help="random seed, a whole number ≥ 0 (default 0)")
     t.add_argument("--distribution", choices=("normal", "uniform"), default="normal",
                    help="normal: the tolerance is 3σ (default); uniform: within ± the tolerance")
     t.add_argument("--loads", action="store_true", help="also the kinetostatics and the peak loads per sample")

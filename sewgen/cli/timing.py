@@ -1,26 +1,32 @@
-"""``sewgen timing``: the stitch-formation events of a revolution and every timing rule's margin (exit status 1
+"""``sewgen timing``: the stitch-formation events of a revolution and every timing rule's margin (exit status 3
 where one fails)."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
-from sewgen.cli.common import Console, quantity
+from sewgen.cli.common import RULES_FAIL, Console, quantity
+from sewgen.files import check_folder, staged_folder
 from sewgen.machine.assembly import load_machine
 from sewgen.machine.timing import timing
-from sewgen.report.outputs import check_output_folder
 
 
 def cmd_timing(args, con: Console) -> int:
-    """Stitch-formation timing of a machine: the event table and every rule's margin (exit 1 if one fails)."""
+    """Stitch-formation timing of a machine: the event table and every rule's margin (exit 3 if one fails)."""
     speed = quantity(args.speed, "speed", "--speed", "positive")
-    plots = check_output_folder(Path(args.plots), "--plots") if args.plots else None
-    machine = load_machine(args.model)
+    if args.plots is not None:
+        check_folder(args.plots, "--plots")
+    machine = load_machine(args.model, allow_outside_code=args.allow_outside_code)
     tm = timing(machine, speed=speed)
-    con.say(json.dumps(tm.as_dict(), indent=2, ensure_ascii=False) if args.json else tm.table())
-    if plots is not None:
+    if args.plots is not None:
         from sewgen.report.plots.cycle import write_timing_plots
 
-        for path in write_timing_plots(tm, plots):
-            con.note(f"wrote {path}")
-    return 0 if tm.ok else 1
+        with staged_folder(args.plots, "--plots") as tmp:
+            written = write_timing_plots(tm, tmp)
+    con.say(json.dumps(tm.as_dict(), indent=2, ensure_ascii=False) if args.json else tm.table())
+    if args.plots is not None:
+        for path in written:
+            con.note(f"wrote {args.plots}/{path.name}")
+    if not tm.ok:
+        con.warn(f"{machine.name} fails {len(tm.failed)} of {len(tm.checks)} timing rules: "
+                 f"{', '.join(c.rule for c in tm.failed)}")
+    return 0 if tm.ok else RULES_FAIL

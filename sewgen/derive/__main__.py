@@ -7,6 +7,8 @@ import sys
 import time
 from pathlib import Path
 
+from sewgen.files import write_text
+
 from .catalog import CATALOG, declare
 from .emit import generate, render_files
 
@@ -63,7 +65,7 @@ def main(argv=None) -> int:
     for name in _derived_files(out) - set(files):
         (out / name).unlink()
     for name, text in files.items():
-        (out / name).write_text(text)
+        write_text(out / name, text, "--out")
     print(f"wrote {len(files)} files to {out} in {time.perf_counter() - t0:.1f} s")
     return 0
 

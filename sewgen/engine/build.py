@@ -139,6 +139,8 @@ def runtime_object(folder: Path, abi_header: str) -> Path:
     by every user build with the same flags: the object's name is a hash of the runtime's sources, the ABI
     header ``abi_header`` (the text of the generated sg_abi.h) and the flags. Written atomically (a compile
     into a temporary name, then a rename), so concurrent builders at worst compile it twice."""
+    from sewgen.files import write_text  # here: setuptools runs this file on its own, without the package
+
     rt = runtime_dir()
     # As setuptools compiles a module's own sources: Python's CC, CFLAGS and CCSHARED (-fPIC), then ours.
     cc = shlex.split(os.environ.get("CC") or sysconfig.get_config_var("CC") or "cc")
@@ -153,7 +155,7 @@ def runtime_object(folder: Path, abi_header: str) -> Path:
         return obj
     folder.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix=".runtime.", dir=folder) as tmp:
-        (Path(tmp) / "sg_abi.h").write_text(abi_header)
+        write_text(Path(tmp) / "sg_abi.h", abi_header)
         part = Path(tmp) / obj.name
         res = subprocess.run([*cc, *flags, f"-I{rt}", f"-I{tmp}", "-c", str(rt / "sg_runtime.c"), "-o", str(part)],
                              capture_output=True, text=True)

@@ -30,7 +30,8 @@ import zlib
 from pathlib import Path
 
 from sewgen.engine.mechanism import RESOLVERS, Mechanism, Reference
-from sewgen.errors import BuildError
+from sewgen.errors import BuildError, OutputPathError
+from sewgen.files import write_text
 
 try:
     import fcntl
@@ -187,10 +188,8 @@ def _write_json(path: Path, data: dict) -> None:
     """``data`` as JSON at ``path``, atomically (a reader sees the old file or the whole new one)."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        part = path.with_name(f".{path.name}.{os.getpid()}.part")
-        part.write_text(json.dumps(data, indent=1))
-        os.replace(part, path)
-    except OSError:  # an index is an optimisation: without it the next load derives again
+        write_text(path, json.dumps(data, indent=1))
+    except (OSError, OutputPathError):  # an index is an optimisation: without it the next load derives again
         pass
 
 
@@ -247,7 +246,7 @@ def _build(root: Path, folder: Path, module: str, name: str, files: dict, key: s
     tmp = Path(tempfile.mkdtemp(prefix=f".{module}.", dir=root))
     try:
         for fname, text in files.items():
-            (tmp / fname).write_text(text)
+            write_text(tmp / fname, text)
         try:
             runtime = runtime_object(root / "runtime", files["sg_abi.h"])
             so = Path(make_ffi(module, tmp, [name], runtime_object=runtime).compile(tmpdir=str(tmp)))
@@ -261,9 +260,7 @@ def _build(root: Path, folder: Path, module: str, name: str, files: dict, key: s
         shutil.rmtree(tmp, ignore_errors=True)
     so = folder / so.name
     marker = {"key": key, "module": module, "mechanism": name, "so": so.name, "sha256": _sha256(so)}
-    part = folder / f".{MARKER}.part"
-    part.write_text(json.dumps(marker, indent=1))
-    os.replace(part, folder / MARKER)
+    write_text(folder / MARKER, json.dumps(marker, indent=1))
     return so
 
 

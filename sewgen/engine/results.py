@@ -1,14 +1,12 @@
 """Named results of a sweep: every coordinate, point and body with position, velocity and acceleration."""
 from __future__ import annotations
 
-import contextlib
 import csv
-import os
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
+
+from sewgen.files import replacing
 
 
 #: The arrays of a :class:`Motion` (those :meth:`Motion.of_block` makes as views at the first look).
@@ -183,30 +181,15 @@ class Motion:
                 f"bodies {', '.join(self.body_names) or 'none'}>")
 
 
-def write_csv(path, cols: dict):
-    """Columns (name -> array, equal lengths) as a CSV file with a header row, written to a temporary file beside
-    ``path`` and renamed into place (a reader sees the old file or the whole new one); returns ``path``."""
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(cols)
-            w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
-        os.chmod(tmp, 0o666 & ~umask())
-        os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+def write_csv(path, cols: dict, option: str | None = None):
+    """Columns (name -> array, equal lengths) as a CSV file with a header row, written whole or not at all
+    (sewgen.files.replacing: a reader sees the old file or the whole new one); returns ``path``. ``option``: the
+    command-line option naming the file, for its errors."""
+    with replacing(path, option, text=True, newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(cols)
+        w.writerows(zip(*(np.asarray(c).tolist() for c in cols.values())))
     return path
-
-
-def umask() -> int:
-    """The process's file-creation mask (read without changing it)."""
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 class Selection:

@@ -45,6 +45,7 @@ from sewgen.engine.loads import load_matrix
 from sewgen.machine.plan import ShaftCall, gravity_polar, plan_of, scalar
 from sewgen.machine.modelfile import (Declared, GroupSpec, Model, ModelFileError, Shaft, ShaftMass,
     declaration_problem, read_model, read_settings, resolve)
+from sewgen.machine.thread import find_point
 from sewgen.machine.timing import RULES
 from sewgen.roles import STITCH_REGULATOR
 from sewgen.units import UnitError, steps_per_turn, to_si
@@ -128,6 +129,7 @@ class Machine:
     source: str = ""
     stitch: object = None  # sewgen.machine.modelfile.Stitch: cloth, loop lift and release, timing rules ([stitch])
     thread: object = None  # sewgen.machine.modelfile.ThreadPath: the needle thread's guides ([thread])
+    allow_outside_code: bool = False  # loaded with declaration files outside the model's folder allowed
 
     def shaft_angles(self, step: float | None = None) -> np.ndarray:
         """One revolution every ``step`` (rad; default the model's): a step must divide 360° into 4 to
@@ -552,10 +554,14 @@ def _xy(r) -> tuple:
 
 # -- model files ---------------------------------------------------------------------------------------------
 
-def load_machine(name_or_path, doc: dict | None = None) -> Machine:
+def load_machine(name_or_path, doc: dict | None = None, *, allow_outside_code: bool = False) -> Machine:
     """A machine from a model file (or a built-in model such as "jb1-3"), checked and converted to SI. ``doc``:
     the file's parsed TOML, changed (a design study's variant, sewgen.study.machine_designs); relative paths in
     it still resolve beside the file.
+
+    A model file is code where a group's ``mechanism`` names a declaration file (a .py file whose ``declare()``
+    runs when the machine is loaded): only files in the model file's folder or below are run, unless
+    ``allow_outside_code`` (the command line's ``--allow-outside-code``) allows any path.
 
     The file is read by :func:`sewgen.machine.modelfile.read_model` (every table, its schema in
     sewgen.machine.modelfile.schema); here each group's mechanism is loaded, its tables are read against what
@@ -566,13 +572,20 @@ def load_machine(name_or_path, doc: dict | None = None) -> Machine:
     groups = []
     for spec in model.groups:
         try:
-            groups.append(_group(model, spec))
+            groups.append(_group(model, spec, allow_outside_code))
         except ModelFileError:
             raise
         except SewgenError as exc:  # the group's geometry: cannot assemble at the stitch's setting, ...
             raise located(exc, model.path, spec.key) from None
-    return Machine(model.name, model.description, model.speed, model.step, model.gravity, groups, model.shaft,
-                   str(model.path), model.stitch, model.thread)
+    machine = Machine(model.name, model.description, model.speed, model.step, model.gravity, groups, model.shaft,
+                      str(model.path), model.stitch, model.thread, allow_outside_code)
+    for i, guide in enumerate(model.thread.guides if model.thread is not None else ()):
+        if guide.point is not None:  # a moving guide names a point some group has
+            try:
+                find_point(machine, guide.point)
+            except KeyError as exc:
+                raise ModelFileError(model.path, f"thread.guides[{i}].point", exc.args[0]) from None
+    return machine
 
 
 def located(exc: SewgenError, path, key: str) -> SewgenError:
@@ -585,11 +598,11 @@ def located(exc: SewgenError, path, key: str) -> SewgenError:
     return out
 
 
-def _group(model: Model, spec: GroupSpec) -> Group:
+def _group(model: Model, spec: GroupSpec, allow_outside_code: bool) -> Group:
     """A group of the model file: its mechanism loaded, its tables read against the mechanism's declaration, its
     parameter values, stitch regulator and loads checked by the compiled mechanism."""
     key = spec.key
-    mech = _group_mechanism(model.path, f"{key}.mechanism", spec.mechanism)
+    mech = _group_mechanism(model.path, f"{key}.mechanism", spec.mechanism, allow_outside_code)
     desc = mech.description
     declared = Declared(mech.name, {p.name: p.kind for p in desc.params}, tuple(mech.held_names),
                         tuple(mech.branch_names), tuple(b.name for b in desc.driven_bodies))
@@ -620,9 +633,11 @@ def _group(model: Model, spec: GroupSpec) -> Group:
     return group
 
 
-def _group_mechanism(model_path: Path, key: str, text: str):
+def _group_mechanism(model_path: Path, key: str, text: str, allow_outside_code: bool = False):
     """A group's mechanism: a catalog name, or a declaration file (.py with ``declare()``) relative to the model
-    file, derived and compiled on first use and then loaded from the cache (:func:`sewgen.load`)."""
+    file, derived and compiled on first use and then loaded from the cache (:func:`sewgen.load`). Loading a
+    declaration file runs its code: one outside the model file's folder (an absolute path, ``..``, ``~``, a link
+    out of it) is refused unless ``allow_outside_code``."""
     if text in catalog():
         return catalog_mechanism(text)
     path = Path(text).expanduser()
@@ -631,7 +646,18 @@ def _group_mechanism(model_path: Path, key: str, text: str):
     if path.suffix != ".py":
         raise ModelFileError(model_path, key, f"{text!r} is neither a catalog mechanism ({', '.join(catalog())}) "
                                               "nor a declaration file (.py with a declare() function)")
-    if not path.is_file():
+    try:
+        folder = model_path.parent.resolve()
+        outside = not path.resolve().is_relative_to(folder)
+        found = path.is_file()
+    except OSError as exc:  # a name too long, a loop of links
+        raise ModelFileError(model_path, key, f"cannot read {path}: {exc.strerror or exc}") from None
+    if outside and not allow_outside_code:
+        raise ModelFileError(model_path, key, f"{text!r} is outside the model file's folder {folder}: a declaration "
+                                              "file is Python code that loading the model runs, so only files in "
+                                              "that folder or below are run; allow others with "
+                                              "--allow-outside-code (load_machine(..., allow_outside_code=True))")
+    if not found:
         raise ModelFileError(model_path, key, f"no declaration file {path}")
     try:
         return load(path)

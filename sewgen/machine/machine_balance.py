@@ -37,6 +37,7 @@ again around each sampled peak), so the improvement they report is the machine's
 from __future__ import annotations
 
 import math
+import tomllib
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -409,8 +410,19 @@ def balance(machine: Machine, method: str, objective: str = "peak", shaking_weig
     return BalanceReport(method, objective if method == "bearings" else None, sol, before, after, rows)
 
 
-def model_text(source_text: str, counterweights) -> str:
-    """The model file's text with the counterweights appended as shaft point masses (analysable as it is)."""
+def model_text(source_text: str, counterweights, source: str = "") -> str:
+    """The model file's text with the counterweights appended as shaft point masses (analysable as it is).
+
+    A model that already has a shaft mass named as a counterweight's plane (written by an earlier balancing) is
+    refused with a :class:`BalancingError`: appending would put two counterweights on the plane, more than its
+    ``max_mass`` — balance the model without them (``source``: the model file, named in the error)."""
+    masses = tomllib.loads(source_text).get("shaft", {}).get("masses", [])
+    names = {m.get("name") for m in masses if isinstance(m, dict)}
+    twice = [c.plane.name for c in counterweights if c.plane.name in names]
+    if twice:
+        raise BalancingError(f"{source or 'the model'}: shaft.masses already has {', '.join(twice)} (counterweights "
+                             "of an earlier balancing): a second one on the same plane would exceed its max_mass; "
+                             "remove them from the model file to balance it again")
     lines = [source_text.rstrip("\n"), "", "# counterweights chosen by sewgen balance machine"]
     for c in counterweights:
         lines += ["[[shaft.masses]]", f'name = "{c.plane.name}"', f'mass = "{c.mass * 1e3:.15g} g"',

@@ -50,7 +50,7 @@ from sewgen.roles import FEED_DOG, HOOK_POINT, NEEDLE_EYE, THREAD_EYE
 TWO_PI = 2.0 * math.pi
 
 
-def _find(machine, ref: str):
+def find_point(machine, ref: str):
     """(group, point name) of ``ref``: "group.point" or a point role."""
     if "." in ref:
         gname, pname = ref.split(".", 1)
@@ -72,7 +72,7 @@ def guide_positions(machine, motions: dict, path: ThreadPath, n: int) -> list:
         if gd.at is not None:
             out.append((gd.name, np.tile(np.asarray(gd.at, float), (n, 1))))
             continue
-        g, pname = _find(machine, gd.point)
+        g, pname = find_point(machine, gd.point)
         mo = motions[g.name]
         p = mo.point(pname)
         pos = np.column_stack([p.x, p.y])
@@ -243,5 +243,5 @@ def thread_control(machine, motions: dict, tm, path: ThreadPath, stitch) -> Thre
                          float(drawn[order[-1]]), pts)
 
 
-__all__ = ["Guide", "ThreadControl", "ThreadPath", "eye_motion", "guide_positions", "path_length",
+__all__ = ["Guide", "ThreadControl", "ThreadPath", "eye_motion", "find_point", "guide_positions", "path_length",
            "thread_control"]

@@ -63,7 +63,8 @@ contains the shaft, ``frame = "along"``, is placed by its origin). The looper ru
 the plane the lower looper moves in (the machine's x for a group across the shaft, z for one along it).
 
 Angle differences are wrapped into (−180°, 180°], except ``take_up_rise`` and ``loop_released_before_reversal``
-(a span). A rule whose parts the machine lacks fails with a message saying what is missing.
+(a span). A rule whose parts the machine lacks cannot be checked: it fails, its value is NaN (null in
+summary.json) and its message names the roles no group plays and the machine's groups.
 """
 from __future__ import annotations
 
@@ -108,9 +109,9 @@ class Measured(NamedTuple):
 class TimingRule:
     """One kind of timing rule, measured on a machine's :class:`Timing`. ``name`` is the model file's ``rule``,
     ``kind`` the kind of its value (a key of ``_SCALE``: its ``min``/``max`` are read in it), ``unit`` the unit
-    shown, ``text`` what it measures. ``needs`` names the :attr:`Timing.values` it reads and ``lacks`` what a
-    machine without one of them lacks; ``window`` rules take ``from``/``to``; ``own_limits`` rules need no
-    ``min``/``max`` in the file (:meth:`limits` gives them).
+    shown, ``text`` what it measures. ``needs`` names the :attr:`Timing.values` it reads, ``roles`` the parts
+    (sewgen.roles) those come from and ``lacks`` what a machine without one of them lacks; ``window`` rules take
+    ``from``/``to``; ``own_limits`` rules need no ``min``/``max`` in the file (:meth:`limits` gives them).
 
     A rule measures (:meth:`measure`); :meth:`check` does the rest, the same for every rule."""
 
@@ -119,6 +120,7 @@ class TimingRule:
     unit = "mm"
     text = ""
     needs: tuple = ()
+    roles: tuple = ()
     lacks = ""
     window = False
     own_limits = False
@@ -132,6 +134,15 @@ class TimingRule:
         """(lower, upper) limits in SI, None where open: the model file's."""
         return rule.lo, rule.hi
 
+    def missing(self, machine) -> str:
+        """Why the rule cannot be measured on ``machine``: the roles it needs that no group plays, named with the
+        machine's groups; else :attr:`lacks`."""
+        absent = [r for r in self.roles if not any(g.mechanism.description.has_role(r) for g in machine.groups)]
+        if not absent:
+            return self.lacks
+        return (f"no group has a part with the role{'s' if len(absent) > 1 else ''} {', '.join(absent)} (groups: "
+                f"{', '.join(g.name for g in machine.groups)}); {self.lacks}")
+
     def check(self, rule: Rule, tm: Timing, st: Stitch, machine, ge) -> Check:
         """The rule measured on ``tm`` against its limits: value and limits in the unit shown, pass or fail."""
         scale = _SCALE[self.kind]
@@ -139,7 +150,7 @@ class TimingRule:
         def shown(x):  # SI back to the unit shown, without the conversion's last-digit noise
             return None if x is None else float(f"{x * scale:.12g}")
 
-        got = self.lacks if any(tm.values.get(k) is None for k in self.needs) else \
+        got = self.missing(machine) if any(tm.values.get(k) is None for k in self.needs) else \
             self.measure(rule, tm, st, machine, ge)
         if isinstance(got, str):
             return Check(rule.kind, math.nan, shown(rule.lo), shown(rule.hi), self.unit, False,
@@ -222,6 +233,7 @@ class HookAtNeedleRise(_NeedleRiseAtTaker):
     name = "hook_at_needle_rise"
     text = "needle rise from BDC when the hook point reaches the needle"
     role, event, taker = HOOK_POINT, "hook_fwd", "the hook point"
+    roles = (NEEDLE_POINT, HOOK_POINT)
     lacks = "the machine needs a needle_point and a hook_point"
 
 
@@ -233,6 +245,7 @@ class HookAboveEye(_TakerAboveEye):
     name = "hook_above_eye"
     text = "hook point above the needle eye's top at the needle"
     role, event, at, who = HOOK_POINT, "hook_fwd", "hook point at the needle", "the hook point"
+    roles = (NEEDLE_POINT, HOOK_POINT)
     lacks = "the machine needs a needle_point and a hook_point"
 
 
@@ -244,6 +257,7 @@ class HookInScarf(_TakerAtNeedle):
     name = "hook_in_scarf"
     text = "hook point within the needle's scarf"
     role, event = HOOK_POINT, "hook_fwd"
+    roles = (NEEDLE_POINT, HOOK_POINT)
     lacks = "the machine needs a needle_point and a hook_point"
     own_limits = True
 
@@ -268,6 +282,7 @@ class ShuttleStartAtBdc(_AngleRule):
     name = "shuttle_start_at_bdc"
     text = "shuttle starts its forward stroke at the needle's BDC"
     needs = ("shuttle_start", "bdc")
+    roles = (NEEDLE_POINT, HOOK_POINT)
     lacks = "the machine needs a needle_point and a hook_point on a shuttle"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -286,6 +301,7 @@ class LoopReleasedBeforeReversal(_AngleRule):
     name = "loop_released_before_reversal"
     text = "shuttle turns past the loop release before it reverses"
     needs = ("hook_turn", "hook_fwd", "shuttle_back")
+    roles = (NEEDLE_POINT, HOOK_POINT)
     lacks = "the machine needs a needle_point and a hook_point on a shuttle"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -306,6 +322,7 @@ class DogSinksBeforeNeedleEnters(_AngleRule):
     name = "dog_sinks_before_needle_enters"
     text = "feed dog below the plate before the needle enters"
     needs = ("needle_in_cloth", "dog_down")
+    roles = (NEEDLE_POINT, FEED_DOG, THROAT_PLATE)
     lacks = "the machine needs a needle_point, a feed_dog and a throat_plate"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -323,6 +340,7 @@ class DogRisesAfterNeedleLeaves(_AngleRule):
     name = "dog_rises_after_needle_leaves"
     text = "feed dog above the plate after the needle leaves"
     needs = ("needle_out_cloth", "dog_up")
+    roles = (NEEDLE_POINT, FEED_DOG, THROAT_PLATE)
     lacks = "the machine needs a needle_point, a feed_dog and a throat_plate"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -340,6 +358,7 @@ class TakeUpRisesAfterRelease(_AngleRule):
     name = "take_up_rises_after_release"
     text = "take-up gives thread until the loop is cast off"
     needs = ("take_up_bottom", "release")
+    roles = (THREAD_EYE, NEEDLE_POINT, HOOK_POINT)
     lacks = "the machine needs a thread_eye, a needle_point and a hook_point"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -357,6 +376,7 @@ class StitchSetBeforeNeedleEnters(_AngleRule):
     name = "stitch_set_before_needle_enters"
     text = "take-up sets the stitch before the needle enters"
     needs = ("take_up_top", "needle_in_cloth")
+    roles = (THREAD_EYE, NEEDLE_POINT, THROAT_PLATE)
     lacks = "the machine needs a thread_eye, a needle_point and a throat_plate"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -374,6 +394,7 @@ class TakeUpRise(_AngleRule):
     name = "take_up_rise"
     text = "take-up rises fast"
     needs = ("take_up_top", "take_up_bottom")
+    roles = (THREAD_EYE,)
     lacks = "the machine needs a thread_eye"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -390,6 +411,7 @@ class TakeUpRisesOver(_AngleRule):
     name = "take_up_rises_over"
     text = "take-up rising over the stitch-setting window"
     needs = ("take_up_top", "take_up_bottom")
+    roles = (THREAD_EYE,)
     lacks = "the machine needs a thread_eye"
     window = True
 
@@ -430,6 +452,7 @@ class LowerLooperAtNeedleRise(_NeedleRiseAtTaker):
     name = "lower_looper_at_needle_rise"
     text = "needle rise from BDC when the lower looper reaches the needle"
     role, event, taker = LOWER_LOOPER_TIP, "lower_fwd", "the lower looper's tip"
+    roles = (NEEDLE_POINT, LOWER_LOOPER_TIP)
     lacks = "the machine needs a needle_point and a lower_looper_tip"
 
 
@@ -441,6 +464,7 @@ class LowerLooperAboveEye(_TakerAboveEye):
     name = "lower_looper_above_eye"
     text = "lower looper tip above the needle eye's top at the needle"
     role, event, at, who = LOWER_LOOPER_TIP, "lower_fwd", "lower looper tip at the needle", "the tip"
+    roles = (NEEDLE_POINT, LOWER_LOOPER_TIP)
     lacks = "the machine needs a needle_point and a lower_looper_tip"
 
 
@@ -452,6 +476,7 @@ class LowerLooperPassesLevel(TimingRule):
     name = "lower_looper_passes_level"
     text = "needle height at the lower looper's return minus forward pass"
     needs = ("lower_ret", "lower_fwd")
+    roles = (NEEDLE_POINT, LOWER_LOOPER_TIP)
     lacks = "the lower looper must pass the needle forward and back"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -470,6 +495,7 @@ class UpperTakesLowerThread(TimingRule):
     name = "upper_takes_lower_thread"
     text = "lower looper beyond the needle as the upper looper passes it"
     needs = ("upper_meets_lower",)
+    roles = (NEEDLE_POINT, LOWER_LOOPER_TIP, UPPER_LOOPER_TIP)
     lacks = "the machine needs an upper_looper_tip that rises past the lower_looper_tip"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -489,6 +515,7 @@ class NeedleInUpperTriangle(TimingRule):
     name = "needle_in_upper_triangle"
     text = "upper looper beyond the needle as the needle enters"
     needs = ("needle_at_upper", "upper_top")
+    roles = (NEEDLE_POINT, LOWER_LOOPER_TIP, UPPER_LOOPER_TIP, THROAT_PLATE)
     lacks = "the machine needs an upper_looper_tip, a needle_point and a throat_plate"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -508,6 +535,7 @@ class UpperAboveMaterial(TimingRule):
     name = "upper_above_material"
     text = "upper looper tip above the material as the needle enters"
     needs = ("needle_at_upper", "upper_top")
+    roles = (NEEDLE_POINT, LOWER_LOOPER_TIP, UPPER_LOOPER_TIP, THROAT_PLATE)
     lacks = "the machine needs an upper_looper_tip, a needle_point and a throat_plate"
 
     def measure(self, rule, tm, st, machine, ge):
@@ -611,10 +639,12 @@ class Timing:
         raise KeyError(f"no check of rule {rule!r}; checked: {', '.join(c.rule for c in self.checks)}")
 
     def as_dict(self) -> dict:
-        """summary.json's ``timing``: events (name, angle_deg) and checks (rule, value, limit, unit, ok)."""
+        """summary.json's ``timing``: events (name, angle_deg) and checks (rule, value, limit, unit, ok); the value
+        of a rule that cannot be checked (a part missing: its message says which) is None."""
         out = {"events": [{"name": e.name, "angle_deg": round(float(e.deg), 3), "note": e.note} for e in self.events],
-               "checks": [{"rule": c.rule, "value": round(c.value, 4), "limit": [c.lo, c.hi], "unit": c.unit,
-                           "ok": c.ok, "message": c.message, "source": c.source} for c in self.checks]}
+               "checks": [{"rule": c.rule, "value": round(c.value, 4) if math.isfinite(c.value) else None,
+                           "limit": [c.lo, c.hi], "unit": c.unit, "ok": c.ok, "message": c.message,
+                           "source": c.source} for c in self.checks]}
         if self.thread is not None:
             out["thread"] = self.thread.as_dict()
         return out

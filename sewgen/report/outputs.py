@@ -15,23 +15,21 @@ moments (inertia only, −Σ m a_G) and the moving parts' weight act on the fram
 ``frame_force_on_parts`` is the frame's force on the moving parts (the sign convention: sewgen.machine.shaking);
 a joint's reaction is on its second body from its first (group tables).
 
-A report is written into a temporary folder beside the target and moved into place only when complete
-(:func:`staged_folder`): a run that fails leaves no half-written tables behind.
+A report is written as a whole (sewgen.files.staged_folder): into a temporary folder, moved into place only when
+complete, replacing the previous run's files; a run that fails leaves the folder as it was.
 """
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from sewgen.engine.results import umask, write_csv
-from sewgen.errors import NonFiniteOutputError, SewgenError
+from sewgen.engine.results import write_csv
+from sewgen.errors import NonFiniteOutputError
+from sewgen.files import staged_folder, write_text
 from sewgen.machine import shaking
 from sewgen.machine.cams import arc_switches
 from sewgen.machine.feed import dog_travel, has_feed, plate_height
@@ -294,72 +292,15 @@ def write_tables(a, folder, progress=None, units: DisplayUnits | None = None) ->
     text = json.dumps(summary(a, cam_switches(a), tm), indent=2, ensure_ascii=False, allow_nan=False)
     paths = [write_csv(folder / name, cols) for name, cols in tables.items()]
     if tm is not None:
-        (folder / "timing.txt").write_text(tm.table() + "\n", encoding="utf-8")
-        paths.append(folder / "timing.txt")
-    (folder / "summary.json").write_text(text + "\n", encoding="utf-8")  # last: the report is complete
-    paths.append(folder / "summary.json")
+        paths.append(write_text(folder / "timing.txt", tm.table() + "\n"))
+    paths.append(write_text(folder / "summary.json", text + "\n"))  # last: the report is complete
     return paths
-
-
-def check_output_folder(folder, option: str = "--out") -> Path:
-    """``folder`` usable as an output folder: an existing folder, or a new one whose parent exists. Raises
-    :class:`OutputPathError` naming ``option`` otherwise (before any work is done)."""
-    folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise OutputPathError(option, f"{folder} exists and is not a folder")
-    parent = folder.absolute().parent
-    if not folder.exists() and not parent.is_dir():
-        raise OutputPathError(option, f"cannot make {folder}: no folder {parent}")
-    if not os.access(folder if folder.exists() else parent, os.W_OK):
-        raise OutputPathError(option, f"cannot write into {folder if folder.exists() else parent}: permission denied")
-    return folder
-
-
-class OutputPathError(SewgenError, ValueError):
-    """An output file or folder that cannot be written (``parameter``: the option or argument naming it)."""
-
-    def __init__(self, option: str, problem: str):
-        super().__init__(f"{option}: {problem}" if option else problem, problem=problem, parameter=option)
-
-
-@contextlib.contextmanager
-def staged_folder(folder, option: str = "--out"):
-    """Write a folder's files into a temporary folder; move them into place only when the block ends without an
-    error. A new folder is staged beside it and renamed in one step; an existing folder (``--out .``, a mount
-    point) is staged in a hidden folder inside it, and each file is renamed over the old one, summary.json last.
-    On an error the temporary folder is removed and ``folder`` is left as it was. Yields the temporary folder."""
-    folder = check_output_folder(folder, option)
-    existed = folder.is_dir()
-    home = folder if existed else folder.absolute().parent
-    try:
-        tmp = Path(tempfile.mkdtemp(prefix=f".{folder.absolute().name or 'out'}.", suffix=".part", dir=home))
-    except OSError as exc:
-        raise OutputPathError(option, f"cannot write into {home}: {exc.strerror or exc}") from None
-    try:
-        yield tmp
-        os.chmod(tmp, 0o777 & ~umask())
-        if not existed:
-            try:
-                os.rename(tmp, folder)
-                return
-            except OSError:  # made meanwhile: move the files one by one
-                folder.mkdir(exist_ok=True)
-        names = sorted(p.name for p in tmp.iterdir())
-        names.sort(key=lambda n: n == "summary.json")  # summary.json last: its presence marks a complete run
-        for name in names:
-            target = folder / name
-            if target.is_dir():
-                raise OutputPathError(option, f"cannot replace {target}: it is a folder")
-            os.replace(tmp / name, target)
-    except OSError as exc:
-        raise OutputPathError(option, f"cannot write {folder}: {exc.strerror or exc}") from None
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def write_report(a, folder, progress=None, units: DisplayUnits | None = None) -> list[Path]:
     """machine.csv, <group>.csv for every group and summary.json into ``folder``, moved into place only when all
-    are written (:func:`staged_folder`). Returns the paths in ``folder``."""
+    are written, replacing the previous run's files (sewgen.files.staged_folder). Returns the paths in
+    ``folder``."""
     folder = Path(folder)
     with staged_folder(folder, "folder") as tmp:
         written = write_tables(a, tmp, progress, units)

@@ -254,7 +254,7 @@ class MachineDesigns:
                     unit = SI_UNITS.get(k.kind, "")
                     v = float(self.values[i, j])
                     container[last] = f"{v!r} {unit}".strip() if unit else v
-            m = load_machine(m.source, doc=doc)
+            m = load_machine(m.source, doc=doc, allow_outside_code=m.allow_outside_code)
         return with_params(m, self.param_changes(i))
 
     def table(self):

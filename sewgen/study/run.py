@@ -479,6 +479,8 @@ def tolerance(machine, tolerances: dict, samples: int = 1000, seed: int | None =
         raise StudyError("--samples", f"must be a positive integer, got {samples!r}")
     if distribution not in ("normal", "uniform"):
         raise StudyError("--distribution", f"normal or uniform, not {distribution!r}")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+        raise StudyError("--seed", f"a seed is a whole number ≥ 0 (or None: a fresh one), got {seed!r}")
     rng = np.random.default_rng(seed)
     if distribution == "normal":
         u = np.clip(rng.standard_normal((samples, len(keys))) / 3.0, -1.0, 1.0)

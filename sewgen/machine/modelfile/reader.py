@@ -114,16 +114,16 @@ class Reader:
 
 
 def load_toml(path) -> dict:
-    """Parse a TOML file; a missing file, a folder, unreadable bytes (not UTF-8) or a syntax error names the file
-    (and, for a syntax error, the line)."""
+    """Parse a TOML file; a missing file, a folder, a name the file system cannot take, unreadable bytes (not
+    UTF-8), a syntax error or nesting too deep to read names the file (and, for a syntax error, the line)."""
     p = Path(path)
-    if p.is_dir():
-        raise ModelFileError(p, "", "is a folder, not a model file")
-    if not p.is_file():
-        raise ModelFileError(p, "", "no such model file")
     try:
+        if p.is_dir():
+            raise ModelFileError(p, "", "is a folder, not a model file")
+        if not p.is_file():
+            raise ModelFileError(p, "", "no such model file")
         data = p.read_bytes()
-    except OSError as exc:
+    except OSError as exc:  # a name too long, no permission, a loop of links
         raise ModelFileError(p, "", f"cannot be read ({exc.strerror or exc})") from None
     try:
         text = data.decode("utf-8")
@@ -135,6 +135,9 @@ def load_toml(path) -> dict:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ModelFileError(p, "", f"not valid TOML: {exc}") from None
+    except RecursionError:  # tomllib reads nested arrays and inline tables recursively
+        raise ModelFileError(p, "", "arrays or inline tables nested too deeply to read (no model file nests more "
+                                    "than a few levels)") from None
 
 
 def builtin_models() -> list[str]:
@@ -152,8 +155,11 @@ def resolve(name_or_path) -> Path:
         return p
     if text in builtin_models():
         return MODELS_DIR / f"{text}.toml"
-    if p.is_file():
-        return p
+    try:
+        if p.is_file():
+            return p
+    except OSError as exc:  # a name too long for the file system
+        raise ModelFileError(p, "", f"cannot be read ({exc.strerror or exc})") from None
     known = ", ".join(builtin_models())
     raise ModelFileError(p, "", f"neither a model file (.toml) nor a built-in model (built in: {known})")
 

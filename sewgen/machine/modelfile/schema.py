@@ -93,14 +93,17 @@ COUNTERWEIGHT = {
 }
 
 #: ``[groups.<name>]``: one mechanism group on the upper shaft, swept at φ + ``phase`` (seed 000 analyses each
-#: group as a plane mechanism, §二(三)). Its name must be an identifier and not a reserved one (it names the
-#: group's table). ``params`` (SI overrides of the mechanism's parameters, each in its own kind), ``held``
-#: (held inputs, angles), ``branch`` (branch joints set to 1 or −1) and ``axial`` (z of every driven body) are
-#: checked against the mechanism's declaration. ``frame`` defaults to "across"; ``origin`` is given exactly for
-#: "along" groups; ``loads`` is ``[[groups.<name>.loads]]`` (:data:`LOAD`).
+#: group as a plane mechanism, §二(三)). Its name must be an identifier, not a reserved one and not another
+#: group's name in another case (it names the group's table, ``<name>.csv``). ``params`` (SI overrides of the
+#: mechanism's parameters, each in its own kind), ``held`` (held inputs, angles), ``branch`` (branch joints set
+#: to 1 or −1) and ``axial`` (z of every driven body) are checked against the mechanism's declaration.
+#: ``frame`` defaults to "across"; ``origin`` is given exactly for "along" groups; ``loads`` is
+#: ``[[groups.<name>.loads]]`` (:data:`LOAD`).
 GROUP = {
     "mechanism": Field("text", doc="a catalog mechanism's name, or the path of a declaration file (.py with a "
-                               "declare()), relative to the model file"),
+                               "declare()), relative to the model file: Python code that loading the model "
+                               "runs, so only in the model file's folder or below unless allowed "
+                               "(--allow-outside-code)"),
     "description": Field("text", False, "what the group is"),
     "phase": Field("angle", doc="group shaft angle minus machine shaft angle"),
     "axial": Field("table", doc="z on the upper shaft of every driven body, e.g. { crank = \"-20 mm\" }"),

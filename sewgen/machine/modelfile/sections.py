@@ -191,9 +191,14 @@ def read_model(path, doc: dict | None = None, *, rules: dict) -> Model:
     mach = rd.read(rd.table(doc["machine"], "machine"), "machine", MACHINE)
     _check_name(rd, mach["name"])
     shaft = _shaft(rd, rd.read(rd.table(doc["shaft"], "shaft"), "shaft", SHAFT))
-    groups = []
+    groups, folded = [], {}
     for name, g in rd.table(doc["groups"], "groups").items():
         _check_group_name(rd, name)
+        other = folded.setdefault(name.casefold(), name)
+        if other != name:
+            rd.fail(f"groups.{name}", f"differs from groups.{other} only in case: their tables ({name}.csv, "
+                                      f"{other}.csv) would be one file on a case-insensitive file system "
+                                      "(Windows, macOS); rename one of them")
         groups.append(_group(rd, name, rd.table(g, f"groups.{name}")))
     if not groups:
         rd.fail("groups", "a machine needs at least one group")
@@ -238,11 +243,12 @@ def _shaft(rd: Reader, s: dict) -> Shaft:
 
 
 def _check_group_name(rd: Reader, name: str) -> None:
-    """A group's name names its table (``<group>.csv``) and its entries in summary.json."""
+    """A group's name names its table (``<group>.csv``) and its entries in summary.json: an identifier, not a
+    reserved name in any case (``Machine.csv`` is ``machine.csv`` on a case-insensitive file system)."""
     if not _IDENTIFIER.fullmatch(name):
         rd.fail(f"groups.{name}", "a group name must be an identifier (letters, digits and _, not starting with a "
                                   "digit)")
-    if name in RESERVED_GROUP_NAMES:
+    if name.casefold() in RESERVED_GROUP_NAMES:
         rd.fail(f"groups.{name}", f"{name!r} is reserved (the machine's own outputs: "
                                   f"{', '.join(RESERVED_GROUP_NAMES)}); rename the group")
 

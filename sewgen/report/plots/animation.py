@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sewgen.files import replacing
 from sewgen.roles import FEED_DOG, NEEDLE_EYE, NEEDLE_POINT
 from sewgen.report.plots.common import (AT_THE_PLATE, axis_name, color, new_figure, offset, role_point,
     throat_plate_height)
@@ -265,6 +266,11 @@ def _gif_writer(fps):
             if not self._frames:
                 self._palette = im.quantize(GIF_COLORS, method=Image.Quantize.MEDIANCUT)
             self._frames.append(im.quantize(palette=self._palette, dither=Image.Dither.NONE))
+
+        def finish(self):  # the GIF written whole or not at all (sewgen.files.replacing)
+            with replacing(self.outfile) as fh:
+                self._frames[0].save(fh, format="GIF", save_all=True, append_images=self._frames[1:],
+                                     duration=int(1000 / self.fps), loop=0)
 
     return CanvasGifWriter(fps=fps)
 

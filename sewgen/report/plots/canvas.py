@@ -30,8 +30,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag
 from matplotlib.font_manager import findfont
-from sewgen.engine.loader import cache_root
-from sewgen.engine.loader import locked
+from sewgen.engine.loader import cache_root, locked
+from sewgen.errors import SewgenError
+from sewgen.files import replacing
 
 #: Rendered strings kept (a figure set uses a few hundred distinct ones).
 CACHE_SIZE = 4096
@@ -197,15 +198,10 @@ def save() -> None:
                 if len(theirs.keys() | mine.keys()) > CACHE_SIZE:
                     theirs.clear()  # a full cache starts again from this process's strings
                 theirs.update(mine)
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            try:
-                with open(tmp, "wb") as fh:
-                    pickle.dump((bitmaps, extents), fh, protocol=pickle.HIGHEST_PROTOCOL)
-                os.replace(tmp, path)
-            finally:
-                tmp.unlink(missing_ok=True)  # left only where writing or renaming failed
+            with replacing(path) as fh:
+                pickle.dump((bitmaps, extents), fh, protocol=pickle.HIGHEST_PROTOCOL)
         _loaded = (len(_bitmaps), len(_extents))
-    except OSError:
+    except (OSError, SewgenError):
         pass
 
 

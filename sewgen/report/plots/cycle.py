@@ -13,9 +13,8 @@ import math
 import numpy as np
 
 from sewgen.roles import FEED_DOG, HOOK_POINT, LOWER_LOOPER_TIP, NEEDLE_EYE, NEEDLE_POINT, THREAD_EYE, UPPER_LOOPER_TIP
-from sewgen.report.plots.common import new_figure, suptitle
+from sewgen.report.plots.common import DPI, new_figure, save, suptitle
 from sewgen.machine.timing import timing
-from sewgen.report.plots.common import DPI
 from sewgen.report.plots.thread import draw_thread_timing, thread_size
 
 ROWS = ("needle", "shuttle", "lower looper", "upper looper", "take-up", "feed dog")
@@ -146,19 +145,16 @@ def draw_cycle(fig, a):
 
 
 def write_timing_plots(tm, folder) -> list:
-    """cycle_diagram.png and, with a thread path, thread_control.png of ``tm`` into ``folder``; returns the paths."""
+    """cycle_diagram.png and, with a thread path, thread_control.png of ``tm`` into ``folder`` (which must exist);
+    returns the paths."""
     from pathlib import Path
 
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    out = []
     fig = new_figure(cycle_size(tm))
     draw_cycle_timing(fig, tm)
-    fig.savefig(folder / "cycle_diagram.png", dpi=DPI)
-    out.append(folder / "cycle_diagram.png")
+    out = [save(fig, folder / "cycle_diagram.png", dpi=DPI)]
     if tm.thread is not None:
         fig = new_figure(thread_size(tm))
         draw_thread_timing(fig, tm)
-        fig.savefig(folder / "thread_control.png", dpi=DPI)
-        out.append(folder / "thread_control.png")
+        out.append(save(fig, folder / "thread_control.png", dpi=DPI))
     return out
