@@ -357,7 +357,7 @@ def test_a_histogram_of_samples_one_rounding_apart_states_the_one_value(tmp_path
         np.histogram(noisy, bins=5)
     quantities = ["needle_stroke [mm]", "take_up_amount [mm]"]
     table = pd.DataFrame({"status": ["ok"] * 100, quantities[0]: noisy, quantities[1]: np.linspace(90.0, 92.0, 100)})
-    res = SimpleNamespace(table=table, stats=pd.DataFrame({"quantity": quantities}), machine="JB1-3",
+    res = SimpleNamespace(table=table, periods={}, stats=pd.DataFrame({"quantity": quantities}), machine="JB1-3",
                           nominal=pd.Series({quantities[0]: 16.7, quantities[1]: 91.0}), distribution="normal")
     (path,) = tolerance_plots(res, tmp_path)
     assert path == tmp_path / "histograms.png" and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
