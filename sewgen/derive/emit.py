@@ -108,10 +108,11 @@ def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, ker
 
 def observable_groups(mech: Mechanism, kin: Kinematics) -> list[int]:
     """Where each group of observables starts (and, last, their number): each point's POINT_FIELDS, each moving
-    body's BODY_FIELDS, each cam's arc index, in the manifest's order (kinematics._derive_observables). A sweep
-    that keeps a few outputs computes only their groups (kernel 'observe')."""
+    body's BODY_FIELDS, each cam's arc index, each spatial crank's centre-of-mass z (z, z_d, z_dd), in the
+    manifest's order (kinematics._derive_observables). A sweep that keeps a few outputs computes only their groups
+    (kernel 'observe')."""
     sizes = ([len(POINT_FIELDS)] * len(mech.points) + [len(BODY_FIELDS)] * sum(b.moving for b in mech.bodies)
-             + [1] * len(kin.cams))
+             + [1] * len(kin.cams) + [3] * len(kin.spatial_bodies))
     starts = [0]
     for k in sizes:
         starts.append(starts[-1] + k)

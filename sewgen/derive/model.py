@@ -151,17 +151,21 @@ class Mechanism:
                           guide=guide, input_index=len(self.inputs) - 1)
 
     def spatial_crank(self, name: str, axis_point, axis, phase="0 deg", sense: int = 1, ratio=1, reference=None,
-                      doc: str = "", mass="0 g", inertia="0 kg*m**2", role=None, planar: bool = False) -> Body:
+                      doc: str = "", mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None,
+                      planar: bool = False) -> Body:
         """A crank turned by the upper shaft about a fixed axis in space (seed 003's spatial four-bar: the crank
         of the needle or looper drive, whose shaft is not parallel to the rocker's).
 
         ``axis_point`` (x, y, z; the mechanism's plane is z = 0) is a point of the axis, ``axis`` its direction
         (three numbers, normalised here); the crank angle sense · ratio · phi + phase is measured about the axis
         from ``reference`` (three numbers; default: the machine's z axis, or x when the axis is along z) projected
-        into the plane the crank turns in. Its points are ``crank.pin(radius, along)``; its centre of mass is on
-        the axis and ``inertia`` is about the axis. In the force balance its rows are the in-plane components
-        of its bearings' resultant (reaction ``<name>.pivot`` at the axis point's projection) and the moment
-        about its own axis (the driving torque).
+        into the plane the crank turns in. Its points are ``crank.pin(radius, along)``. Its centre of mass lies in
+        that plane, through the axis point: ``com`` = (u, v), u along the crank (towards ``pin(radius)``), v a
+        quarter turn ahead about the axis (parameters ``<name>.com_u``, ``<name>.com_v``; default on the axis);
+        ``inertia`` is about the line through the centre of mass parallel to the axis (about the axis itself:
+        inertia + mass·(u² + v²)). In the force balance its rows are the in-plane components of its bearings'
+        resultant (reaction ``<name>.pivot`` at the axis point's projection) and the moment about its own axis
+        (the driving torque); its centre of mass's motion out of the plane is the observable ``<name>.com.z``.
 
         ``planar=True`` declares the planar equivalent instead (seed 003 computes its spatial four-bars so, eq. 1
         with α = 0): the crank's axis and the plane it turns in are turned, by the least rotation about the line
@@ -202,7 +206,7 @@ class Mechanism:
                 a, e1, e2 = (sp.simplify(rot * v) for v in (a, e1, e2))
             point = (point[0], point[1], sp.S.Zero)
         body = self.driven(name, self.ground.at(point[0], point[1]), phase=phase, sense=sense, doc=doc, mass=mass,
-                           inertia=inertia, role=role, ratio=ratio)
+                           com=com, inertia=inertia, role=role, ratio=ratio)
         body.axis = Axis(point, tuple(a), tuple(e1), tuple(e2))
         return body
 

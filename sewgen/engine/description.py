@@ -114,6 +114,7 @@ class Body:
     com_v: str | None = None
     inertia: str | None = None
     role: str | None = None
+    com_z: int | None = None  # a spatial crank's: the offset of its centre of mass's z, z_d, z_dd (off the plane)
 
 
 @dataclass(frozen=True)
@@ -336,8 +337,10 @@ def describe(manifest: dict | str) -> Description:
                      for i, b in enumerate(man["branches"]))
     points = tuple(Point(p["name"], p.get("doc", ""), int(p["offset"]), p.get("body"), p.get("role"))
                    for p in man["points"])
+    observable = {o["name"]: k for k, o in enumerate(man["observables"])}
     bodies = tuple(Body(b["name"], b["kind"], b.get("doc", ""), int(b["offset"]), role=b.get("role"),
-                        **_mass_params(b["name"], pnames)) for b in man["bodies"])
+                        com_z=observable.get(f"{b['name']}.com.z"), **_mass_params(b["name"], pnames))
+                   for b in man["bodies"])
     reactions = tuple(Reaction(r["name"], r["kind"], r["a"], r["b"], tuple(r["columns"]), int(r["offset"]),
                                bool(r["grounded"]), r.get("input"), r.get("sense", 1)) for r in man["reactions"])
     if "joints" in man:
