@@ -195,6 +195,29 @@ def unit_of(text: str) -> str:
     return parts[1] if len(parts) == 2 else ""
 
 
+# -- physical limits ------------------------------------------------------------------------------------------------
+
+#: The largest Coulomb friction coefficient a joint or bearing may be given. Oiled pins and slides run at about
+#: 0.05-0.15, dry steel on steel at 0.6-0.8 (engineering handbooks' tables of friction coefficients); 1 covers every
+#: pair in a sewing machine. Far above it a pin's friction moment μ·r·|F| outgrows what drives the pin (the
+#: joint self-locks) and the Coulomb balance the kernels iterate has no solution: refused, never iterated.
+FRICTION_MAX = 1.0
+
+#: The largest gravity a run may be given (m/s²): 10 g, beyond any machine's standing on Earth (9.80665). A larger
+#: value is a slip of the units (or an overflow: 1e308 m/s² times a mass is infinite), refused with its name.
+GRAVITY_MAX = 100.0
+
+
+def range_problem(value: float, minimum=None, maximum=None, unit: str = "") -> str | None:
+    """What is wrong with ``value`` (SI) against a physical range [``minimum``, ``maximum``] (None: open), or None."""
+    shown = f"{value!r}{' ' + unit if unit else ''}"
+    if minimum is not None and not value >= minimum:
+        return f"must be at least {minimum:g}{' ' + unit if unit else ''}, got {shown}"
+    if maximum is not None and not value <= maximum:
+        return f"must be at most {maximum:g}{' ' + unit if unit else ''}, got {shown}"
+    return None
+
+
 # -- sweeps of one revolution ------------------------------------------------------------------------------------
 
 #: The most positions a sweep of one revolution may have (a step of at least 0.0036°): a larger sweep would need

@@ -88,7 +88,9 @@ def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, ker
                    for i in mech.inputs],
         "params": [{"name": p.name, "kind": p.kind, "unit": p.unit, "default": p.default,
                     "display_unit": p.display_unit, "positive": p.positive, "doc": p.doc,
-                    "role": role("param", p.name)} for p in mech.params],
+                    "role": role("param", p.name),
+                    **{k: v for k, v in (("minimum", p.minimum), ("maximum", p.maximum)) if v is not None}}
+                   for p in mech.params],
         "roles": {r: {"kind": kind, "name": name} for r, (kind, name) in sorted(mech.roles.items())},
         "points": points,
         "point_fields": POINT_FIELDS,

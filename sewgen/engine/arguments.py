@@ -11,7 +11,7 @@ import numpy as np
 
 from sewgen import abi
 from sewgen.errors import ParameterError
-from sewgen.units import UnitError, to_si
+from sewgen.units import UnitError, range_problem, to_si
 
 #: Parameter kinds that must not be negative.
 NONNEGATIVE = {"mass", "inertia"}
@@ -36,6 +36,19 @@ def vector(mechanism: str, what: str, value, n: int) -> np.ndarray:
     if not np.isfinite(arr).all():
         raise ParameterError(mechanism, what, "must be finite")
     return arr
+
+
+def parameter_problem(spec, value: float) -> str | None:
+    """What is wrong with ``value`` (SI, finite) for the parameter ``spec`` (a description.Parameter), or None:
+    positive where it is declared so, not negative for a mass or an inertia, within its physical range (a friction
+    coefficient's [0, 1], a damper's or a spring's [0, ∞): the declaration's ``minimum`` and ``maximum``). The one
+    check of a parameter's value, whichever way it comes (params=, a model file, a design table)."""
+    if spec.positive and not value > 0:
+        return f"must be positive, got {value!r} {spec.unit}"
+    if spec.kind in NONNEGATIVE and value < 0:
+        return f"must not be negative, got {value!r} {spec.unit}"
+    problem = range_problem(value, spec.minimum, spec.maximum, spec.unit)
+    return None if problem is None else f"{problem} ({spec.doc})"
 
 
 def mapping(mechanism: str, what: str, value) -> Mapping:

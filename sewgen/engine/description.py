@@ -34,6 +34,8 @@ class Parameter:
     doc: str
     positive: bool
     role: str | None = None
+    minimum: float | None = None  # the physical range of its values (SI; None: open), e.g. a friction coefficient's
+    maximum: float | None = None
 
 
 @dataclass(frozen=True)
@@ -328,7 +330,8 @@ def describe(manifest: dict | str) -> Description:
     """The :class:`Description` of a manifest (the dict, or its JSON text)."""
     man = json.loads(manifest) if isinstance(manifest, str) else manifest
     params = tuple(Parameter(i, p["name"], p["kind"], p["unit"], float(p["default"]), p["display_unit"], p["doc"],
-                             bool(p["positive"]), p.get("role")) for i, p in enumerate(man["params"]))
+                             bool(p["positive"]), p.get("role"), p.get("minimum"), p.get("maximum"))
+                   for i, p in enumerate(man["params"]))
     pnames = {p.name for p in params}
     coords = tuple(Coordinate(i, c["name"], c["unit"], float(c["guess"])) for i, c in enumerate(man["coords"]))
     inputs = tuple(Input(i, x["name"], x["kind"], x["unit"], float(x["default"]), x.get("display_unit", x["unit"]),

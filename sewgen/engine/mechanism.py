@@ -26,7 +26,7 @@ import numpy as np
 
 from sewgen import abi
 from sewgen.engine import designs as many_designs
-from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, mapping, pointer, request, si, vector
+from sewgen.engine.arguments import DEFAULT_MAX_ITER, mapping, parameter_problem, pointer, request, si, vector
 from sewgen.engine.description import describe
 from sewgen.errors import AssemblyError, InputError, ParameterError, SingularPositionError
 from sewgen.engine.forces import ForceAnalysis, RunSettings
@@ -244,10 +244,9 @@ class Mechanism:
         out = np.empty(len(desc.params))
         for spec in desc.params:
             v = si(desc.name, values[spec.name], spec.kind, spec.name)
-            if spec.positive and not v > 0:
-                raise ParameterError(desc.name, spec.name, f"must be positive, got {v!r} {spec.unit}")
-            if spec.kind in NONNEGATIVE and v < 0:
-                raise ParameterError(desc.name, spec.name, f"must not be negative, got {v!r} {spec.unit}")
+            problem = parameter_problem(spec, v)
+            if problem:
+                raise ParameterError(desc.name, spec.name, problem)
             out[spec.index] = v
         return out
 
