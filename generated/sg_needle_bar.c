@@ -423,7 +423,7 @@ int sg_needle_bar_forces(const double *q, const double *cq, const double *x, con
             double d = 0.0, s = 0.0;
             for (int k = 0; k < 3; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
             if (!(d <= 1e-13 * s)) {
-                if (it >= 100) return SG_NO_CONVERGENCE;
+                if (it >= 100) return SG_FRICTION_LOCK;
                 for (int k = 0; k < 3; ++k) fr[k] = frn[k];
                 continue;
             }

@@ -224,3 +224,21 @@ def test_element_declarations_are_checked():
         m.torsion_spring(m.ground.line(), "1 N*m/rad", name="t")
     with pytest.raises(UnitError, match=r"wrong_unit\.stiffness: .1 N. is not a stiffness"):
         m.spring(crank.at(0, 0), m.ground.at(0, 0), "1 N", "1 mm", name="wrong_unit")
+    # values no spring or damper has (each was accepted: a negative damper drives the mechanism)
+    with pytest.raises(DeclarationError, match=r"d1\.coefficient.* at least 0"):
+        m.damper(crank.at(0, 0), m.ground.at(0, 0), "-3 N*s/m", name="d1")
+    with pytest.raises(DeclarationError, match=r"s1\.free_length.* at least 0"):
+        m.spring(crank.at(0, 0), m.ground.at(0, 0), "1 N/m", "-1 mm", name="s1")
+    with pytest.raises(DeclarationError, match=r"s2\.stiffness.* at least 0"):
+        m.spring(crank.at(0, 0), m.ground.at(0, 0), -5.0, "1 mm", name="s2")
+
+
+@pytest.mark.parametrize("params, words", [({"damper.coefficient": -3.0}, "at least 0 N*s/m"),
+                                           ({"spring.free_length": -0.01}, "at least 0 m"),
+                                           ({"spring.stiffness": -500.0}, "at least 0 N/m")])
+def test_element_values_out_of_range_are_refused(crank, params, words):
+    """A negative damper coefficient made the damper a motor (positive load power); a negative free length is no
+    spring's. Each is refused naming the parameter, as params= gives it."""
+    with pytest.raises(sewgen.ParameterError, match=words.replace("*", r"\*")) as info:
+        crank.kinetostatics(np.radians(np.arange(0, 360, 5.0)), speed=W, params=params)
+    assert info.value.parameter == next(iter(params))

@@ -26,7 +26,8 @@ import numpy as np
 
 from sewgen import abi
 from sewgen.engine import designs as many_designs
-from sewgen.engine.arguments import DEFAULT_MAX_ITER, mapping, parameter_problem, pointer, request, si, vector
+from sewgen.engine.arguments import (DEFAULT_MAX_ITER, check_gravity, check_shaft_angles, mapping,
+                                     parameter_problem, pointer, request, si, vector)
 from sewgen.engine.description import describe
 from sewgen.errors import AssemblyError, InputError, ParameterError, SingularPositionError
 from sewgen.engine.forces import ForceAnalysis, RunSettings
@@ -348,6 +349,7 @@ class Mechanism:
         phi_v = self._series("shaft angle", phi_arr, n, "angle")
         if degrees:
             phi_v = np.radians(phi_v)
+        check_shaft_angles(self.name, phi_v, degrees)  # the angles' own checks (sewgen.engine.arguments)
         omega = self._series("speed", self.default_speed if speed is None else speed, n, "speed")
         alpha = self._series("angular acceleration", accel, n, "angular_acceleration")
         if not isinstance(max_iter, (int, np.integer)) or isinstance(max_iter, (bool, np.bool_)) \
@@ -381,7 +383,7 @@ class Mechanism:
         settings = None
         if forces:
             arrays["frc"] = (n, sizes["nfo"])
-            g = si(self.name, gravity, "acceleration", "gravity")
+            g = check_gravity(self.name, si(self.name, gravity, "acceleration", "gravity"))
             g_dir = si(self.name, gravity_direction, "angle", "gravity_direction")
             gx, gy = g * math.cos(g_dir), g * math.sin(g_dir)
             tiny = 1e-15 * abs(g)  # -90 deg is exactly -y, not (6e-16, -g)

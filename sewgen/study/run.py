@@ -362,12 +362,16 @@ def influence(machine, params, ranges, steps: int = 11, options: StudyOptions | 
 # -- tolerance ------------------------------------------------------------------------------------------------
 
 def parse_tolerance(key: DesignKey, text: str, option: str = "--tolerance") -> float:
-    """"±0.02mm", "+-0.02 mm", "0.02 mm", "±1%" -> the half-width in SI (≥ 0)."""
+    """"±0.02mm", "+-0.02 mm", "+/-0.02 mm", "±1%" -> the half-width in SI (≥ 0). The ± is required: "0.02 mm"
+    alone could be a half-width, a full width or a one-sided limit, so it is refused naming the key."""
     t = str(text).strip()
     for pre in ("±", "+-", "+/-"):
         if t.startswith(pre):
             t = t[len(pre):].strip()
             break
+    else:
+        raise StudyError(option, f'{key.key}: "{text}" has no ±: write the tolerance as a half-width, e.g. '
+                                 f'"±{t}" (or "+-{t}", "±1%")')
     if t.endswith("%"):
         try:
             return abs(key.nominal) * float(t[:-1]) / 100.0
