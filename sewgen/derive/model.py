@@ -322,8 +322,8 @@ class Mechanism:
         preload + stiffness·(length − free_length), positive when it pulls the points together. Values are
         quantity strings ("1.2 N/mm", "30 mm", "2 N": parameters ``<name>.stiffness`` …) or expressions."""
         return self._element("spring", name, a, b, values={
-            "stiffness": ("stiffness", stiffness, _NOT_NEGATIVE), "free_length": ("length", free_length, _NOT_NEGATIVE),
-            "preload": ("force", preload)}, doc=doc)
+            "stiffness": ("stiffness", stiffness, _NOT_NEGATIVE),
+            "free_length": ("length", free_length, _NOT_NEGATIVE), "preload": ("force", preload)}, doc=doc)
 
     def damper(self, a: Attachment, b: Attachment, coefficient, *, name: str, doc: str = ""):
         """A linear viscous damper from ``a`` to ``b``: tension coefficient·(d length/dt)."""
@@ -333,7 +333,8 @@ class Mechanism:
     def torsion_spring(self, joint: Joint, stiffness, free_angle="0 deg", preload="0 N*m", *, name: str,
                        doc: str = ""):
         """A torsion spring at revolute ``joint``: torque preload + stiffness·((θ_b − θ_a) − free_angle) acts on
-        the joint's body b as −T and on its body a as +T (the deflection is taken in (−180°, 180°])."""
+        the joint's body b as −T and on its body a as +T; the deflection is the continuous relative rotation (a
+        spring on a pin that turns right round winds a turn per turn; derive.elements.TorsionSpring.deflection)."""
         return self._element("torsion_spring", name, joint=joint, values={
             "stiffness": ("torsional_stiffness", stiffness, _NOT_NEGATIVE), "free_angle": ("angle", free_angle),
             "preload": ("torque", preload)}, doc=doc)
