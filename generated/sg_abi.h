@@ -14,7 +14,8 @@ enum sg_status {
     SG_NO_CONVERGENCE = 5, /* Newton ran out of iterations */
     SG_NONFINITE = 6, /* a result came out non-finite (the motion kernel tests every output) */
     SG_BAD_ARGUMENT = 7, /* sizes or options out of range: nothing was computed */
-    SG_BAD_DESIGN = 8 /* batched designs: a design's parameter or held input is not finite or out of range, a branch sign is not +1 or -1, or a dimension derived from its parameters is not real; the design is skipped (Python names the parameter) */
+    SG_BAD_DESIGN = 8, /* batched designs: a design's parameter or held input is not finite or out of range, a branch sign is not +1 or -1, or a dimension derived from its parameters is not real; the design is skipped (Python names the parameter) */
+    SG_FRICTION_LOCK = 9 /* Coulomb friction does not settle: the friction loads, iterated with the reactions, do not converge in the kernel's iterations (a joint at or near self-locking, as a slide whose friction outgrows its drive) */
 };
 
 /* The runtime's fixed sizes (sewgen.abi.LIMITS). */

@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_loopers_constants -- Total ops: 113 */
+/* sg_overlock_loopers_constants -- Total ops: 118 */
 void sg_overlock_loopers_constants(const double *p, double *c)
 {
     const double t0 = sin(p[14]);
@@ -90,10 +90,10 @@ void sg_overlock_loopers_constants(const double *p, double *c)
     c[44] = t23;
     c[45] = -t22;
     c[46] = p[14];
-    c[47] = p[16];
+    c[47] = -p[16];
     c[48] = -p[17];
     c[49] = p[17];
-    c[50] = -p[16];
+    c[50] = p[16];
     c[51] = p[20];
     c[52] = -p[21];
     c[53] = p[21];
@@ -123,11 +123,11 @@ void sg_overlock_loopers_constants(const double *p, double *c)
     c[77] = -t31;
     c[78] = t31;
     c[79] = p[25];
-    c[80] = p[18];
-    c[81] = t2*t27;
-    c[82] = -t28;
-    c[83] = p[15];
-    c[84] = t27;
+    c[80] = p[15];
+    c[81] = t27;
+    c[82] = p[15]*(((p[16])*(p[16])) + ((p[17])*(p[17]))) + p[18];
+    c[83] = t2*t27;
+    c[84] = -t28;
     c[85] = -t27;
     c[86] = p[23];
     c[87] = t28;
@@ -248,7 +248,7 @@ void sg_overlock_loopers_blocks(const double *jac, double *out)
     }
 }
 
-/* sg_overlock_loopers_motion -- Total ops: 216 */
+/* sg_overlock_loopers_motion -- Total ops: 215 */
 int sg_overlock_loopers_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[26]*(c[0]*cq[0] + c[18]);
@@ -265,8 +265,8 @@ int sg_overlock_loopers_motion(const double *q, const double *cq, const double *
     const double t17 = c[39]*cq[0] + c[41]*cq[1];
     const double t18 = c[42]*cq[2] + c[43]*cq[3];
     const double t19 = c[43]*cq[2] + c[45]*cq[3];
-    const double t20 = c[47]*t7 + c[48]*t1;
-    const double t21 = c[48]*t7 + c[50]*t1;
+    const double t20 = c[47]*t1 + c[48]*t7;
+    const double t21 = c[47]*t7 + c[49]*t1;
     const double t22 = ((xd[0])*(xd[0]));
     const double t23 = c[51]*cq[0] + c[52]*cq[1];
     const double t24 = c[52]*cq[0] + c[54]*cq[1];
@@ -318,12 +318,12 @@ int sg_overlock_loopers_motion(const double *q, const double *cq, const double *
     obs[12] = c[46] + x[0];
     obs[13] = xd[0];
     obs[14] = xdd[0];
-    obs[15] = c[0] + t20;
-    obs[16] = c[1] + c[47]*t1 + c[49]*t7;
-    obs[17] = t21*xd[0];
-    obs[18] = t20*xd[0];
-    obs[19] = t21*xdd[0] + t22*(c[49]*t1 + c[50]*t7);
-    obs[20] = t20*xdd[0] + t21*t22;
+    obs[15] = c[0];
+    obs[16] = c[1] + t20;
+    obs[17] = 0.0;
+    obs[18] = t21*xd[0];
+    obs[19] = 0.0;
+    obs[20] = t21*xdd[0] + t22*(c[49]*t7 + c[50]*t1);
     obs[21] = q[0];
     obs[22] = qd[0];
     obs[23] = qdd[0];
@@ -351,7 +351,10 @@ int sg_overlock_loopers_motion(const double *q, const double *cq, const double *
     obs[45] = qd[1]*t27;
     obs[46] = qdd[1]*t28 + t11*(c[59]*cq[3] + c[60]*cq[2]);
     obs[47] = qdd[1]*t27 + t11*t28;
-    if (!isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + ((qdd[1] + (qdd[2] + obs[0])) + ((obs[1] + obs[2]) + (obs[3] + obs[4])))) + (((obs[5] + (obs[6] + obs[7])) + ((obs[8] + obs[9]) + (obs[10] + obs[11]))) + ((obs[12] + (obs[13] + obs[14])) + ((obs[15] + obs[16]) + (obs[17] + obs[18]))))) + ((((obs[19] + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + obs[25]))) + ((obs[26] + (obs[27] + obs[28])) + ((obs[29] + obs[30]) + (obs[31] + obs[32])))) + (((obs[33] + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39]))) + (((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47])))))))) return SG_NONFINITE;
+    obs[48] = c[48]*t1 + c[50]*t7;
+    obs[49] = t20*xd[0];
+    obs[50] = t20*xdd[0] + t21*t22;
+    if (!isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + ((obs[9] + obs[10]) + (obs[11] + obs[12]))) + (((obs[13] + obs[14]) + (obs[15] + obs[16])) + ((obs[17] + obs[18]) + (obs[19] + obs[20]))))) + ((((obs[21] + (obs[22] + obs[23])) + ((obs[24] + obs[25]) + (obs[26] + obs[27]))) + (((obs[28] + obs[29]) + (obs[30] + obs[31])) + ((obs[32] + obs[33]) + (obs[34] + obs[35])))) + (((obs[36] + (obs[37] + obs[38])) + ((obs[39] + obs[40]) + (obs[41] + obs[42]))) + (((obs[43] + obs[44]) + (obs[45] + obs[46])) + ((obs[47] + obs[48]) + (obs[49] + obs[50])))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
@@ -402,7 +405,7 @@ int sg_overlock_loopers_rates(const double *q, const double *cq, const double *x
     return SG_OK;
 }
 
-/* sg_overlock_loopers_observe -- Total ops: 159 */
+/* sg_overlock_loopers_observe -- Total ops: 171 */
 int sg_overlock_loopers_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
 {
     switch (group) {
@@ -433,18 +436,18 @@ int sg_overlock_loopers_observe(const double *q, const double *cq, const double 
     case 2: {
         const double t1 = c[2]*cx[0] + c[3]*cx[1];
         const double t7 = c[3]*cx[0] + c[6]*cx[1];
-        const double t20 = c[47]*t7 + c[48]*t1;
-        const double t21 = c[48]*t7 + c[50]*t1;
+        const double t20 = c[47]*t1 + c[48]*t7;
+        const double t21 = c[47]*t7 + c[49]*t1;
         const double t22 = ((xd[0])*(xd[0]));
         obs[12] = c[46] + x[0];
         obs[13] = xd[0];
         obs[14] = xdd[0];
-        obs[15] = c[0] + t20;
-        obs[16] = c[1] + c[47]*t1 + c[49]*t7;
-        obs[17] = t21*xd[0];
-        obs[18] = t20*xd[0];
-        obs[19] = t21*xdd[0] + t22*(c[49]*t1 + c[50]*t7);
-        obs[20] = t20*xdd[0] + t21*t22;
+        obs[15] = c[0];
+        obs[16] = c[1] + t20;
+        obs[17] = 0.0;
+        obs[18] = t21*xd[0];
+        obs[19] = 0.0;
+        obs[20] = t21*xdd[0] + t22*(c[49]*t7 + c[50]*t1);
         return isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20]))))) ? SG_OK : SG_NONFINITE;
     }
     case 3: {
@@ -498,12 +501,23 @@ int sg_overlock_loopers_observe(const double *q, const double *cq, const double 
         obs[47] = qdd[1]*t27 + t11*t28;
         return isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) ? SG_OK : SG_NONFINITE;
     }
+    case 6: {
+        const double t1 = c[2]*cx[0] + c[3]*cx[1];
+        const double t7 = c[3]*cx[0] + c[6]*cx[1];
+        const double t20 = c[47]*t1 + c[48]*t7;
+        const double t21 = c[47]*t7 + c[49]*t1;
+        const double t22 = ((xd[0])*(xd[0]));
+        obs[48] = c[48]*t1 + c[50]*t7;
+        obs[49] = t20*xd[0];
+        obs[50] = t20*xdd[0] + t21*t22;
+        return isfinite((obs[48] + (obs[49] + obs[50]))) ? SG_OK : SG_NONFINITE;
+    }
     default:
         return SG_BAD_ARGUMENT;
     }
 }
 
-/* sg_overlock_loopers_forces -- Total ops: 209 */
+/* sg_overlock_loopers_forces -- Total ops: 211 */
 int sg_overlock_loopers_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)q;
@@ -517,10 +531,10 @@ int sg_overlock_loopers_forces(const double *q, const double *cq, const double *
     const double t6 = c[70]*(-gv[1] + obs[29]) - ld[1];
     const double t7 = c[79]*(-gv[0] + obs[46]) - ld[2];
     const double t8 = c[79]*(-gv[1] + obs[47]) - ld[3];
-    const double t9 = c[3]*cx[0] + c[6]*cx[1];
+    const double t9 = c[0]*cq[0] + c[18];
     const double t10 = c[0]*cq[1] + c[19] + c[20]*t0;
-    const double t11 = c[0]*cq[0] + c[18];
-    const double t12 = c[85]*t11;
+    const double t11 = c[3]*cx[0] + c[6]*cx[1];
+    const double t12 = c[85]*t9;
     const double t13 = c[85]*t10;
     {
         /* block of unknowns 9, 10 */
@@ -548,18 +562,18 @@ int sg_overlock_loopers_forces(const double *q, const double *cq, const double *
     out[2] = -out[4]*t12 + out[5] + t5;
     out[8] = -out[10] + t8;
     out[7] = -out[9] + t7;
-    out[1] = c[83]*(-gv[1] + obs[20]) - c[84]*out[4]*t10;
-    out[0] = c[83]*(-gv[0] + obs[19]) - c[84]*out[4]*t11;
-    out[11] = c[80]*obs[14] - out[0]*(c[47]*t0 + c[49]*t9) - out[1]*(c[49]*t0 + c[50]*t9) - out[4]*(c[81]*t0*t9 + c[82]*t10*t9) - ld[4];
+    out[11] = c[80]*gv[1]*(c[48]*t0 + c[50]*t11) + c[82]*obs[14] - out[4]*(c[83]*t0*t11 + c[84]*t10*t11) - ld[4];
+    out[1] = c[80]*(-gv[1] + obs[20]) - c[81]*out[4]*t10;
+    out[0] = c[80]*(-gv[0] + obs[19]) - c[81]*out[4]*t9;
     out[12] = out[11];
     out[13] = out[11]*xd[0];
     out[14] = out[4]*t12;
     out[15] = out[4]*t13;
-    out[16] = c[87]*out[4]*t9;
+    out[16] = c[87]*out[4]*t11;
     out[17] = out[0] + out[2] + out[7];
     out[18] = out[1] + out[3] + out[8];
     out[19] = c[0]*out[1] + c[12]*out[8] + c[19]*out[0] + c[25]*out[7] + out[11];
-    out[20] = c[88]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18]))) + c[89]*((obs[13])*(obs[13])) + c[90]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[91]*((obs[22])*(obs[22])) + c[92]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[93]*((obs[31])*(obs[31])) + c[94]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[95]*((obs[40])*(obs[40]));
+    out[20] = c[88]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[89]*((obs[13])*(obs[13])) + c[90]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[91]*((obs[22])*(obs[22])) + c[92]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[93]*((obs[31])*(obs[31])) + c[94]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[95]*((obs[40])*(obs[40]));
     out[21] = c[71]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[96]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[97]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[98]*(gv[0]*obs[42] + gv[1]*obs[43]);
     out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
     out[23] = 0.0;
@@ -573,7 +587,7 @@ void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const d
     (void)q;
     (void)x;
     const double t0 = c[0]*cq[0] + c[18];
-    const double t1 = c[84]*t0;
+    const double t1 = c[81]*t0;
     const double t2 = c[2]*cx[0] + c[3]*cx[1];
     const double t3 = c[0]*cq[1] + c[19] + c[20]*t2;
     const double t4 = c[3]*cx[0] + c[6]*cx[1];
@@ -587,10 +601,8 @@ void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const d
     A[0] = 1.0;
     A[4] = t1;
     A[13] = 1.0;
-    A[16] = c[84]*t3;
-    A[24] = c[47]*t2 + c[49]*t4;
-    A[25] = c[49]*t2 + c[50]*t4;
-    A[28] = c[81]*t2*t4 + c[82]*t3*t4;
+    A[16] = c[81]*t3;
+    A[28] = c[83]*t2*t4 + c[84]*t3*t4;
     A[35] = 1.0;
     A[38] = 1.0;
     A[40] = c[85]*t0;
@@ -619,9 +631,9 @@ void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const d
     A[140] = c[60]*cq[2] + t10;
     A[141] = c[103]*cq[3] + t9;
     A[142] = c[104]*cq[2] + t10;
-    b[0] = c[83]*(-gv[0] + obs[19]);
-    b[1] = c[83]*(-gv[1] + obs[20]);
-    b[2] = c[80]*obs[14] - ld[4];
+    b[0] = c[80]*(-gv[0] + obs[19]);
+    b[1] = c[80]*(-gv[1] + obs[20]);
+    b[2] = c[80]*gv[1]*(c[48]*t2 + c[50]*t4) + c[82]*obs[14] - ld[4];
     b[3] = c[70]*(-gv[0] + obs[28]) - ld[0];
     b[4] = c[70]*(-gv[1] + obs[29]) - ld[1];
     b[5] = c[66]*obs[23] - ld[0]*(c[67]*cq[0] + c[68]*cq[1]) - ld[1]*(c[67]*cq[1] + c[69]*cq[0]) - ld[5];
@@ -633,7 +645,7 @@ void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const d
     b[11] = c[75]*obs[41] - ld[2]*(c[76]*cq[2] + c[77]*cq[3]) - ld[3]*(c[76]*cq[3] + c[78]*cq[2]) - ld[7];
 }
 
-/* sg_overlock_loopers_anchors -- Total ops: 64 */
+/* sg_overlock_loopers_anchors -- Total ops: 60 */
 void sg_overlock_loopers_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
 {
     (void)q;
@@ -641,7 +653,6 @@ void sg_overlock_loopers_anchors(const double *q, const double *cq, const double
     const double t0 = c[2]*cx[0] + c[3]*cx[1];
     const double t1 = c[10]*cq[1] + c[9]*cq[0];
     const double t2 = c[11]*cq[0] + c[9]*cq[1];
-    const double t3 = c[3]*cx[0] + c[6]*cx[1];
     out[0] = c[0];
     out[1] = c[1];
     out[2] = c[0];
@@ -670,8 +681,8 @@ void sg_overlock_loopers_anchors(const double *q, const double *cq, const double
     out[25] = c[38]*cq[1] + c[40]*cq[0];
     out[26] = c[12] + c[42]*cq[2] + c[43]*cq[3];
     out[27] = c[13] + c[42]*cq[3] + c[44]*cq[2];
-    out[28] = c[0] + c[47]*t3 + c[48]*t0;
-    out[29] = c[1] + c[47]*t0 + c[49]*t3;
+    out[28] = c[0];
+    out[29] = c[1] + c[47]*t0 + c[48]*(c[3]*cx[0] + c[6]*cx[1]);
     out[30] = c[51]*cq[0] + c[52]*cq[1];
     out[31] = c[51]*cq[1] + c[53]*cq[0];
     out[32] = c[55]*cq[4] + t1;
@@ -742,8 +753,8 @@ SG_VINLINE sg_vm sg_overlock_loopers_motion_v(const sg_vd *q, const sg_vd *cq, c
     const sg_vd t17 = c[39]*cq[0] + c[41]*cq[1];
     const sg_vd t18 = c[42]*cq[2] + c[43]*cq[3];
     const sg_vd t19 = c[43]*cq[2] + c[45]*cq[3];
-    const sg_vd t20 = c[47]*t7 + c[48]*t1;
-    const sg_vd t21 = c[48]*t7 + c[50]*t1;
+    const sg_vd t20 = c[47]*t1 + c[48]*t7;
+    const sg_vd t21 = c[47]*t7 + c[49]*t1;
     const sg_vd t22 = ((xd[0])*(xd[0]));
     const sg_vd t23 = c[51]*cq[0] + c[52]*cq[1];
     const sg_vd t24 = c[52]*cq[0] + c[54]*cq[1];
@@ -795,12 +806,12 @@ SG_VINLINE sg_vm sg_overlock_loopers_motion_v(const sg_vd *q, const sg_vd *cq, c
     obs[12] = c[46] + x[0];
     obs[13] = xd[0];
     obs[14] = xdd[0];
-    obs[15] = c[0] + t20;
-    obs[16] = c[1] + c[47]*t1 + c[49]*t7;
-    obs[17] = t21*xd[0];
-    obs[18] = t20*xd[0];
-    obs[19] = t21*xdd[0] + t22*(c[49]*t1 + c[50]*t7);
-    obs[20] = t20*xdd[0] + t21*t22;
+    obs[15] = sgv_set1(c[0]);
+    obs[16] = c[1] + t20;
+    obs[17] = sgv_set1(0.0);
+    obs[18] = t21*xd[0];
+    obs[19] = sgv_set1(0.0);
+    obs[20] = t21*xdd[0] + t22*(c[49]*t7 + c[50]*t1);
     obs[21] = q[0];
     obs[22] = qd[0];
     obs[23] = qdd[0];
@@ -828,7 +839,10 @@ SG_VINLINE sg_vm sg_overlock_loopers_motion_v(const sg_vd *q, const sg_vd *cq, c
     obs[45] = qd[1]*t27;
     obs[46] = qdd[1]*t28 + t11*(c[59]*cq[3] + c[60]*cq[2]);
     obs[47] = qdd[1]*t27 + t11*t28;
-    ok &= sgv_isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + ((qdd[1] + (qdd[2] + obs[0])) + ((obs[1] + obs[2]) + (obs[3] + obs[4])))) + (((obs[5] + (obs[6] + obs[7])) + ((obs[8] + obs[9]) + (obs[10] + obs[11]))) + ((obs[12] + (obs[13] + obs[14])) + ((obs[15] + obs[16]) + (obs[17] + obs[18]))))) + ((((obs[19] + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + obs[25]))) + ((obs[26] + (obs[27] + obs[28])) + ((obs[29] + obs[30]) + (obs[31] + obs[32])))) + (((obs[33] + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39]))) + (((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47])))))));
+    obs[48] = c[48]*t1 + c[50]*t7;
+    obs[49] = t20*xd[0];
+    obs[50] = t20*xdd[0] + t21*t22;
+    ok &= sgv_isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + ((obs[9] + obs[10]) + (obs[11] + obs[12]))) + (((obs[13] + obs[14]) + (obs[15] + obs[16])) + ((obs[17] + obs[18]) + (obs[19] + obs[20]))))) + ((((obs[21] + (obs[22] + obs[23])) + ((obs[24] + obs[25]) + (obs[26] + obs[27]))) + (((obs[28] + obs[29]) + (obs[30] + obs[31])) + ((obs[32] + obs[33]) + (obs[34] + obs[35])))) + (((obs[36] + (obs[37] + obs[38])) + ((obs[39] + obs[40]) + (obs[41] + obs[42]))) + (((obs[43] + obs[44]) + (obs[45] + obs[46])) + ((obs[47] + obs[48]) + (obs[49] + obs[50])))))));
     return ok;
 }
 
@@ -908,18 +922,18 @@ SG_VINLINE sg_vm sg_overlock_loopers_observe_v(const sg_vd *q, const sg_vd *cq, 
     case 2: {
         const sg_vd t1 = c[2]*cx[0] + c[3]*cx[1];
         const sg_vd t7 = c[3]*cx[0] + c[6]*cx[1];
-        const sg_vd t20 = c[47]*t7 + c[48]*t1;
-        const sg_vd t21 = c[48]*t7 + c[50]*t1;
+        const sg_vd t20 = c[47]*t1 + c[48]*t7;
+        const sg_vd t21 = c[47]*t7 + c[49]*t1;
         const sg_vd t22 = ((xd[0])*(xd[0]));
         obs[12] = c[46] + x[0];
         obs[13] = xd[0];
         obs[14] = xdd[0];
-        obs[15] = c[0] + t20;
-        obs[16] = c[1] + c[47]*t1 + c[49]*t7;
-        obs[17] = t21*xd[0];
-        obs[18] = t20*xd[0];
-        obs[19] = t21*xdd[0] + t22*(c[49]*t1 + c[50]*t7);
-        obs[20] = t20*xdd[0] + t21*t22;
+        obs[15] = sgv_set1(c[0]);
+        obs[16] = c[1] + t20;
+        obs[17] = sgv_set1(0.0);
+        obs[18] = t21*xd[0];
+        obs[19] = sgv_set1(0.0);
+        obs[20] = t21*xdd[0] + t22*(c[49]*t7 + c[50]*t1);
         return sgv_isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20])))));
     }
     case 3: {
@@ -973,6 +987,17 @@ SG_VINLINE sg_vm sg_overlock_loopers_observe_v(const sg_vd *q, const sg_vd *cq, 
         obs[47] = qdd[1]*t27 + t11*t28;
         return sgv_isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47])))));
     }
+    case 6: {
+        const sg_vd t1 = c[2]*cx[0] + c[3]*cx[1];
+        const sg_vd t7 = c[3]*cx[0] + c[6]*cx[1];
+        const sg_vd t20 = c[47]*t1 + c[48]*t7;
+        const sg_vd t21 = c[47]*t7 + c[49]*t1;
+        const sg_vd t22 = ((xd[0])*(xd[0]));
+        obs[48] = c[48]*t1 + c[50]*t7;
+        obs[49] = t20*xd[0];
+        obs[50] = t20*xdd[0] + t21*t22;
+        return sgv_isfinite((obs[48] + (obs[49] + obs[50])));
+    }
     default:
         return sgv_false();
     }
@@ -992,10 +1017,10 @@ SG_VINLINE sg_vm sg_overlock_loopers_forces_v(const sg_vd *q, const sg_vd *cq, c
     const sg_vd t6 = c[70]*(-gv[1] + obs[29]) - ld[1];
     const sg_vd t7 = c[79]*(-gv[0] + obs[46]) - ld[2];
     const sg_vd t8 = c[79]*(-gv[1] + obs[47]) - ld[3];
-    const sg_vd t9 = c[3]*cx[0] + c[6]*cx[1];
+    const sg_vd t9 = c[0]*cq[0] + c[18];
     const sg_vd t10 = c[0]*cq[1] + c[19] + c[20]*t0;
-    const sg_vd t11 = c[0]*cq[0] + c[18];
-    const sg_vd t12 = c[85]*t11;
+    const sg_vd t11 = c[3]*cx[0] + c[6]*cx[1];
+    const sg_vd t12 = c[85]*t9;
     const sg_vd t13 = c[85]*t10;
     {
         /* block of unknowns 9, 10 */
@@ -1023,18 +1048,18 @@ SG_VINLINE sg_vm sg_overlock_loopers_forces_v(const sg_vd *q, const sg_vd *cq, c
     out[2] = -out[4]*t12 + out[5] + t5;
     out[8] = -out[10] + t8;
     out[7] = -out[9] + t7;
-    out[1] = c[83]*(-gv[1] + obs[20]) - c[84]*out[4]*t10;
-    out[0] = c[83]*(-gv[0] + obs[19]) - c[84]*out[4]*t11;
-    out[11] = c[80]*obs[14] - out[0]*(c[47]*t0 + c[49]*t9) - out[1]*(c[49]*t0 + c[50]*t9) - out[4]*(c[81]*t0*t9 + c[82]*t10*t9) - ld[4];
+    out[11] = c[80]*gv[1]*(c[48]*t0 + c[50]*t11) + c[82]*obs[14] - out[4]*(c[83]*t0*t11 + c[84]*t10*t11) - ld[4];
+    out[1] = c[80]*(-gv[1] + obs[20]) - c[81]*out[4]*t10;
+    out[0] = c[80]*(-gv[0] + obs[19]) - c[81]*out[4]*t9;
     out[12] = out[11];
     out[13] = out[11]*xd[0];
     out[14] = out[4]*t12;
     out[15] = out[4]*t13;
-    out[16] = c[87]*out[4]*t9;
+    out[16] = c[87]*out[4]*t11;
     out[17] = out[0] + out[2] + out[7];
     out[18] = out[1] + out[3] + out[8];
     out[19] = c[0]*out[1] + c[12]*out[8] + c[19]*out[0] + c[25]*out[7] + out[11];
-    out[20] = c[88]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18]))) + c[89]*((obs[13])*(obs[13])) + c[90]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[91]*((obs[22])*(obs[22])) + c[92]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[93]*((obs[31])*(obs[31])) + c[94]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[95]*((obs[40])*(obs[40]));
+    out[20] = c[88]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[89]*((obs[13])*(obs[13])) + c[90]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[91]*((obs[22])*(obs[22])) + c[92]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[93]*((obs[31])*(obs[31])) + c[94]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[95]*((obs[40])*(obs[40]));
     out[21] = c[71]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[96]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[97]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[98]*(gv[0]*obs[42] + gv[1]*obs[43]);
     out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
     out[23] = sgv_set1(0.0);
@@ -1051,16 +1076,16 @@ SG_VINLINE int sg_overlock_loopers_forces_in_simd(const double *c)
 static SG_FLATTEN size_t sg_overlock_loopers_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
 {
     const sgv_kernels k = { sg_overlock_loopers_closed_v, sg_overlock_loopers_motion_v, sg_overlock_loopers_rates_v, sg_overlock_loopers_observe_v,
-                           sg_overlock_loopers_forces_v, sg_overlock_loopers_forces_in_simd, 48, 24 };
+                           sg_overlock_loopers_forces_v, sg_overlock_loopers_forces_in_simd, 51, 24 };
     return sgv_closed_sweep(m, r, sg_overlock_loopers_constants, sg_overlock_loopers_sweep, k);
 }
 SG_SIMD_END
 #endif
 
 static const unsigned char sg_overlock_loopers_coord_is_angle[3] = { 1, 1, 1 };
-static const int sg_overlock_loopers_group_start[7] = { 0, 6, 12, 21, 30, 39, 48 };
-static const unsigned char sg_overlock_loopers_group_always[6] = { 0, 0, 0, 0, 0, 0 };
-static const unsigned char sg_overlock_loopers_group_angles[7] = { 0, 0, 0, 1, 1, 1, 0 };
+static const int sg_overlock_loopers_group_start[8] = { 0, 6, 12, 21, 30, 39, 48, 51 };
+static const unsigned char sg_overlock_loopers_group_always[7] = { 0, 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_overlock_loopers_group_angles[8] = { 0, 0, 0, 1, 1, 1, 0, 0 };
 
 static const sg_mechanism sg_overlock_loopers_descriptor = {
     .name = "overlock_loopers",
@@ -1068,14 +1093,14 @@ static const sg_mechanism sg_overlock_loopers_descriptor = {
     .nx = 1,
     .np = 29,
     .nc = 105,
-    .nobs = 48,
+    .nobs = 51,
     .nbranch = 2,
     .nf = 12,
     .nfo = 24,
     .nload = 8,
     .nblock = 2,
     .coord_is_angle = sg_overlock_loopers_coord_is_angle,
-    .ngroup = 6,
+    .ngroup = 7,
     .group_start = sg_overlock_loopers_group_start,
     .group_always = sg_overlock_loopers_group_always,
     .group_angles = sg_overlock_loopers_group_angles,
@@ -1139,148 +1164,150 @@ const char *sg_overlock_loopers_manifest(void)
         "[0,1,2,3],[6,8,9,10],[0],[0],[3],[0,3],[0],[0],[4,5],[4,5],[4,5],[4,5],[12,13],[12,13],[12,13],["
         "12,13],[14],[16],[17],[17],[16],[20],[21],[21],[20],[8],[8],[26],[27],[27],[26],[0,1,2,3],[6,8,9"
         ",10],[2,3],[1,2,3],[0,2,3],[22],[4,5,21],[4,5,20],[4,5,20],[19],[23],[24],[8,23],[8,23],[28],[12"
-        ",13,27],[12,13,26],[12,13,26],[25],[18],[0,2],[0,2],[15],[2],[2],[23],[0,2],[15],[18],[19],[22],"
-        "[23],[24],[25],[28],[15],[19],[25],[3,20],[6,7,21],[6,7,20],[6,7,20],[9,26],[9,26]],\"coords\":["
-        "{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"lower_l"
-        "ever.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"coupler.angle\",\"unit\""
-        ":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the looper mechan"
-        "ism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0435\\u0442\\u043b\\u0438"
-        "\\u0442\\u0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136).\\n\\nAn eccentric on t"
-        "he main shaft 1 drives, through a ball-jointed rod, the looper rock shaft 3 (a spatial-planar\\n"
-        "four-bar ABCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper looper, whose tip N\\u20"
-        "82 is at l\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), and drives through the pla"
-        "nar four-bar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081 is at l\\u2086 from G at"
-        " the angle \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2 (eq. 6).\\n\\nFrame (the"
-        " loopers' plane): origin on the rock-shaft axis D, x along the main shaft, y up; the main shaft'"
-        "s axis\\nruns parallel to x below D. Angles counter-clockwise from +x. Seed 003 writes eqs. 4\\u"
-        "20136 in its own axes (see\\ntests/test_overlock_loopers.py for the mapping).\\n\\nEvery dimensi"
-        "on is an estimate (seed 003 prints none): the rock shaft swings about \\u00b122\\u00b0, the uppe"
-        "r looper's tip\\nthrough about 45 mm of arc, the lower looper's lever about \\u00b135\\u00b0; ma"
-        "sses of small steel levers and loopers.\",\"elements\":[],\"force_blocks\":[2,1],\"force_outputs"
-        "\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"na"
-        "me\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\",\"unit"
-        "\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts"
-        ".fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_"
-        "energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\""
-        ",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\""
-        "eccentric.y\",\"eccentric.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"cou"
-        "pler.x\",\"coupler.y\",\"coupler.moment\",\"lower_lever.x\",\"lower_lever.y\",\"lower_lever.mome"
-        "nt\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\""
-        "kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_"
-        "loopers_anchors\":{\"ops\":64},\"sg_overlock_loopers_blocks\":{\"ops\":28},\"sg_overlock_loopers"
-        "_closed\":{\"ops\":40},\"sg_overlock_loopers_constants\":{\"ops\":113},\"sg_overlock_loopers_for"
-        "ce_matrix\":{\"ops\":111},\"sg_overlock_loopers_forces\":{\"ops\":209},\"sg_overlock_loopers_lu_"
-        "factor\":{\"ops\":18},\"sg_overlock_loopers_lu_solve\":{\"ops\":18},\"sg_overlock_loopers_motion"
-        "\":{\"ops\":216},\"sg_overlock_loopers_observe\":{\"ops\":159},\"sg_overlock_loopers_rates\":{\""
-        "ops\":81},\"sg_overlock_loopers_residual\":{\"ops\":45},\"sg_overlock_loopers_scales\":{\"ops\":"
-        "3}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\"},{\"b"
-        "ody\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower_lever"
-        "\",\"component\":\"fx\",\"name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\""
-        "fy\",\"name\":\"lower_looper_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\""
-        "eccentric\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\""
-        ":\"coupler\",\"component\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\"componen"
-        "t\":\"torque\",\"name\":\"lower_lever\"}],\"name\":\"overlock_loopers\",\"observables\":[{\"name"
-        "\":\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\"},{\"na"
-        "me\":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit\":\"m/"
-        "s\"},{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip.y_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_looper_t"
-        "ip.y\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lo"
-        "oper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name"
-        "\":\"lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"}"
-        ",{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\""
-        "rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":"
-        "\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angl"
-        "e_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"ro"
-        "ck_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock"
-        "_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":"
-        "\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\"rad/s\""
-        "},{\"name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit\":\"m\""
-        "},{\"name\":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\"m/s^2\"},"
-        "{\"name\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"unit\":\"ra"
-        "d\"},{\"name\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angle_dd\",\""
-        "unit\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_lever.com."
-        "y\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever."
-        "com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"l"
-        "ower_lever.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\""
-        ",\"doc\":\"eccentricity AB of the looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"e"
-        "ccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\""
-        "mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":"
-        "\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_uni"
-        "t\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"pos"
-        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\""
-        "rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,"
-        "\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper D"
-        "N\\u2082, l\\u2087 (estimate)\",\"kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,"
-        "\"role\":null,\"unit\":\"m\"},{\"default\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\""
-        "its constructive angle \\u03b3 from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_"
-        "looper_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_un"
-        "it\":\"mm\",\"doc\":\"arm DE of the planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name"
-        "\":\"drive_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,"
-        "\"display_unit\":\"deg\",\"doc\":\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name"
-        "\":\"drive_arm_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"di"
-        "splay_unit\":\"mm\",\"doc\":\"coupler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\""
-        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\""
-        ":\"lower-looper lever GF (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate"
-        ")\",\"kind\":\"length\",\"name\":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m"
-        "\"},{\"default\":2.443460952792061,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u"
-        "03b2 (estimate)\",\"kind\":\"angle\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"rad\"},{\"default\":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081"
-        ", l\\u2086 (estimate)\",\"kind\":\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its co"
-        "nstructive angle \\u03b7 from the lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_loop"
-        "er_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":"
-        "\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\""
-        "eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\""
-        "centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positi"
-        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"cent"
-        "re of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\""
-        "moment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccent"
-        "ric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\","
-        "\"doc\":\"moment of inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name"
-        "\":\"rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0."
-        "006,\"display_unit\":\"g\",\"doc\":\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass"
-        "\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m*"
-        "*2\",\"doc\":\"moment of inertia of coupler about its centre of mass\",\"kind\":\"inertia\",\"na"
-        "me\":\"coupler.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0"
-        "3,\"display_unit\":\"g\",\"doc\":\"mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_leve"
-        "r.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of lower_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lev"
-        "er.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of lower_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lev"
-        "er.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\""
-        ":\"kg*m**2\",\"doc\":\"moment of inertia of lower_lever about its centre of mass\",\"kind\":\"in"
-        "ertia\",\"name\":\"lower_lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}]"
-        ",\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\""
-        ",\"doc\":\"upper looper tip N\\u2082\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upp"
-        "er_looper_tip\"},{\"body\":\"lower_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lowe"
-        "r_looper_tip\",\"offset\":6,\"role\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b"
-        "\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\""
-        "eccentric.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\""
-        "],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\""
-        ":\"rock_shaft\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\""
-        "offset\":4},{\"a\":\"rock_shaft\",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":fal"
-        "se,\"kind\":\"revolute\",\"name\":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\""
-        "columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{"
-        "\"a\":\"coupler\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":"
-        "\"revolute\",\"name\":\"F\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"t"
-        "orque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\""
-        "offset\":11,\"sense\":1}],\"roles\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_l"
-        "ooper_tip\"},\"upper_looper_tip\":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":"
-        "{\"nanchor_out\":36,\"nblock\":2,\"nbranch\":2,\"nc\":105,\"nf\":12,\"nfo\":24,\"ngroup\":6,\"nl"
-        "oad\":8,\"nobs\":48,\"np\":29,\"nq\":3,\"nx\":1}}"
+        ",13,27],[12,13,26],[12,13,26],[25],[15],[2],[15,16,17,18],[0,2],[0,2],[2],[23],[0,2],[15],[18],["
+        "19],[22],[23],[24],[25],[28],[15],[19],[25],[3,20],[6,7,21],[6,7,20],[6,7,20],[9,26],[9,26]],\"c"
+        "oords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":"
+        "\"lower_lever.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"coupler.angle\""
+        ",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the loop"
+        "er mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0435\\u0442\\u04"
+        "3b\\u0438\\u0442\\u0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136).\\n\\nAn eccen"
+        "tric on the main shaft 1 drives, through a ball-jointed rod, the looper rock shaft 3 (a spatial-"
+        "planar\\nfour-bar ABCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper looper, whose t"
+        "ip N\\u2082 is at l\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), and drives throug"
+        "h the planar four-bar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081 is at l\\u2086 "
+        "from G at the angle \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2 (eq. 6).\\n\\nF"
+        "rame (the loopers' plane): origin on the rock-shaft axis D, x along the main shaft, y up; the ma"
+        "in shaft's axis\\nruns parallel to x below D. Angles counter-clockwise from +x. Seed 003 writes "
+        "eqs. 4\\u20136 in its own axes (see\\ntests/test_overlock_loopers.py for the mapping).\\n\\nEver"
+        "y dimension is an estimate (seed 003 prints none): the rock shaft swings about \\u00b122\\u00b0,"
+        " the upper looper's tip\\nthrough about 45 mm of arc, the lower looper's lever about \\u00b135\\u"
+        "00b0; masses of small steel levers and loopers.\",\"elements\":[],\"force_blocks\":[2,1],\"force"
+        "_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\""
+        "},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\""
+        ",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_o"
+        "n_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"k"
+        "inetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_"
+        "power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric"
+        ".x\",\"eccentric.y\",\"eccentric.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\""
+        ",\"coupler.x\",\"coupler.y\",\"coupler.moment\",\"lower_lever.x\",\"lower_lever.y\",\"lower_leve"
+        "r.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle ph"
+        "i\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_ove"
+        "rlock_loopers_anchors\":{\"ops\":60},\"sg_overlock_loopers_blocks\":{\"ops\":28},\"sg_overlock_l"
+        "oopers_closed\":{\"ops\":40},\"sg_overlock_loopers_constants\":{\"ops\":118},\"sg_overlock_loope"
+        "rs_force_matrix\":{\"ops\":111},\"sg_overlock_loopers_forces\":{\"ops\":211},\"sg_overlock_loope"
+        "rs_lu_factor\":{\"ops\":18},\"sg_overlock_loopers_lu_solve\":{\"ops\":18},\"sg_overlock_loopers_"
+        "motion\":{\"ops\":215},\"sg_overlock_loopers_observe\":{\"ops\":171},\"sg_overlock_loopers_rates"
+        "\":{\"ops\":81},\"sg_overlock_loopers_residual\":{\"ops\":45},\"sg_overlock_loopers_scales\":{\""
+        "ops\":3}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\""
+        "},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower"
+        "_lever\",\"component\":\"fx\",\"name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"compone"
+        "nt\":\"fy\",\"name\":\"lower_looper_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"na"
+        "me\":\"eccentric\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{"
+        "\"body\":\"coupler\",\"component\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\""
+        "component\":\"torque\",\"name\":\"lower_lever\"}],\"name\":\"overlock_loopers\",\"observables\":"
+        "[{\"name\":\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\""
+        "},{\"name\":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit"
+        "\":\"m/s\"},{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip"
+        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_l"
+        "ooper_tip.y\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"l"
+        "ower_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},"
+        "{\"name\":\"lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\""
+        "rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"un"
+        "it\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\""
+        "unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\","
+        "\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com"
+        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_sh"
+        "aft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"nam"
+        "e\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\""
+        ":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\""
+        "rad/s\"},{\"name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit"
+        "\":\"m\"},{\"name\":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"un"
+        "it\":\"rad\"},{\"name\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angl"
+        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_l"
+        "ever.com.y\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"low"
+        "er_lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"lower_lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.z\",\"unit\":\"m\"}"
+        ",{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.z_dd\",\"unit\":\"m"
+        "/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of the"
+        " looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"ro"
+        "le\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis b"
+        "elow the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive\":tru"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"ball-jointe"
+        "d rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (est"
+        "imate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (estimate)\",\""
+        "kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b3 fr"
+        "om the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"arm DE of t"
+        "he planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"positive\":tru"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":"
+        "\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"cou"
+        "pler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper lever GF (estima"
+        "te)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"length\",\"name\""
+        ":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.4434609527920"
+        "61,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\",\"kind\":\"ang"
+        "le\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\""
+        ":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estimate)\",\"kind\":"
+        "\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b7 from the "
+        "lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of eccentr"
+        "ic relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of "
+        "eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, loca"
+        "l u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\""
+        ",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric abo"
+        "ut its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of ro"
+        "ck_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, lo"
+        "cal u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, lo"
+        "cal v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock"
+        "_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":"
+        "\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of"
+        " coupler about its centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.inertia\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\""
+        "mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lo"
+        "wer_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lo"
+        "wer_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of i"
+        "nertia of lower_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_lever.ine"
+        "rtia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"v"
+        "x\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper looper tip N\\u20"
+        "82\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"body\":\"lower"
+        "_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\"offset\":6,\"role"
+        "\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx"
+        "\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\""
+        "a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"rev"
+        "olute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"columns\":[\"te"
+        "nsion\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\":\"rock_shaft\""
+        ",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\""
+        ":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"groun"
+        "ded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\",\"b\":\"lower_l"
+        "ever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F\",\"off"
+        "set\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"inpu"
+        "t\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"role"
+        "s\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\"upper_looper_tip\""
+        ":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":36,\"nblock\":2,"
+        "\"nbranch\":2,\"nc\":105,\"nf\":12,\"nfo\":24,\"ngroup\":7,\"nload\":8,\"nobs\":51,\"np\":29,\"n"
+        "q\":3,\"nx\":1}}"
         ;
 }

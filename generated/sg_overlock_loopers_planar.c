@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_loopers_planar_constants -- Total ops: 112 */
+/* sg_overlock_loopers_planar_constants -- Total ops: 117 */
 void sg_overlock_loopers_planar_constants(const double *p, double *c)
 {
     const double t0 = sin(p[14]);
@@ -86,10 +86,10 @@ void sg_overlock_loopers_planar_constants(const double *p, double *c)
     c[41] = t21;
     c[42] = -t20;
     c[43] = p[14];
-    c[44] = p[16];
-    c[45] = -p[17];
-    c[46] = p[17];
-    c[47] = -p[16];
+    c[44] = p[17];
+    c[45] = -p[16];
+    c[46] = -p[17];
+    c[47] = p[16];
     c[48] = p[20];
     c[49] = -p[21];
     c[50] = p[21];
@@ -120,22 +120,22 @@ void sg_overlock_loopers_planar_constants(const double *p, double *c)
     c[75] = -t30;
     c[76] = t30;
     c[77] = p[25];
-    c[78] = p[18];
-    c[79] = t26;
-    c[80] = -t26;
-    c[81] = p[15];
-    c[82] = t25;
-    c[83] = -t25;
-    c[84] = p[23];
-    c[85] = (0.5)*p[15];
-    c[86] = (0.5)*p[18];
-    c[87] = (0.5)*p[19];
-    c[88] = (0.5)*p[22];
-    c[89] = (0.5)*p[23];
-    c[90] = (0.5)*p[24];
-    c[91] = (0.5)*p[25];
-    c[92] = (0.5)*p[28];
-    c[93] = -p[15];
+    c[78] = p[15];
+    c[79] = t25;
+    c[80] = p[15]*(((p[16])*(p[16])) + ((p[17])*(p[17]))) + p[18];
+    c[81] = -p[15];
+    c[82] = t26;
+    c[83] = -t26;
+    c[84] = -t25;
+    c[85] = p[23];
+    c[86] = (0.5)*p[15];
+    c[87] = (0.5)*p[18];
+    c[88] = (0.5)*p[19];
+    c[89] = (0.5)*p[22];
+    c[90] = (0.5)*p[23];
+    c[91] = (0.5)*p[24];
+    c[92] = (0.5)*p[25];
+    c[93] = (0.5)*p[28];
     c[94] = -p[19];
     c[95] = -p[25];
     c[96] = -p[20] - t6;
@@ -263,8 +263,8 @@ int sg_overlock_loopers_planar_motion(const double *q, const double *cq, const d
     const double t19 = c[36]*cq[0] + c[38]*cq[1];
     const double t20 = c[39]*cq[2] + c[40]*cq[3];
     const double t21 = c[40]*cq[2] + c[42]*cq[3];
-    const double t22 = c[44]*t0 + c[45]*t3;
-    const double t23 = c[45]*t0 + c[47]*t3;
+    const double t22 = c[44]*t3 + c[45]*t0;
+    const double t23 = c[44]*t0 + c[47]*t3;
     const double t24 = ((xd[0])*(xd[0]));
     const double t25 = c[48]*cq[0] + c[49]*cq[1];
     const double t26 = c[49]*cq[0] + c[51]*cq[1];
@@ -317,7 +317,7 @@ int sg_overlock_loopers_planar_motion(const double *q, const double *cq, const d
     obs[13] = xd[0];
     obs[14] = xdd[0];
     obs[15] = c[0] + t22;
-    obs[16] = c[4] + c[44]*t3 + c[46]*t0;
+    obs[16] = c[4] + c[45]*t3 + c[46]*t0;
     obs[17] = t23*xd[0];
     obs[18] = t22*xd[0];
     obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
@@ -349,7 +349,10 @@ int sg_overlock_loopers_planar_motion(const double *q, const double *cq, const d
     obs[45] = qd[1]*t29;
     obs[46] = qdd[1]*t30 + t13*(c[56]*cq[3] + c[57]*cq[2]);
     obs[47] = qdd[1]*t29 + t13*t30;
-    if (!isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + ((qdd[1] + (qdd[2] + obs[0])) + ((obs[1] + obs[2]) + (obs[3] + obs[4])))) + (((obs[5] + (obs[6] + obs[7])) + ((obs[8] + obs[9]) + (obs[10] + obs[11]))) + ((obs[12] + (obs[13] + obs[14])) + ((obs[15] + obs[16]) + (obs[17] + obs[18]))))) + ((((obs[19] + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + obs[25]))) + ((obs[26] + (obs[27] + obs[28])) + ((obs[29] + obs[30]) + (obs[31] + obs[32])))) + (((obs[33] + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39]))) + (((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47])))))))) return SG_NONFINITE;
+    obs[48] = 0.0;
+    obs[49] = 0.0;
+    obs[50] = 0.0;
+    if (!isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + ((obs[9] + obs[10]) + (obs[11] + obs[12]))) + (((obs[13] + obs[14]) + (obs[15] + obs[16])) + ((obs[17] + obs[18]) + (obs[19] + obs[20]))))) + ((((obs[21] + (obs[22] + obs[23])) + ((obs[24] + obs[25]) + (obs[26] + obs[27]))) + (((obs[28] + obs[29]) + (obs[30] + obs[31])) + ((obs[32] + obs[33]) + (obs[34] + obs[35])))) + (((obs[36] + (obs[37] + obs[38])) + ((obs[39] + obs[40]) + (obs[41] + obs[42]))) + (((obs[43] + obs[44]) + (obs[45] + obs[46])) + ((obs[47] + obs[48]) + (obs[49] + obs[50])))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
@@ -433,14 +436,14 @@ int sg_overlock_loopers_planar_observe(const double *q, const double *cq, const 
     case 2: {
         const double t0 = c[1]*cx[0] + c[2]*cx[1];
         const double t3 = c[1]*cx[1] + c[5]*cx[0];
-        const double t22 = c[44]*t0 + c[45]*t3;
-        const double t23 = c[45]*t0 + c[47]*t3;
+        const double t22 = c[44]*t3 + c[45]*t0;
+        const double t23 = c[44]*t0 + c[47]*t3;
         const double t24 = ((xd[0])*(xd[0]));
         obs[12] = c[43] + x[0];
         obs[13] = xd[0];
         obs[14] = xdd[0];
         obs[15] = c[0] + t22;
-        obs[16] = c[4] + c[44]*t3 + c[46]*t0;
+        obs[16] = c[4] + c[45]*t3 + c[46]*t0;
         obs[17] = t23*xd[0];
         obs[18] = t22*xd[0];
         obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
@@ -498,12 +501,18 @@ int sg_overlock_loopers_planar_observe(const double *q, const double *cq, const 
         obs[47] = qdd[1]*t29 + t13*t30;
         return isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) ? SG_OK : SG_NONFINITE;
     }
+    case 6: {
+        obs[48] = 0.0;
+        obs[49] = 0.0;
+        obs[50] = 0.0;
+        return isfinite((obs[48] + (obs[49] + obs[50]))) ? SG_OK : SG_NONFINITE;
+    }
     default:
         return SG_BAD_ARGUMENT;
     }
 }
 
-/* sg_overlock_loopers_planar_forces -- Total ops: 212 */
+/* sg_overlock_loopers_planar_forces -- Total ops: 219 */
 int sg_overlock_loopers_planar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)q;
@@ -520,8 +529,8 @@ int sg_overlock_loopers_planar_forces(const double *q, const double *cq, const d
     const double t9 = c[77]*(-gv[1] + obs[47]) - ld[3];
     const double t10 = c[0]*cq[0] + c[18]*t0 + c[19];
     const double t11 = c[0]*cq[1] + c[17] + c[18]*t1;
-    const double t12 = c[83]*t10;
-    const double t13 = c[83]*t11;
+    const double t12 = c[84]*t10;
+    const double t13 = c[84]*t11;
     {
         /* block of unknowns 9, 10 */
         double M[4], r[2];
@@ -542,15 +551,15 @@ int sg_overlock_loopers_planar_forces(const double *q, const double *cq, const d
         if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[60]*cq[1] + c[61]*cq[0] + c[62]*cq[1]*t0 + c[63]*cq[0]*t1))) return SG_SINGULAR;
         out[4] = (c[64]*obs[23] + c[69]*t2*t4 + c[69]*t3*t5 - out[10]*t3 - out[9]*t2 - ld[0]*(c[65]*cq[0] + c[66]*cq[1]) - ld[1]*(c[65]*cq[1] + c[67]*cq[0]) - ld[5] - t6*(c[48]*cq[1] + c[50]*cq[0]) - t7*(c[50]*cq[1] + c[51]*cq[0]))/d;
     }
-    out[6] = c[84]*t5 + out[10];
-    out[5] = c[84]*t4 + out[9];
+    out[6] = c[85]*t5 + out[10];
+    out[5] = c[85]*t4 + out[9];
     out[3] = -out[4]*t13 + out[6] + t7;
     out[2] = -out[4]*t12 + out[5] + t6;
     out[8] = -out[10] + t9;
     out[7] = -out[9] + t8;
-    out[1] = c[81]*(-gv[1] + obs[20]) - c[82]*out[4]*t11;
-    out[0] = c[81]*(-gv[0] + obs[19]) - c[82]*out[4]*t10;
-    out[11] = c[78]*obs[14] - out[0]*(c[44]*t1 + c[46]*t0) - out[1]*(c[46]*t1 + c[47]*t0) - out[4]*(c[79]*t1*t10 + c[80]*t0*t11) - ld[4];
+    out[11] = c[80]*obs[14] + c[81]*(-gv[0]*(c[45]*t1 + c[46]*t0) + gv[1]*(c[44]*t1 + c[45]*t0)) - out[4]*(c[82]*t1*t10 + c[83]*t0*t11) - ld[4];
+    out[1] = c[78]*(-gv[1] + obs[20]) - c[79]*out[4]*t11;
+    out[0] = c[78]*(-gv[0] + obs[19]) - c[79]*out[4]*t10;
     out[12] = out[11];
     out[13] = out[11]*xd[0];
     out[14] = out[4]*t12;
@@ -559,25 +568,25 @@ int sg_overlock_loopers_planar_forces(const double *q, const double *cq, const d
     out[17] = out[0] + out[2] + out[7];
     out[18] = out[1] + out[3] + out[8];
     out[19] = c[0]*out[1] + c[11]*out[8] + c[17]*out[0] + c[23]*out[7] + out[11];
-    out[20] = c[85]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18]))) + c[86]*((obs[13])*(obs[13])) + c[87]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[88]*((obs[22])*(obs[22])) + c[89]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[90]*((obs[31])*(obs[31])) + c[91]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[92]*((obs[40])*(obs[40]));
-    out[21] = c[69]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[93]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[94]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[95]*(gv[0]*obs[42] + gv[1]*obs[43]);
+    out[20] = c[86]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[87]*((obs[13])*(obs[13])) + c[88]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[89]*((obs[22])*(obs[22])) + c[90]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[91]*((obs[31])*(obs[31])) + c[92]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[93]*((obs[40])*(obs[40]));
+    out[21] = c[69]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[81]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[94]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[95]*(gv[0]*obs[42] + gv[1]*obs[43]);
     out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
     out[23] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
-/* sg_overlock_loopers_planar_force_matrix -- Total ops: 113 */
+/* sg_overlock_loopers_planar_force_matrix -- Total ops: 118 */
 void sg_overlock_loopers_planar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b)
 {
     (void)q;
     (void)x;
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
     const double t1 = c[0]*cq[0] + c[18]*t0 + c[19];
-    const double t2 = c[82]*t1;
+    const double t2 = c[79]*t1;
     const double t3 = c[1]*cx[1] + c[5]*cx[0];
     const double t4 = c[0]*cq[1] + c[17] + c[18]*t3;
-    const double t5 = c[83]*t4;
+    const double t5 = c[84]*t4;
     const double t6 = c[50]*cq[1];
     const double t7 = c[52]*cq[5];
     const double t8 = c[53]*cq[4];
@@ -587,13 +596,11 @@ void sg_overlock_loopers_planar_force_matrix(const double *q, const double *cq, 
     A[0] = 1.0;
     A[4] = t2;
     A[13] = 1.0;
-    A[16] = c[82]*t4;
-    A[24] = c[44]*t3 + c[46]*t0;
-    A[25] = c[46]*t3 + c[47]*t0;
-    A[28] = c[79]*t1*t3 + c[80]*t0*t4;
+    A[16] = c[79]*t4;
+    A[28] = c[82]*t1*t3 + c[83]*t0*t4;
     A[35] = 1.0;
     A[38] = 1.0;
-    A[40] = c[83]*t1;
+    A[40] = c[84]*t1;
     A[41] = -1.0;
     A[51] = 1.0;
     A[52] = t5;
@@ -619,14 +626,14 @@ void sg_overlock_loopers_planar_force_matrix(const double *q, const double *cq, 
     A[140] = c[57]*cq[2] + t10;
     A[141] = c[100]*cq[3] + t9;
     A[142] = c[101]*cq[2] + t10;
-    b[0] = c[81]*(-gv[0] + obs[19]);
-    b[1] = c[81]*(-gv[1] + obs[20]);
-    b[2] = c[78]*obs[14] - ld[4];
+    b[0] = c[78]*(-gv[0] + obs[19]);
+    b[1] = c[78]*(-gv[1] + obs[20]);
+    b[2] = c[80]*obs[14] + c[81]*(-gv[0]*(c[45]*t3 + c[46]*t0) + gv[1]*(c[44]*t3 + c[45]*t0)) - ld[4];
     b[3] = c[68]*(-gv[0] + obs[28]) - ld[0];
     b[4] = c[68]*(-gv[1] + obs[29]) - ld[1];
     b[5] = c[64]*obs[23] - ld[0]*(c[65]*cq[0] + c[66]*cq[1]) - ld[1]*(c[65]*cq[1] + c[67]*cq[0]) - ld[5];
-    b[6] = c[84]*(-gv[0] + obs[37]);
-    b[7] = c[84]*(-gv[1] + obs[38]);
+    b[6] = c[85]*(-gv[0] + obs[37]);
+    b[7] = c[85]*(-gv[1] + obs[38]);
     b[8] = c[70]*obs[32] - ld[6];
     b[9] = c[77]*(-gv[0] + obs[46]) - ld[2];
     b[10] = c[77]*(-gv[1] + obs[47]) - ld[3];
@@ -670,8 +677,8 @@ void sg_overlock_loopers_planar_anchors(const double *q, const double *cq, const
     out[25] = c[35]*cq[1] + c[37]*cq[0];
     out[26] = c[11] + c[39]*cq[2] + c[40]*cq[3];
     out[27] = c[12] + c[39]*cq[3] + c[41]*cq[2];
-    out[28] = c[0] + c[44]*t0 + c[45]*t1;
-    out[29] = c[4] + c[44]*t1 + c[46]*t0;
+    out[28] = c[0] + c[44]*t1 + c[45]*t0;
+    out[29] = c[4] + c[45]*t1 + c[46]*t0;
     out[30] = c[48]*cq[0] + c[49]*cq[1];
     out[31] = c[48]*cq[1] + c[50]*cq[0];
     out[32] = c[52]*cq[4] + t2;
@@ -744,8 +751,8 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_motion_v(const sg_vd *q, const sg_vd
     const sg_vd t19 = c[36]*cq[0] + c[38]*cq[1];
     const sg_vd t20 = c[39]*cq[2] + c[40]*cq[3];
     const sg_vd t21 = c[40]*cq[2] + c[42]*cq[3];
-    const sg_vd t22 = c[44]*t0 + c[45]*t3;
-    const sg_vd t23 = c[45]*t0 + c[47]*t3;
+    const sg_vd t22 = c[44]*t3 + c[45]*t0;
+    const sg_vd t23 = c[44]*t0 + c[47]*t3;
     const sg_vd t24 = ((xd[0])*(xd[0]));
     const sg_vd t25 = c[48]*cq[0] + c[49]*cq[1];
     const sg_vd t26 = c[49]*cq[0] + c[51]*cq[1];
@@ -798,7 +805,7 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_motion_v(const sg_vd *q, const sg_vd
     obs[13] = xd[0];
     obs[14] = xdd[0];
     obs[15] = c[0] + t22;
-    obs[16] = c[4] + c[44]*t3 + c[46]*t0;
+    obs[16] = c[4] + c[45]*t3 + c[46]*t0;
     obs[17] = t23*xd[0];
     obs[18] = t22*xd[0];
     obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
@@ -830,7 +837,10 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_motion_v(const sg_vd *q, const sg_vd
     obs[45] = qd[1]*t29;
     obs[46] = qdd[1]*t30 + t13*(c[56]*cq[3] + c[57]*cq[2]);
     obs[47] = qdd[1]*t29 + t13*t30;
-    ok &= sgv_isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + ((qdd[1] + (qdd[2] + obs[0])) + ((obs[1] + obs[2]) + (obs[3] + obs[4])))) + (((obs[5] + (obs[6] + obs[7])) + ((obs[8] + obs[9]) + (obs[10] + obs[11]))) + ((obs[12] + (obs[13] + obs[14])) + ((obs[15] + obs[16]) + (obs[17] + obs[18]))))) + ((((obs[19] + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + obs[25]))) + ((obs[26] + (obs[27] + obs[28])) + ((obs[29] + obs[30]) + (obs[31] + obs[32])))) + (((obs[33] + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39]))) + (((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47])))))));
+    obs[48] = sgv_set1(0.0);
+    obs[49] = sgv_set1(0.0);
+    obs[50] = sgv_set1(0.0);
+    ok &= sgv_isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + ((obs[9] + obs[10]) + (obs[11] + obs[12]))) + (((obs[13] + obs[14]) + (obs[15] + obs[16])) + ((obs[17] + obs[18]) + (obs[19] + obs[20]))))) + ((((obs[21] + (obs[22] + obs[23])) + ((obs[24] + obs[25]) + (obs[26] + obs[27]))) + (((obs[28] + obs[29]) + (obs[30] + obs[31])) + ((obs[32] + obs[33]) + (obs[34] + obs[35])))) + (((obs[36] + (obs[37] + obs[38])) + ((obs[39] + obs[40]) + (obs[41] + obs[42]))) + (((obs[43] + obs[44]) + (obs[45] + obs[46])) + ((obs[47] + obs[48]) + (obs[49] + obs[50])))))));
     return ok;
 }
 
@@ -912,14 +922,14 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_observe_v(const sg_vd *q, const sg_v
     case 2: {
         const sg_vd t0 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t3 = c[1]*cx[1] + c[5]*cx[0];
-        const sg_vd t22 = c[44]*t0 + c[45]*t3;
-        const sg_vd t23 = c[45]*t0 + c[47]*t3;
+        const sg_vd t22 = c[44]*t3 + c[45]*t0;
+        const sg_vd t23 = c[44]*t0 + c[47]*t3;
         const sg_vd t24 = ((xd[0])*(xd[0]));
         obs[12] = c[43] + x[0];
         obs[13] = xd[0];
         obs[14] = xdd[0];
         obs[15] = c[0] + t22;
-        obs[16] = c[4] + c[44]*t3 + c[46]*t0;
+        obs[16] = c[4] + c[45]*t3 + c[46]*t0;
         obs[17] = t23*xd[0];
         obs[18] = t22*xd[0];
         obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
@@ -977,6 +987,12 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_observe_v(const sg_vd *q, const sg_v
         obs[47] = qdd[1]*t29 + t13*t30;
         return sgv_isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47])))));
     }
+    case 6: {
+        obs[48] = sgv_set1(0.0);
+        obs[49] = sgv_set1(0.0);
+        obs[50] = sgv_set1(0.0);
+        return sgv_isfinite((obs[48] + (obs[49] + obs[50])));
+    }
     default:
         return sgv_false();
     }
@@ -999,8 +1015,8 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_forces_v(const sg_vd *q, const sg_vd
     const sg_vd t9 = c[77]*(-gv[1] + obs[47]) - ld[3];
     const sg_vd t10 = c[0]*cq[0] + c[18]*t0 + c[19];
     const sg_vd t11 = c[0]*cq[1] + c[17] + c[18]*t1;
-    const sg_vd t12 = c[83]*t10;
-    const sg_vd t13 = c[83]*t11;
+    const sg_vd t12 = c[84]*t10;
+    const sg_vd t13 = c[84]*t11;
     {
         /* block of unknowns 9, 10 */
         sg_vd M[4], r[2];
@@ -1021,15 +1037,15 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_forces_v(const sg_vd *q, const sg_vd
         ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[60]*cq[1] + c[61]*cq[0] + c[62]*cq[1]*t0 + c[63]*cq[0]*t1);
         out[4] = (c[64]*obs[23] + c[69]*t2*t4 + c[69]*t3*t5 - out[10]*t3 - out[9]*t2 - ld[0]*(c[65]*cq[0] + c[66]*cq[1]) - ld[1]*(c[65]*cq[1] + c[67]*cq[0]) - ld[5] - t6*(c[48]*cq[1] + c[50]*cq[0]) - t7*(c[50]*cq[1] + c[51]*cq[0]))/d;
     }
-    out[6] = c[84]*t5 + out[10];
-    out[5] = c[84]*t4 + out[9];
+    out[6] = c[85]*t5 + out[10];
+    out[5] = c[85]*t4 + out[9];
     out[3] = -out[4]*t13 + out[6] + t7;
     out[2] = -out[4]*t12 + out[5] + t6;
     out[8] = -out[10] + t9;
     out[7] = -out[9] + t8;
-    out[1] = c[81]*(-gv[1] + obs[20]) - c[82]*out[4]*t11;
-    out[0] = c[81]*(-gv[0] + obs[19]) - c[82]*out[4]*t10;
-    out[11] = c[78]*obs[14] - out[0]*(c[44]*t1 + c[46]*t0) - out[1]*(c[46]*t1 + c[47]*t0) - out[4]*(c[79]*t1*t10 + c[80]*t0*t11) - ld[4];
+    out[11] = c[80]*obs[14] + c[81]*(-gv[0]*(c[45]*t1 + c[46]*t0) + gv[1]*(c[44]*t1 + c[45]*t0)) - out[4]*(c[82]*t1*t10 + c[83]*t0*t11) - ld[4];
+    out[1] = c[78]*(-gv[1] + obs[20]) - c[79]*out[4]*t11;
+    out[0] = c[78]*(-gv[0] + obs[19]) - c[79]*out[4]*t10;
     out[12] = out[11];
     out[13] = out[11]*xd[0];
     out[14] = out[4]*t12;
@@ -1038,8 +1054,8 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_forces_v(const sg_vd *q, const sg_vd
     out[17] = out[0] + out[2] + out[7];
     out[18] = out[1] + out[3] + out[8];
     out[19] = c[0]*out[1] + c[11]*out[8] + c[17]*out[0] + c[23]*out[7] + out[11];
-    out[20] = c[85]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18]))) + c[86]*((obs[13])*(obs[13])) + c[87]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[88]*((obs[22])*(obs[22])) + c[89]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[90]*((obs[31])*(obs[31])) + c[91]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[92]*((obs[40])*(obs[40]));
-    out[21] = c[69]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[93]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[94]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[95]*(gv[0]*obs[42] + gv[1]*obs[43]);
+    out[20] = c[86]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[87]*((obs[13])*(obs[13])) + c[88]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[89]*((obs[22])*(obs[22])) + c[90]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[91]*((obs[31])*(obs[31])) + c[92]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[93]*((obs[40])*(obs[40]));
+    out[21] = c[69]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[81]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[94]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[95]*(gv[0]*obs[42] + gv[1]*obs[43]);
     out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
     out[23] = sgv_set1(0.0);
     ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))));
@@ -1055,16 +1071,16 @@ SG_VINLINE int sg_overlock_loopers_planar_forces_in_simd(const double *c)
 static SG_FLATTEN size_t sg_overlock_loopers_planar_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
 {
     const sgv_kernels k = { sg_overlock_loopers_planar_closed_v, sg_overlock_loopers_planar_motion_v, sg_overlock_loopers_planar_rates_v, sg_overlock_loopers_planar_observe_v,
-                           sg_overlock_loopers_planar_forces_v, sg_overlock_loopers_planar_forces_in_simd, 48, 24 };
+                           sg_overlock_loopers_planar_forces_v, sg_overlock_loopers_planar_forces_in_simd, 51, 24 };
     return sgv_closed_sweep(m, r, sg_overlock_loopers_planar_constants, sg_overlock_loopers_planar_sweep, k);
 }
 SG_SIMD_END
 #endif
 
 static const unsigned char sg_overlock_loopers_planar_coord_is_angle[3] = { 1, 1, 1 };
-static const int sg_overlock_loopers_planar_group_start[7] = { 0, 6, 12, 21, 30, 39, 48 };
-static const unsigned char sg_overlock_loopers_planar_group_always[6] = { 0, 0, 0, 0, 0, 0 };
-static const unsigned char sg_overlock_loopers_planar_group_angles[7] = { 0, 0, 0, 1, 1, 1, 0 };
+static const int sg_overlock_loopers_planar_group_start[8] = { 0, 6, 12, 21, 30, 39, 48, 51 };
+static const unsigned char sg_overlock_loopers_planar_group_always[7] = { 0, 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_overlock_loopers_planar_group_angles[8] = { 0, 0, 0, 1, 1, 1, 0, 0 };
 
 static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
     .name = "overlock_loopers_planar",
@@ -1072,14 +1088,14 @@ static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
     .nx = 1,
     .np = 29,
     .nc = 102,
-    .nobs = 48,
+    .nobs = 51,
     .nbranch = 2,
     .nf = 12,
     .nfo = 24,
     .nload = 8,
     .nblock = 2,
     .coord_is_angle = sg_overlock_loopers_planar_coord_is_angle,
-    .ngroup = 6,
+    .ngroup = 7,
     .group_start = sg_overlock_loopers_planar_group_start,
     .group_always = sg_overlock_loopers_planar_group_always,
     .group_angles = sg_overlock_loopers_planar_group_angles,
@@ -1141,151 +1157,153 @@ const char *sg_overlock_loopers_planar_manifest(void)
         "rod.length\",\"F.x\",\"F.y\"],\"constants\":[[3],[14],[14],[0],[1],[14],[2],[3],[6,7],[6,7],[6,7"
         "],[10,11],[10,11],[8],[9],[8],[9],[1],[0],[3],[2],[9],[10,11],[10,11],[3],[3],[6,7],[8],[0,1,2,3"
         "],[6,8,9,10],[0],[0],[3],[0,3],[0],[4,5],[4,5],[4,5],[4,5],[12,13],[12,13],[12,13],[12,13],[14],"
-        "[16],[17],[17],[16],[20],[21],[21],[20],[8],[8],[26],[27],[27],[26],[0,1,2,3],[6,8,9,10],[2,3],["
+        "[17],[16],[17],[16],[20],[21],[21],[20],[8],[8],[26],[27],[27],[26],[0,1,2,3],[6,8,9,10],[2,3],["
         "1,2,3],[0,2,3],[0,2,3],[22],[4,5,21],[4,5,20],[4,5,20],[19],[23],[24],[8,23],[8,23],[28],[12,13,"
-        "27],[12,13,26],[12,13,26],[25],[18],[0,2],[0,2],[15],[2],[2],[23],[15],[18],[19],[22],[23],[24],"
-        "[25],[28],[15],[19],[25],[3,20],[6,7,21],[6,7,20],[6,7,20],[9,26],[9,26]],\"coords\":[{\"guess\""
-        ":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"lower_lever.angle"
-        "\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"coupler.angle\",\"unit\":\"rad\"}]"
-        ",\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the looper mechanism \\u043"
-        "c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0435\\u0442\\u043b\\u0438\\u0442\\u"
-        "0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136).\\n\\nAn eccentric on the main sh"
-        "aft 1 drives, through a ball-jointed rod, the looper rock shaft 3 (a spatial-planar\\nfour-bar A"
-        "BCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper looper, whose tip N\\u2082 is at l"
-        "\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), and drives through the planar four-b"
-        "ar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081 is at l\\u2086 from G at the angle"
-        " \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2 (eq. 6).\\n\\nFrame (the loopers' "
-        "plane): origin on the rock-shaft axis D, x along the main shaft, y up; the main shaft's axis\\nr"
-        "uns parallel to x below D. Angles counter-clockwise from +x. Seed 003 writes eqs. 4\\u20136 in i"
-        "ts own axes (see\\ntests/test_overlock_loopers.py for the mapping).\\n\\nEvery dimension is an e"
-        "stimate (seed 003 prints none): the rock shaft swings about \\u00b122\\u00b0, the upper looper's"
-        " tip\\nthrough about 45 mm of arc, the lower looper's lever about \\u00b135\\u00b0; masses of sm"
-        "all steel levers and loopers.\",\"elements\":[],\"force_blocks\":[2,1],\"force_outputs\":[{\"nam"
-        "e\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rod"
-        ".fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},"
-        "{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"un"
-        "it\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\""
-        "unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\""
-        "W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"eccentric.y\""
-        ",\"eccentric.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"coupler.x\",\"co"
-        "upler.y\",\"coupler.moment\",\"lower_lever.x\",\"lower_lever.y\",\"lower_lever.moment\"],\"input"
-        "s\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaf"
-        "t\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_loopers_plana"
-        "r_anchors\":{\"ops\":66},\"sg_overlock_loopers_planar_blocks\":{\"ops\":28},\"sg_overlock_looper"
-        "s_planar_closed\":{\"ops\":37},\"sg_overlock_loopers_planar_constants\":{\"ops\":112},\"sg_overl"
-        "ock_loopers_planar_force_matrix\":{\"ops\":113},\"sg_overlock_loopers_planar_forces\":{\"ops\":2"
-        "12},\"sg_overlock_loopers_planar_lu_factor\":{\"ops\":18},\"sg_overlock_loopers_planar_lu_solve\""
-        ":{\"ops\":18},\"sg_overlock_loopers_planar_motion\":{\"ops\":226},\"sg_overlock_loopers_planar_o"
-        "bserve\":{\"ops\":159},\"sg_overlock_loopers_planar_rates\":{\"ops\":91},\"sg_overlock_loopers_p"
-        "lanar_residual\":{\"ops\":44},\"sg_overlock_loopers_planar_scales\":{\"ops\":3}},\"loads\":[{\"b"
-        "ody\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\"},{\"body\":\"rock_shaft\""
-        ",\"component\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"f"
-        "x\",\"name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fy\",\"name\":\"low"
-        "er_looper_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"bod"
-        "y\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"coupler\",\"com"
-        "ponent\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\"component\":\"torque\",\"n"
-        "ame\":\"lower_lever\"}],\"name\":\"overlock_loopers_planar\",\"observables\":[{\"name\":\"upper_"
-        "looper_tip.x\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"uppe"
-        "r_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip.y_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.y\",\"uni"
-        "t\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.y_d"
-        "\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_l"
-        "ooper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":\""
-        "eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{"
-        "\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\"na"
-        "me\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{"
-        "\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"uni"
-        "t\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.co"
-        "m.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com."
-        "x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaf"
-        "t.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\"rad/s\"},{\"name\""
-        ":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit\":\"m\"},{\"name\""
-        ":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"c"
-        "oupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":"
-        "\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"unit\":\"rad\"},{\"na"
-        "me\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angle_dd\",\"unit\":\"r"
-        "ad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.y\",\"unit"
-        "\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.y_d\","
-        "\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever"
-        ".com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":"
-        "\"eccentricity AB of the looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\""
-        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"do"
-        "c\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_b"
-        "elow\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\""
-        ",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":tr"
-        "ue,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft"
-        " arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, "
-        "l\\u2087 (estimate)\",\"kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\"its const"
-        "ructive angle \\u03b3 from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_an"
-        "gle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm"
-        "\",\"doc\":\"arm DE of the planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"driv"
-        "e_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display"
-        "_unit\":\"deg\",\"doc\":\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"driv"
-        "e_arm_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_uni"
-        "t\":\"mm\",\"doc\":\"coupler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive"
-        "\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower"
-        "-looper lever GF (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":"
-        "null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"k"
-        "ind\":\"length\",\"name\":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":2.443460952792061,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (e"
-        "stimate)\",\"kind\":\"angle\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"rad\"},{\"default\":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2"
-        "086 (estimate)\",\"kind\":\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its constructi"
-        "ve angle \\u03b7 from the lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle"
-        "\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\","
-        "\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentr"
-        "ic.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\""
-        ":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre o"
-        "f mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":fal"
-        "se,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
-        "ss of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\""
-        "role\":null,\"unit\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment o"
-        "f inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.iner"
-        "tia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\""
-        ":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre"
-        " of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre"
-        " of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\""
-        "moment of inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_"
-        "shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"disp"
-        "lay_unit\":\"g\",\"doc\":\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc"
-        "\":\"moment of inertia of coupler about its centre of mass\",\"kind\":\"inertia\",\"name\":\"cou"
-        "pler.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc"
-        "\":\"centre of mass of lower_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc"
-        "\":\"centre of mass of lower_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\""
-        ",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**"
-        "2\",\"doc\":\"moment of inertia of lower_lever about its centre of mass\",\"kind\":\"inertia\",\""
-        "name\":\"lower_lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_f"
-        "ields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\""
-        "upper looper tip N\\u2082\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_t"
-        "ip\"},{\"body\":\"lower_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_ti"
-        "p\",\"offset\":6,\"role\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccent"
-        "ric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.p"
-        "ivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"ground"
-        "ed\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_s"
-        "haft\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\""
-        ":4},{\"a\":\"rock_shaft\",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kin"
-        "d\":\"revolute\",\"name\":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\""
-        ":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"c"
-        "oupler\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolut"
-        "e\",\"name\":\"F\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],"
-        "\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\""
-        ":11,\"sense\":1}],\"roles\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_ti"
-        "p\"},\"upper_looper_tip\":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanch"
-        "or_out\":36,\"nblock\":2,\"nbranch\":2,\"nc\":102,\"nf\":12,\"nfo\":24,\"ngroup\":6,\"nload\":8,"
-        "\"nobs\":48,\"np\":29,\"nq\":3,\"nx\":1}}"
+        "27],[12,13,26],[12,13,26],[25],[15],[2],[15,16,17,18],[15],[0,2],[0,2],[2],[23],[15],[18],[19],["
+        "22],[23],[24],[25],[28],[19],[25],[3,20],[6,7,21],[6,7,20],[6,7,20],[9,26],[9,26]],\"coords\":[{"
+        "\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"lower_le"
+        "ver.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"coupler.angle\",\"unit\":"
+        "\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the looper mechani"
+        "sm \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0435\\u0442\\u043b\\u0438\\u"
+        "0442\\u0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136).\\n\\nAn eccentric on the "
+        "main shaft 1 drives, through a ball-jointed rod, the looper rock shaft 3 (a spatial-planar\\nfou"
+        "r-bar ABCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper looper, whose tip N\\u2082 "
+        "is at l\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), and drives through the planar"
+        " four-bar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081 is at l\\u2086 from G at th"
+        "e angle \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2 (eq. 6).\\n\\nFrame (the lo"
+        "opers' plane): origin on the rock-shaft axis D, x along the main shaft, y up; the main shaft's a"
+        "xis\\nruns parallel to x below D. Angles counter-clockwise from +x. Seed 003 writes eqs. 4\\u201"
+        "36 in its own axes (see\\ntests/test_overlock_loopers.py for the mapping).\\n\\nEvery dimension "
+        "is an estimate (seed 003 prints none): the rock shaft swings about \\u00b122\\u00b0, the upper l"
+        "ooper's tip\\nthrough about 45 mm of arc, the lower looper's lever about \\u00b135\\u00b0; masse"
+        "s of small steel levers and loopers.\",\"elements\":[],\"force_blocks\":[2,1],\"force_outputs\":"
+        "[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\""
+        ":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\",\"unit\":\""
+        "N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\""
+        ",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energ"
+        "y\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"un"
+        "it\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"eccen"
+        "tric.y\",\"eccentric.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"coupler."
+        "x\",\"coupler.y\",\"coupler.moment\",\"lower_lever.x\",\"lower_lever.y\",\"lower_lever.moment\"]"
+        ",\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\""
+        ":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_looper"
+        "s_planar_anchors\":{\"ops\":66},\"sg_overlock_loopers_planar_blocks\":{\"ops\":28},\"sg_overlock"
+        "_loopers_planar_closed\":{\"ops\":37},\"sg_overlock_loopers_planar_constants\":{\"ops\":117},\"s"
+        "g_overlock_loopers_planar_force_matrix\":{\"ops\":118},\"sg_overlock_loopers_planar_forces\":{\""
+        "ops\":219},\"sg_overlock_loopers_planar_lu_factor\":{\"ops\":18},\"sg_overlock_loopers_planar_lu"
+        "_solve\":{\"ops\":18},\"sg_overlock_loopers_planar_motion\":{\"ops\":226},\"sg_overlock_loopers_"
+        "planar_observe\":{\"ops\":159},\"sg_overlock_loopers_planar_rates\":{\"ops\":91},\"sg_overlock_l"
+        "oopers_planar_residual\":{\"ops\":44},\"sg_overlock_loopers_planar_scales\":{\"ops\":3}},\"loads"
+        "\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\"},{\"body\":\"roc"
+        "k_shaft\",\"component\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\"compon"
+        "ent\":\"fx\",\"name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fy\",\"nam"
+        "e\":\"lower_looper_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\""
+        "},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"coupler"
+        "\",\"component\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\"component\":\"torq"
+        "ue\",\"name\":\"lower_lever\"}],\"name\":\"overlock_loopers_planar\",\"observables\":[{\"name\":"
+        "\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\"},{\"name\""
+        ":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip.y_dd\",\"u"
+        "nit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.y"
+        "\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper"
+        "_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"n"
+        "ame\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/"
+        "s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\""
+        "},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"un"
+        "it\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\""
+        ",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_sh"
+        "aft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaf"
+        "t.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"roc"
+        "k_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\""
+        "name\":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\"rad/s\"},{\""
+        "name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit\":\"m\"},{\""
+        "name\":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m/s\"},{\"name"
+        "\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"unit\":\"rad\"}"
+        ",{\"name\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angle_dd\",\"unit"
+        "\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.y\","
+        "\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com."
+        "y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower"
+        "_lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.z\",\"unit\":\"m\"},{\"name\":\""
+        "eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.z_dd\",\"unit\":\"m/s^2\"}],\"pa"
+        "rams\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of the looper eccen"
+        "tric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"u"
+        "nit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock"
+        " shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive\":true,\"role\":nu"
+        "ll,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (est"
+        "imate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kin"
+        "d\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
+        "6,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (estimate)\",\"kind\":\"len"
+        "gth\",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":1.7"
+        "453292519943295,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b3 from the arm D"
+        "C (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"arm DE of the planar fo"
+        "ur-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"positive\":true,\"role\":n"
+        "ull,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"arm DE fro"
+        "m the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"coupler EF (est"
+        "imate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper lever GF (estimate)\",\"kind"
+        "\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
+        "045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"length\",\"name\":\"pivot_di"
+        "stance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.443460952792061,\"displa"
+        "y_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\",\"kind\":\"angle\",\"name"
+        "\":\"pivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.055,\"d"
+        "isplay_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estimate)\",\"kind\":\"length\""
+        ",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-1.04719"
+        "75511965976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b7 from the lever GF "
+        "(estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric relati"
+        "ve to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of eccentric"
+        "\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\""
+        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u\",\"ki"
+        "nd\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\"kind\":"
+        "\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about its ce"
+        "ntre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft"
+        "\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
+        "\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\","
+        "\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\""
+        "kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
+        ",{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft abo"
+        "ut its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,"
+        "\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of "
+        "coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":false,\"role\":null,\"unit\":"
+        "\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of coupler a"
+        "bout its centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.inertia\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of low"
+        "er_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_lever,"
+        " local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_lever, "
+        "local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of l"
+        "ower_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_lever.inertia\",\"po"
+        "sitive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\","
+        "\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper looper tip N\\u2082\",\"name"
+        "\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\""
+        "doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\"offset\":6,\"role\":\"lower_"
+        "looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],"
+        "\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"grou"
+        "nd\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\""
+        "name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"columns\":[\"tension\"],\""
+        "grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\":\"rock_shaft\",\"b\":\"c"
+        "oupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"o"
+        "ffset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true"
+        ",\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\",\"b\":\"lower_lever\",\"c"
+        "olumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F\",\"offset\":9},{"
+        "\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaf"
+        "t\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\"low"
+        "er_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\"upper_looper_tip\":{\"kind\""
+        ":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":36,\"nblock\":2,\"nbranch\""
+        ":2,\"nc\":102,\"nf\":12,\"nfo\":24,\"ngroup\":7,\"nload\":8,\"nobs\":51,\"np\":29,\"nq\":3,\"nx\""
+        ":1}}"
         ;
 }

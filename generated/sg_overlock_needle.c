@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_needle_constants -- Total ops: 111 */
+/* sg_overlock_needle_constants -- Total ops: 116 */
 void sg_overlock_needle_constants(const double *p, double *c)
 {
     const double t0 = sin(p[12]);
@@ -79,10 +79,10 @@ void sg_overlock_needle_constants(const double *p, double *c)
     c[38] = -p[8];
     c[39] = -t21;
     c[40] = p[12];
-    c[41] = p[14];
+    c[41] = -p[14];
     c[42] = -p[15];
     c[43] = p[15];
-    c[44] = -p[14];
+    c[44] = p[14];
     c[45] = p[18];
     c[46] = -p[19];
     c[47] = p[19];
@@ -107,11 +107,11 @@ void sg_overlock_needle_constants(const double *p, double *c)
     c[66] = p[23];
     c[67] = p[22];
     c[68] = p[21]*t22;
-    c[69] = p[16];
-    c[70] = t23*t6;
-    c[71] = -t26;
-    c[72] = p[13];
-    c[73] = t23;
+    c[69] = p[13];
+    c[70] = t23;
+    c[71] = p[13]*(((p[14])*(p[14])) + ((p[15])*(p[15]))) + p[16];
+    c[72] = t23*t6;
+    c[73] = -t26;
     c[74] = p[26];
     c[75] = -p[24] - p[8];
     c[76] = -p[25];
@@ -236,7 +236,7 @@ void sg_overlock_needle_blocks(const double *jac, double *out)
     }
 }
 
-/* sg_overlock_needle_motion -- Total ops: 155 */
+/* sg_overlock_needle_motion -- Total ops: 154 */
 int sg_overlock_needle_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[24]*cq[1] + c[25]*cq[0];
@@ -252,8 +252,8 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     const double t10 = c[33]*t9;
     const double t11 = c[32]*t4*t9 + t10*t5;
     const double t14 = c[14]*cq[1];
-    const double t20 = c[41]*t9 + c[42]*t4;
-    const double t21 = c[42]*t9 + c[44]*t4;
+    const double t20 = c[41]*t4 + c[42]*t9;
+    const double t21 = c[41]*t9 + c[43]*t4;
     const double t22 = ((xd[0])*(xd[0]));
     const double t23 = c[45]*cq[0] + c[46]*cq[1];
     const double t24 = c[46]*cq[0] + c[48]*cq[1];
@@ -310,12 +310,12 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     obs[18] = c[40] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
-    obs[21] = c[0] + t20;
-    obs[22] = c[1] + c[41]*t4 + c[43]*t9;
-    obs[23] = t21*xd[0];
-    obs[24] = t20*xd[0];
-    obs[25] = t21*xdd[0] + t22*(c[43]*t4 + c[44]*t9);
-    obs[26] = t20*xdd[0] + t21*t22;
+    obs[21] = c[0];
+    obs[22] = c[1] + t20;
+    obs[23] = 0.0;
+    obs[24] = t21*xd[0];
+    obs[25] = 0.0;
+    obs[26] = t21*xdd[0] + t22*(c[43]*t9 + c[44]*t4);
     obs[27] = q[0];
     obs[28] = qd[0];
     obs[29] = qdd[0];
@@ -343,7 +343,10 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     obs[51] = qd[1];
     obs[52] = 0.0;
     obs[53] = qdd[1];
-    if (!isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + ((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + obs[13]))) + (((obs[14] + obs[15]) + (obs[16] + obs[17])) + ((obs[18] + obs[19]) + (obs[20] + obs[21]))))) + (((((obs[22] + obs[23]) + (obs[24] + obs[25])) + ((obs[26] + obs[27]) + (obs[28] + obs[29]))) + (((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + obs[37])))) + ((((obs[38] + obs[39]) + (obs[40] + obs[41])) + ((obs[42] + obs[43]) + (obs[44] + obs[45]))) + (((obs[46] + obs[47]) + (obs[48] + obs[49])) + ((obs[50] + obs[51]) + (obs[52] + obs[53])))))))) return SG_NONFINITE;
+    obs[54] = c[42]*t4 + c[44]*t9;
+    obs[55] = t20*xd[0];
+    obs[56] = t20*xdd[0] + t21*t22;
+    if (!isfinite(((((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + qdd[1]))) + (((qdd[2] + obs[0]) + (obs[1] + obs[2])) + ((obs[3] + obs[4]) + (obs[5] + obs[6])))) + ((((obs[7] + obs[8]) + (obs[9] + obs[10])) + ((obs[11] + obs[12]) + (obs[13] + obs[14]))) + (((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23])))))) + (((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31]))) + (((obs[32] + obs[33]) + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39])))) + ((((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47]))) + (((obs[48] + obs[49]) + (obs[50] + obs[51])) + ((obs[52] + obs[53]) + (obs[54] + (obs[55] + obs[56]))))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
@@ -394,7 +397,7 @@ int sg_overlock_needle_rates(const double *q, const double *cq, const double *x,
     return SG_OK;
 }
 
-/* sg_overlock_needle_observe -- Total ops: 101 */
+/* sg_overlock_needle_observe -- Total ops: 113 */
 int sg_overlock_needle_observe(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, const double *qd, const double *qdd, int group, double *obs)
 {
     switch (group) {
@@ -436,18 +439,18 @@ int sg_overlock_needle_observe(const double *q, const double *cq, const double *
     case 3: {
         const double t4 = c[2]*cx[0] + c[3]*cx[1];
         const double t9 = c[3]*cx[0] + c[7]*cx[1];
-        const double t20 = c[41]*t9 + c[42]*t4;
-        const double t21 = c[42]*t9 + c[44]*t4;
+        const double t20 = c[41]*t4 + c[42]*t9;
+        const double t21 = c[41]*t9 + c[43]*t4;
         const double t22 = ((xd[0])*(xd[0]));
         obs[18] = c[40] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
-        obs[21] = c[0] + t20;
-        obs[22] = c[1] + c[41]*t4 + c[43]*t9;
-        obs[23] = t21*xd[0];
-        obs[24] = t20*xd[0];
-        obs[25] = t21*xdd[0] + t22*(c[43]*t4 + c[44]*t9);
-        obs[26] = t20*xdd[0] + t21*t22;
+        obs[21] = c[0];
+        obs[22] = c[1] + t20;
+        obs[23] = 0.0;
+        obs[24] = t21*xd[0];
+        obs[25] = 0.0;
+        obs[26] = t21*xdd[0] + t22*(c[43]*t9 + c[44]*t4);
         return isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26]))))) ? SG_OK : SG_NONFINITE;
     }
     case 4: {
@@ -501,12 +504,23 @@ int sg_overlock_needle_observe(const double *q, const double *cq, const double *
         obs[53] = qdd[1];
         return isfinite((((obs[45] + obs[46]) + (obs[47] + obs[48])) + ((obs[49] + obs[50]) + (obs[51] + (obs[52] + obs[53]))))) ? SG_OK : SG_NONFINITE;
     }
+    case 7: {
+        const double t4 = c[2]*cx[0] + c[3]*cx[1];
+        const double t9 = c[3]*cx[0] + c[7]*cx[1];
+        const double t20 = c[41]*t4 + c[42]*t9;
+        const double t21 = c[41]*t9 + c[43]*t4;
+        const double t22 = ((xd[0])*(xd[0]));
+        obs[54] = c[42]*t4 + c[44]*t9;
+        obs[55] = t20*xd[0];
+        obs[56] = t20*xdd[0] + t21*t22;
+        return isfinite((obs[54] + (obs[55] + obs[56]))) ? SG_OK : SG_NONFINITE;
+    }
     default:
         return SG_BAD_ARGUMENT;
     }
 }
 
-/* sg_overlock_needle_forces -- Total ops: 208 */
+/* sg_overlock_needle_forces -- Total ops: 210 */
 int sg_overlock_needle_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)x;
@@ -520,11 +534,11 @@ int sg_overlock_needle_forces(const double *q, const double *cq, const double *x
     const double t7 = -gv[0] + obs[43];
     const double t8 = c[66]*t4 - ld[3] - ld[5];
     const double t9 = c[49]*cq[4];
-    const double t10 = c[3]*cx[0] + c[7]*cx[1];
+    const double t10 = c[11]*cq[0] + c[13]*cq[1] + c[18];
     const double t11 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t0;
-    const double t12 = c[11]*cq[0] + c[13]*cq[1] + c[18];
+    const double t12 = c[3]*cx[0] + c[7]*cx[1];
     const double t13 = c[79]*t11;
-    const double t14 = c[79]*t12;
+    const double t14 = c[79]*t10;
     {
         const double d = c[15]*cq[5];
         if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[14]*cq[1]), fabs(c[15]*cq[5])))) return SG_SINGULAR;
@@ -542,9 +556,9 @@ int sg_overlock_needle_forces(const double *q, const double *cq, const double *x
     out[3] = -c[52]*out[9] + c[74]*obs[47] + c[75]*ld[2] + c[76]*ld[3] + c[76]*ld[5] + c[76]*t8 + c[77]*ld[4] - c[78]*out[2] - ld[9];
     out[8] = t5;
     out[10] = t8;
-    out[1] = c[72]*(-gv[1] + obs[26]) - c[73]*out[6]*t11;
-    out[0] = c[72]*(-gv[0] + obs[25]) - c[73]*out[6]*t12;
-    out[11] = c[69]*obs[20] - out[0]*(c[41]*t0 + c[43]*t10) - out[1]*(c[43]*t0 + c[44]*t10) - out[6]*(c[70]*t0*t10 + c[71]*t10*t11) - ld[6];
+    out[11] = c[69]*gv[1]*(c[42]*t0 + c[44]*t12) + c[71]*obs[20] - out[6]*(c[72]*t0*t12 + c[73]*t11*t12) - ld[6];
+    out[1] = c[69]*(-gv[1] + obs[26]) - c[70]*out[6]*t11;
+    out[0] = c[69]*(-gv[0] + obs[25]) - c[70]*out[6]*t10;
     const double t15 = -out[2];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
@@ -552,11 +566,11 @@ int sg_overlock_needle_forces(const double *q, const double *cq, const double *x
     out[15] = 0.0;
     out[16] = out[6]*t14;
     out[17] = out[6]*t13;
-    out[18] = c[80]*out[6]*t10;
+    out[18] = c[80]*out[6]*t12;
     out[19] = out[0] + out[4] + t15;
     out[20] = out[1] + out[5];
     out[21] = c[0]*out[1] + c[19]*out[0] + out[11] + out[2]*q[1] + out[3];
-    out[22] = c[81]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[82]*((obs[19])*(obs[19])) + c[83]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[84]*((obs[28])*(obs[28])) + c[85]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[86]*((obs[37])*(obs[37])) + c[87]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[88]*((obs[46])*(obs[46]));
+    out[22] = c[81]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[82]*((obs[19])*(obs[19])) + c[83]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[84]*((obs[28])*(obs[28])) + c[85]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[86]*((obs[37])*(obs[37])) + c[87]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[88]*((obs[46])*(obs[46]));
     out[23] = c[89]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[90]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[91]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[92]*(gv[0]*obs[48] + gv[1]*obs[49]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     out[25] = 0.0;
@@ -570,7 +584,7 @@ void sg_overlock_needle_force_matrix(const double *q, const double *cq, const do
     (void)q;
     (void)x;
     const double t0 = c[11]*cq[0] + c[13]*cq[1] + c[18];
-    const double t1 = c[73]*t0;
+    const double t1 = c[70]*t0;
     const double t2 = c[2]*cx[0] + c[3]*cx[1];
     const double t3 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t2;
     const double t4 = c[3]*cx[0] + c[7]*cx[1];
@@ -583,10 +597,8 @@ void sg_overlock_needle_force_matrix(const double *q, const double *cq, const do
     A[0] = 1.0;
     A[6] = t1;
     A[13] = 1.0;
-    A[18] = c[73]*t3;
-    A[24] = c[41]*t2 + c[43]*t4;
-    A[25] = c[43]*t2 + c[44]*t4;
-    A[30] = c[70]*t2*t4 + c[71]*t3*t4;
+    A[18] = c[70]*t3;
+    A[30] = c[72]*t2*t4 + c[73]*t3*t4;
     A[35] = 1.0;
     A[40] = 1.0;
     A[42] = c[79]*t0;
@@ -614,9 +626,9 @@ void sg_overlock_needle_force_matrix(const double *q, const double *cq, const do
     A[135] = 1.0;
     A[141] = c[52];
     A[142] = c[96];
-    b[0] = c[72]*(-gv[0] + obs[25]);
-    b[1] = c[72]*(-gv[1] + obs[26]);
-    b[2] = c[69]*obs[20] - ld[6];
+    b[0] = c[69]*(-gv[0] + obs[25]);
+    b[1] = c[69]*(-gv[1] + obs[26]);
+    b[2] = c[69]*gv[1]*(c[42]*t2 + c[44]*t4) + c[71]*obs[20] - ld[6];
     b[3] = c[64]*(-gv[0] + obs[34]) - ld[0];
     b[4] = c[64]*(-gv[1] + obs[35]) - ld[1];
     b[5] = c[61]*obs[29] - ld[0]*(c[62]*cq[1] + t6) - ld[1]*(c[63]*cq[0] + t7) - ld[7];
@@ -628,14 +640,13 @@ void sg_overlock_needle_force_matrix(const double *q, const double *cq, const do
     b[11] = c[74]*obs[47] + c[75]*ld[2] + c[76]*ld[3] + c[76]*ld[5] + c[77]*ld[4] - ld[9];
 }
 
-/* sg_overlock_needle_anchors -- Total ops: 41 */
+/* sg_overlock_needle_anchors -- Total ops: 37 */
 void sg_overlock_needle_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
 {
     (void)x;
     const double t0 = c[2]*cx[0] + c[3]*cx[1];
     const double t1 = c[14]*cq[0];
     const double t2 = c[14]*cq[1];
-    const double t3 = c[3]*cx[0] + c[7]*cx[1];
     out[0] = c[0];
     out[1] = c[1];
     out[2] = c[0];
@@ -668,8 +679,8 @@ void sg_overlock_needle_anchors(const double *q, const double *cq, const double 
     out[29] = c[38] + q[1];
     out[30] = c[16];
     out[31] = c[39] + q[1];
-    out[32] = c[0] + c[41]*t3 + c[42]*t0;
-    out[33] = c[1] + c[41]*t0 + c[43]*t3;
+    out[32] = c[0];
+    out[33] = c[1] + c[41]*t0 + c[42]*(c[3]*cx[0] + c[7]*cx[1]);
     out[34] = c[45]*cq[0] + c[46]*cq[1];
     out[35] = c[45]*cq[1] + c[47]*cq[0];
     out[36] = c[49]*cq[4] + t1;
@@ -738,8 +749,8 @@ SG_VINLINE sg_vm sg_overlock_needle_motion_v(const sg_vd *q, const sg_vd *cq, co
     const sg_vd t10 = c[33]*t9;
     const sg_vd t11 = c[32]*t4*t9 + t10*t5;
     const sg_vd t14 = c[14]*cq[1];
-    const sg_vd t20 = c[41]*t9 + c[42]*t4;
-    const sg_vd t21 = c[42]*t9 + c[44]*t4;
+    const sg_vd t20 = c[41]*t4 + c[42]*t9;
+    const sg_vd t21 = c[41]*t9 + c[43]*t4;
     const sg_vd t22 = ((xd[0])*(xd[0]));
     const sg_vd t23 = c[45]*cq[0] + c[46]*cq[1];
     const sg_vd t24 = c[46]*cq[0] + c[48]*cq[1];
@@ -796,12 +807,12 @@ SG_VINLINE sg_vm sg_overlock_needle_motion_v(const sg_vd *q, const sg_vd *cq, co
     obs[18] = c[40] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
-    obs[21] = c[0] + t20;
-    obs[22] = c[1] + c[41]*t4 + c[43]*t9;
-    obs[23] = t21*xd[0];
-    obs[24] = t20*xd[0];
-    obs[25] = t21*xdd[0] + t22*(c[43]*t4 + c[44]*t9);
-    obs[26] = t20*xdd[0] + t21*t22;
+    obs[21] = sgv_set1(c[0]);
+    obs[22] = c[1] + t20;
+    obs[23] = sgv_set1(0.0);
+    obs[24] = t21*xd[0];
+    obs[25] = sgv_set1(0.0);
+    obs[26] = t21*xdd[0] + t22*(c[43]*t9 + c[44]*t4);
     obs[27] = q[0];
     obs[28] = qd[0];
     obs[29] = qdd[0];
@@ -829,7 +840,10 @@ SG_VINLINE sg_vm sg_overlock_needle_motion_v(const sg_vd *q, const sg_vd *cq, co
     obs[51] = qd[1];
     obs[52] = sgv_set1(0.0);
     obs[53] = qdd[1];
-    ok &= sgv_isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + ((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + obs[13]))) + (((obs[14] + obs[15]) + (obs[16] + obs[17])) + ((obs[18] + obs[19]) + (obs[20] + obs[21]))))) + (((((obs[22] + obs[23]) + (obs[24] + obs[25])) + ((obs[26] + obs[27]) + (obs[28] + obs[29]))) + (((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + obs[37])))) + ((((obs[38] + obs[39]) + (obs[40] + obs[41])) + ((obs[42] + obs[43]) + (obs[44] + obs[45]))) + (((obs[46] + obs[47]) + (obs[48] + obs[49])) + ((obs[50] + obs[51]) + (obs[52] + obs[53])))))));
+    obs[54] = c[42]*t4 + c[44]*t9;
+    obs[55] = t20*xd[0];
+    obs[56] = t20*xdd[0] + t21*t22;
+    ok &= sgv_isfinite(((((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + qdd[1]))) + (((qdd[2] + obs[0]) + (obs[1] + obs[2])) + ((obs[3] + obs[4]) + (obs[5] + obs[6])))) + ((((obs[7] + obs[8]) + (obs[9] + obs[10])) + ((obs[11] + obs[12]) + (obs[13] + obs[14]))) + (((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23])))))) + (((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31]))) + (((obs[32] + obs[33]) + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39])))) + ((((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47]))) + (((obs[48] + obs[49]) + (obs[50] + obs[51])) + ((obs[52] + obs[53]) + (obs[54] + (obs[55] + obs[56]))))))));
     return ok;
 }
 
@@ -920,18 +934,18 @@ SG_VINLINE sg_vm sg_overlock_needle_observe_v(const sg_vd *q, const sg_vd *cq, c
     case 3: {
         const sg_vd t4 = c[2]*cx[0] + c[3]*cx[1];
         const sg_vd t9 = c[3]*cx[0] + c[7]*cx[1];
-        const sg_vd t20 = c[41]*t9 + c[42]*t4;
-        const sg_vd t21 = c[42]*t9 + c[44]*t4;
+        const sg_vd t20 = c[41]*t4 + c[42]*t9;
+        const sg_vd t21 = c[41]*t9 + c[43]*t4;
         const sg_vd t22 = ((xd[0])*(xd[0]));
         obs[18] = c[40] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
-        obs[21] = c[0] + t20;
-        obs[22] = c[1] + c[41]*t4 + c[43]*t9;
-        obs[23] = t21*xd[0];
-        obs[24] = t20*xd[0];
-        obs[25] = t21*xdd[0] + t22*(c[43]*t4 + c[44]*t9);
-        obs[26] = t20*xdd[0] + t21*t22;
+        obs[21] = sgv_set1(c[0]);
+        obs[22] = c[1] + t20;
+        obs[23] = sgv_set1(0.0);
+        obs[24] = t21*xd[0];
+        obs[25] = sgv_set1(0.0);
+        obs[26] = t21*xdd[0] + t22*(c[43]*t9 + c[44]*t4);
         return sgv_isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26])))));
     }
     case 4: {
@@ -985,6 +999,17 @@ SG_VINLINE sg_vm sg_overlock_needle_observe_v(const sg_vd *q, const sg_vd *cq, c
         obs[53] = qdd[1];
         return sgv_isfinite((((obs[45] + obs[46]) + (obs[47] + obs[48])) + ((obs[49] + obs[50]) + (obs[51] + (obs[52] + obs[53])))));
     }
+    case 7: {
+        const sg_vd t4 = c[2]*cx[0] + c[3]*cx[1];
+        const sg_vd t9 = c[3]*cx[0] + c[7]*cx[1];
+        const sg_vd t20 = c[41]*t4 + c[42]*t9;
+        const sg_vd t21 = c[41]*t9 + c[43]*t4;
+        const sg_vd t22 = ((xd[0])*(xd[0]));
+        obs[54] = c[42]*t4 + c[44]*t9;
+        obs[55] = t20*xd[0];
+        obs[56] = t20*xdd[0] + t21*t22;
+        return sgv_isfinite((obs[54] + (obs[55] + obs[56])));
+    }
     default:
         return sgv_false();
     }
@@ -1004,11 +1029,11 @@ SG_VINLINE sg_vm sg_overlock_needle_forces_v(const sg_vd *q, const sg_vd *cq, co
     const sg_vd t7 = -gv[0] + obs[43];
     const sg_vd t8 = c[66]*t4 - ld[3] - ld[5];
     const sg_vd t9 = c[49]*cq[4];
-    const sg_vd t10 = c[3]*cx[0] + c[7]*cx[1];
+    const sg_vd t10 = c[11]*cq[0] + c[13]*cq[1] + c[18];
     const sg_vd t11 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t0;
-    const sg_vd t12 = c[11]*cq[0] + c[13]*cq[1] + c[18];
+    const sg_vd t12 = c[3]*cx[0] + c[7]*cx[1];
     const sg_vd t13 = c[79]*t11;
-    const sg_vd t14 = c[79]*t12;
+    const sg_vd t14 = c[79]*t10;
     {
         const sg_vd d = c[15]*cq[5];
         ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[14]*cq[1]), sgv_fabs(c[15]*cq[5]));
@@ -1026,9 +1051,9 @@ SG_VINLINE sg_vm sg_overlock_needle_forces_v(const sg_vd *q, const sg_vd *cq, co
     out[3] = -c[52]*out[9] + c[74]*obs[47] + c[75]*ld[2] + c[76]*ld[3] + c[76]*ld[5] + c[76]*t8 + c[77]*ld[4] - c[78]*out[2] - ld[9];
     out[8] = t5;
     out[10] = t8;
-    out[1] = c[72]*(-gv[1] + obs[26]) - c[73]*out[6]*t11;
-    out[0] = c[72]*(-gv[0] + obs[25]) - c[73]*out[6]*t12;
-    out[11] = c[69]*obs[20] - out[0]*(c[41]*t0 + c[43]*t10) - out[1]*(c[43]*t0 + c[44]*t10) - out[6]*(c[70]*t0*t10 + c[71]*t10*t11) - ld[6];
+    out[11] = c[69]*gv[1]*(c[42]*t0 + c[44]*t12) + c[71]*obs[20] - out[6]*(c[72]*t0*t12 + c[73]*t11*t12) - ld[6];
+    out[1] = c[69]*(-gv[1] + obs[26]) - c[70]*out[6]*t11;
+    out[0] = c[69]*(-gv[0] + obs[25]) - c[70]*out[6]*t10;
     const sg_vd t15 = -out[2];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
@@ -1036,11 +1061,11 @@ SG_VINLINE sg_vm sg_overlock_needle_forces_v(const sg_vd *q, const sg_vd *cq, co
     out[15] = sgv_set1(0.0);
     out[16] = out[6]*t14;
     out[17] = out[6]*t13;
-    out[18] = c[80]*out[6]*t10;
+    out[18] = c[80]*out[6]*t12;
     out[19] = out[0] + out[4] + t15;
     out[20] = out[1] + out[5];
     out[21] = c[0]*out[1] + c[19]*out[0] + out[11] + out[2]*q[1] + out[3];
-    out[22] = c[81]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[82]*((obs[19])*(obs[19])) + c[83]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[84]*((obs[28])*(obs[28])) + c[85]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[86]*((obs[37])*(obs[37])) + c[87]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[88]*((obs[46])*(obs[46]));
+    out[22] = c[81]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[82]*((obs[19])*(obs[19])) + c[83]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[84]*((obs[28])*(obs[28])) + c[85]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[86]*((obs[37])*(obs[37])) + c[87]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[88]*((obs[46])*(obs[46]));
     out[23] = c[89]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[90]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[91]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[92]*(gv[0]*obs[48] + gv[1]*obs[49]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     out[25] = sgv_set1(0.0);
@@ -1057,16 +1082,16 @@ SG_VINLINE int sg_overlock_needle_forces_in_simd(const double *c)
 static SG_FLATTEN size_t sg_overlock_needle_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
 {
     const sgv_kernels k = { sg_overlock_needle_closed_v, sg_overlock_needle_motion_v, sg_overlock_needle_rates_v, sg_overlock_needle_observe_v,
-                           sg_overlock_needle_forces_v, sg_overlock_needle_forces_in_simd, 54, 26 };
+                           sg_overlock_needle_forces_v, sg_overlock_needle_forces_in_simd, 57, 26 };
     return sgv_closed_sweep(m, r, sg_overlock_needle_constants, sg_overlock_needle_sweep, k);
 }
 SG_SIMD_END
 #endif
 
 static const unsigned char sg_overlock_needle_coord_is_angle[3] = { 1, 0, 1 };
-static const int sg_overlock_needle_group_start[8] = { 0, 6, 12, 18, 27, 36, 45, 54 };
-static const unsigned char sg_overlock_needle_group_always[7] = { 0, 0, 0, 0, 0, 0, 0 };
-static const unsigned char sg_overlock_needle_group_angles[8] = { 0, 0, 0, 0, 1, 1, 0, 0 };
+static const int sg_overlock_needle_group_start[9] = { 0, 6, 12, 18, 27, 36, 45, 54, 57 };
+static const unsigned char sg_overlock_needle_group_always[8] = { 0, 0, 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_overlock_needle_group_angles[9] = { 0, 0, 0, 0, 1, 1, 0, 0, 0 };
 
 static const sg_mechanism sg_overlock_needle_descriptor = {
     .name = "overlock_needle",
@@ -1074,14 +1099,14 @@ static const sg_mechanism sg_overlock_needle_descriptor = {
     .nx = 1,
     .np = 27,
     .nc = 97,
-    .nobs = 54,
+    .nobs = 57,
     .nbranch = 2,
     .nf = 12,
     .nfo = 26,
     .nload = 10,
     .nblock = 3,
     .coord_is_angle = sg_overlock_needle_coord_is_angle,
-    .ngroup = 7,
+    .ngroup = 8,
     .group_start = sg_overlock_needle_group_start,
     .group_always = sg_overlock_needle_group_always,
     .group_angles = sg_overlock_needle_group_angles,
@@ -1146,154 +1171,155 @@ const char *sg_overlock_needle_manifest(void)
         ",[12],[0],[3,5],[3,5],[3,5],[3,5],[3,5],[4],[6],[7],[6],[3],[1],[0],[2],[0],[7],[3,5],[3,5],[3,5"
         "],[4],[6],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[0],[8],[8,9],[12],[14],[15],[15],[14]"
         ",[18],[19],[19],[18],[6],[6],[7,25],[24],[0,1,2,3],[4,6,7],[2,3,5],[2,3,5],[1,2,3,5],[1,2,3,5],["
-        "0,2,3,5],[0,2,3,5],[20],[4,18],[4,18],[17],[21],[23],[22],[6,21],[16],[0,2],[0,2],[13],[2],[26],"
-        "[8,24],[25],[8,9,24],[24],[2],[0,2],[13],[16],[17],[20],[21],[22],[23],[26],[13],[17],[21],[23],"
-        "[3,5,19],[3,5,18],[3,5,19],[25]],\"coords\":[{\"guess\":0.0,\"name\":\"lever.angle\",\"unit\":\""
-        "rad\"},{\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":1.5707963267948"
-        "966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51"
-        "-A class overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c"
-        " \\u0438\\u0433\\u043b\\u044b (seed 003 fig. 1\\u20132, eqs. 1\\u20132).\\n\\nA spatial-planar f"
-        "our-bar: the main shaft 1 (below the bed, along the machine's x) carries an eccentric whose\\npi"
-        "n B drives, through a rod with a ball joint at each end, the needle-lever rock shaft 3 (axis acr"
-        "oss the main\\nshaft, through D); its arm l\\u2084 drives the needle bar through the link l\\u20"
-        "85 (the needle bar's axis at the offset a\\nfrom D). Seed 003 eq. (1) gives the rock shaft's ang"
-        "le \\u03c6\\u2083 in closed form (\\u03b4\\u2081 the assembly sign), eq. (2) the\\nneedle stroke"
-        " as a second-order expansion in the link's obliquity \\u2014 here both are exact.\\n\\nFrame (th"
-        "e needle lever's plane): origin on the rock-shaft axis D, x along the main shaft, y up, z along "
-        "the rock\\nshaft. The main shaft's axis runs parallel to x through (l\\u2083, \\u2212h_A, 0): th"
-        "e rod is nearly vertical and the lever\\narm DC horizontal in mid stroke, so B's up-and-down thr"
-        "ow rocks the shaft by about \\u00b1asin(r/l\\u2083). The arm DC and\\nthe needle lever DL are on"
-        "e bent lever (DL at ``lever_angle`` from DC). Crank angle zero points the eccentric\\nalong +z ("
-        "the mechanism's normal): \\u03c6 = 90\\u00b0 puts B at its lowest, the needle at its highest (si"
-        "gn of the lever).\\n\\nEvery dimension is an estimate (seed 003 prints none; DOMAIN-NOTES: 51-A "
-        "class, 3000\\u20134000 r/min): a needle\\nstroke of about 25 mm, the rock shaft swinging about \\u"
-        "00b127\\u00b0, masses of a small cast lever and a light needle bar.\",\"elements\":[],\"force_bl"
-        "ocks\":[1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.p"
-        "ower\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar."
-        "guide.fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\""
-        "N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},"
-        "{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit"
-        "\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\""
-        ":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\""
-        "force_rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"lever.x\",\"lever.y\",\"lev"
-        "er.moment\",\"link.x\",\"link.y\",\"link.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar"
-        ".moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi"
-        "\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_over"
-        "lock_needle_anchors\":{\"ops\":41},\"sg_overlock_needle_blocks\":{\"ops\":27},\"sg_overlock_need"
-        "le_closed\":{\"ops\":38},\"sg_overlock_needle_constants\":{\"ops\":111},\"sg_overlock_needle_for"
-        "ce_matrix\":{\"ops\":105},\"sg_overlock_needle_forces\":{\"ops\":208},\"sg_overlock_needle_lu_fa"
-        "ctor\":{\"ops\":18},\"sg_overlock_needle_lu_solve\":{\"ops\":18},\"sg_overlock_needle_motion\":{"
-        "\"ops\":155},\"sg_overlock_needle_observe\":{\"ops\":101},\"sg_overlock_needle_rates\":{\"ops\":"
-        "83},\"sg_overlock_needle_residual\":{\"ops\":43},\"sg_overlock_needle_scales\":{\"ops\":5}},\"lo"
-        "ads\":[{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":\"lever\",\"co"
-        "mponent\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":"
-        "\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\""
-        ":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"compo"
-        "nent\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name"
-        "\":\"eccentric\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\":\"l"
-        "ink\",\"component\":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\"component\":\"torqu"
-        "e\",\"name\":\"needle_bar\"}],\"name\":\"overlock_needle\",\"observables\":[{\"name\":\"lever_pi"
-        "n.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"lever_pin.x_d\",\"un"
-        "it\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.x_dd\",\"unit\""
-        ":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\""
-        ":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"}"
-        ",{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{"
-        "\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2"
-        "\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\""
-        "rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"un"
-        "it\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\""
-        "unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\","
-        "\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com"
-        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_"
-        "d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com"
-        ".x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"uni"
-        "t\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\""
-        ":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.angle\",\"unit\":\""
-        "rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angle_dd\",\"unit\":\"rad"
-        "/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\"unit\":\"m\"},{\"nam"
-        "e\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"nam"
-        "e\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"}"
-        ",{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.007"
-        "4,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of the needle eccentric on the main shaft (e"
-        "stimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D "
-        "(estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit"
-        "\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\""
-        "kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":"
-        "0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"leng"
-        "th\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"displ"
-        "ay_unit\":\"mm\",\"doc\":\"needle lever DL, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\""
-        "lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\""
-        ",\"doc\":\"angle of the needle lever DL from the arm DC (estimate)\",\"kind\":\"angle\",\"name\""
-        ":\"lever_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_"
-        "unit\":\"mm\",\"doc\":\"needle-bar link LN, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\""
-        "link\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\""
-        ",\"doc\":\"needle-bar axis from the rock shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\""
-        "offset\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\""
-        "mm\",\"doc\":\"needle eye below the link pin N along the bar (estimate)\",\"kind\":\"length\",\""
-        "name\":\"eye_below_pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"di"
-        "splay_unit\":\"mm\",\"doc\":\"needle point below its eye (estimate)\",\"kind\":\"length\",\"name"
-        "\":\"point_below_eye\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"disp"
-        "lay_unit\":\"mm\",\"doc\":\"length of the needle eye along the needle (estimate)\",\"kind\":\"le"
-        "ngth\",\"name\":\"eye_length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},"
-        "{\"default\":0.0035,\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, where th"
-        "e lower looper's tip passes (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positiv"
-        "e\":true,\"role\":\"needle_scarf\",\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit"
-        "\":\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\""
-        ":\"eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"disp"
-        "lay_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":"
-        "\"centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"posi"
-        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"ce"
-        "ntre of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\""
-        "moment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccent"
-        "ric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"displa"
-        "y_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre"
-        " of mass of lever, local u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of "
-        "lever, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lev"
-        "er about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of"
-        " link\",\"kind\":\"mass\",\"name\":\"link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\""
-        "},{\"default\":1e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of link about its "
-        "centre of mass\",\"kind\":\"inertia\",\"name\":\"link.inertia\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"kg*m**2\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\","
-        "\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"}"
-        ",{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\""
-        "kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"ki"
-        "nd\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
-        "\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about i"
-        "ts centre of mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"po"
-        "ints\":[{\"body\":\"lever\",\"doc\":\"needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\""
-        "role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":"
-        "6,\"role\":\"needle_eye\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_p"
-        "oint\",\"offset\":12,\"role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccent"
-        "ric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.p"
-        "ivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],"
-        "\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"gr"
-        "ound\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"nam"
-        "e\":\"D\",\"offset\":4},{\"a\":\"eccentric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounde"
-        "d\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"colu"
-        "mns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a"
-        "\":\"link\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revol"
-        "ute\",\"name\":\"N\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\""
-        "],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset"
-        "\":11,\"sense\":1}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"need"
-        "le_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\","
-        "\"name\":\"eye_length\"},\"needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needl"
-        "e_scarf\":{\"kind\":\"param\",\"name\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock"
-        "\":3,\"nbranch\":2,\"nc\":97,\"nf\":12,\"nfo\":26,\"ngroup\":7,\"nload\":10,\"nobs\":54,\"np\":2"
-        "7,\"nq\":3,\"nx\":1}}"
+        "0,2,3,5],[0,2,3,5],[20],[4,18],[4,18],[17],[21],[23],[22],[6,21],[13],[2],[13,14,15,16],[0,2],[0"
+        ",2],[26],[8,24],[25],[8,9,24],[24],[2],[0,2],[13],[16],[17],[20],[21],[22],[23],[26],[13],[17],["
+        "21],[23],[3,5,19],[3,5,18],[3,5,19],[25]],\"coords\":[{\"guess\":0.0,\"name\":\"lever.angle\",\""
+        "unit\":\"rad\"},{\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":1.5707"
+        "963267948966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"d"
+        "oc\":\"51-A class overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u04"
+        "37\\u043c \\u0438\\u0433\\u043b\\u044b (seed 003 fig. 1\\u20132, eqs. 1\\u20132).\\n\\nA spatial"
+        "-planar four-bar: the main shaft 1 (below the bed, along the machine's x) carries an eccentric w"
+        "hose\\npin B drives, through a rod with a ball joint at each end, the needle-lever rock shaft 3 "
+        "(axis across the main\\nshaft, through D); its arm l\\u2084 drives the needle bar through the li"
+        "nk l\\u2085 (the needle bar's axis at the offset a\\nfrom D). Seed 003 eq. (1) gives the rock sh"
+        "aft's angle \\u03c6\\u2083 in closed form (\\u03b4\\u2081 the assembly sign), eq. (2) the\\nneed"
+        "le stroke as a second-order expansion in the link's obliquity \\u2014 here both are exact.\\n\\n"
+        "Frame (the needle lever's plane): origin on the rock-shaft axis D, x along the main shaft, y up,"
+        " z along the rock\\nshaft. The main shaft's axis runs parallel to x through (l\\u2083, \\u2212h_"
+        "A, 0): the rod is nearly vertical and the lever\\narm DC horizontal in mid stroke, so B's up-and"
+        "-down throw rocks the shaft by about \\u00b1asin(r/l\\u2083). The arm DC and\\nthe needle lever "
+        "DL are one bent lever (DL at ``lever_angle`` from DC). Crank angle zero points the eccentric\\na"
+        "long +z (the mechanism's normal): \\u03c6 = 90\\u00b0 puts B at its lowest, the needle at its hi"
+        "ghest (sign of the lever).\\n\\nEvery dimension is an estimate (seed 003 prints none; DOMAIN-NOT"
+        "ES: 51-A class, 3000\\u20134000 r/min): a needle\\nstroke of about 25 mm, the rock shaft swingin"
+        "g about \\u00b127\\u00b0, masses of a small cast lever and a light needle bar.\",\"elements\":[]"
+        ",\"force_blocks\":[1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\""
+        ":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"n"
+        "eedle_bar.guide.fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\""
+        "unit\":\"N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\""
+        ":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\""
+        ",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\""
+        "unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\""
+        "}],\"force_rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"lever.x\",\"lever.y\","
+        "\"lever.moment\",\"link.x\",\"link.y\",\"link.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needl"
+        "e_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angl"
+        "e phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg"
+        "_overlock_needle_anchors\":{\"ops\":37},\"sg_overlock_needle_blocks\":{\"ops\":27},\"sg_overlock"
+        "_needle_closed\":{\"ops\":38},\"sg_overlock_needle_constants\":{\"ops\":116},\"sg_overlock_needl"
+        "e_force_matrix\":{\"ops\":105},\"sg_overlock_needle_forces\":{\"ops\":210},\"sg_overlock_needle_"
+        "lu_factor\":{\"ops\":18},\"sg_overlock_needle_lu_solve\":{\"ops\":18},\"sg_overlock_needle_motio"
+        "n\":{\"ops\":154},\"sg_overlock_needle_observe\":{\"ops\":113},\"sg_overlock_needle_rates\":{\"o"
+        "ps\":83},\"sg_overlock_needle_residual\":{\"ops\":43},\"sg_overlock_needle_scales\":{\"ops\":5}}"
+        ",\"loads\":[{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":\"lever\""
+        ",\"component\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"na"
+        "me\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"b"
+        "ody\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\""
+        "component\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"eccentric\",\"component\":\"torque\",\""
+        "name\":\"eccentric\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\""
+        ":\"link\",\"component\":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\"component\":\"t"
+        "orque\",\"name\":\"needle_bar\"}],\"name\":\"overlock_needle\",\"observables\":[{\"name\":\"leve"
+        "r_pin.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"lever_pin.x_d\","
+        "\"unit\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.x_dd\",\"u"
+        "nit\":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"u"
+        "nit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m"
+        "/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":"
+        "\"m\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/"
+        "s\"},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"uni"
+        "t\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\""
+        ",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y"
+        "\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y"
+        "_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentri"
+        "c.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.a"
+        "ngle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"leve"
+        "r.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\","
+        "\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"u"
+        "nit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.angle\",\"uni"
+        "t\":\"rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angle_dd\",\"unit\""
+        ":\"rad/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\"unit\":\"m\"},"
+        "{\"name\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\"m/s\"},{\"nam"
+        "e\":\"link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/s^2\"},{\"nam"
+        "e\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},"
+        "{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":"
+        "\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\""
+        "unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.co"
+        "m.z\",\"unit\":\"m\"},{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.co"
+        "m.z_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\"mm\",\"doc\":\""
+        "eccentricity AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\"length\",\"nam"
+        "e\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_un"
+        "it\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\""
+        "name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"displ"
+        "ay_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\""
+        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"do"
+        "c\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\""
+        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle "
+        "lever DL, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of the needle le"
+        "ver DL from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"needle-ba"
+        "r link LN, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":true,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-bar axis from "
+        "the rock shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"needle eye below "
+        "the link pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"posit"
+        "ive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"ne"
+        "edle point below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_eye\",\"positiv"
+        "e\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\"doc\":\"leng"
+        "th of the needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"eye_length\",\""
+        "positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,\"display_uni"
+        "t\":\"mm\",\"doc\":\"needle scarf above the eye's top, where the lower looper's tip passes (esti"
+        "mate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"needle_scarf\""
+        ",\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"phase of ecce"
+        "ntric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass o"
+        "f eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"u"
+        "nit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, lo"
+        "cal u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local "
+        "v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric ab"
+        "out its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,"
+        "\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of "
+        "lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
+        "\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"ki"
+        "nd\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"def"
+        "ault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"lengt"
+        "h\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06"
+        ",\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\""
+        "kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**"
+        "2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\"mass\",\"name"
+        "\":\"link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-06,\"display_"
+        "unit\":\"kg*m**2\",\"doc\":\"moment of inertia of link about its centre of mass\",\"kind\":\"ine"
+        "rtia\",\"name\":\"link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"defau"
+        "lt\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"ne"
+        "edle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_u"
+        "nit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\"ne"
+        "edle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_uni"
+        "t\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"need"
+        "le_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_uni"
+        "t\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\":\""
+        "inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}"
+        "],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"lever\",\"d"
+        "oc\":\"needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body\":\"needl"
+        "e_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_eye\"},{\""
+        "body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":12,\"role\":"
+        "\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy"
+        "\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\""
+        "ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"p"
+        "rismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\",\"colum"
+        "ns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\""
+        ":\"eccentric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"n"
+        "ame\":\"rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],\"ground"
+        "ed\":false,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"needle_bar"
+        "\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\"offset\""
+        ":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\""
+        "shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\""
+        "needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"point\",\"na"
+        "me\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\"needle"
+        "_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"param\",\"n"
+        "ame\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc\":97,\"nf"
+        "\":12,\"nfo\":26,\"ngroup\":8,\"nload\":10,\"nobs\":57,\"np\":27,\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_needle_planar_constants -- Total ops: 109 */
+/* sg_overlock_needle_planar_constants -- Total ops: 114 */
 void sg_overlock_needle_planar_constants(const double *p, double *c)
 {
     const double t0 = sin(p[12]);
@@ -75,10 +75,10 @@ void sg_overlock_needle_planar_constants(const double *p, double *c)
     c[35] = -p[8];
     c[36] = -t19;
     c[37] = p[12];
-    c[38] = p[14];
-    c[39] = -p[15];
-    c[40] = p[15];
-    c[41] = -p[14];
+    c[38] = p[15];
+    c[39] = -p[14];
+    c[40] = -p[15];
+    c[41] = p[14];
     c[42] = p[18];
     c[43] = -p[19];
     c[44] = p[19];
@@ -104,26 +104,26 @@ void sg_overlock_needle_planar_constants(const double *p, double *c)
     c[64] = p[23];
     c[65] = p[22];
     c[66] = p[21]*t20;
-    c[67] = p[16];
-    c[68] = t24;
-    c[69] = -t24;
-    c[70] = p[13];
-    c[71] = t21;
-    c[72] = p[26];
-    c[73] = -p[24] - p[8];
-    c[74] = -p[25];
-    c[75] = -p[24] - t19;
-    c[76] = -p[24];
-    c[77] = -t21;
-    c[78] = (0.5)*p[13];
-    c[79] = (0.5)*p[16];
-    c[80] = (0.5)*p[17];
-    c[81] = (0.5)*p[20];
-    c[82] = (0.5)*p[21];
-    c[83] = (0.5)*p[22];
-    c[84] = (0.5)*p[23];
-    c[85] = (0.5)*p[26];
-    c[86] = -p[13];
+    c[67] = p[13];
+    c[68] = t21;
+    c[69] = p[13]*(((p[14])*(p[14])) + ((p[15])*(p[15]))) + p[16];
+    c[70] = -p[13];
+    c[71] = t24;
+    c[72] = -t24;
+    c[73] = p[26];
+    c[74] = -p[24] - p[8];
+    c[75] = -p[25];
+    c[76] = -p[24] - t19;
+    c[77] = -p[24];
+    c[78] = -t21;
+    c[79] = (0.5)*p[13];
+    c[80] = (0.5)*p[16];
+    c[81] = (0.5)*p[17];
+    c[82] = (0.5)*p[20];
+    c[83] = (0.5)*p[21];
+    c[84] = (0.5)*p[22];
+    c[85] = (0.5)*p[23];
+    c[86] = (0.5)*p[26];
     c[87] = -p[17];
     c[88] = -p[21];
     c[89] = -p[23];
@@ -251,8 +251,8 @@ int sg_overlock_needle_planar_motion(const double *q, const double *cq, const do
     const double t13 = t11*t4 + t12*t7;
     const double t14 = c[12]*cq[0] + c[32]*cq[1];
     const double t17 = c[13]*cq[1];
-    const double t23 = c[38]*t1 + c[39]*t6;
-    const double t24 = c[39]*t1 + c[41]*t6;
+    const double t23 = c[38]*t6 + c[39]*t1;
+    const double t24 = c[38]*t1 + c[41]*t6;
     const double t25 = ((xd[0])*(xd[0]));
     const double t26 = c[42]*cq[0] + c[43]*cq[1];
     const double t27 = c[43]*cq[0] + c[45]*cq[1];
@@ -310,7 +310,7 @@ int sg_overlock_needle_planar_motion(const double *q, const double *cq, const do
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = c[0] + t23;
-    obs[22] = c[38]*t6 + c[4] + c[40]*t1;
+    obs[22] = c[39]*t6 + c[4] + c[40]*t1;
     obs[23] = t24*xd[0];
     obs[24] = t23*xd[0];
     obs[25] = t24*xdd[0] + t25*(c[40]*t6 + c[41]*t1);
@@ -342,7 +342,10 @@ int sg_overlock_needle_planar_motion(const double *q, const double *cq, const do
     obs[51] = qd[1];
     obs[52] = 0.0;
     obs[53] = qdd[1];
-    if (!isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + ((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + obs[13]))) + (((obs[14] + obs[15]) + (obs[16] + obs[17])) + ((obs[18] + obs[19]) + (obs[20] + obs[21]))))) + (((((obs[22] + obs[23]) + (obs[24] + obs[25])) + ((obs[26] + obs[27]) + (obs[28] + obs[29]))) + (((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + obs[37])))) + ((((obs[38] + obs[39]) + (obs[40] + obs[41])) + ((obs[42] + obs[43]) + (obs[44] + obs[45]))) + (((obs[46] + obs[47]) + (obs[48] + obs[49])) + ((obs[50] + obs[51]) + (obs[52] + obs[53])))))))) return SG_NONFINITE;
+    obs[54] = 0.0;
+    obs[55] = 0.0;
+    obs[56] = 0.0;
+    if (!isfinite(((((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + qdd[1]))) + (((qdd[2] + obs[0]) + (obs[1] + obs[2])) + ((obs[3] + obs[4]) + (obs[5] + obs[6])))) + ((((obs[7] + obs[8]) + (obs[9] + obs[10])) + ((obs[11] + obs[12]) + (obs[13] + obs[14]))) + (((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23])))))) + (((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31]))) + (((obs[32] + obs[33]) + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39])))) + ((((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47]))) + (((obs[48] + obs[49]) + (obs[50] + obs[51])) + ((obs[52] + obs[53]) + (obs[54] + (obs[55] + obs[56]))))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
@@ -438,14 +441,14 @@ int sg_overlock_needle_planar_observe(const double *q, const double *cq, const d
     case 3: {
         const double t1 = c[1]*cx[0] + c[2]*cx[1];
         const double t6 = c[1]*cx[1] + c[5]*cx[0];
-        const double t23 = c[38]*t1 + c[39]*t6;
-        const double t24 = c[39]*t1 + c[41]*t6;
+        const double t23 = c[38]*t6 + c[39]*t1;
+        const double t24 = c[38]*t1 + c[41]*t6;
         const double t25 = ((xd[0])*(xd[0]));
         obs[18] = c[37] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
         obs[21] = c[0] + t23;
-        obs[22] = c[38]*t6 + c[4] + c[40]*t1;
+        obs[22] = c[39]*t6 + c[4] + c[40]*t1;
         obs[23] = t24*xd[0];
         obs[24] = t23*xd[0];
         obs[25] = t24*xdd[0] + t25*(c[40]*t6 + c[41]*t1);
@@ -503,12 +506,18 @@ int sg_overlock_needle_planar_observe(const double *q, const double *cq, const d
         obs[53] = qdd[1];
         return isfinite((((obs[45] + obs[46]) + (obs[47] + obs[48])) + ((obs[49] + obs[50]) + (obs[51] + (obs[52] + obs[53]))))) ? SG_OK : SG_NONFINITE;
     }
+    case 7: {
+        obs[54] = 0.0;
+        obs[55] = 0.0;
+        obs[56] = 0.0;
+        return isfinite((obs[54] + (obs[55] + obs[56]))) ? SG_OK : SG_NONFINITE;
+    }
     default:
         return SG_BAD_ARGUMENT;
     }
 }
 
-/* sg_overlock_needle_planar_forces -- Total ops: 214 */
+/* sg_overlock_needle_planar_forces -- Total ops: 221 */
 int sg_overlock_needle_planar_forces(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *c, const double *obs, const double *gv, const double *ld, double *out)
 {
     (void)x;
@@ -525,8 +534,8 @@ int sg_overlock_needle_planar_forces(const double *q, const double *cq, const do
     const double t10 = c[46]*cq[4];
     const double t11 = c[10]*cq[0] + c[12]*cq[1] + c[18]*t0 + c[19];
     const double t12 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t1;
-    const double t13 = c[77]*t12;
-    const double t14 = c[77]*t11;
+    const double t13 = c[78]*t12;
+    const double t14 = c[78]*t11;
     {
         const double d = c[14]*cq[5];
         if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[13]*cq[1]), fabs(c[14]*cq[5])))) return SG_SINGULAR;
@@ -541,12 +550,12 @@ int sg_overlock_needle_planar_forces(const double *q, const double *cq, const do
     out[9] = -c[63]*t8 + out[7];
     out[5] = -out[6]*t13 + t7;
     out[2] = -c[64]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
-    out[3] = -c[49]*out[9] + c[72]*obs[47] + c[73]*ld[2] + c[74]*ld[3] + c[74]*ld[5] + c[74]*t9 + c[75]*ld[4] - c[76]*out[2] - ld[9];
+    out[3] = -c[49]*out[9] + c[73]*obs[47] + c[74]*ld[2] + c[75]*ld[3] + c[75]*ld[5] + c[75]*t9 + c[76]*ld[4] - c[77]*out[2] - ld[9];
     out[8] = t6;
     out[10] = t9;
-    out[1] = c[70]*(-gv[1] + obs[26]) - c[71]*out[6]*t12;
-    out[0] = c[70]*(-gv[0] + obs[25]) - c[71]*out[6]*t11;
-    out[11] = c[67]*obs[20] - out[0]*(c[38]*t1 + c[40]*t0) - out[1]*(c[40]*t1 + c[41]*t0) - out[6]*(c[68]*t1*t11 + c[69]*t0*t12) - ld[6];
+    out[11] = c[69]*obs[20] + c[70]*(-gv[0]*(c[39]*t1 + c[40]*t0) + gv[1]*(c[38]*t1 + c[39]*t0)) - out[6]*(c[71]*t1*t11 + c[72]*t0*t12) - ld[6];
+    out[1] = c[67]*(-gv[1] + obs[26]) - c[68]*out[6]*t12;
+    out[0] = c[67]*(-gv[0] + obs[25]) - c[68]*out[6]*t11;
     const double t15 = -out[2];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
@@ -558,25 +567,25 @@ int sg_overlock_needle_planar_forces(const double *q, const double *cq, const do
     out[19] = out[0] + out[4] + t15;
     out[20] = out[1] + out[5];
     out[21] = c[0]*out[1] + c[17]*out[0] + out[11] + out[2]*q[1] + out[3];
-    out[22] = c[78]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[79]*((obs[19])*(obs[19])) + c[80]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[81]*((obs[28])*(obs[28])) + c[82]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[83]*((obs[37])*(obs[37])) + c[84]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[85]*((obs[46])*(obs[46]));
-    out[23] = c[86]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[87]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[88]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[89]*(gv[0]*obs[48] + gv[1]*obs[49]);
+    out[22] = c[79]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[80]*((obs[19])*(obs[19])) + c[81]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[82]*((obs[28])*(obs[28])) + c[83]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[84]*((obs[37])*(obs[37])) + c[85]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[86]*((obs[46])*(obs[46]));
+    out[23] = c[70]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[87]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[88]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[89]*(gv[0]*obs[48] + gv[1]*obs[49]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     out[25] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
     return SG_OK;
 }
 
-/* sg_overlock_needle_planar_force_matrix -- Total ops: 107 */
+/* sg_overlock_needle_planar_force_matrix -- Total ops: 112 */
 void sg_overlock_needle_planar_force_matrix(const double *q, const double *cq, const double *x, const double *cx, const double *c, const double *obs, const double *gv, const double *ld, double *A, double *b)
 {
     (void)q;
     (void)x;
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
     const double t1 = c[10]*cq[0] + c[12]*cq[1] + c[18]*t0 + c[19];
-    const double t2 = c[71]*t1;
+    const double t2 = c[68]*t1;
     const double t3 = c[1]*cx[1] + c[5]*cx[0];
     const double t4 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t3;
-    const double t5 = c[77]*t4;
+    const double t5 = c[78]*t4;
     const double t6 = c[44]*cq[0];
     const double t7 = c[44]*cq[1];
     const double t8 = c[46]*cq[5];
@@ -585,13 +594,11 @@ void sg_overlock_needle_planar_force_matrix(const double *q, const double *cq, c
     A[0] = 1.0;
     A[6] = t2;
     A[13] = 1.0;
-    A[18] = c[71]*t4;
-    A[24] = c[38]*t3 + c[40]*t0;
-    A[25] = c[40]*t3 + c[41]*t0;
-    A[30] = c[68]*t1*t3 + c[69]*t0*t4;
+    A[18] = c[68]*t4;
+    A[30] = c[71]*t1*t3 + c[72]*t0*t4;
     A[35] = 1.0;
     A[40] = 1.0;
-    A[42] = c[77]*t1;
+    A[42] = c[78]*t1;
     A[43] = -1.0;
     A[53] = 1.0;
     A[54] = t5;
@@ -612,13 +619,13 @@ void sg_overlock_needle_planar_force_matrix(const double *q, const double *cq, c
     A[110] = -1.0;
     A[117] = 1.0;
     A[130] = 1.0;
-    A[134] = c[76];
+    A[134] = c[77];
     A[135] = 1.0;
     A[141] = c[49];
     A[142] = c[93];
-    b[0] = c[70]*(-gv[0] + obs[25]);
-    b[1] = c[70]*(-gv[1] + obs[26]);
-    b[2] = c[67]*obs[20] - ld[6];
+    b[0] = c[67]*(-gv[0] + obs[25]);
+    b[1] = c[67]*(-gv[1] + obs[26]);
+    b[2] = c[69]*obs[20] + c[70]*(-gv[0]*(c[39]*t3 + c[40]*t0) + gv[1]*(c[38]*t3 + c[39]*t0)) - ld[6];
     b[3] = c[62]*(-gv[0] + obs[34]) - ld[0];
     b[4] = c[62]*(-gv[1] + obs[35]) - ld[1];
     b[5] = c[59]*obs[29] - ld[0]*(c[60]*cq[1] + t6) - ld[1]*(c[61]*cq[0] + t7) - ld[7];
@@ -627,7 +634,7 @@ void sg_overlock_needle_planar_force_matrix(const double *q, const double *cq, c
     b[8] = c[65]*obs[38] - ld[8];
     b[9] = c[64]*(-gv[0] + obs[52]) - ld[2] - ld[4];
     b[10] = c[64]*(-gv[1] + obs[53]) - ld[3] - ld[5];
-    b[11] = c[72]*obs[47] + c[73]*ld[2] + c[74]*ld[3] + c[74]*ld[5] + c[75]*ld[4] - ld[9];
+    b[11] = c[73]*obs[47] + c[74]*ld[2] + c[75]*ld[3] + c[75]*ld[5] + c[76]*ld[4] - ld[9];
 }
 
 /* sg_overlock_needle_planar_anchors -- Total ops: 43 */
@@ -670,8 +677,8 @@ void sg_overlock_needle_planar_anchors(const double *q, const double *cq, const 
     out[29] = c[35] + q[1];
     out[30] = c[15];
     out[31] = c[36] + q[1];
-    out[32] = c[0] + c[38]*t0 + c[39]*t1;
-    out[33] = c[38]*t1 + c[4] + c[40]*t0;
+    out[32] = c[0] + c[38]*t1 + c[39]*t0;
+    out[33] = c[39]*t1 + c[4] + c[40]*t0;
     out[34] = c[42]*cq[0] + c[43]*cq[1];
     out[35] = c[42]*cq[1] + c[44]*cq[0];
     out[36] = c[46]*cq[4] + t2;
@@ -743,8 +750,8 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_motion_v(const sg_vd *q, const sg_vd 
     const sg_vd t13 = t11*t4 + t12*t7;
     const sg_vd t14 = c[12]*cq[0] + c[32]*cq[1];
     const sg_vd t17 = c[13]*cq[1];
-    const sg_vd t23 = c[38]*t1 + c[39]*t6;
-    const sg_vd t24 = c[39]*t1 + c[41]*t6;
+    const sg_vd t23 = c[38]*t6 + c[39]*t1;
+    const sg_vd t24 = c[38]*t1 + c[41]*t6;
     const sg_vd t25 = ((xd[0])*(xd[0]));
     const sg_vd t26 = c[42]*cq[0] + c[43]*cq[1];
     const sg_vd t27 = c[43]*cq[0] + c[45]*cq[1];
@@ -802,7 +809,7 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_motion_v(const sg_vd *q, const sg_vd 
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = c[0] + t23;
-    obs[22] = c[38]*t6 + c[4] + c[40]*t1;
+    obs[22] = c[39]*t6 + c[4] + c[40]*t1;
     obs[23] = t24*xd[0];
     obs[24] = t23*xd[0];
     obs[25] = t24*xdd[0] + t25*(c[40]*t6 + c[41]*t1);
@@ -834,7 +841,10 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_motion_v(const sg_vd *q, const sg_vd 
     obs[51] = qd[1];
     obs[52] = sgv_set1(0.0);
     obs[53] = qdd[1];
-    ok &= sgv_isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + ((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + obs[13]))) + (((obs[14] + obs[15]) + (obs[16] + obs[17])) + ((obs[18] + obs[19]) + (obs[20] + obs[21]))))) + (((((obs[22] + obs[23]) + (obs[24] + obs[25])) + ((obs[26] + obs[27]) + (obs[28] + obs[29]))) + (((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + obs[37])))) + ((((obs[38] + obs[39]) + (obs[40] + obs[41])) + ((obs[42] + obs[43]) + (obs[44] + obs[45]))) + (((obs[46] + obs[47]) + (obs[48] + obs[49])) + ((obs[50] + obs[51]) + (obs[52] + obs[53])))))));
+    obs[54] = sgv_set1(0.0);
+    obs[55] = sgv_set1(0.0);
+    obs[56] = sgv_set1(0.0);
+    ok &= sgv_isfinite(((((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + qdd[1]))) + (((qdd[2] + obs[0]) + (obs[1] + obs[2])) + ((obs[3] + obs[4]) + (obs[5] + obs[6])))) + ((((obs[7] + obs[8]) + (obs[9] + obs[10])) + ((obs[11] + obs[12]) + (obs[13] + obs[14]))) + (((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23])))))) + (((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31]))) + (((obs[32] + obs[33]) + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39])))) + ((((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47]))) + (((obs[48] + obs[49]) + (obs[50] + obs[51])) + ((obs[52] + obs[53]) + (obs[54] + (obs[55] + obs[56]))))))));
     return ok;
 }
 
@@ -928,14 +938,14 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_observe_v(const sg_vd *q, const sg_vd
     case 3: {
         const sg_vd t1 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t6 = c[1]*cx[1] + c[5]*cx[0];
-        const sg_vd t23 = c[38]*t1 + c[39]*t6;
-        const sg_vd t24 = c[39]*t1 + c[41]*t6;
+        const sg_vd t23 = c[38]*t6 + c[39]*t1;
+        const sg_vd t24 = c[38]*t1 + c[41]*t6;
         const sg_vd t25 = ((xd[0])*(xd[0]));
         obs[18] = c[37] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
         obs[21] = c[0] + t23;
-        obs[22] = c[38]*t6 + c[4] + c[40]*t1;
+        obs[22] = c[39]*t6 + c[4] + c[40]*t1;
         obs[23] = t24*xd[0];
         obs[24] = t23*xd[0];
         obs[25] = t24*xdd[0] + t25*(c[40]*t6 + c[41]*t1);
@@ -993,6 +1003,12 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_observe_v(const sg_vd *q, const sg_vd
         obs[53] = qdd[1];
         return sgv_isfinite((((obs[45] + obs[46]) + (obs[47] + obs[48])) + ((obs[49] + obs[50]) + (obs[51] + (obs[52] + obs[53])))));
     }
+    case 7: {
+        obs[54] = sgv_set1(0.0);
+        obs[55] = sgv_set1(0.0);
+        obs[56] = sgv_set1(0.0);
+        return sgv_isfinite((obs[54] + (obs[55] + obs[56])));
+    }
     default:
         return sgv_false();
     }
@@ -1015,8 +1031,8 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_forces_v(const sg_vd *q, const sg_vd 
     const sg_vd t10 = c[46]*cq[4];
     const sg_vd t11 = c[10]*cq[0] + c[12]*cq[1] + c[18]*t0 + c[19];
     const sg_vd t12 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t1;
-    const sg_vd t13 = c[77]*t12;
-    const sg_vd t14 = c[77]*t11;
+    const sg_vd t13 = c[78]*t12;
+    const sg_vd t14 = c[78]*t11;
     {
         const sg_vd d = c[14]*cq[5];
         ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[13]*cq[1]), sgv_fabs(c[14]*cq[5]));
@@ -1031,12 +1047,12 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_forces_v(const sg_vd *q, const sg_vd 
     out[9] = -c[63]*t8 + out[7];
     out[5] = -out[6]*t13 + t7;
     out[2] = -c[64]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
-    out[3] = -c[49]*out[9] + c[72]*obs[47] + c[73]*ld[2] + c[74]*ld[3] + c[74]*ld[5] + c[74]*t9 + c[75]*ld[4] - c[76]*out[2] - ld[9];
+    out[3] = -c[49]*out[9] + c[73]*obs[47] + c[74]*ld[2] + c[75]*ld[3] + c[75]*ld[5] + c[75]*t9 + c[76]*ld[4] - c[77]*out[2] - ld[9];
     out[8] = t6;
     out[10] = t9;
-    out[1] = c[70]*(-gv[1] + obs[26]) - c[71]*out[6]*t12;
-    out[0] = c[70]*(-gv[0] + obs[25]) - c[71]*out[6]*t11;
-    out[11] = c[67]*obs[20] - out[0]*(c[38]*t1 + c[40]*t0) - out[1]*(c[40]*t1 + c[41]*t0) - out[6]*(c[68]*t1*t11 + c[69]*t0*t12) - ld[6];
+    out[11] = c[69]*obs[20] + c[70]*(-gv[0]*(c[39]*t1 + c[40]*t0) + gv[1]*(c[38]*t1 + c[39]*t0)) - out[6]*(c[71]*t1*t11 + c[72]*t0*t12) - ld[6];
+    out[1] = c[67]*(-gv[1] + obs[26]) - c[68]*out[6]*t12;
+    out[0] = c[67]*(-gv[0] + obs[25]) - c[68]*out[6]*t11;
     const sg_vd t15 = -out[2];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
@@ -1048,8 +1064,8 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_forces_v(const sg_vd *q, const sg_vd 
     out[19] = out[0] + out[4] + t15;
     out[20] = out[1] + out[5];
     out[21] = c[0]*out[1] + c[17]*out[0] + out[11] + out[2]*q[1] + out[3];
-    out[22] = c[78]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24]))) + c[79]*((obs[19])*(obs[19])) + c[80]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[81]*((obs[28])*(obs[28])) + c[82]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[83]*((obs[37])*(obs[37])) + c[84]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[85]*((obs[46])*(obs[46]));
-    out[23] = c[86]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[87]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[88]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[89]*(gv[0]*obs[48] + gv[1]*obs[49]);
+    out[22] = c[79]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[80]*((obs[19])*(obs[19])) + c[81]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[82]*((obs[28])*(obs[28])) + c[83]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[84]*((obs[37])*(obs[37])) + c[85]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[86]*((obs[46])*(obs[46]));
+    out[23] = c[70]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[87]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[88]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[89]*(gv[0]*obs[48] + gv[1]*obs[49]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     out[25] = sgv_set1(0.0);
     ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))));
@@ -1065,16 +1081,16 @@ SG_VINLINE int sg_overlock_needle_planar_forces_in_simd(const double *c)
 static SG_FLATTEN size_t sg_overlock_needle_planar_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
 {
     const sgv_kernels k = { sg_overlock_needle_planar_closed_v, sg_overlock_needle_planar_motion_v, sg_overlock_needle_planar_rates_v, sg_overlock_needle_planar_observe_v,
-                           sg_overlock_needle_planar_forces_v, sg_overlock_needle_planar_forces_in_simd, 54, 26 };
+                           sg_overlock_needle_planar_forces_v, sg_overlock_needle_planar_forces_in_simd, 57, 26 };
     return sgv_closed_sweep(m, r, sg_overlock_needle_planar_constants, sg_overlock_needle_planar_sweep, k);
 }
 SG_SIMD_END
 #endif
 
 static const unsigned char sg_overlock_needle_planar_coord_is_angle[3] = { 1, 0, 1 };
-static const int sg_overlock_needle_planar_group_start[8] = { 0, 6, 12, 18, 27, 36, 45, 54 };
-static const unsigned char sg_overlock_needle_planar_group_always[7] = { 0, 0, 0, 0, 0, 0, 0 };
-static const unsigned char sg_overlock_needle_planar_group_angles[8] = { 0, 0, 0, 0, 1, 1, 0, 0 };
+static const int sg_overlock_needle_planar_group_start[9] = { 0, 6, 12, 18, 27, 36, 45, 54, 57 };
+static const unsigned char sg_overlock_needle_planar_group_always[8] = { 0, 0, 0, 0, 0, 0, 0, 0 };
+static const unsigned char sg_overlock_needle_planar_group_angles[9] = { 0, 0, 0, 0, 1, 1, 0, 0, 0 };
 
 static const sg_mechanism sg_overlock_needle_planar_descriptor = {
     .name = "overlock_needle_planar",
@@ -1082,14 +1098,14 @@ static const sg_mechanism sg_overlock_needle_planar_descriptor = {
     .nx = 1,
     .np = 27,
     .nc = 94,
-    .nobs = 54,
+    .nobs = 57,
     .nbranch = 2,
     .nf = 12,
     .nfo = 26,
     .nload = 10,
     .nblock = 3,
     .coord_is_angle = sg_overlock_needle_planar_coord_is_angle,
-    .ngroup = 7,
+    .ngroup = 8,
     .group_start = sg_overlock_needle_planar_group_start,
     .group_always = sg_overlock_needle_planar_group_always,
     .group_angles = sg_overlock_needle_planar_group_angles,
@@ -1152,157 +1168,158 @@ const char *sg_overlock_needle_planar_manifest(void)
         "kind\":\"rrp\",\"meaning\":\"+1: the larger travel of needle_bar at joint N\"}],\"closed_form\":"
         "true,\"closure\":[\"rod.length\",\"N.x\",\"N.y\"],\"constants\":[[3],[12],[12],[0],[1],[12],[3,5"
         "],[2],[3,5],[3,5],[3,5],[3,5],[3,5],[4],[6],[7],[6],[1],[0],[3],[2],[7],[3,5],[3,5],[3,5],[4],[6"
-        "],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[8],[8,9],[12],[14],[15],[15],[14],[18],[19],["
+        "],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[8],[8,9],[12],[15],[14],[15],[14],[18],[19],["
         "19],[18],[6],[6],[7,25],[24],[0,1,2,3],[4,6,7],[2,3,5],[2,3,5],[1,2,3,5],[1,2,3,5],[0,2,3,5],[0,"
-        "2,3,5],[0,2,3,5],[20],[4,18],[4,18],[17],[21],[23],[22],[6,21],[16],[0,2],[0,2],[13],[2],[26],[8"
-        ",24],[25],[8,9,24],[24],[2],[13],[16],[17],[20],[21],[22],[23],[26],[13],[17],[21],[23],[3,5,19]"
-        ",[3,5,18],[3,5,19],[25]],\"coords\":[{\"guess\":0.0,\"name\":\"lever.angle\",\"unit\":\"rad\"},{"
-        "\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":1.5707963267948966,\"na"
-        "me\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class"
-        " overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u0438"
-        "\\u0433\\u043b\\u044b (seed 003 fig. 1\\u20132, eqs. 1\\u20132).\\n\\nA spatial-planar four-bar:"
-        " the main shaft 1 (below the bed, along the machine's x) carries an eccentric whose\\npin B driv"
-        "es, through a rod with a ball joint at each end, the needle-lever rock shaft 3 (axis across the "
-        "main\\nshaft, through D); its arm l\\u2084 drives the needle bar through the link l\\u2085 (the "
-        "needle bar's axis at the offset a\\nfrom D). Seed 003 eq. (1) gives the rock shaft's angle \\u03"
-        "c6\\u2083 in closed form (\\u03b4\\u2081 the assembly sign), eq. (2) the\\nneedle stroke as a se"
-        "cond-order expansion in the link's obliquity \\u2014 here both are exact.\\n\\nFrame (the needle"
-        " lever's plane): origin on the rock-shaft axis D, x along the main shaft, y up, z along the rock"
-        "\\nshaft. The main shaft's axis runs parallel to x through (l\\u2083, \\u2212h_A, 0): the rod is"
-        " nearly vertical and the lever\\narm DC horizontal in mid stroke, so B's up-and-down throw rocks"
-        " the shaft by about \\u00b1asin(r/l\\u2083). The arm DC and\\nthe needle lever DL are one bent l"
-        "ever (DL at ``lever_angle`` from DC). Crank angle zero points the eccentric\\nalong +z (the mech"
-        "anism's normal): \\u03c6 = 90\\u00b0 puts B at its lowest, the needle at its highest (sign of th"
-        "e lever).\\n\\nEvery dimension is an estimate (seed 003 prints none; DOMAIN-NOTES: 51-A class, 3"
-        "000\\u20134000 r/min): a needle\\nstroke of about 25 mm, the rock shaft swinging about \\u00b127"
-        "\\u00b0, masses of a small cast lever and a light needle bar.\",\"elements\":[],\"force_blocks\""
-        ":[1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\""
-        ",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar.guide."
-        "fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{"
-        "\"name\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"nam"
-        "e\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N"
-        "*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\""
-        "},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_"
-        "rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"lever.x\",\"lever.y\",\"lever.mom"
-        "ent\",\"link.x\",\"link.y\",\"link.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar.momen"
-        "t\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"k"
-        "ind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_n"
-        "eedle_planar_anchors\":{\"ops\":43},\"sg_overlock_needle_planar_blocks\":{\"ops\":27},\"sg_overl"
-        "ock_needle_planar_closed\":{\"ops\":35},\"sg_overlock_needle_planar_constants\":{\"ops\":109},\""
-        "sg_overlock_needle_planar_force_matrix\":{\"ops\":107},\"sg_overlock_needle_planar_forces\":{\"o"
-        "ps\":214},\"sg_overlock_needle_planar_lu_factor\":{\"ops\":18},\"sg_overlock_needle_planar_lu_so"
-        "lve\":{\"ops\":18},\"sg_overlock_needle_planar_motion\":{\"ops\":166},\"sg_overlock_needle_plana"
-        "r_observe\":{\"ops\":101},\"sg_overlock_needle_planar_rates\":{\"ops\":94},\"sg_overlock_needle_"
-        "planar_residual\":{\"ops\":42},\"sg_overlock_needle_planar_scales\":{\"ops\":5}},\"loads\":[{\"b"
-        "ody\":\"lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":\"lever\",\"component\":\""
-        "fy\",\"name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_eye"
-        "\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"needle_ba"
-        "r\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"component\":\"fy\""
-        ",\"name\":\"needle_point\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentri"
-        "c\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\":\"link\",\"compo"
-        "nent\":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\"component\":\"torque\",\"name\":"
-        "\"needle_bar\"}],\"name\":\"overlock_needle_planar\",\"observables\":[{\"name\":\"lever_pin.x\","
-        "\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"lever_pin.x_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.x_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\""
-        "},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"n"
-        "ame\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\""
-        "name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"n"
-        "ame\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\""
-        "},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":"
-        "\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\""
-        ":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit"
-        "\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"u"
-        "nit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\""
-        "unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m"
-        "/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^"
-        "2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.angle\",\"unit\":\"rad\"}"
-        ",{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angle_dd\",\"unit\":\"rad/s^2\""
-        "},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\"unit\":\"m\"},{\"name\":\""
-        "link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"link.c"
-        "om.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle"
-        "_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"name\":\""
-        "needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"},{\"na"
-        "me\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":\"m/s"
-        "^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"d"
-        "isplay_unit\":\"mm\",\"doc\":\"eccentricity AB of the needle eccentric on the main shaft (estima"
-        "te)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D (est"
-        "imate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind"
-        "\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.01"
-        "6,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\""
-        ",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_u"
-        "nit\":\"mm\",\"doc\":\"needle lever DL, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lev"
-        "er\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\""
-        "doc\":\"angle of the needle lever DL from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\""
-        "lever_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_uni"
-        "t\":\"mm\",\"doc\":\"needle-bar link LN, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"li"
-        "nk\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\","
-        "\"doc\":\"needle-bar axis from the rock shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"o"
-        "ffset\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"m"
-        "m\",\"doc\":\"needle eye below the link pin N along the bar (estimate)\",\"kind\":\"length\",\"n"
-        "ame\":\"eye_below_pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"dis"
-        "play_unit\":\"mm\",\"doc\":\"needle point below its eye (estimate)\",\"kind\":\"length\",\"name\""
-        ":\"point_below_eye\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"length of the needle eye along the needle (estimate)\",\"kind\":\"leng"
-        "th\",\"name\":\"eye_length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\""
-        "default\":0.0035,\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, where the l"
-        "ower looper's tip passes (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\""
-        ":true,\"role\":\"needle_scarf\",\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":"
-        "\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\""
-        "eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display"
-        "_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"posi"
-        "tive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"c"
-        "entre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centr"
-        "e of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"mo"
-        "ment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentri"
-        "c.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_"
-        "unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":fa"
-        "lse,\"role\":null,\"unit\":\"kg\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre o"
-        "f mass of lever, local u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of le"
-        "ver, local v\",\"kind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,\"u"
-        "nit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of leve"
-        "r about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,"
-        "\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of "
-        "link\",\"kind\":\"mass\",\"name\":\"link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\""
-        "},{\"default\":1e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of link about its "
-        "centre of mass\",\"kind\":\"inertia\",\"name\":\"link.inertia\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"kg*m**2\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\","
-        "\"kind\":\"mass\",\"name\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"}"
-        ",{\"default\":-0.03,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\""
-        "kind\":\"length\",\"name\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"ki"
-        "nd\":\"length\",\"name\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
-        "\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about i"
-        "ts centre of mass\",\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"po"
-        "ints\":[{\"body\":\"lever\",\"doc\":\"needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\""
-        "role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":"
-        "6,\"role\":\"needle_eye\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_p"
-        "oint\",\"offset\":12,\"role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccent"
-        "ric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.p"
-        "ivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],"
-        "\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"gr"
-        "ound\",\"b\":\"lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"nam"
-        "e\":\"D\",\"offset\":4},{\"a\":\"eccentric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounde"
-        "d\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"colu"
-        "mns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a"
-        "\":\"link\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revol"
-        "ute\",\"name\":\"N\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\""
-        "],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset"
-        "\":11,\"sense\":1}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"need"
-        "le_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\","
-        "\"name\":\"eye_length\"},\"needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needl"
-        "e_scarf\":{\"kind\":\"param\",\"name\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock"
-        "\":3,\"nbranch\":2,\"nc\":94,\"nf\":12,\"nfo\":26,\"ngroup\":7,\"nload\":10,\"nobs\":54,\"np\":2"
-        "7,\"nq\":3,\"nx\":1}}"
+        "2,3,5],[0,2,3,5],[20],[4,18],[4,18],[17],[21],[23],[22],[6,21],[13],[2],[13,14,15,16],[13],[0,2]"
+        ",[0,2],[26],[8,24],[25],[8,9,24],[24],[2],[13],[16],[17],[20],[21],[22],[23],[26],[17],[21],[23]"
+        ",[3,5,19],[3,5,18],[3,5,19],[25]],\"coords\":[{\"guess\":0.0,\"name\":\"lever.angle\",\"unit\":\""
+        "rad\"},{\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":1.5707963267948"
+        "966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51"
+        "-A class overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c"
+        " \\u0438\\u0433\\u043b\\u044b (seed 003 fig. 1\\u20132, eqs. 1\\u20132).\\n\\nA spatial-planar f"
+        "our-bar: the main shaft 1 (below the bed, along the machine's x) carries an eccentric whose\\npi"
+        "n B drives, through a rod with a ball joint at each end, the needle-lever rock shaft 3 (axis acr"
+        "oss the main\\nshaft, through D); its arm l\\u2084 drives the needle bar through the link l\\u20"
+        "85 (the needle bar's axis at the offset a\\nfrom D). Seed 003 eq. (1) gives the rock shaft's ang"
+        "le \\u03c6\\u2083 in closed form (\\u03b4\\u2081 the assembly sign), eq. (2) the\\nneedle stroke"
+        " as a second-order expansion in the link's obliquity \\u2014 here both are exact.\\n\\nFrame (th"
+        "e needle lever's plane): origin on the rock-shaft axis D, x along the main shaft, y up, z along "
+        "the rock\\nshaft. The main shaft's axis runs parallel to x through (l\\u2083, \\u2212h_A, 0): th"
+        "e rod is nearly vertical and the lever\\narm DC horizontal in mid stroke, so B's up-and-down thr"
+        "ow rocks the shaft by about \\u00b1asin(r/l\\u2083). The arm DC and\\nthe needle lever DL are on"
+        "e bent lever (DL at ``lever_angle`` from DC). Crank angle zero points the eccentric\\nalong +z ("
+        "the mechanism's normal): \\u03c6 = 90\\u00b0 puts B at its lowest, the needle at its highest (si"
+        "gn of the lever).\\n\\nEvery dimension is an estimate (seed 003 prints none; DOMAIN-NOTES: 51-A "
+        "class, 3000\\u20134000 r/min): a needle\\nstroke of about 25 mm, the rock shaft swinging about \\u"
+        "00b127\\u00b0, masses of a small cast lever and a light needle bar.\",\"elements\":[],\"force_bl"
+        "ocks\":[1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.p"
+        "ower\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar."
+        "guide.fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\""
+        "N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},"
+        "{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit"
+        "\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\""
+        ":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\""
+        "force_rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"lever.x\",\"lever.y\",\"lev"
+        "er.moment\",\"link.x\",\"link.y\",\"link.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar"
+        ".moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi"
+        "\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_over"
+        "lock_needle_planar_anchors\":{\"ops\":43},\"sg_overlock_needle_planar_blocks\":{\"ops\":27},\"sg"
+        "_overlock_needle_planar_closed\":{\"ops\":35},\"sg_overlock_needle_planar_constants\":{\"ops\":1"
+        "14},\"sg_overlock_needle_planar_force_matrix\":{\"ops\":112},\"sg_overlock_needle_planar_forces\""
+        ":{\"ops\":221},\"sg_overlock_needle_planar_lu_factor\":{\"ops\":18},\"sg_overlock_needle_planar_"
+        "lu_solve\":{\"ops\":18},\"sg_overlock_needle_planar_motion\":{\"ops\":166},\"sg_overlock_needle_"
+        "planar_observe\":{\"ops\":101},\"sg_overlock_needle_planar_rates\":{\"ops\":94},\"sg_overlock_ne"
+        "edle_planar_residual\":{\"ops\":42},\"sg_overlock_needle_planar_scales\":{\"ops\":5}},\"loads\":"
+        "[{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":\"lever\",\"componen"
+        "t\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"need"
+        "le_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"nee"
+        "dle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"component\""
+        ":\"fy\",\"name\":\"needle_point\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"e"
+        "ccentric\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\":\"link\","
+        "\"component\":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\"component\":\"torque\",\""
+        "name\":\"needle_bar\"}],\"name\":\"overlock_needle_planar\",\"observables\":[{\"name\":\"lever_p"
+        "in.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"lever_pin.x_d\",\"u"
+        "nit\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.x_dd\",\"unit"
+        "\":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit"
+        "\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^"
+        "2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m"
+        "\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/"
+        "s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\""
+        ":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\""
+        "unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\","
+        "\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.co"
+        "m.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle"
+        "_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.co"
+        "m.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"un"
+        "it\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.angle\",\"unit\":\""
+        "rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angle_dd\",\"unit\":\"rad"
+        "/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\"unit\":\"m\"},{\"nam"
+        "e\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"nam"
+        "e\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"}"
+        ",{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":"
+        "\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.z\",\""
+        "unit\":\"m\"},{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.z_dd\""
+        ",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\"mm\",\"doc\":\"eccentri"
+        "city AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\"length\",\"name\":\"ec"
+        "centric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"m"
+        "m\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\""
+        "shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\""
+        ":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positi"
+        "ve\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"roc"
+        "k-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle lever DL,"
+        " l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of the needle lever DL f"
+        "rom the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"needle-bar link L"
+        "N, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-bar axis from the rock"
+        " shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link"
+        " pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":tr"
+        "ue,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"needle poi"
+        "nt below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_eye\",\"positive\":true"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\"doc\":\"length of th"
+        "e needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"eye_length\",\"positiv"
+        "e\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,\"display_unit\":\"m"
+        "m\",\"doc\":\"needle scarf above the eye's top, where the lower looper's tip passes (estimate)\""
+        ",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"needle_scarf\",\"uni"
+        "t\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric "
+        "relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of ecce"
+        "ntric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":"
+        "\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u\""
+        ",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\"ki"
+        "nd\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
+        "default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about its "
+        "centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of lever\","
+        "\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
+        "efault\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"l"
+        "ength\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0"
+        ".0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"na"
+        "me\":\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"displ"
+        "ay_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\""
+        "inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"d"
+        "efault\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\"mass\",\"name\":\"link"
+        ".mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-06,\"display_unit\":\""
+        "kg*m**2\",\"doc\":\"moment of inertia of link about its centre of mass\",\"kind\":\"inertia\",\""
+        "name\":\"link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.02"
+        "5,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar."
+        "mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"m"
+        "m\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\"needle_bar."
+        "com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\""
+        ",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar.com"
+        "_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m"
+        "**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\":\"inertia\","
+        "\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_"
+        "fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"lever\",\"doc\":\"nee"
+        "dle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\",\""
+        "doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_eye\"},{\"body\":\"n"
+        "eedle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":12,\"role\":\"needle_p"
+        "oint\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grou"
+        "nded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"ground\",\""
+        "b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic\","
+        "\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\",\"columns\":[\"fx\""
+        ",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"eccentric"
+        "\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\""
+        ",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\""
+        "kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"needle_bar\",\"columns\""
+        ":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\"offset\":9},{\"a\":\""
+        "ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"ki"
+        "nd\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\"needle_bar\""
+        ":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"point\",\"name\":\"needl"
+        "e_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\"needle_point\":{\""
+        "kind\":\"point\",\"name\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"param\",\"name\":\"scar"
+        "f_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc\":94,\"nf\":12,\"nfo\""
+        ":26,\"ngroup\":8,\"nload\":10,\"nobs\":57,\"np\":27,\"nq\":3,\"nx\":1}}"
         ;
 }

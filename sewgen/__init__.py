@@ -5,8 +5,8 @@
     >>> motion = nb.solve(sewgen.shaft_angles(5), speed="1000 rpm")
     >>> motion.point("needle_eye").y      # m, at 72 shaft angles
 """
-from sewgen.errors import (AssemblyError, BranchJumpError, BuildError, ConvergenceError, InputError, ParameterError,
-    PositionError, SewgenError, SingularPositionError)
+from sewgen.errors import (AssemblyError, BranchJumpError, BuildError, ConvergenceError, FrictionLockError, InputError,
+    ParameterError, PositionError, SewgenError, SingularPositionError)
 from sewgen.engine.forces import ForceAnalysis, JointReaction, RunSettings
 from sewgen.engine.loads import Load
 from sewgen.engine.loader import catalog, load, mechanism
@@ -14,9 +14,9 @@ from sewgen.engine.mechanism import Mechanism, Reference, Sweep, shaft_angles
 from sewgen.engine.results import Motion
 from sewgen.version import version
 
-__all__ = ["AssemblyError", "BranchJumpError", "BuildError", "ConvergenceError", "ForceAnalysis", "InputError",
-           "JointReaction", "Load", "Mechanism", "Motion", "ParameterError", "PositionError", "Reference",
-           "RunSettings", "SewgenError", "SingularPositionError", "Sweep", "catalog", "load", "mechanism",
+__all__ = ["AssemblyError", "BranchJumpError", "BuildError", "ConvergenceError", "ForceAnalysis", "FrictionLockError",
+           "InputError", "JointReaction", "Load", "Mechanism", "Motion", "ParameterError", "PositionError",
+           "Reference", "RunSettings", "SewgenError", "SingularPositionError", "Sweep", "catalog", "load", "mechanism",
            "shaft_angles"]
 
 

@@ -31,6 +31,9 @@ STATUS = (
      "batched designs: a design's parameter or held input is not finite or out of range, a branch sign is not "
      "+1 or -1, or a dimension derived from its parameters is not real; the design is skipped (Python names "
      "the parameter)"),
+    ("SG_FRICTION_LOCK", 9, errors.FrictionLockError,
+     "Coulomb friction does not settle: the friction loads, iterated with the reactions, do not converge in the "
+     "kernel's iterations (a joint at or near self-locking, as a slide whose friction outgrows its drive)"),
 )
 
 _ERRORS = {code: cls for _, code, cls, _ in STATUS}

@@ -115,6 +115,11 @@ class NonFiniteResultError(PositionError):
     what = "a result came out non-finite"
 
 
+class FrictionLockError(PositionError):
+    what = ("Coulomb friction did not settle (its loads feed back through the reactions about as strongly as they "
+            "act, or more: a joint at or near self-locking; lower the <joint>.friction coefficients)")
+
+
 class NonFiniteOutputError(SewgenError, ValueError):
     """A result that came out infinite or NaN (an absurd mass or speed in a model file overflows): never written.
     ``key`` names the entry or column, ``file`` the model file."""

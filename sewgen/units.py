@@ -105,6 +105,13 @@ _COMMON = {
     "m/s**2": (1.0, "acceleration"),
 }
 
+#: Unit names read here otherwise than the units library would: "gr" is a grain to pint (64.8 mg) and a gram to
+#: many a reader (a mass of "35 gr" meant 35 g would be 2.27 g): refused, saying which to write.
+_AMBIGUOUS = {"gr": 'is ambiguous: pint reads it as grains (1 gr = 64.8 mg), many write it for grams: write "g" for '
+                    'grams or "grain" for grains'}
+#: The shaft-speed spellings of the trade: r/min (the SI brochure's, the README's), r/s, rev/min, rev/s.
+_REVOLUTION = re.compile(r"(?<![A-Za-z_])(?:r|rev)(?![A-Za-z_0-9])")
+
 #: The number a quantity string starts with: digits with a decimal point, an optional exponent; no thousands
 #: separators, no decimal comma, no other digits than 0-9.
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
@@ -169,6 +176,10 @@ def _parse(text: str, kind: str) -> tuple[float, str]:
     common = _COMMON.get(unit)
     if common is not None and common[1] == kind:  # the units declarations and model files use: no pint needed
         return magnitude * common[0], ""
+    for token in re.findall(r"[A-Za-z_]+", unit):
+        if token in _AMBIGUOUS:
+            return math.nan, f"cannot read {{value}}: {_show(token)} {_AMBIGUOUS[token]}"
+    unit = _REVOLUTION.sub("revolution", unit)  # "r/min" is rpm: pint knows no "r"
     ureg = registry()
     try:
         q = ureg.Quantity(magnitude, unit)
@@ -195,7 +206,34 @@ def unit_of(text: str) -> str:
     return parts[1] if len(parts) == 2 else ""
 
 
+# -- physical limits ------------------------------------------------------------------------------------------------
+
+#: The largest Coulomb friction coefficient a joint or bearing may be given. Oiled pins and slides run at about
+#: 0.05-0.15, dry steel on steel at 0.6-0.8 (engineering handbooks' tables of friction coefficients); 1 covers every
+#: pair in a sewing machine. Far above it a pin's friction moment μ·r·|F| outgrows what drives the pin (the
+#: joint self-locks) and the Coulomb balance the kernels iterate has no solution: refused, never iterated.
+FRICTION_MAX = 1.0
+
+#: The largest gravity a run may be given (m/s²): 10 g, beyond any machine's standing on Earth (9.80665). A larger
+#: value is a slip of the units (or an overflow: 1e308 m/s² times a mass is infinite), refused with its name.
+GRAVITY_MAX = 100.0
+
+
+def range_problem(value: float, minimum=None, maximum=None, unit: str = "") -> str | None:
+    """What is wrong with ``value`` (SI) against a physical range [``minimum``, ``maximum``] (None: open), or None."""
+    shown = f"{value!r}{' ' + unit if unit else ''}"
+    if minimum is not None and not value >= minimum:
+        return f"must be at least {minimum:g}{' ' + unit if unit else ''}, got {shown}"
+    if maximum is not None and not value <= maximum:
+        return f"must be at most {maximum:g}{' ' + unit if unit else ''}, got {shown}"
+    return None
+
+
 # -- sweeps of one revolution ------------------------------------------------------------------------------------
+
+#: The largest shaft angle a sweep may ask for (rad; about 160 000 turns): an angle's rounding there is 1e-10 rad.
+#: Beyond it the steps of a sweep drown in the angle's own rounding ("1e300 deg" + 5° is 1e300 deg): refused.
+MAX_SHAFT_ANGLE = 1e6
 
 #: The most positions a sweep of one revolution may have (a step of at least 0.0036°): a larger sweep would need
 #: gigabytes for its results and is refused with a message instead of running out of memory.

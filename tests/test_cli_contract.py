@@ -348,6 +348,9 @@ BAD = [
     (["forces", "needle_bar", "--load", "needle_eye fy=-3N from=10deg"], ["--load", "to="]),
     (["forces", "needle_bar", "--load", "nowhere fy=-3N"], ["nowhere"]),
     (["kinematics", "take_up", "--units", "rpm"], ["--units", "rpm"]),
+    (["forces", "take_up", "--gravity", "1e308 m/s**2"], ["--gravity", "at most 100 m/s**2"]),  # printed inf
+    (["kinematics", "take_up", "--start", "1e300 deg"], ["--start", "1e300 deg"]),  # was 72 positions in one
+    (["forces", "needle_bar", "--param", "crank.mass=35 gr"], ["--param crank.mass", '"gr"']),  # was 2.27 g
     (["kinematics", "take_up", "--units", "mm,mm"], ["--units"]),
     # strict quantity strings
     (["kinematics", "take_up", "--param", "crank=1,5 mm"], ["--param crank", "1,5 mm"]),

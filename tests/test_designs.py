@@ -477,3 +477,15 @@ def test_a_batch_equals_its_designs_solved_alone_to_the_bit(name):
         flat = np.hstack([alone.q, alone.qd, alone.qdd, alone.obs])
         for col, arr in res.outputs.items():
             assert np.array_equal(arr[d], flat[:, cols.index[col]]), (name, d, col)
+
+
+def test_a_design_with_a_friction_coefficient_out_of_its_range_is_refused_alone():
+    """A design table's parameter goes through the same range check as params= (a friction coefficient is in
+    [0, 1]): the bad designs are named, the good one sweeps as solve() does."""
+    nb = sewgen.mechanism("needle_bar")
+    res = nb.sweep_designs({"B.friction": [0.1, 10.0, -0.2]}, PHI, reduce={"coords.needle_bar.travel": "max"})
+    assert list(res.ok) == [True, False, False]
+    for d in (1, 2):
+        assert isinstance(res.exception(d), ParameterError) and "B.friction" in res.error[d]
+    with pytest.raises(ParameterError, match="B.friction"):
+        nb.solve(PHI, params={"B.friction": 10.0})

@@ -169,6 +169,41 @@ def test_non_finite_shaft_angle_in_degrees(nb):
         nb.solve([0.0, 10.0, np.nan], degrees=True)
 
 
+def test_degrees_given_as_radians_are_refused(nb):
+    """np.arange(0, 360, 5) is 72 angles in degrees; as rad it would be 56 turns solved without a word."""
+    with pytest.raises(sewgen.InputError, match="degrees=True") as info:
+        nb.solve(np.arange(0, 360, 5))
+    assert info.value.parameter == "phi" and info.value.mechanism == "needle_bar"
+    with pytest.raises(sewgen.InputError, match="degrees=True"):
+        nb.kinetostatics(np.arange(0, 720, 5))
+    a = nb.solve(np.arange(0, 360, 5), degrees=True)  # the same angles, said to be degrees
+    np.testing.assert_allclose(a.phi, PHI, rtol=1e-15)
+    nb.solve(np.arange(0.0, 3.0, 0.01) * 2)  # rad in round numbers within two turns: rad
+    nb.solve(np.linspace(0, 6 * np.pi, 50))  # three turns in rad: not round numbers
+
+
+@pytest.mark.parametrize("phi", [[1e300], [0.0, 1e7], [-2e6, -2e6 + 0.1]])
+def test_shaft_angles_too_large_for_their_steps(nb, phi):
+    """Beyond 1e6 rad an angle's rounding is 1e-10 rad and more: at 1e300 rad the steps of a sweep vanish."""
+    assert 1e300 + 0.1 == 1e300  # what would happen
+    with pytest.raises(sewgen.InputError, match="beyond") as info:
+        nb.solve(np.array(phi), newton=True)  # (newton=True: prepare's path, which checks the angles)
+    assert info.value.parameter == "phi"
+
+
+@pytest.mark.parametrize("gravity, words", [(-9.81, "at least 0"), ("1e308 m/s**2", "at most 100"),
+                                            ("200 m/s**2", "at most 100")])
+def test_gravity_is_a_magnitude_of_this_world(nb, gravity, words):
+    """A negative magnitude turned the weight over; 1e308 m/s² made every force infinite."""
+    with pytest.raises(sewgen.ParameterError, match=words) as info:
+        nb.kinetostatics(PHI, gravity=gravity)
+    assert info.value.parameter == "gravity"
+    free = nb.kinetostatics(PHI, gravity=0)
+    up = nb.kinetostatics(PHI, gravity=9.80665, gravity_direction="90 deg")
+    down = nb.kinetostatics(PHI, gravity=9.80665)
+    np.testing.assert_allclose(up.torque() - free.torque(), -(down.torque() - free.torque()), atol=1e-12)
+
+
 @pytest.mark.parametrize("bad", [np.nan, np.inf])
 def test_non_finite_speed(nb, bad):
     speed = np.full(len(PHI), 100.0)

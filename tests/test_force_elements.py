@@ -4,8 +4,9 @@ Independent references written here: a sprung and damped crank's driving torque 
 and damper forces from the closed form of the length; a zero frame force on massless parts (what the frame puts
 on the parts through the pivot and through the grounded spring cancels); a four-bar with masses, gravity and a
 coupler-to-ground spring closing its power balance with the spring's energy (spectral derivative of the
-energies); a torsion spring at a rocker's pivot against virtual work; the machine-level power balance through a
-model file.
+energies); a torsion spring at a rocker's pivot against virtual work; a torsion spring on a crank pin that turns
+right round, against k·Δ with Δ the continuous relative rotation written here (no jump at ±180°) and the drive by
+virtual work; a spring whose ends meet; the machine-level power balance through a model file.
 """
 from __future__ import annotations
 
@@ -137,6 +138,58 @@ def test_torsion_spring_against_virtual_work(four_bar):
     np.testing.assert_allclose(fa.torque(), torque * rocker.omega / W, rtol=1e-10, atol=1e-14)
 
 
+def wound_crank_slider():
+    m = Mechanism("wound_crank_slider", "a massless crank-slider with a torsion spring on its crank pin")
+    crank = m.driven("crank", m.ground.at(0, 0))
+    rod = m.link("rod")
+    bar = m.slider("bar", m.ground.line(at=(0, 0), angle=0), guess="50 mm")
+    pin = m.revolute(crank.at("12 mm", 0), rod.at(0, 0), "B")
+    m.revolute(rod.at("40 mm", 0), bar.at(0, 0), "C")
+    m.torsion_spring(pin, "0.05 N*m/rad", "20 deg", "0.01 N*m", name="pin_spring")
+    return m
+
+
+def test_torsion_spring_on_a_turning_pin_winds_continuously(cache):
+    """The pin B turns right round relative to the crank: the spring's deflection is the continuous relative
+    rotation Δ = θ_rod − φ − θ0 (θ_rod within ±asin(r/l) of 0 here), so at adjacent degrees through ±180° its
+    torque and the driving torque change by a little, and over two turns it winds two turns. Massless parts: the
+    drive supplies the spring's power, T_drive ω = T (ω_rod − ω)."""
+    mech = sewgen.load(wound_crank_slider, cache_dir=cache)
+    for deg in (np.arange(170.0, 191.0, 1.0), np.arange(0.0, 720.0, 5.0)):
+        phi = np.radians(deg)
+        fa = mech.kinetostatics(phi, speed=W, gravity=0)
+        rod = fa.motion.body("rod")
+        assert np.abs(rod.angle).max() < np.arcsin(12 / 40) + 1e-12
+        deflection = rod.angle - phi - np.radians(20)
+        torque = 0.01 + 0.05 * deflection
+        ts = fa.element("pin_spring")
+        np.testing.assert_allclose(ts["deflection"], deflection, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(ts["torque"], torque, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(fa.torque(), torque * (rod.omega - W) / W, rtol=1e-10, atol=1e-14)
+    assert np.abs(np.diff(ts["torque"])).max() < 0.05 * 0.2  # 5° steps turn B by < 0.2 rad: no jump of k·2π
+    assert ts["deflection"][-1] < -4 * np.pi + 0.5  # two turns wound
+
+
+def test_spring_whose_ends_meet(cache):
+    """A spring from the crank pin to the frame point the pin passes at 0°: where its tension at zero length,
+    preload − k·L0, is zero its force is k·d there (a zero-length spring; none at all with zero stiffness), so
+    every result is finite and the massless drive supplies its power, T ω = k d·v."""
+    def declare():
+        m = Mechanism("meeting_spring", "a massless crank with a spring from its pin to a point on the pin's path")
+        crank = m.driven("crank", m.ground.at(0, 0))
+        m.spring(crank.at("20 mm", 0), m.ground.at("20 mm", 0), "0 N/m", "0 mm", name="s")
+        return m
+
+    mech = sewgen.load(declare, cache_dir=cache)
+    phi = np.radians(np.arange(0, 360, 5.0))
+    for k in (0.0, 500.0):
+        fa = mech.kinetostatics(phi, speed=W, gravity=0, params={"s.stiffness": k})
+        d = R * np.column_stack([1 - np.cos(phi), -np.sin(phi)])  # from the pin to the frame point
+        v = R * W * np.column_stack([-np.sin(phi), np.cos(phi)])  # the pin's velocity
+        np.testing.assert_allclose(fa.element("s")["force"], k * np.hypot(d[:, 0], d[:, 1]), atol=1e-12)
+        np.testing.assert_allclose(fa.torque(), -k * np.sum(d * v, axis=1) / W, atol=1e-12)
+
+
 def test_a_machine_with_springs_closes_its_power_balance(four_bar):
     _, folder = four_bar
     (folder / "sprung.toml").write_text(textwrap.dedent('''
@@ -171,3 +224,21 @@ def test_element_declarations_are_checked():
         m.torsion_spring(m.ground.line(), "1 N*m/rad", name="t")
     with pytest.raises(UnitError, match=r"wrong_unit\.stiffness: .1 N. is not a stiffness"):
         m.spring(crank.at(0, 0), m.ground.at(0, 0), "1 N", "1 mm", name="wrong_unit")
+    # values no spring or damper has (each was accepted: a negative damper drives the mechanism)
+    with pytest.raises(DeclarationError, match=r"d1\.coefficient.* at least 0"):
+        m.damper(crank.at(0, 0), m.ground.at(0, 0), "-3 N*s/m", name="d1")
+    with pytest.raises(DeclarationError, match=r"s1\.free_length.* at least 0"):
+        m.spring(crank.at(0, 0), m.ground.at(0, 0), "1 N/m", "-1 mm", name="s1")
+    with pytest.raises(DeclarationError, match=r"s2\.stiffness.* at least 0"):
+        m.spring(crank.at(0, 0), m.ground.at(0, 0), -5.0, "1 mm", name="s2")
+
+
+@pytest.mark.parametrize("params, words", [({"damper.coefficient": -3.0}, "at least 0 N*s/m"),
+                                           ({"spring.free_length": -0.01}, "at least 0 m"),
+                                           ({"spring.stiffness": -500.0}, "at least 0 N/m")])
+def test_element_values_out_of_range_are_refused(crank, params, words):
+    """A negative damper coefficient made the damper a motor (positive load power); a negative free length is no
+    spring's. Each is refused naming the parameter, as params= gives it."""
+    with pytest.raises(sewgen.ParameterError, match=words.replace("*", r"\*")) as info:
+        crank.kinetostatics(np.radians(np.arange(0, 360, 5.0)), speed=W, params=params)
+    assert info.value.parameter == next(iter(params))

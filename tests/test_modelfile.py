@@ -446,6 +446,29 @@ def test_masses_and_inertias_are_not_negative(tmp_path, old, new, key):
     check(tmp_path, edit(old, new), key, ["negative"])
 
 
+@pytest.mark.parametrize("old, new, key, words", [
+    ('gravity = "9.80665 m/s**2"', 'gravity = "-9.81 m/s**2"', "machine.gravity", ["negative"]),
+    ('gravity = "9.80665 m/s**2"', 'gravity = "1e308 m/s**2"', "machine.gravity", ["at most 100 m/s**2"]),
+    ('# bearing_friction = 0.04\n# journal_radius = "6 mm"', 'bearing_friction = 4\njournal_radius = "6 mm"',
+     "shaft.bearing_friction", ["at most 1"]),
+    ('cloth = "1.5 mm"', 'cloth = "-1.5 mm"', "stitch.cloth", ["negative"]),
+    ('min = "1.8 mm"\nmax = "2.5 mm"', 'min = "2.5 mm"\nmax = "1.8 mm"', "stitch.rules[0].min", ["above max"]),
+])
+def test_physical_ranges_in_a_model_file(tmp_path, old, new, key, words):
+    """Values no machine can have, each refused naming its key (each was accepted: a negative gravity turned the
+    weight over, a rule with min > max failed whatever the machine did)."""
+    check(tmp_path, edit(old, new), key, words)
+
+
+@pytest.mark.parametrize("param, value, words", [("B.friction", "-0.08", "at least 0"),
+                                                 ("B.friction", "10", "at most 1"),
+                                                 ("needle_bar.guide.friction", "1e6", "at most 1")])
+def test_friction_coefficients_of_a_group(tmp_path, param, value, words):
+    text = edit('# "B.friction" = 0.08\n# "C.friction" = 0.08\n# "needle_bar.guide.friction" = 0.10',
+                f'"{param}" = {value}')
+    check(tmp_path, text, f"groups.needle_bar.params.{param}", [words, "Coulomb friction coefficient"])
+
+
 @pytest.mark.parametrize("old, new", [('speed = "1000 rpm"', 'speed = "0 rpm"'),
                                       ('speed = "1000 rpm"', 'speed = "-1000 rpm"'),
                                       ('step = "5 deg"', 'step = "0 deg"')])

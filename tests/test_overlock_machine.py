@@ -298,3 +298,29 @@ def test_shaking_moments_of_groups_along_the_shaft(accel):
         force = a.shaking_force_on_frame + a.weight_on_frame
         np.testing.assert_allclose(force, -(a.frame_force_on_parts + loads + np.asarray(m.shaft.belt)),
                                    atol=1e-12 * np.abs(force).max())
+
+
+def test_an_eccentric_off_its_axis_loads_the_shaft_with_its_rotating_force():
+    """The needle eccentric's centre of mass moved off the main shaft by (u, v) = (2, 1) mm: at constant speed the
+    only change is the eccentric's own inertia, the rotating force m e ω² (e = |(u, v)|) perpendicular to the
+    shaft — on the shaft's two bearings together and in the shaking force on the frame — and the machine's power
+    balance still closes; the moments from the kinematics still equal those from the reactions."""
+    from sewgen.machine import shaking
+
+    m = load_machine("51-a")
+    base = m.analyze()
+    needle = next(g for g in m.groups if g.name == "needle")
+    u, v = 2 * MM, 1 * MM
+    mass = needle.mechanism.defaults()["eccentric.mass"]
+    needle.params = {**needle.params, "eccentric.com_u": u, "eccentric.com_v": v}
+    a = m.analyze()
+    assert a.power_balance_residual <= 1e-9
+    rotating = mass * math.hypot(u, v) * m.speed**2
+    bearings = a.bearing("front") + a.bearing("rear") - base.bearing("front") - base.bearing("rear")
+    np.testing.assert_allclose(np.hypot(bearings[:, 0], bearings[:, 1]), rotating, rtol=1e-9)
+    shake = a.shaking_force_on_frame - base.shaking_force_on_frame
+    np.testing.assert_allclose(shake, bearings, atol=1e-9 * rotating)
+    about = (0.01, 0.02, 0.03)
+    kinematics = a.shaking_moments_on_frame(about) + shaking.weight_moments_on_frame(a, about)
+    np.testing.assert_allclose(kinematics, a.inertia_and_weight_moments_on_frame(about),
+                               atol=1e-12 * np.abs(kinematics).max())

@@ -9,6 +9,9 @@ with r = (B − D) projected on the plane and f = (|B − D|² + ρ² − L²)/(
 perpendicular and skew axes (δ1 = +1 puts C left of the line from D to B's projection: the declaration's
 branch +1); velocities and accelerations against central differences of that closed form; the rod tension and
 the driving torque against a Newton–Euler solve of the rocker and the crank written here, and the power balance.
+A crank whose centre of mass is off its axis: the power balance with energies written here (the centre of mass
+turning with the crank in the plane it turns in), and a lone eccentric on the x axis against its rotating force
+m e ω² and the weight's moment m g e cos ψ (Newton–Euler about a fixed axis).
 """
 from __future__ import annotations
 
@@ -135,3 +138,86 @@ def test_spatial_crank_declarations_are_checked():
         m.rod(rocker.at(0, 0), rocker.at(1, 0), "10 mm", "r")
     with pytest.raises(DeclarationError, match="reference of 'c2' is along its axis"):
         m.spatial_crank("c2", (0, 0, 0), (0, 0, 1), reference=(0, 0, 2))
+
+
+M1 = 0.030  # kg, the crank's mass where it has one
+OFF = {"crank.com_u": 3 * MM, "crank.com_v": -2 * MM}  # its centre of mass off the axis, in its plane
+
+
+def massive_crank(direction):
+    def declare():
+        m = Mechanism("rssr_massive", "a spatial crank-rocker whose crank has a mass (its centre of mass a parameter)")
+        crank = m.spatial_crank("crank", ("50 mm", "20 mm", "-30 mm"), direction, mass=f"{M1} kg",
+                                inertia=f"{I1} kg*m**2")
+        rocker = m.link("rocker", guess="60 deg", mass=f"{M3} kg", com=(f"{COM3} m", 0), inertia=f"{I3} kg*m**2")
+        m.revolute(m.ground.at(0, 0), rocker.at(0, 0), "D")
+        m.rod(crank.pin("8 mm"), rocker.at("30 mm", 0), "60 mm", "rod")
+        return m
+    return declare
+
+
+def test_crank_off_its_axis_closes_the_power_balance(cache):
+    """T ω = d(E_kin + E_pot)/dt with the energies written here: the crank's centre of mass G at (u, v) in the
+    plane it turns in (u along the crank, v a quarter turn ahead about the axis), E_kin = ½ (I + m |G − A|²) ω²,
+    E_pot = −m g·G; the rocker's from its kinematics. Accelerating shaft, gravity on."""
+    direction = (1, 0.3, 0.4)
+    mech = sewgen.load(massive_crank(direction), cache_dir=cache)
+    n = 720
+    phi = 2 * np.pi * np.arange(n) / n
+    w = W * (1 + 0.2 * np.sin(phi))
+    alpha = w * W * 0.2 * np.cos(phi)  # ω dω/dφ: consistent with w(φ)
+    g = np.array([0.0, -9.80665])
+    fa = mech.kinetostatics(phi, speed=w, accel=alpha, params=OFF)
+    _, e1, e2 = axis_frame(direction)
+    u, v = OFF["crank.com_u"], OFF["crank.com_v"]
+    c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
+    centre = A + u * (c * e1 + s * e2) + v * (-s * e1 + c * e2)
+    kinetic = 0.5 * (I1 + M1 * (u * u + v * v)) * w**2
+    potential = -M1 * (centre[:, :2] @ g)
+    rocker = fa.motion.body("rocker")
+    kinetic = kinetic + 0.5 * M3 * (rocker.com.vx**2 + rocker.com.vy**2) + 0.5 * I3 * rocker.omega**2
+    potential = potential - M3 * (g[0] * rocker.com.x + g[1] * rocker.com.y)
+    np.testing.assert_allclose(fa.kinetic_energy, kinetic, rtol=1e-12)
+    np.testing.assert_allclose(fa.potential_energy, potential, rtol=1e-12, atol=1e-15)
+    # d/dt = ω d/dφ, the φ-derivative spectral (every term is periodic in φ)
+    k = np.fft.rfftfreq(n, d=1.0 / n)
+    rate = w * np.fft.irfft(1j * k * np.fft.rfft(kinetic + potential), n)
+    power = fa.input_power("shaft")
+    assert np.abs(power - rate).max() < 1e-9 * np.abs(power).max()
+
+
+@pytest.mark.parametrize("accel, gravity", [(0.0, 0.0), (0.0, 9.80665), (400.0, 9.80665)])
+def test_lone_eccentric_on_the_x_axis(cache, accel, gravity):
+    """A lone eccentric of mass m, its centre of mass at e = |(u, v)| from the x axis, turning about x: written
+    here by Newton–Euler about a fixed axis. Its centre is r = R_x(ψ)·(0, 0, e) from the axis (the crank's angle
+    zero points along +z, the default reference; ψ = φ + atan2(v, u)); a_G = α x × r + ω x × (x × r) (at constant
+    speed the rotating force m e ω²); the frame's force on it in the plane m (a_G − g); the torque about x
+    (I + m e²) α − m ((r × g)·x) = (I + m e²) α − m g e cos ψ for g = −g y."""
+    m, inertia, u, v = 0.04, 3e-6, 4 * MM, 3 * MM
+
+    def declare():
+        mech = Mechanism("lone_eccentric", "an eccentric alone on a shaft along x")
+        mech.spatial_crank("crank", ("0 mm", "0 mm", "0 mm"), (1, 0, 0), mass=f"{m} kg", inertia=f"{inertia} kg*m**2")
+        return mech
+
+    mech = sewgen.load(declare, cache_dir=cache)
+    phi = np.radians(np.arange(0, 360, 1.0))
+    fa = mech.kinetostatics(phi, speed=W, accel=accel, gravity=gravity, params={"crank.com_u": u, "crank.com_v": v})
+    e = np.hypot(u, v)
+    psi = phi + np.arctan2(v, u)
+    r = e * np.column_stack([np.zeros(len(phi)), -np.sin(psi), np.cos(psi)])  # R_x(ψ) (0, 0, e)
+    x = np.array([1.0, 0.0, 0.0])
+    acc = accel * np.cross(x, r) + W**2 * np.cross(x, np.cross(x, r))
+    g = np.array([0.0, -gravity, 0.0])
+    force = m * (acc - g)
+    torque = (inertia + m * e * e) * accel - m * np.cross(r, g)[:, 0]
+    if accel == 0.0:
+        np.testing.assert_allclose(np.hypot(acc[:, 1], acc[:, 2]), e * W**2, rtol=1e-12)  # m e ω², rotating
+        np.testing.assert_allclose(torque, -m * gravity * e * np.cos(psi), atol=1e-15)
+    scale = m * e * W**2 + m * gravity
+    np.testing.assert_allclose(fa.frame_force_on_parts[:, 0], force[:, 0], atol=1e-12 * scale)
+    np.testing.assert_allclose(fa.frame_force_on_parts[:, 1], force[:, 1], atol=1e-12 * scale)
+    np.testing.assert_allclose(fa.torque(), torque, atol=1e-12 * (scale * e + inertia * abs(accel)))
+    com = fa.motion.body("crank").com
+    np.testing.assert_allclose(np.column_stack([com.y, com.z]), r[:, 1:], atol=1e-15)
+    np.testing.assert_allclose(np.column_stack([com.ay, com.az]), acc[:, 1:], atol=1e-12 * e * W**2)

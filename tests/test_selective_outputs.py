@@ -107,7 +107,8 @@ def test_rates_and_observe_kernels_equal_motion_at_solved_positions(name):
     sizes = desc.sizes
     nq, nobs, ngroup = sizes["nq"], sizes["nobs"], sizes["ngroup"]
     arcs = sum(o["name"].endswith(".arc") for o in mech.manifest["observables"])
-    assert ngroup == len(mech.manifest["points"]) + len(mech.manifest["bodies"]) + arcs
+    spatial = sum(o["name"].endswith(".com.z") for o in mech.manifest["observables"])  # a spatial crank's G: z
+    assert ngroup == len(mech.manifest["points"]) + len(mech.manifest["bodies"]) + arcs + spatial
     sweep = mech.prepare(PHI, newton=True)
     sweep.run()
     assert (sweep.status == 0).all()

@@ -150,7 +150,7 @@ def test_linked_keys_move_together(jb):
 
 
 def test_tolerance_with_zero_tolerance_has_zero_spread(jb):
-    r = tolerance(jb, {"groups.feed.params.feed_arm_r": "±0 mm", "groups.needle_bar.params.crank": "0 mm"}, 12,
+    r = tolerance(jb, {"groups.feed.params.feed_arm_r": "±0 mm", "groups.needle_bar.params.crank": "+-0 mm"}, 12,
                   seed=5)
     assert (r.table["status"] == "ok").all()
     for q in r.stats["quantity"]:
@@ -322,6 +322,9 @@ def test_study_tolerance_command_with_exact_jumps(tmp_path, capsys):
     (["study", "influence", "jb1-3", "--param", "groups.hook_drive.phase", "--range", "-10%..+10%"],
      "percentage of an angle"),
     (["study", "tolerance", "jb1-3", "--tolerance", "groups.hook_drive.phase=±1%"], "percentage of an angle"),
+    # a half-width, a full width or a one-sided limit? was read as ±0.02 mm
+    (["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.feed_arm_r=0.02mm"],
+     "groups.feed.params.feed_arm_r"),
     (["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.feed_arm_r=±0.02mm", "--dask", "nowhere"],
      "--dask"),
     (["study", "tolerance", "jb1-3", "--tolerance", "groups.feed.params.feed_arm_r=±0.02mm", "--seed", "-1"],

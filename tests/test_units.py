@@ -17,6 +17,8 @@ from sewgen.units import MAX_POSITIONS, DisplayUnits, steps_per_turn, to_si
     ("1e-3 m", "length", 1e-3), ("2.0E+1 mm", "length", 0.02), ("1000 rpm", "speed", 1000 * math.pi / 30),
     ("90°", "angle", math.pi / 2), ("2.0e-5 kg*m**2", "inertia", 2e-5), ("9.81 m/s^2", "acceleration", 9.81),
     ("0.5", "dimensionless", 0.5), ("1e300 kg", "mass", 1e300),
+    ("1000 r/min", "speed", 1000 * 2 * math.pi / 60), ("1000 rev/min", "speed", 1000 * 2 * math.pi / 60),
+    ("10 r/s", "speed", 20 * math.pi), ("35 grain", "mass", 35 * 64.79891e-6),
 ])
 def test_good_quantities(text, kind, si):
     assert to_si(text, kind, "x") == pytest.approx(si, rel=1e-15)
@@ -42,6 +44,8 @@ def test_good_quantities(text, kind, si):
     ("nan mm", "length", ["nan mm"]),
     ("1e999 mm", "length", ["not finite"]),
     ("٣ mm", "length", ["number"]),                             # digits other than 0-9
+    ("35 gr", "mass", ['"gr"', "grains", '"g"', '"grain"']),   # was read as 35 grains, 2.27 g
+    ("2 gr*mm", "mass_length", ['"gr"', "ambiguous"]),
 ])
 def test_bad_quantities_name_the_value(text, kind, words):
     with pytest.raises(UnitError) as exc:

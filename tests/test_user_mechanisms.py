@@ -395,3 +395,23 @@ def test_duplicate_parameter_name():
 def test_bad_mechanism_name():
     with pytest.raises(DeclarationError, match="Not_Snake"):
         Declaration("Not_Snake", "")
+
+
+@pytest.mark.parametrize("declare_crank, words", [
+    (lambda m: m.length("crank", 12, "crank"), ["'crank'", "bare number 12", '"12 mm"', "12 m"]),
+    (lambda m: m.driven("crank", pivot=m.ground.at(12, 0)), ["'ground'", "bare number 12", "12 m"]),
+    (lambda m: m.ground.line(angle=90), ["bare number 90", "90 rad", '"90 deg"']),
+])
+def test_a_bare_number_meant_in_mm_or_deg_is_refused_before_anything_compiles(tmp_path, declare_crank, words):
+    """``m.length("crank", 12)`` was a 12 m crank: a vague assembly error after a 7.8 s compile. A parameter's
+    default carries its unit; a bare coordinate is SI, and one beyond 1 m (or a turn) is refused at once."""
+    def declare():
+        m = Declaration("bare_number_mech", "a declaration with a number written without its unit")
+        declare_crank(m)
+        return m
+
+    with pytest.raises((sewgen.BuildError, DeclarationError)) as info:
+        sewgen.load(declare, cache_dir=tmp_path)
+    msg = str(info.value)
+    assert "bare_number_mech" in msg and all(w in msg for w in words), msg
+    assert not list(tmp_path.rglob("*.so")) and not list(tmp_path.rglob("*.c"))  # nothing derived or compiled

@@ -15,7 +15,7 @@ from sewgen.engine.loader import catalog, load, mechanism
 from sewgen.engine.results import write_csv
 from sewgen.errors import SewgenError
 from sewgen.machine.modelfile import declaration_problem
-from sewgen.units import DisplayUnits, UnitError, steps_per_turn, to_si
+from sewgen.units import MAX_SHAFT_ANGLE, DisplayUnits, UnitError, steps_per_turn, to_si
 
 #: Exit status of a user mistake (a bad option, file or value: a typed error of sewgen.errors), as argparse uses
 #: for usage errors.
@@ -182,6 +182,9 @@ def sweep_of(args) -> tuple[np.ndarray, float, float]:
     if n is None:
         raise UsageError("--step", problem)
     start = quantity(args.start, "angle", "--start")
+    if abs(start) > MAX_SHAFT_ANGLE:
+        raise UsageError("--start", f'"{args.start}" is beyond ±{math.degrees(MAX_SHAFT_ANGLE):.6g} deg: the '
+                                    f"{360.0 / n:g}° steps would drown in its rounding (give an angle within a turn)")
     return start + (2 * math.pi / n) * np.arange(n), 360.0 / n, math.degrees(start)
 
 

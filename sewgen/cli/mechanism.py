@@ -24,6 +24,7 @@ from sewgen.cli.common import (
 from sewgen.engine.loader import catalog, mechanism
 from sewgen.engine.loads import Load
 from sewgen.machine.peaks import REFINED, extremes_of, mechanism_signature
+from sewgen.units import GRAVITY_MAX, range_problem
 
 REFINED_NOTE = "peaks and extremes refined between the positions (the mechanism solved again around each)"
 
@@ -157,8 +158,9 @@ def cmd_forces(args, con: Console) -> int:
     csv = check_file(args.csv, "--csv")
     phi, step, start = sweep_of(args)
     gravity = quantity(args.gravity, "acceleration", "--gravity")
-    if gravity < 0:
-        raise UsageError("--gravity", f'must not be negative, got "{args.gravity}" (it acts along -y)')
+    problem = range_problem(gravity, 0.0, GRAVITY_MAX, "m/s**2")
+    if problem:
+        raise UsageError("--gravity", f"{problem} (a magnitude: it acts along -y; 9.80665 m/s**2 on Earth)")
     m = mechanism_of(args)
     speed, speed_words = speed_of(args, m.default_speed, "the mechanism's")
     params = params_of(m, args.param)

@@ -65,7 +65,7 @@ def anchors(kin: Kinematics, kind_of) -> tuple[list[Anchor], list[ArcAnchor]]:
         out.append(at_anchor(kin, att, name, "point", None))
     for body in mech.bodies:
         if body.moving:
-            out.append(at_anchor(kin, Attachment(body, *body.com), f"{body.name}.com", "com", None))
+            out.append(Anchor(f"{body.name}.com", body.name, "com", None, kin.com(body)[:2]))
     arcs = []
     index = {a.name: k for k, a in enumerate(out)}
     for j in mech.joints:

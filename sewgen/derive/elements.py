@@ -10,8 +10,9 @@ Conventions (stated in the manifest and in docs/explanation/conventions.md):
 
 * a **spring** or **damper** between point ``a`` and point ``b``: its force is a *tension* (positive when it
   pulls the points together); spring F = preload + k·(L − L0), damper F = c·dL/dt;
-* a **torsion spring** at a revolute between bodies a and b: deflection Δ = (θ_b − θ_a) − θ0 taken in
-  (−π, π]; torque T = preload + k·Δ acts on b as −T and on a as +T;
+* a **torsion spring** at a revolute between bodies a and b: deflection Δ = (θ_b − θ_a) − θ0, the continuous
+  relative rotation (:meth:`TorsionSpring.deflection`: the inputs' turns wind it, a link's angle counts within half
+  a turn of its declared guess); torque T = preload + k·Δ acts on b as −T and on a as +T;
 * a spring's stored energy (preload·(L − L0) + k·(L − L0)²/2, and the torsional analogue) is part of the
   potential energy, and its rate the output ``elastic_power``; a damper's power on the mechanism
   (−c·(dL/dt)² ≤ 0) is part of ``load_power``, so the power balance drive + loads = d(E_kin + E_pot)/dt still
@@ -112,11 +113,16 @@ class _TwoPoint(ElementKind):
     def tension(self, kst, el):
         raise NotImplementedError
 
-    def applied(self, kst, el):
-        """A tension F pulls a towards b (+F·e at a) and b towards a (−F·e at b)."""
+    def pull(self, kst, el) -> tuple:
+        """The force on a, towards b: F·e."""
         _length, e = self.geometry(kst, el)
         f = self.tension(kst, el)
-        return [Applied(el.a.body, f * e[0], f * e[1], el.a), Applied(el.b.body, -f * e[0], -f * e[1], el.b)]
+        return (f * e[0], f * e[1])
+
+    def applied(self, kst, el):
+        """A tension F pulls a towards b (+F·e at a) and b towards a (−F·e at b)."""
+        fx, fy = self.pull(kst, el)
+        return [Applied(el.a.body, fx, fy, el.a), Applied(el.b.body, -fx, -fy, el.b)]
 
 
 class Spring(_TwoPoint):
@@ -135,10 +141,24 @@ class Spring(_TwoPoint):
         stretch = length - v["free_length"]
         return v["preload"] * stretch + v["stiffness"] * stretch * stretch / 2
 
+    def pull(self, kst, el):
+        """F·e = k·d + (preload − k·L0)·d/L, d = b − a: the linear part k·d needs no direction, so a spring whose
+        ends meet (L = 0) pulls with k·d = 0 where its tension there, preload − k·L0, is zero (a zero-length
+        spring, or one of zero stiffness and preload) — only a nonzero tension at L = 0 has no direction (a
+        non-finite result at that angle). The division is by L + [preload − k·L0 = 0], which is L wherever the
+        term counts."""
+        (ax, ay), (bx, by) = kst.kin.world(el.a), kst.kin.world(el.b)
+        length, _e = self.geometry(kst, el)
+        v = el.values
+        rest = v["preload"] - v["stiffness"] * v["free_length"]
+        divisor = length + sp.Piecewise((1, sp.Eq(rest, 0)), (0, True))
+        return tuple(v["stiffness"] * d + rest * d / divisor for d in (bx - ax, by - ay))
+
     def energy_rate(self, kst, el):
-        """dV/dt = F·dL/dt."""
-        _length, e = self.geometry(kst, el)
-        return self.tension(kst, el) * self.rate(kst, el, e)
+        """dV/dt = F·dL/dt = (F·e)·(v_b − v_a)."""
+        fx, fy = self.pull(kst, el)
+        (vax, vay), (vbx, vby) = kst.point_velocity(el.a), kst.point_velocity(el.b)
+        return fx * (vbx - vax) + fy * (vby - vay)
 
     def outputs(self, kst, el):
         length, _e = self.geometry(kst, el)
@@ -167,7 +187,8 @@ class Damper(_TwoPoint):
 
 
 class TorsionSpring(ElementKind):
-    """A torsion spring at a revolute: T = preload + k·Δ, Δ = (θ_b − θ_a) − θ0 in (−π, π]; −T on b, +T on a."""
+    """A torsion spring at a revolute: T = preload + k·Δ, Δ = (θ_b − θ_a) − θ0 the continuous relative rotation;
+    −T on b, +T on a."""
 
     name = "torsion_spring"
 
@@ -178,9 +199,21 @@ class TorsionSpring(ElementKind):
 
     @staticmethod
     def deflection(kst, el):
-        pose = kst.kin.pose
-        raw = pose[el.joint.b.body][2] - pose[el.joint.a.body][2] - el.values["free_angle"]
-        return sp.atan2(sp.sin(raw), sp.cos(raw))
+        """Δ = (θ_b − θ_a) − θ0 as the spring winds, never wrapped at ±180°: a torsion spring on a joint that turns
+        right round (a crank's pivot, its crank pin) winds a turn per turn. The relative angle is linear in the
+        inputs and the link angles, θ_b − θ_a − θ0 = Σ c_k x_k + Σ s_i q_i + constants: the inputs' part is taken
+        as the inputs are given (a shaft angle of 370° is a turn more than 10°); the links' part Σ s_i q_i within
+        half a turn of its value at the links' declared guesses (a link rocks about where it is declared; the
+        results read a link's angle only through its sine and cosine, so sweeps that count a link's turns
+        differently agree)."""
+        kin = kst.kin
+        pose = kin.pose
+        raw = sp.expand(pose[el.joint.b.body][2] - pose[el.joint.a.body][2] - el.values["free_angle"])
+        turns = sum((sp.diff(raw, x) * x for x in kin.x), sp.S.Zero)
+        links = sum((sp.diff(raw, q) * q for q in kin.q), sp.S.Zero)
+        ref = links.subs({q: c.guess for q, c in zip(kin.q, kin.coords)})
+        rest = sp.expand(raw - turns - links)  # phases, the free angle: no input, no coordinate (poses are linear)
+        return turns + rest + ref + sp.atan2(sp.sin(links - ref), sp.cos(links - ref))
 
     def torque(self, kst, el):
         v = el.values

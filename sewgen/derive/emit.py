@@ -88,7 +88,9 @@ def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, ker
                    for i in mech.inputs],
         "params": [{"name": p.name, "kind": p.kind, "unit": p.unit, "default": p.default,
                     "display_unit": p.display_unit, "positive": p.positive, "doc": p.doc,
-                    "role": role("param", p.name)} for p in mech.params],
+                    "role": role("param", p.name),
+                    **{k: v for k, v in (("minimum", p.minimum), ("maximum", p.maximum)) if v is not None}}
+                   for p in mech.params],
         "roles": {r: {"kind": kind, "name": name} for r, (kind, name) in sorted(mech.roles.items())},
         "points": points,
         "point_fields": POINT_FIELDS,
@@ -108,10 +110,11 @@ def manifest_of(mech: Mechanism, kin: Kinematics, kst: Kinetostatics, dyads, ker
 
 def observable_groups(mech: Mechanism, kin: Kinematics) -> list[int]:
     """Where each group of observables starts (and, last, their number): each point's POINT_FIELDS, each moving
-    body's BODY_FIELDS, each cam's arc index, in the manifest's order (kinematics._derive_observables). A sweep
-    that keeps a few outputs computes only their groups (kernel 'observe')."""
+    body's BODY_FIELDS, each cam's arc index, each spatial crank's centre-of-mass z (z, z_d, z_dd), in the
+    manifest's order (kinematics._derive_observables). A sweep that keeps a few outputs computes only their groups
+    (kernel 'observe')."""
     sizes = ([len(POINT_FIELDS)] * len(mech.points) + [len(BODY_FIELDS)] * sum(b.moving for b in mech.bodies)
-             + [1] * len(kin.cams))
+             + [1] * len(kin.cams) + [3] * len(kin.spatial_bodies))
     starts = [0]
     for k in sizes:
         starts.append(starts[-1] + k)

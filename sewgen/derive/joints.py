@@ -293,6 +293,9 @@ class Cam(_NormalForce):
         cam = a.body if isinstance(a, Attachment) else None
         if cam is None or not cam.moving or not isinstance(b, Line) or b.body is cam:
             raise DeclarationError(f"{mech.name}: cam {name!r} needs a moving cam body and a face of another body")
+        if cam.axis is not None:
+            raise DeclarationError(f"{mech.name}: cam {name!r}: {cam.name!r} turns about an axis in space and carries "
+                                   "pins only (crank.pin); a cam turns in the plane (driven)")
         if not arcs or not all(isinstance(x, Arc) for x in arcs):
             raise DeclarationError(f"{mech.name}: cam {name!r} needs a list of Arc")
 

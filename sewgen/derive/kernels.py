@@ -473,7 +473,7 @@ class KernelSet:
                 step += ["double d = 0.0, s = 0.0;",
                          f"for (int k = 0; k < {nfr}; ++k) {{ d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }}",
                          f"if (!(d <= {FRICTION_RTOL!r} * s)) {{",  # not settled (NaN included): once more
-                         f"    if (it >= {FRICTION_ITER}) return SG_NO_CONVERGENCE;",
+                         f"    if (it >= {FRICTION_ITER}) return SG_FRICTION_LOCK;",
                          f"    for (int k = 0; k < {nfr}; ++k) fr[k] = frn[k];",
                          "    continue;", "}"]
                 loop = (solve + [f"if (!({self._frictionless(kst)})) {{"] + ["    " + line for line in step] + ["}"]

@@ -83,6 +83,18 @@ class Kinematics:
         x, y = self.world(att)
         return (x, y, z)
 
+    def com(self, body: Body) -> tuple:
+        """(x, y, z) of ``body``'s centre of mass in the machine frame. A planar body's is its point (com_u, com_v)
+        in the plane (z = 0); a spatial crank's lies in the plane it turns in through its axis point: com_u along
+        the crank (where a pin at angle zero of the crank points), com_v a quarter turn ahead about its axis,
+        G = axis point + com_u·(cos θ e1 + sin θ e2) + com_v·(−sin θ e1 + cos θ e2)."""
+        u, v = body.com
+        if body.axis is None:
+            return (*self.world(Attachment(body, u, v)), sp.S.Zero)
+        axis, th = body.axis, self.pose[body][2]
+        c, s = sp.cos(th), sp.sin(th)
+        return tuple(axis.point[k] + (u * c - v * s) * axis.e1[k] + (u * s + v * c) * axis.e2[k] for k in range(3))
+
     def _new_coord(self, body: Body, kind: str) -> sp.Symbol:
         suffix = "angle" if kind == "angle" else "travel"
         self.coords.append(Coordinate(f"{body.name}.{suffix}", kind, body, body.guess))
@@ -203,10 +215,17 @@ class Kinematics:
                 continue
             th = self.pose[body][2]
             obs += self._motion_of(f"{body.name}.angle", th, "rad")
-            gx, gy = self.world(Attachment(body, body.com[0], body.com[1]))
+            gx, gy, _gz = self.com(body)
             obs += self._point_block(f"{body.name}.com", gx, gy)
         obs += [Observable(f"{c.joint.name}.arc", "", c.index) for c in self.cams]
+        for body in self.spatial_bodies:  # a spatial crank's centre of mass moves out of the plane too
+            obs += self._motion_of(f"{body.name}.com.z", self.com(body)[2], "m")
         self.observables = obs
+
+    @property
+    def spatial_bodies(self) -> list[Body]:
+        """The bodies that turn about an axis in space (spatial cranks), in declaration order."""
+        return [b for b in self.mech.bodies if b.axis is not None]
 
     def _point_block(self, name, px, py):
         """x, y, vx, vy, ax, ay of a point, in that order (the manifest's point layout)."""

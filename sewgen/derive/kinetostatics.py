@@ -111,7 +111,7 @@ class Kinetostatics:
 
     def arm(self, body: Body, world_point) -> tuple:
         """world_point − G of ``body``, world axes."""
-        gx, gy = self.kin.world(Attachment(body, body.com[0], body.com[1]))
+        gx, gy, _gz = self.kin.com(body)
         return (world_point[0] - gx, world_point[1] - gy)
 
     def point_velocity(self, att: Attachment) -> tuple:
@@ -132,9 +132,35 @@ class Kinetostatics:
         return (self.o(f"{body.name}.com.x_d") - w * ry, self.o(f"{body.name}.com.y_d") + w * rx)
 
     def own_arm(self, att: Attachment) -> tuple:
-        """A point fixed in its body, relative to the body's G: R(θ)(u − u_G, v − v_G)."""
+        """A point fixed in its body, relative to the body's G: R(θ)(u − u_G, v − v_G). A spatial crank's moment
+        row is about its own axis (see :meth:`_spatial_moment`): its one planar point, its origin (the pivot, on
+        the axis), has no arm about it."""
         body = att.body
+        if body.axis is not None:
+            if att.u != 0 or att.v != 0:
+                raise DeclarationError(f"{self.mech.name}: {body.name!r} turns about an axis in space: its points "
+                                       f"are {body.name}.pin(radius, along)")
+            return (sp.S.Zero, sp.S.Zero)
         return rot(self.kin.pose[body][2], att.u - body.com[0], att.v - body.com[1])
+
+    def _spatial_moment(self, body: Body) -> sp.Expr:
+        """The right-hand side of a spatial crank's moment row, about its fixed axis (unit a through A):
+
+            Σ M_A·a = (I + m d²) θ̈ − m a·(r_G × g),    r_G = G − A ⊥ a,  d² = com_u² + com_v²,
+
+        Euler's equation about a fixed axis (any rigid-dynamics text: H_A·a = I_A θ̇ for rotation about a fixed
+        axis, I_A = I + m d² by the parallel-axis theorem, I about the line through G parallel to a), gravity's
+        moment about the axis moved to the right. The reactions' moments about the axis are the rows' entries
+        (the bearing's force, through the axis, has none)."""
+        axis, (u, v) = body.axis, body.com
+        centre = self.kin.com(body)
+        r = [centre[k] - axis.point[k] for k in range(3)]
+        g = (self.gravity[0], self.gravity[1], sp.S.Zero)
+        a = axis.direction
+        moment_of_weight = sum(a[k] * (r[(k + 1) % 3] * g[(k + 2) % 3] - r[(k + 2) % 3] * g[(k + 1) % 3])
+                               for k in range(3))
+        return ((body.inertia + body.mass * (u * u + v * v)) * self.o(f"{body.name}.angle_dd")
+                - body.mass * moment_of_weight)
 
     # -- the matrices ---------------------------------------------------------------------------------------
     def _balance(self):
@@ -154,7 +180,8 @@ class Kinetostatics:
             k, name = rows[body], body.name
             b[k] = body.mass * (self.o(f"{name}.com.x_dd") - gx)
             b[k + 1] = body.mass * (self.o(f"{name}.com.y_dd") - gy)
-            b[k + 2] = body.inertia * self.o(f"{name}.angle_dd")
+            b[k + 2] = (body.inertia * self.o(f"{name}.angle_dd") if body.axis is None
+                        else self._spatial_moment(body))
         for (name, comp, body, att), load in zip(self.load_slots, self.loads):
             k = rows[body]
             if comp == "torque":
@@ -212,7 +239,7 @@ class Kinetostatics:
                 continue
             for body, bx, by, moment in r.joint_kind.friction_loads(self, r, fr):
                 if body.moving:
-                    gx_, gy_ = kin.world(Attachment(body, body.com[0], body.com[1]))
+                    gx_, gy_, _gz = kin.com(body)
                     fx += bx
                     fy += by
                     mz += moment + gx_ * by - gy_ * bx
@@ -232,7 +259,8 @@ class Kinetostatics:
         for body in self.moving:
             n = body.name
             vx, vy, w = self.o(f"{n}.com.x_d"), self.o(f"{n}.com.y_d"), self.o(f"{n}.angle_d")
-            ke += body.mass * (vx * vx + vy * vy) / 2 + body.inertia * w * w / 2
+            vz = self.o(f"{n}.com.z_d") if body.axis is not None else sp.S.Zero  # a spatial crank's G: off the plane
+            ke += body.mass * (vx * vx + vy * vy + vz * vz) / 2 + body.inertia * w * w / 2
             pe -= body.mass * (gx * self.o(f"{n}.com.x") + gy * self.o(f"{n}.com.y"))
         power = sp.S.Zero
         for (name, comp, body, _att), load in zip(self.load_slots, self.loads):

@@ -14,11 +14,18 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from ..units import SI_UNITS, to_si, unit_of
+from ..units import FRICTION_MAX, SI_UNITS, range_problem, to_si, unit_of
 from .elements import ELEMENTS, ForceElement
 from .joints import KINDS
 from .vocabulary import (NAME, Arc, Attachment, Axis, Body, DeclarationError, Input, Joint, Line,  # noqa: F401
-                         Param, SpatialPoint)  # re-exported: declarations import the vocabulary from here
+                         Param, SpatialPoint, check_bare)  # re-exported: declarations import the vocabulary from here
+
+
+#: The range of a quantity that cannot be negative (a damper's coefficient, a spring's stiffness and free length, a
+#: pin's radius): its minimum and maximum (SI; None: open).
+_NOT_NEGATIVE = (0.0, None)
+#: The unit a "give it with its unit" message suggests for each kind of parameter.
+_EXAMPLE_UNITS = {"length": "mm", "angle": "deg", "mass": "g"}
 
 
 @dataclass(eq=False)
@@ -72,18 +79,32 @@ class Mechanism:
             raise DeclarationError(f"{self.name}: the {what} name {name!r} is declared twice")
         self._names.add(key)
 
-    def param(self, name: str, kind: str, default: str, doc: str, positive: bool = False, role=None) -> sp.Symbol:
-        """Declare a parameter of physical ``kind`` with a default such as "16.7 mm"; returns its symbol."""
-        self._claim(name, "parameter")
-        self._role(role, "param", name)
+    def param(self, name: str, kind: str, default: str, doc: str, positive: bool = False, role=None,
+              bounds=(None, None)) -> sp.Symbol:
+        """Declare a parameter of physical ``kind`` with a default such as "16.7 mm"; returns its symbol.
+
+        The default carries its unit: a bare number is refused for every kind that has one (``length("crank",
+        12)`` would be 12 m — a sewing machine's crank is 12 mm), a dimensionless one is a plain number.
+        ``bounds`` (minimum, maximum; SI, None: open) is the physical range every value of it must lie in, checked
+        here for the default and at run time for every value given (``sewgen.engine.arguments.parameter_problem``).
+        """
         if not doc:
             raise DeclarationError(f"{self.name}: parameter {name!r} needs a docstring")
+        if not isinstance(default, str) and SI_UNITS.get(kind):
+            raise DeclarationError(f"{self.name}: default of {name!r} is a bare number {default!r}: give it with "
+                                   f"its unit, e.g. \"{default} {_EXAMPLE_UNITS.get(kind, SI_UNITS[kind])}\" (a bare "
+                                   f"number would be read as {default} {SI_UNITS[kind]})")
         value = to_si(default, kind, f"{self.name}.{name}")
         if positive and not value > 0:
             raise DeclarationError(f"{self.name}: default of {name!r} must be positive")
+        problem = range_problem(value, *bounds, SI_UNITS[kind])
+        if problem:
+            raise DeclarationError(f"{self.name}: default of {name!r} {problem} ({doc})")
+        self._claim(name, "parameter")
+        self._role(role, "param", name)
         sym = sp.Symbol(f"p_{len(self.params)}", **({"positive": True} if positive else {"real": True}))
         unit = unit_of(default) if isinstance(default, str) else SI_UNITS[kind]
-        self.params.append(Param(name, sym, kind, value, unit, doc, positive))
+        self.params.append(Param(name, sym, kind, value, unit, doc, positive, *bounds))
         return sym
 
     def length(self, name: str, default: str, doc: str, signed: bool = False, role=None) -> sp.Symbol:
@@ -107,12 +128,17 @@ class Mechanism:
         self.bodies.append(body)
         return body
 
-    def _mass_prop(self, body: str, prop: str, kind: str, value, doc: str) -> sp.Expr:
+    def _mass_prop(self, body: str, prop: str, kind: str, value, doc: str, bounds=(None, None)) -> sp.Expr:
         """A property of a part (mass, an element's stiffness …): a quantity string becomes parameter
-        ``part.prop``; an expression is used as is."""
+        ``part.prop`` (its values within ``bounds``, see :meth:`param`); an expression is used as is (a number in
+        it checked against ``bounds``)."""
         if isinstance(value, str):
-            return self.param(f"{body}.{prop}", kind, value, doc)
-        return sp.sympify(value)
+            return self.param(f"{body}.{prop}", kind, value, doc, bounds=bounds)
+        expr = sp.sympify(value)
+        problem = range_problem(float(expr), *bounds, SI_UNITS[kind]) if expr.is_number else None
+        if problem:
+            raise DeclarationError(f"{self.name}: {body}.{prop} {problem} ({doc})")
+        return expr
 
     def driven(self, name: str, pivot: Attachment, phase="0 deg", sense: int = 1, doc: str = "",
                mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None, ratio=1) -> Body:
@@ -151,17 +177,21 @@ class Mechanism:
                           guide=guide, input_index=len(self.inputs) - 1)
 
     def spatial_crank(self, name: str, axis_point, axis, phase="0 deg", sense: int = 1, ratio=1, reference=None,
-                      doc: str = "", mass="0 g", inertia="0 kg*m**2", role=None, planar: bool = False) -> Body:
+                      doc: str = "", mass="0 g", com=("0 mm", "0 mm"), inertia="0 kg*m**2", role=None,
+                      planar: bool = False) -> Body:
         """A crank turned by the upper shaft about a fixed axis in space (seed 003's spatial four-bar: the crank
         of the needle or looper drive, whose shaft is not parallel to the rocker's).
 
         ``axis_point`` (x, y, z; the mechanism's plane is z = 0) is a point of the axis, ``axis`` its direction
         (three numbers, normalised here); the crank angle sense · ratio · phi + phase is measured about the axis
         from ``reference`` (three numbers; default: the machine's z axis, or x when the axis is along z) projected
-        into the plane the crank turns in. Its points are ``crank.pin(radius, along)``; its centre of mass is on
-        the axis and ``inertia`` is about the axis. In the force balance its rows are the in-plane components
-        of its bearings' resultant (reaction ``<name>.pivot`` at the axis point's projection) and the moment
-        about its own axis (the driving torque).
+        into the plane the crank turns in. Its points are ``crank.pin(radius, along)``. Its centre of mass lies in
+        that plane, through the axis point: ``com`` = (u, v), u along the crank (towards ``pin(radius)``), v a
+        quarter turn ahead about the axis (parameters ``<name>.com_u``, ``<name>.com_v``; default on the axis);
+        ``inertia`` is about the line through the centre of mass parallel to the axis (about the axis itself:
+        inertia + mass·(u² + v²)). In the force balance its rows are the in-plane components of its bearings'
+        resultant (reaction ``<name>.pivot`` at the axis point's projection) and the moment about its own axis
+        (the driving torque); its centre of mass's motion out of the plane is the observable ``<name>.com.z``.
 
         ``planar=True`` declares the planar equivalent instead (seed 003 computes its spatial four-bars so, eq. 1
         with α = 0): the crank's axis and the plane it turns in are turned, by the least rotation about the line
@@ -172,12 +202,14 @@ class Mechanism:
         def coordinate(value, what):
             if isinstance(value, str):
                 return sp.Float(to_si(value, "length", f"{self.name}.{name}.{what}"))
-            return sp.sympify(value)
+            return check_bare(self.name, name, sp.sympify(value), "length")
 
         try:
             point = tuple(coordinate(value, what) for value, what in zip(axis_point, "xyz"))
             direction = sp.Matrix([sp.Rational(str(c)) if not isinstance(c, sp.Expr) else c for c in axis])
             ref = sp.Matrix([sp.Rational(str(c)) for c in reference]) if reference is not None else None
+        except DeclarationError:
+            raise
         except (TypeError, ValueError, sp.SympifyError):
             raise DeclarationError(f"{self.name}: axis of {name!r}: a point (x, y, z) and a direction of three "
                                    "numbers") from None
@@ -202,7 +234,7 @@ class Mechanism:
                 a, e1, e2 = (sp.simplify(rot * v) for v in (a, e1, e2))
             point = (point[0], point[1], sp.S.Zero)
         body = self.driven(name, self.ground.at(point[0], point[1]), phase=phase, sense=sense, doc=doc, mass=mass,
-                           inertia=inertia, role=role, ratio=ratio)
+                           com=com, inertia=inertia, role=role, ratio=ratio)
         body.axis = Axis(point, tuple(a), tuple(e1), tuple(e2))
         return body
 
@@ -278,8 +310,9 @@ class Mechanism:
         self._claim(name, "force element")
         el = ForceElement(name, kind, a, b, joint, {}, doc)
         ELEMENTS[kind].check(self, el)
-        for prop, (quantity, value) in (values or {}).items():
-            el.values[prop] = self._mass_prop(name, prop, quantity, value, f"{prop.replace('_', ' ')} of {name}")
+        for prop, (quantity, value, *bounds) in (values or {}).items():
+            el.values[prop] = self._mass_prop(name, prop, quantity, value, f"{prop.replace('_', ' ')} of {name}",
+                                              *bounds)
         self.elements.append(el)
         return el
 
@@ -289,19 +322,21 @@ class Mechanism:
         preload + stiffness·(length − free_length), positive when it pulls the points together. Values are
         quantity strings ("1.2 N/mm", "30 mm", "2 N": parameters ``<name>.stiffness`` …) or expressions."""
         return self._element("spring", name, a, b, values={
-            "stiffness": ("stiffness", stiffness), "free_length": ("length", free_length),
-            "preload": ("force", preload)}, doc=doc)
+            "stiffness": ("stiffness", stiffness, _NOT_NEGATIVE),
+            "free_length": ("length", free_length, _NOT_NEGATIVE), "preload": ("force", preload)}, doc=doc)
 
     def damper(self, a: Attachment, b: Attachment, coefficient, *, name: str, doc: str = ""):
         """A linear viscous damper from ``a`` to ``b``: tension coefficient·(d length/dt)."""
-        return self._element("damper", name, a, b, values={"coefficient": ("damping", coefficient)}, doc=doc)
+        return self._element("damper", name, a, b, values={"coefficient": ("damping", coefficient, _NOT_NEGATIVE)},
+                             doc=doc)
 
     def torsion_spring(self, joint: Joint, stiffness, free_angle="0 deg", preload="0 N*m", *, name: str,
                        doc: str = ""):
         """A torsion spring at revolute ``joint``: torque preload + stiffness·((θ_b − θ_a) − free_angle) acts on
-        the joint's body b as −T and on its body a as +T (the deflection is taken in (−180°, 180°])."""
+        the joint's body b as −T and on its body a as +T; the deflection is the continuous relative rotation (a
+        spring on a pin that turns right round winds a turn per turn; derive.elements.TorsionSpring.deflection)."""
         return self._element("torsion_spring", name, joint=joint, values={
-            "stiffness": ("torsional_stiffness", stiffness), "free_angle": ("angle", free_angle),
+            "stiffness": ("torsional_stiffness", stiffness, _NOT_NEGATIVE), "free_angle": ("angle", free_angle),
             "preload": ("torque", preload)}, doc=doc)
 
     def rod(self, crank_pin: SpatialPoint, b: Attachment, length, name: str, z="0 mm", branch: int = 1) -> Joint:
@@ -329,9 +364,10 @@ class Mechanism:
                                    f"(joints that have: {', '.join(k for k, v in KINDS.items() if v.has_friction)})")
         if any(f[0] == name for f in self.frictions):
             raise DeclarationError(f"{self.name}: friction in {name!r} is declared twice")
-        mu = self._mass_prop(name, "friction", "dimensionless", coefficient, f"Coulomb friction coefficient of {name}")
-        radius = (self._mass_prop(name, "pin_radius", "length", pin_radius, f"pin radius of {name} (friction arm)")
-                  if kind.friction_unit == "N*m" else sp.S.Zero)
+        mu = self._mass_prop(name, "friction", "dimensionless", coefficient, f"Coulomb friction coefficient of {name}",
+                             (0.0, FRICTION_MAX))
+        radius = (self._mass_prop(name, "pin_radius", "length", pin_radius, f"pin radius of {name} (friction arm)",
+                                  _NOT_NEGATIVE) if kind.friction_unit == "N*m" else sp.S.Zero)
         self.frictions.append((name, mu, radius))
 
     def friction_off(self, pins: dict, slides=()) -> None:

@@ -4,6 +4,7 @@ drawing build on these; :class:`derive.model.Mechanism` declares a mechanism wit
 """
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -23,9 +24,27 @@ class DeclarationError(ValueError):
     """A mechanism declaration that cannot be derived (names the mechanism and the part)."""
 
 
+#: The largest bare number (SI, no unit) a declaration's coordinate may be, by kind: a sewing machine has no part
+#: a metre long and no fixed angle beyond a turn, so a bare 12 where a length goes (12 m) or 90 where an angle goes
+#: (90 rad) is a number meant in mm or deg: refused, naming it, before anything is derived or compiled.
+BARE_LIMIT = {"length": 1.0, "angle": 2 * math.pi}
+
+
+def check_bare(mech: str, owner: str, expr: sp.Expr, kind: str) -> sp.Expr:
+    """``expr`` (a coordinate of ``owner`` given without a unit) if it is not a number beyond :data:`BARE_LIMIT`."""
+    limit = BARE_LIMIT.get(kind)
+    if limit is not None and expr.is_number and expr.is_real and abs(float(expr)) > limit:
+        unit = SI_UNITS[kind]
+        raise DeclarationError(f"{mech}: a coordinate of {owner!r} is the bare number {float(expr):g}, read as "
+                               f"{float(expr):g} {unit}: give it with its unit (e.g. \"{float(expr):g} "
+                               f"{'mm' if kind == 'length' else 'deg'}\")")
+    return expr
+
+
 @dataclass(frozen=True)
 class Param:
-    """A named parameter: symbol, physical kind, SI default, the unit it was declared in, docstring."""
+    """A named parameter: symbol, physical kind, SI default, the unit it was declared in, docstring, and the
+    physical range its values must lie in (``minimum``, ``maximum``, SI; None: open)."""
 
     name: str
     symbol: sp.Symbol
@@ -34,6 +53,8 @@ class Param:
     display_unit: str
     doc: str
     positive: bool
+    minimum: float | None = None
+    maximum: float | None = None
 
     @property
     def unit(self) -> str:
@@ -126,10 +147,11 @@ class Body:
             except UnitError as exc:
                 raise DeclarationError(str(exc)) from None
         try:
-            return sp.sympify(value, strict=True)
+            expr = sp.sympify(value, strict=True)
         except (sp.SympifyError, TypeError):
             raise DeclarationError(f"{self.mech.name}: a coordinate of {self.name!r} must be a number, a "
                                    f"parameter symbol or a quantity string, got {value!r}") from None
+        return check_bare(self.mech.name, self.name, expr, kind)
 
     @property
     def moving(self) -> bool:

@@ -34,6 +34,8 @@ class Parameter:
     doc: str
     positive: bool
     role: str | None = None
+    minimum: float | None = None  # the physical range of its values (SI; None: open), e.g. a friction coefficient's
+    maximum: float | None = None
 
 
 @dataclass(frozen=True)
@@ -114,6 +116,7 @@ class Body:
     com_v: str | None = None
     inertia: str | None = None
     role: str | None = None
+    com_z: int | None = None  # a spatial crank's: the offset of its centre of mass's z, z_d, z_dd (off the plane)
 
 
 @dataclass(frozen=True)
@@ -327,7 +330,8 @@ def describe(manifest: dict | str) -> Description:
     """The :class:`Description` of a manifest (the dict, or its JSON text)."""
     man = json.loads(manifest) if isinstance(manifest, str) else manifest
     params = tuple(Parameter(i, p["name"], p["kind"], p["unit"], float(p["default"]), p["display_unit"], p["doc"],
-                             bool(p["positive"]), p.get("role")) for i, p in enumerate(man["params"]))
+                             bool(p["positive"]), p.get("role"), p.get("minimum"), p.get("maximum"))
+                   for i, p in enumerate(man["params"]))
     pnames = {p.name for p in params}
     coords = tuple(Coordinate(i, c["name"], c["unit"], float(c["guess"])) for i, c in enumerate(man["coords"]))
     inputs = tuple(Input(i, x["name"], x["kind"], x["unit"], float(x["default"]), x.get("display_unit", x["unit"]),
@@ -336,8 +340,10 @@ def describe(manifest: dict | str) -> Description:
                      for i, b in enumerate(man["branches"]))
     points = tuple(Point(p["name"], p.get("doc", ""), int(p["offset"]), p.get("body"), p.get("role"))
                    for p in man["points"])
+    observable = {o["name"]: k for k, o in enumerate(man["observables"])}
     bodies = tuple(Body(b["name"], b["kind"], b.get("doc", ""), int(b["offset"]), role=b.get("role"),
-                        **_mass_params(b["name"], pnames)) for b in man["bodies"])
+                        com_z=observable.get(f"{b['name']}.com.z"), **_mass_params(b["name"], pnames))
+                   for b in man["bodies"])
     reactions = tuple(Reaction(r["name"], r["kind"], r["a"], r["b"], tuple(r["columns"]), int(r["offset"]),
                                bool(r["grounded"]), r.get("input"), r.get("sense", 1)) for r in man["reactions"])
     if "joints" in man:

@@ -31,7 +31,7 @@ import numpy as np
 
 from sewgen import abi
 from sewgen.errors import InputError, ParameterError
-from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, pointer, request, si
+from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, parameter_problem, pointer, request, si
 from sewgen.engine.results import Selection
 from sewgen.units import UnitError, to_si
 
@@ -405,14 +405,16 @@ def _check_columns(mech, p: np.ndarray, held: np.ndarray) -> dict:
             bad |= ~(col > 0)
         if spec.kind in NONNEGATIVE:
             bad |= col < 0
-        for d in np.flatnonzero(bad):
+        if spec.minimum is not None:
+            bad |= col < spec.minimum
+        if spec.maximum is not None:
+            bad |= col > spec.maximum
+        for d in np.flatnonzero(bad):  # the message: the one check of a parameter's value (parameter_problem)
             d = int(d)
             if d in problems:
                 continue
             v = float(col[d])
-            msg = (f"{v!r} is not finite" if not math.isfinite(v) else
-                   f"must be positive, got {v!r} {spec.unit}" if spec.positive and not v > 0 else
-                   f"must not be negative, got {v!r} {spec.unit}")
+            msg = f"{v!r} is not finite" if not math.isfinite(v) else parameter_problem(spec, v)
             problems[d] = ParameterError(mech.name, spec.name, msg)
     for k, spec in enumerate(mech.description.held_inputs):
         for d in np.flatnonzero(~np.isfinite(held[:, k])):

@@ -26,7 +26,8 @@ import numpy as np
 
 from sewgen import abi
 from sewgen.engine import designs as many_designs
-from sewgen.engine.arguments import DEFAULT_MAX_ITER, NONNEGATIVE, mapping, pointer, request, si, vector
+from sewgen.engine.arguments import (DEFAULT_MAX_ITER, DEGREES_LIKE, check_gravity, check_shaft_angles, mapping,
+                                     parameter_problem, pointer, request, si, vector)
 from sewgen.engine.description import describe
 from sewgen.errors import AssemblyError, InputError, ParameterError, SingularPositionError
 from sewgen.engine.forces import ForceAnalysis, RunSettings
@@ -247,10 +248,9 @@ class Mechanism:
         out = np.empty(len(desc.params))
         for spec in desc.params:
             v = si(desc.name, values[spec.name], spec.kind, spec.name)
-            if spec.positive and not v > 0:
-                raise ParameterError(desc.name, spec.name, f"must be positive, got {v!r} {spec.unit}")
-            if spec.kind in NONNEGATIVE and v < 0:
-                raise ParameterError(desc.name, spec.name, f"must not be negative, got {v!r} {spec.unit}")
+            problem = parameter_problem(spec, v)
+            if problem:
+                raise ParameterError(desc.name, spec.name, problem)
             out[spec.index] = v
         return out
 
@@ -388,6 +388,7 @@ class Mechanism:
         phi_v = self._series("shaft angle", phi_arr, n, "angle")
         if degrees:
             phi_v = np.radians(phi_v)
+        check_shaft_angles(self.name, phi_v, degrees)  # the angles' own checks (sewgen.engine.arguments)
         omega = self._series("speed", self.default_speed if speed is None else speed, n, "speed")
         alpha = self._series("angular acceleration", accel, n, "angular_acceleration")
         if not isinstance(max_iter, (int, np.integer)) or isinstance(max_iter, (bool, np.bool_)) \
@@ -421,7 +422,7 @@ class Mechanism:
         settings = None
         if forces:
             arrays["frc"] = (n, sizes["nfo"])
-            g = si(self.name, gravity, "acceleration", "gravity")
+            g = check_gravity(self.name, si(self.name, gravity, "acceleration", "gravity"))
             g_dir = si(self.name, gravity_direction, "angle", "gravity_direction")
             gx, gy = g * math.cos(g_dir), g * math.sin(g_dir)
             tiny = 1e-15 * abs(g)  # -90 deg is exactly -y, not (6e-16, -g)
@@ -839,6 +840,8 @@ class LeanSweep(Sweep):
         got = mechanism.params_in_c(params)
         if got is None:
             return None
+        if abs(phi[0]) > DEGREES_LIKE or abs(phi[-1]) > DEGREES_LIKE:  # ascending angles' extremes: the ends
+            check_shaft_angles(mechanism.name, phi, False)  # (unsorted ones: run() checks them all)
         widths = mechanism.lean_widths
         if not phi.flags.c_contiguous:
             phi = np.ascontiguousarray(phi)
@@ -924,6 +927,7 @@ class LeanSweep(Sweep):
         fn, desc, req, keep = self._call(None)
         failed = fn(desc, req)
         if failed == _SIZE_MAX:  # not ascending: solved in sorted order, returned in the caller's
+            check_shaft_angles(self.mechanism.name, self.phi_in, False)  # of() looked at the ends only
             fn, desc, req, keep = self._call(np.argsort(self.phi_in, kind="stable").astype(np.uintp))
             failed = fn(desc, req)
         self.__dict__["failed"] = failed

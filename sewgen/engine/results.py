@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import csv
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -15,7 +15,9 @@ _BLOCK_ARRAYS = frozenset({"phi", "omega", "alpha", "error_estimate", "q", "qd",
 
 @dataclass(frozen=True)
 class PointMotion:
-    """A point's path: position (m), velocity (m/s), acceleration (m/s²), one entry per shaft angle."""
+    """A point's path: position (m), velocity (m/s), acceleration (m/s²), one entry per shaft angle. ``z``,
+    ``vz``, ``az``: out of the mechanism's plane, for a spatial crank's centre of mass (None for every point that
+    stays in the plane, z = 0)."""
 
     x: np.ndarray
     y: np.ndarray
@@ -23,6 +25,9 @@ class PointMotion:
     vy: np.ndarray
     ax: np.ndarray
     ay: np.ndarray
+    z: np.ndarray | None = None
+    vz: np.ndarray | None = None
+    az: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -133,8 +138,11 @@ class Motion:
         desc = self.mechanism.description
         if not desc.has("body", name):
             raise KeyError(f"{self.mechanism.name} has no moving body {name!r}; bodies: {', '.join(self.body_names)}")
-        off = desc.body(name).offset
-        return BodyMotion(self.obs[:, off], self.obs[:, off + 1], self.obs[:, off + 2], self._block(off + 3))
+        body = desc.body(name)
+        off, com = body.offset, self._block(body.offset + 3)
+        if body.com_z is not None:  # a spatial crank's centre of mass leaves the plane
+            com = replace(com, **{k: self.obs[:, body.com_z + i] for i, k in enumerate(("z", "vz", "az"))})
+        return BodyMotion(self.obs[:, off], self.obs[:, off + 1], self.obs[:, off + 2], com)
 
     def coord(self, name: str) -> CoordinateMotion:
         desc = self.mechanism.description
@@ -232,7 +240,8 @@ class Selection:
 
     def body(self, name: str) -> BodyMotion:
         b = f"bodies.{name}"
-        com = PointMotion(*(self[f"{b}.com.{f}"] for f in ("x", "y", "x_d", "y_d", "x_dd", "y_dd")))
+        com = PointMotion(*(self[f"{b}.com.{f}"] for f in ("x", "y", "x_d", "y_d", "x_dd", "y_dd")),
+                          *(self.columns.get(f"obs.{name}.com.{f}") for f in ("z", "z_d", "z_dd")))
         return BodyMotion(self[f"{b}.angle"], self[f"{b}.angle_d"], self[f"{b}.angle_dd"], com)
 
     def coord(self, name: str) -> CoordinateMotion:

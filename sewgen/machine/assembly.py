@@ -77,12 +77,13 @@ class Group:
     def along(self) -> bool:
         return self.frame == "along"
 
-    def to_machine(self, x, y):
-        """(X, Y, Z) in the machine frame of the point (x, y) of the group's plane (arrays or numbers, m)."""
+    def to_machine(self, x, y, z=0.0):
+        """(X, Y, Z) in the machine frame of the point (x, y, z) of the group's frame, z = 0 its plane (arrays or
+        numbers, m)."""
         if not self.along:
-            return x, y, self.z + 0.0 * np.asarray(x)
+            return x, y, self.z + z + 0.0 * np.asarray(x)
         ox, oy, oz = self.origin
-        return ox + 0.0 * np.asarray(x), oy + y, oz + x
+        return ox - z + 0.0 * np.asarray(x), oy + y, oz + x
 
     def force_to_machine(self, fx, fy, fz=0.0):
         """A force (or any vector) of the group's frame in the machine frame: (X, Y, Z) components."""
@@ -248,11 +249,12 @@ class MachineAnalysis:
     def _crank_loads(self, g):
         fa = self.groups[g.name]
         out = []
+        inertia = {b.name: b.mass * b.motion.com.az for b in self.moving_bodies(g) if b.motion.com.az is not None}
         for body, z in g.axial.items():
             fx, fy = _xy(fa.frame_force(f"{body}.pivot"))
-            if g.along:
+            if g.along:  # the crank on the core out of the plane: its rods' pull and its own inertia, −m a_z
                 fz = -sum((fa.output(f"{r.name}.fz") for r in g.mechanism.description.force_joints
-                           if r.kind == "rod" and r.a == body), np.zeros(len(self.phi)))
+                           if r.kind == "rod" and r.a == body), np.zeros(len(self.phi))) - inertia.get(body, 0.0)
                 fx, fy, _ = g.force_to_machine(fx, fy, fz)
             out.append((f"{g.name}.{body}", z, np.column_stack([fx, fy])))
         return out
@@ -263,6 +265,29 @@ class MachineAnalysis:
             return force
         x, y, _ = g.force_to_machine(force[:, 0], force[:, 1])
         return np.column_stack([np.zeros(len(y)) + x, y])
+
+    def _off_plane(self, g):
+        """Per body of group ``g`` whose centre of mass leaves the group's plane (a spatial crank's turning about
+        its axis): the frame's force on it m (a_G − g) and its centre of mass, both in the machine frame, as they are
+        (F, P) and as the group's plane forces count them, in the plane (F₀, P₀) — the part the plane leaves out
+        is the difference."""
+        gx, gy = (0.0, float(self.machine.gravity[1])) if g.along else (float(v) for v in self.machine.gravity)
+        for b in self.moving_bodies(g):
+            c = b.motion.com
+            if c.z is None:
+                continue
+            fx, fy = b.mass * (c.ax - gx), b.mass * (c.ay - gy)
+            yield (g.force_to_machine(fx, fy, b.mass * c.az), g.to_machine(c.x, c.y, c.z),
+                   g.force_to_machine(fx, fy), g.to_machine(c.x, c.y))
+
+    def _off_plane_moment(self, g, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """(n, 3) the moment about ``about`` of the frame's forces on ``g``'s bodies that its plane leaves out
+        (:meth:`_off_plane`): Σ (P − O) × F − (P₀ − O) × F₀."""
+        out = np.zeros((len(self.phi), 3))
+        for force, at, plane_force, plane_at in self._off_plane(g):
+            shaking.add_moment(out, at, force, about)
+            shaking.add_moment(out, plane_at, tuple(-np.asarray(f) for f in plane_force), about)
+        return out
 
     def _group_moment_z(self, g, force, moment):
         """The z moment about the machine's origin of a group's force (n, 2) and its moment about the group's
@@ -359,6 +384,9 @@ class MachineAnalysis:
         pivots excepted) and of the bearings' (seed 000's base-support reactions 机座支承反力)."""
         gv = self.machine.gravity
         out = sum(self._group_force(g, self.groups[g.name].frame_force_on_parts) for g in self.machine.groups)
+        for g in self.machine.groups:  # the part of a spatial crank's force that leaves the group's plane
+            for force, _at, plane_force, _plane_at in self._off_plane(g):
+                out = out + np.column_stack([force[k] - plane_force[k] + 0.0 * self.phi for k in range(2)])
         for sm, _pos, _vel, acc in self.core:
             out = out + sm.mass * (acc - gv[None, :])
         return out - np.asarray(self.machine.shaft.belt, dtype=float)[None, :]
@@ -373,7 +401,7 @@ class MachineAnalysis:
             fa = self.groups[g.name]
             sf = fa.frame_force_on_parts
             own = fa.frame_moment_on_parts + fa.moment_about[0] * sf[:, 1] - fa.moment_about[1] * sf[:, 0]
-            out = out + self._group_moment_z(g, sf, own)
+            out = out + self._group_moment_z(g, sf, own) + self._off_plane_moment(g)[:, 2]
             if g.along:  # its cranks turn about the machine's z
                 out = out + self._along_moments(g)[1]
         for sm, pos, _vel, acc in self.core:
@@ -446,6 +474,7 @@ class MachineAnalysis:
             fa = self.groups[g.name]
             lf, _lm = self._group_loads(g)
             force = fa.frame_force_on_parts + lf
+            out[:, :2] += self._off_plane_moment(g, about)[:, :2]
             if g.along:  # F = (0, fy, fx) at the group's origin with its own moment M about −x: (o − O) × F − M x
                 own = self._along_moments(g)[0]
                 dx, dy, dz = g.origin[0] - ox, g.origin[1] - oy, g.origin[2] - oz
@@ -511,6 +540,8 @@ class MachineAnalysis:
         for b in self.moving_bodies():
             com, bm = b.motion.com, b.motion
             rate = rate + b.mass * (com.vx * com.ax + com.vy * com.ay - gv[0] * com.vx - gv[1] * com.vy)
+            if com.vz is not None:  # a spatial crank's centre of mass leaves the plane
+                rate = rate + b.mass * com.vz * com.az
             rate = rate + b.inertia * bm.omega * bm.alpha
         for fa in self.groups.values():
             rate = rate + fa.elastic_power  # the springs' stored energy

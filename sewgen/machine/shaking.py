@@ -45,8 +45,9 @@ def _placed(b):
     (sewgen.machine.Group.to_machine), but for its cranks, which turn about the shaft."""
     g, c = b.group, b.motion.com
     zero = 0.0 * c.x
-    pos = tuple(v + zero for v in g.to_machine(c.x, c.y))
-    acc = tuple(v + zero for v in g.force_to_machine(c.ax, c.ay, zero))
+    z, az = (zero, zero) if c.z is None else (c.z, c.az)  # a spatial crank's centre of mass leaves the plane
+    pos = tuple(v + zero for v in g.to_machine(c.x, c.y, z))
+    acc = tuple(v + zero for v in g.force_to_machine(c.ax, c.ay, az))
     axis = (0.0, 0.0, 1.0) if g.along and b.driven else tuple(float(v) for v in g.force_to_machine(0.0, 0.0, 1.0))
     return pos, acc, axis
 
@@ -66,7 +67,7 @@ def shaking_force_on_frame(a, group=None) -> np.ndarray:
     return out
 
 
-def _add_moment(out, r, f, about) -> None:
+def add_moment(out, r, f, about) -> None:
     """out (n, 3) += (r − O) × f: the moment about the point ``about`` (x, y, z) of a force f = (fx, fy, fz)
     acting at r = (x, y, z) (each an array of n or a number)."""
     dx, dy, dz = (r[k] - about[k] for k in range(3))
@@ -85,12 +86,12 @@ def shaking_moments_on_frame(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
     out[:, 2] -= a.machine.shaft.inertia * a.alpha
     for b in a.moving_bodies():
         pos, (ax, ay, az), axis = _placed(b)
-        _add_moment(out, pos, (-b.mass * ax, -b.mass * ay, -b.mass * az), about)
+        add_moment(out, pos, (-b.mass * ax, -b.mass * ay, -b.mass * az), about)
         spin = b.inertia * b.motion.alpha
         for k in range(3):
             out[:, k] -= spin * axis[k]
     for sm, pos, _vel, acc in a.core:
-        _add_moment(out, (pos[:, 0], pos[:, 1], sm.z), (-sm.mass * acc[:, 0], -sm.mass * acc[:, 1], 0.0), about)
+        add_moment(out, (pos[:, 0], pos[:, 1], sm.z), (-sm.mass * acc[:, 0], -sm.mass * acc[:, 1], 0.0), about)
     return out
 
 
@@ -101,9 +102,9 @@ def weight_moments_on_frame(a, about=(0.0, 0.0, 0.0)) -> np.ndarray:
     out = np.zeros((len(a.phi), 3))
     for b in a.moving_bodies():
         pos, _acc, _axis = _placed(b)
-        _add_moment(out, pos, (b.mass * gx, b.mass * gy, 0.0), about)
+        add_moment(out, pos, (b.mass * gx, b.mass * gy, 0.0), about)
     for sm, pos, _vel, _acc in a.core:
-        _add_moment(out, (pos[:, 0], pos[:, 1], sm.z), (sm.mass * gx, sm.mass * gy, 0.0), about)
+        add_moment(out, (pos[:, 0], pos[:, 1], sm.z), (sm.mass * gx, sm.mass * gy, 0.0), about)
     return out
 
 

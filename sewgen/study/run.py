@@ -412,13 +412,17 @@ def influence(machine, params, ranges=None, steps: int = 11, options: StudyOptio
 # -- tolerance ------------------------------------------------------------------------------------------------
 
 def parse_tolerance(key: DesignKey, text: str, option: str = "--tolerance") -> float:
-    """"±0.02mm", "+-0.02 mm", "0.02 mm", "±1%" -> the half-width in SI (≥ 0). An angle's tolerance is an angle
-    ("±0.5 deg"): a percentage of it is refused, as in :func:`parse_range`."""
+    """"±0.02mm", "+-0.02 mm", "+/-0.02 mm", "±1%" -> the half-width in SI (≥ 0). The ± is required: "0.02 mm"
+    alone could be a half-width, a full width or a one-sided limit, so it is refused naming the key. An angle's
+    tolerance is an angle ("±0.5 deg"): a percentage of it is refused, as in :func:`parse_range`."""
     t = str(text).strip()
     for pre in ("±", "+-", "+/-"):
         if t.startswith(pre):
             t = t[len(pre):].strip()
             break
+    else:
+        raise StudyError(option, f'{key.key}: "{text}" has no ±: write the tolerance as a half-width, e.g. '
+                                 f'"±{t}" (or "+-{t}", "±1%")')
     if t.endswith("%"):
         _no_percent_of_angle(key, text, option, "±0.5 deg")
         try:

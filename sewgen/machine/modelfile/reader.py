@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sewgen.errors import SewgenError
-from sewgen.units import EXAMPLES, SI_UNITS, UnitError, to_si
+from sewgen.units import EXAMPLES, SI_UNITS, UnitError, range_problem, to_si
 
 #: Built-in machine models: sewgen/models (this file is sewgen/machine/modelfile/reader.py).
 MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
@@ -32,12 +32,13 @@ class ModelFileError(SewgenError, ValueError):
 @dataclass(frozen=True)
 class Field:
     """One key of a schema table: its kind, whether the file must give it, what it means (``doc``: shown in the
-    "missing" message of a required key) and, for a quantity, its sign."""
+    "missing" message of a required key) and, for a quantity, its sign and the largest value it may have."""
 
     kind: str  # a units kind, "text", "int", "table" or "list"
     required: bool = True
     doc: str = ""
     sign: str = ""  # quantities: "positive" (> 0), "nonnegative" (>= 0) or "" (any finite value)
+    maximum: float | None = None  # quantities: the largest physical value (SI), e.g. a friction coefficient's 1
 
 
 def _unit(kind: str) -> str:
@@ -96,6 +97,9 @@ class Reader:
             v, full = data[k], f"{key}.{k}" if key else k
             if f.kind in SI_UNITS:
                 out[k] = self.signed(self.quantity(v, f.kind, full), f.sign, full, v)
+                problem = range_problem(out[k], None, f.maximum, SI_UNITS[f.kind])
+                if problem:
+                    self.fail(full, f"{problem} ({f.doc})" if f.doc else problem)
             elif f.kind == "text":
                 if not isinstance(v, str):
                     self.fail(full, f"must be text, got {v!r}")

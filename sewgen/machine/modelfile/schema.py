@@ -27,6 +27,7 @@ the mechanism is known (:func:`sewgen.machine.modelfile.sections.read_settings`)
 from __future__ import annotations
 
 from sewgen.machine.modelfile.reader import Field
+from sewgen.units import FRICTION_MAX, GRAVITY_MAX
 
 #: The top level of a model file. ``machine``, ``shaft`` and ``groups`` are required tables; ``stitch`` and
 #: ``thread`` are optional (a machine without them is analysed, not timed).
@@ -45,7 +46,8 @@ MACHINE = {
     "description": Field("text", False, "what the machine is (shown in reports)"),
     "speed": Field("speed", doc="upper-shaft speed, e.g. \"1000 rpm\"", sign="positive"),
     "step": Field("angle", doc="shaft-angle step, e.g. \"5 deg\" (72 positions)", sign="positive"),
-    "gravity": Field("acceleration", False, "magnitude of gravity (default 9.80665 m/s²)"),
+    "gravity": Field("acceleration", False, "magnitude of gravity (default 9.80665 m/s²)", sign="nonnegative",
+                     maximum=GRAVITY_MAX),
     "gravity_direction": Field("angle", False, "direction of gravity in the frame, from +x (default −90°: −y)"),
 }
 
@@ -66,7 +68,7 @@ SHAFT = {
     "belt_pull": Field("force", False, "the belt's radial pull on the pulley, T1 + T2", sign="nonnegative"),
     "belt_direction": Field("angle", False, "direction of the belt pull in the frame (from +x)"),
     "bearing_friction": Field("dimensionless", False, "Coulomb friction coefficient of the front and rear "
-                              "bearings (default 0: ideal)", sign="nonnegative"),
+                              "bearings (default 0: ideal)", sign="nonnegative", maximum=FRICTION_MAX),
     "journal_radius": Field("length", False, "radius of the shaft's journals in the bearings (friction arm)",
                             sign="nonnegative"),
 }
@@ -135,8 +137,8 @@ LOAD = {
 #: ``[stitch]``: what stitch formation needs beyond the mechanisms (defaults in
 #: :class:`sewgen.machine.modelfile.sections.Stitch`) and the rules, ``[[stitch.rules]]`` (:data:`RULE`).
 STITCH = {
-    "cloth": Field("length", False, "cloth thickness on the throat plate"),
-    "loop_lift": Field("length", False, "the needle's rise from BDC at which the loop forms"),
+    "cloth": Field("length", False, "cloth thickness on the throat plate", sign="nonnegative"),
+    "loop_lift": Field("length", False, "the needle's rise from BDC at which the loop forms", sign="nonnegative"),
     "loop_release": Field("angle", False, "shuttle turn past the needle at which the loop is cast off"),
     "rules": Field("list", False, "the timing rules, [[stitch.rules]]"),
 }

@@ -336,6 +336,8 @@ def _stitch(rd: Reader, data, rules: dict) -> Stitch:
             rd.fail(key, f"give 'from' and 'to' (a window of shaft angles) for {windowed}, and only there")
         if not kr.own_limits and "min" not in r and "max" not in r:
             rd.fail(key, f"give 'min' or 'max' (a {unit_kind} with its unit)")
+        if "min" in r and "max" in r and r["min"] > r["max"]:
+            rd.fail(f"{key}.min", f"{item['min']!r} is above max {item['max']!r}: no value could pass the rule")
         out.append(Rule(kind, r.get("min"), r.get("max"), r["source"], (r["from"], r["to"]) if "from" in r else None))
     return Stitch(s.get("cloth", Stitch.cloth), s.get("loop_lift", Stitch.loop_lift),
                   s.get("loop_release", Stitch.loop_release), tuple(out))
