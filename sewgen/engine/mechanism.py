@@ -927,7 +927,8 @@ class LeanSweep(Sweep):
         fn, desc, req, keep = self._call(None)
         failed = fn(desc, req)
         if failed == _SIZE_MAX:  # not ascending: solved in sorted order, returned in the caller's
-            check_shaft_angles(self.mechanism.name, self.phi_in, False)  # of() looked at the ends only
+            if np.isfinite(self.phi_in).all():  # (a non-finite one: the sweep fails, check() names it)
+                check_shaft_angles(self.mechanism.name, self.phi_in, False)  # of() looked at the ends only
             fn, desc, req, keep = self._call(np.argsort(self.phi_in, kind="stable").astype(np.uintp))
             failed = fn(desc, req)
         self.__dict__["failed"] = failed
