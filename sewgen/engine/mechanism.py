@@ -840,8 +840,9 @@ class LeanSweep(Sweep):
         got = mechanism.params_in_c(params)
         if got is None:
             return None
-        if abs(phi[0]) > DEGREES_LIKE or abs(phi[-1]) > DEGREES_LIKE:  # ascending angles' extremes: the ends
-            check_shaft_angles(mechanism.name, phi, False)  # (unsorted ones: run() checks them all)
+        if (abs(phi[0]) > DEGREES_LIKE or abs(phi[-1]) > DEGREES_LIKE) and np.isfinite(phi).all():
+            check_shaft_angles(mechanism.name, phi, False)  # ascending angles' extremes are the ends (unsorted
+            # ones: run() checks them all; a non-finite one: the sweep fails and check() names it)
         widths = mechanism.lean_widths
         if not phi.flags.c_contiguous:
             phi = np.ascontiguousarray(phi)
