@@ -148,7 +148,7 @@ def raw_sweep(m: sewgen.Mechanism, phi: np.ndarray, loop: str = "auto", **forces
     as solve() does, :meth:`Sweep.bind` makes the pointers once; ``loop``: :meth:`Sweep.use_loop`'s (the SIMD
     loop where it runs by default). Returns (call, sweep): time ``call``, read the results (``sweep.q``,
     ``.obs``, ``.frc``, ``.status``) from ``sweep``."""
-    sweep = m.prepare(phi, **forces).use_loop(loop)
+    sweep = m.prepare(phi, layout="arrays", **forces).use_loop(loop)  # sg_sweep on separate arrays
     return sweep.bind(), sweep
 
 

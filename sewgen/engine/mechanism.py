@@ -804,7 +804,7 @@ class Sweep:
 
 
 #: The arrays of a :class:`LeanSweep` that are views of its block (made at the first look after a run).
-_LEAN_VIEWS = frozenset(("omega", "alpha", "err", "q", "qd", "qdd", "obs", "frc", "status"))
+_LEAN_VIEWS = frozenset(("phi", "omega", "alpha", "err", "q", "qd", "qdd", "obs", "frc", "status"))
 
 
 class LeanSweep(Sweep):
