@@ -258,29 +258,29 @@ void sg_feed_residual(const double *q, const double *cq, const double *x, const 
     (void)x;
     double ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
-        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[41];
             ka[3] = 0.0;
-        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[42];
             ka[3] = 1.0;
-        } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        } else if ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[41];
             ka[3] = 2.0;
-        } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[42];
             ka[3] = 3.0;
-        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(0.0) - e1*(1.0) + 1e-12 > 0.0) {
             ka[0] = c[45];
             ka[1] = c[44];
             ka[2] = c[41];
@@ -496,29 +496,29 @@ void sg_feed_scales(const double *q, const double *cq, const double *x, const do
     (void)x;
     double ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
-        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[41];
             ka[3] = 0.0;
-        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[42];
             ka[3] = 1.0;
-        } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        } else if ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[41];
             ka[3] = 2.0;
-        } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[42];
             ka[3] = 3.0;
-        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(0.0) - e1*(1.0) + 1e-12 > 0.0) {
             ka[0] = c[45];
             ka[1] = c[44];
             ka[2] = c[41];
@@ -570,29 +570,29 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
 {
     double ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
-        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[41];
             ka[3] = 0.0;
-        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[42];
             ka[3] = 1.0;
-        } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        } else if ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[41];
             ka[3] = 2.0;
-        } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[42];
             ka[3] = 3.0;
-        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(0.0) - e1*(1.0) + 1e-12 > 0.0) {
             ka[0] = c[45];
             ka[1] = c[44];
             ka[2] = c[41];
@@ -1123,29 +1123,29 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
     (void)x;
     double ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
-        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[41];
             ka[3] = 0.0;
-        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[42];
             ka[3] = 1.0;
-        } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        } else if ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[41];
             ka[3] = 2.0;
-        } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[42];
             ka[3] = 3.0;
-        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(0.0) - e1*(1.0) + 1e-12 > 0.0) {
             ka[0] = c[45];
             ka[1] = c[44];
             ka[2] = c[41];
@@ -1812,29 +1812,29 @@ int sg_feed_observe(const double *q, const double *cq, const double *x, const do
     case 15: {
         double ka[4];
         {
-            /* cam cam: the arc whose normal sector holds e */
+            /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
             const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
-            if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+            if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
                 ka[0] = 0.0;
                 ka[1] = 0.0;
                 ka[2] = c[41];
                 ka[3] = 0.0;
-            } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+            } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
                 ka[0] = 0.0;
                 ka[1] = 0.0;
                 ka[2] = c[42];
                 ka[3] = 1.0;
-            } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+            } else if ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
                 ka[0] = c[43];
                 ka[1] = c[44];
                 ka[2] = c[41];
                 ka[3] = 2.0;
-            } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+            } else if ((1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
                 ka[0] = c[43];
                 ka[1] = c[44];
                 ka[2] = c[42];
                 ka[3] = 3.0;
-            } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+            } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(0.0) - e1*(1.0) + 1e-12 > 0.0) {
                 ka[0] = c[45];
                 ka[1] = c[44];
                 ka[2] = c[41];
@@ -1860,29 +1860,29 @@ int sg_feed_forces(const double *q, const double *cq, const double *x, const dou
     (void)x;
     double ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
-        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[41];
             ka[3] = 0.0;
-        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[42];
             ka[3] = 1.0;
-        } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        } else if ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[41];
             ka[3] = 2.0;
-        } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[42];
             ka[3] = 3.0;
-        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(0.0) - e1*(1.0) + 1e-12 > 0.0) {
             ka[0] = c[45];
             ka[1] = c[44];
             ka[2] = c[41];
@@ -2108,29 +2108,29 @@ void sg_feed_force_matrix(const double *q, const double *cq, const double *x, co
     (void)x;
     double ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const double e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
-        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        if ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[41];
             ka[3] = 0.0;
-        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = 0.0;
             ka[1] = 0.0;
             ka[2] = c[42];
             ka[3] = 1.0;
-        } else if ((-1.0)*e1 - (0.0)*e0 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > 0.0) {
+        } else if ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[41];
             ka[3] = 2.0;
-        } else if ((1.0)*e1 - (0.0)*e0 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) > 0.0) {
+        } else if ((1.0)*e1 - (0.0)*e0 - 1e-12 >= 0.0 && e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > 0.0) {
             ka[0] = c[43];
             ka[1] = c[44];
             ka[2] = c[42];
             ka[3] = 3.0;
-        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= 0.0 && e0*(0.0) - e1*(1.0) > 0.0) {
+        } else if ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= 0.0 && e0*(0.0) - e1*(1.0) + 1e-12 > 0.0) {
             ka[0] = c[45];
             ka[1] = c[44];
             ka[2] = c[41];
@@ -2468,42 +2468,42 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
 {
     sg_vd ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
         ka[0] = sgv_set1(c[45]);
         ka[1] = sgv_set1(c[44]);
         ka[2] = sgv_set1(c[42]);
         ka[3] = sgv_set1(5.0);
         {
-            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
         }
         {
-            const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            const sg_vm in = ((1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
         }
         {
-            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
         }
         {
-            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
         }
         {
-            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
@@ -3028,42 +3028,42 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
     (void)x;
     sg_vd ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
         ka[0] = sgv_set1(c[45]);
         ka[1] = sgv_set1(c[44]);
         ka[2] = sgv_set1(c[42]);
         ka[3] = sgv_set1(5.0);
         {
-            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
         }
         {
-            const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            const sg_vm in = ((1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
         }
         {
-            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
         }
         {
-            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
         }
         {
-            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
@@ -3724,42 +3724,42 @@ SG_VINLINE sg_vm sg_feed_observe_v(const sg_vd *q, const sg_vd *cq, const sg_vd 
     case 15: {
         sg_vd ka[4];
         {
-            /* cam cam: the arc whose normal sector holds e */
+            /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
             const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
             ka[0] = sgv_set1(c[45]);
             ka[1] = sgv_set1(c[44]);
             ka[2] = sgv_set1(c[42]);
             ka[3] = sgv_set1(5.0);
             {
-                const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+                const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) + 1e-12 > sgv_set1(0.0));
                 ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
                 ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
                 ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
                 ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
             }
             {
-                const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+                const sg_vm in = ((1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
                 ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
                 ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
                 ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
                 ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
             }
             {
-                const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+                const sg_vm in = ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
                 ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
                 ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
                 ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
                 ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
             }
             {
-                const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+                const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
                 ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
                 ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
                 ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
                 ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
             }
             {
-                const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+                const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
                 ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
                 ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
                 ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
@@ -3779,42 +3779,42 @@ SG_VINLINE void sg_feed_residual_v(const sg_vd *q, const sg_vd *cq, const sg_vd 
     (void)x;
     sg_vd ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
         ka[0] = sgv_set1(c[45]);
         ka[1] = sgv_set1(c[44]);
         ka[2] = sgv_set1(c[42]);
         ka[3] = sgv_set1(5.0);
         {
-            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
         }
         {
-            const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            const sg_vm in = ((1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
         }
         {
-            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
         }
         {
-            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
         }
         {
-            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
@@ -4047,42 +4047,42 @@ SG_VINLINE sg_vm sg_feed_forces_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
     (void)x;
     sg_vd ka[4];
     {
-        /* cam cam: the arc whose normal sector holds e */
+        /* cam cam: the arc whose normal sector holds e (turned as the shaft turns) */
         const sg_vd e0 = -cq[6]*(c[3]*cx[1] + c[6]*cx[0]) + cq[7]*(c[3]*cx[0] + c[4]*cx[1]), e1 = -cq[6]*(c[3]*cx[0] + c[4]*cx[1]) - cq[7]*(c[3]*cx[1] + c[6]*cx[0]);
         ka[0] = sgv_set1(c[45]);
         ka[1] = sgv_set1(c[44]);
         ka[2] = sgv_set1(c[42]);
         ka[3] = sgv_set1(5.0);
         {
-            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) > sgv_set1(0.0));
+            const sg_vm in = ((0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(0.0) - e1*(1.0) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[45]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(4.0), ka[3]);
         }
         {
-            const sg_vm in = ((1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            const sg_vm in = ((1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(3.0), ka[3]);
         }
         {
-            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            const sg_vm in = ((-1.0)*e1 - (0.0)*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(c[43]), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(c[44]), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(2.0), ka[3]);
         }
         {
-            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) > sgv_set1(0.0));
+            const sg_vm in = ((-0.5)*e1 - (-0.5*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*(-0.5*sqrt(3.0)) - e1*(0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[42]), ka[2]);
             ka[3] = sgv_select(in, sgv_set1(1.0), ka[3]);
         }
         {
-            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) > sgv_set1(0.0));
+            const sg_vm in = ((0.5)*e1 - ((0.5)*sqrt(3.0))*e0 - 1e-12 >= sgv_set1(0.0)) & (e0*((0.5)*sqrt(3.0)) - e1*(-0.5) + 1e-12 > sgv_set1(0.0));
             ka[0] = sgv_select(in, sgv_set1(0.0), ka[0]);
             ka[1] = sgv_select(in, sgv_set1(0.0), ka[1]);
             ka[2] = sgv_select(in, sgv_set1(c[41]), ka[2]);

@@ -144,9 +144,6 @@ def test_a_study_s_peak_loads_at_a_coarse_step_are_the_fine_sweep_s(jb, jb_fine)
     assert df["drive_torque_peak [N*m]"][0] == pytest.approx(np.abs(jb_fine.torque).max(), rel=5e-3)
 
 
-@pytest.mark.xfail(strict=True, reason="the arc chosen at a cam-arc switch is decided by the last bits of the "
-                   "Newton solution, which depend on the sweep's previous position (generated kernels' arc "
-                   "selection, sewgen/derive/joints.py Cam.selection_c): a fix belongs there, not here")
 def test_a_feed_at_a_cam_arc_switch_is_the_same_in_every_sweep():
     """The JB1-3 feed cam switches arc at the group angle 300°: every sweep containing 300° must give there the
     value of the arc that starts at 300° (right-continuous in the shaft angle), the limit from above."""

@@ -332,9 +332,27 @@ class Cam(_NormalForce):
                                  "arc_center", joint.name))
         return out
 
+    #: How far (rad) the face normal is turned, in the sense it turns as the shaft angle grows, before the arc is
+    #: chosen: a normal on a sector's edge to within rounding (a switch between two arcs) takes the arc it is
+    #: turning into, whatever the last bits of the solved position (which depend on the sweep's other angles).
+    #: The sectors' edges move by this much, 1e-12 rad: far below any cam's tolerance.
+    SWITCH_NUDGE = 1e-12
+
+    @staticmethod
+    def normal_sense(kin, cam) -> int:
+        """+1 or −1: the sense the face normal turns in the cam frame as the shaft angle grows (the opposite of the
+        cam's own turning: the follower's face swings a little while the cam turns round, so the contact runs
+        round the cam against its rotation); 0 where the cam's rate in the shaft angle is not a constant."""
+        rate = sp.diff(kin.pose[cam.joint.a.body][2], kin.x[0]) if kin.x else sp.S.Zero
+        return -int(sp.sign(rate)) if rate.is_number and rate != 0 else 0
+
     def selection_c(self, kin, flavour, prepare):
         """ka[3j..3j+2] = the active arc's centre and radius, ka[3·ncam + j] = its index: the arc whose normal
-        sector holds the face normal's direction e (cam frame), the first such arc in declaration order.
+        sector [from, to) holds the face normal's direction e (cam frame) turned by :data:`SWITCH_NUDGE` in the
+        sense it turns as the shaft angle grows (:meth:`normal_sense`), the first such arc in declaration order:
+        at a switch between two arcs, the arc the contact is moving onto (every sweep through that angle then
+        gives the limit from above, right-continuous in the shaft angle). The tests take sin(θ_e + δ − from) ≈
+        sin(θ_e − from) + δ and sin(to − θ_e − δ) ≈ sin(to − θ_e) − δ, first order at an edge.
         ``flavour`` (derive.kernels._Flavour) prints scalar C, an if-chain, or the SIMD twin's lanes: the last
         arc in every lane, then each earlier arc selected over it where its sector holds that lane's e, so the
         first arc that holds it wins as in the chain (the same tests on the same values: the same arc)."""
@@ -344,8 +362,11 @@ class Cam(_NormalForce):
         lines = [f"{flavour.real} ka[{4 * len(cams)}];"]
         for j, cam in enumerate(cams):
             e0, e1 = (flavour.value(e) for e in prepare(cam.normal))
-            block = [f"/* cam {cam.joint.name}: the arc whose normal sector holds e */",
+            block = [f"/* cam {cam.joint.name}: the arc whose normal sector holds e (turned as the shaft turns) */",
                      f"const {flavour.real} e0 = {e0}, e1 = {e1};"]
+            nudge = self.normal_sense(kin, cam) * self.SWITCH_NUDGE
+            shift = "" if nudge == 0 else f" + {nudge!r}" if nudge > 0 else f" - {-nudge!r}"
+            back = "" if nudge == 0 else f" - {nudge!r}" if nudge > 0 else f" + {-nudge!r}"
             arcs = cam.joint.arcs
             picks = []
             for k, arc in enumerate(arcs):
@@ -353,7 +374,7 @@ class Cam(_NormalForce):
                     [sp.cos(arc.normal_from), sp.sin(arc.normal_from), sp.cos(arc.normal_to), sp.sin(arc.normal_to),
                      arc.center_u, arc.center_v, arc.radius]))
                 values = [(3 * j, u), (3 * j + 1, v), (3 * j + 2, r), (3 * len(cams) + j, f"{k}.0")]
-                picks.append(((f"({ca})*e1 - ({sa})*e0", f"e0*({sb}) - e1*({cb})"), values))
+                picks.append(((f"({ca})*e1 - ({sa})*e0{shift}", f"e0*({sb}) - e1*({cb}){back}"), values))
             if flavour.vector:
                 block += [f"ka[{i}] = sgv_set1({val});" for i, val in picks[-1][1]]
                 for (a, b), values in reversed(picks[:-1]):
