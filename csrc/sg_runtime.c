@@ -543,14 +543,14 @@ static int finish_position(sg_walker *w, const unsigned char *want, const double
     const sg_mechanism *m = w->m;
     const sg_options *opt = w->opt;
     const double *c = w->c;
-    double cond[SG_NCOND] = {1.0, 1.0};
+    double cond[SG_NCOND] = {1.0, 1.0, 1.0};
     *est = 0.0;
     int st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, cond);
     if (st == SG_SINGULAR) {
         *est = INFINITY; /* the velocity solve itself is singular */
     } else if (st == SG_OK) {
         *est = sg_newton_error(cond, resid);
-        if (!(*est <= opt->singular_tol) && resid > SG_RESID_FLOOR) { /* Newton's last residual */
+        if (!(*est <= opt->singular_tol) && resid > SG_ROUND_RESID) { /* Newton's last residual */
             polish(m, qi, cq, x, cx, c, opt, &resid);
             st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, cond);
             if (st == SG_SINGULAR) *est = INFINITY;

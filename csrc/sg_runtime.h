@@ -234,9 +234,9 @@ SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *
  *     / |det B| (E^-1 = diag(m) adj(B) / det B), where the general factor gives an upper bound of it (at most a
  *     few times larger).
  * One division for all of it (the general factor takes four, three of them in a chain), and no pivoting: the
- * adjugate needs none. cs[2], cs[3]: m0, m1 (the rates' scales, sg_rates_scale_inl; cs[0], cs[1] are not set:
- * the solve does not read them). csrc/sg_simd.h's sgv_factor_eq2 is this lane by lane, operation for operation,
- * so the two loops agree to the bit. A NaN, a zero column (a coordinate no loop reads) or a singular B gives
+ * adjugate needs none. cs as sg_factor_eq_inl's (1/m0, 1/m1 from the one division: m1 / (m0 m1), m0 / (m0 m1);
+ * then m0, m1), for the rates' scales (sg_rates_scale_inl); the solve does not read it. csrc/sg_simd.h's
+ * sgv_factor_eq2 is this lane by lane, operation for operation, so the two loops agree to the bit. A NaN, a zero column (a coordinate no loop reads) or a singular B gives
  * SG_SINGULAR. */
 SG_INLINE int sg_factor_eq2_inl(double *a, const double *rs, double *cs, double *cond)
 {
@@ -244,10 +244,12 @@ SG_INLINE int sg_factor_eq2_inl(double *a, const double *rs, double *cs, double 
     const double f00 = fabs(b00), f01 = fabs(b01), f10 = fabs(b10), f11 = fabs(b11);
     const double m0 = f00 > f10 ? f00 : f10, m1 = f01 > f11 ? f01 : f11;
     const double det = b00 * b11 - b01 * b10, mm = m0 * m1;
-    const double r = 1.0 / (mm * det), inv = r * mm;
+    const double r = 1.0 / (mm * det), inv = r * mm, imm = r * det;
     const double n1a = f00 * m1 + f01 * m0, n1b = f10 * m1 + f11 * m0;
     const double n2a = m0 * (f11 + f01), n2b = m1 * (f10 + f00);
     *cond = (n1a > n1b ? n1a : n1b) * (n2a > n2b ? n2a : n2b) * fabs(r);
+    cs[0] = m1 * imm;
+    cs[1] = m0 * imm;
     cs[2] = m0;
     cs[3] = m1;
     a[0] = b11 * inv;
@@ -292,29 +294,29 @@ SG_INLINE int sg_lu_bound_inl(int n, double *a, int *piv, double *inorm_out)
                 for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
         }
     }
-    /* ||A^-1||_inf <= ||U^-1|| ||L^-1|| <= ||M(U)^-1 1|| ||M(L)^-1 1||, M the comparison matrix (|diagonal|,
-     * -|off-diagonal|: its inverse is non-negative, so its norm is its row sums, one triangular solve with a
-     * vector of ones each). An upper bound, tight for the small well-scaled factors here; two passes of n^2/2
-     * instead of n solves. */
+    /* ||A^-1||_inf = || |A^-1| 1 || <= || |U^-1| |L^-1| 1 || <= || M(U)^-1 M(L)^-1 1 ||, M the comparison matrix
+     * (|diagonal|, -|off-diagonal|: the inverse of a triangular one is non-negative and bounds the inverse's
+     * magnitudes entry by entry): a triangular solve with a vector of ones, then one with its result. An upper
+     * bound, tight for the small well-scaled factors here (at most ||M(U)^-1|| ||M(L)^-1||, the bound of the two
+     * solves each with ones); two passes of n^2/2 instead of n solves. */
     double y[SG_MAX_Q];
-    double lnorm = 0.0, inorm = 0.0;
+    double inorm = 0.0;
     SG_UNROLL
     for (int i = 0; i < n; ++i) {
         double s = 1.0;
         SG_UNROLL
         for (int j = 0; j < i; ++j) s += fabs(a[i * n + j]) * y[j];
         y[i] = s;
-        if (!(s <= lnorm)) lnorm = s;
     }
     SG_UNROLL
     for (int i = n - 1; i >= 0; --i) {
-        double s = 1.0;
+        double s = y[i];
         SG_UNROLL
         for (int j = i + 1; j < n; ++j) s += fabs(a[i * n + j]) * y[j];
         y[i] = s * fabs(a[i * n + i]);
         if (!(y[i] <= inorm)) inorm = y[i];
     }
-    *inorm_out = inorm * lnorm;
+    *inorm_out = inorm;
     return SG_OK;
 }
 
@@ -324,7 +326,7 @@ SG_INLINE int sg_lu_bound_inl(int n, double *a, int *piv, double *inorm_out)
  * own scale); and a bound of the condition number of R A C in the inf norm (from the factor, below), in cond[0].
  * cs holds 2 n values: the column factors 1/m_j, then the columns' largest entries m_j (the rates' scales,
  * sg_rates_scale_inl). The runtime turns cond into the estimated relative error of the rates (sg_rates_error).
- * Solve with sg_solve_eq_inl. n = 2 is sg_factor_eq2_inl (piv and cs[0], cs[1] unused). */
+ * Solve with sg_solve_eq_inl. n = 2 is sg_factor_eq2_inl (piv unused). */
 SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, double *cs, double *cond)
 {
     if (n == 2) return sg_factor_eq2_inl(a, rs, cs, cond);
@@ -401,27 +403,33 @@ SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const do
 }
 
 /* The rates' error estimate (sg_closed_finish; csrc/sg_runtime.c finish_position; the SIMD loops' twins in
- * csrc/sg_simd.h), relative: q' to ||y'||, q'' to max(||y''||, M), y = q' m and y'' = q'' m the rates scaled by
- * their columns (sg_rates_scale_inl), M their centripetal and Coriolis terms.
+ * csrc/sg_simd.h), relative: q' to ||y'||, q'' to max(||y''||, S), y = q' m and y'' = q'' m the rates scaled by
+ * their columns, S their centripetal and Coriolis terms (sg_rates_scale_inl).
  *
  * The rates solve Φ_q q' = -Φ_x x' and Φ_q q'' = γ(q, q'). A relative perturbation e of either moves the
  * solution by up to amp e, amp the solve's amplification. Three sources of e:
  *   - rounding: eps;
  *   - the position's own error, ej (rad: the largest error of an angle coordinate), which turns Φ_q's columns with
  *     their bodies (and γ's terms): e = ej;
- *   - for q'', the error of q' in γ's terms: 2 E_v of their magnitude M, so 2 E_v μ of the accelerations' scale,
- *     μ = M / max(||y''||, M) (cond[1]).
+ *   - for q'', the error of q' in γ's terms: 2 E_v of their sensitivity, 2 E_v μ of the accelerations' scale
+ *     (μ = cond[1], sg_rates_scale_inl).
  * Hence E_v = amp (eps + ej) for q' and E_a = amp ((2 E_v + eps) μ + ej) for q''; the estimate is the larger. At a
  * dead centre (q' growing as amp, q'' as amp³: μ about 1 / amp) both are about amp ej; at a change point (two
  * branches meeting, q' and q'' finite: μ about 1) E_a is about amp² ej, and ej there is itself about amp eps: the
  * accelerations lose amp³ eps (the closed form's square root of a cancelled difference, then two solves near
  * singular). A closed form's dyads give ej and amp themselves (sg_dyad_*: amp the product of their triangles'
- * amplifications, 1 / sin of the angle at the joint); Newton's position is off by up to κ resid in the scaled
- * coordinates (a position whose loops close to resid of their sizes solves loops changed by that much; resid
- * below SG_RESID_FLOOR is rounding: eps), and amp is κ = cond[0], the equilibrated Φ_q's condition number
- * (sg_newton_error). First-order estimates: of the order of the error, not below it (tools/fuzz.py checks them
- * against an mpmath reference). */
-#define SG_NCOND 2
+ * amplifications, 1 / sin of the angle at the joint). For Newton's position (sg_newton_error) amp is κ = cond[0],
+ * the equilibrated Φ_q's condition number, and ej = (κ + λ) resid: a position whose loops close to resid of their
+ * sizes solves loops changed by that much, so its scaled coordinates are off by up to κ resid, and a coordinate on
+ * a lever ℓ short against its loop's size L turns by its loop's residual over ℓ / L however well the loops are
+ * conditioned: λ = cond[2], the largest L / ℓ of an angle coordinate (its column's 1 / m_j; an oscillating guide's
+ * pin near its pivot: L / s). A residual below SG_ROUND_RESID is rounding and counts as that much: a position
+ * exact to rounding (Newton's at its fixed point, a closed form's) is off by about 15 eps / sin γ near a toggle
+ * (the dyads' bound, measured against mpmath); a larger one is polished first where the estimate is above the
+ * tolerance (csrc/sg_runtime.c finish_position). First-order estimates: of the order of the error, not below it
+ * (tools/fuzz.py checks them against an mpmath reference). */
+#define SG_NCOND 3
+#define SG_ROUND_RESID (16.0 * SG_EPS)
 SG_INLINE double sg_rates_error(double amp, double mu, double ej)
 {
     const double ev = amp * (SG_EPS + ej);
@@ -429,32 +437,42 @@ SG_INLINE double sg_rates_error(double amp, double mu, double ej)
     return ev > ea ? ev : ea;
 }
 
-/* sg_rates_error of a position Newton solved (resid: its last relative residual; cond: the rates kernel's). */
+/* sg_rates_error of a position Newton solved: resid its last relative residual, cond the rates kernel's. */
 SG_INLINE double sg_newton_error(const double *cond, double resid)
 {
-    return sg_rates_error(cond[0], cond[1], cond[0] * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
+    return sg_rates_error(cond[0], cond[1], (cond[0] + cond[2]) * (resid > SG_ROUND_RESID ? resid : SG_ROUND_RESID));
 }
 
-/* cond[1] of a motion or rates kernel (sg_rates_error's μ) from its solved rates: cs the factor's 2 n column
- * values (sg_factor_eq_inl; cs[n + j] = m_j), angles bit j set where coordinate j is an angle, turn the largest
- * |rate| of an angle input. y' = q' m and y'' = q'' m are the scaled rates; γ's terms, each a column of Φ_q times a
- * rate squared or two rates (centripetal, Coriolis), are bounded by M = 2 n Ω ||y'||, Ω the fastest angle's rate
- * (inputs' too). μ = M / max(||y''||, M): 1 where the accelerations are no larger than their terms (a change
- * point, where they cancel), about 1 / κ at a dead centre (where they grow as κ³ and their terms as κ²). A NaN
- * propagates. */
+/* cond[1] and cond[2] of a motion or rates kernel (sg_rates_error's μ, sg_newton_error's λ) from its solved rates:
+ * cs the factor's 2 n column values (sg_factor_eq_inl: 1/m_j, then m_j), angles bit j set where coordinate j is
+ * an angle, turn the largest |rate| of an angle input. y' = q' m and y'' = q'' m are the scaled rates, λ the
+ * largest 1/m_j of an angle coordinate (at least 1). γ's terms, each a column of Φ_q times a rate squared or two
+ * rates (centripetal, Coriolis), are at most S = 2 n Ω ||y'|| (Ω the fastest angle's rate, inputs' too); their
+ * sensitivity to an error of q' relative to ||y'|| is at most 2 n (Ω + λ Y_t) ||y'||, Y_t the largest scaled rate
+ * of a travel (a Coriolis term 2 s' θ' moves by 2 s' δθ', and δθ' may be ||y'|| / m_θ: an oscillating guide's pin
+ * running radially past its pivot). μ is that sensitivity over the accelerations' scale max(||y''||, S): 1 where
+ * the accelerations are no larger than their terms and no travel runs on a short lever (a change point, where
+ * they cancel), about 1 / κ at a dead centre (where they grow as κ³ and their terms as κ²), λ Y_t / Ω past a
+ * guide's pivot. A NaN propagates. */
 SG_INLINE void sg_rates_scale_inl(int n, unsigned long long angles, double turn, const double *cs, const double *qd,
                                   const double *qdd, double *cond)
 {
-    double y1 = 0.0, y2 = 0.0, om = turn;
+    double y1 = 0.0, y2 = 0.0, yt = 0.0, om = turn, lam = 1.0;
     SG_UNROLL
     for (int j = 0; j < n; ++j) {
         const double w = fabs(qd[j]), v = w * cs[n + j], a = fabs(qdd[j]) * cs[n + j];
         if (!(v <= y1)) y1 = v;
         if (!(a <= y2)) y2 = a;
-        if ((angles >> j & 1) && w > om) om = w;
+        if (angles >> j & 1) {
+            if (w > om) om = w;
+            if (cs[j] > lam) lam = cs[j];
+        } else if (v > yt) {
+            yt = v;
+        }
     }
-    const double terms = (2.0 * n) * om * y1;
-    cond[1] = terms >= y2 ? 1.0 : terms / y2;
+    const double terms = (2.0 * n) * om * y1, scale = terms > y2 ? terms : y2;
+    cond[1] = scale > 0.0 ? (2.0 * n) * (om + lam * yt) * y1 / scale : 1.0;
+    cond[2] = lam;
 }
 
 /* A parameter sum under a square root (a triangle's height from its sides): a negative within 1e-12 of the sum
@@ -682,7 +700,7 @@ SG_INLINE void sg_closed_finish(sg_closed_loop *L, size_t i, const double *cq, c
     const int nq = L->nq, nobs = L->nobs;
     const double *qi = L->q + i * (size_t)nq;
     double *qdi = L->qd + i * (size_t)nq, *qddi = L->qdd + i * (size_t)nq, *oi = L->obs + i * (size_t)nobs;
-    double cond[SG_NCOND] = {1.0, 1.0}, est = 0.0;
+    double cond[SG_NCOND] = {1.0, 1.0, 1.0}, est = 0.0;
     int st;
     if (L->want == NULL) {
         st = K.motion(qi, cq, L->x, L->cx, L->xd, L->xdd, L->c, qdi, qddi, oi, cond);

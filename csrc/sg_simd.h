@@ -263,10 +263,12 @@ SG_VINLINE sg_vm sgv_factor_eq2(sg_vd *a, const sg_vd *rs, sg_vd *cs, sg_vd *con
     const sg_vd f00 = sgv_fabs(b00), f01 = sgv_fabs(b01), f10 = sgv_fabs(b10), f11 = sgv_fabs(b11);
     const sg_vd m0 = sgv_fmax(f00, f10), m1 = sgv_fmax(f01, f11);
     const sg_vd det = b00 * b11 - b01 * b10, mm = m0 * m1;
-    const sg_vd r = 1.0 / (mm * det), inv = r * mm;
+    const sg_vd r = 1.0 / (mm * det), inv = r * mm, imm = r * det;
     const sg_vd n1a = f00 * m1 + f01 * m0, n1b = f10 * m1 + f11 * m0;
     const sg_vd n2a = m0 * (f11 + f01), n2b = m1 * (f10 + f00);
     *cond = sgv_fmax(n1a, n1b) * sgv_fmax(n2a, n2b) * sgv_fabs(r);
+    cs[0] = m1 * imm;
+    cs[1] = m0 * imm;
     cs[2] = m0;
     cs[3] = m1;
     a[0] = b11 * inv;
@@ -285,20 +287,19 @@ SG_VINLINE sg_vm sgv_lu_bound(int n, sg_vd *a, sg_vm *piv, sg_vd *inorm_out)
     sg_vd best[SG_MAX_Q], y[SG_MAX_Q];
     sgv_eliminate(n, a, piv, best, 1);
     for (int k = 0; k < n; ++k) ok &= best[k] > sgv_set1(SG_PIVOT_RTOL);
-    sg_vd lnorm = zero, inorm = zero;
+    sg_vd inorm = zero;
     for (int i = 0; i < n; ++i) {
         sg_vd s = sgv_set1(1.0);
         for (int j = 0; j < i; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
         y[i] = s;
-        lnorm = sgv_select(~(s <= lnorm), s, lnorm);
     }
     for (int i = n - 1; i >= 0; --i) {
-        sg_vd s = sgv_set1(1.0);
+        sg_vd s = y[i];
         for (int j = i + 1; j < n; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
         y[i] = s * sgv_fabs(a[i * n + i]);
         inorm = sgv_select(~(y[i] <= inorm), y[i], inorm);
     }
-    *inorm_out = inorm * lnorm;
+    *inorm_out = inorm;
     return ok;
 }
 
@@ -354,15 +355,22 @@ SG_VINLINE void sgv_solve_eq(int n, const sg_vd *lu, const sg_vm *piv, const sg_
 SG_VINLINE void sgv_rates_scale(int n, unsigned long long angles, sg_vd turn, const sg_vd *cs, const sg_vd *qd,
                                 const sg_vd *qdd, sg_vd *cond)
 {
-    sg_vd y1 = sgv_set1(0.0), y2 = sgv_set1(0.0), om = turn;
+    const sg_vd zero = sgv_set1(0.0);
+    sg_vd y1 = zero, y2 = zero, yt = zero, om = turn, lam = sgv_set1(1.0);
     for (int j = 0; j < n; ++j) {
         const sg_vd w = sgv_fabs(qd[j]), v = w * cs[n + j], a = sgv_fabs(qdd[j]) * cs[n + j];
         y1 = sgv_select(~(v <= y1), v, y1);
         y2 = sgv_select(~(a <= y2), a, y2);
-        if (angles >> j & 1) om = sgv_select(w > om, w, om);
+        if (angles >> j & 1) {
+            om = sgv_select(w > om, w, om);
+            lam = sgv_select(cs[j] > lam, cs[j], lam);
+        } else {
+            yt = sgv_select(v > yt, v, yt);
+        }
     }
-    const sg_vd terms = (2.0 * n) * om * y1;
-    cond[1] = sgv_select(terms >= y2, sgv_set1(1.0), terms / y2);
+    const sg_vd terms = (2.0 * n) * om * y1, scale = sgv_select(terms > y2, terms, y2);
+    cond[1] = sgv_select(scale > zero, (2.0 * n) * (om + lam * yt) * y1 / scale, sgv_set1(1.0));
+    cond[2] = lam;
 }
 
 /* sg_rates_error and sg_newton_error lane by lane, operation for operation. */
@@ -375,8 +383,8 @@ SG_VINLINE sg_vd sgv_rates_error(sg_vd amp, sg_vd mu, sg_vd ej)
 
 SG_VINLINE sg_vd sgv_newton_error(const sg_vd *cond, sg_vd resid)
 {
-    return sgv_rates_error(cond[0], cond[1],
-                           cond[0] * sgv_select(resid > sgv_set1(SG_RESID_FLOOR), resid, sgv_set1(SG_EPS)));
+    const sg_vd floor = sgv_set1(SG_ROUND_RESID);
+    return sgv_rates_error(cond[0], cond[1], (cond[0] + cond[2]) * sgv_select(resid > floor, resid, floor));
 }
 
 /* sg_lu_factor_cm_inl lane by lane: the pivot test against colmax, each column's largest |entry| (of all of Φ_q

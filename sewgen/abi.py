@@ -165,10 +165,11 @@ KERNELS = {
                  "loop-closure residual and its Jacobian dPhi/dq (row-major)"),
     "motion": ("int", _Q + (("const double *", "xd"), ("const double *", "xdd"), ("const double *", "c"),
                             ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"), ("double *", "cond")),
-               "velocities, accelerations and observables at a solved position; cond: the two numbers of the "
+               "velocities, accelerations and observables at a solved position; cond: the three numbers of the "
                "rates' error estimate (csrc/sg_runtime.h sg_rates_error): the condition number (inf norm) of dPhi/dq "
-               "with each row over its loop's size (kernel 'scales') and its columns equilibrated, and the share of "
-               "the accelerations' centripetal and Coriolis terms in their scale"),
+               "with each row over its loop's size (kernel 'scales') and its columns equilibrated, the share of the "
+               "accelerations' centripetal and Coriolis terms in their scale, and the largest column factor of an "
+               "angle coordinate"),
     "rates": ("int", _Q + (("const double *", "xd"), ("const double *", "xdd"), ("const double *", "c"),
                            ("double *", "qd"), ("double *", "qdd"), ("double *", "cond")),
               "the motion kernel without its observables: velocities, accelerations and cond, equal to the bit "

@@ -277,8 +277,8 @@ class KernelSet:
         vector = fl.vector
         if not n:  # no coordinates: nothing solved (csrc/sg_runtime.h sg_rates_error)
             if vector:
-                return ["cond[0] = cond[1] = sgv_set1(1.0);", "sg_vm ok = sgv_true();"]
-            return ["cond[0] = cond[1] = 1.0;"]
+                return ["cond[0] = cond[1] = cond[2] = sgv_set1(1.0);", "sg_vm ok = sgv_true();"]
+            return ["cond[0] = cond[1] = cond[2] = 1.0;"]
         bf = self._block_factor
         body = [f"{fl.real} J[{n * n}], rs[{n}], cs[{2 * n}];"]
         body += bf.declarations(vector) if bf else [f"{'sg_vm' if vector else 'int'} piv[{n}];"]
@@ -294,8 +294,8 @@ class KernelSet:
                        f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
 
     def _acceleration_lines(self, fl: _Flavour, n: int, r_gam) -> list[str]:
-        """q'' from γ with the same factor (after :meth:`_velocity_lines`), then the accelerations' share of the
-        error estimate (csrc/sg_runtime.h sg_rates_scale_inl: cond[1])."""
+        """q'' from γ with the same factor (after :meth:`_velocity_lines`), then the rest of the error estimate's
+        numbers (csrc/sg_runtime.h sg_rates_scale_inl: cond[1], cond[2])."""
         if not n:
             return []
         lines = [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)]
