@@ -236,8 +236,8 @@ SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *
  * One division for all of it (the general factor takes four, three of them in a chain), and no pivoting: the
  * adjugate needs none. cs as sg_factor_eq_inl's (1/m0, 1/m1 from the one division: m1 / (m0 m1), m0 / (m0 m1);
  * then m0, m1), for the rates' scales (sg_rates_scale_inl); the solve does not read it. csrc/sg_simd.h's
- * sgv_factor_eq2 is this lane by lane, operation for operation, so the two loops agree to the bit. A NaN, a zero column (a coordinate no loop reads) or a singular B gives
- * SG_SINGULAR. */
+ * sgv_factor_eq2 is this lane by lane, operation for operation, so the two loops agree to the bit. A NaN, a zero
+ * column (a coordinate no loop reads) or a singular B gives SG_SINGULAR. */
 SG_INLINE int sg_factor_eq2_inl(double *a, const double *rs, double *cs, double *cond)
 {
     const double b00 = a[0] * rs[0], b01 = a[1] * rs[0], b10 = a[2] * rs[1], b11 = a[3] * rs[1];
@@ -440,7 +440,8 @@ SG_INLINE double sg_rates_error(double amp, double mu, double ej)
 /* sg_rates_error of a position Newton solved: resid its last relative residual, cond the rates kernel's. */
 SG_INLINE double sg_newton_error(const double *cond, double resid)
 {
-    return sg_rates_error(cond[0], cond[1], (cond[0] + cond[2]) * (resid > SG_ROUND_RESID ? resid : SG_ROUND_RESID));
+    const double rho = resid > SG_ROUND_RESID ? resid : SG_ROUND_RESID;
+    return sg_rates_error(cond[0], cond[1], (cond[0] + cond[2]) * rho);
 }
 
 /* cond[1] and cond[2] of a motion or rates kernel (sg_rates_error's μ, sg_newton_error's λ) from its solved rates:

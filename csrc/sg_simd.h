@@ -383,8 +383,8 @@ SG_VINLINE sg_vd sgv_rates_error(sg_vd amp, sg_vd mu, sg_vd ej)
 
 SG_VINLINE sg_vd sgv_newton_error(const sg_vd *cond, sg_vd resid)
 {
-    const sg_vd floor = sgv_set1(SG_ROUND_RESID);
-    return sgv_rates_error(cond[0], cond[1], (cond[0] + cond[2]) * sgv_select(resid > floor, resid, floor));
+    const sg_vd floor = sgv_set1(SG_ROUND_RESID), rho = sgv_select(resid > floor, resid, floor);
+    return sgv_rates_error(cond[0], cond[1], (cond[0] + cond[2]) * rho);
 }
 
 /* sg_lu_factor_cm_inl lane by lane: the pivot test against colmax, each column's largest |entry| (of all of Φ_q

@@ -651,7 +651,8 @@ def families(cache_dir=None) -> list[Family]:
                     p[prm.name] += float(rng.uniform(-0.02, 0.02)) * big
             br = {b: _sign(rng) if rng.random() < 0.3 else d for b, d in zip(mech.branch_names, (
                 br.default for br in desc.branches))}
-            held = {h.name: h.default + float(rng.uniform(-0.1, 0.1)) * (abs(h.default) or 1.0) for h in desc.held_inputs}
+            held = {h.name: h.default + float(rng.uniform(-0.1, 0.1)) * (abs(h.default) or 1.0)
+                    for h in desc.held_inputs}
             return Design(p, br, held=held)
         return draw
 
@@ -1089,10 +1090,17 @@ def _continues(fam: Family, d: Design, phi, w, al, newton: bool) -> bool:
         phi = np.concatenate([np.linspace(a, b, k, endpoint=False) for a, b, k in zip(phi[:-1], phi[1:], steps)]
                              + [phi[-1:]])
     with mp.workdps(20):
-        for ph in phi:
+        def margin(ph):
             ref = fam.reference(d.params, d.branch, float(ph), w, al)
-            if ref is None or not ref.margin > MARGIN:
-                return False
+            return 0.0 if ref is None else float(ref.margin)
+
+        m = [margin(ph) for ph in phi]
+        if not min(m) > MARGIN:
+            return False
+        if newton:  # a margin can dip between two samples (a guide's pin sweeping past its pivot): look closer there
+            for a, b, ma, mb in zip(phi[:-1], phi[1:], m[:-1], m[1:]):
+                if min(ma, mb) < 100 * MARGIN and not all(margin(t) > MARGIN for t in np.linspace(a, b, 41)[1:-1]):
+                    return False
     return True
 
 
@@ -1120,7 +1128,7 @@ def _feed_outcome(fam, d, motion, phi, w, al) -> Outcome:
     return Outcome("verified", positions=len(phi), refused=int(motion.singular.sum()))
 
 
-# -- kinetostatics: the power balance -----------------------------------------------------------------------------------
+# -- kinetostatics: the power balance ------------------------------------------------------------------------------
 
 def check_forces(fam: Family, rng, newton: bool) -> Outcome:
     """A kinetostatic sweep of a random design (friction on in half of them, where the mechanism declares it): at
@@ -1247,7 +1255,7 @@ def check_cli(fam: Family, rng) -> Outcome:
     return Outcome("verified cli", positions=len(phi))
 
 
-# -- campaigns ----------------------------------------------------------------------------------------------------------
+# -- campaigns ------------------------------------------------------------------------------------------------------
 
 BAD = ("silent wrong", "silent flip", "nan")
 
