@@ -14,7 +14,8 @@
  * functions are generated from sewgen/abi.py (one source for C and Python). */
 #include "sg_abi.h"
 
-/* SG_MAX_Q, SG_MAX_C, SG_MAX_GROUP, SG_MAX_LOAD, SG_MAX_DIRECT, SG_BLOCK, SG_HISTORY: sg_abi.h (sewgen.abi.LIMITS). */
+/* SG_MAX_Q, SG_MAX_C, SG_MAX_GROUP, SG_MAX_LOAD, SG_MAX_DIRECT, SG_BLOCK, SG_HISTORY, SG_NCOND: sg_abi.h
+ * (sewgen.abi.LIMITS). */
 
 /* Flat column j of one position (q, qd, qdd: nq each, then obs): a pointer into the arrays q, qd, qdd, obs of that
  * position (doubles, or a SIMD block's lane vectors): the layout of sg_columns' col[] (sg_runtime.c's col_ptr
@@ -428,7 +429,6 @@ SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const do
  * (the dyads' bound, measured against mpmath); a larger one is polished first where the estimate is above the
  * tolerance (csrc/sg_runtime.c finish_position). First-order estimates: of the order of the error, not below it
  * (tools/fuzz.py checks them against an mpmath reference). */
-#define SG_NCOND 3
 #define SG_ROUND_RESID (16.0 * SG_EPS)
 SG_INLINE double sg_rates_error(double amp, double mu, double ej)
 {

@@ -32,6 +32,8 @@ enum sg_status {
 #define SG_BLOCK 8
 /* solved states a Newton sweep's predictor extrapolates from (a Lagrange polynomial of degree 4 at most) */
 #define SG_HISTORY 5
+/* numbers a motion or rates kernel writes to cond, the rates' error estimate's (csrc/sg_runtime.h sg_rates_error) */
+#define SG_NCOND 3
 
 /* Per-design reductions of sg_sweep_designs (sewgen.abi.REDUCTIONS). */
 enum sg_reduction {

@@ -60,6 +60,8 @@ LIMITS = (
                     "at every SIMD level (the scalar and the SIMD loops give the same values)"),
     ("SG_HISTORY", 5, "solved states a Newton sweep's predictor extrapolates from (a Lagrange polynomial of "
                       "degree 4 at most)"),
+    ("SG_NCOND", 3, "numbers a motion or rates kernel writes to cond, the rates' error estimate's (csrc/sg_runtime.h "
+                    "sg_rates_error)"),
 )
 LIMIT = {name: value for name, value, _ in LIMITS}
 

@@ -106,18 +106,24 @@ def _hook_pin(p):
     return pin, lower
 
 
-@pytest.mark.parametrize("newton", [False, True])
-def test_guide_pin_a_nanometre_from_its_pivot_raises(newton):
-    """The hook drive's lower shaft axis placed 1 nm beside the slider pin's path at 2 rad: the guide's angle is
-    the pin's position error over 1 nm."""
+def _hook_near_pivot(distance):
+    """The hook drive with its lower shaft's axis ``distance`` beside the slider pin's path at 2 rad (its params)."""
     hd = sewgen.mechanism("hook_drive")
     p = dict(hd.defaults())
     pin, _ = _hook_pin(p)
     with mp.workdps(DPS):
         t = mp.mpf(2.0)
         E, v = pin(t), mp.diff(pin, t)
-        axis = E + mp.mpf(1e-9) * 1j * v / abs(v)
+        axis = E + mp.mpf(distance) * 1j * v / abs(v)
     p["lower_axis_x"], p["lower_axis_y"] = float(axis.real), float(axis.imag)
+    return hd, p
+
+
+@pytest.mark.parametrize("newton", [False, True])
+def test_guide_pin_a_nanometre_from_its_pivot_raises(newton):
+    """The hook drive's lower shaft axis placed 1 nm beside the slider pin's path at 2 rad: the guide's angle is
+    the pin's position error over 1 nm."""
+    hd, p = _hook_near_pivot(1e-9)
     w = hd.default_speed
     phi = np.array([2.0])
     with pytest.raises(sewgen.SingularPositionError):
@@ -132,16 +138,9 @@ def test_guide_pin_a_nanometre_from_its_pivot_raises(newton):
 
 
 def test_guide_pin_near_its_pivot_is_right_where_accepted():
-    """The same design at shaft angles moving away from the pin's closest approach: every position accepted is
-    right to within its estimate."""
-    hd = sewgen.mechanism("hook_drive")
-    p = dict(hd.defaults())
-    pin, _ = _hook_pin(p)
-    with mp.workdps(DPS):
-        t = mp.mpf(2.0)
-        E, v = pin(t), mp.diff(pin, t)
-        axis = E + mp.mpf(1e-6) * 1j * v / abs(v)
-    p["lower_axis_x"], p["lower_axis_y"] = float(axis.real), float(axis.imag)
+    """The pin passing 1 µm from the pivot, at shaft angles moving away from its closest approach: every position is
+    right to within its estimate, and the farthest is accepted."""
+    hd, p = _hook_near_pivot(1e-6)
     w = hd.default_speed
     phi = 2.0 + np.array([0.0, 1e-4, 1e-3, 1e-2, 0.1, 0.3])
     m = hd.solve(phi, params=p, singular="flag")
