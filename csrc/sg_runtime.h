@@ -507,14 +507,14 @@ SG_INLINE double sg_det_inl(int n, double *a, int *piv)
  * difference (the height squared, the discriminant) turns that difference's rounding, SG_DYAD_ROUND roundings of
  * its terms, into an error over twice the root: the loss near a toggle or change point, which no Jacobian's
  * condition number sees (the closed form's position is taken as it is). An oscillating guide's angle is its
- * pin's error over the pin's distance from the pivot. One division a dyad (and a square root for the guide). */
+ * pin's error over the pin's distance from the pivot. One division and one square root a dyad. */
 #define SG_TOUCH 1e-14
 #define SG_DYAD_ROUND 4.0
 
 /* RRR: J is at distance l1 from P and l2 from Q; sigma = +1 puts J left of the ray P->Q. The error: J moves by
  * 2 ein / sin γ (γ the angle at J, 1 / sin γ = l1 l2 / (h d^2), h = sqrt(h2) in units of d) and by h's rounding,
  * δ(h^2) d / (2 h), δ(h^2) = SG_DYAD_ROUND eps S (1 + |a|), S = (l1^2 + l2^2 + d^2) / d^2 = 2 (u1 + 1 - a) with
- * u1 = l1^2 / d^2, d <= l1 + l2; the links' angles by that and their pins' ein over the shorter link. */
+ * u1 = l1^2 / d^2; the links' angles by that and their pins' ein over the shorter link. */
 static inline int sg_dyad_rrr(const double P[2], const double Q[2], double l1, double l2, int sigma, double ein,
                               double e[3], double J[2])
 {
@@ -530,7 +530,7 @@ static inline int sg_dyad_rrr(const double P[2], const double Q[2], double l1, d
     J[0] = P[0] + a * dx - h * dy;
     J[1] = P[1] + a * dy + h * dx;
     const double lm = l1 < l2 ? l1 : l2, inv = 1.0 / (r * d2 * lm), amp = l1 * l2 * lm * inv;
-    const double own = (0.5 * SG_DYAD_ROUND * SG_EPS) * (2.0 * (u1 + 1.0 - a)) * (1.0 + fabs(a)) * (l1 + l2);
+    const double own = (0.5 * SG_DYAD_ROUND * SG_EPS) * (2.0 * (u1 + 1.0 - a)) * (1.0 + fabs(a)) * sqrt(d2);
     const double ea = (2.0 * ein * l1 * l2 + (own + ein * r) * d2) * inv;
     if (!(ea <= e[0])) e[0] = ea;
     e[2] *= amp;

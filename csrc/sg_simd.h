@@ -155,7 +155,7 @@ SG_VINLINE sg_vm sgv_dyad_rrr(const sg_vd P[2], const sg_vd Q[2], sg_vd l1, sg_v
     J[0] = P[0] + a * dx - h * dy;
     J[1] = P[1] + a * dy + h * dx;
     const sg_vd lm = sgv_select(l1 < l2, l1, l2), inv = 1.0 / (r * d2 * lm), amp = l1 * l2 * lm * inv;
-    const sg_vd own = (0.5 * SG_DYAD_ROUND * SG_EPS) * (2.0 * (u1 + 1.0 - a)) * (1.0 + sgv_fabs(a)) * (l1 + l2);
+    const sg_vd own = (0.5 * SG_DYAD_ROUND * SG_EPS) * (2.0 * (u1 + 1.0 - a)) * (1.0 + sgv_fabs(a)) * sgv_sqrt(d2);
     const sg_vd ea = (2.0 * ein * l1 * l2 + (own + ein * r) * d2) * inv;
     e[0] = sgv_select(~(ea <= e[0]), ea, e[0]);
     e[2] *= amp;
