@@ -529,13 +529,6 @@ static inline int motion_at(const sg_mechanism *m, const unsigned char *want, co
     return st;
 }
 
-/* The rates' estimated relative error at a position: the solve's own (eps cond) plus what the position's error
- * (Newton's last relative residual, resid cond) does to the Jacobian, amplified again. */
-static inline double rates_error(double cond, double resid)
-{
-    return cond * (SG_EPS + cond * (resid > SG_RESID_FLOOR ? resid : SG_EPS));
-}
-
 /* The rates, observables and (fi not NULL) forces at a solved position (qi, cq: its coordinates, their cos, sin;
  * resid: Newton's last relative residual), and the rates' estimated relative error in *est: the scalar loop's step
  * after Newton, and the deferred loop's for a lane the SIMD finish does not vouch for. A position whose estimate
@@ -550,18 +543,18 @@ static int finish_position(sg_walker *w, const unsigned char *want, const double
     const sg_mechanism *m = w->m;
     const sg_options *opt = w->opt;
     const double *c = w->c;
-    double cond = 1.0;
+    double cond[SG_NCOND] = {1.0, 1.0, 1.0};
     *est = 0.0;
-    int st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
+    int st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, cond);
     if (st == SG_SINGULAR) {
         *est = INFINITY; /* the velocity solve itself is singular */
     } else if (st == SG_OK) {
-        *est = rates_error(cond, resid);
-        if (!(*est <= opt->singular_tol) && resid > SG_RESID_FLOOR) { /* Newton's last residual */
+        *est = sg_newton_error(cond, resid);
+        if (!(*est <= opt->singular_tol) && resid > SG_ROUND_RESID) { /* Newton's last residual */
             polish(m, qi, cq, x, cx, c, opt, &resid);
-            st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, &cond);
+            st = motion_at(m, want, qi, cq, x, cx, xd, xdd, c, qdi, qddi, oi, cond);
             if (st == SG_SINGULAR) *est = INFINITY;
-            else *est = rates_error(cond, resid);
+            else *est = sg_newton_error(cond, resid);
         }
         if (st == SG_OK && !(*est <= opt->singular_tol) && !opt->keep_singular) st = SG_SINGULAR;
     }
@@ -688,10 +681,10 @@ static size_t sweep(const sg_mechanism *m, const sg_request *r)
          * branch, taken from the closed form at the first position (in solving order) where it assembles */
         for (size_t k = 0; k < n && !w.has_ref; ++k) {
             const size_t i = order ? order[k] : k;
-            double qr[SG_MAX_Q], cqr[2 * SG_MAX_Q], r[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q], bv[SG_MAX_Q];
+            double qr[SG_MAX_Q], cqr[2 * SG_MAX_Q], r[SG_MAX_Q], jac[SG_MAX_Q * SG_MAX_Q], bv[SG_MAX_Q], err[2];
             if (!isfinite(phi[i])) continue;
             set_input(&w, phi[i]);
-            if (m->closed(x, cx, c, branch, qr, cqr) != SG_OK) continue;
+            if (m->closed(x, cx, c, branch, qr, cqr, err) != SG_OK) continue;
             m->residual(qr, cqr, x, cx, c, r, jac);
             m->blocks(jac, bv);
             int ok = 1;
@@ -718,7 +711,7 @@ static size_t sweep(const sg_mechanism *m, const sg_request *r)
         double *qi = q + i * (size_t)nq, *qdi = qd + i * (size_t)nq, *qddi = qdd + i * (size_t)nq;
         double *oi = obs + i * (size_t)nobs;
         double cq_own[2 * SG_MAX_Q], *cq = cq_own;
-        double resid = SG_EPS; /* the position's relative accuracy (Newton's last relative residual) */
+        double resid = 0.0; /* the position's relative accuracy (Newton's last relative residual) */
         int st = SG_OK;
         const double ph = phi[i];
         xd[0] = omega[i];
@@ -741,7 +734,8 @@ static size_t sweep(const sg_mechanism *m, const sg_request *r)
                       * solution or the guess; the orientation signs are checked against the first position's */
                 int have = 0, closed_st = SG_OK;
                 if (m->closed != NULL) {
-                    closed_st = m->closed(x, cx, c, branch, qi, cq);
+                    double err[2]; /* Newton's residual says how exact its solution is */
+                    closed_st = m->closed(x, cx, c, branch, qi, cq, err);
                     have = closed_st == SG_OK;
                 }
                 if (!have && w.nh > 0) {

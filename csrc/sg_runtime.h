@@ -14,7 +14,8 @@
  * functions are generated from sewgen/abi.py (one source for C and Python). */
 #include "sg_abi.h"
 
-/* SG_MAX_Q, SG_MAX_C, SG_MAX_GROUP, SG_MAX_LOAD, SG_MAX_DIRECT, SG_BLOCK, SG_HISTORY: sg_abi.h (sewgen.abi.LIMITS). */
+/* SG_MAX_Q, SG_MAX_C, SG_MAX_GROUP, SG_MAX_LOAD, SG_MAX_DIRECT, SG_BLOCK, SG_HISTORY, SG_NCOND: sg_abi.h
+ * (sewgen.abi.LIMITS). */
 
 /* Flat column j of one position (q, qd, qdd: nq each, then obs): a pointer into the arrays q, qd, qdd, obs of that
  * position (doubles, or a SIMD block's lane vectors): the layout of sg_columns' col[] (sg_runtime.c's col_ptr
@@ -234,19 +235,24 @@ SG_INLINE void sg_lu_solve_inl(int n, const double *lu, const int *piv, double *
  *     / |det B| (E^-1 = diag(m) adj(B) / det B), where the general factor gives an upper bound of it (at most a
  *     few times larger).
  * One division for all of it (the general factor takes four, three of them in a chain), and no pivoting: the
- * adjugate needs none. csrc/sg_simd.h's sgv_factor_eq2 is this lane by lane, operation for operation, so the
- * two loops agree to the bit. A NaN, a zero column (a coordinate no loop reads) or a singular B gives
- * SG_SINGULAR. */
-SG_INLINE int sg_factor_eq2_inl(double *a, const double *rs, double *cond)
+ * adjugate needs none. cs as sg_factor_eq_inl's (1/m0, 1/m1 from the one division: m1 / (m0 m1), m0 / (m0 m1);
+ * then m0, m1), for the rates' scales (sg_rates_scale_inl); the solve does not read it. csrc/sg_simd.h's
+ * sgv_factor_eq2 is this lane by lane, operation for operation, so the two loops agree to the bit. A NaN, a zero
+ * column (a coordinate no loop reads) or a singular B gives SG_SINGULAR. */
+SG_INLINE int sg_factor_eq2_inl(double *a, const double *rs, double *cs, double *cond)
 {
     const double b00 = a[0] * rs[0], b01 = a[1] * rs[0], b10 = a[2] * rs[1], b11 = a[3] * rs[1];
     const double f00 = fabs(b00), f01 = fabs(b01), f10 = fabs(b10), f11 = fabs(b11);
     const double m0 = f00 > f10 ? f00 : f10, m1 = f01 > f11 ? f01 : f11;
     const double det = b00 * b11 - b01 * b10, mm = m0 * m1;
-    const double r = 1.0 / (mm * det), inv = r * mm;
+    const double r = 1.0 / (mm * det), inv = r * mm, imm = r * det;
     const double n1a = f00 * m1 + f01 * m0, n1b = f10 * m1 + f11 * m0;
     const double n2a = m0 * (f11 + f01), n2b = m1 * (f10 + f00);
     *cond = (n1a > n1b ? n1a : n1b) * (n2a > n2b ? n2a : n2b) * fabs(r);
+    cs[0] = m1 * imm;
+    cs[1] = m0 * imm;
+    cs[2] = m0;
+    cs[3] = m1;
     a[0] = b11 * inv;
     a[1] = -b01 * inv;
     a[2] = -b10 * inv;
@@ -289,41 +295,42 @@ SG_INLINE int sg_lu_bound_inl(int n, double *a, int *piv, double *inorm_out)
                 for (int j = k + 1; j < n; ++j) a[i * n + j] -= f * a[k * n + j];
         }
     }
-    /* ||A^-1||_inf <= ||U^-1|| ||L^-1|| <= ||M(U)^-1 1|| ||M(L)^-1 1||, M the comparison matrix (|diagonal|,
-     * -|off-diagonal|: its inverse is non-negative, so its norm is its row sums, one triangular solve with a
-     * vector of ones each). An upper bound, tight for the small well-scaled factors here; two passes of n^2/2
-     * instead of n solves. */
+    /* ||A^-1||_inf = || |A^-1| 1 || <= || |U^-1| |L^-1| 1 || <= || M(U)^-1 M(L)^-1 1 ||, M the comparison matrix
+     * (|diagonal|, -|off-diagonal|: the inverse of a triangular one is non-negative and bounds the inverse's
+     * magnitudes entry by entry): a triangular solve with a vector of ones, then one with its result. An upper
+     * bound, tight for the small well-scaled factors here (at most ||M(U)^-1|| ||M(L)^-1||, the bound of the two
+     * solves each with ones); two passes of n^2/2 instead of n solves. */
     double y[SG_MAX_Q];
-    double lnorm = 0.0, inorm = 0.0;
+    double inorm = 0.0;
     SG_UNROLL
     for (int i = 0; i < n; ++i) {
         double s = 1.0;
         SG_UNROLL
         for (int j = 0; j < i; ++j) s += fabs(a[i * n + j]) * y[j];
         y[i] = s;
-        if (!(s <= lnorm)) lnorm = s;
     }
     SG_UNROLL
     for (int i = n - 1; i >= 0; --i) {
-        double s = 1.0;
+        double s = y[i];
         SG_UNROLL
         for (int j = i + 1; j < n; ++j) s += fabs(a[i * n + j]) * y[j];
         y[i] = s * fabs(a[i * n + i]);
         if (!(y[i] <= inorm)) inorm = y[i];
     }
-    *inorm_out = inorm * lnorm;
+    *inorm_out = inorm;
     return SG_OK;
 }
 
 /* LU of A scaled, R A C: R = diag(rs) given in natural units (sewgen's motion kernels: each row over its loop's
  * size, so that a loop near its toggle, whose rows all but vanish, stays near-singular), C = diag(cs) found here
  * (each column of R A to its largest entry 1: rad and m columns alike, the solution's components each to its
- * own scale); and a bound of the condition number of R A C in the inf norm (from the factor, below). The
- * runtime turns it into the estimated relative error of the rates (csrc/sg_runtime.c). Solve with
- * sg_solve_eq_inl. n = 2 is sg_factor_eq2_inl (piv and cs unused). */
+ * own scale); and a bound of the condition number of R A C in the inf norm (from the factor, below), in cond[0].
+ * cs holds 2 n values: the column factors 1/m_j, then the columns' largest entries m_j (the rates' scales,
+ * sg_rates_scale_inl). The runtime turns cond into the estimated relative error of the rates (sg_rates_error).
+ * Solve with sg_solve_eq_inl. n = 2 is sg_factor_eq2_inl (piv unused). */
 SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, double *cs, double *cond)
 {
-    if (n == 2) return sg_factor_eq2_inl(a, rs, cond);
+    if (n == 2) return sg_factor_eq2_inl(a, rs, cs, cond);
     *cond = INFINITY;
     SG_UNROLL
     for (int j = 0; j < n; ++j) {
@@ -336,6 +343,7 @@ SG_INLINE int sg_factor_eq_inl(int n, double *a, int *piv, const double *rs, dou
         }
         if (!(m > 0.0) || !(m < INFINITY)) return SG_SINGULAR; /* a coordinate no loop reads */
         cs[j] = 1.0 / m;
+        cs[n + j] = m;
         SG_UNROLL
         for (int i = 0; i < n; ++i) a[i * n + j] *= cs[j];
     }
@@ -395,6 +403,79 @@ SG_INLINE void sg_solve_eq_inl(int n, const double *lu, const int *piv, const do
     for (int j = 0; j < n; ++j) b[j] *= cs[j];
 }
 
+/* The rates' error estimate (sg_closed_finish; csrc/sg_runtime.c finish_position; the SIMD loops' twins in
+ * csrc/sg_simd.h), relative: q' to ||y'||, q'' to max(||y''||, S), y = q' m and y'' = q'' m the rates scaled by
+ * their columns, S their centripetal and Coriolis terms (sg_rates_scale_inl).
+ *
+ * The rates solve Φ_q q' = -Φ_x x' and Φ_q q'' = γ(q, q'). A relative perturbation e of either moves the
+ * solution by up to amp e, amp the solve's amplification. Three sources of e:
+ *   - rounding: eps;
+ *   - the position's own error, ej (rad: the largest error of an angle coordinate), which turns Φ_q's columns with
+ *     their bodies (and γ's terms): e = ej;
+ *   - for q'', the error of q' in γ's terms: 2 E_v of their sensitivity, 2 E_v μ of the accelerations' scale
+ *     (μ = cond[1], sg_rates_scale_inl).
+ * Hence E_v = amp (eps + ej) for q' and E_a = amp ((2 E_v + eps) μ + ej) for q''; the estimate is the larger. At a
+ * dead centre (q' growing as amp, q'' as amp³: μ about 1 / amp) both are about amp ej; at a change point (two
+ * branches meeting, q' and q'' finite: μ about 1) E_a is about amp² ej, and ej there is itself about amp eps: the
+ * accelerations lose amp³ eps (the closed form's square root of a cancelled difference, then two solves near
+ * singular). A closed form's dyads give ej and amp themselves (sg_dyad_*: amp the product of their triangles'
+ * amplifications, 1 / sin of the angle at the joint). For Newton's position (sg_newton_error) amp is κ = cond[0],
+ * the equilibrated Φ_q's condition number, and ej = (κ + λ) resid: a position whose loops close to resid of their
+ * sizes solves loops changed by that much, so its scaled coordinates are off by up to κ resid, and a coordinate on
+ * a lever ℓ short against its loop's size L turns by its loop's residual over ℓ / L however well the loops are
+ * conditioned: λ = cond[2], the largest L / ℓ of an angle coordinate (its column's 1 / m_j; an oscillating guide's
+ * pin near its pivot: L / s). A residual below SG_ROUND_RESID is rounding and counts as that much: a position
+ * exact to rounding (Newton's at its fixed point, a closed form's) is off by about 15 eps / sin γ near a toggle
+ * (the dyads' bound, measured against mpmath); a larger one is polished first where the estimate is above the
+ * tolerance (csrc/sg_runtime.c finish_position). First-order estimates: of the order of the error, not below it
+ * (tools/fuzz.py checks them against an mpmath reference). */
+#define SG_ROUND_RESID (16.0 * SG_EPS)
+SG_INLINE double sg_rates_error(double amp, double mu, double ej)
+{
+    const double ev = amp * (SG_EPS + ej);
+    const double ea = amp * ((2.0 * ev + SG_EPS) * mu + ej);
+    return ev > ea ? ev : ea;
+}
+
+/* sg_rates_error of a position Newton solved: resid its last relative residual, cond the rates kernel's. */
+SG_INLINE double sg_newton_error(const double *cond, double resid)
+{
+    const double rho = resid > SG_ROUND_RESID ? resid : SG_ROUND_RESID;
+    return sg_rates_error(cond[0], cond[1], (cond[0] + cond[2]) * rho);
+}
+
+/* cond[1] and cond[2] of a motion or rates kernel (sg_rates_error's μ, sg_newton_error's λ) from its solved rates:
+ * cs the factor's 2 n column values (sg_factor_eq_inl: 1/m_j, then m_j), angles bit j set where coordinate j is
+ * an angle, turn the largest |rate| of an angle input. y' = q' m and y'' = q'' m are the scaled rates, λ the
+ * largest 1/m_j of an angle coordinate (at least 1). γ's terms, each a column of Φ_q times a rate squared or two
+ * rates (centripetal, Coriolis), are at most S = 2 n Ω ||y'|| (Ω the fastest angle's rate, inputs' too); their
+ * sensitivity to an error of q' relative to ||y'|| is at most 2 n (Ω + λ Y_t) ||y'||, Y_t the largest scaled rate
+ * of a travel (a Coriolis term 2 s' θ' moves by 2 s' δθ', and δθ' may be ||y'|| / m_θ: an oscillating guide's pin
+ * running radially past its pivot). μ is that sensitivity over the accelerations' scale max(||y''||, S): 1 where
+ * the accelerations are no larger than their terms and no travel runs on a short lever (a change point, where
+ * they cancel), about 1 / κ at a dead centre (where they grow as κ³ and their terms as κ²), λ Y_t / Ω past a
+ * guide's pivot. A NaN propagates. */
+SG_INLINE void sg_rates_scale_inl(int n, unsigned long long angles, double turn, const double *cs, const double *qd,
+                                  const double *qdd, double *cond)
+{
+    double y1 = 0.0, y2 = 0.0, yt = 0.0, om = turn, lam = 1.0;
+    SG_UNROLL
+    for (int j = 0; j < n; ++j) {
+        const double w = fabs(qd[j]), v = w * cs[n + j], a = fabs(qdd[j]) * cs[n + j];
+        if (!(v <= y1)) y1 = v;
+        if (!(a <= y2)) y2 = a;
+        if (angles >> j & 1) {
+            if (w > om) om = w;
+            if (cs[j] > lam) lam = cs[j];
+        } else if (v > yt) {
+            yt = v;
+        }
+    }
+    const double terms = (2.0 * n) * om * y1, scale = terms > y2 ? terms : y2;
+    cond[1] = scale > 0.0 ? (2.0 * n) * (om + lam * yt) * y1 / scale : 1.0;
+    cond[2] = lam;
+}
+
 /* A parameter sum under a square root (a triangle's height from its sides): a negative within 1e-12 of the sum
  * of its terms' magnitudes is rounding of a zero (a collinear triangle) and becomes 0; a real negative stays. */
 static inline double sg_rounding_clamp(double value, double scale)
@@ -415,46 +496,80 @@ SG_INLINE double sg_det_inl(int n, double *a, int *piv)
 /* Closed-form dyads (seed 001 §三, Makino's vector triangles; BV4 is the RRR dyad). ------------------
  * A triangle that closes only within the rounding of its sides (a toggle or change point hit exactly) is taken
  * as closed, flat: SG_TOUCH is that rounding, relative to the squares summed. The position is then singular
- * and the motion kernel's condition estimate reports it as such. */
+ * and its error bound (below) infinite.
+ *
+ * Each dyad also bounds the error of what it solves (first order) for the rates' error estimate (sg_rates_error):
+ * ein is its input points' error (m: the earlier dyads' errors carried by the lengths that place them, and their
+ * rounding; the generated closed kernel computes it), e[0] the largest error of an angle coordinate so far (rad),
+ * e[1] of a travel (m), both raised to this dyad's, and e[2] the product of the dyads' amplifications (how much a
+ * relative error of the rates' right side grows in this dyad's solve, an upstream one's too). A triangle moves its
+ * inputs' errors by 1 / sin of its angle at the joint (the amplification), and its square root of a cancelled
+ * difference (the height squared, the discriminant) turns that difference's rounding, SG_DYAD_ROUND roundings of
+ * its terms, into an error over twice the root: the loss near a toggle or change point, which no Jacobian's
+ * condition number sees (the closed form's position is taken as it is). An oscillating guide's angle is its
+ * pin's error over the pin's distance from the pivot. One division and one square root a dyad. */
 #define SG_TOUCH 1e-14
+#define SG_DYAD_ROUND 4.0
 
-/* RRR: J is at distance l1 from P and l2 from Q; sigma = +1 puts J left of the ray P->Q. */
-static inline int sg_dyad_rrr(const double P[2], const double Q[2], double l1, double l2, int sigma,
-                              double J[2])
+/* RRR: J is at distance l1 from P and l2 from Q; sigma = +1 puts J left of the ray P->Q. The error: J moves by
+ * 2 ein / sin γ (γ the angle at J, 1 / sin γ = l1 l2 / (h d^2), h = sqrt(h2) in units of d) and by h's rounding,
+ * δ(h^2) d / (2 h), δ(h^2) = SG_DYAD_ROUND eps S (1 + |a|), S = (l1^2 + l2^2 + d^2) / d^2 = 2 (u1 + 1 - a) with
+ * u1 = l1^2 / d^2; the links' angles by that and their pins' ein over the shorter link. */
+static inline int sg_dyad_rrr(const double P[2], const double Q[2], double l1, double l2, int sigma, double ein,
+                              double e[3], double J[2])
 {
     const double dx = Q[0] - P[0], dy = Q[1] - P[1];
     const double d2 = dx * dx + dy * dy;
     if (!(d2 > 1e-30)) return SG_SINGULAR;
     const double a = 0.5 * (l1 * l1 - l2 * l2 + d2) / d2; /* along PQ, in units of d */
-    double h2 = l1 * l1 / d2 - a * a;                      /* across PQ, squared, in units of d^2 */
+    const double u1 = l1 * l1 / d2;
+    double h2 = u1 - a * a; /* across PQ, squared, in units of d^2 */
     if (h2 < 0.0 && h2 >= -SG_TOUCH * (l1 * l1 + l2 * l2 + d2) / d2) h2 = 0.0; /* touching within rounding */
     if (!(h2 >= 0.0)) return SG_CANNOT_ASSEMBLE;
-    const double h = sigma * sqrt(h2);
+    const double r = sqrt(h2), h = sigma * r;
     J[0] = P[0] + a * dx - h * dy;
     J[1] = P[1] + a * dy + h * dx;
+    const double lm = l1 < l2 ? l1 : l2, inv = 1.0 / (r * d2 * lm), amp = l1 * l2 * lm * inv;
+    const double own = (0.5 * SG_DYAD_ROUND * SG_EPS) * (2.0 * (u1 + 1.0 - a)) * (1.0 + fabs(a)) * sqrt(d2);
+    const double ea = (2.0 * ein * l1 * l2 + (own + ein * r) * d2) * inv;
+    if (!(ea <= e[0])) e[0] = ea;
+    e[2] *= amp;
     return SG_OK;
 }
 
-/* RRP: J = L0 + s*u (u a unit vector) at distance l1 from P; sigma = +1 takes the larger s. */
-static inline int sg_dyad_rrp(const double P[2], double l1, const double L0[2], const double u[2],
-                              int sigma, double *s, double J[2])
+/* RRP: J = L0 + s*u (u a unit vector) at distance l1 from P; sigma = +1 takes the larger s. The error: s moves by
+ * (J - P).(δw + s δu) / ((J - P).u) with (J - P).u = ±sqrt(disc) (the amplification l1 / sqrt(disc)), δw <= 2 ein,
+ * δu the guide's angle error, and by the discriminant's rounding over 2 sqrt(disc); the link's angle by that and
+ * the same over l1. */
+static inline int sg_dyad_rrp(const double P[2], double l1, const double L0[2], const double u[2], int sigma,
+                              double ein, double e[3], double *s, double J[2])
 {
     const double wx = L0[0] - P[0], wy = L0[1] - P[1];
     const double b = u[0] * wx + u[1] * wy;
     double disc = b * b - (wx * wx + wy * wy - l1 * l1);
     if (disc < 0.0 && disc >= -SG_TOUCH * (b * b + wx * wx + wy * wy + l1 * l1)) disc = 0.0;
     if (!(disc >= 0.0)) return SG_CANNOT_ASSEMBLE;
-    *s = -b + sigma * sqrt(disc);
+    const double r = sqrt(disc);
+    *s = -b + sigma * r;
     J[0] = L0[0] + *s * u[0];
     J[1] = L0[1] + *s * u[1];
+    const double x = 2.0 * ein + fabs(*s) * e[0];
+    const double num = l1 * x + (0.5 * SG_DYAD_ROUND * SG_EPS) * (b * b + wx * wx + wy * wy + l1 * l1);
+    const double inv = 1.0 / (r * l1), es = num * l1 * inv, ea = (x * r + num) * inv;
+    if (!(es <= e[1])) e[1] = es;
+    if (!(ea <= e[0])) e[0] = ea;
+    e[2] *= l1 * l1 * inv;
     return SG_OK;
 }
 
 /* RPR (oscillating guide bar): in the bar's frame the pin runs on w0 + s*u (u unit); it must lie at
  * distance |D| from the pivot, D = pin - pivot in the world. Returns s (sigma = +1: larger s) and the
- * bar angle theta with R(theta) (w0 + s u) = D. */
-static inline int sg_dyad_rpr(const double D[2], const double w0[2], const double u[2], int sigma,
-                              double *s, double *theta)
+ * bar angle theta with R(theta) (w0 + s u) = D. The error: s moves by the discriminant's, 2 |D| ein and its
+ * rounding, over 2 sqrt(disc) (the amplification |D| / sqrt(disc): 1 where the pin runs through the pivot);
+ * theta by the pin's error and that over |D| (the bar's angle is only as good as its pin's position over the
+ * pin's distance from the pivot). */
+static inline int sg_dyad_rpr(const double D[2], const double w0[2], const double u[2], int sigma, double ein,
+                              double e[3], double *s, double *theta)
 {
     const double d2 = D[0] * D[0] + D[1] * D[1];
     if (!(d2 > 1e-30)) return SG_SINGULAR;
@@ -462,9 +577,16 @@ static inline int sg_dyad_rpr(const double D[2], const double w0[2], const doubl
     double disc = b * b - (w0[0] * w0[0] + w0[1] * w0[1] - d2);
     if (disc < 0.0 && disc >= -SG_TOUCH * (b * b + w0[0] * w0[0] + w0[1] * w0[1] + d2)) disc = 0.0;
     if (!(disc >= 0.0)) return SG_CANNOT_ASSEMBLE;
-    *s = -b + sigma * sqrt(disc);
+    const double r = sqrt(disc);
+    *s = -b + sigma * r;
     const double wx = w0[0] + *s * u[0], wy = w0[1] + *s * u[1];
     *theta = atan2(D[1], D[0]) - atan2(wy, wx);
+    const double dd = sqrt(d2);
+    const double num = dd * ein + (0.5 * SG_DYAD_ROUND * SG_EPS) * (b * b + w0[0] * w0[0] + w0[1] * w0[1] + d2);
+    const double inv = 1.0 / (r * dd), es = num * dd * inv, ea = (ein * r + num) * inv;
+    if (!(es <= e[1])) e[1] = es;
+    if (!(ea <= e[0])) e[0] = ea;
+    e[2] *= d2 * inv;
     return SG_OK;
 }
 
@@ -484,8 +606,9 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
  * kernels: constant arguments of an always-inline function, so that the file's flatten attribute inlines them, no
  * call through a pointer per position), and the runtime's sweep calls it with the descriptor's kernels where
  * opt->generic asks for the calls through the descriptor (tests: the same code, so the same values to the bit).
- * K: the kernels (sg_closed_kernels). Per position: closed form, unwrap against the last solution, motion, the rates' error estimate (the closed form's
- * position is exact to rounding: resid = eps, never polished), singular check, forces (r->frc), status. r->want
+ * K: the kernels (sg_closed_kernels). Per position: closed form, unwrap against the last solution, motion, the
+ * rates' error estimate (sg_rates_error, with the position's error its dyads bound; never polished), singular
+ * check, forces (r->frc), status. r->want
  * (not NULL: a kinematic sweep that keeps a few outputs) flags the groups of observables to compute: the rates
  * kernel and the wanted groups' observe kernel then stand for the motion kernel. The SIMD loop (csrc/sg_simd.h)
  * shares the state (sg_closed_loop, set up by sg_closed_setup), the step of one position (sg_closed_step) and the
@@ -570,25 +693,27 @@ SG_INLINE void sg_closed_settle(sg_closed_loop *L, size_t i, int st, double est)
 
 /* Position i from its solved coordinates (its row of q; cq their cos, sin): motion (or the rates and the wanted
  * groups: the same values to the bit), the rates' error estimate and the singular check, forces, then
- * sg_closed_settle. The inputs x, cx, xd, xdd are L's, set for position i. */
-SG_INLINE void sg_closed_finish(sg_closed_loop *L, size_t i, const double *cq, const sg_closed_kernels K)
+ * sg_closed_settle. The inputs x, cx, xd, xdd are L's, set for position i; err the closed kernel's (its position's
+ * error and the dyads' amplification). */
+SG_INLINE void sg_closed_finish(sg_closed_loop *L, size_t i, const double *cq, const double *err,
+                                 const sg_closed_kernels K)
 {
     const int nq = L->nq, nobs = L->nobs;
     const double *qi = L->q + i * (size_t)nq;
     double *qdi = L->qd + i * (size_t)nq, *qddi = L->qdd + i * (size_t)nq, *oi = L->obs + i * (size_t)nobs;
-    double cond = 1.0, est = 0.0;
+    double cond[SG_NCOND] = {1.0, 1.0, 1.0}, est = 0.0;
     int st;
     if (L->want == NULL) {
-        st = K.motion(qi, cq, L->x, L->cx, L->xd, L->xdd, L->c, qdi, qddi, oi, &cond);
+        st = K.motion(qi, cq, L->x, L->cx, L->xd, L->xdd, L->c, qdi, qddi, oi, cond);
     } else {
-        st = K.rates(qi, cq, L->x, L->cx, L->xd, L->xdd, L->c, qdi, qddi, &cond);
+        st = K.rates(qi, cq, L->x, L->cx, L->xd, L->xdd, L->c, qdi, qddi, cond);
         for (int g = 0; g < L->m->ngroup && st == SG_OK; ++g)
             if (L->want[g]) st = K.observe(qi, cq, L->x, L->cx, L->xd, L->xdd, L->c, qdi, qddi, g, oi);
     }
     if (st == SG_SINGULAR) {
         est = INFINITY;
     } else if (st == SG_OK) {
-        est = cond * (SG_EPS + cond * SG_EPS);
+        est = sg_rates_error(err[1], cond[1], err[0]);
         if (!(est <= L->opt->singular_tol) && !L->opt->keep_singular) st = SG_SINGULAR;
     }
     if (st == SG_OK && L->frc != NULL)
@@ -616,7 +741,8 @@ SG_INLINE void sg_closed_step(sg_closed_loop *L, size_t i, const sg_closed_kerne
         sg_closed_settle(L, i, SG_NAN_INPUT, 0.0);
         return;
     }
-    const int st = K.closed(L->x, L->cx, L->c, L->branch, qi, cq);
+    double err[2];
+    const int st = K.closed(L->x, L->cx, L->c, L->branch, qi, cq, err);
     if (st != SG_OK) {
         sg_closed_settle(L, i, st, 0.0);
         return;
@@ -629,7 +755,7 @@ SG_INLINE void sg_closed_step(sg_closed_loop *L, size_t i, const sg_closed_kerne
             }
     for (int j = 0; j < nq; ++j) L->last[j] = qi[j];
     L->have_last = 1;
-    sg_closed_finish(L, i, cq, K);
+    sg_closed_finish(L, i, cq, err, K);
 }
 
 /* The closed-form sweep of the request r with the kernels given (r->trig and r->cols are the SIMD loop's: this

@@ -139,44 +139,66 @@ SG_VINLINE sg_vm sgv_no_forces(const sg_vd *q, const sg_vd *cq, const sg_vd *x, 
     return sgv_false();
 }
 
-/* The closed-form dyads of csrc/sg_runtime.h, lane by lane, with the same operations; the mask says which lanes
- * close by more than SG_SIMD_MARGIN (the others carry a flat triangle's values, never read). */
-SG_VINLINE sg_vm sgv_dyad_rrr(const sg_vd P[2], const sg_vd Q[2], sg_vd l1, sg_vd l2, int sigma, sg_vd J[2])
+/* The closed-form dyads of csrc/sg_runtime.h, lane by lane, with the same operations (their error bounds too);
+ * the mask says which lanes close by more than SG_SIMD_MARGIN (the others carry a flat triangle's values, never
+ * read). */
+SG_VINLINE sg_vm sgv_dyad_rrr(const sg_vd P[2], const sg_vd Q[2], sg_vd l1, sg_vd l2, int sigma, sg_vd ein,
+                              sg_vd e[3], sg_vd J[2])
 {
     const sg_vd dx = Q[0] - P[0], dy = Q[1] - P[1];
     const sg_vd d2 = dx * dx + dy * dy;
     const sg_vd a = 0.5 * (l1 * l1 - l2 * l2 + d2) / d2;
-    const sg_vd h2 = l1 * l1 / d2 - a * a;
+    const sg_vd u1 = l1 * l1 / d2;
+    const sg_vd h2 = u1 - a * a;
     const sg_vm ok = (d2 > sgv_set1(1e-30)) & (h2 > SG_SIMD_MARGIN * (l1 * l1 + l2 * l2 + d2) / d2);
-    const sg_vd h = (double)sigma * sgv_sqrt(sgv_select(ok, h2, sgv_set1(0.0)));
+    const sg_vd r = sgv_sqrt(sgv_select(ok, h2, sgv_set1(0.0))), h = (double)sigma * r;
     J[0] = P[0] + a * dx - h * dy;
     J[1] = P[1] + a * dy + h * dx;
+    const sg_vd lm = sgv_select(l1 < l2, l1, l2), inv = 1.0 / (r * d2 * lm), amp = l1 * l2 * lm * inv;
+    const sg_vd own = (0.5 * SG_DYAD_ROUND * SG_EPS) * (2.0 * (u1 + 1.0 - a)) * (1.0 + sgv_fabs(a)) * sgv_sqrt(d2);
+    const sg_vd ea = (2.0 * ein * l1 * l2 + (own + ein * r) * d2) * inv;
+    e[0] = sgv_select(~(ea <= e[0]), ea, e[0]);
+    e[2] *= amp;
     return ok;
 }
 
-SG_VINLINE sg_vm sgv_dyad_rrp(const sg_vd P[2], sg_vd l1, const sg_vd L0[2], const sg_vd u[2], int sigma,
-                              sg_vd *s, sg_vd J[2])
+SG_VINLINE sg_vm sgv_dyad_rrp(const sg_vd P[2], sg_vd l1, const sg_vd L0[2], const sg_vd u[2], int sigma, sg_vd ein,
+                              sg_vd e[3], sg_vd *s, sg_vd J[2])
 {
     const sg_vd wx = L0[0] - P[0], wy = L0[1] - P[1];
     const sg_vd b = u[0] * wx + u[1] * wy;
     const sg_vd disc = b * b - (wx * wx + wy * wy - l1 * l1);
     const sg_vm ok = disc > SG_SIMD_MARGIN * (b * b + wx * wx + wy * wy + l1 * l1);
-    *s = -b + (double)sigma * sgv_sqrt(sgv_select(ok, disc, sgv_set1(0.0)));
+    const sg_vd r = sgv_sqrt(sgv_select(ok, disc, sgv_set1(0.0)));
+    *s = -b + (double)sigma * r;
     J[0] = L0[0] + *s * u[0];
     J[1] = L0[1] + *s * u[1];
+    const sg_vd x = 2.0 * ein + sgv_fabs(*s) * e[0];
+    const sg_vd num = l1 * x + (0.5 * SG_DYAD_ROUND * SG_EPS) * (b * b + wx * wx + wy * wy + l1 * l1);
+    const sg_vd inv = 1.0 / (r * l1), es = num * l1 * inv, ea = (x * r + num) * inv;
+    e[1] = sgv_select(~(es <= e[1]), es, e[1]);
+    e[0] = sgv_select(~(ea <= e[0]), ea, e[0]);
+    e[2] *= l1 * l1 * inv;
     return ok;
 }
 
-SG_VINLINE sg_vm sgv_dyad_rpr(const sg_vd D[2], const sg_vd w0[2], const sg_vd u[2], int sigma, sg_vd *s,
-                              sg_vd *theta)
+SG_VINLINE sg_vm sgv_dyad_rpr(const sg_vd D[2], const sg_vd w0[2], const sg_vd u[2], int sigma, sg_vd ein,
+                              sg_vd e[3], sg_vd *s, sg_vd *theta)
 {
     const sg_vd d2 = D[0] * D[0] + D[1] * D[1];
     const sg_vd b = u[0] * w0[0] + u[1] * w0[1];
     const sg_vd disc = b * b - (w0[0] * w0[0] + w0[1] * w0[1] - d2);
     const sg_vm ok = (d2 > sgv_set1(1e-30)) & (disc > SG_SIMD_MARGIN * (b * b + w0[0] * w0[0] + w0[1] * w0[1] + d2));
-    *s = -b + (double)sigma * sgv_sqrt(sgv_select(ok, disc, sgv_set1(0.0)));
+    const sg_vd r = sgv_sqrt(sgv_select(ok, disc, sgv_set1(0.0)));
+    *s = -b + (double)sigma * r;
     const sg_vd wx = w0[0] + *s * u[0], wy = w0[1] + *s * u[1];
     *theta = sgv_atan2(D[1], D[0]) - sgv_atan2(wy, wx);
+    const sg_vd dd = sgv_sqrt(d2);
+    const sg_vd num = dd * ein + (0.5 * SG_DYAD_ROUND * SG_EPS) * (b * b + w0[0] * w0[0] + w0[1] * w0[1] + d2);
+    const sg_vd inv = 1.0 / (r * dd), es = num * dd * inv, ea = (ein * r + num) * inv;
+    e[1] = sgv_select(~(es <= e[1]), es, e[1]);
+    e[0] = sgv_select(~(ea <= e[0]), ea, e[0]);
+    e[2] *= d2 * inv;
     return ok;
 }
 
@@ -235,16 +257,20 @@ SG_VINLINE void sgv_substitute(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *
 }
 
 /* sg_factor_eq2_inl lane by lane, operation for operation (the same values to the bit). */
-SG_VINLINE sg_vm sgv_factor_eq2(sg_vd *a, const sg_vd *rs, sg_vd *cond)
+SG_VINLINE sg_vm sgv_factor_eq2(sg_vd *a, const sg_vd *rs, sg_vd *cs, sg_vd *cond)
 {
     const sg_vd b00 = a[0] * rs[0], b01 = a[1] * rs[0], b10 = a[2] * rs[1], b11 = a[3] * rs[1];
     const sg_vd f00 = sgv_fabs(b00), f01 = sgv_fabs(b01), f10 = sgv_fabs(b10), f11 = sgv_fabs(b11);
     const sg_vd m0 = sgv_fmax(f00, f10), m1 = sgv_fmax(f01, f11);
     const sg_vd det = b00 * b11 - b01 * b10, mm = m0 * m1;
-    const sg_vd r = 1.0 / (mm * det), inv = r * mm;
+    const sg_vd r = 1.0 / (mm * det), inv = r * mm, imm = r * det;
     const sg_vd n1a = f00 * m1 + f01 * m0, n1b = f10 * m1 + f11 * m0;
     const sg_vd n2a = m0 * (f11 + f01), n2b = m1 * (f10 + f00);
     *cond = sgv_fmax(n1a, n1b) * sgv_fmax(n2a, n2b) * sgv_fabs(r);
+    cs[0] = m1 * imm;
+    cs[1] = m0 * imm;
+    cs[2] = m0;
+    cs[3] = m1;
     a[0] = b11 * inv;
     a[1] = -b01 * inv;
     a[2] = -b10 * inv;
@@ -261,20 +287,19 @@ SG_VINLINE sg_vm sgv_lu_bound(int n, sg_vd *a, sg_vm *piv, sg_vd *inorm_out)
     sg_vd best[SG_MAX_Q], y[SG_MAX_Q];
     sgv_eliminate(n, a, piv, best, 1);
     for (int k = 0; k < n; ++k) ok &= best[k] > sgv_set1(SG_PIVOT_RTOL);
-    sg_vd lnorm = zero, inorm = zero;
+    sg_vd inorm = zero;
     for (int i = 0; i < n; ++i) {
         sg_vd s = sgv_set1(1.0);
         for (int j = 0; j < i; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
         y[i] = s;
-        lnorm = sgv_select(~(s <= lnorm), s, lnorm);
     }
     for (int i = n - 1; i >= 0; --i) {
-        sg_vd s = sgv_set1(1.0);
+        sg_vd s = y[i];
         for (int j = i + 1; j < n; ++j) s += sgv_fabs(a[i * n + j]) * y[j];
         y[i] = s * sgv_fabs(a[i * n + i]);
         inorm = sgv_select(~(y[i] <= inorm), y[i], inorm);
     }
-    *inorm_out = inorm * lnorm;
+    *inorm_out = inorm;
     return ok;
 }
 
@@ -285,7 +310,7 @@ SG_VINLINE void sgv_lu_apply(int n, const sg_vd *lu, const sg_vm *piv, sg_vd *b)
  * mask is the lanes the scalar factor would accept. */
 SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_vd *cs, sg_vd *cond)
 {
-    if (n == 2) return sgv_factor_eq2(a, rs, cond);
+    if (n == 2) return sgv_factor_eq2(a, rs, cs, cond);
     const sg_vd zero = sgv_set1(0.0);
     sg_vm ok = sgv_true();
     for (int j = 0; j < n; ++j) {
@@ -297,6 +322,7 @@ SG_VINLINE sg_vm sgv_factor_eq(int n, sg_vd *a, sg_vm *piv, const sg_vd *rs, sg_
         }
         ok &= (m > zero) & (m < sgv_set1(INFINITY));
         cs[j] = 1.0 / m;
+        cs[n + j] = m;
         for (int i = 0; i < n; ++i) a[i * n + j] *= cs[j];
     }
     sg_vd anorm = zero;
@@ -323,6 +349,42 @@ SG_VINLINE void sgv_solve_eq(int n, const sg_vd *lu, const sg_vm *piv, const sg_
     for (int i = 0; i < n; ++i) b[i] *= rs[i];
     sgv_substitute(n, lu, piv, b, 1);
     for (int j = 0; j < n; ++j) b[j] *= cs[j];
+}
+
+/* sg_rates_scale_inl lane by lane, operation for operation (the scalar kernels' values to the bit). */
+SG_VINLINE void sgv_rates_scale(int n, unsigned long long angles, sg_vd turn, const sg_vd *cs, const sg_vd *qd,
+                                const sg_vd *qdd, sg_vd *cond)
+{
+    const sg_vd zero = sgv_set1(0.0);
+    sg_vd y1 = zero, y2 = zero, yt = zero, om = turn, lam = sgv_set1(1.0);
+    for (int j = 0; j < n; ++j) {
+        const sg_vd w = sgv_fabs(qd[j]), v = w * cs[n + j], a = sgv_fabs(qdd[j]) * cs[n + j];
+        y1 = sgv_select(~(v <= y1), v, y1);
+        y2 = sgv_select(~(a <= y2), a, y2);
+        if (angles >> j & 1) {
+            om = sgv_select(w > om, w, om);
+            lam = sgv_select(cs[j] > lam, cs[j], lam);
+        } else {
+            yt = sgv_select(v > yt, v, yt);
+        }
+    }
+    const sg_vd terms = (2.0 * n) * om * y1, scale = sgv_select(terms > y2, terms, y2);
+    cond[1] = sgv_select(scale > zero, (2.0 * n) * (om + lam * yt) * y1 / scale, sgv_set1(1.0));
+    cond[2] = lam;
+}
+
+/* sg_rates_error and sg_newton_error lane by lane, operation for operation. */
+SG_VINLINE sg_vd sgv_rates_error(sg_vd amp, sg_vd mu, sg_vd ej)
+{
+    const sg_vd ev = amp * (SG_EPS + ej);
+    const sg_vd ea = amp * ((2.0 * ev + SG_EPS) * mu + ej);
+    return sgv_select(ev > ea, ev, ea);
+}
+
+SG_VINLINE sg_vd sgv_newton_error(const sg_vd *cond, sg_vd resid)
+{
+    const sg_vd floor = sgv_set1(SG_ROUND_RESID), rho = sgv_select(resid > floor, resid, floor);
+    return sgv_rates_error(cond[0], cond[1], (cond[0] + cond[2]) * rho);
 }
 
 /* sg_lu_factor_cm_inl lane by lane: the pivot test against colmax, each column's largest |entry| (of all of Φ_q
@@ -460,7 +522,7 @@ static inline void sg_columns_from_rows(const sg_columns *cols, int nq, size_t i
 /* The SIMD twins' types (the signatures sewgen/derive/kernels.py VECTOR_SIGNATURES gives them; the compiler checks
  * the two agree where a generated file passes its twins to the loops below). */
 typedef sg_vm (*sgv_closed_fn)(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles,
-                               sg_vd *q, sg_vd *cq);
+                               sg_vd *q, sg_vd *cq, sg_vd *err);
 typedef sg_vm (*sgv_motion_fn)(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd,
                                const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond);
 typedef sg_vm (*sgv_rates_fn)(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd,
@@ -549,7 +611,7 @@ SG_VINLINE size_t sgv_closed_sweep(const sg_mechanism *m, const sg_request *r, s
         L.last[j] = 0.0;
         if (angles && m->coord_is_angle[j]) angle_q[nangle++] = j;
     }
-    sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[K.nobs + 1];
+    sg_vd vq[SG_MAX_Q], vcq[2 * SG_MAX_Q], vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[K.nobs + 1], verr[2];
     const sg_vd *csrc[SG_MAX_DIRECT]; /* the vector each direct column is stored from */
     if (cols != NULL && (frc != NULL || cols->n < 1 || cols->n > SG_MAX_DIRECT)) cols = NULL;
     for (int k = 0; cols != NULL && k < cols->n; ++k) csrc[k] = SG_FLAT_COLUMN(cols->col[k], nq, vq, vqd, vqdd, vobs);
@@ -590,7 +652,7 @@ SG_VINLINE size_t sgv_closed_sweep(const sg_mechanism *m, const sg_request *r, s
             } else {
                 sgv_sincos(ph, &vcx[0], &vcx[1]);
             }
-            vector_block = sgv_all(K.closed(vx, vcx, c, L.branch, angles, vq, vcq));
+            vector_block = sgv_all(K.closed(vx, vcx, c, L.branch, angles, vq, vcq, verr));
         }
         if (!vector_block) {
             for (int l = 0; l < lanes; ++l) {
@@ -615,15 +677,15 @@ SG_VINLINE size_t sgv_closed_sweep(const sg_mechanism *m, const sg_request *r, s
             L.last[j] = vq[j][SG_W - 1];
         }
         L.have_last = 1;
-        sg_vd vout[K.nfo + 1], vcond;
+        sg_vd vout[K.nfo + 1], vcond[SG_NCOND];
         sg_vm ok;
         if (want == NULL) {
-            ok = K.motion(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);
+            ok = K.motion(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, vcond);
         } else { /* the rates and the wanted groups: the motion twin's values to the bit */
-            ok = K.rates(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);
+            ok = K.rates(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vcond);
             for (int t = 0; t < nwanted; ++t) ok &= K.observe(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, wanted[t], vobs);
         }
-        const sg_vd vest = vcond * (SG_EPS + vcond * SG_EPS);
+        const sg_vd vest = sgv_rates_error(verr[1], vcond[1], verr[0]); /* the position's error: the dyads' */
         ok &= vest <= accept;
         if (frc != NULL) {
             if (loads != NULL) {
@@ -676,7 +738,8 @@ SG_VINLINE size_t sgv_closed_sweep(const sg_mechanism *m, const sg_request *r, s
             L.cx[1] = vcx[1][l];
             L.xd[0] = om[l];
             L.xdd[0] = al[l];
-            sg_closed_finish(&L, i, cq, D);
+            const double lerr[2] = {verr[0][l], verr[1][l]};
+            sg_closed_finish(&L, i, cq, lerr, D);
             if (cols != NULL) sg_columns_from_rows(cols, nq, i, qi, qd + i * (size_t)nq, qdd + i * (size_t)nq,
                                                    obs + i * (size_t)nobs);
         }
@@ -706,22 +769,21 @@ SG_VINLINE int sgv_finish(const sg_mechanism *m, sg_lanes *lanes, const double *
     sgv_load_lanes(lanes->cx[0], 2 * SG_MAX_Q, 2 * nx, vcx);
     sgv_load_lanes(lanes->xd[0], SG_MAX_Q, nx, vxd);
     sgv_load_lanes(lanes->xdd[0], SG_MAX_Q, nx, vxdd);
-    sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[K.nobs + 1], vout[K.nfo + 1], vcond, vres;
+    sg_vd vqd[SG_MAX_Q], vqdd[SG_MAX_Q], vobs[K.nobs + 1], vout[K.nfo + 1], vcond[SG_NCOND], vres;
     sg_vm ok;
     int wanted[SG_MAX_GROUP], nwanted = 0;
     if (want == NULL) {
-        ok = K.motion(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, &vcond);
+        ok = K.motion(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vobs, vcond);
     } else { /* the rates and the wanted groups: the motion twin's values to the bit */
-        ok = K.rates(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, &vcond);
+        ok = K.rates(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, vcond);
         for (int g = 0; g < m->ngroup; ++g)
             if (want[g]) {
                 wanted[nwanted++] = g;
                 ok &= K.observe(vq, vcq, vx, vcx, vxd, vxdd, c, vqd, vqdd, g, vobs);
             }
     }
-    for (int l = 0; l < SG_W; ++l) /* the scalar loop's error estimate, from Newton's residual */
-        vres[l] = lanes->resid[l] > SG_RESID_FLOOR ? lanes->resid[l] : SG_EPS;
-    const sg_vd vest = vcond * (SG_EPS + vcond * vres);
+    for (int l = 0; l < SG_W; ++l) vres[l] = lanes->resid[l]; /* the scalar loop's estimate, from Newton's residual */
+    const sg_vd vest = sgv_newton_error(vcond, vres);
     ok &= vest <= sgv_set1(0.25 * opt->singular_tol);
     double *rqd[SG_W], *rqdd[SG_W], *robs[SG_W], *rfrc[SG_W];
     for (int l = 0; l < SG_W; ++l) {

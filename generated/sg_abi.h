@@ -33,6 +33,8 @@ enum sg_status {
 #define SG_BLOCK 8
 /* solved states a Newton sweep's predictor extrapolates from (a Lagrange polynomial of degree 4 at most) */
 #define SG_HISTORY 5
+/* numbers a motion or rates kernel writes to cond, the rates' error estimate's (csrc/sg_runtime.h sg_rates_error) */
+#define SG_NCOND 3
 
 /* Per-design reductions of sg_sweep_designs (sewgen.abi.REDUCTIONS). */
 enum sg_reduction {
@@ -112,11 +114,11 @@ typedef struct sg_request {
 /* Kernel kinds: the generated sg_<mechanism>_<kind> functions have these types. */
 /* every parameter-only subexpression, once per sweep */
 typedef void (*sg_constants_fn)(const double *p, double *c);
-/* the dyad chain in closed form; NULL in the descriptor where the loops do not split */
-typedef int (*sg_closed_fn)(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+/* the dyad chain in closed form, and err: the largest error of an angle coordinate (rad) and the product of the dyads' amplifications, as they bound them (csrc/sg_runtime.h sg_dyad_*); NULL in the descriptor where the loops do not split */
+typedef int (*sg_closed_fn)(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
 typedef void (*sg_residual_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
-/* velocities, accelerations and observables at a solved position; cond: the condition number (inf norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated */
+/* velocities, accelerations and observables at a solved position; cond: the three numbers of the rates' error estimate (csrc/sg_runtime.h sg_rates_error): the condition number (inf norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated, the share of the accelerations' centripetal and Coriolis terms in their scale, and the largest column factor of an angle coordinate */
 typedef int (*sg_motion_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond);
 /* the motion kernel without its observables: velocities, accelerations and cond, equal to the bit (a sweep that keeps a few outputs adds only their groups, kernel 'observe') */
 typedef int (*sg_rates_fn)(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond);
@@ -166,9 +168,9 @@ typedef struct sg_mechanism {
     const unsigned char *group_always;   /* 1 for a group that may be non-finite where the coordinates, rates and constants are finite: a selective sweep computes it always */
     const unsigned char *group_angles;   /* ngroup + 1 entries: 1 for a group that reads an angle coordinate's value (not only its cos, sin), then 1 where the rates do: a selective SIMD sweep computes the angles (atan2) only where they are read */
     sg_constants_fn constants;           /* every parameter-only subexpression, once per sweep */
-    sg_closed_fn closed;                 /* the dyad chain in closed form; NULL in the descriptor where the loops do not split */
+    sg_closed_fn closed;                 /* the dyad chain in closed form, and err: the largest error of an angle coordinate (rad) and the product of the dyads' amplifications, as they bound them (csrc/sg_runtime.h sg_dyad_*); NULL in the descriptor where the loops do not split */
     sg_residual_fn residual;             /* loop-closure residual and its Jacobian dPhi/dq (row-major) */
-    sg_motion_fn motion;                 /* velocities, accelerations and observables at a solved position; cond: the condition number (inf norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated */
+    sg_motion_fn motion;                 /* velocities, accelerations and observables at a solved position; cond: the three numbers of the rates' error estimate (csrc/sg_runtime.h sg_rates_error): the condition number (inf norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated, the share of the accelerations' centripetal and Coriolis terms in their scale, and the largest column factor of an angle coordinate */
     sg_rates_fn rates;                   /* the motion kernel without its observables: velocities, accelerations and cond, equal to the bit (a sweep that keeps a few outputs adds only their groups, kernel 'observe') */
     sg_observe_fn observe;               /* one group of observables (a point's, a body's, a cam's arc: obs[group_start[group]] up to obs[group_start[group + 1]]) from a position and its rates, equal to the bit to the motion kernel's; SG_NONFINITE where one of them is not finite */
     sg_forces_fn forces;                 /* joint reactions, driving torques, frame on parts, energies: reads obs, gravity gv[2], loads ld */
@@ -188,7 +190,7 @@ typedef struct sg_mechanism {
 int sg_lu_factor(int n, double *a, int *piv, double *det_sign);
 /* solve with a factor of sg_lu_factor, b overwritten */
 void sg_lu_solve(int n, const double *lu, const int *piv, double *b);
-/* the rates' equilibrated factor of the motion kernels in place (row-major n x n, rows scaled by rs; n = 2: the inverse in closed form), the condition number of the equilibrated matrix (n = 2: exact; else an upper bound); SG_SINGULAR below the pivot tolerance */
+/* the rates' equilibrated factor of the motion kernels in place (row-major n x n, rows scaled by rs; n = 2: the inverse in closed form), cs (2 n: the column factors, then the columns' largest entries), the condition number of the equilibrated matrix (n = 2: exact; else an upper bound); SG_SINGULAR below the pivot tolerance */
 int sg_factor_eq(int n, double *a, int *piv, const double *rs, double *cs, double *cond);
 /* solve with a factor of sg_factor_eq, b overwritten */
 void sg_solve_eq(int n, const double *lu, const int *piv, const double *rs, const double *cs, double *b);

@@ -691,7 +691,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
     const double t105 = c[101]*cq[4] + c[102]*cq[5];
     const double t106 = c[102]*cq[4] + c[104]*cq[5];
     const double t107 = fabs(q[4]);
-    double J[49], rs[7], cs[7];
+    double J[49], rs[7], cs[14];
     double F0[9]; int P0[3];
     double F1[4]; int P1[2];
     J[0] = cq[6]*t0 + cq[7]*t1;
@@ -784,6 +784,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[42]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[0] = 1.0 / m;
+        cs[7] = m;
         J[0] *= cs[0];
         J[7] *= cs[0];
         J[14] *= cs[0];
@@ -795,6 +796,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[43]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[1] = 1.0 / m;
+        cs[8] = m;
         J[36] *= cs[1];
         J[43] *= cs[1];
     }
@@ -805,6 +807,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[37]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[2] = 1.0 / m;
+        cs[9] = m;
         J[23] *= cs[2];
         J[30] *= cs[2];
         J[37] *= cs[2];
@@ -816,6 +819,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[17]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[3] = 1.0 / m;
+        cs[10] = m;
         J[3] *= cs[3];
         J[10] *= cs[3];
         J[17] *= cs[3];
@@ -826,6 +830,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[18]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[4] = 1.0 / m;
+        cs[11] = m;
         J[11] *= cs[4];
         J[18] *= cs[4];
     }
@@ -834,6 +839,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[47]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[5] = 1.0 / m;
+        cs[12] = m;
         J[47] *= cs[5];
     }
     {
@@ -842,6 +848,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         v = fabs(J[34]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[6] = 1.0 / m;
+        cs[13] = m;
         J[27] *= cs[6];
         J[34] *= cs[6];
     }
@@ -988,6 +995,7 @@ int sg_feed_motion(const double *q, const double *cq, const double *x, const dou
         qdd[5] = y[5] * cs[5];
         qdd[6] = y[6] * cs[6];
     }
+    sg_rates_scale_inl(7, 0x6fULL, fabs(xd[0]), cs, qd, qdd, cond);
     const double t74 = qdd[0]*t27 + t28*t48;
     const double t75 = qdd[0]*t62 + t27*t48;
     const double t81 = qdd[0]*t7 + t12*t48;
@@ -1215,7 +1223,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
     const double t65 = c[54]*cq[2];
     const double t66 = cq[10]*t30 + cq[11]*t65;
     const double t107 = fabs(q[4]);
-    double J[49], rs[7], cs[7];
+    double J[49], rs[7], cs[14];
     double F0[9]; int P0[3];
     double F1[4]; int P1[2];
     J[0] = cq[6]*t0 + cq[7]*t1;
@@ -1308,6 +1316,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[42]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[0] = 1.0 / m;
+        cs[7] = m;
         J[0] *= cs[0];
         J[7] *= cs[0];
         J[14] *= cs[0];
@@ -1319,6 +1328,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[43]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[1] = 1.0 / m;
+        cs[8] = m;
         J[36] *= cs[1];
         J[43] *= cs[1];
     }
@@ -1329,6 +1339,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[37]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[2] = 1.0 / m;
+        cs[9] = m;
         J[23] *= cs[2];
         J[30] *= cs[2];
         J[37] *= cs[2];
@@ -1340,6 +1351,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[17]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[3] = 1.0 / m;
+        cs[10] = m;
         J[3] *= cs[3];
         J[10] *= cs[3];
         J[17] *= cs[3];
@@ -1350,6 +1362,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[18]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[4] = 1.0 / m;
+        cs[11] = m;
         J[11] *= cs[4];
         J[18] *= cs[4];
     }
@@ -1358,6 +1371,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[47]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[5] = 1.0 / m;
+        cs[12] = m;
         J[47] *= cs[5];
     }
     {
@@ -1366,6 +1380,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         v = fabs(J[34]); if (!(v <= m)) m = v;
         if (!(m > 0.0 && m < INFINITY)) return SG_SINGULAR;
         cs[6] = 1.0 / m;
+        cs[13] = m;
         J[27] *= cs[6];
         J[34] *= cs[6];
     }
@@ -1505,6 +1520,7 @@ int sg_feed_rates(const double *q, const double *cq, const double *x, const doub
         qdd[5] = y[5] * cs[5];
         qdd[6] = y[6] * cs[6];
     }
+    sg_rates_scale_inl(7, 0x6fULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite(((((q[0] + q[1]) + (q[2] + (q[3] + q[4]))) + ((q[5] + q[6]) + (qd[0] + (qd[1] + qd[2])))) + (((qd[3] + qd[4]) + (qd[5] + (qd[6] + qdd[0]))) + ((qdd[1] + (qdd[2] + qdd[3])) + (qdd[4] + (qdd[5] + qdd[6]))))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -2597,7 +2613,7 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
     const sg_vd t105 = c[101]*cq[4] + c[102]*cq[5];
     const sg_vd t106 = c[102]*cq[4] + c[104]*cq[5];
     const sg_vd t107 = sgv_fabs(q[4]);
-    sg_vd J[49], rs[7], cs[7];
+    sg_vd J[49], rs[7], cs[14];
     sg_vd F0[9]; sg_vm P0[3];
     sg_vd F1[4]; sg_vm P1[2];
     J[0] = cq[6]*t0 + cq[7]*t1;
@@ -2690,6 +2706,7 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
         v = sgv_fabs(J[42]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[0] = 1.0 / m;
+        cs[7] = m;
         J[0] *= cs[0];
         J[7] *= cs[0];
         J[14] *= cs[0];
@@ -2701,6 +2718,7 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
         v = sgv_fabs(J[43]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[1] = 1.0 / m;
+        cs[8] = m;
         J[36] *= cs[1];
         J[43] *= cs[1];
     }
@@ -2711,6 +2729,7 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
         v = sgv_fabs(J[37]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[2] = 1.0 / m;
+        cs[9] = m;
         J[23] *= cs[2];
         J[30] *= cs[2];
         J[37] *= cs[2];
@@ -2722,6 +2741,7 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
         v = sgv_fabs(J[17]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[3] = 1.0 / m;
+        cs[10] = m;
         J[3] *= cs[3];
         J[10] *= cs[3];
         J[17] *= cs[3];
@@ -2732,6 +2752,7 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
         v = sgv_fabs(J[18]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[4] = 1.0 / m;
+        cs[11] = m;
         J[11] *= cs[4];
         J[18] *= cs[4];
     }
@@ -2740,6 +2761,7 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
         v = sgv_fabs(J[47]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[5] = 1.0 / m;
+        cs[12] = m;
         J[47] *= cs[5];
     }
     {
@@ -2748,6 +2770,7 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
         v = sgv_fabs(J[34]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[6] = 1.0 / m;
+        cs[13] = m;
         J[27] *= cs[6];
         J[34] *= cs[6];
     }
@@ -2894,6 +2917,7 @@ SG_VINLINE sg_vm sg_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *
         qdd[5] = y[5] * cs[5];
         qdd[6] = y[6] * cs[6];
     }
+    sgv_rates_scale(7, 0x6fULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     const sg_vd t74 = qdd[0]*t27 + t28*t48;
     const sg_vd t75 = qdd[0]*t62 + t27*t48;
     const sg_vd t81 = qdd[0]*t7 + t12*t48;
@@ -3128,7 +3152,7 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
     const sg_vd t65 = c[54]*cq[2];
     const sg_vd t66 = cq[10]*t30 + cq[11]*t65;
     const sg_vd t107 = sgv_fabs(q[4]);
-    sg_vd J[49], rs[7], cs[7];
+    sg_vd J[49], rs[7], cs[14];
     sg_vd F0[9]; sg_vm P0[3];
     sg_vd F1[4]; sg_vm P1[2];
     J[0] = cq[6]*t0 + cq[7]*t1;
@@ -3221,6 +3245,7 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
         v = sgv_fabs(J[42]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[0] = 1.0 / m;
+        cs[7] = m;
         J[0] *= cs[0];
         J[7] *= cs[0];
         J[14] *= cs[0];
@@ -3232,6 +3257,7 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
         v = sgv_fabs(J[43]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[1] = 1.0 / m;
+        cs[8] = m;
         J[36] *= cs[1];
         J[43] *= cs[1];
     }
@@ -3242,6 +3268,7 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
         v = sgv_fabs(J[37]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[2] = 1.0 / m;
+        cs[9] = m;
         J[23] *= cs[2];
         J[30] *= cs[2];
         J[37] *= cs[2];
@@ -3253,6 +3280,7 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
         v = sgv_fabs(J[17]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[3] = 1.0 / m;
+        cs[10] = m;
         J[3] *= cs[3];
         J[10] *= cs[3];
         J[17] *= cs[3];
@@ -3263,6 +3291,7 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
         v = sgv_fabs(J[18]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[4] = 1.0 / m;
+        cs[11] = m;
         J[11] *= cs[4];
         J[18] *= cs[4];
     }
@@ -3271,6 +3300,7 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
         v = sgv_fabs(J[47]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[5] = 1.0 / m;
+        cs[12] = m;
         J[47] *= cs[5];
     }
     {
@@ -3279,6 +3309,7 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
         v = sgv_fabs(J[34]); m = sgv_select(~(v <= m), v, m);
         ok &= (m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY));
         cs[6] = 1.0 / m;
+        cs[13] = m;
         J[27] *= cs[6];
         J[34] *= cs[6];
     }
@@ -3418,6 +3449,7 @@ SG_VINLINE sg_vm sg_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x
         qdd[5] = y[5] * cs[5];
         qdd[6] = y[6] * cs[6];
     }
+    sgv_rates_scale(7, 0x6fULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite(((((q[0] + q[1]) + (q[2] + (q[3] + q[4]))) + ((q[5] + q[6]) + (qd[0] + (qd[1] + qd[2])))) + (((qd[3] + qd[4]) + (qd[5] + (qd[6] + qdd[0]))) + ((qdd[1] + (qdd[2] + qdd[3])) + (qdd[4] + (qdd[5] + qdd[6]))))));
     return ok;
 }

@@ -6,33 +6,37 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_hook_drive_constants -- Total ops: 89 */
+/* sg_hook_drive_constants -- Total ops: 96 */
 void sg_hook_drive_constants(const double *p, double *c)
 {
     const double t0 = sin(p[11]);
-    const double t1 = p[5]*cos(p[6]);
-    const double t2 = p[5]*sin(p[6]);
-    const double t3 = -t2;
-    const double t4 = -p[8];
-    const double t5 = -p[4];
-    const double t6 = -t1;
-    const double t7 = fabs(p[2]);
-    const double t8 = p[0] + p[1] + p[4];
-    const double t9 = t7 + t8;
-    const double t10 = fabs(p[3]);
-    const double t11 = t10 + t8;
-    const double t12 = 2.0*p[5];
-    const double t13 = p[9]*cos(p[10]);
-    const double t14 = p[9]*sin(p[10]);
-    const double t15 = -t14;
-    const double t16 = -t13;
-    const double t17 = -p[13];
-    const double t18 = (0.5)*p[1];
-    const double t19 = p[16]*t18;
-    const double t20 = p[19] + t5;
-    const double t21 = p[23] + t16;
-    const double t22 = p[0] + t17;
-    const double t23 = p[19] + t6;
+    const double t1 = fabs(p[2]);
+    const double t2 = fabs(p[3]);
+    const double t3 = t1 + t2;
+    const double t4 = p[5]*cos(p[6]);
+    const double t5 = p[5]*sin(p[6]);
+    const double t6 = -t5;
+    const double t7 = -p[8];
+    const double t8 = 4.0*p[5];
+    const double t9 = fabs(p[7]);
+    const double t10 = fabs(p[8]);
+    const double t11 = -p[4];
+    const double t12 = -t4;
+    const double t13 = p[0] + p[1] + p[4];
+    const double t14 = t1 + t13;
+    const double t15 = t13 + t2;
+    const double t16 = 2.0*p[5];
+    const double t17 = p[9]*cos(p[10]);
+    const double t18 = p[9]*sin(p[10]);
+    const double t19 = -t18;
+    const double t20 = -t17;
+    const double t21 = -p[13];
+    const double t22 = (0.5)*p[1];
+    const double t23 = p[16]*t22;
+    const double t24 = p[19] + t11;
+    const double t25 = p[23] + t20;
+    const double t26 = p[0] + t21;
+    const double t27 = p[19] + t12;
     c[0] = p[0];
     c[1] = cos(p[11]);
     c[2] = -t0;
@@ -43,112 +47,117 @@ void sg_hook_drive_constants(const double *p, double *c)
     c[7] = p[4];
     c[8] = (1.0/(p[1]));
     c[9] = (1.0/(p[4]));
-    c[10] = t1;
-    c[11] = t3;
-    c[12] = p[2] - p[7];
-    c[13] = t2;
-    c[14] = p[3] + t4;
-    c[15] = -p[2];
-    c[16] = t5;
-    c[17] = -p[3];
-    c[18] = -p[1];
-    c[19] = t6;
-    c[20] = t9;
-    c[21] = t11;
-    c[22] = t12 + t7 + fabs(p[7]);
-    c[23] = t10 + t12 + fabs(p[8]);
-    c[24] = -p[0];
-    c[25] = p[7];
-    c[26] = p[8];
-    c[27] = t13;
-    c[28] = t15;
-    c[29] = t14;
-    c[30] = t16;
-    c[31] = p[11];
-    c[32] = p[13];
-    c[33] = -p[14];
-    c[34] = p[14];
-    c[35] = t17;
-    c[36] = t18;
-    c[37] = -t18;
-    c[38] = p[19];
-    c[39] = -p[20];
-    c[40] = p[20];
-    c[41] = -p[19];
-    c[42] = p[23];
-    c[43] = -p[24];
-    c[44] = p[24];
-    c[45] = -p[23];
-    c[46] = p[27];
-    c[47] = -p[28];
-    c[48] = p[28];
-    c[49] = -p[27];
-    c[50] = (1.0/(t9));
-    c[51] = (1.0/(t11));
-    c[52] = p[17];
-    c[53] = t19;
-    c[54] = -t19;
-    c[55] = p[21];
-    c[56] = t20;
-    c[57] = -t20;
-    c[58] = p[18];
-    c[59] = p[26];
-    c[60] = p[25];
-    c[61] = p[29];
-    c[62] = p[24] + t15;
-    c[63] = t21;
-    c[64] = -t21;
-    c[65] = p[22];
-    c[66] = p[15];
-    c[67] = -t22;
-    c[68] = t22;
-    c[69] = p[12];
-    c[70] = p[16];
-    c[71] = t4;
-    c[72] = (0.5)*p[12];
-    c[73] = (0.5)*p[15];
-    c[74] = (0.5)*p[16];
-    c[75] = (0.5)*p[17];
-    c[76] = (0.5)*p[18];
-    c[77] = (0.5)*p[21];
-    c[78] = (0.5)*p[22];
-    c[79] = (0.5)*p[25];
-    c[80] = (0.5)*p[26];
-    c[81] = (0.5)*p[29];
-    c[82] = -p[12];
-    c[83] = -p[16];
-    c[84] = -p[18];
-    c[85] = -p[22];
-    c[86] = -p[26];
-    c[87] = -p[30]*p[31];
-    c[88] = -p[32]*p[33];
-    c[89] = -p[34]*p[35];
-    c[90] = -p[36]*p[37];
-    c[91] = -p[38]*p[39];
-    c[92] = -p[40];
-    c[93] = p[30];
-    c[94] = p[32];
-    c[95] = p[34];
-    c[96] = p[36];
-    c[97] = p[38];
-    c[98] = p[40];
-    c[99] = -p[20] - t3;
-    c[100] = -t23;
-    c[101] = t23;
+    c[10] = 2.0*p[0] + t3;
+    c[11] = t4;
+    c[12] = t6;
+    c[13] = p[2] - p[7];
+    c[14] = t5;
+    c[15] = p[3] + t7;
+    c[16] = t8;
+    c[17] = t10 + t3 + t8 + t9;
+    c[18] = -p[2];
+    c[19] = t11;
+    c[20] = -p[3];
+    c[21] = -p[1];
+    c[22] = t12;
+    c[23] = t14;
+    c[24] = t15;
+    c[25] = t1 + t16 + t9;
+    c[26] = t10 + t16 + t2;
+    c[27] = -p[0];
+    c[28] = p[7];
+    c[29] = p[8];
+    c[30] = t17;
+    c[31] = t19;
+    c[32] = t18;
+    c[33] = t20;
+    c[34] = p[11];
+    c[35] = p[13];
+    c[36] = -p[14];
+    c[37] = p[14];
+    c[38] = t21;
+    c[39] = t22;
+    c[40] = -t22;
+    c[41] = p[19];
+    c[42] = -p[20];
+    c[43] = p[20];
+    c[44] = -p[19];
+    c[45] = p[23];
+    c[46] = -p[24];
+    c[47] = p[24];
+    c[48] = -p[23];
+    c[49] = p[27];
+    c[50] = -p[28];
+    c[51] = p[28];
+    c[52] = -p[27];
+    c[53] = (1.0/(t14));
+    c[54] = (1.0/(t15));
+    c[55] = p[17];
+    c[56] = t23;
+    c[57] = -t23;
+    c[58] = p[21];
+    c[59] = t24;
+    c[60] = -t24;
+    c[61] = p[18];
+    c[62] = p[26];
+    c[63] = p[25];
+    c[64] = p[29];
+    c[65] = p[24] + t19;
+    c[66] = t25;
+    c[67] = -t25;
+    c[68] = p[22];
+    c[69] = p[15];
+    c[70] = -t26;
+    c[71] = t26;
+    c[72] = p[12];
+    c[73] = p[16];
+    c[74] = t7;
+    c[75] = (0.5)*p[12];
+    c[76] = (0.5)*p[15];
+    c[77] = (0.5)*p[16];
+    c[78] = (0.5)*p[17];
+    c[79] = (0.5)*p[18];
+    c[80] = (0.5)*p[21];
+    c[81] = (0.5)*p[22];
+    c[82] = (0.5)*p[25];
+    c[83] = (0.5)*p[26];
+    c[84] = (0.5)*p[29];
+    c[85] = -p[12];
+    c[86] = -p[16];
+    c[87] = -p[18];
+    c[88] = -p[22];
+    c[89] = -p[26];
+    c[90] = -p[30]*p[31];
+    c[91] = -p[32]*p[33];
+    c[92] = -p[34]*p[35];
+    c[93] = -p[36]*p[37];
+    c[94] = -p[38]*p[39];
+    c[95] = -p[40];
+    c[96] = p[30];
+    c[97] = p[32];
+    c[98] = p[34];
+    c[99] = p[36];
+    c[100] = p[38];
+    c[101] = p[40];
+    c[102] = -p[20] - t6;
+    c[103] = -t27;
+    c[104] = t27;
 }
 
 /* sg_hook_drive_closed -- Total ops: 60 */
-int sg_hook_drive_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+int sg_hook_drive_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err)
 {
     (void)x;
     int st;
+    double e[3] = {0.0, 0.0, 1.0};
     {
         /* dyad 0: RRR closed at joint C (big_rod, rock_shaft) */
         const double P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
         const double Q[2] = {c[4], c[5]};
         const double l[2] = {c[6], c[7]};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[10];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         if (st != SG_OK) return st;
         q[2] = atan2(J[1] - P[1], J[0] - P[0]);
         q[0] = atan2(J[1] - Q[1], J[0] - Q[0]);
@@ -159,17 +168,20 @@ int sg_hook_drive_closed(const double *x, const double *cx, const double *c, con
     }
     {
         /* dyad 1: RPR closed at joint E (rock_slider, lower_shaft) */
-        const double D[2] = {c[10]*cq[0] + c[11]*cq[1] + c[12], c[10]*cq[1] + c[13]*cq[0] + c[14]};
+        const double D[2] = {c[11]*cq[0] + c[12]*cq[1] + c[13], c[11]*cq[1] + c[14]*cq[0] + c[15]};
         const double w0[2] = {0.0, 0.0};
         const double u[2] = {1.0, 0.0};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[17] + c[16] * e[0];
         double s, theta;
-        st = sg_dyad_rpr(D, w0, u, branch[1], &s, &theta);
+        st = sg_dyad_rpr(D, w0, u, branch[1], ein, e, &s, &theta);
         if (st != SG_OK) return st;
         q[3] = s;
         q[1] = theta;
         cq[2] = (D[0]*(s*u[0] + w0[0]) + D[1]*(s*u[1] + w0[1]))/(((s*u[0] + w0[0])*(s*u[0] + w0[0])) + ((s*u[1] + w0[1])*(s*u[1] + w0[1])));
         cq[3] = (-D[0]*(s*u[1] + w0[1]) + D[1]*(s*u[0] + w0[0]))/(((s*u[0] + w0[0])*(s*u[0] + w0[0])) + ((s*u[1] + w0[1])*(s*u[1] + w0[1])));
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return SG_OK;
 }
 
@@ -177,24 +189,24 @@ int sg_hook_drive_closed(const double *x, const double *cx, const double *c, con
 void sg_hook_drive_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac)
 {
     (void)x;
-    const double t0 = c[16]*cq[0];
+    const double t0 = c[19]*cq[0];
     const double t1 = c[6]*cq[4];
     const double t2 = -cq[2]*q[3];
-    const double t3 = c[10]*cq[0] + c[11]*cq[1];
+    const double t3 = c[11]*cq[0] + c[12]*cq[1];
     const double t4 = cq[3]*q[3];
-    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[15] + t0 + t1;
-    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[16]*cq[1] + c[17] + c[6]*cq[5];
-    r[2] = c[12] + t2 + t3;
-    r[3] = c[10]*cq[1] + c[13]*cq[0] + c[14] - t4;
+    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[18] + t0 + t1;
+    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[19]*cq[1] + c[20] + c[6]*cq[5];
+    r[2] = c[13] + t2 + t3;
+    r[3] = c[11]*cq[1] + c[14]*cq[0] + c[15] - t4;
     jac[0] = c[7]*cq[1];
     jac[1] = 0.0;
-    jac[2] = c[18]*cq[5];
+    jac[2] = c[21]*cq[5];
     jac[3] = 0.0;
     jac[4] = t0;
     jac[5] = 0.0;
     jac[6] = t1;
     jac[7] = 0.0;
-    jac[8] = c[11]*cq[0] + c[19]*cq[1];
+    jac[8] = c[12]*cq[0] + c[22]*cq[1];
     jac[9] = t4;
     jac[10] = 0.0;
     jac[11] = -cq[2];
@@ -223,10 +235,10 @@ void sg_hook_drive_scales(const double *q, const double *cq, const double *x, co
     (void)x;
     (void)cx;
     const double t0 = fabs(q[3]);
-    out[0] = c[20];
-    out[1] = c[21];
-    out[2] = c[22] + t0;
-    out[3] = c[23] + t0;
+    out[0] = c[23];
+    out[1] = c[24];
+    out[2] = c[25] + t0;
+    out[3] = c[26] + t0;
 }
 
 /* sg_hook_drive_blocks -- Total ops: 46 */
@@ -248,46 +260,46 @@ void sg_hook_drive_blocks(const double *jac, double *out)
 int sg_hook_drive_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[7]*cq[1];
-    const double t1 = c[16]*cq[0];
+    const double t1 = c[19]*cq[0];
     const double t2 = c[6]*cq[4];
-    const double t3 = c[11]*cq[0] + c[19]*cq[1];
+    const double t3 = c[12]*cq[0] + c[22]*cq[1];
     const double t4 = cq[3]*q[3];
     const double t5 = cq[2]*q[3];
     const double t6 = -t5;
     const double t7 = c[1]*cx[1] + c[3]*cx[0];
     const double t8 = c[0]*t7;
     const double t9 = c[1]*cx[0] + c[2]*cx[1];
-    const double t10 = c[24]*t9;
+    const double t10 = c[27]*t9;
     const double t14 = ((xd[0])*(xd[0]));
     const double t15 = c[0]*t9;
-    const double t16 = c[16]*cq[1];
-    const double t24 = c[24]*t7;
+    const double t16 = c[19]*cq[1];
+    const double t24 = c[27]*t7;
     const double t25 = t24*xd[0];
     const double t26 = t15*xd[0];
     const double t27 = t10*t14 + t24*xdd[0];
     const double t28 = t14*t24 + t15*xdd[0];
     const double t29 = c[7]*cq[0];
-    const double t30 = c[25] + t5;
-    const double t31 = c[26] + t4;
-    const double t34 = c[27]*cq[2] + c[28]*cq[3];
-    const double t35 = c[28]*cq[2] + c[30]*cq[3];
-    const double t37 = c[32]*t9 + c[33]*t7;
-    const double t38 = c[33]*t9 + c[35]*t7;
-    const double t39 = c[36]*cq[4];
-    const double t40 = c[37]*cq[5];
-    const double t41 = c[38]*cq[0] + c[39]*cq[1];
-    const double t42 = c[39]*cq[0] + c[41]*cq[1];
-    const double t43 = c[42]*cq[2] + c[43]*cq[3];
-    const double t44 = c[43]*cq[2] + c[45]*cq[3];
-    const double t45 = c[46]*cq[2] + c[47]*cq[3];
-    const double t46 = c[47]*cq[2] + c[49]*cq[3] - t4;
+    const double t30 = c[28] + t5;
+    const double t31 = c[29] + t4;
+    const double t34 = c[30]*cq[2] + c[31]*cq[3];
+    const double t35 = c[31]*cq[2] + c[33]*cq[3];
+    const double t37 = c[35]*t9 + c[36]*t7;
+    const double t38 = c[36]*t9 + c[38]*t7;
+    const double t39 = c[39]*cq[4];
+    const double t40 = c[40]*cq[5];
+    const double t41 = c[41]*cq[0] + c[42]*cq[1];
+    const double t42 = c[42]*cq[0] + c[44]*cq[1];
+    const double t43 = c[45]*cq[2] + c[46]*cq[3];
+    const double t44 = c[46]*cq[2] + c[48]*cq[3];
+    const double t45 = c[49]*cq[2] + c[50]*cq[3];
+    const double t46 = c[50]*cq[2] + c[52]*cq[3] - t4;
     const double t48 = t45 + t5;
     const double t49 = fabs(q[3]);
-    double J[16], rs[4], cs[4];
+    double J[16], rs[4], cs[8];
     int piv[4];
     J[0] = t0;
     J[1] = 0.0;
-    J[2] = c[18]*cq[5];
+    J[2] = c[21]*cq[5];
     J[3] = 0.0;
     J[4] = t1;
     J[5] = 0.0;
@@ -297,7 +309,7 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     J[9] = t4;
     J[10] = 0.0;
     J[11] = -cq[2];
-    J[12] = c[10]*cq[0] + c[11]*cq[1];
+    J[12] = c[11]*cq[0] + c[12]*cq[1];
     J[13] = t6;
     J[14] = 0.0;
     J[15] = -cq[3];
@@ -305,10 +317,10 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     qd[1] = t10*xd[0];
     qd[2] = 0.0;
     qd[3] = 0.0;
-    rs[0] = c[50];
-    rs[1] = c[51];
-    rs[2] = (1.0/(c[22] + t49));
-    rs[3] = (1.0/(c[23] + t49));
+    rs[0] = c[53];
+    rs[1] = c[54];
+    rs[2] = (1.0/(c[25] + t49));
+    rs[3] = (1.0/(c[26] + t49));
     if (sg_factor_eq_inl(4, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(4, J, piv, rs, cs, qd);
     const double t11 = ((qd[0])*(qd[0]));
@@ -325,9 +337,10 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     const double t47 = qd[1]*t46 + t22;
     qdd[0] = t12 + t13*t2 + t14*t15 + t8*xdd[0];
     qdd[1] = c[6]*t18 + t10*xdd[0] + t14*t8 + t17;
-    qdd[2] = -qd[1]*t21 - t11*(c[13]*cq[1] + c[19]*cq[0]) - t20;
+    qdd[2] = -qd[1]*t21 - t11*(c[14]*cq[1] + c[22]*cq[0]) - t20;
     qdd[3] = cq[2]*qd[1]*qd[3] + qd[1]*t23 - t11*t3;
     sg_solve_eq_inl(4, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(4, 0x7ULL, fabs(xd[0]), cs, qd, qdd, cond);
     const double t32 = cq[2]*qdd[3] - t20;
     const double t33 = cq[3]*qdd[3] + qd[1]*t22;
     obs[0] = t15;
@@ -348,56 +361,56 @@ int sg_hook_drive_motion(const double *q, const double *cq, const double *x, con
     obs[15] = t21;
     obs[16] = -qd[1]*t21 - qdd[1]*t4 + t32;
     obs[17] = qd[1]*t23 + qdd[1]*t5 + t33;
-    obs[18] = c[25] + t34;
-    obs[19] = c[26] + c[27]*cq[3] + c[29]*cq[2];
+    obs[18] = c[28] + t34;
+    obs[19] = c[29] + c[30]*cq[3] + c[32]*cq[2];
     obs[20] = qd[1]*t35;
     obs[21] = qd[1]*t34;
-    obs[22] = qdd[1]*t35 + t36*(c[29]*cq[3] + c[30]*cq[2]);
+    obs[22] = qdd[1]*t35 + t36*(c[32]*cq[3] + c[33]*cq[2]);
     obs[23] = qdd[1]*t34 + t35*t36;
-    obs[24] = c[31] + x[0];
+    obs[24] = c[34] + x[0];
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t37;
-    obs[28] = c[32]*t7 + c[34]*t9;
+    obs[28] = c[35]*t7 + c[37]*t9;
     obs[29] = t38*xd[0];
     obs[30] = t37*xd[0];
-    obs[31] = t14*(c[34]*t7 + c[35]*t9) + t38*xdd[0];
+    obs[31] = t14*(c[37]*t7 + c[38]*t9) + t38*xdd[0];
     obs[32] = t14*t38 + t37*xdd[0];
     obs[33] = q[2];
     obs[34] = qd[2];
     obs[35] = qdd[2];
     obs[36] = t15 + t39;
-    obs[37] = c[36]*cq[5] + t8;
+    obs[37] = c[39]*cq[5] + t8;
     obs[38] = qd[2]*t40 + t25;
     obs[39] = qd[2]*t39 + t26;
-    obs[40] = c[37]*cq[4]*t13 + qdd[2]*t40 + t27;
-    obs[41] = c[37]*t18 + qdd[2]*t39 + t28;
+    obs[40] = c[40]*cq[4]*t13 + qdd[2]*t40 + t27;
+    obs[41] = c[40]*t18 + qdd[2]*t39 + t28;
     obs[42] = q[0];
     obs[43] = qd[0];
     obs[44] = qdd[0];
     obs[45] = c[4] + t41;
-    obs[46] = c[38]*cq[1] + c[40]*cq[0] + c[5];
+    obs[46] = c[41]*cq[1] + c[43]*cq[0] + c[5];
     obs[47] = qd[0]*t42;
     obs[48] = qd[0]*t41;
-    obs[49] = qdd[0]*t42 + t11*(c[40]*cq[1] + c[41]*cq[0]);
+    obs[49] = qdd[0]*t42 + t11*(c[43]*cq[1] + c[44]*cq[0]);
     obs[50] = qdd[0]*t41 + t11*t42;
     obs[51] = q[1];
     obs[52] = qd[1];
     obs[53] = qdd[1];
-    obs[54] = c[25] + t43;
-    obs[55] = c[26] + c[42]*cq[3] + c[44]*cq[2];
+    obs[54] = c[28] + t43;
+    obs[55] = c[29] + c[45]*cq[3] + c[47]*cq[2];
     obs[56] = qd[1]*t44;
     obs[57] = qd[1]*t43;
-    obs[58] = qdd[1]*t44 + t36*(c[44]*cq[3] + c[45]*cq[2]);
+    obs[58] = qdd[1]*t44 + t36*(c[47]*cq[3] + c[48]*cq[2]);
     obs[59] = qdd[1]*t43 + t36*t44;
     obs[60] = q[1];
     obs[61] = qd[1];
     obs[62] = qdd[1];
     obs[63] = t30 + t45;
-    obs[64] = c[46]*cq[3] + c[48]*cq[2] + t31;
+    obs[64] = c[49]*cq[3] + c[51]*cq[2] + t31;
     obs[65] = t47;
     obs[66] = qd[1]*t48 + t19;
-    obs[67] = qd[1]*(qd[1]*(c[48]*cq[3] + c[49]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
+    obs[67] = qd[1]*(qd[1]*(c[51]*cq[3] + c[52]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
     obs[68] = qd[1]*t47 + qdd[1]*t48 + t33;
     if (!isfinite(((((((q[0] + q[1]) + (q[2] + (q[3] + qd[0]))) + ((qd[1] + qd[2]) + (qd[3] + (qdd[0] + qdd[1])))) + (((qdd[2] + qdd[3]) + (obs[0] + (obs[1] + obs[2]))) + ((obs[3] + obs[4]) + (obs[5] + (obs[6] + obs[7]))))) + ((((obs[8] + obs[9]) + (obs[10] + (obs[11] + obs[12]))) + ((obs[13] + obs[14]) + (obs[15] + (obs[16] + obs[17])))) + (((obs[18] + obs[19]) + (obs[20] + (obs[21] + obs[22]))) + ((obs[23] + obs[24]) + (obs[25] + (obs[26] + obs[27])))))) + (((((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))) + ((obs[33] + obs[34]) + (obs[35] + (obs[36] + obs[37])))) + (((obs[38] + obs[39]) + (obs[40] + (obs[41] + obs[42]))) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) + ((((obs[48] + obs[49]) + (obs[50] + (obs[51] + obs[52]))) + ((obs[53] + obs[54]) + (obs[55] + (obs[56] + obs[57])))) + (((obs[58] + obs[59]) + (obs[60] + (obs[61] + obs[62]))) + ((obs[63] + (obs[64] + obs[65])) + (obs[66] + (obs[67] + obs[68]))))))))) return SG_NONFINITE;
     return SG_OK;
@@ -408,25 +421,25 @@ int sg_hook_drive_rates(const double *q, const double *cq, const double *x, cons
 {
     (void)x;
     const double t0 = c[7]*cq[1];
-    const double t1 = c[16]*cq[0];
+    const double t1 = c[19]*cq[0];
     const double t2 = c[6]*cq[4];
-    const double t3 = c[11]*cq[0] + c[19]*cq[1];
+    const double t3 = c[12]*cq[0] + c[22]*cq[1];
     const double t4 = cq[3]*q[3];
     const double t5 = cq[2]*q[3];
     const double t6 = -t5;
     const double t7 = c[1]*cx[1] + c[3]*cx[0];
     const double t8 = c[0]*t7;
     const double t9 = c[1]*cx[0] + c[2]*cx[1];
-    const double t10 = c[24]*t9;
+    const double t10 = c[27]*t9;
     const double t14 = ((xd[0])*(xd[0]));
     const double t15 = c[0]*t9;
-    const double t16 = c[16]*cq[1];
+    const double t16 = c[19]*cq[1];
     const double t49 = fabs(q[3]);
-    double J[16], rs[4], cs[4];
+    double J[16], rs[4], cs[8];
     int piv[4];
     J[0] = t0;
     J[1] = 0.0;
-    J[2] = c[18]*cq[5];
+    J[2] = c[21]*cq[5];
     J[3] = 0.0;
     J[4] = t1;
     J[5] = 0.0;
@@ -436,7 +449,7 @@ int sg_hook_drive_rates(const double *q, const double *cq, const double *x, cons
     J[9] = t4;
     J[10] = 0.0;
     J[11] = -cq[2];
-    J[12] = c[10]*cq[0] + c[11]*cq[1];
+    J[12] = c[11]*cq[0] + c[12]*cq[1];
     J[13] = t6;
     J[14] = 0.0;
     J[15] = -cq[3];
@@ -444,10 +457,10 @@ int sg_hook_drive_rates(const double *q, const double *cq, const double *x, cons
     qd[1] = t10*xd[0];
     qd[2] = 0.0;
     qd[3] = 0.0;
-    rs[0] = c[50];
-    rs[1] = c[51];
-    rs[2] = (1.0/(c[22] + t49));
-    rs[3] = (1.0/(c[23] + t49));
+    rs[0] = c[53];
+    rs[1] = c[54];
+    rs[2] = (1.0/(c[25] + t49));
+    rs[3] = (1.0/(c[26] + t49));
     if (sg_factor_eq_inl(4, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(4, J, piv, rs, cs, qd);
     const double t11 = ((qd[0])*(qd[0]));
@@ -462,9 +475,10 @@ int sg_hook_drive_rates(const double *q, const double *cq, const double *x, cons
     const double t23 = -cq[3]*q[3]*qd[1] + t22;
     qdd[0] = t12 + t13*t2 + t14*t15 + t8*xdd[0];
     qdd[1] = c[6]*t18 + t10*xdd[0] + t14*t8 + t17;
-    qdd[2] = -qd[1]*t21 - t11*(c[13]*cq[1] + c[19]*cq[0]) - t20;
+    qdd[2] = -qd[1]*t21 - t11*(c[14]*cq[1] + c[22]*cq[0]) - t20;
     qdd[3] = cq[2]*qd[1]*qd[3] + qd[1]*t23 - t11*t3;
     sg_solve_eq_inl(4, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(4, 0x7ULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -477,10 +491,10 @@ int sg_hook_drive_observe(const double *q, const double *cq, const double *x, co
         const double t7 = c[1]*cx[1] + c[3]*cx[0];
         const double t8 = c[0]*t7;
         const double t9 = c[1]*cx[0] + c[2]*cx[1];
-        const double t10 = c[24]*t9;
+        const double t10 = c[27]*t9;
         const double t14 = ((xd[0])*(xd[0]));
         const double t15 = c[0]*t9;
-        const double t24 = c[24]*t7;
+        const double t24 = c[27]*t7;
         const double t25 = t24*xd[0];
         const double t26 = t15*xd[0];
         const double t27 = t10*t14 + t24*xdd[0];
@@ -495,10 +509,10 @@ int sg_hook_drive_observe(const double *q, const double *cq, const double *x, co
     }
     case 1: {
         const double t0 = c[7]*cq[1];
-        const double t1 = c[16]*cq[0];
+        const double t1 = c[19]*cq[0];
         const double t11 = ((qd[0])*(qd[0]));
         const double t12 = t1*t11;
-        const double t16 = c[16]*cq[1];
+        const double t16 = c[19]*cq[1];
         const double t17 = t11*t16;
         const double t29 = c[7]*cq[0];
         obs[6] = c[4] + t29;
@@ -517,8 +531,8 @@ int sg_hook_drive_observe(const double *q, const double *cq, const double *x, co
         const double t21 = qd[1]*t5 + t19;
         const double t22 = cq[2]*qd[3];
         const double t23 = -cq[3]*q[3]*qd[1] + t22;
-        const double t30 = c[25] + t5;
-        const double t31 = c[26] + t4;
+        const double t30 = c[28] + t5;
+        const double t31 = c[29] + t4;
         const double t32 = cq[2]*qdd[3] - t20;
         const double t33 = cq[3]*qdd[3] + qd[1]*t22;
         obs[12] = t30;
@@ -530,14 +544,14 @@ int sg_hook_drive_observe(const double *q, const double *cq, const double *x, co
         return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
     }
     case 3: {
-        const double t34 = c[27]*cq[2] + c[28]*cq[3];
-        const double t35 = c[28]*cq[2] + c[30]*cq[3];
+        const double t34 = c[30]*cq[2] + c[31]*cq[3];
+        const double t35 = c[31]*cq[2] + c[33]*cq[3];
         const double t36 = ((qd[1])*(qd[1]));
-        obs[18] = c[25] + t34;
-        obs[19] = c[26] + c[27]*cq[3] + c[29]*cq[2];
+        obs[18] = c[28] + t34;
+        obs[19] = c[29] + c[30]*cq[3] + c[32]*cq[2];
         obs[20] = qd[1]*t35;
         obs[21] = qd[1]*t34;
-        obs[22] = qdd[1]*t35 + t36*(c[29]*cq[3] + c[30]*cq[2]);
+        obs[22] = qdd[1]*t35 + t36*(c[32]*cq[3] + c[33]*cq[2]);
         obs[23] = qdd[1]*t34 + t35*t36;
         return isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23])))) ? SG_OK : SG_NONFINITE;
     }
@@ -545,16 +559,16 @@ int sg_hook_drive_observe(const double *q, const double *cq, const double *x, co
         const double t7 = c[1]*cx[1] + c[3]*cx[0];
         const double t9 = c[1]*cx[0] + c[2]*cx[1];
         const double t14 = ((xd[0])*(xd[0]));
-        const double t37 = c[32]*t9 + c[33]*t7;
-        const double t38 = c[33]*t9 + c[35]*t7;
-        obs[24] = c[31] + x[0];
+        const double t37 = c[35]*t9 + c[36]*t7;
+        const double t38 = c[36]*t9 + c[38]*t7;
+        obs[24] = c[34] + x[0];
         obs[25] = xd[0];
         obs[26] = xdd[0];
         obs[27] = t37;
-        obs[28] = c[32]*t7 + c[34]*t9;
+        obs[28] = c[35]*t7 + c[37]*t9;
         obs[29] = t38*xd[0];
         obs[30] = t37*xd[0];
-        obs[31] = t14*(c[34]*t7 + c[35]*t9) + t38*xdd[0];
+        obs[31] = t14*(c[37]*t7 + c[38]*t9) + t38*xdd[0];
         obs[32] = t14*t38 + t37*xdd[0];
         return isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -562,56 +576,56 @@ int sg_hook_drive_observe(const double *q, const double *cq, const double *x, co
         const double t7 = c[1]*cx[1] + c[3]*cx[0];
         const double t8 = c[0]*t7;
         const double t9 = c[1]*cx[0] + c[2]*cx[1];
-        const double t10 = c[24]*t9;
+        const double t10 = c[27]*t9;
         const double t13 = ((qd[2])*(qd[2]));
         const double t14 = ((xd[0])*(xd[0]));
         const double t15 = c[0]*t9;
         const double t18 = cq[5]*t13;
-        const double t24 = c[24]*t7;
+        const double t24 = c[27]*t7;
         const double t25 = t24*xd[0];
         const double t26 = t15*xd[0];
         const double t27 = t10*t14 + t24*xdd[0];
         const double t28 = t14*t24 + t15*xdd[0];
-        const double t39 = c[36]*cq[4];
-        const double t40 = c[37]*cq[5];
+        const double t39 = c[39]*cq[4];
+        const double t40 = c[40]*cq[5];
         obs[33] = q[2];
         obs[34] = qd[2];
         obs[35] = qdd[2];
         obs[36] = t15 + t39;
-        obs[37] = c[36]*cq[5] + t8;
+        obs[37] = c[39]*cq[5] + t8;
         obs[38] = qd[2]*t40 + t25;
         obs[39] = qd[2]*t39 + t26;
-        obs[40] = c[37]*cq[4]*t13 + qdd[2]*t40 + t27;
-        obs[41] = c[37]*t18 + qdd[2]*t39 + t28;
+        obs[40] = c[40]*cq[4]*t13 + qdd[2]*t40 + t27;
+        obs[41] = c[40]*t18 + qdd[2]*t39 + t28;
         return isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41]))))) ? SG_OK : SG_NONFINITE;
     }
     case 6: {
         const double t11 = ((qd[0])*(qd[0]));
-        const double t41 = c[38]*cq[0] + c[39]*cq[1];
-        const double t42 = c[39]*cq[0] + c[41]*cq[1];
+        const double t41 = c[41]*cq[0] + c[42]*cq[1];
+        const double t42 = c[42]*cq[0] + c[44]*cq[1];
         obs[42] = q[0];
         obs[43] = qd[0];
         obs[44] = qdd[0];
         obs[45] = c[4] + t41;
-        obs[46] = c[38]*cq[1] + c[40]*cq[0] + c[5];
+        obs[46] = c[41]*cq[1] + c[43]*cq[0] + c[5];
         obs[47] = qd[0]*t42;
         obs[48] = qd[0]*t41;
-        obs[49] = qdd[0]*t42 + t11*(c[40]*cq[1] + c[41]*cq[0]);
+        obs[49] = qdd[0]*t42 + t11*(c[43]*cq[1] + c[44]*cq[0]);
         obs[50] = qdd[0]*t41 + t11*t42;
         return isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50]))))) ? SG_OK : SG_NONFINITE;
     }
     case 7: {
         const double t36 = ((qd[1])*(qd[1]));
-        const double t43 = c[42]*cq[2] + c[43]*cq[3];
-        const double t44 = c[43]*cq[2] + c[45]*cq[3];
+        const double t43 = c[45]*cq[2] + c[46]*cq[3];
+        const double t44 = c[46]*cq[2] + c[48]*cq[3];
         obs[51] = q[1];
         obs[52] = qd[1];
         obs[53] = qdd[1];
-        obs[54] = c[25] + t43;
-        obs[55] = c[26] + c[42]*cq[3] + c[44]*cq[2];
+        obs[54] = c[28] + t43;
+        obs[55] = c[29] + c[45]*cq[3] + c[47]*cq[2];
         obs[56] = qd[1]*t44;
         obs[57] = qd[1]*t43;
-        obs[58] = qdd[1]*t44 + t36*(c[44]*cq[3] + c[45]*cq[2]);
+        obs[58] = qdd[1]*t44 + t36*(c[47]*cq[3] + c[48]*cq[2]);
         obs[59] = qdd[1]*t43 + t36*t44;
         return isfinite((((obs[51] + obs[52]) + (obs[53] + obs[54])) + ((obs[55] + obs[56]) + (obs[57] + (obs[58] + obs[59]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -622,22 +636,22 @@ int sg_hook_drive_observe(const double *q, const double *cq, const double *x, co
         const double t19 = cq[3]*qd[3];
         const double t20 = qd[1]*t19;
         const double t22 = cq[2]*qd[3];
-        const double t30 = c[25] + t5;
-        const double t31 = c[26] + t4;
+        const double t30 = c[28] + t5;
+        const double t31 = c[29] + t4;
         const double t32 = cq[2]*qdd[3] - t20;
         const double t33 = cq[3]*qdd[3] + qd[1]*t22;
-        const double t45 = c[46]*cq[2] + c[47]*cq[3];
-        const double t46 = c[47]*cq[2] + c[49]*cq[3] - t4;
+        const double t45 = c[49]*cq[2] + c[50]*cq[3];
+        const double t46 = c[50]*cq[2] + c[52]*cq[3] - t4;
         const double t47 = qd[1]*t46 + t22;
         const double t48 = t45 + t5;
         obs[60] = q[1];
         obs[61] = qd[1];
         obs[62] = qdd[1];
         obs[63] = t30 + t45;
-        obs[64] = c[46]*cq[3] + c[48]*cq[2] + t31;
+        obs[64] = c[49]*cq[3] + c[51]*cq[2] + t31;
         obs[65] = t47;
         obs[66] = qd[1]*t48 + t19;
-        obs[67] = qd[1]*(qd[1]*(c[48]*cq[3] + c[49]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
+        obs[67] = qd[1]*(qd[1]*(c[51]*cq[3] + c[52]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
         obs[68] = qd[1]*t47 + qdd[1]*t48 + t33;
         return isfinite((((obs[60] + obs[61]) + (obs[62] + obs[63])) + ((obs[64] + obs[65]) + (obs[66] + (obs[67] + obs[68]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -652,33 +666,33 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
     (void)x;
     double fr[6] = {0.0};
     for (int it = 0; ; ++it) {
-        const double t0 = c[10]*cq[1];
-        const double t1 = c[13]*cq[0];
+        const double t0 = c[11]*cq[1];
+        const double t1 = c[14]*cq[0];
         const double t2 = -((cq[2])*(cq[2]))*q[3] - ((cq[3])*(cq[3]))*q[3];
         const double t3 = -fr[0];
         const double t4 = -gv[1] + obs[41];
         const double t5 = -gv[0] + obs[40];
-        const double t6 = c[40]*cq[0];
-        const double t7 = c[40]*cq[1];
-        const double t8 = c[58]*(-gv[0] + obs[49]) - ld[2];
-        const double t9 = c[58]*(-gv[1] + obs[50]) - ld[3];
+        const double t6 = c[43]*cq[0];
+        const double t7 = c[43]*cq[1];
+        const double t8 = c[61]*(-gv[0] + obs[49]) - ld[2];
+        const double t9 = c[61]*(-gv[1] + obs[50]) - ld[3];
         const double t10 = cq[2]*fr[5];
-        const double t11 = c[59]*(-gv[0] + obs[67]) - ld[4] - t10;
+        const double t11 = c[62]*(-gv[0] + obs[67]) - ld[4] - t10;
         const double t12 = cq[3]*fr[5];
-        const double t13 = c[59]*(-gv[1] + obs[68]) - ld[5] - t12;
-        const double t14 = c[47]*cq[2] + c[49]*cq[3];
-        const double t15 = c[48]*cq[3] + c[49]*cq[2];
-        const double t16 = c[46]*cq[3] + c[48]*cq[2];
-        const double t17 = c[65]*(-gv[0] + obs[58]) - ld[6] + t10;
-        const double t18 = c[44]*cq[3] + c[45]*cq[2];
-        const double t19 = c[65]*(-gv[1] + obs[59]) - ld[7] + t12;
-        const double t20 = c[43]*cq[2] + c[45]*cq[3] + cq[3]*q[3];
+        const double t13 = c[62]*(-gv[1] + obs[68]) - ld[5] - t12;
+        const double t14 = c[50]*cq[2] + c[52]*cq[3];
+        const double t15 = c[51]*cq[3] + c[52]*cq[2];
+        const double t16 = c[49]*cq[3] + c[51]*cq[2];
+        const double t17 = c[68]*(-gv[0] + obs[58]) - ld[6] + t10;
+        const double t18 = c[47]*cq[3] + c[48]*cq[2];
+        const double t19 = c[68]*(-gv[1] + obs[59]) - ld[7] + t12;
+        const double t20 = c[46]*cq[2] + c[48]*cq[3] + cq[3]*q[3];
         const double t21 = cq[2]*q[3] + t18;
-        const double t22 = -c[60]*obs[53] + fr[3] - fr[5]*(-cq[2]*t20 + cq[3]*t21) + ld[11] + ld[6]*(c[62]*cq[2] + c[63]*cq[3]) + ld[7]*(c[62]*cq[3] + c[64]*cq[2]) + t17*(c[42]*cq[3] + c[44]*cq[2]) + t18*t19;
+        const double t22 = -c[63]*obs[53] + fr[3] - fr[5]*(-cq[2]*t20 + cq[3]*t21) + ld[11] + ld[6]*(c[65]*cq[2] + c[66]*cq[3]) + ld[7]*(c[65]*cq[3] + c[67]*cq[2]) + t17*(c[45]*cq[3] + c[47]*cq[2]) + t18*t19;
         const double t23 = c[1]*cx[0] + c[2]*cx[1];
-        const double t24 = c[34]*t23;
+        const double t24 = c[37]*t23;
         const double t25 = c[1]*cx[1] + c[3]*cx[0];
-        const double t26 = c[34]*t25;
+        const double t26 = c[37]*t25;
         const double t27 = fr[2]*obs[43];
         const double t28 = fr[3]*obs[52];
         const double t29 = -obs[25] + obs[34];
@@ -691,19 +705,19 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
         const double t36 = fr[5]*t35;
         {
             const double d = t2;
-            if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), fabs(t2)))) return SG_SINGULAR;
-            out[2] = (c[61]*obs[62] - fr[4] - fr[5]*(-cq[2]*t14 + cq[3]*t15) - ld[12] - ld[4]*t16 - ld[5]*t15 - t11*t16 - t13*t15 - t22)/d;
+            if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[11]*cq[0]*cq[2] + c[12]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), fabs(t2)))) return SG_SINGULAR;
+            out[2] = (c[64]*obs[62] - fr[4] - fr[5]*(-cq[2]*t14 + cq[3]*t15) - ld[12] - ld[4]*t16 - ld[5]*t15 - t11*t16 - t13*t15 - t22)/d;
         }
         {
             /* block of unknowns 10, 11 */
             double M[4], r[2];
             int piv[2];
-            M[0] = c[16]*cq[1];
+            M[0] = c[19]*cq[1];
             M[1] = c[7]*cq[0];
-            r[0] = c[55]*obs[44] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - fr[1] - fr[2] + fr[4] - ld[10] - ld[2]*(c[56]*cq[1] + t6) - ld[3]*(c[57]*cq[0] + t7) - t11*(t0 + t1) - t13*(c[13]*cq[1] + c[19]*cq[0]) - t8*(c[38]*cq[1] + t6) - t9*(c[41]*cq[0] + t7);
+            r[0] = c[58]*obs[44] - out[2]*(c[11]*cq[0]*cq[2] + c[12]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - fr[1] - fr[2] + fr[4] - ld[10] - ld[2]*(c[59]*cq[1] + t6) - ld[3]*(c[60]*cq[0] + t7) - t11*(t0 + t1) - t13*(c[14]*cq[1] + c[22]*cq[0]) - t8*(c[41]*cq[1] + t6) - t9*(c[44]*cq[0] + t7);
             M[2] = c[6]*cq[5];
-            M[3] = c[18]*cq[4];
-            r[1] = c[52]*obs[35] + c[53]*cq[4]*t4 + c[54]*cq[5]*t5 + fr[1] - ld[9] + t3;
+            M[3] = c[21]*cq[4];
+            r[1] = c[55]*obs[35] + c[56]*cq[4]*t4 + c[57]*cq[5]*t5 + fr[1] - ld[9] + t3;
             if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
             sg_lu_solve_inl(2, M, piv, r);
             out[10] = r[0];
@@ -716,19 +730,19 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
         out[3] = out[2]*t2 + t22;
         out[9] = cq[2]*out[2] + t19;
         out[8] = -cq[3]*out[2] + t17;
-        out[5] = c[70]*t4 + out[11];
-        out[4] = c[70]*t5 + out[10];
-        out[1] = c[69]*(-gv[1] + obs[32]) + out[5] - ld[1];
-        out[0] = c[69]*(-gv[0] + obs[31]) + out[4] - ld[0];
-        out[14] = c[66]*obs[26] - out[0]*(c[32]*t25 + t24) - out[1]*(c[35]*t23 + t26) - out[4]*(c[33]*t23 + c[68]*t25) - out[5]*(c[33]*t25 + c[67]*t23) - ld[0]*(c[67]*t25 + t24) - ld[1]*(c[68]*t23 + t26) - ld[8] - t3;
-        if (!(c[93] == 0.0 && c[94] == 0.0 && c[95] == 0.0 && c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0)) {
+        out[5] = c[73]*t4 + out[11];
+        out[4] = c[73]*t5 + out[10];
+        out[1] = c[72]*(-gv[1] + obs[32]) + out[5] - ld[1];
+        out[0] = c[72]*(-gv[0] + obs[31]) + out[4] - ld[0];
+        out[14] = c[69]*obs[26] - out[0]*(c[35]*t25 + t24) - out[1]*(c[38]*t23 + t26) - out[4]*(c[36]*t23 + c[71]*t25) - out[5]*(c[36]*t25 + c[70]*t23) - ld[0]*(c[70]*t25 + t24) - ld[1]*(c[71]*t23 + t26) - ld[8] - t3;
+        if (!(c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0 && c[99] == 0.0 && c[100] == 0.0 && c[101] == 0.0)) {
             double frn[6];
-            frn[0] = c[87]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t29) > 0.0 ? 1.0 : ((t29) < 0.0 ? -1.0 : 0.0));
-            frn[1] = c[88]*sqrt(((out[10])*(out[10])) + ((out[11])*(out[11])))*((t31) > 0.0 ? 1.0 : ((t31) < 0.0 ? -1.0 : 0.0));
-            frn[2] = c[89]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((obs[43]) > 0.0 ? 1.0 : ((obs[43]) < 0.0 ? -1.0 : 0.0));
-            frn[3] = c[90]*sqrt(((out[8])*(out[8])) + ((out[9])*(out[9])))*((obs[52]) > 0.0 ? 1.0 : ((obs[52]) < 0.0 ? -1.0 : 0.0));
-            frn[4] = c[91]*sqrt(((out[12])*(out[12])) + ((out[13])*(out[13])))*((t33) > 0.0 ? 1.0 : ((t33) < 0.0 ? -1.0 : 0.0));
-            frn[5] = c[92]*fabs(out[2])*((t35) > 0.0 ? 1.0 : ((t35) < 0.0 ? -1.0 : 0.0));
+            frn[0] = c[90]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t29) > 0.0 ? 1.0 : ((t29) < 0.0 ? -1.0 : 0.0));
+            frn[1] = c[91]*sqrt(((out[10])*(out[10])) + ((out[11])*(out[11])))*((t31) > 0.0 ? 1.0 : ((t31) < 0.0 ? -1.0 : 0.0));
+            frn[2] = c[92]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((obs[43]) > 0.0 ? 1.0 : ((obs[43]) < 0.0 ? -1.0 : 0.0));
+            frn[3] = c[93]*sqrt(((out[8])*(out[8])) + ((out[9])*(out[9])))*((obs[52]) > 0.0 ? 1.0 : ((obs[52]) < 0.0 ? -1.0 : 0.0));
+            frn[4] = c[94]*sqrt(((out[12])*(out[12])) + ((out[13])*(out[13])))*((t33) > 0.0 ? 1.0 : ((t33) < 0.0 ? -1.0 : 0.0));
+            frn[5] = c[95]*fabs(out[2])*((t35) > 0.0 ? 1.0 : ((t35) < 0.0 ? -1.0 : 0.0));
             double d = 0.0, s = 0.0;
             for (int k = 0; k < 6; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
             if (!(d <= 1e-13 * s)) {
@@ -743,9 +757,9 @@ int sg_hook_drive_forces(const double *q, const double *cq, const double *x, con
         out[18] = cq[2]*out[2];
         out[19] = out[0] + out[6] + out[8];
         out[20] = out[1] + out[7] + out[9];
-        out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14] + fr[2] + fr[3];
-        out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
-        out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
+        out[21] = c[20]*out[6] + c[28]*out[9] + c[4]*out[7] + c[74]*out[8] + out[14] + fr[2] + fr[3];
+        out[22] = c[75]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[76]*((obs[25])*(obs[25])) + c[77]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[78]*((obs[34])*(obs[34])) + c[79]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[80]*((obs[43])*(obs[43])) + c[81]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[82]*((obs[52])*(obs[52])) + c[83]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[84]*((obs[61])*(obs[61]));
+        out[23] = c[85]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[86]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[87]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[88]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[89]*(gv[0]*obs[63] + gv[1]*obs[64]);
         out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t27 + t28 + t30 + t32 + t34 + t36;
         out[25] = 0.0;
         out[26] = fr[0];
@@ -771,26 +785,26 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[34]*t1;
-    const double t3 = c[34]*t0;
-    const double t4 = c[36]*cq[5];
-    const double t5 = c[37]*cq[4];
-    const double t6 = c[40]*cq[0];
-    const double t7 = c[40]*cq[1];
-    const double t8 = c[56]*cq[1] + t6;
-    const double t9 = c[57]*cq[0] + t7;
-    const double t10 = c[44]*cq[3] + c[45]*cq[2];
-    const double t11 = c[48]*cq[3] + c[49]*cq[2];
-    const double t12 = c[46]*cq[3] + c[48]*cq[2];
+    const double t2 = c[37]*t1;
+    const double t3 = c[37]*t0;
+    const double t4 = c[39]*cq[5];
+    const double t5 = c[40]*cq[4];
+    const double t6 = c[43]*cq[0];
+    const double t7 = c[43]*cq[1];
+    const double t8 = c[59]*cq[1] + t6;
+    const double t9 = c[60]*cq[0] + t7;
+    const double t10 = c[47]*cq[3] + c[48]*cq[2];
+    const double t11 = c[51]*cq[3] + c[52]*cq[2];
+    const double t12 = c[49]*cq[3] + c[51]*cq[2];
     for (int k = 0; k < 225; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = -1.0;
     A[16] = 1.0;
     A[20] = -1.0;
-    A[30] = c[32]*t0 + t2;
-    A[31] = c[35]*t1 + t3;
-    A[34] = c[33]*t1 + c[68]*t0;
-    A[35] = c[33]*t0 + c[67]*t1;
+    A[30] = c[35]*t0 + t2;
+    A[31] = c[38]*t1 + t3;
+    A[34] = c[36]*t1 + c[71]*t0;
+    A[35] = c[36]*t0 + c[70]*t1;
     A[44] = 1.0;
     A[49] = 1.0;
     A[55] = -1.0;
@@ -806,51 +820,51 @@ void sg_hook_drive_force_matrix(const double *q, const double *cq, const double 
     A[112] = 1.0;
     A[116] = 1.0;
     A[118] = -1.0;
-    A[126] = c[38]*cq[1] + t6;
-    A[127] = c[41]*cq[0] + t7;
+    A[126] = c[41]*cq[1] + t6;
+    A[127] = c[44]*cq[0] + t7;
     A[130] = t8;
     A[131] = t9;
-    A[132] = c[100]*cq[1] + c[99]*cq[0];
-    A[133] = c[101]*cq[0] + c[99]*cq[1];
+    A[132] = c[102]*cq[0] + c[103]*cq[1];
+    A[133] = c[102]*cq[1] + c[104]*cq[0];
     A[137] = cq[3];
     A[143] = 1.0;
     A[152] = -cq[2];
     A[159] = 1.0;
-    A[167] = -cq[2]*(cq[2]*q[3] + t10) - cq[3]*(c[43]*cq[2] + c[45]*cq[3] + cq[3]*q[3]);
+    A[167] = -cq[2]*(cq[2]*q[3] + t10) - cq[3]*(c[46]*cq[2] + c[48]*cq[3] + cq[3]*q[3]);
     A[168] = -1.0;
-    A[173] = c[42]*cq[3] + c[44]*cq[2];
+    A[173] = c[45]*cq[3] + c[47]*cq[2];
     A[174] = t10;
     A[182] = -cq[3];
     A[192] = 1.0;
     A[197] = cq[2];
     A[208] = 1.0;
-    A[212] = cq[2]*t11 + cq[3]*(c[47]*cq[2] + c[49]*cq[3]);
+    A[212] = cq[2]*t11 + cq[3]*(c[50]*cq[2] + c[52]*cq[3]);
     A[213] = 1.0;
     A[222] = t12;
     A[223] = t11;
-    b[0] = c[69]*(-gv[0] + obs[31]) - ld[0];
-    b[1] = c[69]*(-gv[1] + obs[32]) - ld[1];
-    b[2] = c[66]*obs[26] - ld[0]*(c[67]*t0 + t2) - ld[1]*(c[68]*t1 + t3) - ld[8];
-    b[3] = c[70]*(-gv[0] + obs[40]);
-    b[4] = c[70]*(-gv[1] + obs[41]);
-    b[5] = c[52]*obs[35] - ld[9];
-    b[6] = c[58]*(-gv[0] + obs[49]) - ld[2];
-    b[7] = c[58]*(-gv[1] + obs[50]) - ld[3];
-    b[8] = c[55]*obs[44] - ld[10] - ld[2]*t8 - ld[3]*t9;
-    b[9] = c[65]*(-gv[0] + obs[58]) - ld[6];
-    b[10] = c[65]*(-gv[1] + obs[59]) - ld[7];
-    b[11] = c[60]*obs[53] - ld[11] - ld[6]*(c[62]*cq[2] + c[63]*cq[3]) - ld[7]*(c[62]*cq[3] + c[64]*cq[2]);
-    b[12] = c[59]*(-gv[0] + obs[67]) - ld[4];
-    b[13] = c[59]*(-gv[1] + obs[68]) - ld[5];
-    b[14] = c[61]*obs[62] - ld[12] - ld[4]*t12 - ld[5]*t11;
+    b[0] = c[72]*(-gv[0] + obs[31]) - ld[0];
+    b[1] = c[72]*(-gv[1] + obs[32]) - ld[1];
+    b[2] = c[69]*obs[26] - ld[0]*(c[70]*t0 + t2) - ld[1]*(c[71]*t1 + t3) - ld[8];
+    b[3] = c[73]*(-gv[0] + obs[40]);
+    b[4] = c[73]*(-gv[1] + obs[41]);
+    b[5] = c[55]*obs[35] - ld[9];
+    b[6] = c[61]*(-gv[0] + obs[49]) - ld[2];
+    b[7] = c[61]*(-gv[1] + obs[50]) - ld[3];
+    b[8] = c[58]*obs[44] - ld[10] - ld[2]*t8 - ld[3]*t9;
+    b[9] = c[68]*(-gv[0] + obs[58]) - ld[6];
+    b[10] = c[68]*(-gv[1] + obs[59]) - ld[7];
+    b[11] = c[63]*obs[53] - ld[11] - ld[6]*(c[65]*cq[2] + c[66]*cq[3]) - ld[7]*(c[65]*cq[3] + c[67]*cq[2]);
+    b[12] = c[62]*(-gv[0] + obs[67]) - ld[4];
+    b[13] = c[62]*(-gv[1] + obs[68]) - ld[5];
+    b[14] = c[64]*obs[62] - ld[12] - ld[4]*t12 - ld[5]*t11;
 }
 
 /* sg_hook_drive_anchors -- Total ops: 70 */
 void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *out)
 {
     (void)x;
-    const double t0 = c[25] + cq[2]*q[3];
-    const double t1 = c[26] + cq[3]*q[3];
+    const double t0 = c[28] + cq[2]*q[3];
+    const double t1 = c[29] + cq[3]*q[3];
     const double t2 = c[1]*cx[0] + c[2]*cx[1];
     const double t3 = c[0]*t2;
     const double t4 = c[1]*cx[1] + c[3]*cx[0];
@@ -861,8 +875,8 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[1] = 0.0;
     out[2] = 0.0;
     out[3] = 0.0;
-    out[4] = c[25];
-    out[5] = c[26];
+    out[4] = c[28];
+    out[5] = c[29];
     out[6] = cq[2];
     out[7] = cq[3];
     out[8] = t0;
@@ -875,16 +889,16 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[15] = c[5];
     out[16] = c[4];
     out[17] = c[5];
-    out[18] = c[25];
-    out[19] = c[26];
-    out[20] = c[25];
-    out[21] = c[26];
+    out[18] = c[28];
+    out[19] = c[29];
+    out[20] = c[28];
+    out[21] = c[29];
     out[22] = c[6]*cq[4] + t3;
     out[23] = c[6]*cq[5] + t5;
     out[24] = t6;
     out[25] = t7;
-    out[26] = c[10]*cq[0] + c[11]*cq[1] + c[4];
-    out[27] = c[10]*cq[1] + c[13]*cq[0] + c[5];
+    out[26] = c[11]*cq[0] + c[12]*cq[1] + c[4];
+    out[27] = c[11]*cq[1] + c[14]*cq[0] + c[5];
     out[28] = t0;
     out[29] = t1;
     out[30] = t3;
@@ -893,18 +907,18 @@ void sg_hook_drive_anchors(const double *q, const double *cq, const double *x, c
     out[33] = t7;
     out[34] = t0;
     out[35] = t1;
-    out[36] = c[25] + c[27]*cq[2] + c[28]*cq[3];
-    out[37] = c[26] + c[27]*cq[3] + c[29]*cq[2];
-    out[38] = c[32]*t2 + c[33]*t4;
-    out[39] = c[32]*t4 + c[34]*t2;
-    out[40] = c[36]*cq[4] + t3;
-    out[41] = c[36]*cq[5] + t5;
-    out[42] = c[38]*cq[0] + c[39]*cq[1] + c[4];
-    out[43] = c[38]*cq[1] + c[40]*cq[0] + c[5];
-    out[44] = c[25] + c[42]*cq[2] + c[43]*cq[3];
-    out[45] = c[26] + c[42]*cq[3] + c[44]*cq[2];
-    out[46] = c[46]*cq[2] + c[47]*cq[3] + t0;
-    out[47] = c[46]*cq[3] + c[48]*cq[2] + t1;
+    out[36] = c[28] + c[30]*cq[2] + c[31]*cq[3];
+    out[37] = c[29] + c[30]*cq[3] + c[32]*cq[2];
+    out[38] = c[35]*t2 + c[36]*t4;
+    out[39] = c[35]*t4 + c[37]*t2;
+    out[40] = c[39]*cq[4] + t3;
+    out[41] = c[39]*cq[5] + t5;
+    out[42] = c[4] + c[41]*cq[0] + c[42]*cq[1];
+    out[43] = c[41]*cq[1] + c[43]*cq[0] + c[5];
+    out[44] = c[28] + c[45]*cq[2] + c[46]*cq[3];
+    out[45] = c[29] + c[45]*cq[3] + c[47]*cq[2];
+    out[46] = c[49]*cq[2] + c[50]*cq[3] + t0;
+    out[47] = c[49]*cq[3] + c[51]*cq[2] + t1;
 }
 
 /* sg_hook_drive_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
@@ -921,17 +935,19 @@ static SG_FLATTEN SG_NOINLINE size_t sg_hook_drive_sweep(const struct sg_mechani
 #if SG_SIMD
 SG_SIMD_BEGIN
 
-SG_VINLINE sg_vm sg_hook_drive_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_hook_drive_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq, sg_vd *err)
 {
     (void)x;
     sg_vm ok = sgv_true();
+    sg_vd e[3] = {sgv_set1(0.0), sgv_set1(0.0), sgv_set1(1.0)};
     {
         /* dyad 0: RRR closed at joint C (big_rod, rock_shaft) */
         const sg_vd P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
         const sg_vd Q[2] = {sgv_set1(c[4]), sgv_set1(c[5])};
         const sg_vd l[2] = {sgv_set1(c[6]), sgv_set1(c[7])};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[10]);
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[0] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
         cq[4] = c[8]*(J[0] - P[0]);
@@ -941,62 +957,65 @@ SG_VINLINE sg_vm sg_hook_drive_closed_v(const sg_vd *x, const sg_vd *cx, const d
     }
     {
         /* dyad 1: RPR closed at joint E (rock_slider, lower_shaft) */
-        const sg_vd D[2] = {c[10]*cq[0] + c[11]*cq[1] + c[12], c[10]*cq[1] + c[13]*cq[0] + c[14]};
+        const sg_vd D[2] = {c[11]*cq[0] + c[12]*cq[1] + c[13], c[11]*cq[1] + c[14]*cq[0] + c[15]};
         const sg_vd w0[2] = {sgv_set1(0.0), sgv_set1(0.0)};
         const sg_vd u[2] = {sgv_set1(1.0), sgv_set1(0.0)};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[17]) + sgv_set1(c[16]) * e[0];
         sg_vd s, theta;
-        ok &= sgv_dyad_rpr(D, w0, u, branch[1], &s, &theta);
+        ok &= sgv_dyad_rpr(D, w0, u, branch[1], ein, e, &s, &theta);
         q[3] = s;
         q[1] = angles ? theta : sgv_set1(0.0);
         cq[2] = (D[0]*(s*u[0] + w0[0]) + D[1]*(s*u[1] + w0[1]))/(((s*u[0] + w0[0])*(s*u[0] + w0[0])) + ((s*u[1] + w0[1])*(s*u[1] + w0[1])));
         cq[3] = (-D[0]*(s*u[1] + w0[1]) + D[1]*(s*u[0] + w0[0]))/(((s*u[0] + w0[0])*(s*u[0] + w0[0])) + ((s*u[1] + w0[1])*(s*u[1] + w0[1])));
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return ok;
 }
 
 SG_VINLINE sg_vm sg_hook_drive_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
 {
     const sg_vd t0 = c[7]*cq[1];
-    const sg_vd t1 = c[16]*cq[0];
+    const sg_vd t1 = c[19]*cq[0];
     const sg_vd t2 = c[6]*cq[4];
-    const sg_vd t3 = c[11]*cq[0] + c[19]*cq[1];
+    const sg_vd t3 = c[12]*cq[0] + c[22]*cq[1];
     const sg_vd t4 = cq[3]*q[3];
     const sg_vd t5 = cq[2]*q[3];
     const sg_vd t6 = -t5;
     const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
     const sg_vd t8 = c[0]*t7;
     const sg_vd t9 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t10 = c[24]*t9;
+    const sg_vd t10 = c[27]*t9;
     const sg_vd t14 = ((xd[0])*(xd[0]));
     const sg_vd t15 = c[0]*t9;
-    const sg_vd t16 = c[16]*cq[1];
-    const sg_vd t24 = c[24]*t7;
+    const sg_vd t16 = c[19]*cq[1];
+    const sg_vd t24 = c[27]*t7;
     const sg_vd t25 = t24*xd[0];
     const sg_vd t26 = t15*xd[0];
     const sg_vd t27 = t10*t14 + t24*xdd[0];
     const sg_vd t28 = t14*t24 + t15*xdd[0];
     const sg_vd t29 = c[7]*cq[0];
-    const sg_vd t30 = c[25] + t5;
-    const sg_vd t31 = c[26] + t4;
-    const sg_vd t34 = c[27]*cq[2] + c[28]*cq[3];
-    const sg_vd t35 = c[28]*cq[2] + c[30]*cq[3];
-    const sg_vd t37 = c[32]*t9 + c[33]*t7;
-    const sg_vd t38 = c[33]*t9 + c[35]*t7;
-    const sg_vd t39 = c[36]*cq[4];
-    const sg_vd t40 = c[37]*cq[5];
-    const sg_vd t41 = c[38]*cq[0] + c[39]*cq[1];
-    const sg_vd t42 = c[39]*cq[0] + c[41]*cq[1];
-    const sg_vd t43 = c[42]*cq[2] + c[43]*cq[3];
-    const sg_vd t44 = c[43]*cq[2] + c[45]*cq[3];
-    const sg_vd t45 = c[46]*cq[2] + c[47]*cq[3];
-    const sg_vd t46 = c[47]*cq[2] + c[49]*cq[3] - t4;
+    const sg_vd t30 = c[28] + t5;
+    const sg_vd t31 = c[29] + t4;
+    const sg_vd t34 = c[30]*cq[2] + c[31]*cq[3];
+    const sg_vd t35 = c[31]*cq[2] + c[33]*cq[3];
+    const sg_vd t37 = c[35]*t9 + c[36]*t7;
+    const sg_vd t38 = c[36]*t9 + c[38]*t7;
+    const sg_vd t39 = c[39]*cq[4];
+    const sg_vd t40 = c[40]*cq[5];
+    const sg_vd t41 = c[41]*cq[0] + c[42]*cq[1];
+    const sg_vd t42 = c[42]*cq[0] + c[44]*cq[1];
+    const sg_vd t43 = c[45]*cq[2] + c[46]*cq[3];
+    const sg_vd t44 = c[46]*cq[2] + c[48]*cq[3];
+    const sg_vd t45 = c[49]*cq[2] + c[50]*cq[3];
+    const sg_vd t46 = c[50]*cq[2] + c[52]*cq[3] - t4;
     const sg_vd t48 = t45 + t5;
     const sg_vd t49 = sgv_fabs(q[3]);
-    sg_vd J[16], rs[4], cs[4];
+    sg_vd J[16], rs[4], cs[8];
     sg_vm piv[4];
     J[0] = t0;
     J[1] = sgv_set1(0.0);
-    J[2] = c[18]*cq[5];
+    J[2] = c[21]*cq[5];
     J[3] = sgv_set1(0.0);
     J[4] = t1;
     J[5] = sgv_set1(0.0);
@@ -1006,7 +1025,7 @@ SG_VINLINE sg_vm sg_hook_drive_motion_v(const sg_vd *q, const sg_vd *cq, const s
     J[9] = t4;
     J[10] = sgv_set1(0.0);
     J[11] = -cq[2];
-    J[12] = c[10]*cq[0] + c[11]*cq[1];
+    J[12] = c[11]*cq[0] + c[12]*cq[1];
     J[13] = t6;
     J[14] = sgv_set1(0.0);
     J[15] = -cq[3];
@@ -1014,10 +1033,10 @@ SG_VINLINE sg_vm sg_hook_drive_motion_v(const sg_vd *q, const sg_vd *cq, const s
     qd[1] = t10*xd[0];
     qd[2] = sgv_set1(0.0);
     qd[3] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[50]);
-    rs[1] = sgv_set1(c[51]);
-    rs[2] = (1.0/(c[22] + t49));
-    rs[3] = (1.0/(c[23] + t49));
+    rs[0] = sgv_set1(c[53]);
+    rs[1] = sgv_set1(c[54]);
+    rs[2] = (1.0/(c[25] + t49));
+    rs[3] = (1.0/(c[26] + t49));
     sg_vm ok = sgv_factor_eq(4, J, piv, rs, cs, cond);
     sgv_solve_eq(4, J, piv, rs, cs, qd);
     const sg_vd t11 = ((qd[0])*(qd[0]));
@@ -1034,9 +1053,10 @@ SG_VINLINE sg_vm sg_hook_drive_motion_v(const sg_vd *q, const sg_vd *cq, const s
     const sg_vd t47 = qd[1]*t46 + t22;
     qdd[0] = t12 + t13*t2 + t14*t15 + t8*xdd[0];
     qdd[1] = c[6]*t18 + t10*xdd[0] + t14*t8 + t17;
-    qdd[2] = -qd[1]*t21 - t11*(c[13]*cq[1] + c[19]*cq[0]) - t20;
+    qdd[2] = -qd[1]*t21 - t11*(c[14]*cq[1] + c[22]*cq[0]) - t20;
     qdd[3] = cq[2]*qd[1]*qd[3] + qd[1]*t23 - t11*t3;
     sgv_solve_eq(4, J, piv, rs, cs, qdd);
+    sgv_rates_scale(4, 0x7ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     const sg_vd t32 = cq[2]*qdd[3] - t20;
     const sg_vd t33 = cq[3]*qdd[3] + qd[1]*t22;
     obs[0] = t15;
@@ -1057,56 +1077,56 @@ SG_VINLINE sg_vm sg_hook_drive_motion_v(const sg_vd *q, const sg_vd *cq, const s
     obs[15] = t21;
     obs[16] = -qd[1]*t21 - qdd[1]*t4 + t32;
     obs[17] = qd[1]*t23 + qdd[1]*t5 + t33;
-    obs[18] = c[25] + t34;
-    obs[19] = c[26] + c[27]*cq[3] + c[29]*cq[2];
+    obs[18] = c[28] + t34;
+    obs[19] = c[29] + c[30]*cq[3] + c[32]*cq[2];
     obs[20] = qd[1]*t35;
     obs[21] = qd[1]*t34;
-    obs[22] = qdd[1]*t35 + t36*(c[29]*cq[3] + c[30]*cq[2]);
+    obs[22] = qdd[1]*t35 + t36*(c[32]*cq[3] + c[33]*cq[2]);
     obs[23] = qdd[1]*t34 + t35*t36;
-    obs[24] = c[31] + x[0];
+    obs[24] = c[34] + x[0];
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t37;
-    obs[28] = c[32]*t7 + c[34]*t9;
+    obs[28] = c[35]*t7 + c[37]*t9;
     obs[29] = t38*xd[0];
     obs[30] = t37*xd[0];
-    obs[31] = t14*(c[34]*t7 + c[35]*t9) + t38*xdd[0];
+    obs[31] = t14*(c[37]*t7 + c[38]*t9) + t38*xdd[0];
     obs[32] = t14*t38 + t37*xdd[0];
     obs[33] = q[2];
     obs[34] = qd[2];
     obs[35] = qdd[2];
     obs[36] = t15 + t39;
-    obs[37] = c[36]*cq[5] + t8;
+    obs[37] = c[39]*cq[5] + t8;
     obs[38] = qd[2]*t40 + t25;
     obs[39] = qd[2]*t39 + t26;
-    obs[40] = c[37]*cq[4]*t13 + qdd[2]*t40 + t27;
-    obs[41] = c[37]*t18 + qdd[2]*t39 + t28;
+    obs[40] = c[40]*cq[4]*t13 + qdd[2]*t40 + t27;
+    obs[41] = c[40]*t18 + qdd[2]*t39 + t28;
     obs[42] = q[0];
     obs[43] = qd[0];
     obs[44] = qdd[0];
     obs[45] = c[4] + t41;
-    obs[46] = c[38]*cq[1] + c[40]*cq[0] + c[5];
+    obs[46] = c[41]*cq[1] + c[43]*cq[0] + c[5];
     obs[47] = qd[0]*t42;
     obs[48] = qd[0]*t41;
-    obs[49] = qdd[0]*t42 + t11*(c[40]*cq[1] + c[41]*cq[0]);
+    obs[49] = qdd[0]*t42 + t11*(c[43]*cq[1] + c[44]*cq[0]);
     obs[50] = qdd[0]*t41 + t11*t42;
     obs[51] = q[1];
     obs[52] = qd[1];
     obs[53] = qdd[1];
-    obs[54] = c[25] + t43;
-    obs[55] = c[26] + c[42]*cq[3] + c[44]*cq[2];
+    obs[54] = c[28] + t43;
+    obs[55] = c[29] + c[45]*cq[3] + c[47]*cq[2];
     obs[56] = qd[1]*t44;
     obs[57] = qd[1]*t43;
-    obs[58] = qdd[1]*t44 + t36*(c[44]*cq[3] + c[45]*cq[2]);
+    obs[58] = qdd[1]*t44 + t36*(c[47]*cq[3] + c[48]*cq[2]);
     obs[59] = qdd[1]*t43 + t36*t44;
     obs[60] = q[1];
     obs[61] = qd[1];
     obs[62] = qdd[1];
     obs[63] = t30 + t45;
-    obs[64] = c[46]*cq[3] + c[48]*cq[2] + t31;
+    obs[64] = c[49]*cq[3] + c[51]*cq[2] + t31;
     obs[65] = t47;
     obs[66] = qd[1]*t48 + t19;
-    obs[67] = qd[1]*(qd[1]*(c[48]*cq[3] + c[49]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
+    obs[67] = qd[1]*(qd[1]*(c[51]*cq[3] + c[52]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
     obs[68] = qd[1]*t47 + qdd[1]*t48 + t33;
     ok &= sgv_isfinite(((((((q[0] + q[1]) + (q[2] + (q[3] + qd[0]))) + ((qd[1] + qd[2]) + (qd[3] + (qdd[0] + qdd[1])))) + (((qdd[2] + qdd[3]) + (obs[0] + (obs[1] + obs[2]))) + ((obs[3] + obs[4]) + (obs[5] + (obs[6] + obs[7]))))) + ((((obs[8] + obs[9]) + (obs[10] + (obs[11] + obs[12]))) + ((obs[13] + obs[14]) + (obs[15] + (obs[16] + obs[17])))) + (((obs[18] + obs[19]) + (obs[20] + (obs[21] + obs[22]))) + ((obs[23] + obs[24]) + (obs[25] + (obs[26] + obs[27])))))) + (((((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))) + ((obs[33] + obs[34]) + (obs[35] + (obs[36] + obs[37])))) + (((obs[38] + obs[39]) + (obs[40] + (obs[41] + obs[42]))) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) + ((((obs[48] + obs[49]) + (obs[50] + (obs[51] + obs[52]))) + ((obs[53] + obs[54]) + (obs[55] + (obs[56] + obs[57])))) + (((obs[58] + obs[59]) + (obs[60] + (obs[61] + obs[62]))) + ((obs[63] + (obs[64] + obs[65])) + (obs[66] + (obs[67] + obs[68]))))))));
     return ok;
@@ -1116,25 +1136,25 @@ SG_VINLINE sg_vm sg_hook_drive_rates_v(const sg_vd *q, const sg_vd *cq, const sg
 {
     (void)x;
     const sg_vd t0 = c[7]*cq[1];
-    const sg_vd t1 = c[16]*cq[0];
+    const sg_vd t1 = c[19]*cq[0];
     const sg_vd t2 = c[6]*cq[4];
-    const sg_vd t3 = c[11]*cq[0] + c[19]*cq[1];
+    const sg_vd t3 = c[12]*cq[0] + c[22]*cq[1];
     const sg_vd t4 = cq[3]*q[3];
     const sg_vd t5 = cq[2]*q[3];
     const sg_vd t6 = -t5;
     const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
     const sg_vd t8 = c[0]*t7;
     const sg_vd t9 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t10 = c[24]*t9;
+    const sg_vd t10 = c[27]*t9;
     const sg_vd t14 = ((xd[0])*(xd[0]));
     const sg_vd t15 = c[0]*t9;
-    const sg_vd t16 = c[16]*cq[1];
+    const sg_vd t16 = c[19]*cq[1];
     const sg_vd t49 = sgv_fabs(q[3]);
-    sg_vd J[16], rs[4], cs[4];
+    sg_vd J[16], rs[4], cs[8];
     sg_vm piv[4];
     J[0] = t0;
     J[1] = sgv_set1(0.0);
-    J[2] = c[18]*cq[5];
+    J[2] = c[21]*cq[5];
     J[3] = sgv_set1(0.0);
     J[4] = t1;
     J[5] = sgv_set1(0.0);
@@ -1144,7 +1164,7 @@ SG_VINLINE sg_vm sg_hook_drive_rates_v(const sg_vd *q, const sg_vd *cq, const sg
     J[9] = t4;
     J[10] = sgv_set1(0.0);
     J[11] = -cq[2];
-    J[12] = c[10]*cq[0] + c[11]*cq[1];
+    J[12] = c[11]*cq[0] + c[12]*cq[1];
     J[13] = t6;
     J[14] = sgv_set1(0.0);
     J[15] = -cq[3];
@@ -1152,10 +1172,10 @@ SG_VINLINE sg_vm sg_hook_drive_rates_v(const sg_vd *q, const sg_vd *cq, const sg
     qd[1] = t10*xd[0];
     qd[2] = sgv_set1(0.0);
     qd[3] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[50]);
-    rs[1] = sgv_set1(c[51]);
-    rs[2] = (1.0/(c[22] + t49));
-    rs[3] = (1.0/(c[23] + t49));
+    rs[0] = sgv_set1(c[53]);
+    rs[1] = sgv_set1(c[54]);
+    rs[2] = (1.0/(c[25] + t49));
+    rs[3] = (1.0/(c[26] + t49));
     sg_vm ok = sgv_factor_eq(4, J, piv, rs, cs, cond);
     sgv_solve_eq(4, J, piv, rs, cs, qd);
     const sg_vd t11 = ((qd[0])*(qd[0]));
@@ -1170,9 +1190,10 @@ SG_VINLINE sg_vm sg_hook_drive_rates_v(const sg_vd *q, const sg_vd *cq, const sg
     const sg_vd t23 = -cq[3]*q[3]*qd[1] + t22;
     qdd[0] = t12 + t13*t2 + t14*t15 + t8*xdd[0];
     qdd[1] = c[6]*t18 + t10*xdd[0] + t14*t8 + t17;
-    qdd[2] = -qd[1]*t21 - t11*(c[13]*cq[1] + c[19]*cq[0]) - t20;
+    qdd[2] = -qd[1]*t21 - t11*(c[14]*cq[1] + c[22]*cq[0]) - t20;
     qdd[3] = cq[2]*qd[1]*qd[3] + qd[1]*t23 - t11*t3;
     sgv_solve_eq(4, J, piv, rs, cs, qdd);
+    sgv_rates_scale(4, 0x7ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))));
     return ok;
 }
@@ -1184,10 +1205,10 @@ SG_VINLINE sg_vm sg_hook_drive_observe_v(const sg_vd *q, const sg_vd *cq, const 
         const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t8 = c[0]*t7;
         const sg_vd t9 = c[1]*cx[0] + c[2]*cx[1];
-        const sg_vd t10 = c[24]*t9;
+        const sg_vd t10 = c[27]*t9;
         const sg_vd t14 = ((xd[0])*(xd[0]));
         const sg_vd t15 = c[0]*t9;
-        const sg_vd t24 = c[24]*t7;
+        const sg_vd t24 = c[27]*t7;
         const sg_vd t25 = t24*xd[0];
         const sg_vd t26 = t15*xd[0];
         const sg_vd t27 = t10*t14 + t24*xdd[0];
@@ -1202,10 +1223,10 @@ SG_VINLINE sg_vm sg_hook_drive_observe_v(const sg_vd *q, const sg_vd *cq, const 
     }
     case 1: {
         const sg_vd t0 = c[7]*cq[1];
-        const sg_vd t1 = c[16]*cq[0];
+        const sg_vd t1 = c[19]*cq[0];
         const sg_vd t11 = ((qd[0])*(qd[0]));
         const sg_vd t12 = t1*t11;
-        const sg_vd t16 = c[16]*cq[1];
+        const sg_vd t16 = c[19]*cq[1];
         const sg_vd t17 = t11*t16;
         const sg_vd t29 = c[7]*cq[0];
         obs[6] = c[4] + t29;
@@ -1224,8 +1245,8 @@ SG_VINLINE sg_vm sg_hook_drive_observe_v(const sg_vd *q, const sg_vd *cq, const 
         const sg_vd t21 = qd[1]*t5 + t19;
         const sg_vd t22 = cq[2]*qd[3];
         const sg_vd t23 = -cq[3]*q[3]*qd[1] + t22;
-        const sg_vd t30 = c[25] + t5;
-        const sg_vd t31 = c[26] + t4;
+        const sg_vd t30 = c[28] + t5;
+        const sg_vd t31 = c[29] + t4;
         const sg_vd t32 = cq[2]*qdd[3] - t20;
         const sg_vd t33 = cq[3]*qdd[3] + qd[1]*t22;
         obs[12] = t30;
@@ -1237,14 +1258,14 @@ SG_VINLINE sg_vm sg_hook_drive_observe_v(const sg_vd *q, const sg_vd *cq, const 
         return sgv_isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))));
     }
     case 3: {
-        const sg_vd t34 = c[27]*cq[2] + c[28]*cq[3];
-        const sg_vd t35 = c[28]*cq[2] + c[30]*cq[3];
+        const sg_vd t34 = c[30]*cq[2] + c[31]*cq[3];
+        const sg_vd t35 = c[31]*cq[2] + c[33]*cq[3];
         const sg_vd t36 = ((qd[1])*(qd[1]));
-        obs[18] = c[25] + t34;
-        obs[19] = c[26] + c[27]*cq[3] + c[29]*cq[2];
+        obs[18] = c[28] + t34;
+        obs[19] = c[29] + c[30]*cq[3] + c[32]*cq[2];
         obs[20] = qd[1]*t35;
         obs[21] = qd[1]*t34;
-        obs[22] = qdd[1]*t35 + t36*(c[29]*cq[3] + c[30]*cq[2]);
+        obs[22] = qdd[1]*t35 + t36*(c[32]*cq[3] + c[33]*cq[2]);
         obs[23] = qdd[1]*t34 + t35*t36;
         return sgv_isfinite(((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23]))));
     }
@@ -1252,16 +1273,16 @@ SG_VINLINE sg_vm sg_hook_drive_observe_v(const sg_vd *q, const sg_vd *cq, const 
         const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t9 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t14 = ((xd[0])*(xd[0]));
-        const sg_vd t37 = c[32]*t9 + c[33]*t7;
-        const sg_vd t38 = c[33]*t9 + c[35]*t7;
-        obs[24] = c[31] + x[0];
+        const sg_vd t37 = c[35]*t9 + c[36]*t7;
+        const sg_vd t38 = c[36]*t9 + c[38]*t7;
+        obs[24] = c[34] + x[0];
         obs[25] = xd[0];
         obs[26] = xdd[0];
         obs[27] = t37;
-        obs[28] = c[32]*t7 + c[34]*t9;
+        obs[28] = c[35]*t7 + c[37]*t9;
         obs[29] = t38*xd[0];
         obs[30] = t37*xd[0];
-        obs[31] = t14*(c[34]*t7 + c[35]*t9) + t38*xdd[0];
+        obs[31] = t14*(c[37]*t7 + c[38]*t9) + t38*xdd[0];
         obs[32] = t14*t38 + t37*xdd[0];
         return sgv_isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))));
     }
@@ -1269,56 +1290,56 @@ SG_VINLINE sg_vm sg_hook_drive_observe_v(const sg_vd *q, const sg_vd *cq, const 
         const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t8 = c[0]*t7;
         const sg_vd t9 = c[1]*cx[0] + c[2]*cx[1];
-        const sg_vd t10 = c[24]*t9;
+        const sg_vd t10 = c[27]*t9;
         const sg_vd t13 = ((qd[2])*(qd[2]));
         const sg_vd t14 = ((xd[0])*(xd[0]));
         const sg_vd t15 = c[0]*t9;
         const sg_vd t18 = cq[5]*t13;
-        const sg_vd t24 = c[24]*t7;
+        const sg_vd t24 = c[27]*t7;
         const sg_vd t25 = t24*xd[0];
         const sg_vd t26 = t15*xd[0];
         const sg_vd t27 = t10*t14 + t24*xdd[0];
         const sg_vd t28 = t14*t24 + t15*xdd[0];
-        const sg_vd t39 = c[36]*cq[4];
-        const sg_vd t40 = c[37]*cq[5];
+        const sg_vd t39 = c[39]*cq[4];
+        const sg_vd t40 = c[40]*cq[5];
         obs[33] = q[2];
         obs[34] = qd[2];
         obs[35] = qdd[2];
         obs[36] = t15 + t39;
-        obs[37] = c[36]*cq[5] + t8;
+        obs[37] = c[39]*cq[5] + t8;
         obs[38] = qd[2]*t40 + t25;
         obs[39] = qd[2]*t39 + t26;
-        obs[40] = c[37]*cq[4]*t13 + qdd[2]*t40 + t27;
-        obs[41] = c[37]*t18 + qdd[2]*t39 + t28;
+        obs[40] = c[40]*cq[4]*t13 + qdd[2]*t40 + t27;
+        obs[41] = c[40]*t18 + qdd[2]*t39 + t28;
         return sgv_isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41])))));
     }
     case 6: {
         const sg_vd t11 = ((qd[0])*(qd[0]));
-        const sg_vd t41 = c[38]*cq[0] + c[39]*cq[1];
-        const sg_vd t42 = c[39]*cq[0] + c[41]*cq[1];
+        const sg_vd t41 = c[41]*cq[0] + c[42]*cq[1];
+        const sg_vd t42 = c[42]*cq[0] + c[44]*cq[1];
         obs[42] = q[0];
         obs[43] = qd[0];
         obs[44] = qdd[0];
         obs[45] = c[4] + t41;
-        obs[46] = c[38]*cq[1] + c[40]*cq[0] + c[5];
+        obs[46] = c[41]*cq[1] + c[43]*cq[0] + c[5];
         obs[47] = qd[0]*t42;
         obs[48] = qd[0]*t41;
-        obs[49] = qdd[0]*t42 + t11*(c[40]*cq[1] + c[41]*cq[0]);
+        obs[49] = qdd[0]*t42 + t11*(c[43]*cq[1] + c[44]*cq[0]);
         obs[50] = qdd[0]*t41 + t11*t42;
         return sgv_isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50])))));
     }
     case 7: {
         const sg_vd t36 = ((qd[1])*(qd[1]));
-        const sg_vd t43 = c[42]*cq[2] + c[43]*cq[3];
-        const sg_vd t44 = c[43]*cq[2] + c[45]*cq[3];
+        const sg_vd t43 = c[45]*cq[2] + c[46]*cq[3];
+        const sg_vd t44 = c[46]*cq[2] + c[48]*cq[3];
         obs[51] = q[1];
         obs[52] = qd[1];
         obs[53] = qdd[1];
-        obs[54] = c[25] + t43;
-        obs[55] = c[26] + c[42]*cq[3] + c[44]*cq[2];
+        obs[54] = c[28] + t43;
+        obs[55] = c[29] + c[45]*cq[3] + c[47]*cq[2];
         obs[56] = qd[1]*t44;
         obs[57] = qd[1]*t43;
-        obs[58] = qdd[1]*t44 + t36*(c[44]*cq[3] + c[45]*cq[2]);
+        obs[58] = qdd[1]*t44 + t36*(c[47]*cq[3] + c[48]*cq[2]);
         obs[59] = qdd[1]*t43 + t36*t44;
         return sgv_isfinite((((obs[51] + obs[52]) + (obs[53] + obs[54])) + ((obs[55] + obs[56]) + (obs[57] + (obs[58] + obs[59])))));
     }
@@ -1329,22 +1350,22 @@ SG_VINLINE sg_vm sg_hook_drive_observe_v(const sg_vd *q, const sg_vd *cq, const 
         const sg_vd t19 = cq[3]*qd[3];
         const sg_vd t20 = qd[1]*t19;
         const sg_vd t22 = cq[2]*qd[3];
-        const sg_vd t30 = c[25] + t5;
-        const sg_vd t31 = c[26] + t4;
+        const sg_vd t30 = c[28] + t5;
+        const sg_vd t31 = c[29] + t4;
         const sg_vd t32 = cq[2]*qdd[3] - t20;
         const sg_vd t33 = cq[3]*qdd[3] + qd[1]*t22;
-        const sg_vd t45 = c[46]*cq[2] + c[47]*cq[3];
-        const sg_vd t46 = c[47]*cq[2] + c[49]*cq[3] - t4;
+        const sg_vd t45 = c[49]*cq[2] + c[50]*cq[3];
+        const sg_vd t46 = c[50]*cq[2] + c[52]*cq[3] - t4;
         const sg_vd t47 = qd[1]*t46 + t22;
         const sg_vd t48 = t45 + t5;
         obs[60] = q[1];
         obs[61] = qd[1];
         obs[62] = qdd[1];
         obs[63] = t30 + t45;
-        obs[64] = c[46]*cq[3] + c[48]*cq[2] + t31;
+        obs[64] = c[49]*cq[3] + c[51]*cq[2] + t31;
         obs[65] = t47;
         obs[66] = qd[1]*t48 + t19;
-        obs[67] = qd[1]*(qd[1]*(c[48]*cq[3] + c[49]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
+        obs[67] = qd[1]*(qd[1]*(c[51]*cq[3] + c[52]*cq[2] + t6) - t19) + qdd[1]*t46 + t32;
         obs[68] = qd[1]*t47 + qdd[1]*t48 + t33;
         return sgv_isfinite((((obs[60] + obs[61]) + (obs[62] + obs[63])) + ((obs[64] + obs[65]) + (obs[66] + (obs[67] + obs[68])))));
     }
@@ -1358,33 +1379,33 @@ SG_VINLINE sg_vm sg_hook_drive_forces_v(const sg_vd *q, const sg_vd *cq, const s
     (void)x;
     sg_vm ok = sgv_true();
     const double fr[6] = {0.0};
-    const sg_vd t0 = c[10]*cq[1];
-    const sg_vd t1 = c[13]*cq[0];
+    const sg_vd t0 = c[11]*cq[1];
+    const sg_vd t1 = c[14]*cq[0];
     const sg_vd t2 = -((cq[2])*(cq[2]))*q[3] - ((cq[3])*(cq[3]))*q[3];
     const sg_vd t3 = sgv_set1(-fr[0]);
     const sg_vd t4 = -gv[1] + obs[41];
     const sg_vd t5 = -gv[0] + obs[40];
-    const sg_vd t6 = c[40]*cq[0];
-    const sg_vd t7 = c[40]*cq[1];
-    const sg_vd t8 = c[58]*(-gv[0] + obs[49]) - ld[2];
-    const sg_vd t9 = c[58]*(-gv[1] + obs[50]) - ld[3];
+    const sg_vd t6 = c[43]*cq[0];
+    const sg_vd t7 = c[43]*cq[1];
+    const sg_vd t8 = c[61]*(-gv[0] + obs[49]) - ld[2];
+    const sg_vd t9 = c[61]*(-gv[1] + obs[50]) - ld[3];
     const sg_vd t10 = cq[2]*fr[5];
-    const sg_vd t11 = c[59]*(-gv[0] + obs[67]) - ld[4] - t10;
+    const sg_vd t11 = c[62]*(-gv[0] + obs[67]) - ld[4] - t10;
     const sg_vd t12 = cq[3]*fr[5];
-    const sg_vd t13 = c[59]*(-gv[1] + obs[68]) - ld[5] - t12;
-    const sg_vd t14 = c[47]*cq[2] + c[49]*cq[3];
-    const sg_vd t15 = c[48]*cq[3] + c[49]*cq[2];
-    const sg_vd t16 = c[46]*cq[3] + c[48]*cq[2];
-    const sg_vd t17 = c[65]*(-gv[0] + obs[58]) - ld[6] + t10;
-    const sg_vd t18 = c[44]*cq[3] + c[45]*cq[2];
-    const sg_vd t19 = c[65]*(-gv[1] + obs[59]) - ld[7] + t12;
-    const sg_vd t20 = c[43]*cq[2] + c[45]*cq[3] + cq[3]*q[3];
+    const sg_vd t13 = c[62]*(-gv[1] + obs[68]) - ld[5] - t12;
+    const sg_vd t14 = c[50]*cq[2] + c[52]*cq[3];
+    const sg_vd t15 = c[51]*cq[3] + c[52]*cq[2];
+    const sg_vd t16 = c[49]*cq[3] + c[51]*cq[2];
+    const sg_vd t17 = c[68]*(-gv[0] + obs[58]) - ld[6] + t10;
+    const sg_vd t18 = c[47]*cq[3] + c[48]*cq[2];
+    const sg_vd t19 = c[68]*(-gv[1] + obs[59]) - ld[7] + t12;
+    const sg_vd t20 = c[46]*cq[2] + c[48]*cq[3] + cq[3]*q[3];
     const sg_vd t21 = cq[2]*q[3] + t18;
-    const sg_vd t22 = -c[60]*obs[53] + fr[3] - fr[5]*(-cq[2]*t20 + cq[3]*t21) + ld[11] + ld[6]*(c[62]*cq[2] + c[63]*cq[3]) + ld[7]*(c[62]*cq[3] + c[64]*cq[2]) + t17*(c[42]*cq[3] + c[44]*cq[2]) + t18*t19;
+    const sg_vd t22 = -c[63]*obs[53] + fr[3] - fr[5]*(-cq[2]*t20 + cq[3]*t21) + ld[11] + ld[6]*(c[65]*cq[2] + c[66]*cq[3]) + ld[7]*(c[65]*cq[3] + c[67]*cq[2]) + t17*(c[45]*cq[3] + c[47]*cq[2]) + t18*t19;
     const sg_vd t23 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t24 = c[34]*t23;
+    const sg_vd t24 = c[37]*t23;
     const sg_vd t25 = c[1]*cx[1] + c[3]*cx[0];
-    const sg_vd t26 = c[34]*t25;
+    const sg_vd t26 = c[37]*t25;
     const sg_vd t27 = fr[2]*obs[43];
     const sg_vd t28 = fr[3]*obs[52];
     const sg_vd t29 = -obs[25] + obs[34];
@@ -1397,19 +1418,19 @@ SG_VINLINE sg_vm sg_hook_drive_forces_v(const sg_vd *q, const sg_vd *cq, const s
     const sg_vd t36 = fr[5]*t35;
     {
         const sg_vd d = t2;
-        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), sgv_fabs(t2));
-        out[2] = (c[61]*obs[62] - fr[4] - fr[5]*(-cq[2]*t14 + cq[3]*t15) - ld[12] - ld[4]*t16 - ld[5]*t15 - t11*t16 - t13*t15 - t22)/d;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[11]*cq[0]*cq[2] + c[12]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1), sgv_fabs(t2));
+        out[2] = (c[64]*obs[62] - fr[4] - fr[5]*(-cq[2]*t14 + cq[3]*t15) - ld[12] - ld[4]*t16 - ld[5]*t15 - t11*t16 - t13*t15 - t22)/d;
     }
     {
         /* block of unknowns 10, 11 */
         sg_vd M[4], r[2];
         sg_vm piv[2];
-        M[0] = c[16]*cq[1];
+        M[0] = c[19]*cq[1];
         M[1] = c[7]*cq[0];
-        r[0] = c[55]*obs[44] - out[2]*(c[10]*cq[0]*cq[2] + c[11]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - fr[1] - fr[2] + fr[4] - ld[10] - ld[2]*(c[56]*cq[1] + t6) - ld[3]*(c[57]*cq[0] + t7) - t11*(t0 + t1) - t13*(c[13]*cq[1] + c[19]*cq[0]) - t8*(c[38]*cq[1] + t6) - t9*(c[41]*cq[0] + t7);
+        r[0] = c[58]*obs[44] - out[2]*(c[11]*cq[0]*cq[2] + c[12]*cq[1]*cq[2] + cq[3]*t0 + cq[3]*t1) - fr[1] - fr[2] + fr[4] - ld[10] - ld[2]*(c[59]*cq[1] + t6) - ld[3]*(c[60]*cq[0] + t7) - t11*(t0 + t1) - t13*(c[14]*cq[1] + c[22]*cq[0]) - t8*(c[41]*cq[1] + t6) - t9*(c[44]*cq[0] + t7);
         M[2] = c[6]*cq[5];
-        M[3] = c[18]*cq[4];
-        r[1] = c[52]*obs[35] + c[53]*cq[4]*t4 + c[54]*cq[5]*t5 + fr[1] - ld[9] + t3;
+        M[3] = c[21]*cq[4];
+        r[1] = c[55]*obs[35] + c[56]*cq[4]*t4 + c[57]*cq[5]*t5 + fr[1] - ld[9] + t3;
         ok &= sgv_lu_factor(2, M, piv);
         sgv_lu_solve(2, M, piv, r);
         out[10] = r[0];
@@ -1422,20 +1443,20 @@ SG_VINLINE sg_vm sg_hook_drive_forces_v(const sg_vd *q, const sg_vd *cq, const s
     out[3] = out[2]*t2 + t22;
     out[9] = cq[2]*out[2] + t19;
     out[8] = -cq[3]*out[2] + t17;
-    out[5] = c[70]*t4 + out[11];
-    out[4] = c[70]*t5 + out[10];
-    out[1] = c[69]*(-gv[1] + obs[32]) + out[5] - ld[1];
-    out[0] = c[69]*(-gv[0] + obs[31]) + out[4] - ld[0];
-    out[14] = c[66]*obs[26] - out[0]*(c[32]*t25 + t24) - out[1]*(c[35]*t23 + t26) - out[4]*(c[33]*t23 + c[68]*t25) - out[5]*(c[33]*t25 + c[67]*t23) - ld[0]*(c[67]*t25 + t24) - ld[1]*(c[68]*t23 + t26) - ld[8] - t3;
+    out[5] = c[73]*t4 + out[11];
+    out[4] = c[73]*t5 + out[10];
+    out[1] = c[72]*(-gv[1] + obs[32]) + out[5] - ld[1];
+    out[0] = c[72]*(-gv[0] + obs[31]) + out[4] - ld[0];
+    out[14] = c[69]*obs[26] - out[0]*(c[35]*t25 + t24) - out[1]*(c[38]*t23 + t26) - out[4]*(c[36]*t23 + c[71]*t25) - out[5]*(c[36]*t25 + c[70]*t23) - ld[0]*(c[70]*t25 + t24) - ld[1]*(c[71]*t23 + t26) - ld[8] - t3;
     out[15] = out[14];
     out[16] = out[14]*xd[0];
     out[17] = -cq[3]*out[2];
     out[18] = cq[2]*out[2];
     out[19] = out[0] + out[6] + out[8];
     out[20] = out[1] + out[7] + out[9];
-    out[21] = c[17]*out[6] + c[25]*out[9] + c[4]*out[7] + c[71]*out[8] + out[14] + fr[2] + fr[3];
-    out[22] = c[72]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[73]*((obs[25])*(obs[25])) + c[74]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[75]*((obs[34])*(obs[34])) + c[76]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[77]*((obs[43])*(obs[43])) + c[78]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[79]*((obs[52])*(obs[52])) + c[80]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[81]*((obs[61])*(obs[61]));
-    out[23] = c[82]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[83]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[84]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[85]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[86]*(gv[0]*obs[63] + gv[1]*obs[64]);
+    out[21] = c[20]*out[6] + c[28]*out[9] + c[4]*out[7] + c[74]*out[8] + out[14] + fr[2] + fr[3];
+    out[22] = c[75]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[76]*((obs[25])*(obs[25])) + c[77]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[78]*((obs[34])*(obs[34])) + c[79]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[80]*((obs[43])*(obs[43])) + c[81]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[82]*((obs[52])*(obs[52])) + c[83]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[84]*((obs[61])*(obs[61]));
+    out[23] = c[85]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[86]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[87]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[88]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[89]*(gv[0]*obs[63] + gv[1]*obs[64]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t27 + t28 + t30 + t32 + t34 + t36;
     out[25] = sgv_set1(0.0);
     out[26] = sgv_set1(fr[0]);
@@ -1456,7 +1477,7 @@ SG_VINLINE sg_vm sg_hook_drive_forces_v(const sg_vd *q, const sg_vd *cq, const s
 
 SG_VINLINE int sg_hook_drive_forces_in_simd(const double *c)
 {
-    return c[93] == 0.0 && c[94] == 0.0 && c[95] == 0.0 && c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0;
+    return c[96] == 0.0 && c[97] == 0.0 && c[98] == 0.0 && c[99] == 0.0 && c[100] == 0.0 && c[101] == 0.0;
 }
 
 static SG_FLATTEN size_t sg_hook_drive_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
@@ -1478,7 +1499,7 @@ static const sg_mechanism sg_hook_drive_descriptor = {
     .nq = 4,
     .nx = 1,
     .np = 41,
-    .nc = 102,
+    .nc = 105,
     .nobs = 69,
     .nbranch = 2,
     .nf = 15,
@@ -1553,230 +1574,230 @@ const char *sg_hook_drive_manifest(void)
         ",\"branches\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C left of"
         " the line from B to O4\"},{\"default\":1,\"joint\":\"E\",\"kind\":\"rpr\",\"meaning\":\"+1: the "
         "larger travel of rock_slider on lower_shaft\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\""
-        ",\"E.x\",\"E.y\"],\"constants\":[[0],[11],[11],[11],[2],[3],[1],[4],[1],[4],[5,6],[5,6],[2,7],[5"
-        ",6],[3,8],[2],[4],[3],[1],[5,6],[0,1,2,4],[0,1,3,4],[2,5,7],[3,5,8],[0],[7],[8],[9,10],[9,10],[9"
-        ",10],[9,10],[11],[13],[14],[14],[13],[1],[1],[19],[20],[20],[19],[23],[24],[24],[23],[27],[28],["
-        "28],[27],[0,1,2,4],[0,1,3,4],[17],[1,16],[1,16],[21],[4,19],[4,19],[18],[26],[25],[29],[9,10,24]"
-        ",[9,10,23],[9,10,23],[22],[15],[0,13],[0,13],[12],[16],[8],[12],[15],[16],[17],[18],[21],[22],[2"
-        "5],[26],[29],[12],[16],[18],[22],[26],[30,31],[32,33],[34,35],[36,37],[38,39],[40],[30],[32],[34"
-        "],[36],[38],[40],[5,6,20],[5,6,19],[5,6,19]],\"coords\":[{\"guess\":0.0,\"name\":\"rock_shaft.an"
-        "gle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"lower_shaft.angle\",\"unit\":\""
-        "rad\"},{\"guess\":-1.5707963267948966,\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"guess\":0."
-        "005,\"name\":\"rock_slider.travel\",\"unit\":\"m\"}],\"default_speed\":104.71975511965977,\"doc\""
-        ":\"Hook drive \\u94a9\\u7ebf\\u673a\\u6784: hook crank 12 \\u2192 big connecting rod \\u5927\\u8"
-        "fde\\u6746 9 \\u2192 rock shaft \\u6446\\u8f74 4 \\u2192 rock-shaft slider\\n\\u6446\\u8f74\\u6e"
-        "d1\\u5757 10 in the slot of the lower-shaft arm \\u4e0b\\u8f74 11 (an oscillating guide bar) \\u"
-        "2192 oscillating shuttle.\\n\\nTwo loops (seed 000 \\u00a7\\u4e00(\\u4e00)3, fig. 1-1; fig. 1-2("
-        "c) is the guide-bar unit): the four-bar crank\\u2013rod\\u2013rock\\nshaft, then the guide bar w"
-        "hose slotted arm turns the lower shaft through a large swing. The rock shaft\\nand lower shaft r"
-        "un parallel to the upper shaft, so both loops project onto one plane: origin on the upper\\nshaf"
-        "t axis, x horizontal, y up. The lower-shaft slot passes through its axis (local u axis).\\n\\nTh"
-        "e shuttle's point \\u6446\\u68ad\\u5c16 (point ``hook_point``) is a point of the lower-shaft bod"
-        "y at ``hook_radius`` from its\\naxis and ``hook_angle`` from the slot: the lower shaft's axis is"
-        " under the needle (x = 0), so the hook point\\ncrosses the needle's centre line at the top of it"
-        "s circle, moving across it (sewgen.machine.timing measures the\\nneedle's rise from its bottom d"
-        "ead centre and the hook point's height above the needle eye there).\\n\\nDimensions are estimate"
-        "s sized to the household machine (seed 000's tables are not in the text); the\\nearlier estimate"
-        " (crank 12, rod 170, rock arms 13.6 and 20 mm) swung the rock shaft \\u00b162\\u00b0 with a mini"
-        "mum\\ntransmission angle of 23.6\\u00b0, at \\u03c6 = 125\\u00b0 where the hook crank pin's load"
-        " peaked:\\n\\n* the crank-rocker (crank 16 mm, big rod 217.76 mm, front arm 21.02 mm, rock axis "
-        "217.45 mm below the upper\\n  shaft) swings the rock shaft 99.1\\u00b0 with a minimum transmissi"
-        "on angle of 40.3\\u00b0 (big rod against the front\\n  arm). A crank-rocker's transmission angle"
-        " falls below 40\\u00b0 once its rocker swings much more than 100\\u00b0, so\\n  the rock swing c"
-        "annot stay near the old 124\\u00b0. Its ends \\u2014 the shuttle's reversals \\u2014 fall at cra"
-        "nk angles of\\n  about 89\\u00b0 and 269\\u00b0, so a group phase of \\u22122\\u00b0 puts them a"
-        "t the needle's top and bottom dead centres (an\\n  oscillating shuttle starts from its end posit"
-        "ion with the needle at its lowest point);\\n* the guide bar (the lower-shaft axis under the need"
-        "le, 32.4 mm from the rock shaft's, inside the 39.01 mm\\n  rear arm's circle; rear arm 57.63\\u0"
-        "0b0 from the front arm) turns the 99.1\\u00b0 into a shuttle swing of 206.7\\u00b0\\n  (househol"
-        "d shuttles swing 206\\u00b0\\u2013210\\u00b0). Its own transmission angle is 90\\u00b0 (the slot"
-        "'s force is normal to the\\n  slotted arm). The price of the smaller rock swing is a less unifor"
-        "m shuttle: the guide bar must multiply\\n  the swing 2.1 times, most of it at mid-stroke, so the"
-        " lower shaft peaks at 4.5 times the upper shaft's speed\\n  (2.7 before) and its inertia, not th"
-        "e transmission, now sets the hook crank pin's peak load. These\\n  dimensions are the ones of le"
-        "ast peak crank-pin load (167 N at 1000 r/min with the lower shaft's 6e-6\\n  kg\\u00b7m\\u00b2) "
-        "among those with a transmission angle of at least 40.3\\u00b0, a 206.5\\u00b0\\u2013210\\u00b0 s"
-        "wing and reversals at 89\\u00b0 and\\n  269\\u00b0 (a local search over rod, rock axis, arms and"
-        " rear-arm angle); a 35\\u00b0 design of the same kind would\\n  carry about 80 N, and without th"
-        "e lower shaft's inertia this one would carry 16 N (the old one 44 N);\\n* the shuttle (hook poin"
-        "t) radius is 12 mm, its axis 20 mm below the throat plate: its point passes over the\\n  needle'"
-        "s centre line at the top of its circle. ``hook_angle`` (132.45\\u00b0) puts it there when the ne"
-        "edle has\\n  risen 2.0 mm from its bottom dead centre (JUKI service manuals: 2.0 \\u00b1 0.2 mm)"
-        " at the JB1-3's phase, 1.6 mm\\n  above the top of the needle eye (service manuals: 1\\u20132.5 "
-        "mm).\",\"elements\":[],\"force_blocks\":[1,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"un"
-        "it\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_slider.guide.fx\",\"uni"
-        "t\":\"N\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.f"
-        "x\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_mome"
-        "nt_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potenti"
-        "al_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\""
-        ",\"unit\":\"W\"},{\"name\":\"B.friction\",\"unit\":\"N*m\"},{\"name\":\"B.friction_power\",\"uni"
-        "t\":\"W\"},{\"name\":\"C.friction\",\"unit\":\"N*m\"},{\"name\":\"C.friction_power\",\"unit\":\""
-        "W\"},{\"name\":\"O4.friction\",\"unit\":\"N*m\"},{\"name\":\"O4.friction_power\",\"unit\":\"W\"}"
-        ",{\"name\":\"O11.friction\",\"unit\":\"N*m\"},{\"name\":\"O11.friction_power\",\"unit\":\"W\"},{"
-        "\"name\":\"E.friction\",\"unit\":\"N*m\"},{\"name\":\"E.friction_power\",\"unit\":\"W\"},{\"name"
-        "\":\"rock_slider.guide.friction\",\"unit\":\"N\"},{\"name\":\"rock_slider.guide.friction_power\""
-        ",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"big_rod.x\",\"big_r"
-        "od.y\",\"big_rod.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"lower_shaft."
-        "x\",\"lower_shaft.y\",\"lower_shaft.moment\",\"rock_slider.x\",\"rock_slider.y\",\"rock_slider.m"
-        "oment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\""
-        ",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_hook_d"
-        "rive_anchors\":{\"ops\":70},\"sg_hook_drive_blocks\":{\"ops\":46},\"sg_hook_drive_closed\":{\"op"
-        "s\":60},\"sg_hook_drive_constants\":{\"ops\":89},\"sg_hook_drive_force_matrix\":{\"ops\":138},\""
-        "sg_hook_drive_forces\":{\"ops\":380},\"sg_hook_drive_lu_factor\":{\"ops\":42},\"sg_hook_drive_lu"
-        "_solve\":{\"ops\":32},\"sg_hook_drive_motion\":{\"ops\":238},\"sg_hook_drive_observe\":{\"ops\":"
-        "239},\"sg_hook_drive_rates\":{\"ops\":72},\"sg_hook_drive_residual\":{\"ops\":38},\"sg_hook_driv"
-        "e_scales\":{\"ops\":7}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"name\":\"crank_pin"
-        "\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\"rock_shaft\",\""
-        "component\":\"fx\",\"name\":\"rock_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\""
-        ":\"rock_pin\"},{\"body\":\"rock_slider\",\"component\":\"fx\",\"name\":\"slider_pin\"},{\"body\""
-        ":\"rock_slider\",\"component\":\"fy\",\"name\":\"slider_pin\"},{\"body\":\"lower_shaft\",\"compo"
-        "nent\":\"fx\",\"name\":\"hook_point\"},{\"body\":\"lower_shaft\",\"component\":\"fy\",\"name\":\""
-        "hook_point\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"crank\"},{\"body\":\"big_r"
-        "od\",\"component\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft\",\"component\":\"tor"
-        "que\",\"name\":\"rock_shaft\"},{\"body\":\"lower_shaft\",\"component\":\"torque\",\"name\":\"low"
-        "er_shaft\"},{\"body\":\"rock_slider\",\"component\":\"torque\",\"name\":\"rock_slider\"}],\"name"
-        "\":\"hook_drive\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_p"
-        "in.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\""
-        ",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"rock_pin.y\",\"unit\":"
-        "\"m\"},{\"name\":\"rock_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"rock_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\",\"unit\":\"m/s^2\"}"
-        ",{\"name\":\"slider_pin.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"unit\":\"m\"},{\"name\""
-        ":\"slider_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "slider_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
-        ":\"hook_point.x\",\"unit\":\"m\"},{\"name\":\"hook_point.y\",\"unit\":\"m\"},{\"name\":\"hook_po"
-        "int.x_d\",\"unit\":\"m/s\"},{\"name\":\"hook_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"hook_poin"
-        "t.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank"
-        ".angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.ang"
-        "le_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\""
-        ",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"uni"
-        "t\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"uni"
-        "t\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"big_rod.angle_d\",\"uni"
-        "t\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"big_rod.com.x\","
-        "\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big_rod.com.x_d\",\"unit"
-        "\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.x_dd\",\"uni"
-        "t\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\""
-        ",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.a"
-        "ngle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_"
-        "shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"roc"
-        "k_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.angle\",\"unit\":\"rad\""
-        "},{\"name\":\"lower_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_shaft.angle_dd\",\"uni"
-        "t\":\"rad/s^2\"},{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.y\""
-        ",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com"
-        ".y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lowe"
-        "r_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"unit\":\"rad\"},{\"name"
-        "\":\"rock_slider.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angle_dd\",\"unit\":\"rad"
-        "/s^2\"},{\"name\":\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.y\",\"unit\""
-        ":\"m\"},{\"name\":\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.y_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.c"
-        "om.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\""
-        "hook crank radius on the upper shaft (estimate)\",\"kind\":\"length\",\"name\":\"crank\",\"posit"
-        "ive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.21776,\"display_unit\":\"mm\",\"doc\":\""
-        "big connecting rod, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\"big_rod\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0179,\"display_unit\":\"mm\",\"doc\":\"rock-"
-        "shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_x\",\"positive\":fa"
-        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":-0.21745,\"display_unit\":\"mm\",\"doc\":\"rock-s"
-        "haft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\":\"mm\",\"doc\":\"rock-shaft"
-        " arm driven by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock_front_arm\",\"positi"
-        "ve\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.039009999999999996,\"display_unit\":\"mm\""
-        ",\"doc\":\"rock-shaft arm carrying the slider pin (estimate)\",\"kind\":\"length\",\"name\":\"ro"
-        "ck_rear_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":1.0058332479243322,\""
-        "display_unit\":\"deg\",\"doc\":\"rear arm direction relative to the front arm (estimate)\",\"kin"
-        "d\":\"angle\",\"name\":\"rock_rear_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\""
-        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, horizontal: under the needle ("
-        "estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_x\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":-0.1905,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, vertical (es"
-        "timate)\",\"kind\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"m\"},{\"default\":0.012,\"display_unit\":\"mm\",\"doc\":\"shuttle point's radius about the lo"
-        "wer-shaft axis (estimate)\",\"kind\":\"length\",\"name\":\"hook_radius\",\"positive\":true,\"rol"
-        "e\":null,\"unit\":\"m\"},{\"default\":2.311688594266489,\"display_unit\":\"deg\",\"doc\":\"shutt"
-        "le point's direction on the lower shaft from its slot (set for a 2.0 mm loop lift)\",\"kind\":\""
-        "angle\",\"name\":\"hook_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":"
-        "0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"a"
-        "ngle\",\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":"
-        "0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\""
-        ":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of"
-        " mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role"
-        "\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inerti"
-        "a of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.028,\"display_unit\":\"g\",\"doc\":\""
-        "mass of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of bi"
-        "g_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_rod.inertia\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\"doc\":\"mas"
-        "s of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":nul"
-        "l,\"unit\":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_s"
-        "haft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_"
-        "shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia "
-        "of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\""
-        "positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_unit\":\"g\",\""
-        "doc\":\"mass of lower_shaft\",\"kind\":\"mass\",\"name\":\"lower_shaft.mass\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mas"
-        "s of lower_shaft, local u\",\"kind\":\"length\",\"name\":\"lower_shaft.com_u\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mas"
-        "s of lower_shaft, local v\",\"kind\":\"length\",\"name\":\"lower_shaft.com_v\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment"
-        " of inertia of lower_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_shaf"
-        "t.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.003,\"display_"
-        "unit\":\"g\",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\"rock_slider.mass\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":"
-        "\"centre of mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\"rock_slider.com_u\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":"
-        "\"centre of mass of rock_slider, local v\",\"kind\":\"length\",\"name\":\"rock_slider.com_v\",\""
-        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"display_unit\":\"kg*m**2\",\""
-        "doc\":\"moment of inertia of rock_slider about its centre of mass\",\"kind\":\"inertia\",\"name\""
-        ":\"rock_slider.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0"
-        ",\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\","
-        "\"maximum\":1.0,\"minimum\":0.0,\"name\":\"B.friction\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\"k"
-        "ind\":\"length\",\"minimum\":0.0,\"name\":\"B.pin_radius\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of C\""
-        ",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"C.friction\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin ra"
-        "dius of C (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":\"C.pin_radius\",\"posit"
-        "ive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulo"
-        "mb friction coefficient of O4\",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"nam"
-        "e\":\"O4.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.004,\"display"
-        "_unit\":\"mm\",\"doc\":\"pin radius of O4 (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\""
-        "name\":\"O4.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"dis"
-        "play_unit\":\"\",\"doc\":\"Coulomb friction coefficient of O11\",\"kind\":\"dimensionless\",\"ma"
-        "ximum\":1.0,\"minimum\":0.0,\"name\":\"O11.friction\",\"positive\":false,\"role\":null,\"unit\":"
-        "\"\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"pin radius of O11 (friction arm)\",\""
-        "kind\":\"length\",\"minimum\":0.0,\"name\":\"O11.pin_radius\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of E"
-        "\",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"E.friction\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"pin "
-        "radius of E (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":\"E.pin_radius\",\"pos"
-        "itive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Cou"
-        "lomb friction coefficient of rock_slider.guide\",\"kind\":\"dimensionless\",\"maximum\":1.0,\"mi"
-        "nimum\":0.0,\"name\":\"rock_slider.guide.friction\",\"positive\":false,\"role\":null,\"unit\":\""
-        "\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\","
-        "\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rock_shaf"
-        "t\",\"doc\":\"big-rod pin C on the rock-shaft arm\",\"name\":\"rock_pin\",\"offset\":6,\"role\":"
-        "null},{\"body\":\"rock_slider\",\"doc\":\"slider pin E on the rock-shaft rear arm\",\"name\":\"s"
-        "lider_pin\",\"offset\":12,\"role\":null},{\"body\":\"lower_shaft\",\"doc\":\"shuttle point \\u64"
-        "46\\u68ad\\u5c16\",\"name\":\"hook_point\",\"offset\":18,\"role\":\"hook_point\"}],\"reactions\""
-        ":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"rev"
-        "olute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\"rock_slider\",\"co"
-        "lumns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"name\":\"rock_slider"
-        ".guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\",\"fy\"],\"grounded"
-        "\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\",\"b\":\"rock_shaft"
-        "\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"O4\",\"offset\""
-        ":6},{\"a\":\"ground\",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind"
-        "\":\"revolute\",\"name\":\"O11\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock_shaft\",\"columns"
-        "\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":10},{\"a\""
-        ":\"rock_shaft\",\"b\":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\""
-        "revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"torque"
-        "\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.drive\",\"offset\""
-        ":14,\"sense\":1}],\"roles\":{\"hook_point\":{\"kind\":\"point\",\"name\":\"hook_point\"},\"hook_"
-        "shaft\":{\"kind\":\"body\",\"name\":\"lower_shaft\"}},\"sizes\":{\"nanchor_out\":48,\"nblock\":2"
-        ",\"nbranch\":2,\"nc\":102,\"nf\":15,\"nfo\":38,\"ngroup\":9,\"nload\":13,\"nobs\":69,\"np\":41,\""
-        "nq\":4,\"nx\":1}}"
+        ",\"E.x\",\"E.y\"],\"constants\":[[0],[11],[11],[11],[2],[3],[1],[4],[1],[4],[0,2,3],[5,6],[5,6],"
+        "[2,7],[5,6],[3,8],[5],[2,3,5,7,8],[2],[4],[3],[1],[5,6],[0,1,2,4],[0,1,3,4],[2,5,7],[3,5,8],[0],"
+        "[7],[8],[9,10],[9,10],[9,10],[9,10],[11],[13],[14],[14],[13],[1],[1],[19],[20],[20],[19],[23],[2"
+        "4],[24],[23],[27],[28],[28],[27],[0,1,2,4],[0,1,3,4],[17],[1,16],[1,16],[21],[4,19],[4,19],[18],"
+        "[26],[25],[29],[9,10,24],[9,10,23],[9,10,23],[22],[15],[0,13],[0,13],[12],[16],[8],[12],[15],[16"
+        "],[17],[18],[21],[22],[25],[26],[29],[12],[16],[18],[22],[26],[30,31],[32,33],[34,35],[36,37],[3"
+        "8,39],[40],[30],[32],[34],[36],[38],[40],[5,6,20],[5,6,19],[5,6,19]],\"coords\":[{\"guess\":0.0,"
+        "\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"lower_"
+        "shaft.angle\",\"unit\":\"rad\"},{\"guess\":-1.5707963267948966,\"name\":\"big_rod.angle\",\"unit"
+        "\":\"rad\"},{\"guess\":0.005,\"name\":\"rock_slider.travel\",\"unit\":\"m\"}],\"default_speed\":"
+        "104.71975511965977,\"doc\":\"Hook drive \\u94a9\\u7ebf\\u673a\\u6784: hook crank 12 \\u2192 big "
+        "connecting rod \\u5927\\u8fde\\u6746 9 \\u2192 rock shaft \\u6446\\u8f74 4 \\u2192 rock-shaft sl"
+        "ider\\n\\u6446\\u8f74\\u6ed1\\u5757 10 in the slot of the lower-shaft arm \\u4e0b\\u8f74 11 (an "
+        "oscillating guide bar) \\u2192 oscillating shuttle.\\n\\nTwo loops (seed 000 \\u00a7\\u4e00(\\u4"
+        "e00)3, fig. 1-1; fig. 1-2(c) is the guide-bar unit): the four-bar crank\\u2013rod\\u2013rock\\ns"
+        "haft, then the guide bar whose slotted arm turns the lower shaft through a large swing. The rock"
+        " shaft\\nand lower shaft run parallel to the upper shaft, so both loops project onto one plane: "
+        "origin on the upper\\nshaft axis, x horizontal, y up. The lower-shaft slot passes through its ax"
+        "is (local u axis).\\n\\nThe shuttle's point \\u6446\\u68ad\\u5c16 (point ``hook_point``) is a po"
+        "int of the lower-shaft body at ``hook_radius`` from its\\naxis and ``hook_angle`` from the slot:"
+        " the lower shaft's axis is under the needle (x = 0), so the hook point\\ncrosses the needle's ce"
+        "ntre line at the top of its circle, moving across it (sewgen.machine.timing measures the\\nneedl"
+        "e's rise from its bottom dead centre and the hook point's height above the needle eye there).\\n"
+        "\\nDimensions are estimates sized to the household machine (seed 000's tables are not in the tex"
+        "t); the\\nearlier estimate (crank 12, rod 170, rock arms 13.6 and 20 mm) swung the rock shaft \\u"
+        "00b162\\u00b0 with a minimum\\ntransmission angle of 23.6\\u00b0, at \\u03c6 = 125\\u00b0 where "
+        "the hook crank pin's load peaked:\\n\\n* the crank-rocker (crank 16 mm, big rod 217.76 mm, front"
+        " arm 21.02 mm, rock axis 217.45 mm below the upper\\n  shaft) swings the rock shaft 99.1\\u00b0 "
+        "with a minimum transmission angle of 40.3\\u00b0 (big rod against the front\\n  arm). A crank-ro"
+        "cker's transmission angle falls below 40\\u00b0 once its rocker swings much more than 100\\u00b0"
+        ", so\\n  the rock swing cannot stay near the old 124\\u00b0. Its ends \\u2014 the shuttle's reve"
+        "rsals \\u2014 fall at crank angles of\\n  about 89\\u00b0 and 269\\u00b0, so a group phase of \\u"
+        "22122\\u00b0 puts them at the needle's top and bottom dead centres (an\\n  oscillating shuttle s"
+        "tarts from its end position with the needle at its lowest point);\\n* the guide bar (the lower-s"
+        "haft axis under the needle, 32.4 mm from the rock shaft's, inside the 39.01 mm\\n  rear arm's ci"
+        "rcle; rear arm 57.63\\u00b0 from the front arm) turns the 99.1\\u00b0 into a shuttle swing of 20"
+        "6.7\\u00b0\\n  (household shuttles swing 206\\u00b0\\u2013210\\u00b0). Its own transmission angl"
+        "e is 90\\u00b0 (the slot's force is normal to the\\n  slotted arm). The price of the smaller roc"
+        "k swing is a less uniform shuttle: the guide bar must multiply\\n  the swing 2.1 times, most of "
+        "it at mid-stroke, so the lower shaft peaks at 4.5 times the upper shaft's speed\\n  (2.7 before)"
+        " and its inertia, not the transmission, now sets the hook crank pin's peak load. These\\n  dimen"
+        "sions are the ones of least peak crank-pin load (167 N at 1000 r/min with the lower shaft's 6e-6"
+        "\\n  kg\\u00b7m\\u00b2) among those with a transmission angle of at least 40.3\\u00b0, a 206.5\\u"
+        "00b0\\u2013210\\u00b0 swing and reversals at 89\\u00b0 and\\n  269\\u00b0 (a local search over r"
+        "od, rock axis, arms and rear-arm angle); a 35\\u00b0 design of the same kind would\\n  carry abo"
+        "ut 80 N, and without the lower shaft's inertia this one would carry 16 N (the old one 44 N);\\n*"
+        " the shuttle (hook point) radius is 12 mm, its axis 20 mm below the throat plate: its point pass"
+        "es over the\\n  needle's centre line at the top of its circle. ``hook_angle`` (132.45\\u00b0) pu"
+        "ts it there when the needle has\\n  risen 2.0 mm from its bottom dead centre (JUKI service manua"
+        "ls: 2.0 \\u00b1 0.2 mm) at the JB1-3's phase, 1.6 mm\\n  above the top of the needle eye (servic"
+        "e manuals: 1\\u20132.5 mm).\",\"elements\":[],\"force_blocks\":[1,2],\"force_outputs\":[{\"name\""
+        ":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"rock_s"
+        "lider.guide.fx\",\"unit\":\"N\"},{\"name\":\"rock_slider.guide.fy\",\"unit\":\"N\"},{\"name\":\""
+        "frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},"
+        "{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\""
+        "},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"nam"
+        "e\":\"elastic_power\",\"unit\":\"W\"},{\"name\":\"B.friction\",\"unit\":\"N*m\"},{\"name\":\"B.f"
+        "riction_power\",\"unit\":\"W\"},{\"name\":\"C.friction\",\"unit\":\"N*m\"},{\"name\":\"C.frictio"
+        "n_power\",\"unit\":\"W\"},{\"name\":\"O4.friction\",\"unit\":\"N*m\"},{\"name\":\"O4.friction_po"
+        "wer\",\"unit\":\"W\"},{\"name\":\"O11.friction\",\"unit\":\"N*m\"},{\"name\":\"O11.friction_powe"
+        "r\",\"unit\":\"W\"},{\"name\":\"E.friction\",\"unit\":\"N*m\"},{\"name\":\"E.friction_power\",\""
+        "unit\":\"W\"},{\"name\":\"rock_slider.guide.friction\",\"unit\":\"N\"},{\"name\":\"rock_slider.g"
+        "uide.friction_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\","
+        "\"big_rod.x\",\"big_rod.y\",\"big_rod.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.mo"
+        "ment\",\"lower_shaft.x\",\"lower_shaft.y\",\"lower_shaft.moment\",\"rock_slider.x\",\"rock_slide"
+        "r.y\",\"rock_slider.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"up"
+        "per-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"k"
+        "ernels\":{\"sg_hook_drive_anchors\":{\"ops\":70},\"sg_hook_drive_blocks\":{\"ops\":46},\"sg_hook"
+        "_drive_closed\":{\"ops\":60},\"sg_hook_drive_constants\":{\"ops\":96},\"sg_hook_drive_force_matr"
+        "ix\":{\"ops\":138},\"sg_hook_drive_forces\":{\"ops\":380},\"sg_hook_drive_lu_factor\":{\"ops\":4"
+        "2},\"sg_hook_drive_lu_solve\":{\"ops\":32},\"sg_hook_drive_motion\":{\"ops\":238},\"sg_hook_driv"
+        "e_observe\":{\"ops\":239},\"sg_hook_drive_rates\":{\"ops\":72},\"sg_hook_drive_residual\":{\"ops"
+        "\":38},\"sg_hook_drive_scales\":{\"ops\":7}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\""
+        ",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"bod"
+        "y\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"rock_pin\"},{\"body\":\"rock_shaft\",\"compon"
+        "ent\":\"fy\",\"name\":\"rock_pin\"},{\"body\":\"rock_slider\",\"component\":\"fx\",\"name\":\"sl"
+        "ider_pin\"},{\"body\":\"rock_slider\",\"component\":\"fy\",\"name\":\"slider_pin\"},{\"body\":\""
+        "lower_shaft\",\"component\":\"fx\",\"name\":\"hook_point\"},{\"body\":\"lower_shaft\",\"componen"
+        "t\":\"fy\",\"name\":\"hook_point\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\"cran"
+        "k\"},{\"body\":\"big_rod\",\"component\":\"torque\",\"name\":\"big_rod\"},{\"body\":\"rock_shaft"
+        "\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"lower_shaft\",\"component\":\"t"
+        "orque\",\"name\":\"lower_shaft\"},{\"body\":\"rock_slider\",\"component\":\"torque\",\"name\":\""
+        "rock_slider\"}],\"name\":\"hook_drive\",\"observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\""
+        "},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"nam"
+        "e\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name"
+        "\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.x\",\"unit\":\"m\"},{\"name\":\"r"
+        "ock_pin.y\",\"unit\":\"m\"},{\"name\":\"rock_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.y_"
+        "d\",\"unit\":\"m/s\"},{\"name\":\"rock_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_pin.y_dd\""
+        ",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.x\",\"unit\":\"m\"},{\"name\":\"slider_pin.y\",\"uni"
+        "t\":\"m\"},{\"name\":\"slider_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"slider_pin.y_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"slider_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"slider_pin.y_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"hook_point.x\",\"unit\":\"m\"},{\"name\":\"hook_point.y\",\"unit\":\"m\""
+        "},{\"name\":\"hook_point.x_d\",\"unit\":\"m/s\"},{\"name\":\"hook_point.y_d\",\"unit\":\"m/s\"},"
+        "{\"name\":\"hook_point.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"hook_point.y_dd\",\"unit\":\"m/s^2"
+        "\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},"
+        "{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\""
+        "name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"c"
+        "rank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.angle\",\"unit\":\"rad\"},{\"name\":\"bi"
+        "g_rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"big_rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name"
+        "\":\"big_rod.com.x\",\"unit\":\"m\"},{\"name\":\"big_rod.com.y\",\"unit\":\"m\"},{\"name\":\"big"
+        "_rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"big_rod.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"big"
+        "_rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"big_rod.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\""
+        "name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m"
+        "\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m"
+        "/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"uni"
+        "t\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_shaft.ang"
+        "le\",\"unit\":\"rad\"},{\"name\":\"lower_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_s"
+        "haft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_shaft.com.x\",\"unit\":\"m\"},{\"name\":"
+        "\"lower_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"lower_shaft.com.x_d\",\"unit\":\"m/s\"},{\"nam"
+        "e\":\"lower_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_shaft.com.x_dd\",\"unit\":\"m/s^"
+        "2\"},{\"name\":\"lower_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_slider.angle\",\"un"
+        "it\":\"rad\"},{\"name\":\"rock_slider.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_slider.angl"
+        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_slider.com.x\",\"unit\":\"m\"},{\"name\":\"rock_sl"
+        "ider.com.y\",\"unit\":\"m\"},{\"name\":\"rock_slider.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"roc"
+        "k_slider.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_slider.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
+        "ame\":\"rock_slider.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.016,\"display_uni"
+        "t\":\"mm\",\"doc\":\"hook crank radius on the upper shaft (estimate)\",\"kind\":\"length\",\"nam"
+        "e\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.21776,\"display_uni"
+        "t\":\"mm\",\"doc\":\"big connecting rod, pin to pin (estimate)\",\"kind\":\"length\",\"name\":\""
+        "big_rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.0179,\"display_unit\":"
+        "\"mm\",\"doc\":\"rock-shaft axis, horizontal (estimate)\",\"kind\":\"length\",\"name\":\"rock_ax"
+        "is_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.21745,\"display_unit\":\""
+        "mm\",\"doc\":\"rock-shaft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"rock_axis_y"
+        "\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02102,\"display_unit\":\"mm\""
+        ",\"doc\":\"rock-shaft arm driven by the big rod (estimate)\",\"kind\":\"length\",\"name\":\"rock"
+        "_front_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.039009999999999996,\""
+        "display_unit\":\"mm\",\"doc\":\"rock-shaft arm carrying the slider pin (estimate)\",\"kind\":\"l"
+        "ength\",\"name\":\"rock_rear_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":"
+        "1.0058332479243322,\"display_unit\":\"deg\",\"doc\":\"rear arm direction relative to the front a"
+        "rm (estimate)\",\"kind\":\"angle\",\"name\":\"rock_rear_angle\",\"positive\":false,\"role\":null"
+        ",\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"lower-shaft axis, horizont"
+        "al: under the needle (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_x\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"m\"},{\"default\":-0.1905,\"display_unit\":\"mm\",\"doc\":\"lower-sh"
+        "aft axis, vertical (estimate)\",\"kind\":\"length\",\"name\":\"lower_axis_y\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.012,\"display_unit\":\"mm\",\"doc\":\"shuttle poin"
+        "t's radius about the lower-shaft axis (estimate)\",\"kind\":\"length\",\"name\":\"hook_radius\","
+        "\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.311688594266489,\"display_unit\":"
+        "\"deg\",\"doc\":\"shuttle point's direction on the lower shaft from its slot (set for a 2.0 mm l"
+        "oop lift)\",\"kind\":\"angle\",\"name\":\"hook_angle\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of crank relative to the sha"
+        "ft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of crank\",\"kind\":\"mass\",\""
+        "name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"displ"
+        "ay_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind\":\"length\",\"name\":\"cra"
+        "nk.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\""
+        "mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\",\"name\":\"crank.com_v\",\""
+        "positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"kg*m**2\",\"d"
+        "oc\":\"moment of inertia of crank about its centre of mass\",\"kind\":\"inertia\",\"name\":\"cra"
+        "nk.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.028,\"display"
+        "_unit\":\"g\",\"doc\":\"mass of big_rod\",\"kind\":\"mass\",\"name\":\"big_rod.mass\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":7e-05,\"display_unit\":\"kg*m**2\",\"doc\":"
+        "\"moment of inertia of big_rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"big_ro"
+        "d.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\"display_u"
+        "nit\":\"g\",\"doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\""
+        "centre of mass of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":-0.002,\"display_unit\":\"mm\",\"doc\":\""
+        "centre of mass of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m**2\",\"doc"
+        "\":\"moment of inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\""
+        "rock_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.06,\""
+        "display_unit\":\"g\",\"doc\":\"mass of lower_shaft\",\"kind\":\"mass\",\"name\":\"lower_shaft.ma"
+        "ss\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\","
+        "\"doc\":\"centre of mass of lower_shaft, local u\",\"kind\":\"length\",\"name\":\"lower_shaft.co"
+        "m_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\","
+        "\"doc\":\"centre of mass of lower_shaft, local v\",\"kind\":\"length\",\"name\":\"lower_shaft.co"
+        "m_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*"
+        "m**2\",\"doc\":\"moment of inertia of lower_shaft about its centre of mass\",\"kind\":\"inertia\""
+        ",\"name\":\"lower_shaft.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"defa"
+        "ult\":0.003,\"display_unit\":\"g\",\"doc\":\"mass of rock_slider\",\"kind\":\"mass\",\"name\":\""
+        "rock_slider.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_"
+        "unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, local u\",\"kind\":\"length\",\"name\":\""
+        "rock_slider.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_"
+        "unit\":\"mm\",\"doc\":\"centre of mass of rock_slider, local v\",\"kind\":\"length\",\"name\":\""
+        "rock_slider.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1e-08,\"displa"
+        "y_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_slider about its centre of mass\",\"kin"
+        "d\":\"inertia\",\"name\":\"rock_slider.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*"
+        "m**2\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"k"
+        "ind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"B.friction\",\"positive\":fal"
+        "se,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"pin radius "
+        "of B (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":\"B.pin_radius\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb fr"
+        "iction coefficient of C\",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\""
+        "C.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\""
+        ":\"mm\",\"doc\":\"pin radius of C (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":"
+        "\"C.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_uni"
+        "t\":\"\",\"doc\":\"Coulomb friction coefficient of O4\",\"kind\":\"dimensionless\",\"maximum\":1"
+        ".0,\"minimum\":0.0,\"name\":\"O4.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"d"
+        "efault\":0.004,\"display_unit\":\"mm\",\"doc\":\"pin radius of O4 (friction arm)\",\"kind\":\"le"
+        "ngth\",\"minimum\":0.0,\"name\":\"O4.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of O11\",\"kind\""
+        ":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"O11.friction\",\"positive\":false,"
+        "\"role\":null,\"unit\":\"\"},{\"default\":0.005,\"display_unit\":\"mm\",\"doc\":\"pin radius of "
+        "O11 (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":\"O11.pin_radius\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb fr"
+        "iction coefficient of E\",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\""
+        "E.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\""
+        ":\"mm\",\"doc\":\"pin radius of E (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":"
+        "\"E.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_uni"
+        "t\":\"\",\"doc\":\"Coulomb friction coefficient of rock_slider.guide\",\"kind\":\"dimensionless\""
+        ",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"rock_slider.guide.friction\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":"
+        "[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},"
+        "{\"body\":\"rock_shaft\",\"doc\":\"big-rod pin C on the rock-shaft arm\",\"name\":\"rock_pin\",\""
+        "offset\":6,\"role\":null},{\"body\":\"rock_slider\",\"doc\":\"slider pin E on the rock-shaft rea"
+        "r arm\",\"name\":\"slider_pin\",\"offset\":12,\"role\":null},{\"body\":\"lower_shaft\",\"doc\":\""
+        "shuttle point \\u6446\\u68ad\\u5c16\",\"name\":\"hook_point\",\"offset\":18,\"role\":\"hook_poin"
+        "t\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":"
+        "true,\"kind\":\"revolute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"lower_shaft\",\"b\":\""
+        "rock_slider\",\"columns\":[\"normal\",\"moment\"],\"grounded\":false,\"kind\":\"prismatic\",\"na"
+        "me\":\"rock_slider.guide\",\"offset\":2},{\"a\":\"crank\",\"b\":\"big_rod\",\"columns\":[\"fx\","
+        "\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":4},{\"a\":\"ground\","
+        "\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\""
+        ":\"O4\",\"offset\":6},{\"a\":\"ground\",\"b\":\"lower_shaft\",\"columns\":[\"fx\",\"fy\"],\"grou"
+        "nded\":true,\"kind\":\"revolute\",\"name\":\"O11\",\"offset\":8},{\"a\":\"big_rod\",\"b\":\"rock"
+        "_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"o"
+        "ffset\":10},{\"a\":\"rock_shaft\",\"b\":\"rock_slider\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
+        ":false,\"kind\":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"ground\",\"b\":\"crank\",\"c"
+        "olumns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank."
+        "drive\",\"offset\":14,\"sense\":1}],\"roles\":{\"hook_point\":{\"kind\":\"point\",\"name\":\"hoo"
+        "k_point\"},\"hook_shaft\":{\"kind\":\"body\",\"name\":\"lower_shaft\"}},\"sizes\":{\"nanchor_out"
+        "\":48,\"nblock\":2,\"nbranch\":2,\"nc\":105,\"nf\":15,\"nfo\":38,\"ngroup\":9,\"nload\":13,\"nob"
+        "s\":69,\"np\":41,\"nq\":4,\"nx\":1}}"
         ;
 }

@@ -6,7 +6,7 @@
 
 /* needle_bar */
 void sg_needle_bar_constants(const double *p, double *c);
-int sg_needle_bar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+int sg_needle_bar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 void sg_needle_bar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_needle_bar_lu_factor(double *a, int *piv);
 void sg_needle_bar_lu_solve(const double *lu, const int *piv, double *b);
@@ -23,7 +23,7 @@ const char *sg_needle_bar_manifest(void);
 
 /* take_up */
 void sg_take_up_constants(const double *p, double *c);
-int sg_take_up_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+int sg_take_up_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 void sg_take_up_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_take_up_lu_factor(double *a, int *piv);
 void sg_take_up_lu_solve(const double *lu, const int *piv, double *b);
@@ -40,7 +40,7 @@ const char *sg_take_up_manifest(void);
 
 /* hook_drive */
 void sg_hook_drive_constants(const double *p, double *c);
-int sg_hook_drive_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+int sg_hook_drive_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 void sg_hook_drive_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_hook_drive_lu_factor(double *a, int *piv);
 void sg_hook_drive_lu_solve(const double *lu, const int *piv, double *b);
@@ -73,7 +73,7 @@ const char *sg_feed_manifest(void);
 
 /* overlock_needle */
 void sg_overlock_needle_constants(const double *p, double *c);
-int sg_overlock_needle_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+int sg_overlock_needle_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 void sg_overlock_needle_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_overlock_needle_lu_factor(double *a, int *piv);
 void sg_overlock_needle_lu_solve(const double *lu, const int *piv, double *b);
@@ -90,7 +90,7 @@ const char *sg_overlock_needle_manifest(void);
 
 /* overlock_loopers */
 void sg_overlock_loopers_constants(const double *p, double *c);
-int sg_overlock_loopers_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+int sg_overlock_loopers_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 void sg_overlock_loopers_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_overlock_loopers_lu_factor(double *a, int *piv);
 void sg_overlock_loopers_lu_solve(const double *lu, const int *piv, double *b);
@@ -107,7 +107,7 @@ const char *sg_overlock_loopers_manifest(void);
 
 /* overlock_feed */
 void sg_overlock_feed_constants(const double *p, double *c);
-int sg_overlock_feed_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+int sg_overlock_feed_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 void sg_overlock_feed_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_overlock_feed_lu_factor(double *a, int *piv);
 void sg_overlock_feed_lu_solve(const double *lu, const int *piv, double *b);
@@ -124,7 +124,7 @@ const char *sg_overlock_feed_manifest(void);
 
 /* overlock_knife */
 void sg_overlock_knife_constants(const double *p, double *c);
-int sg_overlock_knife_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+int sg_overlock_knife_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 void sg_overlock_knife_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_overlock_knife_lu_factor(double *a, int *piv);
 void sg_overlock_knife_lu_solve(const double *lu, const int *piv, double *b);
@@ -141,7 +141,7 @@ const char *sg_overlock_knife_manifest(void);
 
 /* overlock_needle_planar */
 void sg_overlock_needle_planar_constants(const double *p, double *c);
-int sg_overlock_needle_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+int sg_overlock_needle_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 void sg_overlock_needle_planar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_overlock_needle_planar_lu_factor(double *a, int *piv);
 void sg_overlock_needle_planar_lu_solve(const double *lu, const int *piv, double *b);
@@ -158,7 +158,7 @@ const char *sg_overlock_needle_planar_manifest(void);
 
 /* overlock_loopers_planar */
 void sg_overlock_loopers_planar_constants(const double *p, double *c);
-int sg_overlock_loopers_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq);
+int sg_overlock_loopers_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err);
 void sg_overlock_loopers_planar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac);
 int sg_overlock_loopers_planar_lu_factor(double *a, int *piv);
 void sg_overlock_loopers_planar_lu_solve(const double *lu, const int *piv, double *b);

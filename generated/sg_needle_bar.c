@@ -6,17 +6,18 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_needle_bar_constants -- Total ops: 44 */
+/* sg_needle_bar_constants -- Total ops: 46 */
 void sg_needle_bar_constants(const double *p, double *c)
 {
     const double t0 = sin(p[7]);
-    const double t1 = -p[2];
-    const double t2 = p[0] + p[1];
-    const double t3 = t2 + fabs(p[2]);
-    const double t4 = p[3] + p[4];
-    const double t5 = -p[9];
-    const double t6 = (0.5)*p[1];
-    const double t7 = p[0] + t5;
+    const double t1 = fabs(p[2]);
+    const double t2 = -p[2];
+    const double t3 = p[0] + p[1];
+    const double t4 = t1 + t3;
+    const double t5 = p[3] + p[4];
+    const double t6 = -p[9];
+    const double t7 = (0.5)*p[1];
+    const double t8 = p[0] + t6;
     c[0] = p[0];
     c[1] = cos(p[7]);
     c[2] = -t0;
@@ -24,73 +25,78 @@ void sg_needle_bar_constants(const double *p, double *c)
     c[4] = p[1];
     c[5] = p[2];
     c[6] = (1.0/(p[1]));
-    c[7] = t1;
-    c[8] = -p[1];
-    c[9] = t3;
-    c[10] = t2;
-    c[11] = -p[0];
-    c[12] = -p[3];
-    c[13] = -t4;
-    c[14] = p[7];
-    c[15] = p[9];
-    c[16] = -p[10];
-    c[17] = p[10];
-    c[18] = t5;
+    c[7] = 2.0*p[0] + t1;
+    c[8] = t2;
+    c[9] = -p[1];
+    c[10] = t4;
+    c[11] = t3;
+    c[12] = -p[0];
+    c[13] = -p[3];
+    c[14] = -t5;
+    c[15] = p[7];
+    c[16] = p[9];
+    c[17] = -p[10];
+    c[18] = p[10];
     c[19] = t6;
-    c[20] = -t6;
-    c[21] = -p[16] - t1;
-    c[22] = p[15];
-    c[23] = (1.0/(t3));
-    c[24] = p[13];
-    c[25] = p[14];
-    c[26] = p[12];
-    c[27] = -p[12]*t6;
-    c[28] = p[11];
-    c[29] = -t7;
-    c[30] = t7;
-    c[31] = p[8];
-    c[32] = p[17];
-    c[33] = -p[16];
-    c[34] = -p[15];
-    c[35] = -p[15] - p[3];
-    c[36] = -p[15] - t4;
-    c[37] = p[16];
-    c[38] = (0.5)*p[11];
-    c[39] = (0.5)*p[12];
-    c[40] = (0.5)*p[13];
-    c[41] = (0.5)*p[14];
-    c[42] = (0.5)*p[17];
-    c[43] = (0.5)*p[8];
-    c[44] = -p[12];
-    c[45] = -p[14];
-    c[46] = -p[8];
-    c[47] = -p[18]*p[19];
-    c[48] = -p[20]*p[21];
-    c[49] = -p[22];
-    c[50] = p[18];
-    c[51] = p[20];
-    c[52] = p[22];
+    c[20] = t7;
+    c[21] = -t7;
+    c[22] = -p[16] - t2;
+    c[23] = p[15];
+    c[24] = (1.0/(t4));
+    c[25] = p[13];
+    c[26] = p[14];
+    c[27] = p[12];
+    c[28] = -p[12]*t7;
+    c[29] = p[11];
+    c[30] = -t8;
+    c[31] = t8;
+    c[32] = p[8];
+    c[33] = p[17];
+    c[34] = -p[16];
+    c[35] = -p[15];
+    c[36] = -p[15] - p[3];
+    c[37] = -p[15] - t5;
+    c[38] = p[16];
+    c[39] = (0.5)*p[11];
+    c[40] = (0.5)*p[12];
+    c[41] = (0.5)*p[13];
+    c[42] = (0.5)*p[14];
+    c[43] = (0.5)*p[17];
+    c[44] = (0.5)*p[8];
+    c[45] = -p[12];
+    c[46] = -p[14];
+    c[47] = -p[8];
+    c[48] = -p[18]*p[19];
+    c[49] = -p[20]*p[21];
+    c[50] = -p[22];
+    c[51] = p[18];
+    c[52] = p[20];
+    c[53] = p[22];
 }
 
 /* sg_needle_bar_closed -- Total ops: 15 */
-int sg_needle_bar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+int sg_needle_bar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err)
 {
     (void)x;
     int st;
+    double e[3] = {0.0, 0.0, 1.0};
     {
         /* dyad 0: RRP closed at joint C (rod, needle_bar) */
         const double P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
         const double l[1] = {c[4]};
         const double L0[2] = {c[5], 0.0};
         const double u[2] = {0.0, 1.0};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[7];
         double s, J[2];
-        st = sg_dyad_rrp(P, l[0], L0, u, branch[0], &s, J);
+        st = sg_dyad_rrp(P, l[0], L0, u, branch[0], ein, e, &s, J);
         if (st != SG_OK) return st;
         q[1] = atan2(J[1] - P[1], J[0] - P[0]);
         q[0] = s;
         cq[2] = c[6]*(J[0] - P[0]);
         cq[3] = c[6]*(J[1] - P[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return SG_OK;
 }
 
@@ -99,10 +105,10 @@ void sg_needle_bar_residual(const double *q, const double *cq, const double *x, 
 {
     (void)x;
     const double t0 = c[4]*cq[2];
-    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[7] + t0;
+    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[8] + t0;
     r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[4]*cq[3] - q[0];
     jac[0] = 0.0;
-    jac[1] = c[8]*cq[3];
+    jac[1] = c[9]*cq[3];
     jac[2] = -1.0;
     jac[3] = t0;
 }
@@ -125,8 +131,8 @@ void sg_needle_bar_scales(const double *q, const double *cq, const double *x, co
     (void)cq;
     (void)x;
     (void)cx;
-    out[0] = c[9];
-    out[1] = c[10] + fabs(q[0]);
+    out[0] = c[10];
+    out[1] = c[11] + fabs(q[0]);
 }
 
 /* sg_needle_bar_blocks -- Total ops: 14 */
@@ -151,28 +157,28 @@ int sg_needle_bar_motion(const double *q, const double *cq, const double *x, con
     const double t1 = c[1]*cx[1] + c[3]*cx[0];
     const double t2 = c[0]*t1;
     const double t3 = c[1]*cx[0] + c[2]*cx[1];
-    const double t4 = c[11]*t3;
+    const double t4 = c[12]*t3;
     const double t6 = ((xd[0])*(xd[0]));
     const double t7 = c[0]*t3;
-    const double t9 = c[11]*t1;
+    const double t9 = c[12]*t1;
     const double t10 = t9*xd[0];
     const double t11 = t7*xd[0];
     const double t12 = t4*t6 + t9*xdd[0];
     const double t13 = t6*t9 + t7*xdd[0];
-    const double t14 = c[15]*t3 + c[16]*t1;
-    const double t15 = c[16]*t3 + c[18]*t1;
-    const double t16 = c[19]*cq[2];
-    const double t17 = c[20]*cq[3];
-    double J[4], rs[2], cs[2];
+    const double t14 = c[16]*t3 + c[17]*t1;
+    const double t15 = c[17]*t3 + c[19]*t1;
+    const double t16 = c[20]*cq[2];
+    const double t17 = c[21]*cq[3];
+    double J[4], rs[2], cs[4];
     int piv[2];
     J[0] = 0.0;
-    J[1] = c[8]*cq[3];
+    J[1] = c[9]*cq[3];
     J[2] = -1.0;
     J[3] = t0;
     qd[0] = t2*xd[0];
     qd[1] = t4*xd[0];
-    rs[0] = c[23];
-    rs[1] = (1.0/(c[10] + fabs(q[0])));
+    rs[0] = c[24];
+    rs[1] = (1.0/(c[11] + fabs(q[0])));
     if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(2, J, piv, rs, cs, qd);
     const double t5 = ((qd[1])*(qd[1]));
@@ -180,6 +186,7 @@ int sg_needle_bar_motion(const double *q, const double *cq, const double *x, con
     qdd[0] = t0*t5 + t2*xdd[0] + t6*t7;
     qdd[1] = c[4]*t8 + t2*t6 + t4*xdd[0];
     sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(2, 0x2ULL, fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = t7;
     obs[1] = t2;
     obs[2] = t10;
@@ -193,40 +200,40 @@ int sg_needle_bar_motion(const double *q, const double *cq, const double *x, con
     obs[10] = 0.0;
     obs[11] = qdd[0];
     obs[12] = c[5];
-    obs[13] = c[12] + q[0];
+    obs[13] = c[13] + q[0];
     obs[14] = 0.0;
     obs[15] = qd[0];
     obs[16] = 0.0;
     obs[17] = qdd[0];
     obs[18] = c[5];
-    obs[19] = c[13] + q[0];
+    obs[19] = c[14] + q[0];
     obs[20] = 0.0;
     obs[21] = qd[0];
     obs[22] = 0.0;
     obs[23] = qdd[0];
-    obs[24] = c[14] + x[0];
+    obs[24] = c[15] + x[0];
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t14;
-    obs[28] = c[15]*t1 + c[17]*t3;
+    obs[28] = c[16]*t1 + c[18]*t3;
     obs[29] = t15*xd[0];
     obs[30] = t14*xd[0];
-    obs[31] = t15*xdd[0] + t6*(c[17]*t1 + c[18]*t3);
+    obs[31] = t15*xdd[0] + t6*(c[18]*t1 + c[19]*t3);
     obs[32] = t14*xdd[0] + t15*t6;
     obs[33] = q[1];
     obs[34] = qd[1];
     obs[35] = qdd[1];
     obs[36] = t16 + t7;
-    obs[37] = c[19]*cq[3] + t2;
+    obs[37] = c[20]*cq[3] + t2;
     obs[38] = qd[1]*t17 + t10;
     obs[39] = qd[1]*t16 + t11;
-    obs[40] = c[20]*cq[2]*t5 + qdd[1]*t17 + t12;
-    obs[41] = c[20]*t8 + qdd[1]*t16 + t13;
+    obs[40] = c[21]*cq[2]*t5 + qdd[1]*t17 + t12;
+    obs[41] = c[21]*t8 + qdd[1]*t16 + t13;
     obs[42] = (0.5)*3.141592653589793;
     obs[43] = 0.0;
     obs[44] = 0.0;
-    obs[45] = c[21];
-    obs[46] = c[22] + q[0];
+    obs[45] = c[22];
+    obs[46] = c[23] + q[0];
     obs[47] = 0.0;
     obs[48] = qd[0];
     obs[49] = 0.0;
@@ -243,19 +250,19 @@ int sg_needle_bar_rates(const double *q, const double *cq, const double *x, cons
     const double t1 = c[1]*cx[1] + c[3]*cx[0];
     const double t2 = c[0]*t1;
     const double t3 = c[1]*cx[0] + c[2]*cx[1];
-    const double t4 = c[11]*t3;
+    const double t4 = c[12]*t3;
     const double t6 = ((xd[0])*(xd[0]));
     const double t7 = c[0]*t3;
-    double J[4], rs[2], cs[2];
+    double J[4], rs[2], cs[4];
     int piv[2];
     J[0] = 0.0;
-    J[1] = c[8]*cq[3];
+    J[1] = c[9]*cq[3];
     J[2] = -1.0;
     J[3] = t0;
     qd[0] = t2*xd[0];
     qd[1] = t4*xd[0];
-    rs[0] = c[23];
-    rs[1] = (1.0/(c[10] + fabs(q[0])));
+    rs[0] = c[24];
+    rs[1] = (1.0/(c[11] + fabs(q[0])));
     if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(2, J, piv, rs, cs, qd);
     const double t5 = ((qd[1])*(qd[1]));
@@ -263,6 +270,7 @@ int sg_needle_bar_rates(const double *q, const double *cq, const double *x, cons
     qdd[0] = t0*t5 + t2*xdd[0] + t6*t7;
     qdd[1] = c[4]*t8 + t2*t6 + t4*xdd[0];
     sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(2, 0x2ULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -275,10 +283,10 @@ int sg_needle_bar_observe(const double *q, const double *cq, const double *x, co
         const double t1 = c[1]*cx[1] + c[3]*cx[0];
         const double t2 = c[0]*t1;
         const double t3 = c[1]*cx[0] + c[2]*cx[1];
-        const double t4 = c[11]*t3;
+        const double t4 = c[12]*t3;
         const double t6 = ((xd[0])*(xd[0]));
         const double t7 = c[0]*t3;
-        const double t9 = c[11]*t1;
+        const double t9 = c[12]*t1;
         const double t10 = t9*xd[0];
         const double t11 = t7*xd[0];
         const double t12 = t4*t6 + t9*xdd[0];
@@ -302,7 +310,7 @@ int sg_needle_bar_observe(const double *q, const double *cq, const double *x, co
     }
     case 2: {
         obs[12] = c[5];
-        obs[13] = c[12] + q[0];
+        obs[13] = c[13] + q[0];
         obs[14] = 0.0;
         obs[15] = qd[0];
         obs[16] = 0.0;
@@ -311,7 +319,7 @@ int sg_needle_bar_observe(const double *q, const double *cq, const double *x, co
     }
     case 3: {
         obs[18] = c[5];
-        obs[19] = c[13] + q[0];
+        obs[19] = c[14] + q[0];
         obs[20] = 0.0;
         obs[21] = qd[0];
         obs[22] = 0.0;
@@ -322,16 +330,16 @@ int sg_needle_bar_observe(const double *q, const double *cq, const double *x, co
         const double t1 = c[1]*cx[1] + c[3]*cx[0];
         const double t3 = c[1]*cx[0] + c[2]*cx[1];
         const double t6 = ((xd[0])*(xd[0]));
-        const double t14 = c[15]*t3 + c[16]*t1;
-        const double t15 = c[16]*t3 + c[18]*t1;
-        obs[24] = c[14] + x[0];
+        const double t14 = c[16]*t3 + c[17]*t1;
+        const double t15 = c[17]*t3 + c[19]*t1;
+        obs[24] = c[15] + x[0];
         obs[25] = xd[0];
         obs[26] = xdd[0];
         obs[27] = t14;
-        obs[28] = c[15]*t1 + c[17]*t3;
+        obs[28] = c[16]*t1 + c[18]*t3;
         obs[29] = t15*xd[0];
         obs[30] = t14*xd[0];
-        obs[31] = t15*xdd[0] + t6*(c[17]*t1 + c[18]*t3);
+        obs[31] = t15*xdd[0] + t6*(c[18]*t1 + c[19]*t3);
         obs[32] = t14*xdd[0] + t15*t6;
         return isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -339,35 +347,35 @@ int sg_needle_bar_observe(const double *q, const double *cq, const double *x, co
         const double t1 = c[1]*cx[1] + c[3]*cx[0];
         const double t2 = c[0]*t1;
         const double t3 = c[1]*cx[0] + c[2]*cx[1];
-        const double t4 = c[11]*t3;
+        const double t4 = c[12]*t3;
         const double t5 = ((qd[1])*(qd[1]));
         const double t6 = ((xd[0])*(xd[0]));
         const double t7 = c[0]*t3;
         const double t8 = cq[3]*t5;
-        const double t9 = c[11]*t1;
+        const double t9 = c[12]*t1;
         const double t10 = t9*xd[0];
         const double t11 = t7*xd[0];
         const double t12 = t4*t6 + t9*xdd[0];
         const double t13 = t6*t9 + t7*xdd[0];
-        const double t16 = c[19]*cq[2];
-        const double t17 = c[20]*cq[3];
+        const double t16 = c[20]*cq[2];
+        const double t17 = c[21]*cq[3];
         obs[33] = q[1];
         obs[34] = qd[1];
         obs[35] = qdd[1];
         obs[36] = t16 + t7;
-        obs[37] = c[19]*cq[3] + t2;
+        obs[37] = c[20]*cq[3] + t2;
         obs[38] = qd[1]*t17 + t10;
         obs[39] = qd[1]*t16 + t11;
-        obs[40] = c[20]*cq[2]*t5 + qdd[1]*t17 + t12;
-        obs[41] = c[20]*t8 + qdd[1]*t16 + t13;
+        obs[40] = c[21]*cq[2]*t5 + qdd[1]*t17 + t12;
+        obs[41] = c[21]*t8 + qdd[1]*t16 + t13;
         return isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41]))))) ? SG_OK : SG_NONFINITE;
     }
     case 6: {
         obs[42] = (0.5)*3.141592653589793;
         obs[43] = 0.0;
         obs[44] = 0.0;
-        obs[45] = c[21];
-        obs[46] = c[22] + q[0];
+        obs[45] = c[22];
+        obs[46] = c[23] + q[0];
         obs[47] = 0.0;
         obs[48] = qd[0];
         obs[49] = 0.0;
@@ -387,39 +395,39 @@ int sg_needle_bar_forces(const double *q, const double *cq, const double *x, con
     for (int it = 0; ; ++it) {
         const double t0 = -fr[0];
         const double t1 = -gv[0] + obs[40];
-        const double t2 = -c[25]*(-gv[1] + obs[50]) + fr[2] + ld[3] + ld[5] + ld[7];
+        const double t2 = -c[26]*(-gv[1] + obs[50]) + fr[2] + ld[3] + ld[5] + ld[7];
         const double t3 = -t2;
-        const double t4 = c[19]*cq[2];
-        const double t5 = c[26]*(-gv[1] + obs[41]) - t2;
+        const double t4 = c[20]*cq[2];
+        const double t5 = c[27]*(-gv[1] + obs[41]) - t2;
         const double t6 = c[1]*cx[0] + c[2]*cx[1];
-        const double t7 = c[17]*t6;
+        const double t7 = c[18]*t6;
         const double t8 = c[1]*cx[1] + c[3]*cx[0];
-        const double t9 = c[17]*t8;
+        const double t9 = c[18]*t8;
         const double t11 = -obs[25] + obs[34];
         const double t12 = fr[0]*t11;
         const double t13 = -obs[34] + obs[43];
         const double t14 = fr[1]*t13;
-        const double t15 = c[37]*obs[43] + obs[48];
+        const double t15 = c[38]*obs[43] + obs[48];
         const double t16 = fr[2]*t15;
         {
             const double d = c[4]*cq[3];
             if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[4]*cq[3]))) return SG_SINGULAR;
-            out[6] = (c[24]*obs[35] + c[27]*cq[3]*t1 + fr[1] - ld[9] + t0 + t3*t4 + t4*t5)/d;
+            out[6] = (c[25]*obs[35] + c[28]*cq[3]*t1 + fr[1] - ld[9] + t0 + t3*t4 + t4*t5)/d;
         }
-        out[4] = c[26]*t1 + out[6];
-        out[2] = -c[25]*(-gv[0] + obs[49]) + out[6] + ld[2] + ld[4] + ld[6];
-        out[3] = -c[22]*out[6] + c[32]*obs[44] + c[33]*fr[2] + c[33]*ld[3] + c[33]*ld[5] + c[33]*ld[7] + c[33]*t3 - c[34]*out[2] + c[34]*ld[2] + c[35]*ld[4] + c[36]*ld[6] - fr[1] - ld[10];
+        out[4] = c[27]*t1 + out[6];
+        out[2] = -c[26]*(-gv[0] + obs[49]) + out[6] + ld[2] + ld[4] + ld[6];
+        out[3] = -c[23]*out[6] + c[33]*obs[44] + c[34]*fr[2] + c[34]*ld[3] + c[34]*ld[5] + c[34]*ld[7] + c[34]*t3 - c[35]*out[2] + c[35]*ld[2] + c[36]*ld[4] + c[37]*ld[6] - fr[1] - ld[10];
         out[5] = t5;
         out[7] = t3;
-        out[1] = c[31]*(-gv[1] + obs[32]) + out[5] - ld[1];
-        out[0] = c[31]*(-gv[0] + obs[31]) + out[4] - ld[0];
-        out[8] = c[28]*obs[26] - out[0]*(c[15]*t8 + t7) - out[1]*(c[18]*t6 + t9) - out[4]*(c[16]*t6 + c[30]*t8) - out[5]*(c[16]*t8 + c[29]*t6) - ld[0]*(c[29]*t8 + t7) - ld[1]*(c[30]*t6 + t9) - ld[8] - t0;
+        out[1] = c[32]*(-gv[1] + obs[32]) + out[5] - ld[1];
+        out[0] = c[32]*(-gv[0] + obs[31]) + out[4] - ld[0];
+        out[8] = c[29]*obs[26] - out[0]*(c[16]*t8 + t7) - out[1]*(c[19]*t6 + t9) - out[4]*(c[17]*t6 + c[31]*t8) - out[5]*(c[17]*t8 + c[30]*t6) - ld[0]*(c[30]*t8 + t7) - ld[1]*(c[31]*t6 + t9) - ld[8] - t0;
         const double t10 = -out[2];
-        if (!(c[50] == 0.0 && c[51] == 0.0 && c[52] == 0.0)) {
+        if (!(c[51] == 0.0 && c[52] == 0.0 && c[53] == 0.0)) {
             double frn[3];
-            frn[0] = c[47]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t11) > 0.0 ? 1.0 : ((t11) < 0.0 ? -1.0 : 0.0));
-            frn[1] = c[48]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t13) > 0.0 ? 1.0 : ((t13) < 0.0 ? -1.0 : 0.0));
-            frn[2] = c[49]*fabs(out[2])*((t15) > 0.0 ? 1.0 : ((t15) < 0.0 ? -1.0 : 0.0));
+            frn[0] = c[48]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((t11) > 0.0 ? 1.0 : ((t11) < 0.0 ? -1.0 : 0.0));
+            frn[1] = c[49]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t13) > 0.0 ? 1.0 : ((t13) < 0.0 ? -1.0 : 0.0));
+            frn[2] = c[50]*fabs(out[2])*((t15) > 0.0 ? 1.0 : ((t15) < 0.0 ? -1.0 : 0.0));
             double d = 0.0, s = 0.0;
             for (int k = 0; k < 3; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
             if (!(d <= 1e-13 * s)) {
@@ -434,9 +442,9 @@ int sg_needle_bar_forces(const double *q, const double *cq, const double *x, con
         out[12] = 0.0;
         out[13] = out[0] + t10;
         out[14] = out[1] + fr[2];
-        out[15] = c[21]*fr[2] + c[37]*fr[2] + out[2]*q[0] + out[3] + out[8];
-        out[16] = c[38]*((obs[25])*(obs[25])) + c[39]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[40]*((obs[34])*(obs[34])) + c[41]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[42]*((obs[43])*(obs[43])) + c[43]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
-        out[17] = c[44]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[45]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[46]*(gv[0]*obs[27] + gv[1]*obs[28]);
+        out[15] = c[22]*fr[2] + c[38]*fr[2] + out[2]*q[0] + out[3] + out[8];
+        out[16] = c[39]*((obs[25])*(obs[25])) + c[40]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[41]*((obs[34])*(obs[34])) + c[42]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[43]*((obs[43])*(obs[43])) + c[44]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
+        out[17] = c[45]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[46]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[47]*(gv[0]*obs[27] + gv[1]*obs[28]);
         out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t12 + t14 + t16;
         out[19] = 0.0;
         out[20] = fr[0];
@@ -457,19 +465,19 @@ void sg_needle_bar_force_matrix(const double *q, const double *cq, const double 
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[17]*t1;
-    const double t3 = c[17]*t0;
-    const double t4 = c[19]*cq[3];
-    const double t5 = c[20]*cq[2];
+    const double t2 = c[18]*t1;
+    const double t3 = c[18]*t0;
+    const double t4 = c[20]*cq[3];
+    const double t5 = c[21]*cq[2];
     for (int k = 0; k < 81; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = -1.0;
     A[10] = 1.0;
     A[14] = -1.0;
-    A[18] = c[15]*t0 + t2;
-    A[19] = c[18]*t1 + t3;
-    A[22] = c[16]*t1 + c[30]*t0;
-    A[23] = c[16]*t0 + c[29]*t1;
+    A[18] = c[16]*t0 + t2;
+    A[19] = c[19]*t1 + t3;
+    A[22] = c[17]*t1 + c[31]*t0;
+    A[23] = c[17]*t0 + c[30]*t1;
     A[26] = 1.0;
     A[31] = 1.0;
     A[33] = -1.0;
@@ -482,19 +490,19 @@ void sg_needle_bar_force_matrix(const double *q, const double *cq, const double 
     A[56] = -1.0;
     A[60] = 1.0;
     A[70] = 1.0;
-    A[74] = c[34];
+    A[74] = c[35];
     A[75] = 1.0;
-    A[78] = c[22];
-    A[79] = c[37];
-    b[0] = c[31]*(-gv[0] + obs[31]) - ld[0];
-    b[1] = c[31]*(-gv[1] + obs[32]) - ld[1];
-    b[2] = c[28]*obs[26] - ld[0]*(c[29]*t0 + t2) - ld[1]*(c[30]*t1 + t3) - ld[8];
-    b[3] = c[26]*(-gv[0] + obs[40]);
-    b[4] = c[26]*(-gv[1] + obs[41]);
-    b[5] = c[24]*obs[35] - ld[9];
-    b[6] = c[25]*(-gv[0] + obs[49]) - ld[2] - ld[4] - ld[6];
-    b[7] = c[25]*(-gv[1] + obs[50]) - ld[3] - ld[5] - ld[7];
-    b[8] = c[32]*obs[44] + c[33]*ld[3] + c[33]*ld[5] + c[33]*ld[7] + c[34]*ld[2] + c[35]*ld[4] + c[36]*ld[6] - ld[10];
+    A[78] = c[23];
+    A[79] = c[38];
+    b[0] = c[32]*(-gv[0] + obs[31]) - ld[0];
+    b[1] = c[32]*(-gv[1] + obs[32]) - ld[1];
+    b[2] = c[29]*obs[26] - ld[0]*(c[30]*t0 + t2) - ld[1]*(c[31]*t1 + t3) - ld[8];
+    b[3] = c[27]*(-gv[0] + obs[40]);
+    b[4] = c[27]*(-gv[1] + obs[41]);
+    b[5] = c[25]*obs[35] - ld[9];
+    b[6] = c[26]*(-gv[0] + obs[49]) - ld[2] - ld[4] - ld[6];
+    b[7] = c[26]*(-gv[1] + obs[50]) - ld[3] - ld[5] - ld[7];
+    b[8] = c[33]*obs[44] + c[34]*ld[3] + c[34]*ld[5] + c[34]*ld[7] + c[35]*ld[2] + c[36]*ld[4] + c[37]*ld[6] - ld[10];
 }
 
 /* sg_needle_bar_anchors -- Total ops: 25 */
@@ -528,15 +536,15 @@ void sg_needle_bar_anchors(const double *q, const double *cq, const double *x, c
     out[20] = c[5];
     out[21] = q[0];
     out[22] = c[5];
-    out[23] = c[12] + q[0];
+    out[23] = c[13] + q[0];
     out[24] = c[5];
-    out[25] = c[13] + q[0];
-    out[26] = c[15]*t0 + c[16]*t2;
-    out[27] = c[15]*t2 + c[17]*t0;
-    out[28] = c[19]*cq[2] + t1;
-    out[29] = c[19]*cq[3] + t3;
-    out[30] = c[21];
-    out[31] = c[22] + q[0];
+    out[25] = c[14] + q[0];
+    out[26] = c[16]*t0 + c[17]*t2;
+    out[27] = c[16]*t2 + c[18]*t0;
+    out[28] = c[20]*cq[2] + t1;
+    out[29] = c[20]*cq[3] + t3;
+    out[30] = c[22];
+    out[31] = c[23] + q[0];
 }
 
 /* sg_needle_bar_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
@@ -553,23 +561,27 @@ static SG_FLATTEN SG_NOINLINE size_t sg_needle_bar_sweep(const struct sg_mechani
 #if SG_SIMD
 SG_SIMD_BEGIN
 
-SG_VINLINE sg_vm sg_needle_bar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_needle_bar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq, sg_vd *err)
 {
     (void)x;
     sg_vm ok = sgv_true();
+    sg_vd e[3] = {sgv_set1(0.0), sgv_set1(0.0), sgv_set1(1.0)};
     {
         /* dyad 0: RRP closed at joint C (rod, needle_bar) */
         const sg_vd P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
         const sg_vd l[1] = {sgv_set1(c[4])};
         const sg_vd L0[2] = {sgv_set1(c[5]), sgv_set1(0.0)};
         const sg_vd u[2] = {sgv_set1(0.0), sgv_set1(1.0)};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[7]);
         sg_vd s, J[2];
-        ok &= sgv_dyad_rrp(P, l[0], L0, u, branch[0], &s, J);
+        ok &= sgv_dyad_rrp(P, l[0], L0, u, branch[0], ein, e, &s, J);
         q[1] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[0] = s;
         cq[2] = c[6]*(J[0] - P[0]);
         cq[3] = c[6]*(J[1] - P[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return ok;
 }
 
@@ -579,28 +591,28 @@ SG_VINLINE sg_vm sg_needle_bar_motion_v(const sg_vd *q, const sg_vd *cq, const s
     const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
     const sg_vd t2 = c[0]*t1;
     const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t4 = c[11]*t3;
+    const sg_vd t4 = c[12]*t3;
     const sg_vd t6 = ((xd[0])*(xd[0]));
     const sg_vd t7 = c[0]*t3;
-    const sg_vd t9 = c[11]*t1;
+    const sg_vd t9 = c[12]*t1;
     const sg_vd t10 = t9*xd[0];
     const sg_vd t11 = t7*xd[0];
     const sg_vd t12 = t4*t6 + t9*xdd[0];
     const sg_vd t13 = t6*t9 + t7*xdd[0];
-    const sg_vd t14 = c[15]*t3 + c[16]*t1;
-    const sg_vd t15 = c[16]*t3 + c[18]*t1;
-    const sg_vd t16 = c[19]*cq[2];
-    const sg_vd t17 = c[20]*cq[3];
-    sg_vd J[4], rs[2], cs[2];
+    const sg_vd t14 = c[16]*t3 + c[17]*t1;
+    const sg_vd t15 = c[17]*t3 + c[19]*t1;
+    const sg_vd t16 = c[20]*cq[2];
+    const sg_vd t17 = c[21]*cq[3];
+    sg_vd J[4], rs[2], cs[4];
     sg_vm piv[2];
     J[0] = sgv_set1(0.0);
-    J[1] = c[8]*cq[3];
+    J[1] = c[9]*cq[3];
     J[2] = sgv_set1(-1.0);
     J[3] = t0;
     qd[0] = t2*xd[0];
     qd[1] = t4*xd[0];
-    rs[0] = sgv_set1(c[23]);
-    rs[1] = (1.0/(c[10] + sgv_fabs(q[0])));
+    rs[0] = sgv_set1(c[24]);
+    rs[1] = (1.0/(c[11] + sgv_fabs(q[0])));
     sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
     sgv_solve_eq(2, J, piv, rs, cs, qd);
     const sg_vd t5 = ((qd[1])*(qd[1]));
@@ -608,6 +620,7 @@ SG_VINLINE sg_vm sg_needle_bar_motion_v(const sg_vd *q, const sg_vd *cq, const s
     qdd[0] = t0*t5 + t2*xdd[0] + t6*t7;
     qdd[1] = c[4]*t8 + t2*t6 + t4*xdd[0];
     sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    sgv_rates_scale(2, 0x2ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = t7;
     obs[1] = t2;
     obs[2] = t10;
@@ -621,40 +634,40 @@ SG_VINLINE sg_vm sg_needle_bar_motion_v(const sg_vd *q, const sg_vd *cq, const s
     obs[10] = sgv_set1(0.0);
     obs[11] = qdd[0];
     obs[12] = sgv_set1(c[5]);
-    obs[13] = c[12] + q[0];
+    obs[13] = c[13] + q[0];
     obs[14] = sgv_set1(0.0);
     obs[15] = qd[0];
     obs[16] = sgv_set1(0.0);
     obs[17] = qdd[0];
     obs[18] = sgv_set1(c[5]);
-    obs[19] = c[13] + q[0];
+    obs[19] = c[14] + q[0];
     obs[20] = sgv_set1(0.0);
     obs[21] = qd[0];
     obs[22] = sgv_set1(0.0);
     obs[23] = qdd[0];
-    obs[24] = c[14] + x[0];
+    obs[24] = c[15] + x[0];
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t14;
-    obs[28] = c[15]*t1 + c[17]*t3;
+    obs[28] = c[16]*t1 + c[18]*t3;
     obs[29] = t15*xd[0];
     obs[30] = t14*xd[0];
-    obs[31] = t15*xdd[0] + t6*(c[17]*t1 + c[18]*t3);
+    obs[31] = t15*xdd[0] + t6*(c[18]*t1 + c[19]*t3);
     obs[32] = t14*xdd[0] + t15*t6;
     obs[33] = q[1];
     obs[34] = qd[1];
     obs[35] = qdd[1];
     obs[36] = t16 + t7;
-    obs[37] = c[19]*cq[3] + t2;
+    obs[37] = c[20]*cq[3] + t2;
     obs[38] = qd[1]*t17 + t10;
     obs[39] = qd[1]*t16 + t11;
-    obs[40] = c[20]*cq[2]*t5 + qdd[1]*t17 + t12;
-    obs[41] = c[20]*t8 + qdd[1]*t16 + t13;
+    obs[40] = c[21]*cq[2]*t5 + qdd[1]*t17 + t12;
+    obs[41] = c[21]*t8 + qdd[1]*t16 + t13;
     obs[42] = sgv_set1((0.5)*3.141592653589793);
     obs[43] = sgv_set1(0.0);
     obs[44] = sgv_set1(0.0);
-    obs[45] = sgv_set1(c[21]);
-    obs[46] = c[22] + q[0];
+    obs[45] = sgv_set1(c[22]);
+    obs[46] = c[23] + q[0];
     obs[47] = sgv_set1(0.0);
     obs[48] = qd[0];
     obs[49] = sgv_set1(0.0);
@@ -670,19 +683,19 @@ SG_VINLINE sg_vm sg_needle_bar_rates_v(const sg_vd *q, const sg_vd *cq, const sg
     const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
     const sg_vd t2 = c[0]*t1;
     const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t4 = c[11]*t3;
+    const sg_vd t4 = c[12]*t3;
     const sg_vd t6 = ((xd[0])*(xd[0]));
     const sg_vd t7 = c[0]*t3;
-    sg_vd J[4], rs[2], cs[2];
+    sg_vd J[4], rs[2], cs[4];
     sg_vm piv[2];
     J[0] = sgv_set1(0.0);
-    J[1] = c[8]*cq[3];
+    J[1] = c[9]*cq[3];
     J[2] = sgv_set1(-1.0);
     J[3] = t0;
     qd[0] = t2*xd[0];
     qd[1] = t4*xd[0];
-    rs[0] = sgv_set1(c[23]);
-    rs[1] = (1.0/(c[10] + sgv_fabs(q[0])));
+    rs[0] = sgv_set1(c[24]);
+    rs[1] = (1.0/(c[11] + sgv_fabs(q[0])));
     sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
     sgv_solve_eq(2, J, piv, rs, cs, qd);
     const sg_vd t5 = ((qd[1])*(qd[1]));
@@ -690,6 +703,7 @@ SG_VINLINE sg_vm sg_needle_bar_rates_v(const sg_vd *q, const sg_vd *cq, const sg
     qdd[0] = t0*t5 + t2*xdd[0] + t6*t7;
     qdd[1] = c[4]*t8 + t2*t6 + t4*xdd[0];
     sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    sgv_rates_scale(2, 0x2ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))));
     return ok;
 }
@@ -701,10 +715,10 @@ SG_VINLINE sg_vm sg_needle_bar_observe_v(const sg_vd *q, const sg_vd *cq, const 
         const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t2 = c[0]*t1;
         const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
-        const sg_vd t4 = c[11]*t3;
+        const sg_vd t4 = c[12]*t3;
         const sg_vd t6 = ((xd[0])*(xd[0]));
         const sg_vd t7 = c[0]*t3;
-        const sg_vd t9 = c[11]*t1;
+        const sg_vd t9 = c[12]*t1;
         const sg_vd t10 = t9*xd[0];
         const sg_vd t11 = t7*xd[0];
         const sg_vd t12 = t4*t6 + t9*xdd[0];
@@ -728,7 +742,7 @@ SG_VINLINE sg_vm sg_needle_bar_observe_v(const sg_vd *q, const sg_vd *cq, const 
     }
     case 2: {
         obs[12] = sgv_set1(c[5]);
-        obs[13] = c[12] + q[0];
+        obs[13] = c[13] + q[0];
         obs[14] = sgv_set1(0.0);
         obs[15] = qd[0];
         obs[16] = sgv_set1(0.0);
@@ -737,7 +751,7 @@ SG_VINLINE sg_vm sg_needle_bar_observe_v(const sg_vd *q, const sg_vd *cq, const 
     }
     case 3: {
         obs[18] = sgv_set1(c[5]);
-        obs[19] = c[13] + q[0];
+        obs[19] = c[14] + q[0];
         obs[20] = sgv_set1(0.0);
         obs[21] = qd[0];
         obs[22] = sgv_set1(0.0);
@@ -748,16 +762,16 @@ SG_VINLINE sg_vm sg_needle_bar_observe_v(const sg_vd *q, const sg_vd *cq, const 
         const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t6 = ((xd[0])*(xd[0]));
-        const sg_vd t14 = c[15]*t3 + c[16]*t1;
-        const sg_vd t15 = c[16]*t3 + c[18]*t1;
-        obs[24] = c[14] + x[0];
+        const sg_vd t14 = c[16]*t3 + c[17]*t1;
+        const sg_vd t15 = c[17]*t3 + c[19]*t1;
+        obs[24] = c[15] + x[0];
         obs[25] = xd[0];
         obs[26] = xdd[0];
         obs[27] = t14;
-        obs[28] = c[15]*t1 + c[17]*t3;
+        obs[28] = c[16]*t1 + c[18]*t3;
         obs[29] = t15*xd[0];
         obs[30] = t14*xd[0];
-        obs[31] = t15*xdd[0] + t6*(c[17]*t1 + c[18]*t3);
+        obs[31] = t15*xdd[0] + t6*(c[18]*t1 + c[19]*t3);
         obs[32] = t14*xdd[0] + t15*t6;
         return sgv_isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))));
     }
@@ -765,35 +779,35 @@ SG_VINLINE sg_vm sg_needle_bar_observe_v(const sg_vd *q, const sg_vd *cq, const 
         const sg_vd t1 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t2 = c[0]*t1;
         const sg_vd t3 = c[1]*cx[0] + c[2]*cx[1];
-        const sg_vd t4 = c[11]*t3;
+        const sg_vd t4 = c[12]*t3;
         const sg_vd t5 = ((qd[1])*(qd[1]));
         const sg_vd t6 = ((xd[0])*(xd[0]));
         const sg_vd t7 = c[0]*t3;
         const sg_vd t8 = cq[3]*t5;
-        const sg_vd t9 = c[11]*t1;
+        const sg_vd t9 = c[12]*t1;
         const sg_vd t10 = t9*xd[0];
         const sg_vd t11 = t7*xd[0];
         const sg_vd t12 = t4*t6 + t9*xdd[0];
         const sg_vd t13 = t6*t9 + t7*xdd[0];
-        const sg_vd t16 = c[19]*cq[2];
-        const sg_vd t17 = c[20]*cq[3];
+        const sg_vd t16 = c[20]*cq[2];
+        const sg_vd t17 = c[21]*cq[3];
         obs[33] = q[1];
         obs[34] = qd[1];
         obs[35] = qdd[1];
         obs[36] = t16 + t7;
-        obs[37] = c[19]*cq[3] + t2;
+        obs[37] = c[20]*cq[3] + t2;
         obs[38] = qd[1]*t17 + t10;
         obs[39] = qd[1]*t16 + t11;
-        obs[40] = c[20]*cq[2]*t5 + qdd[1]*t17 + t12;
-        obs[41] = c[20]*t8 + qdd[1]*t16 + t13;
+        obs[40] = c[21]*cq[2]*t5 + qdd[1]*t17 + t12;
+        obs[41] = c[21]*t8 + qdd[1]*t16 + t13;
         return sgv_isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41])))));
     }
     case 6: {
         obs[42] = sgv_set1((0.5)*3.141592653589793);
         obs[43] = sgv_set1(0.0);
         obs[44] = sgv_set1(0.0);
-        obs[45] = sgv_set1(c[21]);
-        obs[46] = c[22] + q[0];
+        obs[45] = sgv_set1(c[22]);
+        obs[46] = c[23] + q[0];
         obs[47] = sgv_set1(0.0);
         obs[48] = qd[0];
         obs[49] = sgv_set1(0.0);
@@ -812,33 +826,33 @@ SG_VINLINE sg_vm sg_needle_bar_forces_v(const sg_vd *q, const sg_vd *cq, const s
     const double fr[3] = {0.0};
     const sg_vd t0 = sgv_set1(-fr[0]);
     const sg_vd t1 = -gv[0] + obs[40];
-    const sg_vd t2 = -c[25]*(-gv[1] + obs[50]) + fr[2] + ld[3] + ld[5] + ld[7];
+    const sg_vd t2 = -c[26]*(-gv[1] + obs[50]) + fr[2] + ld[3] + ld[5] + ld[7];
     const sg_vd t3 = -t2;
-    const sg_vd t4 = c[19]*cq[2];
-    const sg_vd t5 = c[26]*(-gv[1] + obs[41]) - t2;
+    const sg_vd t4 = c[20]*cq[2];
+    const sg_vd t5 = c[27]*(-gv[1] + obs[41]) - t2;
     const sg_vd t6 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t7 = c[17]*t6;
+    const sg_vd t7 = c[18]*t6;
     const sg_vd t8 = c[1]*cx[1] + c[3]*cx[0];
-    const sg_vd t9 = c[17]*t8;
+    const sg_vd t9 = c[18]*t8;
     const sg_vd t11 = -obs[25] + obs[34];
     const sg_vd t12 = fr[0]*t11;
     const sg_vd t13 = -obs[34] + obs[43];
     const sg_vd t14 = fr[1]*t13;
-    const sg_vd t15 = c[37]*obs[43] + obs[48];
+    const sg_vd t15 = c[38]*obs[43] + obs[48];
     const sg_vd t16 = fr[2]*t15;
     {
         const sg_vd d = c[4]*cq[3];
         ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[4]*cq[3]);
-        out[6] = (c[24]*obs[35] + c[27]*cq[3]*t1 + fr[1] - ld[9] + t0 + t3*t4 + t4*t5)/d;
+        out[6] = (c[25]*obs[35] + c[28]*cq[3]*t1 + fr[1] - ld[9] + t0 + t3*t4 + t4*t5)/d;
     }
-    out[4] = c[26]*t1 + out[6];
-    out[2] = -c[25]*(-gv[0] + obs[49]) + out[6] + ld[2] + ld[4] + ld[6];
-    out[3] = -c[22]*out[6] + c[32]*obs[44] + c[33]*fr[2] + c[33]*ld[3] + c[33]*ld[5] + c[33]*ld[7] + c[33]*t3 - c[34]*out[2] + c[34]*ld[2] + c[35]*ld[4] + c[36]*ld[6] - fr[1] - ld[10];
+    out[4] = c[27]*t1 + out[6];
+    out[2] = -c[26]*(-gv[0] + obs[49]) + out[6] + ld[2] + ld[4] + ld[6];
+    out[3] = -c[23]*out[6] + c[33]*obs[44] + c[34]*fr[2] + c[34]*ld[3] + c[34]*ld[5] + c[34]*ld[7] + c[34]*t3 - c[35]*out[2] + c[35]*ld[2] + c[36]*ld[4] + c[37]*ld[6] - fr[1] - ld[10];
     out[5] = t5;
     out[7] = t3;
-    out[1] = c[31]*(-gv[1] + obs[32]) + out[5] - ld[1];
-    out[0] = c[31]*(-gv[0] + obs[31]) + out[4] - ld[0];
-    out[8] = c[28]*obs[26] - out[0]*(c[15]*t8 + t7) - out[1]*(c[18]*t6 + t9) - out[4]*(c[16]*t6 + c[30]*t8) - out[5]*(c[16]*t8 + c[29]*t6) - ld[0]*(c[29]*t8 + t7) - ld[1]*(c[30]*t6 + t9) - ld[8] - t0;
+    out[1] = c[32]*(-gv[1] + obs[32]) + out[5] - ld[1];
+    out[0] = c[32]*(-gv[0] + obs[31]) + out[4] - ld[0];
+    out[8] = c[29]*obs[26] - out[0]*(c[16]*t8 + t7) - out[1]*(c[19]*t6 + t9) - out[4]*(c[17]*t6 + c[31]*t8) - out[5]*(c[17]*t8 + c[30]*t6) - ld[0]*(c[30]*t8 + t7) - ld[1]*(c[31]*t6 + t9) - ld[8] - t0;
     const sg_vd t10 = -out[2];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
@@ -846,9 +860,9 @@ SG_VINLINE sg_vm sg_needle_bar_forces_v(const sg_vd *q, const sg_vd *cq, const s
     out[12] = sgv_set1(0.0);
     out[13] = out[0] + t10;
     out[14] = out[1] + fr[2];
-    out[15] = c[21]*fr[2] + c[37]*fr[2] + out[2]*q[0] + out[3] + out[8];
-    out[16] = c[38]*((obs[25])*(obs[25])) + c[39]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[40]*((obs[34])*(obs[34])) + c[41]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[42]*((obs[43])*(obs[43])) + c[43]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
-    out[17] = c[44]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[45]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[46]*(gv[0]*obs[27] + gv[1]*obs[28]);
+    out[15] = c[22]*fr[2] + c[38]*fr[2] + out[2]*q[0] + out[3] + out[8];
+    out[16] = c[39]*((obs[25])*(obs[25])) + c[40]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[41]*((obs[34])*(obs[34])) + c[42]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[43]*((obs[43])*(obs[43])) + c[44]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30])));
+    out[17] = c[45]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[46]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[47]*(gv[0]*obs[27] + gv[1]*obs[28]);
     out[18] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34] + t12 + t14 + t16;
     out[19] = sgv_set1(0.0);
     out[20] = sgv_set1(fr[0]);
@@ -863,7 +877,7 @@ SG_VINLINE sg_vm sg_needle_bar_forces_v(const sg_vd *q, const sg_vd *cq, const s
 
 SG_VINLINE int sg_needle_bar_forces_in_simd(const double *c)
 {
-    return c[50] == 0.0 && c[51] == 0.0 && c[52] == 0.0;
+    return c[51] == 0.0 && c[52] == 0.0 && c[53] == 0.0;
 }
 
 static SG_FLATTEN size_t sg_needle_bar_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
@@ -885,7 +899,7 @@ static const sg_mechanism sg_needle_bar_descriptor = {
     .nq = 2,
     .nx = 1,
     .np = 23,
-    .nc = 53,
+    .nc = 54,
     .nobs = 51,
     .nbranch = 1,
     .nf = 9,
@@ -948,146 +962,146 @@ const char *sg_needle_bar_manifest(void)
         "gle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"bra"
         "nches\":[{\"default\":-1,\"joint\":\"C\",\"kind\":\"rrp\",\"meaning\":\"+1: the larger travel of"
         " needle_bar at joint C\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\"],\"constants\":[[0]"
-        ",[7],[7],[7],[1],[2],[1],[2],[1],[0,1,2],[0,1],[0],[3],[3,4],[7],[9],[10],[10],[9],[1],[1],[2,16"
-        "],[15],[0,1,2],[13],[14],[12],[1,12],[11],[0,9],[0,9],[8],[17],[16],[15],[3,15],[3,4,15],[16],[1"
-        "1],[12],[13],[14],[17],[8],[12],[14],[8],[18,19],[20,21],[22],[18],[20],[22]],\"coords\":[{\"gue"
-        "ss\":-0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":-1.5707963267948966,\"name\""
-        ":\"rod.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Needle-bar mech"
-        "anism \\u523a\\u5e03\\u673a\\u6784: upper-shaft crank \\u2192 needle-bar link \\u5c0f\\u8fde\\u6"
-        "746 13 \\u2192 needle bar \\u9488\\u6746 14.\\n\\nA crank-slider with offset (seed 000 \\u00a7\\u"
-        "4e00(\\u4e00)1 and fig. 1-6; seed 002 fig. 1: A crank centre, B crank pin,\\nC needle-bar pin). "
-        "Frame: origin on the upper-shaft axis A, x horizontal, y up; the needle bar slides on\\nthe vert"
-        "ical line x = offset, its travel s measured upward from the shaft's horizontal (s = y of C).\\nC"
-        "rank angle = shaft angle + phase, counter-clockwise from +x (the needle is highest near phi = 90"
-        "\\u00b0).\\n\\nDimensions: crank 16.7 mm is seed 002's industrial crank (its stroke 33.4 mm is w"
-        "ithin the 29\\u201335 mm of\\nindustrial and household machines). The link length, offset, masse"
-        "s and inertias are estimates (the\\nseeds' tables of them are not in the text we have).\\n\\nThe"
-        " needle itself (stitch formation, sewgen.machine.timing): the eye (point ``needle_eye``, the eye"
-        "'s centre), the\\npoint below it (point ``needle_point``: it enters and leaves the cloth), the e"
-        "ye's length (its top is where\\nthe hook point's height is measured from) and the scarf above th"
-        "e eye (the hollow the hook point passes\\nthrough). A household 130/705 H (15x1) needle of size "
-        "80\\u201390 is assumed: eye about 1.2 mm long, its centre\\nabout 2.5 mm above the point, scarf "
-        "about 4 mm long (estimates; no dimensioned drawing was reachable).\",\"elements\":[],\"force_blo"
-        "cks\":[1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.powe"
-        "r\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar.gui"
-        "de.fy\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_"
-        "force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"nam"
-        "e\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":"
-        "\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"},{\"name\":\"B.frictio"
-        "n\",\"unit\":\"N*m\"},{\"name\":\"B.friction_power\",\"unit\":\"W\"},{\"name\":\"C.friction\",\""
-        "unit\":\"N*m\"},{\"name\":\"C.friction_power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fric"
-        "tion\",\"unit\":\"N\"},{\"name\":\"needle_bar.guide.friction_power\",\"unit\":\"W\"}],\"force_ro"
-        "ws\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\"needle_bar.x"
-        "\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\""
-        ",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":"
-        "\"rad\"}],\"kernels\":{\"sg_needle_bar_anchors\":{\"ops\":25},\"sg_needle_bar_blocks\":{\"ops\":"
-        "14},\"sg_needle_bar_closed\":{\"ops\":15},\"sg_needle_bar_constants\":{\"ops\":44},\"sg_needle_b"
-        "ar_force_matrix\":{\"ops\":71},\"sg_needle_bar_forces\":{\"ops\":190},\"sg_needle_bar_lu_factor\""
-        ":{\"ops\":5},\"sg_needle_bar_lu_solve\":{\"ops\":8},\"sg_needle_bar_motion\":{\"ops\":79},\"sg_n"
-        "eedle_bar_observe\":{\"ops\":90},\"sg_needle_bar_rates\":{\"ops\":30},\"sg_needle_bar_residual\""
-        ":{\"ops\":16},\"sg_needle_bar_scales\":{\"ops\":4}},\"loads\":[{\"body\":\"crank\",\"component\""
-        ":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"}"
-        ",{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\""
-        "component\":\"fy\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\""
-        ":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\""
-        ":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"compo"
-        "nent\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"crank\",\"component\":\"torque\",\"name\":\""
-        "crank\"},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"rod\"},{\"body\":\"needle_bar\",\""
-        "component\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"needle_bar\",\"observables\":[{\"nam"
-        "e\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\"crank_"
-        "pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin."
-        "x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link_pin"
-        ".x\",\"unit\":\"m\"},{\"name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"link_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\":\"m/"
-        "s^2\"},{\"name\":\"link_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":\"m\""
-        "},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"},{\"n"
-        "ame\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\"},{\""
-        "name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"},{\"n"
-        "ame\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2\"},{"
-        "\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad\"},{"
-        "\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/s^2\""
-        "},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"name\":"
-        "\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"cr"
-        "ank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod.angl"
-        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\",\"u"
-        "nit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":\"m/"
-        "s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"r"
-        "ad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\""
-        "unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\""
-        "unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_"
-        "dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"d"
-        "efault\":0.0167,\"display_unit\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u00a73)\",\"kind\""
-        ":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":\"needle_crank_radius\",\"unit\":\"m\""
-        "},{\"default\":0.05,\"display_unit\":\"mm\",\"doc\":\"needle-bar link BC, pin to pin (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":\"needle_rod_length\",\"unit\":"
-        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"horizontal offset of the needle-bar ax"
-        "is from the shaft axis\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":\"n"
-        "eedle_bar_offset\",\"unit\":\"m\"},{\"default\":0.062,\"display_unit\":\"mm\",\"doc\":\"needle e"
-        "ye below the link pin C along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\""
-        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"d"
-        "oc\":\"needle point below the eye's centre (estimate, 130/705 H size 80-90)\",\"kind\":\"length\""
-        ",\"name\":\"point_below_eye\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001"
-        "2,\"display_unit\":\"mm\",\"doc\":\"length of the needle eye along the needle (estimate)\",\"kin"
-        "d\":\"length\",\"name\":\"eye_length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\""
-        ":\"m\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, w"
-        "here the hook point passes (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive"
-        "\":true,\"role\":\"needle_scarf\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"do"
-        "c\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\""
-        "positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\""
-        ":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local"
-        " u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\""
-        ":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default"
-        "\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mas"
-        "s\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
-        "kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\""
-        "name\":\"rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":2.5e-06,\"dis"
-        "play_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rod about its centre of mass\",\"kind\":\""
-        "inertia\",\"name\":\"rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"def"
-        "ault\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\""
-        "needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display"
-        "_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\""
-        "needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_u"
-        "nit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"ne"
-        "edle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-05,\"display"
-        "_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\""
-        ":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2"
-        "\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\""
-        ":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"B.friction\",\"positive\":false,\""
-        "role\":null,\"unit\":\"\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"pin radius of B "
-        "(friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":\"B.pin_radius\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb frictio"
-        "n coefficient of C\",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"C.fri"
-        "ction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\":\"m"
-        "m\",\"doc\":\"pin radius of C (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":\"C."
-        "pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":"
-        "\"\",\"doc\":\"Coulomb friction coefficient of needle_bar.guide\",\"kind\":\"dimensionless\",\"m"
-        "aximum\":1.0,\"minimum\":0.0,\"name\":\"needle_bar.guide.friction\",\"positive\":false,\"role\":"
-        "null,\"unit\":\"\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"b"
-        "ody\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null},{\"bo"
-        "dy\":\"needle_bar\",\"doc\":\"needle-bar link pin C\",\"name\":\"link_pin\",\"offset\":6,\"role\""
-        ":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye (its centre)\",\"name\":\"needle_eye\",\"of"
-        "fset\":12,\"role\":\"needle_eye\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\""
-        "needle_point\",\"offset\":18,\"role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":"
-        "\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"crank.p"
-        "ivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],"
-        "\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"cr"
-        "ank\",\"b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\""
-        ":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
-        ":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"co"
-        "lumns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.d"
-        "rive\",\"offset\":8,\"sense\":1}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle"
-        "_bar\"},\"needle_bar_offset\":{\"kind\":\"param\",\"name\":\"offset\"},\"needle_crank\":{\"kind\""
-        ":\"body\",\"name\":\"crank\"},\"needle_crank_radius\":{\"kind\":\"param\",\"name\":\"crank\"},\""
-        "needle_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"para"
-        "m\",\"name\":\"eye_length\"},\"needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"n"
-        "eedle_rod\":{\"kind\":\"body\",\"name\":\"rod\"},\"needle_rod_length\":{\"kind\":\"param\",\"nam"
-        "e\":\"rod\"},\"needle_scarf\":{\"kind\":\"param\",\"name\":\"scarf_length\"}},\"sizes\":{\"nanch"
-        "or_out\":32,\"nblock\":2,\"nbranch\":1,\"nc\":53,\"nf\":9,\"nfo\":26,\"ngroup\":7,\"nload\":11,\""
-        "nobs\":51,\"np\":23,\"nq\":2,\"nx\":1}}"
+        ",[7],[7],[7],[1],[2],[1],[0,2],[2],[1],[0,1,2],[0,1],[0],[3],[3,4],[7],[9],[10],[10],[9],[1],[1]"
+        ",[2,16],[15],[0,1,2],[13],[14],[12],[1,12],[11],[0,9],[0,9],[8],[17],[16],[15],[3,15],[3,4,15],["
+        "16],[11],[12],[13],[14],[17],[8],[12],[14],[8],[18,19],[20,21],[22],[18],[20],[22]],\"coords\":["
+        "{\"guess\":-0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":-1.5707963267948966,\""
+        "name\":\"rod.angle\",\"unit\":\"rad\"}],\"default_speed\":104.71975511965977,\"doc\":\"Needle-ba"
+        "r mechanism \\u523a\\u5e03\\u673a\\u6784: upper-shaft crank \\u2192 needle-bar link \\u5c0f\\u8f"
+        "de\\u6746 13 \\u2192 needle bar \\u9488\\u6746 14.\\n\\nA crank-slider with offset (seed 000 \\u"
+        "00a7\\u4e00(\\u4e00)1 and fig. 1-6; seed 002 fig. 1: A crank centre, B crank pin,\\nC needle-bar"
+        " pin). Frame: origin on the upper-shaft axis A, x horizontal, y up; the needle bar slides on\\nt"
+        "he vertical line x = offset, its travel s measured upward from the shaft's horizontal (s = y of "
+        "C).\\nCrank angle = shaft angle + phase, counter-clockwise from +x (the needle is highest near p"
+        "hi = 90\\u00b0).\\n\\nDimensions: crank 16.7 mm is seed 002's industrial crank (its stroke 33.4 "
+        "mm is within the 29\\u201335 mm of\\nindustrial and household machines). The link length, offset"
+        ", masses and inertias are estimates (the\\nseeds' tables of them are not in the text we have).\\n"
+        "\\nThe needle itself (stitch formation, sewgen.machine.timing): the eye (point ``needle_eye``, t"
+        "he eye's centre), the\\npoint below it (point ``needle_point``: it enters and leaves the cloth),"
+        " the eye's length (its top is where\\nthe hook point's height is measured from) and the scarf ab"
+        "ove the eye (the hollow the hook point passes\\nthrough). A household 130/705 H (15x1) needle of"
+        " size 80\\u201390 is assumed: eye about 1.2 mm long, its centre\\nabout 2.5 mm above the point, "
+        "scarf about 4 mm long (estimates; no dimensioned drawing was reachable).\",\"elements\":[],\"for"
+        "ce_blocks\":[1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaf"
+        "t.power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_b"
+        "ar.guide.fy\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\""
+        "frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},"
+        "{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"n"
+        "ame\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"},{\"name\":\"B.f"
+        "riction\",\"unit\":\"N*m\"},{\"name\":\"B.friction_power\",\"unit\":\"W\"},{\"name\":\"C.frictio"
+        "n\",\"unit\":\"N*m\"},{\"name\":\"C.friction_power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guid"
+        "e.friction\",\"unit\":\"N\"},{\"name\":\"needle_bar.guide.friction_power\",\"unit\":\"W\"}],\"fo"
+        "rce_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\"needle"
+        "_bar.x\",\"needle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\""
+        "rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"un"
+        "it\":\"rad\"}],\"kernels\":{\"sg_needle_bar_anchors\":{\"ops\":25},\"sg_needle_bar_blocks\":{\"o"
+        "ps\":14},\"sg_needle_bar_closed\":{\"ops\":15},\"sg_needle_bar_constants\":{\"ops\":46},\"sg_nee"
+        "dle_bar_force_matrix\":{\"ops\":71},\"sg_needle_bar_forces\":{\"ops\":190},\"sg_needle_bar_lu_fa"
+        "ctor\":{\"ops\":5},\"sg_needle_bar_lu_solve\":{\"ops\":8},\"sg_needle_bar_motion\":{\"ops\":79},"
+        "\"sg_needle_bar_observe\":{\"ops\":90},\"sg_needle_bar_rates\":{\"ops\":30},\"sg_needle_bar_resi"
+        "dual\":{\"ops\":16},\"sg_needle_bar_scales\":{\"ops\":4}},\"loads\":[{\"body\":\"crank\",\"compo"
+        "nent\":\"fx\",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_"
+        "pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"link_pin\"},{\"body\":\"needle_b"
+        "ar\",\"component\":\"fy\",\"name\":\"link_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\""
+        "name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\""
+        "body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\""
+        "component\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"crank\",\"component\":\"torque\",\"nam"
+        "e\":\"crank\"},{\"body\":\"rod\",\"component\":\"torque\",\"name\":\"rod\"},{\"body\":\"needle_b"
+        "ar\",\"component\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"needle_bar\",\"observables\":"
+        "[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\"name\":\""
+        "crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"cran"
+        "k_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"li"
+        "nk_pin.x\",\"unit\":\"m\"},{\"name\":\"link_pin.y\",\"unit\":\"m\"},{\"name\":\"link_pin.x_d\",\""
+        "unit\":\"m/s\"},{\"name\":\"link_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"link_pin.x_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"link_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit\":"
+        "\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m\"}"
+        ",{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\"},{"
+        "\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/s^2"
+        "\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.angle\",\"unit\":\"rad"
+        "\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_dd\",\"unit\":\"rad/"
+        "s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\"unit\":\"m\"},{\"na"
+        "me\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\":\"m/s^2\"},{\"name"
+        "\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rod"
+        ".angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"name\":\"rod.com.y\""
+        ",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.y_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_dd\",\"unit\":\"m/"
+        "s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\""
+        ":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x"
+        "\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.c"
+        "om.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":"
+        "[{\"default\":0.0167,\"display_unit\":\"mm\",\"doc\":\"crank radius AB (seed 002 \\u00a73)\",\"k"
+        "ind\":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":\"needle_crank_radius\",\"unit\":"
+        "\"m\"},{\"default\":0.05,\"display_unit\":\"mm\",\"doc\":\"needle-bar link BC, pin to pin (estim"
+        "ate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":\"needle_rod_length\",\"u"
+        "nit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"horizontal offset of the needle-"
+        "bar axis from the shaft axis\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role"
+        "\":\"needle_bar_offset\",\"unit\":\"m\"},{\"default\":0.062,\"display_unit\":\"mm\",\"doc\":\"ne"
+        "edle eye below the link pin C along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_belo"
+        "w_pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0025,\"display_unit\":\"m"
+        "m\",\"doc\":\"needle point below the eye's centre (estimate, 130/705 H size 80-90)\",\"kind\":\""
+        "length\",\"name\":\"point_below_eye\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default"
+        "\":0.0012,\"display_unit\":\"mm\",\"doc\":\"length of the needle eye along the needle (estimate)"
+        "\",\"kind\":\"length\",\"name\":\"eye_length\",\"positive\":true,\"role\":\"needle_eye_length\","
+        "\"unit\":\"m\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye'"
+        "s top, where the hook point passes (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\""
+        "positive\":true,\"role\":\"needle_scarf\",\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"de"
+        "g\",\"doc\":\"phase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.p"
+        "hase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\""
+        ",\"doc\":\"mass of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of cran"
+        "k, local u\",\"kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\""
+        ",\"kind\":\"length\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
+        "\"default\":0.0,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its cent"
+        "re of mass\",\"kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\""
+        "unit\":\"kg*m**2\"},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\""
+        "mass\",\"name\":\"rod.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":2.5e"
+        "-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rod about its centre of mass\",\""
+        "kind\":\"inertia\",\"name\":\"rod.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\""
+        "},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"n"
+        "ame\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\""
+        "display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"na"
+        "me\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"di"
+        "splay_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name"
+        "\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.5e-05,\""
+        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\","
+        "\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg*m**2\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\","
+        "\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"B.friction\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"pin radi"
+        "us of B (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":\"B.pin_radius\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb"
+        " friction coefficient of C\",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\""
+        ":\"C.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_un"
+        "it\":\"mm\",\"doc\":\"pin radius of C (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"nam"
+        "e\":\"C.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display"
+        "_unit\":\"\",\"doc\":\"Coulomb friction coefficient of needle_bar.guide\",\"kind\":\"dimensionle"
+        "ss\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"needle_bar.guide.friction\",\"positive\":false,\""
+        "role\":null,\"unit\":\"\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\""
+        ":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\"crank_pin\",\"offset\":0,\"role\":null}"
+        ",{\"body\":\"needle_bar\",\"doc\":\"needle-bar link pin C\",\"name\":\"link_pin\",\"offset\":6,\""
+        "role\":null},{\"body\":\"needle_bar\",\"doc\":\"needle eye (its centre)\",\"name\":\"needle_eye\""
+        ",\"offset\":12,\"role\":\"needle_eye\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name"
+        "\":\"needle_point\",\"offset\":18,\"role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\""
+        "b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"cra"
+        "nk.pivot\",\"offset\":0},{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment"
+        "\"],\"grounded\":true,\"kind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":"
+        "\"crank\",\"b\":\"rod\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"n"
+        "ame\":\"B\",\"offset\":4},{\"a\":\"rod\",\"b\":\"needle_bar\",\"columns\":[\"fx\",\"fy\"],\"grou"
+        "nded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\""
+        ",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"cr"
+        "ank.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"n"
+        "eedle_bar\"},\"needle_bar_offset\":{\"kind\":\"param\",\"name\":\"offset\"},\"needle_crank\":{\""
+        "kind\":\"body\",\"name\":\"crank\"},\"needle_crank_radius\":{\"kind\":\"param\",\"name\":\"crank"
+        "\"},\"needle_eye\":{\"kind\":\"point\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":"
+        "\"param\",\"name\":\"eye_length\"},\"needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\""
+        "},\"needle_rod\":{\"kind\":\"body\",\"name\":\"rod\"},\"needle_rod_length\":{\"kind\":\"param\","
+        "\"name\":\"rod\"},\"needle_scarf\":{\"kind\":\"param\",\"name\":\"scarf_length\"}},\"sizes\":{\""
+        "nanchor_out\":32,\"nblock\":2,\"nbranch\":1,\"nc\":54,\"nf\":9,\"nfo\":26,\"ngroup\":7,\"nload\""
+        ":11,\"nobs\":51,\"np\":23,\"nq\":2,\"nx\":1}}"
         ;
 }

@@ -6,35 +6,37 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_feed_constants -- Total ops: 92 */
+/* sg_overlock_feed_constants -- Total ops: 101 */
 void sg_overlock_feed_constants(const double *p, double *c)
 {
     const double t0 = sin(p[13]);
-    const double t1 = sin(p[10]);
-    const double t2 = -p[9];
-    const double t3 = -p[6];
-    const double t4 = fabs(p[3]);
-    const double t5 = p[0] + p[1] + p[2] + p[5];
-    const double t6 = t4 + t5;
-    const double t7 = fabs(p[4]);
-    const double t8 = t5 + t7;
-    const double t9 = p[11] + p[6] + p[7] + p[9];
-    const double t10 = t4 + t9;
-    const double t11 = t7 + t9;
-    const double t12 = -p[8];
-    const double t13 = p[7] + t12;
-    const double t14 = -p[15];
-    const double t15 = (0.5)*p[2];
-    const double t16 = (0.5)*p[7];
-    const double t17 = (0.5)*p[11];
-    const double t18 = p[26]*t15;
-    const double t19 = p[29] + t3;
-    const double t20 = t12 + t16;
-    const double t21 = p[35]*t17;
-    const double t22 = p[0] + t14;
-    const double t23 = p[1] + p[19];
-    const double t24 = p[23] + t2;
-    const double t25 = p[29] + p[5];
+    const double t1 = fabs(p[3]);
+    const double t2 = fabs(p[4]);
+    const double t3 = t1 + t2;
+    const double t4 = sin(p[10]);
+    const double t5 = 2.0*p[6];
+    const double t6 = -p[9];
+    const double t7 = -p[6];
+    const double t8 = p[0] + p[1] + p[2] + p[5];
+    const double t9 = t1 + t8;
+    const double t10 = t2 + t8;
+    const double t11 = p[11] + p[6] + p[7] + p[9];
+    const double t12 = t1 + t11;
+    const double t13 = t11 + t2;
+    const double t14 = -p[8];
+    const double t15 = p[7] + t14;
+    const double t16 = -p[15];
+    const double t17 = (0.5)*p[2];
+    const double t18 = (0.5)*p[7];
+    const double t19 = (0.5)*p[11];
+    const double t20 = p[26]*t17;
+    const double t21 = p[29] + t7;
+    const double t22 = t14 + t18;
+    const double t23 = p[35]*t19;
+    const double t24 = p[0] + t16;
+    const double t25 = p[1] + p[19];
+    const double t26 = p[23] + t6;
+    const double t27 = p[29] + p[5];
     c[0] = p[0];
     c[1] = cos(p[13]);
     c[2] = -t0;
@@ -46,119 +48,123 @@ void sg_overlock_feed_constants(const double *p, double *c)
     c[8] = p[5];
     c[9] = (1.0/(p[2]));
     c[10] = -1.0/p[5];
-    c[11] = p[6];
-    c[12] = p[9];
-    c[13] = cos(p[10]);
-    c[14] = -t1;
-    c[15] = t1;
-    c[16] = p[7];
-    c[17] = p[11];
-    c[18] = (1.0/(p[7]));
-    c[19] = (1.0/(p[11]));
-    c[20] = -p[3];
-    c[21] = -p[4];
-    c[22] = -p[11];
-    c[23] = t2;
-    c[24] = -p[5];
-    c[25] = -p[2];
-    c[26] = t3;
-    c[27] = -p[7];
-    c[28] = t6;
-    c[29] = t8;
-    c[30] = t10;
-    c[31] = t11;
-    c[32] = p[1];
-    c[33] = -p[0];
+    c[11] = 2.0*p[0] + 2.0*p[1] + t3;
+    c[12] = p[6];
+    c[13] = p[9];
+    c[14] = cos(p[10]);
+    c[15] = -t4;
+    c[16] = t4;
+    c[17] = p[7];
+    c[18] = p[11];
+    c[19] = (1.0/(p[7]));
+    c[20] = (1.0/(p[11]));
+    c[21] = t5;
+    c[22] = 2.0*p[9] + t3 + t5;
+    c[23] = -p[3];
+    c[24] = -p[4];
+    c[25] = -p[11];
+    c[26] = t6;
+    c[27] = -p[5];
+    c[28] = -p[2];
+    c[29] = t7;
+    c[30] = -p[7];
+    c[31] = t9;
+    c[32] = t10;
+    c[33] = t12;
     c[34] = t13;
-    c[35] = -t13;
-    c[36] = p[13];
-    c[37] = p[15];
-    c[38] = -p[16];
-    c[39] = p[16];
-    c[40] = t14;
-    c[41] = p[19];
-    c[42] = -p[20];
-    c[43] = p[20];
-    c[44] = -p[19];
-    c[45] = p[10];
-    c[46] = p[23];
-    c[47] = -p[24];
-    c[48] = p[24];
-    c[49] = -p[23];
-    c[50] = -t15;
-    c[51] = t15;
-    c[52] = p[29];
-    c[53] = -p[30];
-    c[54] = p[30];
-    c[55] = -p[29];
-    c[56] = t16;
-    c[57] = -p[33];
-    c[58] = p[33];
-    c[59] = -t16;
-    c[60] = t17;
-    c[61] = -t17;
-    c[62] = (1.0/(t6));
-    c[63] = (1.0/(t8));
-    c[64] = (1.0/(t10));
-    c[65] = (1.0/(t11));
-    c[66] = p[27];
-    c[67] = t18;
-    c[68] = -t18;
-    c[69] = p[31];
-    c[70] = t19;
-    c[71] = -t19;
-    c[72] = p[28];
-    c[73] = p[32];
-    c[74] = p[34];
-    c[75] = -t20;
-    c[76] = t20;
-    c[77] = p[36];
-    c[78] = t21;
-    c[79] = -t21;
-    c[80] = p[17];
-    c[81] = t22;
-    c[82] = -t22;
-    c[83] = p[14];
-    c[84] = p[21];
-    c[85] = -t23;
-    c[86] = t23;
-    c[87] = p[18];
-    c[88] = p[25];
-    c[89] = t24;
-    c[90] = -t24;
-    c[91] = p[22];
-    c[92] = p[26];
-    c[93] = p[35];
-    c[94] = (0.5)*p[14];
-    c[95] = (0.5)*p[17];
-    c[96] = (0.5)*p[18];
-    c[97] = (0.5)*p[21];
-    c[98] = (0.5)*p[22];
-    c[99] = (0.5)*p[25];
-    c[100] = (0.5)*p[26];
-    c[101] = (0.5)*p[27];
-    c[102] = (0.5)*p[28];
-    c[103] = (0.5)*p[31];
-    c[104] = (0.5)*p[32];
-    c[105] = (0.5)*p[34];
-    c[106] = (0.5)*p[35];
-    c[107] = (0.5)*p[36];
-    c[108] = -p[14];
-    c[109] = -p[18];
-    c[110] = -p[22];
-    c[111] = -p[26];
-    c[112] = -p[28];
-    c[113] = -p[32];
-    c[114] = -p[35];
-    c[115] = t25;
-    c[116] = -t25;
+    c[35] = p[1];
+    c[36] = -p[0];
+    c[37] = t15;
+    c[38] = -t15;
+    c[39] = p[13];
+    c[40] = p[15];
+    c[41] = -p[16];
+    c[42] = p[16];
+    c[43] = t16;
+    c[44] = p[19];
+    c[45] = -p[20];
+    c[46] = p[20];
+    c[47] = -p[19];
+    c[48] = p[10];
+    c[49] = p[23];
+    c[50] = -p[24];
+    c[51] = p[24];
+    c[52] = -p[23];
+    c[53] = -t17;
+    c[54] = t17;
+    c[55] = p[29];
+    c[56] = -p[30];
+    c[57] = p[30];
+    c[58] = -p[29];
+    c[59] = t18;
+    c[60] = -p[33];
+    c[61] = p[33];
+    c[62] = -t18;
+    c[63] = t19;
+    c[64] = -t19;
+    c[65] = (1.0/(t9));
+    c[66] = (1.0/(t10));
+    c[67] = (1.0/(t12));
+    c[68] = (1.0/(t13));
+    c[69] = p[27];
+    c[70] = t20;
+    c[71] = -t20;
+    c[72] = p[31];
+    c[73] = t21;
+    c[74] = -t21;
+    c[75] = p[28];
+    c[76] = p[32];
+    c[77] = p[34];
+    c[78] = -t22;
+    c[79] = t22;
+    c[80] = p[36];
+    c[81] = t23;
+    c[82] = -t23;
+    c[83] = p[17];
+    c[84] = t24;
+    c[85] = -t24;
+    c[86] = p[14];
+    c[87] = p[21];
+    c[88] = -t25;
+    c[89] = t25;
+    c[90] = p[18];
+    c[91] = p[25];
+    c[92] = t26;
+    c[93] = -t26;
+    c[94] = p[22];
+    c[95] = p[26];
+    c[96] = p[35];
+    c[97] = (0.5)*p[14];
+    c[98] = (0.5)*p[17];
+    c[99] = (0.5)*p[18];
+    c[100] = (0.5)*p[21];
+    c[101] = (0.5)*p[22];
+    c[102] = (0.5)*p[25];
+    c[103] = (0.5)*p[26];
+    c[104] = (0.5)*p[27];
+    c[105] = (0.5)*p[28];
+    c[106] = (0.5)*p[31];
+    c[107] = (0.5)*p[32];
+    c[108] = (0.5)*p[34];
+    c[109] = (0.5)*p[35];
+    c[110] = (0.5)*p[36];
+    c[111] = -p[14];
+    c[112] = -p[18];
+    c[113] = -p[22];
+    c[114] = -p[26];
+    c[115] = -p[28];
+    c[116] = -p[32];
+    c[117] = -p[35];
+    c[118] = t27;
+    c[119] = -t27;
 }
 
 /* sg_overlock_feed_closed -- Total ops: 65 */
-int sg_overlock_feed_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+int sg_overlock_feed_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err)
 {
     (void)x;
     int st;
+    double e[3] = {0.0, 0.0, 1.0};
     {
         /* dyad 0: RRR closed at joint C (strap, rock_shaft) */
         const double t0 = c[1]*cx[2] + c[2]*cx[3];
@@ -166,8 +172,9 @@ int sg_overlock_feed_closed(const double *x, const double *cx, const double *c, 
         const double P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[4]*(cx[0]*t0 - cx[1]*t1), c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[4]*(cx[0]*t1 + cx[1]*t0)};
         const double Q[2] = {c[5], c[6]};
         const double l[2] = {c[7], c[8]};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[11];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         if (st != SG_OK) return st;
         q[1] = atan2(J[1] - P[1], J[0] - P[0]);
         q[0] = atan2(J[1] - Q[1], J[0] - Q[0]) - 3.141592653589793;
@@ -178,19 +185,22 @@ int sg_overlock_feed_closed(const double *x, const double *cx, const double *c, 
     }
     {
         /* dyad 1: RRR closed at joint F (rack, lift_link) */
-        const double P[2] = {c[11]*cq[0] + c[5], c[11]*cq[1] + c[6]};
-        const double Q[2] = {c[12]*(c[13]*cx[0] + c[14]*cx[1]), c[12]*(c[13]*cx[1] + c[15]*cx[0])};
-        const double l[2] = {c[16], c[17]};
+        const double P[2] = {c[12]*cq[0] + c[5], c[12]*cq[1] + c[6]};
+        const double Q[2] = {c[13]*(c[14]*cx[0] + c[15]*cx[1]), c[13]*(c[14]*cx[1] + c[16]*cx[0])};
+        const double l[2] = {c[17], c[18]};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[22] + c[21] * e[0];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[1], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[1], ein, e, J);
         if (st != SG_OK) return st;
         q[2] = atan2(J[1] - P[1], J[0] - P[0]);
         q[3] = atan2(J[1] - Q[1], J[0] - Q[0]);
-        cq[4] = c[18]*(J[0] - P[0]);
-        cq[5] = c[18]*(J[1] - P[1]);
-        cq[6] = c[19]*(J[0] - Q[0]);
-        cq[7] = c[19]*(J[1] - Q[1]);
+        cq[4] = c[19]*(J[0] - P[0]);
+        cq[5] = c[19]*(J[1] - P[1]);
+        cq[6] = c[20]*(J[0] - Q[0]);
+        cq[7] = c[20]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return SG_OK;
 }
 
@@ -203,25 +213,25 @@ void sg_overlock_feed_residual(const double *q, const double *cq, const double *
     const double t1 = c[8]*cq[0];
     const double t2 = c[1]*cx[2] + c[2]*cx[3];
     const double t3 = c[1]*cx[3] + c[3]*cx[2];
-    const double t4 = c[11]*cq[0];
-    const double t5 = c[16]*cq[4];
-    const double t6 = c[22]*cq[6];
-    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[20] + c[4]*(cx[0]*t2 - cx[1]*t3) + t0 + t1;
-    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[21] + c[4]*(cx[0]*t3 + cx[1]*t2) + c[7]*cq[3] + c[8]*cq[1];
-    r[2] = c[23]*(c[13]*cx[0] + c[14]*cx[1]) + c[5] + t4 + t5 + t6;
-    r[3] = c[11]*cq[1] + c[16]*cq[5] + c[22]*cq[7] + c[23]*(c[13]*cx[1] + c[15]*cx[0]) + c[6];
-    jac[0] = c[24]*cq[1];
-    jac[1] = c[25]*cq[3];
+    const double t4 = c[12]*cq[0];
+    const double t5 = c[17]*cq[4];
+    const double t6 = c[25]*cq[6];
+    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[23] + c[4]*(cx[0]*t2 - cx[1]*t3) + t0 + t1;
+    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[24] + c[4]*(cx[0]*t3 + cx[1]*t2) + c[7]*cq[3] + c[8]*cq[1];
+    r[2] = c[26]*(c[14]*cx[0] + c[15]*cx[1]) + c[5] + t4 + t5 + t6;
+    r[3] = c[12]*cq[1] + c[17]*cq[5] + c[25]*cq[7] + c[26]*(c[14]*cx[1] + c[16]*cx[0]) + c[6];
+    jac[0] = c[27]*cq[1];
+    jac[1] = c[28]*cq[3];
     jac[2] = 0.0;
     jac[3] = 0.0;
     jac[4] = t1;
     jac[5] = t0;
     jac[6] = 0.0;
     jac[7] = 0.0;
-    jac[8] = c[26]*cq[1];
+    jac[8] = c[29]*cq[1];
     jac[9] = 0.0;
-    jac[10] = c[27]*cq[5];
-    jac[11] = c[17]*cq[7];
+    jac[10] = c[30]*cq[5];
+    jac[11] = c[18]*cq[7];
     jac[12] = t4;
     jac[13] = 0.0;
     jac[14] = t5;
@@ -247,10 +257,10 @@ void sg_overlock_feed_scales(const double *q, const double *cq, const double *x,
     (void)cq;
     (void)x;
     (void)cx;
-    out[0] = c[28];
-    out[1] = c[29];
-    out[2] = c[30];
-    out[3] = c[31];
+    out[0] = c[31];
+    out[1] = c[32];
+    out[2] = c[33];
+    out[3] = c[34];
 }
 
 /* sg_overlock_feed_blocks -- Total ops: 46 */
@@ -271,74 +281,74 @@ void sg_overlock_feed_blocks(const double *jac, double *out)
 /* sg_overlock_feed_motion -- Total ops: 339 */
 int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
-    const double t0 = c[24]*cq[1];
+    const double t0 = c[27]*cq[1];
     const double t1 = c[8]*cq[0];
     const double t2 = c[7]*cq[2];
-    const double t3 = c[26]*cq[1];
-    const double t4 = c[27]*cq[5];
-    const double t5 = c[11]*cq[0];
-    const double t6 = c[16]*cq[4];
-    const double t7 = c[22]*cq[6];
+    const double t3 = c[29]*cq[1];
+    const double t4 = c[30]*cq[5];
+    const double t5 = c[12]*cq[0];
+    const double t6 = c[17]*cq[4];
+    const double t7 = c[25]*cq[6];
     const double t8 = c[1]*cx[3] + c[3]*cx[2];
     const double t9 = c[1]*cx[2] + c[2]*cx[3];
     const double t10 = cx[0]*t8 + cx[1]*t9;
     const double t11 = c[4]*t10;
     const double t12 = c[1]*cx[1] + c[3]*cx[0];
-    const double t13 = c[33]*t12;
-    const double t14 = c[32]*t10;
+    const double t13 = c[36]*t12;
+    const double t14 = c[35]*t10;
     const double t15 = t13 + t14;
     const double t16 = t15*xd[0];
     const double t17 = cx[0]*t9 - cx[1]*t8;
-    const double t18 = c[32]*t17;
+    const double t18 = c[35]*t17;
     const double t19 = t18*xd[1];
     const double t20 = c[1]*cx[0] + c[2]*cx[1];
     const double t21 = c[0]*t20;
     const double t22 = c[4]*t17 + t21;
-    const double t23 = c[13]*cx[1] + c[15]*cx[0];
-    const double t24 = c[23]*t23;
+    const double t23 = c[14]*cx[1] + c[16]*cx[0];
+    const double t24 = c[26]*t23;
     const double t25 = t24*xd[0];
-    const double t26 = c[13]*cx[0] + c[14]*cx[1];
-    const double t27 = c[12]*t26;
+    const double t26 = c[14]*cx[0] + c[15]*cx[1];
+    const double t27 = c[13]*t26;
     const double t28 = t27*xd[0];
-    const double t32 = c[33]*t20;
+    const double t32 = c[36]*t20;
     const double t34 = c[8]*cq[1];
     const double t36 = t14*xd[1];
     const double t39 = ((xd[0])*(xd[0]));
-    const double t40 = c[23]*t26*t39 + t24*xdd[0];
-    const double t41 = c[11]*cq[1];
-    const double t42 = c[16]*cq[5];
+    const double t40 = c[26]*t26*t39 + t24*xdd[0];
+    const double t41 = c[12]*cq[1];
+    const double t42 = c[17]*cq[5];
     const double t44 = t24*t39 + t27*xdd[0];
     const double t45 = c[5] + t5;
     const double t46 = c[6] + t41;
-    const double t52 = c[34]*cq[4];
-    const double t53 = c[35]*cq[5];
-    const double t54 = c[12]*t23;
-    const double t55 = c[36] + x[0];
-    const double t56 = c[37]*t20 + c[38]*t12;
-    const double t57 = c[38]*t20 + c[40]*t12;
-    const double t58 = c[41]*t17 + c[42]*t10;
+    const double t52 = c[37]*cq[4];
+    const double t53 = c[38]*cq[5];
+    const double t54 = c[13]*t23;
+    const double t55 = c[39] + x[0];
+    const double t56 = c[40]*t20 + c[41]*t12;
+    const double t57 = c[41]*t20 + c[43]*t12;
+    const double t58 = c[44]*t17 + c[45]*t10;
     const double t59 = t21 + t58;
-    const double t60 = c[42]*t17 + c[44]*t10;
+    const double t60 = c[45]*t17 + c[47]*t10;
     const double t61 = t60*xd[1];
     const double t62 = t13 + t60;
     const double t63 = t61 + t62*xd[0];
-    const double t64 = c[43]*t10 + c[44]*t17;
+    const double t64 = c[46]*t10 + c[47]*t17;
     const double t65 = t64*xd[1];
-    const double t66 = c[46]*t26 + c[47]*t23;
-    const double t67 = c[47]*t26 + c[49]*t23;
-    const double t68 = c[24]*cq[0];
-    const double t69 = c[50]*cq[2];
-    const double t70 = c[51]*cq[3];
-    const double t71 = c[52]*cq[0] + c[53]*cq[1];
-    const double t72 = c[53]*cq[0] + c[55]*cq[1];
-    const double t73 = c[56]*cq[4] + c[57]*cq[5];
-    const double t74 = c[57]*cq[4] + c[59]*cq[5];
-    const double t75 = c[60]*cq[6];
-    const double t76 = c[61]*cq[7];
-    double J[16], rs[4], cs[4];
+    const double t66 = c[49]*t26 + c[50]*t23;
+    const double t67 = c[50]*t26 + c[52]*t23;
+    const double t68 = c[27]*cq[0];
+    const double t69 = c[53]*cq[2];
+    const double t70 = c[54]*cq[3];
+    const double t71 = c[55]*cq[0] + c[56]*cq[1];
+    const double t72 = c[56]*cq[0] + c[58]*cq[1];
+    const double t73 = c[59]*cq[4] + c[60]*cq[5];
+    const double t74 = c[60]*cq[4] + c[62]*cq[5];
+    const double t75 = c[63]*cq[6];
+    const double t76 = c[64]*cq[7];
+    double J[16], rs[4], cs[8];
     int piv[4];
     J[0] = t0;
-    J[1] = c[25]*cq[3];
+    J[1] = c[28]*cq[3];
     J[2] = 0.0;
     J[3] = 0.0;
     J[4] = t1;
@@ -348,7 +358,7 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     J[8] = t3;
     J[9] = 0.0;
     J[10] = t4;
-    J[11] = c[17]*cq[7];
+    J[11] = c[18]*cq[7];
     J[12] = t5;
     J[13] = 0.0;
     J[14] = t6;
@@ -357,10 +367,10 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     qd[1] = t19 - t22*xd[0];
     qd[2] = t25;
     qd[3] = t28;
-    rs[0] = c[62];
-    rs[1] = c[63];
-    rs[2] = c[64];
-    rs[3] = c[65];
+    rs[0] = c[65];
+    rs[1] = c[66];
+    rs[2] = c[67];
+    rs[3] = c[68];
     if (sg_factor_eq_inl(4, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(4, J, piv, rs, cs, qd);
     const double t29 = ((qd[1])*(qd[1]));
@@ -377,9 +387,10 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     qdd[0] = t11*xdd[1] - t15*xdd[0] + t2*t29 + t31 - xd[0]*(t19 + xd[0]*(t18 + t32)) - xd[1]*(t18*xd[0] + t19);
     qdd[1] = c[7]*t33 + t18*xdd[1] - t22*xdd[0] + t35 - xd[0]*(t16 + t36) - xd[1]*(t14*xd[0] + t36);
     qdd[2] = t30*t5 + t37*t6 + t38*t7 + t40;
-    qdd[3] = c[22]*t43 + t30*t41 + t37*t42 + t44;
+    qdd[3] = c[25]*t43 + t30*t41 + t37*t42 + t44;
     sg_solve_eq_inl(4, J, piv, rs, cs, qdd);
-    const double t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+    sg_rates_scale_inl(4, 0xfULL, fabs(xd[0]), cs, qd, qdd, cond);
+    const double t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
     const double t50 = qdd[0]*t5 + t3*t30;
     obs[0] = t45;
     obs[1] = t46;
@@ -391,13 +402,13 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     obs[7] = t42 + t46;
     obs[8] = qd[2]*t4 + t47;
     obs[9] = qd[2]*t6 + t48;
-    obs[10] = c[27]*t51 + qdd[2]*t4 + t49;
+    obs[10] = c[30]*t51 + qdd[2]*t4 + t49;
     obs[11] = qdd[2]*t6 + t37*t4 + t50;
     obs[12] = t45 + t52;
-    obs[13] = c[34]*cq[5] + t46;
+    obs[13] = c[37]*cq[5] + t46;
     obs[14] = qd[2]*t53 + t47;
     obs[15] = qd[2]*t52 + t48;
-    obs[16] = c[35]*t51 + qdd[2]*t53 + t49;
+    obs[16] = c[38]*t51 + qdd[2]*t53 + t49;
     obs[17] = qdd[2]*t52 + t37*t53 + t50;
     obs[18] = t27;
     obs[19] = t54;
@@ -409,65 +420,65 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t56;
-    obs[28] = c[37]*t12 + c[39]*t20;
+    obs[28] = c[40]*t12 + c[42]*t20;
     obs[29] = t57*xd[0];
     obs[30] = t56*xd[0];
-    obs[31] = t39*(c[39]*t12 + c[40]*t20) + t57*xdd[0];
+    obs[31] = t39*(c[42]*t12 + c[43]*t20) + t57*xdd[0];
     obs[32] = t39*t57 + t56*xdd[0];
     obs[33] = t55 + x[1];
     obs[34] = xd[0] + xd[1];
     obs[35] = xdd[0] + xdd[1];
     obs[36] = t59;
-    obs[37] = c[0]*t12 + c[41]*t10 + c[43]*t17;
+    obs[37] = c[0]*t12 + c[44]*t10 + c[46]*t17;
     obs[38] = t63;
     obs[39] = t58*xd[1] + t59*xd[0];
     obs[40] = t60*xdd[1] + t62*xdd[0] + xd[0]*(t65 + xd[0]*(t32 + t64)) + xd[1]*(t64*xd[0] + t65);
     obs[41] = t58*xdd[1] + t59*xdd[0] + t63*xd[0] + xd[1]*(t60*xd[0] + t61);
-    obs[42] = c[45] + x[0];
+    obs[42] = c[48] + x[0];
     obs[43] = xd[0];
     obs[44] = xdd[0];
     obs[45] = t66;
-    obs[46] = c[46]*t23 + c[48]*t26;
+    obs[46] = c[49]*t23 + c[51]*t26;
     obs[47] = t67*xd[0];
     obs[48] = t66*xd[0];
-    obs[49] = t39*(c[48]*t23 + c[49]*t26) + t67*xdd[0];
+    obs[49] = t39*(c[51]*t23 + c[52]*t26) + t67*xdd[0];
     obs[50] = t39*t67 + t66*xdd[0];
     obs[51] = q[1];
     obs[52] = qd[1];
     obs[53] = qdd[1];
     obs[54] = c[5] + t68 + t69;
-    obs[55] = c[50]*cq[3] + c[6] + t0;
+    obs[55] = c[53]*cq[3] + c[6] + t0;
     obs[56] = qd[0]*t34 + qd[1]*t70;
     obs[57] = qd[0]*t68 + qd[1]*t69;
-    obs[58] = c[51]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
-    obs[59] = c[51]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
+    obs[58] = c[54]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
+    obs[59] = c[54]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
     obs[60] = q[0];
     obs[61] = qd[0];
     obs[62] = qdd[0];
     obs[63] = c[5] + t71;
-    obs[64] = c[52]*cq[1] + c[54]*cq[0] + c[6];
+    obs[64] = c[55]*cq[1] + c[57]*cq[0] + c[6];
     obs[65] = qd[0]*t72;
     obs[66] = qd[0]*t71;
-    obs[67] = qdd[0]*t72 + t30*(c[54]*cq[1] + c[55]*cq[0]);
+    obs[67] = qdd[0]*t72 + t30*(c[57]*cq[1] + c[58]*cq[0]);
     obs[68] = qdd[0]*t71 + t30*t72;
     obs[69] = q[2];
     obs[70] = qd[2];
     obs[71] = qdd[2];
     obs[72] = t45 + t73;
-    obs[73] = c[56]*cq[5] + c[58]*cq[4] + t46;
+    obs[73] = c[59]*cq[5] + c[61]*cq[4] + t46;
     obs[74] = qd[2]*t74 + t47;
     obs[75] = qd[2]*t73 + t48;
-    obs[76] = qdd[2]*t74 + t37*(c[58]*cq[5] + c[59]*cq[4]) + t49;
+    obs[76] = qdd[2]*t74 + t37*(c[61]*cq[5] + c[62]*cq[4]) + t49;
     obs[77] = qdd[2]*t73 + t37*t74 + t50;
     obs[78] = q[3];
     obs[79] = qd[3];
     obs[80] = qdd[3];
     obs[81] = t27 + t75;
-    obs[82] = c[60]*cq[7] + t54;
+    obs[82] = c[63]*cq[7] + t54;
     obs[83] = qd[3]*t76 + t25;
     obs[84] = qd[3]*t75 + t28;
-    obs[85] = c[61]*cq[6]*t38 + qdd[3]*t76 + t40;
-    obs[86] = c[61]*t43 + qdd[3]*t75 + t44;
+    obs[85] = c[64]*cq[6]*t38 + qdd[3]*t76 + t40;
+    obs[86] = c[64]*t43 + qdd[3]*t75 + t44;
     if (!isfinite(((((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))) + (((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))) + ((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))))) + ((((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))) + ((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23])))) + (((obs[24] + (obs[25] + obs[26])) + (obs[27] + (obs[28] + obs[29]))) + ((obs[30] + (obs[31] + obs[32])) + ((obs[33] + obs[34]) + (obs[35] + obs[36])))))) + (((((obs[37] + (obs[38] + obs[39])) + (obs[40] + (obs[41] + obs[42]))) + ((obs[43] + (obs[44] + obs[45])) + (obs[46] + (obs[47] + obs[48])))) + (((obs[49] + (obs[50] + obs[51])) + (obs[52] + (obs[53] + obs[54]))) + ((obs[55] + (obs[56] + obs[57])) + ((obs[58] + obs[59]) + (obs[60] + obs[61]))))) + ((((obs[62] + (obs[63] + obs[64])) + (obs[65] + (obs[66] + obs[67]))) + ((obs[68] + (obs[69] + obs[70])) + (obs[71] + (obs[72] + obs[73])))) + (((obs[74] + (obs[75] + obs[76])) + (obs[77] + (obs[78] + obs[79]))) + ((obs[80] + (obs[81] + obs[82])) + ((obs[83] + obs[84]) + (obs[85] + obs[86]))))))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -476,47 +487,47 @@ int sg_overlock_feed_motion(const double *q, const double *cq, const double *x, 
 int sg_overlock_feed_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
 {
     (void)x;
-    const double t0 = c[24]*cq[1];
+    const double t0 = c[27]*cq[1];
     const double t1 = c[8]*cq[0];
     const double t2 = c[7]*cq[2];
-    const double t3 = c[26]*cq[1];
-    const double t4 = c[27]*cq[5];
-    const double t5 = c[11]*cq[0];
-    const double t6 = c[16]*cq[4];
-    const double t7 = c[22]*cq[6];
+    const double t3 = c[29]*cq[1];
+    const double t4 = c[30]*cq[5];
+    const double t5 = c[12]*cq[0];
+    const double t6 = c[17]*cq[4];
+    const double t7 = c[25]*cq[6];
     const double t8 = c[1]*cx[3] + c[3]*cx[2];
     const double t9 = c[1]*cx[2] + c[2]*cx[3];
     const double t10 = cx[0]*t8 + cx[1]*t9;
     const double t11 = c[4]*t10;
     const double t12 = c[1]*cx[1] + c[3]*cx[0];
-    const double t13 = c[33]*t12;
-    const double t14 = c[32]*t10;
+    const double t13 = c[36]*t12;
+    const double t14 = c[35]*t10;
     const double t15 = t13 + t14;
     const double t16 = t15*xd[0];
     const double t17 = cx[0]*t9 - cx[1]*t8;
-    const double t18 = c[32]*t17;
+    const double t18 = c[35]*t17;
     const double t19 = t18*xd[1];
     const double t20 = c[1]*cx[0] + c[2]*cx[1];
     const double t21 = c[0]*t20;
     const double t22 = c[4]*t17 + t21;
-    const double t23 = c[13]*cx[1] + c[15]*cx[0];
-    const double t24 = c[23]*t23;
+    const double t23 = c[14]*cx[1] + c[16]*cx[0];
+    const double t24 = c[26]*t23;
     const double t25 = t24*xd[0];
-    const double t26 = c[13]*cx[0] + c[14]*cx[1];
-    const double t27 = c[12]*t26;
+    const double t26 = c[14]*cx[0] + c[15]*cx[1];
+    const double t27 = c[13]*t26;
     const double t28 = t27*xd[0];
-    const double t32 = c[33]*t20;
+    const double t32 = c[36]*t20;
     const double t34 = c[8]*cq[1];
     const double t36 = t14*xd[1];
     const double t39 = ((xd[0])*(xd[0]));
-    const double t40 = c[23]*t26*t39 + t24*xdd[0];
-    const double t41 = c[11]*cq[1];
-    const double t42 = c[16]*cq[5];
+    const double t40 = c[26]*t26*t39 + t24*xdd[0];
+    const double t41 = c[12]*cq[1];
+    const double t42 = c[17]*cq[5];
     const double t44 = t24*t39 + t27*xdd[0];
-    double J[16], rs[4], cs[4];
+    double J[16], rs[4], cs[8];
     int piv[4];
     J[0] = t0;
-    J[1] = c[25]*cq[3];
+    J[1] = c[28]*cq[3];
     J[2] = 0.0;
     J[3] = 0.0;
     J[4] = t1;
@@ -526,7 +537,7 @@ int sg_overlock_feed_rates(const double *q, const double *cq, const double *x, c
     J[8] = t3;
     J[9] = 0.0;
     J[10] = t4;
-    J[11] = c[17]*cq[7];
+    J[11] = c[18]*cq[7];
     J[12] = t5;
     J[13] = 0.0;
     J[14] = t6;
@@ -535,10 +546,10 @@ int sg_overlock_feed_rates(const double *q, const double *cq, const double *x, c
     qd[1] = t19 - t22*xd[0];
     qd[2] = t25;
     qd[3] = t28;
-    rs[0] = c[62];
-    rs[1] = c[63];
-    rs[2] = c[64];
-    rs[3] = c[65];
+    rs[0] = c[65];
+    rs[1] = c[66];
+    rs[2] = c[67];
+    rs[3] = c[68];
     if (sg_factor_eq_inl(4, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(4, J, piv, rs, cs, qd);
     const double t29 = ((qd[1])*(qd[1]));
@@ -552,8 +563,9 @@ int sg_overlock_feed_rates(const double *q, const double *cq, const double *x, c
     qdd[0] = t11*xdd[1] - t15*xdd[0] + t2*t29 + t31 - xd[0]*(t19 + xd[0]*(t18 + t32)) - xd[1]*(t18*xd[0] + t19);
     qdd[1] = c[7]*t33 + t18*xdd[1] - t22*xdd[0] + t35 - xd[0]*(t16 + t36) - xd[1]*(t14*xd[0] + t36);
     qdd[2] = t30*t5 + t37*t6 + t38*t7 + t40;
-    qdd[3] = c[22]*t43 + t30*t41 + t37*t42 + t44;
+    qdd[3] = c[25]*t43 + t30*t41 + t37*t42 + t44;
     sg_solve_eq_inl(4, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(4, 0xfULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -563,15 +575,15 @@ int sg_overlock_feed_observe(const double *q, const double *cq, const double *x,
 {
     switch (group) {
     case 0: {
-        const double t3 = c[26]*cq[1];
-        const double t5 = c[11]*cq[0];
+        const double t3 = c[29]*cq[1];
+        const double t5 = c[12]*cq[0];
         const double t30 = ((qd[0])*(qd[0]));
-        const double t41 = c[11]*cq[1];
+        const double t41 = c[12]*cq[1];
         const double t45 = c[5] + t5;
         const double t46 = c[6] + t41;
         const double t47 = qd[0]*t3;
         const double t48 = qd[0]*t5;
-        const double t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const double t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
         const double t50 = qdd[0]*t5 + t3*t30;
         obs[0] = t45;
         obs[1] = t46;
@@ -582,63 +594,63 @@ int sg_overlock_feed_observe(const double *q, const double *cq, const double *x,
         return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
     }
     case 1: {
-        const double t3 = c[26]*cq[1];
-        const double t4 = c[27]*cq[5];
-        const double t5 = c[11]*cq[0];
-        const double t6 = c[16]*cq[4];
+        const double t3 = c[29]*cq[1];
+        const double t4 = c[30]*cq[5];
+        const double t5 = c[12]*cq[0];
+        const double t6 = c[17]*cq[4];
         const double t30 = ((qd[0])*(qd[0]));
         const double t37 = ((qd[2])*(qd[2]));
-        const double t41 = c[11]*cq[1];
-        const double t42 = c[16]*cq[5];
+        const double t41 = c[12]*cq[1];
+        const double t42 = c[17]*cq[5];
         const double t45 = c[5] + t5;
         const double t46 = c[6] + t41;
         const double t47 = qd[0]*t3;
         const double t48 = qd[0]*t5;
-        const double t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const double t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
         const double t50 = qdd[0]*t5 + t3*t30;
         const double t51 = cq[4]*t37;
         obs[6] = t45 + t6;
         obs[7] = t42 + t46;
         obs[8] = qd[2]*t4 + t47;
         obs[9] = qd[2]*t6 + t48;
-        obs[10] = c[27]*t51 + qdd[2]*t4 + t49;
+        obs[10] = c[30]*t51 + qdd[2]*t4 + t49;
         obs[11] = qdd[2]*t6 + t37*t4 + t50;
         return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
     }
     case 2: {
-        const double t3 = c[26]*cq[1];
-        const double t5 = c[11]*cq[0];
+        const double t3 = c[29]*cq[1];
+        const double t5 = c[12]*cq[0];
         const double t30 = ((qd[0])*(qd[0]));
         const double t37 = ((qd[2])*(qd[2]));
-        const double t41 = c[11]*cq[1];
+        const double t41 = c[12]*cq[1];
         const double t45 = c[5] + t5;
         const double t46 = c[6] + t41;
         const double t47 = qd[0]*t3;
         const double t48 = qd[0]*t5;
-        const double t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const double t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
         const double t50 = qdd[0]*t5 + t3*t30;
         const double t51 = cq[4]*t37;
-        const double t52 = c[34]*cq[4];
-        const double t53 = c[35]*cq[5];
+        const double t52 = c[37]*cq[4];
+        const double t53 = c[38]*cq[5];
         obs[12] = t45 + t52;
-        obs[13] = c[34]*cq[5] + t46;
+        obs[13] = c[37]*cq[5] + t46;
         obs[14] = qd[2]*t53 + t47;
         obs[15] = qd[2]*t52 + t48;
-        obs[16] = c[35]*t51 + qdd[2]*t53 + t49;
+        obs[16] = c[38]*t51 + qdd[2]*t53 + t49;
         obs[17] = qdd[2]*t52 + t37*t53 + t50;
         return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
     }
     case 3: {
-        const double t23 = c[13]*cx[1] + c[15]*cx[0];
-        const double t24 = c[23]*t23;
+        const double t23 = c[14]*cx[1] + c[16]*cx[0];
+        const double t24 = c[26]*t23;
         const double t25 = t24*xd[0];
-        const double t26 = c[13]*cx[0] + c[14]*cx[1];
-        const double t27 = c[12]*t26;
+        const double t26 = c[14]*cx[0] + c[15]*cx[1];
+        const double t27 = c[13]*t26;
         const double t28 = t27*xd[0];
         const double t39 = ((xd[0])*(xd[0]));
-        const double t40 = c[23]*t26*t39 + t24*xdd[0];
+        const double t40 = c[26]*t26*t39 + t24*xdd[0];
         const double t44 = t24*t39 + t27*xdd[0];
-        const double t54 = c[12]*t23;
+        const double t54 = c[13]*t23;
         obs[18] = t27;
         obs[19] = t54;
         obs[20] = t25;
@@ -651,17 +663,17 @@ int sg_overlock_feed_observe(const double *q, const double *cq, const double *x,
         const double t12 = c[1]*cx[1] + c[3]*cx[0];
         const double t20 = c[1]*cx[0] + c[2]*cx[1];
         const double t39 = ((xd[0])*(xd[0]));
-        const double t55 = c[36] + x[0];
-        const double t56 = c[37]*t20 + c[38]*t12;
-        const double t57 = c[38]*t20 + c[40]*t12;
+        const double t55 = c[39] + x[0];
+        const double t56 = c[40]*t20 + c[41]*t12;
+        const double t57 = c[41]*t20 + c[43]*t12;
         obs[24] = t55;
         obs[25] = xd[0];
         obs[26] = xdd[0];
         obs[27] = t56;
-        obs[28] = c[37]*t12 + c[39]*t20;
+        obs[28] = c[40]*t12 + c[42]*t20;
         obs[29] = t57*xd[0];
         obs[30] = t56*xd[0];
-        obs[31] = t39*(c[39]*t12 + c[40]*t20) + t57*xdd[0];
+        obs[31] = t39*(c[42]*t12 + c[43]*t20) + t57*xdd[0];
         obs[32] = t39*t57 + t56*xdd[0];
         return isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -670,25 +682,25 @@ int sg_overlock_feed_observe(const double *q, const double *cq, const double *x,
         const double t9 = c[1]*cx[2] + c[2]*cx[3];
         const double t10 = cx[0]*t8 + cx[1]*t9;
         const double t12 = c[1]*cx[1] + c[3]*cx[0];
-        const double t13 = c[33]*t12;
+        const double t13 = c[36]*t12;
         const double t17 = cx[0]*t9 - cx[1]*t8;
         const double t20 = c[1]*cx[0] + c[2]*cx[1];
         const double t21 = c[0]*t20;
-        const double t32 = c[33]*t20;
-        const double t55 = c[36] + x[0];
-        const double t58 = c[41]*t17 + c[42]*t10;
+        const double t32 = c[36]*t20;
+        const double t55 = c[39] + x[0];
+        const double t58 = c[44]*t17 + c[45]*t10;
         const double t59 = t21 + t58;
-        const double t60 = c[42]*t17 + c[44]*t10;
+        const double t60 = c[45]*t17 + c[47]*t10;
         const double t61 = t60*xd[1];
         const double t62 = t13 + t60;
         const double t63 = t61 + t62*xd[0];
-        const double t64 = c[43]*t10 + c[44]*t17;
+        const double t64 = c[46]*t10 + c[47]*t17;
         const double t65 = t64*xd[1];
         obs[33] = t55 + x[1];
         obs[34] = xd[0] + xd[1];
         obs[35] = xdd[0] + xdd[1];
         obs[36] = t59;
-        obs[37] = c[0]*t12 + c[41]*t10 + c[43]*t17;
+        obs[37] = c[0]*t12 + c[44]*t10 + c[46]*t17;
         obs[38] = t63;
         obs[39] = t58*xd[1] + t59*xd[0];
         obs[40] = t60*xdd[1] + t62*xdd[0] + xd[0]*(t65 + xd[0]*(t32 + t64)) + xd[1]*(t64*xd[0] + t65);
@@ -696,24 +708,24 @@ int sg_overlock_feed_observe(const double *q, const double *cq, const double *x,
         return isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41]))))) ? SG_OK : SG_NONFINITE;
     }
     case 6: {
-        const double t23 = c[13]*cx[1] + c[15]*cx[0];
-        const double t26 = c[13]*cx[0] + c[14]*cx[1];
+        const double t23 = c[14]*cx[1] + c[16]*cx[0];
+        const double t26 = c[14]*cx[0] + c[15]*cx[1];
         const double t39 = ((xd[0])*(xd[0]));
-        const double t66 = c[46]*t26 + c[47]*t23;
-        const double t67 = c[47]*t26 + c[49]*t23;
-        obs[42] = c[45] + x[0];
+        const double t66 = c[49]*t26 + c[50]*t23;
+        const double t67 = c[50]*t26 + c[52]*t23;
+        obs[42] = c[48] + x[0];
         obs[43] = xd[0];
         obs[44] = xdd[0];
         obs[45] = t66;
-        obs[46] = c[46]*t23 + c[48]*t26;
+        obs[46] = c[49]*t23 + c[51]*t26;
         obs[47] = t67*xd[0];
         obs[48] = t66*xd[0];
-        obs[49] = t39*(c[48]*t23 + c[49]*t26) + t67*xdd[0];
+        obs[49] = t39*(c[51]*t23 + c[52]*t26) + t67*xdd[0];
         obs[50] = t39*t67 + t66*xdd[0];
         return isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50]))))) ? SG_OK : SG_NONFINITE;
     }
     case 7: {
-        const double t0 = c[24]*cq[1];
+        const double t0 = c[27]*cq[1];
         const double t1 = c[8]*cq[0];
         const double t29 = ((qd[1])*(qd[1]));
         const double t30 = ((qd[0])*(qd[0]));
@@ -721,84 +733,84 @@ int sg_overlock_feed_observe(const double *q, const double *cq, const double *x,
         const double t33 = cq[3]*t29;
         const double t34 = c[8]*cq[1];
         const double t35 = t30*t34;
-        const double t68 = c[24]*cq[0];
-        const double t69 = c[50]*cq[2];
-        const double t70 = c[51]*cq[3];
+        const double t68 = c[27]*cq[0];
+        const double t69 = c[53]*cq[2];
+        const double t70 = c[54]*cq[3];
         obs[51] = q[1];
         obs[52] = qd[1];
         obs[53] = qdd[1];
         obs[54] = c[5] + t68 + t69;
-        obs[55] = c[50]*cq[3] + c[6] + t0;
+        obs[55] = c[53]*cq[3] + c[6] + t0;
         obs[56] = qd[0]*t34 + qd[1]*t70;
         obs[57] = qd[0]*t68 + qd[1]*t69;
-        obs[58] = c[51]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
-        obs[59] = c[51]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
+        obs[58] = c[54]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
+        obs[59] = c[54]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
         return isfinite((((obs[51] + obs[52]) + (obs[53] + obs[54])) + ((obs[55] + obs[56]) + (obs[57] + (obs[58] + obs[59]))))) ? SG_OK : SG_NONFINITE;
     }
     case 8: {
         const double t30 = ((qd[0])*(qd[0]));
-        const double t71 = c[52]*cq[0] + c[53]*cq[1];
-        const double t72 = c[53]*cq[0] + c[55]*cq[1];
+        const double t71 = c[55]*cq[0] + c[56]*cq[1];
+        const double t72 = c[56]*cq[0] + c[58]*cq[1];
         obs[60] = q[0];
         obs[61] = qd[0];
         obs[62] = qdd[0];
         obs[63] = c[5] + t71;
-        obs[64] = c[52]*cq[1] + c[54]*cq[0] + c[6];
+        obs[64] = c[55]*cq[1] + c[57]*cq[0] + c[6];
         obs[65] = qd[0]*t72;
         obs[66] = qd[0]*t71;
-        obs[67] = qdd[0]*t72 + t30*(c[54]*cq[1] + c[55]*cq[0]);
+        obs[67] = qdd[0]*t72 + t30*(c[57]*cq[1] + c[58]*cq[0]);
         obs[68] = qdd[0]*t71 + t30*t72;
         return isfinite((((obs[60] + obs[61]) + (obs[62] + obs[63])) + ((obs[64] + obs[65]) + (obs[66] + (obs[67] + obs[68]))))) ? SG_OK : SG_NONFINITE;
     }
     case 9: {
-        const double t3 = c[26]*cq[1];
-        const double t5 = c[11]*cq[0];
+        const double t3 = c[29]*cq[1];
+        const double t5 = c[12]*cq[0];
         const double t30 = ((qd[0])*(qd[0]));
         const double t37 = ((qd[2])*(qd[2]));
-        const double t41 = c[11]*cq[1];
+        const double t41 = c[12]*cq[1];
         const double t45 = c[5] + t5;
         const double t46 = c[6] + t41;
         const double t47 = qd[0]*t3;
         const double t48 = qd[0]*t5;
-        const double t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const double t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
         const double t50 = qdd[0]*t5 + t3*t30;
-        const double t73 = c[56]*cq[4] + c[57]*cq[5];
-        const double t74 = c[57]*cq[4] + c[59]*cq[5];
+        const double t73 = c[59]*cq[4] + c[60]*cq[5];
+        const double t74 = c[60]*cq[4] + c[62]*cq[5];
         obs[69] = q[2];
         obs[70] = qd[2];
         obs[71] = qdd[2];
         obs[72] = t45 + t73;
-        obs[73] = c[56]*cq[5] + c[58]*cq[4] + t46;
+        obs[73] = c[59]*cq[5] + c[61]*cq[4] + t46;
         obs[74] = qd[2]*t74 + t47;
         obs[75] = qd[2]*t73 + t48;
-        obs[76] = qdd[2]*t74 + t37*(c[58]*cq[5] + c[59]*cq[4]) + t49;
+        obs[76] = qdd[2]*t74 + t37*(c[61]*cq[5] + c[62]*cq[4]) + t49;
         obs[77] = qdd[2]*t73 + t37*t74 + t50;
         return isfinite((((obs[69] + obs[70]) + (obs[71] + obs[72])) + ((obs[73] + obs[74]) + (obs[75] + (obs[76] + obs[77]))))) ? SG_OK : SG_NONFINITE;
     }
     case 10: {
-        const double t23 = c[13]*cx[1] + c[15]*cx[0];
-        const double t24 = c[23]*t23;
+        const double t23 = c[14]*cx[1] + c[16]*cx[0];
+        const double t24 = c[26]*t23;
         const double t25 = t24*xd[0];
-        const double t26 = c[13]*cx[0] + c[14]*cx[1];
-        const double t27 = c[12]*t26;
+        const double t26 = c[14]*cx[0] + c[15]*cx[1];
+        const double t27 = c[13]*t26;
         const double t28 = t27*xd[0];
         const double t38 = ((qd[3])*(qd[3]));
         const double t39 = ((xd[0])*(xd[0]));
-        const double t40 = c[23]*t26*t39 + t24*xdd[0];
+        const double t40 = c[26]*t26*t39 + t24*xdd[0];
         const double t43 = cq[7]*t38;
         const double t44 = t24*t39 + t27*xdd[0];
-        const double t54 = c[12]*t23;
-        const double t75 = c[60]*cq[6];
-        const double t76 = c[61]*cq[7];
+        const double t54 = c[13]*t23;
+        const double t75 = c[63]*cq[6];
+        const double t76 = c[64]*cq[7];
         obs[78] = q[3];
         obs[79] = qd[3];
         obs[80] = qdd[3];
         obs[81] = t27 + t75;
-        obs[82] = c[60]*cq[7] + t54;
+        obs[82] = c[63]*cq[7] + t54;
         obs[83] = qd[3]*t76 + t25;
         obs[84] = qd[3]*t75 + t28;
-        obs[85] = c[61]*cq[6]*t38 + qdd[3]*t76 + t40;
-        obs[86] = c[61]*t43 + qdd[3]*t75 + t44;
+        obs[85] = c[64]*cq[6]*t38 + qdd[3]*t76 + t40;
+        obs[86] = c[64]*t43 + qdd[3]*t75 + t44;
         return isfinite((((obs[78] + obs[79]) + (obs[80] + obs[81])) + ((obs[82] + obs[83]) + (obs[84] + (obs[85] + obs[86]))))) ? SG_OK : SG_NONFINITE;
     }
     default:
@@ -813,14 +825,14 @@ int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, 
     (void)x;
     const double t0 = -gv[1] + obs[59];
     const double t1 = -gv[0] + obs[58];
-    const double t2 = c[54]*cq[0];
-    const double t3 = c[54]*cq[1];
-    const double t4 = c[73]*(-gv[1] + obs[77]) - ld[3] - ld[5];
-    const double t5 = c[73]*(-gv[0] + obs[76]) - ld[2] - ld[4];
-    const double t6 = c[72]*(-gv[0] + obs[67]) - ld[0];
-    const double t7 = c[72]*(-gv[1] + obs[68]) - ld[1];
-    const double t8 = c[58]*cq[4];
-    const double t9 = c[58]*cq[5];
+    const double t2 = c[57]*cq[0];
+    const double t3 = c[57]*cq[1];
+    const double t4 = c[76]*(-gv[1] + obs[77]) - ld[3] - ld[5];
+    const double t5 = c[76]*(-gv[0] + obs[76]) - ld[2] - ld[4];
+    const double t6 = c[75]*(-gv[0] + obs[67]) - ld[0];
+    const double t7 = c[75]*(-gv[1] + obs[68]) - ld[1];
+    const double t8 = c[61]*cq[4];
+    const double t9 = c[61]*cq[5];
     const double t10 = -gv[1] + obs[86];
     const double t11 = -gv[0] + obs[85];
     const double t12 = c[1]*cx[1] + c[3]*cx[0];
@@ -829,20 +841,20 @@ int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, 
     const double t15 = c[1]*cx[2] + c[2]*cx[3];
     const double t16 = cx[0]*t14 + cx[1]*t15;
     const double t17 = cx[0]*t15 - cx[1]*t14;
-    const double t18 = c[13]*cx[0] + c[14]*cx[1];
-    const double t19 = c[48]*t18;
-    const double t20 = c[13]*cx[1] + c[15]*cx[0];
-    const double t21 = c[48]*t20;
+    const double t18 = c[14]*cx[0] + c[15]*cx[1];
+    const double t19 = c[51]*t18;
+    const double t20 = c[14]*cx[1] + c[16]*cx[0];
+    const double t21 = c[51]*t20;
     {
         /* block of unknowns 16, 17 */
         double M[4], r[2];
         int piv[2];
-        M[0] = c[22]*cq[7];
-        M[1] = c[17]*cq[6];
-        r[0] = c[77]*obs[80] + c[78]*cq[6]*t10 + c[79]*cq[7]*t11 - ld[14];
-        M[2] = c[16]*cq[5];
-        M[3] = c[27]*cq[4];
-        r[1] = c[74]*obs[71] - ld[13] - ld[2]*(c[59]*cq[5] + t8) - ld[3]*(c[56]*cq[4] + t9) - ld[4]*(c[75]*cq[5] + t8) - ld[5]*(c[76]*cq[4] + t9) - t4*(c[59]*cq[4] + t9) - t5*(c[56]*cq[5] + t8);
+        M[0] = c[25]*cq[7];
+        M[1] = c[18]*cq[6];
+        r[0] = c[80]*obs[80] + c[81]*cq[6]*t10 + c[82]*cq[7]*t11 - ld[14];
+        M[2] = c[17]*cq[5];
+        M[3] = c[30]*cq[4];
+        r[1] = c[77]*obs[71] - ld[13] - ld[2]*(c[62]*cq[5] + t8) - ld[3]*(c[59]*cq[4] + t9) - ld[4]*(c[78]*cq[5] + t8) - ld[5]*(c[79]*cq[4] + t9) - t4*(c[62]*cq[4] + t9) - t5*(c[59]*cq[5] + t8);
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[16] = r[0];
@@ -853,11 +865,11 @@ int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, 
         double M[4], r[2];
         int piv[2];
         M[0] = c[8]*cq[1];
-        M[1] = c[24]*cq[0];
-        r[0] = c[11]*cq[0]*t4 - c[11]*cq[1]*out[16] - c[26]*cq[0]*out[17] + c[26]*cq[1]*t5 + c[69]*obs[62] - ld[0]*(c[70]*cq[1] + t2) - ld[1]*(c[71]*cq[0] + t3) - ld[12] - t6*(c[52]*cq[1] + t2) - t7*(c[55]*cq[0] + t3);
+        M[1] = c[27]*cq[0];
+        r[0] = c[12]*cq[0]*t4 - c[12]*cq[1]*out[16] - c[29]*cq[0]*out[17] + c[29]*cq[1]*t5 + c[72]*obs[62] - ld[0]*(c[73]*cq[1] + t2) - ld[1]*(c[74]*cq[0] + t3) - ld[12] - t6*(c[55]*cq[1] + t2) - t7*(c[58]*cq[0] + t3);
         M[2] = c[7]*cq[3];
-        M[3] = c[25]*cq[2];
-        r[1] = c[66]*obs[53] + c[67]*cq[2]*t0 + c[68]*cq[3]*t1 - ld[11];
+        M[3] = c[28]*cq[2];
+        r[1] = c[69]*obs[53] + c[70]*cq[2]*t0 + c[71]*cq[3]*t1 - ld[11];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[10] = r[0];
@@ -867,19 +879,19 @@ int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, 
     out[12] = out[16] + t5;
     out[9] = -out[11] + out[13] + t7;
     out[8] = -out[10] + out[12] + t6;
-    out[15] = c[93]*t10 - out[17];
-    out[14] = c[93]*t11 - out[16];
-    out[7] = c[92]*t0 + out[11];
-    out[6] = c[92]*t1 + out[10];
-    out[5] = c[91]*(-gv[1] + obs[50]) + out[15] - ld[7];
-    out[4] = c[91]*(-gv[0] + obs[49]) + out[14] - ld[6];
-    out[20] = c[88]*obs[44] - out[14]*(c[47]*t18 + c[90]*t20) - out[15]*(c[47]*t20 + c[89]*t18) - out[4]*(c[46]*t20 + t19) - out[5]*(c[49]*t18 + t21) - ld[10] - ld[6]*(c[89]*t20 + t19) - ld[7]*(c[90]*t18 + t21);
-    out[3] = c[87]*(-gv[1] + obs[41]) + out[7];
-    out[2] = c[87]*(-gv[0] + obs[40]) + out[6];
-    out[19] = c[84]*obs[35] - out[2]*(c[41]*t16 + c[43]*t17) - out[3]*(c[43]*t16 + c[44]*t17) - out[6]*(c[42]*t17 + c[85]*t16) - out[7]*(c[42]*t16 + c[86]*t17) - ld[9];
-    out[1] = c[83]*(-gv[1] + obs[32]) + out[3];
-    out[0] = c[83]*(-gv[0] + obs[31]) + out[2];
-    out[18] = c[80]*obs[26] - out[0]*(c[37]*t12 + c[39]*t13) - out[1]*(c[39]*t12 + c[40]*t13) + out[19] - out[2]*(c[38]*t13 + c[81]*t12) - out[3]*(c[38]*t12 + c[82]*t13) - ld[8];
+    out[15] = c[96]*t10 - out[17];
+    out[14] = c[96]*t11 - out[16];
+    out[7] = c[95]*t0 + out[11];
+    out[6] = c[95]*t1 + out[10];
+    out[5] = c[94]*(-gv[1] + obs[50]) + out[15] - ld[7];
+    out[4] = c[94]*(-gv[0] + obs[49]) + out[14] - ld[6];
+    out[20] = c[91]*obs[44] - out[14]*(c[50]*t18 + c[93]*t20) - out[15]*(c[50]*t20 + c[92]*t18) - out[4]*(c[49]*t20 + t19) - out[5]*(c[52]*t18 + t21) - ld[10] - ld[6]*(c[92]*t20 + t19) - ld[7]*(c[93]*t18 + t21);
+    out[3] = c[90]*(-gv[1] + obs[41]) + out[7];
+    out[2] = c[90]*(-gv[0] + obs[40]) + out[6];
+    out[19] = c[87]*obs[35] - out[2]*(c[44]*t16 + c[46]*t17) - out[3]*(c[46]*t16 + c[47]*t17) - out[6]*(c[45]*t17 + c[88]*t16) - out[7]*(c[45]*t16 + c[89]*t17) - ld[9];
+    out[1] = c[86]*(-gv[1] + obs[32]) + out[3];
+    out[0] = c[86]*(-gv[0] + obs[31]) + out[2];
+    out[18] = c[83]*obs[26] - out[0]*(c[40]*t12 + c[42]*t13) - out[1]*(c[42]*t12 + c[43]*t13) + out[19] - out[2]*(c[41]*t13 + c[84]*t12) - out[3]*(c[41]*t12 + c[85]*t13) - ld[8];
     const double t22 = out[18] + out[20];
     out[21] = t22;
     out[22] = out[19];
@@ -887,9 +899,9 @@ int sg_overlock_feed_forces(const double *q, const double *cq, const double *x, 
     out[24] = out[19]*xd[1];
     out[25] = out[0] + out[4] + out[8];
     out[26] = out[1] + out[5] + out[9];
-    out[27] = c[21]*out[8] + c[5]*out[9] + t22;
-    out[28] = c[100]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[101]*((obs[52])*(obs[52])) + c[102]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[103]*((obs[61])*(obs[61])) + c[104]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[105]*((obs[70])*(obs[70])) + c[106]*(((obs[83])*(obs[83])) + ((obs[84])*(obs[84]))) + c[107]*((obs[79])*(obs[79])) + c[94]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[95]*((obs[25])*(obs[25])) + c[96]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[97]*((obs[34])*(obs[34])) + c[98]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[99]*((obs[43])*(obs[43]));
-    out[29] = c[108]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[109]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[110]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[111]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[112]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[113]*(gv[0]*obs[72] + gv[1]*obs[73]) + c[114]*(gv[0]*obs[81] + gv[1]*obs[82]);
+    out[27] = c[24]*out[8] + c[5]*out[9] + t22;
+    out[28] = c[100]*((obs[34])*(obs[34])) + c[101]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[102]*((obs[43])*(obs[43])) + c[103]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[104]*((obs[52])*(obs[52])) + c[105]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[106]*((obs[61])*(obs[61])) + c[107]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[108]*((obs[70])*(obs[70])) + c[109]*(((obs[83])*(obs[83])) + ((obs[84])*(obs[84]))) + c[110]*((obs[79])*(obs[79])) + c[97]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[98]*((obs[25])*(obs[25])) + c[99]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39])));
+    out[29] = c[111]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[112]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[113]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[114]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[115]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[116]*(gv[0]*obs[72] + gv[1]*obs[73]) + c[117]*(gv[0]*obs[81] + gv[1]*obs[82]);
     out[30] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[13]*obs[70] + ld[14]*obs[79] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
     out[31] = 0.0;
     if (!isfinite((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + out[7]))) + (((out[8] + out[9]) + (out[10] + out[11])) + ((out[12] + out[13]) + (out[14] + out[15])))) + ((((out[16] + out[17]) + (out[18] + out[19])) + ((out[20] + out[21]) + (out[22] + out[23]))) + (((out[24] + out[25]) + (out[26] + out[27])) + ((out[28] + out[29]) + (out[30] + out[31]))))))) return SG_NONFINITE;
@@ -907,46 +919,46 @@ void sg_overlock_feed_force_matrix(const double *q, const double *cq, const doub
     const double t3 = c[1]*cx[2] + c[2]*cx[3];
     const double t4 = cx[0]*t2 + cx[1]*t3;
     const double t5 = cx[0]*t3 - cx[1]*t2;
-    const double t6 = c[13]*cx[1] + c[15]*cx[0];
-    const double t7 = c[13]*cx[0] + c[14]*cx[1];
-    const double t8 = c[48]*t7;
-    const double t9 = c[48]*t6;
-    const double t10 = c[51]*cq[3];
-    const double t11 = c[50]*cq[2];
-    const double t12 = c[54]*cq[0];
-    const double t13 = c[54]*cq[1];
-    const double t14 = c[56]*cq[5];
-    const double t15 = c[58]*cq[4];
-    const double t16 = c[58]*cq[5];
-    const double t17 = c[59]*cq[4];
+    const double t6 = c[14]*cx[1] + c[16]*cx[0];
+    const double t7 = c[14]*cx[0] + c[15]*cx[1];
+    const double t8 = c[51]*t7;
+    const double t9 = c[51]*t6;
+    const double t10 = c[54]*cq[3];
+    const double t11 = c[53]*cq[2];
+    const double t12 = c[57]*cq[0];
+    const double t13 = c[57]*cq[1];
+    const double t14 = c[59]*cq[5];
+    const double t15 = c[61]*cq[4];
+    const double t16 = c[61]*cq[5];
+    const double t17 = c[62]*cq[4];
     for (int k = 0; k < 441; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[2] = -1.0;
     A[22] = 1.0;
     A[24] = -1.0;
-    A[42] = c[37]*t0 + c[39]*t1;
-    A[43] = c[39]*t0 + c[40]*t1;
-    A[44] = c[38]*t1 + c[81]*t0;
-    A[45] = c[38]*t0 + c[82]*t1;
+    A[42] = c[40]*t0 + c[42]*t1;
+    A[43] = c[42]*t0 + c[43]*t1;
+    A[44] = c[41]*t1 + c[84]*t0;
+    A[45] = c[41]*t0 + c[85]*t1;
     A[60] = 1.0;
     A[61] = -1.0;
     A[65] = 1.0;
     A[69] = -1.0;
     A[87] = 1.0;
     A[91] = -1.0;
-    A[107] = c[41]*t4 + c[43]*t5;
-    A[108] = c[43]*t4 + c[44]*t5;
-    A[111] = c[42]*t5 + c[85]*t4;
-    A[112] = c[42]*t4 + c[86]*t5;
+    A[107] = c[44]*t4 + c[46]*t5;
+    A[108] = c[46]*t4 + c[47]*t5;
+    A[111] = c[45]*t5 + c[88]*t4;
+    A[112] = c[45]*t4 + c[89]*t5;
     A[124] = 1.0;
     A[130] = 1.0;
     A[140] = -1.0;
     A[152] = 1.0;
     A[162] = -1.0;
-    A[172] = c[46]*t6 + t8;
-    A[173] = c[49]*t7 + t9;
-    A[182] = c[47]*t7 + c[90]*t6;
-    A[183] = c[47]*t6 + c[89]*t7;
+    A[172] = c[49]*t6 + t8;
+    A[173] = c[52]*t7 + t9;
+    A[182] = c[50]*t7 + c[93]*t6;
+    A[183] = c[50]*t6 + c[92]*t7;
     A[188] = 1.0;
     A[195] = 1.0;
     A[199] = -1.0;
@@ -962,49 +974,49 @@ void sg_overlock_feed_force_matrix(const double *q, const double *cq, const doub
     A[282] = 1.0;
     A[284] = 1.0;
     A[286] = -1.0;
-    A[302] = c[52]*cq[1] + t12;
-    A[303] = c[55]*cq[0] + t13;
-    A[304] = c[115]*cq[1] + t12;
-    A[305] = c[116]*cq[0] + t13;
-    A[306] = c[53]*cq[0] + c[71]*cq[1];
-    A[307] = c[53]*cq[1] + c[70]*cq[0];
+    A[302] = c[55]*cq[1] + t12;
+    A[303] = c[58]*cq[0] + t13;
+    A[304] = c[118]*cq[1] + t12;
+    A[305] = c[119]*cq[0] + t13;
+    A[306] = c[56]*cq[0] + c[74]*cq[1];
+    A[307] = c[56]*cq[1] + c[73]*cq[0];
     A[327] = 1.0;
     A[331] = -1.0;
     A[349] = 1.0;
     A[353] = -1.0;
     A[369] = t14 + t15;
     A[370] = t16 + t17;
-    A[373] = c[57]*cq[4] + t14;
-    A[374] = c[57]*cq[5] + t17;
+    A[373] = c[60]*cq[4] + t14;
+    A[374] = c[60]*cq[5] + t17;
     A[392] = 1.0;
     A[394] = 1.0;
     A[414] = 1.0;
     A[416] = 1.0;
-    A[434] = c[60]*cq[7];
-    A[435] = c[61]*cq[6];
-    A[436] = c[61]*cq[7];
-    A[437] = c[60]*cq[6];
-    b[0] = c[83]*(-gv[0] + obs[31]);
-    b[1] = c[83]*(-gv[1] + obs[32]);
-    b[2] = c[80]*obs[26] - ld[8];
-    b[3] = c[87]*(-gv[0] + obs[40]);
-    b[4] = c[87]*(-gv[1] + obs[41]);
-    b[5] = c[84]*obs[35] - ld[9];
-    b[6] = c[91]*(-gv[0] + obs[49]) - ld[6];
-    b[7] = c[91]*(-gv[1] + obs[50]) - ld[7];
-    b[8] = c[88]*obs[44] - ld[10] - ld[6]*(c[89]*t6 + t8) - ld[7]*(c[90]*t7 + t9);
-    b[9] = c[92]*(-gv[0] + obs[58]);
-    b[10] = c[92]*(-gv[1] + obs[59]);
-    b[11] = c[66]*obs[53] - ld[11];
-    b[12] = c[72]*(-gv[0] + obs[67]) - ld[0];
-    b[13] = c[72]*(-gv[1] + obs[68]) - ld[1];
-    b[14] = c[69]*obs[62] - ld[0]*(c[70]*cq[1] + t12) - ld[1]*(c[71]*cq[0] + t13) - ld[12];
-    b[15] = c[73]*(-gv[0] + obs[76]) - ld[2] - ld[4];
-    b[16] = c[73]*(-gv[1] + obs[77]) - ld[3] - ld[5];
-    b[17] = c[74]*obs[71] - ld[13] - ld[2]*(c[59]*cq[5] + t15) - ld[3]*(c[56]*cq[4] + t16) - ld[4]*(c[75]*cq[5] + t15) - ld[5]*(c[76]*cq[4] + t16);
-    b[18] = c[93]*(-gv[0] + obs[85]);
-    b[19] = c[93]*(-gv[1] + obs[86]);
-    b[20] = c[77]*obs[80] - ld[14];
+    A[434] = c[63]*cq[7];
+    A[435] = c[64]*cq[6];
+    A[436] = c[64]*cq[7];
+    A[437] = c[63]*cq[6];
+    b[0] = c[86]*(-gv[0] + obs[31]);
+    b[1] = c[86]*(-gv[1] + obs[32]);
+    b[2] = c[83]*obs[26] - ld[8];
+    b[3] = c[90]*(-gv[0] + obs[40]);
+    b[4] = c[90]*(-gv[1] + obs[41]);
+    b[5] = c[87]*obs[35] - ld[9];
+    b[6] = c[94]*(-gv[0] + obs[49]) - ld[6];
+    b[7] = c[94]*(-gv[1] + obs[50]) - ld[7];
+    b[8] = c[91]*obs[44] - ld[10] - ld[6]*(c[92]*t6 + t8) - ld[7]*(c[93]*t7 + t9);
+    b[9] = c[95]*(-gv[0] + obs[58]);
+    b[10] = c[95]*(-gv[1] + obs[59]);
+    b[11] = c[69]*obs[53] - ld[11];
+    b[12] = c[75]*(-gv[0] + obs[67]) - ld[0];
+    b[13] = c[75]*(-gv[1] + obs[68]) - ld[1];
+    b[14] = c[72]*obs[62] - ld[0]*(c[73]*cq[1] + t12) - ld[1]*(c[74]*cq[0] + t13) - ld[12];
+    b[15] = c[76]*(-gv[0] + obs[76]) - ld[2] - ld[4];
+    b[16] = c[76]*(-gv[1] + obs[77]) - ld[3] - ld[5];
+    b[17] = c[77]*obs[71] - ld[13] - ld[2]*(c[62]*cq[5] + t15) - ld[3]*(c[59]*cq[4] + t16) - ld[4]*(c[78]*cq[5] + t15) - ld[5]*(c[79]*cq[4] + t16);
+    b[18] = c[96]*(-gv[0] + obs[85]);
+    b[19] = c[96]*(-gv[1] + obs[86]);
+    b[20] = c[80]*obs[80] - ld[14];
 }
 
 /* sg_overlock_feed_anchors -- Total ops: 100 */
@@ -1020,16 +1032,16 @@ void sg_overlock_feed_anchors(const double *q, const double *cq, const double *x
     const double t5 = c[1]*cx[3] + c[3]*cx[2];
     const double t6 = cx[0]*t4 - cx[1]*t5;
     const double t7 = cx[0]*t5 + cx[1]*t4;
-    const double t8 = c[24]*cq[0] + c[5];
-    const double t9 = c[24]*cq[1] + c[6];
-    const double t10 = c[11]*cq[0] + c[5];
-    const double t11 = c[11]*cq[1] + c[6];
-    const double t12 = c[13]*cx[0] + c[14]*cx[1];
-    const double t13 = c[12]*t12;
-    const double t14 = c[13]*cx[1] + c[15]*cx[0];
-    const double t15 = c[12]*t14;
-    const double t16 = c[16]*cq[4] + t10;
-    const double t17 = c[16]*cq[5] + t11;
+    const double t8 = c[27]*cq[0] + c[5];
+    const double t9 = c[27]*cq[1] + c[6];
+    const double t10 = c[12]*cq[0] + c[5];
+    const double t11 = c[12]*cq[1] + c[6];
+    const double t12 = c[14]*cx[0] + c[15]*cx[1];
+    const double t13 = c[13]*t12;
+    const double t14 = c[14]*cx[1] + c[16]*cx[0];
+    const double t15 = c[13]*t14;
+    const double t16 = c[17]*cq[4] + t10;
+    const double t17 = c[17]*cq[5] + t11;
     out[0] = 0.0;
     out[1] = 0.0;
     out[2] = 0.0;
@@ -1044,8 +1056,8 @@ void sg_overlock_feed_anchors(const double *q, const double *cq, const double *x
     out[11] = 0.0;
     out[12] = c[4]*t6 + t1;
     out[13] = c[4]*t7 + t3;
-    out[14] = c[25]*cq[2] + t8;
-    out[15] = c[25]*cq[3] + t9;
+    out[14] = c[28]*cq[2] + t8;
+    out[15] = c[28]*cq[3] + t9;
     out[16] = c[5];
     out[17] = c[6];
     out[18] = c[5];
@@ -1064,30 +1076,30 @@ void sg_overlock_feed_anchors(const double *q, const double *cq, const double *x
     out[31] = t15;
     out[32] = t16;
     out[33] = t17;
-    out[34] = c[17]*cq[6] + t13;
-    out[35] = c[17]*cq[7] + t15;
+    out[34] = c[18]*cq[6] + t13;
+    out[35] = c[18]*cq[7] + t15;
     out[36] = t10;
     out[37] = t11;
     out[38] = t16;
     out[39] = t17;
-    out[40] = c[34]*cq[4] + t10;
-    out[41] = c[34]*cq[5] + t11;
+    out[40] = c[37]*cq[4] + t10;
+    out[41] = c[37]*cq[5] + t11;
     out[42] = t13;
     out[43] = t15;
-    out[44] = c[37]*t0 + c[38]*t2;
-    out[45] = c[37]*t2 + c[39]*t0;
-    out[46] = c[41]*t6 + c[42]*t7 + t1;
-    out[47] = c[41]*t7 + c[43]*t6 + t3;
-    out[48] = c[46]*t12 + c[47]*t14;
-    out[49] = c[46]*t14 + c[48]*t12;
-    out[50] = c[50]*cq[2] + t8;
-    out[51] = c[50]*cq[3] + t9;
-    out[52] = c[5] + c[52]*cq[0] + c[53]*cq[1];
-    out[53] = c[52]*cq[1] + c[54]*cq[0] + c[6];
-    out[54] = c[56]*cq[4] + c[57]*cq[5] + t10;
-    out[55] = c[56]*cq[5] + c[58]*cq[4] + t11;
-    out[56] = c[60]*cq[6] + t13;
-    out[57] = c[60]*cq[7] + t15;
+    out[44] = c[40]*t0 + c[41]*t2;
+    out[45] = c[40]*t2 + c[42]*t0;
+    out[46] = c[44]*t6 + c[45]*t7 + t1;
+    out[47] = c[44]*t7 + c[46]*t6 + t3;
+    out[48] = c[49]*t12 + c[50]*t14;
+    out[49] = c[49]*t14 + c[51]*t12;
+    out[50] = c[53]*cq[2] + t8;
+    out[51] = c[53]*cq[3] + t9;
+    out[52] = c[5] + c[55]*cq[0] + c[56]*cq[1];
+    out[53] = c[55]*cq[1] + c[57]*cq[0] + c[6];
+    out[54] = c[59]*cq[4] + c[60]*cq[5] + t10;
+    out[55] = c[59]*cq[5] + c[61]*cq[4] + t11;
+    out[56] = c[63]*cq[6] + t13;
+    out[57] = c[63]*cq[7] + t15;
 }
 
 /* sg_overlock_feed_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
@@ -1104,10 +1116,11 @@ static SG_FLATTEN SG_NOINLINE size_t sg_overlock_feed_sweep(const struct sg_mech
 #if SG_SIMD
 SG_SIMD_BEGIN
 
-SG_VINLINE sg_vm sg_overlock_feed_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_feed_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq, sg_vd *err)
 {
     (void)x;
     sg_vm ok = sgv_true();
+    sg_vd e[3] = {sgv_set1(0.0), sgv_set1(0.0), sgv_set1(1.0)};
     {
         /* dyad 0: RRR closed at joint C (strap, rock_shaft) */
         const sg_vd t0 = c[1]*cx[2] + c[2]*cx[3];
@@ -1115,8 +1128,9 @@ SG_VINLINE sg_vm sg_overlock_feed_closed_v(const sg_vd *x, const sg_vd *cx, cons
         const sg_vd P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[4]*(cx[0]*t0 - cx[1]*t1), c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[4]*(cx[0]*t1 + cx[1]*t0)};
         const sg_vd Q[2] = {sgv_set1(c[5]), sgv_set1(c[6])};
         const sg_vd l[2] = {sgv_set1(c[7]), sgv_set1(c[8])};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[11]);
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         q[1] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[0] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) - 3.141592653589793 : sgv_set1(0.0);
         cq[2] = c[9]*(J[0] - P[0]);
@@ -1126,91 +1140,94 @@ SG_VINLINE sg_vm sg_overlock_feed_closed_v(const sg_vd *x, const sg_vd *cx, cons
     }
     {
         /* dyad 1: RRR closed at joint F (rack, lift_link) */
-        const sg_vd P[2] = {c[11]*cq[0] + c[5], c[11]*cq[1] + c[6]};
-        const sg_vd Q[2] = {c[12]*(c[13]*cx[0] + c[14]*cx[1]), c[12]*(c[13]*cx[1] + c[15]*cx[0])};
-        const sg_vd l[2] = {sgv_set1(c[16]), sgv_set1(c[17])};
+        const sg_vd P[2] = {c[12]*cq[0] + c[5], c[12]*cq[1] + c[6]};
+        const sg_vd Q[2] = {c[13]*(c[14]*cx[0] + c[15]*cx[1]), c[13]*(c[14]*cx[1] + c[16]*cx[0])};
+        const sg_vd l[2] = {sgv_set1(c[17]), sgv_set1(c[18])};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[22]) + sgv_set1(c[21]) * e[0];
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[1], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[1], ein, e, J);
         q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[3] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
-        cq[4] = c[18]*(J[0] - P[0]);
-        cq[5] = c[18]*(J[1] - P[1]);
-        cq[6] = c[19]*(J[0] - Q[0]);
-        cq[7] = c[19]*(J[1] - Q[1]);
+        cq[4] = c[19]*(J[0] - P[0]);
+        cq[5] = c[19]*(J[1] - P[1]);
+        cq[6] = c[20]*(J[0] - Q[0]);
+        cq[7] = c[20]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return ok;
 }
 
 SG_VINLINE sg_vm sg_overlock_feed_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
 {
-    const sg_vd t0 = c[24]*cq[1];
+    const sg_vd t0 = c[27]*cq[1];
     const sg_vd t1 = c[8]*cq[0];
     const sg_vd t2 = c[7]*cq[2];
-    const sg_vd t3 = c[26]*cq[1];
-    const sg_vd t4 = c[27]*cq[5];
-    const sg_vd t5 = c[11]*cq[0];
-    const sg_vd t6 = c[16]*cq[4];
-    const sg_vd t7 = c[22]*cq[6];
+    const sg_vd t3 = c[29]*cq[1];
+    const sg_vd t4 = c[30]*cq[5];
+    const sg_vd t5 = c[12]*cq[0];
+    const sg_vd t6 = c[17]*cq[4];
+    const sg_vd t7 = c[25]*cq[6];
     const sg_vd t8 = c[1]*cx[3] + c[3]*cx[2];
     const sg_vd t9 = c[1]*cx[2] + c[2]*cx[3];
     const sg_vd t10 = cx[0]*t8 + cx[1]*t9;
     const sg_vd t11 = c[4]*t10;
     const sg_vd t12 = c[1]*cx[1] + c[3]*cx[0];
-    const sg_vd t13 = c[33]*t12;
-    const sg_vd t14 = c[32]*t10;
+    const sg_vd t13 = c[36]*t12;
+    const sg_vd t14 = c[35]*t10;
     const sg_vd t15 = t13 + t14;
     const sg_vd t16 = t15*xd[0];
     const sg_vd t17 = cx[0]*t9 - cx[1]*t8;
-    const sg_vd t18 = c[32]*t17;
+    const sg_vd t18 = c[35]*t17;
     const sg_vd t19 = t18*xd[1];
     const sg_vd t20 = c[1]*cx[0] + c[2]*cx[1];
     const sg_vd t21 = c[0]*t20;
     const sg_vd t22 = c[4]*t17 + t21;
-    const sg_vd t23 = c[13]*cx[1] + c[15]*cx[0];
-    const sg_vd t24 = c[23]*t23;
+    const sg_vd t23 = c[14]*cx[1] + c[16]*cx[0];
+    const sg_vd t24 = c[26]*t23;
     const sg_vd t25 = t24*xd[0];
-    const sg_vd t26 = c[13]*cx[0] + c[14]*cx[1];
-    const sg_vd t27 = c[12]*t26;
+    const sg_vd t26 = c[14]*cx[0] + c[15]*cx[1];
+    const sg_vd t27 = c[13]*t26;
     const sg_vd t28 = t27*xd[0];
-    const sg_vd t32 = c[33]*t20;
+    const sg_vd t32 = c[36]*t20;
     const sg_vd t34 = c[8]*cq[1];
     const sg_vd t36 = t14*xd[1];
     const sg_vd t39 = ((xd[0])*(xd[0]));
-    const sg_vd t40 = c[23]*t26*t39 + t24*xdd[0];
-    const sg_vd t41 = c[11]*cq[1];
-    const sg_vd t42 = c[16]*cq[5];
+    const sg_vd t40 = c[26]*t26*t39 + t24*xdd[0];
+    const sg_vd t41 = c[12]*cq[1];
+    const sg_vd t42 = c[17]*cq[5];
     const sg_vd t44 = t24*t39 + t27*xdd[0];
     const sg_vd t45 = c[5] + t5;
     const sg_vd t46 = c[6] + t41;
-    const sg_vd t52 = c[34]*cq[4];
-    const sg_vd t53 = c[35]*cq[5];
-    const sg_vd t54 = c[12]*t23;
-    const sg_vd t55 = c[36] + x[0];
-    const sg_vd t56 = c[37]*t20 + c[38]*t12;
-    const sg_vd t57 = c[38]*t20 + c[40]*t12;
-    const sg_vd t58 = c[41]*t17 + c[42]*t10;
+    const sg_vd t52 = c[37]*cq[4];
+    const sg_vd t53 = c[38]*cq[5];
+    const sg_vd t54 = c[13]*t23;
+    const sg_vd t55 = c[39] + x[0];
+    const sg_vd t56 = c[40]*t20 + c[41]*t12;
+    const sg_vd t57 = c[41]*t20 + c[43]*t12;
+    const sg_vd t58 = c[44]*t17 + c[45]*t10;
     const sg_vd t59 = t21 + t58;
-    const sg_vd t60 = c[42]*t17 + c[44]*t10;
+    const sg_vd t60 = c[45]*t17 + c[47]*t10;
     const sg_vd t61 = t60*xd[1];
     const sg_vd t62 = t13 + t60;
     const sg_vd t63 = t61 + t62*xd[0];
-    const sg_vd t64 = c[43]*t10 + c[44]*t17;
+    const sg_vd t64 = c[46]*t10 + c[47]*t17;
     const sg_vd t65 = t64*xd[1];
-    const sg_vd t66 = c[46]*t26 + c[47]*t23;
-    const sg_vd t67 = c[47]*t26 + c[49]*t23;
-    const sg_vd t68 = c[24]*cq[0];
-    const sg_vd t69 = c[50]*cq[2];
-    const sg_vd t70 = c[51]*cq[3];
-    const sg_vd t71 = c[52]*cq[0] + c[53]*cq[1];
-    const sg_vd t72 = c[53]*cq[0] + c[55]*cq[1];
-    const sg_vd t73 = c[56]*cq[4] + c[57]*cq[5];
-    const sg_vd t74 = c[57]*cq[4] + c[59]*cq[5];
-    const sg_vd t75 = c[60]*cq[6];
-    const sg_vd t76 = c[61]*cq[7];
-    sg_vd J[16], rs[4], cs[4];
+    const sg_vd t66 = c[49]*t26 + c[50]*t23;
+    const sg_vd t67 = c[50]*t26 + c[52]*t23;
+    const sg_vd t68 = c[27]*cq[0];
+    const sg_vd t69 = c[53]*cq[2];
+    const sg_vd t70 = c[54]*cq[3];
+    const sg_vd t71 = c[55]*cq[0] + c[56]*cq[1];
+    const sg_vd t72 = c[56]*cq[0] + c[58]*cq[1];
+    const sg_vd t73 = c[59]*cq[4] + c[60]*cq[5];
+    const sg_vd t74 = c[60]*cq[4] + c[62]*cq[5];
+    const sg_vd t75 = c[63]*cq[6];
+    const sg_vd t76 = c[64]*cq[7];
+    sg_vd J[16], rs[4], cs[8];
     sg_vm piv[4];
     J[0] = t0;
-    J[1] = c[25]*cq[3];
+    J[1] = c[28]*cq[3];
     J[2] = sgv_set1(0.0);
     J[3] = sgv_set1(0.0);
     J[4] = t1;
@@ -1220,7 +1237,7 @@ SG_VINLINE sg_vm sg_overlock_feed_motion_v(const sg_vd *q, const sg_vd *cq, cons
     J[8] = t3;
     J[9] = sgv_set1(0.0);
     J[10] = t4;
-    J[11] = c[17]*cq[7];
+    J[11] = c[18]*cq[7];
     J[12] = t5;
     J[13] = sgv_set1(0.0);
     J[14] = t6;
@@ -1229,10 +1246,10 @@ SG_VINLINE sg_vm sg_overlock_feed_motion_v(const sg_vd *q, const sg_vd *cq, cons
     qd[1] = t19 - t22*xd[0];
     qd[2] = t25;
     qd[3] = t28;
-    rs[0] = sgv_set1(c[62]);
-    rs[1] = sgv_set1(c[63]);
-    rs[2] = sgv_set1(c[64]);
-    rs[3] = sgv_set1(c[65]);
+    rs[0] = sgv_set1(c[65]);
+    rs[1] = sgv_set1(c[66]);
+    rs[2] = sgv_set1(c[67]);
+    rs[3] = sgv_set1(c[68]);
     sg_vm ok = sgv_factor_eq(4, J, piv, rs, cs, cond);
     sgv_solve_eq(4, J, piv, rs, cs, qd);
     const sg_vd t29 = ((qd[1])*(qd[1]));
@@ -1249,9 +1266,10 @@ SG_VINLINE sg_vm sg_overlock_feed_motion_v(const sg_vd *q, const sg_vd *cq, cons
     qdd[0] = t11*xdd[1] - t15*xdd[0] + t2*t29 + t31 - xd[0]*(t19 + xd[0]*(t18 + t32)) - xd[1]*(t18*xd[0] + t19);
     qdd[1] = c[7]*t33 + t18*xdd[1] - t22*xdd[0] + t35 - xd[0]*(t16 + t36) - xd[1]*(t14*xd[0] + t36);
     qdd[2] = t30*t5 + t37*t6 + t38*t7 + t40;
-    qdd[3] = c[22]*t43 + t30*t41 + t37*t42 + t44;
+    qdd[3] = c[25]*t43 + t30*t41 + t37*t42 + t44;
     sgv_solve_eq(4, J, piv, rs, cs, qdd);
-    const sg_vd t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+    sgv_rates_scale(4, 0xfULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
+    const sg_vd t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
     const sg_vd t50 = qdd[0]*t5 + t3*t30;
     obs[0] = t45;
     obs[1] = t46;
@@ -1263,13 +1281,13 @@ SG_VINLINE sg_vm sg_overlock_feed_motion_v(const sg_vd *q, const sg_vd *cq, cons
     obs[7] = t42 + t46;
     obs[8] = qd[2]*t4 + t47;
     obs[9] = qd[2]*t6 + t48;
-    obs[10] = c[27]*t51 + qdd[2]*t4 + t49;
+    obs[10] = c[30]*t51 + qdd[2]*t4 + t49;
     obs[11] = qdd[2]*t6 + t37*t4 + t50;
     obs[12] = t45 + t52;
-    obs[13] = c[34]*cq[5] + t46;
+    obs[13] = c[37]*cq[5] + t46;
     obs[14] = qd[2]*t53 + t47;
     obs[15] = qd[2]*t52 + t48;
-    obs[16] = c[35]*t51 + qdd[2]*t53 + t49;
+    obs[16] = c[38]*t51 + qdd[2]*t53 + t49;
     obs[17] = qdd[2]*t52 + t37*t53 + t50;
     obs[18] = t27;
     obs[19] = t54;
@@ -1281,65 +1299,65 @@ SG_VINLINE sg_vm sg_overlock_feed_motion_v(const sg_vd *q, const sg_vd *cq, cons
     obs[25] = xd[0];
     obs[26] = xdd[0];
     obs[27] = t56;
-    obs[28] = c[37]*t12 + c[39]*t20;
+    obs[28] = c[40]*t12 + c[42]*t20;
     obs[29] = t57*xd[0];
     obs[30] = t56*xd[0];
-    obs[31] = t39*(c[39]*t12 + c[40]*t20) + t57*xdd[0];
+    obs[31] = t39*(c[42]*t12 + c[43]*t20) + t57*xdd[0];
     obs[32] = t39*t57 + t56*xdd[0];
     obs[33] = t55 + x[1];
     obs[34] = xd[0] + xd[1];
     obs[35] = xdd[0] + xdd[1];
     obs[36] = t59;
-    obs[37] = c[0]*t12 + c[41]*t10 + c[43]*t17;
+    obs[37] = c[0]*t12 + c[44]*t10 + c[46]*t17;
     obs[38] = t63;
     obs[39] = t58*xd[1] + t59*xd[0];
     obs[40] = t60*xdd[1] + t62*xdd[0] + xd[0]*(t65 + xd[0]*(t32 + t64)) + xd[1]*(t64*xd[0] + t65);
     obs[41] = t58*xdd[1] + t59*xdd[0] + t63*xd[0] + xd[1]*(t60*xd[0] + t61);
-    obs[42] = c[45] + x[0];
+    obs[42] = c[48] + x[0];
     obs[43] = xd[0];
     obs[44] = xdd[0];
     obs[45] = t66;
-    obs[46] = c[46]*t23 + c[48]*t26;
+    obs[46] = c[49]*t23 + c[51]*t26;
     obs[47] = t67*xd[0];
     obs[48] = t66*xd[0];
-    obs[49] = t39*(c[48]*t23 + c[49]*t26) + t67*xdd[0];
+    obs[49] = t39*(c[51]*t23 + c[52]*t26) + t67*xdd[0];
     obs[50] = t39*t67 + t66*xdd[0];
     obs[51] = q[1];
     obs[52] = qd[1];
     obs[53] = qdd[1];
     obs[54] = c[5] + t68 + t69;
-    obs[55] = c[50]*cq[3] + c[6] + t0;
+    obs[55] = c[53]*cq[3] + c[6] + t0;
     obs[56] = qd[0]*t34 + qd[1]*t70;
     obs[57] = qd[0]*t68 + qd[1]*t69;
-    obs[58] = c[51]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
-    obs[59] = c[51]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
+    obs[58] = c[54]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
+    obs[59] = c[54]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
     obs[60] = q[0];
     obs[61] = qd[0];
     obs[62] = qdd[0];
     obs[63] = c[5] + t71;
-    obs[64] = c[52]*cq[1] + c[54]*cq[0] + c[6];
+    obs[64] = c[55]*cq[1] + c[57]*cq[0] + c[6];
     obs[65] = qd[0]*t72;
     obs[66] = qd[0]*t71;
-    obs[67] = qdd[0]*t72 + t30*(c[54]*cq[1] + c[55]*cq[0]);
+    obs[67] = qdd[0]*t72 + t30*(c[57]*cq[1] + c[58]*cq[0]);
     obs[68] = qdd[0]*t71 + t30*t72;
     obs[69] = q[2];
     obs[70] = qd[2];
     obs[71] = qdd[2];
     obs[72] = t45 + t73;
-    obs[73] = c[56]*cq[5] + c[58]*cq[4] + t46;
+    obs[73] = c[59]*cq[5] + c[61]*cq[4] + t46;
     obs[74] = qd[2]*t74 + t47;
     obs[75] = qd[2]*t73 + t48;
-    obs[76] = qdd[2]*t74 + t37*(c[58]*cq[5] + c[59]*cq[4]) + t49;
+    obs[76] = qdd[2]*t74 + t37*(c[61]*cq[5] + c[62]*cq[4]) + t49;
     obs[77] = qdd[2]*t73 + t37*t74 + t50;
     obs[78] = q[3];
     obs[79] = qd[3];
     obs[80] = qdd[3];
     obs[81] = t27 + t75;
-    obs[82] = c[60]*cq[7] + t54;
+    obs[82] = c[63]*cq[7] + t54;
     obs[83] = qd[3]*t76 + t25;
     obs[84] = qd[3]*t75 + t28;
-    obs[85] = c[61]*cq[6]*t38 + qdd[3]*t76 + t40;
-    obs[86] = c[61]*t43 + qdd[3]*t75 + t44;
+    obs[85] = c[64]*cq[6]*t38 + qdd[3]*t76 + t40;
+    obs[86] = c[64]*t43 + qdd[3]*t75 + t44;
     ok &= sgv_isfinite(((((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))) + (((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))) + ((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))))) + ((((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))) + ((obs[18] + (obs[19] + obs[20])) + (obs[21] + (obs[22] + obs[23])))) + (((obs[24] + (obs[25] + obs[26])) + (obs[27] + (obs[28] + obs[29]))) + ((obs[30] + (obs[31] + obs[32])) + ((obs[33] + obs[34]) + (obs[35] + obs[36])))))) + (((((obs[37] + (obs[38] + obs[39])) + (obs[40] + (obs[41] + obs[42]))) + ((obs[43] + (obs[44] + obs[45])) + (obs[46] + (obs[47] + obs[48])))) + (((obs[49] + (obs[50] + obs[51])) + (obs[52] + (obs[53] + obs[54]))) + ((obs[55] + (obs[56] + obs[57])) + ((obs[58] + obs[59]) + (obs[60] + obs[61]))))) + ((((obs[62] + (obs[63] + obs[64])) + (obs[65] + (obs[66] + obs[67]))) + ((obs[68] + (obs[69] + obs[70])) + (obs[71] + (obs[72] + obs[73])))) + (((obs[74] + (obs[75] + obs[76])) + (obs[77] + (obs[78] + obs[79]))) + ((obs[80] + (obs[81] + obs[82])) + ((obs[83] + obs[84]) + (obs[85] + obs[86]))))))));
     return ok;
 }
@@ -1347,47 +1365,47 @@ SG_VINLINE sg_vm sg_overlock_feed_motion_v(const sg_vd *q, const sg_vd *cq, cons
 SG_VINLINE sg_vm sg_overlock_feed_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
 {
     (void)x;
-    const sg_vd t0 = c[24]*cq[1];
+    const sg_vd t0 = c[27]*cq[1];
     const sg_vd t1 = c[8]*cq[0];
     const sg_vd t2 = c[7]*cq[2];
-    const sg_vd t3 = c[26]*cq[1];
-    const sg_vd t4 = c[27]*cq[5];
-    const sg_vd t5 = c[11]*cq[0];
-    const sg_vd t6 = c[16]*cq[4];
-    const sg_vd t7 = c[22]*cq[6];
+    const sg_vd t3 = c[29]*cq[1];
+    const sg_vd t4 = c[30]*cq[5];
+    const sg_vd t5 = c[12]*cq[0];
+    const sg_vd t6 = c[17]*cq[4];
+    const sg_vd t7 = c[25]*cq[6];
     const sg_vd t8 = c[1]*cx[3] + c[3]*cx[2];
     const sg_vd t9 = c[1]*cx[2] + c[2]*cx[3];
     const sg_vd t10 = cx[0]*t8 + cx[1]*t9;
     const sg_vd t11 = c[4]*t10;
     const sg_vd t12 = c[1]*cx[1] + c[3]*cx[0];
-    const sg_vd t13 = c[33]*t12;
-    const sg_vd t14 = c[32]*t10;
+    const sg_vd t13 = c[36]*t12;
+    const sg_vd t14 = c[35]*t10;
     const sg_vd t15 = t13 + t14;
     const sg_vd t16 = t15*xd[0];
     const sg_vd t17 = cx[0]*t9 - cx[1]*t8;
-    const sg_vd t18 = c[32]*t17;
+    const sg_vd t18 = c[35]*t17;
     const sg_vd t19 = t18*xd[1];
     const sg_vd t20 = c[1]*cx[0] + c[2]*cx[1];
     const sg_vd t21 = c[0]*t20;
     const sg_vd t22 = c[4]*t17 + t21;
-    const sg_vd t23 = c[13]*cx[1] + c[15]*cx[0];
-    const sg_vd t24 = c[23]*t23;
+    const sg_vd t23 = c[14]*cx[1] + c[16]*cx[0];
+    const sg_vd t24 = c[26]*t23;
     const sg_vd t25 = t24*xd[0];
-    const sg_vd t26 = c[13]*cx[0] + c[14]*cx[1];
-    const sg_vd t27 = c[12]*t26;
+    const sg_vd t26 = c[14]*cx[0] + c[15]*cx[1];
+    const sg_vd t27 = c[13]*t26;
     const sg_vd t28 = t27*xd[0];
-    const sg_vd t32 = c[33]*t20;
+    const sg_vd t32 = c[36]*t20;
     const sg_vd t34 = c[8]*cq[1];
     const sg_vd t36 = t14*xd[1];
     const sg_vd t39 = ((xd[0])*(xd[0]));
-    const sg_vd t40 = c[23]*t26*t39 + t24*xdd[0];
-    const sg_vd t41 = c[11]*cq[1];
-    const sg_vd t42 = c[16]*cq[5];
+    const sg_vd t40 = c[26]*t26*t39 + t24*xdd[0];
+    const sg_vd t41 = c[12]*cq[1];
+    const sg_vd t42 = c[17]*cq[5];
     const sg_vd t44 = t24*t39 + t27*xdd[0];
-    sg_vd J[16], rs[4], cs[4];
+    sg_vd J[16], rs[4], cs[8];
     sg_vm piv[4];
     J[0] = t0;
-    J[1] = c[25]*cq[3];
+    J[1] = c[28]*cq[3];
     J[2] = sgv_set1(0.0);
     J[3] = sgv_set1(0.0);
     J[4] = t1;
@@ -1397,7 +1415,7 @@ SG_VINLINE sg_vm sg_overlock_feed_rates_v(const sg_vd *q, const sg_vd *cq, const
     J[8] = t3;
     J[9] = sgv_set1(0.0);
     J[10] = t4;
-    J[11] = c[17]*cq[7];
+    J[11] = c[18]*cq[7];
     J[12] = t5;
     J[13] = sgv_set1(0.0);
     J[14] = t6;
@@ -1406,10 +1424,10 @@ SG_VINLINE sg_vm sg_overlock_feed_rates_v(const sg_vd *q, const sg_vd *cq, const
     qd[1] = t19 - t22*xd[0];
     qd[2] = t25;
     qd[3] = t28;
-    rs[0] = sgv_set1(c[62]);
-    rs[1] = sgv_set1(c[63]);
-    rs[2] = sgv_set1(c[64]);
-    rs[3] = sgv_set1(c[65]);
+    rs[0] = sgv_set1(c[65]);
+    rs[1] = sgv_set1(c[66]);
+    rs[2] = sgv_set1(c[67]);
+    rs[3] = sgv_set1(c[68]);
     sg_vm ok = sgv_factor_eq(4, J, piv, rs, cs, cond);
     sgv_solve_eq(4, J, piv, rs, cs, qd);
     const sg_vd t29 = ((qd[1])*(qd[1]));
@@ -1423,8 +1441,9 @@ SG_VINLINE sg_vm sg_overlock_feed_rates_v(const sg_vd *q, const sg_vd *cq, const
     qdd[0] = t11*xdd[1] - t15*xdd[0] + t2*t29 + t31 - xd[0]*(t19 + xd[0]*(t18 + t32)) - xd[1]*(t18*xd[0] + t19);
     qdd[1] = c[7]*t33 + t18*xdd[1] - t22*xdd[0] + t35 - xd[0]*(t16 + t36) - xd[1]*(t14*xd[0] + t36);
     qdd[2] = t30*t5 + t37*t6 + t38*t7 + t40;
-    qdd[3] = c[22]*t43 + t30*t41 + t37*t42 + t44;
+    qdd[3] = c[25]*t43 + t30*t41 + t37*t42 + t44;
     sgv_solve_eq(4, J, piv, rs, cs, qdd);
+    sgv_rates_scale(4, 0xfULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite((((q[0] + (q[1] + q[2])) + (q[3] + (qd[0] + qd[1]))) + ((qd[2] + (qd[3] + qdd[0])) + (qdd[1] + (qdd[2] + qdd[3])))));
     return ok;
 }
@@ -1433,15 +1452,15 @@ SG_VINLINE sg_vm sg_overlock_feed_observe_v(const sg_vd *q, const sg_vd *cq, con
 {
     switch (group) {
     case 0: {
-        const sg_vd t3 = c[26]*cq[1];
-        const sg_vd t5 = c[11]*cq[0];
+        const sg_vd t3 = c[29]*cq[1];
+        const sg_vd t5 = c[12]*cq[0];
         const sg_vd t30 = ((qd[0])*(qd[0]));
-        const sg_vd t41 = c[11]*cq[1];
+        const sg_vd t41 = c[12]*cq[1];
         const sg_vd t45 = c[5] + t5;
         const sg_vd t46 = c[6] + t41;
         const sg_vd t47 = qd[0]*t3;
         const sg_vd t48 = qd[0]*t5;
-        const sg_vd t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const sg_vd t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
         const sg_vd t50 = qdd[0]*t5 + t3*t30;
         obs[0] = t45;
         obs[1] = t46;
@@ -1452,63 +1471,63 @@ SG_VINLINE sg_vm sg_overlock_feed_observe_v(const sg_vd *q, const sg_vd *cq, con
         return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
     }
     case 1: {
-        const sg_vd t3 = c[26]*cq[1];
-        const sg_vd t4 = c[27]*cq[5];
-        const sg_vd t5 = c[11]*cq[0];
-        const sg_vd t6 = c[16]*cq[4];
+        const sg_vd t3 = c[29]*cq[1];
+        const sg_vd t4 = c[30]*cq[5];
+        const sg_vd t5 = c[12]*cq[0];
+        const sg_vd t6 = c[17]*cq[4];
         const sg_vd t30 = ((qd[0])*(qd[0]));
         const sg_vd t37 = ((qd[2])*(qd[2]));
-        const sg_vd t41 = c[11]*cq[1];
-        const sg_vd t42 = c[16]*cq[5];
+        const sg_vd t41 = c[12]*cq[1];
+        const sg_vd t42 = c[17]*cq[5];
         const sg_vd t45 = c[5] + t5;
         const sg_vd t46 = c[6] + t41;
         const sg_vd t47 = qd[0]*t3;
         const sg_vd t48 = qd[0]*t5;
-        const sg_vd t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const sg_vd t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
         const sg_vd t50 = qdd[0]*t5 + t3*t30;
         const sg_vd t51 = cq[4]*t37;
         obs[6] = t45 + t6;
         obs[7] = t42 + t46;
         obs[8] = qd[2]*t4 + t47;
         obs[9] = qd[2]*t6 + t48;
-        obs[10] = c[27]*t51 + qdd[2]*t4 + t49;
+        obs[10] = c[30]*t51 + qdd[2]*t4 + t49;
         obs[11] = qdd[2]*t6 + t37*t4 + t50;
         return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
     }
     case 2: {
-        const sg_vd t3 = c[26]*cq[1];
-        const sg_vd t5 = c[11]*cq[0];
+        const sg_vd t3 = c[29]*cq[1];
+        const sg_vd t5 = c[12]*cq[0];
         const sg_vd t30 = ((qd[0])*(qd[0]));
         const sg_vd t37 = ((qd[2])*(qd[2]));
-        const sg_vd t41 = c[11]*cq[1];
+        const sg_vd t41 = c[12]*cq[1];
         const sg_vd t45 = c[5] + t5;
         const sg_vd t46 = c[6] + t41;
         const sg_vd t47 = qd[0]*t3;
         const sg_vd t48 = qd[0]*t5;
-        const sg_vd t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const sg_vd t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
         const sg_vd t50 = qdd[0]*t5 + t3*t30;
         const sg_vd t51 = cq[4]*t37;
-        const sg_vd t52 = c[34]*cq[4];
-        const sg_vd t53 = c[35]*cq[5];
+        const sg_vd t52 = c[37]*cq[4];
+        const sg_vd t53 = c[38]*cq[5];
         obs[12] = t45 + t52;
-        obs[13] = c[34]*cq[5] + t46;
+        obs[13] = c[37]*cq[5] + t46;
         obs[14] = qd[2]*t53 + t47;
         obs[15] = qd[2]*t52 + t48;
-        obs[16] = c[35]*t51 + qdd[2]*t53 + t49;
+        obs[16] = c[38]*t51 + qdd[2]*t53 + t49;
         obs[17] = qdd[2]*t52 + t37*t53 + t50;
         return sgv_isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))));
     }
     case 3: {
-        const sg_vd t23 = c[13]*cx[1] + c[15]*cx[0];
-        const sg_vd t24 = c[23]*t23;
+        const sg_vd t23 = c[14]*cx[1] + c[16]*cx[0];
+        const sg_vd t24 = c[26]*t23;
         const sg_vd t25 = t24*xd[0];
-        const sg_vd t26 = c[13]*cx[0] + c[14]*cx[1];
-        const sg_vd t27 = c[12]*t26;
+        const sg_vd t26 = c[14]*cx[0] + c[15]*cx[1];
+        const sg_vd t27 = c[13]*t26;
         const sg_vd t28 = t27*xd[0];
         const sg_vd t39 = ((xd[0])*(xd[0]));
-        const sg_vd t40 = c[23]*t26*t39 + t24*xdd[0];
+        const sg_vd t40 = c[26]*t26*t39 + t24*xdd[0];
         const sg_vd t44 = t24*t39 + t27*xdd[0];
-        const sg_vd t54 = c[12]*t23;
+        const sg_vd t54 = c[13]*t23;
         obs[18] = t27;
         obs[19] = t54;
         obs[20] = t25;
@@ -1521,17 +1540,17 @@ SG_VINLINE sg_vm sg_overlock_feed_observe_v(const sg_vd *q, const sg_vd *cq, con
         const sg_vd t12 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t20 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t39 = ((xd[0])*(xd[0]));
-        const sg_vd t55 = c[36] + x[0];
-        const sg_vd t56 = c[37]*t20 + c[38]*t12;
-        const sg_vd t57 = c[38]*t20 + c[40]*t12;
+        const sg_vd t55 = c[39] + x[0];
+        const sg_vd t56 = c[40]*t20 + c[41]*t12;
+        const sg_vd t57 = c[41]*t20 + c[43]*t12;
         obs[24] = t55;
         obs[25] = xd[0];
         obs[26] = xdd[0];
         obs[27] = t56;
-        obs[28] = c[37]*t12 + c[39]*t20;
+        obs[28] = c[40]*t12 + c[42]*t20;
         obs[29] = t57*xd[0];
         obs[30] = t56*xd[0];
-        obs[31] = t39*(c[39]*t12 + c[40]*t20) + t57*xdd[0];
+        obs[31] = t39*(c[42]*t12 + c[43]*t20) + t57*xdd[0];
         obs[32] = t39*t57 + t56*xdd[0];
         return sgv_isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))));
     }
@@ -1540,25 +1559,25 @@ SG_VINLINE sg_vm sg_overlock_feed_observe_v(const sg_vd *q, const sg_vd *cq, con
         const sg_vd t9 = c[1]*cx[2] + c[2]*cx[3];
         const sg_vd t10 = cx[0]*t8 + cx[1]*t9;
         const sg_vd t12 = c[1]*cx[1] + c[3]*cx[0];
-        const sg_vd t13 = c[33]*t12;
+        const sg_vd t13 = c[36]*t12;
         const sg_vd t17 = cx[0]*t9 - cx[1]*t8;
         const sg_vd t20 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t21 = c[0]*t20;
-        const sg_vd t32 = c[33]*t20;
-        const sg_vd t55 = c[36] + x[0];
-        const sg_vd t58 = c[41]*t17 + c[42]*t10;
+        const sg_vd t32 = c[36]*t20;
+        const sg_vd t55 = c[39] + x[0];
+        const sg_vd t58 = c[44]*t17 + c[45]*t10;
         const sg_vd t59 = t21 + t58;
-        const sg_vd t60 = c[42]*t17 + c[44]*t10;
+        const sg_vd t60 = c[45]*t17 + c[47]*t10;
         const sg_vd t61 = t60*xd[1];
         const sg_vd t62 = t13 + t60;
         const sg_vd t63 = t61 + t62*xd[0];
-        const sg_vd t64 = c[43]*t10 + c[44]*t17;
+        const sg_vd t64 = c[46]*t10 + c[47]*t17;
         const sg_vd t65 = t64*xd[1];
         obs[33] = t55 + x[1];
         obs[34] = xd[0] + xd[1];
         obs[35] = xdd[0] + xdd[1];
         obs[36] = t59;
-        obs[37] = c[0]*t12 + c[41]*t10 + c[43]*t17;
+        obs[37] = c[0]*t12 + c[44]*t10 + c[46]*t17;
         obs[38] = t63;
         obs[39] = t58*xd[1] + t59*xd[0];
         obs[40] = t60*xdd[1] + t62*xdd[0] + xd[0]*(t65 + xd[0]*(t32 + t64)) + xd[1]*(t64*xd[0] + t65);
@@ -1566,24 +1585,24 @@ SG_VINLINE sg_vm sg_overlock_feed_observe_v(const sg_vd *q, const sg_vd *cq, con
         return sgv_isfinite((((obs[33] + obs[34]) + (obs[35] + obs[36])) + ((obs[37] + obs[38]) + (obs[39] + (obs[40] + obs[41])))));
     }
     case 6: {
-        const sg_vd t23 = c[13]*cx[1] + c[15]*cx[0];
-        const sg_vd t26 = c[13]*cx[0] + c[14]*cx[1];
+        const sg_vd t23 = c[14]*cx[1] + c[16]*cx[0];
+        const sg_vd t26 = c[14]*cx[0] + c[15]*cx[1];
         const sg_vd t39 = ((xd[0])*(xd[0]));
-        const sg_vd t66 = c[46]*t26 + c[47]*t23;
-        const sg_vd t67 = c[47]*t26 + c[49]*t23;
-        obs[42] = c[45] + x[0];
+        const sg_vd t66 = c[49]*t26 + c[50]*t23;
+        const sg_vd t67 = c[50]*t26 + c[52]*t23;
+        obs[42] = c[48] + x[0];
         obs[43] = xd[0];
         obs[44] = xdd[0];
         obs[45] = t66;
-        obs[46] = c[46]*t23 + c[48]*t26;
+        obs[46] = c[49]*t23 + c[51]*t26;
         obs[47] = t67*xd[0];
         obs[48] = t66*xd[0];
-        obs[49] = t39*(c[48]*t23 + c[49]*t26) + t67*xdd[0];
+        obs[49] = t39*(c[51]*t23 + c[52]*t26) + t67*xdd[0];
         obs[50] = t39*t67 + t66*xdd[0];
         return sgv_isfinite((((obs[42] + obs[43]) + (obs[44] + obs[45])) + ((obs[46] + obs[47]) + (obs[48] + (obs[49] + obs[50])))));
     }
     case 7: {
-        const sg_vd t0 = c[24]*cq[1];
+        const sg_vd t0 = c[27]*cq[1];
         const sg_vd t1 = c[8]*cq[0];
         const sg_vd t29 = ((qd[1])*(qd[1]));
         const sg_vd t30 = ((qd[0])*(qd[0]));
@@ -1591,84 +1610,84 @@ SG_VINLINE sg_vm sg_overlock_feed_observe_v(const sg_vd *q, const sg_vd *cq, con
         const sg_vd t33 = cq[3]*t29;
         const sg_vd t34 = c[8]*cq[1];
         const sg_vd t35 = t30*t34;
-        const sg_vd t68 = c[24]*cq[0];
-        const sg_vd t69 = c[50]*cq[2];
-        const sg_vd t70 = c[51]*cq[3];
+        const sg_vd t68 = c[27]*cq[0];
+        const sg_vd t69 = c[53]*cq[2];
+        const sg_vd t70 = c[54]*cq[3];
         obs[51] = q[1];
         obs[52] = qd[1];
         obs[53] = qdd[1];
         obs[54] = c[5] + t68 + t69;
-        obs[55] = c[50]*cq[3] + c[6] + t0;
+        obs[55] = c[53]*cq[3] + c[6] + t0;
         obs[56] = qd[0]*t34 + qd[1]*t70;
         obs[57] = qd[0]*t68 + qd[1]*t69;
-        obs[58] = c[51]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
-        obs[59] = c[51]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
+        obs[58] = c[54]*cq[2]*t29 + qdd[0]*t34 + qdd[1]*t70 + t31;
+        obs[59] = c[54]*t33 + qdd[0]*t68 + qdd[1]*t69 + t35;
         return sgv_isfinite((((obs[51] + obs[52]) + (obs[53] + obs[54])) + ((obs[55] + obs[56]) + (obs[57] + (obs[58] + obs[59])))));
     }
     case 8: {
         const sg_vd t30 = ((qd[0])*(qd[0]));
-        const sg_vd t71 = c[52]*cq[0] + c[53]*cq[1];
-        const sg_vd t72 = c[53]*cq[0] + c[55]*cq[1];
+        const sg_vd t71 = c[55]*cq[0] + c[56]*cq[1];
+        const sg_vd t72 = c[56]*cq[0] + c[58]*cq[1];
         obs[60] = q[0];
         obs[61] = qd[0];
         obs[62] = qdd[0];
         obs[63] = c[5] + t71;
-        obs[64] = c[52]*cq[1] + c[54]*cq[0] + c[6];
+        obs[64] = c[55]*cq[1] + c[57]*cq[0] + c[6];
         obs[65] = qd[0]*t72;
         obs[66] = qd[0]*t71;
-        obs[67] = qdd[0]*t72 + t30*(c[54]*cq[1] + c[55]*cq[0]);
+        obs[67] = qdd[0]*t72 + t30*(c[57]*cq[1] + c[58]*cq[0]);
         obs[68] = qdd[0]*t71 + t30*t72;
         return sgv_isfinite((((obs[60] + obs[61]) + (obs[62] + obs[63])) + ((obs[64] + obs[65]) + (obs[66] + (obs[67] + obs[68])))));
     }
     case 9: {
-        const sg_vd t3 = c[26]*cq[1];
-        const sg_vd t5 = c[11]*cq[0];
+        const sg_vd t3 = c[29]*cq[1];
+        const sg_vd t5 = c[12]*cq[0];
         const sg_vd t30 = ((qd[0])*(qd[0]));
         const sg_vd t37 = ((qd[2])*(qd[2]));
-        const sg_vd t41 = c[11]*cq[1];
+        const sg_vd t41 = c[12]*cq[1];
         const sg_vd t45 = c[5] + t5;
         const sg_vd t46 = c[6] + t41;
         const sg_vd t47 = qd[0]*t3;
         const sg_vd t48 = qd[0]*t5;
-        const sg_vd t49 = c[26]*cq[0]*t30 + qdd[0]*t3;
+        const sg_vd t49 = c[29]*cq[0]*t30 + qdd[0]*t3;
         const sg_vd t50 = qdd[0]*t5 + t3*t30;
-        const sg_vd t73 = c[56]*cq[4] + c[57]*cq[5];
-        const sg_vd t74 = c[57]*cq[4] + c[59]*cq[5];
+        const sg_vd t73 = c[59]*cq[4] + c[60]*cq[5];
+        const sg_vd t74 = c[60]*cq[4] + c[62]*cq[5];
         obs[69] = q[2];
         obs[70] = qd[2];
         obs[71] = qdd[2];
         obs[72] = t45 + t73;
-        obs[73] = c[56]*cq[5] + c[58]*cq[4] + t46;
+        obs[73] = c[59]*cq[5] + c[61]*cq[4] + t46;
         obs[74] = qd[2]*t74 + t47;
         obs[75] = qd[2]*t73 + t48;
-        obs[76] = qdd[2]*t74 + t37*(c[58]*cq[5] + c[59]*cq[4]) + t49;
+        obs[76] = qdd[2]*t74 + t37*(c[61]*cq[5] + c[62]*cq[4]) + t49;
         obs[77] = qdd[2]*t73 + t37*t74 + t50;
         return sgv_isfinite((((obs[69] + obs[70]) + (obs[71] + obs[72])) + ((obs[73] + obs[74]) + (obs[75] + (obs[76] + obs[77])))));
     }
     case 10: {
-        const sg_vd t23 = c[13]*cx[1] + c[15]*cx[0];
-        const sg_vd t24 = c[23]*t23;
+        const sg_vd t23 = c[14]*cx[1] + c[16]*cx[0];
+        const sg_vd t24 = c[26]*t23;
         const sg_vd t25 = t24*xd[0];
-        const sg_vd t26 = c[13]*cx[0] + c[14]*cx[1];
-        const sg_vd t27 = c[12]*t26;
+        const sg_vd t26 = c[14]*cx[0] + c[15]*cx[1];
+        const sg_vd t27 = c[13]*t26;
         const sg_vd t28 = t27*xd[0];
         const sg_vd t38 = ((qd[3])*(qd[3]));
         const sg_vd t39 = ((xd[0])*(xd[0]));
-        const sg_vd t40 = c[23]*t26*t39 + t24*xdd[0];
+        const sg_vd t40 = c[26]*t26*t39 + t24*xdd[0];
         const sg_vd t43 = cq[7]*t38;
         const sg_vd t44 = t24*t39 + t27*xdd[0];
-        const sg_vd t54 = c[12]*t23;
-        const sg_vd t75 = c[60]*cq[6];
-        const sg_vd t76 = c[61]*cq[7];
+        const sg_vd t54 = c[13]*t23;
+        const sg_vd t75 = c[63]*cq[6];
+        const sg_vd t76 = c[64]*cq[7];
         obs[78] = q[3];
         obs[79] = qd[3];
         obs[80] = qdd[3];
         obs[81] = t27 + t75;
-        obs[82] = c[60]*cq[7] + t54;
+        obs[82] = c[63]*cq[7] + t54;
         obs[83] = qd[3]*t76 + t25;
         obs[84] = qd[3]*t75 + t28;
-        obs[85] = c[61]*cq[6]*t38 + qdd[3]*t76 + t40;
-        obs[86] = c[61]*t43 + qdd[3]*t75 + t44;
+        obs[85] = c[64]*cq[6]*t38 + qdd[3]*t76 + t40;
+        obs[86] = c[64]*t43 + qdd[3]*t75 + t44;
         return sgv_isfinite((((obs[78] + obs[79]) + (obs[80] + obs[81])) + ((obs[82] + obs[83]) + (obs[84] + (obs[85] + obs[86])))));
     }
     default:
@@ -1683,14 +1702,14 @@ SG_VINLINE sg_vm sg_overlock_feed_forces_v(const sg_vd *q, const sg_vd *cq, cons
     sg_vm ok = sgv_true();
     const sg_vd t0 = -gv[1] + obs[59];
     const sg_vd t1 = -gv[0] + obs[58];
-    const sg_vd t2 = c[54]*cq[0];
-    const sg_vd t3 = c[54]*cq[1];
-    const sg_vd t4 = c[73]*(-gv[1] + obs[77]) - ld[3] - ld[5];
-    const sg_vd t5 = c[73]*(-gv[0] + obs[76]) - ld[2] - ld[4];
-    const sg_vd t6 = c[72]*(-gv[0] + obs[67]) - ld[0];
-    const sg_vd t7 = c[72]*(-gv[1] + obs[68]) - ld[1];
-    const sg_vd t8 = c[58]*cq[4];
-    const sg_vd t9 = c[58]*cq[5];
+    const sg_vd t2 = c[57]*cq[0];
+    const sg_vd t3 = c[57]*cq[1];
+    const sg_vd t4 = c[76]*(-gv[1] + obs[77]) - ld[3] - ld[5];
+    const sg_vd t5 = c[76]*(-gv[0] + obs[76]) - ld[2] - ld[4];
+    const sg_vd t6 = c[75]*(-gv[0] + obs[67]) - ld[0];
+    const sg_vd t7 = c[75]*(-gv[1] + obs[68]) - ld[1];
+    const sg_vd t8 = c[61]*cq[4];
+    const sg_vd t9 = c[61]*cq[5];
     const sg_vd t10 = -gv[1] + obs[86];
     const sg_vd t11 = -gv[0] + obs[85];
     const sg_vd t12 = c[1]*cx[1] + c[3]*cx[0];
@@ -1699,20 +1718,20 @@ SG_VINLINE sg_vm sg_overlock_feed_forces_v(const sg_vd *q, const sg_vd *cq, cons
     const sg_vd t15 = c[1]*cx[2] + c[2]*cx[3];
     const sg_vd t16 = cx[0]*t14 + cx[1]*t15;
     const sg_vd t17 = cx[0]*t15 - cx[1]*t14;
-    const sg_vd t18 = c[13]*cx[0] + c[14]*cx[1];
-    const sg_vd t19 = c[48]*t18;
-    const sg_vd t20 = c[13]*cx[1] + c[15]*cx[0];
-    const sg_vd t21 = c[48]*t20;
+    const sg_vd t18 = c[14]*cx[0] + c[15]*cx[1];
+    const sg_vd t19 = c[51]*t18;
+    const sg_vd t20 = c[14]*cx[1] + c[16]*cx[0];
+    const sg_vd t21 = c[51]*t20;
     {
         /* block of unknowns 16, 17 */
         sg_vd M[4], r[2];
         sg_vm piv[2];
-        M[0] = c[22]*cq[7];
-        M[1] = c[17]*cq[6];
-        r[0] = c[77]*obs[80] + c[78]*cq[6]*t10 + c[79]*cq[7]*t11 - ld[14];
-        M[2] = c[16]*cq[5];
-        M[3] = c[27]*cq[4];
-        r[1] = c[74]*obs[71] - ld[13] - ld[2]*(c[59]*cq[5] + t8) - ld[3]*(c[56]*cq[4] + t9) - ld[4]*(c[75]*cq[5] + t8) - ld[5]*(c[76]*cq[4] + t9) - t4*(c[59]*cq[4] + t9) - t5*(c[56]*cq[5] + t8);
+        M[0] = c[25]*cq[7];
+        M[1] = c[18]*cq[6];
+        r[0] = c[80]*obs[80] + c[81]*cq[6]*t10 + c[82]*cq[7]*t11 - ld[14];
+        M[2] = c[17]*cq[5];
+        M[3] = c[30]*cq[4];
+        r[1] = c[77]*obs[71] - ld[13] - ld[2]*(c[62]*cq[5] + t8) - ld[3]*(c[59]*cq[4] + t9) - ld[4]*(c[78]*cq[5] + t8) - ld[5]*(c[79]*cq[4] + t9) - t4*(c[62]*cq[4] + t9) - t5*(c[59]*cq[5] + t8);
         ok &= sgv_lu_factor(2, M, piv);
         sgv_lu_solve(2, M, piv, r);
         out[16] = r[0];
@@ -1723,11 +1742,11 @@ SG_VINLINE sg_vm sg_overlock_feed_forces_v(const sg_vd *q, const sg_vd *cq, cons
         sg_vd M[4], r[2];
         sg_vm piv[2];
         M[0] = c[8]*cq[1];
-        M[1] = c[24]*cq[0];
-        r[0] = c[11]*cq[0]*t4 - c[11]*cq[1]*out[16] - c[26]*cq[0]*out[17] + c[26]*cq[1]*t5 + c[69]*obs[62] - ld[0]*(c[70]*cq[1] + t2) - ld[1]*(c[71]*cq[0] + t3) - ld[12] - t6*(c[52]*cq[1] + t2) - t7*(c[55]*cq[0] + t3);
+        M[1] = c[27]*cq[0];
+        r[0] = c[12]*cq[0]*t4 - c[12]*cq[1]*out[16] - c[29]*cq[0]*out[17] + c[29]*cq[1]*t5 + c[72]*obs[62] - ld[0]*(c[73]*cq[1] + t2) - ld[1]*(c[74]*cq[0] + t3) - ld[12] - t6*(c[55]*cq[1] + t2) - t7*(c[58]*cq[0] + t3);
         M[2] = c[7]*cq[3];
-        M[3] = c[25]*cq[2];
-        r[1] = c[66]*obs[53] + c[67]*cq[2]*t0 + c[68]*cq[3]*t1 - ld[11];
+        M[3] = c[28]*cq[2];
+        r[1] = c[69]*obs[53] + c[70]*cq[2]*t0 + c[71]*cq[3]*t1 - ld[11];
         ok &= sgv_lu_factor(2, M, piv);
         sgv_lu_solve(2, M, piv, r);
         out[10] = r[0];
@@ -1737,19 +1756,19 @@ SG_VINLINE sg_vm sg_overlock_feed_forces_v(const sg_vd *q, const sg_vd *cq, cons
     out[12] = out[16] + t5;
     out[9] = -out[11] + out[13] + t7;
     out[8] = -out[10] + out[12] + t6;
-    out[15] = c[93]*t10 - out[17];
-    out[14] = c[93]*t11 - out[16];
-    out[7] = c[92]*t0 + out[11];
-    out[6] = c[92]*t1 + out[10];
-    out[5] = c[91]*(-gv[1] + obs[50]) + out[15] - ld[7];
-    out[4] = c[91]*(-gv[0] + obs[49]) + out[14] - ld[6];
-    out[20] = c[88]*obs[44] - out[14]*(c[47]*t18 + c[90]*t20) - out[15]*(c[47]*t20 + c[89]*t18) - out[4]*(c[46]*t20 + t19) - out[5]*(c[49]*t18 + t21) - ld[10] - ld[6]*(c[89]*t20 + t19) - ld[7]*(c[90]*t18 + t21);
-    out[3] = c[87]*(-gv[1] + obs[41]) + out[7];
-    out[2] = c[87]*(-gv[0] + obs[40]) + out[6];
-    out[19] = c[84]*obs[35] - out[2]*(c[41]*t16 + c[43]*t17) - out[3]*(c[43]*t16 + c[44]*t17) - out[6]*(c[42]*t17 + c[85]*t16) - out[7]*(c[42]*t16 + c[86]*t17) - ld[9];
-    out[1] = c[83]*(-gv[1] + obs[32]) + out[3];
-    out[0] = c[83]*(-gv[0] + obs[31]) + out[2];
-    out[18] = c[80]*obs[26] - out[0]*(c[37]*t12 + c[39]*t13) - out[1]*(c[39]*t12 + c[40]*t13) + out[19] - out[2]*(c[38]*t13 + c[81]*t12) - out[3]*(c[38]*t12 + c[82]*t13) - ld[8];
+    out[15] = c[96]*t10 - out[17];
+    out[14] = c[96]*t11 - out[16];
+    out[7] = c[95]*t0 + out[11];
+    out[6] = c[95]*t1 + out[10];
+    out[5] = c[94]*(-gv[1] + obs[50]) + out[15] - ld[7];
+    out[4] = c[94]*(-gv[0] + obs[49]) + out[14] - ld[6];
+    out[20] = c[91]*obs[44] - out[14]*(c[50]*t18 + c[93]*t20) - out[15]*(c[50]*t20 + c[92]*t18) - out[4]*(c[49]*t20 + t19) - out[5]*(c[52]*t18 + t21) - ld[10] - ld[6]*(c[92]*t20 + t19) - ld[7]*(c[93]*t18 + t21);
+    out[3] = c[90]*(-gv[1] + obs[41]) + out[7];
+    out[2] = c[90]*(-gv[0] + obs[40]) + out[6];
+    out[19] = c[87]*obs[35] - out[2]*(c[44]*t16 + c[46]*t17) - out[3]*(c[46]*t16 + c[47]*t17) - out[6]*(c[45]*t17 + c[88]*t16) - out[7]*(c[45]*t16 + c[89]*t17) - ld[9];
+    out[1] = c[86]*(-gv[1] + obs[32]) + out[3];
+    out[0] = c[86]*(-gv[0] + obs[31]) + out[2];
+    out[18] = c[83]*obs[26] - out[0]*(c[40]*t12 + c[42]*t13) - out[1]*(c[42]*t12 + c[43]*t13) + out[19] - out[2]*(c[41]*t13 + c[84]*t12) - out[3]*(c[41]*t12 + c[85]*t13) - ld[8];
     const sg_vd t22 = out[18] + out[20];
     out[21] = t22;
     out[22] = out[19];
@@ -1757,9 +1776,9 @@ SG_VINLINE sg_vm sg_overlock_feed_forces_v(const sg_vd *q, const sg_vd *cq, cons
     out[24] = out[19]*xd[1];
     out[25] = out[0] + out[4] + out[8];
     out[26] = out[1] + out[5] + out[9];
-    out[27] = c[21]*out[8] + c[5]*out[9] + t22;
-    out[28] = c[100]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[101]*((obs[52])*(obs[52])) + c[102]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[103]*((obs[61])*(obs[61])) + c[104]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[105]*((obs[70])*(obs[70])) + c[106]*(((obs[83])*(obs[83])) + ((obs[84])*(obs[84]))) + c[107]*((obs[79])*(obs[79])) + c[94]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[95]*((obs[25])*(obs[25])) + c[96]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39]))) + c[97]*((obs[34])*(obs[34])) + c[98]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[99]*((obs[43])*(obs[43]));
-    out[29] = c[108]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[109]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[110]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[111]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[112]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[113]*(gv[0]*obs[72] + gv[1]*obs[73]) + c[114]*(gv[0]*obs[81] + gv[1]*obs[82]);
+    out[27] = c[24]*out[8] + c[5]*out[9] + t22;
+    out[28] = c[100]*((obs[34])*(obs[34])) + c[101]*(((obs[47])*(obs[47])) + ((obs[48])*(obs[48]))) + c[102]*((obs[43])*(obs[43])) + c[103]*(((obs[56])*(obs[56])) + ((obs[57])*(obs[57]))) + c[104]*((obs[52])*(obs[52])) + c[105]*(((obs[65])*(obs[65])) + ((obs[66])*(obs[66]))) + c[106]*((obs[61])*(obs[61])) + c[107]*(((obs[74])*(obs[74])) + ((obs[75])*(obs[75]))) + c[108]*((obs[70])*(obs[70])) + c[109]*(((obs[83])*(obs[83])) + ((obs[84])*(obs[84]))) + c[110]*((obs[79])*(obs[79])) + c[97]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[98]*((obs[25])*(obs[25])) + c[99]*(((obs[38])*(obs[38])) + ((obs[39])*(obs[39])));
+    out[29] = c[111]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[112]*(gv[0]*obs[36] + gv[1]*obs[37]) + c[113]*(gv[0]*obs[45] + gv[1]*obs[46]) + c[114]*(gv[0]*obs[54] + gv[1]*obs[55]) + c[115]*(gv[0]*obs[63] + gv[1]*obs[64]) + c[116]*(gv[0]*obs[72] + gv[1]*obs[73]) + c[117]*(gv[0]*obs[81] + gv[1]*obs[82]);
     out[30] = ld[0]*obs[2] + ld[1]*obs[3] + ld[10]*obs[43] + ld[11]*obs[52] + ld[12]*obs[61] + ld[13]*obs[70] + ld[14]*obs[79] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[20] + ld[7]*obs[21] + ld[8]*obs[25] + ld[9]*obs[34];
     out[31] = sgv_set1(0.0);
     ok &= sgv_isfinite((((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + out[7]))) + (((out[8] + out[9]) + (out[10] + out[11])) + ((out[12] + out[13]) + (out[14] + out[15])))) + ((((out[16] + out[17]) + (out[18] + out[19])) + ((out[20] + out[21]) + (out[22] + out[23]))) + (((out[24] + out[25]) + (out[26] + out[27])) + ((out[28] + out[29]) + (out[30] + out[31]))))));
@@ -1791,7 +1810,7 @@ static const sg_mechanism sg_overlock_feed_descriptor = {
     .nq = 4,
     .nx = 2,
     .np = 37,
-    .nc = 117,
+    .nc = 120,
     .nobs = 87,
     .nbranch = 2,
     .nf = 21,
@@ -1875,231 +1894,231 @@ const char *sg_overlock_feed_manifest(void)
         "ranches\":[{\"default\":-1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C left of th"
         "e line from B to D\"},{\"default\":-1,\"joint\":\"F\",\"kind\":\"rrr\",\"meaning\":\"+1: joint F"
         " left of the line from E to K\"}],\"closed_form\":true,\"closure\":[\"B.x\",\"B.y\",\"F.x\",\"F."
-        "y\"],\"constants\":[[0],[13],[13],[13],[1],[3],[4],[2],[5],[2],[5],[6],[9],[10],[10],[10],[7],[1"
-        "1],[7],[11],[3],[4],[11],[9],[5],[2],[6],[7],[0,1,2,3,5],[0,1,2,4,5],[3,6,7,9,11],[4,6,7,9,11],["
-        "1],[0],[7,8],[7,8],[13],[15],[16],[16],[15],[19],[20],[20],[19],[10],[23],[24],[24],[23],[2],[2]"
-        ",[29],[30],[30],[29],[7],[33],[33],[7],[11],[11],[0,1,2,3,5],[0,1,2,4,5],[3,6,7,9,11],[4,6,7,9,1"
-        "1],[27],[2,26],[2,26],[31],[6,29],[6,29],[28],[32],[34],[7,8],[7,8],[36],[11,35],[11,35],[17],[0"
-        ",15],[0,15],[14],[21],[1,19],[1,19],[18],[25],[9,23],[9,23],[22],[26],[35],[14],[17],[18],[21],["
-        "22],[25],[26],[27],[28],[31],[32],[34],[35],[36],[14],[18],[22],[26],[28],[32],[35],[5,29],[5,29"
-        "]],\"coords\":[{\"guess\":1.5707963267948966,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\""
-        "guess\":0.0,\"name\":\"strap.angle\",\"unit\":\"rad\"},{\"guess\":3.141592653589793,\"name\":\"r"
-        "ack.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"lift_link.angle\",\"unit\""
-        ":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the material feed"
-        " \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0440\\u043e\\u0434\\u0432\\u"
-        "0438\\u0436\\u0435\\u043d\\u0438\\u044f \\u043c\\u0430\\u0442\\u0435\\u0440\\u0438\\u0430\\u043b"
-        "\\u0430 (seed 003 fig. 5, eqs. 3\\u201314).\\n\\nTwo eccentrics on the main shaft A, fixed to ea"
-        "ch other at the constructive angle \\u03b8: the feed eccentric AB\\ndrives the rock shaft 3 thro"
-        "ugh the planar four-bar ABCD (\\u03c6\\u2083 by eq. 1 with \\u03b1 = 0), whose arm DE carries th"
-        "e rack's\\nrear pin E; the lift eccentric AK (radius l\\u2085) lifts the rack's front through th"
-        "e link KF (l\\u2086). The rack 4 \\u2014 the\\nlink EF (l\\u2084) with its teeth at F and G \\u2"
-        "014 is the two-input group DEFKA's dyad (links 4 and 6 meeting at F): the\\nseed solves its velo"
-        "cities by Cramer's rule on the velocity plan (eqs. 8\\u201313; eq. 12 needs \\u03c9\\u2083\\u00b"
-        "7l\\u2083) and G's by the\\nsame plan (eq. 14).\\n\\nFrame: the plane across the main shaft, ori"
-        "gin on its axis A, x the feed direction, y up. The rock-shaft arm DE is\\nvertical in mid stroke"
-        ", so E moves about horizontally (the stitch), K about vertically (the lift).\\n\\nEvery dimensio"
-        "n is an estimate (seed 003 prints none): a rack travel of about 4.3 mm at the largest stitch, a\\n"
-        "lift of about 2.4 mm, the rack's teeth about 40 mm above the shaft. \\u03b8 = 0 puts the teeth a"
-        "t their highest when\\nthey move forward fastest, at \\u03c6 \\u2248 90\\u00b0, when the needle "
-        "(overlock_needle) is at its highest: the rack feeds while\\nthe needle is out of the material.\\n"
-        "\\nStitch regulator (role ``stitch_regulator``): overlocks of this class set the stitch by the f"
-        "eed eccentric's throw\\n(a double, adjustable-throw eccentric: the inner eccentric is turned in "
-        "the outer one and clamped \\u2014 on later\\nmachines by pressing a button and turning the hand "
-        "wheel). Here the outer eccentric AB\\u2080 (``feed_eccentric``, e\\u2081,\\nfixed on the shaft a"
-        "t ``feed_eccentric.phase``) carries the inner one B\\u2080B (``stitch_eccentric``, e\\u2082 = e\\u"
-        "2081) turned\\nby the held angle \\u03b2, its pin set back (\\u2212e\\u2082 along its arm): AB ="
-        " e\\u2081 \\u2212 e\\u2082\\u00b7(cos \\u03b2, sin \\u03b2) in the outer eccentric's\\nframe, a "
-        "throw of 2e sin(\\u03b2/2) at the angle \\u03b2/2 \\u2212 90\\u00b0. \\u03b2 = 0 gives no feed, "
-        "\\u03b2 > 0 forward, \\u03b2 < 0 reverse (the\\nthrow turned half a turn); the effective eccentr"
-        "ic's phase moves by \\u03b2/2 with the setting, so\\n``feed_eccentric.phase`` = 90\\u00b0 \\u221"
-        "2 \\u03b2\\u2080/2 puts it on the shaft angle at the design setting \\u03b2\\u2080 (the 4 mm sti"
-        "tch). At\\nthe regulator's limit \\u00b145\\u00b0 the throw is 2e sin 22.5\\u00b0 = 1.91 mm: a r"
-        "ack travel of about 5 mm.\\n\\nThe throat plate (role ``throat_plate``, ``plate_y``) is 1 mm bel"
-        "ow the teeth's highest point: the stitch is the\\nteeth's travel above it (sewgen.machine.feed)."
-        "\",\"elements\":[],\"force_blocks\":[2,2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\""
-        ":\"N*m\"},{\"name\":\"stitch_eccentric.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"un"
-        "it\":\"W\"},{\"name\":\"stitch_eccentric.power\",\"unit\":\"W\"},{\"name\":\"frame_force_on_part"
-        "s.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_m"
-        "oment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"pote"
-        "ntial_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_powe"
-        "r\",\"unit\":\"W\"}],\"force_rows\":[\"feed_eccentric.x\",\"feed_eccentric.y\",\"feed_eccentric."
-        "moment\",\"stitch_eccentric.x\",\"stitch_eccentric.y\",\"stitch_eccentric.moment\",\"lift_eccent"
-        "ric.x\",\"lift_eccentric.y\",\"lift_eccentric.moment\",\"strap.x\",\"strap.y\",\"strap.moment\","
-        "\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"rack.x\",\"rack.y\",\"rack.moment\",\""
-        "lift_link.x\",\"lift_link.y\",\"lift_link.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\""
-        ":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\""
-        "unit\":\"rad\"},{\"default\":0.6335545184739416,\"display_unit\":\"deg\",\"doc\":\"inner (stitch"
-        ") eccentric B\\u2080B: its angle \\u03b2 in the outer one sets the throw 2e\\u00b7sin(\\u03b2/2)"
-        " (0: no feed; > 0 forward; < 0 reverse)\",\"kind\":\"held\",\"name\":\"stitch_eccentric\",\"role"
-        "\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_feed_anchors\":{\"ops\":10"
-        "0},\"sg_overlock_feed_blocks\":{\"ops\":46},\"sg_overlock_feed_closed\":{\"ops\":65},\"sg_overlo"
-        "ck_feed_constants\":{\"ops\":92},\"sg_overlock_feed_force_matrix\":{\"ops\":187},\"sg_overlock_f"
-        "eed_forces\":{\"ops\":332},\"sg_overlock_feed_lu_factor\":{\"ops\":42},\"sg_overlock_feed_lu_sol"
-        "ve\":{\"ops\":32},\"sg_overlock_feed_motion\":{\"ops\":339},\"sg_overlock_feed_observe\":{\"ops\""
-        ":366},\"sg_overlock_feed_rates\":{\"ops\":113},\"sg_overlock_feed_residual\":{\"ops\":61},\"sg_o"
-        "verlock_feed_scales\":{\"ops\":4}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"na"
-        "me\":\"rear_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"rear_pin\"},{\"body\""
-        ":\"rack\",\"component\":\"fx\",\"name\":\"tooth_f\"},{\"body\":\"rack\",\"component\":\"fy\",\"n"
-        "ame\":\"tooth_f\"},{\"body\":\"rack\",\"component\":\"fx\",\"name\":\"tooth_g\"},{\"body\":\"rac"
-        "k\",\"component\":\"fy\",\"name\":\"tooth_g\"},{\"body\":\"lift_eccentric\",\"component\":\"fx\""
-        ",\"name\":\"lift_pin\"},{\"body\":\"lift_eccentric\",\"component\":\"fy\",\"name\":\"lift_pin\"}"
-        ",{\"body\":\"feed_eccentric\",\"component\":\"torque\",\"name\":\"feed_eccentric\"},{\"body\":\""
-        "stitch_eccentric\",\"component\":\"torque\",\"name\":\"stitch_eccentric\"},{\"body\":\"lift_ecce"
-        "ntric\",\"component\":\"torque\",\"name\":\"lift_eccentric\"},{\"body\":\"strap\",\"component\":"
-        "\"torque\",\"name\":\"strap\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock"
-        "_shaft\"},{\"body\":\"rack\",\"component\":\"torque\",\"name\":\"rack\"},{\"body\":\"lift_link\""
-        ",\"component\":\"torque\",\"name\":\"lift_link\"}],\"name\":\"overlock_feed\",\"observables\":[{"
-        "\"name\":\"rear_pin.x\",\"unit\":\"m\"},{\"name\":\"rear_pin.y\",\"unit\":\"m\"},{\"name\":\"rea"
-        "r_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rear_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rear_pin."
-        "x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rear_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_f.x"
-        "\",\"unit\":\"m\"},{\"name\":\"tooth_f.y\",\"unit\":\"m\"},{\"name\":\"tooth_f.x_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"tooth_f.y_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_f.x_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"tooth_f.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_g.x\",\"unit\":\"m\"},{\"name"
-        "\":\"tooth_g.y\",\"unit\":\"m\"},{\"name\":\"tooth_g.x_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_g"
-        ".y_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_g.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_g.y_dd"
-        "\",\"unit\":\"m/s^2\"},{\"name\":\"lift_pin.x\",\"unit\":\"m\"},{\"name\":\"lift_pin.y\",\"unit\""
-        ":\"m\"},{\"name\":\"lift_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_pin.y_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"lift_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_pin.y_dd\",\"unit\":\"m/s^2\""
-        "},{\"name\":\"feed_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"feed_eccentric.angle_d\",\"un"
-        "it\":\"rad/s\"},{\"name\":\"feed_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"feed_ecc"
-        "entric.com.x\",\"unit\":\"m\"},{\"name\":\"feed_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"fe"
-        "ed_eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_eccentric.com.y_d\",\"unit\":\"m/s\"},"
-        "{\"name\":\"feed_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_eccentric.com.y_dd\","
-        "\"unit\":\"m/s^2\"},{\"name\":\"stitch_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"stitch_ec"
-        "centric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_eccentric.angle_dd\",\"unit\":\"rad/s^2"
-        "\"},{\"name\":\"stitch_eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"stitch_eccentric.com.y\",\""
-        "unit\":\"m\"},{\"name\":\"stitch_eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_eccent"
-        "ric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"stitch_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.angle\",\"uni"
-        "t\":\"rad\"},{\"name\":\"lift_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_eccentric"
-        ".angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_eccentric.com.x\",\"unit\":\"m\"},{\"name\":\""
-        "lift_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.com.x_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"lift_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.x_dd\",\"unit"
-        "\":\"m/s^2\"},{\"name\":\"lift_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"strap.angle\""
-        ",\"unit\":\"rad\"},{\"name\":\"strap.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"strap.angle_dd\","
-        "\"unit\":\"rad/s^2\"},{\"name\":\"strap.com.x\",\"unit\":\"m\"},{\"name\":\"strap.com.y\",\"unit"
-        "\":\"m\"},{\"name\":\"strap.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"strap.com.y_d\",\"unit\":\"m"
-        "/s\"},{\"name\":\"strap.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"strap.com.y_dd\",\"unit\":\"m"
-        "/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\",\"unit"
-        "\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_shaft.com"
-        ".x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.x"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft"
-        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":"
-        "\"rack.angle\",\"unit\":\"rad\"},{\"name\":\"rack.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rack"
-        ".angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rack.com.x\",\"unit\":\"m\"},{\"name\":\"rack.com."
-        "y\",\"unit\":\"m\"},{\"name\":\"rack.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rack.com.y_d\",\"un"
-        "it\":\"m/s\"},{\"name\":\"rack.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rack.com.y_dd\",\"unit"
-        "\":\"m/s^2\"},{\"name\":\"lift_link.angle\",\"unit\":\"rad\"},{\"name\":\"lift_link.angle_d\",\""
-        "unit\":\"rad/s\"},{\"name\":\"lift_link.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_link.c"
-        "om.x\",\"unit\":\"m\"},{\"name\":\"lift_link.com.y\",\"unit\":\"m\"},{\"name\":\"lift_link.com.x"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"lift_link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_link.c"
-        "om.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_link.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\":["
-        "{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"outer feed eccentric's eccentricity AB\\u2"
-        "080, e\\u2081 (estimate)\",\"kind\":\"length\",\"name\":\"feed_eccentric\",\"positive\":true,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"inner (stitch) "
-        "eccentric's eccentricity B\\u2080B, e\\u2082 (estimate)\",\"kind\":\"length\",\"name\":\"stitch_"
-        "eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":"
-        "\"mm\",\"doc\":\"feed eccentric strap BC (estimate)\",\"kind\":\"length\",\"name\":\"strap\",\"p"
-        "ositive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":"
-        "\"rock shaft D, x (estimate)\",\"kind\":\"length\",\"name\":\"rock_shaft_x\",\"positive\":false,"
-        "\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock shaft D,"
-        " y (estimate)\",\"kind\":\"length\",\"name\":\"rock_shaft_y\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.018000000000000002,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm"
-        " DC, below D (estimate)\",\"kind\":\"length\",\"name\":\"rock_arm\",\"positive\":true,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":0.024,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DE, abov"
-        "e D, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"rack_arm\",\"positive\":true,\"role\":"
-        "null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"rack EF between its re"
-        "ar pin E and front pin F, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"rack\",\"positive"
-        "\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"tooth "
-        "G behind tooth F along the rack (estimate)\",\"kind\":\"length\",\"name\":\"tooth_spacing\",\"po"
-        "sitive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0012,\"display_unit\":\"mm\",\"doc\":"
-        "\"lift eccentricity AK, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"lift_eccentric\",\""
-        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":"
-        "\"constructive angle \\u03b8 of the lift eccentric ahead of the feed one (estimate)\",\"kind\":\""
-        "angle\",\"name\":\"lift_angle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":"
-        "0.04,\"display_unit\":\"mm\",\"doc\":\"lift link KF, l\\u2086 (estimate)\",\"kind\":\"length\",\""
-        "name\":\"lift_link\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.040200000000"
-        "00001,\"display_unit\":\"mm\",\"doc\":\"throat plate surface above the main shaft, y (estimate: "
-        "the teeth rise about 1 mm above it)\",\"kind\":\"length\",\"name\":\"plate_y\",\"positive\":fals"
-        "e,\"role\":\"throat_plate\",\"unit\":\"m\"},{\"default\":1.2540190675579257,\"display_unit\":\"d"
-        "eg\",\"doc\":\"phase of feed_eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\""
-        ":\"feed_eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.015,"
-        "\"display_unit\":\"g\",\"doc\":\"mass of feed_eccentric\",\"kind\":\"mass\",\"name\":\"feed_ecce"
-        "ntric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0008,\"display_uni"
-        "t\":\"mm\",\"doc\":\"centre of mass of feed_eccentric, local u\",\"kind\":\"length\",\"name\":\""
-        "feed_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"displ"
-        "ay_unit\":\"mm\",\"doc\":\"centre of mass of feed_eccentric, local v\",\"kind\":\"length\",\"nam"
-        "e\":\"feed_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":2e-06"
-        ",\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_eccentric about its centre of "
-        "mass\",\"kind\":\"inertia\",\"name\":\"feed_eccentric.inertia\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"kg*m**2\"},{\"default\":0.008,\"display_unit\":\"g\",\"doc\":\"mass of stitch_eccent"
-        "ric\",\"kind\":\"mass\",\"name\":\"stitch_eccentric.mass\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"kg\"},{\"default\":-0.0008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of stitch_ecc"
-        "entric, local u\",\"kind\":\"length\",\"name\":\"stitch_eccentric.com_u\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of "
-        "stitch_eccentric, local v\",\"kind\":\"length\",\"name\":\"stitch_eccentric.com_v\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"m"
-        "oment of inertia of stitch_eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\""
-        "stitch_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0"
-        ".012,\"display_unit\":\"g\",\"doc\":\"mass of lift_eccentric\",\"kind\":\"mass\",\"name\":\"lift"
-        "_eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0004,\"displa"
-        "y_unit\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local u\",\"kind\":\"length\",\"name"
-        "\":\"lift_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
-        "display_unit\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local v\",\"kind\":\"length\","
-        "\"name\":\"lift_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":"
-        "1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_eccentric about its cen"
-        "tre of mass\",\"kind\":\"inertia\",\"name\":\"lift_eccentric.inertia\",\"positive\":false,\"role"
-        "\":null,\"unit\":\"kg*m**2\"},{\"default\":0.02,\"display_unit\":\"g\",\"doc\":\"mass of strap\""
-        ",\"kind\":\"mass\",\"name\":\"strap.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\""
-        "default\":5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of strap about its cent"
-        "re of mass\",\"kind\":\"inertia\",\"name\":\"strap.inertia\",\"positive\":false,\"role\":null,\""
-        "unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft\",\"ki"
-        "nd\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\""
-        "default\":0.004,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\",\"kind"
-        "\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\"kind\""
-        ":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
-        "fault\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft about its c"
-        "entre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.018000000000000002,\"display_unit\":\"g\",\"doc\":\"m"
-        "ass of rack\",\"kind\":\"mass\",\"name\":\"rack.mass\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"kg\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rack, local v\","
-        "\"kind\":\"length\",\"name\":\"rack.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rack about its centr"
-        "e of mass\",\"kind\":\"inertia\",\"name\":\"rack.inertia\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"kg*m**2\"},{\"default\":0.008,\"display_unit\":\"g\",\"doc\":\"mass of lift_link\",\"kind"
-        "\":\"mass\",\"name\":\"lift_link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"def"
-        "ault\":1.2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_link about its c"
-        "entre of mass\",\"kind\":\"inertia\",\"name\":\"lift_link.inertia\",\"positive\":false,\"role\":"
-        "null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\""
-        ":[{\"body\":\"rock_shaft\",\"doc\":\"rack's rear pin E\",\"name\":\"rear_pin\",\"offset\":0,\"ro"
-        "le\":null},{\"body\":\"rack\",\"doc\":\"front tooth F\",\"name\":\"tooth_f\",\"offset\":6,\"role"
-        "\":\"feed_dog\"},{\"body\":\"rack\",\"doc\":\"tooth G behind F\",\"name\":\"tooth_g\",\"offset\""
-        ":12,\"role\":\"rack_tooth\"},{\"body\":\"lift_eccentric\",\"doc\":\"lift eccentric's centre K\","
-        "\"name\":\"lift_pin\",\"offset\":18,\"role\":null}],\"reactions\":[{\"a\":\"ground\",\"b\":\"fee"
-        "d_eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"fee"
-        "d_eccentric.pivot\",\"offset\":0},{\"a\":\"feed_eccentric\",\"b\":\"stitch_eccentric\",\"columns"
-        "\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"stitch_eccentric.pivot\","
-        "\"offset\":2},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
-        ":true,\"kind\":\"revolute\",\"name\":\"lift_eccentric.pivot\",\"offset\":4},{\"a\":\"stitch_ecce"
-        "ntric\",\"b\":\"strap\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"n"
-        "ame\":\"B\",\"offset\":6},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"g"
-        "rounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":8},{\"a\":\"strap\",\"b\":\"rock_"
-        "shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"C\",\"of"
-        "fset\":10},{\"a\":\"rock_shaft\",\"b\":\"rack\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\""
-        "kind\":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"lift_eccentric\",\"b\":\"lift_link\","
-        "\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"K\",\"offset\":1"
-        "4},{\"a\":\"rack\",\"b\":\"lift_link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\""
-        "revolute\",\"name\":\"F\",\"offset\":16},{\"a\":\"ground\",\"b\":\"feed_eccentric\",\"columns\":"
-        "[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"feed_eccentric."
-        "drive\",\"offset\":18,\"sense\":1},{\"a\":\"feed_eccentric\",\"b\":\"stitch_eccentric\",\"column"
-        "s\":[\"torque\"],\"grounded\":false,\"input\":\"stitch_eccentric\",\"kind\":\"drive\",\"name\":\""
-        "stitch_eccentric.drive\",\"offset\":19,\"sense\":1},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\""
-        "columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"lift_"
-        "eccentric.drive\",\"offset\":20,\"sense\":1}],\"roles\":{\"feed_dog\":{\"kind\":\"point\",\"name"
-        "\":\"tooth_f\"},\"rack_tooth\":{\"kind\":\"point\",\"name\":\"tooth_g\"},\"stitch_regulator\":{\""
-        "kind\":\"input\",\"name\":\"stitch_eccentric\"},\"throat_plate\":{\"kind\":\"param\",\"name\":\""
-        "plate_y\"}},\"sizes\":{\"nanchor_out\":58,\"nblock\":2,\"nbranch\":2,\"nc\":117,\"nf\":21,\"nfo\""
-        ":32,\"ngroup\":11,\"nload\":15,\"nobs\":87,\"np\":37,\"nq\":4,\"nx\":2}}"
+        "y\"],\"constants\":[[0],[13],[13],[13],[1],[3],[4],[2],[5],[2],[5],[0,1,3,4],[6],[9],[10],[10],["
+        "10],[7],[11],[7],[11],[6],[3,4,6,9],[3],[4],[11],[9],[5],[2],[6],[7],[0,1,2,3,5],[0,1,2,4,5],[3,"
+        "6,7,9,11],[4,6,7,9,11],[1],[0],[7,8],[7,8],[13],[15],[16],[16],[15],[19],[20],[20],[19],[10],[23"
+        "],[24],[24],[23],[2],[2],[29],[30],[30],[29],[7],[33],[33],[7],[11],[11],[0,1,2,3,5],[0,1,2,4,5]"
+        ",[3,6,7,9,11],[4,6,7,9,11],[27],[2,26],[2,26],[31],[6,29],[6,29],[28],[32],[34],[7,8],[7,8],[36]"
+        ",[11,35],[11,35],[17],[0,15],[0,15],[14],[21],[1,19],[1,19],[18],[25],[9,23],[9,23],[22],[26],[3"
+        "5],[14],[17],[18],[21],[22],[25],[26],[27],[28],[31],[32],[34],[35],[36],[14],[18],[22],[26],[28"
+        "],[32],[35],[5,29],[5,29]],\"coords\":[{\"guess\":1.5707963267948966,\"name\":\"rock_shaft.angle"
+        "\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"strap.angle\",\"unit\":\"rad\"},{\"guess\":3.1415"
+        "92653589793,\"name\":\"rack.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"l"
+        "ift_link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class ov"
+        "erlock: the material feed \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u044"
+        "0\\u043e\\u0434\\u0432\\u0438\\u0436\\u0435\\u043d\\u0438\\u044f \\u043c\\u0430\\u0442\\u0435\\u"
+        "0440\\u0438\\u0430\\u043b\\u0430 (seed 003 fig. 5, eqs. 3\\u201314).\\n\\nTwo eccentrics on the "
+        "main shaft A, fixed to each other at the constructive angle \\u03b8: the feed eccentric AB\\ndri"
+        "ves the rock shaft 3 through the planar four-bar ABCD (\\u03c6\\u2083 by eq. 1 with \\u03b1 = 0)"
+        ", whose arm DE carries the rack's\\nrear pin E; the lift eccentric AK (radius l\\u2085) lifts th"
+        "e rack's front through the link KF (l\\u2086). The rack 4 \\u2014 the\\nlink EF (l\\u2084) with "
+        "its teeth at F and G \\u2014 is the two-input group DEFKA's dyad (links 4 and 6 meeting at F): t"
+        "he\\nseed solves its velocities by Cramer's rule on the velocity plan (eqs. 8\\u201313; eq. 12 n"
+        "eeds \\u03c9\\u2083\\u00b7l\\u2083) and G's by the\\nsame plan (eq. 14).\\n\\nFrame: the plane a"
+        "cross the main shaft, origin on its axis A, x the feed direction, y up. The rock-shaft arm DE is"
+        "\\nvertical in mid stroke, so E moves about horizontally (the stitch), K about vertically (the l"
+        "ift).\\n\\nEvery dimension is an estimate (seed 003 prints none): a rack travel of about 4.3 mm "
+        "at the largest stitch, a\\nlift of about 2.4 mm, the rack's teeth about 40 mm above the shaft. \\u"
+        "03b8 = 0 puts the teeth at their highest when\\nthey move forward fastest, at \\u03c6 \\u2248 90"
+        "\\u00b0, when the needle (overlock_needle) is at its highest: the rack feeds while\\nthe needle "
+        "is out of the material.\\n\\nStitch regulator (role ``stitch_regulator``): overlocks of this cla"
+        "ss set the stitch by the feed eccentric's throw\\n(a double, adjustable-throw eccentric: the inn"
+        "er eccentric is turned in the outer one and clamped \\u2014 on later\\nmachines by pressing a bu"
+        "tton and turning the hand wheel). Here the outer eccentric AB\\u2080 (``feed_eccentric``, e\\u20"
+        "81,\\nfixed on the shaft at ``feed_eccentric.phase``) carries the inner one B\\u2080B (``stitch_"
+        "eccentric``, e\\u2082 = e\\u2081) turned\\nby the held angle \\u03b2, its pin set back (\\u2212e"
+        "\\u2082 along its arm): AB = e\\u2081 \\u2212 e\\u2082\\u00b7(cos \\u03b2, sin \\u03b2) in the o"
+        "uter eccentric's\\nframe, a throw of 2e sin(\\u03b2/2) at the angle \\u03b2/2 \\u2212 90\\u00b0."
+        " \\u03b2 = 0 gives no feed, \\u03b2 > 0 forward, \\u03b2 < 0 reverse (the\\nthrow turned half a "
+        "turn); the effective eccentric's phase moves by \\u03b2/2 with the setting, so\\n``feed_eccentri"
+        "c.phase`` = 90\\u00b0 \\u2212 \\u03b2\\u2080/2 puts it on the shaft angle at the design setting "
+        "\\u03b2\\u2080 (the 4 mm stitch). At\\nthe regulator's limit \\u00b145\\u00b0 the throw is 2e si"
+        "n 22.5\\u00b0 = 1.91 mm: a rack travel of about 5 mm.\\n\\nThe throat plate (role ``throat_plate"
+        "``, ``plate_y``) is 1 mm below the teeth's highest point: the stitch is the\\nteeth's travel abo"
+        "ve it (sewgen.machine.feed).\",\"elements\":[],\"force_blocks\":[2,2],\"force_outputs\":[{\"name"
+        "\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"stitch_eccentric.torque\",\"unit\":\"N*m\"},{\""
+        "name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"stitch_eccentric.power\",\"unit\":\"W\"},{\"n"
+        "ame\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\""
+        ":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"uni"
+        "t\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\""
+        "},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"feed_eccentric.x\",\"feed_eccen"
+        "tric.y\",\"feed_eccentric.moment\",\"stitch_eccentric.x\",\"stitch_eccentric.y\",\"stitch_eccent"
+        "ric.moment\",\"lift_eccentric.x\",\"lift_eccentric.y\",\"lift_eccentric.moment\",\"strap.x\",\"s"
+        "trap.y\",\"strap.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"rack.x\",\"r"
+        "ack.y\",\"rack.moment\",\"lift_link.x\",\"lift_link.y\",\"lift_link.moment\"],\"inputs\":[{\"def"
+        "ault\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\""
+        ":\"shaft\",\"role\":null,\"unit\":\"rad\"},{\"default\":0.6335545184739416,\"display_unit\":\"de"
+        "g\",\"doc\":\"inner (stitch) eccentric B\\u2080B: its angle \\u03b2 in the outer one sets the th"
+        "row 2e\\u00b7sin(\\u03b2/2) (0: no feed; > 0 forward; < 0 reverse)\",\"kind\":\"held\",\"name\":"
+        "\"stitch_eccentric\",\"role\":\"stitch_regulator\",\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock"
+        "_feed_anchors\":{\"ops\":100},\"sg_overlock_feed_blocks\":{\"ops\":46},\"sg_overlock_feed_closed"
+        "\":{\"ops\":65},\"sg_overlock_feed_constants\":{\"ops\":101},\"sg_overlock_feed_force_matrix\":{"
+        "\"ops\":187},\"sg_overlock_feed_forces\":{\"ops\":332},\"sg_overlock_feed_lu_factor\":{\"ops\":4"
+        "2},\"sg_overlock_feed_lu_solve\":{\"ops\":32},\"sg_overlock_feed_motion\":{\"ops\":339},\"sg_ove"
+        "rlock_feed_observe\":{\"ops\":366},\"sg_overlock_feed_rates\":{\"ops\":113},\"sg_overlock_feed_r"
+        "esidual\":{\"ops\":61},\"sg_overlock_feed_scales\":{\"ops\":4}},\"loads\":[{\"body\":\"rock_shaf"
+        "t\",\"component\":\"fx\",\"name\":\"rear_pin\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\""
+        "name\":\"rear_pin\"},{\"body\":\"rack\",\"component\":\"fx\",\"name\":\"tooth_f\"},{\"body\":\"r"
+        "ack\",\"component\":\"fy\",\"name\":\"tooth_f\"},{\"body\":\"rack\",\"component\":\"fx\",\"name\""
+        ":\"tooth_g\"},{\"body\":\"rack\",\"component\":\"fy\",\"name\":\"tooth_g\"},{\"body\":\"lift_ecc"
+        "entric\",\"component\":\"fx\",\"name\":\"lift_pin\"},{\"body\":\"lift_eccentric\",\"component\":"
+        "\"fy\",\"name\":\"lift_pin\"},{\"body\":\"feed_eccentric\",\"component\":\"torque\",\"name\":\"f"
+        "eed_eccentric\"},{\"body\":\"stitch_eccentric\",\"component\":\"torque\",\"name\":\"stitch_eccen"
+        "tric\"},{\"body\":\"lift_eccentric\",\"component\":\"torque\",\"name\":\"lift_eccentric\"},{\"bo"
+        "dy\":\"strap\",\"component\":\"torque\",\"name\":\"strap\"},{\"body\":\"rock_shaft\",\"component"
+        "\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"rack\",\"component\":\"torque\",\"name\":\"ra"
+        "ck\"},{\"body\":\"lift_link\",\"component\":\"torque\",\"name\":\"lift_link\"}],\"name\":\"overl"
+        "ock_feed\",\"observables\":[{\"name\":\"rear_pin.x\",\"unit\":\"m\"},{\"name\":\"rear_pin.y\",\""
+        "unit\":\"m\"},{\"name\":\"rear_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rear_pin.y_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"rear_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rear_pin.y_dd\",\"unit\":\"m/"
+        "s^2\"},{\"name\":\"tooth_f.x\",\"unit\":\"m\"},{\"name\":\"tooth_f.y\",\"unit\":\"m\"},{\"name\""
+        ":\"tooth_f.x_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_f.y_d\",\"unit\":\"m/s\"},{\"name\":\"tooth"
+        "_f.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_f.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"tooth_g"
+        ".x\",\"unit\":\"m\"},{\"name\":\"tooth_g.y\",\"unit\":\"m\"},{\"name\":\"tooth_g.x_d\",\"unit\":"
+        "\"m/s\"},{\"name\":\"tooth_g.y_d\",\"unit\":\"m/s\"},{\"name\":\"tooth_g.x_dd\",\"unit\":\"m/s^2"
+        "\"},{\"name\":\"tooth_g.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_pin.x\",\"unit\":\"m\"},{\"n"
+        "ame\":\"lift_pin.y\",\"unit\":\"m\"},{\"name\":\"lift_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"li"
+        "ft_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lift_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_"
+        "pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"feed_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\""
+        "feed_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"feed_eccentric.angle_dd\",\"unit\":\"ra"
+        "d/s^2\"},{\"name\":\"feed_eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"feed_eccentric.com.y\",\""
+        "unit\":\"m\"},{\"name\":\"feed_eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"feed_eccentric."
+        "com.y_d\",\"unit\":\"m/s\"},{\"name\":\"feed_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":"
+        "\"feed_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_eccentric.angle\",\"unit\":\""
+        "rad\"},{\"name\":\"stitch_eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"stitch_eccentric.a"
+        "ngle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"stitch_eccentric.com.x\",\"unit\":\"m\"},{\"name\":\""
+        "stitch_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"stitch_eccentric.com.x_d\",\"unit\":\"m/s\""
+        "},{\"name\":\"stitch_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"stitch_eccentric.com.x_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"stitch_eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"l"
+        "ift_eccentric.angle\",\"unit\":\"rad\"},{\"name\":\"lift_eccentric.angle_d\",\"unit\":\"rad/s\"}"
+        ",{\"name\":\"lift_eccentric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lift_eccentric.com.x\","
+        "\"unit\":\"m\"},{\"name\":\"lift_eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"lift_eccentric.co"
+        "m.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lif"
+        "t_eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_eccentric.com.y_dd\",\"unit\":\"m/s^"
+        "2\"},{\"name\":\"strap.angle\",\"unit\":\"rad\"},{\"name\":\"strap.angle_d\",\"unit\":\"rad/s\"}"
+        ",{\"name\":\"strap.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"strap.com.x\",\"unit\":\"m\"},{\""
+        "name\":\"strap.com.y\",\"unit\":\"m\"},{\"name\":\"strap.com.x_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "strap.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"strap.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"s"
+        "trap.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\""
+        "rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"}"
+        ",{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{"
+        "\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/"
+        "s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"u"
+        "nit\":\"m/s^2\"},{\"name\":\"rack.angle\",\"unit\":\"rad\"},{\"name\":\"rack.angle_d\",\"unit\":"
+        "\"rad/s\"},{\"name\":\"rack.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rack.com.x\",\"unit\":\""
+        "m\"},{\"name\":\"rack.com.y\",\"unit\":\"m\"},{\"name\":\"rack.com.x_d\",\"unit\":\"m/s\"},{\"na"
+        "me\":\"rack.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rack.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"rack.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_link.angle\",\"unit\":\"rad\"},{\"name\""
+        ":\"lift_link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lift_link.angle_dd\",\"unit\":\"rad/s^2\""
+        "},{\"name\":\"lift_link.com.x\",\"unit\":\"m\"},{\"name\":\"lift_link.com.y\",\"unit\":\"m\"},{\""
+        "name\":\"lift_link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lift_link.com.y_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"lift_link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lift_link.com.y_dd\",\"unit\":"
+        "\"m/s^2\"}],\"params\":[{\"default\":0.0025,\"display_unit\":\"mm\",\"doc\":\"outer feed eccentr"
+        "ic's eccentricity AB\\u2080, e\\u2081 (estimate)\",\"kind\":\"length\",\"name\":\"feed_eccentric"
+        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0025,\"display_unit\":\"mm\",\""
+        "doc\":\"inner (stitch) eccentric's eccentricity B\\u2080B, e\\u2082 (estimate)\",\"kind\":\"leng"
+        "th\",\"name\":\"stitch_eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":"
+        "0.045,\"display_unit\":\"mm\",\"doc\":\"feed eccentric strap BC (estimate)\",\"kind\":\"length\""
+        ",\"name\":\"strap\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display"
+        "_unit\":\"mm\",\"doc\":\"rock shaft D, x (estimate)\",\"kind\":\"length\",\"name\":\"rock_shaft_"
+        "x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\","
+        "\"doc\":\"rock shaft D, y (estimate)\",\"kind\":\"length\",\"name\":\"rock_shaft_y\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.018000000000000002,\"display_unit\":\"mm\",\""
+        "doc\":\"rock-shaft arm DC, below D (estimate)\",\"kind\":\"length\",\"name\":\"rock_arm\",\"posi"
+        "tive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.024,\"display_unit\":\"mm\",\"doc\":\"r"
+        "ock-shaft arm DE, above D, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"rack_arm\",\"pos"
+        "itive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\""
+        "rack EF between its rear pin E and front pin F, l\\u2084 (estimate)\",\"kind\":\"length\",\"name"
+        "\":\"rack\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.01,\"display_unit\":\""
+        "mm\",\"doc\":\"tooth G behind tooth F along the rack (estimate)\",\"kind\":\"length\",\"name\":\""
+        "tooth_spacing\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0012,\"display_un"
+        "it\":\"mm\",\"doc\":\"lift eccentricity AK, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\""
+        "lift_eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit"
+        "\":\"deg\",\"doc\":\"constructive angle \\u03b8 of the lift eccentric ahead of the feed one (est"
+        "imate)\",\"kind\":\"angle\",\"name\":\"lift_angle\",\"positive\":false,\"role\":null,\"unit\":\""
+        "rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"lift link KF, l\\u2086 (estimate)\",\""
+        "kind\":\"length\",\"name\":\"lift_link\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"defa"
+        "ult\":0.04020000000000001,\"display_unit\":\"mm\",\"doc\":\"throat plate surface above the main "
+        "shaft, y (estimate: the teeth rise about 1 mm above it)\",\"kind\":\"length\",\"name\":\"plate_y"
+        "\",\"positive\":false,\"role\":\"throat_plate\",\"unit\":\"m\"},{\"default\":1.2540190675579257,"
+        "\"display_unit\":\"deg\",\"doc\":\"phase of feed_eccentric relative to the shaft angle\",\"kind\""
+        ":\"angle\",\"name\":\"feed_eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},"
+        "{\"default\":0.015,\"display_unit\":\"g\",\"doc\":\"mass of feed_eccentric\",\"kind\":\"mass\",\""
+        "name\":\"feed_eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0."
+        "0008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_eccentric, local u\",\"kind\":\"le"
+        "ngth\",\"name\":\"feed_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"def"
+        "ault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of feed_eccentric, local v\",\"kind\""
+        ":\"length\",\"name\":\"feed_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{"
+        "\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of feed_eccentric abo"
+        "ut its centre of mass\",\"kind\":\"inertia\",\"name\":\"feed_eccentric.inertia\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.008,\"display_unit\":\"g\",\"doc\":\"mass"
+        " of stitch_eccentric\",\"kind\":\"mass\",\"name\":\"stitch_eccentric.mass\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg\"},{\"default\":-0.0008,\"display_unit\":\"mm\",\"doc\":\"centre of ma"
+        "ss of stitch_eccentric, local u\",\"kind\":\"length\",\"name\":\"stitch_eccentric.com_u\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"ce"
+        "ntre of mass of stitch_eccentric, local v\",\"kind\":\"length\",\"name\":\"stitch_eccentric.com_"
+        "v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-07,\"display_unit\":\"kg*m*"
+        "*2\",\"doc\":\"moment of inertia of stitch_eccentric about its centre of mass\",\"kind\":\"inert"
+        "ia\",\"name\":\"stitch_eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\""
+        "},{\"default\":0.012,\"display_unit\":\"g\",\"doc\":\"mass of lift_eccentric\",\"kind\":\"mass\""
+        ",\"name\":\"lift_eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
+        ":0.0004,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local u\",\"kind\":\""
+        "length\",\"name\":\"lift_eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lift_eccentric, local v\",\"kin"
+        "d\":\"length\",\"name\":\"lift_eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_eccentri"
+        "c about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_eccentric.inertia\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.02,\"display_unit\":\"g\",\"doc\":\""
+        "mass of strap\",\"kind\":\"mass\",\"name\":\"strap.mass\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"kg\"},{\"default\":5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of strap"
+        " about its centre of mass\",\"kind\":\"inertia\",\"name\":\"strap.inertia\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of roc"
+        "k_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"kg\"},{\"default\":0.004,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, lo"
+        "cal u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"uni"
+        "t\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, loca"
+        "l v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaf"
+        "t about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":f"
+        "alse,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.018000000000000002,\"display_unit\":\"g\""
+        ",\"doc\":\"mass of rack\",\"kind\":\"mass\",\"name\":\"rack.mass\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"kg\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rack"
+        ", local v\",\"kind\":\"length\",\"name\":\"rack.com_v\",\"positive\":false,\"role\":null,\"unit\""
+        ":\"m\"},{\"default\":4e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rack abou"
+        "t its centre of mass\",\"kind\":\"inertia\",\"name\":\"rack.inertia\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.008,\"display_unit\":\"g\",\"doc\":\"mass of lift_lin"
+        "k\",\"kind\":\"mass\",\"name\":\"lift_link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
+        "\"},{\"default\":1.2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lift_link a"
+        "bout its centre of mass\",\"kind\":\"inertia\",\"name\":\"lift_link.inertia\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"]"
+        ",\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"rack's rear pin E\",\"name\":\"rear_pin\",\"offs"
+        "et\":0,\"role\":null},{\"body\":\"rack\",\"doc\":\"front tooth F\",\"name\":\"tooth_f\",\"offset"
+        "\":6,\"role\":\"feed_dog\"},{\"body\":\"rack\",\"doc\":\"tooth G behind F\",\"name\":\"tooth_g\""
+        ",\"offset\":12,\"role\":\"rack_tooth\"},{\"body\":\"lift_eccentric\",\"doc\":\"lift eccentric's "
+        "centre K\",\"name\":\"lift_pin\",\"offset\":18,\"role\":null}],\"reactions\":[{\"a\":\"ground\","
+        "\"b\":\"feed_eccentric\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"n"
+        "ame\":\"feed_eccentric.pivot\",\"offset\":0},{\"a\":\"feed_eccentric\",\"b\":\"stitch_eccentric\""
+        ",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"stitch_eccentri"
+        "c.pivot\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lift_eccentric\",\"columns\":[\"fx\",\"fy\"],\""
+        "grounded\":true,\"kind\":\"revolute\",\"name\":\"lift_eccentric.pivot\",\"offset\":4},{\"a\":\"s"
+        "titch_eccentric\",\"b\":\"strap\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revo"
+        "lute\",\"name\":\"B\",\"offset\":6},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\""
+        "fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":8},{\"a\":\"strap\",\"b\""
+        ":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\""
+        "C\",\"offset\":10},{\"a\":\"rock_shaft\",\"b\":\"rack\",\"columns\":[\"fx\",\"fy\"],\"grounded\""
+        ":false,\"kind\":\"revolute\",\"name\":\"E\",\"offset\":12},{\"a\":\"lift_eccentric\",\"b\":\"lif"
+        "t_link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"K\",\"o"
+        "ffset\":14},{\"a\":\"rack\",\"b\":\"lift_link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\""
+        "kind\":\"revolute\",\"name\":\"F\",\"offset\":16},{\"a\":\"ground\",\"b\":\"feed_eccentric\",\"c"
+        "olumns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"feed_e"
+        "ccentric.drive\",\"offset\":18,\"sense\":1},{\"a\":\"feed_eccentric\",\"b\":\"stitch_eccentric\""
+        ",\"columns\":[\"torque\"],\"grounded\":false,\"input\":\"stitch_eccentric\",\"kind\":\"drive\",\""
+        "name\":\"stitch_eccentric.drive\",\"offset\":19,\"sense\":1},{\"a\":\"ground\",\"b\":\"lift_ecce"
+        "ntric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name"
+        "\":\"lift_eccentric.drive\",\"offset\":20,\"sense\":1}],\"roles\":{\"feed_dog\":{\"kind\":\"poin"
+        "t\",\"name\":\"tooth_f\"},\"rack_tooth\":{\"kind\":\"point\",\"name\":\"tooth_g\"},\"stitch_regu"
+        "lator\":{\"kind\":\"input\",\"name\":\"stitch_eccentric\"},\"throat_plate\":{\"kind\":\"param\","
+        "\"name\":\"plate_y\"}},\"sizes\":{\"nanchor_out\":58,\"nblock\":2,\"nbranch\":2,\"nc\":120,\"nf\""
+        ":21,\"nfo\":32,\"ngroup\":11,\"nload\":15,\"nobs\":87,\"np\":37,\"nq\":4,\"nx\":2}}"
         ;
 }

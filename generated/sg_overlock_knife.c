@@ -6,21 +6,23 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_knife_constants -- Total ops: 42 */
+/* sg_overlock_knife_constants -- Total ops: 45 */
 void sg_overlock_knife_constants(const double *p, double *c)
 {
     const double t0 = sin(p[7]);
-    const double t1 = -p[4];
-    const double t2 = p[0] + p[1] + p[4];
-    const double t3 = t2 + fabs(p[2]);
-    const double t4 = t2 + fabs(p[3]);
-    const double t5 = -p[5];
-    const double t6 = -p[9];
-    const double t7 = (0.5)*p[1];
-    const double t8 = p[12]*t7;
-    const double t9 = p[15] + t5;
-    const double t10 = p[0] + t6;
-    const double t11 = p[15] + t1;
+    const double t1 = fabs(p[2]);
+    const double t2 = fabs(p[3]);
+    const double t3 = -p[4];
+    const double t4 = p[0] + p[1] + p[4];
+    const double t5 = t1 + t4;
+    const double t6 = t2 + t4;
+    const double t7 = -p[5];
+    const double t8 = -p[9];
+    const double t9 = (0.5)*p[1];
+    const double t10 = p[12]*t9;
+    const double t11 = p[15] + t7;
+    const double t12 = p[0] + t8;
+    const double t13 = p[15] + t3;
     c[0] = p[0];
     c[1] = cos(p[7]);
     c[2] = -t0;
@@ -31,65 +33,68 @@ void sg_overlock_knife_constants(const double *p, double *c)
     c[7] = p[4];
     c[8] = (1.0/(p[1]));
     c[9] = (1.0/(p[4]));
-    c[10] = -p[2];
-    c[11] = t1;
-    c[12] = -p[3];
-    c[13] = -p[1];
-    c[14] = t3;
-    c[15] = t4;
-    c[16] = -p[0];
-    c[17] = p[5];
-    c[18] = t5;
-    c[19] = p[7];
-    c[20] = p[9];
-    c[21] = -p[10];
-    c[22] = p[10];
-    c[23] = t6;
-    c[24] = t7;
-    c[25] = -t7;
-    c[26] = p[15];
-    c[27] = -p[16];
-    c[28] = p[16];
-    c[29] = -p[15];
-    c[30] = (1.0/(t3));
-    c[31] = (1.0/(t4));
-    c[32] = p[13];
-    c[33] = t8;
-    c[34] = -t8;
-    c[35] = p[17];
-    c[36] = t9;
-    c[37] = -t9;
-    c[38] = p[14];
-    c[39] = p[11];
-    c[40] = t10;
-    c[41] = -t10;
-    c[42] = p[8];
-    c[43] = p[12];
-    c[44] = (0.5)*p[11];
-    c[45] = (0.5)*p[12];
-    c[46] = (0.5)*p[13];
-    c[47] = (0.5)*p[14];
-    c[48] = (0.5)*p[17];
-    c[49] = (0.5)*p[8];
-    c[50] = -p[12];
-    c[51] = -p[14];
-    c[52] = -p[8];
-    c[53] = t11;
-    c[54] = -t11;
+    c[10] = 2.0*p[0] + t1 + t2;
+    c[11] = -p[2];
+    c[12] = t3;
+    c[13] = -p[3];
+    c[14] = -p[1];
+    c[15] = t5;
+    c[16] = t6;
+    c[17] = -p[0];
+    c[18] = p[5];
+    c[19] = t7;
+    c[20] = p[7];
+    c[21] = p[9];
+    c[22] = -p[10];
+    c[23] = p[10];
+    c[24] = t8;
+    c[25] = t9;
+    c[26] = -t9;
+    c[27] = p[15];
+    c[28] = -p[16];
+    c[29] = p[16];
+    c[30] = -p[15];
+    c[31] = (1.0/(t5));
+    c[32] = (1.0/(t6));
+    c[33] = p[13];
+    c[34] = t10;
+    c[35] = -t10;
+    c[36] = p[17];
+    c[37] = t11;
+    c[38] = -t11;
+    c[39] = p[14];
+    c[40] = p[11];
+    c[41] = t12;
+    c[42] = -t12;
+    c[43] = p[8];
+    c[44] = p[12];
+    c[45] = (0.5)*p[11];
+    c[46] = (0.5)*p[12];
+    c[47] = (0.5)*p[13];
+    c[48] = (0.5)*p[14];
+    c[49] = (0.5)*p[17];
+    c[50] = (0.5)*p[8];
+    c[51] = -p[12];
+    c[52] = -p[14];
+    c[53] = -p[8];
+    c[54] = t13;
+    c[55] = -t13;
 }
 
 /* sg_overlock_knife_closed -- Total ops: 22 */
-int sg_overlock_knife_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+int sg_overlock_knife_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err)
 {
     (void)x;
     int st;
+    double e[3] = {0.0, 0.0, 1.0};
     {
         /* dyad 0: RRR closed at joint C (rod, knife_lever) */
         const double P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
         const double Q[2] = {c[4], c[5]};
         const double l[2] = {c[6], c[7]};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[10];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         if (st != SG_OK) return st;
         q[1] = atan2(J[1] - P[1], J[0] - P[0]);
         q[0] = atan2(J[1] - Q[1], J[0] - Q[0]);
@@ -98,6 +103,8 @@ int sg_overlock_knife_closed(const double *x, const double *cx, const double *c,
         cq[0] = c[9]*(J[0] - Q[0]);
         cq[1] = c[9]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return SG_OK;
 }
 
@@ -106,12 +113,12 @@ void sg_overlock_knife_residual(const double *q, const double *cq, const double 
 {
     (void)q;
     (void)x;
-    const double t0 = c[11]*cq[0];
+    const double t0 = c[12]*cq[0];
     const double t1 = c[6]*cq[2];
-    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[10] + t0 + t1;
-    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[11]*cq[1] + c[12] + c[6]*cq[3];
+    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[11] + t0 + t1;
+    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[12]*cq[1] + c[13] + c[6]*cq[3];
     jac[0] = c[7]*cq[1];
-    jac[1] = c[13]*cq[3];
+    jac[1] = c[14]*cq[3];
     jac[2] = t0;
     jac[3] = t1;
 }
@@ -135,8 +142,8 @@ void sg_overlock_knife_scales(const double *q, const double *cq, const double *x
     (void)cq;
     (void)x;
     (void)cx;
-    out[0] = c[14];
-    out[1] = c[15];
+    out[0] = c[15];
+    out[1] = c[16];
 }
 
 /* sg_overlock_knife_blocks -- Total ops: 15 */
@@ -152,33 +159,33 @@ void sg_overlock_knife_blocks(const double *jac, double *out)
 /* sg_overlock_knife_motion -- Total ops: 118 */
 int sg_overlock_knife_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
-    const double t0 = c[11]*cq[0];
+    const double t0 = c[12]*cq[0];
     const double t1 = c[6]*cq[2];
     const double t2 = c[1]*cx[1] + c[3]*cx[0];
     const double t3 = c[0]*t2;
     const double t4 = c[1]*cx[0] + c[2]*cx[1];
-    const double t5 = c[16]*t4;
+    const double t5 = c[17]*t4;
     const double t8 = ((xd[0])*(xd[0]));
     const double t9 = c[0]*t4;
-    const double t12 = c[17]*cq[0];
-    const double t13 = c[18]*cq[1];
-    const double t14 = c[20]*t4 + c[21]*t2;
-    const double t15 = c[21]*t4 + c[23]*t2;
-    const double t16 = c[24]*cq[2];
-    const double t17 = c[25]*cq[3];
-    const double t18 = c[16]*t2;
-    const double t19 = c[26]*cq[0] + c[27]*cq[1];
-    const double t20 = c[27]*cq[0] + c[29]*cq[1];
-    double J[4], rs[2], cs[2];
+    const double t12 = c[18]*cq[0];
+    const double t13 = c[19]*cq[1];
+    const double t14 = c[21]*t4 + c[22]*t2;
+    const double t15 = c[22]*t4 + c[24]*t2;
+    const double t16 = c[25]*cq[2];
+    const double t17 = c[26]*cq[3];
+    const double t18 = c[17]*t2;
+    const double t19 = c[27]*cq[0] + c[28]*cq[1];
+    const double t20 = c[28]*cq[0] + c[30]*cq[1];
+    double J[4], rs[2], cs[4];
     int piv[2];
     J[0] = c[7]*cq[1];
-    J[1] = c[13]*cq[3];
+    J[1] = c[14]*cq[3];
     J[2] = t0;
     J[3] = t1;
     qd[0] = t3*xd[0];
     qd[1] = t5*xd[0];
-    rs[0] = c[30];
-    rs[1] = c[31];
+    rs[0] = c[31];
+    rs[1] = c[32];
     if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(2, J, piv, rs, cs, qd);
     const double t6 = ((qd[0])*(qd[0]));
@@ -186,40 +193,41 @@ int sg_overlock_knife_motion(const double *q, const double *cq, const double *x,
     const double t10 = cq[1]*t6;
     const double t11 = cq[3]*t7;
     qdd[0] = t0*t6 + t1*t7 + t3*xdd[0] + t8*t9;
-    qdd[1] = c[11]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
+    qdd[1] = c[12]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
     sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(2, 0x3ULL, fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = c[4] + t12;
-    obs[1] = c[17]*cq[1] + c[5];
+    obs[1] = c[18]*cq[1] + c[5];
     obs[2] = qd[0]*t13;
     obs[3] = qd[0]*t12;
-    obs[4] = c[18]*cq[0]*t6 + qdd[0]*t13;
-    obs[5] = c[18]*t10 + qdd[0]*t12;
-    obs[6] = c[19] + x[0];
+    obs[4] = c[19]*cq[0]*t6 + qdd[0]*t13;
+    obs[5] = c[19]*t10 + qdd[0]*t12;
+    obs[6] = c[20] + x[0];
     obs[7] = xd[0];
     obs[8] = xdd[0];
     obs[9] = t14;
-    obs[10] = c[20]*t2 + c[22]*t4;
+    obs[10] = c[21]*t2 + c[23]*t4;
     obs[11] = t15*xd[0];
     obs[12] = t14*xd[0];
-    obs[13] = t15*xdd[0] + t8*(c[22]*t2 + c[23]*t4);
+    obs[13] = t15*xdd[0] + t8*(c[23]*t2 + c[24]*t4);
     obs[14] = t14*xdd[0] + t15*t8;
     obs[15] = q[1];
     obs[16] = qd[1];
     obs[17] = qdd[1];
     obs[18] = t16 + t9;
-    obs[19] = c[24]*cq[3] + t3;
+    obs[19] = c[25]*cq[3] + t3;
     obs[20] = qd[1]*t17 + t18*xd[0];
     obs[21] = qd[1]*t16 + t9*xd[0];
-    obs[22] = c[25]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
-    obs[23] = c[25]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
+    obs[22] = c[26]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
+    obs[23] = c[26]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
     obs[24] = q[0];
     obs[25] = qd[0];
     obs[26] = qdd[0];
     obs[27] = c[4] + t19;
-    obs[28] = c[26]*cq[1] + c[28]*cq[0] + c[5];
+    obs[28] = c[27]*cq[1] + c[29]*cq[0] + c[5];
     obs[29] = qd[0]*t20;
     obs[30] = qd[0]*t19;
-    obs[31] = qdd[0]*t20 + t6*(c[28]*cq[1] + c[29]*cq[0]);
+    obs[31] = qdd[0]*t20 + t6*(c[29]*cq[1] + c[30]*cq[0]);
     obs[32] = qdd[0]*t19 + t20*t6;
     if (!isfinite((((((q[0] + q[1]) + (qd[0] + qd[1])) + ((qdd[0] + qdd[1]) + (obs[0] + (obs[1] + obs[2])))) + (((obs[3] + obs[4]) + (obs[5] + (obs[6] + obs[7]))) + ((obs[8] + obs[9]) + (obs[10] + (obs[11] + obs[12]))))) + ((((obs[13] + obs[14]) + (obs[15] + (obs[16] + obs[17]))) + ((obs[18] + obs[19]) + (obs[20] + (obs[21] + obs[22])))) + (((obs[23] + obs[24]) + (obs[25] + (obs[26] + obs[27]))) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))))))) return SG_NONFINITE;
     return SG_OK;
@@ -229,24 +237,24 @@ int sg_overlock_knife_motion(const double *q, const double *cq, const double *x,
 int sg_overlock_knife_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
 {
     (void)x;
-    const double t0 = c[11]*cq[0];
+    const double t0 = c[12]*cq[0];
     const double t1 = c[6]*cq[2];
     const double t2 = c[1]*cx[1] + c[3]*cx[0];
     const double t3 = c[0]*t2;
     const double t4 = c[1]*cx[0] + c[2]*cx[1];
-    const double t5 = c[16]*t4;
+    const double t5 = c[17]*t4;
     const double t8 = ((xd[0])*(xd[0]));
     const double t9 = c[0]*t4;
-    double J[4], rs[2], cs[2];
+    double J[4], rs[2], cs[4];
     int piv[2];
     J[0] = c[7]*cq[1];
-    J[1] = c[13]*cq[3];
+    J[1] = c[14]*cq[3];
     J[2] = t0;
     J[3] = t1;
     qd[0] = t3*xd[0];
     qd[1] = t5*xd[0];
-    rs[0] = c[30];
-    rs[1] = c[31];
+    rs[0] = c[31];
+    rs[1] = c[32];
     if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(2, J, piv, rs, cs, qd);
     const double t6 = ((qd[0])*(qd[0]));
@@ -254,8 +262,9 @@ int sg_overlock_knife_rates(const double *q, const double *cq, const double *x, 
     const double t10 = cq[1]*t6;
     const double t11 = cq[3]*t7;
     qdd[0] = t0*t6 + t1*t7 + t3*xdd[0] + t8*t9;
-    qdd[1] = c[11]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
+    qdd[1] = c[12]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
     sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(2, 0x3ULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -267,30 +276,30 @@ int sg_overlock_knife_observe(const double *q, const double *cq, const double *x
     case 0: {
         const double t6 = ((qd[0])*(qd[0]));
         const double t10 = cq[1]*t6;
-        const double t12 = c[17]*cq[0];
-        const double t13 = c[18]*cq[1];
+        const double t12 = c[18]*cq[0];
+        const double t13 = c[19]*cq[1];
         obs[0] = c[4] + t12;
-        obs[1] = c[17]*cq[1] + c[5];
+        obs[1] = c[18]*cq[1] + c[5];
         obs[2] = qd[0]*t13;
         obs[3] = qd[0]*t12;
-        obs[4] = c[18]*cq[0]*t6 + qdd[0]*t13;
-        obs[5] = c[18]*t10 + qdd[0]*t12;
+        obs[4] = c[19]*cq[0]*t6 + qdd[0]*t13;
+        obs[5] = c[19]*t10 + qdd[0]*t12;
         return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
     }
     case 1: {
         const double t2 = c[1]*cx[1] + c[3]*cx[0];
         const double t4 = c[1]*cx[0] + c[2]*cx[1];
         const double t8 = ((xd[0])*(xd[0]));
-        const double t14 = c[20]*t4 + c[21]*t2;
-        const double t15 = c[21]*t4 + c[23]*t2;
-        obs[6] = c[19] + x[0];
+        const double t14 = c[21]*t4 + c[22]*t2;
+        const double t15 = c[22]*t4 + c[24]*t2;
+        obs[6] = c[20] + x[0];
         obs[7] = xd[0];
         obs[8] = xdd[0];
         obs[9] = t14;
-        obs[10] = c[20]*t2 + c[22]*t4;
+        obs[10] = c[21]*t2 + c[23]*t4;
         obs[11] = t15*xd[0];
         obs[12] = t14*xd[0];
-        obs[13] = t15*xdd[0] + t8*(c[22]*t2 + c[23]*t4);
+        obs[13] = t15*xdd[0] + t8*(c[23]*t2 + c[24]*t4);
         obs[14] = t14*xdd[0] + t15*t8;
         return isfinite((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + (obs[13] + obs[14]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -298,37 +307,37 @@ int sg_overlock_knife_observe(const double *q, const double *cq, const double *x
         const double t2 = c[1]*cx[1] + c[3]*cx[0];
         const double t3 = c[0]*t2;
         const double t4 = c[1]*cx[0] + c[2]*cx[1];
-        const double t5 = c[16]*t4;
+        const double t5 = c[17]*t4;
         const double t7 = ((qd[1])*(qd[1]));
         const double t8 = ((xd[0])*(xd[0]));
         const double t9 = c[0]*t4;
         const double t11 = cq[3]*t7;
-        const double t16 = c[24]*cq[2];
-        const double t17 = c[25]*cq[3];
-        const double t18 = c[16]*t2;
+        const double t16 = c[25]*cq[2];
+        const double t17 = c[26]*cq[3];
+        const double t18 = c[17]*t2;
         obs[15] = q[1];
         obs[16] = qd[1];
         obs[17] = qdd[1];
         obs[18] = t16 + t9;
-        obs[19] = c[24]*cq[3] + t3;
+        obs[19] = c[25]*cq[3] + t3;
         obs[20] = qd[1]*t17 + t18*xd[0];
         obs[21] = qd[1]*t16 + t9*xd[0];
-        obs[22] = c[25]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
-        obs[23] = c[25]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
+        obs[22] = c[26]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
+        obs[23] = c[26]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
         return isfinite((((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23]))))) ? SG_OK : SG_NONFINITE;
     }
     case 3: {
         const double t6 = ((qd[0])*(qd[0]));
-        const double t19 = c[26]*cq[0] + c[27]*cq[1];
-        const double t20 = c[27]*cq[0] + c[29]*cq[1];
+        const double t19 = c[27]*cq[0] + c[28]*cq[1];
+        const double t20 = c[28]*cq[0] + c[30]*cq[1];
         obs[24] = q[0];
         obs[25] = qd[0];
         obs[26] = qdd[0];
         obs[27] = c[4] + t19;
-        obs[28] = c[26]*cq[1] + c[28]*cq[0] + c[5];
+        obs[28] = c[27]*cq[1] + c[29]*cq[0] + c[5];
         obs[29] = qd[0]*t20;
         obs[30] = qd[0]*t19;
-        obs[31] = qdd[0]*t20 + t6*(c[28]*cq[1] + c[29]*cq[0]);
+        obs[31] = qdd[0]*t20 + t6*(c[29]*cq[1] + c[30]*cq[0]);
         obs[32] = qdd[0]*t19 + t20*t6;
         return isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -344,22 +353,22 @@ int sg_overlock_knife_forces(const double *q, const double *cq, const double *x,
     (void)x;
     const double t0 = -gv[1] + obs[23];
     const double t1 = -gv[0] + obs[22];
-    const double t2 = c[28]*cq[0];
-    const double t3 = c[28]*cq[1];
-    const double t4 = c[38]*(-gv[0] + obs[31]) - ld[0];
-    const double t5 = c[38]*(-gv[1] + obs[32]) - ld[1];
+    const double t2 = c[29]*cq[0];
+    const double t3 = c[29]*cq[1];
+    const double t4 = c[39]*(-gv[0] + obs[31]) - ld[0];
+    const double t5 = c[39]*(-gv[1] + obs[32]) - ld[1];
     const double t6 = c[1]*cx[1] + c[3]*cx[0];
     const double t7 = c[1]*cx[0] + c[2]*cx[1];
     {
         /* block of unknowns 6, 7 */
         double M[4], r[2];
         int piv[2];
-        M[0] = c[11]*cq[1];
+        M[0] = c[12]*cq[1];
         M[1] = c[7]*cq[0];
-        r[0] = c[35]*obs[26] - ld[0]*(c[36]*cq[1] + t2) - ld[1]*(c[37]*cq[0] + t3) - ld[4] - t4*(c[26]*cq[1] + t2) - t5*(c[29]*cq[0] + t3);
+        r[0] = c[36]*obs[26] - ld[0]*(c[37]*cq[1] + t2) - ld[1]*(c[38]*cq[0] + t3) - ld[4] - t4*(c[27]*cq[1] + t2) - t5*(c[30]*cq[0] + t3);
         M[2] = c[6]*cq[3];
-        M[3] = c[13]*cq[2];
-        r[1] = c[32]*obs[17] + c[33]*cq[2]*t0 + c[34]*cq[3]*t1 - ld[3];
+        M[3] = c[14]*cq[2];
+        r[1] = c[33]*obs[17] + c[34]*cq[2]*t0 + c[35]*cq[3]*t1 - ld[3];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[6] = r[0];
@@ -367,18 +376,18 @@ int sg_overlock_knife_forces(const double *q, const double *cq, const double *x,
     }
     out[5] = -out[7] + t5;
     out[4] = -out[6] + t4;
-    out[3] = c[43]*t0 + out[7];
-    out[2] = c[43]*t1 + out[6];
-    out[1] = c[42]*(-gv[1] + obs[14]) + out[3];
-    out[0] = c[42]*(-gv[0] + obs[13]) + out[2];
-    out[8] = c[39]*obs[8] - out[0]*(c[20]*t6 + c[22]*t7) - out[1]*(c[22]*t6 + c[23]*t7) - out[2]*(c[21]*t7 + c[40]*t6) - out[3]*(c[21]*t6 + c[41]*t7) - ld[2];
+    out[3] = c[44]*t0 + out[7];
+    out[2] = c[44]*t1 + out[6];
+    out[1] = c[43]*(-gv[1] + obs[14]) + out[3];
+    out[0] = c[43]*(-gv[0] + obs[13]) + out[2];
+    out[8] = c[40]*obs[8] - out[0]*(c[21]*t6 + c[23]*t7) - out[1]*(c[23]*t6 + c[24]*t7) - out[2]*(c[22]*t7 + c[41]*t6) - out[3]*(c[22]*t6 + c[42]*t7) - ld[2];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
     out[11] = out[0] + out[4];
     out[12] = out[1] + out[5];
-    out[13] = c[12]*out[4] + c[4]*out[5] + out[8];
-    out[14] = c[44]*((obs[7])*(obs[7])) + c[45]*(((obs[20])*(obs[20])) + ((obs[21])*(obs[21]))) + c[46]*((obs[16])*(obs[16])) + c[47]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[48]*((obs[25])*(obs[25])) + c[49]*(((obs[11])*(obs[11])) + ((obs[12])*(obs[12])));
-    out[15] = c[50]*(gv[0]*obs[18] + gv[1]*obs[19]) + c[51]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[52]*(gv[0]*obs[9] + gv[1]*obs[10]);
+    out[13] = c[13]*out[4] + c[4]*out[5] + out[8];
+    out[14] = c[45]*((obs[7])*(obs[7])) + c[46]*(((obs[20])*(obs[20])) + ((obs[21])*(obs[21]))) + c[47]*((obs[16])*(obs[16])) + c[48]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[49]*((obs[25])*(obs[25])) + c[50]*(((obs[11])*(obs[11])) + ((obs[12])*(obs[12])));
+    out[15] = c[51]*(gv[0]*obs[18] + gv[1]*obs[19]) + c[52]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[53]*(gv[0]*obs[9] + gv[1]*obs[10]);
     out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[7] + ld[3]*obs[16] + ld[4]*obs[25];
     out[17] = 0.0;
     if (!isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + out[12])) + ((out[13] + out[14]) + (out[15] + (out[16] + out[17]))))))) return SG_NONFINITE;
@@ -392,19 +401,19 @@ void sg_overlock_knife_force_matrix(const double *q, const double *cq, const dou
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[24]*cq[3];
-    const double t3 = c[25]*cq[2];
-    const double t4 = c[28]*cq[0];
-    const double t5 = c[28]*cq[1];
+    const double t2 = c[25]*cq[3];
+    const double t3 = c[26]*cq[2];
+    const double t4 = c[29]*cq[0];
+    const double t5 = c[29]*cq[1];
     for (int k = 0; k < 81; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[2] = -1.0;
     A[10] = 1.0;
     A[12] = -1.0;
-    A[18] = c[20]*t0 + c[22]*t1;
-    A[19] = c[22]*t0 + c[23]*t1;
-    A[20] = c[21]*t1 + c[40]*t0;
-    A[21] = c[21]*t0 + c[41]*t1;
+    A[18] = c[21]*t0 + c[23]*t1;
+    A[19] = c[23]*t0 + c[24]*t1;
+    A[20] = c[22]*t1 + c[41]*t0;
+    A[21] = c[22]*t0 + c[42]*t1;
     A[26] = 1.0;
     A[29] = 1.0;
     A[33] = -1.0;
@@ -418,19 +427,19 @@ void sg_overlock_knife_force_matrix(const double *q, const double *cq, const dou
     A[60] = 1.0;
     A[68] = 1.0;
     A[70] = 1.0;
-    A[76] = c[26]*cq[1] + t4;
-    A[77] = c[29]*cq[0] + t5;
-    A[78] = c[53]*cq[1] + t4;
-    A[79] = c[54]*cq[0] + t5;
-    b[0] = c[42]*(-gv[0] + obs[13]);
-    b[1] = c[42]*(-gv[1] + obs[14]);
-    b[2] = c[39]*obs[8] - ld[2];
-    b[3] = c[43]*(-gv[0] + obs[22]);
-    b[4] = c[43]*(-gv[1] + obs[23]);
-    b[5] = c[32]*obs[17] - ld[3];
-    b[6] = c[38]*(-gv[0] + obs[31]) - ld[0];
-    b[7] = c[38]*(-gv[1] + obs[32]) - ld[1];
-    b[8] = c[35]*obs[26] - ld[0]*(c[36]*cq[1] + t4) - ld[1]*(c[37]*cq[0] + t5) - ld[4];
+    A[76] = c[27]*cq[1] + t4;
+    A[77] = c[30]*cq[0] + t5;
+    A[78] = c[54]*cq[1] + t4;
+    A[79] = c[55]*cq[0] + t5;
+    b[0] = c[43]*(-gv[0] + obs[13]);
+    b[1] = c[43]*(-gv[1] + obs[14]);
+    b[2] = c[40]*obs[8] - ld[2];
+    b[3] = c[44]*(-gv[0] + obs[22]);
+    b[4] = c[44]*(-gv[1] + obs[23]);
+    b[5] = c[33]*obs[17] - ld[3];
+    b[6] = c[39]*(-gv[0] + obs[31]) - ld[0];
+    b[7] = c[39]*(-gv[1] + obs[32]) - ld[1];
+    b[8] = c[36]*obs[26] - ld[0]*(c[37]*cq[1] + t4) - ld[1]*(c[38]*cq[0] + t5) - ld[4];
 }
 
 /* sg_overlock_knife_anchors -- Total ops: 38 */
@@ -458,14 +467,14 @@ void sg_overlock_knife_anchors(const double *q, const double *cq, const double *
     out[13] = c[6]*cq[3] + t3;
     out[14] = c[4] + c[7]*cq[0];
     out[15] = c[5] + c[7]*cq[1];
-    out[16] = c[17]*cq[0] + c[4];
-    out[17] = c[17]*cq[1] + c[5];
-    out[18] = c[20]*t0 + c[21]*t2;
-    out[19] = c[20]*t2 + c[22]*t0;
-    out[20] = c[24]*cq[2] + t1;
-    out[21] = c[24]*cq[3] + t3;
-    out[22] = c[26]*cq[0] + c[27]*cq[1] + c[4];
-    out[23] = c[26]*cq[1] + c[28]*cq[0] + c[5];
+    out[16] = c[18]*cq[0] + c[4];
+    out[17] = c[18]*cq[1] + c[5];
+    out[18] = c[21]*t0 + c[22]*t2;
+    out[19] = c[21]*t2 + c[23]*t0;
+    out[20] = c[25]*cq[2] + t1;
+    out[21] = c[25]*cq[3] + t3;
+    out[22] = c[27]*cq[0] + c[28]*cq[1] + c[4];
+    out[23] = c[27]*cq[1] + c[29]*cq[0] + c[5];
 }
 
 /* sg_overlock_knife_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
@@ -482,17 +491,19 @@ static SG_FLATTEN SG_NOINLINE size_t sg_overlock_knife_sweep(const struct sg_mec
 #if SG_SIMD
 SG_SIMD_BEGIN
 
-SG_VINLINE sg_vm sg_overlock_knife_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_knife_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq, sg_vd *err)
 {
     (void)x;
     sg_vm ok = sgv_true();
+    sg_vd e[3] = {sgv_set1(0.0), sgv_set1(0.0), sgv_set1(1.0)};
     {
         /* dyad 0: RRR closed at joint C (rod, knife_lever) */
         const sg_vd P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
         const sg_vd Q[2] = {sgv_set1(c[4]), sgv_set1(c[5])};
         const sg_vd l[2] = {sgv_set1(c[6]), sgv_set1(c[7])};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[10]);
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         q[1] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[0] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
         cq[2] = c[8]*(J[0] - P[0]);
@@ -500,38 +511,40 @@ SG_VINLINE sg_vm sg_overlock_knife_closed_v(const sg_vd *x, const sg_vd *cx, con
         cq[0] = c[9]*(J[0] - Q[0]);
         cq[1] = c[9]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return ok;
 }
 
 SG_VINLINE sg_vm sg_overlock_knife_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
 {
-    const sg_vd t0 = c[11]*cq[0];
+    const sg_vd t0 = c[12]*cq[0];
     const sg_vd t1 = c[6]*cq[2];
     const sg_vd t2 = c[1]*cx[1] + c[3]*cx[0];
     const sg_vd t3 = c[0]*t2;
     const sg_vd t4 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t5 = c[16]*t4;
+    const sg_vd t5 = c[17]*t4;
     const sg_vd t8 = ((xd[0])*(xd[0]));
     const sg_vd t9 = c[0]*t4;
-    const sg_vd t12 = c[17]*cq[0];
-    const sg_vd t13 = c[18]*cq[1];
-    const sg_vd t14 = c[20]*t4 + c[21]*t2;
-    const sg_vd t15 = c[21]*t4 + c[23]*t2;
-    const sg_vd t16 = c[24]*cq[2];
-    const sg_vd t17 = c[25]*cq[3];
-    const sg_vd t18 = c[16]*t2;
-    const sg_vd t19 = c[26]*cq[0] + c[27]*cq[1];
-    const sg_vd t20 = c[27]*cq[0] + c[29]*cq[1];
-    sg_vd J[4], rs[2], cs[2];
+    const sg_vd t12 = c[18]*cq[0];
+    const sg_vd t13 = c[19]*cq[1];
+    const sg_vd t14 = c[21]*t4 + c[22]*t2;
+    const sg_vd t15 = c[22]*t4 + c[24]*t2;
+    const sg_vd t16 = c[25]*cq[2];
+    const sg_vd t17 = c[26]*cq[3];
+    const sg_vd t18 = c[17]*t2;
+    const sg_vd t19 = c[27]*cq[0] + c[28]*cq[1];
+    const sg_vd t20 = c[28]*cq[0] + c[30]*cq[1];
+    sg_vd J[4], rs[2], cs[4];
     sg_vm piv[2];
     J[0] = c[7]*cq[1];
-    J[1] = c[13]*cq[3];
+    J[1] = c[14]*cq[3];
     J[2] = t0;
     J[3] = t1;
     qd[0] = t3*xd[0];
     qd[1] = t5*xd[0];
-    rs[0] = sgv_set1(c[30]);
-    rs[1] = sgv_set1(c[31]);
+    rs[0] = sgv_set1(c[31]);
+    rs[1] = sgv_set1(c[32]);
     sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
     sgv_solve_eq(2, J, piv, rs, cs, qd);
     const sg_vd t6 = ((qd[0])*(qd[0]));
@@ -539,40 +552,41 @@ SG_VINLINE sg_vm sg_overlock_knife_motion_v(const sg_vd *q, const sg_vd *cq, con
     const sg_vd t10 = cq[1]*t6;
     const sg_vd t11 = cq[3]*t7;
     qdd[0] = t0*t6 + t1*t7 + t3*xdd[0] + t8*t9;
-    qdd[1] = c[11]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
+    qdd[1] = c[12]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
     sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    sgv_rates_scale(2, 0x3ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = c[4] + t12;
-    obs[1] = c[17]*cq[1] + c[5];
+    obs[1] = c[18]*cq[1] + c[5];
     obs[2] = qd[0]*t13;
     obs[3] = qd[0]*t12;
-    obs[4] = c[18]*cq[0]*t6 + qdd[0]*t13;
-    obs[5] = c[18]*t10 + qdd[0]*t12;
-    obs[6] = c[19] + x[0];
+    obs[4] = c[19]*cq[0]*t6 + qdd[0]*t13;
+    obs[5] = c[19]*t10 + qdd[0]*t12;
+    obs[6] = c[20] + x[0];
     obs[7] = xd[0];
     obs[8] = xdd[0];
     obs[9] = t14;
-    obs[10] = c[20]*t2 + c[22]*t4;
+    obs[10] = c[21]*t2 + c[23]*t4;
     obs[11] = t15*xd[0];
     obs[12] = t14*xd[0];
-    obs[13] = t15*xdd[0] + t8*(c[22]*t2 + c[23]*t4);
+    obs[13] = t15*xdd[0] + t8*(c[23]*t2 + c[24]*t4);
     obs[14] = t14*xdd[0] + t15*t8;
     obs[15] = q[1];
     obs[16] = qd[1];
     obs[17] = qdd[1];
     obs[18] = t16 + t9;
-    obs[19] = c[24]*cq[3] + t3;
+    obs[19] = c[25]*cq[3] + t3;
     obs[20] = qd[1]*t17 + t18*xd[0];
     obs[21] = qd[1]*t16 + t9*xd[0];
-    obs[22] = c[25]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
-    obs[23] = c[25]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
+    obs[22] = c[26]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
+    obs[23] = c[26]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
     obs[24] = q[0];
     obs[25] = qd[0];
     obs[26] = qdd[0];
     obs[27] = c[4] + t19;
-    obs[28] = c[26]*cq[1] + c[28]*cq[0] + c[5];
+    obs[28] = c[27]*cq[1] + c[29]*cq[0] + c[5];
     obs[29] = qd[0]*t20;
     obs[30] = qd[0]*t19;
-    obs[31] = qdd[0]*t20 + t6*(c[28]*cq[1] + c[29]*cq[0]);
+    obs[31] = qdd[0]*t20 + t6*(c[29]*cq[1] + c[30]*cq[0]);
     obs[32] = qdd[0]*t19 + t20*t6;
     ok &= sgv_isfinite((((((q[0] + q[1]) + (qd[0] + qd[1])) + ((qdd[0] + qdd[1]) + (obs[0] + (obs[1] + obs[2])))) + (((obs[3] + obs[4]) + (obs[5] + (obs[6] + obs[7]))) + ((obs[8] + obs[9]) + (obs[10] + (obs[11] + obs[12]))))) + ((((obs[13] + obs[14]) + (obs[15] + (obs[16] + obs[17]))) + ((obs[18] + obs[19]) + (obs[20] + (obs[21] + obs[22])))) + (((obs[23] + obs[24]) + (obs[25] + (obs[26] + obs[27]))) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))))));
     return ok;
@@ -581,24 +595,24 @@ SG_VINLINE sg_vm sg_overlock_knife_motion_v(const sg_vd *q, const sg_vd *cq, con
 SG_VINLINE sg_vm sg_overlock_knife_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
 {
     (void)x;
-    const sg_vd t0 = c[11]*cq[0];
+    const sg_vd t0 = c[12]*cq[0];
     const sg_vd t1 = c[6]*cq[2];
     const sg_vd t2 = c[1]*cx[1] + c[3]*cx[0];
     const sg_vd t3 = c[0]*t2;
     const sg_vd t4 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t5 = c[16]*t4;
+    const sg_vd t5 = c[17]*t4;
     const sg_vd t8 = ((xd[0])*(xd[0]));
     const sg_vd t9 = c[0]*t4;
-    sg_vd J[4], rs[2], cs[2];
+    sg_vd J[4], rs[2], cs[4];
     sg_vm piv[2];
     J[0] = c[7]*cq[1];
-    J[1] = c[13]*cq[3];
+    J[1] = c[14]*cq[3];
     J[2] = t0;
     J[3] = t1;
     qd[0] = t3*xd[0];
     qd[1] = t5*xd[0];
-    rs[0] = sgv_set1(c[30]);
-    rs[1] = sgv_set1(c[31]);
+    rs[0] = sgv_set1(c[31]);
+    rs[1] = sgv_set1(c[32]);
     sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
     sgv_solve_eq(2, J, piv, rs, cs, qd);
     const sg_vd t6 = ((qd[0])*(qd[0]));
@@ -606,8 +620,9 @@ SG_VINLINE sg_vm sg_overlock_knife_rates_v(const sg_vd *q, const sg_vd *cq, cons
     const sg_vd t10 = cq[1]*t6;
     const sg_vd t11 = cq[3]*t7;
     qdd[0] = t0*t6 + t1*t7 + t3*xdd[0] + t8*t9;
-    qdd[1] = c[11]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
+    qdd[1] = c[12]*t10 + c[6]*t11 + t3*t8 + t5*xdd[0];
     sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    sgv_rates_scale(2, 0x3ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))));
     return ok;
 }
@@ -618,30 +633,30 @@ SG_VINLINE sg_vm sg_overlock_knife_observe_v(const sg_vd *q, const sg_vd *cq, co
     case 0: {
         const sg_vd t6 = ((qd[0])*(qd[0]));
         const sg_vd t10 = cq[1]*t6;
-        const sg_vd t12 = c[17]*cq[0];
-        const sg_vd t13 = c[18]*cq[1];
+        const sg_vd t12 = c[18]*cq[0];
+        const sg_vd t13 = c[19]*cq[1];
         obs[0] = c[4] + t12;
-        obs[1] = c[17]*cq[1] + c[5];
+        obs[1] = c[18]*cq[1] + c[5];
         obs[2] = qd[0]*t13;
         obs[3] = qd[0]*t12;
-        obs[4] = c[18]*cq[0]*t6 + qdd[0]*t13;
-        obs[5] = c[18]*t10 + qdd[0]*t12;
+        obs[4] = c[19]*cq[0]*t6 + qdd[0]*t13;
+        obs[5] = c[19]*t10 + qdd[0]*t12;
         return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
     }
     case 1: {
         const sg_vd t2 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t4 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t8 = ((xd[0])*(xd[0]));
-        const sg_vd t14 = c[20]*t4 + c[21]*t2;
-        const sg_vd t15 = c[21]*t4 + c[23]*t2;
-        obs[6] = c[19] + x[0];
+        const sg_vd t14 = c[21]*t4 + c[22]*t2;
+        const sg_vd t15 = c[22]*t4 + c[24]*t2;
+        obs[6] = c[20] + x[0];
         obs[7] = xd[0];
         obs[8] = xdd[0];
         obs[9] = t14;
-        obs[10] = c[20]*t2 + c[22]*t4;
+        obs[10] = c[21]*t2 + c[23]*t4;
         obs[11] = t15*xd[0];
         obs[12] = t14*xd[0];
-        obs[13] = t15*xdd[0] + t8*(c[22]*t2 + c[23]*t4);
+        obs[13] = t15*xdd[0] + t8*(c[23]*t2 + c[24]*t4);
         obs[14] = t14*xdd[0] + t15*t8;
         return sgv_isfinite((((obs[6] + obs[7]) + (obs[8] + obs[9])) + ((obs[10] + obs[11]) + (obs[12] + (obs[13] + obs[14])))));
     }
@@ -649,37 +664,37 @@ SG_VINLINE sg_vm sg_overlock_knife_observe_v(const sg_vd *q, const sg_vd *cq, co
         const sg_vd t2 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t3 = c[0]*t2;
         const sg_vd t4 = c[1]*cx[0] + c[2]*cx[1];
-        const sg_vd t5 = c[16]*t4;
+        const sg_vd t5 = c[17]*t4;
         const sg_vd t7 = ((qd[1])*(qd[1]));
         const sg_vd t8 = ((xd[0])*(xd[0]));
         const sg_vd t9 = c[0]*t4;
         const sg_vd t11 = cq[3]*t7;
-        const sg_vd t16 = c[24]*cq[2];
-        const sg_vd t17 = c[25]*cq[3];
-        const sg_vd t18 = c[16]*t2;
+        const sg_vd t16 = c[25]*cq[2];
+        const sg_vd t17 = c[26]*cq[3];
+        const sg_vd t18 = c[17]*t2;
         obs[15] = q[1];
         obs[16] = qd[1];
         obs[17] = qdd[1];
         obs[18] = t16 + t9;
-        obs[19] = c[24]*cq[3] + t3;
+        obs[19] = c[25]*cq[3] + t3;
         obs[20] = qd[1]*t17 + t18*xd[0];
         obs[21] = qd[1]*t16 + t9*xd[0];
-        obs[22] = c[25]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
-        obs[23] = c[25]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
+        obs[22] = c[26]*cq[2]*t7 + qdd[1]*t17 + t18*xdd[0] + t5*t8;
+        obs[23] = c[26]*t11 + qdd[1]*t16 + t18*t8 + t9*xdd[0];
         return sgv_isfinite((((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23])))));
     }
     case 3: {
         const sg_vd t6 = ((qd[0])*(qd[0]));
-        const sg_vd t19 = c[26]*cq[0] + c[27]*cq[1];
-        const sg_vd t20 = c[27]*cq[0] + c[29]*cq[1];
+        const sg_vd t19 = c[27]*cq[0] + c[28]*cq[1];
+        const sg_vd t20 = c[28]*cq[0] + c[30]*cq[1];
         obs[24] = q[0];
         obs[25] = qd[0];
         obs[26] = qdd[0];
         obs[27] = c[4] + t19;
-        obs[28] = c[26]*cq[1] + c[28]*cq[0] + c[5];
+        obs[28] = c[27]*cq[1] + c[29]*cq[0] + c[5];
         obs[29] = qd[0]*t20;
         obs[30] = qd[0]*t19;
-        obs[31] = qdd[0]*t20 + t6*(c[28]*cq[1] + c[29]*cq[0]);
+        obs[31] = qdd[0]*t20 + t6*(c[29]*cq[1] + c[30]*cq[0]);
         obs[32] = qdd[0]*t19 + t20*t6;
         return sgv_isfinite((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + (obs[31] + obs[32])))));
     }
@@ -695,22 +710,22 @@ SG_VINLINE sg_vm sg_overlock_knife_forces_v(const sg_vd *q, const sg_vd *cq, con
     sg_vm ok = sgv_true();
     const sg_vd t0 = -gv[1] + obs[23];
     const sg_vd t1 = -gv[0] + obs[22];
-    const sg_vd t2 = c[28]*cq[0];
-    const sg_vd t3 = c[28]*cq[1];
-    const sg_vd t4 = c[38]*(-gv[0] + obs[31]) - ld[0];
-    const sg_vd t5 = c[38]*(-gv[1] + obs[32]) - ld[1];
+    const sg_vd t2 = c[29]*cq[0];
+    const sg_vd t3 = c[29]*cq[1];
+    const sg_vd t4 = c[39]*(-gv[0] + obs[31]) - ld[0];
+    const sg_vd t5 = c[39]*(-gv[1] + obs[32]) - ld[1];
     const sg_vd t6 = c[1]*cx[1] + c[3]*cx[0];
     const sg_vd t7 = c[1]*cx[0] + c[2]*cx[1];
     {
         /* block of unknowns 6, 7 */
         sg_vd M[4], r[2];
         sg_vm piv[2];
-        M[0] = c[11]*cq[1];
+        M[0] = c[12]*cq[1];
         M[1] = c[7]*cq[0];
-        r[0] = c[35]*obs[26] - ld[0]*(c[36]*cq[1] + t2) - ld[1]*(c[37]*cq[0] + t3) - ld[4] - t4*(c[26]*cq[1] + t2) - t5*(c[29]*cq[0] + t3);
+        r[0] = c[36]*obs[26] - ld[0]*(c[37]*cq[1] + t2) - ld[1]*(c[38]*cq[0] + t3) - ld[4] - t4*(c[27]*cq[1] + t2) - t5*(c[30]*cq[0] + t3);
         M[2] = c[6]*cq[3];
-        M[3] = c[13]*cq[2];
-        r[1] = c[32]*obs[17] + c[33]*cq[2]*t0 + c[34]*cq[3]*t1 - ld[3];
+        M[3] = c[14]*cq[2];
+        r[1] = c[33]*obs[17] + c[34]*cq[2]*t0 + c[35]*cq[3]*t1 - ld[3];
         ok &= sgv_lu_factor(2, M, piv);
         sgv_lu_solve(2, M, piv, r);
         out[6] = r[0];
@@ -718,18 +733,18 @@ SG_VINLINE sg_vm sg_overlock_knife_forces_v(const sg_vd *q, const sg_vd *cq, con
     }
     out[5] = -out[7] + t5;
     out[4] = -out[6] + t4;
-    out[3] = c[43]*t0 + out[7];
-    out[2] = c[43]*t1 + out[6];
-    out[1] = c[42]*(-gv[1] + obs[14]) + out[3];
-    out[0] = c[42]*(-gv[0] + obs[13]) + out[2];
-    out[8] = c[39]*obs[8] - out[0]*(c[20]*t6 + c[22]*t7) - out[1]*(c[22]*t6 + c[23]*t7) - out[2]*(c[21]*t7 + c[40]*t6) - out[3]*(c[21]*t6 + c[41]*t7) - ld[2];
+    out[3] = c[44]*t0 + out[7];
+    out[2] = c[44]*t1 + out[6];
+    out[1] = c[43]*(-gv[1] + obs[14]) + out[3];
+    out[0] = c[43]*(-gv[0] + obs[13]) + out[2];
+    out[8] = c[40]*obs[8] - out[0]*(c[21]*t6 + c[23]*t7) - out[1]*(c[23]*t6 + c[24]*t7) - out[2]*(c[22]*t7 + c[41]*t6) - out[3]*(c[22]*t6 + c[42]*t7) - ld[2];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
     out[11] = out[0] + out[4];
     out[12] = out[1] + out[5];
-    out[13] = c[12]*out[4] + c[4]*out[5] + out[8];
-    out[14] = c[44]*((obs[7])*(obs[7])) + c[45]*(((obs[20])*(obs[20])) + ((obs[21])*(obs[21]))) + c[46]*((obs[16])*(obs[16])) + c[47]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[48]*((obs[25])*(obs[25])) + c[49]*(((obs[11])*(obs[11])) + ((obs[12])*(obs[12])));
-    out[15] = c[50]*(gv[0]*obs[18] + gv[1]*obs[19]) + c[51]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[52]*(gv[0]*obs[9] + gv[1]*obs[10]);
+    out[13] = c[13]*out[4] + c[4]*out[5] + out[8];
+    out[14] = c[45]*((obs[7])*(obs[7])) + c[46]*(((obs[20])*(obs[20])) + ((obs[21])*(obs[21]))) + c[47]*((obs[16])*(obs[16])) + c[48]*(((obs[29])*(obs[29])) + ((obs[30])*(obs[30]))) + c[49]*((obs[25])*(obs[25])) + c[50]*(((obs[11])*(obs[11])) + ((obs[12])*(obs[12])));
+    out[15] = c[51]*(gv[0]*obs[18] + gv[1]*obs[19]) + c[52]*(gv[0]*obs[27] + gv[1]*obs[28]) + c[53]*(gv[0]*obs[9] + gv[1]*obs[10]);
     out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[7] + ld[3]*obs[16] + ld[4]*obs[25];
     out[17] = sgv_set1(0.0);
     ok &= sgv_isfinite(((((out[0] + out[1]) + (out[2] + out[3])) + ((out[4] + out[5]) + (out[6] + (out[7] + out[8])))) + (((out[9] + out[10]) + (out[11] + out[12])) + ((out[13] + out[14]) + (out[15] + (out[16] + out[17]))))));
@@ -761,7 +776,7 @@ static const sg_mechanism sg_overlock_knife_descriptor = {
     .nq = 2,
     .nx = 1,
     .np = 18,
-    .nc = 55,
+    .nc = 56,
     .nobs = 33,
     .nbranch = 1,
     .nf = 9,
@@ -818,81 +833,81 @@ const char *sg_overlock_knife_manifest(void)
         "fset\":24,\"role\":null}],\"body_fields\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"c"
         "om_vx\",\"com_vy\",\"com_ax\",\"com_ay\"],\"branches\":[{\"default\":-1,\"joint\":\"C\",\"kind\""
         ":\"rrr\",\"meaning\":\"+1: joint C left of the line from B to P\"}],\"closed_form\":true,\"closu"
-        "re\":[\"C.x\",\"C.y\"],\"constants\":[[0],[7],[7],[7],[2],[3],[1],[4],[1],[4],[2],[4],[3],[1],[0"
-        ",1,2,4],[0,1,3,4],[0],[5],[5],[7],[9],[10],[10],[9],[1],[1],[15],[16],[16],[15],[0,1,2,4],[0,1,3"
-        ",4],[13],[1,12],[1,12],[17],[5,15],[5,15],[14],[11],[0,9],[0,9],[8],[12],[11],[12],[13],[14],[17"
-        "],[8],[12],[14],[8],[4,15],[4,15]],\"coords\":[{\"guess\":0.0,\"name\":\"knife_lever.angle\",\"u"
-        "nit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"rod.angle\",\"unit\":\"rad\"}],\"default"
-        "_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the knife \\u043c\\u0435\\u0445\\u043"
-        "0\\u043d\\u0438\\u0437\\u043c \\u043d\\u043e\\u0436\\u0430 (seed 003 names it; its drive is as o"
-        "n 51-A class machines).\\n\\nThe upper knife is clamped in a knife lever that an eccentric on th"
-        "e main shaft rocks through a rod (a\\ncrank-rocker); it cuts against the fixed lower knife, whos"
-        "e edge is the parameter ``lower_edge``. The knife edge\\npoint is the upper knife's cutting corn"
-        "er; the cutting overlap is how far it passes below the lower knife's edge\\nat the bottom of its"
-        " stroke (about 0.5\\u20131 mm on overlock machines; the analysis reports it).\\n\\nFrame: the pl"
-        "ane across the main shaft, origin on its axis, x the feed direction, y up. Every dimension is an"
-        "\\nestimate: an edge stroke of about 8.1 mm, an overlap of about 0.56 mm.\",\"elements\":[],\"fo"
-        "rce_blocks\":[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"sha"
-        "ft.power\",\"unit\":\"W\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"fra"
-        "me_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\""
-        "name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name"
-        "\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\""
-        "eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\"knife_le"
-        "ver.x\",\"knife_lever.y\",\"knife_lever.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":"
-        "\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\""
-        "unit\":\"rad\"}],\"kernels\":{\"sg_overlock_knife_anchors\":{\"ops\":38},\"sg_overlock_knife_blo"
-        "cks\":{\"ops\":15},\"sg_overlock_knife_closed\":{\"ops\":22},\"sg_overlock_knife_constants\":{\""
-        "ops\":42},\"sg_overlock_knife_force_matrix\":{\"ops\":62},\"sg_overlock_knife_forces\":{\"ops\":"
-        "123},\"sg_overlock_knife_lu_factor\":{\"ops\":5},\"sg_overlock_knife_lu_solve\":{\"ops\":8},\"sg"
-        "_overlock_knife_motion\":{\"ops\":118},\"sg_overlock_knife_observe\":{\"ops\":106},\"sg_overlock"
-        "_knife_rates\":{\"ops\":34},\"sg_overlock_knife_residual\":{\"ops\":20},\"sg_overlock_knife_scal"
-        "es\":{\"ops\":2}},\"loads\":[{\"body\":\"knife_lever\",\"component\":\"fx\",\"name\":\"knife_edg"
-        "e\"},{\"body\":\"knife_lever\",\"component\":\"fy\",\"name\":\"knife_edge\"},{\"body\":\"eccentr"
-        "ic\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"rod\",\"component\":\"torque\""
-        ",\"name\":\"rod\"},{\"body\":\"knife_lever\",\"component\":\"torque\",\"name\":\"knife_lever\"}]"
-        ",\"name\":\"overlock_knife\",\"observables\":[{\"name\":\"knife_edge.x\",\"unit\":\"m\"},{\"name"
-        "\":\"knife_edge.y\",\"unit\":\"m\"},{\"name\":\"knife_edge.x_d\",\"unit\":\"m/s\"},{\"name\":\"k"
-        "nife_edge.y_d\",\"unit\":\"m/s\"},{\"name\":\"knife_edge.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "knife_edge.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name\":"
-        "\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2\"}"
-        ",{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},{\""
-        "name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad/s\""
-        "},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{\"na"
-        "me\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rod.c"
-        "om.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.com.y_"
-        "dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_lever.angle\",\"unit\":\"rad\"},{\"name\":\"knife_lev"
-        "er.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"knife_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"nam"
-        "e\":\"knife_lever.com.x\",\"unit\":\"m\"},{\"name\":\"knife_lever.com.y\",\"unit\":\"m\"},{\"nam"
-        "e\":\"knife_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"knife_lever.com.y_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"knife_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_lever.com.y_dd\",\"un"
-        "it\":\"m/s^2\"}],\"params\":[{\"default\":0.00125,\"display_unit\":\"mm\",\"doc\":\"knife eccent"
-        "ricity (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"knife rod (estimate)\",\"kind\""
-        ":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0.02,"
-        "\"display_unit\":\"mm\",\"doc\":\"knife lever pivot, x (estimate)\",\"kind\":\"length\",\"name\""
-        ":\"lever_pivot_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.04,\"display_"
-        "unit\":\"mm\",\"doc\":\"knife lever pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"lever_p"
-        "ivot_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\":\"m"
-        "m\",\"doc\":\"knife lever's arm to the rod (estimate)\",\"kind\":\"length\",\"name\":\"lever_arm"
-        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.065,\"display_unit\":\"mm\",\""
-        "doc\":\"knife lever's arm to the knife edge (estimate)\",\"kind\":\"length\",\"name\":\"knife_ar"
-        "m\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0365,\"display_unit\":\"mm\","
-        "\"doc\":\"height of the fixed lower knife's edge (estimate)\",\"kind\":\"length\",\"name\":\"low"
-        "er_edge\",\"positive\":false,\"role\":\"lower_knife_edge\",\"unit\":\"m\"},{\"default\":0.0,\"di"
-        "splay_unit\":\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"angle"
-        "\",\"name\":\"eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":"
-        "0.01,\"display_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric"
-        ".mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0005,\"display_unit\":\""
-        "mm\",\"doc\":\"centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.c"
-        "om_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\""
-        ",\"doc\":\"centre of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v"
-        "\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-07,\"display_unit\":\"kg*m**"
-        "2\",\"doc\":\"moment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\"n"
-        "ame\":\"eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":"
-        "0.008,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\",\"p"
-        "ositive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\""
+        "re\":[\"C.x\",\"C.y\"],\"constants\":[[0],[7],[7],[7],[2],[3],[1],[4],[1],[4],[0,2,3],[2],[4],[3"
+        "],[1],[0,1,2,4],[0,1,3,4],[0],[5],[5],[7],[9],[10],[10],[9],[1],[1],[15],[16],[16],[15],[0,1,2,4"
+        "],[0,1,3,4],[13],[1,12],[1,12],[17],[5,15],[5,15],[14],[11],[0,9],[0,9],[8],[12],[11],[12],[13],"
+        "[14],[17],[8],[12],[14],[8],[4,15],[4,15]],\"coords\":[{\"guess\":0.0,\"name\":\"knife_lever.ang"
+        "le\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"rod.angle\",\"unit\":\"rad\"}],\""
+        "default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the knife \\u043c\\u0435\\u044"
+        "5\\u0430\\u043d\\u0438\\u0437\\u043c \\u043d\\u043e\\u0436\\u0430 (seed 003 names it; its drive "
+        "is as on 51-A class machines).\\n\\nThe upper knife is clamped in a knife lever that an eccentri"
+        "c on the main shaft rocks through a rod (a\\ncrank-rocker); it cuts against the fixed lower knif"
+        "e, whose edge is the parameter ``lower_edge``. The knife edge\\npoint is the upper knife's cutti"
+        "ng corner; the cutting overlap is how far it passes below the lower knife's edge\\nat the bottom"
+        " of its stroke (about 0.5\\u20131 mm on overlock machines; the analysis reports it).\\n\\nFrame:"
+        " the plane across the main shaft, origin on its axis, x the feed direction, y up. Every dimensio"
+        "n is an\\nestimate: an edge stroke of about 8.1 mm, an overlap of about 0.56 mm.\",\"elements\":"
+        "[],\"force_blocks\":[2],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\""
+        ":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\""
+        ":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\""
+        "},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\""
+        "name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\""
+        ":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"rod.x\",\"rod.y\",\"rod.moment\",\"knif"
+        "e_lever.x\",\"knife_lever.y\",\"knife_lever.moment\"],\"inputs\":[{\"default\":0.0,\"display_uni"
+        "t\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":nul"
+        "l,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_knife_anchors\":{\"ops\":38},\"sg_overlock_knife"
+        "_blocks\":{\"ops\":15},\"sg_overlock_knife_closed\":{\"ops\":22},\"sg_overlock_knife_constants\""
+        ":{\"ops\":45},\"sg_overlock_knife_force_matrix\":{\"ops\":62},\"sg_overlock_knife_forces\":{\"op"
+        "s\":123},\"sg_overlock_knife_lu_factor\":{\"ops\":5},\"sg_overlock_knife_lu_solve\":{\"ops\":8},"
+        "\"sg_overlock_knife_motion\":{\"ops\":118},\"sg_overlock_knife_observe\":{\"ops\":106},\"sg_over"
+        "lock_knife_rates\":{\"ops\":34},\"sg_overlock_knife_residual\":{\"ops\":20},\"sg_overlock_knife_"
+        "scales\":{\"ops\":2}},\"loads\":[{\"body\":\"knife_lever\",\"component\":\"fx\",\"name\":\"knife"
+        "_edge\"},{\"body\":\"knife_lever\",\"component\":\"fy\",\"name\":\"knife_edge\"},{\"body\":\"ecc"
+        "entric\",\"component\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"rod\",\"component\":\"torq"
+        "ue\",\"name\":\"rod\"},{\"body\":\"knife_lever\",\"component\":\"torque\",\"name\":\"knife_lever"
+        "\"}],\"name\":\"overlock_knife\",\"observables\":[{\"name\":\"knife_edge.x\",\"unit\":\"m\"},{\""
+        "name\":\"knife_edge.y\",\"unit\":\"m\"},{\"name\":\"knife_edge.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"knife_edge.y_d\",\"unit\":\"m/s\"},{\"name\":\"knife_edge.x_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"knife_edge.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"name"
+        "\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/s^2"
+        "\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\"},"
+        "{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m/s"
+        "\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"unit"
+        "\":\"m/s^2\"},{\"name\":\"rod.angle\",\"unit\":\"rad\"},{\"name\":\"rod.angle_d\",\"unit\":\"rad"
+        "/s\"},{\"name\":\"rod.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rod.com.x\",\"unit\":\"m\"},{"
+        "\"name\":\"rod.com.y\",\"unit\":\"m\"},{\"name\":\"rod.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"r"
+        "od.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"rod.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rod.co"
+        "m.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_lever.angle\",\"unit\":\"rad\"},{\"name\":\"knife"
+        "_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"knife_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\""
+        "name\":\"knife_lever.com.x\",\"unit\":\"m\"},{\"name\":\"knife_lever.com.y\",\"unit\":\"m\"},{\""
+        "name\":\"knife_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"knife_lever.com.y_d\",\"unit\":\"m/"
+        "s\"},{\"name\":\"knife_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"knife_lever.com.y_dd\",\""
+        "unit\":\"m/s^2\"}],\"params\":[{\"default\":0.00125,\"display_unit\":\"mm\",\"doc\":\"knife ecce"
+        "ntricity (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"knife rod (estimate)\",\"ki"
+        "nd\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-0"
+        ".02,\"display_unit\":\"mm\",\"doc\":\"knife lever pivot, x (estimate)\",\"kind\":\"length\",\"na"
+        "me\":\"lever_pivot_x\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.04,\"disp"
+        "lay_unit\":\"mm\",\"doc\":\"knife lever pivot, y (estimate)\",\"kind\":\"length\",\"name\":\"lev"
+        "er_pivot_y\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.02,\"display_unit\""
+        ":\"mm\",\"doc\":\"knife lever's arm to the rod (estimate)\",\"kind\":\"length\",\"name\":\"lever"
+        "_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.065,\"display_unit\":\"mm\""
+        ",\"doc\":\"knife lever's arm to the knife edge (estimate)\",\"kind\":\"length\",\"name\":\"knife"
+        "_arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0365,\"display_unit\":\"mm"
+        "\",\"doc\":\"height of the fixed lower knife's edge (estimate)\",\"kind\":\"length\",\"name\":\""
+        "lower_edge\",\"positive\":false,\"role\":\"lower_knife_edge\",\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"deg\",\"doc\":\"phase of eccentric relative to the shaft angle\",\"kind\":\"ang"
+        "le\",\"name\":\"eccentric.phase\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\""
+        ":0.01,\"display_unit\":\"g\",\"doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentri"
+        "c.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.0005,\"display_unit\":"
+        "\"mm\",\"doc\":\"centre of mass of eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric"
+        ".com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm"
+        "\",\"doc\":\"centre of mass of eccentric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com"
+        "_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-07,\"display_unit\":\"kg*m"
+        "**2\",\"doc\":\"moment of inertia of eccentric about its centre of mass\",\"kind\":\"inertia\",\""
+        "name\":\"eccentric.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\""
+        ":0.008,\"display_unit\":\"g\",\"doc\":\"mass of rod\",\"kind\":\"mass\",\"name\":\"rod.mass\",\""
+        "positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\""
         ",\"doc\":\"moment of inertia of rod about its centre of mass\",\"kind\":\"inertia\",\"name\":\"r"
         "od.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display"
         "_unit\":\"g\",\"doc\":\"mass of knife_lever\",\"kind\":\"mass\",\"name\":\"knife_lever.mass\",\""
@@ -914,7 +929,7 @@ const char *sg_overlock_knife_manifest(void)
         "d\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":"
         "\"drive\",\"name\":\"eccentric.drive\",\"offset\":8,\"sense\":1}],\"roles\":{\"knife_edge\":{\"k"
         "ind\":\"point\",\"name\":\"knife_edge\"},\"lower_knife_edge\":{\"kind\":\"param\",\"name\":\"low"
-        "er_edge\"}},\"sizes\":{\"nanchor_out\":24,\"nblock\":1,\"nbranch\":1,\"nc\":55,\"nf\":9,\"nfo\":"
+        "er_edge\"}},\"sizes\":{\"nanchor_out\":24,\"nblock\":1,\"nbranch\":1,\"nc\":56,\"nf\":9,\"nfo\":"
         "18,\"ngroup\":4,\"nload\":5,\"nobs\":33,\"np\":18,\"nq\":2,\"nx\":1}}"
         ;
 }

@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_loopers_constants -- Total ops: 118 */
+/* sg_overlock_loopers_constants -- Total ops: 123 */
 void sg_overlock_loopers_constants(const double *p, double *c)
 {
     const double t0 = sin(p[14]);
@@ -17,32 +17,33 @@ void sg_overlock_loopers_constants(const double *p, double *c)
     const double t5 = -t4;
     const double t6 = p[10]*cos(p[11]);
     const double t7 = p[10]*sin(p[11]);
-    const double t8 = -p[3];
-    const double t9 = -p[9];
-    const double t10 = 2.0*p[3];
-    const double t11 = -t3;
-    const double t12 = 2.0*p[0];
-    const double t13 = p[0]*t10;
-    const double t14 = 2.0*t2;
-    const double t15 = ((p[3])*(p[3]));
-    const double t16 = ((p[1])*(p[1])) + p[1]*t10 + p[1]*t12 + t1 + t13 + t14 + 5.0*t15;
-    const double t17 = p[10] + 2.0*p[6] + p[8] + p[9];
-    const double t18 = p[4]*cos(p[5]);
-    const double t19 = p[4]*sin(p[5]);
-    const double t20 = -t19;
-    const double t21 = -t18;
-    const double t22 = p[12]*cos(p[13]);
-    const double t23 = p[12]*sin(p[13]);
-    const double t24 = (0.5)*p[8];
-    const double t25 = -p[27];
-    const double t26 = -p[26];
-    const double t27 = (1.0/(p[2]));
-    const double t28 = p[0]*t27;
-    const double t29 = p[20] + t21;
-    const double t30 = p[23]*t24;
-    const double t31 = t22 + t26;
-    const double t32 = p[20] + t11;
-    const double t33 = p[26] + t9;
+    const double t8 = 4.0*p[6];
+    const double t9 = -p[3];
+    const double t10 = -p[9];
+    const double t11 = 2.0*p[3];
+    const double t12 = -t3;
+    const double t13 = 2.0*p[0];
+    const double t14 = p[0]*t11;
+    const double t15 = 2.0*t2;
+    const double t16 = ((p[3])*(p[3]));
+    const double t17 = ((p[1])*(p[1])) + p[1]*t11 + p[1]*t13 + t1 + t14 + t15 + 5.0*t16;
+    const double t18 = p[10] + 2.0*p[6] + p[8] + p[9];
+    const double t19 = p[4]*cos(p[5]);
+    const double t20 = p[4]*sin(p[5]);
+    const double t21 = -t20;
+    const double t22 = -t19;
+    const double t23 = p[12]*cos(p[13]);
+    const double t24 = p[12]*sin(p[13]);
+    const double t25 = (0.5)*p[8];
+    const double t26 = -p[27];
+    const double t27 = -p[26];
+    const double t28 = (1.0/(p[2]));
+    const double t29 = p[0]*t28;
+    const double t30 = p[20] + t22;
+    const double t31 = p[23]*t25;
+    const double t32 = t23 + t27;
+    const double t33 = p[20] + t12;
+    const double t34 = p[26] + t10;
     c[0] = p[3];
     c[1] = -p[1];
     c[2] = t0;
@@ -52,116 +53,121 @@ void sg_overlock_loopers_constants(const double *p, double *c)
     c[6] = -t0;
     c[7] = -t2;
     c[8] = (1.0/(p[3]));
-    c[9] = t3;
-    c[10] = t5;
-    c[11] = t4;
-    c[12] = t6;
-    c[13] = t7;
-    c[14] = p[8];
-    c[15] = p[9];
-    c[16] = (1.0/(p[8]));
-    c[17] = (1.0/(p[9]));
-    c[18] = t8;
-    c[19] = p[1];
-    c[20] = p[0];
-    c[21] = -t1;
-    c[22] = t2;
-    c[23] = t9;
-    c[24] = -t6;
-    c[25] = -t7;
-    c[26] = -t10;
-    c[27] = t10;
-    c[28] = t11;
-    c[29] = -p[8];
-    c[30] = t16;
-    c[31] = t17;
-    c[32] = -t14;
-    c[33] = t12;
-    c[34] = 2.0*t15;
-    c[35] = t13;
-    c[36] = t14;
-    c[37] = -t12;
-    c[38] = t18;
-    c[39] = t20;
-    c[40] = t19;
-    c[41] = t21;
-    c[42] = t22;
-    c[43] = -t23;
-    c[44] = t23;
-    c[45] = -t22;
-    c[46] = p[14];
-    c[47] = -p[16];
-    c[48] = -p[17];
-    c[49] = p[17];
-    c[50] = p[16];
-    c[51] = p[20];
-    c[52] = -p[21];
-    c[53] = p[21];
-    c[54] = -p[20];
-    c[55] = t24;
-    c[56] = -t24;
-    c[57] = p[26];
+    c[9] = p[0] + p[1] + p[3];
+    c[10] = t3;
+    c[11] = t5;
+    c[12] = t4;
+    c[13] = t6;
+    c[14] = t7;
+    c[15] = p[8];
+    c[16] = p[9];
+    c[17] = (1.0/(p[8]));
+    c[18] = (1.0/(p[9]));
+    c[19] = t8;
+    c[20] = 2.0*p[10] + t8;
+    c[21] = t9;
+    c[22] = p[1];
+    c[23] = p[0];
+    c[24] = -t1;
+    c[25] = t2;
+    c[26] = t10;
+    c[27] = -t6;
+    c[28] = -t7;
+    c[29] = -t11;
+    c[30] = t11;
+    c[31] = t12;
+    c[32] = -p[8];
+    c[33] = t17;
+    c[34] = t18;
+    c[35] = -t15;
+    c[36] = t13;
+    c[37] = 2.0*t16;
+    c[38] = t14;
+    c[39] = t15;
+    c[40] = -t13;
+    c[41] = t19;
+    c[42] = t21;
+    c[43] = t20;
+    c[44] = t22;
+    c[45] = t23;
+    c[46] = -t24;
+    c[47] = t24;
+    c[48] = -t23;
+    c[49] = p[14];
+    c[50] = -p[16];
+    c[51] = -p[17];
+    c[52] = p[17];
+    c[53] = p[16];
+    c[54] = p[20];
+    c[55] = -p[21];
+    c[56] = p[21];
+    c[57] = -p[20];
     c[58] = t25;
-    c[59] = p[27];
-    c[60] = t26;
-    c[61] = (1.0/(t16));
-    c[62] = (1.0/(t17));
-    c[63] = -t15*t27;
-    c[64] = -p[1]*p[3]*t27;
-    c[65] = -p[3]*t28;
-    c[66] = p[22];
-    c[67] = p[21] + t20;
-    c[68] = t29;
-    c[69] = -t29;
-    c[70] = p[19];
-    c[71] = -p[23];
-    c[72] = p[24];
-    c[73] = t30;
-    c[74] = -t30;
-    c[75] = p[28];
-    c[76] = -t23 - t25;
+    c[59] = -t25;
+    c[60] = p[26];
+    c[61] = t26;
+    c[62] = p[27];
+    c[63] = t27;
+    c[64] = (1.0/(t17));
+    c[65] = (1.0/(t18));
+    c[66] = -t16*t28;
+    c[67] = -p[1]*p[3]*t28;
+    c[68] = -p[3]*t29;
+    c[69] = p[22];
+    c[70] = p[21] + t21;
+    c[71] = t30;
+    c[72] = -t30;
+    c[73] = p[19];
+    c[74] = -p[23];
+    c[75] = p[24];
+    c[76] = t31;
     c[77] = -t31;
-    c[78] = t31;
-    c[79] = p[25];
-    c[80] = p[15];
-    c[81] = t27;
-    c[82] = p[15]*(((p[16])*(p[16])) + ((p[17])*(p[17]))) + p[18];
-    c[83] = t2*t27;
-    c[84] = -t28;
-    c[85] = -t27;
-    c[86] = p[23];
-    c[87] = t28;
-    c[88] = (0.5)*p[15];
-    c[89] = (0.5)*p[18];
-    c[90] = (0.5)*p[19];
-    c[91] = (0.5)*p[22];
-    c[92] = (0.5)*p[23];
-    c[93] = (0.5)*p[24];
-    c[94] = (0.5)*p[25];
-    c[95] = (0.5)*p[28];
-    c[96] = -p[15];
-    c[97] = -p[19];
-    c[98] = -p[25];
-    c[99] = -p[20] - t8;
-    c[100] = -p[21] - t5;
-    c[101] = -t32;
-    c[102] = t32;
-    c[103] = t33;
+    c[78] = p[28];
+    c[79] = -t24 - t26;
+    c[80] = -t32;
+    c[81] = t32;
+    c[82] = p[25];
+    c[83] = p[15];
+    c[84] = t28;
+    c[85] = p[15]*(((p[16])*(p[16])) + ((p[17])*(p[17]))) + p[18];
+    c[86] = t2*t28;
+    c[87] = -t29;
+    c[88] = -t28;
+    c[89] = p[23];
+    c[90] = t29;
+    c[91] = (0.5)*p[15];
+    c[92] = (0.5)*p[18];
+    c[93] = (0.5)*p[19];
+    c[94] = (0.5)*p[22];
+    c[95] = (0.5)*p[23];
+    c[96] = (0.5)*p[24];
+    c[97] = (0.5)*p[25];
+    c[98] = (0.5)*p[28];
+    c[99] = -p[15];
+    c[100] = -p[19];
+    c[101] = -p[25];
+    c[102] = -p[20] - t9;
+    c[103] = -p[21] - t5;
     c[104] = -t33;
+    c[105] = t33;
+    c[106] = t34;
+    c[107] = -t34;
 }
 
 /* sg_overlock_loopers_closed -- Total ops: 40 */
-int sg_overlock_loopers_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+int sg_overlock_loopers_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err)
 {
     (void)x;
     int st;
+    double e[3] = {0.0, 0.0, 1.0};
     {
         /* dyad 0: RRS closed at joint rod (rock_shaft) */
         const double P[2] = {0.0, 0.0};
         const double Q[2] = {c[0], c[1] + c[4]*(c[2]*cx[0] + c[3]*cx[1])};
         const double l[2] = {c[0], sqrt(c[5] + c[7]*((c[3]*cx[0] + c[6]*cx[1])*(c[3]*cx[0] + c[6]*cx[1])))};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[9];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         if (st != SG_OK) return st;
         q[0] = atan2(J[1] - P[1], J[0] - P[0]);
         cq[0] = c[8]*(J[0] - P[0]);
@@ -169,19 +175,22 @@ int sg_overlock_loopers_closed(const double *x, const double *cx, const double *
     }
     {
         /* dyad 1: RRR closed at joint F (coupler, lower_lever) */
-        const double P[2] = {c[10]*cq[1] + c[9]*cq[0], c[11]*cq[0] + c[9]*cq[1]};
-        const double Q[2] = {c[12], c[13]};
-        const double l[2] = {c[14], c[15]};
+        const double P[2] = {c[10]*cq[0] + c[11]*cq[1], c[10]*cq[1] + c[12]*cq[0]};
+        const double Q[2] = {c[13], c[14]};
+        const double l[2] = {c[15], c[16]};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[20] + c[19] * e[0];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[1], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[1], ein, e, J);
         if (st != SG_OK) return st;
         q[2] = atan2(J[1] - P[1], J[0] - P[0]);
         q[1] = atan2(J[1] - Q[1], J[0] - Q[0]);
-        cq[4] = c[16]*(J[0] - P[0]);
-        cq[5] = c[16]*(J[1] - P[1]);
-        cq[2] = c[17]*(J[0] - Q[0]);
-        cq[3] = c[17]*(J[1] - Q[1]);
+        cq[4] = c[17]*(J[0] - P[0]);
+        cq[5] = c[17]*(J[1] - P[1]);
+        cq[2] = c[18]*(J[0] - Q[0]);
+        cq[3] = c[18]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return SG_OK;
 }
 
@@ -190,20 +199,20 @@ void sg_overlock_loopers_residual(const double *q, const double *cq, const doubl
 {
     (void)q;
     (void)x;
-    const double t0 = c[0]*cq[0] + c[18];
-    const double t1 = c[0]*cq[1] + c[19] + c[20]*(c[2]*cx[0] + c[3]*cx[1]);
-    const double t2 = c[14]*cq[4];
-    const double t3 = c[23]*cq[2];
-    const double t4 = c[10]*cq[1] + c[9]*cq[0];
-    r[0] = c[21] + c[22]*((c[3]*cx[0] + c[6]*cx[1])*(c[3]*cx[0] + c[6]*cx[1])) + ((t0)*(t0)) + ((t1)*(t1));
-    r[1] = c[24] + t2 + t3 + t4;
-    r[2] = c[11]*cq[0] + c[14]*cq[5] + c[23]*cq[3] + c[25] + c[9]*cq[1];
-    jac[0] = c[26]*cq[1]*t0 + c[27]*cq[0]*t1;
+    const double t0 = c[0]*cq[0] + c[21];
+    const double t1 = c[0]*cq[1] + c[22] + c[23]*(c[2]*cx[0] + c[3]*cx[1]);
+    const double t2 = c[15]*cq[4];
+    const double t3 = c[26]*cq[2];
+    const double t4 = c[10]*cq[0] + c[11]*cq[1];
+    r[0] = c[24] + c[25]*((c[3]*cx[0] + c[6]*cx[1])*(c[3]*cx[0] + c[6]*cx[1])) + ((t0)*(t0)) + ((t1)*(t1));
+    r[1] = c[27] + t2 + t3 + t4;
+    r[2] = c[10]*cq[1] + c[12]*cq[0] + c[15]*cq[5] + c[26]*cq[3] + c[28];
+    jac[0] = c[29]*cq[1]*t0 + c[30]*cq[0]*t1;
     jac[1] = 0.0;
     jac[2] = 0.0;
-    jac[3] = c[10]*cq[0] + c[28]*cq[1];
-    jac[4] = c[15]*cq[3];
-    jac[5] = c[29]*cq[5];
+    jac[3] = c[11]*cq[0] + c[31]*cq[1];
+    jac[4] = c[16]*cq[3];
+    jac[5] = c[32]*cq[5];
     jac[6] = t4;
     jac[7] = t3;
     jac[8] = t2;
@@ -228,9 +237,9 @@ void sg_overlock_loopers_scales(const double *q, const double *cq, const double 
     (void)cq;
     (void)x;
     (void)cx;
-    out[0] = c[30];
-    out[1] = c[31];
-    out[2] = c[31];
+    out[0] = c[33];
+    out[1] = c[34];
+    out[2] = c[34];
 }
 
 /* sg_overlock_loopers_blocks -- Total ops: 28 */
@@ -251,71 +260,72 @@ void sg_overlock_loopers_blocks(const double *jac, double *out)
 /* sg_overlock_loopers_motion -- Total ops: 215 */
 int sg_overlock_loopers_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
-    const double t0 = c[26]*(c[0]*cq[0] + c[18]);
+    const double t0 = c[29]*(c[0]*cq[0] + c[21]);
     const double t1 = c[2]*cx[0] + c[3]*cx[1];
-    const double t2 = c[0]*cq[1] + c[19] + c[20]*t1;
-    const double t3 = c[10]*cq[0] + c[28]*cq[1];
-    const double t4 = c[10]*cq[1] + c[9]*cq[0];
-    const double t5 = c[23]*cq[2];
-    const double t6 = c[14]*cq[4];
+    const double t2 = c[0]*cq[1] + c[22] + c[23]*t1;
+    const double t3 = c[11]*cq[0] + c[31]*cq[1];
+    const double t4 = c[10]*cq[0] + c[11]*cq[1];
+    const double t5 = c[26]*cq[2];
+    const double t6 = c[15]*cq[4];
     const double t7 = c[3]*cx[0] + c[6]*cx[1];
-    const double t8 = c[32]*t1*t7 + c[33]*t2*t7;
-    const double t9 = c[35]*cq[0]*t7;
-    const double t16 = c[38]*cq[0] + c[39]*cq[1];
-    const double t17 = c[39]*cq[0] + c[41]*cq[1];
-    const double t18 = c[42]*cq[2] + c[43]*cq[3];
-    const double t19 = c[43]*cq[2] + c[45]*cq[3];
-    const double t20 = c[47]*t1 + c[48]*t7;
-    const double t21 = c[47]*t7 + c[49]*t1;
+    const double t8 = c[35]*t1*t7 + c[36]*t2*t7;
+    const double t9 = c[38]*cq[0]*t7;
+    const double t16 = c[41]*cq[0] + c[42]*cq[1];
+    const double t17 = c[42]*cq[0] + c[44]*cq[1];
+    const double t18 = c[45]*cq[2] + c[46]*cq[3];
+    const double t19 = c[46]*cq[2] + c[48]*cq[3];
+    const double t20 = c[50]*t1 + c[51]*t7;
+    const double t21 = c[50]*t7 + c[52]*t1;
     const double t22 = ((xd[0])*(xd[0]));
-    const double t23 = c[51]*cq[0] + c[52]*cq[1];
-    const double t24 = c[52]*cq[0] + c[54]*cq[1];
-    const double t25 = c[55]*cq[4];
-    const double t26 = c[56]*cq[5];
-    const double t27 = c[57]*cq[2] + c[58]*cq[3];
-    const double t28 = c[58]*cq[2] + c[60]*cq[3];
-    double J[9], rs[3], cs[3];
+    const double t23 = c[54]*cq[0] + c[55]*cq[1];
+    const double t24 = c[55]*cq[0] + c[57]*cq[1];
+    const double t25 = c[58]*cq[4];
+    const double t26 = c[59]*cq[5];
+    const double t27 = c[60]*cq[2] + c[61]*cq[3];
+    const double t28 = c[61]*cq[2] + c[63]*cq[3];
+    double J[9], rs[3], cs[6];
     int piv[3];
-    J[0] = c[27]*cq[0]*t2 + cq[1]*t0;
+    J[0] = c[30]*cq[0]*t2 + cq[1]*t0;
     J[1] = 0.0;
     J[2] = 0.0;
     J[3] = t3;
-    J[4] = c[15]*cq[3];
-    J[5] = c[29]*cq[5];
+    J[4] = c[16]*cq[3];
+    J[5] = c[32]*cq[5];
     J[6] = t4;
     J[7] = t5;
     J[8] = t6;
     qd[0] = -t8*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    rs[0] = c[61];
-    rs[1] = c[62];
-    rs[2] = c[62];
+    rs[0] = c[64];
+    rs[1] = c[65];
+    rs[2] = c[65];
     if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t10 = ((qd[2])*(qd[2]));
     const double t11 = ((qd[1])*(qd[1]));
     const double t12 = ((qd[0])*(qd[0]));
-    const double t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+    const double t13 = t12*(c[12]*cq[1] + c[31]*cq[0]);
     const double t14 = cq[5]*t10;
     const double t15 = t12*t3;
-    qdd[0] = -qd[0]*(qd[0]*(c[26]*cq[1]*t2 + c[34]*((cq[0])*(cq[0])) + c[34]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[36]*((t1)*(t1)) + c[37]*t1*t2));
+    qdd[0] = -qd[0]*(qd[0]*(c[29]*cq[1]*t2 + c[37]*((cq[0])*(cq[0])) + c[37]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[39]*((t1)*(t1)) + c[40]*t1*t2));
     qdd[1] = t10*t6 + t11*t5 - t13;
-    qdd[2] = c[14]*t14 + c[23]*cq[3]*t11 - t15;
+    qdd[2] = c[15]*t14 + c[26]*cq[3]*t11 - t15;
     sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(3, 0x7ULL, fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = t16;
-    obs[1] = c[38]*cq[1] + c[40]*cq[0];
+    obs[1] = c[41]*cq[1] + c[43]*cq[0];
     obs[2] = qd[0]*t17;
     obs[3] = qd[0]*t16;
-    obs[4] = qdd[0]*t17 + t12*(c[40]*cq[1] + c[41]*cq[0]);
+    obs[4] = qdd[0]*t17 + t12*(c[43]*cq[1] + c[44]*cq[0]);
     obs[5] = qdd[0]*t16 + t12*t17;
-    obs[6] = c[12] + t18;
-    obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
+    obs[6] = c[13] + t18;
+    obs[7] = c[14] + c[45]*cq[3] + c[47]*cq[2];
     obs[8] = qd[1]*t19;
     obs[9] = qd[1]*t18;
-    obs[10] = qdd[1]*t19 + t11*(c[44]*cq[3] + c[45]*cq[2]);
+    obs[10] = qdd[1]*t19 + t11*(c[47]*cq[3] + c[48]*cq[2]);
     obs[11] = qdd[1]*t18 + t11*t19;
-    obs[12] = c[46] + x[0];
+    obs[12] = c[49] + x[0];
     obs[13] = xd[0];
     obs[14] = xdd[0];
     obs[15] = c[0];
@@ -323,35 +333,35 @@ int sg_overlock_loopers_motion(const double *q, const double *cq, const double *
     obs[17] = 0.0;
     obs[18] = t21*xd[0];
     obs[19] = 0.0;
-    obs[20] = t21*xdd[0] + t22*(c[49]*t7 + c[50]*t1);
+    obs[20] = t21*xdd[0] + t22*(c[52]*t7 + c[53]*t1);
     obs[21] = q[0];
     obs[22] = qd[0];
     obs[23] = qdd[0];
     obs[24] = t23;
-    obs[25] = c[51]*cq[1] + c[53]*cq[0];
+    obs[25] = c[54]*cq[1] + c[56]*cq[0];
     obs[26] = qd[0]*t24;
     obs[27] = qd[0]*t23;
-    obs[28] = qdd[0]*t24 + t12*(c[53]*cq[1] + c[54]*cq[0]);
+    obs[28] = qdd[0]*t24 + t12*(c[56]*cq[1] + c[57]*cq[0]);
     obs[29] = qdd[0]*t23 + t12*t24;
     obs[30] = q[2];
     obs[31] = qd[2];
     obs[32] = qdd[2];
     obs[33] = t25 + t4;
-    obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
+    obs[34] = c[10]*cq[1] + c[12]*cq[0] + c[58]*cq[5];
     obs[35] = qd[0]*t3 + qd[2]*t26;
     obs[36] = qd[0]*t4 + qd[2]*t25;
-    obs[37] = c[56]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
-    obs[38] = c[56]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
+    obs[37] = c[59]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
+    obs[38] = c[59]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
     obs[39] = q[1];
     obs[40] = qd[1];
     obs[41] = qdd[1];
-    obs[42] = c[12] + t27;
-    obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
+    obs[42] = c[13] + t27;
+    obs[43] = c[14] + c[60]*cq[3] + c[62]*cq[2];
     obs[44] = qd[1]*t28;
     obs[45] = qd[1]*t27;
-    obs[46] = qdd[1]*t28 + t11*(c[59]*cq[3] + c[60]*cq[2]);
+    obs[46] = qdd[1]*t28 + t11*(c[62]*cq[3] + c[63]*cq[2]);
     obs[47] = qdd[1]*t27 + t11*t28;
-    obs[48] = c[48]*t1 + c[50]*t7;
+    obs[48] = c[51]*t1 + c[53]*t7;
     obs[49] = t20*xd[0];
     obs[50] = t20*xdd[0] + t21*t22;
     if (!isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + ((obs[9] + obs[10]) + (obs[11] + obs[12]))) + (((obs[13] + obs[14]) + (obs[15] + obs[16])) + ((obs[17] + obs[18]) + (obs[19] + obs[20]))))) + ((((obs[21] + (obs[22] + obs[23])) + ((obs[24] + obs[25]) + (obs[26] + obs[27]))) + (((obs[28] + obs[29]) + (obs[30] + obs[31])) + ((obs[32] + obs[33]) + (obs[34] + obs[35])))) + (((obs[36] + (obs[37] + obs[38])) + ((obs[39] + obs[40]) + (obs[41] + obs[42]))) + (((obs[43] + obs[44]) + (obs[45] + obs[46])) + ((obs[47] + obs[48]) + (obs[49] + obs[50])))))))) return SG_NONFINITE;
@@ -362,45 +372,46 @@ int sg_overlock_loopers_motion(const double *q, const double *cq, const double *
 int sg_overlock_loopers_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
 {
     (void)x;
-    const double t0 = c[26]*(c[0]*cq[0] + c[18]);
+    const double t0 = c[29]*(c[0]*cq[0] + c[21]);
     const double t1 = c[2]*cx[0] + c[3]*cx[1];
-    const double t2 = c[0]*cq[1] + c[19] + c[20]*t1;
-    const double t3 = c[10]*cq[0] + c[28]*cq[1];
-    const double t4 = c[10]*cq[1] + c[9]*cq[0];
-    const double t5 = c[23]*cq[2];
-    const double t6 = c[14]*cq[4];
+    const double t2 = c[0]*cq[1] + c[22] + c[23]*t1;
+    const double t3 = c[11]*cq[0] + c[31]*cq[1];
+    const double t4 = c[10]*cq[0] + c[11]*cq[1];
+    const double t5 = c[26]*cq[2];
+    const double t6 = c[15]*cq[4];
     const double t7 = c[3]*cx[0] + c[6]*cx[1];
-    const double t8 = c[32]*t1*t7 + c[33]*t2*t7;
-    const double t9 = c[35]*cq[0]*t7;
-    double J[9], rs[3], cs[3];
+    const double t8 = c[35]*t1*t7 + c[36]*t2*t7;
+    const double t9 = c[38]*cq[0]*t7;
+    double J[9], rs[3], cs[6];
     int piv[3];
-    J[0] = c[27]*cq[0]*t2 + cq[1]*t0;
+    J[0] = c[30]*cq[0]*t2 + cq[1]*t0;
     J[1] = 0.0;
     J[2] = 0.0;
     J[3] = t3;
-    J[4] = c[15]*cq[3];
-    J[5] = c[29]*cq[5];
+    J[4] = c[16]*cq[3];
+    J[5] = c[32]*cq[5];
     J[6] = t4;
     J[7] = t5;
     J[8] = t6;
     qd[0] = -t8*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    rs[0] = c[61];
-    rs[1] = c[62];
-    rs[2] = c[62];
+    rs[0] = c[64];
+    rs[1] = c[65];
+    rs[2] = c[65];
     if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t10 = ((qd[2])*(qd[2]));
     const double t11 = ((qd[1])*(qd[1]));
     const double t12 = ((qd[0])*(qd[0]));
-    const double t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+    const double t13 = t12*(c[12]*cq[1] + c[31]*cq[0]);
     const double t14 = cq[5]*t10;
     const double t15 = t12*t3;
-    qdd[0] = -qd[0]*(qd[0]*(c[26]*cq[1]*t2 + c[34]*((cq[0])*(cq[0])) + c[34]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[36]*((t1)*(t1)) + c[37]*t1*t2));
+    qdd[0] = -qd[0]*(qd[0]*(c[29]*cq[1]*t2 + c[37]*((cq[0])*(cq[0])) + c[37]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[39]*((t1)*(t1)) + c[40]*t1*t2));
     qdd[1] = t10*t6 + t11*t5 - t13;
-    qdd[2] = c[14]*t14 + c[23]*cq[3]*t11 - t15;
+    qdd[2] = c[15]*t14 + c[26]*cq[3]*t11 - t15;
     sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(3, 0x7ULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -411,35 +422,35 @@ int sg_overlock_loopers_observe(const double *q, const double *cq, const double 
     switch (group) {
     case 0: {
         const double t12 = ((qd[0])*(qd[0]));
-        const double t16 = c[38]*cq[0] + c[39]*cq[1];
-        const double t17 = c[39]*cq[0] + c[41]*cq[1];
+        const double t16 = c[41]*cq[0] + c[42]*cq[1];
+        const double t17 = c[42]*cq[0] + c[44]*cq[1];
         obs[0] = t16;
-        obs[1] = c[38]*cq[1] + c[40]*cq[0];
+        obs[1] = c[41]*cq[1] + c[43]*cq[0];
         obs[2] = qd[0]*t17;
         obs[3] = qd[0]*t16;
-        obs[4] = qdd[0]*t17 + t12*(c[40]*cq[1] + c[41]*cq[0]);
+        obs[4] = qdd[0]*t17 + t12*(c[43]*cq[1] + c[44]*cq[0]);
         obs[5] = qdd[0]*t16 + t12*t17;
         return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
     }
     case 1: {
         const double t11 = ((qd[1])*(qd[1]));
-        const double t18 = c[42]*cq[2] + c[43]*cq[3];
-        const double t19 = c[43]*cq[2] + c[45]*cq[3];
-        obs[6] = c[12] + t18;
-        obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
+        const double t18 = c[45]*cq[2] + c[46]*cq[3];
+        const double t19 = c[46]*cq[2] + c[48]*cq[3];
+        obs[6] = c[13] + t18;
+        obs[7] = c[14] + c[45]*cq[3] + c[47]*cq[2];
         obs[8] = qd[1]*t19;
         obs[9] = qd[1]*t18;
-        obs[10] = qdd[1]*t19 + t11*(c[44]*cq[3] + c[45]*cq[2]);
+        obs[10] = qdd[1]*t19 + t11*(c[47]*cq[3] + c[48]*cq[2]);
         obs[11] = qdd[1]*t18 + t11*t19;
         return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
     }
     case 2: {
         const double t1 = c[2]*cx[0] + c[3]*cx[1];
         const double t7 = c[3]*cx[0] + c[6]*cx[1];
-        const double t20 = c[47]*t1 + c[48]*t7;
-        const double t21 = c[47]*t7 + c[49]*t1;
+        const double t20 = c[50]*t1 + c[51]*t7;
+        const double t21 = c[50]*t7 + c[52]*t1;
         const double t22 = ((xd[0])*(xd[0]));
-        obs[12] = c[46] + x[0];
+        obs[12] = c[49] + x[0];
         obs[13] = xd[0];
         obs[14] = xdd[0];
         obs[15] = c[0];
@@ -447,67 +458,67 @@ int sg_overlock_loopers_observe(const double *q, const double *cq, const double 
         obs[17] = 0.0;
         obs[18] = t21*xd[0];
         obs[19] = 0.0;
-        obs[20] = t21*xdd[0] + t22*(c[49]*t7 + c[50]*t1);
+        obs[20] = t21*xdd[0] + t22*(c[52]*t7 + c[53]*t1);
         return isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20]))))) ? SG_OK : SG_NONFINITE;
     }
     case 3: {
         const double t12 = ((qd[0])*(qd[0]));
-        const double t23 = c[51]*cq[0] + c[52]*cq[1];
-        const double t24 = c[52]*cq[0] + c[54]*cq[1];
+        const double t23 = c[54]*cq[0] + c[55]*cq[1];
+        const double t24 = c[55]*cq[0] + c[57]*cq[1];
         obs[21] = q[0];
         obs[22] = qd[0];
         obs[23] = qdd[0];
         obs[24] = t23;
-        obs[25] = c[51]*cq[1] + c[53]*cq[0];
+        obs[25] = c[54]*cq[1] + c[56]*cq[0];
         obs[26] = qd[0]*t24;
         obs[27] = qd[0]*t23;
-        obs[28] = qdd[0]*t24 + t12*(c[53]*cq[1] + c[54]*cq[0]);
+        obs[28] = qdd[0]*t24 + t12*(c[56]*cq[1] + c[57]*cq[0]);
         obs[29] = qdd[0]*t23 + t12*t24;
         return isfinite((((obs[21] + obs[22]) + (obs[23] + obs[24])) + ((obs[25] + obs[26]) + (obs[27] + (obs[28] + obs[29]))))) ? SG_OK : SG_NONFINITE;
     }
     case 4: {
-        const double t3 = c[10]*cq[0] + c[28]*cq[1];
-        const double t4 = c[10]*cq[1] + c[9]*cq[0];
+        const double t3 = c[11]*cq[0] + c[31]*cq[1];
+        const double t4 = c[10]*cq[0] + c[11]*cq[1];
         const double t10 = ((qd[2])*(qd[2]));
         const double t12 = ((qd[0])*(qd[0]));
-        const double t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+        const double t13 = t12*(c[12]*cq[1] + c[31]*cq[0]);
         const double t14 = cq[5]*t10;
         const double t15 = t12*t3;
-        const double t25 = c[55]*cq[4];
-        const double t26 = c[56]*cq[5];
+        const double t25 = c[58]*cq[4];
+        const double t26 = c[59]*cq[5];
         obs[30] = q[2];
         obs[31] = qd[2];
         obs[32] = qdd[2];
         obs[33] = t25 + t4;
-        obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
+        obs[34] = c[10]*cq[1] + c[12]*cq[0] + c[58]*cq[5];
         obs[35] = qd[0]*t3 + qd[2]*t26;
         obs[36] = qd[0]*t4 + qd[2]*t25;
-        obs[37] = c[56]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
-        obs[38] = c[56]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
+        obs[37] = c[59]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
+        obs[38] = c[59]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
         return isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38]))))) ? SG_OK : SG_NONFINITE;
     }
     case 5: {
         const double t11 = ((qd[1])*(qd[1]));
-        const double t27 = c[57]*cq[2] + c[58]*cq[3];
-        const double t28 = c[58]*cq[2] + c[60]*cq[3];
+        const double t27 = c[60]*cq[2] + c[61]*cq[3];
+        const double t28 = c[61]*cq[2] + c[63]*cq[3];
         obs[39] = q[1];
         obs[40] = qd[1];
         obs[41] = qdd[1];
-        obs[42] = c[12] + t27;
-        obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
+        obs[42] = c[13] + t27;
+        obs[43] = c[14] + c[60]*cq[3] + c[62]*cq[2];
         obs[44] = qd[1]*t28;
         obs[45] = qd[1]*t27;
-        obs[46] = qdd[1]*t28 + t11*(c[59]*cq[3] + c[60]*cq[2]);
+        obs[46] = qdd[1]*t28 + t11*(c[62]*cq[3] + c[63]*cq[2]);
         obs[47] = qdd[1]*t27 + t11*t28;
         return isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) ? SG_OK : SG_NONFINITE;
     }
     case 6: {
         const double t1 = c[2]*cx[0] + c[3]*cx[1];
         const double t7 = c[3]*cx[0] + c[6]*cx[1];
-        const double t20 = c[47]*t1 + c[48]*t7;
-        const double t21 = c[47]*t7 + c[49]*t1;
+        const double t20 = c[50]*t1 + c[51]*t7;
+        const double t21 = c[50]*t7 + c[52]*t1;
         const double t22 = ((xd[0])*(xd[0]));
-        obs[48] = c[48]*t1 + c[50]*t7;
+        obs[48] = c[51]*t1 + c[53]*t7;
         obs[49] = t20*xd[0];
         obs[50] = t20*xdd[0] + t21*t22;
         return isfinite((obs[48] + (obs[49] + obs[50]))) ? SG_OK : SG_NONFINITE;
@@ -523,58 +534,58 @@ int sg_overlock_loopers_forces(const double *q, const double *cq, const double *
     (void)q;
     (void)x;
     const double t0 = c[2]*cx[0] + c[3]*cx[1];
-    const double t1 = c[11]*cq[0] + c[9]*cq[1];
-    const double t2 = c[11]*cq[1] + c[28]*cq[0];
+    const double t1 = c[10]*cq[1] + c[12]*cq[0];
+    const double t2 = c[12]*cq[1] + c[31]*cq[0];
     const double t3 = -gv[0] + obs[37];
     const double t4 = -gv[1] + obs[38];
-    const double t5 = c[70]*(-gv[0] + obs[28]) - ld[0];
-    const double t6 = c[70]*(-gv[1] + obs[29]) - ld[1];
-    const double t7 = c[79]*(-gv[0] + obs[46]) - ld[2];
-    const double t8 = c[79]*(-gv[1] + obs[47]) - ld[3];
-    const double t9 = c[0]*cq[0] + c[18];
-    const double t10 = c[0]*cq[1] + c[19] + c[20]*t0;
+    const double t5 = c[73]*(-gv[0] + obs[28]) - ld[0];
+    const double t6 = c[73]*(-gv[1] + obs[29]) - ld[1];
+    const double t7 = c[82]*(-gv[0] + obs[46]) - ld[2];
+    const double t8 = c[82]*(-gv[1] + obs[47]) - ld[3];
+    const double t9 = c[0]*cq[0] + c[21];
+    const double t10 = c[0]*cq[1] + c[22] + c[23]*t0;
     const double t11 = c[3]*cx[0] + c[6]*cx[1];
-    const double t12 = c[85]*t9;
-    const double t13 = c[85]*t10;
+    const double t12 = c[88]*t9;
+    const double t13 = c[88]*t10;
     {
         /* block of unknowns 9, 10 */
         double M[4], r[2];
         int piv[2];
-        M[0] = c[23]*cq[3];
-        M[1] = c[15]*cq[2];
-        r[0] = c[75]*obs[41] - ld[2]*(c[76]*cq[2] + c[77]*cq[3]) - ld[3]*(c[76]*cq[3] + c[78]*cq[2]) - ld[7] - t7*(c[57]*cq[3] + c[59]*cq[2]) - t8*(c[59]*cq[3] + c[60]*cq[2]);
-        M[2] = c[14]*cq[5];
-        M[3] = c[29]*cq[4];
-        r[1] = c[72]*obs[32] + c[73]*cq[4]*t4 + c[74]*cq[5]*t3 - ld[6];
+        M[0] = c[26]*cq[3];
+        M[1] = c[16]*cq[2];
+        r[0] = c[78]*obs[41] - ld[2]*(c[79]*cq[2] + c[80]*cq[3]) - ld[3]*(c[79]*cq[3] + c[81]*cq[2]) - ld[7] - t7*(c[60]*cq[3] + c[62]*cq[2]) - t8*(c[62]*cq[3] + c[63]*cq[2]);
+        M[2] = c[15]*cq[5];
+        M[3] = c[32]*cq[4];
+        r[1] = c[75]*obs[32] + c[76]*cq[4]*t4 + c[77]*cq[5]*t3 - ld[6];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[9] = r[0];
         out[10] = r[1];
     }
     {
-        const double d = c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[0]*t0;
-        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[0]*t0))) return SG_SINGULAR;
-        out[4] = (c[66]*obs[23] + c[71]*t1*t3 + c[71]*t2*t4 - out[10]*t2 - out[9]*t1 - ld[0]*(c[67]*cq[0] + c[68]*cq[1]) - ld[1]*(c[67]*cq[1] + c[69]*cq[0]) - ld[5] - t5*(c[51]*cq[1] + c[53]*cq[0]) - t6*(c[53]*cq[1] + c[54]*cq[0]))/d;
+        const double d = c[66]*cq[1] + c[67]*cq[0] + c[68]*cq[0]*t0;
+        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[66]*cq[1] + c[67]*cq[0] + c[68]*cq[0]*t0))) return SG_SINGULAR;
+        out[4] = (c[69]*obs[23] + c[74]*t1*t3 + c[74]*t2*t4 - out[10]*t2 - out[9]*t1 - ld[0]*(c[70]*cq[0] + c[71]*cq[1]) - ld[1]*(c[70]*cq[1] + c[72]*cq[0]) - ld[5] - t5*(c[54]*cq[1] + c[56]*cq[0]) - t6*(c[56]*cq[1] + c[57]*cq[0]))/d;
     }
-    out[6] = c[86]*t4 + out[10];
-    out[5] = c[86]*t3 + out[9];
+    out[6] = c[89]*t4 + out[10];
+    out[5] = c[89]*t3 + out[9];
     out[3] = -out[4]*t13 + out[6] + t6;
     out[2] = -out[4]*t12 + out[5] + t5;
     out[8] = -out[10] + t8;
     out[7] = -out[9] + t7;
-    out[11] = c[80]*gv[1]*(c[48]*t0 + c[50]*t11) + c[82]*obs[14] - out[4]*(c[83]*t0*t11 + c[84]*t10*t11) - ld[4];
-    out[1] = c[80]*(-gv[1] + obs[20]) - c[81]*out[4]*t10;
-    out[0] = c[80]*(-gv[0] + obs[19]) - c[81]*out[4]*t9;
+    out[11] = c[83]*gv[1]*(c[51]*t0 + c[53]*t11) + c[85]*obs[14] - out[4]*(c[86]*t0*t11 + c[87]*t10*t11) - ld[4];
+    out[1] = c[83]*(-gv[1] + obs[20]) - c[84]*out[4]*t10;
+    out[0] = c[83]*(-gv[0] + obs[19]) - c[84]*out[4]*t9;
     out[12] = out[11];
     out[13] = out[11]*xd[0];
     out[14] = out[4]*t12;
     out[15] = out[4]*t13;
-    out[16] = c[87]*out[4]*t11;
+    out[16] = c[90]*out[4]*t11;
     out[17] = out[0] + out[2] + out[7];
     out[18] = out[1] + out[3] + out[8];
-    out[19] = c[0]*out[1] + c[12]*out[8] + c[19]*out[0] + c[25]*out[7] + out[11];
-    out[20] = c[88]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[89]*((obs[13])*(obs[13])) + c[90]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[91]*((obs[22])*(obs[22])) + c[92]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[93]*((obs[31])*(obs[31])) + c[94]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[95]*((obs[40])*(obs[40]));
-    out[21] = c[71]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[96]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[97]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[98]*(gv[0]*obs[42] + gv[1]*obs[43]);
+    out[19] = c[0]*out[1] + c[13]*out[8] + c[22]*out[0] + c[28]*out[7] + out[11];
+    out[20] = c[91]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[92]*((obs[13])*(obs[13])) + c[93]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[94]*((obs[22])*(obs[22])) + c[95]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[96]*((obs[31])*(obs[31])) + c[97]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[98]*((obs[40])*(obs[40]));
+    out[21] = c[100]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[101]*(gv[0]*obs[42] + gv[1]*obs[43]) + c[74]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[99]*(gv[0]*obs[15] + gv[1]*obs[16]);
     out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
     out[23] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))))) return SG_NONFINITE;
@@ -586,35 +597,35 @@ void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const d
 {
     (void)q;
     (void)x;
-    const double t0 = c[0]*cq[0] + c[18];
-    const double t1 = c[81]*t0;
+    const double t0 = c[0]*cq[0] + c[21];
+    const double t1 = c[84]*t0;
     const double t2 = c[2]*cx[0] + c[3]*cx[1];
-    const double t3 = c[0]*cq[1] + c[19] + c[20]*t2;
+    const double t3 = c[0]*cq[1] + c[22] + c[23]*t2;
     const double t4 = c[3]*cx[0] + c[6]*cx[1];
-    const double t5 = c[85]*t3;
-    const double t6 = c[53]*cq[1];
-    const double t7 = c[55]*cq[5];
-    const double t8 = c[56]*cq[4];
-    const double t9 = c[59]*cq[2];
-    const double t10 = c[59]*cq[3];
+    const double t5 = c[88]*t3;
+    const double t6 = c[56]*cq[1];
+    const double t7 = c[58]*cq[5];
+    const double t8 = c[59]*cq[4];
+    const double t9 = c[62]*cq[2];
+    const double t10 = c[62]*cq[3];
     for (int k = 0; k < 144; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = t1;
     A[13] = 1.0;
-    A[16] = c[81]*t3;
-    A[28] = c[83]*t2*t4 + c[84]*t3*t4;
+    A[16] = c[84]*t3;
+    A[28] = c[86]*t2*t4 + c[87]*t3*t4;
     A[35] = 1.0;
     A[38] = 1.0;
-    A[40] = c[85]*t0;
+    A[40] = c[88]*t0;
     A[41] = -1.0;
     A[51] = 1.0;
     A[52] = t5;
     A[54] = -1.0;
-    A[62] = c[51]*cq[1] + c[53]*cq[0];
-    A[63] = c[54]*cq[0] + t6;
-    A[64] = t1*(c[52]*cq[0] + c[99]*cq[1]) + t5*(c[99]*cq[0] + t6);
-    A[65] = c[100]*cq[0] + c[101]*cq[1];
-    A[66] = c[100]*cq[1] + c[102]*cq[0];
+    A[62] = c[54]*cq[1] + c[56]*cq[0];
+    A[63] = c[57]*cq[0] + t6;
+    A[64] = t1*(c[102]*cq[1] + c[55]*cq[0]) + t5*(c[102]*cq[0] + t6);
+    A[65] = c[103]*cq[0] + c[104]*cq[1];
+    A[66] = c[103]*cq[1] + c[105]*cq[0];
     A[77] = 1.0;
     A[81] = -1.0;
     A[90] = 1.0;
@@ -627,22 +638,22 @@ void sg_overlock_loopers_force_matrix(const double *q, const double *cq, const d
     A[117] = 1.0;
     A[128] = 1.0;
     A[130] = 1.0;
-    A[139] = c[57]*cq[3] + t9;
-    A[140] = c[60]*cq[2] + t10;
-    A[141] = c[103]*cq[3] + t9;
-    A[142] = c[104]*cq[2] + t10;
-    b[0] = c[80]*(-gv[0] + obs[19]);
-    b[1] = c[80]*(-gv[1] + obs[20]);
-    b[2] = c[80]*gv[1]*(c[48]*t2 + c[50]*t4) + c[82]*obs[14] - ld[4];
-    b[3] = c[70]*(-gv[0] + obs[28]) - ld[0];
-    b[4] = c[70]*(-gv[1] + obs[29]) - ld[1];
-    b[5] = c[66]*obs[23] - ld[0]*(c[67]*cq[0] + c[68]*cq[1]) - ld[1]*(c[67]*cq[1] + c[69]*cq[0]) - ld[5];
-    b[6] = c[86]*(-gv[0] + obs[37]);
-    b[7] = c[86]*(-gv[1] + obs[38]);
-    b[8] = c[72]*obs[32] - ld[6];
-    b[9] = c[79]*(-gv[0] + obs[46]) - ld[2];
-    b[10] = c[79]*(-gv[1] + obs[47]) - ld[3];
-    b[11] = c[75]*obs[41] - ld[2]*(c[76]*cq[2] + c[77]*cq[3]) - ld[3]*(c[76]*cq[3] + c[78]*cq[2]) - ld[7];
+    A[139] = c[60]*cq[3] + t9;
+    A[140] = c[63]*cq[2] + t10;
+    A[141] = c[106]*cq[3] + t9;
+    A[142] = c[107]*cq[2] + t10;
+    b[0] = c[83]*(-gv[0] + obs[19]);
+    b[1] = c[83]*(-gv[1] + obs[20]);
+    b[2] = c[83]*gv[1]*(c[51]*t2 + c[53]*t4) + c[85]*obs[14] - ld[4];
+    b[3] = c[73]*(-gv[0] + obs[28]) - ld[0];
+    b[4] = c[73]*(-gv[1] + obs[29]) - ld[1];
+    b[5] = c[69]*obs[23] - ld[0]*(c[70]*cq[0] + c[71]*cq[1]) - ld[1]*(c[70]*cq[1] + c[72]*cq[0]) - ld[5];
+    b[6] = c[89]*(-gv[0] + obs[37]);
+    b[7] = c[89]*(-gv[1] + obs[38]);
+    b[8] = c[75]*obs[32] - ld[6];
+    b[9] = c[82]*(-gv[0] + obs[46]) - ld[2];
+    b[10] = c[82]*(-gv[1] + obs[47]) - ld[3];
+    b[11] = c[78]*obs[41] - ld[2]*(c[79]*cq[2] + c[80]*cq[3]) - ld[3]*(c[79]*cq[3] + c[81]*cq[2]) - ld[7];
 }
 
 /* sg_overlock_loopers_anchors -- Total ops: 60 */
@@ -651,8 +662,8 @@ void sg_overlock_loopers_anchors(const double *q, const double *cq, const double
     (void)q;
     (void)x;
     const double t0 = c[2]*cx[0] + c[3]*cx[1];
-    const double t1 = c[10]*cq[1] + c[9]*cq[0];
-    const double t2 = c[11]*cq[0] + c[9]*cq[1];
+    const double t1 = c[10]*cq[0] + c[11]*cq[1];
+    const double t2 = c[10]*cq[1] + c[12]*cq[0];
     out[0] = c[0];
     out[1] = c[1];
     out[2] = c[0];
@@ -669,26 +680,26 @@ void sg_overlock_loopers_anchors(const double *q, const double *cq, const double
     out[13] = t2;
     out[14] = t1;
     out[15] = t2;
-    out[16] = c[12];
-    out[17] = c[13];
-    out[18] = c[12];
-    out[19] = c[13];
-    out[20] = c[14]*cq[4] + t1;
-    out[21] = c[14]*cq[5] + t2;
-    out[22] = c[12] + c[15]*cq[2];
-    out[23] = c[13] + c[15]*cq[3];
-    out[24] = c[38]*cq[0] + c[39]*cq[1];
-    out[25] = c[38]*cq[1] + c[40]*cq[0];
-    out[26] = c[12] + c[42]*cq[2] + c[43]*cq[3];
-    out[27] = c[13] + c[42]*cq[3] + c[44]*cq[2];
+    out[16] = c[13];
+    out[17] = c[14];
+    out[18] = c[13];
+    out[19] = c[14];
+    out[20] = c[15]*cq[4] + t1;
+    out[21] = c[15]*cq[5] + t2;
+    out[22] = c[13] + c[16]*cq[2];
+    out[23] = c[14] + c[16]*cq[3];
+    out[24] = c[41]*cq[0] + c[42]*cq[1];
+    out[25] = c[41]*cq[1] + c[43]*cq[0];
+    out[26] = c[13] + c[45]*cq[2] + c[46]*cq[3];
+    out[27] = c[14] + c[45]*cq[3] + c[47]*cq[2];
     out[28] = c[0];
-    out[29] = c[1] + c[47]*t0 + c[48]*(c[3]*cx[0] + c[6]*cx[1]);
-    out[30] = c[51]*cq[0] + c[52]*cq[1];
-    out[31] = c[51]*cq[1] + c[53]*cq[0];
-    out[32] = c[55]*cq[4] + t1;
-    out[33] = c[55]*cq[5] + t2;
-    out[34] = c[12] + c[57]*cq[2] + c[58]*cq[3];
-    out[35] = c[13] + c[57]*cq[3] + c[59]*cq[2];
+    out[29] = c[1] + c[50]*t0 + c[51]*(c[3]*cx[0] + c[6]*cx[1]);
+    out[30] = c[54]*cq[0] + c[55]*cq[1];
+    out[31] = c[54]*cq[1] + c[56]*cq[0];
+    out[32] = c[58]*cq[4] + t1;
+    out[33] = c[58]*cq[5] + t2;
+    out[34] = c[13] + c[60]*cq[2] + c[61]*cq[3];
+    out[35] = c[14] + c[60]*cq[3] + c[62]*cq[2];
 }
 
 /* sg_overlock_loopers_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
@@ -705,105 +716,111 @@ static SG_FLATTEN SG_NOINLINE size_t sg_overlock_loopers_sweep(const struct sg_m
 #if SG_SIMD
 SG_SIMD_BEGIN
 
-SG_VINLINE sg_vm sg_overlock_loopers_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_loopers_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq, sg_vd *err)
 {
     (void)x;
     sg_vm ok = sgv_true();
+    sg_vd e[3] = {sgv_set1(0.0), sgv_set1(0.0), sgv_set1(1.0)};
     {
         /* dyad 0: RRS closed at joint rod (rock_shaft) */
         const sg_vd P[2] = {sgv_set1(0.0), sgv_set1(0.0)};
         const sg_vd Q[2] = {sgv_set1(c[0]), c[1] + c[4]*(c[2]*cx[0] + c[3]*cx[1])};
         const sg_vd l[2] = {sgv_set1(c[0]), sgv_sqrt(c[5] + c[7]*((c[3]*cx[0] + c[6]*cx[1])*(c[3]*cx[0] + c[6]*cx[1])))};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[9]);
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         q[0] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         cq[0] = c[8]*(J[0] - P[0]);
         cq[1] = c[8]*(J[1] - P[1]);
     }
     {
         /* dyad 1: RRR closed at joint F (coupler, lower_lever) */
-        const sg_vd P[2] = {c[10]*cq[1] + c[9]*cq[0], c[11]*cq[0] + c[9]*cq[1]};
-        const sg_vd Q[2] = {sgv_set1(c[12]), sgv_set1(c[13])};
-        const sg_vd l[2] = {sgv_set1(c[14]), sgv_set1(c[15])};
+        const sg_vd P[2] = {c[10]*cq[0] + c[11]*cq[1], c[10]*cq[1] + c[12]*cq[0]};
+        const sg_vd Q[2] = {sgv_set1(c[13]), sgv_set1(c[14])};
+        const sg_vd l[2] = {sgv_set1(c[15]), sgv_set1(c[16])};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[20]) + sgv_set1(c[19]) * e[0];
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[1], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[1], ein, e, J);
         q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[1] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
-        cq[4] = c[16]*(J[0] - P[0]);
-        cq[5] = c[16]*(J[1] - P[1]);
-        cq[2] = c[17]*(J[0] - Q[0]);
-        cq[3] = c[17]*(J[1] - Q[1]);
+        cq[4] = c[17]*(J[0] - P[0]);
+        cq[5] = c[17]*(J[1] - P[1]);
+        cq[2] = c[18]*(J[0] - Q[0]);
+        cq[3] = c[18]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return ok;
 }
 
 SG_VINLINE sg_vm sg_overlock_loopers_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
 {
-    const sg_vd t0 = c[26]*(c[0]*cq[0] + c[18]);
+    const sg_vd t0 = c[29]*(c[0]*cq[0] + c[21]);
     const sg_vd t1 = c[2]*cx[0] + c[3]*cx[1];
-    const sg_vd t2 = c[0]*cq[1] + c[19] + c[20]*t1;
-    const sg_vd t3 = c[10]*cq[0] + c[28]*cq[1];
-    const sg_vd t4 = c[10]*cq[1] + c[9]*cq[0];
-    const sg_vd t5 = c[23]*cq[2];
-    const sg_vd t6 = c[14]*cq[4];
+    const sg_vd t2 = c[0]*cq[1] + c[22] + c[23]*t1;
+    const sg_vd t3 = c[11]*cq[0] + c[31]*cq[1];
+    const sg_vd t4 = c[10]*cq[0] + c[11]*cq[1];
+    const sg_vd t5 = c[26]*cq[2];
+    const sg_vd t6 = c[15]*cq[4];
     const sg_vd t7 = c[3]*cx[0] + c[6]*cx[1];
-    const sg_vd t8 = c[32]*t1*t7 + c[33]*t2*t7;
-    const sg_vd t9 = c[35]*cq[0]*t7;
-    const sg_vd t16 = c[38]*cq[0] + c[39]*cq[1];
-    const sg_vd t17 = c[39]*cq[0] + c[41]*cq[1];
-    const sg_vd t18 = c[42]*cq[2] + c[43]*cq[3];
-    const sg_vd t19 = c[43]*cq[2] + c[45]*cq[3];
-    const sg_vd t20 = c[47]*t1 + c[48]*t7;
-    const sg_vd t21 = c[47]*t7 + c[49]*t1;
+    const sg_vd t8 = c[35]*t1*t7 + c[36]*t2*t7;
+    const sg_vd t9 = c[38]*cq[0]*t7;
+    const sg_vd t16 = c[41]*cq[0] + c[42]*cq[1];
+    const sg_vd t17 = c[42]*cq[0] + c[44]*cq[1];
+    const sg_vd t18 = c[45]*cq[2] + c[46]*cq[3];
+    const sg_vd t19 = c[46]*cq[2] + c[48]*cq[3];
+    const sg_vd t20 = c[50]*t1 + c[51]*t7;
+    const sg_vd t21 = c[50]*t7 + c[52]*t1;
     const sg_vd t22 = ((xd[0])*(xd[0]));
-    const sg_vd t23 = c[51]*cq[0] + c[52]*cq[1];
-    const sg_vd t24 = c[52]*cq[0] + c[54]*cq[1];
-    const sg_vd t25 = c[55]*cq[4];
-    const sg_vd t26 = c[56]*cq[5];
-    const sg_vd t27 = c[57]*cq[2] + c[58]*cq[3];
-    const sg_vd t28 = c[58]*cq[2] + c[60]*cq[3];
-    sg_vd J[9], rs[3], cs[3];
+    const sg_vd t23 = c[54]*cq[0] + c[55]*cq[1];
+    const sg_vd t24 = c[55]*cq[0] + c[57]*cq[1];
+    const sg_vd t25 = c[58]*cq[4];
+    const sg_vd t26 = c[59]*cq[5];
+    const sg_vd t27 = c[60]*cq[2] + c[61]*cq[3];
+    const sg_vd t28 = c[61]*cq[2] + c[63]*cq[3];
+    sg_vd J[9], rs[3], cs[6];
     sg_vm piv[3];
-    J[0] = c[27]*cq[0]*t2 + cq[1]*t0;
+    J[0] = c[30]*cq[0]*t2 + cq[1]*t0;
     J[1] = sgv_set1(0.0);
     J[2] = sgv_set1(0.0);
     J[3] = t3;
-    J[4] = c[15]*cq[3];
-    J[5] = c[29]*cq[5];
+    J[4] = c[16]*cq[3];
+    J[5] = c[32]*cq[5];
     J[6] = t4;
     J[7] = t5;
     J[8] = t6;
     qd[0] = -t8*xd[0];
     qd[1] = sgv_set1(0.0);
     qd[2] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[61]);
-    rs[1] = sgv_set1(c[62]);
-    rs[2] = sgv_set1(c[62]);
+    rs[0] = sgv_set1(c[64]);
+    rs[1] = sgv_set1(c[65]);
+    rs[2] = sgv_set1(c[65]);
     sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
     sgv_solve_eq(3, J, piv, rs, cs, qd);
     const sg_vd t10 = ((qd[2])*(qd[2]));
     const sg_vd t11 = ((qd[1])*(qd[1]));
     const sg_vd t12 = ((qd[0])*(qd[0]));
-    const sg_vd t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+    const sg_vd t13 = t12*(c[12]*cq[1] + c[31]*cq[0]);
     const sg_vd t14 = cq[5]*t10;
     const sg_vd t15 = t12*t3;
-    qdd[0] = -qd[0]*(qd[0]*(c[26]*cq[1]*t2 + c[34]*((cq[0])*(cq[0])) + c[34]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[36]*((t1)*(t1)) + c[37]*t1*t2));
+    qdd[0] = -qd[0]*(qd[0]*(c[29]*cq[1]*t2 + c[37]*((cq[0])*(cq[0])) + c[37]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[39]*((t1)*(t1)) + c[40]*t1*t2));
     qdd[1] = t10*t6 + t11*t5 - t13;
-    qdd[2] = c[14]*t14 + c[23]*cq[3]*t11 - t15;
+    qdd[2] = c[15]*t14 + c[26]*cq[3]*t11 - t15;
     sgv_solve_eq(3, J, piv, rs, cs, qdd);
+    sgv_rates_scale(3, 0x7ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = t16;
-    obs[1] = c[38]*cq[1] + c[40]*cq[0];
+    obs[1] = c[41]*cq[1] + c[43]*cq[0];
     obs[2] = qd[0]*t17;
     obs[3] = qd[0]*t16;
-    obs[4] = qdd[0]*t17 + t12*(c[40]*cq[1] + c[41]*cq[0]);
+    obs[4] = qdd[0]*t17 + t12*(c[43]*cq[1] + c[44]*cq[0]);
     obs[5] = qdd[0]*t16 + t12*t17;
-    obs[6] = c[12] + t18;
-    obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
+    obs[6] = c[13] + t18;
+    obs[7] = c[14] + c[45]*cq[3] + c[47]*cq[2];
     obs[8] = qd[1]*t19;
     obs[9] = qd[1]*t18;
-    obs[10] = qdd[1]*t19 + t11*(c[44]*cq[3] + c[45]*cq[2]);
+    obs[10] = qdd[1]*t19 + t11*(c[47]*cq[3] + c[48]*cq[2]);
     obs[11] = qdd[1]*t18 + t11*t19;
-    obs[12] = c[46] + x[0];
+    obs[12] = c[49] + x[0];
     obs[13] = xd[0];
     obs[14] = xdd[0];
     obs[15] = sgv_set1(c[0]);
@@ -811,35 +828,35 @@ SG_VINLINE sg_vm sg_overlock_loopers_motion_v(const sg_vd *q, const sg_vd *cq, c
     obs[17] = sgv_set1(0.0);
     obs[18] = t21*xd[0];
     obs[19] = sgv_set1(0.0);
-    obs[20] = t21*xdd[0] + t22*(c[49]*t7 + c[50]*t1);
+    obs[20] = t21*xdd[0] + t22*(c[52]*t7 + c[53]*t1);
     obs[21] = q[0];
     obs[22] = qd[0];
     obs[23] = qdd[0];
     obs[24] = t23;
-    obs[25] = c[51]*cq[1] + c[53]*cq[0];
+    obs[25] = c[54]*cq[1] + c[56]*cq[0];
     obs[26] = qd[0]*t24;
     obs[27] = qd[0]*t23;
-    obs[28] = qdd[0]*t24 + t12*(c[53]*cq[1] + c[54]*cq[0]);
+    obs[28] = qdd[0]*t24 + t12*(c[56]*cq[1] + c[57]*cq[0]);
     obs[29] = qdd[0]*t23 + t12*t24;
     obs[30] = q[2];
     obs[31] = qd[2];
     obs[32] = qdd[2];
     obs[33] = t25 + t4;
-    obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
+    obs[34] = c[10]*cq[1] + c[12]*cq[0] + c[58]*cq[5];
     obs[35] = qd[0]*t3 + qd[2]*t26;
     obs[36] = qd[0]*t4 + qd[2]*t25;
-    obs[37] = c[56]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
-    obs[38] = c[56]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
+    obs[37] = c[59]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
+    obs[38] = c[59]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
     obs[39] = q[1];
     obs[40] = qd[1];
     obs[41] = qdd[1];
-    obs[42] = c[12] + t27;
-    obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
+    obs[42] = c[13] + t27;
+    obs[43] = c[14] + c[60]*cq[3] + c[62]*cq[2];
     obs[44] = qd[1]*t28;
     obs[45] = qd[1]*t27;
-    obs[46] = qdd[1]*t28 + t11*(c[59]*cq[3] + c[60]*cq[2]);
+    obs[46] = qdd[1]*t28 + t11*(c[62]*cq[3] + c[63]*cq[2]);
     obs[47] = qdd[1]*t27 + t11*t28;
-    obs[48] = c[48]*t1 + c[50]*t7;
+    obs[48] = c[51]*t1 + c[53]*t7;
     obs[49] = t20*xd[0];
     obs[50] = t20*xdd[0] + t21*t22;
     ok &= sgv_isfinite((((((q[0] + (q[1] + q[2])) + ((qd[0] + qd[1]) + (qd[2] + qdd[0]))) + (((qdd[1] + qdd[2]) + (obs[0] + obs[1])) + ((obs[2] + obs[3]) + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + ((obs[9] + obs[10]) + (obs[11] + obs[12]))) + (((obs[13] + obs[14]) + (obs[15] + obs[16])) + ((obs[17] + obs[18]) + (obs[19] + obs[20]))))) + ((((obs[21] + (obs[22] + obs[23])) + ((obs[24] + obs[25]) + (obs[26] + obs[27]))) + (((obs[28] + obs[29]) + (obs[30] + obs[31])) + ((obs[32] + obs[33]) + (obs[34] + obs[35])))) + (((obs[36] + (obs[37] + obs[38])) + ((obs[39] + obs[40]) + (obs[41] + obs[42]))) + (((obs[43] + obs[44]) + (obs[45] + obs[46])) + ((obs[47] + obs[48]) + (obs[49] + obs[50])))))));
@@ -849,45 +866,46 @@ SG_VINLINE sg_vm sg_overlock_loopers_motion_v(const sg_vd *q, const sg_vd *cq, c
 SG_VINLINE sg_vm sg_overlock_loopers_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
 {
     (void)x;
-    const sg_vd t0 = c[26]*(c[0]*cq[0] + c[18]);
+    const sg_vd t0 = c[29]*(c[0]*cq[0] + c[21]);
     const sg_vd t1 = c[2]*cx[0] + c[3]*cx[1];
-    const sg_vd t2 = c[0]*cq[1] + c[19] + c[20]*t1;
-    const sg_vd t3 = c[10]*cq[0] + c[28]*cq[1];
-    const sg_vd t4 = c[10]*cq[1] + c[9]*cq[0];
-    const sg_vd t5 = c[23]*cq[2];
-    const sg_vd t6 = c[14]*cq[4];
+    const sg_vd t2 = c[0]*cq[1] + c[22] + c[23]*t1;
+    const sg_vd t3 = c[11]*cq[0] + c[31]*cq[1];
+    const sg_vd t4 = c[10]*cq[0] + c[11]*cq[1];
+    const sg_vd t5 = c[26]*cq[2];
+    const sg_vd t6 = c[15]*cq[4];
     const sg_vd t7 = c[3]*cx[0] + c[6]*cx[1];
-    const sg_vd t8 = c[32]*t1*t7 + c[33]*t2*t7;
-    const sg_vd t9 = c[35]*cq[0]*t7;
-    sg_vd J[9], rs[3], cs[3];
+    const sg_vd t8 = c[35]*t1*t7 + c[36]*t2*t7;
+    const sg_vd t9 = c[38]*cq[0]*t7;
+    sg_vd J[9], rs[3], cs[6];
     sg_vm piv[3];
-    J[0] = c[27]*cq[0]*t2 + cq[1]*t0;
+    J[0] = c[30]*cq[0]*t2 + cq[1]*t0;
     J[1] = sgv_set1(0.0);
     J[2] = sgv_set1(0.0);
     J[3] = t3;
-    J[4] = c[15]*cq[3];
-    J[5] = c[29]*cq[5];
+    J[4] = c[16]*cq[3];
+    J[5] = c[32]*cq[5];
     J[6] = t4;
     J[7] = t5;
     J[8] = t6;
     qd[0] = -t8*xd[0];
     qd[1] = sgv_set1(0.0);
     qd[2] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[61]);
-    rs[1] = sgv_set1(c[62]);
-    rs[2] = sgv_set1(c[62]);
+    rs[0] = sgv_set1(c[64]);
+    rs[1] = sgv_set1(c[65]);
+    rs[2] = sgv_set1(c[65]);
     sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
     sgv_solve_eq(3, J, piv, rs, cs, qd);
     const sg_vd t10 = ((qd[2])*(qd[2]));
     const sg_vd t11 = ((qd[1])*(qd[1]));
     const sg_vd t12 = ((qd[0])*(qd[0]));
-    const sg_vd t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+    const sg_vd t13 = t12*(c[12]*cq[1] + c[31]*cq[0]);
     const sg_vd t14 = cq[5]*t10;
     const sg_vd t15 = t12*t3;
-    qdd[0] = -qd[0]*(qd[0]*(c[26]*cq[1]*t2 + c[34]*((cq[0])*(cq[0])) + c[34]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[36]*((t1)*(t1)) + c[37]*t1*t2));
+    qdd[0] = -qd[0]*(qd[0]*(c[29]*cq[1]*t2 + c[37]*((cq[0])*(cq[0])) + c[37]*((cq[1])*(cq[1])) + cq[0]*t0) + t9*xd[0]) - t8*xdd[0] - xd[0]*(qd[0]*t9 + xd[0]*(c[39]*((t1)*(t1)) + c[40]*t1*t2));
     qdd[1] = t10*t6 + t11*t5 - t13;
-    qdd[2] = c[14]*t14 + c[23]*cq[3]*t11 - t15;
+    qdd[2] = c[15]*t14 + c[26]*cq[3]*t11 - t15;
     sgv_solve_eq(3, J, piv, rs, cs, qdd);
+    sgv_rates_scale(3, 0x7ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))));
     return ok;
 }
@@ -897,35 +915,35 @@ SG_VINLINE sg_vm sg_overlock_loopers_observe_v(const sg_vd *q, const sg_vd *cq, 
     switch (group) {
     case 0: {
         const sg_vd t12 = ((qd[0])*(qd[0]));
-        const sg_vd t16 = c[38]*cq[0] + c[39]*cq[1];
-        const sg_vd t17 = c[39]*cq[0] + c[41]*cq[1];
+        const sg_vd t16 = c[41]*cq[0] + c[42]*cq[1];
+        const sg_vd t17 = c[42]*cq[0] + c[44]*cq[1];
         obs[0] = t16;
-        obs[1] = c[38]*cq[1] + c[40]*cq[0];
+        obs[1] = c[41]*cq[1] + c[43]*cq[0];
         obs[2] = qd[0]*t17;
         obs[3] = qd[0]*t16;
-        obs[4] = qdd[0]*t17 + t12*(c[40]*cq[1] + c[41]*cq[0]);
+        obs[4] = qdd[0]*t17 + t12*(c[43]*cq[1] + c[44]*cq[0]);
         obs[5] = qdd[0]*t16 + t12*t17;
         return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
     }
     case 1: {
         const sg_vd t11 = ((qd[1])*(qd[1]));
-        const sg_vd t18 = c[42]*cq[2] + c[43]*cq[3];
-        const sg_vd t19 = c[43]*cq[2] + c[45]*cq[3];
-        obs[6] = c[12] + t18;
-        obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
+        const sg_vd t18 = c[45]*cq[2] + c[46]*cq[3];
+        const sg_vd t19 = c[46]*cq[2] + c[48]*cq[3];
+        obs[6] = c[13] + t18;
+        obs[7] = c[14] + c[45]*cq[3] + c[47]*cq[2];
         obs[8] = qd[1]*t19;
         obs[9] = qd[1]*t18;
-        obs[10] = qdd[1]*t19 + t11*(c[44]*cq[3] + c[45]*cq[2]);
+        obs[10] = qdd[1]*t19 + t11*(c[47]*cq[3] + c[48]*cq[2]);
         obs[11] = qdd[1]*t18 + t11*t19;
         return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
     }
     case 2: {
         const sg_vd t1 = c[2]*cx[0] + c[3]*cx[1];
         const sg_vd t7 = c[3]*cx[0] + c[6]*cx[1];
-        const sg_vd t20 = c[47]*t1 + c[48]*t7;
-        const sg_vd t21 = c[47]*t7 + c[49]*t1;
+        const sg_vd t20 = c[50]*t1 + c[51]*t7;
+        const sg_vd t21 = c[50]*t7 + c[52]*t1;
         const sg_vd t22 = ((xd[0])*(xd[0]));
-        obs[12] = c[46] + x[0];
+        obs[12] = c[49] + x[0];
         obs[13] = xd[0];
         obs[14] = xdd[0];
         obs[15] = sgv_set1(c[0]);
@@ -933,67 +951,67 @@ SG_VINLINE sg_vm sg_overlock_loopers_observe_v(const sg_vd *q, const sg_vd *cq, 
         obs[17] = sgv_set1(0.0);
         obs[18] = t21*xd[0];
         obs[19] = sgv_set1(0.0);
-        obs[20] = t21*xdd[0] + t22*(c[49]*t7 + c[50]*t1);
+        obs[20] = t21*xdd[0] + t22*(c[52]*t7 + c[53]*t1);
         return sgv_isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20])))));
     }
     case 3: {
         const sg_vd t12 = ((qd[0])*(qd[0]));
-        const sg_vd t23 = c[51]*cq[0] + c[52]*cq[1];
-        const sg_vd t24 = c[52]*cq[0] + c[54]*cq[1];
+        const sg_vd t23 = c[54]*cq[0] + c[55]*cq[1];
+        const sg_vd t24 = c[55]*cq[0] + c[57]*cq[1];
         obs[21] = q[0];
         obs[22] = qd[0];
         obs[23] = qdd[0];
         obs[24] = t23;
-        obs[25] = c[51]*cq[1] + c[53]*cq[0];
+        obs[25] = c[54]*cq[1] + c[56]*cq[0];
         obs[26] = qd[0]*t24;
         obs[27] = qd[0]*t23;
-        obs[28] = qdd[0]*t24 + t12*(c[53]*cq[1] + c[54]*cq[0]);
+        obs[28] = qdd[0]*t24 + t12*(c[56]*cq[1] + c[57]*cq[0]);
         obs[29] = qdd[0]*t23 + t12*t24;
         return sgv_isfinite((((obs[21] + obs[22]) + (obs[23] + obs[24])) + ((obs[25] + obs[26]) + (obs[27] + (obs[28] + obs[29])))));
     }
     case 4: {
-        const sg_vd t3 = c[10]*cq[0] + c[28]*cq[1];
-        const sg_vd t4 = c[10]*cq[1] + c[9]*cq[0];
+        const sg_vd t3 = c[11]*cq[0] + c[31]*cq[1];
+        const sg_vd t4 = c[10]*cq[0] + c[11]*cq[1];
         const sg_vd t10 = ((qd[2])*(qd[2]));
         const sg_vd t12 = ((qd[0])*(qd[0]));
-        const sg_vd t13 = t12*(c[11]*cq[1] + c[28]*cq[0]);
+        const sg_vd t13 = t12*(c[12]*cq[1] + c[31]*cq[0]);
         const sg_vd t14 = cq[5]*t10;
         const sg_vd t15 = t12*t3;
-        const sg_vd t25 = c[55]*cq[4];
-        const sg_vd t26 = c[56]*cq[5];
+        const sg_vd t25 = c[58]*cq[4];
+        const sg_vd t26 = c[59]*cq[5];
         obs[30] = q[2];
         obs[31] = qd[2];
         obs[32] = qdd[2];
         obs[33] = t25 + t4;
-        obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
+        obs[34] = c[10]*cq[1] + c[12]*cq[0] + c[58]*cq[5];
         obs[35] = qd[0]*t3 + qd[2]*t26;
         obs[36] = qd[0]*t4 + qd[2]*t25;
-        obs[37] = c[56]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
-        obs[38] = c[56]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
+        obs[37] = c[59]*cq[4]*t10 + qdd[0]*t3 + qdd[2]*t26 + t13;
+        obs[38] = c[59]*t14 + qdd[0]*t4 + qdd[2]*t25 + t15;
         return sgv_isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38])))));
     }
     case 5: {
         const sg_vd t11 = ((qd[1])*(qd[1]));
-        const sg_vd t27 = c[57]*cq[2] + c[58]*cq[3];
-        const sg_vd t28 = c[58]*cq[2] + c[60]*cq[3];
+        const sg_vd t27 = c[60]*cq[2] + c[61]*cq[3];
+        const sg_vd t28 = c[61]*cq[2] + c[63]*cq[3];
         obs[39] = q[1];
         obs[40] = qd[1];
         obs[41] = qdd[1];
-        obs[42] = c[12] + t27;
-        obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
+        obs[42] = c[13] + t27;
+        obs[43] = c[14] + c[60]*cq[3] + c[62]*cq[2];
         obs[44] = qd[1]*t28;
         obs[45] = qd[1]*t27;
-        obs[46] = qdd[1]*t28 + t11*(c[59]*cq[3] + c[60]*cq[2]);
+        obs[46] = qdd[1]*t28 + t11*(c[62]*cq[3] + c[63]*cq[2]);
         obs[47] = qdd[1]*t27 + t11*t28;
         return sgv_isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47])))));
     }
     case 6: {
         const sg_vd t1 = c[2]*cx[0] + c[3]*cx[1];
         const sg_vd t7 = c[3]*cx[0] + c[6]*cx[1];
-        const sg_vd t20 = c[47]*t1 + c[48]*t7;
-        const sg_vd t21 = c[47]*t7 + c[49]*t1;
+        const sg_vd t20 = c[50]*t1 + c[51]*t7;
+        const sg_vd t21 = c[50]*t7 + c[52]*t1;
         const sg_vd t22 = ((xd[0])*(xd[0]));
-        obs[48] = c[48]*t1 + c[50]*t7;
+        obs[48] = c[51]*t1 + c[53]*t7;
         obs[49] = t20*xd[0];
         obs[50] = t20*xdd[0] + t21*t22;
         return sgv_isfinite((obs[48] + (obs[49] + obs[50])));
@@ -1009,58 +1027,58 @@ SG_VINLINE sg_vm sg_overlock_loopers_forces_v(const sg_vd *q, const sg_vd *cq, c
     (void)x;
     sg_vm ok = sgv_true();
     const sg_vd t0 = c[2]*cx[0] + c[3]*cx[1];
-    const sg_vd t1 = c[11]*cq[0] + c[9]*cq[1];
-    const sg_vd t2 = c[11]*cq[1] + c[28]*cq[0];
+    const sg_vd t1 = c[10]*cq[1] + c[12]*cq[0];
+    const sg_vd t2 = c[12]*cq[1] + c[31]*cq[0];
     const sg_vd t3 = -gv[0] + obs[37];
     const sg_vd t4 = -gv[1] + obs[38];
-    const sg_vd t5 = c[70]*(-gv[0] + obs[28]) - ld[0];
-    const sg_vd t6 = c[70]*(-gv[1] + obs[29]) - ld[1];
-    const sg_vd t7 = c[79]*(-gv[0] + obs[46]) - ld[2];
-    const sg_vd t8 = c[79]*(-gv[1] + obs[47]) - ld[3];
-    const sg_vd t9 = c[0]*cq[0] + c[18];
-    const sg_vd t10 = c[0]*cq[1] + c[19] + c[20]*t0;
+    const sg_vd t5 = c[73]*(-gv[0] + obs[28]) - ld[0];
+    const sg_vd t6 = c[73]*(-gv[1] + obs[29]) - ld[1];
+    const sg_vd t7 = c[82]*(-gv[0] + obs[46]) - ld[2];
+    const sg_vd t8 = c[82]*(-gv[1] + obs[47]) - ld[3];
+    const sg_vd t9 = c[0]*cq[0] + c[21];
+    const sg_vd t10 = c[0]*cq[1] + c[22] + c[23]*t0;
     const sg_vd t11 = c[3]*cx[0] + c[6]*cx[1];
-    const sg_vd t12 = c[85]*t9;
-    const sg_vd t13 = c[85]*t10;
+    const sg_vd t12 = c[88]*t9;
+    const sg_vd t13 = c[88]*t10;
     {
         /* block of unknowns 9, 10 */
         sg_vd M[4], r[2];
         sg_vm piv[2];
-        M[0] = c[23]*cq[3];
-        M[1] = c[15]*cq[2];
-        r[0] = c[75]*obs[41] - ld[2]*(c[76]*cq[2] + c[77]*cq[3]) - ld[3]*(c[76]*cq[3] + c[78]*cq[2]) - ld[7] - t7*(c[57]*cq[3] + c[59]*cq[2]) - t8*(c[59]*cq[3] + c[60]*cq[2]);
-        M[2] = c[14]*cq[5];
-        M[3] = c[29]*cq[4];
-        r[1] = c[72]*obs[32] + c[73]*cq[4]*t4 + c[74]*cq[5]*t3 - ld[6];
+        M[0] = c[26]*cq[3];
+        M[1] = c[16]*cq[2];
+        r[0] = c[78]*obs[41] - ld[2]*(c[79]*cq[2] + c[80]*cq[3]) - ld[3]*(c[79]*cq[3] + c[81]*cq[2]) - ld[7] - t7*(c[60]*cq[3] + c[62]*cq[2]) - t8*(c[62]*cq[3] + c[63]*cq[2]);
+        M[2] = c[15]*cq[5];
+        M[3] = c[32]*cq[4];
+        r[1] = c[75]*obs[32] + c[76]*cq[4]*t4 + c[77]*cq[5]*t3 - ld[6];
         ok &= sgv_lu_factor(2, M, piv);
         sgv_lu_solve(2, M, piv, r);
         out[9] = r[0];
         out[10] = r[1];
     }
     {
-        const sg_vd d = c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[0]*t0;
-        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[0]*t0);
-        out[4] = (c[66]*obs[23] + c[71]*t1*t3 + c[71]*t2*t4 - out[10]*t2 - out[9]*t1 - ld[0]*(c[67]*cq[0] + c[68]*cq[1]) - ld[1]*(c[67]*cq[1] + c[69]*cq[0]) - ld[5] - t5*(c[51]*cq[1] + c[53]*cq[0]) - t6*(c[53]*cq[1] + c[54]*cq[0]))/d;
+        const sg_vd d = c[66]*cq[1] + c[67]*cq[0] + c[68]*cq[0]*t0;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[66]*cq[1] + c[67]*cq[0] + c[68]*cq[0]*t0);
+        out[4] = (c[69]*obs[23] + c[74]*t1*t3 + c[74]*t2*t4 - out[10]*t2 - out[9]*t1 - ld[0]*(c[70]*cq[0] + c[71]*cq[1]) - ld[1]*(c[70]*cq[1] + c[72]*cq[0]) - ld[5] - t5*(c[54]*cq[1] + c[56]*cq[0]) - t6*(c[56]*cq[1] + c[57]*cq[0]))/d;
     }
-    out[6] = c[86]*t4 + out[10];
-    out[5] = c[86]*t3 + out[9];
+    out[6] = c[89]*t4 + out[10];
+    out[5] = c[89]*t3 + out[9];
     out[3] = -out[4]*t13 + out[6] + t6;
     out[2] = -out[4]*t12 + out[5] + t5;
     out[8] = -out[10] + t8;
     out[7] = -out[9] + t7;
-    out[11] = c[80]*gv[1]*(c[48]*t0 + c[50]*t11) + c[82]*obs[14] - out[4]*(c[83]*t0*t11 + c[84]*t10*t11) - ld[4];
-    out[1] = c[80]*(-gv[1] + obs[20]) - c[81]*out[4]*t10;
-    out[0] = c[80]*(-gv[0] + obs[19]) - c[81]*out[4]*t9;
+    out[11] = c[83]*gv[1]*(c[51]*t0 + c[53]*t11) + c[85]*obs[14] - out[4]*(c[86]*t0*t11 + c[87]*t10*t11) - ld[4];
+    out[1] = c[83]*(-gv[1] + obs[20]) - c[84]*out[4]*t10;
+    out[0] = c[83]*(-gv[0] + obs[19]) - c[84]*out[4]*t9;
     out[12] = out[11];
     out[13] = out[11]*xd[0];
     out[14] = out[4]*t12;
     out[15] = out[4]*t13;
-    out[16] = c[87]*out[4]*t11;
+    out[16] = c[90]*out[4]*t11;
     out[17] = out[0] + out[2] + out[7];
     out[18] = out[1] + out[3] + out[8];
-    out[19] = c[0]*out[1] + c[12]*out[8] + c[19]*out[0] + c[25]*out[7] + out[11];
-    out[20] = c[88]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[89]*((obs[13])*(obs[13])) + c[90]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[91]*((obs[22])*(obs[22])) + c[92]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[93]*((obs[31])*(obs[31])) + c[94]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[95]*((obs[40])*(obs[40]));
-    out[21] = c[71]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[96]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[97]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[98]*(gv[0]*obs[42] + gv[1]*obs[43]);
+    out[19] = c[0]*out[1] + c[13]*out[8] + c[22]*out[0] + c[28]*out[7] + out[11];
+    out[20] = c[91]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[92]*((obs[13])*(obs[13])) + c[93]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[94]*((obs[22])*(obs[22])) + c[95]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[96]*((obs[31])*(obs[31])) + c[97]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[98]*((obs[40])*(obs[40]));
+    out[21] = c[100]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[101]*(gv[0]*obs[42] + gv[1]*obs[43]) + c[74]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[99]*(gv[0]*obs[15] + gv[1]*obs[16]);
     out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
     out[23] = sgv_set1(0.0);
     ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))));
@@ -1092,7 +1110,7 @@ static const sg_mechanism sg_overlock_loopers_descriptor = {
     .nq = 3,
     .nx = 1,
     .np = 29,
-    .nc = 105,
+    .nc = 108,
     .nobs = 51,
     .nbranch = 2,
     .nf = 12,
@@ -1159,155 +1177,155 @@ const char *sg_overlock_loopers_manifest(void)
         "\":\"rrs\",\"meaning\":\"+1: pin rock_shaft of rod rod left of the line from D to the crank pin'"
         "s projection (seed 003 eq. 1: \\u03b4\\u2081)\"},{\"default\":1,\"joint\":\"F\",\"kind\":\"rrr\""
         ",\"meaning\":\"+1: joint F left of the line from E to G\"}],\"closed_form\":true,\"closure\":[\""
-        "rod.length\",\"F.x\",\"F.y\"],\"constants\":[[3],[1],[14],[14],[0],[2],[14],[0],[3],[6,7],[6,7],"
-        "[6,7],[10,11],[10,11],[8],[9],[8],[9],[3],[1],[0],[2],[0],[9],[10,11],[10,11],[3],[3],[6,7],[8],"
-        "[0,1,2,3],[6,8,9,10],[0],[0],[3],[0,3],[0],[0],[4,5],[4,5],[4,5],[4,5],[12,13],[12,13],[12,13],["
-        "12,13],[14],[16],[17],[17],[16],[20],[21],[21],[20],[8],[8],[26],[27],[27],[26],[0,1,2,3],[6,8,9"
-        ",10],[2,3],[1,2,3],[0,2,3],[22],[4,5,21],[4,5,20],[4,5,20],[19],[23],[24],[8,23],[8,23],[28],[12"
-        ",13,27],[12,13,26],[12,13,26],[25],[15],[2],[15,16,17,18],[0,2],[0,2],[2],[23],[0,2],[15],[18],["
-        "19],[22],[23],[24],[25],[28],[15],[19],[25],[3,20],[6,7,21],[6,7,20],[6,7,20],[9,26],[9,26]],\"c"
-        "oords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":"
-        "\"lower_lever.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"coupler.angle\""
-        ",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the loop"
-        "er mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0435\\u0442\\u04"
-        "3b\\u0438\\u0442\\u0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136).\\n\\nAn eccen"
-        "tric on the main shaft 1 drives, through a ball-jointed rod, the looper rock shaft 3 (a spatial-"
-        "planar\\nfour-bar ABCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper looper, whose t"
-        "ip N\\u2082 is at l\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), and drives throug"
-        "h the planar four-bar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081 is at l\\u2086 "
-        "from G at the angle \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2 (eq. 6).\\n\\nF"
-        "rame (the loopers' plane): origin on the rock-shaft axis D, x along the main shaft, y up; the ma"
-        "in shaft's axis\\nruns parallel to x below D. Angles counter-clockwise from +x. Seed 003 writes "
-        "eqs. 4\\u20136 in its own axes (see\\ntests/test_overlock_loopers.py for the mapping).\\n\\nEver"
-        "y dimension is an estimate (seed 003 prints none): the rock shaft swings about \\u00b122\\u00b0,"
-        " the upper looper's tip\\nthrough about 45 mm of arc, the lower looper's lever about \\u00b135\\u"
-        "00b0; masses of small steel levers and loopers.\",\"elements\":[],\"force_blocks\":[2,1],\"force"
-        "_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\""
-        "},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\""
-        ",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_o"
-        "n_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"k"
-        "inetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_"
-        "power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric"
-        ".x\",\"eccentric.y\",\"eccentric.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\""
-        ",\"coupler.x\",\"coupler.y\",\"coupler.moment\",\"lower_lever.x\",\"lower_lever.y\",\"lower_leve"
-        "r.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle ph"
-        "i\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_ove"
-        "rlock_loopers_anchors\":{\"ops\":60},\"sg_overlock_loopers_blocks\":{\"ops\":28},\"sg_overlock_l"
-        "oopers_closed\":{\"ops\":40},\"sg_overlock_loopers_constants\":{\"ops\":118},\"sg_overlock_loope"
-        "rs_force_matrix\":{\"ops\":111},\"sg_overlock_loopers_forces\":{\"ops\":211},\"sg_overlock_loope"
-        "rs_lu_factor\":{\"ops\":18},\"sg_overlock_loopers_lu_solve\":{\"ops\":18},\"sg_overlock_loopers_"
-        "motion\":{\"ops\":215},\"sg_overlock_loopers_observe\":{\"ops\":171},\"sg_overlock_loopers_rates"
-        "\":{\"ops\":81},\"sg_overlock_loopers_residual\":{\"ops\":45},\"sg_overlock_loopers_scales\":{\""
-        "ops\":3}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\""
-        "},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower"
-        "_lever\",\"component\":\"fx\",\"name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"compone"
-        "nt\":\"fy\",\"name\":\"lower_looper_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"na"
-        "me\":\"eccentric\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{"
-        "\"body\":\"coupler\",\"component\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\""
-        "component\":\"torque\",\"name\":\"lower_lever\"}],\"name\":\"overlock_loopers\",\"observables\":"
-        "[{\"name\":\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\""
-        "},{\"name\":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit"
-        "\":\"m/s\"},{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip"
-        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_l"
-        "ooper_tip.y\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"l"
-        "ower_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},"
-        "{\"name\":\"lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\""
-        "rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"un"
-        "it\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\""
-        "unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\","
-        "\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com"
-        ".y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_sh"
-        "aft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"nam"
-        "e\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\""
-        ":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\""
-        "rad/s\"},{\"name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit"
-        "\":\"m\"},{\"name\":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m"
-        "/s\"},{\"name\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"un"
-        "it\":\"rad\"},{\"name\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angl"
-        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_l"
-        "ever.com.y\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"low"
-        "er_lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"lower_lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.z\",\"unit\":\"m\"}"
-        ",{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.z_dd\",\"unit\":\"m"
-        "/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of the"
-        " looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"ro"
-        "le\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis b"
-        "elow the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive\":tru"
-        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"ball-jointe"
-        "d rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (est"
-        "imate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (estimate)\",\""
-        "kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"d"
-        "efault\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b3 fr"
-        "om the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"arm DE of t"
-        "he planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"positive\":tru"
-        "e,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":"
-        "\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"cou"
-        "pler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper lever GF (estima"
-        "te)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"length\",\"name\""
-        ":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.4434609527920"
-        "61,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\",\"kind\":\"ang"
-        "le\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\""
-        ":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estimate)\",\"kind\":"
-        "\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
-        ":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b7 from the "
-        "lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of eccentr"
-        "ic relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":fa"
-        "lse,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of "
-        "eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, loca"
-        "l u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\""
-        ":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\""
-        ",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric abo"
-        "ut its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\""
-        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of ro"
-        "ck_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, lo"
-        "cal u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, lo"
-        "cal v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"uni"
-        "t\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock"
-        "_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positiv"
-        "e\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":"
-        "\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of"
-        " coupler about its centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.inertia\",\"positive"
-        "\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\""
-        "mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lo"
-        "wer_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lo"
-        "wer_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of i"
-        "nertia of lower_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_lever.ine"
-        "rtia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"v"
-        "x\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper looper tip N\\u20"
-        "82\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"body\":\"lower"
-        "_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\"offset\":6,\"role"
-        "\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx"
-        "\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\""
-        "a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"rev"
-        "olute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"columns\":[\"te"
-        "nsion\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\":\"rock_shaft\""
-        ",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\""
-        ":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"groun"
-        "ded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\",\"b\":\"lower_l"
-        "ever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F\",\"off"
-        "set\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"inpu"
-        "t\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"role"
-        "s\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\"upper_looper_tip\""
-        ":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":36,\"nblock\":2,"
-        "\"nbranch\":2,\"nc\":105,\"nf\":12,\"nfo\":24,\"ngroup\":7,\"nload\":8,\"nobs\":51,\"np\":29,\"n"
-        "q\":3,\"nx\":1}}"
+        "rod.length\",\"F.x\",\"F.y\"],\"constants\":[[3],[1],[14],[14],[0],[2],[14],[0],[3],[0,1,3],[6,7"
+        "],[6,7],[6,7],[10,11],[10,11],[8],[9],[8],[9],[6],[6,10],[3],[1],[0],[2],[0],[9],[10,11],[10,11]"
+        ",[3],[3],[6,7],[8],[0,1,2,3],[6,8,9,10],[0],[0],[3],[0,3],[0],[0],[4,5],[4,5],[4,5],[4,5],[12,13"
+        "],[12,13],[12,13],[12,13],[14],[16],[17],[17],[16],[20],[21],[21],[20],[8],[8],[26],[27],[27],[2"
+        "6],[0,1,2,3],[6,8,9,10],[2,3],[1,2,3],[0,2,3],[22],[4,5,21],[4,5,20],[4,5,20],[19],[23],[24],[8,"
+        "23],[8,23],[28],[12,13,27],[12,13,26],[12,13,26],[25],[15],[2],[15,16,17,18],[0,2],[0,2],[2],[23"
+        "],[0,2],[15],[18],[19],[22],[23],[24],[25],[28],[15],[19],[25],[3,20],[6,7,21],[6,7,20],[6,7,20]"
+        ",[9,26],[9,26]],\"coords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"gu"
+        "ess\":0.0,\"name\":\"lower_lever.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\""
+        ":\"coupler.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class "
+        "overlock: the looper mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u"
+        "0435\\u0442\\u043b\\u0438\\u0442\\u0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136"
+        ").\\n\\nAn eccentric on the main shaft 1 drives, through a ball-jointed rod, the looper rock sha"
+        "ft 3 (a spatial-planar\\nfour-bar ABCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper"
+        " looper, whose tip N\\u2082 is at l\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), a"
+        "nd drives through the planar four-bar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081"
+        " is at l\\u2086 from G at the angle \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2"
+        " (eq. 6).\\n\\nFrame (the loopers' plane): origin on the rock-shaft axis D, x along the main sha"
+        "ft, y up; the main shaft's axis\\nruns parallel to x below D. Angles counter-clockwise from +x. "
+        "Seed 003 writes eqs. 4\\u20136 in its own axes (see\\ntests/test_overlock_loopers.py for the map"
+        "ping).\\n\\nEvery dimension is an estimate (seed 003 prints none): the rock shaft swings about \\u"
+        "00b122\\u00b0, the upper looper's tip\\nthrough about 45 mm of arc, the lower looper's lever abo"
+        "ut \\u00b135\\u00b0; masses of small steel levers and loopers.\",\"elements\":[],\"force_blocks\""
+        ":[2,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\""
+        ",\"unit\":\"W\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"na"
+        "me\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":"
+        "\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\""
+        "},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\""
+        "name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\""
+        ":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_"
+        "shaft.moment\",\"coupler.x\",\"coupler.y\",\"coupler.moment\",\"lower_lever.x\",\"lower_lever.y\""
+        ",\"lower_lever.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-s"
+        "haft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernel"
+        "s\":{\"sg_overlock_loopers_anchors\":{\"ops\":60},\"sg_overlock_loopers_blocks\":{\"ops\":28},\""
+        "sg_overlock_loopers_closed\":{\"ops\":40},\"sg_overlock_loopers_constants\":{\"ops\":123},\"sg_o"
+        "verlock_loopers_force_matrix\":{\"ops\":111},\"sg_overlock_loopers_forces\":{\"ops\":211},\"sg_o"
+        "verlock_loopers_lu_factor\":{\"ops\":18},\"sg_overlock_loopers_lu_solve\":{\"ops\":18},\"sg_over"
+        "lock_loopers_motion\":{\"ops\":215},\"sg_overlock_loopers_observe\":{\"ops\":171},\"sg_overlock_"
+        "loopers_rates\":{\"ops\":81},\"sg_overlock_loopers_residual\":{\"ops\":45},\"sg_overlock_loopers"
+        "_scales\":{\"ops\":3}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper"
+        "_looper_tip\"},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"upper_looper_tip\"},{\"b"
+        "ody\":\"lower_lever\",\"component\":\"fx\",\"name\":\"lower_looper_tip\"},{\"body\":\"lower_leve"
+        "r\",\"component\":\"fy\",\"name\":\"lower_looper_tip\"},{\"body\":\"eccentric\",\"component\":\""
+        "torque\",\"name\":\"eccentric\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"ro"
+        "ck_shaft\"},{\"body\":\"coupler\",\"component\":\"torque\",\"name\":\"coupler\"},{\"body\":\"low"
+        "er_lever\",\"component\":\"torque\",\"name\":\"lower_lever\"}],\"name\":\"overlock_loopers\",\"o"
+        "bservables\":[{\"name\":\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\","
+        "\"unit\":\"m\"},{\"name\":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_ti"
+        "p.y_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"up"
+        "per_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"na"
+        "me\":\"lower_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"lower_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit"
+        "\":\"m/s^2\"},{\"name\":\"lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angl"
+        "e\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric."
+        "angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccen"
+        "tric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccen"
+        "tric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":"
+        "\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"n"
+        "ame\":\"rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"ra"
+        "d/s^2\"},{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":"
+        "\"m\"},{\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"uni"
+        "t\":\"m/s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_"
+        "dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"coupler.angle"
+        "_d\",\"unit\":\"rad/s\"},{\"name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"couple"
+        "r.com.x\",\"unit\":\"m\"},{\"name\":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_"
+        "d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_"
+        "dd\",\"unit\":\"m/s^2\"},{\"name\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_le"
+        "ver.angle\",\"unit\":\"rad\"},{\"name\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\""
+        "lower_lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\"m\"},{\""
+        "name\":\"lower_lever.com.y\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"}"
+        ",{\"name\":\"lower_lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\""
+        ":\"m/s^2\"},{\"name\":\"lower_lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.z\""
+        ",\"unit\":\"m\"},{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.z_d"
+        "d\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccent"
+        "ricity AB of the looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"posi"
+        "tive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"m"
+        "ain-shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\","
+        "\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc"
+        "\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"r"
+        "ole\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm D"
+        "C, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u20"
+        "87 (estimate)\",\"kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\"its constructiv"
+        "e angle \\u03b3 from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\","
+        "\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"d"
+        "oc\":\"arm DE of the planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\""
+        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\""
+        ":\"deg\",\"doc\":\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_a"
+        "ngle\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"m"
+        "m\",\"doc\":\"coupler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true"
+        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper"
+        " lever GF (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\""
+        "length\",\"name\":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":2.443460952792061,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\""
+        ",\"kind\":\"angle\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad"
+        "\"},{\"default\":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estim"
+        "ate)\",\"kind\":\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\""
+        "m\"},{\"default\":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle "
+        "\\u03b7 from the lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\""
+        "phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\""
+        "doc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"r"
+        "ole\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of"
+        " eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role"
+        "\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of ecc"
+        "entric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":n"
+        "ull,\"unit\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inerti"
+        "a of eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\""
+        "positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\""
+        "doc\":\"mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\""
+        "role\":null,\"unit\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass "
+        "of rock_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass "
+        "of rock_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\""
+        "role\":null,\"unit\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment o"
+        "f inertia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.in"
+        "ertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit"
+        "\":\"g\",\"doc\":\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"mom"
+        "ent of inertia of coupler about its centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.ine"
+        "rtia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\""
+        ":\"g\",\"doc\":\"mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"ce"
+        "ntre of mass of lower_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"ce"
+        "ntre of mass of lower_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"d"
+        "oc\":\"moment of inertia of lower_lever about its centre of mass\",\"kind\":\"inertia\",\"name\""
+        ":\"lower_lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\""
+        ":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper "
+        "looper tip N\\u2082\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},"
+        "{\"body\":\"lower_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\""
+        "offset\":6,\"role\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\","
+        "\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\""
+        ",\"offset\":0},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":t"
+        "rue,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\""
+        ",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\""
+        "a\":\"rock_shaft\",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"r"
+        "evolute\",\"name\":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx"
+        "\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler"
+        "\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\""
+        "name\":\"F\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grou"
+        "nded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\""
+        "sense\":1}],\"roles\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\""
+        "upper_looper_tip\":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\""
+        ":36,\"nblock\":2,\"nbranch\":2,\"nc\":108,\"nf\":12,\"nfo\":24,\"ngroup\":7,\"nload\":8,\"nobs\""
+        ":51,\"np\":29,\"nq\":3,\"nx\":1}}"
         ;
 }

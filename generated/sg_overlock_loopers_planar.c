@@ -6,42 +6,43 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_loopers_planar_constants -- Total ops: 117 */
+/* sg_overlock_loopers_planar_constants -- Total ops: 122 */
 void sg_overlock_loopers_planar_constants(const double *p, double *c)
 {
     const double t0 = sin(p[14]);
-    const double t1 = p[6]*cos(p[7]);
-    const double t2 = p[6]*sin(p[7]);
-    const double t3 = -t2;
-    const double t4 = p[10]*cos(p[11]);
-    const double t5 = p[10]*sin(p[11]);
-    const double t6 = -p[3];
-    const double t7 = ((p[2])*(p[2]));
-    const double t8 = -p[9];
-    const double t9 = 2.0*p[3];
-    const double t10 = -t1;
-    const double t11 = 2.0*p[0];
-    const double t12 = 2.0*((p[0])*(p[0]));
-    const double t13 = ((p[3])*(p[3]));
-    const double t14 = 6.0*p[0]*p[3] + ((p[1])*(p[1])) + p[1]*t11 + p[1]*t9 + t12 + 5.0*t13 + t7;
-    const double t15 = p[10] + 2.0*p[6] + p[8] + p[9];
-    const double t16 = p[4]*cos(p[5]);
-    const double t17 = p[4]*sin(p[5]);
-    const double t18 = -t17;
-    const double t19 = -t16;
-    const double t20 = p[12]*cos(p[13]);
-    const double t21 = p[12]*sin(p[13]);
-    const double t22 = (0.5)*p[8];
-    const double t23 = -p[27];
-    const double t24 = -p[26];
-    const double t25 = (1.0/(p[2]));
-    const double t26 = p[0]*t25;
-    const double t27 = p[3]*t26;
-    const double t28 = p[20] + t19;
-    const double t29 = p[23]*t22;
-    const double t30 = t20 + t24;
-    const double t31 = p[20] + t10;
-    const double t32 = p[26] + t8;
+    const double t1 = 2.0*p[0];
+    const double t2 = p[6]*cos(p[7]);
+    const double t3 = p[6]*sin(p[7]);
+    const double t4 = -t3;
+    const double t5 = p[10]*cos(p[11]);
+    const double t6 = p[10]*sin(p[11]);
+    const double t7 = 4.0*p[6];
+    const double t8 = -p[3];
+    const double t9 = ((p[2])*(p[2]));
+    const double t10 = -p[9];
+    const double t11 = 2.0*p[3];
+    const double t12 = -t2;
+    const double t13 = 2.0*((p[0])*(p[0]));
+    const double t14 = ((p[3])*(p[3]));
+    const double t15 = 6.0*p[0]*p[3] + ((p[1])*(p[1])) + p[1]*t1 + p[1]*t11 + t13 + 5.0*t14 + t9;
+    const double t16 = p[10] + 2.0*p[6] + p[8] + p[9];
+    const double t17 = p[4]*cos(p[5]);
+    const double t18 = p[4]*sin(p[5]);
+    const double t19 = -t18;
+    const double t20 = -t17;
+    const double t21 = p[12]*cos(p[13]);
+    const double t22 = p[12]*sin(p[13]);
+    const double t23 = (0.5)*p[8];
+    const double t24 = -p[27];
+    const double t25 = -p[26];
+    const double t26 = (1.0/(p[2]));
+    const double t27 = p[0]*t26;
+    const double t28 = p[3]*t27;
+    const double t29 = p[20] + t20;
+    const double t30 = p[23]*t23;
+    const double t31 = t21 + t25;
+    const double t32 = p[20] + t12;
+    const double t33 = p[26] + t10;
     c[0] = p[3];
     c[1] = cos(p[14]);
     c[2] = -t0;
@@ -50,114 +51,119 @@ void sg_overlock_loopers_planar_constants(const double *p, double *c)
     c[5] = t0;
     c[6] = p[2];
     c[7] = (1.0/(p[3]));
-    c[8] = t1;
-    c[9] = t3;
-    c[10] = t2;
-    c[11] = t4;
+    c[8] = p[1] + p[3] + t1;
+    c[9] = t2;
+    c[10] = t4;
+    c[11] = t3;
     c[12] = t5;
-    c[13] = p[8];
-    c[14] = p[9];
-    c[15] = (1.0/(p[8]));
-    c[16] = (1.0/(p[9]));
-    c[17] = p[1];
-    c[18] = p[0];
-    c[19] = t6;
-    c[20] = -t7;
-    c[21] = t8;
-    c[22] = -t4;
-    c[23] = -t5;
-    c[24] = -t9;
-    c[25] = t9;
-    c[26] = t10;
-    c[27] = -p[8];
-    c[28] = t14;
-    c[29] = t15;
-    c[30] = -t11;
-    c[31] = t11;
-    c[32] = 2.0*t13;
-    c[33] = p[0]*t9;
-    c[34] = t12;
-    c[35] = t16;
-    c[36] = t18;
-    c[37] = t17;
-    c[38] = t19;
-    c[39] = t20;
-    c[40] = -t21;
-    c[41] = t21;
-    c[42] = -t20;
-    c[43] = p[14];
-    c[44] = p[17];
-    c[45] = -p[16];
-    c[46] = -p[17];
-    c[47] = p[16];
-    c[48] = p[20];
-    c[49] = -p[21];
-    c[50] = p[21];
-    c[51] = -p[20];
-    c[52] = t22;
-    c[53] = -t22;
-    c[54] = p[26];
+    c[13] = t6;
+    c[14] = p[8];
+    c[15] = p[9];
+    c[16] = (1.0/(p[8]));
+    c[17] = (1.0/(p[9]));
+    c[18] = t7;
+    c[19] = 2.0*p[10] + t7;
+    c[20] = p[1];
+    c[21] = p[0];
+    c[22] = t8;
+    c[23] = -t9;
+    c[24] = t10;
+    c[25] = -t5;
+    c[26] = -t6;
+    c[27] = -t11;
+    c[28] = t11;
+    c[29] = t12;
+    c[30] = -p[8];
+    c[31] = t15;
+    c[32] = t16;
+    c[33] = -t1;
+    c[34] = t1;
+    c[35] = 2.0*t14;
+    c[36] = p[3]*t1;
+    c[37] = t13;
+    c[38] = t17;
+    c[39] = t19;
+    c[40] = t18;
+    c[41] = t20;
+    c[42] = t21;
+    c[43] = -t22;
+    c[44] = t22;
+    c[45] = -t21;
+    c[46] = p[14];
+    c[47] = p[17];
+    c[48] = -p[16];
+    c[49] = -p[17];
+    c[50] = p[16];
+    c[51] = p[20];
+    c[52] = -p[21];
+    c[53] = p[21];
+    c[54] = -p[20];
     c[55] = t23;
-    c[56] = p[27];
-    c[57] = t24;
-    c[58] = (1.0/(t14));
-    c[59] = (1.0/(t15));
-    c[60] = -t13*t25;
-    c[61] = -p[1]*p[3]*t25;
-    c[62] = t27;
-    c[63] = -t27;
-    c[64] = p[22];
-    c[65] = p[21] + t18;
-    c[66] = t28;
-    c[67] = -t28;
-    c[68] = p[19];
-    c[69] = -p[23];
-    c[70] = p[24];
-    c[71] = t29;
-    c[72] = -t29;
-    c[73] = p[28];
-    c[74] = -t21 - t23;
+    c[56] = -t23;
+    c[57] = p[26];
+    c[58] = t24;
+    c[59] = p[27];
+    c[60] = t25;
+    c[61] = (1.0/(t15));
+    c[62] = (1.0/(t16));
+    c[63] = -t14*t26;
+    c[64] = -p[1]*p[3]*t26;
+    c[65] = t28;
+    c[66] = -t28;
+    c[67] = p[22];
+    c[68] = p[21] + t19;
+    c[69] = t29;
+    c[70] = -t29;
+    c[71] = p[19];
+    c[72] = -p[23];
+    c[73] = p[24];
+    c[74] = t30;
     c[75] = -t30;
-    c[76] = t30;
-    c[77] = p[25];
-    c[78] = p[15];
-    c[79] = t25;
-    c[80] = p[15]*(((p[16])*(p[16])) + ((p[17])*(p[17]))) + p[18];
-    c[81] = -p[15];
+    c[76] = p[28];
+    c[77] = -t22 - t24;
+    c[78] = -t31;
+    c[79] = t31;
+    c[80] = p[25];
+    c[81] = p[15];
     c[82] = t26;
-    c[83] = -t26;
-    c[84] = -t25;
-    c[85] = p[23];
-    c[86] = (0.5)*p[15];
-    c[87] = (0.5)*p[18];
-    c[88] = (0.5)*p[19];
-    c[89] = (0.5)*p[22];
-    c[90] = (0.5)*p[23];
-    c[91] = (0.5)*p[24];
-    c[92] = (0.5)*p[25];
-    c[93] = (0.5)*p[28];
-    c[94] = -p[19];
-    c[95] = -p[25];
-    c[96] = -p[20] - t6;
-    c[97] = -p[21] - t3;
-    c[98] = -t31;
-    c[99] = t31;
-    c[100] = t32;
+    c[83] = p[15]*(((p[16])*(p[16])) + ((p[17])*(p[17]))) + p[18];
+    c[84] = -p[15];
+    c[85] = t27;
+    c[86] = -t27;
+    c[87] = -t26;
+    c[88] = p[23];
+    c[89] = (0.5)*p[15];
+    c[90] = (0.5)*p[18];
+    c[91] = (0.5)*p[19];
+    c[92] = (0.5)*p[22];
+    c[93] = (0.5)*p[23];
+    c[94] = (0.5)*p[24];
+    c[95] = (0.5)*p[25];
+    c[96] = (0.5)*p[28];
+    c[97] = -p[19];
+    c[98] = -p[25];
+    c[99] = -p[20] - t8;
+    c[100] = -p[21] - t4;
     c[101] = -t32;
+    c[102] = t32;
+    c[103] = t33;
+    c[104] = -t33;
 }
 
 /* sg_overlock_loopers_planar_closed -- Total ops: 37 */
-int sg_overlock_loopers_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+int sg_overlock_loopers_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err)
 {
     (void)x;
     int st;
+    double e[3] = {0.0, 0.0, 1.0};
     {
         /* dyad 0: RRS closed at joint rod (rock_shaft) */
         const double P[2] = {0.0, 0.0};
         const double Q[2] = {c[0] + c[3]*(c[1]*cx[0] + c[2]*cx[1]), c[3]*(c[1]*cx[1] + c[5]*cx[0]) + c[4]};
         const double l[2] = {c[0], c[6]};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[8];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         if (st != SG_OK) return st;
         q[0] = atan2(J[1] - P[1], J[0] - P[0]);
         cq[0] = c[7]*(J[0] - P[0]);
@@ -165,19 +171,22 @@ int sg_overlock_loopers_planar_closed(const double *x, const double *cx, const d
     }
     {
         /* dyad 1: RRR closed at joint F (coupler, lower_lever) */
-        const double P[2] = {c[8]*cq[0] + c[9]*cq[1], c[10]*cq[0] + c[8]*cq[1]};
-        const double Q[2] = {c[11], c[12]};
-        const double l[2] = {c[13], c[14]};
+        const double P[2] = {c[10]*cq[1] + c[9]*cq[0], c[11]*cq[0] + c[9]*cq[1]};
+        const double Q[2] = {c[12], c[13]};
+        const double l[2] = {c[14], c[15]};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[19] + c[18] * e[0];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[1], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[1], ein, e, J);
         if (st != SG_OK) return st;
         q[2] = atan2(J[1] - P[1], J[0] - P[0]);
         q[1] = atan2(J[1] - Q[1], J[0] - Q[0]);
-        cq[4] = c[15]*(J[0] - P[0]);
-        cq[5] = c[15]*(J[1] - P[1]);
-        cq[2] = c[16]*(J[0] - Q[0]);
-        cq[3] = c[16]*(J[1] - Q[1]);
+        cq[4] = c[16]*(J[0] - P[0]);
+        cq[5] = c[16]*(J[1] - P[1]);
+        cq[2] = c[17]*(J[0] - Q[0]);
+        cq[3] = c[17]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return SG_OK;
 }
 
@@ -186,20 +195,20 @@ void sg_overlock_loopers_planar_residual(const double *q, const double *cq, cons
 {
     (void)q;
     (void)x;
-    const double t0 = c[0]*cq[0] + c[18]*(c[1]*cx[0] + c[2]*cx[1]) + c[19];
-    const double t1 = c[0]*cq[1] + c[17] + c[18]*(c[1]*cx[1] + c[5]*cx[0]);
-    const double t2 = c[13]*cq[4];
-    const double t3 = c[21]*cq[2];
-    const double t4 = c[8]*cq[0] + c[9]*cq[1];
-    r[0] = c[20] + ((t0)*(t0)) + ((t1)*(t1));
-    r[1] = c[22] + t2 + t3 + t4;
-    r[2] = c[10]*cq[0] + c[13]*cq[5] + c[21]*cq[3] + c[23] + c[8]*cq[1];
-    jac[0] = c[24]*cq[1]*t0 + c[25]*cq[0]*t1;
+    const double t0 = c[0]*cq[0] + c[21]*(c[1]*cx[0] + c[2]*cx[1]) + c[22];
+    const double t1 = c[0]*cq[1] + c[20] + c[21]*(c[1]*cx[1] + c[5]*cx[0]);
+    const double t2 = c[14]*cq[4];
+    const double t3 = c[24]*cq[2];
+    const double t4 = c[10]*cq[1] + c[9]*cq[0];
+    r[0] = c[23] + ((t0)*(t0)) + ((t1)*(t1));
+    r[1] = c[25] + t2 + t3 + t4;
+    r[2] = c[11]*cq[0] + c[14]*cq[5] + c[24]*cq[3] + c[26] + c[9]*cq[1];
+    jac[0] = c[27]*cq[1]*t0 + c[28]*cq[0]*t1;
     jac[1] = 0.0;
     jac[2] = 0.0;
-    jac[3] = c[26]*cq[1] + c[9]*cq[0];
-    jac[4] = c[14]*cq[3];
-    jac[5] = c[27]*cq[5];
+    jac[3] = c[10]*cq[0] + c[29]*cq[1];
+    jac[4] = c[15]*cq[3];
+    jac[5] = c[30]*cq[5];
     jac[6] = t4;
     jac[7] = t3;
     jac[8] = t2;
@@ -224,9 +233,9 @@ void sg_overlock_loopers_planar_scales(const double *q, const double *cq, const 
     (void)cq;
     (void)x;
     (void)cx;
-    out[0] = c[28];
-    out[1] = c[29];
-    out[2] = c[29];
+    out[0] = c[31];
+    out[1] = c[32];
+    out[2] = c[32];
 }
 
 /* sg_overlock_loopers_planar_blocks -- Total ops: 28 */
@@ -248,106 +257,107 @@ void sg_overlock_loopers_planar_blocks(const double *jac, double *out)
 int sg_overlock_loopers_planar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
-    const double t1 = c[0]*cq[0] + c[18]*t0 + c[19];
-    const double t2 = c[24]*t1;
+    const double t1 = c[0]*cq[0] + c[21]*t0 + c[22];
+    const double t2 = c[27]*t1;
     const double t3 = c[1]*cx[1] + c[5]*cx[0];
-    const double t4 = c[0]*cq[1] + c[17] + c[18]*t3;
-    const double t5 = c[26]*cq[1] + c[9]*cq[0];
-    const double t6 = c[8]*cq[0] + c[9]*cq[1];
-    const double t7 = c[21]*cq[2];
-    const double t8 = c[13]*cq[4];
-    const double t9 = c[30]*t1;
-    const double t10 = c[31]*t0*t4 + t3*t9;
-    const double t11 = c[33]*cq[0]*t0 + c[33]*cq[1]*t3;
-    const double t18 = c[35]*cq[0] + c[36]*cq[1];
-    const double t19 = c[36]*cq[0] + c[38]*cq[1];
-    const double t20 = c[39]*cq[2] + c[40]*cq[3];
-    const double t21 = c[40]*cq[2] + c[42]*cq[3];
-    const double t22 = c[44]*t3 + c[45]*t0;
-    const double t23 = c[44]*t0 + c[47]*t3;
+    const double t4 = c[0]*cq[1] + c[20] + c[21]*t3;
+    const double t5 = c[10]*cq[0] + c[29]*cq[1];
+    const double t6 = c[10]*cq[1] + c[9]*cq[0];
+    const double t7 = c[24]*cq[2];
+    const double t8 = c[14]*cq[4];
+    const double t9 = c[33]*t1;
+    const double t10 = c[34]*t0*t4 + t3*t9;
+    const double t11 = c[36]*cq[0]*t0 + c[36]*cq[1]*t3;
+    const double t18 = c[38]*cq[0] + c[39]*cq[1];
+    const double t19 = c[39]*cq[0] + c[41]*cq[1];
+    const double t20 = c[42]*cq[2] + c[43]*cq[3];
+    const double t21 = c[43]*cq[2] + c[45]*cq[3];
+    const double t22 = c[47]*t3 + c[48]*t0;
+    const double t23 = c[47]*t0 + c[50]*t3;
     const double t24 = ((xd[0])*(xd[0]));
-    const double t25 = c[48]*cq[0] + c[49]*cq[1];
-    const double t26 = c[49]*cq[0] + c[51]*cq[1];
-    const double t27 = c[52]*cq[4];
-    const double t28 = c[53]*cq[5];
-    const double t29 = c[54]*cq[2] + c[55]*cq[3];
-    const double t30 = c[55]*cq[2] + c[57]*cq[3];
-    double J[9], rs[3], cs[3];
+    const double t25 = c[51]*cq[0] + c[52]*cq[1];
+    const double t26 = c[52]*cq[0] + c[54]*cq[1];
+    const double t27 = c[55]*cq[4];
+    const double t28 = c[56]*cq[5];
+    const double t29 = c[57]*cq[2] + c[58]*cq[3];
+    const double t30 = c[58]*cq[2] + c[60]*cq[3];
+    double J[9], rs[3], cs[6];
     int piv[3];
-    J[0] = c[25]*cq[0]*t4 + cq[1]*t2;
+    J[0] = c[28]*cq[0]*t4 + cq[1]*t2;
     J[1] = 0.0;
     J[2] = 0.0;
     J[3] = t5;
-    J[4] = c[14]*cq[3];
-    J[5] = c[27]*cq[5];
+    J[4] = c[15]*cq[3];
+    J[5] = c[30]*cq[5];
     J[6] = t6;
     J[7] = t7;
     J[8] = t8;
     qd[0] = -t10*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    rs[0] = c[58];
-    rs[1] = c[59];
-    rs[2] = c[59];
+    rs[0] = c[61];
+    rs[1] = c[62];
+    rs[2] = c[62];
     if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t12 = ((qd[2])*(qd[2]));
     const double t13 = ((qd[1])*(qd[1]));
     const double t14 = ((qd[0])*(qd[0]));
-    const double t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+    const double t15 = t14*(c[11]*cq[1] + c[29]*cq[0]);
     const double t16 = cq[5]*t12;
     const double t17 = t14*t5;
-    qdd[0] = -qd[0]*(qd[0]*(c[24]*cq[1]*t4 + c[32]*((cq[0])*(cq[0])) + c[32]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[30]*t3*t4 + c[34]*((t0)*(t0)) + c[34]*((t3)*(t3)) + t0*t9));
+    qdd[0] = -qd[0]*(qd[0]*(c[27]*cq[1]*t4 + c[35]*((cq[0])*(cq[0])) + c[35]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[33]*t3*t4 + c[37]*((t0)*(t0)) + c[37]*((t3)*(t3)) + t0*t9));
     qdd[1] = t12*t8 + t13*t7 - t15;
-    qdd[2] = c[13]*t16 + c[21]*cq[3]*t13 - t17;
+    qdd[2] = c[14]*t16 + c[24]*cq[3]*t13 - t17;
     sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(3, 0x7ULL, fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = t18;
-    obs[1] = c[35]*cq[1] + c[37]*cq[0];
+    obs[1] = c[38]*cq[1] + c[40]*cq[0];
     obs[2] = qd[0]*t19;
     obs[3] = qd[0]*t18;
-    obs[4] = qdd[0]*t19 + t14*(c[37]*cq[1] + c[38]*cq[0]);
+    obs[4] = qdd[0]*t19 + t14*(c[40]*cq[1] + c[41]*cq[0]);
     obs[5] = qdd[0]*t18 + t14*t19;
-    obs[6] = c[11] + t20;
-    obs[7] = c[12] + c[39]*cq[3] + c[41]*cq[2];
+    obs[6] = c[12] + t20;
+    obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
     obs[8] = qd[1]*t21;
     obs[9] = qd[1]*t20;
-    obs[10] = qdd[1]*t21 + t13*(c[41]*cq[3] + c[42]*cq[2]);
+    obs[10] = qdd[1]*t21 + t13*(c[44]*cq[3] + c[45]*cq[2]);
     obs[11] = qdd[1]*t20 + t13*t21;
-    obs[12] = c[43] + x[0];
+    obs[12] = c[46] + x[0];
     obs[13] = xd[0];
     obs[14] = xdd[0];
     obs[15] = c[0] + t22;
-    obs[16] = c[4] + c[45]*t3 + c[46]*t0;
+    obs[16] = c[4] + c[48]*t3 + c[49]*t0;
     obs[17] = t23*xd[0];
     obs[18] = t22*xd[0];
-    obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
+    obs[19] = t23*xdd[0] + t24*(c[49]*t3 + c[50]*t0);
     obs[20] = t22*xdd[0] + t23*t24;
     obs[21] = q[0];
     obs[22] = qd[0];
     obs[23] = qdd[0];
     obs[24] = t25;
-    obs[25] = c[48]*cq[1] + c[50]*cq[0];
+    obs[25] = c[51]*cq[1] + c[53]*cq[0];
     obs[26] = qd[0]*t26;
     obs[27] = qd[0]*t25;
-    obs[28] = qdd[0]*t26 + t14*(c[50]*cq[1] + c[51]*cq[0]);
+    obs[28] = qdd[0]*t26 + t14*(c[53]*cq[1] + c[54]*cq[0]);
     obs[29] = qdd[0]*t25 + t14*t26;
     obs[30] = q[2];
     obs[31] = qd[2];
     obs[32] = qdd[2];
     obs[33] = t27 + t6;
-    obs[34] = c[10]*cq[0] + c[52]*cq[5] + c[8]*cq[1];
+    obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
     obs[35] = qd[0]*t5 + qd[2]*t28;
     obs[36] = qd[0]*t6 + qd[2]*t27;
-    obs[37] = c[53]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
-    obs[38] = c[53]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
+    obs[37] = c[56]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
+    obs[38] = c[56]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
     obs[39] = q[1];
     obs[40] = qd[1];
     obs[41] = qdd[1];
-    obs[42] = c[11] + t29;
-    obs[43] = c[12] + c[54]*cq[3] + c[56]*cq[2];
+    obs[42] = c[12] + t29;
+    obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
     obs[44] = qd[1]*t30;
     obs[45] = qd[1]*t29;
-    obs[46] = qdd[1]*t30 + t13*(c[56]*cq[3] + c[57]*cq[2]);
+    obs[46] = qdd[1]*t30 + t13*(c[59]*cq[3] + c[60]*cq[2]);
     obs[47] = qdd[1]*t29 + t13*t30;
     obs[48] = 0.0;
     obs[49] = 0.0;
@@ -361,46 +371,47 @@ int sg_overlock_loopers_planar_rates(const double *q, const double *cq, const do
 {
     (void)x;
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
-    const double t1 = c[0]*cq[0] + c[18]*t0 + c[19];
-    const double t2 = c[24]*t1;
+    const double t1 = c[0]*cq[0] + c[21]*t0 + c[22];
+    const double t2 = c[27]*t1;
     const double t3 = c[1]*cx[1] + c[5]*cx[0];
-    const double t4 = c[0]*cq[1] + c[17] + c[18]*t3;
-    const double t5 = c[26]*cq[1] + c[9]*cq[0];
-    const double t6 = c[8]*cq[0] + c[9]*cq[1];
-    const double t7 = c[21]*cq[2];
-    const double t8 = c[13]*cq[4];
-    const double t9 = c[30]*t1;
-    const double t10 = c[31]*t0*t4 + t3*t9;
-    const double t11 = c[33]*cq[0]*t0 + c[33]*cq[1]*t3;
-    double J[9], rs[3], cs[3];
+    const double t4 = c[0]*cq[1] + c[20] + c[21]*t3;
+    const double t5 = c[10]*cq[0] + c[29]*cq[1];
+    const double t6 = c[10]*cq[1] + c[9]*cq[0];
+    const double t7 = c[24]*cq[2];
+    const double t8 = c[14]*cq[4];
+    const double t9 = c[33]*t1;
+    const double t10 = c[34]*t0*t4 + t3*t9;
+    const double t11 = c[36]*cq[0]*t0 + c[36]*cq[1]*t3;
+    double J[9], rs[3], cs[6];
     int piv[3];
-    J[0] = c[25]*cq[0]*t4 + cq[1]*t2;
+    J[0] = c[28]*cq[0]*t4 + cq[1]*t2;
     J[1] = 0.0;
     J[2] = 0.0;
     J[3] = t5;
-    J[4] = c[14]*cq[3];
-    J[5] = c[27]*cq[5];
+    J[4] = c[15]*cq[3];
+    J[5] = c[30]*cq[5];
     J[6] = t6;
     J[7] = t7;
     J[8] = t8;
     qd[0] = -t10*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    rs[0] = c[58];
-    rs[1] = c[59];
-    rs[2] = c[59];
+    rs[0] = c[61];
+    rs[1] = c[62];
+    rs[2] = c[62];
     if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t12 = ((qd[2])*(qd[2]));
     const double t13 = ((qd[1])*(qd[1]));
     const double t14 = ((qd[0])*(qd[0]));
-    const double t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+    const double t15 = t14*(c[11]*cq[1] + c[29]*cq[0]);
     const double t16 = cq[5]*t12;
     const double t17 = t14*t5;
-    qdd[0] = -qd[0]*(qd[0]*(c[24]*cq[1]*t4 + c[32]*((cq[0])*(cq[0])) + c[32]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[30]*t3*t4 + c[34]*((t0)*(t0)) + c[34]*((t3)*(t3)) + t0*t9));
+    qdd[0] = -qd[0]*(qd[0]*(c[27]*cq[1]*t4 + c[35]*((cq[0])*(cq[0])) + c[35]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[33]*t3*t4 + c[37]*((t0)*(t0)) + c[37]*((t3)*(t3)) + t0*t9));
     qdd[1] = t12*t8 + t13*t7 - t15;
-    qdd[2] = c[13]*t16 + c[21]*cq[3]*t13 - t17;
+    qdd[2] = c[14]*t16 + c[24]*cq[3]*t13 - t17;
     sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(3, 0x7ULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -411,93 +422,93 @@ int sg_overlock_loopers_planar_observe(const double *q, const double *cq, const 
     switch (group) {
     case 0: {
         const double t14 = ((qd[0])*(qd[0]));
-        const double t18 = c[35]*cq[0] + c[36]*cq[1];
-        const double t19 = c[36]*cq[0] + c[38]*cq[1];
+        const double t18 = c[38]*cq[0] + c[39]*cq[1];
+        const double t19 = c[39]*cq[0] + c[41]*cq[1];
         obs[0] = t18;
-        obs[1] = c[35]*cq[1] + c[37]*cq[0];
+        obs[1] = c[38]*cq[1] + c[40]*cq[0];
         obs[2] = qd[0]*t19;
         obs[3] = qd[0]*t18;
-        obs[4] = qdd[0]*t19 + t14*(c[37]*cq[1] + c[38]*cq[0]);
+        obs[4] = qdd[0]*t19 + t14*(c[40]*cq[1] + c[41]*cq[0]);
         obs[5] = qdd[0]*t18 + t14*t19;
         return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
     }
     case 1: {
         const double t13 = ((qd[1])*(qd[1]));
-        const double t20 = c[39]*cq[2] + c[40]*cq[3];
-        const double t21 = c[40]*cq[2] + c[42]*cq[3];
-        obs[6] = c[11] + t20;
-        obs[7] = c[12] + c[39]*cq[3] + c[41]*cq[2];
+        const double t20 = c[42]*cq[2] + c[43]*cq[3];
+        const double t21 = c[43]*cq[2] + c[45]*cq[3];
+        obs[6] = c[12] + t20;
+        obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
         obs[8] = qd[1]*t21;
         obs[9] = qd[1]*t20;
-        obs[10] = qdd[1]*t21 + t13*(c[41]*cq[3] + c[42]*cq[2]);
+        obs[10] = qdd[1]*t21 + t13*(c[44]*cq[3] + c[45]*cq[2]);
         obs[11] = qdd[1]*t20 + t13*t21;
         return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
     }
     case 2: {
         const double t0 = c[1]*cx[0] + c[2]*cx[1];
         const double t3 = c[1]*cx[1] + c[5]*cx[0];
-        const double t22 = c[44]*t3 + c[45]*t0;
-        const double t23 = c[44]*t0 + c[47]*t3;
+        const double t22 = c[47]*t3 + c[48]*t0;
+        const double t23 = c[47]*t0 + c[50]*t3;
         const double t24 = ((xd[0])*(xd[0]));
-        obs[12] = c[43] + x[0];
+        obs[12] = c[46] + x[0];
         obs[13] = xd[0];
         obs[14] = xdd[0];
         obs[15] = c[0] + t22;
-        obs[16] = c[4] + c[45]*t3 + c[46]*t0;
+        obs[16] = c[4] + c[48]*t3 + c[49]*t0;
         obs[17] = t23*xd[0];
         obs[18] = t22*xd[0];
-        obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
+        obs[19] = t23*xdd[0] + t24*(c[49]*t3 + c[50]*t0);
         obs[20] = t22*xdd[0] + t23*t24;
         return isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20]))))) ? SG_OK : SG_NONFINITE;
     }
     case 3: {
         const double t14 = ((qd[0])*(qd[0]));
-        const double t25 = c[48]*cq[0] + c[49]*cq[1];
-        const double t26 = c[49]*cq[0] + c[51]*cq[1];
+        const double t25 = c[51]*cq[0] + c[52]*cq[1];
+        const double t26 = c[52]*cq[0] + c[54]*cq[1];
         obs[21] = q[0];
         obs[22] = qd[0];
         obs[23] = qdd[0];
         obs[24] = t25;
-        obs[25] = c[48]*cq[1] + c[50]*cq[0];
+        obs[25] = c[51]*cq[1] + c[53]*cq[0];
         obs[26] = qd[0]*t26;
         obs[27] = qd[0]*t25;
-        obs[28] = qdd[0]*t26 + t14*(c[50]*cq[1] + c[51]*cq[0]);
+        obs[28] = qdd[0]*t26 + t14*(c[53]*cq[1] + c[54]*cq[0]);
         obs[29] = qdd[0]*t25 + t14*t26;
         return isfinite((((obs[21] + obs[22]) + (obs[23] + obs[24])) + ((obs[25] + obs[26]) + (obs[27] + (obs[28] + obs[29]))))) ? SG_OK : SG_NONFINITE;
     }
     case 4: {
-        const double t5 = c[26]*cq[1] + c[9]*cq[0];
-        const double t6 = c[8]*cq[0] + c[9]*cq[1];
+        const double t5 = c[10]*cq[0] + c[29]*cq[1];
+        const double t6 = c[10]*cq[1] + c[9]*cq[0];
         const double t12 = ((qd[2])*(qd[2]));
         const double t14 = ((qd[0])*(qd[0]));
-        const double t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+        const double t15 = t14*(c[11]*cq[1] + c[29]*cq[0]);
         const double t16 = cq[5]*t12;
         const double t17 = t14*t5;
-        const double t27 = c[52]*cq[4];
-        const double t28 = c[53]*cq[5];
+        const double t27 = c[55]*cq[4];
+        const double t28 = c[56]*cq[5];
         obs[30] = q[2];
         obs[31] = qd[2];
         obs[32] = qdd[2];
         obs[33] = t27 + t6;
-        obs[34] = c[10]*cq[0] + c[52]*cq[5] + c[8]*cq[1];
+        obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
         obs[35] = qd[0]*t5 + qd[2]*t28;
         obs[36] = qd[0]*t6 + qd[2]*t27;
-        obs[37] = c[53]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
-        obs[38] = c[53]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
+        obs[37] = c[56]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
+        obs[38] = c[56]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
         return isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38]))))) ? SG_OK : SG_NONFINITE;
     }
     case 5: {
         const double t13 = ((qd[1])*(qd[1]));
-        const double t29 = c[54]*cq[2] + c[55]*cq[3];
-        const double t30 = c[55]*cq[2] + c[57]*cq[3];
+        const double t29 = c[57]*cq[2] + c[58]*cq[3];
+        const double t30 = c[58]*cq[2] + c[60]*cq[3];
         obs[39] = q[1];
         obs[40] = qd[1];
         obs[41] = qdd[1];
-        obs[42] = c[11] + t29;
-        obs[43] = c[12] + c[54]*cq[3] + c[56]*cq[2];
+        obs[42] = c[12] + t29;
+        obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
         obs[44] = qd[1]*t30;
         obs[45] = qd[1]*t29;
-        obs[46] = qdd[1]*t30 + t13*(c[56]*cq[3] + c[57]*cq[2]);
+        obs[46] = qdd[1]*t30 + t13*(c[59]*cq[3] + c[60]*cq[2]);
         obs[47] = qdd[1]*t29 + t13*t30;
         return isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -519,47 +530,47 @@ int sg_overlock_loopers_planar_forces(const double *q, const double *cq, const d
     (void)x;
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
     const double t1 = c[1]*cx[1] + c[5]*cx[0];
-    const double t2 = c[10]*cq[0] + c[8]*cq[1];
-    const double t3 = c[10]*cq[1] + c[26]*cq[0];
+    const double t2 = c[11]*cq[0] + c[9]*cq[1];
+    const double t3 = c[11]*cq[1] + c[29]*cq[0];
     const double t4 = -gv[0] + obs[37];
     const double t5 = -gv[1] + obs[38];
-    const double t6 = c[68]*(-gv[0] + obs[28]) - ld[0];
-    const double t7 = c[68]*(-gv[1] + obs[29]) - ld[1];
-    const double t8 = c[77]*(-gv[0] + obs[46]) - ld[2];
-    const double t9 = c[77]*(-gv[1] + obs[47]) - ld[3];
-    const double t10 = c[0]*cq[0] + c[18]*t0 + c[19];
-    const double t11 = c[0]*cq[1] + c[17] + c[18]*t1;
-    const double t12 = c[84]*t10;
-    const double t13 = c[84]*t11;
+    const double t6 = c[71]*(-gv[0] + obs[28]) - ld[0];
+    const double t7 = c[71]*(-gv[1] + obs[29]) - ld[1];
+    const double t8 = c[80]*(-gv[0] + obs[46]) - ld[2];
+    const double t9 = c[80]*(-gv[1] + obs[47]) - ld[3];
+    const double t10 = c[0]*cq[0] + c[21]*t0 + c[22];
+    const double t11 = c[0]*cq[1] + c[20] + c[21]*t1;
+    const double t12 = c[87]*t10;
+    const double t13 = c[87]*t11;
     {
         /* block of unknowns 9, 10 */
         double M[4], r[2];
         int piv[2];
-        M[0] = c[21]*cq[3];
-        M[1] = c[14]*cq[2];
-        r[0] = c[73]*obs[41] - ld[2]*(c[74]*cq[2] + c[75]*cq[3]) - ld[3]*(c[74]*cq[3] + c[76]*cq[2]) - ld[7] - t8*(c[54]*cq[3] + c[56]*cq[2]) - t9*(c[56]*cq[3] + c[57]*cq[2]);
-        M[2] = c[13]*cq[5];
-        M[3] = c[27]*cq[4];
-        r[1] = c[70]*obs[32] + c[71]*cq[4]*t5 + c[72]*cq[5]*t4 - ld[6];
+        M[0] = c[24]*cq[3];
+        M[1] = c[15]*cq[2];
+        r[0] = c[76]*obs[41] - ld[2]*(c[77]*cq[2] + c[78]*cq[3]) - ld[3]*(c[77]*cq[3] + c[79]*cq[2]) - ld[7] - t8*(c[57]*cq[3] + c[59]*cq[2]) - t9*(c[59]*cq[3] + c[60]*cq[2]);
+        M[2] = c[14]*cq[5];
+        M[3] = c[30]*cq[4];
+        r[1] = c[73]*obs[32] + c[74]*cq[4]*t5 + c[75]*cq[5]*t4 - ld[6];
         if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
         sg_lu_solve_inl(2, M, piv, r);
         out[9] = r[0];
         out[10] = r[1];
     }
     {
-        const double d = c[60]*cq[1] + c[61]*cq[0] + c[62]*cq[1]*t0 + c[63]*cq[0]*t1;
-        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[60]*cq[1] + c[61]*cq[0] + c[62]*cq[1]*t0 + c[63]*cq[0]*t1))) return SG_SINGULAR;
-        out[4] = (c[64]*obs[23] + c[69]*t2*t4 + c[69]*t3*t5 - out[10]*t3 - out[9]*t2 - ld[0]*(c[65]*cq[0] + c[66]*cq[1]) - ld[1]*(c[65]*cq[1] + c[67]*cq[0]) - ld[5] - t6*(c[48]*cq[1] + c[50]*cq[0]) - t7*(c[50]*cq[1] + c[51]*cq[0]))/d;
+        const double d = c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[1]*t0 + c[66]*cq[0]*t1;
+        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[1]*t0 + c[66]*cq[0]*t1))) return SG_SINGULAR;
+        out[4] = (c[67]*obs[23] + c[72]*t2*t4 + c[72]*t3*t5 - out[10]*t3 - out[9]*t2 - ld[0]*(c[68]*cq[0] + c[69]*cq[1]) - ld[1]*(c[68]*cq[1] + c[70]*cq[0]) - ld[5] - t6*(c[51]*cq[1] + c[53]*cq[0]) - t7*(c[53]*cq[1] + c[54]*cq[0]))/d;
     }
-    out[6] = c[85]*t5 + out[10];
-    out[5] = c[85]*t4 + out[9];
+    out[6] = c[88]*t5 + out[10];
+    out[5] = c[88]*t4 + out[9];
     out[3] = -out[4]*t13 + out[6] + t7;
     out[2] = -out[4]*t12 + out[5] + t6;
     out[8] = -out[10] + t9;
     out[7] = -out[9] + t8;
-    out[11] = c[80]*obs[14] + c[81]*(-gv[0]*(c[45]*t1 + c[46]*t0) + gv[1]*(c[44]*t1 + c[45]*t0)) - out[4]*(c[82]*t1*t10 + c[83]*t0*t11) - ld[4];
-    out[1] = c[78]*(-gv[1] + obs[20]) - c[79]*out[4]*t11;
-    out[0] = c[78]*(-gv[0] + obs[19]) - c[79]*out[4]*t10;
+    out[11] = c[83]*obs[14] + c[84]*(-gv[0]*(c[48]*t1 + c[49]*t0) + gv[1]*(c[47]*t1 + c[48]*t0)) - out[4]*(c[85]*t1*t10 + c[86]*t0*t11) - ld[4];
+    out[1] = c[81]*(-gv[1] + obs[20]) - c[82]*out[4]*t11;
+    out[0] = c[81]*(-gv[0] + obs[19]) - c[82]*out[4]*t10;
     out[12] = out[11];
     out[13] = out[11]*xd[0];
     out[14] = out[4]*t12;
@@ -567,9 +578,9 @@ int sg_overlock_loopers_planar_forces(const double *q, const double *cq, const d
     out[16] = 0.0;
     out[17] = out[0] + out[2] + out[7];
     out[18] = out[1] + out[3] + out[8];
-    out[19] = c[0]*out[1] + c[11]*out[8] + c[17]*out[0] + c[23]*out[7] + out[11];
-    out[20] = c[86]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[87]*((obs[13])*(obs[13])) + c[88]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[89]*((obs[22])*(obs[22])) + c[90]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[91]*((obs[31])*(obs[31])) + c[92]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[93]*((obs[40])*(obs[40]));
-    out[21] = c[69]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[81]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[94]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[95]*(gv[0]*obs[42] + gv[1]*obs[43]);
+    out[19] = c[0]*out[1] + c[12]*out[8] + c[20]*out[0] + c[26]*out[7] + out[11];
+    out[20] = c[89]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[90]*((obs[13])*(obs[13])) + c[91]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[92]*((obs[22])*(obs[22])) + c[93]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[94]*((obs[31])*(obs[31])) + c[95]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[96]*((obs[40])*(obs[40]));
+    out[21] = c[72]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[84]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[97]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[98]*(gv[0]*obs[42] + gv[1]*obs[43]);
     out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
     out[23] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))))) return SG_NONFINITE;
@@ -582,34 +593,34 @@ void sg_overlock_loopers_planar_force_matrix(const double *q, const double *cq, 
     (void)q;
     (void)x;
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
-    const double t1 = c[0]*cq[0] + c[18]*t0 + c[19];
-    const double t2 = c[79]*t1;
+    const double t1 = c[0]*cq[0] + c[21]*t0 + c[22];
+    const double t2 = c[82]*t1;
     const double t3 = c[1]*cx[1] + c[5]*cx[0];
-    const double t4 = c[0]*cq[1] + c[17] + c[18]*t3;
-    const double t5 = c[84]*t4;
-    const double t6 = c[50]*cq[1];
-    const double t7 = c[52]*cq[5];
-    const double t8 = c[53]*cq[4];
-    const double t9 = c[56]*cq[2];
-    const double t10 = c[56]*cq[3];
+    const double t4 = c[0]*cq[1] + c[20] + c[21]*t3;
+    const double t5 = c[87]*t4;
+    const double t6 = c[53]*cq[1];
+    const double t7 = c[55]*cq[5];
+    const double t8 = c[56]*cq[4];
+    const double t9 = c[59]*cq[2];
+    const double t10 = c[59]*cq[3];
     for (int k = 0; k < 144; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[4] = t2;
     A[13] = 1.0;
-    A[16] = c[79]*t4;
-    A[28] = c[82]*t1*t3 + c[83]*t0*t4;
+    A[16] = c[82]*t4;
+    A[28] = c[85]*t1*t3 + c[86]*t0*t4;
     A[35] = 1.0;
     A[38] = 1.0;
-    A[40] = c[84]*t1;
+    A[40] = c[87]*t1;
     A[41] = -1.0;
     A[51] = 1.0;
     A[52] = t5;
     A[54] = -1.0;
-    A[62] = c[48]*cq[1] + c[50]*cq[0];
-    A[63] = c[51]*cq[0] + t6;
-    A[64] = t2*(c[49]*cq[0] + c[96]*cq[1]) + t5*(c[96]*cq[0] + t6);
-    A[65] = c[97]*cq[0] + c[98]*cq[1];
-    A[66] = c[97]*cq[1] + c[99]*cq[0];
+    A[62] = c[51]*cq[1] + c[53]*cq[0];
+    A[63] = c[54]*cq[0] + t6;
+    A[64] = t2*(c[52]*cq[0] + c[99]*cq[1]) + t5*(c[99]*cq[0] + t6);
+    A[65] = c[100]*cq[0] + c[101]*cq[1];
+    A[66] = c[100]*cq[1] + c[102]*cq[0];
     A[77] = 1.0;
     A[81] = -1.0;
     A[90] = 1.0;
@@ -622,22 +633,22 @@ void sg_overlock_loopers_planar_force_matrix(const double *q, const double *cq, 
     A[117] = 1.0;
     A[128] = 1.0;
     A[130] = 1.0;
-    A[139] = c[54]*cq[3] + t9;
-    A[140] = c[57]*cq[2] + t10;
-    A[141] = c[100]*cq[3] + t9;
-    A[142] = c[101]*cq[2] + t10;
-    b[0] = c[78]*(-gv[0] + obs[19]);
-    b[1] = c[78]*(-gv[1] + obs[20]);
-    b[2] = c[80]*obs[14] + c[81]*(-gv[0]*(c[45]*t3 + c[46]*t0) + gv[1]*(c[44]*t3 + c[45]*t0)) - ld[4];
-    b[3] = c[68]*(-gv[0] + obs[28]) - ld[0];
-    b[4] = c[68]*(-gv[1] + obs[29]) - ld[1];
-    b[5] = c[64]*obs[23] - ld[0]*(c[65]*cq[0] + c[66]*cq[1]) - ld[1]*(c[65]*cq[1] + c[67]*cq[0]) - ld[5];
-    b[6] = c[85]*(-gv[0] + obs[37]);
-    b[7] = c[85]*(-gv[1] + obs[38]);
-    b[8] = c[70]*obs[32] - ld[6];
-    b[9] = c[77]*(-gv[0] + obs[46]) - ld[2];
-    b[10] = c[77]*(-gv[1] + obs[47]) - ld[3];
-    b[11] = c[73]*obs[41] - ld[2]*(c[74]*cq[2] + c[75]*cq[3]) - ld[3]*(c[74]*cq[3] + c[76]*cq[2]) - ld[7];
+    A[139] = c[57]*cq[3] + t9;
+    A[140] = c[60]*cq[2] + t10;
+    A[141] = c[103]*cq[3] + t9;
+    A[142] = c[104]*cq[2] + t10;
+    b[0] = c[81]*(-gv[0] + obs[19]);
+    b[1] = c[81]*(-gv[1] + obs[20]);
+    b[2] = c[83]*obs[14] + c[84]*(-gv[0]*(c[48]*t3 + c[49]*t0) + gv[1]*(c[47]*t3 + c[48]*t0)) - ld[4];
+    b[3] = c[71]*(-gv[0] + obs[28]) - ld[0];
+    b[4] = c[71]*(-gv[1] + obs[29]) - ld[1];
+    b[5] = c[67]*obs[23] - ld[0]*(c[68]*cq[0] + c[69]*cq[1]) - ld[1]*(c[68]*cq[1] + c[70]*cq[0]) - ld[5];
+    b[6] = c[88]*(-gv[0] + obs[37]);
+    b[7] = c[88]*(-gv[1] + obs[38]);
+    b[8] = c[73]*obs[32] - ld[6];
+    b[9] = c[80]*(-gv[0] + obs[46]) - ld[2];
+    b[10] = c[80]*(-gv[1] + obs[47]) - ld[3];
+    b[11] = c[76]*obs[41] - ld[2]*(c[77]*cq[2] + c[78]*cq[3]) - ld[3]*(c[77]*cq[3] + c[79]*cq[2]) - ld[7];
 }
 
 /* sg_overlock_loopers_planar_anchors -- Total ops: 66 */
@@ -647,8 +658,8 @@ void sg_overlock_loopers_planar_anchors(const double *q, const double *cq, const
     (void)x;
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
     const double t1 = c[1]*cx[1] + c[5]*cx[0];
-    const double t2 = c[8]*cq[0] + c[9]*cq[1];
-    const double t3 = c[10]*cq[0] + c[8]*cq[1];
+    const double t2 = c[10]*cq[1] + c[9]*cq[0];
+    const double t3 = c[11]*cq[0] + c[9]*cq[1];
     out[0] = c[0];
     out[1] = c[4];
     out[2] = c[0];
@@ -665,26 +676,26 @@ void sg_overlock_loopers_planar_anchors(const double *q, const double *cq, const
     out[13] = t3;
     out[14] = t2;
     out[15] = t3;
-    out[16] = c[11];
-    out[17] = c[12];
-    out[18] = c[11];
-    out[19] = c[12];
-    out[20] = c[13]*cq[4] + t2;
-    out[21] = c[13]*cq[5] + t3;
-    out[22] = c[11] + c[14]*cq[2];
-    out[23] = c[12] + c[14]*cq[3];
-    out[24] = c[35]*cq[0] + c[36]*cq[1];
-    out[25] = c[35]*cq[1] + c[37]*cq[0];
-    out[26] = c[11] + c[39]*cq[2] + c[40]*cq[3];
-    out[27] = c[12] + c[39]*cq[3] + c[41]*cq[2];
-    out[28] = c[0] + c[44]*t1 + c[45]*t0;
-    out[29] = c[4] + c[45]*t1 + c[46]*t0;
-    out[30] = c[48]*cq[0] + c[49]*cq[1];
-    out[31] = c[48]*cq[1] + c[50]*cq[0];
-    out[32] = c[52]*cq[4] + t2;
-    out[33] = c[52]*cq[5] + t3;
-    out[34] = c[11] + c[54]*cq[2] + c[55]*cq[3];
-    out[35] = c[12] + c[54]*cq[3] + c[56]*cq[2];
+    out[16] = c[12];
+    out[17] = c[13];
+    out[18] = c[12];
+    out[19] = c[13];
+    out[20] = c[14]*cq[4] + t2;
+    out[21] = c[14]*cq[5] + t3;
+    out[22] = c[12] + c[15]*cq[2];
+    out[23] = c[13] + c[15]*cq[3];
+    out[24] = c[38]*cq[0] + c[39]*cq[1];
+    out[25] = c[38]*cq[1] + c[40]*cq[0];
+    out[26] = c[12] + c[42]*cq[2] + c[43]*cq[3];
+    out[27] = c[13] + c[42]*cq[3] + c[44]*cq[2];
+    out[28] = c[0] + c[47]*t1 + c[48]*t0;
+    out[29] = c[4] + c[48]*t1 + c[49]*t0;
+    out[30] = c[51]*cq[0] + c[52]*cq[1];
+    out[31] = c[51]*cq[1] + c[53]*cq[0];
+    out[32] = c[55]*cq[4] + t2;
+    out[33] = c[55]*cq[5] + t3;
+    out[34] = c[12] + c[57]*cq[2] + c[58]*cq[3];
+    out[35] = c[13] + c[57]*cq[3] + c[59]*cq[2];
 }
 
 /* sg_overlock_loopers_planar_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
@@ -701,141 +712,147 @@ static SG_FLATTEN SG_NOINLINE size_t sg_overlock_loopers_planar_sweep(const stru
 #if SG_SIMD
 SG_SIMD_BEGIN
 
-SG_VINLINE sg_vm sg_overlock_loopers_planar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_loopers_planar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq, sg_vd *err)
 {
     (void)x;
     sg_vm ok = sgv_true();
+    sg_vd e[3] = {sgv_set1(0.0), sgv_set1(0.0), sgv_set1(1.0)};
     {
         /* dyad 0: RRS closed at joint rod (rock_shaft) */
         const sg_vd P[2] = {sgv_set1(0.0), sgv_set1(0.0)};
         const sg_vd Q[2] = {c[0] + c[3]*(c[1]*cx[0] + c[2]*cx[1]), c[3]*(c[1]*cx[1] + c[5]*cx[0]) + c[4]};
         const sg_vd l[2] = {sgv_set1(c[0]), sgv_set1(c[6])};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[8]);
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         q[0] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         cq[0] = c[7]*(J[0] - P[0]);
         cq[1] = c[7]*(J[1] - P[1]);
     }
     {
         /* dyad 1: RRR closed at joint F (coupler, lower_lever) */
-        const sg_vd P[2] = {c[8]*cq[0] + c[9]*cq[1], c[10]*cq[0] + c[8]*cq[1]};
-        const sg_vd Q[2] = {sgv_set1(c[11]), sgv_set1(c[12])};
-        const sg_vd l[2] = {sgv_set1(c[13]), sgv_set1(c[14])};
+        const sg_vd P[2] = {c[10]*cq[1] + c[9]*cq[0], c[11]*cq[0] + c[9]*cq[1]};
+        const sg_vd Q[2] = {sgv_set1(c[12]), sgv_set1(c[13])};
+        const sg_vd l[2] = {sgv_set1(c[14]), sgv_set1(c[15])};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[19]) + sgv_set1(c[18]) * e[0];
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[1], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[1], ein, e, J);
         q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[1] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
-        cq[4] = c[15]*(J[0] - P[0]);
-        cq[5] = c[15]*(J[1] - P[1]);
-        cq[2] = c[16]*(J[0] - Q[0]);
-        cq[3] = c[16]*(J[1] - Q[1]);
+        cq[4] = c[16]*(J[0] - P[0]);
+        cq[5] = c[16]*(J[1] - P[1]);
+        cq[2] = c[17]*(J[0] - Q[0]);
+        cq[3] = c[17]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return ok;
 }
 
 SG_VINLINE sg_vm sg_overlock_loopers_planar_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
 {
     const sg_vd t0 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t1 = c[0]*cq[0] + c[18]*t0 + c[19];
-    const sg_vd t2 = c[24]*t1;
+    const sg_vd t1 = c[0]*cq[0] + c[21]*t0 + c[22];
+    const sg_vd t2 = c[27]*t1;
     const sg_vd t3 = c[1]*cx[1] + c[5]*cx[0];
-    const sg_vd t4 = c[0]*cq[1] + c[17] + c[18]*t3;
-    const sg_vd t5 = c[26]*cq[1] + c[9]*cq[0];
-    const sg_vd t6 = c[8]*cq[0] + c[9]*cq[1];
-    const sg_vd t7 = c[21]*cq[2];
-    const sg_vd t8 = c[13]*cq[4];
-    const sg_vd t9 = c[30]*t1;
-    const sg_vd t10 = c[31]*t0*t4 + t3*t9;
-    const sg_vd t11 = c[33]*cq[0]*t0 + c[33]*cq[1]*t3;
-    const sg_vd t18 = c[35]*cq[0] + c[36]*cq[1];
-    const sg_vd t19 = c[36]*cq[0] + c[38]*cq[1];
-    const sg_vd t20 = c[39]*cq[2] + c[40]*cq[3];
-    const sg_vd t21 = c[40]*cq[2] + c[42]*cq[3];
-    const sg_vd t22 = c[44]*t3 + c[45]*t0;
-    const sg_vd t23 = c[44]*t0 + c[47]*t3;
+    const sg_vd t4 = c[0]*cq[1] + c[20] + c[21]*t3;
+    const sg_vd t5 = c[10]*cq[0] + c[29]*cq[1];
+    const sg_vd t6 = c[10]*cq[1] + c[9]*cq[0];
+    const sg_vd t7 = c[24]*cq[2];
+    const sg_vd t8 = c[14]*cq[4];
+    const sg_vd t9 = c[33]*t1;
+    const sg_vd t10 = c[34]*t0*t4 + t3*t9;
+    const sg_vd t11 = c[36]*cq[0]*t0 + c[36]*cq[1]*t3;
+    const sg_vd t18 = c[38]*cq[0] + c[39]*cq[1];
+    const sg_vd t19 = c[39]*cq[0] + c[41]*cq[1];
+    const sg_vd t20 = c[42]*cq[2] + c[43]*cq[3];
+    const sg_vd t21 = c[43]*cq[2] + c[45]*cq[3];
+    const sg_vd t22 = c[47]*t3 + c[48]*t0;
+    const sg_vd t23 = c[47]*t0 + c[50]*t3;
     const sg_vd t24 = ((xd[0])*(xd[0]));
-    const sg_vd t25 = c[48]*cq[0] + c[49]*cq[1];
-    const sg_vd t26 = c[49]*cq[0] + c[51]*cq[1];
-    const sg_vd t27 = c[52]*cq[4];
-    const sg_vd t28 = c[53]*cq[5];
-    const sg_vd t29 = c[54]*cq[2] + c[55]*cq[3];
-    const sg_vd t30 = c[55]*cq[2] + c[57]*cq[3];
-    sg_vd J[9], rs[3], cs[3];
+    const sg_vd t25 = c[51]*cq[0] + c[52]*cq[1];
+    const sg_vd t26 = c[52]*cq[0] + c[54]*cq[1];
+    const sg_vd t27 = c[55]*cq[4];
+    const sg_vd t28 = c[56]*cq[5];
+    const sg_vd t29 = c[57]*cq[2] + c[58]*cq[3];
+    const sg_vd t30 = c[58]*cq[2] + c[60]*cq[3];
+    sg_vd J[9], rs[3], cs[6];
     sg_vm piv[3];
-    J[0] = c[25]*cq[0]*t4 + cq[1]*t2;
+    J[0] = c[28]*cq[0]*t4 + cq[1]*t2;
     J[1] = sgv_set1(0.0);
     J[2] = sgv_set1(0.0);
     J[3] = t5;
-    J[4] = c[14]*cq[3];
-    J[5] = c[27]*cq[5];
+    J[4] = c[15]*cq[3];
+    J[5] = c[30]*cq[5];
     J[6] = t6;
     J[7] = t7;
     J[8] = t8;
     qd[0] = -t10*xd[0];
     qd[1] = sgv_set1(0.0);
     qd[2] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[58]);
-    rs[1] = sgv_set1(c[59]);
-    rs[2] = sgv_set1(c[59]);
+    rs[0] = sgv_set1(c[61]);
+    rs[1] = sgv_set1(c[62]);
+    rs[2] = sgv_set1(c[62]);
     sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
     sgv_solve_eq(3, J, piv, rs, cs, qd);
     const sg_vd t12 = ((qd[2])*(qd[2]));
     const sg_vd t13 = ((qd[1])*(qd[1]));
     const sg_vd t14 = ((qd[0])*(qd[0]));
-    const sg_vd t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+    const sg_vd t15 = t14*(c[11]*cq[1] + c[29]*cq[0]);
     const sg_vd t16 = cq[5]*t12;
     const sg_vd t17 = t14*t5;
-    qdd[0] = -qd[0]*(qd[0]*(c[24]*cq[1]*t4 + c[32]*((cq[0])*(cq[0])) + c[32]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[30]*t3*t4 + c[34]*((t0)*(t0)) + c[34]*((t3)*(t3)) + t0*t9));
+    qdd[0] = -qd[0]*(qd[0]*(c[27]*cq[1]*t4 + c[35]*((cq[0])*(cq[0])) + c[35]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[33]*t3*t4 + c[37]*((t0)*(t0)) + c[37]*((t3)*(t3)) + t0*t9));
     qdd[1] = t12*t8 + t13*t7 - t15;
-    qdd[2] = c[13]*t16 + c[21]*cq[3]*t13 - t17;
+    qdd[2] = c[14]*t16 + c[24]*cq[3]*t13 - t17;
     sgv_solve_eq(3, J, piv, rs, cs, qdd);
+    sgv_rates_scale(3, 0x7ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = t18;
-    obs[1] = c[35]*cq[1] + c[37]*cq[0];
+    obs[1] = c[38]*cq[1] + c[40]*cq[0];
     obs[2] = qd[0]*t19;
     obs[3] = qd[0]*t18;
-    obs[4] = qdd[0]*t19 + t14*(c[37]*cq[1] + c[38]*cq[0]);
+    obs[4] = qdd[0]*t19 + t14*(c[40]*cq[1] + c[41]*cq[0]);
     obs[5] = qdd[0]*t18 + t14*t19;
-    obs[6] = c[11] + t20;
-    obs[7] = c[12] + c[39]*cq[3] + c[41]*cq[2];
+    obs[6] = c[12] + t20;
+    obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
     obs[8] = qd[1]*t21;
     obs[9] = qd[1]*t20;
-    obs[10] = qdd[1]*t21 + t13*(c[41]*cq[3] + c[42]*cq[2]);
+    obs[10] = qdd[1]*t21 + t13*(c[44]*cq[3] + c[45]*cq[2]);
     obs[11] = qdd[1]*t20 + t13*t21;
-    obs[12] = c[43] + x[0];
+    obs[12] = c[46] + x[0];
     obs[13] = xd[0];
     obs[14] = xdd[0];
     obs[15] = c[0] + t22;
-    obs[16] = c[4] + c[45]*t3 + c[46]*t0;
+    obs[16] = c[4] + c[48]*t3 + c[49]*t0;
     obs[17] = t23*xd[0];
     obs[18] = t22*xd[0];
-    obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
+    obs[19] = t23*xdd[0] + t24*(c[49]*t3 + c[50]*t0);
     obs[20] = t22*xdd[0] + t23*t24;
     obs[21] = q[0];
     obs[22] = qd[0];
     obs[23] = qdd[0];
     obs[24] = t25;
-    obs[25] = c[48]*cq[1] + c[50]*cq[0];
+    obs[25] = c[51]*cq[1] + c[53]*cq[0];
     obs[26] = qd[0]*t26;
     obs[27] = qd[0]*t25;
-    obs[28] = qdd[0]*t26 + t14*(c[50]*cq[1] + c[51]*cq[0]);
+    obs[28] = qdd[0]*t26 + t14*(c[53]*cq[1] + c[54]*cq[0]);
     obs[29] = qdd[0]*t25 + t14*t26;
     obs[30] = q[2];
     obs[31] = qd[2];
     obs[32] = qdd[2];
     obs[33] = t27 + t6;
-    obs[34] = c[10]*cq[0] + c[52]*cq[5] + c[8]*cq[1];
+    obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
     obs[35] = qd[0]*t5 + qd[2]*t28;
     obs[36] = qd[0]*t6 + qd[2]*t27;
-    obs[37] = c[53]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
-    obs[38] = c[53]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
+    obs[37] = c[56]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
+    obs[38] = c[56]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
     obs[39] = q[1];
     obs[40] = qd[1];
     obs[41] = qdd[1];
-    obs[42] = c[11] + t29;
-    obs[43] = c[12] + c[54]*cq[3] + c[56]*cq[2];
+    obs[42] = c[12] + t29;
+    obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
     obs[44] = qd[1]*t30;
     obs[45] = qd[1]*t29;
-    obs[46] = qdd[1]*t30 + t13*(c[56]*cq[3] + c[57]*cq[2]);
+    obs[46] = qdd[1]*t30 + t13*(c[59]*cq[3] + c[60]*cq[2]);
     obs[47] = qdd[1]*t29 + t13*t30;
     obs[48] = sgv_set1(0.0);
     obs[49] = sgv_set1(0.0);
@@ -848,46 +865,47 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_rates_v(const sg_vd *q, const sg_vd 
 {
     (void)x;
     const sg_vd t0 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t1 = c[0]*cq[0] + c[18]*t0 + c[19];
-    const sg_vd t2 = c[24]*t1;
+    const sg_vd t1 = c[0]*cq[0] + c[21]*t0 + c[22];
+    const sg_vd t2 = c[27]*t1;
     const sg_vd t3 = c[1]*cx[1] + c[5]*cx[0];
-    const sg_vd t4 = c[0]*cq[1] + c[17] + c[18]*t3;
-    const sg_vd t5 = c[26]*cq[1] + c[9]*cq[0];
-    const sg_vd t6 = c[8]*cq[0] + c[9]*cq[1];
-    const sg_vd t7 = c[21]*cq[2];
-    const sg_vd t8 = c[13]*cq[4];
-    const sg_vd t9 = c[30]*t1;
-    const sg_vd t10 = c[31]*t0*t4 + t3*t9;
-    const sg_vd t11 = c[33]*cq[0]*t0 + c[33]*cq[1]*t3;
-    sg_vd J[9], rs[3], cs[3];
+    const sg_vd t4 = c[0]*cq[1] + c[20] + c[21]*t3;
+    const sg_vd t5 = c[10]*cq[0] + c[29]*cq[1];
+    const sg_vd t6 = c[10]*cq[1] + c[9]*cq[0];
+    const sg_vd t7 = c[24]*cq[2];
+    const sg_vd t8 = c[14]*cq[4];
+    const sg_vd t9 = c[33]*t1;
+    const sg_vd t10 = c[34]*t0*t4 + t3*t9;
+    const sg_vd t11 = c[36]*cq[0]*t0 + c[36]*cq[1]*t3;
+    sg_vd J[9], rs[3], cs[6];
     sg_vm piv[3];
-    J[0] = c[25]*cq[0]*t4 + cq[1]*t2;
+    J[0] = c[28]*cq[0]*t4 + cq[1]*t2;
     J[1] = sgv_set1(0.0);
     J[2] = sgv_set1(0.0);
     J[3] = t5;
-    J[4] = c[14]*cq[3];
-    J[5] = c[27]*cq[5];
+    J[4] = c[15]*cq[3];
+    J[5] = c[30]*cq[5];
     J[6] = t6;
     J[7] = t7;
     J[8] = t8;
     qd[0] = -t10*xd[0];
     qd[1] = sgv_set1(0.0);
     qd[2] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[58]);
-    rs[1] = sgv_set1(c[59]);
-    rs[2] = sgv_set1(c[59]);
+    rs[0] = sgv_set1(c[61]);
+    rs[1] = sgv_set1(c[62]);
+    rs[2] = sgv_set1(c[62]);
     sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
     sgv_solve_eq(3, J, piv, rs, cs, qd);
     const sg_vd t12 = ((qd[2])*(qd[2]));
     const sg_vd t13 = ((qd[1])*(qd[1]));
     const sg_vd t14 = ((qd[0])*(qd[0]));
-    const sg_vd t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+    const sg_vd t15 = t14*(c[11]*cq[1] + c[29]*cq[0]);
     const sg_vd t16 = cq[5]*t12;
     const sg_vd t17 = t14*t5;
-    qdd[0] = -qd[0]*(qd[0]*(c[24]*cq[1]*t4 + c[32]*((cq[0])*(cq[0])) + c[32]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[30]*t3*t4 + c[34]*((t0)*(t0)) + c[34]*((t3)*(t3)) + t0*t9));
+    qdd[0] = -qd[0]*(qd[0]*(c[27]*cq[1]*t4 + c[35]*((cq[0])*(cq[0])) + c[35]*((cq[1])*(cq[1])) + cq[0]*t2) + t11*xd[0]) - t10*xdd[0] - xd[0]*(qd[0]*t11 + xd[0]*(c[33]*t3*t4 + c[37]*((t0)*(t0)) + c[37]*((t3)*(t3)) + t0*t9));
     qdd[1] = t12*t8 + t13*t7 - t15;
-    qdd[2] = c[13]*t16 + c[21]*cq[3]*t13 - t17;
+    qdd[2] = c[14]*t16 + c[24]*cq[3]*t13 - t17;
     sgv_solve_eq(3, J, piv, rs, cs, qdd);
+    sgv_rates_scale(3, 0x7ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))));
     return ok;
 }
@@ -897,93 +915,93 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_observe_v(const sg_vd *q, const sg_v
     switch (group) {
     case 0: {
         const sg_vd t14 = ((qd[0])*(qd[0]));
-        const sg_vd t18 = c[35]*cq[0] + c[36]*cq[1];
-        const sg_vd t19 = c[36]*cq[0] + c[38]*cq[1];
+        const sg_vd t18 = c[38]*cq[0] + c[39]*cq[1];
+        const sg_vd t19 = c[39]*cq[0] + c[41]*cq[1];
         obs[0] = t18;
-        obs[1] = c[35]*cq[1] + c[37]*cq[0];
+        obs[1] = c[38]*cq[1] + c[40]*cq[0];
         obs[2] = qd[0]*t19;
         obs[3] = qd[0]*t18;
-        obs[4] = qdd[0]*t19 + t14*(c[37]*cq[1] + c[38]*cq[0]);
+        obs[4] = qdd[0]*t19 + t14*(c[40]*cq[1] + c[41]*cq[0]);
         obs[5] = qdd[0]*t18 + t14*t19;
         return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
     }
     case 1: {
         const sg_vd t13 = ((qd[1])*(qd[1]));
-        const sg_vd t20 = c[39]*cq[2] + c[40]*cq[3];
-        const sg_vd t21 = c[40]*cq[2] + c[42]*cq[3];
-        obs[6] = c[11] + t20;
-        obs[7] = c[12] + c[39]*cq[3] + c[41]*cq[2];
+        const sg_vd t20 = c[42]*cq[2] + c[43]*cq[3];
+        const sg_vd t21 = c[43]*cq[2] + c[45]*cq[3];
+        obs[6] = c[12] + t20;
+        obs[7] = c[13] + c[42]*cq[3] + c[44]*cq[2];
         obs[8] = qd[1]*t21;
         obs[9] = qd[1]*t20;
-        obs[10] = qdd[1]*t21 + t13*(c[41]*cq[3] + c[42]*cq[2]);
+        obs[10] = qdd[1]*t21 + t13*(c[44]*cq[3] + c[45]*cq[2]);
         obs[11] = qdd[1]*t20 + t13*t21;
         return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
     }
     case 2: {
         const sg_vd t0 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t3 = c[1]*cx[1] + c[5]*cx[0];
-        const sg_vd t22 = c[44]*t3 + c[45]*t0;
-        const sg_vd t23 = c[44]*t0 + c[47]*t3;
+        const sg_vd t22 = c[47]*t3 + c[48]*t0;
+        const sg_vd t23 = c[47]*t0 + c[50]*t3;
         const sg_vd t24 = ((xd[0])*(xd[0]));
-        obs[12] = c[43] + x[0];
+        obs[12] = c[46] + x[0];
         obs[13] = xd[0];
         obs[14] = xdd[0];
         obs[15] = c[0] + t22;
-        obs[16] = c[4] + c[45]*t3 + c[46]*t0;
+        obs[16] = c[4] + c[48]*t3 + c[49]*t0;
         obs[17] = t23*xd[0];
         obs[18] = t22*xd[0];
-        obs[19] = t23*xdd[0] + t24*(c[46]*t3 + c[47]*t0);
+        obs[19] = t23*xdd[0] + t24*(c[49]*t3 + c[50]*t0);
         obs[20] = t22*xdd[0] + t23*t24;
         return sgv_isfinite((((obs[12] + obs[13]) + (obs[14] + obs[15])) + ((obs[16] + obs[17]) + (obs[18] + (obs[19] + obs[20])))));
     }
     case 3: {
         const sg_vd t14 = ((qd[0])*(qd[0]));
-        const sg_vd t25 = c[48]*cq[0] + c[49]*cq[1];
-        const sg_vd t26 = c[49]*cq[0] + c[51]*cq[1];
+        const sg_vd t25 = c[51]*cq[0] + c[52]*cq[1];
+        const sg_vd t26 = c[52]*cq[0] + c[54]*cq[1];
         obs[21] = q[0];
         obs[22] = qd[0];
         obs[23] = qdd[0];
         obs[24] = t25;
-        obs[25] = c[48]*cq[1] + c[50]*cq[0];
+        obs[25] = c[51]*cq[1] + c[53]*cq[0];
         obs[26] = qd[0]*t26;
         obs[27] = qd[0]*t25;
-        obs[28] = qdd[0]*t26 + t14*(c[50]*cq[1] + c[51]*cq[0]);
+        obs[28] = qdd[0]*t26 + t14*(c[53]*cq[1] + c[54]*cq[0]);
         obs[29] = qdd[0]*t25 + t14*t26;
         return sgv_isfinite((((obs[21] + obs[22]) + (obs[23] + obs[24])) + ((obs[25] + obs[26]) + (obs[27] + (obs[28] + obs[29])))));
     }
     case 4: {
-        const sg_vd t5 = c[26]*cq[1] + c[9]*cq[0];
-        const sg_vd t6 = c[8]*cq[0] + c[9]*cq[1];
+        const sg_vd t5 = c[10]*cq[0] + c[29]*cq[1];
+        const sg_vd t6 = c[10]*cq[1] + c[9]*cq[0];
         const sg_vd t12 = ((qd[2])*(qd[2]));
         const sg_vd t14 = ((qd[0])*(qd[0]));
-        const sg_vd t15 = t14*(c[10]*cq[1] + c[26]*cq[0]);
+        const sg_vd t15 = t14*(c[11]*cq[1] + c[29]*cq[0]);
         const sg_vd t16 = cq[5]*t12;
         const sg_vd t17 = t14*t5;
-        const sg_vd t27 = c[52]*cq[4];
-        const sg_vd t28 = c[53]*cq[5];
+        const sg_vd t27 = c[55]*cq[4];
+        const sg_vd t28 = c[56]*cq[5];
         obs[30] = q[2];
         obs[31] = qd[2];
         obs[32] = qdd[2];
         obs[33] = t27 + t6;
-        obs[34] = c[10]*cq[0] + c[52]*cq[5] + c[8]*cq[1];
+        obs[34] = c[11]*cq[0] + c[55]*cq[5] + c[9]*cq[1];
         obs[35] = qd[0]*t5 + qd[2]*t28;
         obs[36] = qd[0]*t6 + qd[2]*t27;
-        obs[37] = c[53]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
-        obs[38] = c[53]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
+        obs[37] = c[56]*cq[4]*t12 + qdd[0]*t5 + qdd[2]*t28 + t15;
+        obs[38] = c[56]*t16 + qdd[0]*t6 + qdd[2]*t27 + t17;
         return sgv_isfinite((((obs[30] + obs[31]) + (obs[32] + obs[33])) + ((obs[34] + obs[35]) + (obs[36] + (obs[37] + obs[38])))));
     }
     case 5: {
         const sg_vd t13 = ((qd[1])*(qd[1]));
-        const sg_vd t29 = c[54]*cq[2] + c[55]*cq[3];
-        const sg_vd t30 = c[55]*cq[2] + c[57]*cq[3];
+        const sg_vd t29 = c[57]*cq[2] + c[58]*cq[3];
+        const sg_vd t30 = c[58]*cq[2] + c[60]*cq[3];
         obs[39] = q[1];
         obs[40] = qd[1];
         obs[41] = qdd[1];
-        obs[42] = c[11] + t29;
-        obs[43] = c[12] + c[54]*cq[3] + c[56]*cq[2];
+        obs[42] = c[12] + t29;
+        obs[43] = c[13] + c[57]*cq[3] + c[59]*cq[2];
         obs[44] = qd[1]*t30;
         obs[45] = qd[1]*t29;
-        obs[46] = qdd[1]*t30 + t13*(c[56]*cq[3] + c[57]*cq[2]);
+        obs[46] = qdd[1]*t30 + t13*(c[59]*cq[3] + c[60]*cq[2]);
         obs[47] = qdd[1]*t29 + t13*t30;
         return sgv_isfinite((((obs[39] + obs[40]) + (obs[41] + obs[42])) + ((obs[43] + obs[44]) + (obs[45] + (obs[46] + obs[47])))));
     }
@@ -1005,47 +1023,47 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_forces_v(const sg_vd *q, const sg_vd
     sg_vm ok = sgv_true();
     const sg_vd t0 = c[1]*cx[0] + c[2]*cx[1];
     const sg_vd t1 = c[1]*cx[1] + c[5]*cx[0];
-    const sg_vd t2 = c[10]*cq[0] + c[8]*cq[1];
-    const sg_vd t3 = c[10]*cq[1] + c[26]*cq[0];
+    const sg_vd t2 = c[11]*cq[0] + c[9]*cq[1];
+    const sg_vd t3 = c[11]*cq[1] + c[29]*cq[0];
     const sg_vd t4 = -gv[0] + obs[37];
     const sg_vd t5 = -gv[1] + obs[38];
-    const sg_vd t6 = c[68]*(-gv[0] + obs[28]) - ld[0];
-    const sg_vd t7 = c[68]*(-gv[1] + obs[29]) - ld[1];
-    const sg_vd t8 = c[77]*(-gv[0] + obs[46]) - ld[2];
-    const sg_vd t9 = c[77]*(-gv[1] + obs[47]) - ld[3];
-    const sg_vd t10 = c[0]*cq[0] + c[18]*t0 + c[19];
-    const sg_vd t11 = c[0]*cq[1] + c[17] + c[18]*t1;
-    const sg_vd t12 = c[84]*t10;
-    const sg_vd t13 = c[84]*t11;
+    const sg_vd t6 = c[71]*(-gv[0] + obs[28]) - ld[0];
+    const sg_vd t7 = c[71]*(-gv[1] + obs[29]) - ld[1];
+    const sg_vd t8 = c[80]*(-gv[0] + obs[46]) - ld[2];
+    const sg_vd t9 = c[80]*(-gv[1] + obs[47]) - ld[3];
+    const sg_vd t10 = c[0]*cq[0] + c[21]*t0 + c[22];
+    const sg_vd t11 = c[0]*cq[1] + c[20] + c[21]*t1;
+    const sg_vd t12 = c[87]*t10;
+    const sg_vd t13 = c[87]*t11;
     {
         /* block of unknowns 9, 10 */
         sg_vd M[4], r[2];
         sg_vm piv[2];
-        M[0] = c[21]*cq[3];
-        M[1] = c[14]*cq[2];
-        r[0] = c[73]*obs[41] - ld[2]*(c[74]*cq[2] + c[75]*cq[3]) - ld[3]*(c[74]*cq[3] + c[76]*cq[2]) - ld[7] - t8*(c[54]*cq[3] + c[56]*cq[2]) - t9*(c[56]*cq[3] + c[57]*cq[2]);
-        M[2] = c[13]*cq[5];
-        M[3] = c[27]*cq[4];
-        r[1] = c[70]*obs[32] + c[71]*cq[4]*t5 + c[72]*cq[5]*t4 - ld[6];
+        M[0] = c[24]*cq[3];
+        M[1] = c[15]*cq[2];
+        r[0] = c[76]*obs[41] - ld[2]*(c[77]*cq[2] + c[78]*cq[3]) - ld[3]*(c[77]*cq[3] + c[79]*cq[2]) - ld[7] - t8*(c[57]*cq[3] + c[59]*cq[2]) - t9*(c[59]*cq[3] + c[60]*cq[2]);
+        M[2] = c[14]*cq[5];
+        M[3] = c[30]*cq[4];
+        r[1] = c[73]*obs[32] + c[74]*cq[4]*t5 + c[75]*cq[5]*t4 - ld[6];
         ok &= sgv_lu_factor(2, M, piv);
         sgv_lu_solve(2, M, piv, r);
         out[9] = r[0];
         out[10] = r[1];
     }
     {
-        const sg_vd d = c[60]*cq[1] + c[61]*cq[0] + c[62]*cq[1]*t0 + c[63]*cq[0]*t1;
-        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[60]*cq[1] + c[61]*cq[0] + c[62]*cq[1]*t0 + c[63]*cq[0]*t1);
-        out[4] = (c[64]*obs[23] + c[69]*t2*t4 + c[69]*t3*t5 - out[10]*t3 - out[9]*t2 - ld[0]*(c[65]*cq[0] + c[66]*cq[1]) - ld[1]*(c[65]*cq[1] + c[67]*cq[0]) - ld[5] - t6*(c[48]*cq[1] + c[50]*cq[0]) - t7*(c[50]*cq[1] + c[51]*cq[0]))/d;
+        const sg_vd d = c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[1]*t0 + c[66]*cq[0]*t1;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[63]*cq[1] + c[64]*cq[0] + c[65]*cq[1]*t0 + c[66]*cq[0]*t1);
+        out[4] = (c[67]*obs[23] + c[72]*t2*t4 + c[72]*t3*t5 - out[10]*t3 - out[9]*t2 - ld[0]*(c[68]*cq[0] + c[69]*cq[1]) - ld[1]*(c[68]*cq[1] + c[70]*cq[0]) - ld[5] - t6*(c[51]*cq[1] + c[53]*cq[0]) - t7*(c[53]*cq[1] + c[54]*cq[0]))/d;
     }
-    out[6] = c[85]*t5 + out[10];
-    out[5] = c[85]*t4 + out[9];
+    out[6] = c[88]*t5 + out[10];
+    out[5] = c[88]*t4 + out[9];
     out[3] = -out[4]*t13 + out[6] + t7;
     out[2] = -out[4]*t12 + out[5] + t6;
     out[8] = -out[10] + t9;
     out[7] = -out[9] + t8;
-    out[11] = c[80]*obs[14] + c[81]*(-gv[0]*(c[45]*t1 + c[46]*t0) + gv[1]*(c[44]*t1 + c[45]*t0)) - out[4]*(c[82]*t1*t10 + c[83]*t0*t11) - ld[4];
-    out[1] = c[78]*(-gv[1] + obs[20]) - c[79]*out[4]*t11;
-    out[0] = c[78]*(-gv[0] + obs[19]) - c[79]*out[4]*t10;
+    out[11] = c[83]*obs[14] + c[84]*(-gv[0]*(c[48]*t1 + c[49]*t0) + gv[1]*(c[47]*t1 + c[48]*t0)) - out[4]*(c[85]*t1*t10 + c[86]*t0*t11) - ld[4];
+    out[1] = c[81]*(-gv[1] + obs[20]) - c[82]*out[4]*t11;
+    out[0] = c[81]*(-gv[0] + obs[19]) - c[82]*out[4]*t10;
     out[12] = out[11];
     out[13] = out[11]*xd[0];
     out[14] = out[4]*t12;
@@ -1053,9 +1071,9 @@ SG_VINLINE sg_vm sg_overlock_loopers_planar_forces_v(const sg_vd *q, const sg_vd
     out[16] = sgv_set1(0.0);
     out[17] = out[0] + out[2] + out[7];
     out[18] = out[1] + out[3] + out[8];
-    out[19] = c[0]*out[1] + c[11]*out[8] + c[17]*out[0] + c[23]*out[7] + out[11];
-    out[20] = c[86]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[87]*((obs[13])*(obs[13])) + c[88]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[89]*((obs[22])*(obs[22])) + c[90]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[91]*((obs[31])*(obs[31])) + c[92]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[93]*((obs[40])*(obs[40]));
-    out[21] = c[69]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[81]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[94]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[95]*(gv[0]*obs[42] + gv[1]*obs[43]);
+    out[19] = c[0]*out[1] + c[12]*out[8] + c[20]*out[0] + c[26]*out[7] + out[11];
+    out[20] = c[89]*(((obs[17])*(obs[17])) + ((obs[18])*(obs[18])) + ((obs[49])*(obs[49]))) + c[90]*((obs[13])*(obs[13])) + c[91]*(((obs[26])*(obs[26])) + ((obs[27])*(obs[27]))) + c[92]*((obs[22])*(obs[22])) + c[93]*(((obs[35])*(obs[35])) + ((obs[36])*(obs[36]))) + c[94]*((obs[31])*(obs[31])) + c[95]*(((obs[44])*(obs[44])) + ((obs[45])*(obs[45]))) + c[96]*((obs[40])*(obs[40]));
+    out[21] = c[72]*(gv[0]*obs[33] + gv[1]*obs[34]) + c[84]*(gv[0]*obs[15] + gv[1]*obs[16]) + c[97]*(gv[0]*obs[24] + gv[1]*obs[25]) + c[98]*(gv[0]*obs[42] + gv[1]*obs[43]);
     out[22] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[13] + ld[5]*obs[22] + ld[6]*obs[31] + ld[7]*obs[40];
     out[23] = sgv_set1(0.0);
     ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + (out[9] + (out[10] + out[11])))) + (((out[12] + (out[13] + out[14])) + (out[15] + (out[16] + out[17]))) + ((out[18] + (out[19] + out[20])) + (out[21] + (out[22] + out[23]))))));
@@ -1087,7 +1105,7 @@ static const sg_mechanism sg_overlock_loopers_planar_descriptor = {
     .nq = 3,
     .nx = 1,
     .np = 29,
-    .nc = 102,
+    .nc = 105,
     .nobs = 51,
     .nbranch = 2,
     .nf = 12,
@@ -1154,156 +1172,156 @@ const char *sg_overlock_loopers_planar_manifest(void)
         "\":\"rrs\",\"meaning\":\"+1: pin rock_shaft of rod rod left of the line from D to the crank pin'"
         "s projection (seed 003 eq. 1: \\u03b4\\u2081)\"},{\"default\":1,\"joint\":\"F\",\"kind\":\"rrr\""
         ",\"meaning\":\"+1: joint F left of the line from E to G\"}],\"closed_form\":true,\"closure\":[\""
-        "rod.length\",\"F.x\",\"F.y\"],\"constants\":[[3],[14],[14],[0],[1],[14],[2],[3],[6,7],[6,7],[6,7"
-        "],[10,11],[10,11],[8],[9],[8],[9],[1],[0],[3],[2],[9],[10,11],[10,11],[3],[3],[6,7],[8],[0,1,2,3"
-        "],[6,8,9,10],[0],[0],[3],[0,3],[0],[4,5],[4,5],[4,5],[4,5],[12,13],[12,13],[12,13],[12,13],[14],"
-        "[17],[16],[17],[16],[20],[21],[21],[20],[8],[8],[26],[27],[27],[26],[0,1,2,3],[6,8,9,10],[2,3],["
-        "1,2,3],[0,2,3],[0,2,3],[22],[4,5,21],[4,5,20],[4,5,20],[19],[23],[24],[8,23],[8,23],[28],[12,13,"
-        "27],[12,13,26],[12,13,26],[25],[15],[2],[15,16,17,18],[15],[0,2],[0,2],[2],[23],[15],[18],[19],["
-        "22],[23],[24],[25],[28],[19],[25],[3,20],[6,7,21],[6,7,20],[6,7,20],[9,26],[9,26]],\"coords\":[{"
-        "\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,\"name\":\"lower_le"
-        "ver.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"coupler.angle\",\"unit\":"
-        "\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock: the looper mechani"
-        "sm \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0435\\u0442\\u043b\\u0438\\u"
-        "0442\\u0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136).\\n\\nAn eccentric on the "
-        "main shaft 1 drives, through a ball-jointed rod, the looper rock shaft 3 (a spatial-planar\\nfou"
-        "r-bar ABCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper looper, whose tip N\\u2082 "
-        "is at l\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), and drives through the planar"
-        " four-bar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081 is at l\\u2086 from G at th"
-        "e angle \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2 (eq. 6).\\n\\nFrame (the lo"
-        "opers' plane): origin on the rock-shaft axis D, x along the main shaft, y up; the main shaft's a"
-        "xis\\nruns parallel to x below D. Angles counter-clockwise from +x. Seed 003 writes eqs. 4\\u201"
-        "36 in its own axes (see\\ntests/test_overlock_loopers.py for the mapping).\\n\\nEvery dimension "
-        "is an estimate (seed 003 prints none): the rock shaft swings about \\u00b122\\u00b0, the upper l"
-        "ooper's tip\\nthrough about 45 mm of arc, the lower looper's lever about \\u00b135\\u00b0; masse"
-        "s of small steel levers and loopers.\",\"elements\":[],\"force_blocks\":[2,1],\"force_outputs\":"
-        "[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\""
-        ":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\",\"unit\":\""
-        "N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\""
-        ",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energ"
-        "y\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"un"
-        "it\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"eccen"
-        "tric.y\",\"eccentric.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.moment\",\"coupler."
-        "x\",\"coupler.y\",\"coupler.moment\",\"lower_lever.x\",\"lower_lever.y\",\"lower_lever.moment\"]"
-        ",\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\""
-        ":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_overlock_looper"
-        "s_planar_anchors\":{\"ops\":66},\"sg_overlock_loopers_planar_blocks\":{\"ops\":28},\"sg_overlock"
-        "_loopers_planar_closed\":{\"ops\":37},\"sg_overlock_loopers_planar_constants\":{\"ops\":117},\"s"
-        "g_overlock_loopers_planar_force_matrix\":{\"ops\":118},\"sg_overlock_loopers_planar_forces\":{\""
-        "ops\":219},\"sg_overlock_loopers_planar_lu_factor\":{\"ops\":18},\"sg_overlock_loopers_planar_lu"
-        "_solve\":{\"ops\":18},\"sg_overlock_loopers_planar_motion\":{\"ops\":226},\"sg_overlock_loopers_"
-        "planar_observe\":{\"ops\":159},\"sg_overlock_loopers_planar_rates\":{\"ops\":91},\"sg_overlock_l"
-        "oopers_planar_residual\":{\"ops\":44},\"sg_overlock_loopers_planar_scales\":{\"ops\":3}},\"loads"
-        "\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\"},{\"body\":\"roc"
-        "k_shaft\",\"component\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\"compon"
-        "ent\":\"fx\",\"name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"component\":\"fy\",\"nam"
-        "e\":\"lower_looper_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"eccentric\""
-        "},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{\"body\":\"coupler"
-        "\",\"component\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\"component\":\"torq"
-        "ue\",\"name\":\"lower_lever\"}],\"name\":\"overlock_loopers_planar\",\"observables\":[{\"name\":"
-        "\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit\":\"m\"},{\"name\""
-        ":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\",\"unit\":\"m/s\"}"
-        ",{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_looper_tip.y_dd\",\"u"
-        "nit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.y"
-        "\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper"
-        "_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\":\"rad\"},{\"n"
-        "ame\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\"unit\":\"rad/"
-        "s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\",\"unit\":\"m\""
-        "},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\",\"unit\":\"m"
-        "/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.y_dd\",\"un"
-        "it\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\"rock_shaft.angle_d\""
-        ",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"rock_sh"
-        "aft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{\"name\":\"rock_shaf"
-        "t.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"roc"
-        "k_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"unit\":\"m/s^2\"},{\""
-        "name\":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"unit\":\"rad/s\"},{\""
-        "name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\",\"unit\":\"m\"},{\""
-        "name\":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"unit\":\"m/s\"},{\"name"
-        "\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle\",\"unit\":\"rad\"}"
-        ",{\"name\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lever.angle_dd\",\"unit"
-        "\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.y\","
-        "\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com."
-        "y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower"
-        "_lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.z\",\"unit\":\"m\"},{\"name\":\""
-        "eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.z_dd\",\"unit\":\"m/s^2\"}],\"pa"
-        "rams\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB of the looper eccen"
-        "tric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"u"
-        "nit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock"
-        " shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive\":true,\"role\":nu"
-        "ll,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (est"
-        "imate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kin"
-        "d\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
-        "6,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (estimate)\",\"kind\":\"len"
-        "gth\",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":1.7"
-        "453292519943295,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b3 from the arm D"
-        "C (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\",\"positive\":false,\"role\":nu"
-        "ll,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"arm DE of the planar fo"
-        "ur-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"positive\":true,\"role\":n"
-        "ull,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"arm DE fro"
-        "m the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\",\"positive\":false,\"r"
-        "ole\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"coupler EF (est"
-        "imate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper lever GF (estimate)\",\"kind"
-        "\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
-        "045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"length\",\"name\":\"pivot_di"
-        "stance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.443460952792061,\"displa"
-        "y_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\",\"kind\":\"angle\",\"name"
-        "\":\"pivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.055,\"d"
-        "isplay_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estimate)\",\"kind\":\"length\""
-        ",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":-1.04719"
-        "75511965976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b7 from the lever GF "
-        "(estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"positive\":false,\"role\":null"
-        ",\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric relati"
-        "ve to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of eccentric"
-        "\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\""
-        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u\",\"ki"
-        "nd\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\"kind\":"
-        "\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defa"
-        "ult\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about its ce"
-        "ntre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"role\":n"
-        "ull,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\"mass of rock_shaft"
-        "\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
-        "\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local u\","
-        "\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock_shaft, local v\",\""
-        "kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"}"
-        ",{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of rock_shaft abo"
-        "ut its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\",\"positive\":false,"
-        "\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of "
-        "coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":false,\"role\":null,\"unit\":"
-        "\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of coupler a"
-        "bout its centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.inertia\",\"positive\":false,\""
-        "role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of low"
-        "er_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positive\":false,\"role\":null,\"un"
-        "it\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_lever,"
-        " local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lower_lever, "
-        "local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of l"
-        "ower_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_lever.inertia\",\"po"
-        "sitive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\","
-        "\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper looper tip N\\u2082\",\"name"
-        "\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"body\":\"lower_lever\",\""
-        "doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\"offset\":6,\"role\":\"lower_"
-        "looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],"
-        "\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"grou"
-        "nd\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\""
-        "name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"columns\":[\"tension\"],\""
-        "grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\":\"rock_shaft\",\"b\":\"c"
-        "oupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"E\",\"o"
-        "ffset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true"
-        ",\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\",\"b\":\"lower_lever\",\"c"
-        "olumns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"F\",\"offset\":9},{"
-        "\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaf"
-        "t\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\"low"
-        "er_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\"upper_looper_tip\":{\"kind\""
-        ":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":36,\"nblock\":2,\"nbranch\""
-        ":2,\"nc\":102,\"nf\":12,\"nfo\":24,\"ngroup\":7,\"nload\":8,\"nobs\":51,\"np\":29,\"nq\":3,\"nx\""
-        ":1}}"
+        "rod.length\",\"F.x\",\"F.y\"],\"constants\":[[3],[14],[14],[0],[1],[14],[2],[3],[0,1,3],[6,7],[6"
+        ",7],[6,7],[10,11],[10,11],[8],[9],[8],[9],[6],[6,10],[1],[0],[3],[2],[9],[10,11],[10,11],[3],[3]"
+        ",[6,7],[8],[0,1,2,3],[6,8,9,10],[0],[0],[3],[0,3],[0],[4,5],[4,5],[4,5],[4,5],[12,13],[12,13],[1"
+        "2,13],[12,13],[14],[17],[16],[17],[16],[20],[21],[21],[20],[8],[8],[26],[27],[27],[26],[0,1,2,3]"
+        ",[6,8,9,10],[2,3],[1,2,3],[0,2,3],[0,2,3],[22],[4,5,21],[4,5,20],[4,5,20],[19],[23],[24],[8,23],"
+        "[8,23],[28],[12,13,27],[12,13,26],[12,13,26],[25],[15],[2],[15,16,17,18],[15],[0,2],[0,2],[2],[2"
+        "3],[15],[18],[19],[22],[23],[24],[25],[28],[19],[25],[3,20],[6,7,21],[6,7,20],[6,7,20],[9,26],[9"
+        ",26]],\"coords\":[{\"guess\":0.0,\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"guess\":0.0,"
+        "\"name\":\"lower_lever.angle\",\"unit\":\"rad\"},{\"guess\":1.5707963267948966,\"name\":\"couple"
+        "r.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51-A class overlock:"
+        " the looper mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c \\u043f\\u0435\\u"
+        "0442\\u043b\\u0438\\u0442\\u0435\\u043b\\u0435\\u0439 (seed 003 fig. 3, eqs. 1, 4\\u20136).\\n\\n"
+        "An eccentric on the main shaft 1 drives, through a ball-jointed rod, the looper rock shaft 3 (a "
+        "spatial-planar\\nfour-bar ABCD, \\u03c6\\u2083 by eq. 1); rock shaft 3 carries the upper looper,"
+        " whose tip N\\u2082 is at l\\u2087 from D at the\\nconstructive angle \\u03b3 (eq. 4), and drive"
+        "s through the planar four-bar DEFG the lever 5 of the lower looper, whose\\ntip N\\u2081 is at l"
+        "\\u2086 from G at the angle \\u03b7 (eq. 5); G lies at L from D in the direction \\u03b2 (eq. 6)"
+        ".\\n\\nFrame (the loopers' plane): origin on the rock-shaft axis D, x along the main shaft, y up"
+        "; the main shaft's axis\\nruns parallel to x below D. Angles counter-clockwise from +x. Seed 003"
+        " writes eqs. 4\\u20136 in its own axes (see\\ntests/test_overlock_loopers.py for the mapping).\\n"
+        "\\nEvery dimension is an estimate (seed 003 prints none): the rock shaft swings about \\u00b122\\u"
+        "00b0, the upper looper's tip\\nthrough about 45 mm of arc, the lower looper's lever about \\u00b"
+        "135\\u00b0; masses of small steel levers and loopers.\",\"elements\":[],\"force_blocks\":[2,1],\""
+        "force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\""
+        ":\"W\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"ro"
+        "d.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_f"
+        "orce_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name"
+        "\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\""
+        "load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\"force_rows\":[\"ecce"
+        "ntric.x\",\"eccentric.y\",\"eccentric.moment\",\"rock_shaft.x\",\"rock_shaft.y\",\"rock_shaft.mo"
+        "ment\",\"coupler.x\",\"coupler.y\",\"coupler.moment\",\"lower_lever.x\",\"lower_lever.y\",\"lowe"
+        "r_lever.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft an"
+        "gle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\""
+        "sg_overlock_loopers_planar_anchors\":{\"ops\":66},\"sg_overlock_loopers_planar_blocks\":{\"ops\""
+        ":28},\"sg_overlock_loopers_planar_closed\":{\"ops\":37},\"sg_overlock_loopers_planar_constants\""
+        ":{\"ops\":122},\"sg_overlock_loopers_planar_force_matrix\":{\"ops\":118},\"sg_overlock_loopers_p"
+        "lanar_forces\":{\"ops\":219},\"sg_overlock_loopers_planar_lu_factor\":{\"ops\":18},\"sg_overlock"
+        "_loopers_planar_lu_solve\":{\"ops\":18},\"sg_overlock_loopers_planar_motion\":{\"ops\":226},\"sg"
+        "_overlock_loopers_planar_observe\":{\"ops\":159},\"sg_overlock_loopers_planar_rates\":{\"ops\":9"
+        "1},\"sg_overlock_loopers_planar_residual\":{\"ops\":44},\"sg_overlock_loopers_planar_scales\":{\""
+        "ops\":3}},\"loads\":[{\"body\":\"rock_shaft\",\"component\":\"fx\",\"name\":\"upper_looper_tip\""
+        "},{\"body\":\"rock_shaft\",\"component\":\"fy\",\"name\":\"upper_looper_tip\"},{\"body\":\"lower"
+        "_lever\",\"component\":\"fx\",\"name\":\"lower_looper_tip\"},{\"body\":\"lower_lever\",\"compone"
+        "nt\":\"fy\",\"name\":\"lower_looper_tip\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"na"
+        "me\":\"eccentric\"},{\"body\":\"rock_shaft\",\"component\":\"torque\",\"name\":\"rock_shaft\"},{"
+        "\"body\":\"coupler\",\"component\":\"torque\",\"name\":\"coupler\"},{\"body\":\"lower_lever\",\""
+        "component\":\"torque\",\"name\":\"lower_lever\"}],\"name\":\"overlock_loopers_planar\",\"observa"
+        "bles\":[{\"name\":\"upper_looper_tip.x\",\"unit\":\"m\"},{\"name\":\"upper_looper_tip.y\",\"unit"
+        "\":\"m\"},{\"name\":\"upper_looper_tip.x_d\",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.y_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"upper_looper_tip.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"upper_loo"
+        "per_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_looper_tip.x\",\"unit\":\"m\"},{\"name\":\""
+        "lower_looper_tip.y\",\"unit\":\"m\"},{\"name\":\"lower_looper_tip.x_d\",\"unit\":\"m/s\"},{\"nam"
+        "e\":\"lower_looper_tip.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_looper_tip.x_dd\",\"unit\":\"m/"
+        "s^2\"},{\"name\":\"lower_looper_tip.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"u"
+        "nit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_d"
+        "d\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.co"
+        "m.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.co"
+        "m.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccen"
+        "tric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.angle\",\"unit\":\"rad\"},{\"name\":\""
+        "rock_shaft.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rock_shaft.angle_dd\",\"unit\":\"rad/s^2\"}"
+        ",{\"name\":\"rock_shaft.com.x\",\"unit\":\"m\"},{\"name\":\"rock_shaft.com.y\",\"unit\":\"m\"},{"
+        "\"name\":\"rock_shaft.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rock_shaft.com.y_d\",\"unit\":\"m/"
+        "s\"},{\"name\":\"rock_shaft.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rock_shaft.com.y_dd\",\"u"
+        "nit\":\"m/s^2\"},{\"name\":\"coupler.angle\",\"unit\":\"rad\"},{\"name\":\"coupler.angle_d\",\"u"
+        "nit\":\"rad/s\"},{\"name\":\"coupler.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"coupler.com.x\""
+        ",\"unit\":\"m\"},{\"name\":\"coupler.com.y\",\"unit\":\"m\"},{\"name\":\"coupler.com.x_d\",\"uni"
+        "t\":\"m/s\"},{\"name\":\"coupler.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"coupler.com.x_dd\",\"un"
+        "it\":\"m/s^2\"},{\"name\":\"coupler.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lower_lever.angle"
+        "\",\"unit\":\"rad\"},{\"name\":\"lower_lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lower_lev"
+        "er.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lower_lever.com.x\",\"unit\":\"m\"},{\"name\":\""
+        "lower_lever.com.y\",\"unit\":\"m\"},{\"name\":\"lower_lever.com.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"lower_lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lower_lever.com.x_dd\",\"unit\":\"m/s^2\""
+        "},{\"name\":\"lower_lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.z\",\"unit\":"
+        "\"m\"},{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.z_dd\",\"unit"
+        "\":\"m/s^2\"}],\"params\":[{\"default\":0.006,\"display_unit\":\"mm\",\"doc\":\"eccentricity AB "
+        "of the looper eccentric (estimate)\",\"kind\":\"length\",\"name\":\"eccentric\",\"positive\":tru"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"main-shaft "
+        "axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\"shaft_below\",\"positive"
+        "\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"ball-"
+        "jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positive\":true,\"role\":null"
+        ",\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u208"
+        "3 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"role\":null,\"unit\":\"m"
+        "\"},{\"default\":0.06,\"display_unit\":\"mm\",\"doc\":\"upper looper DN\\u2082, l\\u2087 (estima"
+        "te)\",\"kind\":\"length\",\"name\":\"upper_looper\",\"positive\":true,\"role\":null,\"unit\":\"m"
+        "\"},{\"default\":1.7453292519943295,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u"
+        "03b3 from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"upper_looper_angle\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.02,\"display_unit\":\"mm\",\"doc\":\"arm D"
+        "E of the planar four-bar DEFG (estimate)\",\"kind\":\"length\",\"name\":\"drive_arm\",\"positive"
+        "\":true,\"role\":null,\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\""
+        "doc\":\"arm DE from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"drive_arm_angle\",\"po"
+        "sitive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\""
+        ":\"coupler EF (estimate)\",\"kind\":\"length\",\"name\":\"coupler\",\"positive\":true,\"role\":n"
+        "ull,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"lower-looper lever GF ("
+        "estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\"unit\":\"m\""
+        "},{\"default\":0.045,\"display_unit\":\"mm\",\"doc\":\"DG, L (estimate)\",\"kind\":\"length\",\""
+        "name\":\"pivot_distance\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":2.4434609"
+        "52792061,\"display_unit\":\"deg\",\"doc\":\"direction of G from D, \\u03b2 (estimate)\",\"kind\""
+        ":\"angle\",\"name\":\"pivot_direction\",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"de"
+        "fault\":0.055,\"display_unit\":\"mm\",\"doc\":\"lower looper GN\\u2081, l\\u2086 (estimate)\",\""
+        "kind\":\"length\",\"name\":\"lower_looper\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":-1.0471975511965976,\"display_unit\":\"deg\",\"doc\":\"its constructive angle \\u03b7 f"
+        "rom the lever GF (estimate)\",\"kind\":\"angle\",\"name\":\"lower_looper_angle\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase of"
+        " eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"posit"
+        "ive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\""
+        "mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":nu"
+        "ll,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentr"
+        "ic, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, "
+        "local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"m\"},{\"default\":1.5e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of ecc"
+        "entric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.045,\"display_unit\":\"g\",\"doc\":\""
+        "mass of rock_shaft\",\"kind\":\"mass\",\"name\":\"rock_shaft.mass\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"kg\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock"
+        "_shaft, local u\",\"kind\":\"length\",\"name\":\"rock_shaft.com_u\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"m\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of mass of rock"
+        "_shaft, local v\",\"kind\":\"length\",\"name\":\"rock_shaft.com_v\",\"positive\":false,\"role\":"
+        "null,\"unit\":\"m\"},{\"default\":2.5e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inert"
+        "ia of rock_shaft about its centre of mass\",\"kind\":\"inertia\",\"name\":\"rock_shaft.inertia\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\""
+        ",\"doc\":\"mass of coupler\",\"kind\":\"mass\",\"name\":\"coupler.mass\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"kg\"},{\"default\":8e-07,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of i"
+        "nertia of coupler about its centre of mass\",\"kind\":\"inertia\",\"name\":\"coupler.inertia\",\""
+        "positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.03,\"display_unit\":\"g\",\""
+        "doc\":\"mass of lower_lever\",\"kind\":\"mass\",\"name\":\"lower_lever.mass\",\"positive\":false"
+        ",\"role\":null,\"unit\":\"kg\"},{\"default\":0.015,\"display_unit\":\"mm\",\"doc\":\"centre of m"
+        "ass of lower_lever, local u\",\"kind\":\"length\",\"name\":\"lower_lever.com_u\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of m"
+        "ass of lower_lever, local v\",\"kind\":\"length\",\"name\":\"lower_lever.com_v\",\"positive\":fa"
+        "lse,\"role\":null,\"unit\":\"m\"},{\"default\":1.2e-05,\"display_unit\":\"kg*m**2\",\"doc\":\"mo"
+        "ment of inertia of lower_lever about its centre of mass\",\"kind\":\"inertia\",\"name\":\"lower_"
+        "lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_fields\":[\"x\","
+        "\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"rock_shaft\",\"doc\":\"upper looper t"
+        "ip N\\u2082\",\"name\":\"upper_looper_tip\",\"offset\":0,\"role\":\"upper_looper_tip\"},{\"body\""
+        ":\"lower_lever\",\"doc\":\"lower looper tip N\\u2081\",\"name\":\"lower_looper_tip\",\"offset\":"
+        "6,\"role\":\"lower_looper_tip\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns"
+        "\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset"
+        "\":0},{\"a\":\"ground\",\"b\":\"rock_shaft\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kin"
+        "d\":\"revolute\",\"name\":\"D\",\"offset\":2},{\"a\":\"eccentric\",\"b\":\"rock_shaft\",\"column"
+        "s\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\",\"offset\":4},{\"a\":\"ro"
+        "ck_shaft\",\"b\":\"coupler\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\""
+        ",\"name\":\"E\",\"offset\":5},{\"a\":\"ground\",\"b\":\"lower_lever\",\"columns\":[\"fx\",\"fy\""
+        "],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"G\",\"offset\":7},{\"a\":\"coupler\",\"b\":"
+        "\"lower_lever\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\""
+        "F\",\"offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":tr"
+        "ue,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1"
+        "}],\"roles\":{\"lower_looper_tip\":{\"kind\":\"point\",\"name\":\"lower_looper_tip\"},\"upper_lo"
+        "oper_tip\":{\"kind\":\"point\",\"name\":\"upper_looper_tip\"}},\"sizes\":{\"nanchor_out\":36,\"n"
+        "block\":2,\"nbranch\":2,\"nc\":105,\"nf\":12,\"nfo\":24,\"ngroup\":7,\"nload\":8,\"nobs\":51,\"n"
+        "p\":29,\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_needle_constants -- Total ops: 116 */
+/* sg_overlock_needle_constants -- Total ops: 120 */
 void sg_overlock_needle_constants(const double *p, double *c)
 {
     const double t0 = sin(p[12]);
@@ -19,25 +19,27 @@ void sg_overlock_needle_constants(const double *p, double *c)
     const double t7 = p[3]*t2;
     const double t8 = -t7;
     const double t9 = p[3]*t3;
-    const double t10 = -p[7];
-    const double t11 = 2.0*t9;
-    const double t12 = 2.0*t7;
-    const double t13 = -p[4];
-    const double t14 = 2.0*p[0];
-    const double t15 = 4.0*p[3];
-    const double t16 = 2.0*t6;
-    const double t17 = p[0]*t15 + ((p[1])*(p[1])) + p[1]*t14 + p[1]*t15 + 9.0*t1 + t16 + t5;
-    const double t18 = p[4] + p[6];
-    const double t19 = t18 + fabs(p[7]);
-    const double t20 = -t9;
-    const double t21 = p[8] + p[9];
-    const double t22 = (0.5)*p[6];
-    const double t23 = (1.0/(p[2]));
-    const double t24 = t1*t23;
-    const double t25 = p[1]*t23;
-    const double t26 = p[0]*t23;
-    const double t27 = p[18] + t13;
-    const double t28 = p[19] + t7;
+    const double t10 = 2.0*p[4];
+    const double t11 = fabs(p[7]);
+    const double t12 = -p[7];
+    const double t13 = 2.0*t9;
+    const double t14 = 2.0*t7;
+    const double t15 = -p[4];
+    const double t16 = 2.0*p[0];
+    const double t17 = 4.0*p[3];
+    const double t18 = 2.0*t6;
+    const double t19 = p[0]*t17 + ((p[1])*(p[1])) + p[1]*t16 + p[1]*t17 + 9.0*t1 + t18 + t5;
+    const double t20 = p[4] + p[6];
+    const double t21 = t11 + t20;
+    const double t22 = -t9;
+    const double t23 = p[8] + p[9];
+    const double t24 = (0.5)*p[6];
+    const double t25 = (1.0/(p[2]));
+    const double t26 = t1*t25;
+    const double t27 = p[1]*t25;
+    const double t28 = p[0]*t25;
+    const double t29 = p[18] + t15;
+    const double t30 = p[19] + t7;
     c[0] = p[3];
     c[1] = -p[1];
     c[2] = t0;
@@ -52,103 +54,108 @@ void sg_overlock_needle_constants(const double *p, double *c)
     c[11] = t9;
     c[12] = t8;
     c[13] = t7;
-    c[14] = p[4];
-    c[15] = p[6];
-    c[16] = p[7];
-    c[17] = (1.0/(p[6]));
-    c[18] = -p[3];
-    c[19] = p[1];
-    c[20] = p[0];
-    c[21] = -t5;
-    c[22] = t6;
-    c[23] = t10;
-    c[24] = -t11;
-    c[25] = t12;
-    c[26] = t11;
-    c[27] = t13;
-    c[28] = -p[6];
-    c[29] = t17;
-    c[30] = t19;
-    c[31] = t18;
-    c[32] = -t16;
-    c[33] = t14;
+    c[14] = p[0] + p[1] + p[3];
+    c[15] = p[4];
+    c[16] = p[6];
+    c[17] = p[7];
+    c[18] = (1.0/(p[6]));
+    c[19] = t10;
+    c[20] = t10 + t11;
+    c[21] = -p[3];
+    c[22] = p[1];
+    c[23] = p[0];
+    c[24] = -t5;
+    c[25] = t6;
+    c[26] = t12;
+    c[27] = -t13;
+    c[28] = t14;
+    c[29] = t13;
+    c[30] = t15;
+    c[31] = -p[6];
+    c[32] = t19;
+    c[33] = t21;
     c[34] = t20;
-    c[35] = -t12;
+    c[35] = -t18;
     c[36] = t16;
-    c[37] = -t14;
-    c[38] = -p[8];
-    c[39] = -t21;
-    c[40] = p[12];
-    c[41] = -p[14];
-    c[42] = -p[15];
-    c[43] = p[15];
-    c[44] = p[14];
-    c[45] = p[18];
-    c[46] = -p[19];
-    c[47] = p[19];
-    c[48] = -p[18];
-    c[49] = t22;
-    c[50] = -t22;
-    c[51] = -p[25] - t10;
-    c[52] = p[24];
-    c[53] = (1.0/(t17));
-    c[54] = (1.0/(t19));
-    c[55] = t2*t24;
-    c[56] = -t24*t3;
-    c[57] = -t25*t9;
-    c[58] = -t25*t7;
-    c[59] = -t26*t9;
-    c[60] = -t26*t7;
-    c[61] = p[20];
-    c[62] = t27;
-    c[63] = -t27;
-    c[64] = p[17];
-    c[65] = p[21];
-    c[66] = p[23];
-    c[67] = p[22];
-    c[68] = p[21]*t22;
-    c[69] = p[13];
-    c[70] = t23;
-    c[71] = p[13]*(((p[14])*(p[14])) + ((p[15])*(p[15]))) + p[16];
-    c[72] = t23*t6;
-    c[73] = -t26;
-    c[74] = p[26];
-    c[75] = -p[24] - p[8];
-    c[76] = -p[25];
-    c[77] = -p[24] - t21;
-    c[78] = -p[24];
-    c[79] = -t23;
-    c[80] = t26;
-    c[81] = (0.5)*p[13];
-    c[82] = (0.5)*p[16];
-    c[83] = (0.5)*p[17];
-    c[84] = (0.5)*p[20];
-    c[85] = (0.5)*p[21];
-    c[86] = (0.5)*p[22];
-    c[87] = (0.5)*p[23];
-    c[88] = (0.5)*p[26];
-    c[89] = -p[13];
-    c[90] = -p[17];
-    c[91] = -p[21];
-    c[92] = -p[23];
-    c[93] = -t28;
-    c[94] = -p[18] - t20;
-    c[95] = t28;
-    c[96] = p[25];
+    c[37] = t22;
+    c[38] = -t14;
+    c[39] = t18;
+    c[40] = -t16;
+    c[41] = -p[8];
+    c[42] = -t23;
+    c[43] = p[12];
+    c[44] = -p[14];
+    c[45] = -p[15];
+    c[46] = p[15];
+    c[47] = p[14];
+    c[48] = p[18];
+    c[49] = -p[19];
+    c[50] = p[19];
+    c[51] = -p[18];
+    c[52] = t24;
+    c[53] = -t24;
+    c[54] = -p[25] - t12;
+    c[55] = p[24];
+    c[56] = (1.0/(t19));
+    c[57] = (1.0/(t21));
+    c[58] = t2*t26;
+    c[59] = -t26*t3;
+    c[60] = -t27*t9;
+    c[61] = -t27*t7;
+    c[62] = -t28*t9;
+    c[63] = -t28*t7;
+    c[64] = p[20];
+    c[65] = t29;
+    c[66] = -t29;
+    c[67] = p[17];
+    c[68] = p[21];
+    c[69] = p[23];
+    c[70] = p[22];
+    c[71] = p[21]*t24;
+    c[72] = p[13];
+    c[73] = t25;
+    c[74] = p[13]*(((p[14])*(p[14])) + ((p[15])*(p[15]))) + p[16];
+    c[75] = t25*t6;
+    c[76] = -t28;
+    c[77] = p[26];
+    c[78] = -p[24] - p[8];
+    c[79] = -p[25];
+    c[80] = -p[24] - t23;
+    c[81] = -p[24];
+    c[82] = -t25;
+    c[83] = t28;
+    c[84] = (0.5)*p[13];
+    c[85] = (0.5)*p[16];
+    c[86] = (0.5)*p[17];
+    c[87] = (0.5)*p[20];
+    c[88] = (0.5)*p[21];
+    c[89] = (0.5)*p[22];
+    c[90] = (0.5)*p[23];
+    c[91] = (0.5)*p[26];
+    c[92] = -p[13];
+    c[93] = -p[17];
+    c[94] = -p[21];
+    c[95] = -p[23];
+    c[96] = -t30;
+    c[97] = -p[18] - t22;
+    c[98] = t30;
+    c[99] = p[25];
 }
 
 /* sg_overlock_needle_closed -- Total ops: 38 */
-int sg_overlock_needle_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+int sg_overlock_needle_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err)
 {
     (void)x;
     int st;
+    double e[3] = {0.0, 0.0, 1.0};
     {
         /* dyad 0: RRS closed at joint rod (lever) */
         const double P[2] = {0.0, 0.0};
         const double Q[2] = {c[0], c[1] + c[4]*(c[2]*cx[0] + c[3]*cx[1])};
         const double l[2] = {c[5], sqrt(c[6] + c[8]*((c[3]*cx[0] + c[7]*cx[1])*(c[3]*cx[0] + c[7]*cx[1])))};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[14];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         if (st != SG_OK) return st;
         q[0] = c[9] + atan2(J[1] - P[1], J[0] - P[0]);
         cq[0] = c[10]*(c[11]*(J[0] - P[0]) + c[12]*(J[1] - P[1]));
@@ -156,18 +163,21 @@ int sg_overlock_needle_closed(const double *x, const double *cx, const double *c
     }
     {
         /* dyad 1: RRP closed at joint N (link, needle_bar) */
-        const double P[2] = {c[14]*cq[0], c[14]*cq[1]};
-        const double l[1] = {c[15]};
-        const double L0[2] = {c[16], 0.0};
+        const double P[2] = {c[15]*cq[0], c[15]*cq[1]};
+        const double l[1] = {c[16]};
+        const double L0[2] = {c[17], 0.0};
         const double u[2] = {0.0, 1.0};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[20] + c[19] * e[0];
         double s, J[2];
-        st = sg_dyad_rrp(P, l[0], L0, u, branch[1], &s, J);
+        st = sg_dyad_rrp(P, l[0], L0, u, branch[1], ein, e, &s, J);
         if (st != SG_OK) return st;
         q[2] = atan2(J[1] - P[1], J[0] - P[0]);
         q[1] = s;
-        cq[4] = c[17]*(J[0] - P[0]);
-        cq[5] = c[17]*(J[1] - P[1]);
+        cq[4] = c[18]*(J[0] - P[0]);
+        cq[5] = c[18]*(J[1] - P[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return SG_OK;
 }
 
@@ -175,19 +185,19 @@ int sg_overlock_needle_closed(const double *x, const double *cx, const double *c
 void sg_overlock_needle_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac)
 {
     (void)x;
-    const double t0 = c[11]*cq[0] + c[13]*cq[1] + c[18];
-    const double t1 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*(c[2]*cx[0] + c[3]*cx[1]);
-    const double t2 = c[14]*cq[0];
-    const double t3 = c[15]*cq[4];
-    r[0] = c[21] + c[22]*((c[3]*cx[0] + c[7]*cx[1])*(c[3]*cx[0] + c[7]*cx[1])) + ((t0)*(t0)) + ((t1)*(t1));
-    r[1] = c[23] + t2 + t3;
-    r[2] = c[14]*cq[1] + c[15]*cq[5] - q[1];
-    jac[0] = t0*(c[24]*cq[1] + c[25]*cq[0]) + t1*(c[25]*cq[1] + c[26]*cq[0]);
+    const double t0 = c[11]*cq[0] + c[13]*cq[1] + c[21];
+    const double t1 = c[11]*cq[1] + c[12]*cq[0] + c[22] + c[23]*(c[2]*cx[0] + c[3]*cx[1]);
+    const double t2 = c[15]*cq[0];
+    const double t3 = c[16]*cq[4];
+    r[0] = c[24] + c[25]*((c[3]*cx[0] + c[7]*cx[1])*(c[3]*cx[0] + c[7]*cx[1])) + ((t0)*(t0)) + ((t1)*(t1));
+    r[1] = c[26] + t2 + t3;
+    r[2] = c[15]*cq[1] + c[16]*cq[5] - q[1];
+    jac[0] = t0*(c[27]*cq[1] + c[28]*cq[0]) + t1*(c[28]*cq[1] + c[29]*cq[0]);
     jac[1] = 0.0;
     jac[2] = 0.0;
-    jac[3] = c[27]*cq[1];
+    jac[3] = c[30]*cq[1];
     jac[4] = 0.0;
-    jac[5] = c[28]*cq[5];
+    jac[5] = c[31]*cq[5];
     jac[6] = t2;
     jac[7] = -1.0;
     jac[8] = t3;
@@ -211,9 +221,9 @@ void sg_overlock_needle_scales(const double *q, const double *cq, const double *
     (void)cq;
     (void)x;
     (void)cx;
-    out[0] = c[29];
-    out[1] = c[30];
-    out[2] = c[31] + fabs(q[1]);
+    out[0] = c[32];
+    out[1] = c[33];
+    out[2] = c[34] + fabs(q[1]);
 }
 
 /* sg_overlock_needle_blocks -- Total ops: 27 */
@@ -239,43 +249,43 @@ void sg_overlock_needle_blocks(const double *jac, double *out)
 /* sg_overlock_needle_motion -- Total ops: 154 */
 int sg_overlock_needle_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
-    const double t0 = c[24]*cq[1] + c[25]*cq[0];
+    const double t0 = c[27]*cq[1] + c[28]*cq[0];
     const double t1 = c[11]*cq[0] + c[13]*cq[1];
-    const double t2 = c[18] + t1;
-    const double t3 = c[25]*cq[1] + c[26]*cq[0];
+    const double t2 = c[21] + t1;
+    const double t3 = c[28]*cq[1] + c[29]*cq[0];
     const double t4 = c[2]*cx[0] + c[3]*cx[1];
-    const double t5 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t4;
-    const double t6 = c[27]*cq[1];
-    const double t7 = c[14]*cq[0];
-    const double t8 = c[15]*cq[4];
+    const double t5 = c[11]*cq[1] + c[12]*cq[0] + c[22] + c[23]*t4;
+    const double t6 = c[30]*cq[1];
+    const double t7 = c[15]*cq[0];
+    const double t8 = c[16]*cq[4];
     const double t9 = c[3]*cx[0] + c[7]*cx[1];
-    const double t10 = c[33]*t9;
-    const double t11 = c[32]*t4*t9 + t10*t5;
-    const double t14 = c[14]*cq[1];
-    const double t20 = c[41]*t4 + c[42]*t9;
-    const double t21 = c[41]*t9 + c[43]*t4;
+    const double t10 = c[36]*t9;
+    const double t11 = c[35]*t4*t9 + t10*t5;
+    const double t14 = c[15]*cq[1];
+    const double t20 = c[44]*t4 + c[45]*t9;
+    const double t21 = c[44]*t9 + c[46]*t4;
     const double t22 = ((xd[0])*(xd[0]));
-    const double t23 = c[45]*cq[0] + c[46]*cq[1];
-    const double t24 = c[46]*cq[0] + c[48]*cq[1];
-    const double t25 = c[49]*cq[4];
-    const double t26 = c[50]*cq[5];
-    double J[9], rs[3], cs[3];
+    const double t23 = c[48]*cq[0] + c[49]*cq[1];
+    const double t24 = c[49]*cq[0] + c[51]*cq[1];
+    const double t25 = c[52]*cq[4];
+    const double t26 = c[53]*cq[5];
+    double J[9], rs[3], cs[6];
     int piv[3];
     J[0] = t0*t2 + t3*t5;
     J[1] = 0.0;
     J[2] = 0.0;
     J[3] = t6;
     J[4] = 0.0;
-    J[5] = c[28]*cq[5];
+    J[5] = c[31]*cq[5];
     J[6] = t7;
     J[7] = -1.0;
     J[8] = t8;
     qd[0] = -t11*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    rs[0] = c[53];
-    rs[1] = c[54];
-    rs[2] = (1.0/(c[31] + fabs(q[1])));
+    rs[0] = c[56];
+    rs[1] = c[57];
+    rs[2] = (1.0/(c[34] + fabs(q[1])));
     if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t12 = ((qd[0])*(qd[0]));
@@ -283,11 +293,12 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     const double t15 = cq[5]*t13;
     const double t16 = qd[0]*t6;
     const double t17 = qd[0]*t7;
-    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[34]*cq[1]) + t1*t3 + t2*(c[24]*cq[0] + c[35]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[20]*qd[0]*t3*t9 + xd[0]*(c[36]*((t4)*(t4)) + c[37]*t4*t5));
+    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[37]*cq[1]) + t1*t3 + t2*(c[27]*cq[0] + c[38]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[23]*qd[0]*t3*t9 + xd[0]*(c[39]*((t4)*(t4)) + c[40]*t4*t5));
     qdd[1] = t12*t7 + t13*t8;
-    qdd[2] = c[15]*t15 + t12*t14;
+    qdd[2] = c[16]*t15 + t12*t14;
     sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
-    const double t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+    sg_rates_scale_inl(3, 0x5ULL, fabs(xd[0]), cs, qd, qdd, cond);
+    const double t18 = c[30]*cq[0]*t12 + qdd[0]*t6;
     const double t19 = qdd[0]*t7 + t12*t6;
     obs[0] = t7;
     obs[1] = t14;
@@ -295,19 +306,19 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     obs[3] = t17;
     obs[4] = t18;
     obs[5] = t19;
-    obs[6] = c[16];
-    obs[7] = c[38] + q[1];
+    obs[6] = c[17];
+    obs[7] = c[41] + q[1];
     obs[8] = 0.0;
     obs[9] = qd[1];
     obs[10] = 0.0;
     obs[11] = qdd[1];
-    obs[12] = c[16];
-    obs[13] = c[39] + q[1];
+    obs[12] = c[17];
+    obs[13] = c[42] + q[1];
     obs[14] = 0.0;
     obs[15] = qd[1];
     obs[16] = 0.0;
     obs[17] = qdd[1];
-    obs[18] = c[40] + x[0];
+    obs[18] = c[43] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = c[0];
@@ -315,35 +326,35 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
     obs[23] = 0.0;
     obs[24] = t21*xd[0];
     obs[25] = 0.0;
-    obs[26] = t21*xdd[0] + t22*(c[43]*t9 + c[44]*t4);
+    obs[26] = t21*xdd[0] + t22*(c[46]*t9 + c[47]*t4);
     obs[27] = q[0];
     obs[28] = qd[0];
     obs[29] = qdd[0];
     obs[30] = t23;
-    obs[31] = c[45]*cq[1] + c[47]*cq[0];
+    obs[31] = c[48]*cq[1] + c[50]*cq[0];
     obs[32] = qd[0]*t24;
     obs[33] = qd[0]*t23;
-    obs[34] = qdd[0]*t24 + t12*(c[47]*cq[1] + c[48]*cq[0]);
+    obs[34] = qdd[0]*t24 + t12*(c[50]*cq[1] + c[51]*cq[0]);
     obs[35] = qdd[0]*t23 + t12*t24;
     obs[36] = q[2];
     obs[37] = qd[2];
     obs[38] = qdd[2];
     obs[39] = t25 + t7;
-    obs[40] = c[49]*cq[5] + t14;
+    obs[40] = c[52]*cq[5] + t14;
     obs[41] = qd[2]*t26 + t16;
     obs[42] = qd[2]*t25 + t17;
-    obs[43] = c[50]*cq[4]*t13 + qdd[2]*t26 + t18;
-    obs[44] = c[50]*t15 + qdd[2]*t25 + t19;
+    obs[43] = c[53]*cq[4]*t13 + qdd[2]*t26 + t18;
+    obs[44] = c[53]*t15 + qdd[2]*t25 + t19;
     obs[45] = (0.5)*3.141592653589793;
     obs[46] = 0.0;
     obs[47] = 0.0;
-    obs[48] = c[51];
-    obs[49] = c[52] + q[1];
+    obs[48] = c[54];
+    obs[49] = c[55] + q[1];
     obs[50] = 0.0;
     obs[51] = qd[1];
     obs[52] = 0.0;
     obs[53] = qdd[1];
-    obs[54] = c[42]*t4 + c[44]*t9;
+    obs[54] = c[45]*t4 + c[47]*t9;
     obs[55] = t20*xd[0];
     obs[56] = t20*xdd[0] + t21*t22;
     if (!isfinite(((((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + qdd[1]))) + (((qdd[2] + obs[0]) + (obs[1] + obs[2])) + ((obs[3] + obs[4]) + (obs[5] + obs[6])))) + ((((obs[7] + obs[8]) + (obs[9] + obs[10])) + ((obs[11] + obs[12]) + (obs[13] + obs[14]))) + (((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23])))))) + (((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31]))) + (((obs[32] + obs[33]) + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39])))) + ((((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47]))) + (((obs[48] + obs[49]) + (obs[50] + obs[51])) + ((obs[52] + obs[53]) + (obs[54] + (obs[55] + obs[56]))))))))) return SG_NONFINITE;
@@ -354,45 +365,46 @@ int sg_overlock_needle_motion(const double *q, const double *cq, const double *x
 int sg_overlock_needle_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
 {
     (void)x;
-    const double t0 = c[24]*cq[1] + c[25]*cq[0];
+    const double t0 = c[27]*cq[1] + c[28]*cq[0];
     const double t1 = c[11]*cq[0] + c[13]*cq[1];
-    const double t2 = c[18] + t1;
-    const double t3 = c[25]*cq[1] + c[26]*cq[0];
+    const double t2 = c[21] + t1;
+    const double t3 = c[28]*cq[1] + c[29]*cq[0];
     const double t4 = c[2]*cx[0] + c[3]*cx[1];
-    const double t5 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t4;
-    const double t6 = c[27]*cq[1];
-    const double t7 = c[14]*cq[0];
-    const double t8 = c[15]*cq[4];
+    const double t5 = c[11]*cq[1] + c[12]*cq[0] + c[22] + c[23]*t4;
+    const double t6 = c[30]*cq[1];
+    const double t7 = c[15]*cq[0];
+    const double t8 = c[16]*cq[4];
     const double t9 = c[3]*cx[0] + c[7]*cx[1];
-    const double t10 = c[33]*t9;
-    const double t11 = c[32]*t4*t9 + t10*t5;
-    const double t14 = c[14]*cq[1];
-    double J[9], rs[3], cs[3];
+    const double t10 = c[36]*t9;
+    const double t11 = c[35]*t4*t9 + t10*t5;
+    const double t14 = c[15]*cq[1];
+    double J[9], rs[3], cs[6];
     int piv[3];
     J[0] = t0*t2 + t3*t5;
     J[1] = 0.0;
     J[2] = 0.0;
     J[3] = t6;
     J[4] = 0.0;
-    J[5] = c[28]*cq[5];
+    J[5] = c[31]*cq[5];
     J[6] = t7;
     J[7] = -1.0;
     J[8] = t8;
     qd[0] = -t11*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    rs[0] = c[53];
-    rs[1] = c[54];
-    rs[2] = (1.0/(c[31] + fabs(q[1])));
+    rs[0] = c[56];
+    rs[1] = c[57];
+    rs[2] = (1.0/(c[34] + fabs(q[1])));
     if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t12 = ((qd[0])*(qd[0]));
     const double t13 = ((qd[2])*(qd[2]));
     const double t15 = cq[5]*t13;
-    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[34]*cq[1]) + t1*t3 + t2*(c[24]*cq[0] + c[35]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[20]*qd[0]*t3*t9 + xd[0]*(c[36]*((t4)*(t4)) + c[37]*t4*t5));
+    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[37]*cq[1]) + t1*t3 + t2*(c[27]*cq[0] + c[38]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[23]*qd[0]*t3*t9 + xd[0]*(c[39]*((t4)*(t4)) + c[40]*t4*t5));
     qdd[1] = t12*t7 + t13*t8;
-    qdd[2] = c[15]*t15 + t12*t14;
+    qdd[2] = c[16]*t15 + t12*t14;
     sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(3, 0x5ULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -402,13 +414,13 @@ int sg_overlock_needle_observe(const double *q, const double *cq, const double *
 {
     switch (group) {
     case 0: {
-        const double t6 = c[27]*cq[1];
-        const double t7 = c[14]*cq[0];
+        const double t6 = c[30]*cq[1];
+        const double t7 = c[15]*cq[0];
         const double t12 = ((qd[0])*(qd[0]));
-        const double t14 = c[14]*cq[1];
+        const double t14 = c[15]*cq[1];
         const double t16 = qd[0]*t6;
         const double t17 = qd[0]*t7;
-        const double t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+        const double t18 = c[30]*cq[0]*t12 + qdd[0]*t6;
         const double t19 = qdd[0]*t7 + t12*t6;
         obs[0] = t7;
         obs[1] = t14;
@@ -419,8 +431,8 @@ int sg_overlock_needle_observe(const double *q, const double *cq, const double *
         return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
     }
     case 1: {
-        obs[6] = c[16];
-        obs[7] = c[38] + q[1];
+        obs[6] = c[17];
+        obs[7] = c[41] + q[1];
         obs[8] = 0.0;
         obs[9] = qd[1];
         obs[10] = 0.0;
@@ -428,8 +440,8 @@ int sg_overlock_needle_observe(const double *q, const double *cq, const double *
         return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
     }
     case 2: {
-        obs[12] = c[16];
-        obs[13] = c[39] + q[1];
+        obs[12] = c[17];
+        obs[13] = c[42] + q[1];
         obs[14] = 0.0;
         obs[15] = qd[1];
         obs[16] = 0.0;
@@ -439,10 +451,10 @@ int sg_overlock_needle_observe(const double *q, const double *cq, const double *
     case 3: {
         const double t4 = c[2]*cx[0] + c[3]*cx[1];
         const double t9 = c[3]*cx[0] + c[7]*cx[1];
-        const double t20 = c[41]*t4 + c[42]*t9;
-        const double t21 = c[41]*t9 + c[43]*t4;
+        const double t20 = c[44]*t4 + c[45]*t9;
+        const double t21 = c[44]*t9 + c[46]*t4;
         const double t22 = ((xd[0])*(xd[0]));
-        obs[18] = c[40] + x[0];
+        obs[18] = c[43] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
         obs[21] = c[0];
@@ -450,54 +462,54 @@ int sg_overlock_needle_observe(const double *q, const double *cq, const double *
         obs[23] = 0.0;
         obs[24] = t21*xd[0];
         obs[25] = 0.0;
-        obs[26] = t21*xdd[0] + t22*(c[43]*t9 + c[44]*t4);
+        obs[26] = t21*xdd[0] + t22*(c[46]*t9 + c[47]*t4);
         return isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26]))))) ? SG_OK : SG_NONFINITE;
     }
     case 4: {
         const double t12 = ((qd[0])*(qd[0]));
-        const double t23 = c[45]*cq[0] + c[46]*cq[1];
-        const double t24 = c[46]*cq[0] + c[48]*cq[1];
+        const double t23 = c[48]*cq[0] + c[49]*cq[1];
+        const double t24 = c[49]*cq[0] + c[51]*cq[1];
         obs[27] = q[0];
         obs[28] = qd[0];
         obs[29] = qdd[0];
         obs[30] = t23;
-        obs[31] = c[45]*cq[1] + c[47]*cq[0];
+        obs[31] = c[48]*cq[1] + c[50]*cq[0];
         obs[32] = qd[0]*t24;
         obs[33] = qd[0]*t23;
-        obs[34] = qdd[0]*t24 + t12*(c[47]*cq[1] + c[48]*cq[0]);
+        obs[34] = qdd[0]*t24 + t12*(c[50]*cq[1] + c[51]*cq[0]);
         obs[35] = qdd[0]*t23 + t12*t24;
         return isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35]))))) ? SG_OK : SG_NONFINITE;
     }
     case 5: {
-        const double t6 = c[27]*cq[1];
-        const double t7 = c[14]*cq[0];
+        const double t6 = c[30]*cq[1];
+        const double t7 = c[15]*cq[0];
         const double t12 = ((qd[0])*(qd[0]));
         const double t13 = ((qd[2])*(qd[2]));
-        const double t14 = c[14]*cq[1];
+        const double t14 = c[15]*cq[1];
         const double t15 = cq[5]*t13;
         const double t16 = qd[0]*t6;
         const double t17 = qd[0]*t7;
-        const double t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+        const double t18 = c[30]*cq[0]*t12 + qdd[0]*t6;
         const double t19 = qdd[0]*t7 + t12*t6;
-        const double t25 = c[49]*cq[4];
-        const double t26 = c[50]*cq[5];
+        const double t25 = c[52]*cq[4];
+        const double t26 = c[53]*cq[5];
         obs[36] = q[2];
         obs[37] = qd[2];
         obs[38] = qdd[2];
         obs[39] = t25 + t7;
-        obs[40] = c[49]*cq[5] + t14;
+        obs[40] = c[52]*cq[5] + t14;
         obs[41] = qd[2]*t26 + t16;
         obs[42] = qd[2]*t25 + t17;
-        obs[43] = c[50]*cq[4]*t13 + qdd[2]*t26 + t18;
-        obs[44] = c[50]*t15 + qdd[2]*t25 + t19;
+        obs[43] = c[53]*cq[4]*t13 + qdd[2]*t26 + t18;
+        obs[44] = c[53]*t15 + qdd[2]*t25 + t19;
         return isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44]))))) ? SG_OK : SG_NONFINITE;
     }
     case 6: {
         obs[45] = (0.5)*3.141592653589793;
         obs[46] = 0.0;
         obs[47] = 0.0;
-        obs[48] = c[51];
-        obs[49] = c[52] + q[1];
+        obs[48] = c[54];
+        obs[49] = c[55] + q[1];
         obs[50] = 0.0;
         obs[51] = qd[1];
         obs[52] = 0.0;
@@ -507,10 +519,10 @@ int sg_overlock_needle_observe(const double *q, const double *cq, const double *
     case 7: {
         const double t4 = c[2]*cx[0] + c[3]*cx[1];
         const double t9 = c[3]*cx[0] + c[7]*cx[1];
-        const double t20 = c[41]*t4 + c[42]*t9;
-        const double t21 = c[41]*t9 + c[43]*t4;
+        const double t20 = c[44]*t4 + c[45]*t9;
+        const double t21 = c[44]*t9 + c[46]*t4;
         const double t22 = ((xd[0])*(xd[0]));
-        obs[54] = c[42]*t4 + c[44]*t9;
+        obs[54] = c[45]*t4 + c[47]*t9;
         obs[55] = t20*xd[0];
         obs[56] = t20*xdd[0] + t21*t22;
         return isfinite((obs[54] + (obs[55] + obs[56]))) ? SG_OK : SG_NONFINITE;
@@ -525,40 +537,40 @@ int sg_overlock_needle_forces(const double *q, const double *cq, const double *x
 {
     (void)x;
     const double t0 = c[2]*cx[0] + c[3]*cx[1];
-    const double t1 = c[47]*cq[0];
-    const double t2 = c[47]*cq[1];
-    const double t3 = c[64]*(-gv[0] + obs[34]) - ld[0];
+    const double t1 = c[50]*cq[0];
+    const double t2 = c[50]*cq[1];
+    const double t3 = c[67]*(-gv[0] + obs[34]) - ld[0];
     const double t4 = -gv[1] + obs[53];
-    const double t5 = c[65]*(-gv[1] + obs[44]) + c[66]*t4 - ld[3] - ld[5];
-    const double t6 = c[64]*(-gv[1] + obs[35]) - ld[1] + t5;
+    const double t5 = c[68]*(-gv[1] + obs[44]) + c[69]*t4 - ld[3] - ld[5];
+    const double t6 = c[67]*(-gv[1] + obs[35]) - ld[1] + t5;
     const double t7 = -gv[0] + obs[43];
-    const double t8 = c[66]*t4 - ld[3] - ld[5];
-    const double t9 = c[49]*cq[4];
-    const double t10 = c[11]*cq[0] + c[13]*cq[1] + c[18];
-    const double t11 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t0;
+    const double t8 = c[69]*t4 - ld[3] - ld[5];
+    const double t9 = c[52]*cq[4];
+    const double t10 = c[11]*cq[0] + c[13]*cq[1] + c[21];
+    const double t11 = c[11]*cq[1] + c[12]*cq[0] + c[22] + c[23]*t0;
     const double t12 = c[3]*cx[0] + c[7]*cx[1];
-    const double t13 = c[79]*t11;
-    const double t14 = c[79]*t10;
+    const double t13 = c[82]*t11;
+    const double t14 = c[82]*t10;
     {
-        const double d = c[15]*cq[5];
-        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[14]*cq[1]), fabs(c[15]*cq[5])))) return SG_SINGULAR;
-        out[7] = (c[67]*obs[38] + c[68]*cq[5]*t7 - ld[8] + t5*t9 + t8*t9)/d;
+        const double d = c[16]*cq[5];
+        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[15]*cq[1]), fabs(c[16]*cq[5])))) return SG_SINGULAR;
+        out[7] = (c[70]*obs[38] + c[71]*cq[5]*t7 - ld[8] + t5*t9 + t8*t9)/d;
     }
     {
-        const double d = c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[0]*t0 + c[60]*cq[1]*t0;
-        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[0]*t0 + c[60]*cq[1]*t0))) return SG_SINGULAR;
-        out[6] = (-c[14]*cq[1]*out[7] + c[61]*obs[29] - ld[0]*(c[62]*cq[1] + t1) - ld[1]*(c[63]*cq[0] + t2) - ld[7] - t3*(c[45]*cq[1] + t1) - t5*(c[46]*cq[1] + c[62]*cq[0]) - t6*(c[48]*cq[0] + t2))/d;
+        const double d = c[58]*cq[0] + c[59]*cq[1] + c[60]*cq[0] + c[61]*cq[1] + c[62]*cq[0]*t0 + c[63]*cq[1]*t0;
+        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[58]*cq[0] + c[59]*cq[1] + c[60]*cq[0] + c[61]*cq[1] + c[62]*cq[0]*t0 + c[63]*cq[1]*t0))) return SG_SINGULAR;
+        out[6] = (-c[15]*cq[1]*out[7] + c[64]*obs[29] - ld[0]*(c[65]*cq[1] + t1) - ld[1]*(c[66]*cq[0] + t2) - ld[7] - t3*(c[48]*cq[1] + t1) - t5*(c[49]*cq[1] + c[65]*cq[0]) - t6*(c[51]*cq[0] + t2))/d;
     }
     out[4] = -out[6]*t14 + out[7] + t3;
-    out[9] = -c[65]*t7 + out[7];
+    out[9] = -c[68]*t7 + out[7];
     out[5] = -out[6]*t13 + t6;
-    out[2] = -c[66]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
-    out[3] = -c[52]*out[9] + c[74]*obs[47] + c[75]*ld[2] + c[76]*ld[3] + c[76]*ld[5] + c[76]*t8 + c[77]*ld[4] - c[78]*out[2] - ld[9];
+    out[2] = -c[69]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
+    out[3] = -c[55]*out[9] + c[77]*obs[47] + c[78]*ld[2] + c[79]*ld[3] + c[79]*ld[5] + c[79]*t8 + c[80]*ld[4] - c[81]*out[2] - ld[9];
     out[8] = t5;
     out[10] = t8;
-    out[11] = c[69]*gv[1]*(c[42]*t0 + c[44]*t12) + c[71]*obs[20] - out[6]*(c[72]*t0*t12 + c[73]*t11*t12) - ld[6];
-    out[1] = c[69]*(-gv[1] + obs[26]) - c[70]*out[6]*t11;
-    out[0] = c[69]*(-gv[0] + obs[25]) - c[70]*out[6]*t10;
+    out[11] = c[72]*gv[1]*(c[45]*t0 + c[47]*t12) + c[74]*obs[20] - out[6]*(c[75]*t0*t12 + c[76]*t11*t12) - ld[6];
+    out[1] = c[72]*(-gv[1] + obs[26]) - c[73]*out[6]*t11;
+    out[0] = c[72]*(-gv[0] + obs[25]) - c[73]*out[6]*t10;
     const double t15 = -out[2];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
@@ -566,12 +578,12 @@ int sg_overlock_needle_forces(const double *q, const double *cq, const double *x
     out[15] = 0.0;
     out[16] = out[6]*t14;
     out[17] = out[6]*t13;
-    out[18] = c[80]*out[6]*t12;
+    out[18] = c[83]*out[6]*t12;
     out[19] = out[0] + out[4] + t15;
     out[20] = out[1] + out[5];
-    out[21] = c[0]*out[1] + c[19]*out[0] + out[11] + out[2]*q[1] + out[3];
-    out[22] = c[81]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[82]*((obs[19])*(obs[19])) + c[83]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[84]*((obs[28])*(obs[28])) + c[85]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[86]*((obs[37])*(obs[37])) + c[87]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[88]*((obs[46])*(obs[46]));
-    out[23] = c[89]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[90]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[91]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[92]*(gv[0]*obs[48] + gv[1]*obs[49]);
+    out[21] = c[0]*out[1] + c[22]*out[0] + out[11] + out[2]*q[1] + out[3];
+    out[22] = c[84]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[85]*((obs[19])*(obs[19])) + c[86]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[87]*((obs[28])*(obs[28])) + c[88]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[89]*((obs[37])*(obs[37])) + c[90]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[91]*((obs[46])*(obs[46]));
+    out[23] = c[92]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[93]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[94]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[95]*(gv[0]*obs[48] + gv[1]*obs[49]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     out[25] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
@@ -583,34 +595,34 @@ void sg_overlock_needle_force_matrix(const double *q, const double *cq, const do
 {
     (void)q;
     (void)x;
-    const double t0 = c[11]*cq[0] + c[13]*cq[1] + c[18];
-    const double t1 = c[70]*t0;
+    const double t0 = c[11]*cq[0] + c[13]*cq[1] + c[21];
+    const double t1 = c[73]*t0;
     const double t2 = c[2]*cx[0] + c[3]*cx[1];
-    const double t3 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t2;
+    const double t3 = c[11]*cq[1] + c[12]*cq[0] + c[22] + c[23]*t2;
     const double t4 = c[3]*cx[0] + c[7]*cx[1];
-    const double t5 = c[79]*t3;
-    const double t6 = c[47]*cq[0];
-    const double t7 = c[47]*cq[1];
-    const double t8 = c[49]*cq[5];
-    const double t9 = c[50]*cq[4];
+    const double t5 = c[82]*t3;
+    const double t6 = c[50]*cq[0];
+    const double t7 = c[50]*cq[1];
+    const double t8 = c[52]*cq[5];
+    const double t9 = c[53]*cq[4];
     for (int k = 0; k < 144; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[6] = t1;
     A[13] = 1.0;
-    A[18] = c[70]*t3;
-    A[30] = c[72]*t2*t4 + c[73]*t3*t4;
+    A[18] = c[73]*t3;
+    A[30] = c[75]*t2*t4 + c[76]*t3*t4;
     A[35] = 1.0;
     A[40] = 1.0;
-    A[42] = c[79]*t0;
+    A[42] = c[82]*t0;
     A[43] = -1.0;
     A[53] = 1.0;
     A[54] = t5;
     A[56] = -1.0;
-    A[64] = c[45]*cq[1] + t6;
-    A[65] = c[48]*cq[0] + t7;
-    A[66] = t1*(c[93]*cq[0] + c[94]*cq[1]) + t5*(c[94]*cq[0] + c[95]*cq[1]);
-    A[67] = c[46]*cq[0] + c[63]*cq[1];
-    A[68] = c[46]*cq[1] + c[62]*cq[0];
+    A[64] = c[48]*cq[1] + t6;
+    A[65] = c[51]*cq[0] + t7;
+    A[66] = t1*(c[96]*cq[0] + c[97]*cq[1]) + t5*(c[97]*cq[0] + c[98]*cq[1]);
+    A[67] = c[49]*cq[0] + c[66]*cq[1];
+    A[68] = c[49]*cq[1] + c[65]*cq[0];
     A[79] = 1.0;
     A[81] = -1.0;
     A[92] = 1.0;
@@ -622,22 +634,22 @@ void sg_overlock_needle_force_matrix(const double *q, const double *cq, const do
     A[110] = -1.0;
     A[117] = 1.0;
     A[130] = 1.0;
-    A[134] = c[78];
+    A[134] = c[81];
     A[135] = 1.0;
-    A[141] = c[52];
-    A[142] = c[96];
-    b[0] = c[69]*(-gv[0] + obs[25]);
-    b[1] = c[69]*(-gv[1] + obs[26]);
-    b[2] = c[69]*gv[1]*(c[42]*t2 + c[44]*t4) + c[71]*obs[20] - ld[6];
-    b[3] = c[64]*(-gv[0] + obs[34]) - ld[0];
-    b[4] = c[64]*(-gv[1] + obs[35]) - ld[1];
-    b[5] = c[61]*obs[29] - ld[0]*(c[62]*cq[1] + t6) - ld[1]*(c[63]*cq[0] + t7) - ld[7];
-    b[6] = c[65]*(-gv[0] + obs[43]);
-    b[7] = c[65]*(-gv[1] + obs[44]);
-    b[8] = c[67]*obs[38] - ld[8];
-    b[9] = c[66]*(-gv[0] + obs[52]) - ld[2] - ld[4];
-    b[10] = c[66]*(-gv[1] + obs[53]) - ld[3] - ld[5];
-    b[11] = c[74]*obs[47] + c[75]*ld[2] + c[76]*ld[3] + c[76]*ld[5] + c[77]*ld[4] - ld[9];
+    A[141] = c[55];
+    A[142] = c[99];
+    b[0] = c[72]*(-gv[0] + obs[25]);
+    b[1] = c[72]*(-gv[1] + obs[26]);
+    b[2] = c[72]*gv[1]*(c[45]*t2 + c[47]*t4) + c[74]*obs[20] - ld[6];
+    b[3] = c[67]*(-gv[0] + obs[34]) - ld[0];
+    b[4] = c[67]*(-gv[1] + obs[35]) - ld[1];
+    b[5] = c[64]*obs[29] - ld[0]*(c[65]*cq[1] + t6) - ld[1]*(c[66]*cq[0] + t7) - ld[7];
+    b[6] = c[68]*(-gv[0] + obs[43]);
+    b[7] = c[68]*(-gv[1] + obs[44]);
+    b[8] = c[70]*obs[38] - ld[8];
+    b[9] = c[69]*(-gv[0] + obs[52]) - ld[2] - ld[4];
+    b[10] = c[69]*(-gv[1] + obs[53]) - ld[3] - ld[5];
+    b[11] = c[77]*obs[47] + c[78]*ld[2] + c[79]*ld[3] + c[79]*ld[5] + c[80]*ld[4] - ld[9];
 }
 
 /* sg_overlock_needle_anchors -- Total ops: 37 */
@@ -645,17 +657,17 @@ void sg_overlock_needle_anchors(const double *q, const double *cq, const double 
 {
     (void)x;
     const double t0 = c[2]*cx[0] + c[3]*cx[1];
-    const double t1 = c[14]*cq[0];
-    const double t2 = c[14]*cq[1];
+    const double t1 = c[15]*cq[0];
+    const double t2 = c[15]*cq[1];
     out[0] = c[0];
     out[1] = c[1];
     out[2] = c[0];
     out[3] = c[1];
-    out[4] = c[16];
+    out[4] = c[17];
     out[5] = 0.0;
     out[6] = 0.0;
     out[7] = 1.0;
-    out[8] = c[16];
+    out[8] = c[17];
     out[9] = q[1];
     out[10] = 0.0;
     out[11] = 0.0;
@@ -669,24 +681,24 @@ void sg_overlock_needle_anchors(const double *q, const double *cq, const double 
     out[19] = t2;
     out[20] = t1;
     out[21] = t2;
-    out[22] = c[15]*cq[4] + t1;
-    out[23] = c[15]*cq[5] + t2;
-    out[24] = c[16];
+    out[22] = c[16]*cq[4] + t1;
+    out[23] = c[16]*cq[5] + t2;
+    out[24] = c[17];
     out[25] = q[1];
     out[26] = t1;
     out[27] = t2;
-    out[28] = c[16];
-    out[29] = c[38] + q[1];
-    out[30] = c[16];
-    out[31] = c[39] + q[1];
+    out[28] = c[17];
+    out[29] = c[41] + q[1];
+    out[30] = c[17];
+    out[31] = c[42] + q[1];
     out[32] = c[0];
-    out[33] = c[1] + c[41]*t0 + c[42]*(c[3]*cx[0] + c[7]*cx[1]);
-    out[34] = c[45]*cq[0] + c[46]*cq[1];
-    out[35] = c[45]*cq[1] + c[47]*cq[0];
-    out[36] = c[49]*cq[4] + t1;
-    out[37] = c[49]*cq[5] + t2;
-    out[38] = c[51];
-    out[39] = c[52] + q[1];
+    out[33] = c[1] + c[44]*t0 + c[45]*(c[3]*cx[0] + c[7]*cx[1]);
+    out[34] = c[48]*cq[0] + c[49]*cq[1];
+    out[35] = c[48]*cq[1] + c[50]*cq[0];
+    out[36] = c[52]*cq[4] + t1;
+    out[37] = c[52]*cq[5] + t2;
+    out[38] = c[54];
+    out[39] = c[55] + q[1];
 }
 
 /* sg_overlock_needle_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
@@ -703,76 +715,81 @@ static SG_FLATTEN SG_NOINLINE size_t sg_overlock_needle_sweep(const struct sg_me
 #if SG_SIMD
 SG_SIMD_BEGIN
 
-SG_VINLINE sg_vm sg_overlock_needle_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_needle_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq, sg_vd *err)
 {
     (void)x;
     sg_vm ok = sgv_true();
+    sg_vd e[3] = {sgv_set1(0.0), sgv_set1(0.0), sgv_set1(1.0)};
     {
         /* dyad 0: RRS closed at joint rod (lever) */
         const sg_vd P[2] = {sgv_set1(0.0), sgv_set1(0.0)};
         const sg_vd Q[2] = {sgv_set1(c[0]), c[1] + c[4]*(c[2]*cx[0] + c[3]*cx[1])};
         const sg_vd l[2] = {sgv_set1(c[5]), sgv_sqrt(c[6] + c[8]*((c[3]*cx[0] + c[7]*cx[1])*(c[3]*cx[0] + c[7]*cx[1])))};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[14]);
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         q[0] = angles ? c[9] + sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         cq[0] = c[10]*(c[11]*(J[0] - P[0]) + c[12]*(J[1] - P[1]));
         cq[1] = c[10]*(c[11]*(J[1] - P[1]) + c[13]*(J[0] - P[0]));
     }
     {
         /* dyad 1: RRP closed at joint N (link, needle_bar) */
-        const sg_vd P[2] = {c[14]*cq[0], c[14]*cq[1]};
-        const sg_vd l[1] = {sgv_set1(c[15])};
-        const sg_vd L0[2] = {sgv_set1(c[16]), sgv_set1(0.0)};
+        const sg_vd P[2] = {c[15]*cq[0], c[15]*cq[1]};
+        const sg_vd l[1] = {sgv_set1(c[16])};
+        const sg_vd L0[2] = {sgv_set1(c[17]), sgv_set1(0.0)};
         const sg_vd u[2] = {sgv_set1(0.0), sgv_set1(1.0)};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[20]) + sgv_set1(c[19]) * e[0];
         sg_vd s, J[2];
-        ok &= sgv_dyad_rrp(P, l[0], L0, u, branch[1], &s, J);
+        ok &= sgv_dyad_rrp(P, l[0], L0, u, branch[1], ein, e, &s, J);
         q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[1] = s;
-        cq[4] = c[17]*(J[0] - P[0]);
-        cq[5] = c[17]*(J[1] - P[1]);
+        cq[4] = c[18]*(J[0] - P[0]);
+        cq[5] = c[18]*(J[1] - P[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return ok;
 }
 
 SG_VINLINE sg_vm sg_overlock_needle_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
 {
-    const sg_vd t0 = c[24]*cq[1] + c[25]*cq[0];
+    const sg_vd t0 = c[27]*cq[1] + c[28]*cq[0];
     const sg_vd t1 = c[11]*cq[0] + c[13]*cq[1];
-    const sg_vd t2 = c[18] + t1;
-    const sg_vd t3 = c[25]*cq[1] + c[26]*cq[0];
+    const sg_vd t2 = c[21] + t1;
+    const sg_vd t3 = c[28]*cq[1] + c[29]*cq[0];
     const sg_vd t4 = c[2]*cx[0] + c[3]*cx[1];
-    const sg_vd t5 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t4;
-    const sg_vd t6 = c[27]*cq[1];
-    const sg_vd t7 = c[14]*cq[0];
-    const sg_vd t8 = c[15]*cq[4];
+    const sg_vd t5 = c[11]*cq[1] + c[12]*cq[0] + c[22] + c[23]*t4;
+    const sg_vd t6 = c[30]*cq[1];
+    const sg_vd t7 = c[15]*cq[0];
+    const sg_vd t8 = c[16]*cq[4];
     const sg_vd t9 = c[3]*cx[0] + c[7]*cx[1];
-    const sg_vd t10 = c[33]*t9;
-    const sg_vd t11 = c[32]*t4*t9 + t10*t5;
-    const sg_vd t14 = c[14]*cq[1];
-    const sg_vd t20 = c[41]*t4 + c[42]*t9;
-    const sg_vd t21 = c[41]*t9 + c[43]*t4;
+    const sg_vd t10 = c[36]*t9;
+    const sg_vd t11 = c[35]*t4*t9 + t10*t5;
+    const sg_vd t14 = c[15]*cq[1];
+    const sg_vd t20 = c[44]*t4 + c[45]*t9;
+    const sg_vd t21 = c[44]*t9 + c[46]*t4;
     const sg_vd t22 = ((xd[0])*(xd[0]));
-    const sg_vd t23 = c[45]*cq[0] + c[46]*cq[1];
-    const sg_vd t24 = c[46]*cq[0] + c[48]*cq[1];
-    const sg_vd t25 = c[49]*cq[4];
-    const sg_vd t26 = c[50]*cq[5];
-    sg_vd J[9], rs[3], cs[3];
+    const sg_vd t23 = c[48]*cq[0] + c[49]*cq[1];
+    const sg_vd t24 = c[49]*cq[0] + c[51]*cq[1];
+    const sg_vd t25 = c[52]*cq[4];
+    const sg_vd t26 = c[53]*cq[5];
+    sg_vd J[9], rs[3], cs[6];
     sg_vm piv[3];
     J[0] = t0*t2 + t3*t5;
     J[1] = sgv_set1(0.0);
     J[2] = sgv_set1(0.0);
     J[3] = t6;
     J[4] = sgv_set1(0.0);
-    J[5] = c[28]*cq[5];
+    J[5] = c[31]*cq[5];
     J[6] = t7;
     J[7] = sgv_set1(-1.0);
     J[8] = t8;
     qd[0] = -t11*xd[0];
     qd[1] = sgv_set1(0.0);
     qd[2] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[53]);
-    rs[1] = sgv_set1(c[54]);
-    rs[2] = (1.0/(c[31] + sgv_fabs(q[1])));
+    rs[0] = sgv_set1(c[56]);
+    rs[1] = sgv_set1(c[57]);
+    rs[2] = (1.0/(c[34] + sgv_fabs(q[1])));
     sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
     sgv_solve_eq(3, J, piv, rs, cs, qd);
     const sg_vd t12 = ((qd[0])*(qd[0]));
@@ -780,11 +797,12 @@ SG_VINLINE sg_vm sg_overlock_needle_motion_v(const sg_vd *q, const sg_vd *cq, co
     const sg_vd t15 = cq[5]*t13;
     const sg_vd t16 = qd[0]*t6;
     const sg_vd t17 = qd[0]*t7;
-    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[34]*cq[1]) + t1*t3 + t2*(c[24]*cq[0] + c[35]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[20]*qd[0]*t3*t9 + xd[0]*(c[36]*((t4)*(t4)) + c[37]*t4*t5));
+    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[37]*cq[1]) + t1*t3 + t2*(c[27]*cq[0] + c[38]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[23]*qd[0]*t3*t9 + xd[0]*(c[39]*((t4)*(t4)) + c[40]*t4*t5));
     qdd[1] = t12*t7 + t13*t8;
-    qdd[2] = c[15]*t15 + t12*t14;
+    qdd[2] = c[16]*t15 + t12*t14;
     sgv_solve_eq(3, J, piv, rs, cs, qdd);
-    const sg_vd t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+    sgv_rates_scale(3, 0x5ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
+    const sg_vd t18 = c[30]*cq[0]*t12 + qdd[0]*t6;
     const sg_vd t19 = qdd[0]*t7 + t12*t6;
     obs[0] = t7;
     obs[1] = t14;
@@ -792,19 +810,19 @@ SG_VINLINE sg_vm sg_overlock_needle_motion_v(const sg_vd *q, const sg_vd *cq, co
     obs[3] = t17;
     obs[4] = t18;
     obs[5] = t19;
-    obs[6] = sgv_set1(c[16]);
-    obs[7] = c[38] + q[1];
+    obs[6] = sgv_set1(c[17]);
+    obs[7] = c[41] + q[1];
     obs[8] = sgv_set1(0.0);
     obs[9] = qd[1];
     obs[10] = sgv_set1(0.0);
     obs[11] = qdd[1];
-    obs[12] = sgv_set1(c[16]);
-    obs[13] = c[39] + q[1];
+    obs[12] = sgv_set1(c[17]);
+    obs[13] = c[42] + q[1];
     obs[14] = sgv_set1(0.0);
     obs[15] = qd[1];
     obs[16] = sgv_set1(0.0);
     obs[17] = qdd[1];
-    obs[18] = c[40] + x[0];
+    obs[18] = c[43] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = sgv_set1(c[0]);
@@ -812,35 +830,35 @@ SG_VINLINE sg_vm sg_overlock_needle_motion_v(const sg_vd *q, const sg_vd *cq, co
     obs[23] = sgv_set1(0.0);
     obs[24] = t21*xd[0];
     obs[25] = sgv_set1(0.0);
-    obs[26] = t21*xdd[0] + t22*(c[43]*t9 + c[44]*t4);
+    obs[26] = t21*xdd[0] + t22*(c[46]*t9 + c[47]*t4);
     obs[27] = q[0];
     obs[28] = qd[0];
     obs[29] = qdd[0];
     obs[30] = t23;
-    obs[31] = c[45]*cq[1] + c[47]*cq[0];
+    obs[31] = c[48]*cq[1] + c[50]*cq[0];
     obs[32] = qd[0]*t24;
     obs[33] = qd[0]*t23;
-    obs[34] = qdd[0]*t24 + t12*(c[47]*cq[1] + c[48]*cq[0]);
+    obs[34] = qdd[0]*t24 + t12*(c[50]*cq[1] + c[51]*cq[0]);
     obs[35] = qdd[0]*t23 + t12*t24;
     obs[36] = q[2];
     obs[37] = qd[2];
     obs[38] = qdd[2];
     obs[39] = t25 + t7;
-    obs[40] = c[49]*cq[5] + t14;
+    obs[40] = c[52]*cq[5] + t14;
     obs[41] = qd[2]*t26 + t16;
     obs[42] = qd[2]*t25 + t17;
-    obs[43] = c[50]*cq[4]*t13 + qdd[2]*t26 + t18;
-    obs[44] = c[50]*t15 + qdd[2]*t25 + t19;
+    obs[43] = c[53]*cq[4]*t13 + qdd[2]*t26 + t18;
+    obs[44] = c[53]*t15 + qdd[2]*t25 + t19;
     obs[45] = sgv_set1((0.5)*3.141592653589793);
     obs[46] = sgv_set1(0.0);
     obs[47] = sgv_set1(0.0);
-    obs[48] = sgv_set1(c[51]);
-    obs[49] = c[52] + q[1];
+    obs[48] = sgv_set1(c[54]);
+    obs[49] = c[55] + q[1];
     obs[50] = sgv_set1(0.0);
     obs[51] = qd[1];
     obs[52] = sgv_set1(0.0);
     obs[53] = qdd[1];
-    obs[54] = c[42]*t4 + c[44]*t9;
+    obs[54] = c[45]*t4 + c[47]*t9;
     obs[55] = t20*xd[0];
     obs[56] = t20*xdd[0] + t21*t22;
     ok &= sgv_isfinite(((((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + qdd[1]))) + (((qdd[2] + obs[0]) + (obs[1] + obs[2])) + ((obs[3] + obs[4]) + (obs[5] + obs[6])))) + ((((obs[7] + obs[8]) + (obs[9] + obs[10])) + ((obs[11] + obs[12]) + (obs[13] + obs[14]))) + (((obs[15] + obs[16]) + (obs[17] + obs[18])) + ((obs[19] + obs[20]) + (obs[21] + (obs[22] + obs[23])))))) + (((((obs[24] + obs[25]) + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31]))) + (((obs[32] + obs[33]) + (obs[34] + obs[35])) + ((obs[36] + obs[37]) + (obs[38] + obs[39])))) + ((((obs[40] + obs[41]) + (obs[42] + obs[43])) + ((obs[44] + obs[45]) + (obs[46] + obs[47]))) + (((obs[48] + obs[49]) + (obs[50] + obs[51])) + ((obs[52] + obs[53]) + (obs[54] + (obs[55] + obs[56]))))))));
@@ -850,45 +868,46 @@ SG_VINLINE sg_vm sg_overlock_needle_motion_v(const sg_vd *q, const sg_vd *cq, co
 SG_VINLINE sg_vm sg_overlock_needle_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
 {
     (void)x;
-    const sg_vd t0 = c[24]*cq[1] + c[25]*cq[0];
+    const sg_vd t0 = c[27]*cq[1] + c[28]*cq[0];
     const sg_vd t1 = c[11]*cq[0] + c[13]*cq[1];
-    const sg_vd t2 = c[18] + t1;
-    const sg_vd t3 = c[25]*cq[1] + c[26]*cq[0];
+    const sg_vd t2 = c[21] + t1;
+    const sg_vd t3 = c[28]*cq[1] + c[29]*cq[0];
     const sg_vd t4 = c[2]*cx[0] + c[3]*cx[1];
-    const sg_vd t5 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t4;
-    const sg_vd t6 = c[27]*cq[1];
-    const sg_vd t7 = c[14]*cq[0];
-    const sg_vd t8 = c[15]*cq[4];
+    const sg_vd t5 = c[11]*cq[1] + c[12]*cq[0] + c[22] + c[23]*t4;
+    const sg_vd t6 = c[30]*cq[1];
+    const sg_vd t7 = c[15]*cq[0];
+    const sg_vd t8 = c[16]*cq[4];
     const sg_vd t9 = c[3]*cx[0] + c[7]*cx[1];
-    const sg_vd t10 = c[33]*t9;
-    const sg_vd t11 = c[32]*t4*t9 + t10*t5;
-    const sg_vd t14 = c[14]*cq[1];
-    sg_vd J[9], rs[3], cs[3];
+    const sg_vd t10 = c[36]*t9;
+    const sg_vd t11 = c[35]*t4*t9 + t10*t5;
+    const sg_vd t14 = c[15]*cq[1];
+    sg_vd J[9], rs[3], cs[6];
     sg_vm piv[3];
     J[0] = t0*t2 + t3*t5;
     J[1] = sgv_set1(0.0);
     J[2] = sgv_set1(0.0);
     J[3] = t6;
     J[4] = sgv_set1(0.0);
-    J[5] = c[28]*cq[5];
+    J[5] = c[31]*cq[5];
     J[6] = t7;
     J[7] = sgv_set1(-1.0);
     J[8] = t8;
     qd[0] = -t11*xd[0];
     qd[1] = sgv_set1(0.0);
     qd[2] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[53]);
-    rs[1] = sgv_set1(c[54]);
-    rs[2] = (1.0/(c[31] + sgv_fabs(q[1])));
+    rs[0] = sgv_set1(c[56]);
+    rs[1] = sgv_set1(c[57]);
+    rs[2] = (1.0/(c[34] + sgv_fabs(q[1])));
     sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
     sgv_solve_eq(3, J, piv, rs, cs, qd);
     const sg_vd t12 = ((qd[0])*(qd[0]));
     const sg_vd t13 = ((qd[2])*(qd[2]));
     const sg_vd t15 = cq[5]*t13;
-    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[34]*cq[1]) + t1*t3 + t2*(c[24]*cq[0] + c[35]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[20]*qd[0]*t3*t9 + xd[0]*(c[36]*((t4)*(t4)) + c[37]*t4*t5));
+    qdd[0] = -qd[0]*(qd[0]*(t0*t5 + t0*(c[13]*cq[0] + c[37]*cq[1]) + t1*t3 + t2*(c[27]*cq[0] + c[38]*cq[1])) + t1*t10*xd[0]) - t11*xdd[0] - xd[0]*(c[23]*qd[0]*t3*t9 + xd[0]*(c[39]*((t4)*(t4)) + c[40]*t4*t5));
     qdd[1] = t12*t7 + t13*t8;
-    qdd[2] = c[15]*t15 + t12*t14;
+    qdd[2] = c[16]*t15 + t12*t14;
     sgv_solve_eq(3, J, piv, rs, cs, qdd);
+    sgv_rates_scale(3, 0x5ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))));
     return ok;
 }
@@ -897,13 +916,13 @@ SG_VINLINE sg_vm sg_overlock_needle_observe_v(const sg_vd *q, const sg_vd *cq, c
 {
     switch (group) {
     case 0: {
-        const sg_vd t6 = c[27]*cq[1];
-        const sg_vd t7 = c[14]*cq[0];
+        const sg_vd t6 = c[30]*cq[1];
+        const sg_vd t7 = c[15]*cq[0];
         const sg_vd t12 = ((qd[0])*(qd[0]));
-        const sg_vd t14 = c[14]*cq[1];
+        const sg_vd t14 = c[15]*cq[1];
         const sg_vd t16 = qd[0]*t6;
         const sg_vd t17 = qd[0]*t7;
-        const sg_vd t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+        const sg_vd t18 = c[30]*cq[0]*t12 + qdd[0]*t6;
         const sg_vd t19 = qdd[0]*t7 + t12*t6;
         obs[0] = t7;
         obs[1] = t14;
@@ -914,8 +933,8 @@ SG_VINLINE sg_vm sg_overlock_needle_observe_v(const sg_vd *q, const sg_vd *cq, c
         return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
     }
     case 1: {
-        obs[6] = sgv_set1(c[16]);
-        obs[7] = c[38] + q[1];
+        obs[6] = sgv_set1(c[17]);
+        obs[7] = c[41] + q[1];
         obs[8] = sgv_set1(0.0);
         obs[9] = qd[1];
         obs[10] = sgv_set1(0.0);
@@ -923,8 +942,8 @@ SG_VINLINE sg_vm sg_overlock_needle_observe_v(const sg_vd *q, const sg_vd *cq, c
         return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
     }
     case 2: {
-        obs[12] = sgv_set1(c[16]);
-        obs[13] = c[39] + q[1];
+        obs[12] = sgv_set1(c[17]);
+        obs[13] = c[42] + q[1];
         obs[14] = sgv_set1(0.0);
         obs[15] = qd[1];
         obs[16] = sgv_set1(0.0);
@@ -934,10 +953,10 @@ SG_VINLINE sg_vm sg_overlock_needle_observe_v(const sg_vd *q, const sg_vd *cq, c
     case 3: {
         const sg_vd t4 = c[2]*cx[0] + c[3]*cx[1];
         const sg_vd t9 = c[3]*cx[0] + c[7]*cx[1];
-        const sg_vd t20 = c[41]*t4 + c[42]*t9;
-        const sg_vd t21 = c[41]*t9 + c[43]*t4;
+        const sg_vd t20 = c[44]*t4 + c[45]*t9;
+        const sg_vd t21 = c[44]*t9 + c[46]*t4;
         const sg_vd t22 = ((xd[0])*(xd[0]));
-        obs[18] = c[40] + x[0];
+        obs[18] = c[43] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
         obs[21] = sgv_set1(c[0]);
@@ -945,54 +964,54 @@ SG_VINLINE sg_vm sg_overlock_needle_observe_v(const sg_vd *q, const sg_vd *cq, c
         obs[23] = sgv_set1(0.0);
         obs[24] = t21*xd[0];
         obs[25] = sgv_set1(0.0);
-        obs[26] = t21*xdd[0] + t22*(c[43]*t9 + c[44]*t4);
+        obs[26] = t21*xdd[0] + t22*(c[46]*t9 + c[47]*t4);
         return sgv_isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26])))));
     }
     case 4: {
         const sg_vd t12 = ((qd[0])*(qd[0]));
-        const sg_vd t23 = c[45]*cq[0] + c[46]*cq[1];
-        const sg_vd t24 = c[46]*cq[0] + c[48]*cq[1];
+        const sg_vd t23 = c[48]*cq[0] + c[49]*cq[1];
+        const sg_vd t24 = c[49]*cq[0] + c[51]*cq[1];
         obs[27] = q[0];
         obs[28] = qd[0];
         obs[29] = qdd[0];
         obs[30] = t23;
-        obs[31] = c[45]*cq[1] + c[47]*cq[0];
+        obs[31] = c[48]*cq[1] + c[50]*cq[0];
         obs[32] = qd[0]*t24;
         obs[33] = qd[0]*t23;
-        obs[34] = qdd[0]*t24 + t12*(c[47]*cq[1] + c[48]*cq[0]);
+        obs[34] = qdd[0]*t24 + t12*(c[50]*cq[1] + c[51]*cq[0]);
         obs[35] = qdd[0]*t23 + t12*t24;
         return sgv_isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35])))));
     }
     case 5: {
-        const sg_vd t6 = c[27]*cq[1];
-        const sg_vd t7 = c[14]*cq[0];
+        const sg_vd t6 = c[30]*cq[1];
+        const sg_vd t7 = c[15]*cq[0];
         const sg_vd t12 = ((qd[0])*(qd[0]));
         const sg_vd t13 = ((qd[2])*(qd[2]));
-        const sg_vd t14 = c[14]*cq[1];
+        const sg_vd t14 = c[15]*cq[1];
         const sg_vd t15 = cq[5]*t13;
         const sg_vd t16 = qd[0]*t6;
         const sg_vd t17 = qd[0]*t7;
-        const sg_vd t18 = c[27]*cq[0]*t12 + qdd[0]*t6;
+        const sg_vd t18 = c[30]*cq[0]*t12 + qdd[0]*t6;
         const sg_vd t19 = qdd[0]*t7 + t12*t6;
-        const sg_vd t25 = c[49]*cq[4];
-        const sg_vd t26 = c[50]*cq[5];
+        const sg_vd t25 = c[52]*cq[4];
+        const sg_vd t26 = c[53]*cq[5];
         obs[36] = q[2];
         obs[37] = qd[2];
         obs[38] = qdd[2];
         obs[39] = t25 + t7;
-        obs[40] = c[49]*cq[5] + t14;
+        obs[40] = c[52]*cq[5] + t14;
         obs[41] = qd[2]*t26 + t16;
         obs[42] = qd[2]*t25 + t17;
-        obs[43] = c[50]*cq[4]*t13 + qdd[2]*t26 + t18;
-        obs[44] = c[50]*t15 + qdd[2]*t25 + t19;
+        obs[43] = c[53]*cq[4]*t13 + qdd[2]*t26 + t18;
+        obs[44] = c[53]*t15 + qdd[2]*t25 + t19;
         return sgv_isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44])))));
     }
     case 6: {
         obs[45] = sgv_set1((0.5)*3.141592653589793);
         obs[46] = sgv_set1(0.0);
         obs[47] = sgv_set1(0.0);
-        obs[48] = sgv_set1(c[51]);
-        obs[49] = c[52] + q[1];
+        obs[48] = sgv_set1(c[54]);
+        obs[49] = c[55] + q[1];
         obs[50] = sgv_set1(0.0);
         obs[51] = qd[1];
         obs[52] = sgv_set1(0.0);
@@ -1002,10 +1021,10 @@ SG_VINLINE sg_vm sg_overlock_needle_observe_v(const sg_vd *q, const sg_vd *cq, c
     case 7: {
         const sg_vd t4 = c[2]*cx[0] + c[3]*cx[1];
         const sg_vd t9 = c[3]*cx[0] + c[7]*cx[1];
-        const sg_vd t20 = c[41]*t4 + c[42]*t9;
-        const sg_vd t21 = c[41]*t9 + c[43]*t4;
+        const sg_vd t20 = c[44]*t4 + c[45]*t9;
+        const sg_vd t21 = c[44]*t9 + c[46]*t4;
         const sg_vd t22 = ((xd[0])*(xd[0]));
-        obs[54] = c[42]*t4 + c[44]*t9;
+        obs[54] = c[45]*t4 + c[47]*t9;
         obs[55] = t20*xd[0];
         obs[56] = t20*xdd[0] + t21*t22;
         return sgv_isfinite((obs[54] + (obs[55] + obs[56])));
@@ -1020,40 +1039,40 @@ SG_VINLINE sg_vm sg_overlock_needle_forces_v(const sg_vd *q, const sg_vd *cq, co
     (void)x;
     sg_vm ok = sgv_true();
     const sg_vd t0 = c[2]*cx[0] + c[3]*cx[1];
-    const sg_vd t1 = c[47]*cq[0];
-    const sg_vd t2 = c[47]*cq[1];
-    const sg_vd t3 = c[64]*(-gv[0] + obs[34]) - ld[0];
+    const sg_vd t1 = c[50]*cq[0];
+    const sg_vd t2 = c[50]*cq[1];
+    const sg_vd t3 = c[67]*(-gv[0] + obs[34]) - ld[0];
     const sg_vd t4 = -gv[1] + obs[53];
-    const sg_vd t5 = c[65]*(-gv[1] + obs[44]) + c[66]*t4 - ld[3] - ld[5];
-    const sg_vd t6 = c[64]*(-gv[1] + obs[35]) - ld[1] + t5;
+    const sg_vd t5 = c[68]*(-gv[1] + obs[44]) + c[69]*t4 - ld[3] - ld[5];
+    const sg_vd t6 = c[67]*(-gv[1] + obs[35]) - ld[1] + t5;
     const sg_vd t7 = -gv[0] + obs[43];
-    const sg_vd t8 = c[66]*t4 - ld[3] - ld[5];
-    const sg_vd t9 = c[49]*cq[4];
-    const sg_vd t10 = c[11]*cq[0] + c[13]*cq[1] + c[18];
-    const sg_vd t11 = c[11]*cq[1] + c[12]*cq[0] + c[19] + c[20]*t0;
+    const sg_vd t8 = c[69]*t4 - ld[3] - ld[5];
+    const sg_vd t9 = c[52]*cq[4];
+    const sg_vd t10 = c[11]*cq[0] + c[13]*cq[1] + c[21];
+    const sg_vd t11 = c[11]*cq[1] + c[12]*cq[0] + c[22] + c[23]*t0;
     const sg_vd t12 = c[3]*cx[0] + c[7]*cx[1];
-    const sg_vd t13 = c[79]*t11;
-    const sg_vd t14 = c[79]*t10;
+    const sg_vd t13 = c[82]*t11;
+    const sg_vd t14 = c[82]*t10;
     {
-        const sg_vd d = c[15]*cq[5];
-        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[14]*cq[1]), sgv_fabs(c[15]*cq[5]));
-        out[7] = (c[67]*obs[38] + c[68]*cq[5]*t7 - ld[8] + t5*t9 + t8*t9)/d;
+        const sg_vd d = c[16]*cq[5];
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[15]*cq[1]), sgv_fabs(c[16]*cq[5]));
+        out[7] = (c[70]*obs[38] + c[71]*cq[5]*t7 - ld[8] + t5*t9 + t8*t9)/d;
     }
     {
-        const sg_vd d = c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[0]*t0 + c[60]*cq[1]*t0;
-        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[0]*t0 + c[60]*cq[1]*t0);
-        out[6] = (-c[14]*cq[1]*out[7] + c[61]*obs[29] - ld[0]*(c[62]*cq[1] + t1) - ld[1]*(c[63]*cq[0] + t2) - ld[7] - t3*(c[45]*cq[1] + t1) - t5*(c[46]*cq[1] + c[62]*cq[0]) - t6*(c[48]*cq[0] + t2))/d;
+        const sg_vd d = c[58]*cq[0] + c[59]*cq[1] + c[60]*cq[0] + c[61]*cq[1] + c[62]*cq[0]*t0 + c[63]*cq[1]*t0;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[58]*cq[0] + c[59]*cq[1] + c[60]*cq[0] + c[61]*cq[1] + c[62]*cq[0]*t0 + c[63]*cq[1]*t0);
+        out[6] = (-c[15]*cq[1]*out[7] + c[64]*obs[29] - ld[0]*(c[65]*cq[1] + t1) - ld[1]*(c[66]*cq[0] + t2) - ld[7] - t3*(c[48]*cq[1] + t1) - t5*(c[49]*cq[1] + c[65]*cq[0]) - t6*(c[51]*cq[0] + t2))/d;
     }
     out[4] = -out[6]*t14 + out[7] + t3;
-    out[9] = -c[65]*t7 + out[7];
+    out[9] = -c[68]*t7 + out[7];
     out[5] = -out[6]*t13 + t6;
-    out[2] = -c[66]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
-    out[3] = -c[52]*out[9] + c[74]*obs[47] + c[75]*ld[2] + c[76]*ld[3] + c[76]*ld[5] + c[76]*t8 + c[77]*ld[4] - c[78]*out[2] - ld[9];
+    out[2] = -c[69]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
+    out[3] = -c[55]*out[9] + c[77]*obs[47] + c[78]*ld[2] + c[79]*ld[3] + c[79]*ld[5] + c[79]*t8 + c[80]*ld[4] - c[81]*out[2] - ld[9];
     out[8] = t5;
     out[10] = t8;
-    out[11] = c[69]*gv[1]*(c[42]*t0 + c[44]*t12) + c[71]*obs[20] - out[6]*(c[72]*t0*t12 + c[73]*t11*t12) - ld[6];
-    out[1] = c[69]*(-gv[1] + obs[26]) - c[70]*out[6]*t11;
-    out[0] = c[69]*(-gv[0] + obs[25]) - c[70]*out[6]*t10;
+    out[11] = c[72]*gv[1]*(c[45]*t0 + c[47]*t12) + c[74]*obs[20] - out[6]*(c[75]*t0*t12 + c[76]*t11*t12) - ld[6];
+    out[1] = c[72]*(-gv[1] + obs[26]) - c[73]*out[6]*t11;
+    out[0] = c[72]*(-gv[0] + obs[25]) - c[73]*out[6]*t10;
     const sg_vd t15 = -out[2];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
@@ -1061,12 +1080,12 @@ SG_VINLINE sg_vm sg_overlock_needle_forces_v(const sg_vd *q, const sg_vd *cq, co
     out[15] = sgv_set1(0.0);
     out[16] = out[6]*t14;
     out[17] = out[6]*t13;
-    out[18] = c[80]*out[6]*t12;
+    out[18] = c[83]*out[6]*t12;
     out[19] = out[0] + out[4] + t15;
     out[20] = out[1] + out[5];
-    out[21] = c[0]*out[1] + c[19]*out[0] + out[11] + out[2]*q[1] + out[3];
-    out[22] = c[81]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[82]*((obs[19])*(obs[19])) + c[83]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[84]*((obs[28])*(obs[28])) + c[85]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[86]*((obs[37])*(obs[37])) + c[87]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[88]*((obs[46])*(obs[46]));
-    out[23] = c[89]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[90]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[91]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[92]*(gv[0]*obs[48] + gv[1]*obs[49]);
+    out[21] = c[0]*out[1] + c[22]*out[0] + out[11] + out[2]*q[1] + out[3];
+    out[22] = c[84]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[85]*((obs[19])*(obs[19])) + c[86]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[87]*((obs[28])*(obs[28])) + c[88]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[89]*((obs[37])*(obs[37])) + c[90]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[91]*((obs[46])*(obs[46]));
+    out[23] = c[92]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[93]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[94]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[95]*(gv[0]*obs[48] + gv[1]*obs[49]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     out[25] = sgv_set1(0.0);
     ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))));
@@ -1098,7 +1117,7 @@ static const sg_mechanism sg_overlock_needle_descriptor = {
     .nq = 3,
     .nx = 1,
     .np = 27,
-    .nc = 97,
+    .nc = 100,
     .nobs = 57,
     .nbranch = 2,
     .nf = 12,
@@ -1168,158 +1187,158 @@ const char *sg_overlock_needle_manifest(void)
         " the crank pin's projection (seed 003 eq. 1: \\u03b4\\u2081)\"},{\"default\":1,\"joint\":\"N\",\""
         "kind\":\"rrp\",\"meaning\":\"+1: the larger travel of needle_bar at joint N\"}],\"closed_form\":"
         "true,\"closure\":[\"rod.length\",\"N.x\",\"N.y\"],\"constants\":[[3],[1],[12],[12],[0],[3,5],[2]"
-        ",[12],[0],[3,5],[3,5],[3,5],[3,5],[3,5],[4],[6],[7],[6],[3],[1],[0],[2],[0],[7],[3,5],[3,5],[3,5"
-        "],[4],[6],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[0],[8],[8,9],[12],[14],[15],[15],[14]"
-        ",[18],[19],[19],[18],[6],[6],[7,25],[24],[0,1,2,3],[4,6,7],[2,3,5],[2,3,5],[1,2,3,5],[1,2,3,5],["
-        "0,2,3,5],[0,2,3,5],[20],[4,18],[4,18],[17],[21],[23],[22],[6,21],[13],[2],[13,14,15,16],[0,2],[0"
-        ",2],[26],[8,24],[25],[8,9,24],[24],[2],[0,2],[13],[16],[17],[20],[21],[22],[23],[26],[13],[17],["
-        "21],[23],[3,5,19],[3,5,18],[3,5,19],[25]],\"coords\":[{\"guess\":0.0,\"name\":\"lever.angle\",\""
-        "unit\":\"rad\"},{\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":1.5707"
-        "963267948966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"d"
-        "oc\":\"51-A class overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u04"
-        "37\\u043c \\u0438\\u0433\\u043b\\u044b (seed 003 fig. 1\\u20132, eqs. 1\\u20132).\\n\\nA spatial"
-        "-planar four-bar: the main shaft 1 (below the bed, along the machine's x) carries an eccentric w"
-        "hose\\npin B drives, through a rod with a ball joint at each end, the needle-lever rock shaft 3 "
-        "(axis across the main\\nshaft, through D); its arm l\\u2084 drives the needle bar through the li"
-        "nk l\\u2085 (the needle bar's axis at the offset a\\nfrom D). Seed 003 eq. (1) gives the rock sh"
-        "aft's angle \\u03c6\\u2083 in closed form (\\u03b4\\u2081 the assembly sign), eq. (2) the\\nneed"
-        "le stroke as a second-order expansion in the link's obliquity \\u2014 here both are exact.\\n\\n"
-        "Frame (the needle lever's plane): origin on the rock-shaft axis D, x along the main shaft, y up,"
-        " z along the rock\\nshaft. The main shaft's axis runs parallel to x through (l\\u2083, \\u2212h_"
-        "A, 0): the rod is nearly vertical and the lever\\narm DC horizontal in mid stroke, so B's up-and"
-        "-down throw rocks the shaft by about \\u00b1asin(r/l\\u2083). The arm DC and\\nthe needle lever "
-        "DL are one bent lever (DL at ``lever_angle`` from DC). Crank angle zero points the eccentric\\na"
-        "long +z (the mechanism's normal): \\u03c6 = 90\\u00b0 puts B at its lowest, the needle at its hi"
-        "ghest (sign of the lever).\\n\\nEvery dimension is an estimate (seed 003 prints none; DOMAIN-NOT"
-        "ES: 51-A class, 3000\\u20134000 r/min): a needle\\nstroke of about 25 mm, the rock shaft swingin"
-        "g about \\u00b127\\u00b0, masses of a small cast lever and a light needle bar.\",\"elements\":[]"
-        ",\"force_blocks\":[1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\""
-        ":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"n"
-        "eedle_bar.guide.fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\""
-        "unit\":\"N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\""
-        ":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\""
-        ",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\""
-        "unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\""
-        "}],\"force_rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"lever.x\",\"lever.y\","
-        "\"lever.moment\",\"link.x\",\"link.y\",\"link.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needl"
-        "e_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angl"
-        "e phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg"
-        "_overlock_needle_anchors\":{\"ops\":37},\"sg_overlock_needle_blocks\":{\"ops\":27},\"sg_overlock"
-        "_needle_closed\":{\"ops\":38},\"sg_overlock_needle_constants\":{\"ops\":116},\"sg_overlock_needl"
-        "e_force_matrix\":{\"ops\":105},\"sg_overlock_needle_forces\":{\"ops\":210},\"sg_overlock_needle_"
-        "lu_factor\":{\"ops\":18},\"sg_overlock_needle_lu_solve\":{\"ops\":18},\"sg_overlock_needle_motio"
-        "n\":{\"ops\":154},\"sg_overlock_needle_observe\":{\"ops\":113},\"sg_overlock_needle_rates\":{\"o"
-        "ps\":83},\"sg_overlock_needle_residual\":{\"ops\":43},\"sg_overlock_needle_scales\":{\"ops\":5}}"
-        ",\"loads\":[{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":\"lever\""
-        ",\"component\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"na"
-        "me\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"b"
-        "ody\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\""
-        "component\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"eccentric\",\"component\":\"torque\",\""
-        "name\":\"eccentric\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\""
-        ":\"link\",\"component\":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\"component\":\"t"
-        "orque\",\"name\":\"needle_bar\"}],\"name\":\"overlock_needle\",\"observables\":[{\"name\":\"leve"
-        "r_pin.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"lever_pin.x_d\","
-        "\"unit\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.x_dd\",\"u"
-        "nit\":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"u"
-        "nit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\""
-        "m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m"
-        "/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":"
-        "\"m\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/"
-        "s\"},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\""
-        "m/s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"uni"
-        "t\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\""
-        ",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y"
-        "\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y"
-        "_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentri"
-        "c.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.a"
-        "ngle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"leve"
-        "r.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\","
-        "\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"u"
-        "nit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.angle\",\"uni"
-        "t\":\"rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angle_dd\",\"unit\""
-        ":\"rad/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\"unit\":\"m\"},"
-        "{\"name\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\"m/s\"},{\"nam"
-        "e\":\"link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/s^2\"},{\"nam"
-        "e\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},"
-        "{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":"
-        "\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":"
-        "\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\""
-        "unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.co"
-        "m.z\",\"unit\":\"m\"},{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.co"
-        "m.z_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\"mm\",\"doc\":\""
-        "eccentricity AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\"length\",\"nam"
-        "e\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_un"
-        "it\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\""
-        "name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"displ"
-        "ay_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\""
-        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"do"
-        "c\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\""
-        ":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle "
-        "lever DL, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of the needle le"
-        "ver DL from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"positive\":fal"
-        "se,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"needle-ba"
-        "r link LN, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":true,\"role\""
-        ":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-bar axis from "
-        "the rock shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"ro"
-        "le\":null,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"needle eye below "
-        "the link pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"posit"
-        "ive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"ne"
-        "edle point below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_eye\",\"positiv"
-        "e\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\"doc\":\"leng"
-        "th of the needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"eye_length\",\""
-        "positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,\"display_uni"
-        "t\":\"mm\",\"doc\":\"needle scarf above the eye's top, where the lower looper's tip passes (esti"
-        "mate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"needle_scarf\""
-        ",\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"phase of ecce"
-        "ntric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\""
-        ":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass o"
-        "f eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"u"
-        "nit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, lo"
-        "cal u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit"
-        "\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local "
-        "v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\""
-        "m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric ab"
-        "out its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,"
-        "\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of "
-        "lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
-        "\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"ki"
-        "nd\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"def"
-        "ault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"lengt"
-        "h\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06"
-        ",\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\""
-        "kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**"
-        "2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\"mass\",\"name"
-        "\":\"link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-06,\"display_"
-        "unit\":\"kg*m**2\",\"doc\":\"moment of inertia of link about its centre of mass\",\"kind\":\"ine"
-        "rtia\",\"name\":\"link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"defau"
-        "lt\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"ne"
-        "edle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_u"
-        "nit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\"ne"
-        "edle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_uni"
-        "t\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"need"
-        "le_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_uni"
-        "t\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\":\""
-        "inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}"
-        "],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"lever\",\"d"
-        "oc\":\"needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body\":\"needl"
-        "e_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_eye\"},{\""
-        "body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":12,\"role\":"
-        "\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy"
-        "\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\""
-        "ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"p"
-        "rismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\",\"colum"
-        "ns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\""
-        ":\"eccentric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"n"
-        "ame\":\"rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],\"ground"
-        "ed\":false,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"needle_bar"
-        "\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\"offset\""
-        ":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\""
-        "shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\""
-        "needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"point\",\"na"
-        "me\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\"needle"
-        "_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"param\",\"n"
-        "ame\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc\":97,\"nf"
-        "\":12,\"nfo\":26,\"ngroup\":8,\"nload\":10,\"nobs\":57,\"np\":27,\"nq\":3,\"nx\":1}}"
+        ",[12],[0],[3,5],[3,5],[3,5],[3,5],[3,5],[0,1,3],[4],[6],[7],[6],[4],[4,7],[3],[1],[0],[2],[0],[7"
+        "],[3,5],[3,5],[3,5],[4],[6],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[0],[8],[8,9],[12],["
+        "14],[15],[15],[14],[18],[19],[19],[18],[6],[6],[7,25],[24],[0,1,2,3],[4,6,7],[2,3,5],[2,3,5],[1,"
+        "2,3,5],[1,2,3,5],[0,2,3,5],[0,2,3,5],[20],[4,18],[4,18],[17],[21],[23],[22],[6,21],[13],[2],[13,"
+        "14,15,16],[0,2],[0,2],[26],[8,24],[25],[8,9,24],[24],[2],[0,2],[13],[16],[17],[20],[21],[22],[23"
+        "],[26],[13],[17],[21],[23],[3,5,19],[3,5,18],[3,5,19],[25]],\"coords\":[{\"guess\":0.0,\"name\":"
+        "\"lever.angle\",\"unit\":\"rad\"},{\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"}"
+        ",{\"guess\":1.5707963267948966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366."
+        "51914291880917,\"doc\":\"51-A class overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u"
+        "043d\\u0438\\u0437\\u043c \\u0438\\u0433\\u043b\\u044b (seed 003 fig. 1\\u20132, eqs. 1\\u20132)"
+        ".\\n\\nA spatial-planar four-bar: the main shaft 1 (below the bed, along the machine's x) carrie"
+        "s an eccentric whose\\npin B drives, through a rod with a ball joint at each end, the needle-lev"
+        "er rock shaft 3 (axis across the main\\nshaft, through D); its arm l\\u2084 drives the needle ba"
+        "r through the link l\\u2085 (the needle bar's axis at the offset a\\nfrom D). Seed 003 eq. (1) g"
+        "ives the rock shaft's angle \\u03c6\\u2083 in closed form (\\u03b4\\u2081 the assembly sign), eq"
+        ". (2) the\\nneedle stroke as a second-order expansion in the link's obliquity \\u2014 here both "
+        "are exact.\\n\\nFrame (the needle lever's plane): origin on the rock-shaft axis D, x along the m"
+        "ain shaft, y up, z along the rock\\nshaft. The main shaft's axis runs parallel to x through (l\\u"
+        "2083, \\u2212h_A, 0): the rod is nearly vertical and the lever\\narm DC horizontal in mid stroke"
+        ", so B's up-and-down throw rocks the shaft by about \\u00b1asin(r/l\\u2083). The arm DC and\\nth"
+        "e needle lever DL are one bent lever (DL at ``lever_angle`` from DC). Crank angle zero points th"
+        "e eccentric\\nalong +z (the mechanism's normal): \\u03c6 = 90\\u00b0 puts B at its lowest, the n"
+        "eedle at its highest (sign of the lever).\\n\\nEvery dimension is an estimate (seed 003 prints n"
+        "one; DOMAIN-NOTES: 51-A class, 3000\\u20134000 r/min): a needle\\nstroke of about 25 mm, the roc"
+        "k shaft swinging about \\u00b127\\u00b0, masses of a small cast lever and a light needle bar.\","
+        "\"elements\":[],\"force_blocks\":[1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\""
+        "N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\""
+        "},{\"name\":\"needle_bar.guide.fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name"
+        "\":\"rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_pa"
+        "rts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame"
+        "_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"po"
+        "tential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_po"
+        "wer\",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"le"
+        "ver.x\",\"lever.y\",\"lever.moment\",\"link.x\",\"link.y\",\"link.moment\",\"needle_bar.x\",\"ne"
+        "edle_bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\""
+        ":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}"
+        "],\"kernels\":{\"sg_overlock_needle_anchors\":{\"ops\":37},\"sg_overlock_needle_blocks\":{\"ops\""
+        ":27},\"sg_overlock_needle_closed\":{\"ops\":38},\"sg_overlock_needle_constants\":{\"ops\":120},\""
+        "sg_overlock_needle_force_matrix\":{\"ops\":105},\"sg_overlock_needle_forces\":{\"ops\":210},\"sg"
+        "_overlock_needle_lu_factor\":{\"ops\":18},\"sg_overlock_needle_lu_solve\":{\"ops\":18},\"sg_over"
+        "lock_needle_motion\":{\"ops\":154},\"sg_overlock_needle_observe\":{\"ops\":113},\"sg_overlock_ne"
+        "edle_rates\":{\"ops\":83},\"sg_overlock_needle_residual\":{\"ops\":43},\"sg_overlock_needle_scal"
+        "es\":{\"ops\":5}},\"loads\":[{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\""
+        "body\":\"lever\",\"component\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"compone"
+        "nt\":\"fx\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"ne"
+        "edle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\""
+        "needle_bar\",\"component\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"eccentric\",\"component"
+        "\":\"torque\",\"name\":\"eccentric\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"le"
+        "ver\"},{\"body\":\"link\",\"component\":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\""
+        "component\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"overlock_needle\",\"observables\":[{"
+        "\"name\":\"lever_pin.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"l"
+        "ever_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever"
+        "_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"nee"
+        "dle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_"
+        "d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd"
+        "\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_poin"
+        "t.x\",\"unit\":\"m\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\""
+        ",\"unit\":\"m/s\"},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_d"
+        "d\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentri"
+        "c.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"ecce"
+        "ntric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\""
+        "eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"na"
+        "me\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"n"
+        "ame\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{"
+        "\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"l"
+        "ever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever"
+        ".com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lin"
+        "k.angle\",\"unit\":\"rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angl"
+        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\""
+        "unit\":\"m\"},{\"name\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\""
+        "m/s\"},{\"name\":\"link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/"
+        "s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\""
+        ":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x"
+        "\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.c"
+        "om.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
+        "eccentric.com.z\",\"unit\":\"m\"},{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "eccentric.com.z_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\"mm\""
+        ",\"doc\":\"eccentricity AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\"len"
+        "gth\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\""
+        "display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"l"
+        "ength\",\"name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0."
+        "06,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name"
+        "\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\""
+        "mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"p"
+        "ositive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":"
+        "\"needle lever DL, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":tru"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of the"
+        " needle lever DL from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\""
+        "needle-bar link LN, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":tru"
+        "e,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-bar "
+        "axis from the rock shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":"
+        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"needle "
+        "eye below the link pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin"
+        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\""
+        "doc\":\"needle point below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_eye\""
+        ",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\"do"
+        "c\":\"length of the needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"eye_"
+        "length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,\""
+        "display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, where the lower looper's tip p"
+        "asses (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"ne"
+        "edle_scarf\",\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"p"
+        "hase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\","
+        "\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"do"
+        "c\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"rol"
+        "e\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of e"
+        "ccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccen"
+        "tric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of"
+        " eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc"
+        "\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"kg\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, l"
+        "ocal u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":"
+        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"k"
+        "ind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
+        "fault\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre"
+        " of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\""
+        "mass\",\"name\":\"link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-"
+        "06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of link about its centre of mass\",\""
+        "kind\":\"inertia\",\"name\":\"link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2"
+        "\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\""
+        "name\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,"
+        "\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\""
+        "name\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"na"
+        "me\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\""
+        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\","
+        "\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"l"
+        "ever\",\"doc\":\"needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body"
+        "\":\"needle_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_"
+        "eye\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":12"
+        ",\"role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\""
+        "fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},"
+        "{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"k"
+        "ind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\""
+        ",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4"
+        "},{\"a\":\"eccentric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"r"
+        "od\",\"name\":\"rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],"
+        "\"grounded\":false,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"ne"
+        "edle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\""
+        "offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"i"
+        "nput\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"r"
+        "oles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"po"
+        "int\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\""
+        "},\"needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"p"
+        "aram\",\"name\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc"
+        "\":100,\"nf\":12,\"nfo\":26,\"ngroup\":8,\"nload\":10,\"nobs\":57,\"np\":27,\"nq\":3,\"nx\":1}}"
         ;
 }

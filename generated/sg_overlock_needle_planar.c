@@ -6,7 +6,7 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_overlock_needle_planar_constants -- Total ops: 114 */
+/* sg_overlock_needle_planar_constants -- Total ops: 118 */
 void sg_overlock_needle_planar_constants(const double *p, double *c)
 {
     const double t0 = sin(p[12]);
@@ -17,26 +17,28 @@ void sg_overlock_needle_planar_constants(const double *p, double *c)
     const double t5 = p[3]*t2;
     const double t6 = -t5;
     const double t7 = p[3]*t3;
-    const double t8 = ((p[2])*(p[2]));
-    const double t9 = -p[7];
-    const double t10 = 2.0*t7;
-    const double t11 = 2.0*t5;
-    const double t12 = -p[4];
-    const double t13 = 2.0*p[0];
-    const double t14 = 2.0*((p[0])*(p[0]));
-    const double t15 = 10.0*p[0]*p[3] + ((p[1])*(p[1])) + 4.0*p[1]*p[3] + p[1]*t13 + 9.0*t1 + t14 + t8;
-    const double t16 = p[4] + p[6];
-    const double t17 = t16 + fabs(p[7]);
-    const double t18 = -t7;
-    const double t19 = p[8] + p[9];
-    const double t20 = (0.5)*p[6];
-    const double t21 = (1.0/(p[2]));
-    const double t22 = t1*t21;
-    const double t23 = p[1]*t21;
-    const double t24 = p[0]*t21;
-    const double t25 = t24*t7;
-    const double t26 = p[18] + t12;
-    const double t27 = p[19] + t5;
+    const double t8 = 2.0*p[0];
+    const double t9 = 2.0*p[4];
+    const double t10 = fabs(p[7]);
+    const double t11 = ((p[2])*(p[2]));
+    const double t12 = -p[7];
+    const double t13 = 2.0*t7;
+    const double t14 = 2.0*t5;
+    const double t15 = -p[4];
+    const double t16 = 2.0*((p[0])*(p[0]));
+    const double t17 = 10.0*p[0]*p[3] + ((p[1])*(p[1])) + 4.0*p[1]*p[3] + p[1]*t8 + 9.0*t1 + t11 + t16;
+    const double t18 = p[4] + p[6];
+    const double t19 = t10 + t18;
+    const double t20 = -t7;
+    const double t21 = p[8] + p[9];
+    const double t22 = (0.5)*p[6];
+    const double t23 = (1.0/(p[2]));
+    const double t24 = t1*t23;
+    const double t25 = p[1]*t23;
+    const double t26 = p[0]*t23;
+    const double t27 = t26*t7;
+    const double t28 = p[18] + t15;
+    const double t29 = p[19] + t5;
     c[0] = p[3];
     c[1] = cos(p[12]);
     c[2] = -t0;
@@ -50,101 +52,106 @@ void sg_overlock_needle_planar_constants(const double *p, double *c)
     c[10] = t7;
     c[11] = t6;
     c[12] = t5;
-    c[13] = p[4];
-    c[14] = p[6];
-    c[15] = p[7];
-    c[16] = (1.0/(p[6]));
-    c[17] = p[1];
-    c[18] = p[0];
-    c[19] = -p[3];
-    c[20] = -t8;
-    c[21] = t9;
-    c[22] = -t10;
-    c[23] = t11;
-    c[24] = t10;
-    c[25] = t12;
-    c[26] = -p[6];
-    c[27] = t15;
-    c[28] = t17;
-    c[29] = t16;
-    c[30] = -t13;
-    c[31] = t13;
+    c[13] = p[1] + p[3] + t8;
+    c[14] = p[4];
+    c[15] = p[6];
+    c[16] = p[7];
+    c[17] = (1.0/(p[6]));
+    c[18] = t9;
+    c[19] = t10 + t9;
+    c[20] = p[1];
+    c[21] = p[0];
+    c[22] = -p[3];
+    c[23] = -t11;
+    c[24] = t12;
+    c[25] = -t13;
+    c[26] = t14;
+    c[27] = t13;
+    c[28] = t15;
+    c[29] = -p[6];
+    c[30] = t17;
+    c[31] = t19;
     c[32] = t18;
-    c[33] = -t11;
-    c[34] = t14;
-    c[35] = -p[8];
-    c[36] = -t19;
-    c[37] = p[12];
-    c[38] = p[15];
-    c[39] = -p[14];
-    c[40] = -p[15];
-    c[41] = p[14];
-    c[42] = p[18];
-    c[43] = -p[19];
-    c[44] = p[19];
-    c[45] = -p[18];
-    c[46] = t20;
-    c[47] = -t20;
-    c[48] = -p[25] - t9;
-    c[49] = p[24];
-    c[50] = (1.0/(t15));
-    c[51] = (1.0/(t17));
-    c[52] = t2*t22;
-    c[53] = -t22*t3;
-    c[54] = -t23*t7;
-    c[55] = -t23*t5;
-    c[56] = t25;
-    c[57] = -t24*t5;
-    c[58] = -t25;
-    c[59] = p[20];
-    c[60] = t26;
-    c[61] = -t26;
-    c[62] = p[17];
-    c[63] = p[21];
-    c[64] = p[23];
-    c[65] = p[22];
-    c[66] = p[21]*t20;
-    c[67] = p[13];
-    c[68] = t21;
-    c[69] = p[13]*(((p[14])*(p[14])) + ((p[15])*(p[15]))) + p[16];
-    c[70] = -p[13];
-    c[71] = t24;
-    c[72] = -t24;
-    c[73] = p[26];
-    c[74] = -p[24] - p[8];
-    c[75] = -p[25];
-    c[76] = -p[24] - t19;
-    c[77] = -p[24];
-    c[78] = -t21;
-    c[79] = (0.5)*p[13];
-    c[80] = (0.5)*p[16];
-    c[81] = (0.5)*p[17];
-    c[82] = (0.5)*p[20];
-    c[83] = (0.5)*p[21];
-    c[84] = (0.5)*p[22];
-    c[85] = (0.5)*p[23];
-    c[86] = (0.5)*p[26];
-    c[87] = -p[17];
-    c[88] = -p[21];
-    c[89] = -p[23];
-    c[90] = -t27;
-    c[91] = -p[18] - t18;
-    c[92] = t27;
-    c[93] = p[25];
+    c[33] = -t8;
+    c[34] = t8;
+    c[35] = t20;
+    c[36] = -t14;
+    c[37] = t16;
+    c[38] = -p[8];
+    c[39] = -t21;
+    c[40] = p[12];
+    c[41] = p[15];
+    c[42] = -p[14];
+    c[43] = -p[15];
+    c[44] = p[14];
+    c[45] = p[18];
+    c[46] = -p[19];
+    c[47] = p[19];
+    c[48] = -p[18];
+    c[49] = t22;
+    c[50] = -t22;
+    c[51] = -p[25] - t12;
+    c[52] = p[24];
+    c[53] = (1.0/(t17));
+    c[54] = (1.0/(t19));
+    c[55] = t2*t24;
+    c[56] = -t24*t3;
+    c[57] = -t25*t7;
+    c[58] = -t25*t5;
+    c[59] = t27;
+    c[60] = -t26*t5;
+    c[61] = -t27;
+    c[62] = p[20];
+    c[63] = t28;
+    c[64] = -t28;
+    c[65] = p[17];
+    c[66] = p[21];
+    c[67] = p[23];
+    c[68] = p[22];
+    c[69] = p[21]*t22;
+    c[70] = p[13];
+    c[71] = t23;
+    c[72] = p[13]*(((p[14])*(p[14])) + ((p[15])*(p[15]))) + p[16];
+    c[73] = -p[13];
+    c[74] = t26;
+    c[75] = -t26;
+    c[76] = p[26];
+    c[77] = -p[24] - p[8];
+    c[78] = -p[25];
+    c[79] = -p[24] - t21;
+    c[80] = -p[24];
+    c[81] = -t23;
+    c[82] = (0.5)*p[13];
+    c[83] = (0.5)*p[16];
+    c[84] = (0.5)*p[17];
+    c[85] = (0.5)*p[20];
+    c[86] = (0.5)*p[21];
+    c[87] = (0.5)*p[22];
+    c[88] = (0.5)*p[23];
+    c[89] = (0.5)*p[26];
+    c[90] = -p[17];
+    c[91] = -p[21];
+    c[92] = -p[23];
+    c[93] = -t29;
+    c[94] = -p[18] - t20;
+    c[95] = t29;
+    c[96] = p[25];
 }
 
 /* sg_overlock_needle_planar_closed -- Total ops: 35 */
-int sg_overlock_needle_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+int sg_overlock_needle_planar_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err)
 {
     (void)x;
     int st;
+    double e[3] = {0.0, 0.0, 1.0};
     {
         /* dyad 0: RRS closed at joint rod (lever) */
         const double P[2] = {0.0, 0.0};
         const double Q[2] = {c[0] + c[3]*(c[1]*cx[0] + c[2]*cx[1]), c[3]*(c[1]*cx[1] + c[5]*cx[0]) + c[4]};
         const double l[2] = {c[6], c[7]};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[13];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         if (st != SG_OK) return st;
         q[0] = c[8] + atan2(J[1] - P[1], J[0] - P[0]);
         cq[0] = c[9]*(c[10]*(J[0] - P[0]) + c[11]*(J[1] - P[1]));
@@ -152,18 +159,21 @@ int sg_overlock_needle_planar_closed(const double *x, const double *cx, const do
     }
     {
         /* dyad 1: RRP closed at joint N (link, needle_bar) */
-        const double P[2] = {c[13]*cq[0], c[13]*cq[1]};
-        const double l[1] = {c[14]};
-        const double L0[2] = {c[15], 0.0};
+        const double P[2] = {c[14]*cq[0], c[14]*cq[1]};
+        const double l[1] = {c[15]};
+        const double L0[2] = {c[16], 0.0};
         const double u[2] = {0.0, 1.0};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[19] + c[18] * e[0];
         double s, J[2];
-        st = sg_dyad_rrp(P, l[0], L0, u, branch[1], &s, J);
+        st = sg_dyad_rrp(P, l[0], L0, u, branch[1], ein, e, &s, J);
         if (st != SG_OK) return st;
         q[2] = atan2(J[1] - P[1], J[0] - P[0]);
         q[1] = s;
-        cq[4] = c[16]*(J[0] - P[0]);
-        cq[5] = c[16]*(J[1] - P[1]);
+        cq[4] = c[17]*(J[0] - P[0]);
+        cq[5] = c[17]*(J[1] - P[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return SG_OK;
 }
 
@@ -171,19 +181,19 @@ int sg_overlock_needle_planar_closed(const double *x, const double *cx, const do
 void sg_overlock_needle_planar_residual(const double *q, const double *cq, const double *x, const double *cx, const double *c, double *r, double *jac)
 {
     (void)x;
-    const double t0 = c[10]*cq[0] + c[12]*cq[1] + c[18]*(c[1]*cx[0] + c[2]*cx[1]) + c[19];
-    const double t1 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*(c[1]*cx[1] + c[5]*cx[0]);
-    const double t2 = c[13]*cq[0];
-    const double t3 = c[14]*cq[4];
-    r[0] = c[20] + ((t0)*(t0)) + ((t1)*(t1));
-    r[1] = c[21] + t2 + t3;
-    r[2] = c[13]*cq[1] + c[14]*cq[5] - q[1];
-    jac[0] = t0*(c[22]*cq[1] + c[23]*cq[0]) + t1*(c[23]*cq[1] + c[24]*cq[0]);
+    const double t0 = c[10]*cq[0] + c[12]*cq[1] + c[21]*(c[1]*cx[0] + c[2]*cx[1]) + c[22];
+    const double t1 = c[10]*cq[1] + c[11]*cq[0] + c[20] + c[21]*(c[1]*cx[1] + c[5]*cx[0]);
+    const double t2 = c[14]*cq[0];
+    const double t3 = c[15]*cq[4];
+    r[0] = c[23] + ((t0)*(t0)) + ((t1)*(t1));
+    r[1] = c[24] + t2 + t3;
+    r[2] = c[14]*cq[1] + c[15]*cq[5] - q[1];
+    jac[0] = t0*(c[25]*cq[1] + c[26]*cq[0]) + t1*(c[26]*cq[1] + c[27]*cq[0]);
     jac[1] = 0.0;
     jac[2] = 0.0;
-    jac[3] = c[25]*cq[1];
+    jac[3] = c[28]*cq[1];
     jac[4] = 0.0;
-    jac[5] = c[26]*cq[5];
+    jac[5] = c[29]*cq[5];
     jac[6] = t2;
     jac[7] = -1.0;
     jac[8] = t3;
@@ -207,9 +217,9 @@ void sg_overlock_needle_planar_scales(const double *q, const double *cq, const d
     (void)cq;
     (void)x;
     (void)cx;
-    out[0] = c[27];
-    out[1] = c[28];
-    out[2] = c[29] + fabs(q[1]);
+    out[0] = c[30];
+    out[1] = c[31];
+    out[2] = c[32] + fabs(q[1]);
 }
 
 /* sg_overlock_needle_planar_blocks -- Total ops: 27 */
@@ -235,46 +245,46 @@ void sg_overlock_needle_planar_blocks(const double *jac, double *out)
 /* sg_overlock_needle_planar_motion -- Total ops: 166 */
 int sg_overlock_needle_planar_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
-    const double t0 = c[22]*cq[1] + c[23]*cq[0];
+    const double t0 = c[25]*cq[1] + c[26]*cq[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[18]*t1;
+    const double t2 = c[21]*t1;
     const double t3 = c[10]*cq[0] + c[12]*cq[1];
-    const double t4 = c[19] + t2 + t3;
-    const double t5 = c[23]*cq[1] + c[24]*cq[0];
+    const double t4 = c[22] + t2 + t3;
+    const double t5 = c[26]*cq[1] + c[27]*cq[0];
     const double t6 = c[1]*cx[1] + c[5]*cx[0];
-    const double t7 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t6;
-    const double t8 = c[25]*cq[1];
-    const double t9 = c[13]*cq[0];
-    const double t10 = c[14]*cq[4];
-    const double t11 = c[30]*t6;
-    const double t12 = c[31]*t1;
+    const double t7 = c[10]*cq[1] + c[11]*cq[0] + c[20] + c[21]*t6;
+    const double t8 = c[28]*cq[1];
+    const double t9 = c[14]*cq[0];
+    const double t10 = c[15]*cq[4];
+    const double t11 = c[33]*t6;
+    const double t12 = c[34]*t1;
     const double t13 = t11*t4 + t12*t7;
-    const double t14 = c[12]*cq[0] + c[32]*cq[1];
-    const double t17 = c[13]*cq[1];
-    const double t23 = c[38]*t6 + c[39]*t1;
-    const double t24 = c[38]*t1 + c[41]*t6;
+    const double t14 = c[12]*cq[0] + c[35]*cq[1];
+    const double t17 = c[14]*cq[1];
+    const double t23 = c[41]*t6 + c[42]*t1;
+    const double t24 = c[41]*t1 + c[44]*t6;
     const double t25 = ((xd[0])*(xd[0]));
-    const double t26 = c[42]*cq[0] + c[43]*cq[1];
-    const double t27 = c[43]*cq[0] + c[45]*cq[1];
-    const double t28 = c[46]*cq[4];
-    const double t29 = c[47]*cq[5];
-    double J[9], rs[3], cs[3];
+    const double t26 = c[45]*cq[0] + c[46]*cq[1];
+    const double t27 = c[46]*cq[0] + c[48]*cq[1];
+    const double t28 = c[49]*cq[4];
+    const double t29 = c[50]*cq[5];
+    double J[9], rs[3], cs[6];
     int piv[3];
     J[0] = t0*t4 + t5*t7;
     J[1] = 0.0;
     J[2] = 0.0;
     J[3] = t8;
     J[4] = 0.0;
-    J[5] = c[26]*cq[5];
+    J[5] = c[29]*cq[5];
     J[6] = t9;
     J[7] = -1.0;
     J[8] = t10;
     qd[0] = -t13*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    rs[0] = c[50];
-    rs[1] = c[51];
-    rs[2] = (1.0/(c[29] + fabs(q[1])));
+    rs[0] = c[53];
+    rs[1] = c[54];
+    rs[2] = (1.0/(c[32] + fabs(q[1])));
     if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t15 = ((qd[0])*(qd[0]));
@@ -282,11 +292,12 @@ int sg_overlock_needle_planar_motion(const double *q, const double *cq, const do
     const double t18 = cq[5]*t16;
     const double t19 = qd[0]*t8;
     const double t20 = qd[0]*t9;
-    qdd[0] = -qd[0]*(qd[0]*(t0*t14 + t0*t7 + t3*t5 + t4*(c[22]*cq[0] + c[33]*cq[1])) + xd[0]*(t11*t14 + t12*t3)) - t13*xdd[0] - xd[0]*(qd[0]*(c[3]*t0*t6 + t2*t5) + xd[0]*(c[30]*t1*t4 + c[34]*((t1)*(t1)) + c[34]*((t6)*(t6)) + t11*t7));
+    qdd[0] = -qd[0]*(qd[0]*(t0*t14 + t0*t7 + t3*t5 + t4*(c[25]*cq[0] + c[36]*cq[1])) + xd[0]*(t11*t14 + t12*t3)) - t13*xdd[0] - xd[0]*(qd[0]*(c[3]*t0*t6 + t2*t5) + xd[0]*(c[33]*t1*t4 + c[37]*((t1)*(t1)) + c[37]*((t6)*(t6)) + t11*t7));
     qdd[1] = t10*t16 + t15*t9;
-    qdd[2] = c[14]*t18 + t15*t17;
+    qdd[2] = c[15]*t18 + t15*t17;
     sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
-    const double t21 = c[25]*cq[0]*t15 + qdd[0]*t8;
+    sg_rates_scale_inl(3, 0x5ULL, fabs(xd[0]), cs, qd, qdd, cond);
+    const double t21 = c[28]*cq[0]*t15 + qdd[0]*t8;
     const double t22 = qdd[0]*t9 + t15*t8;
     obs[0] = t9;
     obs[1] = t17;
@@ -294,50 +305,50 @@ int sg_overlock_needle_planar_motion(const double *q, const double *cq, const do
     obs[3] = t20;
     obs[4] = t21;
     obs[5] = t22;
-    obs[6] = c[15];
-    obs[7] = c[35] + q[1];
+    obs[6] = c[16];
+    obs[7] = c[38] + q[1];
     obs[8] = 0.0;
     obs[9] = qd[1];
     obs[10] = 0.0;
     obs[11] = qdd[1];
-    obs[12] = c[15];
-    obs[13] = c[36] + q[1];
+    obs[12] = c[16];
+    obs[13] = c[39] + q[1];
     obs[14] = 0.0;
     obs[15] = qd[1];
     obs[16] = 0.0;
     obs[17] = qdd[1];
-    obs[18] = c[37] + x[0];
+    obs[18] = c[40] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = c[0] + t23;
-    obs[22] = c[39]*t6 + c[4] + c[40]*t1;
+    obs[22] = c[4] + c[42]*t6 + c[43]*t1;
     obs[23] = t24*xd[0];
     obs[24] = t23*xd[0];
-    obs[25] = t24*xdd[0] + t25*(c[40]*t6 + c[41]*t1);
+    obs[25] = t24*xdd[0] + t25*(c[43]*t6 + c[44]*t1);
     obs[26] = t23*xdd[0] + t24*t25;
     obs[27] = q[0];
     obs[28] = qd[0];
     obs[29] = qdd[0];
     obs[30] = t26;
-    obs[31] = c[42]*cq[1] + c[44]*cq[0];
+    obs[31] = c[45]*cq[1] + c[47]*cq[0];
     obs[32] = qd[0]*t27;
     obs[33] = qd[0]*t26;
-    obs[34] = qdd[0]*t27 + t15*(c[44]*cq[1] + c[45]*cq[0]);
+    obs[34] = qdd[0]*t27 + t15*(c[47]*cq[1] + c[48]*cq[0]);
     obs[35] = qdd[0]*t26 + t15*t27;
     obs[36] = q[2];
     obs[37] = qd[2];
     obs[38] = qdd[2];
     obs[39] = t28 + t9;
-    obs[40] = c[46]*cq[5] + t17;
+    obs[40] = c[49]*cq[5] + t17;
     obs[41] = qd[2]*t29 + t19;
     obs[42] = qd[2]*t28 + t20;
-    obs[43] = c[47]*cq[4]*t16 + qdd[2]*t29 + t21;
-    obs[44] = c[47]*t18 + qdd[2]*t28 + t22;
+    obs[43] = c[50]*cq[4]*t16 + qdd[2]*t29 + t21;
+    obs[44] = c[50]*t18 + qdd[2]*t28 + t22;
     obs[45] = (0.5)*3.141592653589793;
     obs[46] = 0.0;
     obs[47] = 0.0;
-    obs[48] = c[48];
-    obs[49] = c[49] + q[1];
+    obs[48] = c[51];
+    obs[49] = c[52] + q[1];
     obs[50] = 0.0;
     obs[51] = qd[1];
     obs[52] = 0.0;
@@ -353,48 +364,49 @@ int sg_overlock_needle_planar_motion(const double *q, const double *cq, const do
 int sg_overlock_needle_planar_rates(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *cond)
 {
     (void)x;
-    const double t0 = c[22]*cq[1] + c[23]*cq[0];
+    const double t0 = c[25]*cq[1] + c[26]*cq[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[18]*t1;
+    const double t2 = c[21]*t1;
     const double t3 = c[10]*cq[0] + c[12]*cq[1];
-    const double t4 = c[19] + t2 + t3;
-    const double t5 = c[23]*cq[1] + c[24]*cq[0];
+    const double t4 = c[22] + t2 + t3;
+    const double t5 = c[26]*cq[1] + c[27]*cq[0];
     const double t6 = c[1]*cx[1] + c[5]*cx[0];
-    const double t7 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t6;
-    const double t8 = c[25]*cq[1];
-    const double t9 = c[13]*cq[0];
-    const double t10 = c[14]*cq[4];
-    const double t11 = c[30]*t6;
-    const double t12 = c[31]*t1;
+    const double t7 = c[10]*cq[1] + c[11]*cq[0] + c[20] + c[21]*t6;
+    const double t8 = c[28]*cq[1];
+    const double t9 = c[14]*cq[0];
+    const double t10 = c[15]*cq[4];
+    const double t11 = c[33]*t6;
+    const double t12 = c[34]*t1;
     const double t13 = t11*t4 + t12*t7;
-    const double t14 = c[12]*cq[0] + c[32]*cq[1];
-    const double t17 = c[13]*cq[1];
-    double J[9], rs[3], cs[3];
+    const double t14 = c[12]*cq[0] + c[35]*cq[1];
+    const double t17 = c[14]*cq[1];
+    double J[9], rs[3], cs[6];
     int piv[3];
     J[0] = t0*t4 + t5*t7;
     J[1] = 0.0;
     J[2] = 0.0;
     J[3] = t8;
     J[4] = 0.0;
-    J[5] = c[26]*cq[5];
+    J[5] = c[29]*cq[5];
     J[6] = t9;
     J[7] = -1.0;
     J[8] = t10;
     qd[0] = -t13*xd[0];
     qd[1] = 0.0;
     qd[2] = 0.0;
-    rs[0] = c[50];
-    rs[1] = c[51];
-    rs[2] = (1.0/(c[29] + fabs(q[1])));
+    rs[0] = c[53];
+    rs[1] = c[54];
+    rs[2] = (1.0/(c[32] + fabs(q[1])));
     if (sg_factor_eq_inl(3, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(3, J, piv, rs, cs, qd);
     const double t15 = ((qd[0])*(qd[0]));
     const double t16 = ((qd[2])*(qd[2]));
     const double t18 = cq[5]*t16;
-    qdd[0] = -qd[0]*(qd[0]*(t0*t14 + t0*t7 + t3*t5 + t4*(c[22]*cq[0] + c[33]*cq[1])) + xd[0]*(t11*t14 + t12*t3)) - t13*xdd[0] - xd[0]*(qd[0]*(c[3]*t0*t6 + t2*t5) + xd[0]*(c[30]*t1*t4 + c[34]*((t1)*(t1)) + c[34]*((t6)*(t6)) + t11*t7));
+    qdd[0] = -qd[0]*(qd[0]*(t0*t14 + t0*t7 + t3*t5 + t4*(c[25]*cq[0] + c[36]*cq[1])) + xd[0]*(t11*t14 + t12*t3)) - t13*xdd[0] - xd[0]*(qd[0]*(c[3]*t0*t6 + t2*t5) + xd[0]*(c[33]*t1*t4 + c[37]*((t1)*(t1)) + c[37]*((t6)*(t6)) + t11*t7));
     qdd[1] = t10*t16 + t15*t9;
-    qdd[2] = c[14]*t18 + t15*t17;
+    qdd[2] = c[15]*t18 + t15*t17;
     sg_solve_eq_inl(3, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(3, 0x5ULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -404,13 +416,13 @@ int sg_overlock_needle_planar_observe(const double *q, const double *cq, const d
 {
     switch (group) {
     case 0: {
-        const double t8 = c[25]*cq[1];
-        const double t9 = c[13]*cq[0];
+        const double t8 = c[28]*cq[1];
+        const double t9 = c[14]*cq[0];
         const double t15 = ((qd[0])*(qd[0]));
-        const double t17 = c[13]*cq[1];
+        const double t17 = c[14]*cq[1];
         const double t19 = qd[0]*t8;
         const double t20 = qd[0]*t9;
-        const double t21 = c[25]*cq[0]*t15 + qdd[0]*t8;
+        const double t21 = c[28]*cq[0]*t15 + qdd[0]*t8;
         const double t22 = qdd[0]*t9 + t15*t8;
         obs[0] = t9;
         obs[1] = t17;
@@ -421,8 +433,8 @@ int sg_overlock_needle_planar_observe(const double *q, const double *cq, const d
         return isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) ? SG_OK : SG_NONFINITE;
     }
     case 1: {
-        obs[6] = c[15];
-        obs[7] = c[35] + q[1];
+        obs[6] = c[16];
+        obs[7] = c[38] + q[1];
         obs[8] = 0.0;
         obs[9] = qd[1];
         obs[10] = 0.0;
@@ -430,8 +442,8 @@ int sg_overlock_needle_planar_observe(const double *q, const double *cq, const d
         return isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11])))) ? SG_OK : SG_NONFINITE;
     }
     case 2: {
-        obs[12] = c[15];
-        obs[13] = c[36] + q[1];
+        obs[12] = c[16];
+        obs[13] = c[39] + q[1];
         obs[14] = 0.0;
         obs[15] = qd[1];
         obs[16] = 0.0;
@@ -441,65 +453,65 @@ int sg_overlock_needle_planar_observe(const double *q, const double *cq, const d
     case 3: {
         const double t1 = c[1]*cx[0] + c[2]*cx[1];
         const double t6 = c[1]*cx[1] + c[5]*cx[0];
-        const double t23 = c[38]*t6 + c[39]*t1;
-        const double t24 = c[38]*t1 + c[41]*t6;
+        const double t23 = c[41]*t6 + c[42]*t1;
+        const double t24 = c[41]*t1 + c[44]*t6;
         const double t25 = ((xd[0])*(xd[0]));
-        obs[18] = c[37] + x[0];
+        obs[18] = c[40] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
         obs[21] = c[0] + t23;
-        obs[22] = c[39]*t6 + c[4] + c[40]*t1;
+        obs[22] = c[4] + c[42]*t6 + c[43]*t1;
         obs[23] = t24*xd[0];
         obs[24] = t23*xd[0];
-        obs[25] = t24*xdd[0] + t25*(c[40]*t6 + c[41]*t1);
+        obs[25] = t24*xdd[0] + t25*(c[43]*t6 + c[44]*t1);
         obs[26] = t23*xdd[0] + t24*t25;
         return isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26]))))) ? SG_OK : SG_NONFINITE;
     }
     case 4: {
         const double t15 = ((qd[0])*(qd[0]));
-        const double t26 = c[42]*cq[0] + c[43]*cq[1];
-        const double t27 = c[43]*cq[0] + c[45]*cq[1];
+        const double t26 = c[45]*cq[0] + c[46]*cq[1];
+        const double t27 = c[46]*cq[0] + c[48]*cq[1];
         obs[27] = q[0];
         obs[28] = qd[0];
         obs[29] = qdd[0];
         obs[30] = t26;
-        obs[31] = c[42]*cq[1] + c[44]*cq[0];
+        obs[31] = c[45]*cq[1] + c[47]*cq[0];
         obs[32] = qd[0]*t27;
         obs[33] = qd[0]*t26;
-        obs[34] = qdd[0]*t27 + t15*(c[44]*cq[1] + c[45]*cq[0]);
+        obs[34] = qdd[0]*t27 + t15*(c[47]*cq[1] + c[48]*cq[0]);
         obs[35] = qdd[0]*t26 + t15*t27;
         return isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35]))))) ? SG_OK : SG_NONFINITE;
     }
     case 5: {
-        const double t8 = c[25]*cq[1];
-        const double t9 = c[13]*cq[0];
+        const double t8 = c[28]*cq[1];
+        const double t9 = c[14]*cq[0];
         const double t15 = ((qd[0])*(qd[0]));
         const double t16 = ((qd[2])*(qd[2]));
-        const double t17 = c[13]*cq[1];
+        const double t17 = c[14]*cq[1];
         const double t18 = cq[5]*t16;
         const double t19 = qd[0]*t8;
         const double t20 = qd[0]*t9;
-        const double t21 = c[25]*cq[0]*t15 + qdd[0]*t8;
+        const double t21 = c[28]*cq[0]*t15 + qdd[0]*t8;
         const double t22 = qdd[0]*t9 + t15*t8;
-        const double t28 = c[46]*cq[4];
-        const double t29 = c[47]*cq[5];
+        const double t28 = c[49]*cq[4];
+        const double t29 = c[50]*cq[5];
         obs[36] = q[2];
         obs[37] = qd[2];
         obs[38] = qdd[2];
         obs[39] = t28 + t9;
-        obs[40] = c[46]*cq[5] + t17;
+        obs[40] = c[49]*cq[5] + t17;
         obs[41] = qd[2]*t29 + t19;
         obs[42] = qd[2]*t28 + t20;
-        obs[43] = c[47]*cq[4]*t16 + qdd[2]*t29 + t21;
-        obs[44] = c[47]*t18 + qdd[2]*t28 + t22;
+        obs[43] = c[50]*cq[4]*t16 + qdd[2]*t29 + t21;
+        obs[44] = c[50]*t18 + qdd[2]*t28 + t22;
         return isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44]))))) ? SG_OK : SG_NONFINITE;
     }
     case 6: {
         obs[45] = (0.5)*3.141592653589793;
         obs[46] = 0.0;
         obs[47] = 0.0;
-        obs[48] = c[48];
-        obs[49] = c[49] + q[1];
+        obs[48] = c[51];
+        obs[49] = c[52] + q[1];
         obs[50] = 0.0;
         obs[51] = qd[1];
         obs[52] = 0.0;
@@ -523,39 +535,39 @@ int sg_overlock_needle_planar_forces(const double *q, const double *cq, const do
     (void)x;
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
     const double t1 = c[1]*cx[1] + c[5]*cx[0];
-    const double t2 = c[44]*cq[0];
-    const double t3 = c[44]*cq[1];
-    const double t4 = c[62]*(-gv[0] + obs[34]) - ld[0];
+    const double t2 = c[47]*cq[0];
+    const double t3 = c[47]*cq[1];
+    const double t4 = c[65]*(-gv[0] + obs[34]) - ld[0];
     const double t5 = -gv[1] + obs[53];
-    const double t6 = c[63]*(-gv[1] + obs[44]) + c[64]*t5 - ld[3] - ld[5];
-    const double t7 = c[62]*(-gv[1] + obs[35]) - ld[1] + t6;
+    const double t6 = c[66]*(-gv[1] + obs[44]) + c[67]*t5 - ld[3] - ld[5];
+    const double t7 = c[65]*(-gv[1] + obs[35]) - ld[1] + t6;
     const double t8 = -gv[0] + obs[43];
-    const double t9 = c[64]*t5 - ld[3] - ld[5];
-    const double t10 = c[46]*cq[4];
-    const double t11 = c[10]*cq[0] + c[12]*cq[1] + c[18]*t0 + c[19];
-    const double t12 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t1;
-    const double t13 = c[78]*t12;
-    const double t14 = c[78]*t11;
+    const double t9 = c[67]*t5 - ld[3] - ld[5];
+    const double t10 = c[49]*cq[4];
+    const double t11 = c[10]*cq[0] + c[12]*cq[1] + c[21]*t0 + c[22];
+    const double t12 = c[10]*cq[1] + c[11]*cq[0] + c[20] + c[21]*t1;
+    const double t13 = c[81]*t12;
+    const double t14 = c[81]*t11;
     {
-        const double d = c[14]*cq[5];
-        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[13]*cq[1]), fabs(c[14]*cq[5])))) return SG_SINGULAR;
-        out[7] = (c[65]*obs[38] + c[66]*cq[5]*t8 - ld[8] + t10*t6 + t10*t9)/d;
+        const double d = c[15]*cq[5];
+        if (!(fabs(d) > SG_PIVOT_RTOL * fmax(fabs(c[14]*cq[1]), fabs(c[15]*cq[5])))) return SG_SINGULAR;
+        out[7] = (c[68]*obs[38] + c[69]*cq[5]*t8 - ld[8] + t10*t6 + t10*t9)/d;
     }
     {
-        const double d = c[52]*cq[0] + c[53]*cq[1] + c[54]*cq[0] + c[55]*cq[1] + c[56]*cq[1]*t0 + c[57]*cq[0]*t0 + c[57]*cq[1]*t1 + c[58]*cq[0]*t1;
-        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[52]*cq[0] + c[53]*cq[1] + c[54]*cq[0] + c[55]*cq[1] + c[56]*cq[1]*t0 + c[57]*cq[0]*t0 + c[57]*cq[1]*t1 + c[58]*cq[0]*t1))) return SG_SINGULAR;
-        out[6] = (-c[13]*cq[1]*out[7] + c[59]*obs[29] - ld[0]*(c[60]*cq[1] + t2) - ld[1]*(c[61]*cq[0] + t3) - ld[7] - t4*(c[42]*cq[1] + t2) - t6*(c[43]*cq[1] + c[60]*cq[0]) - t7*(c[45]*cq[0] + t3))/d;
+        const double d = c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[1]*t0 + c[60]*cq[0]*t0 + c[60]*cq[1]*t1 + c[61]*cq[0]*t1;
+        if (!(fabs(d) > SG_PIVOT_RTOL * fabs(c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[1]*t0 + c[60]*cq[0]*t0 + c[60]*cq[1]*t1 + c[61]*cq[0]*t1))) return SG_SINGULAR;
+        out[6] = (-c[14]*cq[1]*out[7] + c[62]*obs[29] - ld[0]*(c[63]*cq[1] + t2) - ld[1]*(c[64]*cq[0] + t3) - ld[7] - t4*(c[45]*cq[1] + t2) - t6*(c[46]*cq[1] + c[63]*cq[0]) - t7*(c[48]*cq[0] + t3))/d;
     }
     out[4] = -out[6]*t14 + out[7] + t4;
-    out[9] = -c[63]*t8 + out[7];
+    out[9] = -c[66]*t8 + out[7];
     out[5] = -out[6]*t13 + t7;
-    out[2] = -c[64]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
-    out[3] = -c[49]*out[9] + c[73]*obs[47] + c[74]*ld[2] + c[75]*ld[3] + c[75]*ld[5] + c[75]*t9 + c[76]*ld[4] - c[77]*out[2] - ld[9];
+    out[2] = -c[67]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
+    out[3] = -c[52]*out[9] + c[76]*obs[47] + c[77]*ld[2] + c[78]*ld[3] + c[78]*ld[5] + c[78]*t9 + c[79]*ld[4] - c[80]*out[2] - ld[9];
     out[8] = t6;
     out[10] = t9;
-    out[11] = c[69]*obs[20] + c[70]*(-gv[0]*(c[39]*t1 + c[40]*t0) + gv[1]*(c[38]*t1 + c[39]*t0)) - out[6]*(c[71]*t1*t11 + c[72]*t0*t12) - ld[6];
-    out[1] = c[67]*(-gv[1] + obs[26]) - c[68]*out[6]*t12;
-    out[0] = c[67]*(-gv[0] + obs[25]) - c[68]*out[6]*t11;
+    out[11] = c[72]*obs[20] + c[73]*(-gv[0]*(c[42]*t1 + c[43]*t0) + gv[1]*(c[41]*t1 + c[42]*t0)) - out[6]*(c[74]*t1*t11 + c[75]*t0*t12) - ld[6];
+    out[1] = c[70]*(-gv[1] + obs[26]) - c[71]*out[6]*t12;
+    out[0] = c[70]*(-gv[0] + obs[25]) - c[71]*out[6]*t11;
     const double t15 = -out[2];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
@@ -566,9 +578,9 @@ int sg_overlock_needle_planar_forces(const double *q, const double *cq, const do
     out[18] = 0.0;
     out[19] = out[0] + out[4] + t15;
     out[20] = out[1] + out[5];
-    out[21] = c[0]*out[1] + c[17]*out[0] + out[11] + out[2]*q[1] + out[3];
-    out[22] = c[79]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[80]*((obs[19])*(obs[19])) + c[81]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[82]*((obs[28])*(obs[28])) + c[83]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[84]*((obs[37])*(obs[37])) + c[85]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[86]*((obs[46])*(obs[46]));
-    out[23] = c[70]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[87]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[88]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[89]*(gv[0]*obs[48] + gv[1]*obs[49]);
+    out[21] = c[0]*out[1] + c[20]*out[0] + out[11] + out[2]*q[1] + out[3];
+    out[22] = c[82]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[83]*((obs[19])*(obs[19])) + c[84]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[85]*((obs[28])*(obs[28])) + c[86]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[87]*((obs[37])*(obs[37])) + c[88]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[89]*((obs[46])*(obs[46]));
+    out[23] = c[73]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[90]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[91]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[92]*(gv[0]*obs[48] + gv[1]*obs[49]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     out[25] = 0.0;
     if (!isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))))) return SG_NONFINITE;
@@ -581,33 +593,33 @@ void sg_overlock_needle_planar_force_matrix(const double *q, const double *cq, c
     (void)q;
     (void)x;
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
-    const double t1 = c[10]*cq[0] + c[12]*cq[1] + c[18]*t0 + c[19];
-    const double t2 = c[68]*t1;
+    const double t1 = c[10]*cq[0] + c[12]*cq[1] + c[21]*t0 + c[22];
+    const double t2 = c[71]*t1;
     const double t3 = c[1]*cx[1] + c[5]*cx[0];
-    const double t4 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t3;
-    const double t5 = c[78]*t4;
-    const double t6 = c[44]*cq[0];
-    const double t7 = c[44]*cq[1];
-    const double t8 = c[46]*cq[5];
-    const double t9 = c[47]*cq[4];
+    const double t4 = c[10]*cq[1] + c[11]*cq[0] + c[20] + c[21]*t3;
+    const double t5 = c[81]*t4;
+    const double t6 = c[47]*cq[0];
+    const double t7 = c[47]*cq[1];
+    const double t8 = c[49]*cq[5];
+    const double t9 = c[50]*cq[4];
     for (int k = 0; k < 144; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[6] = t2;
     A[13] = 1.0;
-    A[18] = c[68]*t4;
-    A[30] = c[71]*t1*t3 + c[72]*t0*t4;
+    A[18] = c[71]*t4;
+    A[30] = c[74]*t1*t3 + c[75]*t0*t4;
     A[35] = 1.0;
     A[40] = 1.0;
-    A[42] = c[78]*t1;
+    A[42] = c[81]*t1;
     A[43] = -1.0;
     A[53] = 1.0;
     A[54] = t5;
     A[56] = -1.0;
-    A[64] = c[42]*cq[1] + t6;
-    A[65] = c[45]*cq[0] + t7;
-    A[66] = t2*(c[90]*cq[0] + c[91]*cq[1]) + t5*(c[91]*cq[0] + c[92]*cq[1]);
-    A[67] = c[43]*cq[0] + c[61]*cq[1];
-    A[68] = c[43]*cq[1] + c[60]*cq[0];
+    A[64] = c[45]*cq[1] + t6;
+    A[65] = c[48]*cq[0] + t7;
+    A[66] = t2*(c[93]*cq[0] + c[94]*cq[1]) + t5*(c[94]*cq[0] + c[95]*cq[1]);
+    A[67] = c[46]*cq[0] + c[64]*cq[1];
+    A[68] = c[46]*cq[1] + c[63]*cq[0];
     A[79] = 1.0;
     A[81] = -1.0;
     A[92] = 1.0;
@@ -619,22 +631,22 @@ void sg_overlock_needle_planar_force_matrix(const double *q, const double *cq, c
     A[110] = -1.0;
     A[117] = 1.0;
     A[130] = 1.0;
-    A[134] = c[77];
+    A[134] = c[80];
     A[135] = 1.0;
-    A[141] = c[49];
-    A[142] = c[93];
-    b[0] = c[67]*(-gv[0] + obs[25]);
-    b[1] = c[67]*(-gv[1] + obs[26]);
-    b[2] = c[69]*obs[20] + c[70]*(-gv[0]*(c[39]*t3 + c[40]*t0) + gv[1]*(c[38]*t3 + c[39]*t0)) - ld[6];
-    b[3] = c[62]*(-gv[0] + obs[34]) - ld[0];
-    b[4] = c[62]*(-gv[1] + obs[35]) - ld[1];
-    b[5] = c[59]*obs[29] - ld[0]*(c[60]*cq[1] + t6) - ld[1]*(c[61]*cq[0] + t7) - ld[7];
-    b[6] = c[63]*(-gv[0] + obs[43]);
-    b[7] = c[63]*(-gv[1] + obs[44]);
-    b[8] = c[65]*obs[38] - ld[8];
-    b[9] = c[64]*(-gv[0] + obs[52]) - ld[2] - ld[4];
-    b[10] = c[64]*(-gv[1] + obs[53]) - ld[3] - ld[5];
-    b[11] = c[73]*obs[47] + c[74]*ld[2] + c[75]*ld[3] + c[75]*ld[5] + c[76]*ld[4] - ld[9];
+    A[141] = c[52];
+    A[142] = c[96];
+    b[0] = c[70]*(-gv[0] + obs[25]);
+    b[1] = c[70]*(-gv[1] + obs[26]);
+    b[2] = c[72]*obs[20] + c[73]*(-gv[0]*(c[42]*t3 + c[43]*t0) + gv[1]*(c[41]*t3 + c[42]*t0)) - ld[6];
+    b[3] = c[65]*(-gv[0] + obs[34]) - ld[0];
+    b[4] = c[65]*(-gv[1] + obs[35]) - ld[1];
+    b[5] = c[62]*obs[29] - ld[0]*(c[63]*cq[1] + t6) - ld[1]*(c[64]*cq[0] + t7) - ld[7];
+    b[6] = c[66]*(-gv[0] + obs[43]);
+    b[7] = c[66]*(-gv[1] + obs[44]);
+    b[8] = c[68]*obs[38] - ld[8];
+    b[9] = c[67]*(-gv[0] + obs[52]) - ld[2] - ld[4];
+    b[10] = c[67]*(-gv[1] + obs[53]) - ld[3] - ld[5];
+    b[11] = c[76]*obs[47] + c[77]*ld[2] + c[78]*ld[3] + c[78]*ld[5] + c[79]*ld[4] - ld[9];
 }
 
 /* sg_overlock_needle_planar_anchors -- Total ops: 43 */
@@ -643,17 +655,17 @@ void sg_overlock_needle_planar_anchors(const double *q, const double *cq, const 
     (void)x;
     const double t0 = c[1]*cx[0] + c[2]*cx[1];
     const double t1 = c[1]*cx[1] + c[5]*cx[0];
-    const double t2 = c[13]*cq[0];
-    const double t3 = c[13]*cq[1];
+    const double t2 = c[14]*cq[0];
+    const double t3 = c[14]*cq[1];
     out[0] = c[0];
     out[1] = c[4];
     out[2] = c[0];
     out[3] = c[4];
-    out[4] = c[15];
+    out[4] = c[16];
     out[5] = 0.0;
     out[6] = 0.0;
     out[7] = 1.0;
-    out[8] = c[15];
+    out[8] = c[16];
     out[9] = q[1];
     out[10] = 0.0;
     out[11] = 0.0;
@@ -667,24 +679,24 @@ void sg_overlock_needle_planar_anchors(const double *q, const double *cq, const 
     out[19] = t3;
     out[20] = t2;
     out[21] = t3;
-    out[22] = c[14]*cq[4] + t2;
-    out[23] = c[14]*cq[5] + t3;
-    out[24] = c[15];
+    out[22] = c[15]*cq[4] + t2;
+    out[23] = c[15]*cq[5] + t3;
+    out[24] = c[16];
     out[25] = q[1];
     out[26] = t2;
     out[27] = t3;
-    out[28] = c[15];
-    out[29] = c[35] + q[1];
-    out[30] = c[15];
-    out[31] = c[36] + q[1];
-    out[32] = c[0] + c[38]*t1 + c[39]*t0;
-    out[33] = c[39]*t1 + c[4] + c[40]*t0;
-    out[34] = c[42]*cq[0] + c[43]*cq[1];
-    out[35] = c[42]*cq[1] + c[44]*cq[0];
-    out[36] = c[46]*cq[4] + t2;
-    out[37] = c[46]*cq[5] + t3;
-    out[38] = c[48];
-    out[39] = c[49] + q[1];
+    out[28] = c[16];
+    out[29] = c[38] + q[1];
+    out[30] = c[16];
+    out[31] = c[39] + q[1];
+    out[32] = c[0] + c[41]*t1 + c[42]*t0;
+    out[33] = c[4] + c[42]*t1 + c[43]*t0;
+    out[34] = c[45]*cq[0] + c[46]*cq[1];
+    out[35] = c[45]*cq[1] + c[47]*cq[0];
+    out[36] = c[49]*cq[4] + t2;
+    out[37] = c[49]*cq[5] + t3;
+    out[38] = c[51];
+    out[39] = c[52] + q[1];
 }
 
 /* sg_overlock_needle_planar_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
@@ -701,79 +713,84 @@ static SG_FLATTEN SG_NOINLINE size_t sg_overlock_needle_planar_sweep(const struc
 #if SG_SIMD
 SG_SIMD_BEGIN
 
-SG_VINLINE sg_vm sg_overlock_needle_planar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_overlock_needle_planar_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq, sg_vd *err)
 {
     (void)x;
     sg_vm ok = sgv_true();
+    sg_vd e[3] = {sgv_set1(0.0), sgv_set1(0.0), sgv_set1(1.0)};
     {
         /* dyad 0: RRS closed at joint rod (lever) */
         const sg_vd P[2] = {sgv_set1(0.0), sgv_set1(0.0)};
         const sg_vd Q[2] = {c[0] + c[3]*(c[1]*cx[0] + c[2]*cx[1]), c[3]*(c[1]*cx[1] + c[5]*cx[0]) + c[4]};
         const sg_vd l[2] = {sgv_set1(c[6]), sgv_set1(c[7])};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[13]);
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         q[0] = angles ? c[8] + sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         cq[0] = c[9]*(c[10]*(J[0] - P[0]) + c[11]*(J[1] - P[1]));
         cq[1] = c[9]*(c[10]*(J[1] - P[1]) + c[12]*(J[0] - P[0]));
     }
     {
         /* dyad 1: RRP closed at joint N (link, needle_bar) */
-        const sg_vd P[2] = {c[13]*cq[0], c[13]*cq[1]};
-        const sg_vd l[1] = {sgv_set1(c[14])};
-        const sg_vd L0[2] = {sgv_set1(c[15]), sgv_set1(0.0)};
+        const sg_vd P[2] = {c[14]*cq[0], c[14]*cq[1]};
+        const sg_vd l[1] = {sgv_set1(c[15])};
+        const sg_vd L0[2] = {sgv_set1(c[16]), sgv_set1(0.0)};
         const sg_vd u[2] = {sgv_set1(0.0), sgv_set1(1.0)};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[19]) + sgv_set1(c[18]) * e[0];
         sg_vd s, J[2];
-        ok &= sgv_dyad_rrp(P, l[0], L0, u, branch[1], &s, J);
+        ok &= sgv_dyad_rrp(P, l[0], L0, u, branch[1], ein, e, &s, J);
         q[2] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[1] = s;
-        cq[4] = c[16]*(J[0] - P[0]);
-        cq[5] = c[16]*(J[1] - P[1]);
+        cq[4] = c[17]*(J[0] - P[0]);
+        cq[5] = c[17]*(J[1] - P[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return ok;
 }
 
 SG_VINLINE sg_vm sg_overlock_needle_planar_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
 {
-    const sg_vd t0 = c[22]*cq[1] + c[23]*cq[0];
+    const sg_vd t0 = c[25]*cq[1] + c[26]*cq[0];
     const sg_vd t1 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t2 = c[18]*t1;
+    const sg_vd t2 = c[21]*t1;
     const sg_vd t3 = c[10]*cq[0] + c[12]*cq[1];
-    const sg_vd t4 = c[19] + t2 + t3;
-    const sg_vd t5 = c[23]*cq[1] + c[24]*cq[0];
+    const sg_vd t4 = c[22] + t2 + t3;
+    const sg_vd t5 = c[26]*cq[1] + c[27]*cq[0];
     const sg_vd t6 = c[1]*cx[1] + c[5]*cx[0];
-    const sg_vd t7 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t6;
-    const sg_vd t8 = c[25]*cq[1];
-    const sg_vd t9 = c[13]*cq[0];
-    const sg_vd t10 = c[14]*cq[4];
-    const sg_vd t11 = c[30]*t6;
-    const sg_vd t12 = c[31]*t1;
+    const sg_vd t7 = c[10]*cq[1] + c[11]*cq[0] + c[20] + c[21]*t6;
+    const sg_vd t8 = c[28]*cq[1];
+    const sg_vd t9 = c[14]*cq[0];
+    const sg_vd t10 = c[15]*cq[4];
+    const sg_vd t11 = c[33]*t6;
+    const sg_vd t12 = c[34]*t1;
     const sg_vd t13 = t11*t4 + t12*t7;
-    const sg_vd t14 = c[12]*cq[0] + c[32]*cq[1];
-    const sg_vd t17 = c[13]*cq[1];
-    const sg_vd t23 = c[38]*t6 + c[39]*t1;
-    const sg_vd t24 = c[38]*t1 + c[41]*t6;
+    const sg_vd t14 = c[12]*cq[0] + c[35]*cq[1];
+    const sg_vd t17 = c[14]*cq[1];
+    const sg_vd t23 = c[41]*t6 + c[42]*t1;
+    const sg_vd t24 = c[41]*t1 + c[44]*t6;
     const sg_vd t25 = ((xd[0])*(xd[0]));
-    const sg_vd t26 = c[42]*cq[0] + c[43]*cq[1];
-    const sg_vd t27 = c[43]*cq[0] + c[45]*cq[1];
-    const sg_vd t28 = c[46]*cq[4];
-    const sg_vd t29 = c[47]*cq[5];
-    sg_vd J[9], rs[3], cs[3];
+    const sg_vd t26 = c[45]*cq[0] + c[46]*cq[1];
+    const sg_vd t27 = c[46]*cq[0] + c[48]*cq[1];
+    const sg_vd t28 = c[49]*cq[4];
+    const sg_vd t29 = c[50]*cq[5];
+    sg_vd J[9], rs[3], cs[6];
     sg_vm piv[3];
     J[0] = t0*t4 + t5*t7;
     J[1] = sgv_set1(0.0);
     J[2] = sgv_set1(0.0);
     J[3] = t8;
     J[4] = sgv_set1(0.0);
-    J[5] = c[26]*cq[5];
+    J[5] = c[29]*cq[5];
     J[6] = t9;
     J[7] = sgv_set1(-1.0);
     J[8] = t10;
     qd[0] = -t13*xd[0];
     qd[1] = sgv_set1(0.0);
     qd[2] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[50]);
-    rs[1] = sgv_set1(c[51]);
-    rs[2] = (1.0/(c[29] + sgv_fabs(q[1])));
+    rs[0] = sgv_set1(c[53]);
+    rs[1] = sgv_set1(c[54]);
+    rs[2] = (1.0/(c[32] + sgv_fabs(q[1])));
     sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
     sgv_solve_eq(3, J, piv, rs, cs, qd);
     const sg_vd t15 = ((qd[0])*(qd[0]));
@@ -781,11 +798,12 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_motion_v(const sg_vd *q, const sg_vd 
     const sg_vd t18 = cq[5]*t16;
     const sg_vd t19 = qd[0]*t8;
     const sg_vd t20 = qd[0]*t9;
-    qdd[0] = -qd[0]*(qd[0]*(t0*t14 + t0*t7 + t3*t5 + t4*(c[22]*cq[0] + c[33]*cq[1])) + xd[0]*(t11*t14 + t12*t3)) - t13*xdd[0] - xd[0]*(qd[0]*(c[3]*t0*t6 + t2*t5) + xd[0]*(c[30]*t1*t4 + c[34]*((t1)*(t1)) + c[34]*((t6)*(t6)) + t11*t7));
+    qdd[0] = -qd[0]*(qd[0]*(t0*t14 + t0*t7 + t3*t5 + t4*(c[25]*cq[0] + c[36]*cq[1])) + xd[0]*(t11*t14 + t12*t3)) - t13*xdd[0] - xd[0]*(qd[0]*(c[3]*t0*t6 + t2*t5) + xd[0]*(c[33]*t1*t4 + c[37]*((t1)*(t1)) + c[37]*((t6)*(t6)) + t11*t7));
     qdd[1] = t10*t16 + t15*t9;
-    qdd[2] = c[14]*t18 + t15*t17;
+    qdd[2] = c[15]*t18 + t15*t17;
     sgv_solve_eq(3, J, piv, rs, cs, qdd);
-    const sg_vd t21 = c[25]*cq[0]*t15 + qdd[0]*t8;
+    sgv_rates_scale(3, 0x5ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
+    const sg_vd t21 = c[28]*cq[0]*t15 + qdd[0]*t8;
     const sg_vd t22 = qdd[0]*t9 + t15*t8;
     obs[0] = t9;
     obs[1] = t17;
@@ -793,50 +811,50 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_motion_v(const sg_vd *q, const sg_vd 
     obs[3] = t20;
     obs[4] = t21;
     obs[5] = t22;
-    obs[6] = sgv_set1(c[15]);
-    obs[7] = c[35] + q[1];
+    obs[6] = sgv_set1(c[16]);
+    obs[7] = c[38] + q[1];
     obs[8] = sgv_set1(0.0);
     obs[9] = qd[1];
     obs[10] = sgv_set1(0.0);
     obs[11] = qdd[1];
-    obs[12] = sgv_set1(c[15]);
-    obs[13] = c[36] + q[1];
+    obs[12] = sgv_set1(c[16]);
+    obs[13] = c[39] + q[1];
     obs[14] = sgv_set1(0.0);
     obs[15] = qd[1];
     obs[16] = sgv_set1(0.0);
     obs[17] = qdd[1];
-    obs[18] = c[37] + x[0];
+    obs[18] = c[40] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = c[0] + t23;
-    obs[22] = c[39]*t6 + c[4] + c[40]*t1;
+    obs[22] = c[4] + c[42]*t6 + c[43]*t1;
     obs[23] = t24*xd[0];
     obs[24] = t23*xd[0];
-    obs[25] = t24*xdd[0] + t25*(c[40]*t6 + c[41]*t1);
+    obs[25] = t24*xdd[0] + t25*(c[43]*t6 + c[44]*t1);
     obs[26] = t23*xdd[0] + t24*t25;
     obs[27] = q[0];
     obs[28] = qd[0];
     obs[29] = qdd[0];
     obs[30] = t26;
-    obs[31] = c[42]*cq[1] + c[44]*cq[0];
+    obs[31] = c[45]*cq[1] + c[47]*cq[0];
     obs[32] = qd[0]*t27;
     obs[33] = qd[0]*t26;
-    obs[34] = qdd[0]*t27 + t15*(c[44]*cq[1] + c[45]*cq[0]);
+    obs[34] = qdd[0]*t27 + t15*(c[47]*cq[1] + c[48]*cq[0]);
     obs[35] = qdd[0]*t26 + t15*t27;
     obs[36] = q[2];
     obs[37] = qd[2];
     obs[38] = qdd[2];
     obs[39] = t28 + t9;
-    obs[40] = c[46]*cq[5] + t17;
+    obs[40] = c[49]*cq[5] + t17;
     obs[41] = qd[2]*t29 + t19;
     obs[42] = qd[2]*t28 + t20;
-    obs[43] = c[47]*cq[4]*t16 + qdd[2]*t29 + t21;
-    obs[44] = c[47]*t18 + qdd[2]*t28 + t22;
+    obs[43] = c[50]*cq[4]*t16 + qdd[2]*t29 + t21;
+    obs[44] = c[50]*t18 + qdd[2]*t28 + t22;
     obs[45] = sgv_set1((0.5)*3.141592653589793);
     obs[46] = sgv_set1(0.0);
     obs[47] = sgv_set1(0.0);
-    obs[48] = sgv_set1(c[48]);
-    obs[49] = c[49] + q[1];
+    obs[48] = sgv_set1(c[51]);
+    obs[49] = c[52] + q[1];
     obs[50] = sgv_set1(0.0);
     obs[51] = qd[1];
     obs[52] = sgv_set1(0.0);
@@ -851,48 +869,49 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_motion_v(const sg_vd *q, const sg_vd 
 SG_VINLINE sg_vm sg_overlock_needle_planar_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *cond)
 {
     (void)x;
-    const sg_vd t0 = c[22]*cq[1] + c[23]*cq[0];
+    const sg_vd t0 = c[25]*cq[1] + c[26]*cq[0];
     const sg_vd t1 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t2 = c[18]*t1;
+    const sg_vd t2 = c[21]*t1;
     const sg_vd t3 = c[10]*cq[0] + c[12]*cq[1];
-    const sg_vd t4 = c[19] + t2 + t3;
-    const sg_vd t5 = c[23]*cq[1] + c[24]*cq[0];
+    const sg_vd t4 = c[22] + t2 + t3;
+    const sg_vd t5 = c[26]*cq[1] + c[27]*cq[0];
     const sg_vd t6 = c[1]*cx[1] + c[5]*cx[0];
-    const sg_vd t7 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t6;
-    const sg_vd t8 = c[25]*cq[1];
-    const sg_vd t9 = c[13]*cq[0];
-    const sg_vd t10 = c[14]*cq[4];
-    const sg_vd t11 = c[30]*t6;
-    const sg_vd t12 = c[31]*t1;
+    const sg_vd t7 = c[10]*cq[1] + c[11]*cq[0] + c[20] + c[21]*t6;
+    const sg_vd t8 = c[28]*cq[1];
+    const sg_vd t9 = c[14]*cq[0];
+    const sg_vd t10 = c[15]*cq[4];
+    const sg_vd t11 = c[33]*t6;
+    const sg_vd t12 = c[34]*t1;
     const sg_vd t13 = t11*t4 + t12*t7;
-    const sg_vd t14 = c[12]*cq[0] + c[32]*cq[1];
-    const sg_vd t17 = c[13]*cq[1];
-    sg_vd J[9], rs[3], cs[3];
+    const sg_vd t14 = c[12]*cq[0] + c[35]*cq[1];
+    const sg_vd t17 = c[14]*cq[1];
+    sg_vd J[9], rs[3], cs[6];
     sg_vm piv[3];
     J[0] = t0*t4 + t5*t7;
     J[1] = sgv_set1(0.0);
     J[2] = sgv_set1(0.0);
     J[3] = t8;
     J[4] = sgv_set1(0.0);
-    J[5] = c[26]*cq[5];
+    J[5] = c[29]*cq[5];
     J[6] = t9;
     J[7] = sgv_set1(-1.0);
     J[8] = t10;
     qd[0] = -t13*xd[0];
     qd[1] = sgv_set1(0.0);
     qd[2] = sgv_set1(0.0);
-    rs[0] = sgv_set1(c[50]);
-    rs[1] = sgv_set1(c[51]);
-    rs[2] = (1.0/(c[29] + sgv_fabs(q[1])));
+    rs[0] = sgv_set1(c[53]);
+    rs[1] = sgv_set1(c[54]);
+    rs[2] = (1.0/(c[32] + sgv_fabs(q[1])));
     sg_vm ok = sgv_factor_eq(3, J, piv, rs, cs, cond);
     sgv_solve_eq(3, J, piv, rs, cs, qd);
     const sg_vd t15 = ((qd[0])*(qd[0]));
     const sg_vd t16 = ((qd[2])*(qd[2]));
     const sg_vd t18 = cq[5]*t16;
-    qdd[0] = -qd[0]*(qd[0]*(t0*t14 + t0*t7 + t3*t5 + t4*(c[22]*cq[0] + c[33]*cq[1])) + xd[0]*(t11*t14 + t12*t3)) - t13*xdd[0] - xd[0]*(qd[0]*(c[3]*t0*t6 + t2*t5) + xd[0]*(c[30]*t1*t4 + c[34]*((t1)*(t1)) + c[34]*((t6)*(t6)) + t11*t7));
+    qdd[0] = -qd[0]*(qd[0]*(t0*t14 + t0*t7 + t3*t5 + t4*(c[25]*cq[0] + c[36]*cq[1])) + xd[0]*(t11*t14 + t12*t3)) - t13*xdd[0] - xd[0]*(qd[0]*(c[3]*t0*t6 + t2*t5) + xd[0]*(c[33]*t1*t4 + c[37]*((t1)*(t1)) + c[37]*((t6)*(t6)) + t11*t7));
     qdd[1] = t10*t16 + t15*t9;
-    qdd[2] = c[14]*t18 + t15*t17;
+    qdd[2] = c[15]*t18 + t15*t17;
     sgv_solve_eq(3, J, piv, rs, cs, qdd);
+    sgv_rates_scale(3, 0x5ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite((((q[0] + q[1]) + (q[2] + qd[0])) + ((qd[1] + qd[2]) + (qdd[0] + (qdd[1] + qdd[2])))));
     return ok;
 }
@@ -901,13 +920,13 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_observe_v(const sg_vd *q, const sg_vd
 {
     switch (group) {
     case 0: {
-        const sg_vd t8 = c[25]*cq[1];
-        const sg_vd t9 = c[13]*cq[0];
+        const sg_vd t8 = c[28]*cq[1];
+        const sg_vd t9 = c[14]*cq[0];
         const sg_vd t15 = ((qd[0])*(qd[0]));
-        const sg_vd t17 = c[13]*cq[1];
+        const sg_vd t17 = c[14]*cq[1];
         const sg_vd t19 = qd[0]*t8;
         const sg_vd t20 = qd[0]*t9;
-        const sg_vd t21 = c[25]*cq[0]*t15 + qdd[0]*t8;
+        const sg_vd t21 = c[28]*cq[0]*t15 + qdd[0]*t8;
         const sg_vd t22 = qdd[0]*t9 + t15*t8;
         obs[0] = t9;
         obs[1] = t17;
@@ -918,8 +937,8 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_observe_v(const sg_vd *q, const sg_vd
         return sgv_isfinite(((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5]))));
     }
     case 1: {
-        obs[6] = sgv_set1(c[15]);
-        obs[7] = c[35] + q[1];
+        obs[6] = sgv_set1(c[16]);
+        obs[7] = c[38] + q[1];
         obs[8] = sgv_set1(0.0);
         obs[9] = qd[1];
         obs[10] = sgv_set1(0.0);
@@ -927,8 +946,8 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_observe_v(const sg_vd *q, const sg_vd
         return sgv_isfinite(((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))));
     }
     case 2: {
-        obs[12] = sgv_set1(c[15]);
-        obs[13] = c[36] + q[1];
+        obs[12] = sgv_set1(c[16]);
+        obs[13] = c[39] + q[1];
         obs[14] = sgv_set1(0.0);
         obs[15] = qd[1];
         obs[16] = sgv_set1(0.0);
@@ -938,65 +957,65 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_observe_v(const sg_vd *q, const sg_vd
     case 3: {
         const sg_vd t1 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t6 = c[1]*cx[1] + c[5]*cx[0];
-        const sg_vd t23 = c[38]*t6 + c[39]*t1;
-        const sg_vd t24 = c[38]*t1 + c[41]*t6;
+        const sg_vd t23 = c[41]*t6 + c[42]*t1;
+        const sg_vd t24 = c[41]*t1 + c[44]*t6;
         const sg_vd t25 = ((xd[0])*(xd[0]));
-        obs[18] = c[37] + x[0];
+        obs[18] = c[40] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
         obs[21] = c[0] + t23;
-        obs[22] = c[39]*t6 + c[4] + c[40]*t1;
+        obs[22] = c[4] + c[42]*t6 + c[43]*t1;
         obs[23] = t24*xd[0];
         obs[24] = t23*xd[0];
-        obs[25] = t24*xdd[0] + t25*(c[40]*t6 + c[41]*t1);
+        obs[25] = t24*xdd[0] + t25*(c[43]*t6 + c[44]*t1);
         obs[26] = t23*xdd[0] + t24*t25;
         return sgv_isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26])))));
     }
     case 4: {
         const sg_vd t15 = ((qd[0])*(qd[0]));
-        const sg_vd t26 = c[42]*cq[0] + c[43]*cq[1];
-        const sg_vd t27 = c[43]*cq[0] + c[45]*cq[1];
+        const sg_vd t26 = c[45]*cq[0] + c[46]*cq[1];
+        const sg_vd t27 = c[46]*cq[0] + c[48]*cq[1];
         obs[27] = q[0];
         obs[28] = qd[0];
         obs[29] = qdd[0];
         obs[30] = t26;
-        obs[31] = c[42]*cq[1] + c[44]*cq[0];
+        obs[31] = c[45]*cq[1] + c[47]*cq[0];
         obs[32] = qd[0]*t27;
         obs[33] = qd[0]*t26;
-        obs[34] = qdd[0]*t27 + t15*(c[44]*cq[1] + c[45]*cq[0]);
+        obs[34] = qdd[0]*t27 + t15*(c[47]*cq[1] + c[48]*cq[0]);
         obs[35] = qdd[0]*t26 + t15*t27;
         return sgv_isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35])))));
     }
     case 5: {
-        const sg_vd t8 = c[25]*cq[1];
-        const sg_vd t9 = c[13]*cq[0];
+        const sg_vd t8 = c[28]*cq[1];
+        const sg_vd t9 = c[14]*cq[0];
         const sg_vd t15 = ((qd[0])*(qd[0]));
         const sg_vd t16 = ((qd[2])*(qd[2]));
-        const sg_vd t17 = c[13]*cq[1];
+        const sg_vd t17 = c[14]*cq[1];
         const sg_vd t18 = cq[5]*t16;
         const sg_vd t19 = qd[0]*t8;
         const sg_vd t20 = qd[0]*t9;
-        const sg_vd t21 = c[25]*cq[0]*t15 + qdd[0]*t8;
+        const sg_vd t21 = c[28]*cq[0]*t15 + qdd[0]*t8;
         const sg_vd t22 = qdd[0]*t9 + t15*t8;
-        const sg_vd t28 = c[46]*cq[4];
-        const sg_vd t29 = c[47]*cq[5];
+        const sg_vd t28 = c[49]*cq[4];
+        const sg_vd t29 = c[50]*cq[5];
         obs[36] = q[2];
         obs[37] = qd[2];
         obs[38] = qdd[2];
         obs[39] = t28 + t9;
-        obs[40] = c[46]*cq[5] + t17;
+        obs[40] = c[49]*cq[5] + t17;
         obs[41] = qd[2]*t29 + t19;
         obs[42] = qd[2]*t28 + t20;
-        obs[43] = c[47]*cq[4]*t16 + qdd[2]*t29 + t21;
-        obs[44] = c[47]*t18 + qdd[2]*t28 + t22;
+        obs[43] = c[50]*cq[4]*t16 + qdd[2]*t29 + t21;
+        obs[44] = c[50]*t18 + qdd[2]*t28 + t22;
         return sgv_isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44])))));
     }
     case 6: {
         obs[45] = sgv_set1((0.5)*3.141592653589793);
         obs[46] = sgv_set1(0.0);
         obs[47] = sgv_set1(0.0);
-        obs[48] = sgv_set1(c[48]);
-        obs[49] = c[49] + q[1];
+        obs[48] = sgv_set1(c[51]);
+        obs[49] = c[52] + q[1];
         obs[50] = sgv_set1(0.0);
         obs[51] = qd[1];
         obs[52] = sgv_set1(0.0);
@@ -1020,39 +1039,39 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_forces_v(const sg_vd *q, const sg_vd 
     sg_vm ok = sgv_true();
     const sg_vd t0 = c[1]*cx[0] + c[2]*cx[1];
     const sg_vd t1 = c[1]*cx[1] + c[5]*cx[0];
-    const sg_vd t2 = c[44]*cq[0];
-    const sg_vd t3 = c[44]*cq[1];
-    const sg_vd t4 = c[62]*(-gv[0] + obs[34]) - ld[0];
+    const sg_vd t2 = c[47]*cq[0];
+    const sg_vd t3 = c[47]*cq[1];
+    const sg_vd t4 = c[65]*(-gv[0] + obs[34]) - ld[0];
     const sg_vd t5 = -gv[1] + obs[53];
-    const sg_vd t6 = c[63]*(-gv[1] + obs[44]) + c[64]*t5 - ld[3] - ld[5];
-    const sg_vd t7 = c[62]*(-gv[1] + obs[35]) - ld[1] + t6;
+    const sg_vd t6 = c[66]*(-gv[1] + obs[44]) + c[67]*t5 - ld[3] - ld[5];
+    const sg_vd t7 = c[65]*(-gv[1] + obs[35]) - ld[1] + t6;
     const sg_vd t8 = -gv[0] + obs[43];
-    const sg_vd t9 = c[64]*t5 - ld[3] - ld[5];
-    const sg_vd t10 = c[46]*cq[4];
-    const sg_vd t11 = c[10]*cq[0] + c[12]*cq[1] + c[18]*t0 + c[19];
-    const sg_vd t12 = c[10]*cq[1] + c[11]*cq[0] + c[17] + c[18]*t1;
-    const sg_vd t13 = c[78]*t12;
-    const sg_vd t14 = c[78]*t11;
+    const sg_vd t9 = c[67]*t5 - ld[3] - ld[5];
+    const sg_vd t10 = c[49]*cq[4];
+    const sg_vd t11 = c[10]*cq[0] + c[12]*cq[1] + c[21]*t0 + c[22];
+    const sg_vd t12 = c[10]*cq[1] + c[11]*cq[0] + c[20] + c[21]*t1;
+    const sg_vd t13 = c[81]*t12;
+    const sg_vd t14 = c[81]*t11;
     {
-        const sg_vd d = c[14]*cq[5];
-        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[13]*cq[1]), sgv_fabs(c[14]*cq[5]));
-        out[7] = (c[65]*obs[38] + c[66]*cq[5]*t8 - ld[8] + t10*t6 + t10*t9)/d;
+        const sg_vd d = c[15]*cq[5];
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fmax(sgv_fabs(c[14]*cq[1]), sgv_fabs(c[15]*cq[5]));
+        out[7] = (c[68]*obs[38] + c[69]*cq[5]*t8 - ld[8] + t10*t6 + t10*t9)/d;
     }
     {
-        const sg_vd d = c[52]*cq[0] + c[53]*cq[1] + c[54]*cq[0] + c[55]*cq[1] + c[56]*cq[1]*t0 + c[57]*cq[0]*t0 + c[57]*cq[1]*t1 + c[58]*cq[0]*t1;
-        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[52]*cq[0] + c[53]*cq[1] + c[54]*cq[0] + c[55]*cq[1] + c[56]*cq[1]*t0 + c[57]*cq[0]*t0 + c[57]*cq[1]*t1 + c[58]*cq[0]*t1);
-        out[6] = (-c[13]*cq[1]*out[7] + c[59]*obs[29] - ld[0]*(c[60]*cq[1] + t2) - ld[1]*(c[61]*cq[0] + t3) - ld[7] - t4*(c[42]*cq[1] + t2) - t6*(c[43]*cq[1] + c[60]*cq[0]) - t7*(c[45]*cq[0] + t3))/d;
+        const sg_vd d = c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[1]*t0 + c[60]*cq[0]*t0 + c[60]*cq[1]*t1 + c[61]*cq[0]*t1;
+        ok &= sgv_fabs(d) > SG_PIVOT_RTOL * sgv_fabs(c[55]*cq[0] + c[56]*cq[1] + c[57]*cq[0] + c[58]*cq[1] + c[59]*cq[1]*t0 + c[60]*cq[0]*t0 + c[60]*cq[1]*t1 + c[61]*cq[0]*t1);
+        out[6] = (-c[14]*cq[1]*out[7] + c[62]*obs[29] - ld[0]*(c[63]*cq[1] + t2) - ld[1]*(c[64]*cq[0] + t3) - ld[7] - t4*(c[45]*cq[1] + t2) - t6*(c[46]*cq[1] + c[63]*cq[0]) - t7*(c[48]*cq[0] + t3))/d;
     }
     out[4] = -out[6]*t14 + out[7] + t4;
-    out[9] = -c[63]*t8 + out[7];
+    out[9] = -c[66]*t8 + out[7];
     out[5] = -out[6]*t13 + t7;
-    out[2] = -c[64]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
-    out[3] = -c[49]*out[9] + c[73]*obs[47] + c[74]*ld[2] + c[75]*ld[3] + c[75]*ld[5] + c[75]*t9 + c[76]*ld[4] - c[77]*out[2] - ld[9];
+    out[2] = -c[67]*(-gv[0] + obs[52]) + out[9] + ld[2] + ld[4];
+    out[3] = -c[52]*out[9] + c[76]*obs[47] + c[77]*ld[2] + c[78]*ld[3] + c[78]*ld[5] + c[78]*t9 + c[79]*ld[4] - c[80]*out[2] - ld[9];
     out[8] = t6;
     out[10] = t9;
-    out[11] = c[69]*obs[20] + c[70]*(-gv[0]*(c[39]*t1 + c[40]*t0) + gv[1]*(c[38]*t1 + c[39]*t0)) - out[6]*(c[71]*t1*t11 + c[72]*t0*t12) - ld[6];
-    out[1] = c[67]*(-gv[1] + obs[26]) - c[68]*out[6]*t12;
-    out[0] = c[67]*(-gv[0] + obs[25]) - c[68]*out[6]*t11;
+    out[11] = c[72]*obs[20] + c[73]*(-gv[0]*(c[42]*t1 + c[43]*t0) + gv[1]*(c[41]*t1 + c[42]*t0)) - out[6]*(c[74]*t1*t11 + c[75]*t0*t12) - ld[6];
+    out[1] = c[70]*(-gv[1] + obs[26]) - c[71]*out[6]*t12;
+    out[0] = c[70]*(-gv[0] + obs[25]) - c[71]*out[6]*t11;
     const sg_vd t15 = -out[2];
     out[12] = out[11];
     out[13] = out[11]*xd[0];
@@ -1063,9 +1082,9 @@ SG_VINLINE sg_vm sg_overlock_needle_planar_forces_v(const sg_vd *q, const sg_vd 
     out[18] = sgv_set1(0.0);
     out[19] = out[0] + out[4] + t15;
     out[20] = out[1] + out[5];
-    out[21] = c[0]*out[1] + c[17]*out[0] + out[11] + out[2]*q[1] + out[3];
-    out[22] = c[79]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[80]*((obs[19])*(obs[19])) + c[81]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[82]*((obs[28])*(obs[28])) + c[83]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[84]*((obs[37])*(obs[37])) + c[85]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[86]*((obs[46])*(obs[46]));
-    out[23] = c[70]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[87]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[88]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[89]*(gv[0]*obs[48] + gv[1]*obs[49]);
+    out[21] = c[0]*out[1] + c[20]*out[0] + out[11] + out[2]*q[1] + out[3];
+    out[22] = c[82]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])) + ((obs[55])*(obs[55]))) + c[83]*((obs[19])*(obs[19])) + c[84]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[85]*((obs[28])*(obs[28])) + c[86]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[87]*((obs[37])*(obs[37])) + c[88]*(((obs[50])*(obs[50])) + ((obs[51])*(obs[51]))) + c[89]*((obs[46])*(obs[46]));
+    out[23] = c[73]*(gv[0]*obs[21] + gv[1]*obs[22]) + c[90]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[91]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[92]*(gv[0]*obs[48] + gv[1]*obs[49]);
     out[24] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + ld[9]*obs[46];
     out[25] = sgv_set1(0.0);
     ok &= sgv_isfinite(((((out[0] + (out[1] + out[2])) + (out[3] + (out[4] + out[5]))) + ((out[6] + (out[7] + out[8])) + ((out[9] + out[10]) + (out[11] + out[12])))) + (((out[13] + (out[14] + out[15])) + (out[16] + (out[17] + out[18]))) + ((out[19] + (out[20] + out[21])) + ((out[22] + out[23]) + (out[24] + out[25]))))));
@@ -1097,7 +1116,7 @@ static const sg_mechanism sg_overlock_needle_planar_descriptor = {
     .nq = 3,
     .nx = 1,
     .np = 27,
-    .nc = 94,
+    .nc = 97,
     .nobs = 57,
     .nbranch = 2,
     .nf = 12,
@@ -1167,159 +1186,159 @@ const char *sg_overlock_needle_planar_manifest(void)
         " the crank pin's projection (seed 003 eq. 1: \\u03b4\\u2081)\"},{\"default\":1,\"joint\":\"N\",\""
         "kind\":\"rrp\",\"meaning\":\"+1: the larger travel of needle_bar at joint N\"}],\"closed_form\":"
         "true,\"closure\":[\"rod.length\",\"N.x\",\"N.y\"],\"constants\":[[3],[12],[12],[0],[1],[12],[3,5"
-        "],[2],[3,5],[3,5],[3,5],[3,5],[3,5],[4],[6],[7],[6],[1],[0],[3],[2],[7],[3,5],[3,5],[3,5],[4],[6"
-        "],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[8],[8,9],[12],[15],[14],[15],[14],[18],[19],["
-        "19],[18],[6],[6],[7,25],[24],[0,1,2,3],[4,6,7],[2,3,5],[2,3,5],[1,2,3,5],[1,2,3,5],[0,2,3,5],[0,"
-        "2,3,5],[0,2,3,5],[20],[4,18],[4,18],[17],[21],[23],[22],[6,21],[13],[2],[13,14,15,16],[13],[0,2]"
-        ",[0,2],[26],[8,24],[25],[8,9,24],[24],[2],[13],[16],[17],[20],[21],[22],[23],[26],[17],[21],[23]"
-        ",[3,5,19],[3,5,18],[3,5,19],[25]],\"coords\":[{\"guess\":0.0,\"name\":\"lever.angle\",\"unit\":\""
-        "rad\"},{\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"guess\":1.5707963267948"
-        "966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291880917,\"doc\":\"51"
-        "-A class overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u0438\\u0437\\u043c"
-        " \\u0438\\u0433\\u043b\\u044b (seed 003 fig. 1\\u20132, eqs. 1\\u20132).\\n\\nA spatial-planar f"
-        "our-bar: the main shaft 1 (below the bed, along the machine's x) carries an eccentric whose\\npi"
-        "n B drives, through a rod with a ball joint at each end, the needle-lever rock shaft 3 (axis acr"
-        "oss the main\\nshaft, through D); its arm l\\u2084 drives the needle bar through the link l\\u20"
-        "85 (the needle bar's axis at the offset a\\nfrom D). Seed 003 eq. (1) gives the rock shaft's ang"
-        "le \\u03c6\\u2083 in closed form (\\u03b4\\u2081 the assembly sign), eq. (2) the\\nneedle stroke"
-        " as a second-order expansion in the link's obliquity \\u2014 here both are exact.\\n\\nFrame (th"
-        "e needle lever's plane): origin on the rock-shaft axis D, x along the main shaft, y up, z along "
-        "the rock\\nshaft. The main shaft's axis runs parallel to x through (l\\u2083, \\u2212h_A, 0): th"
-        "e rod is nearly vertical and the lever\\narm DC horizontal in mid stroke, so B's up-and-down thr"
-        "ow rocks the shaft by about \\u00b1asin(r/l\\u2083). The arm DC and\\nthe needle lever DL are on"
-        "e bent lever (DL at ``lever_angle`` from DC). Crank angle zero points the eccentric\\nalong +z ("
-        "the mechanism's normal): \\u03c6 = 90\\u00b0 puts B at its lowest, the needle at its highest (si"
-        "gn of the lever).\\n\\nEvery dimension is an estimate (seed 003 prints none; DOMAIN-NOTES: 51-A "
-        "class, 3000\\u20134000 r/min): a needle\\nstroke of about 25 mm, the rock shaft swinging about \\u"
-        "00b127\\u00b0, masses of a small cast lever and a light needle bar.\",\"elements\":[],\"force_bl"
-        "ocks\":[1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.p"
-        "ower\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\"name\":\"needle_bar."
-        "guide.fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\"rod.fy\",\"unit\":\""
-        "N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},"
-        "{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit"
-        "\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potential_energy\",\"unit\""
-        ":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\",\"unit\":\"W\"}],\""
-        "force_rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"lever.x\",\"lever.y\",\"lev"
-        "er.moment\",\"link.x\",\"link.y\",\"link.moment\",\"needle_bar.x\",\"needle_bar.y\",\"needle_bar"
-        ".moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi"
-        "\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_over"
-        "lock_needle_planar_anchors\":{\"ops\":43},\"sg_overlock_needle_planar_blocks\":{\"ops\":27},\"sg"
-        "_overlock_needle_planar_closed\":{\"ops\":35},\"sg_overlock_needle_planar_constants\":{\"ops\":1"
-        "14},\"sg_overlock_needle_planar_force_matrix\":{\"ops\":112},\"sg_overlock_needle_planar_forces\""
-        ":{\"ops\":221},\"sg_overlock_needle_planar_lu_factor\":{\"ops\":18},\"sg_overlock_needle_planar_"
-        "lu_solve\":{\"ops\":18},\"sg_overlock_needle_planar_motion\":{\"ops\":166},\"sg_overlock_needle_"
-        "planar_observe\":{\"ops\":101},\"sg_overlock_needle_planar_rates\":{\"ops\":94},\"sg_overlock_ne"
-        "edle_planar_residual\":{\"ops\":42},\"sg_overlock_needle_planar_scales\":{\"ops\":5}},\"loads\":"
-        "[{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":\"lever\",\"componen"
-        "t\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"need"
-        "le_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_eye\"},{\"body\":\"nee"
-        "dle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle_bar\",\"component\""
-        ":\"fy\",\"name\":\"needle_point\"},{\"body\":\"eccentric\",\"component\":\"torque\",\"name\":\"e"
-        "ccentric\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},{\"body\":\"link\","
-        "\"component\":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\"component\":\"torque\",\""
-        "name\":\"needle_bar\"}],\"name\":\"overlock_needle_planar\",\"observables\":[{\"name\":\"lever_p"
-        "in.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\"lever_pin.x_d\",\"u"
-        "nit\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.x_dd\",\"unit"
-        "\":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.x\",\"unit"
-        "\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x_d\",\"unit\":\"m/s"
-        "\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_dd\",\"unit\":\"m/s^"
-        "2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.x\",\"unit\":\"m"
-        "\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x_dd\",\"unit\":\"m/"
-        "s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.angle\",\"unit\""
-        ":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"eccentric.angle_dd\",\""
-        "unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\":\"eccentric.com.y\","
-        "\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.y_d\""
-        ",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.co"
-        "m.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle"
-        "_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.co"
-        "m.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"un"
-        "it\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\""
-        ":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.angle\",\"unit\":\""
-        "rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.angle_dd\",\"unit\":\"rad"
-        "/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\",\"unit\":\"m\"},{\"nam"
-        "e\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\":\"m/s\"},{\"name\":\""
-        "link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\""
-        "needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"unit\":\"rad/s\"},{\"nam"
-        "e\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.com.x\",\"unit\":\"m\"}"
-        ",{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.x_d\",\"unit\":\"m/s\""
-        "},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.x_dd\",\"unit\":"
-        "\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccentric.com.z\",\""
-        "unit\":\"m\"},{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.z_dd\""
-        ",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\"mm\",\"doc\":\"eccentri"
-        "city AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\"length\",\"name\":\"ec"
-        "centric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\":\"m"
-        "m\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\":\"length\",\"name\":\""
-        "shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.06,\"display_unit\""
-        ":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"name\":\"rod\",\"positi"
-        "ve\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\":\"mm\",\"doc\":\"roc"
-        "k-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\",\"positive\":true,\"r"
-        "ole\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle lever DL,"
-        " l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of the needle lever DL f"
-        "rom the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"positive\":false,\"rol"
-        "e\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\":\"needle-bar link L"
-        "N, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":true,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-bar axis from the rock"
-        " shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive\":false,\"role\":nul"
-        "l,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"needle eye below the link"
-        " pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_pin\",\"positive\":tr"
-        "ue,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"needle poi"
-        "nt below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_eye\",\"positive\":true"
-        ",\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\"doc\":\"length of th"
-        "e needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"eye_length\",\"positiv"
-        "e\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,\"display_unit\":\"m"
-        "m\",\"doc\":\"needle scarf above the eye's top, where the lower looper's tip passes (estimate)\""
-        ",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\"needle_scarf\",\"uni"
-        "t\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\"phase of eccentric "
-        "relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\",\"positive\":false"
-        ",\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"doc\":\"mass of ecce"
-        "ntric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"role\":null,\"unit\":"
-        "\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local u\""
-        ",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\""
-        "},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccentric, local v\",\"ki"
-        "nd\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\""
-        "default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of eccentric about its "
-        "centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"positive\":false,\"role\""
-        ":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc\":\"mass of lever\","
-        "\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"d"
-        "efault\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"l"
-        "ength\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0"
-        ".0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"na"
-        "me\":\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":6e-06,\"displ"
-        "ay_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\""
-        "inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"d"
-        "efault\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\"mass\",\"name\":\"link"
-        ".mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-06,\"display_unit\":\""
-        "kg*m**2\",\"doc\":\"moment of inertia of link about its centre of mass\",\"kind\":\"inertia\",\""
-        "name\":\"link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.02"
-        "5,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\"name\":\"needle_bar."
-        "mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,\"display_unit\":\"m"
-        "m\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\"name\":\"needle_bar."
-        "com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\""
-        ",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"name\":\"needle_bar.com"
-        "_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\"display_unit\":\"kg*m"
-        "**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\",\"kind\":\"inertia\","
-        "\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"}],\"point_"
-        "fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"lever\",\"doc\":\"nee"
-        "dle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body\":\"needle_bar\",\""
-        "doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_eye\"},{\"body\":\"n"
-        "eedle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":12,\"role\":\"needle_p"
-        "oint\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"fx\",\"fy\"],\"grou"
-        "nded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},{\"a\":\"ground\",\""
-        "b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"kind\":\"prismatic\","
-        "\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\",\"columns\":[\"fx\""
-        ",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4},{\"a\":\"eccentric"
-        "\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"rod\",\"name\":\"rod\""
-        ",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\""
-        "kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"needle_bar\",\"columns\""
-        ":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\"offset\":9},{\"a\":\""
-        "ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"ki"
-        "nd\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"roles\":{\"needle_bar\""
-        ":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"point\",\"name\":\"needl"
-        "e_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\"},\"needle_point\":{\""
-        "kind\":\"point\",\"name\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"param\",\"name\":\"scar"
-        "f_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc\":94,\"nf\":12,\"nfo\""
-        ":26,\"ngroup\":8,\"nload\":10,\"nobs\":57,\"np\":27,\"nq\":3,\"nx\":1}}"
+        "],[2],[3,5],[3,5],[3,5],[3,5],[3,5],[0,1,3],[4],[6],[7],[6],[4],[4,7],[1],[0],[3],[2],[7],[3,5],"
+        "[3,5],[3,5],[4],[6],[0,1,2,3],[4,6,7],[4,6],[0],[0],[3,5],[3,5],[0],[8],[8,9],[12],[15],[14],[15"
+        "],[14],[18],[19],[19],[18],[6],[6],[7,25],[24],[0,1,2,3],[4,6,7],[2,3,5],[2,3,5],[1,2,3,5],[1,2,"
+        "3,5],[0,2,3,5],[0,2,3,5],[0,2,3,5],[20],[4,18],[4,18],[17],[21],[23],[22],[6,21],[13],[2],[13,14"
+        ",15,16],[13],[0,2],[0,2],[26],[8,24],[25],[8,9,24],[24],[2],[13],[16],[17],[20],[21],[22],[23],["
+        "26],[17],[21],[23],[3,5,19],[3,5,18],[3,5,19],[25]],\"coords\":[{\"guess\":0.0,\"name\":\"lever."
+        "angle\",\"unit\":\"rad\"},{\"guess\":0.04,\"name\":\"needle_bar.travel\",\"unit\":\"m\"},{\"gues"
+        "s\":1.5707963267948966,\"name\":\"link.angle\",\"unit\":\"rad\"}],\"default_speed\":366.51914291"
+        "880917,\"doc\":\"51-A class overlock: the needle mechanism \\u043c\\u0435\\u0445\\u0430\\u043d\\u"
+        "0438\\u0437\\u043c \\u0438\\u0433\\u043b\\u044b (seed 003 fig. 1\\u20132, eqs. 1\\u20132).\\n\\n"
+        "A spatial-planar four-bar: the main shaft 1 (below the bed, along the machine's x) carries an ec"
+        "centric whose\\npin B drives, through a rod with a ball joint at each end, the needle-lever rock"
+        " shaft 3 (axis across the main\\nshaft, through D); its arm l\\u2084 drives the needle bar throu"
+        "gh the link l\\u2085 (the needle bar's axis at the offset a\\nfrom D). Seed 003 eq. (1) gives th"
+        "e rock shaft's angle \\u03c6\\u2083 in closed form (\\u03b4\\u2081 the assembly sign), eq. (2) t"
+        "he\\nneedle stroke as a second-order expansion in the link's obliquity \\u2014 here both are exa"
+        "ct.\\n\\nFrame (the needle lever's plane): origin on the rock-shaft axis D, x along the main sha"
+        "ft, y up, z along the rock\\nshaft. The main shaft's axis runs parallel to x through (l\\u2083, "
+        "\\u2212h_A, 0): the rod is nearly vertical and the lever\\narm DC horizontal in mid stroke, so B"
+        "'s up-and-down throw rocks the shaft by about \\u00b1asin(r/l\\u2083). The arm DC and\\nthe need"
+        "le lever DL are one bent lever (DL at ``lever_angle`` from DC). Crank angle zero points the ecce"
+        "ntric\\nalong +z (the mechanism's normal): \\u03c6 = 90\\u00b0 puts B at its lowest, the needle "
+        "at its highest (sign of the lever).\\n\\nEvery dimension is an estimate (seed 003 prints none; D"
+        "OMAIN-NOTES: 51-A class, 3000\\u20134000 r/min): a needle\\nstroke of about 25 mm, the rock shaf"
+        "t swinging about \\u00b127\\u00b0, masses of a small cast lever and a light needle bar.\",\"elem"
+        "ents\":[],\"force_blocks\":[1,1],\"force_outputs\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"}"
+        ",{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"needle_bar.guide.fx\",\"unit\":\"N\"},{\""
+        "name\":\"needle_bar.guide.fy\",\"unit\":\"N\"},{\"name\":\"rod.fx\",\"unit\":\"N\"},{\"name\":\""
+        "rod.fy\",\"unit\":\"N\"},{\"name\":\"rod.fz\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.f"
+        "x\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{\"name\":\"frame_mome"
+        "nt_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\"},{\"name\":\"potenti"
+        "al_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"name\":\"elastic_power\""
+        ",\"unit\":\"W\"}],\"force_rows\":[\"eccentric.x\",\"eccentric.y\",\"eccentric.moment\",\"lever.x"
+        "\",\"lever.y\",\"lever.moment\",\"link.x\",\"link.y\",\"link.moment\",\"needle_bar.x\",\"needle_"
+        "bar.y\",\"needle_bar.moment\"],\"inputs\":[{\"default\":0.0,\"display_unit\":\"rad\",\"doc\":\"u"
+        "pper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\",\"role\":null,\"unit\":\"rad\"}],\""
+        "kernels\":{\"sg_overlock_needle_planar_anchors\":{\"ops\":43},\"sg_overlock_needle_planar_blocks"
+        "\":{\"ops\":27},\"sg_overlock_needle_planar_closed\":{\"ops\":35},\"sg_overlock_needle_planar_co"
+        "nstants\":{\"ops\":118},\"sg_overlock_needle_planar_force_matrix\":{\"ops\":112},\"sg_overlock_n"
+        "eedle_planar_forces\":{\"ops\":221},\"sg_overlock_needle_planar_lu_factor\":{\"ops\":18},\"sg_ov"
+        "erlock_needle_planar_lu_solve\":{\"ops\":18},\"sg_overlock_needle_planar_motion\":{\"ops\":166},"
+        "\"sg_overlock_needle_planar_observe\":{\"ops\":101},\"sg_overlock_needle_planar_rates\":{\"ops\""
+        ":94},\"sg_overlock_needle_planar_residual\":{\"ops\":42},\"sg_overlock_needle_planar_scales\":{\""
+        "ops\":5}},\"loads\":[{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"lever_pin\"},{\"body\":"
+        "\"lever\",\"component\":\"fy\",\"name\":\"lever_pin\"},{\"body\":\"needle_bar\",\"component\":\""
+        "fx\",\"name\":\"needle_eye\"},{\"body\":\"needle_bar\",\"component\":\"fy\",\"name\":\"needle_ey"
+        "e\"},{\"body\":\"needle_bar\",\"component\":\"fx\",\"name\":\"needle_point\"},{\"body\":\"needle"
+        "_bar\",\"component\":\"fy\",\"name\":\"needle_point\"},{\"body\":\"eccentric\",\"component\":\"t"
+        "orque\",\"name\":\"eccentric\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"}"
+        ",{\"body\":\"link\",\"component\":\"torque\",\"name\":\"link\"},{\"body\":\"needle_bar\",\"compo"
+        "nent\":\"torque\",\"name\":\"needle_bar\"}],\"name\":\"overlock_needle_planar\",\"observables\":"
+        "[{\"name\":\"lever_pin.x\",\"unit\":\"m\"},{\"name\":\"lever_pin.y\",\"unit\":\"m\"},{\"name\":\""
+        "lever_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"leve"
+        "r_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"ne"
+        "edle_eye.x\",\"unit\":\"m\"},{\"name\":\"needle_eye.y\",\"unit\":\"m\"},{\"name\":\"needle_eye.x"
+        "_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_eye.x_d"
+        "d\",\"unit\":\"m/s^2\"},{\"name\":\"needle_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_poi"
+        "nt.x\",\"unit\":\"m\"},{\"name\":\"needle_point.y\",\"unit\":\"m\"},{\"name\":\"needle_point.x_d"
+        "\",\"unit\":\"m/s\"},{\"name\":\"needle_point.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_point.x"
+        "_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_point.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"eccent"
+        "ric.angle\",\"unit\":\"rad\"},{\"name\":\"eccentric.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"ec"
+        "centric.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"eccentric.com.x\",\"unit\":\"m\"},{\"name\""
+        ":\"eccentric.com.y\",\"unit\":\"m\"},{\"name\":\"eccentric.com.x_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"eccentric.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"eccentric.com.x_dd\",\"unit\":\"m/s^2\"},{\""
+        "name\":\"eccentric.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\""
+        "name\":\"lever.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},"
+        "{\"name\":\"lever.com.x\",\"unit\":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\""
+        "lever.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"leve"
+        "r.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"li"
+        "nk.angle\",\"unit\":\"rad\"},{\"name\":\"link.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"link.ang"
+        "le_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"link.com.x\",\"unit\":\"m\"},{\"name\":\"link.com.y\","
+        "\"unit\":\"m\"},{\"name\":\"link.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"link.com.y_d\",\"unit\""
+        ":\"m/s\"},{\"name\":\"link.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"link.com.y_dd\",\"unit\":\""
+        "m/s^2\"},{\"name\":\"needle_bar.angle\",\"unit\":\"rad\"},{\"name\":\"needle_bar.angle_d\",\"uni"
+        "t\":\"rad/s\"},{\"name\":\"needle_bar.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"needle_bar.co"
+        "m.x\",\"unit\":\"m\"},{\"name\":\"needle_bar.com.y\",\"unit\":\"m\"},{\"name\":\"needle_bar.com."
+        "x_d\",\"unit\":\"m/s\"},{\"name\":\"needle_bar.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"needle_ba"
+        "r.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"needle_bar.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\""
+        ":\"eccentric.com.z\",\"unit\":\"m\"},{\"name\":\"eccentric.com.z_d\",\"unit\":\"m/s\"},{\"name\""
+        ":\"eccentric.com.z_dd\",\"unit\":\"m/s^2\"}],\"params\":[{\"default\":0.0074,\"display_unit\":\""
+        "mm\",\"doc\":\"eccentricity AB of the needle eccentric on the main shaft (estimate)\",\"kind\":\""
+        "length\",\"name\":\"eccentric\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
+        "6,\"display_unit\":\"mm\",\"doc\":\"main-shaft axis below the rock shaft D (estimate)\",\"kind\""
+        ":\"length\",\"name\":\"shaft_below\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\""
+        ":0.06,\"display_unit\":\"mm\",\"doc\":\"ball-jointed rod BC (estimate)\",\"kind\":\"length\",\"n"
+        "ame\":\"rod\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.016,\"display_unit\""
+        ":\"mm\",\"doc\":\"rock-shaft arm DC, l\\u2083 (estimate)\",\"kind\":\"length\",\"name\":\"arm\","
+        "\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc"
+        "\":\"needle lever DL, l\\u2084 (estimate)\",\"kind\":\"length\",\"name\":\"lever\",\"positive\":"
+        "true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"angle of "
+        "the needle lever DL from the arm DC (estimate)\",\"kind\":\"angle\",\"name\":\"lever_angle\",\"p"
+        "ositive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.04,\"display_unit\":\"mm\",\"doc\""
+        ":\"needle-bar link LN, l\\u2085 (estimate)\",\"kind\":\"length\",\"name\":\"link\",\"positive\":"
+        "true,\"role\":null,\"unit\":\"m\"},{\"default\":0.028,\"display_unit\":\"mm\",\"doc\":\"needle-b"
+        "ar axis from the rock shaft D, a (estimate)\",\"kind\":\"length\",\"name\":\"offset\",\"positive"
+        "\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.075,\"display_unit\":\"mm\",\"doc\":\"need"
+        "le eye below the link pin N along the bar (estimate)\",\"kind\":\"length\",\"name\":\"eye_below_"
+        "pin\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display_unit\":\"mm\""
+        ",\"doc\":\"needle point below its eye (estimate)\",\"kind\":\"length\",\"name\":\"point_below_ey"
+        "e\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.001,\"display_unit\":\"mm\",\""
+        "doc\":\"length of the needle eye along the needle (estimate)\",\"kind\":\"length\",\"name\":\"ey"
+        "e_length\",\"positive\":true,\"role\":\"needle_eye_length\",\"unit\":\"m\"},{\"default\":0.0035,"
+        "\"display_unit\":\"mm\",\"doc\":\"needle scarf above the eye's top, where the lower looper's tip"
+        " passes (estimate)\",\"kind\":\"length\",\"name\":\"scarf_length\",\"positive\":true,\"role\":\""
+        "needle_scarf\",\"unit\":\"m\"},{\"default\":3.141592653589793,\"display_unit\":\"deg\",\"doc\":\""
+        "phase of eccentric relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"eccentric.phase\""
+        ",\"positive\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.03,\"display_unit\":\"g\",\"d"
+        "oc\":\"mass of eccentric\",\"kind\":\"mass\",\"name\":\"eccentric.mass\",\"positive\":false,\"ro"
+        "le\":null,\"unit\":\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of "
+        "eccentric, local u\",\"kind\":\"length\",\"name\":\"eccentric.com_u\",\"positive\":false,\"role\""
+        ":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of eccen"
+        "tric, local v\",\"kind\":\"length\",\"name\":\"eccentric.com_v\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":2e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of"
+        " eccentric about its centre of mass\",\"kind\":\"inertia\",\"name\":\"eccentric.inertia\",\"posi"
+        "tive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.035,\"display_unit\":\"g\",\"doc"
+        "\":\"mass of lever\",\"kind\":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,"
+        "\"unit\":\"kg\"},{\"default\":0.008,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, l"
+        "ocal u\",\"kind\":\"length\",\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":"
+        "\"m\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"k"
+        "ind\":\"length\",\"name\":\"lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"de"
+        "fault\":6e-06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre"
+        " of mass\",\"kind\":\"inertia\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"un"
+        "it\":\"kg*m**2\"},{\"default\":0.006,\"display_unit\":\"g\",\"doc\":\"mass of link\",\"kind\":\""
+        "mass\",\"name\":\"link.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":1e-"
+        "06,\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of link about its centre of mass\",\""
+        "kind\":\"inertia\",\"name\":\"link.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2"
+        "\"},{\"default\":0.025,\"display_unit\":\"g\",\"doc\":\"mass of needle_bar\",\"kind\":\"mass\",\""
+        "name\":\"needle_bar.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":-0.03,"
+        "\"display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local u\",\"kind\":\"length\",\""
+        "name\":\"needle_bar.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\""
+        "display_unit\":\"mm\",\"doc\":\"centre of mass of needle_bar, local v\",\"kind\":\"length\",\"na"
+        "me\":\"needle_bar.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":8e-06,\""
+        "display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of needle_bar about its centre of mass\","
+        "\"kind\":\"inertia\",\"name\":\"needle_bar.inertia\",\"positive\":false,\"role\":null,\"unit\":\""
+        "kg*m**2\"}],\"point_fields\":[\"x\",\"y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"l"
+        "ever\",\"doc\":\"needle-lever pin L\",\"name\":\"lever_pin\",\"offset\":0,\"role\":null},{\"body"
+        "\":\"needle_bar\",\"doc\":\"needle eye\",\"name\":\"needle_eye\",\"offset\":6,\"role\":\"needle_"
+        "eye\"},{\"body\":\"needle_bar\",\"doc\":\"needle point\",\"name\":\"needle_point\",\"offset\":12"
+        ",\"role\":\"needle_point\"}],\"reactions\":[{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\""
+        "fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"eccentric.pivot\",\"offset\":0},"
+        "{\"a\":\"ground\",\"b\":\"needle_bar\",\"columns\":[\"normal\",\"moment\"],\"grounded\":true,\"k"
+        "ind\":\"prismatic\",\"name\":\"needle_bar.guide\",\"offset\":2},{\"a\":\"ground\",\"b\":\"lever\""
+        ",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\":\"D\",\"offset\":4"
+        "},{\"a\":\"eccentric\",\"b\":\"lever\",\"columns\":[\"tension\"],\"grounded\":false,\"kind\":\"r"
+        "od\",\"name\":\"rod\",\"offset\":6},{\"a\":\"lever\",\"b\":\"link\",\"columns\":[\"fx\",\"fy\"],"
+        "\"grounded\":false,\"kind\":\"revolute\",\"name\":\"L\",\"offset\":7},{\"a\":\"link\",\"b\":\"ne"
+        "edle_bar\",\"columns\":[\"fx\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"N\",\""
+        "offset\":9},{\"a\":\"ground\",\"b\":\"eccentric\",\"columns\":[\"torque\"],\"grounded\":true,\"i"
+        "nput\":\"shaft\",\"kind\":\"drive\",\"name\":\"eccentric.drive\",\"offset\":11,\"sense\":1}],\"r"
+        "oles\":{\"needle_bar\":{\"kind\":\"body\",\"name\":\"needle_bar\"},\"needle_eye\":{\"kind\":\"po"
+        "int\",\"name\":\"needle_eye\"},\"needle_eye_length\":{\"kind\":\"param\",\"name\":\"eye_length\""
+        "},\"needle_point\":{\"kind\":\"point\",\"name\":\"needle_point\"},\"needle_scarf\":{\"kind\":\"p"
+        "aram\",\"name\":\"scarf_length\"}},\"sizes\":{\"nanchor_out\":40,\"nblock\":3,\"nbranch\":2,\"nc"
+        "\":97,\"nf\":12,\"nfo\":26,\"ngroup\":8,\"nload\":10,\"nobs\":57,\"np\":27,\"nq\":3,\"nx\":1}}"
         ;
 }

@@ -6,31 +6,33 @@
 #include "sg_runtime.h"
 #include "sg_kernels.h"
 
-/* sg_take_up_constants -- Total ops: 77 */
+/* sg_take_up_constants -- Total ops: 80 */
 void sg_take_up_constants(const double *p, double *c)
 {
     const double t0 = sin(p[7]);
     const double t1 = (1.0/(p[3]));
-    const double t2 = -p[3];
-    const double t3 = p[2] + p[3] + p[4];
-    const double t4 = t3 + fabs(p[0]);
-    const double t5 = t3 + fabs(p[1]);
-    const double t6 = ((p[5])*(p[5]));
-    const double t7 = ((p[3])*(p[3]));
-    const double t8 = ((p[6])*(p[6]));
-    const double t9 = t6 + t7 - t8;
-    const double t10 = (1.0/(t7));
-    const double t11 = (0.25)*t10;
-    const double t12 = (0.5)*t6;
-    const double t13 = sqrt(sg_rounding_clamp(-t11*((t9)*(t9)) + t6, ((p[5])*(p[5])*(p[5])*(p[5]))*t11 + ((p[6])*(p[6])*(p[6])*(p[6]))*t11 + t10*t12*t8 + t12 + (0.25)*t7 + (0.5)*t8));
-    const double t14 = -t13;
-    const double t15 = (0.5)*t1*t9;
+    const double t2 = fabs(p[0]);
+    const double t3 = fabs(p[1]);
+    const double t4 = -p[3];
+    const double t5 = p[2] + p[3] + p[4];
+    const double t6 = t2 + t5;
+    const double t7 = t3 + t5;
+    const double t8 = ((p[5])*(p[5]));
+    const double t9 = ((p[3])*(p[3]));
+    const double t10 = ((p[6])*(p[6]));
+    const double t11 = -t10 + t8 + t9;
+    const double t12 = (1.0/(t9));
+    const double t13 = (0.25)*t12;
+    const double t14 = (0.5)*t8;
+    const double t15 = sqrt(sg_rounding_clamp(-((t11)*(t11))*t13 + t8, ((p[5])*(p[5])*(p[5])*(p[5]))*t13 + ((p[6])*(p[6])*(p[6])*(p[6]))*t13 + t10*t12*t14 + (0.5)*t10 + t14 + (0.25)*t9));
     const double t16 = -t15;
-    const double t17 = -p[9];
-    const double t18 = (0.5)*p[4];
-    const double t19 = p[13] + t16;
-    const double t20 = p[2] + t17;
-    const double t21 = p[13] + t2;
+    const double t17 = (0.5)*t1*t11;
+    const double t18 = -t17;
+    const double t19 = -p[9];
+    const double t20 = (0.5)*p[4];
+    const double t21 = p[13] + t18;
+    const double t22 = p[2] + t19;
+    const double t23 = p[13] + t4;
     c[0] = p[2];
     c[1] = cos(p[7]);
     c[2] = -t0;
@@ -41,72 +43,75 @@ void sg_take_up_constants(const double *p, double *c)
     c[7] = p[4];
     c[8] = t1;
     c[9] = (1.0/(p[4]));
-    c[10] = -p[0];
-    c[11] = -p[4];
-    c[12] = -p[1];
-    c[13] = t2;
+    c[10] = 2.0*p[2] + t2 + t3;
+    c[11] = -p[0];
+    c[12] = -p[4];
+    c[13] = -p[1];
     c[14] = t4;
-    c[15] = t5;
-    c[16] = -p[2];
-    c[17] = t14;
-    c[18] = t15;
-    c[19] = t13;
-    c[20] = t16;
-    c[21] = p[7];
-    c[22] = p[9];
-    c[23] = -p[10];
-    c[24] = p[10];
-    c[25] = t17;
-    c[26] = p[13];
-    c[27] = -p[14];
-    c[28] = p[14];
-    c[29] = -p[13];
-    c[30] = t18;
-    c[31] = -t18;
-    c[32] = (1.0/(t4));
-    c[33] = (1.0/(t5));
-    c[34] = p[15];
-    c[35] = p[14] + t14;
-    c[36] = t19;
-    c[37] = -t19;
-    c[38] = p[12];
-    c[39] = p[17];
-    c[40] = p[16];
-    c[41] = p[11];
-    c[42] = -t20;
-    c[43] = t20;
-    c[44] = p[8];
-    c[45] = (0.5)*p[11];
-    c[46] = (0.5)*p[12];
-    c[47] = (0.5)*p[15];
-    c[48] = (0.5)*p[16];
-    c[49] = (0.5)*p[17];
-    c[50] = (0.5)*p[8];
-    c[51] = -p[12];
-    c[52] = -p[16];
-    c[53] = -p[8];
-    c[54] = -p[18]*p[19];
-    c[55] = -p[20]*p[21];
-    c[56] = -p[22]*p[23];
-    c[57] = p[18];
-    c[58] = p[20];
-    c[59] = p[22];
-    c[60] = -t21;
-    c[61] = t21;
+    c[15] = t6;
+    c[16] = t7;
+    c[17] = -p[2];
+    c[18] = t16;
+    c[19] = t17;
+    c[20] = t15;
+    c[21] = t18;
+    c[22] = p[7];
+    c[23] = p[9];
+    c[24] = -p[10];
+    c[25] = p[10];
+    c[26] = t19;
+    c[27] = p[13];
+    c[28] = -p[14];
+    c[29] = p[14];
+    c[30] = -p[13];
+    c[31] = t20;
+    c[32] = -t20;
+    c[33] = (1.0/(t6));
+    c[34] = (1.0/(t7));
+    c[35] = p[15];
+    c[36] = p[14] + t16;
+    c[37] = t21;
+    c[38] = -t21;
+    c[39] = p[12];
+    c[40] = p[17];
+    c[41] = p[16];
+    c[42] = p[11];
+    c[43] = -t22;
+    c[44] = t22;
+    c[45] = p[8];
+    c[46] = (0.5)*p[11];
+    c[47] = (0.5)*p[12];
+    c[48] = (0.5)*p[15];
+    c[49] = (0.5)*p[16];
+    c[50] = (0.5)*p[17];
+    c[51] = (0.5)*p[8];
+    c[52] = -p[12];
+    c[53] = -p[16];
+    c[54] = -p[8];
+    c[55] = -p[18]*p[19];
+    c[56] = -p[20]*p[21];
+    c[57] = -p[22]*p[23];
+    c[58] = p[18];
+    c[59] = p[20];
+    c[60] = p[22];
+    c[61] = -t23;
+    c[62] = t23;
 }
 
 /* sg_take_up_closed -- Total ops: 22 */
-int sg_take_up_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq)
+int sg_take_up_closed(const double *x, const double *cx, const double *c, const int *branch, double *q, double *cq, double *err)
 {
     (void)x;
     int st;
+    double e[3] = {0.0, 0.0, 1.0};
     {
         /* dyad 0: RRR closed at joint C (lever, rocker) */
         const double P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
         const double Q[2] = {c[4], c[5]};
         const double l[2] = {c[6], c[7]};
+        const double ein = (SG_DYAD_ROUND * SG_EPS) * c[10];
         double J[2];
-        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        st = sg_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         if (st != SG_OK) return st;
         q[1] = atan2(J[1] - P[1], J[0] - P[0]);
         q[0] = atan2(J[1] - Q[1], J[0] - Q[0]);
@@ -115,6 +120,8 @@ int sg_take_up_closed(const double *x, const double *cx, const double *c, const 
         cq[0] = c[9]*(J[0] - Q[0]);
         cq[1] = c[9]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return SG_OK;
 }
 
@@ -123,12 +130,12 @@ void sg_take_up_residual(const double *q, const double *cq, const double *x, con
 {
     (void)q;
     (void)x;
-    const double t0 = c[11]*cq[0];
+    const double t0 = c[12]*cq[0];
     const double t1 = c[6]*cq[2];
-    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[10] + t0 + t1;
-    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[11]*cq[1] + c[12] + c[6]*cq[3];
+    r[0] = c[0]*(c[1]*cx[0] + c[2]*cx[1]) + c[11] + t0 + t1;
+    r[1] = c[0]*(c[1]*cx[1] + c[3]*cx[0]) + c[12]*cq[1] + c[13] + c[6]*cq[3];
     jac[0] = c[7]*cq[1];
-    jac[1] = c[13]*cq[3];
+    jac[1] = c[14]*cq[3];
     jac[2] = t0;
     jac[3] = t1;
 }
@@ -152,8 +159,8 @@ void sg_take_up_scales(const double *q, const double *cq, const double *x, const
     (void)cq;
     (void)x;
     (void)cx;
-    out[0] = c[14];
-    out[1] = c[15];
+    out[0] = c[15];
+    out[1] = c[16];
 }
 
 /* sg_take_up_blocks -- Total ops: 15 */
@@ -170,39 +177,39 @@ void sg_take_up_blocks(const double *jac, double *out)
 int sg_take_up_motion(const double *q, const double *cq, const double *x, const double *cx, const double *xd, const double *xdd, const double *c, double *qd, double *qdd, double *obs, double *cond)
 {
     const double t0 = c[7]*cq[1];
-    const double t1 = c[11]*cq[0];
+    const double t1 = c[12]*cq[0];
     const double t2 = c[6]*cq[2];
     const double t3 = c[1]*cx[1] + c[3]*cx[0];
     const double t4 = c[0]*t3;
     const double t5 = c[1]*cx[0] + c[2]*cx[1];
-    const double t6 = c[16]*t5;
+    const double t6 = c[17]*t5;
     const double t10 = ((xd[0])*(xd[0]));
     const double t11 = c[0]*t5;
-    const double t12 = c[11]*cq[1];
-    const double t14 = c[16]*t3;
+    const double t12 = c[12]*cq[1];
+    const double t14 = c[17]*t3;
     const double t15 = t14*xd[0];
     const double t16 = t11*xd[0];
     const double t17 = t10*t6 + t14*xdd[0];
     const double t18 = t10*t14 + t11*xdd[0];
     const double t19 = c[7]*cq[0];
-    const double t20 = c[17]*cq[3] + c[18]*cq[2];
-    const double t21 = c[17]*cq[2] + c[20]*cq[3];
-    const double t22 = c[22]*t5 + c[23]*t3;
-    const double t23 = c[23]*t5 + c[25]*t3;
-    const double t24 = c[26]*cq[2] + c[27]*cq[3];
-    const double t25 = c[27]*cq[2] + c[29]*cq[3];
-    const double t26 = c[30]*cq[0];
-    const double t27 = c[31]*cq[1];
-    double J[4], rs[2], cs[2];
+    const double t20 = c[18]*cq[3] + c[19]*cq[2];
+    const double t21 = c[18]*cq[2] + c[21]*cq[3];
+    const double t22 = c[23]*t5 + c[24]*t3;
+    const double t23 = c[24]*t5 + c[26]*t3;
+    const double t24 = c[27]*cq[2] + c[28]*cq[3];
+    const double t25 = c[28]*cq[2] + c[30]*cq[3];
+    const double t26 = c[31]*cq[0];
+    const double t27 = c[32]*cq[1];
+    double J[4], rs[2], cs[4];
     int piv[2];
     J[0] = t0;
-    J[1] = c[13]*cq[3];
+    J[1] = c[14]*cq[3];
     J[2] = t1;
     J[3] = t2;
     qd[0] = t4*xd[0];
     qd[1] = t6*xd[0];
-    rs[0] = c[32];
-    rs[1] = c[33];
+    rs[0] = c[33];
+    rs[1] = c[34];
     if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(2, J, piv, rs, cs, qd);
     const double t7 = ((qd[0])*(qd[0]));
@@ -212,6 +219,7 @@ int sg_take_up_motion(const double *q, const double *cq, const double *x, const 
     qdd[0] = t10*t11 + t2*t9 + t4*xdd[0] + t8;
     qdd[1] = c[6]*cq[3]*t9 + t10*t4 + t13 + t6*xdd[0];
     sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(2, 0x3ULL, fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = t11;
     obs[1] = t4;
     obs[2] = t15;
@@ -225,37 +233,37 @@ int sg_take_up_motion(const double *q, const double *cq, const double *x, const 
     obs[10] = qdd[0]*t12 + t8;
     obs[11] = qdd[0]*t19 + t13;
     obs[12] = t11 + t20;
-    obs[13] = c[18]*cq[3] + c[19]*cq[2] + t4;
+    obs[13] = c[19]*cq[3] + c[20]*cq[2] + t4;
     obs[14] = qd[1]*t21 + t15;
     obs[15] = qd[1]*t20 + t16;
-    obs[16] = qdd[1]*t21 + t17 + t9*(c[19]*cq[3] + c[20]*cq[2]);
+    obs[16] = qdd[1]*t21 + t17 + t9*(c[20]*cq[3] + c[21]*cq[2]);
     obs[17] = qdd[1]*t20 + t18 + t21*t9;
-    obs[18] = c[21] + x[0];
+    obs[18] = c[22] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = t22;
-    obs[22] = c[22]*t3 + c[24]*t5;
+    obs[22] = c[23]*t3 + c[25]*t5;
     obs[23] = t23*xd[0];
     obs[24] = t22*xd[0];
-    obs[25] = t10*(c[24]*t3 + c[25]*t5) + t23*xdd[0];
+    obs[25] = t10*(c[25]*t3 + c[26]*t5) + t23*xdd[0];
     obs[26] = t10*t23 + t22*xdd[0];
     obs[27] = q[1];
     obs[28] = qd[1];
     obs[29] = qdd[1];
     obs[30] = t11 + t24;
-    obs[31] = c[26]*cq[3] + c[28]*cq[2] + t4;
+    obs[31] = c[27]*cq[3] + c[29]*cq[2] + t4;
     obs[32] = qd[1]*t25 + t15;
     obs[33] = qd[1]*t24 + t16;
-    obs[34] = qdd[1]*t25 + t17 + t9*(c[28]*cq[3] + c[29]*cq[2]);
+    obs[34] = qdd[1]*t25 + t17 + t9*(c[29]*cq[3] + c[30]*cq[2]);
     obs[35] = qdd[1]*t24 + t18 + t25*t9;
     obs[36] = q[0];
     obs[37] = qd[0];
     obs[38] = qdd[0];
     obs[39] = c[4] + t26;
-    obs[40] = c[30]*cq[1] + c[5];
+    obs[40] = c[31]*cq[1] + c[5];
     obs[41] = qd[0]*t27;
     obs[42] = qd[0]*t26;
-    obs[43] = c[31]*cq[0]*t7 + qdd[0]*t27;
+    obs[43] = c[32]*cq[0]*t7 + qdd[0]*t27;
     obs[44] = qdd[0]*t26 + t27*t7;
     if (!isfinite((((((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))) + ((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))) + ((obs[12] + (obs[13] + obs[14])) + ((obs[15] + obs[16]) + (obs[17] + obs[18]))))) + ((((obs[19] + (obs[20] + obs[21])) + (obs[22] + (obs[23] + obs[24]))) + ((obs[25] + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31])))) + (((obs[32] + (obs[33] + obs[34])) + (obs[35] + (obs[36] + obs[37]))) + ((obs[38] + (obs[39] + obs[40])) + ((obs[41] + obs[42]) + (obs[43] + obs[44])))))))) return SG_NONFINITE;
     return SG_OK;
@@ -266,25 +274,25 @@ int sg_take_up_rates(const double *q, const double *cq, const double *x, const d
 {
     (void)x;
     const double t0 = c[7]*cq[1];
-    const double t1 = c[11]*cq[0];
+    const double t1 = c[12]*cq[0];
     const double t2 = c[6]*cq[2];
     const double t3 = c[1]*cx[1] + c[3]*cx[0];
     const double t4 = c[0]*t3;
     const double t5 = c[1]*cx[0] + c[2]*cx[1];
-    const double t6 = c[16]*t5;
+    const double t6 = c[17]*t5;
     const double t10 = ((xd[0])*(xd[0]));
     const double t11 = c[0]*t5;
-    const double t12 = c[11]*cq[1];
-    double J[4], rs[2], cs[2];
+    const double t12 = c[12]*cq[1];
+    double J[4], rs[2], cs[4];
     int piv[2];
     J[0] = t0;
-    J[1] = c[13]*cq[3];
+    J[1] = c[14]*cq[3];
     J[2] = t1;
     J[3] = t2;
     qd[0] = t4*xd[0];
     qd[1] = t6*xd[0];
-    rs[0] = c[32];
-    rs[1] = c[33];
+    rs[0] = c[33];
+    rs[1] = c[34];
     if (sg_factor_eq_inl(2, J, piv, rs, cs, cond) != SG_OK) return SG_SINGULAR;
     sg_solve_eq_inl(2, J, piv, rs, cs, qd);
     const double t7 = ((qd[0])*(qd[0]));
@@ -294,6 +302,7 @@ int sg_take_up_rates(const double *q, const double *cq, const double *x, const d
     qdd[0] = t10*t11 + t2*t9 + t4*xdd[0] + t8;
     qdd[1] = c[6]*cq[3]*t9 + t10*t4 + t13 + t6*xdd[0];
     sg_solve_eq_inl(2, J, piv, rs, cs, qdd);
+    sg_rates_scale_inl(2, 0x3ULL, fabs(xd[0]), cs, qd, qdd, cond);
     if (!isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))))) return SG_NONFINITE;
     return SG_OK;
 }
@@ -306,10 +315,10 @@ int sg_take_up_observe(const double *q, const double *cq, const double *x, const
         const double t3 = c[1]*cx[1] + c[3]*cx[0];
         const double t4 = c[0]*t3;
         const double t5 = c[1]*cx[0] + c[2]*cx[1];
-        const double t6 = c[16]*t5;
+        const double t6 = c[17]*t5;
         const double t10 = ((xd[0])*(xd[0]));
         const double t11 = c[0]*t5;
-        const double t14 = c[16]*t3;
+        const double t14 = c[17]*t3;
         const double t15 = t14*xd[0];
         const double t16 = t11*xd[0];
         const double t17 = t10*t6 + t14*xdd[0];
@@ -324,10 +333,10 @@ int sg_take_up_observe(const double *q, const double *cq, const double *x, const
     }
     case 1: {
         const double t0 = c[7]*cq[1];
-        const double t1 = c[11]*cq[0];
+        const double t1 = c[12]*cq[0];
         const double t7 = ((qd[0])*(qd[0]));
         const double t8 = t1*t7;
-        const double t12 = c[11]*cq[1];
+        const double t12 = c[12]*cq[1];
         const double t13 = t12*t7;
         const double t19 = c[7]*cq[0];
         obs[6] = c[4] + t19;
@@ -342,22 +351,22 @@ int sg_take_up_observe(const double *q, const double *cq, const double *x, const
         const double t3 = c[1]*cx[1] + c[3]*cx[0];
         const double t4 = c[0]*t3;
         const double t5 = c[1]*cx[0] + c[2]*cx[1];
-        const double t6 = c[16]*t5;
+        const double t6 = c[17]*t5;
         const double t9 = ((qd[1])*(qd[1]));
         const double t10 = ((xd[0])*(xd[0]));
         const double t11 = c[0]*t5;
-        const double t14 = c[16]*t3;
+        const double t14 = c[17]*t3;
         const double t15 = t14*xd[0];
         const double t16 = t11*xd[0];
         const double t17 = t10*t6 + t14*xdd[0];
         const double t18 = t10*t14 + t11*xdd[0];
-        const double t20 = c[17]*cq[3] + c[18]*cq[2];
-        const double t21 = c[17]*cq[2] + c[20]*cq[3];
+        const double t20 = c[18]*cq[3] + c[19]*cq[2];
+        const double t21 = c[18]*cq[2] + c[21]*cq[3];
         obs[12] = t11 + t20;
-        obs[13] = c[18]*cq[3] + c[19]*cq[2] + t4;
+        obs[13] = c[19]*cq[3] + c[20]*cq[2] + t4;
         obs[14] = qd[1]*t21 + t15;
         obs[15] = qd[1]*t20 + t16;
-        obs[16] = qdd[1]*t21 + t17 + t9*(c[19]*cq[3] + c[20]*cq[2]);
+        obs[16] = qdd[1]*t21 + t17 + t9*(c[20]*cq[3] + c[21]*cq[2]);
         obs[17] = qdd[1]*t20 + t18 + t21*t9;
         return isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17])))) ? SG_OK : SG_NONFINITE;
     }
@@ -365,16 +374,16 @@ int sg_take_up_observe(const double *q, const double *cq, const double *x, const
         const double t3 = c[1]*cx[1] + c[3]*cx[0];
         const double t5 = c[1]*cx[0] + c[2]*cx[1];
         const double t10 = ((xd[0])*(xd[0]));
-        const double t22 = c[22]*t5 + c[23]*t3;
-        const double t23 = c[23]*t5 + c[25]*t3;
-        obs[18] = c[21] + x[0];
+        const double t22 = c[23]*t5 + c[24]*t3;
+        const double t23 = c[24]*t5 + c[26]*t3;
+        obs[18] = c[22] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
         obs[21] = t22;
-        obs[22] = c[22]*t3 + c[24]*t5;
+        obs[22] = c[23]*t3 + c[25]*t5;
         obs[23] = t23*xd[0];
         obs[24] = t22*xd[0];
-        obs[25] = t10*(c[24]*t3 + c[25]*t5) + t23*xdd[0];
+        obs[25] = t10*(c[25]*t3 + c[26]*t5) + t23*xdd[0];
         obs[26] = t10*t23 + t22*xdd[0];
         return isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -382,40 +391,40 @@ int sg_take_up_observe(const double *q, const double *cq, const double *x, const
         const double t3 = c[1]*cx[1] + c[3]*cx[0];
         const double t4 = c[0]*t3;
         const double t5 = c[1]*cx[0] + c[2]*cx[1];
-        const double t6 = c[16]*t5;
+        const double t6 = c[17]*t5;
         const double t9 = ((qd[1])*(qd[1]));
         const double t10 = ((xd[0])*(xd[0]));
         const double t11 = c[0]*t5;
-        const double t14 = c[16]*t3;
+        const double t14 = c[17]*t3;
         const double t15 = t14*xd[0];
         const double t16 = t11*xd[0];
         const double t17 = t10*t6 + t14*xdd[0];
         const double t18 = t10*t14 + t11*xdd[0];
-        const double t24 = c[26]*cq[2] + c[27]*cq[3];
-        const double t25 = c[27]*cq[2] + c[29]*cq[3];
+        const double t24 = c[27]*cq[2] + c[28]*cq[3];
+        const double t25 = c[28]*cq[2] + c[30]*cq[3];
         obs[27] = q[1];
         obs[28] = qd[1];
         obs[29] = qdd[1];
         obs[30] = t11 + t24;
-        obs[31] = c[26]*cq[3] + c[28]*cq[2] + t4;
+        obs[31] = c[27]*cq[3] + c[29]*cq[2] + t4;
         obs[32] = qd[1]*t25 + t15;
         obs[33] = qd[1]*t24 + t16;
-        obs[34] = qdd[1]*t25 + t17 + t9*(c[28]*cq[3] + c[29]*cq[2]);
+        obs[34] = qdd[1]*t25 + t17 + t9*(c[29]*cq[3] + c[30]*cq[2]);
         obs[35] = qdd[1]*t24 + t18 + t25*t9;
         return isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35]))))) ? SG_OK : SG_NONFINITE;
     }
     case 5: {
         const double t7 = ((qd[0])*(qd[0]));
-        const double t26 = c[30]*cq[0];
-        const double t27 = c[31]*cq[1];
+        const double t26 = c[31]*cq[0];
+        const double t27 = c[32]*cq[1];
         obs[36] = q[0];
         obs[37] = qd[0];
         obs[38] = qdd[0];
         obs[39] = c[4] + t26;
-        obs[40] = c[30]*cq[1] + c[5];
+        obs[40] = c[31]*cq[1] + c[5];
         obs[41] = qd[0]*t27;
         obs[42] = qd[0]*t26;
-        obs[43] = c[31]*cq[0]*t7 + qdd[0]*t27;
+        obs[43] = c[32]*cq[0]*t7 + qdd[0]*t27;
         obs[44] = qdd[0]*t26 + t27*t7;
         return isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44]))))) ? SG_OK : SG_NONFINITE;
     }
@@ -432,14 +441,14 @@ int sg_take_up_forces(const double *q, const double *cq, const double *x, const 
     double fr[3] = {0.0};
     for (int it = 0; ; ++it) {
         const double t0 = -fr[1];
-        const double t1 = c[38]*(-gv[0] + obs[34]) - ld[4];
-        const double t2 = c[38]*(-gv[1] + obs[35]) - ld[5];
-        const double t3 = c[40]*(-gv[1] + obs[44]) - ld[3];
-        const double t4 = c[40]*(-gv[0] + obs[43]) - ld[2];
+        const double t1 = c[39]*(-gv[0] + obs[34]) - ld[4];
+        const double t2 = c[39]*(-gv[1] + obs[35]) - ld[5];
+        const double t3 = c[41]*(-gv[1] + obs[44]) - ld[3];
+        const double t4 = c[41]*(-gv[0] + obs[43]) - ld[2];
         const double t5 = c[1]*cx[0] + c[2]*cx[1];
-        const double t6 = c[24]*t5;
+        const double t6 = c[25]*t5;
         const double t7 = c[1]*cx[1] + c[3]*cx[0];
-        const double t8 = c[24]*t7;
+        const double t8 = c[25]*t7;
         const double t9 = fr[2]*obs[37];
         const double t10 = -obs[19] + obs[28];
         const double t11 = fr[0]*t10;
@@ -449,12 +458,12 @@ int sg_take_up_forces(const double *q, const double *cq, const double *x, const 
             /* block of unknowns 6, 7 */
             double M[4], r[2];
             int piv[2];
-            M[0] = c[11]*cq[1];
+            M[0] = c[12]*cq[1];
             M[1] = c[7]*cq[0];
-            r[0] = c[30]*cq[0]*t3 + c[30]*cq[1]*ld[2] + c[31]*cq[0]*ld[3] + c[31]*cq[1]*t4 + c[39]*obs[38] - fr[2] - ld[8] + t0;
+            r[0] = c[31]*cq[0]*t3 + c[31]*cq[1]*ld[2] + c[32]*cq[0]*ld[3] + c[32]*cq[1]*t4 + c[40]*obs[38] - fr[2] - ld[8] + t0;
             M[2] = c[6]*cq[3];
-            M[3] = c[13]*cq[2];
-            r[1] = c[34]*obs[29] - fr[0] - ld[4]*(c[35]*cq[2] + c[36]*cq[3]) - ld[5]*(c[35]*cq[3] + c[37]*cq[2]) - ld[7] - t0 - t1*(c[26]*cq[3] + c[28]*cq[2]) - t2*(c[28]*cq[3] + c[29]*cq[2]);
+            M[3] = c[14]*cq[2];
+            r[1] = c[35]*obs[29] - fr[0] - ld[4]*(c[36]*cq[2] + c[37]*cq[3]) - ld[5]*(c[36]*cq[3] + c[38]*cq[2]) - ld[7] - t0 - t1*(c[27]*cq[3] + c[29]*cq[2]) - t2*(c[29]*cq[3] + c[30]*cq[2]);
             if (sg_lu_factor_inl(2, M, piv, 0) != SG_OK) return SG_SINGULAR;
             sg_lu_solve_inl(2, M, piv, r);
             out[6] = r[0];
@@ -464,14 +473,14 @@ int sg_take_up_forces(const double *q, const double *cq, const double *x, const 
         out[4] = -out[6] + t4;
         out[3] = out[7] + t2;
         out[2] = out[6] + t1;
-        out[1] = c[44]*(-gv[1] + obs[26]) + out[3] - ld[1];
-        out[0] = c[44]*(-gv[0] + obs[25]) + out[2] - ld[0];
-        out[8] = c[41]*obs[20] - out[0]*(c[22]*t7 + t6) - out[1]*(c[25]*t5 + t8) - out[2]*(c[23]*t5 + c[43]*t7) - out[3]*(c[23]*t7 + c[42]*t5) + fr[0] - ld[0]*(c[42]*t7 + t6) - ld[1]*(c[43]*t5 + t8) - ld[6];
-        if (!(c[57] == 0.0 && c[58] == 0.0 && c[59] == 0.0)) {
+        out[1] = c[45]*(-gv[1] + obs[26]) + out[3] - ld[1];
+        out[0] = c[45]*(-gv[0] + obs[25]) + out[2] - ld[0];
+        out[8] = c[42]*obs[20] - out[0]*(c[23]*t7 + t6) - out[1]*(c[26]*t5 + t8) - out[2]*(c[24]*t5 + c[44]*t7) - out[3]*(c[24]*t7 + c[43]*t5) + fr[0] - ld[0]*(c[43]*t7 + t6) - ld[1]*(c[44]*t5 + t8) - ld[6];
+        if (!(c[58] == 0.0 && c[59] == 0.0 && c[60] == 0.0)) {
             double frn[3];
-            frn[0] = c[54]*sqrt(((out[2])*(out[2])) + ((out[3])*(out[3])))*((t10) > 0.0 ? 1.0 : ((t10) < 0.0 ? -1.0 : 0.0));
-            frn[1] = c[55]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t12) > 0.0 ? 1.0 : ((t12) < 0.0 ? -1.0 : 0.0));
-            frn[2] = c[56]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((obs[37]) > 0.0 ? 1.0 : ((obs[37]) < 0.0 ? -1.0 : 0.0));
+            frn[0] = c[55]*sqrt(((out[2])*(out[2])) + ((out[3])*(out[3])))*((t10) > 0.0 ? 1.0 : ((t10) < 0.0 ? -1.0 : 0.0));
+            frn[1] = c[56]*sqrt(((out[6])*(out[6])) + ((out[7])*(out[7])))*((t12) > 0.0 ? 1.0 : ((t12) < 0.0 ? -1.0 : 0.0));
+            frn[2] = c[57]*sqrt(((out[4])*(out[4])) + ((out[5])*(out[5])))*((obs[37]) > 0.0 ? 1.0 : ((obs[37]) < 0.0 ? -1.0 : 0.0));
             double d = 0.0, s = 0.0;
             for (int k = 0; k < 3; ++k) { d = fmax(d, fabs(frn[k] - fr[k])); s = fmax(s, fabs(frn[k])); }
             if (!(d <= 1e-13 * s)) {
@@ -484,9 +493,9 @@ int sg_take_up_forces(const double *q, const double *cq, const double *x, const 
         out[10] = out[8]*xd[0];
         out[11] = out[0] + out[4];
         out[12] = out[1] + out[5];
-        out[13] = c[12]*out[4] + c[4]*out[5] + out[8] + fr[2];
-        out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
-        out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
+        out[13] = c[13]*out[4] + c[4]*out[5] + out[8] + fr[2];
+        out[14] = c[46]*((obs[19])*(obs[19])) + c[47]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[48]*((obs[28])*(obs[28])) + c[49]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[50]*((obs[37])*(obs[37])) + c[51]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
+        out[15] = c[52]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[53]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[54]*(gv[0]*obs[21] + gv[1]*obs[22]);
         out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + t11 + t13 + t9;
         out[17] = 0.0;
         out[18] = fr[0];
@@ -507,45 +516,45 @@ void sg_take_up_force_matrix(const double *q, const double *cq, const double *x,
     (void)x;
     const double t0 = c[1]*cx[1] + c[3]*cx[0];
     const double t1 = c[1]*cx[0] + c[2]*cx[1];
-    const double t2 = c[24]*t1;
-    const double t3 = c[24]*t0;
-    const double t4 = c[30]*cq[1];
-    const double t5 = c[31]*cq[0];
+    const double t2 = c[25]*t1;
+    const double t3 = c[25]*t0;
+    const double t4 = c[31]*cq[1];
+    const double t5 = c[32]*cq[0];
     for (int k = 0; k < 81; ++k) A[k] = 0.0;
     A[0] = 1.0;
     A[2] = -1.0;
     A[10] = 1.0;
     A[12] = -1.0;
-    A[18] = c[22]*t0 + t2;
-    A[19] = c[25]*t1 + t3;
-    A[20] = c[23]*t1 + c[43]*t0;
-    A[21] = c[23]*t0 + c[42]*t1;
+    A[18] = c[23]*t0 + t2;
+    A[19] = c[26]*t1 + t3;
+    A[20] = c[24]*t1 + c[44]*t0;
+    A[21] = c[24]*t0 + c[43]*t1;
     A[26] = 1.0;
     A[29] = 1.0;
     A[33] = -1.0;
     A[39] = 1.0;
     A[43] = -1.0;
-    A[47] = c[26]*cq[3] + c[28]*cq[2];
-    A[48] = c[28]*cq[3] + c[29]*cq[2];
-    A[51] = c[27]*cq[2] + c[60]*cq[3];
-    A[52] = c[27]*cq[3] + c[61]*cq[2];
+    A[47] = c[27]*cq[3] + c[29]*cq[2];
+    A[48] = c[29]*cq[3] + c[30]*cq[2];
+    A[51] = c[28]*cq[2] + c[61]*cq[3];
+    A[52] = c[28]*cq[3] + c[62]*cq[2];
     A[58] = 1.0;
     A[60] = 1.0;
     A[68] = 1.0;
     A[70] = 1.0;
     A[76] = t4;
     A[77] = t5;
-    A[78] = c[31]*cq[1];
-    A[79] = c[30]*cq[0];
-    b[0] = c[44]*(-gv[0] + obs[25]) - ld[0];
-    b[1] = c[44]*(-gv[1] + obs[26]) - ld[1];
-    b[2] = c[41]*obs[20] - ld[0]*(c[42]*t0 + t2) - ld[1]*(c[43]*t1 + t3) - ld[6];
-    b[3] = c[38]*(-gv[0] + obs[34]) - ld[4];
-    b[4] = c[38]*(-gv[1] + obs[35]) - ld[5];
-    b[5] = c[34]*obs[29] - ld[4]*(c[35]*cq[2] + c[36]*cq[3]) - ld[5]*(c[35]*cq[3] + c[37]*cq[2]) - ld[7];
-    b[6] = c[40]*(-gv[0] + obs[43]) - ld[2];
-    b[7] = c[40]*(-gv[1] + obs[44]) - ld[3];
-    b[8] = c[39]*obs[38] + ld[2]*t4 + ld[3]*t5 - ld[8];
+    A[78] = c[32]*cq[1];
+    A[79] = c[31]*cq[0];
+    b[0] = c[45]*(-gv[0] + obs[25]) - ld[0];
+    b[1] = c[45]*(-gv[1] + obs[26]) - ld[1];
+    b[2] = c[42]*obs[20] - ld[0]*(c[43]*t0 + t2) - ld[1]*(c[44]*t1 + t3) - ld[6];
+    b[3] = c[39]*(-gv[0] + obs[34]) - ld[4];
+    b[4] = c[39]*(-gv[1] + obs[35]) - ld[5];
+    b[5] = c[35]*obs[29] - ld[4]*(c[36]*cq[2] + c[37]*cq[3]) - ld[5]*(c[36]*cq[3] + c[38]*cq[2]) - ld[7];
+    b[6] = c[41]*(-gv[0] + obs[43]) - ld[2];
+    b[7] = c[41]*(-gv[1] + obs[44]) - ld[3];
+    b[8] = c[40]*obs[38] + ld[2]*t4 + ld[3]*t5 - ld[8];
 }
 
 /* sg_take_up_anchors -- Total ops: 42 */
@@ -579,14 +588,14 @@ void sg_take_up_anchors(const double *q, const double *cq, const double *x, cons
     out[17] = t3;
     out[18] = t4;
     out[19] = t5;
-    out[20] = c[17]*cq[3] + c[18]*cq[2] + t1;
-    out[21] = c[18]*cq[3] + c[19]*cq[2] + t3;
-    out[22] = c[22]*t0 + c[23]*t2;
-    out[23] = c[22]*t2 + c[24]*t0;
-    out[24] = c[26]*cq[2] + c[27]*cq[3] + t1;
-    out[25] = c[26]*cq[3] + c[28]*cq[2] + t3;
-    out[26] = c[30]*cq[0] + c[4];
-    out[27] = c[30]*cq[1] + c[5];
+    out[20] = c[18]*cq[3] + c[19]*cq[2] + t1;
+    out[21] = c[19]*cq[3] + c[20]*cq[2] + t3;
+    out[22] = c[23]*t0 + c[24]*t2;
+    out[23] = c[23]*t2 + c[25]*t0;
+    out[24] = c[27]*cq[2] + c[28]*cq[3] + t1;
+    out[25] = c[27]*cq[3] + c[29]*cq[2] + t3;
+    out[26] = c[31]*cq[0] + c[4];
+    out[27] = c[31]*cq[1] + c[5];
 }
 
 /* sg_take_up_sweep: the closed-form sweep (csrc/sg_runtime.h) with the kernels above inlined; never inlined itself
@@ -603,17 +612,19 @@ static SG_FLATTEN SG_NOINLINE size_t sg_take_up_sweep(const struct sg_mechanism 
 #if SG_SIMD
 SG_SIMD_BEGIN
 
-SG_VINLINE sg_vm sg_take_up_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq)
+SG_VINLINE sg_vm sg_take_up_closed_v(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, sg_vd *cq, sg_vd *err)
 {
     (void)x;
     sg_vm ok = sgv_true();
+    sg_vd e[3] = {sgv_set1(0.0), sgv_set1(0.0), sgv_set1(1.0)};
     {
         /* dyad 0: RRR closed at joint C (lever, rocker) */
         const sg_vd P[2] = {c[0]*(c[1]*cx[0] + c[2]*cx[1]), c[0]*(c[1]*cx[1] + c[3]*cx[0])};
         const sg_vd Q[2] = {sgv_set1(c[4]), sgv_set1(c[5])};
         const sg_vd l[2] = {sgv_set1(c[6]), sgv_set1(c[7])};
+        const sg_vd ein = (SG_DYAD_ROUND * SG_EPS) * sgv_set1(c[10]);
         sg_vd J[2];
-        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], J);
+        ok &= sgv_dyad_rrr(P, Q, l[0], l[1], branch[0], ein, e, J);
         q[1] = angles ? sgv_atan2(J[1] - P[1], J[0] - P[0]) : sgv_set1(0.0);
         q[0] = angles ? sgv_atan2(J[1] - Q[1], J[0] - Q[0]) : sgv_set1(0.0);
         cq[2] = c[8]*(J[0] - P[0]);
@@ -621,45 +632,47 @@ SG_VINLINE sg_vm sg_take_up_closed_v(const sg_vd *x, const sg_vd *cx, const doub
         cq[0] = c[9]*(J[0] - Q[0]);
         cq[1] = c[9]*(J[1] - Q[1]);
     }
+    err[0] = e[0];
+    err[1] = e[2];
     return ok;
 }
 
 SG_VINLINE sg_vm sg_take_up_motion_v(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)
 {
     const sg_vd t0 = c[7]*cq[1];
-    const sg_vd t1 = c[11]*cq[0];
+    const sg_vd t1 = c[12]*cq[0];
     const sg_vd t2 = c[6]*cq[2];
     const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
     const sg_vd t4 = c[0]*t3;
     const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t6 = c[16]*t5;
+    const sg_vd t6 = c[17]*t5;
     const sg_vd t10 = ((xd[0])*(xd[0]));
     const sg_vd t11 = c[0]*t5;
-    const sg_vd t12 = c[11]*cq[1];
-    const sg_vd t14 = c[16]*t3;
+    const sg_vd t12 = c[12]*cq[1];
+    const sg_vd t14 = c[17]*t3;
     const sg_vd t15 = t14*xd[0];
     const sg_vd t16 = t11*xd[0];
     const sg_vd t17 = t10*t6 + t14*xdd[0];
     const sg_vd t18 = t10*t14 + t11*xdd[0];
     const sg_vd t19 = c[7]*cq[0];
-    const sg_vd t20 = c[17]*cq[3] + c[18]*cq[2];
-    const sg_vd t21 = c[17]*cq[2] + c[20]*cq[3];
-    const sg_vd t22 = c[22]*t5 + c[23]*t3;
-    const sg_vd t23 = c[23]*t5 + c[25]*t3;
-    const sg_vd t24 = c[26]*cq[2] + c[27]*cq[3];
-    const sg_vd t25 = c[27]*cq[2] + c[29]*cq[3];
-    const sg_vd t26 = c[30]*cq[0];
-    const sg_vd t27 = c[31]*cq[1];
-    sg_vd J[4], rs[2], cs[2];
+    const sg_vd t20 = c[18]*cq[3] + c[19]*cq[2];
+    const sg_vd t21 = c[18]*cq[2] + c[21]*cq[3];
+    const sg_vd t22 = c[23]*t5 + c[24]*t3;
+    const sg_vd t23 = c[24]*t5 + c[26]*t3;
+    const sg_vd t24 = c[27]*cq[2] + c[28]*cq[3];
+    const sg_vd t25 = c[28]*cq[2] + c[30]*cq[3];
+    const sg_vd t26 = c[31]*cq[0];
+    const sg_vd t27 = c[32]*cq[1];
+    sg_vd J[4], rs[2], cs[4];
     sg_vm piv[2];
     J[0] = t0;
-    J[1] = c[13]*cq[3];
+    J[1] = c[14]*cq[3];
     J[2] = t1;
     J[3] = t2;
     qd[0] = t4*xd[0];
     qd[1] = t6*xd[0];
-    rs[0] = sgv_set1(c[32]);
-    rs[1] = sgv_set1(c[33]);
+    rs[0] = sgv_set1(c[33]);
+    rs[1] = sgv_set1(c[34]);
     sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
     sgv_solve_eq(2, J, piv, rs, cs, qd);
     const sg_vd t7 = ((qd[0])*(qd[0]));
@@ -669,6 +682,7 @@ SG_VINLINE sg_vm sg_take_up_motion_v(const sg_vd *q, const sg_vd *cq, const sg_v
     qdd[0] = t10*t11 + t2*t9 + t4*xdd[0] + t8;
     qdd[1] = c[6]*cq[3]*t9 + t10*t4 + t13 + t6*xdd[0];
     sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    sgv_rates_scale(2, 0x3ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     obs[0] = t11;
     obs[1] = t4;
     obs[2] = t15;
@@ -682,37 +696,37 @@ SG_VINLINE sg_vm sg_take_up_motion_v(const sg_vd *q, const sg_vd *cq, const sg_v
     obs[10] = qdd[0]*t12 + t8;
     obs[11] = qdd[0]*t19 + t13;
     obs[12] = t11 + t20;
-    obs[13] = c[18]*cq[3] + c[19]*cq[2] + t4;
+    obs[13] = c[19]*cq[3] + c[20]*cq[2] + t4;
     obs[14] = qd[1]*t21 + t15;
     obs[15] = qd[1]*t20 + t16;
-    obs[16] = qdd[1]*t21 + t17 + t9*(c[19]*cq[3] + c[20]*cq[2]);
+    obs[16] = qdd[1]*t21 + t17 + t9*(c[20]*cq[3] + c[21]*cq[2]);
     obs[17] = qdd[1]*t20 + t18 + t21*t9;
-    obs[18] = c[21] + x[0];
+    obs[18] = c[22] + x[0];
     obs[19] = xd[0];
     obs[20] = xdd[0];
     obs[21] = t22;
-    obs[22] = c[22]*t3 + c[24]*t5;
+    obs[22] = c[23]*t3 + c[25]*t5;
     obs[23] = t23*xd[0];
     obs[24] = t22*xd[0];
-    obs[25] = t10*(c[24]*t3 + c[25]*t5) + t23*xdd[0];
+    obs[25] = t10*(c[25]*t3 + c[26]*t5) + t23*xdd[0];
     obs[26] = t10*t23 + t22*xdd[0];
     obs[27] = q[1];
     obs[28] = qd[1];
     obs[29] = qdd[1];
     obs[30] = t11 + t24;
-    obs[31] = c[26]*cq[3] + c[28]*cq[2] + t4;
+    obs[31] = c[27]*cq[3] + c[29]*cq[2] + t4;
     obs[32] = qd[1]*t25 + t15;
     obs[33] = qd[1]*t24 + t16;
-    obs[34] = qdd[1]*t25 + t17 + t9*(c[28]*cq[3] + c[29]*cq[2]);
+    obs[34] = qdd[1]*t25 + t17 + t9*(c[29]*cq[3] + c[30]*cq[2]);
     obs[35] = qdd[1]*t24 + t18 + t25*t9;
     obs[36] = q[0];
     obs[37] = qd[0];
     obs[38] = qdd[0];
     obs[39] = c[4] + t26;
-    obs[40] = c[30]*cq[1] + c[5];
+    obs[40] = c[31]*cq[1] + c[5];
     obs[41] = qd[0]*t27;
     obs[42] = qd[0]*t26;
-    obs[43] = c[31]*cq[0]*t7 + qdd[0]*t27;
+    obs[43] = c[32]*cq[0]*t7 + qdd[0]*t27;
     obs[44] = qdd[0]*t26 + t27*t7;
     ok &= sgv_isfinite((((((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))) + ((obs[0] + (obs[1] + obs[2])) + (obs[3] + (obs[4] + obs[5])))) + (((obs[6] + (obs[7] + obs[8])) + (obs[9] + (obs[10] + obs[11]))) + ((obs[12] + (obs[13] + obs[14])) + ((obs[15] + obs[16]) + (obs[17] + obs[18]))))) + ((((obs[19] + (obs[20] + obs[21])) + (obs[22] + (obs[23] + obs[24]))) + ((obs[25] + (obs[26] + obs[27])) + ((obs[28] + obs[29]) + (obs[30] + obs[31])))) + (((obs[32] + (obs[33] + obs[34])) + (obs[35] + (obs[36] + obs[37]))) + ((obs[38] + (obs[39] + obs[40])) + ((obs[41] + obs[42]) + (obs[43] + obs[44])))))));
     return ok;
@@ -722,25 +736,25 @@ SG_VINLINE sg_vm sg_take_up_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd
 {
     (void)x;
     const sg_vd t0 = c[7]*cq[1];
-    const sg_vd t1 = c[11]*cq[0];
+    const sg_vd t1 = c[12]*cq[0];
     const sg_vd t2 = c[6]*cq[2];
     const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
     const sg_vd t4 = c[0]*t3;
     const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t6 = c[16]*t5;
+    const sg_vd t6 = c[17]*t5;
     const sg_vd t10 = ((xd[0])*(xd[0]));
     const sg_vd t11 = c[0]*t5;
-    const sg_vd t12 = c[11]*cq[1];
-    sg_vd J[4], rs[2], cs[2];
+    const sg_vd t12 = c[12]*cq[1];
+    sg_vd J[4], rs[2], cs[4];
     sg_vm piv[2];
     J[0] = t0;
-    J[1] = c[13]*cq[3];
+    J[1] = c[14]*cq[3];
     J[2] = t1;
     J[3] = t2;
     qd[0] = t4*xd[0];
     qd[1] = t6*xd[0];
-    rs[0] = sgv_set1(c[32]);
-    rs[1] = sgv_set1(c[33]);
+    rs[0] = sgv_set1(c[33]);
+    rs[1] = sgv_set1(c[34]);
     sg_vm ok = sgv_factor_eq(2, J, piv, rs, cs, cond);
     sgv_solve_eq(2, J, piv, rs, cs, qd);
     const sg_vd t7 = ((qd[0])*(qd[0]));
@@ -750,6 +764,7 @@ SG_VINLINE sg_vm sg_take_up_rates_v(const sg_vd *q, const sg_vd *cq, const sg_vd
     qdd[0] = t10*t11 + t2*t9 + t4*xdd[0] + t8;
     qdd[1] = c[6]*cq[3]*t9 + t10*t4 + t13 + t6*xdd[0];
     sgv_solve_eq(2, J, piv, rs, cs, qdd);
+    sgv_rates_scale(2, 0x3ULL, sgv_fabs(xd[0]), cs, qd, qdd, cond);
     ok &= sgv_isfinite(((q[0] + (q[1] + qd[0])) + (qd[1] + (qdd[0] + qdd[1]))));
     return ok;
 }
@@ -761,10 +776,10 @@ SG_VINLINE sg_vm sg_take_up_observe_v(const sg_vd *q, const sg_vd *cq, const sg_
         const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t4 = c[0]*t3;
         const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
-        const sg_vd t6 = c[16]*t5;
+        const sg_vd t6 = c[17]*t5;
         const sg_vd t10 = ((xd[0])*(xd[0]));
         const sg_vd t11 = c[0]*t5;
-        const sg_vd t14 = c[16]*t3;
+        const sg_vd t14 = c[17]*t3;
         const sg_vd t15 = t14*xd[0];
         const sg_vd t16 = t11*xd[0];
         const sg_vd t17 = t10*t6 + t14*xdd[0];
@@ -779,10 +794,10 @@ SG_VINLINE sg_vm sg_take_up_observe_v(const sg_vd *q, const sg_vd *cq, const sg_
     }
     case 1: {
         const sg_vd t0 = c[7]*cq[1];
-        const sg_vd t1 = c[11]*cq[0];
+        const sg_vd t1 = c[12]*cq[0];
         const sg_vd t7 = ((qd[0])*(qd[0]));
         const sg_vd t8 = t1*t7;
-        const sg_vd t12 = c[11]*cq[1];
+        const sg_vd t12 = c[12]*cq[1];
         const sg_vd t13 = t12*t7;
         const sg_vd t19 = c[7]*cq[0];
         obs[6] = c[4] + t19;
@@ -797,22 +812,22 @@ SG_VINLINE sg_vm sg_take_up_observe_v(const sg_vd *q, const sg_vd *cq, const sg_
         const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t4 = c[0]*t3;
         const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
-        const sg_vd t6 = c[16]*t5;
+        const sg_vd t6 = c[17]*t5;
         const sg_vd t9 = ((qd[1])*(qd[1]));
         const sg_vd t10 = ((xd[0])*(xd[0]));
         const sg_vd t11 = c[0]*t5;
-        const sg_vd t14 = c[16]*t3;
+        const sg_vd t14 = c[17]*t3;
         const sg_vd t15 = t14*xd[0];
         const sg_vd t16 = t11*xd[0];
         const sg_vd t17 = t10*t6 + t14*xdd[0];
         const sg_vd t18 = t10*t14 + t11*xdd[0];
-        const sg_vd t20 = c[17]*cq[3] + c[18]*cq[2];
-        const sg_vd t21 = c[17]*cq[2] + c[20]*cq[3];
+        const sg_vd t20 = c[18]*cq[3] + c[19]*cq[2];
+        const sg_vd t21 = c[18]*cq[2] + c[21]*cq[3];
         obs[12] = t11 + t20;
-        obs[13] = c[18]*cq[3] + c[19]*cq[2] + t4;
+        obs[13] = c[19]*cq[3] + c[20]*cq[2] + t4;
         obs[14] = qd[1]*t21 + t15;
         obs[15] = qd[1]*t20 + t16;
-        obs[16] = qdd[1]*t21 + t17 + t9*(c[19]*cq[3] + c[20]*cq[2]);
+        obs[16] = qdd[1]*t21 + t17 + t9*(c[20]*cq[3] + c[21]*cq[2]);
         obs[17] = qdd[1]*t20 + t18 + t21*t9;
         return sgv_isfinite(((obs[12] + (obs[13] + obs[14])) + (obs[15] + (obs[16] + obs[17]))));
     }
@@ -820,16 +835,16 @@ SG_VINLINE sg_vm sg_take_up_observe_v(const sg_vd *q, const sg_vd *cq, const sg_
         const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
         const sg_vd t10 = ((xd[0])*(xd[0]));
-        const sg_vd t22 = c[22]*t5 + c[23]*t3;
-        const sg_vd t23 = c[23]*t5 + c[25]*t3;
-        obs[18] = c[21] + x[0];
+        const sg_vd t22 = c[23]*t5 + c[24]*t3;
+        const sg_vd t23 = c[24]*t5 + c[26]*t3;
+        obs[18] = c[22] + x[0];
         obs[19] = xd[0];
         obs[20] = xdd[0];
         obs[21] = t22;
-        obs[22] = c[22]*t3 + c[24]*t5;
+        obs[22] = c[23]*t3 + c[25]*t5;
         obs[23] = t23*xd[0];
         obs[24] = t22*xd[0];
-        obs[25] = t10*(c[24]*t3 + c[25]*t5) + t23*xdd[0];
+        obs[25] = t10*(c[25]*t3 + c[26]*t5) + t23*xdd[0];
         obs[26] = t10*t23 + t22*xdd[0];
         return sgv_isfinite((((obs[18] + obs[19]) + (obs[20] + obs[21])) + ((obs[22] + obs[23]) + (obs[24] + (obs[25] + obs[26])))));
     }
@@ -837,40 +852,40 @@ SG_VINLINE sg_vm sg_take_up_observe_v(const sg_vd *q, const sg_vd *cq, const sg_
         const sg_vd t3 = c[1]*cx[1] + c[3]*cx[0];
         const sg_vd t4 = c[0]*t3;
         const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
-        const sg_vd t6 = c[16]*t5;
+        const sg_vd t6 = c[17]*t5;
         const sg_vd t9 = ((qd[1])*(qd[1]));
         const sg_vd t10 = ((xd[0])*(xd[0]));
         const sg_vd t11 = c[0]*t5;
-        const sg_vd t14 = c[16]*t3;
+        const sg_vd t14 = c[17]*t3;
         const sg_vd t15 = t14*xd[0];
         const sg_vd t16 = t11*xd[0];
         const sg_vd t17 = t10*t6 + t14*xdd[0];
         const sg_vd t18 = t10*t14 + t11*xdd[0];
-        const sg_vd t24 = c[26]*cq[2] + c[27]*cq[3];
-        const sg_vd t25 = c[27]*cq[2] + c[29]*cq[3];
+        const sg_vd t24 = c[27]*cq[2] + c[28]*cq[3];
+        const sg_vd t25 = c[28]*cq[2] + c[30]*cq[3];
         obs[27] = q[1];
         obs[28] = qd[1];
         obs[29] = qdd[1];
         obs[30] = t11 + t24;
-        obs[31] = c[26]*cq[3] + c[28]*cq[2] + t4;
+        obs[31] = c[27]*cq[3] + c[29]*cq[2] + t4;
         obs[32] = qd[1]*t25 + t15;
         obs[33] = qd[1]*t24 + t16;
-        obs[34] = qdd[1]*t25 + t17 + t9*(c[28]*cq[3] + c[29]*cq[2]);
+        obs[34] = qdd[1]*t25 + t17 + t9*(c[29]*cq[3] + c[30]*cq[2]);
         obs[35] = qdd[1]*t24 + t18 + t25*t9;
         return sgv_isfinite((((obs[27] + obs[28]) + (obs[29] + obs[30])) + ((obs[31] + obs[32]) + (obs[33] + (obs[34] + obs[35])))));
     }
     case 5: {
         const sg_vd t7 = ((qd[0])*(qd[0]));
-        const sg_vd t26 = c[30]*cq[0];
-        const sg_vd t27 = c[31]*cq[1];
+        const sg_vd t26 = c[31]*cq[0];
+        const sg_vd t27 = c[32]*cq[1];
         obs[36] = q[0];
         obs[37] = qd[0];
         obs[38] = qdd[0];
         obs[39] = c[4] + t26;
-        obs[40] = c[30]*cq[1] + c[5];
+        obs[40] = c[31]*cq[1] + c[5];
         obs[41] = qd[0]*t27;
         obs[42] = qd[0]*t26;
-        obs[43] = c[31]*cq[0]*t7 + qdd[0]*t27;
+        obs[43] = c[32]*cq[0]*t7 + qdd[0]*t27;
         obs[44] = qdd[0]*t26 + t27*t7;
         return sgv_isfinite((((obs[36] + obs[37]) + (obs[38] + obs[39])) + ((obs[40] + obs[41]) + (obs[42] + (obs[43] + obs[44])))));
     }
@@ -886,14 +901,14 @@ SG_VINLINE sg_vm sg_take_up_forces_v(const sg_vd *q, const sg_vd *cq, const sg_v
     sg_vm ok = sgv_true();
     const double fr[3] = {0.0};
     const sg_vd t0 = sgv_set1(-fr[1]);
-    const sg_vd t1 = c[38]*(-gv[0] + obs[34]) - ld[4];
-    const sg_vd t2 = c[38]*(-gv[1] + obs[35]) - ld[5];
-    const sg_vd t3 = c[40]*(-gv[1] + obs[44]) - ld[3];
-    const sg_vd t4 = c[40]*(-gv[0] + obs[43]) - ld[2];
+    const sg_vd t1 = c[39]*(-gv[0] + obs[34]) - ld[4];
+    const sg_vd t2 = c[39]*(-gv[1] + obs[35]) - ld[5];
+    const sg_vd t3 = c[41]*(-gv[1] + obs[44]) - ld[3];
+    const sg_vd t4 = c[41]*(-gv[0] + obs[43]) - ld[2];
     const sg_vd t5 = c[1]*cx[0] + c[2]*cx[1];
-    const sg_vd t6 = c[24]*t5;
+    const sg_vd t6 = c[25]*t5;
     const sg_vd t7 = c[1]*cx[1] + c[3]*cx[0];
-    const sg_vd t8 = c[24]*t7;
+    const sg_vd t8 = c[25]*t7;
     const sg_vd t9 = fr[2]*obs[37];
     const sg_vd t10 = -obs[19] + obs[28];
     const sg_vd t11 = fr[0]*t10;
@@ -903,12 +918,12 @@ SG_VINLINE sg_vm sg_take_up_forces_v(const sg_vd *q, const sg_vd *cq, const sg_v
         /* block of unknowns 6, 7 */
         sg_vd M[4], r[2];
         sg_vm piv[2];
-        M[0] = c[11]*cq[1];
+        M[0] = c[12]*cq[1];
         M[1] = c[7]*cq[0];
-        r[0] = c[30]*cq[0]*t3 + c[30]*cq[1]*ld[2] + c[31]*cq[0]*ld[3] + c[31]*cq[1]*t4 + c[39]*obs[38] - fr[2] - ld[8] + t0;
+        r[0] = c[31]*cq[0]*t3 + c[31]*cq[1]*ld[2] + c[32]*cq[0]*ld[3] + c[32]*cq[1]*t4 + c[40]*obs[38] - fr[2] - ld[8] + t0;
         M[2] = c[6]*cq[3];
-        M[3] = c[13]*cq[2];
-        r[1] = c[34]*obs[29] - fr[0] - ld[4]*(c[35]*cq[2] + c[36]*cq[3]) - ld[5]*(c[35]*cq[3] + c[37]*cq[2]) - ld[7] - t0 - t1*(c[26]*cq[3] + c[28]*cq[2]) - t2*(c[28]*cq[3] + c[29]*cq[2]);
+        M[3] = c[14]*cq[2];
+        r[1] = c[35]*obs[29] - fr[0] - ld[4]*(c[36]*cq[2] + c[37]*cq[3]) - ld[5]*(c[36]*cq[3] + c[38]*cq[2]) - ld[7] - t0 - t1*(c[27]*cq[3] + c[29]*cq[2]) - t2*(c[29]*cq[3] + c[30]*cq[2]);
         ok &= sgv_lu_factor(2, M, piv);
         sgv_lu_solve(2, M, piv, r);
         out[6] = r[0];
@@ -918,16 +933,16 @@ SG_VINLINE sg_vm sg_take_up_forces_v(const sg_vd *q, const sg_vd *cq, const sg_v
     out[4] = -out[6] + t4;
     out[3] = out[7] + t2;
     out[2] = out[6] + t1;
-    out[1] = c[44]*(-gv[1] + obs[26]) + out[3] - ld[1];
-    out[0] = c[44]*(-gv[0] + obs[25]) + out[2] - ld[0];
-    out[8] = c[41]*obs[20] - out[0]*(c[22]*t7 + t6) - out[1]*(c[25]*t5 + t8) - out[2]*(c[23]*t5 + c[43]*t7) - out[3]*(c[23]*t7 + c[42]*t5) + fr[0] - ld[0]*(c[42]*t7 + t6) - ld[1]*(c[43]*t5 + t8) - ld[6];
+    out[1] = c[45]*(-gv[1] + obs[26]) + out[3] - ld[1];
+    out[0] = c[45]*(-gv[0] + obs[25]) + out[2] - ld[0];
+    out[8] = c[42]*obs[20] - out[0]*(c[23]*t7 + t6) - out[1]*(c[26]*t5 + t8) - out[2]*(c[24]*t5 + c[44]*t7) - out[3]*(c[24]*t7 + c[43]*t5) + fr[0] - ld[0]*(c[43]*t7 + t6) - ld[1]*(c[44]*t5 + t8) - ld[6];
     out[9] = out[8];
     out[10] = out[8]*xd[0];
     out[11] = out[0] + out[4];
     out[12] = out[1] + out[5];
-    out[13] = c[12]*out[4] + c[4]*out[5] + out[8] + fr[2];
-    out[14] = c[45]*((obs[19])*(obs[19])) + c[46]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[47]*((obs[28])*(obs[28])) + c[48]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[49]*((obs[37])*(obs[37])) + c[50]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
-    out[15] = c[51]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[52]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[53]*(gv[0]*obs[21] + gv[1]*obs[22]);
+    out[13] = c[13]*out[4] + c[4]*out[5] + out[8] + fr[2];
+    out[14] = c[46]*((obs[19])*(obs[19])) + c[47]*(((obs[32])*(obs[32])) + ((obs[33])*(obs[33]))) + c[48]*((obs[28])*(obs[28])) + c[49]*(((obs[41])*(obs[41])) + ((obs[42])*(obs[42]))) + c[50]*((obs[37])*(obs[37])) + c[51]*(((obs[23])*(obs[23])) + ((obs[24])*(obs[24])));
+    out[15] = c[52]*(gv[0]*obs[30] + gv[1]*obs[31]) + c[53]*(gv[0]*obs[39] + gv[1]*obs[40]) + c[54]*(gv[0]*obs[21] + gv[1]*obs[22]);
     out[16] = ld[0]*obs[2] + ld[1]*obs[3] + ld[2]*obs[8] + ld[3]*obs[9] + ld[4]*obs[14] + ld[5]*obs[15] + ld[6]*obs[19] + ld[7]*obs[28] + ld[8]*obs[37] + t11 + t13 + t9;
     out[17] = sgv_set1(0.0);
     out[18] = sgv_set1(fr[0]);
@@ -942,7 +957,7 @@ SG_VINLINE sg_vm sg_take_up_forces_v(const sg_vd *q, const sg_vd *cq, const sg_v
 
 SG_VINLINE int sg_take_up_forces_in_simd(const double *c)
 {
-    return c[57] == 0.0 && c[58] == 0.0 && c[59] == 0.0;
+    return c[58] == 0.0 && c[59] == 0.0 && c[60] == 0.0;
 }
 
 static SG_FLATTEN size_t sg_take_up_sweep_simd(const struct sg_mechanism *m, const sg_request *r)
@@ -964,7 +979,7 @@ static const sg_mechanism sg_take_up_descriptor = {
     .nq = 2,
     .nx = 1,
     .np = 24,
-    .nc = 62,
+    .nc = 63,
     .nobs = 45,
     .nbranch = 1,
     .nf = 9,
@@ -1023,128 +1038,128 @@ const char *sg_take_up_manifest(void)
         "ds\":[\"angle\",\"omega\",\"alpha\",\"com_x\",\"com_y\",\"com_vx\",\"com_vy\",\"com_ax\",\"com_a"
         "y\"],\"branches\":[{\"default\":1,\"joint\":\"C\",\"kind\":\"rrr\",\"meaning\":\"+1: joint C lef"
         "t of the line from B to D\"}],\"closed_form\":true,\"closure\":[\"C.x\",\"C.y\"],\"constants\":["
-        "[2],[7],[7],[7],[0],[1],[3],[4],[3],[4],[0],[4],[1],[3],[0,2,3,4],[1,2,3,4],[2],[3,5,6],[3,5,6],"
-        "[3,5,6],[3,5,6],[7],[9],[10],[10],[9],[13],[14],[14],[13],[4],[4],[0,2,3,4],[1,2,3,4],[15],[3,5,"
-        "6,14],[3,5,6,13],[3,5,6,13],[12],[17],[16],[11],[2,9],[2,9],[8],[11],[12],[15],[16],[17],[8],[12"
-        "],[16],[8],[18,19],[20,21],[22,23],[18],[20],[22],[3,13],[3,13]],\"coords\":[{\"guess\":1.745329"
-        "2519943295,\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\"guess\":1.0471975511965976,\"name\":\""
-        "lever.angle\",\"unit\":\"rad\"}],\"default_speed\":523.5987755982989,\"doc\":\"Thread take-up me"
-        "chanism \\u6311\\u7ebf\\u673a\\u6784: upper-shaft crank AB \\u2192 take-up lever \\u6311\\u7ebf\\u"
-        "6746 BCE (16) \\u2192 rocker CD \\u6311\\u7ebf\\u6447\\u6746 (15).\\n\\nA crank-rocker four-bar "
-        "with the thread eye E on the coupler triangle BCE (seed 000 group \\u6311\\u7ebf; seed 004\\n\\u"
-        "00a71.1, figs. 1-2). Frame as seed 004 with its (Z, X) taken as our (x, y): A at the origin, D ="
-        " (26, \\u221220) mm;\\nthe crank angle runs from +x towards +y. E is placed from the triangle's "
-        "sides by the law of cosines,\\nB\\u2192E at \\u2220CBE from B\\u2192C (seed 004 eq. for \\u03c6B"
-        "E, with \\u03c6BC in place of the paper's misprinted \\u03c6CD).\\nSeed 004 runs the crank at n "
-        "= 5000 r/min.\\n\\nThe link lengths of seed 004's table 1 are not in the text: AB, BC, CD, BE, C"
-        "E are estimates that make a\\nGrashof crank-rocker (10 + 38 \\u2264 26 + 32.8) with the willow-l"
-        "eaf eye path the paper describes.\",\"elements\":[],\"force_blocks\":[2],\"force_outputs\":[{\"n"
-        "ame\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\"name\":\"f"
-        "rame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\":\"N\"},{"
-        "\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"unit\":\"J\""
-        "},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\"},{\"nam"
-        "e\":\"elastic_power\",\"unit\":\"W\"},{\"name\":\"B.friction\",\"unit\":\"N*m\"},{\"name\":\"B.f"
-        "riction_power\",\"unit\":\"W\"},{\"name\":\"C.friction\",\"unit\":\"N*m\"},{\"name\":\"C.frictio"
-        "n_power\",\"unit\":\"W\"},{\"name\":\"D.friction\",\"unit\":\"N*m\"},{\"name\":\"D.friction_powe"
-        "r\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"lever.x\",\"leve"
-        "r.y\",\"lever.moment\",\"rocker.x\",\"rocker.y\",\"rocker.moment\"],\"inputs\":[{\"default\":0.0"
-        ",\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\"shaft\""
-        ",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_take_up_anchors\":{\"ops\":42},\"sg_take_up_"
-        "blocks\":{\"ops\":15},\"sg_take_up_closed\":{\"ops\":22},\"sg_take_up_constants\":{\"ops\":77},\""
-        "sg_take_up_force_matrix\":{\"ops\":84},\"sg_take_up_forces\":{\"ops\":193},\"sg_take_up_lu_facto"
-        "r\":{\"ops\":5},\"sg_take_up_lu_solve\":{\"ops\":8},\"sg_take_up_motion\":{\"ops\":139},\"sg_tak"
-        "e_up_observe\":{\"ops\":169},\"sg_take_up_rates\":{\"ops\":34},\"sg_take_up_residual\":{\"ops\":"
-        "20},\"sg_take_up_scales\":{\"ops\":2}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\",\"nam"
-        "e\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"body\":\""
-        "rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"rocker\",\"component\":\"fy\""
-        ",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"thread_eye\"},{\"b"
-        "ody\":\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\"component\":"
-        "\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lever\"},"
-        "{\"body\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\"name\":\"take_up\",\"obser"
-        "vables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\"},{\""
-        "name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\"name"
-        "\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{\"na"
-        "me\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\"name\":\"roc"
-        "ker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"rocke"
-        "r_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"t"
-        "hread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\"thread_eye."
-        "x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.x_"
-        "dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.ang"
-        "le\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angle_d"
-        "d\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\",\""
-        "unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"unit\""
-        ":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"unit\""
-        ":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":\"r"
-        "ad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\":\""
-        "m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},{\""
-        "name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{\"n"
-        "ame\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\"nam"
-        "e\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/s^2\"},{"
-        "\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\"name\":\""
-        "rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"ro"
-        "cker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],\"params\""
-        ":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, horizontal (seed 004 \\u"
-        "00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\":false,\"role\":null,\""
-        "unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed 004 \\u00a7"
-        "1.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"role\":null,\"unit"
-        "\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\":\"l"
-        "ength\",\"name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.038,\""
-        "display_unit\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name\":\""
-        "lever_bc\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.026000000000000002,\"d"
-        "isplay_unit\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker\",\""
-        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\"doc\""
-        ":\"take-up lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\",\"posi"
-        "tive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\":\"t"
-        "ake-up lever C to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"positive"
-        "\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"phase "
-        "of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass of "
-        "crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg"
-        "\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\"kind"
-        "\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"defau"
-        "lt\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"length\""
-        ",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"di"
-        "splay_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\"kind\""
-        ":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{"
-        "\"default\":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\":\"mas"
-        "s\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":0.024"
-        ",\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\",\"name"
-        "\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"display"
-        "_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\"lever"
-        ".com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit\":\""
-        "kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inertia\",\""
-        "name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0"
-        "04,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.mass\","
-        "\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg*m**2\""
-        ",\"doc\":\"moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\"name\":"
-        "\"rocker.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0.0,\"dis"
-        "play_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\",\"maxi"
-        "mum\":1.0,\"minimum\":0.0,\"name\":\"B.friction\",\"positive\":false,\"role\":null,\"unit\":\"\""
-        "},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\"kind\""
-        ":\"length\",\"minimum\":0.0,\"name\":\"B.pin_radius\",\"positive\":false,\"role\":null,\"unit\":"
-        "\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of C\",\"ki"
-        "nd\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"C.friction\",\"positive\":fals"
-        "e,\"role\":null,\"unit\":\"\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"pin radius o"
-        "f C (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":\"C.pin_radius\",\"positive\":"
-        "false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb fri"
-        "ction coefficient of D\",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"D"
-        ".friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_unit\""
-        ":\"mm\",\"doc\":\"pin radius of D (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":"
-        "\"D.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"}],\"point_fields\":[\"x\",\"y\""
-        ",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\":\""
-        "crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rocker\",\"doc\":\"lever-rocker pin C\",\"na"
-        "me\":\"rocker_pin\",\"offset\":6,\"role\":null},{\"body\":\"lever\",\"doc\":\"thread eye E of th"
-        "e take-up lever\",\"name\":\"thread_eye\",\"offset\":12,\"role\":\"thread_eye\"}],\"reactions\":"
-        "[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revo"
-        "lute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"fx"
-        "\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"ground"
-        "\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\""
+        "[2],[7],[7],[7],[0],[1],[3],[4],[3],[4],[0,1,2],[0],[4],[1],[3],[0,2,3,4],[1,2,3,4],[2],[3,5,6],"
+        "[3,5,6],[3,5,6],[3,5,6],[7],[9],[10],[10],[9],[13],[14],[14],[13],[4],[4],[0,2,3,4],[1,2,3,4],[1"
+        "5],[3,5,6,14],[3,5,6,13],[3,5,6,13],[12],[17],[16],[11],[2,9],[2,9],[8],[11],[12],[15],[16],[17]"
+        ",[8],[12],[16],[8],[18,19],[20,21],[22,23],[18],[20],[22],[3,13],[3,13]],\"coords\":[{\"guess\":"
+        "1.7453292519943295,\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\"guess\":1.0471975511965976,\"n"
+        "ame\":\"lever.angle\",\"unit\":\"rad\"}],\"default_speed\":523.5987755982989,\"doc\":\"Thread ta"
+        "ke-up mechanism \\u6311\\u7ebf\\u673a\\u6784: upper-shaft crank AB \\u2192 take-up lever \\u6311"
+        "\\u7ebf\\u6746 BCE (16) \\u2192 rocker CD \\u6311\\u7ebf\\u6447\\u6746 (15).\\n\\nA crank-rocker"
+        " four-bar with the thread eye E on the coupler triangle BCE (seed 000 group \\u6311\\u7ebf; seed"
+        " 004\\n\\u00a71.1, figs. 1-2). Frame as seed 004 with its (Z, X) taken as our (x, y): A at the o"
+        "rigin, D = (26, \\u221220) mm;\\nthe crank angle runs from +x towards +y. E is placed from the t"
+        "riangle's sides by the law of cosines,\\nB\\u2192E at \\u2220CBE from B\\u2192C (seed 004 eq. fo"
+        "r \\u03c6BE, with \\u03c6BC in place of the paper's misprinted \\u03c6CD).\\nSeed 004 runs the c"
+        "rank at n = 5000 r/min.\\n\\nThe link lengths of seed 004's table 1 are not in the text: AB, BC,"
+        " CD, BE, CE are estimates that make a\\nGrashof crank-rocker (10 + 38 \\u2264 26 + 32.8) with th"
+        "e willow-leaf eye path the paper describes.\",\"elements\":[],\"force_blocks\":[2],\"force_outpu"
+        "ts\":[{\"name\":\"shaft.torque\",\"unit\":\"N*m\"},{\"name\":\"shaft.power\",\"unit\":\"W\"},{\""
+        "name\":\"frame_force_on_parts.fx\",\"unit\":\"N\"},{\"name\":\"frame_force_on_parts.fy\",\"unit\""
+        ":\"N\"},{\"name\":\"frame_moment_on_parts\",\"unit\":\"N*m\"},{\"name\":\"kinetic_energy\",\"uni"
+        "t\":\"J\"},{\"name\":\"potential_energy\",\"unit\":\"J\"},{\"name\":\"load_power\",\"unit\":\"W\""
+        "},{\"name\":\"elastic_power\",\"unit\":\"W\"},{\"name\":\"B.friction\",\"unit\":\"N*m\"},{\"name"
+        "\":\"B.friction_power\",\"unit\":\"W\"},{\"name\":\"C.friction\",\"unit\":\"N*m\"},{\"name\":\"C"
+        ".friction_power\",\"unit\":\"W\"},{\"name\":\"D.friction\",\"unit\":\"N*m\"},{\"name\":\"D.frict"
+        "ion_power\",\"unit\":\"W\"}],\"force_rows\":[\"crank.x\",\"crank.y\",\"crank.moment\",\"lever.x\""
+        ",\"lever.y\",\"lever.moment\",\"rocker.x\",\"rocker.y\",\"rocker.moment\"],\"inputs\":[{\"defaul"
+        "t\":0.0,\"display_unit\":\"rad\",\"doc\":\"upper-shaft angle phi\",\"kind\":\"shaft\",\"name\":\""
+        "shaft\",\"role\":null,\"unit\":\"rad\"}],\"kernels\":{\"sg_take_up_anchors\":{\"ops\":42},\"sg_t"
+        "ake_up_blocks\":{\"ops\":15},\"sg_take_up_closed\":{\"ops\":22},\"sg_take_up_constants\":{\"ops\""
+        ":80},\"sg_take_up_force_matrix\":{\"ops\":84},\"sg_take_up_forces\":{\"ops\":193},\"sg_take_up_l"
+        "u_factor\":{\"ops\":5},\"sg_take_up_lu_solve\":{\"ops\":8},\"sg_take_up_motion\":{\"ops\":139},\""
+        "sg_take_up_observe\":{\"ops\":169},\"sg_take_up_rates\":{\"ops\":34},\"sg_take_up_residual\":{\""
+        "ops\":20},\"sg_take_up_scales\":{\"ops\":2}},\"loads\":[{\"body\":\"crank\",\"component\":\"fx\""
+        ",\"name\":\"crank_pin\"},{\"body\":\"crank\",\"component\":\"fy\",\"name\":\"crank_pin\"},{\"bod"
+        "y\":\"rocker\",\"component\":\"fx\",\"name\":\"rocker_pin\"},{\"body\":\"rocker\",\"component\":"
+        "\"fy\",\"name\":\"rocker_pin\"},{\"body\":\"lever\",\"component\":\"fx\",\"name\":\"thread_eye\""
+        "},{\"body\":\"lever\",\"component\":\"fy\",\"name\":\"thread_eye\"},{\"body\":\"crank\",\"compon"
+        "ent\":\"torque\",\"name\":\"crank\"},{\"body\":\"lever\",\"component\":\"torque\",\"name\":\"lev"
+        "er\"},{\"body\":\"rocker\",\"component\":\"torque\",\"name\":\"rocker\"}],\"name\":\"take_up\",\""
+        "observables\":[{\"name\":\"crank_pin.x\",\"unit\":\"m\"},{\"name\":\"crank_pin.y\",\"unit\":\"m\""
+        "},{\"name\":\"crank_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank_pin.y_d\",\"unit\":\"m/s\"},{\""
+        "name\":\"crank_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank_pin.y_dd\",\"unit\":\"m/s^2\"},{"
+        "\"name\":\"rocker_pin.x\",\"unit\":\"m\"},{\"name\":\"rocker_pin.y\",\"unit\":\"m\"},{\"name\":\""
+        "rocker_pin.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker_pin.y_d\",\"unit\":\"m/s\"},{\"name\":\"ro"
+        "cker_pin.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker_pin.y_dd\",\"unit\":\"m/s^2\"},{\"name\":"
+        "\"thread_eye.x\",\"unit\":\"m\"},{\"name\":\"thread_eye.y\",\"unit\":\"m\"},{\"name\":\"thread_e"
+        "ye.x_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye.y_d\",\"unit\":\"m/s\"},{\"name\":\"thread_eye"
+        ".x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"thread_eye.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank."
+        "angle\",\"unit\":\"rad\"},{\"name\":\"crank.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"crank.angl"
+        "e_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"crank.com.x\",\"unit\":\"m\"},{\"name\":\"crank.com.y\""
+        ",\"unit\":\"m\"},{\"name\":\"crank.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"crank.com.y_d\",\"uni"
+        "t\":\"m/s\"},{\"name\":\"crank.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"crank.com.y_dd\",\"uni"
+        "t\":\"m/s^2\"},{\"name\":\"lever.angle\",\"unit\":\"rad\"},{\"name\":\"lever.angle_d\",\"unit\":"
+        "\"rad/s\"},{\"name\":\"lever.angle_dd\",\"unit\":\"rad/s^2\"},{\"name\":\"lever.com.x\",\"unit\""
+        ":\"m\"},{\"name\":\"lever.com.y\",\"unit\":\"m\"},{\"name\":\"lever.com.x_d\",\"unit\":\"m/s\"},"
+        "{\"name\":\"lever.com.y_d\",\"unit\":\"m/s\"},{\"name\":\"lever.com.x_dd\",\"unit\":\"m/s^2\"},{"
+        "\"name\":\"lever.com.y_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.angle\",\"unit\":\"rad\"},{\""
+        "name\":\"rocker.angle_d\",\"unit\":\"rad/s\"},{\"name\":\"rocker.angle_dd\",\"unit\":\"rad/s^2\""
+        "},{\"name\":\"rocker.com.x\",\"unit\":\"m\"},{\"name\":\"rocker.com.y\",\"unit\":\"m\"},{\"name\""
+        ":\"rocker.com.x_d\",\"unit\":\"m/s\"},{\"name\":\"rocker.com.y_d\",\"unit\":\"m/s\"},{\"name\":\""
+        "rocker.com.x_dd\",\"unit\":\"m/s^2\"},{\"name\":\"rocker.com.y_dd\",\"unit\":\"m/s^2\"}],\"param"
+        "s\":[{\"default\":0.026000000000000002,\"display_unit\":\"mm\",\"doc\":\"D, horizontal (seed 004"
+        " \\u00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_x\",\"positive\":false,\"role\":nul"
+        "l,\"unit\":\"m\"},{\"default\":-0.02,\"display_unit\":\"mm\",\"doc\":\"D, vertical (seed 004 \\u"
+        "00a71.1.1)\",\"kind\":\"length\",\"name\":\"rocker_pivot_y\",\"positive\":false,\"role\":null,\""
+        "unit\":\"m\"},{\"default\":0.01,\"display_unit\":\"mm\",\"doc\":\"crank AB (estimate)\",\"kind\""
+        ":\"length\",\"name\":\"crank\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.03"
+        "8,\"display_unit\":\"mm\",\"doc\":\"take-up lever B to C (estimate)\",\"kind\":\"length\",\"name"
+        "\":\"lever_bc\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.02600000000000000"
+        "2,\"display_unit\":\"mm\",\"doc\":\"rocker CD (estimate)\",\"kind\":\"length\",\"name\":\"rocker"
+        "\",\"positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.058,\"display_unit\":\"mm\",\""
+        "doc\":\"take-up lever B to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_be\",\""
+        "positive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.022,\"display_unit\":\"mm\",\"doc\""
+        ":\"take-up lever C to thread eye E (estimate)\",\"kind\":\"length\",\"name\":\"lever_ce\",\"posi"
+        "tive\":true,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"deg\",\"doc\":\"ph"
+        "ase of crank relative to the shaft angle\",\"kind\":\"angle\",\"name\":\"crank.phase\",\"positiv"
+        "e\":false,\"role\":null,\"unit\":\"rad\"},{\"default\":0.0,\"display_unit\":\"g\",\"doc\":\"mass"
+        " of crank\",\"kind\":\"mass\",\"name\":\"crank.mass\",\"positive\":false,\"role\":null,\"unit\":"
+        "\"kg\"},{\"default\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local u\",\""
+        "kind\":\"length\",\"name\":\"crank.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"d"
+        "efault\":0.0,\"display_unit\":\"mm\",\"doc\":\"centre of mass of crank, local v\",\"kind\":\"len"
+        "gth\",\"name\":\"crank.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0"
+        ",\"display_unit\":\"kg*m**2\",\"doc\":\"moment of inertia of crank about its centre of mass\",\""
+        "kind\":\"inertia\",\"name\":\"crank.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**"
+        "2\"},{\"default\":0.009000000000000001,\"display_unit\":\"g\",\"doc\":\"mass of lever\",\"kind\""
+        ":\"mass\",\"name\":\"lever.mass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\""
+        ":0.024,\"display_unit\":\"mm\",\"doc\":\"centre of mass of lever, local u\",\"kind\":\"length\","
+        "\"name\":\"lever.com_u\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.002,\"d"
+        "isplay_unit\":\"mm\",\"doc\":\"centre of mass of lever, local v\",\"kind\":\"length\",\"name\":\""
+        "lever.com_v\",\"positive\":false,\"role\":null,\"unit\":\"m\"},{\"default\":3e-06,\"display_unit"
+        "\":\"kg*m**2\",\"doc\":\"moment of inertia of lever about its centre of mass\",\"kind\":\"inerti"
+        "a\",\"name\":\"lever.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default"
+        "\":0.004,\"display_unit\":\"g\",\"doc\":\"mass of rocker\",\"kind\":\"mass\",\"name\":\"rocker.m"
+        "ass\",\"positive\":false,\"role\":null,\"unit\":\"kg\"},{\"default\":3e-07,\"display_unit\":\"kg"
+        "*m**2\",\"doc\":\"moment of inertia of rocker about its centre of mass\",\"kind\":\"inertia\",\""
+        "name\":\"rocker.inertia\",\"positive\":false,\"role\":null,\"unit\":\"kg*m**2\"},{\"default\":0."
+        "0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of B\",\"kind\":\"dimensionless\""
+        ",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"B.friction\",\"positive\":false,\"role\":null,\"unit"
+        "\":\"\"},{\"default\":0.003,\"display_unit\":\"mm\",\"doc\":\"pin radius of B (friction arm)\",\""
+        "kind\":\"length\",\"minimum\":0.0,\"name\":\"B.pin_radius\",\"positive\":false,\"role\":null,\"u"
+        "nit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulomb friction coefficient of C\""
+        ",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\":\"C.friction\",\"positive\""
+        ":false,\"role\":null,\"unit\":\"\"},{\"default\":0.002,\"display_unit\":\"mm\",\"doc\":\"pin rad"
+        "ius of C (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"name\":\"C.pin_radius\",\"positi"
+        "ve\":false,\"role\":null,\"unit\":\"m\"},{\"default\":0.0,\"display_unit\":\"\",\"doc\":\"Coulom"
+        "b friction coefficient of D\",\"kind\":\"dimensionless\",\"maximum\":1.0,\"minimum\":0.0,\"name\""
+        ":\"D.friction\",\"positive\":false,\"role\":null,\"unit\":\"\"},{\"default\":0.0025,\"display_un"
+        "it\":\"mm\",\"doc\":\"pin radius of D (friction arm)\",\"kind\":\"length\",\"minimum\":0.0,\"nam"
+        "e\":\"D.pin_radius\",\"positive\":false,\"role\":null,\"unit\":\"m\"}],\"point_fields\":[\"x\",\""
+        "y\",\"vx\",\"vy\",\"ax\",\"ay\"],\"points\":[{\"body\":\"crank\",\"doc\":\"crank pin B\",\"name\""
+        ":\"crank_pin\",\"offset\":0,\"role\":null},{\"body\":\"rocker\",\"doc\":\"lever-rocker pin C\",\""
+        "name\":\"rocker_pin\",\"offset\":6,\"role\":null},{\"body\":\"lever\",\"doc\":\"thread eye E of "
+        "the take-up lever\",\"name\":\"thread_eye\",\"offset\":12,\"role\":\"thread_eye\"}],\"reactions\""
+        ":[{\"a\":\"ground\",\"b\":\"crank\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"rev"
+        "olute\",\"name\":\"crank.pivot\",\"offset\":0},{\"a\":\"crank\",\"b\":\"lever\",\"columns\":[\"f"
+        "x\",\"fy\"],\"grounded\":false,\"kind\":\"revolute\",\"name\":\"B\",\"offset\":2},{\"a\":\"groun"
+        "d\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":true,\"kind\":\"revolute\",\"name\""
         ":\"D\",\"offset\":4},{\"a\":\"lever\",\"b\":\"rocker\",\"columns\":[\"fx\",\"fy\"],\"grounded\":"
         "false,\"kind\":\"revolute\",\"name\":\"C\",\"offset\":6},{\"a\":\"ground\",\"b\":\"crank\",\"col"
         "umns\":[\"torque\"],\"grounded\":true,\"input\":\"shaft\",\"kind\":\"drive\",\"name\":\"crank.dr"
         "ive\",\"offset\":8,\"sense\":1}],\"roles\":{\"take_up_lever\":{\"kind\":\"body\",\"name\":\"leve"
         "r\"},\"thread_eye\":{\"kind\":\"point\",\"name\":\"thread_eye\"}},\"sizes\":{\"nanchor_out\":28,"
-        "\"nblock\":1,\"nbranch\":1,\"nc\":62,\"nf\":9,\"nfo\":24,\"ngroup\":6,\"nload\":9,\"nobs\":45,\""
+        "\"nblock\":1,\"nbranch\":1,\"nc\":63,\"nf\":9,\"nfo\":24,\"ngroup\":6,\"nload\":9,\"nobs\":45,\""
         "np\":24,\"nq\":2,\"nx\":1}}"
         ;
 }

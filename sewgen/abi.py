@@ -63,6 +63,8 @@ LIMITS = (
                     "at every SIMD level (the scalar and the SIMD loops give the same values)"),
     ("SG_HISTORY", 5, "solved states a Newton sweep's predictor extrapolates from (a Lagrange polynomial of "
                       "degree 4 at most)"),
+    ("SG_NCOND", 3, "numbers a motion or rates kernel writes to cond, the rates' error estimate's (csrc/sg_runtime.h "
+                    "sg_rates_error)"),
 )
 LIMIT = {name: value for name, value, _ in LIMITS}
 
@@ -160,14 +162,19 @@ KERNELS = {
     "constants": ("void", (("const double *", "p"), ("double *", "c")),
                   "every parameter-only subexpression, once per sweep"),
     "closed": ("int", (("const double *", "x"), ("const double *", "cx"), ("const double *", "c"),
-                       ("const int *", "branch"), ("double *", "q"), ("double *", "cq")),
-               "the dyad chain in closed form; NULL in the descriptor where the loops do not split"),
+                       ("const int *", "branch"), ("double *", "q"), ("double *", "cq"), ("double *", "err")),
+               "the dyad chain in closed form, and err: the largest error of an angle coordinate (rad) and the "
+               "product of the dyads' amplifications, as they bound them (csrc/sg_runtime.h sg_dyad_*); NULL in the "
+               "descriptor where the loops do not split"),
     "residual": ("void", _Q + (("const double *", "c"), ("double *", "r"), ("double *", "jac")),
                  "loop-closure residual and its Jacobian dPhi/dq (row-major)"),
     "motion": ("int", _Q + (("const double *", "xd"), ("const double *", "xdd"), ("const double *", "c"),
                             ("double *", "qd"), ("double *", "qdd"), ("double *", "obs"), ("double *", "cond")),
-               "velocities, accelerations and observables at a solved position; cond: the condition number (inf "
-               "norm) of dPhi/dq with each row over its loop's size (kernel 'scales') and its columns equilibrated"),
+               "velocities, accelerations and observables at a solved position; cond: the three numbers of the "
+               "rates' error estimate (csrc/sg_runtime.h sg_rates_error): the condition number (inf norm) of dPhi/dq "
+               "with each row over its loop's size (kernel 'scales') and its columns equilibrated, the share of the "
+               "accelerations' centripetal and Coriolis terms in their scale, and the largest column factor of an "
+               "angle coordinate"),
     "rates": ("int", _Q + (("const double *", "xd"), ("const double *", "xdd"), ("const double *", "c"),
                            ("double *", "qd"), ("double *", "qdd"), ("double *", "cond")),
               "the motion kernel without its observables: velocities, accelerations and cond, equal to the bit "
@@ -269,8 +276,9 @@ EXPORTS = {
     "sg_factor_eq": ("int", (("int", "n"), ("double *", "a"), ("int *", "piv"), ("const double *", "rs"),
                              ("double *", "cs"), ("double *", "cond")),
                      "the rates' equilibrated factor of the motion kernels in place (row-major n x n, rows scaled "
-                     "by rs; n = 2: the inverse in closed form), the condition number of the equilibrated matrix "
-                     "(n = 2: exact; else an upper bound); SG_SINGULAR below the pivot tolerance"),
+                     "by rs; n = 2: the inverse in closed form), cs (2 n: the column factors, then the columns' "
+                     "largest entries), the condition number of the equilibrated matrix (n = 2: exact; else an "
+                     "upper bound); SG_SINGULAR below the pivot tolerance"),
     "sg_solve_eq": ("void", (("int", "n"), ("const double *", "lu"), ("const int *", "piv"), ("const double *", "rs"),
                              ("const double *", "cs"), ("double *", "b")),
                     "solve with a factor of sg_factor_eq, b overwritten"),

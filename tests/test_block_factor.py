@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import sewgen
+from sewgen import abi
 from sewgen.derive.blockfactor import BlockFactor
 from sewgen.engine.mechanism import _cos_sin_pairs
 
@@ -24,7 +25,7 @@ def _rates_by_kernel(m, q, phi, omega, held):
     """The motion kernel's q', q'' and condition estimate at one solved position (held inputs by name)."""
     nq = len(q)
     x = np.concatenate([[phi], m.held_vector(held)])
-    qd, qdd, cond = np.zeros(nq), np.zeros(nq), m.ffi.new("double *")
+    qd, qdd, cond = np.zeros(nq), np.zeros(nq), m.ffi.new("double[]", abi.LIMIT["SG_NCOND"])
     obs = np.zeros(m.description.sizes["nobs"])
     xd, xdd = np.zeros(len(x)), np.zeros(len(x))
     xd[0] = omega

@@ -73,6 +73,25 @@ def test_unsorted_and_repeated_angles_are_solved_sorted_and_returned_in_order():
     _same_motion(hd.solve(PHI[perm]), sweep_rows(hd.solve(PHI), perm))
 
 
+def test_descending_newton_sweep_names_the_angle_newton_first_fails_at():
+    """The feed's lift chain (hook crank, big rod, a rock arm shortened to 10 mm) does not close where the crank pin
+    is farther from the rock shaft than rod + arm: 35° to 140° (the triangle, written here). Newton solves a
+    descending sweep in ascending order, so it fails first at 35°, whichever way the caller gave the angles (was:
+    315°, the first failing position in the caller's order, a failure that only followed the first)."""
+    fd = sewgen.mechanism("feed")
+    p = fd.defaults()
+    phi = np.radians(np.arange(0.0, 360.0, 5.0))
+    pin = p["hook_crank"] * np.exp(1j * (phi + p["hook_crank.phase"]))
+    open_ = np.abs(complex(p["rock_axis_x"], p["rock_axis_y"]) - pin) > p["big_rod"] + 0.010
+    first = phi[np.flatnonzero(open_)[0]]
+    assert math.degrees(first) == pytest.approx(35.0)
+    for order in (phi, phi[::-1], np.random.default_rng(5).permutation(phi)):
+        with pytest.raises(sewgen.AssemblyError) as info:
+            fd.solve(order, params={"rock_front_arm": 0.010})
+        assert info.value.angle == first and order[info.value.index] == first
+        assert "35°" in str(info.value)
+
+
 def sweep_rows(motion, rows):
     class Rows:
         obs, qd, qdd = motion.obs[rows], motion.qd[rows], motion.qdd[rows]

@@ -60,7 +60,7 @@ def _factor_eq(ffi, lib, a, rs, b):
     """sg_factor_eq + sg_solve_eq on copies: (status, x, cond)."""
     n = a.shape[0]
     lu, piv, x = np.ascontiguousarray(a, dtype=float).copy(), np.zeros(n, dtype=np.intc), b.astype(float).copy()
-    rs, cs, cond = np.ascontiguousarray(rs, dtype=float), np.zeros(n), ffi.new("double *")
+    rs, cs, cond = np.ascontiguousarray(rs, dtype=float), np.zeros(2 * n), ffi.new("double *")  # cs: 2 n
     ptr = lambda arr, t="double *": ffi.cast(t, ffi.from_buffer(arr))  # noqa: E731
     st = lib.sg_factor_eq(n, ptr(lu), ptr(piv, "int *"), ptr(rs), ptr(cs), cond)
     if st == 0:

@@ -64,8 +64,9 @@ class BlockFactor:
         return [c for _rows, cols in self.blocks[:k] for c in cols]
 
     def factor_lines(self, vector: bool = False) -> list[str]:
-        """Scale J (rows by rs, columns into cs), factor each diagonal block, set *cond; return SG_SINGULAR
-        from the kernel where a column is empty or not finite, a block is singular or the bound is not finite.
+        """Scale J (rows by rs, columns into cs: 1/m_j, then m_j, as sg_factor_eq_inl), factor each diagonal block,
+        set *cond; return SG_SINGULAR from the kernel where a column is empty or not finite, a block is singular or
+        the bound is not finite.
         ``vector``: the SIMD twin's lines (csrc/sg_simd.h), the same operations lane by lane, so the same values
         to the bit; a lane that fails a test is cleared from the mask ``ok`` instead."""
         n, nz, at = self.n, self.nonzero, self._at
@@ -88,7 +89,7 @@ class BlockFactor:
                 lines.append(f"    v = {fabs}({e}); {keep_max('m', 'v')}")
             test = ("(m > sgv_set1(0.0)) & (m < sgv_set1(INFINITY))" if vector
                     else "m > 0.0 && m < INFINITY")
-            lines += [f"    {fail_unless(test)}", f"    cs[{j}] = 1.0 / m;"]
+            lines += [f"    {fail_unless(test)}", f"    cs[{j}] = 1.0 / m;", f"    cs[{n + j}] = m;"]
             lines += [f"    {e} *= cs[{j}];" for e in col] + ["}"]
         lines.append(f"{real} anorm = {zero};")
         for i in range(n):

@@ -80,7 +80,7 @@ _VECTOR_FORCE_ARGS = ("q", "cq", "x", "cx", "xd", "c", "obs", "gv", "ld", "out")
 #: sgv_<kind>_fn types are these).
 VECTOR_SIGNATURES = {
     "closed": "sg_vm {f}(const sg_vd *x, const sg_vd *cx, const double *c, const int *branch, int angles, sg_vd *q, "
-              "sg_vd *cq)",
+              "sg_vd *cq, sg_vd *err)",
     "motion": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
               "const sg_vd *xdd, const double *c, sg_vd *qd, sg_vd *qdd, sg_vd *obs, sg_vd *cond)",
     "forces": "sg_vm {f}(const sg_vd *q, const sg_vd *cq, const sg_vd *x, const sg_vd *cx, const sg_vd *xd, "
@@ -112,11 +112,14 @@ FRICTION_RTOL = 1e-13
 FRICTION_ITER = 100
 
 _DYAD_CALL = {
-    "rrr": ("double J[2];", "sg_dyad_rrr(P, Q, l[0], l[1], branch[{k}], J)"),
-    "rrp": ("double s, J[2];", "sg_dyad_rrp(P, l[0], L0, u, branch[{k}], &s, J)"),
-    "rpr": ("double s, theta;", "sg_dyad_rpr(D, w0, u, branch[{k}], &s, &theta)"),
-    "rrs": ("double J[2];", "sg_dyad_rrr(P, Q, l[0], l[1], branch[{k}], J)"),  # the rod's in-plane reach as l[1]
+    "rrr": ("double J[2];", "sg_dyad_rrr(P, Q, l[0], l[1], branch[{k}], ein, e, J)"),
+    "rrp": ("double s, J[2];", "sg_dyad_rrp(P, l[0], L0, u, branch[{k}], ein, e, &s, J)"),
+    "rpr": ("double s, theta;", "sg_dyad_rpr(D, w0, u, branch[{k}], ein, e, &s, &theta)"),
+    "rrs": ("double J[2];", "sg_dyad_rrr(P, Q, l[0], l[1], branch[{k}], ein, e, J)"),  # the rod's reach as l[1]
 }
+#: A dyad's inputs that are points placed by earlier coordinates (their error is the dyad's ein); the others are
+#: lengths, the guide's direction (its angle's error the dyad's own e[0]) and a bar's frame (constants).
+_DYAD_POINTS = ("P", "Q", "L0", "D")
 
 
 class KernelSet:
@@ -272,10 +275,12 @@ class KernelSet:
         """The motion and rates kernels' LU of Φ_q — rows over their loop size (an angle row: 1 rad), columns
         equilibrated — with its condition number (the runtime's singular-position estimate), and q'."""
         vector = fl.vector
-        if not n:
-            return ["*cond = sgv_set1(1.0);", "sg_vm ok = sgv_true();"] if vector else ["*cond = 1.0;"]
+        if not n:  # no coordinates: nothing solved (csrc/sg_runtime.h sg_rates_error)
+            if vector:
+                return ["cond[0] = cond[1] = cond[2] = sgv_set1(1.0);", "sg_vm ok = sgv_true();"]
+            return ["cond[0] = cond[1] = cond[2] = 1.0;"]
         bf = self._block_factor
-        body = [f"{fl.real} J[{n * n}], rs[{n}], cs[{n}];"]
+        body = [f"{fl.real} J[{n * n}], rs[{n}], cs[{2 * n}];"]
         body += bf.declarations(vector) if bf else [f"{'sg_vm' if vector else 'int'} piv[{n}];"]
         body += [f"J[{k}] = {fl.value(e)};" for k, e in enumerate(r_jac)]
         body += [f"qd[{i}] = {fl.value(e)};" for i, e in enumerate(r_vel)]
@@ -289,14 +294,31 @@ class KernelSet:
                        f"sg_solve_eq_inl({n}, J, piv, rs, cs, qd);"]
 
     def _acceleration_lines(self, fl: _Flavour, n: int, r_gam) -> list[str]:
-        """q'' from γ with the same factor (after :meth:`_velocity_lines`)."""
+        """q'' from γ with the same factor (after :meth:`_velocity_lines`), then the rest of the error estimate's
+        numbers (csrc/sg_runtime.h sg_rates_scale_inl: cond[1], cond[2])."""
         if not n:
             return []
         lines = [f"qdd[{i}] = {fl.value(e)};" for i, e in enumerate(r_gam)]
         bf = self._block_factor
         if bf:
-            return lines + bf.solve_lines("qdd", fl.vector)
-        return lines + [f"{'sgv_solve_eq' if fl.vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
+            lines += bf.solve_lines("qdd", fl.vector)
+        else:
+            lines += [f"{'sgv_solve_eq' if fl.vector else 'sg_solve_eq_inl'}({n}, J, piv, rs, cs, qdd);"]
+        return lines + [self._rates_scale_line(fl, n)]
+
+    def _rates_scale_line(self, fl: _Flavour, n: int) -> str:
+        """The call of sg_rates_scale_inl (or its SIMD twin): which coordinates are angles (a bit mask) and the
+        fastest turning input (the shaft's speed times the largest ratio of a body it drives; 0 where it drives
+        none: held inputs do not move). The mask has 64 bits: SG_MAX_Q (sewgen.abi) is 48."""
+        angles = sum(1 << i for i, c in enumerate(self.kin.coords) if c.kind == "angle")
+        ratios = [abs(float(b.ratio)) for b in self.kin.mech.bodies if b.kind == "driven" and b.guide is None]
+        if ratios and self.kin.x:
+            scale = max(ratios)
+            turn = ("sgv_fabs(xd[0])" if fl.vector else "fabs(xd[0])") + ("" if scale == 1.0 else f" * {scale!r}")
+        else:
+            turn = "sgv_set1(0.0)" if fl.vector else "0.0"
+        call = "sgv_rates_scale" if fl.vector else "sg_rates_scale_inl"
+        return f"{call}({n}, {angles:#x}ULL, {turn}, cs, qd, qdd, cond);"
 
     def _motion_parts(self, scales):
         """The motion kernel's CSE split as the kernels read it: (temporaries, Φ_q entries, −Φ_x x', γ, every
@@ -565,12 +587,50 @@ class KernelSet:
                       self._signature("force_matrix"),
                       body, ops(e for _, e in repl) + ops(red))
 
+    def _magnitude(self, e: sp.Expr) -> sp.Expr:
+        """A bound of |e| term by term (SymPy, before :meth:`prepare`): a sum's terms' bounds added, a product's
+        multiplied, every cos and sin taken as 1, a parameter-only factor by its absolute value; anything else (a
+        travel) by its own absolute value."""
+        if e.is_Number:
+            return abs(e)
+        if isinstance(e, sp.Add):
+            return sp.Add(*[self._magnitude(a) for a in e.args])
+        if isinstance(e, sp.Mul):
+            return sp.Mul(*[self._magnitude(a) for a in e.args])
+        if isinstance(e, (sp.cos, sp.sin)):
+            return sp.S.One
+        return sp.Abs(e)
+
+    def _dyad_input_error(self, dyad: Dyad, fl: _Flavour) -> str:
+        """The error of a dyad's input points (m) as the runtime's dyads take it (csrc/sg_runtime.h: ein), from e[0]
+        (the earlier angles' largest error, rad) and e[1] (the earlier travels', m): each point's coordinates are
+        sums of lengths times cos and sin of earlier angles (and travels), so an angle error moves them by at most
+        the lengths of the terms that turn with a coordinate (their magnitude), a travel error by itself per
+        coordinate, and each is rounded to SG_DYAD_ROUND roundings of all its terms' magnitude."""
+        points = [sp.expand(e) for key in _DYAD_POINTS for e in dyad.inputs.get(key, [])]
+        angles = self._angle_symbols()
+        travels = {q for q, c in zip(self.kin.q, self.kin.coords) if c.kind != "angle"}
+        turning = sum((self._magnitude(t) for e in points for t in sp.Add.make_args(e)
+                       if t.free_symbols & angles), sp.S.Zero)
+        size = sum((self._magnitude(e) for e in points), sp.S.Zero)
+        turning, size = self.prepare([turning, size])
+        ein = f"(SG_DYAD_ROUND * SG_EPS) * {fl.value(size)}"
+        if turning != 0:
+            ein += f" + {fl.value(turning)} * e[0]"
+        if any(s in travels for p in points for s in p.free_symbols):
+            ein += " + 2.0 * e[1]"
+        return ein
+
     def closed(self, dyads: list[Dyad], vector: bool = False) -> Kernel:
         """The dyad chain: each dyad's inputs, the runtime's solver (csrc/sg_runtime.h sg_dyad_*), its coordinates
-        and their cos, sin. ``vector``: the SIMD twin (csrc/sg_simd.h sgv_dyad_*), which returns the mask of
-        lanes where every dyad closes by a margin."""
+        and their cos, sin, and ``err``: the largest error of an angle coordinate (rad) and the product of the
+        dyads' amplifications, as the dyads bound them (the rates' error estimate, csrc/sg_runtime.h
+        sg_rates_error). ``vector``: the SIMD twin (csrc/sg_simd.h sgv_dyad_*),
+        which returns the mask of lanes where every dyad closes by a margin."""
         fl = VECTOR if vector else SCALAR
         body = (["sg_vm ok = sgv_true();"] if vector else ["int st;"]) if dyads else []  # no loop: nothing to solve
+        if dyads:  # the dyads' error bounds: angles (rad), travels (m), amplification (csrc/sg_runtime.h sg_dyad_*)
+            body.append(f"{fl.real} e[3] = {{{fl.value(sp.S.Zero)}, {fl.value(sp.S.Zero)}, {fl.value(sp.S.One)}}};")
         total = 0
         # the SIMD twin's angles: computed only where asked (angles != 0) when no dyad reads an angle's value
         angle_syms = self._angle_symbols()
@@ -593,6 +653,7 @@ class KernelSet:
                 vals = ", ".join(fl.value(e) for e in red[pos: pos + size])
                 block.append(f"const {fl.real} {key}[{size}] = {{{vals}}};")
                 pos += size
+            block.append(f"const {fl.real} ein = {self._dyad_input_error(dyad, fl)};")
             decl, call = _DYAD_CALL[dyad.kind]
             if vector:
                 block += [decl.replace("double", "sg_vd"), f"ok &= {call.format(k=k).replace('sg_dyad_', 'sgv_dyad_')};"]
@@ -607,6 +668,8 @@ class KernelSet:
                 block += [f"cq[{2 * i}] = {fl.value(trig[2 * j])};",
                           f"cq[{2 * i + 1}] = {fl.value(trig[2 * j + 1])};"]
             body += ["{"] + ["    " + line for line in block] + ["}"]
+        body += (["err[0] = e[0];", "err[1] = e[2];"] if dyads else
+                 [f"err[0] = {fl.value(sp.S.Zero)};", f"err[1] = {fl.value(sp.S.One)};"])
         done = ("return ok;" if dyads else "return sgv_true();") if vector else "return SG_OK;"
         body = _unused(body, "x", "cx", "c", "branch", "q", "cq", *(("angles",) if vector else ())) + body + [done]
         name = f"{self.prefix}_closed" + ("_v" if vector else "")

@@ -41,8 +41,9 @@ _GRAVITY, _DOWN, _ORIGIN = "9.80665 m/s**2", "-90 deg", (0.0, 0.0)
 _MAX_ITER_LIMIT = 100_000  # Newton iterations per position: more is a hang, not a solve
 #: Newton's relative tolerance: every closure equation's residual below this times its own loop size.
 NEWTON_RTOL = 1e-13
-#: Largest estimated relative error of a position's velocities and accelerations (the conditioning of the
-#: velocity and acceleration solves, with the position's own error): above it the position is singular.
+#: Largest estimated relative error of a position's velocities and accelerations (the amplification of the
+#: velocity and acceleration solves, with the position's own error: csrc/sg_runtime.h sg_rates_error): above it the
+#: position is singular.
 SINGULAR_TOL = 1e-8
 _SINGULAR_MODES = ("raise", "flag")
 
@@ -767,11 +768,16 @@ class Sweep:
         return failed
 
     def check(self) -> None:
-        """Raise the typed error of the first failing position (naming its shaft angle), if any failed."""
+        """Raise the typed error of the first failing position (naming its shaft angle), if any failed: the first in
+        the caller's order where each position is solved on its own (the closed form), the first Newton met where it
+        continues from one position to the next (in ``order``, the sorted angles: a position after a failure may
+        fail only for it)."""
         status = self.status
         bad = np.flatnonzero(status)
         if not bad.size:
             return
+        if self.order is not None and (self.options.newton_only or not self.mechanism.closed_form):
+            bad = self.order[status[self.order] != 0].astype(np.intp)  # in the order Newton solved them
         i = int(bad[0])
         code = int(status[i])
         cls = abi.error_for(code)

@@ -53,8 +53,10 @@ class CoordinateMotion:
 class Motion:
     """The kinematics of one mechanism over a sweep of shaft angles (SI units throughout).
 
-    ``error_estimate`` (per position): the estimated relative error of the velocities and accelerations, from
-    the conditioning of their solves and the position's own accuracy (csrc/sg_runtime.c); ``singular`` flags
+    ``error_estimate`` (per position): the estimated relative error of the velocities and accelerations (each
+    relative to the position's own scale of its kind: the largest rate times its lever, the largest acceleration
+    or centripetal term), from the amplification of their solves and the position's own accuracy
+    (csrc/sg_runtime.h sg_rates_error; docs/explanation/derivation.md, "Singular positions"); ``singular`` flags
     the positions above ``singular_tol`` (kept only by ``solve(..., singular="flag")``).
 
     Plain arrays plus the mechanism (which pickles by reference), so a Motion pickles, crosses processes and
