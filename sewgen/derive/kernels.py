@@ -625,8 +625,8 @@ class KernelSet:
         """The dyad chain: each dyad's inputs, the runtime's solver (csrc/sg_runtime.h sg_dyad_*), its coordinates
         and their cos, sin, and ``err``: the largest error of an angle coordinate (rad) and the product of the
         dyads' amplifications, as the dyads bound them (the rates' error estimate, csrc/sg_runtime.h
-        sg_rates_error). ``vector``: the SIMD twin (csrc/sg_simd.h sgv_dyad_*),
-        which returns the mask of lanes where every dyad closes by a margin."""
+        sg_rates_error). ``vector``: the SIMD twin (csrc/sg_simd.h sgv_dyad_*), which returns the mask of lanes
+        where every dyad closes by a margin."""
         fl = VECTOR if vector else SCALAR
         body = (["sg_vm ok = sgv_true();"] if vector else ["int st;"]) if dyads else []  # no loop: nothing to solve
         if dyads:  # the dyads' error bounds: angles (rad), travels (m), amplification (csrc/sg_runtime.h sg_dyad_*)
