@@ -608,11 +608,10 @@ static inline void sg_sincos_inl(double a, double *c, double *s)
  * opt->generic asks for the calls through the descriptor (tests: the same code, so the same values to the bit).
  * K: the kernels (sg_closed_kernels). Per position: closed form, unwrap against the last solution, motion, the
  * rates' error estimate (sg_rates_error, with the position's error its dyads bound; never polished), singular
- * check, forces (r->frc), status. r->want
- * (not NULL: a kinematic sweep that keeps a few outputs) flags the groups of observables to compute: the rates
- * kernel and the wanted groups' observe kernel then stand for the motion kernel. The SIMD loop (csrc/sg_simd.h)
- * shares the state (sg_closed_loop, set up by sg_closed_setup), the step of one position (sg_closed_step) and the
- * finish of a solved one (sg_closed_finish). */
+ * check, forces (r->frc), status. r->want (not NULL: a kinematic sweep that keeps a few outputs) flags the groups
+ * of observables to compute: the rates kernel and the wanted groups' observe kernel then stand for the motion
+ * kernel. The SIMD loop (csrc/sg_simd.h) shares the state (sg_closed_loop, set up by sg_closed_setup), the step of
+ * one position (sg_closed_step) and the finish of a solved one (sg_closed_finish). */
 typedef struct sg_closed_loop {
     const sg_mechanism *m;
     const sg_options *opt;
