@@ -14,6 +14,7 @@ import pytest
 import sympy as sp
 
 import sewgen
+from sewgen import abi
 from sewgen.engine.designs import Columns
 from sewgen.engine.loader import catalog
 
@@ -128,8 +129,9 @@ def test_rates_and_observe_kernels_equal_motion_at_solved_positions(name):
         cx = np.ravel([(np.cos(v), np.sin(v)) for v in x])
         xd = np.array([sweep.omega[i]] + [0.0] * len(held))
         xdd = np.array([sweep.alpha[i]] + [0.0] * len(held))
-        qd1, qdd1, obs1, cond1 = np.empty(nq), np.empty(nq), np.empty(nobs), np.empty(1)
-        qd2, qdd2, obs2, cond2 = np.empty(nq), np.empty(nq), np.full(nobs, np.nan), np.empty(1)
+        ncond = abi.LIMIT["SG_NCOND"]  # the numbers a motion or rates kernel writes to cond
+        qd1, qdd1, obs1, cond1 = np.empty(nq), np.empty(nq), np.empty(nobs), np.empty(ncond)
+        qd2, qdd2, obs2, cond2 = np.empty(nq), np.empty(nq), np.full(nobs, np.nan), np.empty(ncond)
         args = (buf(q), buf(cq), buf(x), buf(cx), buf(xd), buf(xdd), buf(c))
         assert motion(*args, buf(qd1), buf(qdd1), buf(obs1), buf(cond1)) == 0
         assert rates(*args, buf(qd2), buf(qdd2), buf(cond2)) == 0
