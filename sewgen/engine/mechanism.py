@@ -867,9 +867,7 @@ class LeanSweep(Sweep):
             d["phi"] = d["phi_in"] = np.array(d["phi_in"], order="C")
             return d["phi"]
         if name in _LEAN_DEFAULTS and "mechanism" in d:
-            m = d["mechanism"]
-            value = m.in_c.options if name == "options" else _LEAN_DEFAULTS[name](m)
-            d[name] = value
+            value = d[name] = _LEAN_DEFAULTS[name](d["mechanism"])
             return value
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
@@ -981,8 +979,8 @@ class LeanSweep(Sweep):
 
 #: What a :class:`LeanSweep` runs with but sets only at the first look: the mechanism's defaults.
 _LEAN_DEFAULTS = {"held": lambda m: m.default_vectors["held"], "branch": lambda m: m.default_vectors["branch"],
-                  "guess": lambda m: m.default_vectors["guess"], "options": None, "order": lambda m: None,
-                  "keep_singular": lambda m: False}
+                  "guess": lambda m: m.default_vectors["guess"], "options": lambda m: m.in_c.options,
+                  "order": lambda m: None, "keep_singular": lambda m: False}
 
 
 def continuous_angles(desc, q: np.ndarray, obs: np.ndarray, order=None) -> None:
